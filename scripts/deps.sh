@@ -1,0 +1,37 @@
+#!/bin/sh
+# deps.sh - install the Debian 12 packages qdc builds, tests and benchmarks with.
+# Idempotent: only missing packages are installed, and only when run as root.
+# Usage: scripts/deps.sh [--check]   (--check: list what is missing, exit 1 if any)
+set -eu
+
+PKGS="build-essential pkg-config ca-certificates curl
+libsuitesparse-dev libopenblas0-pthread libopenblas-dev
+libmicrohttpd-dev libjansson-dev libsqlite3-dev libcurl4-openssl-dev
+libtet1.5-dev tetgen
+clang libclang-rt-14-dev
+python3 python3-numpy python3-scipy python3-meshio python3-gmsh gmsh jq"
+
+missing=""
+for p in $PKGS; do
+    if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q 'install ok installed'; then
+        missing="$missing $p"
+    fi
+done
+
+if [ -z "$missing" ]; then
+    exit 0
+fi
+if [ "${1:-}" = "--check" ]; then
+    echo "missing:$missing"
+    exit 1
+fi
+if [ "$(id -u)" -ne 0 ]; then
+    echo "deps.sh: missing Debian packages:$missing" >&2
+    echo "deps.sh: run as root (or: sudo apt-get install$missing)" >&2
+    exit 1
+fi
+echo "deps.sh: installing:$missing" >&2
+export DEBIAN_FRONTEND=noninteractive
+apt-get update -qq
+# shellcheck disable=SC2086
+apt-get install -y -qq --no-install-recommends $missing >/dev/null

@@ -1,0 +1,22 @@
+# tests/lib.sh - helpers for shell tests: source it, then call pass/fail/check.
+# Output protocol shared with the C tests: "ok - name" / "FAIL - name: why".
+ROOT=${ROOT:-$(cd "$(dirname "$0")/../.." && pwd)}
+BIN=${BIN:-$ROOT/build/rel}
+DEV=${DEV:-$ROOT/../shared/meshes/dev}
+QUALITY=${QUALITY:-$ROOT/../shared/tools/quality.py}
+PY=/usr/bin/python3
+TMP=$(mktemp -d "${TMPDIR:-/tmp}/qdc-test.XXXXXX")
+trap 'rm -rf "$TMP"' EXIT
+NFAIL=0
+pass() { echo "ok - $1"; }
+fail() { echo "FAIL - $1: $2"; NFAIL=$((NFAIL + 1)); }
+# check NAME COMMAND...: pass if the command exits 0
+check() {
+    name=$1; shift
+    if out=$("$@" 2>&1); then pass "$name"; else fail "$name" "$(printf '%s' "$out" | tail -3 | tr '\n' ' ')"; fi
+}
+# devmesh NAME: path of an uncompressed copy of a dev mesh in $TMP
+devmesh() {
+    [ -f "$TMP/$1.mesh" ] || gzip -dc "$DEV/$1.mesh.gz" > "$TMP/$1.mesh"
+    echo "$TMP/$1.mesh"
+}
