@@ -1,0 +1,180 @@
+/* finish.c - worst-tet finishing pass (METHOD §5a). */
+#include "finish.h"
+
+#include "encode.h"
+#include "metric.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define FINISH_INNER 8
+#define FINISH_HALVINGS 12
+
+typedef struct {
+    double q;
+    int32_t v;
+} vq_pair;
+
+static int vq_cmp(const void *a, const void *b)
+{
+    const vq_pair *x = a, *y = b;
+    if (x->q != y->q)
+        return x->q < y->q ? -1 : 1;
+    return (x->v > y->v) - (x->v < y->v);
+}
+
+static int dbl_cmp(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+/* Local objective of vertex v placed at y: sum of q~ over its star, and the
+ * number of star tets that are not positive. */
+static double star_objective(const mesh_topo *tp, const double *x, int32_t v, const double *y,
+                             opt_metric m, double delta, int32_t *nbad)
+{
+    double f = 0.0;
+    int32_t bad = 0;
+
+    for (int32_t k = tp->vt_ptr[v]; k < tp->vt_ptr[v + 1]; k++) {
+        int32_t t = tp->vt_idx[k] >> 2, a = tp->vt_idx[k] & 3;
+        const double *p[4];
+        metric_parts pt;
+        for (int b = 0; b < 4; b++)
+            p[b] = b == a ? y : x + 3 * (size_t)tp->tets[4 * (size_t)t + b];
+        metric_parts_of(p[0], p[1], p[2], p[3], &pt);
+        bad += !(pt.vol > 0.0);
+        f += metric_qt(m, &pt, delta);
+    }
+    *nbad = bad;
+    return f;
+}
+
+static void star_gradient(const mesh_topo *tp, const double *x, int32_t v, opt_metric m,
+                          double delta, double g[3])
+{
+    g[0] = g[1] = g[2] = 0.0;
+    for (int32_t k = tp->vt_ptr[v]; k < tp->vt_ptr[v + 1]; k++) {
+        int32_t t = tp->vt_idx[k] >> 2, a = tp->vt_idx[k] & 3;
+        double p[4][3], gt[3], q;
+        for (int b = 0; b < 4; b++)
+            memcpy(p[b], x + 3 * (size_t)tp->tets[4 * (size_t)t + b], sizeof p[b]);
+        q = metric_qt_grad(m, &p[0][0], a, delta, gt);
+        if (!isfinite(q))
+            continue;
+        for (int c = 0; c < 3; c++)
+            g[c] += gt[c];
+    }
+}
+
+/* Adaptive normalized-gradient descent of one vertex (METHOD §5a). */
+static int32_t relax_vertex(const mesh_topo *tp, double *x, int32_t v, opt_metric m,
+                            double delta, double lbar)
+{
+    double s = 0.05 * lbar, *xv = x + 3 * (size_t)v;
+    int32_t moves = 0;
+
+    for (int it = 0; it < FINISH_INNER; it++) {
+        double g[3], gn, y[3], f0, f1;
+        int32_t bad0, bad1;
+        int ok = 0;
+        f0 = star_objective(tp, x, v, xv, m, delta, &bad0);
+        if (!isfinite(f0))
+            break;
+        star_gradient(tp, x, v, m, delta, g);
+        gn = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+        if (!(gn > 0.0) || !isfinite(gn))
+            break;
+        for (int h = 0; h < FINISH_HALVINGS; h++) {
+            for (int c = 0; c < 3; c++)
+                y[c] = xv[c] - s * g[c] / gn;
+            f1 = star_objective(tp, x, v, y, m, delta, &bad1);
+            if (f1 < f0 && bad1 <= bad0) {
+                ok = 1;
+                break;
+            }
+            s *= 0.5;
+        }
+        if (!ok)
+            break;
+        memcpy(xv, y, sizeof y);
+        moves++;
+        s = fmin(s * 1.6, 0.3 * lbar);
+    }
+    return moves;
+}
+
+qdc_status finish_sweep(const mesh_topo *tp, const uint8_t *movable, double *x, opt_metric m,
+                        double eps, double lbar, double frac, finish_stats *st)
+{
+    double *eta = qdc_mallocn((size_t)tp->nt, sizeof(double));
+    double *sorted = qdc_mallocn((size_t)tp->nt, sizeof(double));
+    double *vworst = qdc_mallocn((size_t)tp->nv, sizeof(double));
+    vq_pair *list = NULL;
+    int32_t n = 0, k;
+    double thresh, delta;
+
+    memset(st, 0, sizeof *st);
+    if (!eta || !sorted || !vworst) {
+        qdc_free(eta);
+        qdc_free(sorted);
+        qdc_free(vworst);
+        return QDC_ENOMEM;
+    }
+    for (int32_t t = 0; t < tp->nt; t++) {
+        const int32_t *tt = tp->tets + 4 * (size_t)t;
+        metric_parts pt;
+        metric_parts_of(x + 3 * (size_t)tt[0], x + 3 * (size_t)tt[1], x + 3 * (size_t)tt[2],
+                        x + 3 * (size_t)tt[3], &pt);
+        eta[t] = metric_mean_ratio(&pt);
+    }
+    memcpy(sorted, eta, (size_t)tp->nt * sizeof(double));
+    qsort(sorted, (size_t)tp->nt, sizeof(double), dbl_cmp);
+    k = (int32_t)(frac * tp->nt);
+    if (k < 1)
+        k = 1;
+    if (k > tp->nt)
+        k = tp->nt;
+    thresh = sorted[k - 1];
+    delta = metric_delta(encode_min_arg(tp, x, m), eps);
+    st->delta = delta;
+    for (int32_t v = 0; v < tp->nv; v++)
+        vworst[v] = 2.0;
+    for (int32_t t = 0; t < tp->nt; t++) {
+        if (!(eta[t] <= thresh || eta[t] <= 0.0))
+            continue;
+        for (int a = 0; a < 4; a++) {
+            int32_t v = tp->tets[4 * (size_t)t + a];
+            if (eta[t] < vworst[v])
+                vworst[v] = eta[t];
+        }
+    }
+    for (int32_t v = 0; v < tp->nv; v++)
+        n += movable[v] && vworst[v] < 2.0;
+    list = qdc_mallocn((size_t)n + 1, sizeof *list);
+    if (!list) {
+        qdc_free(eta);
+        qdc_free(sorted);
+        qdc_free(vworst);
+        return QDC_ENOMEM;
+    }
+    n = 0;
+    for (int32_t v = 0; v < tp->nv; v++)
+        if (movable[v] && vworst[v] < 2.0) {
+            list[n].q = vworst[v];
+            list[n].v = v;
+            n++;
+        }
+    /* worst first, Gauss-Seidel: each vertex sees its neighbours' new positions */
+    qsort(list, (size_t)n, sizeof *list, vq_cmp);
+    for (int32_t i = 0; i < n; i++)
+        st->n_moves += relax_vertex(tp, x, list[i].v, m, delta, lbar);
+    st->n_verts = n;
+    qdc_free(list);
+    qdc_free(eta);
+    qdc_free(sorted);
+    qdc_free(vworst);
+    return QDC_OK;
+}

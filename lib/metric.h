@@ -1,0 +1,53 @@
+/* metric.h - per-tet quality metrics (paper Sec. 3.1, METHOD §2-§3).
+ * A tet is given by its 4 corner points; it is positive when
+ * det[p1-p0, p2-p0, p3-p0] > 0. Thread-safe: pure functions. */
+#ifndef QDC_METRIC_H
+#define QDC_METRIC_H
+
+#include "opt.h"
+
+/* Ingredients every metric needs. With S = A W^-1 (W: unit regular tet):
+ * sigma = det S = 6 sqrt2 vol, ||S||_F^2 = l2sum / 2, ||adj S||_F^2 = adj2. */
+typedef struct {
+    double vol;   /* signed volume */
+    double l2sum; /* sum of the 6 squared edge lengths */
+    double adj2;  /* 4 * sum of the squared face areas */
+} metric_parts;
+
+void metric_parts_of(const double *p0, const double *p1, const double *p2, const double *p3,
+                     metric_parts *out);
+
+/* Escobar's regularization h(s) = (s + sqrt(s^2 + 4 delta^2)) / 2 and its derivative. */
+double metric_h(double s, double delta);
+double metric_hprime(double s, double delta);
+
+/* The quantity that goes through h(): vol for MIVL, sigma for MIMR/MICN. */
+double metric_arg(opt_metric m, const metric_parts *p);
+/* Escobar epsilon: eps_rel times metric_arg of a regular tet with edge lbar. */
+double metric_eps(opt_metric m, double lbar, double eps_rel);
+/* delta = sqrt(eps (eps - smin)) if smin < eps, else 0 (one value per iteration). */
+double metric_delta(double smin, double eps);
+
+/* Modified inverse quality q~ (MIMR, MICN, MIVL): 1 on a regular tet, larger is
+ * worse; +inf for a non-positive tet when delta == 0. */
+double metric_qt(opt_metric m, const metric_parts *p, double delta);
+
+/* q~ of the tet (p12: 4 corners, 3 doubles each) and its gradient with respect
+ * to corner a. */
+double metric_qt_grad(opt_metric m, const double *p12, int a, double delta, double g[3]);
+
+/* Signed mean ratio 12 (3|V|)^(2/3) / l2sum in [-1, 1]. */
+double metric_mean_ratio(const metric_parts *p);
+/* Volume-length 6 sqrt2 V / l_rms^3 (signed). */
+double metric_vol_length(const metric_parts *p);
+
+/* The 6 dihedral angles in degrees (edges 01 02 03 12 13 23); a degenerate face
+ * gives 0 and 180 for its angles. Returns 0, or 1 if a face is degenerate. */
+int metric_dihedrals(const double *p0, const double *p1, const double *p2, const double *p3,
+                     double ang[6]);
+
+/* Eq. 8 in closed form (METHOD §3): the distance alpha* along the unit inward
+ * normal from the barycentre of face (f0, f1, f2) that minimizes q~ (delta = 0). */
+double metric_alpha_opt(opt_metric m, const double *f0, const double *f1, const double *f2);
+
+#endif

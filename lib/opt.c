@@ -1,0 +1,557 @@
+/* opt.c - the QDC optimizer: outer loop of the semi-implicit gradient flow
+ * (paper Eq. 15) with the safeguards of METHOD §5 (mu = 1 in normalized units,
+ * backtracking line search on sum q~, best iterate kept), harmonic guidance
+ * (§6) and the finishing pass (§5a). */
+#include "opt.h"
+
+#include "encode.h"
+#include "finish.h"
+#include "harm.h"
+#include "metric.h"
+#include "solve.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <string.h>
+
+void opt_defaults(opt_options *o)
+{
+    memset(o, 0, sizeof *o);
+    o->metric = OPT_METRIC_MIVL;
+    o->boundary = OPT_BOUNDARY_LSQ;
+    o->mode = OPT_MODE_SAFE;
+    o->weights = OPT_WEIGHTS_OPTAVG;
+    o->solver = OPT_SOLVER_AUTO;
+    o->harmonic = 0;
+    o->pre_iters = 3;
+    o->finish = 1;
+    o->max_iter = 10;
+    o->ls_halvings = 10;
+    o->mu = 1.0;
+    o->tol_move = 1e-3;
+    o->eps_rel = 1e-3;
+    o->finish_frac = 0.05;
+    o->finish_sweeps = 4;
+    o->feature_angle = 30.0;
+}
+
+static const char *const metric_names[] = {"mivl", "mimr", "micn"};
+static const char *const boundary_names[] = {"lsq", "fixed", "slide"};
+static const char *const mode_names[] = {"safe", "literal"};
+static const char *const weights_names[] = {"optavg", "paper"};
+static const char *const solver_names[] = {"auto", "cholmod", "pcg"};
+
+static qdc_status parse_word(const char *s, const char *const *names, int n, int *out)
+{
+    for (int i = 0; s && i < n; i++)
+        if (strcmp(s, names[i]) == 0) {
+            *out = i;
+            return QDC_OK;
+        }
+    return QDC_EINVAL;
+}
+
+#define PARSER(fn, type, names)                                                         \
+    qdc_status fn(const char *s, type *out)                                             \
+    {                                                                                   \
+        int v;                                                                          \
+        qdc_status st = parse_word(s, names, (int)(sizeof names / sizeof names[0]), &v); \
+        if (st == QDC_OK)                                                               \
+            *out = (type)v;                                                             \
+        return st;                                                                      \
+    }
+PARSER(opt_parse_metric, opt_metric, metric_names)
+PARSER(opt_parse_boundary, opt_boundary, boundary_names)
+PARSER(opt_parse_mode, opt_mode, mode_names)
+PARSER(opt_parse_weights, opt_weights, weights_names)
+PARSER(opt_parse_solver, opt_solver, solver_names)
+
+#define NAMER(fn, type, names)                                                          \
+    const char *fn(type v)                                                              \
+    {                                                                                   \
+        return (unsigned)v < sizeof names / sizeof names[0] ? names[v] : "?";           \
+    }
+NAMER(opt_metric_name, opt_metric, metric_names)
+NAMER(opt_boundary_name, opt_boundary, boundary_names)
+NAMER(opt_mode_name, opt_mode, mode_names)
+NAMER(opt_weights_name, opt_weights, weights_names)
+NAMER(opt_solver_name, opt_solver, solver_names)
+
+typedef struct {
+    const opt_options *o;
+    const mesh_topo *tp;
+    int32_t nv, nt;
+    double center[3], scale; /* x = (X - center) / scale */
+    double lbar, eps;
+    double *x, *x0, *xn, *xbest, *trial, *tmp, *rhs;
+    uint8_t *locked;  /* not an unknown of the linear system */
+    double *wq2;      /* squared QDC row weights */
+    double *bw2;      /* squared boundary row weights (0: no row) */
+    double *dg;       /* bw2 + mu */
+    double *qt, *qval, *d;
+    solve_ctx *sol;
+    double t0;
+    opt_progress input, best;
+    int best_it;
+} ctx_t;
+
+static void logf_(const ctx_t *c, int level, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
+
+static void logf_(const ctx_t *c, int level, const char *fmt, ...)
+{
+    char buf[256];
+    va_list ap;
+
+    if (!c->o->log)
+        return;
+    va_start(ap, fmt);
+    vsnprintf(buf, sizeof buf, fmt, ap);
+    va_end(ap);
+    c->o->log(c->o->log_ctx, level, buf);
+}
+
+/* Quality record of x (normalized coordinates; mean ratio and angles are
+ * scale-invariant). */
+static void evaluate(const ctx_t *c, const double *x, double delta, opt_progress *r)
+{
+    const mesh_topo *tp = c->tp;
+    double sum = 0, sum2 = 0, qmin = INFINITY, dmin = INFINITY, dmax = -INFINITY;
+    int32_t ninv = 0;
+
+#pragma omp parallel for reduction(+ : sum, sum2, ninv) reduction(min : qmin, dmin)          \
+    reduction(max : dmax) schedule(static)
+    for (int32_t t = 0; t < tp->nt; t++) {
+        const int32_t *tt = tp->tets + 4 * (size_t)t;
+        const double *p0 = x + 3 * (size_t)tt[0], *p1 = x + 3 * (size_t)tt[1];
+        const double *p2 = x + 3 * (size_t)tt[2], *p3 = x + 3 * (size_t)tt[3];
+        metric_parts pt;
+        double eta, ang[6];
+        metric_parts_of(p0, p1, p2, p3, &pt);
+        eta = metric_mean_ratio(&pt);
+        sum += eta;
+        sum2 += eta * eta;
+        qmin = eta < qmin ? eta : qmin;
+        ninv += !(pt.vol > 0.0);
+        metric_dihedrals(p0, p1, p2, p3, ang);
+        for (int e = 0; e < 6; e++) {
+            dmin = ang[e] < dmin ? ang[e] : dmin;
+            dmax = ang[e] > dmax ? ang[e] : dmax;
+        }
+    }
+    memset(r, 0, sizeof *r);
+    r->q_mean = sum / tp->nt;
+    r->q_std = sqrt(fmax(0.0, sum2 / tp->nt - r->q_mean * r->q_mean));
+    r->q_min = qmin;
+    r->dih_min = dmin;
+    r->dih_max = dmax;
+    r->n_inverted = ninv;
+    r->objective = encode_objective(tp, x, c->o->metric, delta, NULL, NULL);
+    r->elapsed = qdc_now() - c->t0;
+    r->solver = c->sol ? (int)solve_kind(c->sol) : 0;
+}
+
+/* METHOD §5: keep the best iterate (fewest inverted, then best worst tet, then
+ * best mean). Never accept one with more inverted tets or a worse worst tet
+ * than the input. Worst-tet differences under 1e-4 count as ties so that the
+ * mean decides between iterates whose worst tet did not really change. */
+static int better(const opt_progress *a, const opt_progress *b)
+{
+    if (a->n_inverted != b->n_inverted)
+        return a->n_inverted < b->n_inverted;
+    if (fabs(a->q_min - b->q_min) > 1e-4)
+        return a->q_min > b->q_min;
+    return a->q_mean > b->q_mean;
+}
+
+static int eligible(const ctx_t *c, const opt_progress *r)
+{
+    return r->n_inverted <= c->input.n_inverted && r->q_min >= c->input.q_min;
+}
+
+static void consider(ctx_t *c, const double *x, const opt_progress *r)
+{
+    if (eligible(c, r) && better(r, &c->best)) {
+        c->best = *r;
+        c->best_it = r->iteration;
+        memcpy(c->xbest, x, 3 * (size_t)c->nv * sizeof(double));
+    }
+}
+
+static int report(ctx_t *c, opt_progress *r)
+{
+    r->elapsed = qdc_now() - c->t0;
+    if (c->o->progress && c->o->progress(c->o->progress_ctx, r))
+        return 1;
+    return 0;
+}
+
+static int should_stop(const ctx_t *c, char *why, size_t len)
+{
+    if (c->o->cancel && *c->o->cancel) {
+        snprintf(why, len, "cancelled");
+        return 1;
+    }
+    if (c->o->time_limit > 0 && qdc_now() - c->t0 > c->o->time_limit) {
+        snprintf(why, len, "time-limit");
+        return 1;
+    }
+    return 0;
+}
+
+static qdc_status ctx_init(ctx_t *c, const mesh_t *m, const mesh_topo *tp, const opt_options *o)
+{
+    size_t n3 = 3 * (size_t)m->nv;
+    double lo[3], hi[3], diag, esum = 0;
+    int64_t ecount = 0;
+
+    memset(c, 0, sizeof *c);
+    c->o = o;
+    c->tp = tp;
+    c->nv = m->nv;
+    c->nt = m->nt;
+    c->x = qdc_mallocn(n3, sizeof(double));
+    c->x0 = qdc_mallocn(n3, sizeof(double));
+    c->xn = qdc_mallocn(n3, sizeof(double));
+    c->xbest = qdc_mallocn(n3, sizeof(double));
+    c->trial = qdc_mallocn(n3, sizeof(double));
+    c->tmp = qdc_mallocn(n3, sizeof(double));
+    c->rhs = qdc_mallocn(n3, sizeof(double));
+    c->d = qdc_mallocn(n3, sizeof(double));
+    c->locked = qdc_calloc((size_t)m->nv, 1);
+    c->wq2 = qdc_mallocn((size_t)m->nv, sizeof(double));
+    c->bw2 = qdc_calloc((size_t)m->nv, sizeof(double));
+    c->dg = qdc_mallocn((size_t)m->nv, sizeof(double));
+    c->qt = qdc_mallocn((size_t)m->nt, sizeof(double));
+    c->qval = qdc_mallocn((size_t)tp->adj_ptr[tp->nv], sizeof(double));
+    if (!c->x || !c->x0 || !c->xn || !c->xbest || !c->trial || !c->tmp || !c->rhs || !c->d ||
+        !c->locked || !c->wq2 || !c->bw2 || !c->dg || !c->qt || !c->qval)
+        return QDC_ENOMEM;
+    /* METHOD §1: bbox centre to 0, diagonal to 1; every tolerance is in these units */
+    diag = mesh_bbox(m, lo, hi);
+    c->scale = diag > 0 ? diag : 1.0;
+    for (int k = 0; k < 3; k++)
+        c->center[k] = 0.5 * (lo[k] + hi[k]);
+    for (int32_t v = 0; v < m->nv; v++)
+        for (int k = 0; k < 3; k++)
+            c->x[3 * (size_t)v + k] = (m->xyz[3 * (size_t)v + k] - c->center[k]) / c->scale;
+    memcpy(c->x0, c->x, n3 * sizeof(double));
+    memcpy(c->xbest, c->x, n3 * sizeof(double));
+    for (int32_t i = 0; i < tp->nv; i++)
+        for (int32_t s = tp->adj_ptr[i]; s < tp->adj_ptr[i + 1]; s++) {
+            int32_t j = tp->adj_idx[s];
+            const double *a = c->x + 3 * (size_t)i, *b = c->x + 3 * (size_t)j;
+            if (j <= i)
+                continue;
+            esum += sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) +
+                         (a[2] - b[2]) * (a[2] - b[2]));
+            ecount++;
+        }
+    c->lbar = ecount ? esum / (double)ecount : 1.0;
+    c->eps = metric_eps(o->metric, c->lbar, o->eps_rel);
+    for (int32_t v = 0; v < m->nv; v++) {
+        uint8_t f = tp->vflag[v];
+        int on_b = (f & (MESH_V_BOUNDARY | MESH_V_INTERFACE)) != 0;
+        c->locked[v] = (f & (MESH_V_FIXED | MESH_V_UNUSED)) ||
+                       (on_b && o->boundary == OPT_BOUNDARY_FIXED);
+        /* Eq. 9: boundary rows B x = b with b the ORIGINAL positions (lsq) */
+        c->bw2[v] = on_b && !c->locked[v] ? 1.0 : 0.0;
+        c->wq2[v] = 1.0;
+    }
+    return QDC_OK;
+}
+
+static void ctx_free(ctx_t *c)
+{
+    solve_free(c->sol);
+    qdc_free(c->x);
+    qdc_free(c->x0);
+    qdc_free(c->xn);
+    qdc_free(c->xbest);
+    qdc_free(c->trial);
+    qdc_free(c->tmp);
+    qdc_free(c->rhs);
+    qdc_free(c->d);
+    qdc_free(c->locked);
+    qdc_free(c->wq2);
+    qdc_free(c->bw2);
+    qdc_free(c->dg);
+    qdc_free(c->qt);
+    qdc_free(c->qval);
+}
+
+/* Harmonic guidance (Eq. 10): QDC rows weighted omega_1 h_i, boundary rows
+ * omega_B, omega_B = n / n_boundary, omega_1 = 0.4 omega_B (paper Sec. 5.1). */
+static qdc_status set_harmonic(ctx_t *c, opt_result *res, qdc_error *err)
+{
+    double t = qdc_now(), *h = qdc_mallocn((size_t)c->nv, sizeof(double));
+    double wb = (double)c->nv / (c->tp->nb > 0 ? c->tp->nb : 1), w1 = 0.4 * wb;
+    int32_t nmed = 0;
+    qdc_status st;
+
+    if (!h)
+        return QDC_ENOMEM;
+    st = harm_field(c->tp, c->x, h, &nmed, err);
+    if (st == QDC_OK) {
+        for (int32_t v = 0; v < c->nv; v++) {
+            c->wq2[v] = (w1 * h[v]) * (w1 * h[v]);
+            if (c->bw2[v] > 0)
+                c->bw2[v] = wb * wb;
+        }
+        logf_(c, 0, "harmonic guidance: %d medial vertices, omega_B %.3g", (int)nmed, wb);
+    }
+    qdc_free(h);
+    res->t_harmonic += qdc_now() - t;
+    return st;
+}
+
+/* One iteration of Eq. 15 plus the line search. Fills r (without quality).
+ * Returns QDC_OK; *stepped = 0 when no step decreased the objective. */
+static qdc_status iterate(ctx_t *c, opt_result *res, opt_progress *r, int *stepped,
+                          qdc_error *err)
+{
+    const opt_options *o = c->o;
+    const mesh_topo *tp = c->tp;
+    size_t n3 = 3 * (size_t)c->nv;
+    int literal = o->mode == OPT_MODE_LITERAL;
+    double t = qdc_now(), delta, f0, mu, step = 1.0, move = 0;
+    int cg = 0;
+    qdc_status st;
+
+    /* q~ at x_k with one global delta (METHOD §2) */
+    delta = metric_delta(encode_min_arg(tp, c->x, o->metric), c->eps);
+    f0 = encode_objective(tp, c->x, o->metric, delta, c->qt, NULL);
+    if (literal || o->weights == OPT_WEIGHTS_PAPER)
+        encode_paper(tp, c->x, o->metric, c->qt, c->qval, c->d);
+    else
+        encode_optavg(tp, c->x, o->metric, c->qt, c->qval, c->d);
+    res->t_weights += qdc_now() - t;
+    t = qdc_now();
+    if (literal) {
+        /* paper as written: mu_k = ||G^T W^2 g||^2 = ||omega_B^2 b||^2 (constant) */
+        mu = 0;
+        for (int32_t v = 0; v < c->nv; v++)
+            for (int k = 0; k < 3; k++)
+                mu += c->bw2[v] * c->bw2[v] * c->x0[3 * (size_t)v + k] * c->x0[3 * (size_t)v + k];
+        if (!(mu > 0))
+            mu = 1.0;
+    } else {
+        mu = o->mu;
+    }
+    /* b = Q_F^T W (d - Q x_L) + bw2 x0 + mu x_k: locked vertices move to the right */
+    for (int32_t v = 0; v < c->nv; v++) {
+        for (int k = 0; k < 3; k++)
+            c->tmp[3 * (size_t)v + k] = c->locked[v] ? c->x[3 * (size_t)v + k] : 0.0;
+        c->dg[v] = c->bw2[v] + mu;
+    }
+    solve_q_mul(tp, c->qval, c->tmp, c->trial);
+    for (int32_t v = 0; v < c->nv; v++)
+        for (int k = 0; k < 3; k++) {
+            size_t q = 3 * (size_t)v + k;
+            c->trial[q] = c->wq2[v] * (c->d[q] - c->trial[q]);
+        }
+    solve_qt_mul(c->sol, c->qval, c->trial, c->rhs);
+    for (int32_t v = 0; v < c->nv; v++)
+        for (int k = 0; k < 3; k++) {
+            size_t q = 3 * (size_t)v + k;
+            c->rhs[q] += c->bw2[v] * c->x0[q] + mu * c->x[q];
+        }
+    res->t_assembly += qdc_now() - t;
+    t = qdc_now();
+    memcpy(c->xn, c->x, n3 * sizeof(double));
+    st = solve_system(c->sol, c->qval, c->wq2, c->dg, c->rhs, c->xn, &cg, err);
+    res->t_solve += qdc_now() - t;
+    if (st != QDC_OK)
+        return st;
+    for (size_t q = 0; q < n3; q++)
+        if (!isfinite(c->xn[q]))
+            return qdc_fail(err, QDC_ESOLVE, "linear solve returned a non-finite value");
+    t = qdc_now();
+    if (!literal) {
+        /* Not in the paper (METHOD §5): backtrack on sum q~ with delta frozen;
+         * with delta = 0 a trial that inverts a tet costs +inf. */
+        int h;
+        for (h = 0; h <= o->ls_halvings; h++) {
+            for (size_t q = 0; q < n3; q++)
+                c->trial[q] = c->x[q] + step * (c->xn[q] - c->x[q]);
+            if (encode_objective(tp, c->trial, o->metric, delta, NULL, NULL) <= f0)
+                break;
+            step *= 0.5;
+        }
+        if (h > o->ls_halvings)
+            step = 0.0;
+    }
+    res->t_linesearch += qdc_now() - t;
+    for (int32_t v = 0; v < c->nv; v++) {
+        double dd = 0;
+        for (int k = 0; k < 3; k++) {
+            size_t q = 3 * (size_t)v + k;
+            double dx = step * (c->xn[q] - c->x[q]);
+            c->x[q] += dx;
+            dd += dx * dx;
+        }
+        if (dd > move)
+            move = dd;
+    }
+    evaluate(c, c->x, metric_delta(encode_min_arg(tp, c->x, o->metric), c->eps), r);
+    r->step = step;
+    r->max_move = sqrt(move) / c->lbar;
+    r->cg_iters = cg;
+    *stepped = step > 0.0;
+    return QDC_OK;
+}
+
+qdc_status opt_run(mesh_t *m, const opt_options *opts, opt_result *res_out, qdc_error *err)
+{
+    opt_options o;
+    opt_result res;
+    mesh_topo *tp = NULL;
+    ctx_t c;
+    qdc_status st;
+    double t_start = qdc_now();
+    int it = 0, total_iters, stop = 0;
+    opt_progress r;
+
+    memset(&res, 0, sizeof res);
+    memset(&c, 0, sizeof c);
+    res.outcome = OPT_FAILED;
+    if (opts)
+        o = *opts;
+    else
+        opt_defaults(&o);
+    if (o.max_iter < 0 || o.ls_halvings < 0 || o.ls_halvings > 60 || !(o.mu > 0) ||
+        !(o.tol_move >= 0) || !(o.eps_rel > 0) || !(o.finish_frac >= 0 && o.finish_frac <= 1) ||
+        o.finish_sweeps < 0 || o.pre_iters < 0 || (unsigned)o.metric > OPT_METRIC_MICN ||
+        (unsigned)o.boundary > OPT_BOUNDARY_SLIDE || (unsigned)o.mode > OPT_MODE_LITERAL ||
+        (unsigned)o.weights > OPT_WEIGHTS_PAPER || (unsigned)o.solver > OPT_SOLVER_PCG) {
+        st = qdc_fail(err, QDC_EINVAL, "invalid optimizer options");
+        goto out;
+    }
+    st = mesh_topo_build(m, &tp, err);
+    if (st != QDC_OK)
+        goto out;
+    st = ctx_init(&c, m, tp, &o);
+    if (st != QDC_OK)
+        goto out;
+    c.t0 = t_start;
+    st = solve_new(tp, c.locked, o.solver, &c.sol, err);
+    if (st != QDC_OK)
+        goto out;
+    res.solver = solve_kind(c.sol);
+    res.solver_flops = solve_flops(c.sol);
+    logf_(&c, 0, "%d vertices (%d boundary), %d tets; solver %s (analysis %.3g flops)",
+          (int)m->nv, (int)tp->nb, (int)m->nt, opt_solver_name(res.solver), res.solver_flops);
+    res.t_setup = qdc_now() - t_start;
+
+    evaluate(&c, c.x, metric_delta(encode_min_arg(tp, c.x, o.metric), c.eps), &r);
+    r.phase = "input";
+    c.input = c.best = r;
+    res.before = r;
+    snprintf(res.stop_reason, sizeof res.stop_reason, "max-iter");
+    if (report(&c, &r)) {
+        stop = 1;
+        snprintf(res.stop_reason, sizeof res.stop_reason, "cancelled");
+    }
+    total_iters = o.max_iter + (o.harmonic ? o.pre_iters : 0);
+    for (it = 1; !stop && it <= total_iters; it++) {
+        int stepped = 0, pre = o.harmonic && it <= o.pre_iters;
+        if (should_stop(&c, res.stop_reason, sizeof res.stop_reason)) {
+            stop = 1;
+            break;
+        }
+        if (o.harmonic && it == o.pre_iters + 1) {
+            st = set_harmonic(&c, &res, err);
+            if (st != QDC_OK)
+                goto out;
+        }
+        st = iterate(&c, &res, &r, &stepped, err);
+        if (st == QDC_ESOLVE) {
+            /* solver trouble: stop with the best mesh so far (STYLE §3) */
+            snprintf(res.stop_reason, sizeof res.stop_reason, "solver");
+            logf_(&c, 1, "iteration %d: %s", it, err ? err->msg : "solve failed");
+            st = QDC_OK;
+            stop = 1;
+            break;
+        }
+        if (st != QDC_OK)
+            goto out;
+        r.iteration = it;
+        r.phase = pre ? "pre" : "global";
+        res.iterations = it;
+        consider(&c, c.x, &r);
+        if (report(&c, &r)) {
+            snprintf(res.stop_reason, sizeof res.stop_reason, "cancelled");
+            stop = 1;
+            break;
+        }
+        if (!stepped) {
+            snprintf(res.stop_reason, sizeof res.stop_reason, "no-descent");
+            if (!pre)
+                break;
+        } else if (r.max_move < o.tol_move && !pre) {
+            snprintf(res.stop_reason, sizeof res.stop_reason, "converged");
+            break;
+        }
+    }
+    res.before_finish = c.best;
+    if (o.finish && !stop && o.finish_sweeps > 0) {
+        double t = qdc_now();
+        uint8_t *movable = qdc_mallocn((size_t)c.nv, 1);
+        if (!movable) {
+            st = QDC_ENOMEM;
+            goto out;
+        }
+        /* Boundary and interface vertices stay put here in every mode: moving
+         * them off the surface is the business of the boundary mode. */
+        for (int32_t v = 0; v < c.nv; v++)
+            movable[v] = !c.locked[v] &&
+                         !(tp->vflag[v] & (MESH_V_BOUNDARY | MESH_V_INTERFACE));
+        memcpy(c.x, c.xbest, 3 * (size_t)c.nv * sizeof(double));
+        for (int s = 0; s < o.finish_sweeps; s++) {
+            finish_stats fs;
+            if (should_stop(&c, res.stop_reason, sizeof res.stop_reason))
+                break;
+            st = finish_sweep(tp, movable, c.x, o.metric, c.eps, c.lbar, o.finish_frac, &fs);
+            if (st != QDC_OK) {
+                qdc_free(movable);
+                goto out;
+            }
+            evaluate(&c, c.x, fs.delta, &r);
+            r.iteration = res.iterations + 1 + s;
+            r.phase = "finish";
+            r.step = fs.n_verts ? (double)fs.n_moves / fs.n_verts : 0;
+            consider(&c, c.x, &r);
+            if (report(&c, &r)) {
+                snprintf(res.stop_reason, sizeof res.stop_reason, "cancelled");
+                break;
+            }
+            if (fs.n_moves == 0)
+                break;
+        }
+        qdc_free(movable);
+        res.t_finish = qdc_now() - t;
+    }
+    /* map back; locked vertices keep their exact input coordinates */
+    for (int32_t v = 0; v < c.nv; v++)
+        if (!c.locked[v])
+            for (int k = 0; k < 3; k++)
+                m->xyz[3 * (size_t)v + k] = c.xbest[3 * (size_t)v + k] * c.scale + c.center[k];
+    res.after = c.best;
+    res.best_iteration = c.best_it;
+    res.outcome = strcmp(res.stop_reason, "converged") == 0 ||
+                          strcmp(res.stop_reason, "max-iter") == 0 ||
+                          strcmp(res.stop_reason, "no-descent") == 0
+                      ? OPT_CONVERGED
+                      : OPT_STOPPED;
+    st = QDC_OK;
+out:
+    res.t_total = qdc_now() - t_start;
+    if (st != QDC_OK)
+        res.outcome = OPT_FAILED;
+    if (res_out)
+        *res_out = res;
+    ctx_free(&c);
+    mesh_topo_free(tp);
+    return st;
+}
