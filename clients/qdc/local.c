@@ -1,0 +1,361 @@
+/* local.c - `qdc optimize` and `qdc quality`: thin layers over libqdc. */
+#define _POSIX_C_SOURCE 200809L
+#include "bderr.h"
+#include "cli.h"
+#include "mesh.h"
+#include "meshio.h"
+#include "opt.h"
+#include "report.h"
+
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+static volatile sig_atomic_t interrupted;
+static volatile int cancel_flag;
+
+static void on_signal(int sig)
+{
+    (void)sig;
+    interrupted = 1;
+    cancel_flag = 1;
+}
+
+void cli_error(const char *path, const qdc_error *err, qdc_status st)
+{
+    fprintf(stderr, "qdc: %s", path ? path : "");
+    if (err && err->line > 0) {
+        fprintf(stderr, ":%lld", (long long)err->line);
+        if (err->col > 0)
+            fprintf(stderr, ":%lld", (long long)err->col);
+    } else if (err && err->offset >= 0) {
+        fprintf(stderr, ": byte %lld", (long long)err->offset);
+    }
+    fprintf(stderr, ": %s\n", err && err->msg[0] ? err->msg : qdc_status_str(st));
+}
+
+typedef struct {
+    int quiet;
+    int tty;
+    int last_len;
+} progress_state;
+
+static int on_progress(void *ctx, const opt_progress *p)
+{
+    progress_state *ps = ctx;
+    char line[200];
+    int n;
+
+    if (ps->quiet)
+        return cancel_flag;
+    n = snprintf(line, sizeof line,
+                 "%-6s %3d  q mean %.4f min %+.4f  dihedral %6.2f..%6.2f  inverted %d  "
+                 "step %.3g  %.1fs",
+                 p->phase, p->iteration, p->q_mean, p->q_min, p->dih_min, p->dih_max,
+                 (int)p->n_inverted, p->step, p->elapsed);
+    if (ps->tty) {
+        fprintf(stderr, "\r%s%*s", line, ps->last_len > n ? ps->last_len - n : 0, "");
+        ps->last_len = n;
+    } else {
+        fprintf(stderr, "%s\n", line);
+    }
+    fflush(stderr);
+    return cancel_flag;
+}
+
+static void on_log(void *ctx, int level, const char *msg)
+{
+    progress_state *ps = ctx;
+
+    if (ps->quiet && level == 0)
+        return;
+    if (ps->tty && ps->last_len) {
+        fputc('\n', stderr);
+        ps->last_len = 0;
+    }
+    fprintf(stderr, "qdc: %s%s\n", level ? "warning: " : "", msg);
+}
+
+static void optimize_usage(FILE *f)
+{
+    fputs("usage: qdc optimize IN OUT [options]\n"
+          "  --metric mivl|mimr|micn    quality metric (default mivl)\n"
+          "  --boundary lsq|fixed       boundary handling (default lsq)\n"
+          "  --harmonic on|off          harmonic guidance, paper Sec. 5.1 (default off)\n"
+          "  --mode safe|literal        safeguarded method or the paper as written (default safe)\n"
+          "  --weights optavg|paper     QDC weights (default optavg)\n"
+          "  --solver auto|cholmod|pcg  linear solver (default auto)\n"
+          "  --finish on|off            worst-tet finishing pass (default on)\n"
+          "  --max-iter N               global iterations (default 10)\n"
+          "  --mu X                     damping in normalized units (default 1)\n"
+          "  --time-limit SECONDS       stop with the best mesh so far\n"
+          "  --in-format F, --out-format F   medit|tetgen|qmesh|json (default: by extension)\n"
+          "  --report FILE.json         write the quality/boundary report\n"
+          "  --quiet                    no progress output\n",
+          f);
+}
+
+static int on_off(const char *s, int *out)
+{
+    if (!strcmp(s, "on") || !strcmp(s, "1") || !strcmp(s, "yes"))
+        *out = 1;
+    else if (!strcmp(s, "off") || !strcmp(s, "0") || !strcmp(s, "no"))
+        *out = 0;
+    else
+        return -1;
+    return 0;
+}
+
+static int write_report(const char *path, const report_t *r)
+{
+    FILE *f = strcmp(path, "-") ? fopen(path, "w") : stdout;
+    qdc_error err;
+    qdc_status st;
+
+    qdc_error_clear(&err);
+    if (!f) {
+        fprintf(stderr, "qdc: %s: cannot open for writing\n", path);
+        return CLI_EOUTPUT;
+    }
+    st = report_write_json(r, report_file_writer, f, &err);
+    if ((f != stdout && fclose(f) != 0) || st != QDC_OK) {
+        fprintf(stderr, "qdc: %s: write failed\n", path);
+        return CLI_EOUTPUT;
+    }
+    return CLI_OK;
+}
+
+int cli_optimize(int argc, char **argv)
+{
+    opt_options o;
+    opt_result res;
+    progress_state ps = {0, 0, 0};
+    const char *in = NULL, *out = NULL, *report_path = NULL;
+    meshio_format fin = MESHIO_AUTO, fout = MESHIO_AUTO;
+    mesh_t *m = NULL, *orig = NULL;
+    qdc_error err;
+    qdc_status st;
+    int rc = CLI_OK;
+    struct sigaction sa;
+
+    opt_defaults(&o);
+    qdc_error_clear(&err);
+    for (int i = 1; i < argc; i++) {
+        const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
+        int bad = 0;
+        if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
+            optimize_usage(stdout);
+            return CLI_OK;
+        } else if (!strcmp(a, "--quiet") || !strcmp(a, "-q")) {
+            ps.quiet = 1;
+            continue;
+        } else if (a[0] == '-' && a[1] == '-') {
+            if (!v) {
+                fprintf(stderr, "qdc: %s needs a value\n", a);
+                return CLI_EUSAGE;
+            }
+            i++;
+            if (!strcmp(a, "--metric"))
+                bad = opt_parse_metric(v, &o.metric) != QDC_OK;
+            else if (!strcmp(a, "--boundary"))
+                bad = opt_parse_boundary(v, &o.boundary) != QDC_OK;
+            else if (!strcmp(a, "--mode"))
+                bad = opt_parse_mode(v, &o.mode) != QDC_OK;
+            else if (!strcmp(a, "--weights"))
+                bad = opt_parse_weights(v, &o.weights) != QDC_OK;
+            else if (!strcmp(a, "--solver"))
+                bad = opt_parse_solver(v, &o.solver) != QDC_OK;
+            else if (!strcmp(a, "--harmonic"))
+                bad = on_off(v, &o.harmonic);
+            else if (!strcmp(a, "--finish"))
+                bad = on_off(v, &o.finish);
+            else if (!strcmp(a, "--max-iter")) {
+                char *end;
+                long n = strtol(v, &end, 10);
+                bad = *end || n < 0 || n > 100000;
+                o.max_iter = (int)n;
+            } else if (!strcmp(a, "--mu") || !strcmp(a, "--time-limit")) {
+                char *end;
+                double x = strtod(v, &end);
+                bad = *end || !(x > 0) || x > 1e12;
+                if (!strcmp(a, "--mu"))
+                    o.mu = x;
+                else
+                    o.time_limit = x;
+            } else if (!strcmp(a, "--in-format"))
+                bad = (fin = meshio_format_from_name(v)) == MESHIO_AUTO;
+            else if (!strcmp(a, "--out-format"))
+                bad = (fout = meshio_format_from_name(v)) == MESHIO_AUTO;
+            else if (!strcmp(a, "--report"))
+                report_path = v;
+            else {
+                fprintf(stderr, "qdc: unknown option %s (see qdc optimize --help)\n", a);
+                return CLI_EUSAGE;
+            }
+            if (bad) {
+                fprintf(stderr, "qdc: bad value '%s' for %s\n", v, a);
+                return CLI_EUSAGE;
+            }
+        } else if (!in) {
+            in = a;
+        } else if (!out) {
+            out = a;
+        } else {
+            fprintf(stderr, "qdc: unexpected argument '%s'\n", a);
+            return CLI_EUSAGE;
+        }
+    }
+    if (!in || !out) {
+        optimize_usage(stderr);
+        return CLI_EUSAGE;
+    }
+    ps.tty = isatty(STDERR_FILENO);
+    o.progress = on_progress;
+    o.progress_ctx = &ps;
+    o.log = on_log;
+    o.log_ctx = &ps;
+    o.cancel = &cancel_flag;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_signal;
+    sigaction(SIGINT, &sa, NULL);
+    sigaction(SIGTERM, &sa, NULL);
+
+    st = meshio_load(in, fin, &m, &err);
+    if (st == QDC_OK)
+        st = mesh_validate(m, NULL, &err);
+    if (st != QDC_OK) {
+        cli_error(in, &err, st);
+        rc = st == QDC_ENOMEM ? CLI_EOPT : CLI_EINPUT;
+        goto out;
+    }
+    orig = report_path ? mesh_dup(m) : NULL;
+    if (report_path && !orig) {
+        fprintf(stderr, "qdc: out of memory\n");
+        rc = CLI_EOPT;
+        goto out;
+    }
+    st = opt_run(m, &o, &res, &err);
+    if (ps.tty && ps.last_len)
+        fputc('\n', stderr);
+    if (st != QDC_OK) {
+        cli_error(in, &err, st);
+        rc = st == QDC_EMESH || st == QDC_EINVAL ? CLI_EINPUT : CLI_EOPT;
+        goto out;
+    }
+    st = meshio_save(out, fout, m, &err);
+    if (st != QDC_OK) {
+        cli_error(out, &err, st);
+        rc = CLI_EOUTPUT;
+        goto out;
+    }
+    if (!ps.quiet)
+        fprintf(stderr,
+                "qdc: %s -> %s: mean ratio %.4f -> %.4f, min %+.4f -> %+.4f, inverted %d -> %d, "
+                "dihedral %.2f..%.2f -> %.2f..%.2f (%s, %d iterations, %s, %.2fs)\n",
+                in, out, res.before.q_mean, res.after.q_mean, res.before.q_min,
+                res.after.q_min, (int)res.before.n_inverted, (int)res.after.n_inverted,
+                res.before.dih_min, res.before.dih_max, res.after.dih_min, res.after.dih_max,
+                res.stop_reason, res.iterations, opt_solver_name(res.solver), res.t_total);
+    if (report_path) {
+        report_quality qb, qa;
+        bderr_result be;
+        report_t r = {&qb, &qa, &res, &o, &be};
+        st = report_quality_compute(orig, &qb, &err);
+        if (st == QDC_OK)
+            st = report_quality_compute(m, &qa, &err);
+        if (st == QDC_OK)
+            st = bderr_meshes(m, orig, 200000, &be, &err);
+        if (st != QDC_OK) {
+            cli_error(report_path, &err, st);
+            rc = CLI_EOUTPUT;
+            goto out;
+        }
+        rc = write_report(report_path, &r);
+    }
+    if (rc == CLI_OK && interrupted)
+        rc = CLI_EINTR;
+out:
+    mesh_free(m);
+    mesh_free(orig);
+    return rc;
+}
+
+int cli_quality(int argc, char **argv)
+{
+    const char *in = NULL, *ref = NULL;
+    int json = 0, rc = CLI_OK;
+    mesh_t *m = NULL, *r = NULL;
+    report_quality q;
+    bderr_result be;
+    qdc_error err;
+    qdc_status st;
+
+    qdc_error_clear(&err);
+    for (int i = 1; i < argc; i++) {
+        if (!strcmp(argv[i], "--json"))
+            json = 1;
+        else if ((!strcmp(argv[i], "--ref") || !strcmp(argv[i], "--orig")) && i + 1 < argc)
+            ref = argv[++i];
+        else if (!strcmp(argv[i], "-h") || !strcmp(argv[i], "--help")) {
+            puts("usage: qdc quality IN [--ref ORIG] [--json]");
+            return CLI_OK;
+        } else if (argv[i][0] != '-' && !in)
+            in = argv[i];
+        else {
+            fprintf(stderr, "qdc: quality: unexpected argument '%s'\n", argv[i]);
+            return CLI_EUSAGE;
+        }
+    }
+    if (!in) {
+        fputs("usage: qdc quality IN [--ref ORIG] [--json]\n", stderr);
+        return CLI_EUSAGE;
+    }
+    st = meshio_load(in, MESHIO_AUTO, &m, &err);
+    if (st == QDC_OK)
+        st = report_quality_compute(m, &q, &err);
+    if (st != QDC_OK) {
+        cli_error(in, &err, st);
+        rc = CLI_EINPUT;
+        goto out;
+    }
+    if (ref) {
+        st = meshio_load(ref, MESHIO_AUTO, &r, &err);
+        if (st != QDC_OK) {
+            cli_error(ref, &err, st);
+            rc = CLI_EINPUT;
+            goto out;
+        }
+        st = bderr_meshes(m, r, 200000, &be, &err);
+        if (st != QDC_OK) {
+            cli_error(ref, &err, st);
+            rc = CLI_EINPUT;
+            goto out;
+        }
+    }
+    if (json) {
+        report_t rep = {NULL, &q, NULL, NULL, ref ? &be : NULL};
+        st = report_write_json(&rep, report_file_writer, stdout, &err);
+        rc = st == QDC_OK ? CLI_OK : CLI_EOUTPUT;
+    } else {
+        printf("%s: %d vertices, %d tets, %d inverted, %d degenerate\n", in, (int)q.nv,
+               (int)q.nt, (int)q.n_inverted, (int)q.n_degenerate);
+        printf("mean ratio: mean %.4f std %.4f min %+.4f\n", q.q_mean, q.q_std, q.q_min);
+        printf("dihedral: min %.2f max %.2f deg; tets with min < 5/15/30/40: %d/%d/%d/%d; "
+               "max > 175/165/150/140: %d/%d/%d/%d\n",
+               q.dih_min, q.dih_max, (int)q.n_dmin_lt[0], (int)q.n_dmin_lt[1],
+               (int)q.n_dmin_lt[2], (int)q.n_dmin_lt[3], (int)q.n_dmax_gt[0],
+               (int)q.n_dmax_gt[1], (int)q.n_dmax_gt[2], (int)q.n_dmax_gt[3]);
+        printf("volume-length: mean %.4f min %+.4f; condition number: mean %.4f max %.4g\n",
+               q.vl_mean, q.vl_min, q.cn_mean, q.cn_max);
+        if (ref)
+            printf("boundary error vs %s: Hausdorff %.6g (%.3g%% of diagonal), mean %.3g, "
+                   "RMS %.3g\n",
+                   ref, be.hausdorff, 100 * be.hausdorff_rel, be.mean, be.rms);
+    }
+out:
+    mesh_free(m);
+    mesh_free(r);
+    return rc;
+}

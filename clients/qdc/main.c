@@ -1,0 +1,39 @@
+/* main.c - the qdc command: local optimization and quality reports
+ * (remote subcommands: see remote.c when present). */
+#include "cli.h"
+
+#include <stdio.h>
+#include <string.h>
+
+static void usage(FILE *f)
+{
+    fputs("usage: qdc COMMAND [ARGS]\n"
+          "\n"
+          "Local commands:\n"
+          "  optimize IN OUT [options]   optimize a tet mesh (qdc optimize --help)\n"
+          "  quality IN [--ref ORIG] [--json]   quality report of a mesh\n"
+          "\n"
+          "Exit codes: 0 ok, 1 usage, 2 bad input file, 3 optimization failed,\n"
+          "  4 output not written, 5 interrupted (best mesh so far written),\n"
+          "  10 server rejected the request, 11 job failed, 12 network failure.\n",
+          f);
+}
+
+int main(int argc, char **argv)
+{
+    if (argc < 2) {
+        usage(stderr);
+        return CLI_EUSAGE;
+    }
+    if (!strcmp(argv[1], "-h") || !strcmp(argv[1], "--help") || !strcmp(argv[1], "help")) {
+        usage(stdout);
+        return CLI_OK;
+    }
+    if (!strcmp(argv[1], "optimize"))
+        return cli_optimize(argc - 1, argv + 1);
+    if (!strcmp(argv[1], "quality"))
+        return cli_quality(argc - 1, argv + 1);
+    fprintf(stderr, "qdc: unknown command '%s'\n", argv[1]);
+    usage(stderr);
+    return CLI_EUSAGE;
+}

@@ -1,0 +1,385 @@
+/* test_core.c - analytic checks of metrics, QDC encoding and the linear solvers. */
+#include "encode.h"
+#include "metric.h"
+#include "solve.h"
+#include "testlib.h"
+#include "testmesh.h"
+
+#include <math.h>
+#include <string.h>
+
+/* unit regular tet, positive orientation */
+static const double REG[4][3] = {{0, 0, 0},
+                                 {1, 0, 0},
+                                 {0.5, 0.86602540378443865, 0},
+                                 {0.5, 0.28867513459481288, 0.81649658092772603}};
+
+TEST(regular_tet_metrics_are_one)
+{
+    metric_parts p;
+    double ang[6];
+    metric_parts_of(REG[0], REG[1], REG[2], REG[3], &p);
+    ASSERT_NEAR(metric_qt(OPT_METRIC_MIMR, &p, 0), 1.0, 1e-12);
+    ASSERT_NEAR(metric_qt(OPT_METRIC_MICN, &p, 0), 1.0, 1e-12);
+    ASSERT_NEAR(metric_qt(OPT_METRIC_MIVL, &p, 0), 1.0, 1e-12);
+    ASSERT_NEAR(metric_mean_ratio(&p), 1.0, 1e-12);
+    ASSERT_NEAR(metric_vol_length(&p), 1.0, 1e-12);
+    ASSERT_NEAR(p.vol, 1.0 / (6.0 * sqrt(2.0)), 1e-14);
+    metric_dihedrals(REG[0], REG[1], REG[2], REG[3], ang);
+    for (int e = 0; e < 6; e++)
+        ASSERT_NEAR(ang[e], acos(1.0 / 3.0) * 180.0 / 3.14159265358979323846, 1e-9);
+}
+
+TEST(scaled_regular_tet_is_still_one)
+{
+    double s[4][3];
+    metric_parts p;
+    for (int a = 0; a < 4; a++)
+        for (int k = 0; k < 3; k++)
+            s[a][k] = 7.5 * REG[a][k] + 3.0;
+    metric_parts_of(s[0], s[1], s[2], s[3], &p);
+    ASSERT_NEAR(metric_qt(OPT_METRIC_MIMR, &p, 0), 1.0, 1e-12);
+    ASSERT_NEAR(metric_qt(OPT_METRIC_MICN, &p, 0), 1.0, 1e-12);
+    ASSERT_NEAR(metric_qt(OPT_METRIC_MIVL, &p, 0), 1.0, 1e-12);
+}
+
+TEST(mivl_is_mimr_to_three_halves)
+{
+    double t[4][3] = {{0, 0, 0}, {1, 0.1, 0}, {0.2, 0.7, 0.1}, {0.3, 0.2, 0.4}};
+    metric_parts p;
+    metric_parts_of(t[0], t[1], t[2], t[3], &p);
+    ASSERT_NEAR(metric_qt(OPT_METRIC_MIVL, &p, 0), pow(metric_qt(OPT_METRIC_MIMR, &p, 0), 1.5),
+                1e-12);
+}
+
+TEST(inverted_tet_negative_mean_ratio_and_infinite_qt)
+{
+    metric_parts p;
+    metric_parts_of(REG[0], REG[2], REG[1], REG[3], &p);
+    ASSERT_NEAR(metric_mean_ratio(&p), -1.0, 1e-12);
+    ASSERT_TRUE(isinf(metric_qt(OPT_METRIC_MIVL, &p, 0)));
+    ASSERT_TRUE(isfinite(metric_qt(OPT_METRIC_MIVL, &p, 1e-3)));
+}
+
+TEST(h_is_continuous_and_regularizes)
+{
+    double d = 0.01;
+    ASSERT_NEAR(metric_h(0, d), d, 1e-15);
+    ASSERT_NEAR(metric_h(1e-9, d) - metric_h(-1e-9, d), 1e-9, 1e-12);
+    ASSERT_NEAR(metric_h(100, d), 100, 1e-5);
+    ASSERT_TRUE(metric_h(-100, d) > 0);
+    ASSERT_NEAR(metric_h(-0.3, 0), -0.3, 0);
+    /* delta rule of Escobar: delta = sqrt(eps (eps - smin)) below eps, else 0 */
+    ASSERT_NEAR(metric_delta(0.5, 0.1), 0.0, 0);
+    ASSERT_NEAR(metric_delta(-0.3, 0.1), sqrt(0.1 * 0.4), 1e-15);
+}
+
+/* closed-form alpha* (METHOD §3) against a brute-force 1D search of q~ */
+TEST(alpha_closed_form_matches_search)
+{
+    double f[3][3] = {{0.1, 0.0, 0.0}, {1.2, 0.2, 0.1}, {0.3, 0.9, -0.1}};
+    double e1[3], e2[3], n[3], pc[3], len;
+    for (int k = 0; k < 3; k++) {
+        e1[k] = f[1][k] - f[0][k];
+        e2[k] = f[2][k] - f[0][k];
+        pc[k] = (f[0][k] + f[1][k] + f[2][k]) / 3;
+    }
+    n[0] = -(e1[1] * e2[2] - e1[2] * e2[1]);
+    n[1] = -(e1[2] * e2[0] - e1[0] * e2[2]);
+    n[2] = -(e1[0] * e2[1] - e1[1] * e2[0]);
+    len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    for (int k = 0; k < 3; k++)
+        n[k] /= len;
+    for (int mm = 0; mm < 3; mm++) {
+        opt_metric m = (opt_metric)mm;
+        double best = INFINITY, abest = 0, a = metric_alpha_opt(m, f[0], f[1], f[2]);
+        for (int i = 1; i <= 200000; i++) {
+            double al = 3.0 * i / 200000, p[3];
+            metric_parts pt;
+            for (int k = 0; k < 3; k++)
+                p[k] = pc[k] + al * n[k];
+            /* tet (p, f0, f1, f2) is positive with p on the inward side */
+            metric_parts_of(p, f[0], f[1], f[2], &pt);
+            double q = metric_qt(m, &pt, 0);
+            if (q < best) {
+                best = q;
+                abest = al;
+            }
+        }
+        ASSERT_NEAR(a, abest, 2e-5);
+    }
+}
+
+TEST(gradient_matches_finite_differences)
+{
+    double t[4][3] = {{0, 0, 0}, {1, 0.1, 0}, {0.2, 0.7, 0.1}, {0.3, 0.2, 0.4}};
+    for (int mm = 0; mm < 3; mm++)
+        for (int a = 0; a < 4; a++)
+            for (int dl = 0; dl < 2; dl++) {
+                double delta = dl ? 0.02 : 0.0, g[3], h = 1e-6;
+                metric_qt_grad((opt_metric)mm, &t[0][0], a, delta, g);
+                for (int k = 0; k < 3; k++) {
+                    double tp[4][3], tm[4][3], qp, qm;
+                    metric_parts pp, pm;
+                    memcpy(tp, t, sizeof t);
+                    memcpy(tm, t, sizeof t);
+                    tp[a][k] += h;
+                    tm[a][k] -= h;
+                    metric_parts_of(tp[0], tp[1], tp[2], tp[3], &pp);
+                    metric_parts_of(tm[0], tm[1], tm[2], tm[3], &pm);
+                    qp = metric_qt((opt_metric)mm, &pp, delta);
+                    qm = metric_qt((opt_metric)mm, &pm, delta);
+                    ASSERT_NEAR(g[k], (qp - qm) / (2 * h), 1e-5 * (1 + fabs(g[k])));
+                }
+            }
+}
+
+/* a regular tet split at its centroid: 4 congruent tets around vertex 4 */
+static mesh_t *star_mesh(void)
+{
+    mesh_t *m = mesh_new(5, 4, 0);
+    static const int32_t tets[4][4] = {{4, 1, 2, 3}, {0, 4, 2, 3}, {0, 1, 4, 3}, {0, 1, 2, 4}};
+    for (int a = 0; a < 4; a++)
+        for (int k = 0; k < 3; k++) {
+            m->xyz[3 * a + k] = REG[a][k];
+            m->xyz[12 + k] += REG[a][k] / 4;
+        }
+    memcpy(m->tets, tets, sizeof tets);
+    return m;
+}
+
+TEST(qdc_of_symmetric_star)
+{
+    mesh_t *m = star_mesh();
+    mesh_topo *tp = NULL;
+    double qt[4], *qval, d[15];
+    ASSERT_OK(mesh_topo_build(m, &tp, NULL));
+    ASSERT_EQ_INT(tp->nb, 4);
+    ASSERT_EQ_INT(tp->nbf, 4);
+    qval = calloc((size_t)tp->adj_ptr[5], sizeof(double));
+    encode_objective(tp, m->xyz, OPT_METRIC_MIVL, 0, qt, NULL);
+    encode_optavg(tp, m->xyz, OPT_METRIC_MIVL, qt, qval, d);
+    /* centre row: 1 on the diagonal, -1/4 on each corner (3 faces x 1/4 x 1/3) */
+    for (int32_t s = tp->adj_ptr[4]; s < tp->adj_ptr[5]; s++)
+        ASSERT_NEAR(qval[s], tp->adj_idx[s] == 4 ? 1.0 : -0.25, 1e-14);
+    /* the inward normals of the 4 faces cancel: d = 0 */
+    for (int k = 0; k < 3; k++)
+        ASSERT_NEAR(d[12 + k], 0.0, 1e-14);
+    /* every row sums to 0 (weights sum to 1) for both weightings */
+    for (int w = 0; w < 2; w++) {
+        if (w)
+            encode_paper(tp, m->xyz, OPT_METRIC_MIVL, qt, qval, d);
+        for (int32_t i = 0; i < 5; i++) {
+            double sum = 0;
+            for (int32_t s = tp->adj_ptr[i]; s < tp->adj_ptr[i + 1]; s++)
+                sum += qval[s];
+            ASSERT_NEAR(sum, 0.0, 1e-13);
+        }
+    }
+    free(qval);
+    mesh_topo_free(tp);
+    mesh_free(m);
+}
+
+TEST(optavg_weights_sum_to_one_on_random_mesh)
+{
+    int n = 4;
+    mesh_t *m = tm_grid(n, 0);
+    mesh_topo *tp = NULL;
+    double *qt, *qval, *d;
+    tm_perturb(m, n, 0.3, 7);
+    ASSERT_OK(mesh_topo_build(m, &tp, NULL));
+    qt = malloc(sizeof(double) * (size_t)m->nt);
+    qval = malloc(sizeof(double) * (size_t)tp->adj_ptr[m->nv]);
+    d = malloc(sizeof(double) * 3 * (size_t)m->nv);
+    encode_objective(tp, m->xyz, OPT_METRIC_MIVL, 0, qt, NULL);
+    encode_optavg(tp, m->xyz, OPT_METRIC_MIVL, qt, qval, d);
+    for (int32_t i = 0; i < m->nv; i++) {
+        double sum = 0;
+        for (int32_t s = tp->adj_ptr[i]; s < tp->adj_ptr[i + 1]; s++) {
+            sum += qval[s];
+            if (tp->adj_idx[s] != i)
+                ASSERT_TRUE(qval[s] <= 0);
+        }
+        ASSERT_NEAR(sum, 0.0, 1e-13);
+    }
+    free(qt);
+    free(qval);
+    free(d);
+    mesh_topo_free(tp);
+    mesh_free(m);
+}
+
+/* Dense reference: A = Q_F^T W Q_F + diag(dg) solved by Gaussian elimination. */
+static void dense_solve(const mesh_topo *tp, const uint8_t *locked, const double *qval,
+                        const double *w2, const double *dg, const double *b, double *x)
+{
+    int n = tp->nv;
+    double *A = calloc((size_t)n * n, sizeof(double)), *B = malloc(sizeof(double) * 3 * n);
+    for (int i = 0; i < n; i++)
+        for (int32_t s1 = tp->adj_ptr[i]; s1 < tp->adj_ptr[i + 1]; s1++)
+            for (int32_t s2 = tp->adj_ptr[i]; s2 < tp->adj_ptr[i + 1]; s2++)
+                A[(size_t)tp->adj_idx[s1] * n + tp->adj_idx[s2]] += w2[i] * qval[s1] * qval[s2];
+    for (int i = 0; i < n; i++) {
+        A[(size_t)i * n + i] += dg[i];
+        for (int k = 0; k < 3; k++)
+            B[3 * i + k] = b[3 * i + k];
+        if (locked[i]) { /* identity row: x_i = 0 (caller moved locked terms to b) */
+            for (int j = 0; j < n; j++)
+                A[(size_t)i * n + j] = A[(size_t)j * n + i] = 0;
+            A[(size_t)i * n + i] = 1;
+            B[3 * i] = B[3 * i + 1] = B[3 * i + 2] = 0;
+        }
+    }
+    for (int c = 0; c < n; c++) {
+        for (int r = c + 1; r < n; r++) {
+            double f = A[(size_t)r * n + c] / A[(size_t)c * n + c];
+            for (int j = c; j < n; j++)
+                A[(size_t)r * n + j] -= f * A[(size_t)c * n + j];
+            for (int k = 0; k < 3; k++)
+                B[3 * r + k] -= f * B[3 * c + k];
+        }
+    }
+    for (int r = n - 1; r >= 0; r--)
+        for (int k = 0; k < 3; k++) {
+            double s = B[3 * r + k];
+            for (int j = r + 1; j < n; j++)
+                s -= A[(size_t)r * n + j] * x[3 * j + k];
+            x[3 * r + k] = s / A[(size_t)r * n + r];
+        }
+    free(A);
+    free(B);
+}
+
+TEST(cholmod_and_pcg_agree_with_dense)
+{
+    int n = 3;
+    mesh_t *m = tm_grid(n, 0);
+    mesh_topo *tp = NULL;
+    uint64_t seed = 99;
+    int32_t nv = m->nv;
+    double *qt, *qval, *d, *w2, *dg, *b, *xd, *xc, *xp;
+    uint8_t *locked;
+    solve_ctx *sc = NULL, *sp = NULL;
+    int it;
+    tm_perturb(m, n, 0.3, 3);
+    ASSERT_OK(mesh_topo_build(m, &tp, NULL));
+    qt = malloc(sizeof(double) * (size_t)m->nt);
+    qval = malloc(sizeof(double) * (size_t)tp->adj_ptr[nv]);
+    d = malloc(sizeof(double) * 3 * nv);
+    w2 = malloc(sizeof(double) * nv);
+    dg = malloc(sizeof(double) * nv);
+    b = malloc(sizeof(double) * 3 * nv);
+    xd = calloc(3 * (size_t)nv, sizeof(double));
+    xc = calloc(3 * (size_t)nv, sizeof(double));
+    xp = calloc(3 * (size_t)nv, sizeof(double));
+    locked = calloc((size_t)nv, 1);
+    encode_objective(tp, m->xyz, OPT_METRIC_MIVL, 0, qt, NULL);
+    encode_optavg(tp, m->xyz, OPT_METRIC_MIVL, qt, qval, d);
+    for (int32_t i = 0; i < nv; i++) {
+        w2[i] = 1.0 + 0.5 * tm_rand(&seed);
+        dg[i] = 1.0 + ((tp->vflag[i] & MESH_V_BOUNDARY) ? 1.0 : 0.0);
+        locked[i] = i % 7 == 0;
+        for (int k = 0; k < 3; k++)
+            b[3 * i + k] = tm_rand(&seed);
+    }
+    dense_solve(tp, locked, qval, w2, dg, b, xd);
+    ASSERT_OK(solve_new(tp, locked, OPT_SOLVER_CHOLMOD, &sc, NULL));
+    ASSERT_EQ_INT(solve_kind(sc), OPT_SOLVER_CHOLMOD);
+    ASSERT_TRUE(solve_flops(sc) > 0);
+    ASSERT_OK(solve_system(sc, qval, w2, dg, b, xc, &it, NULL));
+    ASSERT_OK(solve_new(tp, locked, OPT_SOLVER_PCG, &sp, NULL));
+    ASSERT_EQ_INT(solve_kind(sp), OPT_SOLVER_PCG);
+    ASSERT_OK(solve_system(sp, qval, w2, dg, b, xp, &it, NULL));
+    ASSERT_TRUE(it > 0);
+    for (int32_t i = 0; i < nv; i++)
+        for (int k = 0; k < 3; k++) {
+            if (locked[i])
+                continue;
+            ASSERT_NEAR(xc[3 * i + k], xd[3 * i + k], 1e-9);
+            ASSERT_NEAR(xp[3 * i + k], xd[3 * i + k], 1e-7);
+        }
+    solve_free(sc);
+    solve_free(sp);
+    free(qt);
+    free(qval);
+    free(d);
+    free(w2);
+    free(dg);
+    free(b);
+    free(xd);
+    free(xc);
+    free(xp);
+    free(locked);
+    mesh_topo_free(tp);
+    mesh_free(m);
+}
+
+TEST(topology_of_grid)
+{
+    int n = 3;
+    mesh_t *m = tm_grid(n, MESH_WITH_REGION);
+    mesh_topo *tp = NULL;
+    mesh_check c;
+    ASSERT_OK(mesh_validate(m, &c, NULL));
+    ASSERT_EQ_INT(c.n_inverted, 0);
+    ASSERT_EQ_INT(c.n_unreferenced, 0);
+    ASSERT_OK(mesh_topo_build(m, &tp, NULL));
+    /* boundary: 6 faces x n^2 squares x 2 triangles; boundary vertices (n+1)^3-(n-1)^3 */
+    ASSERT_EQ_INT(tp->nbf, 12 * n * n);
+    ASSERT_EQ_INT(tp->nb, (n + 1) * (n + 1) * (n + 1) - (n - 1) * (n - 1) * (n - 1));
+    ASSERT_EQ_INT(tp->flipped, 0);
+    /* the region interface x = 1/3 is a plane of n^2 squares */
+    ASSERT_EQ_INT(tp->nif, 2 * n * n);
+    mesh_topo_free(tp);
+    mesh_free(m);
+}
+
+TEST(validation_errors)
+{
+    mesh_t *m = tm_grid(2, 0);
+    qdc_error e;
+    qdc_error_clear(&e);
+    m->tets[4 * 5 + 2] = m->nv;
+    ASSERT_EQ_INT(mesh_validate(m, NULL, &e), QDC_EMESH);
+    ASSERT_EQ_INT(e.index, 5);
+    ASSERT_TRUE(strstr(e.msg, "out of range") != NULL);
+    m->tets[4 * 5 + 2] = m->tets[4 * 5 + 1];
+    ASSERT_EQ_INT(mesh_validate(m, NULL, &e), QDC_EMESH);
+    ASSERT_TRUE(strstr(e.msg, "repeats") != NULL);
+    mesh_free(m);
+    m = tm_grid(2, 0);
+    m->xyz[7] = NAN;
+    ASSERT_EQ_INT(mesh_validate(m, NULL, &e), QDC_EMESH);
+    ASSERT_EQ_INT(e.index, 2);
+    mesh_free(m);
+    m = mesh_new(0, 0, 0);
+    ASSERT_EQ_INT(mesh_validate(m, NULL, &e), QDC_EMESH);
+    ASSERT_TRUE(strstr(e.msg, "empty") != NULL);
+    mesh_free(m);
+    /* a face shared by three tets */
+    m = star_mesh();
+    {
+        mesh_t *b = mesh_new(6, 5, 0);
+        memcpy(b->xyz, m->xyz, 15 * sizeof(double));
+        b->xyz[15] = 0.5;
+        b->xyz[16] = 0.3;
+        b->xyz[17] = -0.5;
+        memcpy(b->tets, m->tets, 16 * sizeof(int32_t));
+        b->tets[16] = 4; /* tet (4, 1, 2, 5) shares face (1,2,4) with tets 0 and 3 */
+        b->tets[17] = 1;
+        b->tets[18] = 2;
+        b->tets[19] = 5;
+        ASSERT_EQ_INT(mesh_validate(b, NULL, &e), QDC_EMESH);
+        ASSERT_TRUE(strstr(e.msg, "non-manifold") != NULL);
+        mesh_free(b);
+    }
+    mesh_free(m);
+}
+
+TEST_MAIN("core", T(regular_tet_metrics_are_one), T(scaled_regular_tet_is_still_one),
+          T(mivl_is_mimr_to_three_halves), T(inverted_tet_negative_mean_ratio_and_infinite_qt),
+          T(h_is_continuous_and_regularizes), T(alpha_closed_form_matches_search),
+          T(gradient_matches_finite_differences), T(qdc_of_symmetric_star),
+          T(optavg_weights_sum_to_one_on_random_mesh), T(cholmod_and_pcg_agree_with_dense),
+          T(topology_of_grid), T(validation_errors))
