@@ -1,0 +1,19 @@
+/* api.h - the endpoints (issue 3, item 2): routing, JSON <-> library. */
+#ifndef QDCD_API_H
+#define QDCD_API_H
+
+#include "http.h"
+
+/* First call (headers only): route, authenticate, check limits; may answer
+ * at once (401, 404, 413, 415, 429). */
+enum MHD_Result api_begin(struct MHD_Connection *c, req *r, const char *url,
+                          const char *method);
+/* One chunk of the request body. */
+void api_body(req *r, const char *data, size_t len);
+/* Body complete (or resumed after parking): answer or park. */
+enum MHD_Result api_dispatch(struct MHD_Connection *c, req *r, const char *url,
+                             const char *method);
+/* Release what the request still holds (temp upload file). */
+void api_req_done(req *r);
+
+#endif

@@ -1,0 +1,245 @@
+/* http.c - the MHD daemon and the request life cycle (STYLE §7).
+ * One internal epoll thread serves every connection; handlers never block on
+ * optimization (workers do that) and waiting clients are suspended
+ * connections, not threads. */
+#define _GNU_SOURCE
+#include "http.h"
+
+#include "api.h"
+
+#include <arpa/inet.h>
+#include <errno.h>
+#include <fcntl.h>
+#include <netdb.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+const double lat_bounds[LAT_BUCKETS] = {0.0005, 0.001, 0.0025, 0.005, 0.01, 0.025,
+                                        0.05,   0.1,   0.25,   0.5,   1.0,  5.0};
+
+static req *req_new(qdcd *q)
+{
+    req *r = calloc(1, sizeof *r);
+    if (!r)
+        return NULL;
+    r->q = q;
+    r->t0 = mono_now();
+    r->fd = -1;
+    r->after = -1;
+    return r;
+}
+
+static enum MHD_Result on_request(void *cls, struct MHD_Connection *c, const char *url,
+                                  const char *method, const char *ver, const char *data,
+                                  size_t *len, void **req_cls)
+{
+    req *r = *req_cls;
+
+    (void)ver;
+    if (!r) { /* first call: headers only */
+        r = req_new(cls);
+        if (!r)
+            return MHD_NO;
+        *req_cls = r; /* freed in the completion hook */
+        return api_begin(c, r, url, method);
+    }
+    if (*len) { /* body chunk; capped, 413 at the end */
+        if (!r->replied)
+            api_body(r, data, *len);
+        *len = 0;
+        return MHD_YES;
+    }
+    if (r->replied)
+        return MHD_YES;
+    return api_dispatch(c, r, url, method);
+}
+
+static void on_completed(void *cls, struct MHD_Connection *c, void **req_cls,
+                         enum MHD_RequestTerminationCode toe)
+{
+    qdcd *q = cls;
+    req *r = *req_cls;
+
+    (void)c;
+    (void)toe;
+    if (!r)
+        return;
+    if (r->status >= 100 && r->status < 600)
+        atomic_fetch_add(&q->m.http_by_class[r->status / 100], 1);
+    if (r->status && !r->parked_ever) {
+        double dt = mono_now() - r->t0;
+        int b = 0;
+        while (b < LAT_BUCKETS && dt > lat_bounds[b])
+            b++;
+        atomic_fetch_add(&q->m.lat_count[b], 1);
+        atomic_fetch_add(&q->m.lat_sum_us, (long long)(dt * 1e6));
+    }
+    api_req_done(r);
+    sb_free(&r->sse);
+    free(r);
+    *req_cls = NULL;
+}
+
+enum MHD_Result http_reply_response(struct MHD_Connection *c, req *r, unsigned status,
+                                    struct MHD_Response *resp, const char *const *headers)
+{
+    enum MHD_Result ret = MHD_NO;
+
+    if (!resp)
+        return MHD_NO;
+    for (int i = 0; headers && headers[i]; i += 2)
+        if (MHD_add_response_header(resp, headers[i], headers[i + 1]) != MHD_YES)
+            goto out;
+    ret = MHD_queue_response(c, status, resp);
+    if (ret == MHD_YES) {
+        r->status = (int)status;
+        r->replied = 1;
+    }
+out:
+    MHD_destroy_response(resp);
+    return ret;
+}
+
+enum MHD_Result http_reply(struct MHD_Connection *c, req *r, unsigned status,
+                           const char *ctype, const void *data, size_t len,
+                           const char *const *headers)
+{
+    struct MHD_Response *resp =
+        MHD_create_response_from_buffer(len, (void *)data, MHD_RESPMEM_MUST_COPY);
+
+    if (!resp)
+        return MHD_NO;
+    if (ctype && MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE, ctype) != MHD_YES) {
+        MHD_destroy_response(resp);
+        return MHD_NO;
+    }
+    return http_reply_response(c, r, status, resp, headers);
+}
+
+enum MHD_Result http_reply_json(struct MHD_Connection *c, req *r, unsigned status,
+                                const sbuf *body, const char *const *headers)
+{
+    if (body->oom)
+        return http_problem(c, r, 503, "out-of-memory", "out of memory",
+                            "the reply did not fit in memory", NULL, NULL);
+    return http_reply(c, r, status, "application/json", body->buf ? body->buf : "{}",
+                      body->buf ? body->len : 2, headers);
+}
+
+enum MHD_Result http_problem(struct MHD_Connection *c, req *r, unsigned status,
+                             const char *slug, const char *title, const char *detail,
+                             const char *extra, const char *const *headers)
+{
+    sbuf b = {0};
+    enum MHD_Result ret;
+
+    sb_printf(&b, "{\"type\":\"https://qdc.dev/errors/%s\",\"title\":", slug);
+    sb_json_str(&b, title);
+    sb_printf(&b, ",\"status\":%u,\"detail\":", status);
+    sb_json_str(&b, detail);
+    if (extra && *extra)
+        sb_printf(&b, ",%s", extra);
+    sb_puts(&b, "}\n");
+    if (b.oom)
+        ret = http_reply(c, r, 503, "text/plain", "out of memory\n", 14, NULL);
+    else
+        ret = http_reply(c, r, status, "application/problem+json", b.buf, b.len, headers);
+    sb_free(&b);
+    return ret;
+}
+
+enum MHD_Result http_reply_file(struct MHD_Connection *c, req *r, unsigned status,
+                                const char *path, const char *ctype,
+                                const char *const *headers)
+{
+    struct stat sb;
+    struct MHD_Response *resp;
+    int fd = open(path, O_RDONLY | O_CLOEXEC);
+
+    if (fd < 0 || fstat(fd, &sb)) {
+        if (fd >= 0)
+            close(fd);
+        return http_problem(c, r, 500, "io", "i/o error", "a stored file could not be read",
+                            NULL, NULL);
+    }
+    resp = MHD_create_response_from_fd((uint64_t)sb.st_size, fd); /* owns fd */
+    if (!resp) {
+        close(fd);
+        return MHD_NO;
+    }
+    if (MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE, ctype) != MHD_YES) {
+        MHD_destroy_response(resp);
+        return MHD_NO;
+    }
+    return http_reply_response(c, r, status, resp, headers);
+}
+
+static void log_mhd(void *cls, const char *fmt, va_list ap)
+{
+    qdcd *q = cls;
+    if (!q->cfg.verbose)
+        return;
+    fputs("qdcd: mhd: ", stderr);
+    vfprintf(stderr, fmt, ap);
+}
+
+qdc_status http_start(qdcd *q, qdc_error *err)
+{
+    struct addrinfo hints = {0}, *ai = NULL;
+    char port[16];
+    struct sockaddr_storage ss;
+    socklen_t sl = sizeof ss;
+    const union MHD_DaemonInfo *info;
+    int rc;
+
+    hints.ai_family = AF_UNSPEC;
+    hints.ai_socktype = SOCK_STREAM;
+    hints.ai_flags = AI_PASSIVE | AI_NUMERICSERV;
+    snprintf(port, sizeof port, "%d", q->cfg.port);
+    rc = getaddrinfo(q->cfg.host, port, &hints, &ai);
+    if (rc)
+        return qdc_fail(err, QDC_EINVAL, "cannot resolve %s: %s", q->cfg.host,
+                        gai_strerror(rc));
+    unsigned flags = MHD_USE_EPOLL_INTERNAL_THREAD | MHD_ALLOW_SUSPEND_RESUME |
+                     MHD_USE_ERROR_LOG | MHD_USE_TURBO;
+    if (ai->ai_family == AF_INET6)
+        flags |= MHD_USE_IPv6;
+    q->mhd = MHD_start_daemon(
+        flags, 0, NULL, NULL, on_request, q, MHD_OPTION_EXTERNAL_LOGGER, log_mhd, q,
+        MHD_OPTION_SOCK_ADDR, ai->ai_addr,
+        MHD_OPTION_CONNECTION_LIMIT, (unsigned)q->cfg.max_connections,
+        MHD_OPTION_CONNECTION_TIMEOUT, (unsigned)q->cfg.conn_timeout,
+        MHD_OPTION_CONNECTION_MEMORY_LIMIT, (size_t)128 * 1024,
+        MHD_OPTION_LISTEN_BACKLOG_SIZE, 1024U, MHD_OPTION_NOTIFY_COMPLETED, on_completed, q,
+        MHD_OPTION_END);
+    freeaddrinfo(ai);
+    if (!q->mhd)
+        return qdc_fail(err, QDC_EIO, "cannot listen on %s:%d", q->cfg.host, q->cfg.port);
+    info = MHD_get_daemon_info(q->mhd, MHD_DAEMON_INFO_LISTEN_FD);
+    if (info && !getsockname(info->listen_fd, (struct sockaddr *)&ss, &sl)) {
+        if (ss.ss_family == AF_INET)
+            q->cfg.port = ntohs(((struct sockaddr_in *)&ss)->sin_port);
+        else if (ss.ss_family == AF_INET6)
+            q->cfg.port = ntohs(((struct sockaddr_in6 *)&ss)->sin6_port);
+    }
+    return QDC_OK;
+}
+
+void http_quiesce(qdcd *q)
+{
+    if (q->mhd) {
+        MHD_socket s = MHD_quiesce_daemon(q->mhd);
+        if (s != MHD_INVALID_SOCKET)
+            close(s);
+    }
+}
+
+void http_stop(qdcd *q)
+{
+    if (q->mhd)
+        MHD_stop_daemon(q->mhd);
+    q->mhd = NULL;
+}

@@ -1,0 +1,580 @@
+/* job.c - the worker pool. A worker claims a job (lease), runs opt_run on its
+ * input with a progress callback that publishes every record to the poll hub
+ * and appends it to DATA/jobs/ID/progress.jsonl, then writes the result in the
+ * three formats plus report.json (each written, fsynced and renamed) and only
+ * then marks the row done: a crash at any point leaves a running row that the
+ * next start re-queues. */
+#define _GNU_SOURCE
+#include "job.h"
+
+#include "bderr.h"
+#include "meshio.h"
+#include "report.h"
+#include "sha256.h"
+
+#include <jansson.h>
+#include <pthread.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+#include <unistd.h>
+
+typedef struct worker {
+    struct job_pool *pool;
+    pthread_t th;
+    int idx;
+    char name[64];
+    /* Guarded by pool->lock. */
+    char job[JOB_ID_LEN + 1]; /* "" when idle */
+    volatile int cancel;      /* read by opt_run through opts.cancel */
+    int release;              /* shutdown: give the lease back instead of finishing */
+} worker;
+
+struct job_pool {
+    qdcd *q;
+    pthread_mutex_t lock;
+    pthread_cond_t cond;
+    int stopping;
+    int pending; /* notifications not yet consumed */
+    int n;
+    worker *w;
+};
+
+void job_path(const qdcd *q, const char *id, const char *name, char *out, size_t cap)
+{
+    if (name)
+        snprintf(out, cap, "%s/jobs/%s/%s", q->cfg.data, id, name);
+    else
+        snprintf(out, cap, "%s/jobs/%s", q->cfg.data, id);
+}
+
+const char *job_input_name(const char *format)
+{
+    if (!strcmp(format, "qmesh"))
+        return "input.qmesh";
+    if (!strcmp(format, "json"))
+        return "input.json";
+    return "input.mesh";
+}
+
+/* ---------------------------------------------------------------- options -- */
+
+enum { K_METRIC, K_BOUNDARY, K_MODE, K_WEIGHTS, K_SOLVER, K_BOOL, K_INT, K_DBL };
+
+static const struct {
+    const char *name;
+    int kind;
+    size_t off;
+    double lo, hi;
+} opt_table[] = {
+    {"metric", K_METRIC, offsetof(opt_options, metric), 0, 0},
+    {"boundary", K_BOUNDARY, offsetof(opt_options, boundary), 0, 0},
+    {"mode", K_MODE, offsetof(opt_options, mode), 0, 0},
+    {"weights", K_WEIGHTS, offsetof(opt_options, weights), 0, 0},
+    {"solver", K_SOLVER, offsetof(opt_options, solver), 0, 0},
+    {"harmonic", K_BOOL, offsetof(opt_options, harmonic), 0, 1},
+    {"finish", K_BOOL, offsetof(opt_options, finish), 0, 1},
+    {"max_iter", K_INT, offsetof(opt_options, max_iter), 0, 10000},
+    {"pre_iters", K_INT, offsetof(opt_options, pre_iters), 0, 10000},
+    {"ls_halvings", K_INT, offsetof(opt_options, ls_halvings), 0, 60},
+    {"finish_sweeps", K_INT, offsetof(opt_options, finish_sweeps), 0, 1000},
+    {"mu", K_DBL, offsetof(opt_options, mu), 0, 1e12},
+    {"tol_move", K_DBL, offsetof(opt_options, tol_move), 0, 1},
+    {"eps_rel", K_DBL, offsetof(opt_options, eps_rel), 0, 1},
+    {"finish_frac", K_DBL, offsetof(opt_options, finish_frac), 0, 1},
+    {"feature_angle", K_DBL, offsetof(opt_options, feature_angle), 0, 180},
+    {"time_limit", K_DBL, offsetof(opt_options, time_limit), 0, 1e9},
+};
+#define N_OPTS (sizeof opt_table / sizeof opt_table[0])
+
+int job_opt_set(opt_options *o, const char *key, const char *val, double cap_time,
+                char *why, size_t why_cap)
+{
+    char *end;
+    size_t i;
+
+    for (i = 0; i < N_OPTS && strcmp(opt_table[i].name, key); i++)
+        ;
+    if (i == N_OPTS) {
+        snprintf(why, why_cap, "unknown option '%s'", key);
+        return -1;
+    }
+    void *f = (char *)o + opt_table[i].off;
+    qdc_status st = QDC_OK;
+    switch (opt_table[i].kind) {
+    case K_METRIC:
+        st = opt_parse_metric(val, f);
+        break;
+    case K_BOUNDARY:
+        st = opt_parse_boundary(val, f);
+        break;
+    case K_MODE:
+        st = opt_parse_mode(val, f);
+        break;
+    case K_WEIGHTS:
+        st = opt_parse_weights(val, f);
+        break;
+    case K_SOLVER:
+        st = opt_parse_solver(val, f);
+        break;
+    case K_BOOL:
+        if (!strcmp(val, "1") || !strcasecmp(val, "true") || !strcasecmp(val, "on"))
+            *(int *)f = 1;
+        else if (!strcmp(val, "0") || !strcasecmp(val, "false") || !strcasecmp(val, "off"))
+            *(int *)f = 0;
+        else
+            st = QDC_EINVAL;
+        break;
+    case K_INT: {
+        long v = strtol(val, &end, 10);
+        if (!*val || *end || v < opt_table[i].lo || v > opt_table[i].hi)
+            st = QDC_EINVAL;
+        else
+            *(int *)f = (int)v;
+        break;
+    }
+    default: {
+        double v = strtod(val, &end);
+        if (!*val || *end || !(v >= opt_table[i].lo && v <= opt_table[i].hi))
+            st = QDC_EINVAL;
+        else
+            *(double *)f = v;
+        break;
+    }
+    }
+    if (st != QDC_OK) {
+        if (opt_table[i].kind >= K_INT)
+            snprintf(why, why_cap, "option '%s': '%s' is not a number in [%g, %g]", key,
+                     val, opt_table[i].lo, opt_table[i].hi);
+        else
+            snprintf(why, why_cap, "option '%s': '%s' is not an accepted value", key, val);
+        return -1;
+    }
+    if (cap_time > 0 && (o->time_limit <= 0 || o->time_limit > cap_time))
+        o->time_limit = cap_time;
+    return 0;
+}
+
+void job_opt_json(const opt_options *o, sbuf *out)
+{
+    sb_puts(out, "{");
+    for (size_t i = 0; i < N_OPTS; i++) {
+        const void *f = (const char *)o + opt_table[i].off;
+        const char *s = NULL;
+        sb_printf(out, "%s\"%s\":", i ? "," : "", opt_table[i].name);
+        switch (opt_table[i].kind) {
+        case K_METRIC:
+            s = opt_metric_name(*(const opt_metric *)f);
+            break;
+        case K_BOUNDARY:
+            s = opt_boundary_name(*(const opt_boundary *)f);
+            break;
+        case K_MODE:
+            s = opt_mode_name(*(const opt_mode *)f);
+            break;
+        case K_WEIGHTS:
+            s = opt_weights_name(*(const opt_weights *)f);
+            break;
+        case K_SOLVER:
+            s = opt_solver_name(*(const opt_solver *)f);
+            break;
+        case K_BOOL:
+            sb_puts(out, *(const int *)f ? "true" : "false");
+            break;
+        case K_INT:
+            sb_printf(out, "%d", *(const int *)f);
+            break;
+        default:
+            sb_printf(out, "%.17g", *(const double *)f);
+            break;
+        }
+        if (s)
+            sb_json_str(out, s);
+    }
+    sb_puts(out, "}");
+}
+
+int job_opt_from_json(opt_options *o, const char *json, double cap_time)
+{
+    json_error_t jerr;
+    json_t *root = json_loads(json, 0, &jerr);
+    const char *key;
+    json_t *v;
+    char buf[64], why[160];
+    int rc = 0;
+
+    opt_defaults(o);
+    if (!json_is_object(root)) {
+        json_decref(root);
+        return -1;
+    }
+    json_object_foreach(root, key, v)
+    {
+        if (json_is_string(v))
+            snprintf(buf, sizeof buf, "%s", json_string_value(v));
+        else if (json_is_boolean(v))
+            snprintf(buf, sizeof buf, "%d", json_is_true(v));
+        else if (json_is_integer(v))
+            snprintf(buf, sizeof buf, "%lld", (long long)json_integer_value(v));
+        else if (json_is_real(v))
+            snprintf(buf, sizeof buf, "%.17g", json_real_value(v));
+        else
+            continue;
+        if (job_opt_set(o, key, buf, cap_time, why, sizeof why))
+            rc = -1;
+    }
+    json_decref(root);
+    return rc;
+}
+
+/* ---------------------------------------------------------------- running -- */
+
+typedef struct {
+    worker *w;
+    qdcd *q;
+    const char *id;
+    FILE *progress;
+    double renewed;
+    int iterations;
+    char last[768];
+} run_ctx;
+
+static int on_progress(void *ctx, const opt_progress *p)
+{
+    run_ctx *r = ctx;
+    sbuf js = {0}, line = {0};
+
+    report_progress_json(p, sb_writer, &js);
+    if (!js.oom && js.len) {
+        long seq = poll_publish(r->q->hub, r->id, js.buf, js.len, &line);
+        if (seq >= 0) {
+            r->iterations = (int)seq + 1;
+            if (line.len < sizeof r->last)
+                memcpy(r->last, line.buf, line.len + 1);
+            if (r->progress) {
+                fwrite(line.buf, 1, line.len, r->progress);
+                fputc('\n', r->progress);
+                fflush(r->progress);
+            }
+        }
+    }
+    sb_free(&js);
+    sb_free(&line);
+    atomic_fetch_add(&r->q->m.iterations, 1);
+    if (mono_now() - r->renewed > r->q->cfg.lease / 4) {
+        r->q->store->ops->renew(r->q->store, r->id, r->w->name, r->q->cfg.lease);
+        r->renewed = mono_now();
+    }
+    return r->w->cancel;
+}
+
+static void problem(job_rec *j, int status, const char *slug, const char *title,
+                    const char *detail)
+{
+    sbuf b = {0};
+    sb_printf(&b, "{\"type\":\"https://qdc.dev/errors/%s\",\"title\":", slug);
+    sb_json_str(&b, title);
+    sb_printf(&b, ",\"status\":%d,\"detail\":", status);
+    sb_json_str(&b, detail);
+    sb_puts(&b, "}");
+    snprintf(j->error, sizeof j->error, "%s", b.oom ? "" : b.buf);
+    sb_free(&b);
+}
+
+static qdc_status write_report(const char *path, const report_t *rep, qdc_error *err)
+{
+    char tmp[4400];
+    qdc_status st;
+    FILE *f;
+
+    snprintf(tmp, sizeof tmp, "%s.tmp", path);
+    f = fopen(tmp, "wb");
+    if (!f)
+        return qdc_fail(err, QDC_EIO, "cannot create %s", tmp);
+    st = report_write_json(rep, report_file_writer, f, err);
+    if (fflush(f) || fsync(fileno(f)))
+        st = st == QDC_OK ? qdc_fail(err, QDC_EIO, "cannot write %s", tmp) : st;
+    fclose(f);
+    if (st == QDC_OK && rename(tmp, path))
+        st = qdc_fail(err, QDC_EIO, "cannot rename %s", tmp);
+    if (st != QDC_OK)
+        unlink(tmp);
+    return st;
+}
+
+/* Results, report and etags of a finished optimization. */
+static qdc_status save_outputs(qdcd *q, job_rec *j, const mesh_t *out, const mesh_t *ref,
+                               const opt_options *opts, const opt_result *res,
+                               const report_quality *before, qdc_error *err)
+{
+    static const struct {
+        meshio_format fmt;
+        const char *name;
+        size_t etag_off;
+    } outs[] = {
+        {MESHIO_QMESH, "result.qmesh", offsetof(job_rec, etag_qmesh)},
+        {MESHIO_JSON, "result.json", offsetof(job_rec, etag_json)},
+        {MESHIO_MEDIT, "result.mesh", offsetof(job_rec, etag_medit)},
+    };
+    char path[4200];
+    report_quality after;
+    bderr_result bd;
+    qdc_status st;
+    int have_bd;
+
+    for (size_t i = 0; i < sizeof outs / sizeof outs[0]; i++) {
+        job_path(q, j->id, outs[i].name, path, sizeof path);
+        st = meshio_save(path, outs[i].fmt, out, err);
+        if (st != QDC_OK)
+            return st;
+        if (sha256_file_hex(path, (char *)j + outs[i].etag_off))
+            return qdc_fail(err, QDC_EIO, "cannot hash %s", path);
+    }
+    st = report_quality_compute(out, &after, err);
+    if (st != QDC_OK)
+        return st;
+    have_bd = bderr_meshes(out, ref, q->cfg.bderr_samples, &bd, NULL) == QDC_OK;
+    report_t rep = {before, &after, res, opts, have_bd ? &bd : NULL};
+    job_path(q, j->id, "report.json", path, sizeof path);
+    st = write_report(path, &rep, err);
+    if (st == QDC_OK && fsync_parent(path))
+        st = qdc_fail(err, QDC_EIO, "cannot sync the job directory");
+    return st;
+}
+
+static void run_job(worker *w, job_rec *j)
+{
+    qdcd *q = w->pool->q;
+    char path[4200], detail[512];
+    char *buf = NULL;
+    size_t len = 0;
+    mesh_t *m = NULL, *ref = NULL;
+    opt_options opts;
+    opt_result res;
+    report_quality before;
+    qdc_error err;
+    qdc_status st;
+    run_ctx r = {w, q, j->id, NULL, mono_now(), 0, ""};
+    int release;
+
+    memset(&res, 0, sizeof res);
+    qdc_error_clear(&err);
+    poll_begin(q->hub, j->id);
+    job_path(q, j->id, "progress.jsonl", path, sizeof path);
+    r.progress = fopen(path, "w");
+
+    job_path(q, j->id, job_input_name(j->format), path, sizeof path);
+    buf = file_read_all(path, &len);
+    if (!buf) {
+        st = qdc_fail(&err, QDC_EIO, "cannot read the job's input file");
+        goto failed;
+    }
+    st = meshio_read(buf, len, meshio_format_from_name(j->format), &m, &err);
+    free(buf);
+    buf = NULL;
+    if (st != QDC_OK)
+        goto failed;
+    ref = mesh_dup(m);
+    if (!ref) {
+        st = qdc_fail(&err, QDC_ENOMEM, "out of memory");
+        goto failed;
+    }
+    st = report_quality_compute(m, &before, &err);
+    if (st != QDC_OK)
+        goto failed;
+    job_opt_from_json(&opts, j->options, q->cfg.job_time_limit);
+    opts.cancel = &w->cancel;
+    opts.progress = on_progress;
+    opts.progress_ctx = &r;
+    st = opt_run(m, &opts, &res, &err);
+    if (st != QDC_OK)
+        goto failed;
+
+    pthread_mutex_lock(&w->pool->lock);
+    release = w->release;
+    pthread_mutex_unlock(&w->pool->lock);
+    if (release) {
+        q->store->ops->release(q->store, j->id, w->name);
+        goto out;
+    }
+    if (w->cancel) {
+        j->state = JOB_CANCELLED;
+        snprintf(j->stop_reason, sizeof j->stop_reason, "cancelled");
+    } else if (res.outcome == OPT_FAILED) {
+        snprintf(detail, sizeof detail, "the optimizer failed (%s); the input is unchanged",
+                 res.stop_reason[0] ? res.stop_reason : "no detail");
+        problem(j, 500, "optimizer-failed", "optimization failed", detail);
+        j->state = JOB_FAILED;
+        snprintf(j->stop_reason, sizeof j->stop_reason, "%s", res.stop_reason);
+    } else {
+        st = save_outputs(q, j, m, ref, &opts, &res, &before, &err);
+        if (st != QDC_OK)
+            goto failed;
+        j->state = JOB_SUCCEEDED;
+        snprintf(j->stop_reason, sizeof j->stop_reason, "%s", res.stop_reason);
+    }
+    goto finish;
+
+failed:
+    snprintf(detail, sizeof detail, "%s: %s", qdc_status_str(st), err.msg);
+    problem(j, qdc_status_http(st) >= 500 ? qdc_status_http(st) : 422, "job-failed",
+            "the job failed", detail);
+    j->state = JOB_FAILED;
+finish:
+    if (r.progress)
+        fsync(fileno(r.progress));
+    j->finished = wall_now();
+    j->expires = j->finished + q->cfg.retention;
+    j->iterations = r.iterations;
+    snprintf(j->last_progress, sizeof j->last_progress, "%s", r.last);
+    if (q->store->ops->finish(q->store, j) != QDC_OK)
+        fprintf(stderr, "qdcd: cannot record the end of job %s\n", j->id);
+    atomic_fetch_add(&q->m.finished[j->state], 1);
+    /* Deleted while running: nothing refers to the files any more. */
+    job_rec chk;
+    if (q->store->ops->get(q->store, j->id, &chk) == QDC_EINVAL) {
+        job_path(q, j->id, NULL, path, sizeof path);
+        dir_remove(path);
+    }
+out:
+    poll_end(q->hub, j->id);
+    if (r.progress)
+        fclose(r.progress);
+    mesh_free(m);
+    mesh_free(ref);
+}
+
+static void *worker_main(void *arg)
+{
+    worker *w = arg;
+    job_pool *p = w->pool;
+    qdcd *q = p->q;
+    job_rec j;
+    int found;
+
+    for (;;) {
+        pthread_mutex_lock(&p->lock);
+        while (!p->stopping && !p->pending) {
+            struct timespec ts;
+            clock_gettime(CLOCK_REALTIME, &ts);
+            ts.tv_sec += 2; /* also picks up jobs whose lease expired elsewhere */
+            if (pthread_cond_timedwait(&p->cond, &p->lock, &ts))
+                break;
+        }
+        if (p->stopping) {
+            pthread_mutex_unlock(&p->lock);
+            break;
+        }
+        if (p->pending)
+            p->pending--;
+        pthread_mutex_unlock(&p->lock);
+
+        if (q->store->ops->claim(q->store, w->name, q->cfg.lease, &j, &found) != QDC_OK ||
+            !found)
+            continue;
+        pthread_mutex_lock(&p->lock);
+        snprintf(w->job, sizeof w->job, "%s", j.id);
+        w->cancel = j.cancel_requested;
+        w->release = 0;
+        pthread_mutex_unlock(&p->lock);
+        if (q->cfg.verbose)
+            fprintf(stderr, "qdcd: %s runs job %s (attempt %d)\n", w->name, j.id, j.attempts);
+        run_job(w, &j);
+        pthread_mutex_lock(&p->lock);
+        w->job[0] = 0;
+        /* There may be more queued work than notifications (restart). */
+        p->pending++;
+        pthread_mutex_unlock(&p->lock);
+    }
+    return NULL;
+}
+
+job_pool *job_pool_start(qdcd *q)
+{
+    job_pool *p = calloc(1, sizeof *p);
+
+    if (!p)
+        return NULL;
+    p->q = q;
+    p->n = q->cfg.workers;
+    p->w = calloc((size_t)p->n, sizeof *p->w);
+    if (!p->w) {
+        free(p);
+        return NULL;
+    }
+    pthread_mutex_init(&p->lock, NULL);
+    pthread_cond_init(&p->cond, NULL);
+    p->pending = p->n; /* look for work left by a previous run */
+    for (int i = 0; i < p->n; i++) {
+        worker *w = &p->w[i];
+        w->pool = p;
+        w->idx = i;
+        snprintf(w->name, sizeof w->name, "%s/w%d", q->instance, i);
+        if (pthread_create(&w->th, NULL, worker_main, w)) {
+            p->n = i;
+            job_pool_stop(p, 0);
+            return NULL;
+        }
+    }
+    return p;
+}
+
+void job_pool_notify(job_pool *p)
+{
+    pthread_mutex_lock(&p->lock);
+    p->pending++;
+    pthread_cond_signal(&p->cond);
+    pthread_mutex_unlock(&p->lock);
+}
+
+int job_pool_cancel(job_pool *p, const char *id)
+{
+    int hit = 0;
+    pthread_mutex_lock(&p->lock);
+    for (int i = 0; i < p->n; i++) {
+        if (!strcmp(p->w[i].job, id)) {
+            p->w[i].cancel = 1;
+            hit = 1;
+        }
+    }
+    pthread_mutex_unlock(&p->lock);
+    return hit;
+}
+
+int job_pool_busy(job_pool *p)
+{
+    int n = 0;
+    pthread_mutex_lock(&p->lock);
+    for (int i = 0; i < p->n; i++)
+        n += p->w[i].job[0] != 0;
+    pthread_mutex_unlock(&p->lock);
+    return n;
+}
+
+void job_pool_stop(job_pool *p, double grace)
+{
+    if (!p)
+        return;
+    pthread_mutex_lock(&p->lock);
+    p->stopping = 1;
+    pthread_cond_broadcast(&p->cond);
+    pthread_mutex_unlock(&p->lock);
+    double until = mono_now() + grace;
+    while (job_pool_busy(p) && mono_now() < until)
+        usleep(50 * 1000);
+    pthread_mutex_lock(&p->lock);
+    for (int i = 0; i < p->n; i++) {
+        if (p->w[i].job[0]) {
+            p->w[i].release = 1;
+            p->w[i].cancel = 1;
+        }
+    }
+    pthread_mutex_unlock(&p->lock);
+    for (int i = 0; i < p->n; i++)
+        pthread_join(p->w[i].th, NULL);
+    pthread_cond_destroy(&p->cond);
+    pthread_mutex_destroy(&p->lock);
+    free(p->w);
+    free(p);
+}

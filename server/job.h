@@ -1,0 +1,36 @@
+/* job.h - worker threads that claim queued jobs from the store, run the
+ * optimizer, publish progress and write results; and the option table shared
+ * by the HTTP layer (query string) and the workers (stored JSON). */
+#ifndef QDCD_JOB_H
+#define QDCD_JOB_H
+
+#include "opt.h"
+#include "server.h"
+#include "util.h"
+
+typedef struct job_pool job_pool;
+
+/* Start cfg.workers threads. NULL on failure. */
+job_pool *job_pool_start(qdcd *q);
+/* A job was queued: wake a worker. */
+void job_pool_notify(job_pool *p);
+/* Ask the worker running id (if any here) to stop; returns 1 if it was running. */
+int job_pool_cancel(job_pool *p, const char *id);
+/* Stop claiming; wait up to grace seconds for running jobs, then stop them and
+ * give their leases back (they run again at the next start); join; free. */
+void job_pool_stop(job_pool *p, double grace);
+int job_pool_busy(job_pool *p);
+
+/* Set one option from its text form (query string or stored JSON).
+ * Returns 0, or -1 with a message in why. time_limit is capped by cap_time. */
+int job_opt_set(opt_options *o, const char *key, const char *val, double cap_time,
+                char *why, size_t why_cap);
+/* Canonical JSON of every option the daemon exposes. */
+void job_opt_json(const opt_options *o, sbuf *out);
+/* Rebuild options from job_opt_json output. */
+int job_opt_from_json(opt_options *o, const char *json, double cap_time);
+
+/* Input file name of a job for its format name ("input.qmesh"...). */
+const char *job_input_name(const char *format);
+
+#endif

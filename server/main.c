@@ -1,0 +1,424 @@
+/* main.c - qdcd: command line, start-up (data directory, store recovery,
+ * workers, HTTP) and graceful shutdown on SIGTERM/SIGINT. */
+#define _GNU_SOURCE
+#include "http.h"
+#include "job.h"
+#include "server.h"
+#include "sha256.h"
+
+#include <errno.h>
+#include <getopt.h>
+#include <stddef.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+#include <unistd.h>
+
+static qdcd g;
+
+static void on_signal(int sig)
+{
+    (void)sig;
+    g.stop = 1; /* the main loop does the rest */
+}
+
+static void usage(FILE *f)
+{
+    fputs(
+        "usage: qdcd [options]\n"
+        "Tetrahedral mesh optimization daemon (HTTP API: proto/openapi.yaml).\n\n"
+        "  --listen HOST:PORT        address to listen on (default 127.0.0.1:8080;\n"
+        "                            port 0 picks a free port)\n"
+        "  --port-file FILE          write the bound port to FILE once listening\n"
+        "  --data DIR                data directory: qdcd.db (SQLite, WAL), jobs/, tmp/\n"
+        "                            (default ./var)\n"
+        "  --workers N               optimizer threads (default: number of cores)\n"
+        "  --tokens FILE             bearer tokens, one SHA-256 hex hash per line\n"
+        "                            (make one with --hash-token); each job is visible\n"
+        "                            only to the token that created it\n"
+        "  --hash-token TOKEN        print the line to put in the tokens file, exit\n"
+        "  --insecure                allow a non-loopback address without --tokens\n"
+        "  --max-body BYTES          largest request body (default 1073741824)\n"
+        "  --max-json BYTES          largest JSON mesh body (default 16777216); larger\n"
+        "                            meshes must use application/vnd.qdc.mesh\n"
+        "  --max-vertices N          largest mesh accepted (default 20000000)\n"
+        "  --max-tets N              (default 100000000)\n"
+        "  --max-queued N            queued jobs before 429 (default 64)\n"
+        "  --job-time-limit SECONDS  optimizer time budget per job (default 3600)\n"
+        "  --retention SECONDS       results kept after a job ends, then 410 (default 86400)\n"
+        "  --max-wait SECONDS        cap of the long-poll 'wait' (default 60)\n"
+        "  --max-attempts N          runs of a job interrupted by crashes before it\n"
+        "                            fails (default 3)\n"
+        "  --max-connections N       concurrent connections (default 4096)\n"
+        "  --connection-timeout S    idle connection timeout (default 120)\n"
+        "  --lease SECONDS           job lease, renewed while running (default 60)\n"
+        "  --shutdown-grace SECONDS  on SIGTERM, wait this long for running jobs before\n"
+        "                            giving them back to the queue (default 10)\n"
+        "  --bderr-samples N         random samples per surface for the boundary error\n"
+        "                            (default 20000)\n"
+        "  -v, --verbose             log jobs and HTTP errors to stderr\n"
+        "  -h, --help                this text\n",
+        f);
+}
+
+static int parse_i64(const char *s, int64_t lo, int64_t hi, int64_t *out)
+{
+    char *end;
+    errno = 0;
+    long long v = strtoll(s, &end, 10);
+    if (!*s || *end || errno || v < lo || v > hi)
+        return -1;
+    *out = v;
+    return 0;
+}
+
+static int parse_dbl(const char *s, double lo, double hi, double *out)
+{
+    char *end;
+    double v = strtod(s, &end);
+    if (!*s || *end || !(v >= lo && v <= hi))
+        return -1;
+    *out = v;
+    return 0;
+}
+
+static int parse_listen(const char *s, qdcd_config *c)
+{
+    const char *colon = strrchr(s, ':');
+    int64_t port;
+    size_t n;
+
+    if (!colon || parse_i64(colon + 1, 0, 65535, &port))
+        return -1;
+    n = (size_t)(colon - s);
+    if (n >= 2 && s[0] == '[' && s[n - 1] == ']') { /* [::1]:8080 */
+        s++;
+        n -= 2;
+    }
+    if (!n || n >= sizeof c->host)
+        return -1;
+    memcpy(c->host, s, n);
+    c->host[n] = 0;
+    c->port = (int)port;
+    return 0;
+}
+
+static int is_loopback(const char *h)
+{
+    return !strncmp(h, "127.", 4) || !strcmp(h, "::1") || !strcasecmp(h, "localhost");
+}
+
+static int load_tokens(qdcd *q, const char *path)
+{
+    FILE *f = fopen(path, "r");
+    char line[512];
+    int lineno = 0;
+
+    if (!f) {
+        fprintf(stderr, "qdcd: cannot open %s: %s\n", path, strerror(errno));
+        return -1;
+    }
+    while (fgets(line, sizeof line, f)) {
+        char *p = line + strspn(line, " \t");
+        lineno++;
+        p[strcspn(p, " \t\r\n#")] = 0;
+        if (!*p)
+            continue;
+        if (!strncmp(p, "sha256:", 7))
+            p += 7;
+        size_t n = strlen(p);
+        int ok = n == 64;
+        for (size_t i = 0; ok && i < n; i++)
+            ok = (p[i] >= '0' && p[i] <= '9') || (p[i] >= 'a' && p[i] <= 'f');
+        if (!ok) {
+            fprintf(stderr,
+                    "qdcd: %s:%d: not a SHA-256 hex hash (tokens are stored hashed; "
+                    "use qdcd --hash-token TOKEN)\n",
+                    path, lineno);
+            fclose(f);
+            return -1;
+        }
+        char(*t)[65] = realloc(q->tokens, (size_t)(q->ntokens + 1) * sizeof *t);
+        if (!t) {
+            fclose(f);
+            return -1;
+        }
+        q->tokens = t;
+        memcpy(q->tokens[q->ntokens++], p, 65);
+    }
+    fclose(f);
+    if (!q->ntokens) {
+        fprintf(stderr, "qdcd: %s holds no token\n", path);
+        return -1;
+    }
+    return 0;
+}
+
+/* Options with a value: where it goes and its range. 'i' int, 'l' int64,
+ * 'd' double, 's' string (path), 'h' host:port. */
+typedef struct {
+    const char *name;
+    char kind;
+    size_t off;
+    double lo, hi;
+    double def; /* default (numbers) */
+} cli_opt;
+
+#define CFG(f) offsetof(qdcd_config, f)
+static const cli_opt cli_opts[] = {
+    {"listen", 'h', 0, 0, 0, 0},
+    {"port-file", 's', CFG(port_file), 0, 0, 0},
+    {"data", 's', CFG(data), 0, 0, 0},
+    {"tokens", 's', CFG(tokens_file), 0, 0, 0},
+    {"workers", 'i', CFG(workers), 1, 1024, 0},
+    {"max-body", 'l', CFG(max_body), 1, 9.2e18, 1073741824},
+    {"max-json", 'l', CFG(max_json), 1, 9.2e18, 16777216},
+    {"max-vertices", 'l', CFG(max_vertices), 1, 2e9, 2e7},
+    {"max-tets", 'l', CFG(max_tets), 1, 5e8, 1e8},
+    {"max-queued", 'i', CFG(max_queued), 0, 1e6, 64},
+    {"job-time-limit", 'd', CFG(job_time_limit), 0.001, 1e9, 3600},
+    {"retention", 'd', CFG(retention), 0, 1e10, 86400},
+    {"max-wait", 'd', CFG(wait_cap), 0, 3600, 60},
+    {"max-attempts", 'i', CFG(max_attempts), 1, 1000, 3},
+    {"max-connections", 'i', CFG(max_connections), 1, 1e6, 4096},
+    {"connection-timeout", 'i', CFG(conn_timeout), 1, 86400, 120},
+    {"lease", 'd', CFG(lease), 1, 86400, 60},
+    {"shutdown-grace", 'd', CFG(grace), 0, 86400, 10},
+    {"bderr-samples", 'l', CFG(bderr_samples), 0, 1e8, 20000},
+};
+#define N_CLI (sizeof cli_opts / sizeof cli_opts[0])
+
+static int set_cli(const cli_opt *o, const char *arg, qdcd_config *c)
+{
+    void *f = (char *)c + o->off;
+    double v;
+    int64_t iv;
+
+    switch (o->kind) {
+    case 'h':
+        return parse_listen(arg, c);
+    case 's':
+        if (strlen(arg) >= sizeof c->data)
+            return -1;
+        snprintf(f, sizeof c->data, "%s", arg);
+        return 0;
+    case 'd':
+        if (parse_dbl(arg, o->lo, o->hi, &v))
+            return -1;
+        *(double *)f = v;
+        return 0;
+    default:
+        if (parse_i64(arg, (int64_t)o->lo, (int64_t)o->hi, &iv))
+            return -1;
+        if (o->kind == 'i')
+            *(int *)f = (int)iv;
+        else
+            *(int64_t *)f = iv;
+        return 0;
+    }
+}
+
+static int parse_args(int argc, char **argv, qdcd_config *c)
+{
+    enum { O_HASH = 1000, O_INSECURE };
+    struct option lo[N_CLI + 5];
+    int o, n = 0;
+
+    for (size_t i = 0; i < N_CLI; i++)
+        lo[n++] = (struct option){cli_opts[i].name, required_argument, NULL, (int)i};
+    lo[n++] = (struct option){"hash-token", required_argument, NULL, O_HASH};
+    lo[n++] = (struct option){"insecure", no_argument, NULL, O_INSECURE};
+    lo[n++] = (struct option){"verbose", no_argument, NULL, 'v'};
+    lo[n++] = (struct option){"help", no_argument, NULL, 'h'};
+    lo[n] = (struct option){NULL, 0, NULL, 0};
+    while ((o = getopt_long(argc, argv, "vh", lo, NULL)) != -1) {
+        if (o >= 0 && o < (int)N_CLI) {
+            if (set_cli(&cli_opts[o], optarg, c)) {
+                fprintf(stderr, "qdcd: bad value for --%s: '%s'\n", cli_opts[o].name, optarg);
+                return -1;
+            }
+        } else if (o == O_HASH) {
+            char hex[65];
+            sha256_hex(optarg, strlen(optarg), hex);
+            printf("%s\n", hex);
+            exit(0);
+        } else if (o == O_INSECURE) {
+            c->insecure = 1;
+        } else if (o == 'v') {
+            c->verbose = 1;
+        } else if (o == 'h') {
+            usage(stdout);
+            exit(0);
+        } else {
+            usage(stderr);
+            return -1;
+        }
+    }
+    if (optind < argc) {
+        fprintf(stderr, "qdcd: unexpected argument '%s'\n", argv[optind]);
+        return -1;
+    }
+    return 0;
+}
+
+static void defaults(qdcd_config *c)
+{
+    long n = sysconf(_SC_NPROCESSORS_ONLN);
+
+    for (size_t i = 0; i < N_CLI; i++) {
+        void *f = (char *)c + cli_opts[i].off;
+        if (cli_opts[i].kind == 'd')
+            *(double *)f = cli_opts[i].def;
+        else if (cli_opts[i].kind == 'i')
+            *(int *)f = (int)cli_opts[i].def;
+        else if (cli_opts[i].kind == 'l')
+            *(int64_t *)f = (int64_t)cli_opts[i].def;
+    }
+    snprintf(c->host, sizeof c->host, "127.0.0.1");
+    c->port = 8080;
+    snprintf(c->data, sizeof c->data, "./var");
+    c->workers = n > 0 ? (int)n : 1;
+}
+
+/* Remove results whose retention passed; the rows stay so clients get 410. */
+static void purge_expired(qdcd *q)
+{
+    char ids[64][JOB_ID_LEN + 1], dir[4200];
+    int n = 0;
+
+    if (q->store->ops->expired(q->store, wall_now(), ids, 64, &n) != QDC_OK)
+        return;
+    for (int i = 0; i < n; i++) {
+        job_path(q, ids[i], NULL, dir, sizeof dir);
+        dir_remove(dir);
+        q->store->ops->mark_purged(q->store, ids[i]);
+    }
+}
+
+static int prepare_data_dir(qdcd *q)
+{
+    char p[4200];
+
+    if (dir_ensure(q->cfg.data))
+        return -1;
+    snprintf(p, sizeof p, "%s/jobs", q->cfg.data);
+    if (dir_ensure(p))
+        return -1;
+    snprintf(p, sizeof p, "%s/tmp", q->cfg.data);
+    /* Uploads cut short by a crash: never committed, never acknowledged. */
+    dir_remove(p);
+    return dir_ensure(p);
+}
+
+int main(int argc, char **argv)
+{
+    qdcd *q = &g;
+    qdc_error err;
+    struct sigaction sa;
+    int requeued = 0, failed = 0, rc = 1;
+    char host[64];
+
+    defaults(&q->cfg);
+    if (parse_args(argc, argv, &q->cfg))
+        return 2;
+    if (q->cfg.tokens_file[0] && load_tokens(q, q->cfg.tokens_file))
+        return 2;
+    if (!is_loopback(q->cfg.host) && !q->ntokens && !q->cfg.insecure) {
+        fprintf(stderr, "qdcd: refusing to listen on %s without --tokens (anyone could "
+                        "submit jobs); pass --insecure to do it anyway\n",
+                q->cfg.host);
+        return 2;
+    }
+    if (prepare_data_dir(q)) {
+        fprintf(stderr, "qdcd: cannot use data directory %s: %s\n", q->cfg.data,
+                strerror(errno));
+        return 1;
+    }
+    gethostname(host, sizeof host);
+    host[sizeof host - 1] = 0;
+    snprintf(q->instance, sizeof q->instance, "%.24s:%ld:%lx", host, (long)getpid(),
+             (unsigned long)wall_now());
+
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_signal;
+    sigaction(SIGTERM, &sa, NULL);
+    sigaction(SIGINT, &sa, NULL);
+    signal(SIGPIPE, SIG_IGN);
+
+    qdc_error_clear(&err);
+    if (store_sqlite_open(q->cfg.data, &q->store, &err) != QDC_OK) {
+        fprintf(stderr, "qdcd: %s\n", err.msg);
+        return 1;
+    }
+    if (q->store->ops->recover(q->store, q->cfg.max_attempts, &requeued, &failed) != QDC_OK) {
+        fprintf(stderr, "qdcd: cannot recover the job store\n");
+        goto out;
+    }
+    if (requeued || failed)
+        fprintf(stderr, "qdcd: recovered after a crash: %d job(s) re-queued, %d failed "
+                        "(attempts exhausted)\n",
+                requeued, failed);
+    q->hub = poll_new();
+    if (!q->hub || poll_start(q->hub)) {
+        fprintf(stderr, "qdcd: cannot start the poll timer\n");
+        goto out;
+    }
+    q->pool = job_pool_start(q);
+    if (!q->pool) {
+        fprintf(stderr, "qdcd: cannot start workers\n");
+        goto out;
+    }
+    if (http_start(q, &err) != QDC_OK) {
+        fprintf(stderr, "qdcd: %s\n", err.msg);
+        goto out;
+    }
+    if (q->cfg.port_file[0]) {
+        char buf[16];
+        int n = snprintf(buf, sizeof buf, "%d\n", q->cfg.port);
+        if (file_write_atomic(q->cfg.port_file, buf, (size_t)n))
+            fprintf(stderr, "qdcd: cannot write %s\n", q->cfg.port_file);
+    }
+    fprintf(stderr, "qdcd: listening on http://%s%s%s:%d (data %s, %d workers%s)\n",
+            strchr(q->cfg.host, ':') ? "[" : "", q->cfg.host,
+            strchr(q->cfg.host, ':') ? "]" : "", q->cfg.port, q->cfg.data, q->cfg.workers,
+            q->ntokens ? ", tokens on" : "");
+
+    double next_purge = 0;
+    while (!q->stop) {
+        if (mono_now() >= next_purge) {
+            purge_expired(q);
+            next_purge = mono_now() + 5;
+        }
+        usleep(100 * 1000);
+    }
+
+    fprintf(stderr, "qdcd: shutting down\n");
+    http_quiesce(q);
+    poll_shutdown(q->hub);
+    job_pool_stop(q->pool, q->cfg.grace);
+    q->pool = NULL;
+    /* Let the answers of resumed long-polls and streams go out. */
+    for (double until = mono_now() + 2; mono_now() < until;) {
+        const union MHD_DaemonInfo *i =
+            MHD_get_daemon_info(q->mhd, MHD_DAEMON_INFO_CURRENT_CONNECTIONS);
+        if (!i || !i->num_connections)
+            break;
+        poll_shutdown(q->hub); /* anything that parked meanwhile */
+        usleep(20 * 1000);
+    }
+    rc = 0;
+out:
+    if (q->hub)
+        poll_shutdown(q->hub);
+    http_stop(q);
+    job_pool_stop(q->pool, 0);
+    poll_free(q->hub);
+    if (q->store)
+        q->store->ops->close(q->store);
+    free(q->tokens);
+    if (!rc)
+        fprintf(stderr, "qdcd: stopped\n");
+    return rc;
+}

@@ -1,0 +1,101 @@
+/* store.h - the durable job store behind the daemon (issue 3, item 3).
+ * Handlers and workers talk to a job_store through its ops table only, so a
+ * PostgreSQL backend can be added beside the SQLite one without touching them.
+ * Every call is thread-safe (backends lock internally). Times are Unix seconds.
+ * Mesh bodies, results, reports and progress logs are files in the data
+ * directory (job_dir), never rows. */
+#ifndef QDCD_STORE_H
+#define QDCD_STORE_H
+
+#include "base.h"
+
+#include <stdint.h>
+
+typedef enum {
+    JOB_QUEUED = 0,
+    JOB_RUNNING,
+    JOB_SUCCEEDED,
+    JOB_FAILED,
+    JOB_CANCELLED,
+    JOB_STATE_COUNT
+} job_state;
+
+const char *job_state_name(job_state s); /* "queued"... */
+int job_state_done(job_state s);         /* succeeded, failed or cancelled */
+
+#define JOB_ID_LEN 32 /* hex characters */
+
+/* One job row. Fixed-size fields so records copy by value between threads. */
+typedef struct {
+    char id[JOB_ID_LEN + 1];
+    int64_t seq;            /* insertion order, for paging */
+    char owner[65];         /* SHA-256 hex of the creating token, "" without tokens */
+    job_state state;
+    int cancel_requested;
+    char idem_key[129];     /* Idempotency-Key, "" if none */
+    char body_hash[65];     /* SHA-256 of query + body when idem_key is set */
+    char format[8];         /* input format name: "qmesh", "json", "medit" */
+    int64_t nv, nt;
+    int64_t in_bytes;
+    char options[1024];     /* canonical options JSON */
+    int attempts;
+    char lease_owner[64];
+    double lease_until;
+    double created, started, finished, expires;
+    int purged;             /* files removed after retention (result: 410) */
+    int iterations;         /* progress records published by the last run */
+    char last_progress[768];/* latest progress record JSON, "" if none */
+    char error[1024];       /* problem+json object of a failed job, "" otherwise */
+    char stop_reason[64];
+    char etag_qmesh[65], etag_json[65], etag_medit[65];
+} job_rec;
+
+typedef struct {
+    int64_t by_state[JOB_STATE_COUNT];
+} job_counts;
+
+typedef struct job_store job_store;
+
+typedef struct {
+    /* Insert j (id, owner, idem_key, body_hash, format, sizes, options, created
+     * filled by the caller). If j->idem_key is set and the owner already has a
+     * job with that key, nothing is inserted, *existing receives that job and
+     * *dup is set to 1. The row is durable when this returns QDC_OK. */
+    qdc_status (*create)(job_store *s, const job_rec *j, int *dup, job_rec *existing);
+    /* QDC_EINVAL when there is no such job. */
+    qdc_status (*get)(job_store *s, const char *id, job_rec *out);
+    /* Up to max jobs of owner with seq > after_seq, oldest first; *n set. */
+    qdc_status (*list)(job_store *s, const char *owner, int64_t after_seq, int max,
+                       job_rec *out, int *n);
+    /* Claim the oldest queued job (or a running one whose lease expired):
+     * state running, attempts + 1, lease owner/until. *found 0 if none. */
+    qdc_status (*claim)(job_store *s, const char *worker, double lease_s, job_rec *out,
+                        int *found);
+    qdc_status (*renew)(job_store *s, const char *id, const char *worker, double lease_s);
+    /* Terminal state from a worker: writes state, finished, expires, iterations,
+     * last_progress, error, stop_reason, etags of j. */
+    qdc_status (*finish)(job_store *s, const job_rec *j);
+    /* Give a running job back to the queue (graceful shutdown): attempts - 1. */
+    qdc_status (*release)(job_store *s, const char *id, const char *worker);
+    /* Queued: cancelled at once (*now_done = 1). Running: cancel_requested = 1. */
+    qdc_status (*cancel)(job_store *s, const char *id, int *now_done);
+    qdc_status (*remove)(job_store *s, const char *id);
+    /* Start-up after a crash: running jobs go back to queued, or to failed when
+     * they already used max_attempts. *requeued / *failed counted. */
+    qdc_status (*recover)(job_store *s, int max_attempts, int *requeued, int *failed);
+    qdc_status (*counts)(job_store *s, job_counts *c);
+    /* Done jobs whose expires < now and not yet purged: ids into out (max). */
+    qdc_status (*expired)(job_store *s, double now, char (*out)[JOB_ID_LEN + 1], int max,
+                          int *n);
+    qdc_status (*mark_purged)(job_store *s, const char *id);
+    void (*close)(job_store *s);
+} job_store_ops;
+
+struct job_store {
+    const job_store_ops *ops;
+};
+
+/* SQLite (WAL) backend: DIR/qdcd.db. */
+qdc_status store_sqlite_open(const char *dir, job_store **out, qdc_error *err);
+
+#endif
