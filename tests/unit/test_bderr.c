@@ -1,0 +1,424 @@
+/* test_bderr.c - point-triangle distance, BVH queries and Hausdorff distances
+ * against hand-computed and analytic values. */
+#include "bderr.h"
+#include "meshio.h"
+#include "testlib.h"
+
+#include <stdint.h>
+#include <unistd.h>
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+#if defined(__SANITIZE_ADDRESS__)
+enum { BIG_GRID = 20, BIG_SAMPLES = 100000 };
+#else
+enum { BIG_GRID = 56, BIG_SAMPLES = 1000000 }; /* 6 * 56^3 = 1.05M tets */
+#endif
+
+static uint64_t rng_state = 0x243f6a8885a308d3ULL;
+
+static double urand(void)
+{
+    rng_state ^= rng_state << 13;
+    rng_state ^= rng_state >> 7;
+    rng_state ^= rng_state << 17;
+    return (double)(rng_state >> 11) * 0x1.0p-53;
+}
+
+static const double A[3] = {0, 0, 0}, B[3] = {1, 0, 0}, C[3] = {0, 1, 0};
+
+/* distance from p to ABC is d with closest point q */
+static int pt_case(double px, double py, double pz, double d, double qx, double qy,
+                   double qz)
+{
+    double p[3] = {px, py, pz}, q[3];
+    double got = bderr_point_triangle(p, A, B, C, q);
+
+    if (fabs(got - d) > 1e-15 || fabs(q[0] - qx) > 1e-15 || fabs(q[1] - qy) > 1e-15 ||
+        fabs(q[2] - qz) > 1e-15) {
+        printf("  p=(%g,%g,%g): d=%.17g q=(%g,%g,%g), expected d=%.17g q=(%g,%g,%g)\n",
+               px, py, pz, got, q[0], q[1], q[2], d, qx, qy, qz);
+        return 1;
+    }
+    return 0;
+}
+
+TEST(point_triangle_regions)
+{
+    int bad = 0;
+
+    bad += pt_case(0.25, 0.25, 2, 2, 0.25, 0.25, 0);         /* face, above */
+    bad += pt_case(0.2, 0.3, -0.5, 0.5, 0.2, 0.3, 0);        /* face, below */
+    bad += pt_case(0.1, 0.1, 0, 0, 0.1, 0.1, 0);             /* on the face */
+    bad += pt_case(-1, -1, 0, sqrt(2), 0, 0, 0);             /* vertex A */
+    bad += pt_case(2, -1, 0, sqrt(2), 1, 0, 0);              /* vertex B */
+    bad += pt_case(0, 3, 0, 2, 0, 1, 0);                     /* vertex C */
+    bad += pt_case(-1, 2, 1, sqrt(3), 0, 1, 0);              /* vertex C, off plane */
+    bad += pt_case(0.5, -1, 1, sqrt(2), 0.5, 0, 0);          /* edge AB */
+    bad += pt_case(1, 1, 0, sqrt(0.5), 0.5, 0.5, 0);         /* edge BC */
+    bad += pt_case(0.75, 0.75, 1, sqrt(1.125), 0.5, 0.5, 0); /* edge BC, off plane */
+    bad += pt_case(-2, 0.5, 0, 2, 0, 0.5, 0);                /* edge AC */
+    ASSERT_EQ_INT(bad, 0);
+}
+
+TEST(point_triangle_degenerate)
+{
+    const double a[3] = {0, 0, 0}, b[3] = {1, 0, 0}, c[3] = {2, 0, 0}, p[3] = {1.5, 1, 0};
+    const double s[3] = {1, 1, 1}, p2[3] = {1, 1, 3};
+    double q[3];
+
+    ASSERT_NEAR(bderr_point_triangle(p, a, b, c, q), 1, 1e-15);
+    ASSERT_NEAR(q[0], 1.5, 1e-15);
+    ASSERT_NEAR(bderr_point_triangle(p, c, a, b, q), 1, 1e-15); /* any vertex order */
+    ASSERT_NEAR(bderr_point_triangle(p, b, c, a, q), 1, 1e-15);
+    ASSERT_NEAR(bderr_point_triangle(p2, s, s, s, q), 2, 0);
+    ASSERT_NEAR(bderr_point_triangle(p, a, a, c, NULL), 1, 1e-15); /* repeated vertex */
+    /* random degenerate triangles: finite, never above the distance to a corner */
+    for (int i = 0; i < 10000; i++) {
+        double x[3], y[3], z[3], r[3], t = urand();
+        for (int d = 0; d < 3; d++) {
+            x[d] = urand();
+            y[d] = urand();
+            z[d] = x[d] + t * (y[d] - x[d]);
+            r[d] = 2 * urand() - 0.5;
+        }
+        double dd = bderr_point_triangle(r, x, y, z, q);
+        ASSERT_TRUE(isfinite(dd) && dd <= sqrt(pow(r[0] - x[0], 2) + pow(r[1] - x[1], 2) +
+                                               pow(r[2] - x[2], 2)) +
+                                              1e-15);
+    }
+}
+
+TEST(point_triangle_vs_sampling)
+{
+    /* the exact distance is below every sampled point and close to the best one */
+    for (int it = 0; it < 200; it++) {
+        double a[3], b[3], c[3], p[3], q[3], best = INFINITY, d;
+        for (int k = 0; k < 3; k++) {
+            a[k] = urand();
+            b[k] = urand();
+            c[k] = urand();
+            p[k] = 3 * urand() - 1;
+        }
+        d = bderr_point_triangle(p, a, b, c, q);
+        ASSERT_NEAR(sqrt(pow(p[0] - q[0], 2) + pow(p[1] - q[1], 2) + pow(p[2] - q[2], 2)),
+                    d, 1e-14);
+        for (int i = 0; i <= 200; i++)
+            for (int j = 0; i + j <= 200; j++) {
+                double u = i / 200.0, v = j / 200.0, s[3], e;
+                for (int k = 0; k < 3; k++)
+                    s[k] = a[k] + u * (b[k] - a[k]) + v * (c[k] - a[k]);
+                e = sqrt(pow(p[0] - s[0], 2) + pow(p[1] - s[1], 2) + pow(p[2] - s[2], 2));
+                ASSERT_TRUE(d <= e + 1e-14);
+                best = fmin(best, e);
+            }
+        ASSERT_TRUE(best - d < 0.02);
+    }
+}
+
+TEST(bvh_matches_brute_force)
+{
+    enum { NT = 700, NQ = 2000 };
+    double *x = malloc(9 * NT * sizeof(double));
+    int32_t *t = malloc(3 * NT * sizeof(int32_t));
+    bderr_bvh *b = NULL;
+    qdc_error err;
+
+    ASSERT_TRUE(x && t);
+    for (int i = 0; i < NT; i++) { /* small random triangles in the unit cube */
+        double o[3] = {urand(), urand(), urand()};
+        for (int v = 0; v < 3; v++) {
+            for (int d = 0; d < 3; d++)
+                x[9 * i + 3 * v + d] = o[d] + 0.1 * urand();
+            t[3 * i + v] = 3 * i + v;
+        }
+    }
+    ASSERT_OK(bderr_bvh_build(x, 3 * NT, t, NT, &b, &err));
+    for (int q = 0; q < NQ; q++) {
+        double p[3] = {2 * urand() - 0.5, 2 * urand() - 0.5, 2 * urand() - 0.5}, cp[3];
+        double best = INFINITY, d;
+        int32_t tri;
+        for (int i = 0; i < NT; i++)
+            best = fmin(best, bderr_point_triangle(p, x + 9 * i, x + 9 * i + 3,
+                                                   x + 9 * i + 6, NULL));
+        d = bderr_bvh_closest(b, p, cp, &tri);
+        ASSERT_NEAR(d, best, 0);
+        ASSERT_TRUE(tri >= 0 && tri < NT);
+        ASSERT_NEAR(
+            bderr_point_triangle(p, x + 9 * tri, x + 9 * tri + 3, x + 9 * tri + 6, NULL),
+            d, 0);
+        ASSERT_NEAR(
+            sqrt(pow(p[0] - cp[0], 2) + pow(p[1] - cp[1], 2) + pow(p[2] - cp[2], 2)), d,
+            1e-15);
+    }
+    bderr_bvh_free(b);
+    free(x);
+    free(t);
+}
+
+TEST(bvh_edge_cases)
+{
+    const double x[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0}, p[3] = {0, 0, 1};
+    const int32_t t[3] = {0, 1, 2}, bad[3] = {0, 1, 3};
+    bderr_bvh *b = NULL;
+    int32_t tri = 7;
+    qdc_error err;
+
+    ASSERT_OK(bderr_bvh_build(x, 3, t, 0, &b, &err));
+    ASSERT_TRUE(isinf(bderr_bvh_closest(b, p, NULL, &tri)) && tri == -1);
+    bderr_bvh_free(b);
+    ASSERT_EQ_INT(bderr_bvh_build(x, 3, bad, 1, &b, &err), QDC_EINVAL);
+    ASSERT_TRUE(b == NULL);
+    ASSERT_OK(bderr_bvh_build(x, 3, t, 1, &b, &err));
+    ASSERT_NEAR(bderr_bvh_closest(b, p, NULL, &tri), 1, 0);
+    ASSERT_EQ_INT(tri, 0);
+    bderr_bvh_free(b);
+    bderr_bvh_free(NULL);
+}
+
+/* Closed surface of [-0.5, 0.5]^3, n x n squares per side, shifted by dz. */
+static void cube_surface(int n, double dz, double **xyz, int32_t *nv, int32_t **tris,
+                         int32_t *nt)
+{
+    int32_t k = 0, m = 0;
+    double *x = malloc(6 * (size_t)(n + 1) * (n + 1) * 3 * sizeof(double));
+    int32_t *t = malloc(6 * (size_t)n * n * 6 * sizeof(int32_t));
+
+    for (int f = 0; f < 6; f++) {
+        int ax = f / 2, u = (ax + 1) % 3, w = (ax + 2) % 3;
+        int32_t base = k;
+        for (int i = 0; i <= n; i++)
+            for (int j = 0; j <= n; j++) {
+                double *p = x + 3 * (size_t)k++;
+                p[ax] = f % 2 ? 0.5 : -0.5;
+                p[u] = -0.5 + (double)i / n;
+                p[w] = -0.5 + (double)j / n;
+                p[2] += dz;
+            }
+        for (int i = 0; i < n; i++)
+            for (int j = 0; j < n; j++) {
+                int32_t v00 = base + i * (n + 1) + j, v10 = v00 + n + 1;
+                int32_t q[6] = {v00, v10, v10 + 1, v00, v10 + 1, v00 + 1};
+                memcpy(t + 3 * (size_t)m, q, sizeof q);
+                m += 2;
+            }
+    }
+    *xyz = x;
+    *nv = k;
+    *tris = t;
+    *nt = m;
+}
+
+TEST(hausdorff_translated_cube)
+{
+    double *xa, *xb;
+    int32_t nva, nvb, nta, ntb, *ta, *tb;
+    bderr_result r;
+    qdc_error err;
+
+    cube_surface(8, 0.01, &xa, &nva, &ta, &nta);
+    cube_surface(5, 0.0, &xb, &nvb, &tb, &ntb);
+    ASSERT_OK(bderr_surfaces(xa, nva, ta, nta, xb, nvb, tb, ntb, 20000, 1, &r, &err));
+    ASSERT_NEAR(r.hausdorff, 0.01, 1e-12);
+    ASSERT_NEAR(r.h_a_to_b, 0.01, 1e-12);
+    ASSERT_NEAR(r.h_b_to_a, 0.01, 1e-12);
+    ASSERT_NEAR(r.diag, sqrt(3), 1e-15);
+    ASSERT_NEAR(r.hausdorff_rel, 0.01 / sqrt(3), 1e-12);
+    ASSERT_TRUE(r.mean > 0 && r.mean < 0.01 && r.rms >= r.mean && r.rms < 0.01);
+    ASSERT_EQ_INT(r.n_samples, nva + nvb + nta + ntb + 40000);
+    ASSERT_EQ_INT(r.ntri_a, nta);
+    /* the same surface with another triangulation: zero */
+    free(xa);
+    free(ta);
+    cube_surface(8, 0.0, &xa, &nva, &ta, &nta);
+    ASSERT_OK(bderr_surfaces(xa, nva, ta, nta, xb, nvb, tb, ntb, 20000, 1, &r, &err));
+    ASSERT_NEAR(r.hausdorff, 0, 1e-15);
+    free(xa);
+    free(xb);
+    free(ta);
+    free(tb);
+}
+
+TEST(parallel_planes_mean_rms)
+{
+    /* two unit squares at distance d: every sample is exactly d away */
+    const double d = 0.125;
+    const double xa[12] = {0, 0, d, 1, 0, d, 1, 1, d, 0, 1, d};
+    const double xb[12] = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0};
+    const int32_t t[6] = {0, 1, 2, 0, 2, 3};
+    bderr_result r;
+    qdc_error err;
+
+    ASSERT_OK(bderr_surfaces(xa, 4, t, 2, xb, 4, t, 2, 5000, 7, &r, &err));
+    ASSERT_NEAR(r.hausdorff, d, 1e-15);
+    ASSERT_NEAR(r.mean, d, 1e-15);
+    ASSERT_NEAR(r.rms, d, 1e-15);
+    ASSERT_NEAR(r.mean_rel, d / sqrt(2), 1e-15);
+    ASSERT_EQ_INT(r.n_samples, 2 * (4 + 2 + 5000));
+}
+
+TEST(deterministic_and_thread_independent)
+{
+    double *xa, *xb;
+    int32_t nva, nvb, nta, ntb, *ta, *tb;
+    bderr_result r1, r2, r3;
+    qdc_error err;
+
+    cube_surface(6, 0.0, &xa, &nva, &ta, &nta);
+    cube_surface(9, 0.0, &xb, &nvb, &tb, &ntb);
+    for (int32_t i = 0; i < nva; i++) /* bump: not on the other surface */
+        xa[3 * i] *= 1 + 0.05 * sin(7 * xa[3 * i + 1]) * cos(5 * xa[3 * i + 2]);
+    ASSERT_OK(bderr_surfaces(xa, nva, ta, nta, xb, nvb, tb, ntb, 50000, 42, &r1, &err));
+#ifdef _OPENMP
+    omp_set_num_threads(1);
+#endif
+    ASSERT_OK(bderr_surfaces(xa, nva, ta, nta, xb, nvb, tb, ntb, 50000, 42, &r2, &err));
+#ifdef _OPENMP
+    omp_set_num_threads(omp_get_num_procs());
+#endif
+    ASSERT_TRUE(memcmp(&r1, &r2, sizeof r1) == 0);
+    ASSERT_OK(bderr_surfaces(xa, nva, ta, nta, xb, nvb, tb, ntb, 50000, 43, &r3, &err));
+    ASSERT_TRUE(r3.mean != r1.mean);
+    ASSERT_TRUE(r1.hausdorff > 0.005 && r1.hausdorff < 0.05);
+    free(xa);
+    free(xb);
+    free(ta);
+    free(tb);
+}
+
+TEST(surfaces_bad_input)
+{
+    const double x[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0},
+                 nan3[9] = {0, 0, 0, 1, 0, 0, 0, NAN, 0};
+    const int32_t t[3] = {0, 1, 2}, bad[3] = {0, 1, -1};
+    bderr_result r;
+    qdc_error err;
+
+    ASSERT_EQ_INT(bderr_surfaces(x, 3, t, 0, x, 3, t, 1, 10, 1, &r, &err), QDC_EINVAL);
+    ASSERT_EQ_INT(bderr_surfaces(x, 3, bad, 1, x, 3, t, 1, 10, 1, &r, &err), QDC_EINVAL);
+    ASSERT_EQ_INT(bderr_surfaces(x, 3, t, 1, nan3, 3, t, 1, 10, 1, &r, &err), QDC_EINVAL);
+    ASSERT_EQ_INT(bderr_surfaces(x, 3, t, 1, x, 3, t, 1, -1, 1, &r, &err), QDC_EINVAL);
+    ASSERT_OK(bderr_surfaces(x, 3, t, 1, x, 3, t, 1, 0, 1, &r, &err));
+    ASSERT_NEAR(r.hausdorff, 0, 1e-15);
+}
+
+/* [0,1]^3 as n^3 cubes of 6 Kuhn tets each (a conforming mesh). */
+static mesh_t *grid_mesh(int n, double dz)
+{
+    mesh_t *m = mesh_new((n + 1) * (n + 1) * (n + 1), 6 * n * n * n, 0);
+    static const int perm[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2},
+                                   {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
+    int32_t t = 0;
+
+    if (!m)
+        return NULL;
+    for (int i = 0; i <= n; i++)
+        for (int j = 0; j <= n; j++)
+            for (int k = 0; k <= n; k++) {
+                double *p = m->xyz + 3 * (size_t)((i * (n + 1) + j) * (n + 1) + k);
+                p[0] = (double)i / n;
+                p[1] = (double)j / n;
+                p[2] = (double)k / n + dz;
+            }
+    for (int i = 0; i < n; i++)
+        for (int j = 0; j < n; j++)
+            for (int k = 0; k < n; k++)
+                for (int s = 0; s < 6; s++) {
+                    int c[3] = {i, j, k};
+                    for (int v = 0; v < 4; v++) {
+                        if (v > 0)
+                            c[perm[s][v - 1]]++;
+                        m->tets[4 * (size_t)t + v] =
+                            (c[0] * (n + 1) + c[1]) * (n + 1) + c[2];
+                    }
+                    t++;
+                }
+    return m;
+}
+
+TEST(meshes_boundary_faces)
+{
+    mesh_t *a = grid_mesh(4, 0.01), *b = grid_mesh(3, 0);
+    bderr_result r;
+    qdc_error err;
+
+    ASSERT_TRUE(a && b);
+    ASSERT_OK(bderr_meshes(a, b, 10000, &r, &err));
+    ASSERT_EQ_INT(r.ntri_a, 6 * 2 * 4 * 4);
+    ASSERT_EQ_INT(r.ntri_b, 6 * 2 * 3 * 3);
+    ASSERT_NEAR(r.hausdorff, 0.01, 1e-12);
+    mesh_free(a);
+    a = grid_mesh(4, 0);
+    ASSERT_OK(bderr_meshes(a, b, 10000, &r, &err));
+    ASSERT_NEAR(r.hausdorff, 0, 1e-15);
+    a->tets[5] = a->nv;
+    ASSERT_EQ_INT(bderr_meshes(a, b, 10, &r, &err), QDC_EINVAL);
+    mesh_free(a);
+    mesh_free(b);
+}
+
+TEST(meshes_big_grid_speed)
+{
+    mesh_t *a = grid_mesh(BIG_GRID, 0), *b = grid_mesh(BIG_GRID, 0);
+    bderr_result r;
+    qdc_error err;
+    double t0;
+
+    ASSERT_TRUE(a && b);
+    for (int32_t i = 0; i < a->nv; i++) /* a small bump on the whole surface */
+        for (int d = 0; d < 3; d++)
+            a->xyz[3 * i + d] += 1e-3 * sin(10 * a->xyz[3 * i + (d + 1) % 3]);
+    t0 = qdc_now();
+    ASSERT_OK(bderr_meshes(a, b, BIG_SAMPLES, &r, &err));
+    printf("  # bderr_meshes %d tets, %d + %d faces, %lld samples: %.2f s, H = %.3g\n",
+           a->nt, r.ntri_a, r.ntri_b, (long long)r.n_samples, qdc_now() - t0,
+           r.hausdorff);
+    ASSERT_EQ_INT(r.ntri_a, 12 * BIG_GRID * BIG_GRID);
+    ASSERT_TRUE(r.hausdorff > 0 && r.hausdorff < 2e-3);
+    mesh_free(a);
+    mesh_free(b);
+}
+
+TEST(dev_meshes)
+{
+    const char *root = getenv("ROOT");
+    char dev[400], cmd[1200], pa[128], pb[128];
+    mesh_t *a = NULL, *b = NULL;
+    bderr_result r;
+    qdc_error err;
+
+    snprintf(dev, sizeof dev, "%s%s../shared/meshes/dev", root ? root : "",
+             root ? "/" : "");
+    snprintf(pa, sizeof pa, "/tmp/qdc_test_bderr_%d_a.mesh", (int)getpid());
+    snprintf(pb, sizeof pb, "/tmp/qdc_test_bderr_%d_b.mesh", (int)getpid());
+    snprintf(cmd, sizeof cmd,
+             "gzip -dc %s/cube_h0.1_good.mesh.gz > %s 2>/dev/null && "
+             "gzip -dc %s/cube_h0.1_noisy.mesh.gz > %s 2>/dev/null",
+             dev, pa, dev, pb);
+    if (system(cmd) != 0) {
+        printf("  # dev meshes not found, skipped\n");
+        unlink(pa);
+        unlink(pb);
+        return;
+    }
+    ASSERT_OK(meshio_load(pa, MESHIO_MEDIT, &a, &err));
+    ASSERT_OK(meshio_load(pb, MESHIO_MEDIT, &b, &err));
+    unlink(pa);
+    unlink(pb);
+    ASSERT_OK(bderr_meshes(a, a, 10000, &r, &err));
+    ASSERT_NEAR(r.hausdorff, 0, 1e-15);
+    ASSERT_NEAR(r.diag, sqrt(3), 1e-12);
+    ASSERT_OK(bderr_meshes(b, a, 10000, &r, &err));
+    printf("  # cube noisy vs good: H = %.4g (rel %.4g), mean %.3g, rms %.3g\n",
+           r.hausdorff, r.hausdorff_rel, r.mean, r.rms);
+    ASSERT_TRUE(r.hausdorff >= 0 && r.mean <= r.rms && r.rms <= r.hausdorff);
+    mesh_free(a);
+    mesh_free(b);
+}
+
+TEST_MAIN("bderr", T(point_triangle_regions), T(point_triangle_degenerate),
+          T(point_triangle_vs_sampling), T(bvh_matches_brute_force), T(bvh_edge_cases),
+          T(hausdorff_translated_cube), T(parallel_planes_mean_rms),
+          T(deterministic_and_thread_independent), T(surfaces_bad_input),
+          T(meshes_boundary_faces), T(meshes_big_grid_speed), T(dev_meshes))
