@@ -36,6 +36,11 @@ double metric_qt(opt_metric m, const metric_parts *p, double delta);
  * to corner a. */
 double metric_qt_grad(opt_metric m, const double *p12, int a, double delta, double g[3]);
 
+/* Smallest and largest of the 6 dihedral angles (degrees), as metric_dihedrals
+ * but with 2 acos instead of 6. */
+void metric_dihedral_range(const double *p0, const double *p1, const double *p2,
+                           const double *p3, double *amin, double *amax);
+
 /* Signed mean ratio 12 (3|V|)^(2/3) / l2sum in [-1, 1]. */
 double metric_mean_ratio(const metric_parts *p);
 /* Volume-length 6 sqrt2 V / l_rms^3 (signed). */

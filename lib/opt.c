@@ -11,6 +11,7 @@
 #include "solve.h"
 
 #include <math.h>
+#include <omp.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
@@ -127,18 +128,16 @@ static void evaluate(const ctx_t *c, const double *x, double delta, opt_progress
         const double *p0 = x + 3 * (size_t)tt[0], *p1 = x + 3 * (size_t)tt[1];
         const double *p2 = x + 3 * (size_t)tt[2], *p3 = x + 3 * (size_t)tt[3];
         metric_parts pt;
-        double eta, ang[6];
+        double eta, amin, amax;
         metric_parts_of(p0, p1, p2, p3, &pt);
         eta = metric_mean_ratio(&pt);
         sum += eta;
         sum2 += eta * eta;
         qmin = eta < qmin ? eta : qmin;
         ninv += !(pt.vol > 0.0);
-        metric_dihedrals(p0, p1, p2, p3, ang);
-        for (int e = 0; e < 6; e++) {
-            dmin = ang[e] < dmin ? ang[e] : dmin;
-            dmax = ang[e] > dmax ? ang[e] : dmax;
-        }
+        metric_dihedral_range(p0, p1, p2, p3, &amin, &amax);
+        dmin = amin < dmin ? amin : dmin;
+        dmax = amax > dmax ? amax : dmax;
     }
     memset(r, 0, sizeof *r);
     r->q_mean = sum / tp->nt;
@@ -168,6 +167,11 @@ static int better(const opt_progress *a, const opt_progress *b)
 static int eligible(const ctx_t *c, const opt_progress *r)
 {
     return r->n_inverted <= c->input.n_inverted && r->q_min >= c->input.q_min;
+}
+
+static int eligible_inv(const ctx_t *c, const opt_progress *r)
+{
+    return r->n_inverted <= c->input.n_inverted;
 }
 
 static void consider(ctx_t *c, const double *x, const opt_progress *r)
@@ -422,12 +426,15 @@ qdc_status opt_run(mesh_t *m, const opt_options *opts, opt_result *res_out, qdc_
         opt_defaults(&o);
     if (o.max_iter < 0 || o.ls_halvings < 0 || o.ls_halvings > 60 || !(o.mu > 0) ||
         !(o.tol_move >= 0) || !(o.eps_rel > 0) || !(o.finish_frac >= 0 && o.finish_frac <= 1) ||
-        o.finish_sweeps < 0 || o.pre_iters < 0 || (unsigned)o.metric > OPT_METRIC_MICN ||
+        o.finish_sweeps < 0 || o.pre_iters < 0 || o.threads < 0 || (unsigned)o.metric > OPT_METRIC_MICN ||
         (unsigned)o.boundary > OPT_BOUNDARY_SLIDE || (unsigned)o.mode > OPT_MODE_LITERAL ||
         (unsigned)o.weights > OPT_WEIGHTS_PAPER || (unsigned)o.solver > OPT_SOLVER_PCG) {
         st = qdc_fail(err, QDC_EINVAL, "invalid optimizer options");
         goto out;
     }
+    /* nthreads-var is per thread in OpenMP: this affects only this job */
+    if (o.threads > 0)
+        omp_set_num_threads(o.threads);
     st = mesh_topo_build(m, &tp, err);
     if (st != QDC_OK)
         goto out;
@@ -507,7 +514,11 @@ qdc_status opt_run(mesh_t *m, const opt_options *opts, opt_result *res_out, qdc_
         for (int32_t v = 0; v < c.nv; v++)
             movable[v] = !c.locked[v] &&
                          !(tp->vflag[v] & (MESH_V_BOUNDARY | MESH_V_INTERFACE));
-        memcpy(c.x, c.xbest, 3 * (size_t)c.nv * sizeof(double));
+        /* Start from the last global iterate (the lowest objective), as the
+         * oracle does, unless it has more inverted tets than the best one: the
+         * pass is there to lift the worst tets, which the ranking weighs first. */
+        if (r.n_inverted > c.best.n_inverted || !eligible_inv(&c, &r))
+            memcpy(c.x, c.xbest, 3 * (size_t)c.nv * sizeof(double));
         for (int s = 0; s < o.finish_sweeps; s++) {
             finish_stats fs;
             if (should_stop(&c, res.stop_reason, sizeof res.stop_reason))

@@ -56,6 +56,8 @@ typedef struct {
     int finish_sweeps;     /* default 4 */
     double feature_angle;  /* degrees, for slide (issue 4), default 30 */
     double time_limit;     /* seconds, 0 = none: then OPT_STOPPED with the best mesh */
+    int threads;           /* OpenMP threads for this run; 0 = all cores. A server running
+                            * several jobs at once should give each 1 (no oversubscription) */
     const volatile int *cancel; /* if non-NULL and *cancel != 0: stop (checked every iteration) */
     opt_progress_fn progress;
     void *progress_ctx;

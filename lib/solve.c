@@ -9,8 +9,10 @@
 
 /* Above this many unknowns the direct path is not even analysed: METIS and the
  * supernodal factorization of the 2-ring pattern cost seconds to minutes
- * (METHOD §7: 99k vertices 26 s per factorization), CG a fraction of that. */
-#define SOLVE_ANALYSE_MAX 60000
+ * (METHOD §7: 22k vertices 1.6 s, 99k 26 s per factorization) while CG needs
+ * 10-40 matrix-free products; measured on the dev corpus, the analysis alone
+ * (METIS) costs more than all CG solves of a run above ~10k unknowns. */
+#define SOLVE_ANALYSE_MAX 10000
 /* Direct wins while its factorization is cheaper than ~40 CG iterations on
  * 3 right-hand sides; flop counts from cholmod_analyze (c.fl). */
 #define SOLVE_FLOPS_PER_CG_NNZ 2000.0

@@ -52,9 +52,9 @@ static int on_progress(void *ctx, const opt_progress *p)
         return cancel_flag;
     n = snprintf(line, sizeof line,
                  "%-6s %3d  q mean %.4f min %+.4f  dihedral %6.2f..%6.2f  inverted %d  "
-                 "step %.3g  %.1fs",
+                 "step %.3g  cg %d  %.1fs",
                  p->phase, p->iteration, p->q_mean, p->q_min, p->dih_min, p->dih_max,
-                 (int)p->n_inverted, p->step, p->elapsed);
+                 (int)p->n_inverted, p->step, p->cg_iters, p->elapsed);
     if (ps->tty) {
         fprintf(stderr, "\r%s%*s", line, ps->last_len > n ? ps->last_len - n : 0, "");
         ps->last_len = n;
@@ -88,6 +88,8 @@ static void optimize_usage(FILE *f)
           "  --weights optavg|paper     QDC weights (default optavg)\n"
           "  --solver auto|cholmod|pcg  linear solver (default auto)\n"
           "  --finish on|off            worst-tet finishing pass (default on)\n"
+          "  --finish-sweeps N          finishing sweeps (default 4)\n"
+          "  --finish-frac F            share of worst tets visited per sweep (default 0.05)\n"
           "  --max-iter N               global iterations (default 10)\n"
           "  --mu X                     damping in normalized units (default 1)\n"
           "  --time-limit SECONDS       stop with the best mesh so far\n"
@@ -176,6 +178,15 @@ int cli_optimize(int argc, char **argv)
                 long n = strtol(v, &end, 10);
                 bad = *end || n < 0 || n > 100000;
                 o.max_iter = (int)n;
+            } else if (!strcmp(a, "--finish-sweeps")) {
+                char *end;
+                long n = strtol(v, &end, 10);
+                bad = *end || n < 0 || n > 1000;
+                o.finish_sweeps = (int)n;
+            } else if (!strcmp(a, "--finish-frac")) {
+                char *end;
+                o.finish_frac = strtod(v, &end);
+                bad = *end || !(o.finish_frac >= 0 && o.finish_frac <= 1);
             } else if (!strcmp(a, "--mu") || !strcmp(a, "--time-limit")) {
                 char *end;
                 double x = strtod(v, &end);
@@ -258,6 +269,12 @@ int cli_optimize(int argc, char **argv)
                 res.after.q_min, (int)res.before.n_inverted, (int)res.after.n_inverted,
                 res.before.dih_min, res.before.dih_max, res.after.dih_min, res.after.dih_max,
                 res.stop_reason, res.iterations, opt_solver_name(res.solver), res.t_total);
+    if (!ps.quiet)
+        fprintf(stderr,
+                "qdc: seconds: setup %.2f, weights %.2f, assembly %.2f, solve %.2f, "
+                "line search %.2f, harmonic %.2f, finish %.2f\n",
+                res.t_setup, res.t_weights, res.t_assembly, res.t_solve, res.t_linesearch,
+                res.t_harmonic, res.t_finish);
     if (report_path) {
         report_quality qb, qa;
         bderr_result be;

@@ -1,8 +1,10 @@
 /* main.c - the qdc command: local optimization and quality reports
  * (remote subcommands: see remote.c when present). */
+#define _POSIX_C_SOURCE 200809L
 #include "cli.h"
 
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 static void usage(FILE *f)
@@ -21,6 +23,9 @@ static void usage(FILE *f)
 
 int main(int argc, char **argv)
 {
+    /* OpenMP threads that spin while waiting steal the cores of anything else
+     * running (a server, a second qdc): sleep instead, unless told otherwise. */
+    setenv("OMP_WAIT_POLICY", "PASSIVE", 0);
     if (argc < 2) {
         usage(stderr);
         return CLI_EUSAGE;
