@@ -543,8 +543,9 @@ qdc_status opt_run(mesh_t *m, const opt_options *opts, opt_result *res_out, qdc_
         qdc_free(movable);
         res.t_finish = qdc_now() - t;
     }
-    /* map back; locked vertices keep their exact input coordinates */
-    for (int32_t v = 0; v < c.nv; v++)
+    /* map back; locked vertices keep their exact input coordinates, and if the
+     * input itself is the best iterate the mesh is left bit-for-bit as it was */
+    for (int32_t v = 0; c.best_it > 0 && v < c.nv; v++)
         if (!c.locked[v])
             for (int k = 0; k < 3; k++)
                 m->xyz[3 * (size_t)v + k] = c.xbest[3 * (size_t)v + k] * c.scale + c.center[k];

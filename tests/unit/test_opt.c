@@ -1,0 +1,277 @@
+/* test_opt.c - behaviour of the optimizer on synthetic meshes: it improves,
+ * untangles, never returns a worse mesh, respects locked vertices and tags,
+ * stops on cancel. */
+#include "metric.h"
+#include "opt.h"
+#include "report.h"
+#include "testlib.h"
+#include "testmesh.h"
+
+#include <math.h>
+#include <string.h>
+
+static report_quality quality(const mesh_t *m)
+{
+    report_quality q;
+    report_quality_compute(m, &q, NULL);
+    return q;
+}
+
+static int all_finite(const mesh_t *m)
+{
+    for (size_t i = 0; i < 3 * (size_t)m->nv; i++)
+        if (!isfinite(m->xyz[i]))
+            return 0;
+    return 1;
+}
+
+TEST(improves_perturbed_grid)
+{
+    int n = 6;
+    mesh_t *m = tm_grid(n, 0);
+    opt_options o;
+    opt_result r;
+    report_quality before, after;
+    tm_perturb(m, n, 0.35, 11);
+    before = quality(m);
+    opt_defaults(&o);
+    ASSERT_OK(opt_run(m, &o, &r, NULL));
+    after = quality(m);
+    ASSERT_TRUE(all_finite(m));
+    ASSERT_EQ_INT(after.n_inverted, 0);
+    ASSERT_TRUE(after.q_mean > before.q_mean + 0.02);
+    ASSERT_TRUE(after.q_min >= before.q_min);
+    ASSERT_TRUE(after.dih_min > before.dih_min);
+    /* the library's own record agrees with an independent evaluation */
+    ASSERT_NEAR(r.after.q_mean, after.q_mean, 1e-9);
+    ASSERT_NEAR(r.after.q_min, after.q_min, 1e-9);
+    ASSERT_TRUE(r.outcome == OPT_CONVERGED);
+    mesh_free(m);
+}
+
+TEST(untangles_inverted_grid)
+{
+    int n = 6;
+    mesh_t *m = tm_grid(n, 0);
+    opt_options o;
+    report_quality before, after;
+    /* swap two interior vertices' positions and push others around: tangled */
+    tm_perturb(m, n, 1.6, 5);
+    before = quality(m);
+    ASSERT_TRUE(before.n_inverted > 20);
+    opt_defaults(&o);
+    ASSERT_OK(opt_run(m, &o, NULL, NULL));
+    after = quality(m);
+    ASSERT_EQ_INT(after.n_inverted, 0);
+    ASSERT_TRUE(after.q_min > 0.1);
+    mesh_free(m);
+}
+
+TEST(never_worse_than_input)
+{
+    /* an already regular Kuhn grid with a fixed boundary: any change must keep
+     * the worst tet and the inverted count */
+    int n = 4;
+    mesh_t *m = tm_grid(n, 0);
+    opt_options o;
+    report_quality before, after;
+    before = quality(m);
+    for (int mode = 0; mode < 2; mode++) {
+        opt_defaults(&o);
+        o.mode = (opt_mode)mode;
+        o.boundary = OPT_BOUNDARY_FIXED;
+        ASSERT_OK(opt_run(m, &o, NULL, NULL));
+        after = quality(m);
+        ASSERT_TRUE(after.n_inverted <= before.n_inverted);
+        ASSERT_TRUE(after.q_min >= before.q_min - 1e-12);
+        ASSERT_TRUE(all_finite(m));
+    }
+    mesh_free(m);
+}
+
+TEST(literal_mode_is_safe_and_reported)
+{
+    int n = 5;
+    mesh_t *m = tm_grid(n, 0);
+    opt_options o;
+    opt_result r;
+    report_quality before, after;
+    tm_perturb(m, n, 0.4, 21);
+    before = quality(m);
+    opt_defaults(&o);
+    o.mode = OPT_MODE_LITERAL;
+    o.finish = 0;
+    ASSERT_OK(opt_run(m, &o, &r, NULL));
+    after = quality(m);
+    ASSERT_TRUE(after.n_inverted <= before.n_inverted);
+    ASSERT_TRUE(after.q_min >= before.q_min);
+    ASSERT_TRUE(r.iterations >= 1);
+    mesh_free(m);
+}
+
+TEST(fixed_boundary_and_user_locks_do_not_move)
+{
+    int n = 5;
+    mesh_t *m = tm_grid(n, MESH_WITH_FIXED), *orig;
+    opt_options o;
+    mesh_topo *tp = NULL;
+    tm_perturb(m, n, 0.4, 3);
+    m->fixed[2 + (n + 1) * (2 + (n + 1) * 2)] = 1; /* an interior vertex */
+    orig = mesh_dup(m);
+    ASSERT_OK(mesh_topo_build(m, &tp, NULL));
+    opt_defaults(&o);
+    o.boundary = OPT_BOUNDARY_FIXED;
+    ASSERT_OK(opt_run(m, &o, NULL, NULL));
+    for (int32_t v = 0; v < m->nv; v++)
+        if ((tp->vflag[v] & MESH_V_BOUNDARY) || m->fixed[v])
+            for (int k = 0; k < 3; k++)
+                ASSERT_TRUE(m->xyz[3 * v + k] == orig->xyz[3 * v + k]);
+    /* interior vertices did move */
+    ASSERT_TRUE(memcmp(m->xyz, orig->xyz, 3 * sizeof(double) * (size_t)m->nv) != 0);
+    mesh_topo_free(tp);
+    mesh_free(orig);
+    mesh_free(m);
+}
+
+TEST(regions_and_connectivity_untouched)
+{
+    int n = 5;
+    mesh_t *m = tm_grid(n, MESH_WITH_REGION), *orig;
+    opt_options o;
+    tm_perturb(m, n, 0.3, 9);
+    orig = mesh_dup(m);
+    opt_defaults(&o);
+    ASSERT_OK(opt_run(m, &o, NULL, NULL));
+    ASSERT_TRUE(memcmp(m->tets, orig->tets, 16 * (size_t)m->nt) == 0);
+    ASSERT_TRUE(memcmp(m->region, orig->region, 4 * (size_t)m->nt) == 0);
+    mesh_free(orig);
+    mesh_free(m);
+}
+
+static int cancel_at_2(void *ctx, const opt_progress *p)
+{
+    int *count = ctx;
+    (*count)++;
+    return p->iteration >= 2;
+}
+
+TEST(cancel_from_progress_callback)
+{
+    int n = 5, calls = 0;
+    mesh_t *m = tm_grid(n, 0);
+    opt_options o;
+    opt_result r;
+    report_quality before, after;
+    tm_perturb(m, n, 0.4, 4);
+    before = quality(m);
+    opt_defaults(&o);
+    o.progress = cancel_at_2;
+    o.progress_ctx = &calls;
+    ASSERT_OK(opt_run(m, &o, &r, NULL));
+    after = quality(m);
+    ASSERT_EQ_INT(calls, 3); /* input, iterations 1 and 2 */
+    ASSERT_TRUE(r.outcome == OPT_STOPPED);
+    ASSERT_TRUE(strcmp(r.stop_reason, "cancelled") == 0);
+    ASSERT_TRUE(after.q_min >= before.q_min);
+    mesh_free(m);
+}
+
+TEST(cancel_flag_before_start)
+{
+    int n = 3;
+    volatile int flag = 1;
+    mesh_t *m = tm_grid(n, 0), *orig;
+    opt_options o;
+    opt_result r;
+    tm_perturb(m, n, 0.3, 4);
+    orig = mesh_dup(m);
+    opt_defaults(&o);
+    o.cancel = &flag;
+    ASSERT_OK(opt_run(m, &o, &r, NULL));
+    ASSERT_EQ_INT(r.iterations, 0);
+    ASSERT_TRUE(memcmp(m->xyz, orig->xyz, 24 * (size_t)m->nv) == 0);
+    mesh_free(orig);
+    mesh_free(m);
+}
+
+TEST(solvers_and_metrics_all_work)
+{
+    static const opt_solver solvers[] = {OPT_SOLVER_CHOLMOD, OPT_SOLVER_PCG};
+    double means[2];
+    for (int s = 0; s < 2; s++) {
+        int n = 5;
+        mesh_t *m = tm_grid(n, 0);
+        opt_options o;
+        opt_result r;
+        tm_perturb(m, n, 0.4, 17);
+        opt_defaults(&o);
+        o.solver = solvers[s];
+        o.finish = 0;
+        ASSERT_OK(opt_run(m, &o, &r, NULL));
+        ASSERT_EQ_INT(r.solver, solvers[s]);
+        means[s] = quality(m).q_mean;
+        mesh_free(m);
+    }
+    /* same method, two solvers: the same result up to CG tolerance effects */
+    ASSERT_NEAR(means[0], means[1], 2e-3);
+    for (int mm = 0; mm < 3; mm++) {
+        int n = 4;
+        mesh_t *m = tm_grid(n, 0);
+        opt_options o;
+        report_quality before;
+        tm_perturb(m, n, 0.4, 23);
+        before = quality(m);
+        opt_defaults(&o);
+        o.metric = (opt_metric)mm;
+        ASSERT_OK(opt_run(m, &o, NULL, NULL));
+        ASSERT_TRUE(quality(m).q_mean > before.q_mean);
+        mesh_free(m);
+    }
+}
+
+TEST(harmonic_guidance_runs)
+{
+    int n = 6;
+    mesh_t *m = tm_grid(n, 0);
+    opt_options o;
+    opt_result r;
+    report_quality before;
+    tm_perturb(m, n, 0.4, 31);
+    before = quality(m);
+    opt_defaults(&o);
+    o.harmonic = 1;
+    ASSERT_OK(opt_run(m, &o, &r, NULL));
+    ASSERT_TRUE(r.iterations > o.pre_iters);
+    ASSERT_TRUE(quality(m).q_mean > before.q_mean);
+    ASSERT_TRUE(all_finite(m));
+    mesh_free(m);
+}
+
+TEST(bad_options_and_bad_mesh_rejected)
+{
+    mesh_t *m = tm_grid(2, 0), *orig = mesh_dup(m);
+    opt_options o;
+    opt_result r;
+    qdc_error e;
+    opt_defaults(&o);
+    o.mu = -1;
+    ASSERT_EQ_INT(opt_run(m, &o, &r, &e), QDC_EINVAL);
+    ASSERT_EQ_INT(r.outcome, OPT_FAILED);
+    opt_defaults(&o);
+    m->tets[3] = 99;
+    ASSERT_EQ_INT(opt_run(m, &o, &r, &e), QDC_EMESH);
+    m->tets[3] = orig->tets[3];
+    ASSERT_TRUE(memcmp(m->xyz, orig->xyz, 24 * (size_t)m->nv) == 0);
+    ASSERT_EQ_INT(opt_parse_metric("nope", &o.metric), QDC_EINVAL);
+    ASSERT_OK(opt_parse_metric("micn", &o.metric));
+    ASSERT_EQ_INT(o.metric, OPT_METRIC_MICN);
+    mesh_free(orig);
+    mesh_free(m);
+}
+
+TEST_MAIN("opt", T(improves_perturbed_grid), T(untangles_inverted_grid),
+          T(never_worse_than_input), T(literal_mode_is_safe_and_reported),
+          T(fixed_boundary_and_user_locks_do_not_move), T(regions_and_connectivity_untouched),
+          T(cancel_from_progress_callback), T(cancel_flag_before_start),
+          T(solvers_and_metrics_all_work), T(harmonic_guidance_runs),
+          T(bad_options_and_bad_mesh_rejected))
