@@ -410,6 +410,8 @@ double bderr_bvh_closest(const bderr_bvh *b, const double p[3], double cp[3],
             sd[sp++] = dl;
         }
     }
+    if (bt < 0) /* p had a NaN: every comparison failed */
+        return NAN;
     if (cp)
         memcpy(cp, bq, sizeof bq);
     if (tri)
@@ -620,7 +622,7 @@ qdc_status bderr_surfaces(const double *xa, int32_t nva, const int32_t *ta, int3
     qdc_status st;
     int64_t n;
 
-    if (!r || samples_per_side < 0)
+    if (!r || samples_per_side < 0 || samples_per_side > (INT64_C(1) << 40))
         return qdc_fail(err, QDC_EINVAL, "bderr_surfaces: invalid arguments");
     memset(r, 0, sizeof *r);
     if (nta <= 0 || ntb <= 0)

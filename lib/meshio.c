@@ -1247,21 +1247,22 @@ static qdc_status json_array(txt *s, const char *what, int width, int want_int,
     do {
         if (vec_grow(v, (size_t)k) != 0)
             return qdc_fail(err, QDC_ENOMEM, "%s: out of memory", what);
-        if (width && (st = json_want(s, '[', what, err)) != QDC_OK)
-            return st;
-        for (int j = 0; j < k; j++) {
-            if (j && (st = json_want(s, ',', what, err)) != QDC_OK)
-                return st;
-            st = json_scalar(s, what, want_int, lo, hi, (char *)v->a + v->n * v->size,
-                             err);
-            if (st != QDC_OK) {
-                set_index(err, elem_kind(what), (int64_t)(v->n / (size_t)k));
-                return st;
-            }
-            v->n++;
+        st = width ? json_want(s, '[', what, err) : QDC_OK;
+        for (int j = 0; j < k && st == QDC_OK; j++) {
+            if (j)
+                st = json_want(s, ',', what, err);
+            if (st == QDC_OK)
+                st = json_scalar(s, what, want_int, lo, hi, (char *)v->a + v->n * v->size,
+                                 err);
+            if (st == QDC_OK)
+                v->n++;
         }
-        if (width && (st = json_want(s, ']', what, err)) != QDC_OK)
+        if (st == QDC_OK && width)
+            st = json_want(s, ']', what, err);
+        if (st != QDC_OK) {
+            set_index(err, elem_kind(what), (int64_t)(v->n / (size_t)k));
             return st;
+        }
     } while (json_eat(s, ','));
     return json_want(s, ']', what, err);
 }
@@ -1334,10 +1335,13 @@ static qdc_status json_skip(txt *s, int depth, qdc_error *err)
         if (json_eat(s, close))
             return QDC_OK;
         do {
-            if (close == '}' && ((st = json_string(s, NULL, 0, err)) != QDC_OK ||
-                                 (st = json_want(s, ':', "object", err)) != QDC_OK))
-                return st;
-            st = json_skip(s, depth + 1, err);
+            if (close == '}') {
+                st = json_string(s, NULL, 0, err);
+                if (st == QDC_OK)
+                    st = json_want(s, ':', "object", err);
+            }
+            if (st == QDC_OK)
+                st = json_skip(s, depth + 1, err);
         } while (st == QDC_OK && json_eat(s, ','));
         return st == QDC_OK ? json_want(s, close, "value", err) : st;
     }
@@ -1567,9 +1571,10 @@ static void wb_int(wbuf *w, int64_t v)
     int n = sizeof tmp;
     uint64_t u = v < 0 ? 0 - (uint64_t)v : (uint64_t)v;
 
-    do
+    do {
         tmp[--n] = (char)('0' + u % 10);
-    while (u /= 10);
+        u /= 10;
+    } while (u);
     if (v < 0)
         tmp[--n] = '-';
     wb_put(w, tmp + n, sizeof tmp - (size_t)n);

@@ -159,7 +159,8 @@ TEST(bvh_matches_brute_force)
 
 TEST(bvh_edge_cases)
 {
-    const double x[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0}, p[3] = {0, 0, 1};
+    const double x[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0}, p[3] = {0, 0, 1},
+                 pn[3] = {0, NAN, 0};
     const int32_t t[3] = {0, 1, 2}, bad[3] = {0, 1, 3};
     bderr_bvh *b = NULL;
     int32_t tri = 7;
@@ -173,6 +174,7 @@ TEST(bvh_edge_cases)
     ASSERT_OK(bderr_bvh_build(x, 3, t, 1, &b, &err));
     ASSERT_NEAR(bderr_bvh_closest(b, p, NULL, &tri), 1, 0);
     ASSERT_EQ_INT(tri, 0);
+    ASSERT_TRUE(isnan(bderr_bvh_closest(b, pn, NULL, &tri)) && tri == -1);
     bderr_bvh_free(b);
     bderr_bvh_free(NULL);
 }
@@ -417,8 +419,35 @@ TEST(dev_meshes)
     mesh_free(b);
 }
 
+/* Every allocation failing in turn (build with -DQDC_FAULT_INJECTION). */
+TEST(allocation_failures)
+{
+#ifdef QDC_FAULT_INJECTION
+    mesh_t *a = grid_mesh(3, 0.01), *b = grid_mesh(2, 0);
+    bderr_result r;
+    qdc_error err;
+    qdc_status st;
+
+    ASSERT_TRUE(a && b);
+    for (long n = 1;; n++) {
+        qdc_fault_set(n);
+        st = bderr_meshes(a, b, 100, &r, &err);
+        qdc_fault_set(0);
+        if (st == QDC_OK)
+            break;
+        ASSERT_EQ_INT(st, QDC_ENOMEM);
+    }
+    ASSERT_NEAR(r.hausdorff, 0.01, 1e-12);
+    mesh_free(a);
+    mesh_free(b);
+#else
+    printf("  # built without QDC_FAULT_INJECTION, skipped\n");
+#endif
+}
+
 TEST_MAIN("bderr", T(point_triangle_regions), T(point_triangle_degenerate),
           T(point_triangle_vs_sampling), T(bvh_matches_brute_force), T(bvh_edge_cases),
           T(hausdorff_translated_cube), T(parallel_planes_mean_rms),
           T(deterministic_and_thread_independent), T(surfaces_bad_input),
-          T(meshes_boundary_faces), T(meshes_big_grid_speed), T(dev_meshes))
+          T(meshes_boundary_faces), T(meshes_big_grid_speed), T(dev_meshes),
+          T(allocation_failures))
