@@ -533,8 +533,8 @@ static void vec_free(vec *v)
 typedef struct {
     int64_t nv, nt, ntri, nfix;
     double *xyz;
-    int32_t *vref, *tets, *region, *tris, *tri_ref, *fix;
-    int fix_listed; /* fix holds vertex indices, not nv flags */
+    int32_t *vref, *tets, *region, *tris, *tri_ref;
+    int32_t *fix; /* nfix indices of fixed vertices */
 } parsed;
 
 static void parsed_init(parsed *pm)
@@ -581,12 +581,8 @@ static qdc_status parsed_mesh(const parsed *pm, mesh_t **out, qdc_error *err)
     copy_opt(m->vref, pm->vref, (size_t)pm->nv * sizeof(int32_t));
     copy_opt(m->tets, pm->tets, (size_t)nt * 4 * sizeof(int32_t));
     copy_opt(m->region, pm->region, (size_t)nt * sizeof(int32_t));
-    for (int64_t i = 0; i < pm->nfix && m->fixed; i++) {
-        if (pm->fix_listed)
-            m->fixed[pm->fix[i]] = 1;
-        else
-            m->fixed[i] = (uint8_t)pm->fix[i];
-    }
+    for (int64_t i = 0; i < pm->nfix && m->fixed; i++)
+        m->fixed[pm->fix[i]] = 1;
     if (pm->ntri > 0) {
         if (mesh_set_tris(m, (int32_t)pm->ntri, pm->tri_ref != NULL) != QDC_OK) {
             mesh_free(m);
@@ -831,7 +827,6 @@ static qdc_status medit_keyword(txt *s, const char *kw, size_t kl, medit_state *
         return medit_elem_section(s, "Triangles", 3, INT32_MAX / 3, pm, &pm->ntri,
                                   &pm->tris, &pm->tri_ref, &ms->tri_at, err);
     if (word_is(kw, kl, "RequiredVertices")) {
-        pm->fix_listed = 1;
         return medit_elem_section(s, "RequiredVertices", 1, INT32_MAX, pm, &pm->nfix,
                                   &pm->fix, NULL, &ms->fix_at, err);
     }
@@ -1374,8 +1369,8 @@ static const char *const json_keys[J_KEYS] = {"vertices", "tets", "regions", "fi
 
 typedef struct {
     vec v[J_KEYS];
-    txt at[J_KEYS]; /* where each value starts */
-    int seen[J_KEYS];
+    txt at[J_KEYS];   /* where each value starts */
+    int seen[J_KEYS]; /* 0 absent, 1 present, 2 null */
 } json_state;
 
 static qdc_status json_member(txt *s, json_state *js, qdc_error *err)
@@ -1402,7 +1397,7 @@ static qdc_status json_member(txt *s, json_state *js, qdc_error *err)
     skip_ws(s);
     js->at[k] = *s;
     if (k >= J_REGIONS && json_null(s)) {
-        js->seen[k] = 0;
+        js->seen[k] = 2; /* present, null: as if absent */
         return QDC_OK;
     }
     switch (k) {
@@ -1470,7 +1465,7 @@ static qdc_status read_json(const char *buf, size_t len, mesh_t **out, qdc_error
                       nt);
         goto out;
     }
-    if (js.seen[J_REGIONS] && js.v[J_REGIONS].n != nt) {
+    if (js.seen[J_REGIONS] == 1 && js.v[J_REGIONS].n != nt) {
         st = fail_txt(err, QDC_EPARSE, &js.at[J_REGIONS], js.at[J_REGIONS].p,
                       "regions: %zu entries for %zu tets", js.v[J_REGIONS].n, nt);
         goto out;
@@ -1486,8 +1481,7 @@ static qdc_status read_json(const char *buf, size_t len, mesh_t **out, qdc_error
     pm.tets = js.v[J_TETS].a;
     pm.region = js.v[J_REGIONS].a;
     pm.fix = js.v[J_FIXED].a;
-    pm.nfix = js.seen[J_FIXED] ? (int64_t)js.v[J_FIXED].n : -1;
-    pm.fix_listed = 1;
+    pm.nfix = js.seen[J_FIXED] == 1 ? (int64_t)js.v[J_FIXED].n : -1;
     st = parsed_mesh(&pm, out, err);
 out:
     for (int k = 0; k < J_KEYS; k++)
