@@ -32,7 +32,7 @@ void opt_defaults(opt_options *o)
     o->mu = 1.0;
     o->tol_move = 1e-3;
     o->eps_rel = 1e-3;
-    o->finish_frac = 0.05;
+    o->finish_frac = 0.2;
     o->finish_sweeps = 4;
     o->feature_angle = 30.0;
 }
@@ -505,6 +505,7 @@ qdc_status opt_run(mesh_t *m, const opt_options *opts, opt_result *res_out, qdc_
     if (o.finish && !stop && o.finish_sweeps > 0) {
         double t = qdc_now();
         uint8_t *movable = qdc_mallocn((size_t)c.nv, 1);
+        int polish = 0;
         if (!movable) {
             st = QDC_ENOMEM;
             goto out;
@@ -538,6 +539,30 @@ qdc_status opt_run(mesh_t *m, const opt_options *opts, opt_result *res_out, qdc_
                 break;
             }
             if (fs.n_moves == 0)
+                break;
+        }
+        /* Polish: while the worst tet still improves, sweep the worst 1% only
+         * (cheap); measured on the dev corpus the worst tet keeps rising for a
+         * few sweeps after the regular ones. */
+        for (int s = 0; s < 8 && !should_stop(&c, res.stop_reason, sizeof res.stop_reason);
+             s++) {
+            finish_stats fs;
+            double before = r.q_min;
+            st = finish_sweep(tp, movable, c.x, o.metric, c.eps, c.lbar, 0.01, &fs);
+            if (st != QDC_OK) {
+                qdc_free(movable);
+                goto out;
+            }
+            evaluate(&c, c.x, fs.delta, &r);
+            r.iteration = ++polish + res.iterations + o.finish_sweeps;
+            r.phase = "finish";
+            r.step = fs.n_verts ? (double)fs.n_moves / fs.n_verts : 0;
+            consider(&c, c.x, &r);
+            if (report(&c, &r)) {
+                snprintf(res.stop_reason, sizeof res.stop_reason, "cancelled");
+                break;
+            }
+            if (fs.n_moves == 0 || r.q_min < before + 1e-3)
                 break;
         }
         qdc_free(movable);

@@ -52,7 +52,7 @@ typedef struct {
     double mu;             /* semi-implicit damping in normalized units, default 1 */
     double tol_move;       /* stop when max move < tol_move * mean edge, default 1e-3 */
     double eps_rel;        /* Escobar epsilon relative to a regular tet, default 1e-3 */
-    double finish_frac;    /* fraction of worst tets in the finishing pass, default 0.05 */
+    double finish_frac;    /* fraction of worst tets in the finishing pass, default 0.2 */
     int finish_sweeps;     /* default 4 */
     double feature_angle;  /* degrees, for slide (issue 4), default 30 */
     double time_limit;     /* seconds, 0 = none: then OPT_STOPPED with the best mesh */

@@ -89,7 +89,7 @@ static void optimize_usage(FILE *f)
           "  --solver auto|cholmod|pcg  linear solver (default auto)\n"
           "  --finish on|off            worst-tet finishing pass (default on)\n"
           "  --finish-sweeps N          finishing sweeps (default 4)\n"
-          "  --finish-frac F            share of worst tets visited per sweep (default 0.05)\n"
+          "  --finish-frac F            share of worst tets visited per sweep (default 0.2)\n"
           "  --max-iter N               global iterations (default 10)\n"
           "  --mu X                     damping in normalized units (default 1)\n"
           "  --time-limit SECONDS       stop with the best mesh so far\n"
