@@ -384,6 +384,10 @@ static void run_job(worker *w, job_rec *j)
     if (st != QDC_OK)
         goto failed;
     job_opt_from_json(&opts, j->options, q->cfg.job_time_limit);
+    /* Workers already run side by side: split the cores instead of letting
+     * every job's OpenMP team take them all. */
+    long ncpu = sysconf(_SC_NPROCESSORS_ONLN);
+    opts.threads = ncpu > q->cfg.workers ? (int)(ncpu / q->cfg.workers) : 1;
     opts.cancel = &w->cancel;
     opts.progress = on_progress;
     opts.progress_ctx = &r;

@@ -9,6 +9,7 @@
 #include <errno.h>
 #include <getopt.h>
 #include <stddef.h>
+#include <pthread.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -17,12 +18,6 @@
 #include <unistd.h>
 
 static qdcd g;
-
-static void on_signal(int sig)
-{
-    (void)sig;
-    g.stop = 1; /* the main loop does the rest */
-}
 
 static void usage(FILE *f)
 {
@@ -316,7 +311,8 @@ int main(int argc, char **argv)
 {
     qdcd *q = &g;
     qdc_error err;
-    struct sigaction sa;
+    sigset_t stopset;
+    const struct timespec tick = {0, 100 * 1000 * 1000};
     int requeued = 0, failed = 0, rc = 1;
     char host[64];
 
@@ -341,10 +337,15 @@ int main(int argc, char **argv)
     snprintf(q->instance, sizeof q->instance, "%.24s:%ld:%lx", host, (long)getpid(),
              (unsigned long)wall_now());
 
-    memset(&sa, 0, sizeof sa);
-    sa.sa_handler = on_signal;
-    sigaction(SIGTERM, &sa, NULL);
-    sigaction(SIGINT, &sa, NULL);
+    /* SIGTERM and SIGINT are blocked in every thread and taken synchronously
+     * by the main loop (sigtimedwait), so no handler ever runs. A handler
+     * would not be safe anyway: METIS (inside CHOLMOD, on worker threads)
+     * swaps in its own SIGTERM handler that longjmps into the worker's stack
+     * and, with two jobs analysing at once, can leave it installed. */
+    sigemptyset(&stopset);
+    sigaddset(&stopset, SIGTERM);
+    sigaddset(&stopset, SIGINT);
+    pthread_sigmask(SIG_BLOCK, &stopset, NULL);
     signal(SIGPIPE, SIG_IGN);
 
     qdc_error_clear(&err);
@@ -391,7 +392,9 @@ int main(int argc, char **argv)
             purge_expired(q);
             next_purge = mono_now() + 5;
         }
-        usleep(100 * 1000);
+        int sig = sigtimedwait(&stopset, NULL, &tick);
+        if (sig == SIGTERM || sig == SIGINT)
+            q->stop = 1;
     }
 
     fprintf(stderr, "qdcd: shutting down\n");
