@@ -249,6 +249,7 @@ static enum MHD_Result begin_upload(struct MHD_Connection *c, req *r)
     job_counts cnt;
     int64_t limit;
 
+    r->upload = 1;
     /* Options are checked before any byte of the body is read. */
     memset(&s, 0, sizeof s);
     opt_defaults(&s.o);
@@ -266,7 +267,6 @@ static enum MHD_Result begin_upload(struct MHD_Connection *c, req *r)
         cnt.by_state[JOB_QUEUED] >= q->cfg.max_queued) {
         static const char *const h[] = {MHD_HTTP_HEADER_RETRY_AFTER, "5", NULL};
         char extra[96];
-        atomic_fetch_add(&q->m.rejected, 1);
         snprintf(extra, sizeof extra, "\"queued\":%lld,\"max_queued\":%d",
                  (long long)cnt.by_state[JOB_QUEUED], q->cfg.max_queued);
         return http_problem(c, r, 429, "queue-full", "too many queued jobs",
@@ -484,7 +484,6 @@ static enum MHD_Result finish_upload(struct MHD_Connection *c, req *r)
             snprintf(d, sizeof d, "request bodies are limited to %lld bytes", (long long)lim);
         snprintf(extra, sizeof extra, "\"max_bytes\":%lld%s", (long long)lim,
                  json ? ",\"use\":\"" MEDIA_QMESH "\"" : "");
-        atomic_fetch_add(&q->m.rejected, 1);
         return http_problem(c, r, 413, "too-big", "request body too large", d, extra, NULL);
     }
     if (r->io_err || r->fd < 0)
@@ -511,7 +510,6 @@ static enum MHD_Result finish_upload(struct MHD_Connection *c, req *r)
     st = meshio_read(buf, (size_t)r->body_len, r->fmt, &m, &e);
     munmap(buf, (size_t)r->body_len);
     if (st != QDC_OK) {
-        atomic_fetch_add(&q->m.rejected, 1);
         return mesh_problem(c, r, st, &e);
     }
     if (m->nv > q->cfg.max_vertices || m->nt > q->cfg.max_tets) {
@@ -522,14 +520,12 @@ static enum MHD_Result finish_upload(struct MHD_Connection *c, req *r)
                                       "\"max_tets\":%lld",
                  m->nv, m->nt, (long long)q->cfg.max_vertices, (long long)q->cfg.max_tets);
         mesh_free(m);
-        atomic_fetch_add(&q->m.rejected, 1);
         return http_problem(c, r, 413, "too-big", "mesh exceeds server limits", d, extra,
                             NULL);
     }
     st = mesh_validate(m, &info, &e);
     if (st != QDC_OK) {
         mesh_free(m);
-        atomic_fetch_add(&q->m.rejected, 1);
         return mesh_problem(c, r, st, &e);
     }
 

@@ -69,6 +69,8 @@ static void on_completed(void *cls, struct MHD_Connection *c, void **req_cls,
         return;
     if (r->status >= 100 && r->status < 600)
         atomic_fetch_add(&q->m.http_by_class[r->status / 100], 1);
+    if (r->upload && r->status >= 400 && r->status < 500)
+        atomic_fetch_add(&q->m.rejected, 1);
     if (r->status && !r->parked_ever) {
         double dt = mono_now() - r->t0;
         int b = 0;

@@ -20,6 +20,7 @@ typedef struct req {
     int status;  /* status queued, for metrics (0 = none yet) */
     int replied; /* a response is queued: ignore the rest */
     int parked_ever;
+    int upload;  /* POST /v1/jobs: a 4xx counts as a rejected submission */
     int route;
     char id[JOB_ID_LEN + 1];
     char owner[65];

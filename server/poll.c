@@ -292,7 +292,8 @@ int poll_read(poll_hub *h, const char *id, long after, sbuf *out, int *count, lo
     pthread_mutex_lock(&h->lock);
     c = find(h, id);
     if (c) {
-        for (long i = after + 1 < 0 ? 0 : after + 1; i < c->n; i++) {
+        long start = after < 0 ? 0 : after >= c->n ? c->n : after + 1;
+        for (long i = start; i < c->n; i++) {
             if (*count)
                 sb_puts(out, ",");
             sb_add(out, c->rec[i], c->rlen[i]);

@@ -390,8 +390,9 @@ static qdc_status sq_recover(job_store *s_, int max_attempts, int *requeued, int
 
     snprintf(err, sizeof err,
              "{\"type\":\"https://qdc.dev/errors/attempts-exhausted\",\"title\":\"job "
-             "crashed the daemon\",\"status\":500,\"detail\":\"the daemon stopped while "
-             "running this job %d times; it is not retried again\",\"attempts\":%d}",
+             "crashed the daemon\",\"status\":500,\"detail\":\"the daemon died while "
+             "running this job on each of its %d attempt(s); it is not retried\","
+             "\"attempts\":%d}",
              max_attempts, max_attempts);
     rc = write1(s, failed,
                 "UPDATE jobs SET state = 3, finished = ?, expires = ?, error = ?,"
