@@ -1,0 +1,450 @@
+#!/usr/bin/python3
+"""qdc benchmark driver (called by bench/run.sh; see bench/README.md).
+
+For each mesh and each tool: run the tool once under measure.py (wall, CPU,
+peak RSS of that process, 600 s limit), then evaluate the output with the
+shared evaluator /work/shared/tools/quality.py against the input. Raw JSON
+goes to bench/out/runs/<mesh>/, the combined rows to bench/out/results.json,
+and one Markdown table to stdout and to the results file.
+"""
+import argparse
+import datetime
+import glob
+import gzip
+import json
+import math
+import os
+import platform
+import re
+import shlex
+import shutil
+import subprocess
+import sys
+import time
+
+import numpy as np
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(HERE)
+OUT = os.path.join(HERE, 'out')
+PY = '/usr/bin/python3'
+QDC = os.path.join(ROOT, 'build', 'rel', 'qdc')
+SHARED = '/work/shared'
+QUALITY = os.path.join(SHARED, 'tools', 'quality.py')
+DEV = os.path.join(SHARED, 'meshes', 'dev')
+MAKE_MESHES = os.path.join(SHARED, 'meshes', 'make_meshes.py')
+LIMIT = 600  # seconds, per command
+SAMPLES = 50000
+
+QUICK = ['bunny_low_10k', 'bunny_tangled-low_10k', 'bracket_h0.1_noisy']
+# generated meshes: (make_meshes --h, classes benchmarked, large?)
+GEN = [('0.06', ['lowq', 'tangled'], False),   # ~99k / ~81k tets
+       ('0.026', ['lowq'], True)]              # ~1.1M tets
+
+TOOLS = ['qdc', 'qdc-fixed', 'gmsh-relocate3d', 'gmsh-default']
+PEER = 'gmsh-relocate3d'
+LABEL = {'input': 'input', 'qdc': 'qdc (lsq)', 'qdc-fixed': 'qdc --boundary fixed',
+         'gmsh-relocate3d': 'Gmsh Relocate3D', 'gmsh-default': 'Gmsh default opt'}
+PHASES = ['setup', 'weights', 'assembly', 'solve', 'linesearch', 'finish']
+QKEYS = ['n_verts', 'n_tets', 'eta_mean', 'eta_std', 'eta_min', 'eta_p01', 'dihedral_min',
+         'dihedral_max', 'n_dmin_lt_5', 'n_dmin_lt_15', 'n_dmin_lt_30', 'n_inverted',
+         'n_zero_volume', 'boundary_hausdorff_rel', 'boundary_dist_mean_rel', 'same_counts',
+         'same_connectivity', 'boundary_vertex_max_move', 'interior_vertices_moved',
+         'n_inverted_input_order', 'n_inconsistent_faces']
+
+
+def log(*a):
+    print(time.strftime('%H:%M:%S'), *a, file=sys.stderr, flush=True)
+
+
+def command(tool, src, dst, base):
+    if tool.startswith('qdc'):
+        c = [QDC, 'optimize', src, dst, '--report', base + '.report.json', '--quiet']
+        return c + (['--boundary', 'fixed'] if tool == 'qdc-fixed' else [])
+    method = {'gmsh-relocate3d': 'Relocate3D', 'gmsh-default': ''}[tool]
+    return [PY, os.path.join(HERE, 'gmsh_opt.py'), src, dst, method, base + '.gmsh.json']
+
+
+def load(path):
+    try:
+        with open(path) as f:
+            return json.load(f)
+    except (OSError, ValueError):
+        return None
+
+
+# ------------------------------------------------------------------ meshes --
+
+def prepare_meshes(a):
+    """Return [(name, path)] of the selected meshes, unpacking/generating them."""
+    sel = []
+    mdir = os.path.join(OUT, 'meshes')
+    os.makedirs(mdir, exist_ok=True)
+    for gz in sorted(glob.glob(os.path.join(DEV, '*.mesh.gz'))):
+        name = os.path.basename(gz)[:-len('.mesh.gz')]
+        if a.quick and name not in QUICK:
+            continue
+        dst = os.path.join(mdir, name + '.mesh')
+        if not os.path.exists(dst) or os.path.getmtime(dst) < os.path.getmtime(gz):
+            with gzip.open(gz, 'rb') as fi, open(dst + '.tmp', 'wb') as fo:
+                shutil.copyfileobj(fi, fo)
+            os.replace(dst + '.tmp', dst)
+        sel.append((name, dst))
+    if not a.quick:
+        gdir = os.path.join(OUT, 'gen')
+        for h, classes, large in GEN:
+            if large and a.no_large:
+                continue
+            want = [os.path.join(gdir, 'cube_h%s_%s.mesh' % (h, c)) for c in classes]
+            if a.only and not any(re.search(a.only, os.path.basename(w)) for w in want):
+                continue
+            if not all(os.path.exists(w) for w in want):
+                log('generating cube meshes, h =', h, '(once; reused from', gdir + ')')
+                subprocess.run(['timeout', str(LIMIT), PY, MAKE_MESHES, gdir, '--h', h,
+                                '--shapes', 'cube'], check=True)
+            sel += [(os.path.basename(w)[:-5], w) for w in want]
+    if a.only:
+        sel = [s for s in sel if re.search(a.only, s[0])]
+    return sel
+
+
+# --------------------------------------------------------------- evaluation --
+
+def evaluate(path, orig, dst):
+    cmd = ['timeout', str(LIMIT), PY, QUALITY, path, '--samples', str(SAMPLES), '-o', dst]
+    if orig:
+        cmd[4:4] = ['--orig', orig]
+    r = subprocess.run(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    if r.returncode != 0:
+        log('  quality.py failed on', path, ':', r.stderr.strip()[-300:])
+        return None
+    return load(dst)
+
+
+def renumbering(src, dst):
+    """Counts and tets equal but quality.py says the connectivity differs:
+    look for vertices that kept their exact position under another index
+    (i.e. the writer renumbered the nodes) and, if every vertex can be matched
+    that way, compare the connectivity through that map."""
+    quality = quality_module()
+    p0, t0 = quality.compact(*quality.read_mesh(src))
+    p1, t1 = quality.compact(*quality.read_mesh(dst))
+    index = {tuple(p): i for i, p in enumerate(p0)}
+    m = np.array([index.get(tuple(p), -1) for p in p1])
+    found = m >= 0
+    moved_index = int((found & (m != np.arange(len(p1)))).sum())
+    if moved_index == 0:
+        return 'changed'
+    if found.all():
+        same = np.array_equal(quality._tet_hash(m[t1]), quality._tet_hash(t0))
+        return 'same, renumbered' if same else 'changed, renumbered'
+    return 'renumbered (%d of %d vertices matched)' % (int(found.sum()), len(p1))
+
+
+def quality_module():
+    sys.path.insert(0, os.path.dirname(QUALITY))
+    import quality
+    return quality
+
+
+def gmsh_input(name, src):
+    """Gmsh's Medit reader fixes the boundary only for nodes of a Triangles
+    section (a mesh with Tetrahedra only puts every node in the volume and
+    Relocate3D then moves boundary nodes too). Give Gmsh a copy of the mesh
+    with its boundary faces appended as Triangles; vertex numbering and tets
+    are unchanged, so outputs are still evaluated against the original."""
+    with open(src) as f:
+        text = f.read()
+    if re.search(r'^\s*Triangles\b', text, re.M):
+        return src
+    dst = os.path.join(OUT, 'gmsh-in', name + '.mesh')
+    if os.path.exists(dst) and os.path.getmtime(dst) >= os.path.getmtime(src):
+        return dst
+    quality = quality_module()
+    pts, tets = quality.read_mesh(src)
+    bf = quality.boundary_faces(tets, len(pts)) + 1
+    body = re.sub(r'^\s*End\s*\Z', '', text, flags=re.M).rstrip('\n')
+    os.makedirs(os.path.dirname(dst), exist_ok=True)
+    with open(dst + '.tmp', 'w') as f:
+        f.write(body + '\n\nTriangles\n%d\n' % len(bf))
+        np.savetxt(f, np.hstack([bf, np.ones((len(bf), 1), np.int64)]), fmt='%d')
+        f.write('\nEnd\n')
+    os.replace(dst + '.tmp', dst)
+    return dst
+
+
+def run_case(a, name, src, tool, q_in):
+    rdir = os.path.join(OUT, 'runs', name)
+    os.makedirs(rdir, exist_ok=True)
+    base = os.path.join(rdir, tool)
+    dst = base + '.mesh'
+    rowf = base + '.row.json'
+    if a.resume:
+        row = load(rowf)
+        if row:
+            log('  %-16s reused %s' % (tool, rowf))
+            return row
+    for f in (dst, base + '.report.json', base + '.gmsh.json', base + '.quality.json'):
+        if os.path.exists(f):
+            os.remove(f)
+    cmd = command(tool, gmsh_input(name, src) if tool.startswith('gmsh') else src, dst, base)
+    subprocess.run([PY, os.path.join(HERE, 'measure.py'), base + '.time.json', str(LIMIT),
+                    '--'] + cmd, check=True)
+    t = load(base + '.time.json')
+    row = {'mesh': name, 'tool': tool, 'cmd': ' '.join(shlex.quote(c) for c in cmd),
+           'wall': t['wall'], 'cpu': t['cpu'], 'maxrss_mb': t['maxrss_mb'], 'rc': t['rc']}
+    if t['timed_out']:
+        row['status'] = 'timeout'
+    elif t['rc'] != 0:
+        row['status'] = 'failed rc=%d' % t['rc']
+    elif not os.path.exists(dst):
+        row['status'] = 'no output'
+    else:
+        row['status'] = 'ok'
+    rep = load(base + '.report.json')
+    if rep:
+        run = rep.get('run', {})
+        row['iterations'] = run.get('iterations')
+        row['stop_reason'] = run.get('stop_reason')
+        row['outcome'] = run.get('outcome')
+        row['solver'] = run.get('solver')
+        row['seconds'] = run.get('seconds', {})
+        row['opt_seconds'] = row['seconds'].get('total')
+        row['report_after'] = rep.get('after')
+        row['report_boundary'] = rep.get('boundary_error')
+    g = load(base + '.gmsh.json')
+    if g:
+        row['gmsh'] = g
+        row['opt_seconds'] = g['seconds']['optimize']
+    if row['status'] == 'ok':
+        q = evaluate(dst, src, base + '.quality.json')
+        if q is None:
+            row['status'] = 'evaluator failed'
+        else:
+            row['quality'] = {k: q.get(k) for k in QKEYS}
+            if q.get('same_connectivity'):
+                row['conn'] = 'same'
+            elif not q.get('same_counts'):
+                row['conn'] = 'changed (%+d tets)' % (q['n_tets'] - q_in['n_tets'])
+            else:
+                row['conn'] = renumbering(src, dst)
+            row['notes'] = notes(row, q_in)
+    if row['status'] != 'ok':
+        log('  %s: %s (see %s.time.json.log)' % (tool, row['status'], base))
+    if a.drop_outputs and os.path.exists(dst):
+        os.remove(dst)
+    with open(rowf, 'w') as f:
+        json.dump(row, f, indent=1)
+    return row
+
+
+def notes(row, q_in):
+    """Flags for outputs that are worse than the input or inconsistent."""
+    q, n = row['quality'], []
+    if q['n_inverted'] > q_in['n_inverted']:
+        n.append('more inverted than input')
+    if q['eta_mean'] < q_in['eta_mean'] - 1e-9:
+        n.append('mean ratio mean below input')
+    if q_in['n_inverted'] == 0 and q['eta_min'] < q_in['eta_min'] - 1e-9:
+        n.append('worst tet worse than input')
+    if q['dihedral_min'] < q_in['dihedral_min'] - 1e-9 and q['n_inverted'] == 0:
+        n.append('min dihedral below input')
+    ra = row.get('report_after')
+    if ra and abs(ra.get('mean_ratio_mean', q['eta_mean']) - q['eta_mean']) > 1e-3:
+        n.append('report mean ratio %.4f vs evaluator %.4f' % (ra['mean_ratio_mean'],
+                                                                q['eta_mean']))
+    if row.get('stop_reason') not in (None, 'max-iter', 'converged', 'tolerance'):
+        n.append('stop: %s' % row['stop_reason'])
+    return n
+
+
+# ------------------------------------------------------------------- table --
+
+def fnum(x, fmt):
+    return '—' if x is None else fmt % x
+
+
+def table(rows, inputs, meshes):
+    cols = (['mesh', 'tool', 'tets', 'verts', 'iters'] + PHASES +
+            ['wall s', 'CPU s', 'RSS MB', '× R3D wall', '× R3D opt', 'η mean', 'η std',
+             'η min', 'dih min°', 'dih max°', '<5°', '<15°', '<30°', 'inv',
+             'Hausdorff rel', 'connectivity', 'notes'])
+    out = ['| ' + ' | '.join(cols) + ' |', '|' + '---|' * len(cols)]
+    for name, _ in meshes:
+        qi = inputs.get(name)
+        if qi is None:
+            continue
+        mrows = [r for r in rows if r['mesh'] == name]
+        peer = next((r for r in mrows if r['tool'] == PEER and r['status'] == 'ok'), None)
+        for r in [{'tool': 'input', 'status': 'ok', 'quality': qi}] + mrows:
+            q = r.get('quality') or {}
+            s = r.get('seconds') or {}
+            ok = r['status'] == 'ok'
+            ratio = ratio_opt = None
+            if peer and ok and r['tool'] != 'input':
+                ratio = r['wall'] / peer['wall']
+                if r.get('opt_seconds') is not None and peer.get('opt_seconds'):
+                    ratio_opt = r['opt_seconds'] / peer['opt_seconds']
+            note = list(r.get('notes', []))
+            if not ok:
+                note.insert(0, r['status'])
+            cells = [name, LABEL[r['tool']], fnum(q.get('n_tets'), '%d'),
+                     fnum(q.get('n_verts'), '%d'), fnum(r.get('iterations'), '%d')]
+            cells += [fnum(s.get(p), '%.2f') for p in PHASES]
+            timed = r['tool'] != 'input'
+            cells += [fnum(r.get('wall') if timed else None, '%.2f'),
+                      fnum(r.get('cpu') if timed else None, '%.2f'),
+                      fnum(r.get('maxrss_mb') if timed else None, '%.0f'),
+                      fnum(ratio, '%.2f'), fnum(ratio_opt, '%.2f'),
+                      fnum(q.get('eta_mean'), '%.3f'), fnum(q.get('eta_std'), '%.3f'),
+                      fnum(q.get('eta_min'), '%+.3f'), fnum(q.get('dihedral_min'), '%.2f'),
+                      fnum(q.get('dihedral_max'), '%.2f'), fnum(q.get('n_dmin_lt_5'), '%d'),
+                      fnum(q.get('n_dmin_lt_15'), '%d'), fnum(q.get('n_dmin_lt_30'), '%d'),
+                      fnum(q.get('n_inverted'), '%d'),
+                      fnum(q.get('boundary_hausdorff_rel'), '%.2e'),
+                      r.get('conn', '—' if timed else ''), '; '.join(note)]
+            out.append('| ' + ' | '.join(cells) + ' |')
+    return '\n'.join(out)
+
+
+def summary(rows):
+    """Geometric-mean speed ratio and mean-ratio gain per tool over the meshes
+    where both the tool and the peer succeeded."""
+    lines = ['| tool | meshes | geo-mean × R3D wall | geo-mean × R3D opt | '
+             'mean Δη mean vs input | meshes with a flag |', '|---|---|---|---|---|---|']
+    by = {}
+    for r in rows:
+        by.setdefault(r['mesh'], {})[r['tool']] = r
+    for tool in TOOLS:
+        w, o, d, n, flagged, failed = [], [], [], 0, 0, 0
+        for m in by.values():
+            r, p = m.get(tool), m.get(PEER)
+            if r is None:
+                continue
+            if r['status'] != 'ok':
+                failed += 1
+                continue
+            n += 1
+            flagged += bool(r.get('notes'))
+            d.append(r['quality']['eta_mean'] - r['eta_in'])
+            if p and p['status'] == 'ok':
+                w.append(math.log(r['wall'] / p['wall']))
+                if r.get('opt_seconds') and p.get('opt_seconds'):
+                    o.append(math.log(r['opt_seconds'] / p['opt_seconds']))
+        if n + failed == 0:
+            continue
+        gm = lambda v: '%.2f' % math.exp(sum(v) / len(v)) if v else '—'
+        lines.append('| %s | %d%s | %s | %s | %s | %d |' % (
+            LABEL[tool], n, ' (+%d not ok)' % failed if failed else '', gm(w), gm(o),
+            '%+.3f' % (sum(d) / len(d)) if d else '—', flagged))
+    return '\n'.join(lines)
+
+
+def machine_info(cmdline, up0):
+    cpu = '?'
+    with open('/proc/cpuinfo') as f:
+        for line in f:
+            if line.startswith('model name'):
+                cpu = line.split(':', 1)[1].strip()
+                break
+    git = lambda *c: subprocess.run(['git', '-C', ROOT] + list(c), capture_output=True,
+                                    text=True).stdout.strip()
+    dirty = git('status', '--porcelain', '--', 'lib', 'clients', 'server', 'Makefile')
+    up1 = subprocess.run(['uptime'], capture_output=True, text=True).stdout.strip()
+    return {'date': datetime.datetime.now().astimezone().isoformat(timespec='seconds'),
+            'command': cmdline, 'nproc': os.cpu_count(), 'cpu': cpu,
+            'kernel': platform.release(), 'uptime_start': up0, 'uptime_end': up1,
+            'qdc_commit': git('rev-parse', '--short', 'HEAD'),
+            'qdc_tree_dirty': bool(dirty),
+            'qdc_binary_mtime': datetime.datetime.fromtimestamp(
+                os.path.getmtime(QDC)).isoformat(timespec='seconds')}
+
+
+def write_results(path, info, tab, summ, rows):
+    gv = next((r['gmsh']['gmsh_version'] for r in rows if r.get('gmsh')), '?')
+    loads = [float(x) for x in re.findall(r'load average: ([\d.]+)', info['uptime_start'] +
+                                          ' ' + info['uptime_end'])]
+    shared = max(loads or [0]) > 1
+    with open(path, 'w') as f:
+        f.write('# qdc benchmark results\n\n')
+        f.write('- date: %s\n' % info['date'])
+        f.write('- command: `%s`\n' % info['command'])
+        f.write('- machine: %s, nproc = %d, Linux %s\n' % (info['cpu'], info['nproc'],
+                                                          info['kernel']))
+        f.write('- qdc: commit %s%s, binary built %s (`build/rel/qdc`, default '
+                'OpenMP threads)\n' % (info['qdc_commit'],
+                                       ' + uncommitted changes in the working tree'
+                                       if info['qdc_tree_dirty'] else '',
+                                       info['qdc_binary_mtime']))
+        f.write('- peers: Gmsh %s (Debian python3-gmsh), `General.NumThreads` default\n' % gv)
+        f.write('- quality: `/usr/bin/python3 %s OUT --orig IN --samples %d` for every '
+                'row\n' % (QUALITY, SAMPLES))
+        f.write('- `uptime` at start: `%s`\n- `uptime` at end: `%s`\n' % (
+            info['uptime_start'], info['uptime_end']))
+        if shared:
+            f.write('\n**Timings were taken on a shared machine** (load average above 1: '
+                    'other builds and tests were running on the same %d cores). Wall '
+                    'times are noisy; compare CPU seconds and ratios within a mesh, and '
+                    'do not read small differences.\n' % info['nproc'])
+        f.write('\nColumns are explained in [README.md](README.md). One run per case; '
+                'raw JSON in `bench/out/runs/` (not committed).\n\n')
+        f.write('## Summary\n\n' + summ + '\n\n## Per mesh\n\n' + tab + '\n')
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument('--quick', action='store_true',
+                    help='3 small dev meshes, no generated meshes, no Gmsh default optimizer')
+    ap.add_argument('--no-large', action='store_true', help='skip the ~1M-tet mesh')
+    ap.add_argument('--only', metavar='REGEX', help='only meshes whose name matches')
+    ap.add_argument('--tools', nargs='+', choices=TOOLS, help='subset of tools')
+    ap.add_argument('--resume', action='store_true',
+                    help='reuse finished cases from bench/out/runs (split a long run)')
+    ap.add_argument('--drop-outputs', action='store_true',
+                    help='delete optimized meshes after evaluation (saves disk)')
+    ap.add_argument('--results', metavar='FILE',
+                    help='where to write the Markdown results (default: bench/RESULTS.md '
+                         'for a full run, bench/out/RESULTS.md otherwise)')
+    ap.add_argument('--cmdline', default=None, help=argparse.SUPPRESS)
+    a = ap.parse_args()
+    up0 = subprocess.run(['uptime'], capture_output=True, text=True).stdout.strip()
+    tools = a.tools or [t for t in TOOLS if not (a.quick and t == 'gmsh-default')]
+    if 'qdc' in ''.join(tools) and not os.access(QDC, os.X_OK):
+        sys.exit('bench: %s missing; run `make all`' % QDC)
+    meshes = prepare_meshes(a)
+    if not meshes:
+        sys.exit('bench: no mesh selected')
+    rows, inputs = [], {}
+    n = len(meshes)
+    for i, (name, src) in enumerate(meshes, 1):
+        log('[%d/%d] %s' % (i, n, name))
+        os.makedirs(os.path.join(OUT, 'runs', name), exist_ok=True)
+        qf = os.path.join(OUT, 'runs', name, 'input.quality.json')
+        q_in = load(qf) if a.resume else None
+        q_in = q_in or evaluate(src, None, qf)
+        if q_in is None:
+            continue
+        inputs[name] = q_in
+        for tool in tools:
+            row = run_case(a, name, src, tool, q_in)
+            row['eta_in'] = q_in['eta_mean']
+            rows.append(row)
+            q = row.get('quality') or {}
+            log('  %-16s %-8s wall %7.2fs cpu %7.2fs rss %6.0fMB  eta %.3f -> %s  dmin %s' % (
+                tool, row['status'], row['wall'], row['cpu'], row['maxrss_mb'],
+                q_in['eta_mean'], fnum(q.get('eta_mean'), '%.3f'),
+                fnum(q.get('dihedral_min'), '%.2f')))
+    info = machine_info(a.cmdline or ' '.join(sys.argv), up0)
+    tab, summ = table(rows, inputs, meshes), summary(rows)
+    with open(os.path.join(OUT, 'results.json'), 'w') as f:
+        json.dump({'info': info, 'inputs': inputs, 'rows': rows}, f, indent=1)
+    full = not (a.quick or a.only or a.tools)
+    path = a.results or (os.path.join(HERE, 'RESULTS.md') if full
+                         else os.path.join(OUT, 'RESULTS.md'))
+    write_results(path, info, tab, summ, rows)
+    log('wrote', path, 'and', os.path.join(OUT, 'results.json'))
+    print(tab)
+
+
+if __name__ == '__main__':
+    main()
