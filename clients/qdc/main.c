@@ -15,6 +15,11 @@ static void usage(FILE *f)
           "  optimize IN OUT [options]   optimize a tet mesh (qdc optimize --help)\n"
           "  quality IN [--ref ORIG] [--json]   quality report of a mesh\n"
           "\n"
+          "Remote commands (qdcd at --server URL or $QDC_SERVER; token $QDC_TOKEN):\n"
+          "  submit IN [--wait] [-o OUT] [--report R.json] [options]   new job; prints its id\n"
+          "  status JOB | watch JOB | cancel JOB | jobs\n"
+          "  fetch JOB -o OUT [--report R.json]   download the result (qdc submit --help)\n"
+          "\n"
           "Exit codes: 0 ok, 1 usage, 2 bad input file, 3 optimization failed,\n"
           "  4 output not written, 5 interrupted (best mesh so far written),\n"
           "  10 server rejected the request, 11 job failed, 12 network failure.\n",
@@ -38,6 +43,10 @@ int main(int argc, char **argv)
         return cli_optimize(argc - 1, argv + 1);
     if (!strcmp(argv[1], "quality"))
         return cli_quality(argc - 1, argv + 1);
+    if (!strcmp(argv[1], "submit") || !strcmp(argv[1], "status") ||
+        !strcmp(argv[1], "watch") || !strcmp(argv[1], "fetch") ||
+        !strcmp(argv[1], "cancel") || !strcmp(argv[1], "jobs"))
+        return cli_remote(argc - 1, argv + 1);
     fprintf(stderr, "qdc: unknown command '%s'\n", argv[1]);
     usage(stderr);
     return CLI_EUSAGE;
