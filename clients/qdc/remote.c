@@ -810,6 +810,8 @@ static int job_failed(remote *rm, const char *id, const char *state) {
             jstr(e, "title", msg, sizeof msg);
         if (!msg[0])
             jstr(b, "stop_reason", msg, sizeof msg);
+        if (!strcmp(msg, state))
+            msg[0] = 0;
     }
     fprintf(stderr, "qdc: job %s %s%s%s\n", id, state, msg[0] ? ": " : "", msg);
     rb_free(&r.body);

@@ -1,0 +1,172 @@
+#!/bin/sh
+# remote.sh - `qdc submit|status|watch|fetch|cancel|jobs` against a real qdcd:
+# results valid and in the -o file's format, reports present, uploads always
+# binary, progress lines (plain and on a terminal), Idempotency-Key, tokens,
+# and the exit codes 1, 2, 10, 11, 12.
+. "$(dirname "$0")/../lib.sh"
+. "$ROOT/tests/server/daemon.inc"
+QDC=$BIN/qdc
+
+MESH=$(devmesh bunny_low_10k)
+BIG=$(devmesh bunny_low_100k)
+$MT json "$MESH" "$TMP/in.json"
+NT=9033
+
+start_qdcd "$TMP/d" --workers 2 || { fail "start" "qdcd did not come up: $(tail -3 "$TMP/d.log")"; exit 1; }
+S="--server $URL"
+
+# valid OUT: readable by qdc, no inverted tet, same connectivity as the input
+valid() { # OUT
+    "$QDC" quality "$1" > "$TMP/q.txt" 2>&1 && grep -q ": [0-9]* vertices, $NT tets, 0 inverted" "$TMP/q.txt" &&
+        case $1 in *.node) ;; *) $MT same "$MESH" "$1" > /dev/null 2>&1 ;; esac
+}
+
+# 1. submit --wait -o OUT.mesh --report R.json, Medit input
+id=$("$QDC" submit "$MESH" $S --max-iter 3 -o "$TMP/out.mesh" --report "$TMP/r.json" 2> "$TMP/sub.err")
+rc=$?
+nlines=$(grep -c 'q mean' "$TMP/sub.err")
+if [ $rc = 0 ] && printf '%s' "$id" | grep -Eq '^[0-9a-f]{32}$' && valid "$TMP/out.mesh" &&
+    [ "$(jq -r .after.n_tets "$TMP/r.json")" = $NT ] && jq -e '.boundary_error' "$TMP/r.json" > /dev/null &&
+    [ "$nlines" -ge 3 ] && grep -q "job $id succeeded" "$TMP/sub.err"; then
+    pass "submit --wait: id on stdout, $nlines progress lines, result valid Medit, report present"
+else
+    fail "submit --wait" "rc $rc id '$id' lines $nlines: $(tail -3 "$TMP/sub.err") $(tail -2 "$TMP/q.txt")"
+fi
+ID1=$id
+
+# 2. JSON input goes up as binary; .qmesh output
+id=$("$QDC" submit "$TMP/in.json" $S --max-iter 2 --boundary fixed -q -o "$TMP/out.qmesh" 2> "$TMP/sub2.err")
+rc=$?
+req GET "/v1/jobs/$id" "$TMP/job2" > /dev/null
+if [ $rc = 0 ] && [ "$(jf "$TMP/job2" .mesh.format)" = qmesh ] &&
+    [ "$(jf "$TMP/job2" .options.boundary)" = fixed ] && valid "$TMP/out.qmesh" && [ ! -s "$TMP/sub2.err" ]; then
+    pass "submit JSON mesh: uploaded as qmesh, options passed (boundary fixed), .qmesh result valid, -q silent"
+else
+    fail "submit JSON" "rc $rc format $(jf "$TMP/job2" .mesh.format) $(cat "$TMP/sub2.err")"
+fi
+
+# 3. submit, then watch / status / fetch (server from QDC_SERVER)
+export QDC_SERVER=$URL
+id=$("$QDC" submit "$MESH" --max-iter 3)
+rc=$?
+"$QDC" watch "$id" > "$TMP/watch.out" 2>&1
+rcw=$?
+n=$(grep -c 'q mean .* min .* inverted [0-9]* .*s$' "$TMP/watch.out")
+if [ $rc = 0 ] && [ $rcw = 0 ] && [ "$n" -ge 3 ] && ! grep -q "$(printf '\r')" "$TMP/watch.out" &&
+    tail -1 "$TMP/watch.out" | grep -q "job $id succeeded"; then
+    pass "watch (not a terminal): $n plain progress lines, ends 'succeeded', exit 0"
+else
+    fail "watch" "rc $rc/$rcw lines $n: $(tail -3 "$TMP/watch.out")"
+fi
+"$QDC" status "$id" > "$TMP/status.out"
+rc=$?
+if [ $rc = 0 ] && grep -q "^$id  succeeded .* $NT tets .* q mean" "$TMP/status.out"; then
+    pass "status: one line with state, size and quality"
+else
+    fail "status" "rc $rc: $(cat "$TMP/status.out")"
+fi
+"$QDC" status "$id" --json > "$TMP/status.json"
+[ "$(jf "$TMP/status.json" .state)" = succeeded ] && pass "status --json: the job object" ||
+    fail "status --json" "$(head -c 200 "$TMP/status.json")"
+"$QDC" fetch "$id" -o "$TMP/f.json" --report "$TMP/f.report.json"
+rc=$?
+req GET "/v1/jobs/$id/result?format=json" "$TMP/srv.json" > /dev/null
+d=$($MT same "$TMP/f.json" "$TMP/srv.json")
+if [ $rc = 0 ] && awk -v d="$d" 'BEGIN { exit !(d != "" && d + 0 == 0) }' &&
+    [ "$(jq -r .after.n_tets "$TMP/f.report.json")" = $NT ]; then
+    pass "fetch -o .json --report: identical to the server's JSON result (diff $d), report present"
+else
+    fail "fetch" "rc $rc diff '$d'"
+fi
+"$QDC" fetch "$id" -o "$TMP/f.node" && valid "$TMP/f.node" && pass "fetch -o .node: TetGen output valid" ||
+    fail "fetch tetgen" "$(tail -2 "$TMP/q.txt")"
+
+# 4. on a terminal: one line redrawn with \r
+if script -qec "$QDC watch $id" /dev/null > "$TMP/tty.out" 2>&1 && grep -q "$(printf '\r')global" "$TMP/tty.out"; then
+    pass "watch on a terminal: one progress line redrawn in place"
+else
+    fail "watch tty" "$(od -c "$TMP/tty.out" | head -3)"
+fi
+
+# 5. jobs lists every job
+"$QDC" jobs > "$TMP/jobs.out"
+rc=$?
+if [ $rc = 0 ] && grep -q "^$ID1  succeeded" "$TMP/jobs.out" && grep -q "^$id " "$TMP/jobs.out" &&
+    [ "$(wc -l < "$TMP/jobs.out")" = 3 ]; then
+    pass "jobs: the 3 jobs, one line each"
+else
+    fail "jobs" "rc $rc: $(cat "$TMP/jobs.out")"
+fi
+
+# 6. Idempotency-Key: the same key twice is the same job
+a=$("$QDC" submit "$MESH" --max-iter 1 --idempotency-key k-$$)
+b=$("$QDC" submit "$MESH" --max-iter 1 --idempotency-key k-$$)
+n=$("$QDC" jobs | wc -l)
+[ -n "$a" ] && [ "$a" = "$b" ] && [ "$n" = 4 ] && pass "Idempotency-Key: a re-run returns job $a, no second job" ||
+    fail "idempotency" "'$a' vs '$b', $n jobs"
+"$QDC" submit "$MESH" --max-iter 2 --idempotency-key k-$$ > /dev/null 2> "$TMP/idem.err"
+rc=$?
+[ $rc = 10 ] && pass "Idempotency-Key reused with other options: exit 10" || fail "idempotency reuse" "rc $rc $(cat "$TMP/idem.err")"
+
+# 7. cancel: watch and fetch then report the job's failure (11)
+id=$("$QDC" submit "$BIG" --max-iter 1000 -q)
+"$QDC" cancel "$id" > "$TMP/cancel.out"
+rc=$?
+"$QDC" watch "$id" > /dev/null 2> "$TMP/cw.err"
+rcw=$?
+"$QDC" fetch "$id" -o "$TMP/c.mesh" 2> "$TMP/cf.err"
+rcf=$?
+if [ $rc = 0 ] && grep -Eq "^$id  (queued|running|cancelled) " "$TMP/cancel.out" &&
+    grep -q "job $id cancelled" "$TMP/cw.err" && [ $rcw = 11 ] && [ $rcf = 11 ] && [ ! -e "$TMP/c.mesh" ]; then
+    pass "cancel: exit 0; then watch and fetch exit 11 ($(cat "$TMP/cw.err"))"
+else
+    fail "cancel" "rc $rc/$rcw/$rcf: $(cat "$TMP/cancel.out" "$TMP/cw.err" "$TMP/cf.err")"
+fi
+
+# 8. exit codes
+"$QDC" submit "$MESH" --metric nope -q 2> "$TMP/e.err"
+rc=$?
+[ $rc = 10 ] && grep -q "metric" "$TMP/e.err" && pass "bad option value: server 400, exit 10, says why" ||
+    fail "exit 10 option" "rc $rc $(cat "$TMP/e.err")"
+"$QDC" status 0123456789abcdef0123456789abcdef 2> "$TMP/e.err"
+rc=$?
+[ $rc = 10 ] && grep -q 404 "$TMP/e.err" && pass "unknown job: exit 10" || fail "exit 10 404" "rc $rc $(cat "$TMP/e.err")"
+printf 'MeshVersionFormatted 1\nDimension 3\nVertices\n2\n0 0 0 0\n' > "$TMP/bad.mesh"
+"$QDC" submit "$TMP/bad.mesh" 2> "$TMP/e.err"
+rc=$?
+[ $rc = 2 ] && grep -q "bad.mesh:" "$TMP/e.err" && pass "malformed local file: exit 2 before any upload ($(cat "$TMP/e.err"))" ||
+    fail "exit 2" "rc $rc $(cat "$TMP/e.err")"
+"$QDC" submit "$MESH" -o "$TMP/x.vtk" 2> /dev/null
+rc1=$?
+"$QDC" fetch 2> /dev/null
+rc2=$?
+[ $rc1 = 1 ] && [ $rc2 = 1 ] && pass "bad command line (unknown output format, missing job): exit 1" ||
+    fail "exit 1" "rc $rc1 $rc2"
+# a port nobody listens on: the daemon's, once it is stopped
+DEAD=$URL
+"$QDC" jobs --server "$DEAD/" --retries 0 2> /dev/null > /dev/null  # (trailing / tolerated)
+[ $? = 0 ] || fail "trailing slash" "jobs --server URL/ failed"
+
+stop_qdcd
+t0=$(date +%s)
+"$QDC" submit "$MESH" --server "$DEAD" --retries 2 2> "$TMP/e.err"
+rc=$?
+nret=$(grep -c 'retrying' "$TMP/e.err")
+[ $rc = 12 ] && [ "$nret" = 2 ] && pass "server down: 2 retries with backoff, then exit 12 in $(( $(date +%s) - t0 )) s" ||
+    fail "exit 12" "rc $rc retries $nret $(tail -1 "$TMP/e.err")"
+
+# 9. bearer tokens: QDC_TOKEN or --token; another token sees nothing
+TOKEN=secret-$$
+"$QDCD" --hash-token "$TOKEN" > "$TMP/tokens"
+start_qdcd "$TMP/t" --workers 1 --tokens "$TMP/tokens" || { fail "start tokens" "$(tail -3 "$TMP/t.log")"; exit 1; }
+id=$(QDC_TOKEN=$TOKEN "$QDC" submit "$MESH" --server "$URL" --max-iter 1 -q)
+rc1=$?
+QDC_TOKEN=$TOKEN "$QDC" fetch "$id" --server "$URL" --wait -q --report "$TMP/t.json"
+rc2=$?
+"$QDC" status "$id" --server "$URL" --token wrong 2> "$TMP/e.err"
+rc3=$?
+[ $rc1 = 0 ] && [ $rc2 = 0 ] && [ -s "$TMP/t.json" ] && [ $rc3 = 10 ] && grep -q 401 "$TMP/e.err" &&
+    pass "tokens: QDC_TOKEN submits and fetches; a wrong --token gets 401, exit 10" ||
+    fail "tokens" "rc $rc1 $rc2 $rc3 $(cat "$TMP/e.err")"
+stop_qdcd
+exit 0
