@@ -175,7 +175,7 @@ static void job_json(req *r, const job_rec *j, sbuf *b)
         sb_printf(b, ",\"finished\":%.3f", j->finished);
     if (job_state_done(j->state) && j->state != JOB_CANCELLED)
         sb_printf(b, ",\"expires\":%.3f,\"expired\":%s", j->expires,
-                  j->purged ? "true" : "false");
+                  j->purged || j->expires < wall_now() ? "true" : "false");
     sb_printf(b, ",\"attempts\":%d,\"cancel_requested\":%s", j->attempts,
               j->cancel_requested ? "true" : "false");
     sb_printf(b, ",\"mesh\":{\"format\":\"%s\",\"vertices\":%lld,\"tets\":%lld,\"bytes\":%lld}",
@@ -202,7 +202,7 @@ static void job_json(req *r, const job_rec *j, sbuf *b)
     sb_printf(b, ",\"links\":{\"self\":\"/v1/jobs/%s\",\"progress\":\"/v1/jobs/%s/progress\","
                  "\"events\":\"/v1/jobs/%s/events\"",
               j->id, j->id, j->id);
-    if (j->state == JOB_SUCCEEDED && !j->purged)
+    if (j->state == JOB_SUCCEEDED && !j->purged && j->expires >= wall_now())
         sb_printf(b, ",\"result\":\"/v1/jobs/%s/result\",\"report\":\"/v1/jobs/%s/report\"",
                   j->id, j->id);
     sb_puts(b, "}}");
@@ -263,14 +263,34 @@ static enum MHD_Result begin_upload(struct MHD_Connection *c, req *r)
     snprintf(r->options, sizeof r->options, "%s", oj.buf ? oj.buf : "{}");
     sb_free(&oj);
 
-    if (q->store->ops->counts(q->store, &cnt) == QDC_OK &&
-        cnt.by_state[JOB_QUEUED] >= q->cfg.max_queued) {
-        static const char *const h[] = {MHD_HTTP_HEADER_RETRY_AFTER, "5", NULL};
-        char extra[96];
-        snprintf(extra, sizeof extra, "\"queued\":%lld,\"max_queued\":%d",
-                 (long long)cnt.by_state[JOB_QUEUED], q->cfg.max_queued);
-        return http_problem(c, r, 429, "queue-full", "too many queued jobs",
-                            "the queue is full; retry later", extra, h);
+    ik = MHD_lookup_connection_value(c, MHD_HEADER_KIND, "Idempotency-Key");
+    if (ik) {
+        size_t n = strlen(ik);
+        int ok = n > 0 && n < sizeof r->idem;
+        for (size_t i = 0; ok && i < n; i++)
+            ok = ik[i] > 32 && ik[i] < 127;
+        if (!ok)
+            return http_problem(c, r, 400, "invalid-idempotency-key", "invalid Idempotency-Key",
+                                "the key must be 1 to 128 visible ASCII characters", NULL,
+                                NULL);
+        memcpy(r->idem, ik, n + 1);
+        r->hashing = 1;
+        sha256_init(&r->hash);
+        sha256_update(&r->hash, r->options, strlen(r->options));
+    }
+
+    /* A replay of an accepted request is answered even when the queue is full. */
+    job_rec prev;
+    if (!r->idem[0] || q->store->ops->find_idem(q->store, r->owner, r->idem, &prev) != QDC_OK) {
+        if (q->store->ops->counts(q->store, &cnt) == QDC_OK &&
+            cnt.by_state[JOB_QUEUED] >= q->cfg.max_queued) {
+            static const char *const h[] = {MHD_HTTP_HEADER_RETRY_AFTER, "5", NULL};
+            char extra[96];
+            snprintf(extra, sizeof extra, "\"queued\":%lld,\"max_queued\":%d",
+                     (long long)cnt.by_state[JOB_QUEUED], q->cfg.max_queued);
+            return http_problem(c, r, 429, "queue-full", "too many queued jobs",
+                                "the queue is full; retry later", extra, h);
+        }
     }
 
     ct = MHD_lookup_connection_value(c, MHD_HEADER_KIND, MHD_HTTP_HEADER_CONTENT_TYPE);
@@ -304,22 +324,6 @@ static enum MHD_Result begin_upload(struct MHD_Connection *c, req *r)
         r->too_big = 1;
         r->body_len = strtoll(cl, NULL, 10);
         return api_dispatch(c, r, "", "POST");
-    }
-
-    ik = MHD_lookup_connection_value(c, MHD_HEADER_KIND, "Idempotency-Key");
-    if (ik) {
-        size_t n = strlen(ik);
-        int ok = n > 0 && n < sizeof r->idem;
-        for (size_t i = 0; ok && i < n; i++)
-            ok = ik[i] > 32 && ik[i] < 127;
-        if (!ok)
-            return http_problem(c, r, 400, "invalid-idempotency-key", "invalid Idempotency-Key",
-                                "the key must be 1 to 128 visible ASCII characters", NULL,
-                                NULL);
-        memcpy(r->idem, ik, n + 1);
-        r->hashing = 1;
-        sha256_init(&r->hash);
-        sha256_update(&r->hash, r->options, strlen(r->options));
     }
 
     snprintf(tmpl, sizeof tmpl, "%s/tmp/upload-XXXXXX", q->cfg.data);
@@ -458,6 +462,25 @@ static int commit_input(req *r, const char *id, const char *format)
     return 0;
 }
 
+/* Answer a request whose Idempotency-Key was used before: the same job when
+ * the fingerprint (options + body) matches, else 422. */
+static enum MHD_Result idem_replay(struct MHD_Connection *c, req *r, const job_rec *old,
+                                   const char *body_hash)
+{
+    char loc[80], extra[80];
+
+    if (strcmp(old->body_hash, body_hash)) {
+        snprintf(extra, sizeof extra, "\"job\":\"%s\"", old->id);
+        return http_problem(c, r, 422, "idempotency-key-reused",
+                            "Idempotency-Key reused with a different request",
+                            "this key was already used for a different body or options", extra,
+                            NULL);
+    }
+    snprintf(loc, sizeof loc, "/v1/jobs/%s", old->id);
+    const char *const h[] = {MHD_HTTP_HEADER_LOCATION, loc, "Idempotent-Replayed", "true", NULL};
+    return reply_job(c, r, 202, old, h);
+}
+
 static enum MHD_Result finish_upload(struct MHD_Connection *c, req *r)
 {
     qdcd *q = r->q;
@@ -493,6 +516,14 @@ static enum MHD_Result finish_upload(struct MHD_Connection *c, req *r)
         return http_problem(c, r, 400, "empty-body", "empty request body",
                             "POST /v1/jobs needs a mesh in the body", NULL, NULL);
 
+    memset(&j, 0, sizeof j);
+    if (r->hashing) {
+        uint8_t dig[32];
+        sha256_final(&r->hash, dig);
+        sha256_to_hex(dig, j.body_hash);
+        if (q->store->ops->find_idem(q->store, r->owner, r->idem, &old) == QDC_OK)
+            return idem_replay(c, r, &old, j.body_hash);
+    }
     buf = mmap(NULL, (size_t)r->body_len, PROT_READ, MAP_PRIVATE, r->fd, 0);
     if (buf == MAP_FAILED)
         return http_problem(c, r, 500, "io", "i/o error", "cannot map the upload", NULL, NULL);
@@ -529,15 +560,9 @@ static enum MHD_Result finish_upload(struct MHD_Connection *c, req *r)
         return mesh_problem(c, r, st, &e);
     }
 
-    memset(&j, 0, sizeof j);
     new_id(j.id);
     snprintf(j.owner, sizeof j.owner, "%s", r->owner);
     snprintf(j.idem_key, sizeof j.idem_key, "%s", r->idem);
-    if (r->hashing) {
-        uint8_t dig[32];
-        sha256_final(&r->hash, dig);
-        sha256_to_hex(dig, j.body_hash);
-    }
     snprintf(j.format, sizeof j.format, "%s", meshio_format_name(r->fmt));
     j.nv = m->nv;
     j.nt = m->nt;
@@ -555,21 +580,10 @@ static enum MHD_Result finish_upload(struct MHD_Connection *c, req *r)
         return http_problem(c, r, 500, "store", "job store error",
                             "the job could not be recorded", NULL, NULL);
     }
-    if (dup) {
+    if (dup) { /* a concurrent request with the same key won */
         job_path(q, j.id, NULL, d, sizeof d);
         dir_remove(d);
-        if (strcmp(old.body_hash, j.body_hash)) {
-            snprintf(extra, sizeof extra, "\"job\":\"%s\"", old.id);
-            return http_problem(c, r, 422, "idempotency-key-reused",
-                                "Idempotency-Key reused with a different request",
-                                "this key was already used for a different body or options",
-                                extra, NULL);
-        }
-        char loc[80];
-        snprintf(loc, sizeof loc, "/v1/jobs/%s", old.id);
-        const char *const h[] = {MHD_HTTP_HEADER_LOCATION, loc, "Idempotent-Replayed", "true",
-                                 NULL};
-        return reply_job(c, r, 202, &old, h);
+        return idem_replay(c, r, &old, j.body_hash);
     }
     atomic_fetch_add(&q->m.submitted, 1);
     job_pool_notify(q->pool);

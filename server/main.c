@@ -390,7 +390,7 @@ int main(int argc, char **argv)
     while (!q->stop) {
         if (mono_now() >= next_purge) {
             purge_expired(q);
-            next_purge = mono_now() + 5;
+            next_purge = mono_now() + 1;
         }
         int sig = sigtimedwait(&stopset, NULL, &tick);
         if (sig == SIGTERM || sig == SIGINT)

@@ -45,7 +45,8 @@ static const char schema[] =
     " error TEXT DEFAULT '', stop_reason TEXT DEFAULT '', etag_qmesh TEXT DEFAULT '',"
     " etag_json TEXT DEFAULT '', etag_medit TEXT DEFAULT '');"
     "CREATE UNIQUE INDEX IF NOT EXISTS jobs_idem ON jobs(owner, idem_key) WHERE idem_key != '';"
-    "CREATE INDEX IF NOT EXISTS jobs_state ON jobs(state, seq);";
+    "CREATE INDEX IF NOT EXISTS jobs_state ON jobs(state, seq);"
+    "CREATE INDEX IF NOT EXISTS jobs_expiry ON jobs(purged, expires);";
 
 #define COLS                                                                               \
     "seq, id, owner, state, cancel_requested, idem_key, body_hash, format, nv, nt,"        \
@@ -211,6 +212,28 @@ static qdc_status sq_get(job_store *s_, const char *id, job_rec *out)
 
     pthread_mutex_lock(&s->rd_lock);
     rc = fetch(s->rd, id, out);
+    pthread_mutex_unlock(&s->rd_lock);
+    return rc;
+}
+
+static qdc_status sq_find_idem(job_store *s_, const char *owner, const char *key,
+                               job_rec *out)
+{
+    sq_store *s = (sq_store *)s_;
+    qdc_status rc = QDC_EIO;
+    sqlite3_stmt *st;
+
+    pthread_mutex_lock(&s->rd_lock);
+    st = prep(s->rd, "SELECT " COLS " FROM jobs WHERE owner = ? AND idem_key = ?");
+    if (st) {
+        bind_text(st, 1, owner);
+        bind_text(st, 2, key);
+        int r = sqlite3_step(st);
+        if (r == SQLITE_ROW)
+            row_to_rec(st, out);
+        rc = r == SQLITE_ROW ? QDC_OK : r == SQLITE_DONE ? QDC_EINVAL : QDC_EIO;
+        sqlite3_finalize(st);
+    }
     pthread_mutex_unlock(&s->rd_lock);
     return rc;
 }
@@ -469,7 +492,7 @@ static void sq_close(job_store *s_)
 }
 
 static const job_store_ops sq_ops = {
-    sq_create, sq_get,    sq_list,   sq_claim,   sq_renew,   sq_finish,       sq_release,
+    sq_create, sq_get,    sq_find_idem, sq_list,   sq_claim,   sq_renew,   sq_finish,       sq_release,
     sq_cancel, sq_remove, sq_recover, sq_counts, sq_expired, sq_mark_purged, sq_close,
 };
 

@@ -64,6 +64,8 @@ typedef struct {
     qdc_status (*create)(job_store *s, const job_rec *j, int *dup, job_rec *existing);
     /* QDC_EINVAL when there is no such job. */
     qdc_status (*get)(job_store *s, const char *id, job_rec *out);
+    /* The owner's job created with Idempotency-Key key; QDC_EINVAL if none. */
+    qdc_status (*find_idem)(job_store *s, const char *owner, const char *key, job_rec *out);
     /* Up to max jobs of owner with seq > after_seq, oldest first; *n set. */
     qdc_status (*list)(job_store *s, const char *owner, int64_t after_seq, int max,
                        job_rec *out, int *n);

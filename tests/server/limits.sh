@@ -1,0 +1,174 @@
+#!/bin/sh
+# limits.sh - access and limits: bearer tokens (stored hashed; jobs private to
+# their token), 429 + Retry-After on a full queue, Idempotency-Key replay and
+# misuse, 409 before the result exists, cancel and delete, retention -> 410,
+# graceful SIGTERM with a parked long-poll and a running job, and refusing a
+# public address without tokens.
+. "$(dirname "$0")/../lib.sh"
+. "$(dirname "$0")/daemon.inc"
+
+BIG=$(devmesh cube_h0.1_lowq)
+SMALL=$(devmesh bunny_low_10k)
+$MT qmesh "$BIG" "$TMP/big.qmesh"
+$MT qmesh "$SMALL" "$TMP/small.qmesh"
+QM=application/vnd.qdc.mesh
+{
+    echo "# qdcd tokens: SHA-256 of each bearer token"
+    "$QDCD" --hash-token alpha-secret
+    echo "sha256:$("$QDCD" --hash-token beta-secret)"
+} > "$TMP/tokens"
+A="Authorization: Bearer alpha-secret"
+B="Authorization: Bearer beta-secret"
+grep -q alpha "$TMP/tokens" && fail "tokens file" "holds a plain token" || pass "tokens file holds only hashes"
+
+start_qdcd "$TMP/d" --workers 1 --max-queued 2 --retention 4 --shutdown-grace 1 --tokens "$TMP/tokens" ||
+    { fail "start" "$(tail -3 "$TMP/d.log")"; exit 1; }
+
+code=$(submit "$TMP/small.qmesh" $QM "" "$TMP/out")
+[ "$code" = 401 ] && [ "$(hdr "$TMP/out" WWW-Authenticate)" = 'Bearer realm="qdcd"' ] &&
+    pass "no token -> 401 with WWW-Authenticate" || fail "no token" "$code"
+code=$(req GET /v1/jobs "$TMP/out" -H "Authorization: Bearer wrong")
+[ "$code" = 401 ] && pass "unknown token -> 401" || fail "unknown token" "$code"
+[ "$(req GET /livez "$TMP/out")" = 200 ] && pass "/livez needs no token" || fail "livez" "token required"
+
+# job 1 runs long; jobs 2 and 3 wait; job 4 finds the queue full
+c1=$(submit "$TMP/big.qmesh" $QM "max_iter=200&finish=0&tol_move=0" "$TMP/j1" -H "$A")
+id1=$(jf "$TMP/j1" .id)
+curl -s -m 30 -H "$A" "$URL/v1/jobs/$id1/progress?after=-1&wait=20" > /dev/null
+c2=$(submit "$TMP/small.qmesh" $QM "max_iter=2" "$TMP/j2" -H "$A")
+c3=$(submit "$TMP/small.qmesh" $QM "max_iter=3" "$TMP/j3" -H "$A")
+c4=$(submit "$TMP/small.qmesh" $QM "max_iter=4" "$TMP/j4" -H "$A")
+id2=$(jf "$TMP/j2" .id)
+id3=$(jf "$TMP/j3" .id)
+if [ "$c1$c2$c3" = 202202202 ] && [ "$c4" = 429 ] && [ "$(hdr "$TMP/j4" Retry-After)" = 5 ] &&
+    [ "$(jf "$TMP/j4" .max_queued)" = 2 ] && [ "$(hdr "$TMP/j4" Content-Type)" = application/problem+json ]; then
+    pass "queue full: 3rd waiting job -> 429, Retry-After: 5, problem with max_queued 2"
+else
+    fail "429" "codes $c1 $c2 $c3 $c4 $(head -c 200 "$TMP/j4")"
+fi
+
+# a long-poll on a queued job with nothing new returns after wait= with the same state
+s0=$(date +%s%N)
+curl -s -m 10 -H "$A" "$URL/v1/jobs/$id3/progress?after=-1&wait=1" > "$TMP/p3"
+ms=$((($(date +%s%N) - s0) / 1000000))
+if [ "$(jf "$TMP/p3" .state)" = queued ] && [ "$(jf "$TMP/p3" .count)" = 0 ] && [ $ms -ge 950 ] && [ $ms -lt 3000 ]; then
+    pass "long-poll wait=1 on a queued job: unchanged state after $ms ms"
+else
+    fail "long-poll timeout" "$ms ms $(cat "$TMP/p3")"
+fi
+code=$(req GET "/v1/jobs/$id1/result" "$TMP/out" -H "$A")
+[ "$code" = 409 ] && [ "$(hdr "$TMP/out" Retry-After)" = 2 ] && [ "$(jf "$TMP/out" .state)" = running ] &&
+    pass "result while running -> 409 + Retry-After" || fail "409" "$code $(head -c 200 "$TMP/out")"
+
+# token isolation
+cb=$(req GET "/v1/jobs/$id1" "$TMP/b1" -H "$B")
+cbp=$(req GET "/v1/jobs/$id1/progress" "$TMP/b2" -H "$B")
+cbc=$(req POST "/v1/jobs/$id1:cancel" "$TMP/b3" -H "$B")
+cbd=$(req DELETE "/v1/jobs/$id1" "$TMP/b4" -H "$B")
+req GET /v1/jobs "$TMP/bl" -H "$B" > /dev/null
+req GET /v1/jobs "$TMP/al" -H "$A" > /dev/null
+if [ "$cb$cbp$cbc$cbd" = 404404404404 ] && [ "$(jq '.jobs | length' "$TMP/bl")" = 0 ] &&
+    [ "$(jq '.jobs | length' "$TMP/al")" = 3 ] && [ "$(req GET "/v1/jobs/$id1" "$TMP/a1" -H "$A")" = 200 ]; then
+    pass "token isolation: B gets 404 on A's job (get, progress, cancel, delete) and lists 0; A lists 3"
+else
+    fail "token isolation" "$cb $cbp $cbc $cbd lists B $(jq '.jobs | length' "$TMP/bl") A $(jq '.jobs | length' "$TMP/al")"
+fi
+
+# cancel a queued job: done at once; long-polls on it end
+cc=$(req POST "/v1/jobs/$id3:cancel" "$TMP/c3" -H "$A")
+curl -s -m 5 -H "$A" "$URL/v1/jobs/$id3/progress?after=-1&wait=4" > "$TMP/p3"
+if [ "$cc" = 200 ] && [ "$(jf "$TMP/c3" .state)" = cancelled ] && [ "$(jf "$TMP/c3" .done)" = true ] &&
+    [ "$(jf "$TMP/p3" .done)" = true ]; then
+    pass "cancel queued job: 200, cancelled and done at once"
+else
+    fail "cancel queued" "$cc $(head -c 200 "$TMP/c3")"
+fi
+
+# Idempotency-Key: same key + same request -> same job; different body -> 422
+K="Idempotency-Key: run-42"
+ci1=$(submit "$TMP/small.qmesh" $QM "max_iter=2" "$TMP/i1" -H "$A" -H "$K")
+ci2=$(submit "$TMP/small.qmesh" $QM "max_iter=2" "$TMP/i2" -H "$A" -H "$K")
+ci3=$(submit "$TMP/big.qmesh" $QM "max_iter=2" "$TMP/i3" -H "$A" -H "$K")
+ci4=$(submit "$TMP/small.qmesh" $QM "max_iter=3" "$TMP/i4" -H "$A" -H "$K")
+ci5=$(submit "$TMP/small.qmesh" $QM "max_iter=2" "$TMP/i5" -H "$B" -H "$K")
+idk=$(jf "$TMP/i1" .id)
+if [ "$ci1$ci2" = 202202 ] && [ "$(jf "$TMP/i2" .id)" = "$idk" ] && [ "$(hdr "$TMP/i2" Idempotent-Replayed)" = true ] &&
+    [ "$ci3$ci4" = 422422 ] && [ "$(jf "$TMP/i3" .job)" = "$idk" ] && [ "$ci5" = 429 ]; then
+    pass "Idempotency-Key: replay -> same job $idk (even with the queue full), other body or options -> 422; the key is per token"
+else
+    fail "Idempotency-Key" "$ci1 $ci2 $ci3 $ci4 $ci5 ids $idk $(jf "$TMP/i2" .id)"
+fi
+
+# cancel the running job: the worker stops at the next iteration
+cr=$(req POST "/v1/jobs/$id1:cancel" "$TMP/c1" -H "$A")
+st1=$(poll_all "$id1" "$A")
+if [ "$cr" = 200 ] && [ "$(jf "$TMP/c1" .cancel_requested)" = true ] && [ "$st1" = cancelled ]; then
+    pass "cancel running job: cancel_requested, then cancelled after $(wc -l < "$TMP/seqs.$id1") records"
+else
+    fail "cancel running" "$cr state $st1"
+fi
+
+# job 2 runs to the end; its result expires after --retention 4
+st2=$(poll_all "$id2" "$A")
+r1=$(req GET "/v1/jobs/$id2/result" "$TMP/r2" -H "$A")
+[ "$st2" = succeeded ] && [ "$r1" = 200 ] && pass "job 2 succeeded, result 200" || fail "job 2" "$st2 $r1"
+sleep 6
+r2=$(req GET "/v1/jobs/$id2/result" "$TMP/g" -H "$A")
+r3=$(req GET "/v1/jobs/$id2/report" "$TMP/g2" -H "$A")
+req GET "/v1/jobs/$id2" "$TMP/g3" -H "$A" > /dev/null
+[ "$r2$r3" = 410410 ] && [ "$(jf "$TMP/g3" .expired)" = true ] && [ ! -e "$TMP/d/jobs/$id2/result.qmesh" ] &&
+    pass "retention: result and report -> 410 Gone, files removed, job still listed as expired" ||
+    fail "retention" "$r2 $r3 $(head -c 200 "$TMP/g")"
+
+cd_=$(req DELETE "/v1/jobs/$id2" "$TMP/del" -H "$A")
+cg=$(req GET "/v1/jobs/$id2" "$TMP/del2" -H "$A")
+[ "$cd_$cg" = 204404 ] && [ ! -e "$TMP/d/jobs/$id2" ] && pass "DELETE -> 204, then 404, directory gone" || fail "delete" "$cd_ $cg"
+
+# graceful shutdown: a parked long-poll is answered, the running job goes back to the queue
+cj=$(submit "$TMP/big.qmesh" $QM "max_iter=200&finish=0&tol_move=0" "$TMP/j5" -H "$A")
+id5=$(jf "$TMP/j5" .id)
+curl -s -m 30 -H "$A" "$URL/v1/jobs/$id5/progress?after=0&wait=20" > /dev/null
+curl -s -m 30 -H "$A" "$URL/v1/jobs/$id5/progress?after=100000&wait=25" > "$TMP/parked" &
+cpid=$!
+sleep 0.5
+s0=$(date +%s%N)
+stop_qdcd
+rc=$?
+ms=$((($(date +%s%N) - s0) / 1000000))
+wait $cpid
+if [ $rc = 0 ] && [ "$(jf "$TMP/parked" .state)" = running ] && [ $ms -lt 4000 ]; then
+    pass "SIGTERM: parked long-poll answered (state running), exit 0 in $ms ms"
+else
+    fail "SIGTERM" "rc $rc, $ms ms, parked: $(head -c 200 "$TMP/parked")"
+fi
+start_qdcd "$TMP/d" --workers 1 --tokens "$TMP/tokens" || { fail "restart" "$(tail -3 "$TMP/d.log")"; exit 1; }
+curl -s -m 30 -H "$A" "$URL/v1/jobs/$id5/progress?after=0&wait=20" > /dev/null
+req GET "/v1/jobs/$id5" "$TMP/j5b" -H "$A" > /dev/null
+if [ "$(jf "$TMP/j5b" .state)" = running ] && [ "$(jf "$TMP/j5b" .attempts)" = 1 ]; then
+    pass "after restart the released job runs again, attempt count unchanged (1)"
+else
+    fail "released job" "$(head -c 300 "$TMP/j5b")"
+fi
+req POST "/v1/jobs/$id5:cancel" "$TMP/c5" -H "$A" > /dev/null
+stop_qdcd || fail "SIGTERM 2" "exit status $?"
+
+# public address: refused without tokens, accepted with --insecure
+"$QDCD" --listen 0.0.0.0:0 --data "$TMP/p" > "$TMP/pub.out" 2>&1
+rc=$?
+[ $rc = 2 ] && grep -q -- --insecure "$TMP/pub.out" && pass "non-loopback listen without tokens refused (exit 2, mentions --insecure)" ||
+    fail "non-loopback" "rc $rc $(cat "$TMP/pub.out")"
+if start_qdcd "$TMP/p" --listen 0.0.0.0:0 --insecure; then
+    pass "--insecure: listens on 0.0.0.0"
+    stop_qdcd
+else
+    fail "--insecure" "$(tail -2 "$TMP/p.log")"
+fi
+"$QDCD" --help > "$TMP/help"
+missing=""
+for o in listen port-file data workers tokens hash-token insecure max-body max-json max-vertices max-tets \
+    max-queued job-time-limit retention max-wait max-attempts max-connections connection-timeout lease \
+    shutdown-grace bderr-samples verbose help; do
+    grep -q -- "--$o" "$TMP/help" || missing="$missing $o"
+done
+[ -z "$missing" ] && pass "--help documents every option" || fail "--help" "missing:$missing"
+exit $((NFAIL > 0))
