@@ -137,6 +137,16 @@ static double closest_on_triangle(const double p[3], const double a[3], const do
     }
 }
 
+double bderr_point_segment(const double p[3], const double a[3], const double b[3],
+                           double cp[3])
+{
+    double q[3], d2 = closest_on_segment(p, a, b, q);
+
+    if (cp)
+        memcpy(cp, q, sizeof q);
+    return sqrt(d2);
+}
+
 double bderr_point_triangle(const double p[3], const double a[3], const double b[3],
                             const double c[3], double cp[3])
 {

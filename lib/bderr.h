@@ -25,6 +25,10 @@ double bderr_bvh_closest(const bderr_bvh *b, const double p[3], double cp[3], in
 double bderr_point_triangle(const double p[3], const double a[3], const double b[3],
                             const double c[3], double cp[3]);
 
+/* Exact closest point on segment [a, b] to p; returns the distance. */
+double bderr_point_segment(const double p[3], const double a[3], const double b[3],
+                           double cp[3]);
+
 typedef struct {
     double hausdorff;      /* max of the two directed distances (absolute) */
     double h_a_to_b;       /* max over samples of A of the distance to B */

@@ -68,9 +68,10 @@ static double star_eval(const mesh_topo *tp, const double *x, int32_t v, const d
 /* Adaptive normalized-gradient descent of one vertex (METHOD §5a): step along
  * -g/|g|, start 0.05 mean edge, x1.6 after a success (cap 0.3), halve up to 12
  * times until the local objective decreases without inverting a star tet. */
-static int32_t relax_vertex(const mesh_topo *tp, double *x, int32_t v, opt_metric m,
-                            double delta, double lbar)
+static int32_t relax_vertex(const mesh_topo *tp, const slide_ctx *sl, double *x, int32_t v,
+                            opt_metric m, double delta, double lbar)
 {
+    int sliding = sl && slide_kind(sl, v) != SLIDE_INTERIOR;
     double s = 0.05 * lbar, *xv = x + 3 * (size_t)v;
     int32_t moves = 0;
 
@@ -81,19 +82,29 @@ static int32_t relax_vertex(const mesh_topo *tp, double *x, int32_t v, opt_metri
         f0 = star_eval(tp, x, v, xv, m, delta, &bad0, &w0, g);
         if (!isfinite(f0))
             break;
+        if (sliding) {
+            double gt[3];
+            slide_tangent(sl, v, g, gt);
+            memcpy(g, gt, sizeof gt);
+        }
         gn = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
         if (!(gn > 0.0) || !isfinite(gn))
             break;
         for (int h = 0; h < FINISH_HALVINGS; h++) {
             for (int c = 0; c < 3; c++)
                 y[c] = xv[c] - s * g[c] / gn;
+            if (sliding) {
+                double yp[3];
+                slide_project(sl, v, y, yp);
+                memcpy(y, yp, sizeof yp);
+            }
             f1 = star_eval(tp, x, v, y, m, delta, &bad1, &w1, NULL);
-            /* the sum must drop and the inverted count must not grow. (A rule
-             * that the worst star tet may not grow blocks useful moves: measured
-             * -0.005 mean on the dev corpus; the polish sweeps lift the worst.) */
-            (void)w0;
-            (void)w1;
-            if (f1 < f0 && bad1 <= bad0) {
+            /* The sum must drop and the inverted count must not grow. A sliding
+             * boundary vertex must not worsen its worst star tet either: on curved
+             * surfaces it otherwise flattens all-boundary tets (measured on the
+             * sphere: worst tet 0.259 -> 0.230). For interior vertices that rule
+             * blocks useful moves (measured -0.005 mean on the dev corpus). */
+            if (f1 < f0 && bad1 <= bad0 && (!sliding || w1 <= w0)) {
                 ok = 1;
                 break;
             }
@@ -164,8 +175,9 @@ static int32_t colour_classes(const mesh_topo *tp, vq_pair *list, int32_t n, int
     return ncol;
 }
 
-qdc_status finish_sweep(const mesh_topo *tp, const uint8_t *movable, double *x, opt_metric m,
-                        double eps, double lbar, double frac, finish_stats *st)
+qdc_status finish_sweep(const mesh_topo *tp, const uint8_t *movable, const slide_ctx *sl,
+                        double *x, opt_metric m, double eps, double lbar, double frac,
+                        finish_stats *st)
 {
     double *eta = qdc_mallocn((size_t)tp->nt, sizeof(double));
     double *sorted = qdc_mallocn((size_t)tp->nt, sizeof(double));
@@ -245,7 +257,7 @@ qdc_status finish_sweep(const mesh_topo *tp, const uint8_t *movable, double *x, 
             int32_t moves = 0;
 #pragma omp parallel for reduction(+ : moves) schedule(dynamic, 16)
             for (int32_t i = start[c]; i < start[c + 1]; i++)
-                moves += relax_vertex(tp, x, list[i].v, m, delta, lbar);
+                moves += relax_vertex(tp, sl, x, list[i].v, m, delta, lbar);
             st->n_moves += moves;
         }
         qdc_free(start);

@@ -8,6 +8,7 @@
 
 #include "mesh.h"
 #include "opt.h"
+#include "slide.h"
 
 typedef struct {
     int32_t n_verts; /* vertices visited */
@@ -17,8 +18,11 @@ typedef struct {
 
 /* One sweep over x (normalized coordinates, 3 per vertex). movable: nv flags.
  * frac: share of the worst tets (by mean ratio) whose vertices are visited.
- * eps: Escobar epsilon, lbar: mean edge length (both in x's units). */
-qdc_status finish_sweep(const mesh_topo *tp, const uint8_t *movable, double *x, opt_metric m,
-                        double eps, double lbar, double frac, finish_stats *st);
+ * eps: Escobar epsilon, lbar: mean edge length (both in x's units).
+ * sl (may be NULL): constraints of sliding boundary vertices (movable ones with
+ * a SLIDE_SURFACE/SLIDE_LINE kind move tangentially and are projected back). */
+qdc_status finish_sweep(const mesh_topo *tp, const uint8_t *movable, const slide_ctx *sl,
+                        double *x, opt_metric m, double eps, double lbar, double frac,
+                        finish_stats *st);
 
 #endif

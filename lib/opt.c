@@ -8,6 +8,7 @@
 #include "finish.h"
 #include "harm.h"
 #include "metric.h"
+#include "slide.h"
 #include "solve.h"
 
 #include <math.h>
@@ -91,6 +92,8 @@ typedef struct {
     double *bw2;      /* squared boundary row weights (0: no row) */
     double *dg;       /* bw2 + mu */
     double *qt, *qval, *d;
+    const double *bref;  /* targets of the boundary rows: x0 (lsq) or x_k (slide) */
+    slide_ctx *sl;       /* slide mode only */
     solve_ctx *sol;
     double t0;
     opt_progress input, best;
@@ -253,12 +256,20 @@ static qdc_status ctx_init(ctx_t *c, const mesh_t *m, const mesh_topo *tp, const
             ecount++;
         }
     c->lbar = ecount ? esum / (double)ecount : 1.0;
+    c->bref = c->x0;
+    if (o->boundary == OPT_BOUNDARY_SLIDE) {
+        qdc_status st = slide_new(tp, c->x0, o->feature_angle, &c->sl, NULL);
+        if (st != QDC_OK)
+            return st;
+        c->bref = c->x; /* rows keep a sliding vertex near where it is */
+    }
     c->eps = metric_eps(o->metric, c->lbar, o->eps_rel);
     for (int32_t v = 0; v < m->nv; v++) {
         uint8_t f = tp->vflag[v];
         int on_b = (f & (MESH_V_BOUNDARY | MESH_V_INTERFACE)) != 0;
         c->locked[v] = (f & (MESH_V_FIXED | MESH_V_UNUSED)) ||
-                       (on_b && o->boundary == OPT_BOUNDARY_FIXED);
+                       (on_b && o->boundary == OPT_BOUNDARY_FIXED) ||
+                       (c->sl && slide_kind(c->sl, v) == SLIDE_CORNER);
         /* Eq. 9: boundary rows B x = b with b the ORIGINAL positions (lsq) */
         c->bw2[v] = on_b && !c->locked[v] ? 1.0 : 0.0;
         c->wq2[v] = 1.0;
@@ -269,6 +280,7 @@ static qdc_status ctx_init(ctx_t *c, const mesh_t *m, const mesh_topo *tp, const
 static void ctx_free(ctx_t *c)
 {
     solve_free(c->sol);
+    slide_free(c->sl);
     qdc_free(c->x);
     qdc_free(c->x0);
     qdc_free(c->xn);
@@ -308,6 +320,22 @@ static qdc_status set_harmonic(ctx_t *c, opt_result *res, qdc_error *err)
     qdc_free(h);
     res->t_harmonic += qdc_now() - t;
     return st;
+}
+
+/* Slide mode: put the sliding vertices of y back on their input surface/line. */
+static void project_sliding(const ctx_t *c, double *y)
+{
+    if (!c->sl)
+        return;
+#pragma omp parallel for schedule(dynamic, 256)
+    for (int32_t v = 0; v < c->nv; v++) {
+        int k = slide_kind(c->sl, v);
+        if (k == SLIDE_SURFACE || k == SLIDE_LINE) {
+            double p[3];
+            slide_project(c->sl, v, y + 3 * (size_t)v, p);
+            memcpy(y + 3 * (size_t)v, p, sizeof p);
+        }
+    }
 }
 
 /* One iteration of Eq. 15 plus the line search. Fills r (without quality).
@@ -359,7 +387,7 @@ static qdc_status iterate(ctx_t *c, opt_result *res, opt_progress *r, int *stepp
     for (int32_t v = 0; v < c->nv; v++)
         for (int k = 0; k < 3; k++) {
             size_t q = 3 * (size_t)v + k;
-            c->rhs[q] += c->bw2[v] * c->x0[q] + mu * c->x[q];
+            c->rhs[q] += c->bw2[v] * c->bref[q] + mu * c->x[q];
         }
     res->t_assembly += qdc_now() - t;
     t = qdc_now();
@@ -379,6 +407,7 @@ static qdc_status iterate(ctx_t *c, opt_result *res, opt_progress *r, int *stepp
         for (h = 0; h <= o->ls_halvings; h++) {
             for (size_t q = 0; q < n3; q++)
                 c->trial[q] = c->x[q] + step * (c->xn[q] - c->x[q]);
+            project_sliding(c, c->trial);
             if (encode_objective(tp, c->trial, o->metric, delta, NULL, NULL) <= f0)
                 break;
             step *= 0.5;
@@ -387,11 +416,15 @@ static qdc_status iterate(ctx_t *c, opt_result *res, opt_progress *r, int *stepp
             step = 0.0;
     }
     res->t_linesearch += qdc_now() - t;
+    for (size_t q = 0; q < n3; q++)
+        c->trial[q] = c->x[q] + step * (c->xn[q] - c->x[q]);
+    if (step > 0.0)
+        project_sliding(c, c->trial);
     for (int32_t v = 0; v < c->nv; v++) {
         double dd = 0;
         for (int k = 0; k < 3; k++) {
             size_t q = 3 * (size_t)v + k;
-            double dx = step * (c->xn[q] - c->x[q]);
+            double dx = step > 0.0 ? c->trial[q] - c->x[q] : 0.0;
             c->x[q] += dx;
             dd += dx * dx;
         }
@@ -403,6 +436,47 @@ static qdc_status iterate(ctx_t *c, opt_result *res, opt_progress *r, int *stepp
     r->max_move = sqrt(move) / c->lbar;
     r->cg_iters = cg;
     *stepped = step > 0.0;
+    return QDC_OK;
+}
+
+/* The finishing pass (METHOD §5a) from c->x: regular sweeps over the worst
+ * finish_frac of tets, then polish sweeps over the worst 1% while the worst tet
+ * still improves (measured on the dev corpus: it keeps rising for a few more
+ * sweeps). Each sweep is a progress record numbered from *next. */
+static qdc_status finish_pass(ctx_t *c, const uint8_t *movable, opt_result *res,
+                              opt_progress *r, int *next)
+{
+    const opt_options *o = c->o;
+
+    for (int s = 0; s < o->finish_sweeps + 8; s++) {
+        int polish = s >= o->finish_sweeps;
+        finish_stats fs;
+        double before = r->q_min;
+        qdc_status st;
+        if (should_stop(c, res->stop_reason, sizeof res->stop_reason))
+            break;
+        st = finish_sweep(c->tp, movable, c->sl, c->x, o->metric, c->eps, c->lbar,
+                          polish ? 0.01 : o->finish_frac, &fs);
+        if (st != QDC_OK)
+            return st;
+        evaluate(c, c->x, fs.delta, r);
+        r->iteration = (*next)++;
+        r->phase = "finish";
+        r->step = fs.n_verts ? (double)fs.n_moves / fs.n_verts : 0;
+        consider(c, c->x, r);
+        if (report(c, r)) {
+            snprintf(res->stop_reason, sizeof res->stop_reason, "cancelled");
+            break;
+        }
+        if (fs.n_moves == 0) {
+            if (!polish)
+                s = o->finish_sweeps - 1; /* go on with the polish sweeps */
+            else
+                break;
+        } else if (polish && r->q_min < before + 1e-3) {
+            break;
+        }
+    }
     return QDC_OK;
 }
 
@@ -505,65 +579,36 @@ qdc_status opt_run(mesh_t *m, const opt_options *opts, opt_result *res_out, qdc_
     if (o.finish && !stop && o.finish_sweeps > 0) {
         double t = qdc_now();
         uint8_t *movable = qdc_mallocn((size_t)c.nv, 1);
-        int polish = 0;
         if (!movable) {
             st = QDC_ENOMEM;
             goto out;
         }
-        /* Boundary and interface vertices stay put here in every mode: moving
-         * them off the surface is the business of the boundary mode. */
+        /* Boundary and interface vertices move here only in slide mode, along
+         * their input surface; lsq and fixed leave them where the global step put them. */
         for (int32_t v = 0; v < c.nv; v++)
             movable[v] = !c.locked[v] &&
-                         !(tp->vflag[v] & (MESH_V_BOUNDARY | MESH_V_INTERFACE));
+                         (c.sl || !(tp->vflag[v] & (MESH_V_BOUNDARY | MESH_V_INTERFACE)));
         /* Start from the last global iterate (the lowest objective), as the
          * oracle does, unless it has more inverted tets than the best one: the
          * pass is there to lift the worst tets, which the ranking weighs first. */
         if (r.n_inverted > c.best.n_inverted || !eligible_inv(&c, &r))
             memcpy(c.x, c.xbest, 3 * (size_t)c.nv * sizeof(double));
-        for (int s = 0; s < o.finish_sweeps; s++) {
-            finish_stats fs;
-            if (should_stop(&c, res.stop_reason, sizeof res.stop_reason))
-                break;
-            st = finish_sweep(tp, movable, c.x, o.metric, c.eps, c.lbar, o.finish_frac, &fs);
+        {
+            int from_last = !(r.n_inverted > c.best.n_inverted || !eligible_inv(&c, &r));
+            int next = res.iterations + 1;
+            st = finish_pass(&c, movable, &res, &r, &next);
+            /* From the last iterate the pass may fail to lift the worst tets back
+             * above the input's (seen with slide on curved surfaces): then run it
+             * again from the best global iterate. */
+            if (st == QDC_OK && from_last && c.best_it <= res.iterations &&
+                strcmp(res.stop_reason, "cancelled") != 0) {
+                memcpy(c.x, c.xbest, 3 * (size_t)c.nv * sizeof(double));
+                st = finish_pass(&c, movable, &res, &r, &next);
+            }
             if (st != QDC_OK) {
                 qdc_free(movable);
                 goto out;
             }
-            evaluate(&c, c.x, fs.delta, &r);
-            r.iteration = res.iterations + 1 + s;
-            r.phase = "finish";
-            r.step = fs.n_verts ? (double)fs.n_moves / fs.n_verts : 0;
-            consider(&c, c.x, &r);
-            if (report(&c, &r)) {
-                snprintf(res.stop_reason, sizeof res.stop_reason, "cancelled");
-                break;
-            }
-            if (fs.n_moves == 0)
-                break;
-        }
-        /* Polish: while the worst tet still improves, sweep the worst 1% only
-         * (cheap); measured on the dev corpus the worst tet keeps rising for a
-         * few sweeps after the regular ones. */
-        for (int s = 0; s < 8 && !should_stop(&c, res.stop_reason, sizeof res.stop_reason);
-             s++) {
-            finish_stats fs;
-            double before = r.q_min;
-            st = finish_sweep(tp, movable, c.x, o.metric, c.eps, c.lbar, 0.01, &fs);
-            if (st != QDC_OK) {
-                qdc_free(movable);
-                goto out;
-            }
-            evaluate(&c, c.x, fs.delta, &r);
-            r.iteration = ++polish + res.iterations + o.finish_sweeps;
-            r.phase = "finish";
-            r.step = fs.n_verts ? (double)fs.n_moves / fs.n_verts : 0;
-            consider(&c, c.x, &r);
-            if (report(&c, &r)) {
-                snprintf(res.stop_reason, sizeof res.stop_reason, "cancelled");
-                break;
-            }
-            if (fs.n_moves == 0 || r.q_min < before + 1e-3)
-                break;
         }
         qdc_free(movable);
         res.t_finish = qdc_now() - t;

@@ -82,7 +82,8 @@ static void optimize_usage(FILE *f)
 {
     fputs("usage: qdc optimize IN OUT [options]\n"
           "  --metric mivl|mimr|micn    quality metric (default mivl)\n"
-          "  --boundary lsq|fixed       boundary handling (default lsq)\n"
+          "  --boundary lsq|fixed|slide boundary handling (default lsq)\n"
+          "  --feature-angle DEG        slide: sharper boundary edges are features (default 30)\n"
           "  --harmonic on|off          harmonic guidance, paper Sec. 5.1 (default off)\n"
           "  --mode safe|literal        safeguarded method or the paper as written (default safe)\n"
           "  --weights optavg|paper     QDC weights (default optavg)\n"
@@ -187,6 +188,10 @@ int cli_optimize(int argc, char **argv)
                 char *end;
                 o.finish_frac = strtod(v, &end);
                 bad = *end || !(o.finish_frac >= 0 && o.finish_frac <= 1);
+            } else if (!strcmp(a, "--feature-angle")) {
+                char *end;
+                o.feature_angle = strtod(v, &end);
+                bad = *end || !(o.feature_angle > 0 && o.feature_angle < 180);
             } else if (!strcmp(a, "--mu") || !strcmp(a, "--time-limit")) {
                 char *end;
                 double x = strtod(v, &end);
