@@ -11,6 +11,10 @@
   meshtool.py bad KIND IN.mesh OUT           one bad input (see BAD below)
   meshtool.py bigjson N OUT                  a syntactically valid JSON mesh of ~N bytes
   meshtool.py grid N OUT.qmesh               structured cube mesh with 6*N^3 tets
+  meshtool.py sample OUT.mesh                tests/data/sample/cube.mesh: a 5^3 grid
+                                             (750 tets) with its interior vertices
+                                             jittered (fixed seed), so there is
+                                             something to optimize
 """
 import json
 import struct
@@ -203,6 +207,15 @@ def main(a):
         extra = max(0, (n - len(json.dumps(base))) // 40 + 1)
         base["vertices"] += [[0.123456789, 0.123456789, 0.123456789]] * extra
         open(a[2], "w").write(json.dumps(base))
+    elif a[0] == "sample":
+        import random
+        n = 5
+        xyz, tets = grid(n)
+        rnd = random.Random(3)
+        h = 1.0 / n
+        xyz = [tuple(c + (rnd.uniform(-0.3, 0.3) * h if 0 < c < 1 else 0) for c in v)
+               if all(0 < c < 1 for c in v) else v for v in xyz]
+        write_medit(a[1], xyz, tets, [1] * len(tets))
     elif a[0] == "grid":
         xyz, tets = grid(int(a[1]))
         open(a[2], "wb").write(qmesh_bytes(xyz, tets, None, flags=0))
