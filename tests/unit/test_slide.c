@@ -1,0 +1,193 @@
+/* test_slide.c - sliding boundary: feature detection, projection, and the
+ * optimizer keeping the shape, the regions and the locked vertices. */
+#include "bderr.h"
+#include "opt.h"
+#include "report.h"
+#include "slide.h"
+#include "testlib.h"
+#include "testmesh.h"
+
+#include <math.h>
+#include <string.h>
+
+static int on_cube_edge(const double *p)
+{
+    int extreme = 0;
+    for (int k = 0; k < 3; k++)
+        extreme += fabs(p[k]) < 1e-12 || fabs(p[k] - 1) < 1e-12;
+    return extreme >= 2;
+}
+
+TEST(cube_features_are_its_12_edges_and_8_corners)
+{
+    int n = 4;
+    mesh_t *m = tm_grid(n, 0);
+    mesh_topo *tp = NULL;
+    slide_ctx *s = NULL;
+    int corners = 0, lines = 0, surface = 0;
+    ASSERT_OK(mesh_topo_build(m, &tp, NULL));
+    ASSERT_OK(slide_new(tp, m->xyz, 30.0, &s, NULL));
+    /* 12 cube edges of n segments each */
+    ASSERT_EQ_INT(slide_n_feature_edges(s), 12 * n);
+    for (int32_t v = 0; v < m->nv; v++) {
+        int k = slide_kind(s, v);
+        const double *p = m->xyz + 3 * v;
+        if (k == SLIDE_CORNER) {
+            corners++;
+            for (int c = 0; c < 3; c++)
+                ASSERT_TRUE(fabs(p[c]) < 1e-12 || fabs(p[c] - 1) < 1e-12);
+        } else if (k == SLIDE_LINE) {
+            lines++;
+            ASSERT_TRUE(on_cube_edge(p));
+        } else if (k == SLIDE_SURFACE) {
+            surface++;
+            ASSERT_TRUE(!on_cube_edge(p));
+        }
+    }
+    ASSERT_EQ_INT(corners, 8);
+    ASSERT_EQ_INT(lines, 12 * (n - 1));
+    ASSERT_EQ_INT(surface, 6 * (n - 1) * (n - 1));
+    slide_free(s);
+    mesh_topo_free(tp);
+    mesh_free(m);
+}
+
+TEST(projection_onto_face_line_and_corner)
+{
+    int n = 2;
+    mesh_t *m = tm_grid(n, 0);
+    mesh_topo *tp = NULL;
+    slide_ctx *s = NULL;
+    /* vertex (0.5, 0.5, 0) is on the z = 0 face; (0.5, 0, 0) on an edge; (0,0,0) a corner */
+    int32_t vf = 1 + 3 * 1, ve = 1, vc = 0;
+    double p[3], q[3], g[3] = {1, 2, 3}, t[3];
+    ASSERT_OK(mesh_topo_build(m, &tp, NULL));
+    ASSERT_OK(slide_new(tp, m->xyz, 30.0, &s, NULL));
+    ASSERT_EQ_INT(slide_kind(s, vf), SLIDE_SURFACE);
+    ASSERT_EQ_INT(slide_kind(s, ve), SLIDE_LINE);
+    ASSERT_EQ_INT(slide_kind(s, vc), SLIDE_CORNER);
+    p[0] = 0.4;
+    p[1] = 0.6;
+    p[2] = 0.05;
+    slide_project(s, vf, p, q);
+    ASSERT_NEAR(q[0], 0.4, 1e-12);
+    ASSERT_NEAR(q[1], 0.6, 1e-12);
+    ASSERT_NEAR(q[2], 0.0, 1e-12);
+    slide_tangent(s, vf, g, t);
+    ASSERT_NEAR(t[2], 0.0, 1e-12);
+    ASSERT_NEAR(t[0], 1.0, 1e-12);
+    p[0] = 0.3;
+    p[1] = 0.02;
+    p[2] = -0.01;
+    slide_project(s, ve, p, q);
+    ASSERT_NEAR(q[0], 0.3, 1e-12);
+    ASSERT_NEAR(q[1], 0.0, 1e-12);
+    ASSERT_NEAR(q[2], 0.0, 1e-12);
+    slide_tangent(s, ve, g, t);
+    ASSERT_NEAR(t[0], 1.0, 1e-12);
+    ASSERT_NEAR(t[1], 0.0, 1e-12);
+    slide_project(s, vc, p, q);
+    ASSERT_NEAR(q[0], 0.0, 0);
+    slide_free(s);
+    mesh_topo_free(tp);
+    mesh_free(m);
+}
+
+/* a point projects onto the closest of several triangles */
+TEST(bvh_picks_the_closest_triangle)
+{
+    double xyz[] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 2, 1, 0, 2, 0, 1, 2};
+    int32_t tris[] = {0, 1, 2, 3, 4, 5};
+    bderr_bvh *b = NULL;
+    double p[3] = {0.2, 0.2, 1.2}, cp[3];
+    int32_t tri = -1;
+    ASSERT_OK(bderr_bvh_build(xyz, 6, tris, 2, &b, NULL));
+    ASSERT_NEAR(bderr_bvh_closest(b, p, cp, &tri), 0.8, 1e-12);
+    ASSERT_EQ_INT(tri, 1);
+    ASSERT_NEAR(cp[2], 2.0, 1e-12);
+    bderr_bvh_free(b);
+}
+
+static void slide_run(int with_region, mesh_t **out, mesh_t **orig, report_quality *q)
+{
+    int n = 6;
+    mesh_t *m = tm_grid(n, with_region ? MESH_WITH_REGION : 0);
+    opt_options o;
+    /* perturb boundary vertices tangentially too: a face vertex moves in its plane */
+    tm_perturb(m, n, 0.35, 41);
+    for (int32_t v = 0; v < m->nv; v++) {
+        double *p = m->xyz + 3 * v;
+        int i = v % (n + 1);
+        if (with_region && i == n / 2)
+            p[0] = 0.5; /* interface vertices: perturbed within the plane x = 0.5 */
+        int onface = -1, extreme = 0;
+        for (int k = 0; k < 3; k++)
+            if (p[k] == 0.0 || p[k] == 1.0) {
+                extreme++;
+                onface = k;
+            }
+        if (extreme == 1 && !(with_region && fabs(p[0] - 0.5) < 1e-12)) {
+            p[(onface + 1) % 3] += 0.25 / n * sin(7.0 * v);
+            p[(onface + 2) % 3] += 0.25 / n * cos(5.0 * v);
+        }
+    }
+    *orig = mesh_dup(m);
+    opt_defaults(&o);
+    o.boundary = OPT_BOUNDARY_SLIDE;
+    opt_run(m, &o, NULL, NULL);
+    report_quality_compute(m, q, NULL);
+    *out = m;
+}
+
+TEST(slide_keeps_the_cube_and_beats_fixed)
+{
+    mesh_t *m, *orig, *fx;
+    report_quality qs, qf;
+    opt_options o;
+    bderr_result be;
+    slide_run(0, &m, &orig, &qs);
+    ASSERT_OK(bderr_meshes(m, orig, 20000, &be, NULL));
+    ASSERT_TRUE(be.hausdorff_rel <= 1e-12);
+    fx = mesh_dup(orig);
+    opt_defaults(&o);
+    o.boundary = OPT_BOUNDARY_FIXED;
+    ASSERT_OK(opt_run(fx, &o, NULL, NULL));
+    report_quality_compute(fx, &qf, NULL);
+    ASSERT_TRUE(qs.q_mean > qf.q_mean);
+    ASSERT_TRUE(qs.q_min >= qf.q_min);
+    /* corners of the cube did not move */
+    for (int32_t v = 0; v < m->nv; v++) {
+        const double *p = orig->xyz + 3 * v;
+        int corner = 1;
+        for (int k = 0; k < 3; k++)
+            corner &= p[k] == 0.0 || p[k] == 1.0;
+        if (corner)
+            for (int k = 0; k < 3; k++)
+                ASSERT_TRUE(m->xyz[3 * v + k] == p[k]);
+    }
+    mesh_free(fx);
+    mesh_free(orig);
+    mesh_free(m);
+}
+
+TEST(slide_keeps_region_interfaces_and_tags)
+{
+    mesh_t *m, *orig;
+    report_quality q;
+    slide_run(1, &m, &orig, &q);
+    ASSERT_TRUE(memcmp(m->region, orig->region, 4 * (size_t)m->nt) == 0);
+    /* the grid's interface is the plane x = 0.5 (regions split at i < n/2) */
+    int moved = 0;
+    for (int32_t v = 0; v < m->nv; v++)
+        if (orig->xyz[3 * v] == 0.5) {
+            ASSERT_NEAR(m->xyz[3 * v], 0.5, 1e-12);
+            moved += m->xyz[3 * v + 1] != orig->xyz[3 * v + 1];
+        }
+    ASSERT_TRUE(moved > 0); /* they slid within the interface */
+    mesh_free(orig);
+    mesh_free(m);
+}
+
+TEST_MAIN("slide", T(cube_features_are_its_12_edges_and_8_corners),
+          T(projection_onto_face_line_and_corner), T(bvh_picks_the_closest_triangle),
+          T(slide_keeps_the_cube_and_beats_fixed), T(slide_keeps_region_interfaces_and_tags))
