@@ -95,6 +95,7 @@ static void optimize_usage(FILE *f)
           "  --mu X                     damping in normalized units (default 1)\n"
           "  --time-limit SECONDS       stop with the best mesh so far\n"
           "  --in-format F, --out-format F   medit|tetgen|qmesh|json (default: by extension)\n"
+          "  --fix FILE                 vertices that must not move (0-based indices)\n"
           "  --report FILE.json         write the quality/boundary report\n"
           "  --quiet                    no progress output\n",
           f);
@@ -109,6 +110,53 @@ static int on_off(const char *s, int *out)
     else
         return -1;
     return 0;
+}
+
+/* --fix FILE: vertex indices (0-based, whitespace separated, '#' comments) that
+ * must not move. Sets m->fixed; one-line error with file:line on bad input. */
+static int load_fix(const char *path, mesh_t *m)
+{
+    FILE *f = fopen(path, "r");
+    char line[4096];
+    long lineno = 0;
+
+    if (!f) {
+        fprintf(stderr, "qdc: %s: cannot open\n", path);
+        return CLI_EINPUT;
+    }
+    if (!m->fixed) {
+        m->fixed = qdc_calloc((size_t)m->nv, 1);
+        if (!m->fixed) {
+            fclose(f);
+            fprintf(stderr, "qdc: out of memory\n");
+            return CLI_EOPT;
+        }
+    }
+    while (fgets(line, sizeof line, f)) {
+        char *p = line, *hash = strchr(line, '#');
+        lineno++;
+        if (hash)
+            *hash = 0;
+        for (;;) {
+            char *end;
+            long v;
+            while (*p == ' ' || *p == '\t' || *p == '\n' || *p == '\r' || *p == ',')
+                p++;
+            if (!*p)
+                break;
+            v = strtol(p, &end, 10);
+            if (end == p || v < 0 || v >= m->nv) {
+                fprintf(stderr, "qdc: %s:%ld: expected a vertex index in [0, %d), got '%.20s'\n",
+                        path, lineno, (int)m->nv, p);
+                fclose(f);
+                return CLI_EINPUT;
+            }
+            m->fixed[v] = 1;
+            p = end;
+        }
+    }
+    fclose(f);
+    return CLI_OK;
 }
 
 static int write_report(const char *path, const report_t *r)
@@ -135,7 +183,7 @@ int cli_optimize(int argc, char **argv)
     opt_options o;
     opt_result res;
     progress_state ps = {0, 0, 0};
-    const char *in = NULL, *out = NULL, *report_path = NULL;
+    const char *in = NULL, *out = NULL, *report_path = NULL, *fix_path = NULL;
     meshio_format fin = MESHIO_AUTO, fout = MESHIO_AUTO;
     mesh_t *m = NULL, *orig = NULL;
     qdc_error err;
@@ -206,6 +254,8 @@ int cli_optimize(int argc, char **argv)
                 bad = (fout = meshio_format_from_name(v)) == MESHIO_AUTO;
             else if (!strcmp(a, "--report"))
                 report_path = v;
+            else if (!strcmp(a, "--fix"))
+                fix_path = v;
             else {
                 fprintf(stderr, "qdc: unknown option %s (see qdc optimize --help)\n", a);
                 return CLI_EUSAGE;
@@ -245,6 +295,11 @@ int cli_optimize(int argc, char **argv)
         cli_error(in, &err, st);
         rc = st == QDC_ENOMEM ? CLI_EOPT : CLI_EINPUT;
         goto out;
+    }
+    if (fix_path) {
+        rc = load_fix(fix_path, m);
+        if (rc != CLI_OK)
+            goto out;
     }
     orig = report_path ? mesh_dup(m) : NULL;
     if (report_path && !orig) {

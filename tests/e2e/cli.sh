@@ -66,4 +66,28 @@ for opts in "--mode literal --finish off" "--harmonic on"; do
         fail "cli.$opts" "qdc failed"
     fi
 done
+
+# --fix FILE: the listed vertices keep their exact coordinates
+printf '# locked\n10 11 12\n500, 501\n' > "$TMP/fix.txt"
+if "$BIN/qdc" optimize "$in" "$TMP/fx.mesh" --quiet --max-iter 3 --fix "$TMP/fix.txt"; then
+    same=$($PY - "$in" "$TMP/fx.mesh" <<'PYEOF'
+import sys
+def verts(p):
+    t = open(p).read().split()
+    i = t.index("Vertices"); n = int(t[i + 1])
+    return [tuple(t[i + 2 + 4 * k: i + 5 + 4 * k]) for k in range(n)]
+a, b = verts(sys.argv[1]), verts(sys.argv[2])
+fixed = [10, 11, 12, 500, 501]
+moved = sum(a[k] != b[k] for k in range(len(a)))
+print(all(float(x) == float(y) for k in fixed for x, y in zip(a[k], b[k])) and moved > 100)
+PYEOF
+)
+    [ "$same" = True ] && pass "cli.--fix vertices do not move" || fail "cli.--fix" "locked vertices moved"
+else
+    fail "cli.--fix" "qdc failed"
+fi
+printf '3 99999999\n' > "$TMP/badfix.txt"
+"$BIN/qdc" optimize "$in" "$TMP/fx.mesh" --quiet --fix "$TMP/badfix.txt" 2>"$TMP/err"
+[ $? -eq 2 ] && grep -q "badfix.txt:1:" "$TMP/err" && pass "cli.--fix bad index: exit 2 with file:line" ||
+    fail "cli.--fix bad index" "$(cat "$TMP/err")"
 exit 0
