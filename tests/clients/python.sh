@@ -1,0 +1,31 @@
+#!/bin/sh
+# python.sh - clients/python/qdc_client.py against a real qdcd: the module
+# (tests/clients/python_client.py) and its command line.
+. "$(dirname "$0")/../lib.sh"
+. "$ROOT/tests/server/daemon.inc"
+PYC=$ROOT/clients/python/qdc_client.py
+
+MESH=$(devmesh bunny_low_10k)
+BIG=$(devmesh bunny_low_100k)
+$MT qmesh "$MESH" "$TMP/in.qmesh"
+start_qdcd "$TMP/d" --workers 2 || { fail "start" "qdcd did not come up: $(tail -3 "$TMP/d.log")"; exit 1; }
+
+URL=$URL TMP=$TMP MESH=$MESH MESHQ=$TMP/in.qmesh BIG=$BIG NT=9033 QDC=$BIN/qdc ROOT=$ROOT $PY "$ROOT/tests/clients/python_client.py" ||
+    echo "# python_client.py exited $?"
+
+# the command line: submit -o --report, then fetch and status by id
+id=$($PY "$PYC" --server "$URL" submit "$MESH" --opt max_iter=2 -o "$TMP/cli.mesh" --report "$TMP/cli.json" 2> "$TMP/cli.err")
+rc=$?
+if [ $rc = 0 ] && "$BIN/qdc" quality "$TMP/cli.mesh" | grep -q ' 9033 tets, 0 inverted' &&
+    [ "$(jq -r .after.n_tets "$TMP/cli.json")" = 9033 ] && grep -q 'q mean' "$TMP/cli.err"; then
+    pass "python CLI: submit -o --report (progress on stderr, result valid)"
+else
+    fail "python CLI submit" "rc $rc $(tail -3 "$TMP/cli.err")"
+fi
+QDC_SERVER=$URL $PY "$PYC" fetch "$id" -o "$TMP/cli2.json" && QDC_SERVER=$URL $PY "$PYC" status "$id" > "$TMP/st.json" &&
+    [ "$(jq -r .state "$TMP/st.json")" = succeeded ] && "$BIN/qdc" quality "$TMP/cli2.json" > /dev/null &&
+    pass "python CLI: fetch (JSON) and status with QDC_SERVER" || fail "python CLI fetch" "$(cat "$TMP/st.json")"
+$PY "$PYC" --server "$URL" submit "$MESH" --opt metric=nope 2> /dev/null
+[ $? = 10 ] && pass "python CLI: rejected request exits 10" || fail "python CLI exit" "not 10"
+stop_qdcd
+exit 0

@@ -1,0 +1,126 @@
+"""python_client.py - end-to-end checks of clients/python/qdc_client.py against
+the daemon at $URL (started by python.sh). Prints ok/FAIL lines."""
+import array
+import json
+import os
+import subprocess
+import sys
+
+sys.path.insert(0, os.path.join(os.environ["ROOT"], "clients", "python"))
+import qdc_client  # noqa: E402
+from qdc_client import Client, JobFailed, Mesh, QdcError  # noqa: E402
+
+URL, TMP, MESH, QDC = os.environ["URL"], os.environ["TMP"], os.environ["MESH"], os.environ["QDC"]
+NT = int(os.environ["NT"])
+nfail = 0
+
+
+def check(name, cond, why=""):
+    global nfail
+    if cond:
+        print("ok - python: " + name)
+    else:
+        nfail += 1
+        print("FAIL - python: %s: %s" % (name, why))
+
+
+def valid(path, nt):
+    out = subprocess.run([QDC, "quality", path], capture_output=True, text=True)
+    return out.returncode == 0 and (" %d tets, 0 inverted" % nt) in out.stdout, out.stdout + out.stderr
+
+
+c = Client(URL)
+
+# 1. a Medit path, wait with on_progress, result as a Mesh, report
+recs = []
+job = c.submit(MESH, {"max_iter": 3})
+final = c.wait(job, on_progress=recs.append)
+seqs = [r.get("seq") for r in recs]
+its = [r["iteration"] for r in recs]
+check("submit(path) + wait: %d records, in order" % len(recs),
+      final["state"] == "succeeded" and len(recs) >= 3 and its == sorted(its) and
+      (None in seqs or seqs == list(range(len(recs)))), "%s %s" % (final["state"], seqs))
+m = c.result(job)
+check("result() -> Mesh with %d vertices, %d tets" % (m.nv, m.nt),
+      isinstance(m, Mesh) and m.nt == NT and m.regions is None or m.nt == NT, m.nt)
+rep = c.report(job)
+check("report(): before/after quality, boundary error",
+      rep["after"]["n_tets"] == NT and rep["after"]["mean_ratio_min"] >= rep["before"]["mean_ratio_min"]
+      and "hausdorff_rel" in rep["boundary_error"], json.dumps(rep)[:200])
+
+# 2. the binary format: round trip through to_bytes/from_bytes and a .qmesh file
+m.save(os.path.join(TMP, "py.qmesh"))
+ok, out = valid(os.path.join(TMP, "py.qmesh"), NT)
+check("Mesh.save(.qmesh) is read by qdc (binary writer matches the C reader)", ok, out)
+same = Mesh.from_bytes(m.to_bytes())
+check("to_bytes/from_bytes round trip", same.xyz == m.xyz and same.tets == m.tets, "")
+srv = open(os.path.join(TMP, "srv.qmesh"), "wb")
+srv.write(c._request("GET", "/v1/jobs/%s/result?format=qmesh" % job["id"])[2])
+srv.close()
+check("to_bytes() is byte-identical to the server's binary result",
+      m.to_bytes() == open(os.path.join(TMP, "srv.qmesh"), "rb").read(), "")
+
+# 3. arrays (plain lists), with regions and fixed vertices; result to files
+m0 = Mesh.load(os.environ["MESHQ"])  # the input, converted by meshtool.py
+xyz = [list(m0.xyz[3 * i:3 * i + 3]) for i in range(m0.nv)]
+tets = [list(m0.tets[4 * i:4 * i + 4]) for i in range(m0.nt)]
+regions = [7] * m0.nt
+fixed = [i % 2 == 0 for i in range(m0.nv)]
+job2 = c.submit((xyz, tets, regions, fixed), {"max_iter": 2, "finish": False})
+c.wait(job2)
+r2 = c.result(job2)
+moved_fixed = max(abs(r2.xyz[3 * i + k] - m0.xyz[3 * i + k]) for i in range(0, m0.nv, 2) for k in range(3))
+moved_free = max(abs(r2.xyz[3 * i + k] - m0.xyz[3 * i + k]) for i in range(1, m0.nv, 2) for k in range(3))
+check("submit(lists + regions + fixed): regions and flags kept, fixed vertices still (moved %g, free %g)"
+      % (moved_fixed, moved_free),
+      list(r2.regions or []) == regions and list(r2.fixed or []) == [1 if f else 0 for f in fixed]
+      and moved_fixed == 0 and moved_free > 0, "regions %s fixed moved %g" % (r2.regions is not None, moved_fixed))
+for ext in ("mesh", "json", "qmesh"):
+    p = os.path.join(TMP, "py2." + ext)
+    c.result(job2, p)
+    ok, out = valid(p, NT)
+    check("result(job, '.%s'): valid file" % ext, ok, out)
+
+# 4. numpy arrays, when numpy is there
+if qdc_client._np is not None:
+    np = qdc_client._np
+    X, T, _, _ = m.as_numpy()
+    job3 = c.submit((X, T), {"max_iter": 1})
+    c.wait(job3)
+    X3, T3, _, _ = c.result(job3).as_numpy()
+    check("numpy: submit((xyz, tets)) and as_numpy(): shapes %s %s" % (X3.shape, T3.shape),
+          X3.shape == (m.nv, 3) and T3.shape == (NT, 4) and (T3 == T).all(), "")
+else:
+    print("ok - python: numpy not installed, array.array path only")
+
+# 5. errors, idempotency, cancel, list
+try:
+    c.submit(MESH, {"metric": "nope"})
+    check("bad option raises QdcError(400)", False, "no exception")
+except QdcError as e:
+    check("bad option raises QdcError(400): %s" % e, e.status == 400 and "metric" in str(e), str(e))
+try:
+    c.job("0123456789abcdef0123456789abcdef")
+    check("unknown job raises QdcError(404)", False, "no exception")
+except QdcError as e:
+    check("unknown job raises QdcError(404)", e.status == 404, str(e))
+a = c.submit(MESH, {"max_iter": 1}, idempotency_key="py-%d" % os.getpid())
+b = c.submit(MESH, {"max_iter": 1}, idempotency_key="py-%d" % os.getpid())
+check("same Idempotency-Key: same job", a["id"] == b["id"], "%s %s" % (a["id"], b["id"]))
+big = c.submit(os.environ["BIG"], {"max_iter": 1000})
+c.cancel(big)
+try:
+    c.wait(big)
+    check("cancelled job: wait raises JobFailed", False, "no exception")
+except JobFailed as e:
+    check("cancelled job: wait raises JobFailed (%s)" % e, e.job["state"] == "cancelled", str(e))
+ids = {j["id"] for j in c.jobs()}
+check("jobs(): lists them all", {job["id"], job2["id"], a["id"], big["id"]} <= ids, ids)
+dead = Client("http://127.0.0.1:1", retries=1)
+dead.on_retry = None
+try:
+    dead.jobs()
+    check("unreachable server raises QdcError(0)", False, "no exception")
+except QdcError as e:
+    check("unreachable server raises QdcError(0) after retries", e.status == 0, str(e))
+sys.exit(1 if nfail else 0)
