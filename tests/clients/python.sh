@@ -10,7 +10,8 @@ BIG=$(devmesh bunny_low_100k)
 $MT qmesh "$MESH" "$TMP/in.qmesh"
 start_qdcd "$TMP/d" --workers 2 || { fail "start" "qdcd did not come up: $(tail -3 "$TMP/d.log")"; exit 1; }
 
-URL=$URL TMP=$TMP MESH=$MESH MESHQ=$TMP/in.qmesh BIG=$BIG NT=9033 QDC=$BIN/qdc ROOT=$ROOT $PY "$ROOT/tests/clients/python_client.py" ||
+export URL TMP MESH BIG ROOT
+MESHQ=$TMP/in.qmesh NT=9033 QDC=$BIN/qdc $PY "$ROOT/tests/clients/python_client.py" ||
     echo "# python_client.py exited $?"
 
 # the command line: submit -o --report, then fetch and status by id
