@@ -1,0 +1,110 @@
+#!/bin/sh
+# docker.sh - docker/ without a Docker engine: lint the Dockerfile
+# (dockerfile-utils from npm), check its structure (bookworm-slim build and
+# runtime stages, deps.sh, numeric USER, VOLUME, HEALTHCHECK on /livez, exec'd
+# entrypoint), run the build stage's make on exactly what the Dockerfile
+# copies, check the runtime stage installs every shared library the binaries
+# need, and run the entrypoint: it execs qdcd, which stops on SIGTERM.
+. "$(dirname "$0")/../lib.sh"
+DF=$ROOT/docker/Dockerfile
+EP=$ROOT/docker/entrypoint.sh
+CF=$ROOT/docker/compose.yaml
+
+# 1. linter
+if command -v npx > /dev/null 2>&1; then
+    out=$(cd "$ROOT" && timeout 180 npx --yes dockerfile-utils lint docker/Dockerfile 2>&1)
+    rc=$?
+    if [ $rc = 0 ]; then
+        pass "dockerfile-utils lint: no problem"
+    else
+        fail "dockerfile-utils lint" "rc $rc: $(printf '%s' "$out" | grep -v 'npm warn' | head -8 | tr '\n' ' ')"
+    fi
+else
+    pass "dockerfile-utils lint: skipped, no npx here (apt-get install npm)"
+fi
+if command -v shellcheck > /dev/null 2>&1; then
+    check "shellcheck docker/entrypoint.sh clients/batch/qdc-batch.sh" shellcheck -s sh "$EP" "$ROOT/clients/batch/qdc-batch.sh"
+fi
+
+# 2. structure
+ins() { grep -E "^$1( |$)" "$DF"; } # instructions of one kind
+bad=
+[ "$(ins FROM | grep -c 'debian:bookworm-slim')" = 2 ] && [ "$(ins FROM | wc -l)" = 2 ] || bad="$bad two-bookworm-slim-stages"
+ins FROM | head -1 | grep -q ' AS build$' || bad="$bad build-stage-first"
+grep -q '^RUN scripts/deps.sh' "$DF" || bad="$bad deps.sh"
+grep -q '^COPY scripts/deps.sh ' "$DF" || bad="$bad copy-deps.sh"
+ins USER | tail -1 | grep -Eq '^USER [0-9]+:[0-9]+$' || bad="$bad numeric-user"
+vol=$(ins VOLUME | sed 's/^VOLUME \["\(.*\)"\]$/\1/')
+[ -n "$vol" ] && ins CMD | grep -q "\"--data\", \"$vol\"" || bad="$bad volume=data"
+ins HEALTHCHECK | grep -q '/livez' || sed -n '/^HEALTHCHECK/,/[^\\]$/p' "$DF" | grep -q '/livez' || bad="$bad healthcheck"
+ins STOPSIGNAL | grep -q SIGTERM || bad="$bad stopsignal"
+ins ENTRYPOINT | grep -q '^ENTRYPOINT \["' || bad="$bad exec-form-entrypoint"
+ins CMD | grep -q '"0.0.0.0:8080"' && ins EXPOSE | grep -q 8080 || bad="$bad port"
+grep -q 'libopenblas0-pthread' "$DF" || bad="$bad openblas"
+grep -q "^ *- qdc-data:$vol$" "$CF" && grep -q '^  qdc-data:' "$CF" || bad="$bad compose-named-volume"
+grep -q 'dockerfile: docker/Dockerfile' "$CF" && grep -q '"127.0.0.1:8080:8080"' "$CF" || bad="$bad compose-build-ports"
+[ -z "$bad" ] && pass "Dockerfile/compose structure: 2 bookworm-slim stages, deps.sh, USER numeric, VOLUME $vol = --data, HEALTHCHECK /livez, named volume" ||
+    fail "Dockerfile structure" "missing:$bad"
+
+# 3. the build stage on exactly what it copies (COPY lines of the build stage)
+mkdir -p "$TMP/ctx"
+(cd "$ROOT" && git ls-files -co --exclude-standard) > "$TMP/files"
+sed -n '/ AS build$/,/^FROM /p' "$DF" | awk '$1 == "COPY" && $2 !~ /^--/ { for (i = 2; i < NF; i++) print $i }' |
+    while read -r src; do
+        grep -E "^$src(/|$)" "$TMP/files" | while read -r f; do
+            [ -f "$ROOT/$f" ] || continue
+            mkdir -p "$TMP/ctx/$(dirname "$f")" && cp "$ROOT/$f" "$TMP/ctx/$f"
+        done
+    done
+cmd=$(sed -n '/ AS build$/,/^FROM /p' "$DF" | grep '^RUN make' | sed 's/^RUN //; s/-j"$(nproc)"/-j2/')
+if (cd "$TMP/ctx" && sh scripts/deps.sh --check > /dev/null && eval "$cmd" > "$TMP/make.log" 2>&1) &&
+    [ -x "$TMP/ctx/build/rel/qdcd" ] && [ -x "$TMP/ctx/build/rel/qdc" ]; then
+    pass "build stage: '$cmd' succeeds on the copied files alone"
+else
+    fail "build stage" "$(tail -3 "$TMP/make.log")"
+fi
+
+# 4. the runtime stage installs the package of every library qdcd/qdc need
+pkgs=$(sed -n '/ AS runtime$/,$p' "$DF" | sed -n '/apt-get install/,/rm -rf/p')
+missing=
+for lib in $(readelf -d "$TMP/ctx/build/rel/qdcd" "$TMP/ctx/build/rel/qdc" 2> /dev/null | sed -n 's/.*NEEDED.*\[\(.*\)\]/\1/p' | sort -u); do
+    path=$(ldd "$TMP/ctx/build/rel/qdcd" "$TMP/ctx/build/rel/qdc" | awk -v l="$lib" '$1 == l { print $3; exit }')
+    pkg=$(dpkg -S "$(readlink -f "$path")" 2> /dev/null | head -1 | cut -d: -f1)
+    [ -n "$pkg" ] || pkg=$(dpkg -S "$path" 2> /dev/null | head -1 | cut -d: -f1)
+    case $pkg in libc6 | libgcc-s1 | libstdc++6 | zlib1g) continue ;; esac # in bookworm-slim
+    printf '%s\n' "$pkgs" | grep -qw -- "$pkg" || missing="$missing $lib($pkg)"
+done
+[ -z "$missing" ] && pass "runtime stage installs every shared library the binaries link" ||
+    fail "runtime libraries" "not installed:$missing"
+
+# 5. the entrypoint execs qdcd (PID 1 gets SIGTERM) with or without tokens
+QDCD=$TMP/ctx/build/rel/qdcd QDC_TOKENS_FILE=$TMP/none sh "$EP" --listen 127.0.0.1:0 --port-file "$TMP/port" --data "$TMP/data" 2> "$TMP/ep.log" &
+EPID=$!
+i=0
+while [ $i -lt 100 ] && ! [ -s "$TMP/port" ]; do sleep 0.1; i=$((i + 1)); done
+URL=http://127.0.0.1:$(cat "$TMP/port" 2> /dev/null)
+live=$(curl -s -m 5 -o /dev/null -w '%{http_code}' "$URL/livez")
+comm=$(cat "/proc/$EPID/comm" 2> /dev/null)
+kill -TERM "$EPID" 2> /dev/null
+t0=$(date +%s)
+wait "$EPID"
+rc=$?
+if [ "$live" = 200 ] && [ "$comm" = qdcd ] && [ $rc = 0 ] && [ $(($(date +%s) - t0)) -le 12 ] && grep -q 'API open' "$TMP/ep.log"; then
+    pass "entrypoint: execs qdcd (pid $EPID is qdcd), /livez 200, SIGTERM -> exit 0"
+else
+    fail "entrypoint" "livez $live comm '$comm' rc $rc: $(tail -2 "$TMP/ep.log")"
+fi
+"$TMP/ctx/build/rel/qdcd" --hash-token tok > "$TMP/tokens"
+rm -f "$TMP/port"
+QDCD=$TMP/ctx/build/rel/qdcd QDC_TOKENS_FILE=$TMP/tokens sh "$EP" --listen 127.0.0.1:0 --port-file "$TMP/port" --data "$TMP/data" 2> "$TMP/ep2.log" &
+EPID=$!
+i=0
+while [ $i -lt 100 ] && ! [ -s "$TMP/port" ]; do sleep 0.1; i=$((i + 1)); done
+URL=http://127.0.0.1:$(cat "$TMP/port" 2> /dev/null)
+c1=$(curl -s -o /dev/null -w '%{http_code}' "$URL/v1/jobs")
+c2=$(curl -s -o /dev/null -w '%{http_code}' -H 'Authorization: Bearer tok' "$URL/v1/jobs")
+kill -TERM "$EPID" 2> /dev/null
+wait "$EPID"
+[ "$c1$c2" = 401200 ] && pass "entrypoint with a tokens secret: 401 without the token, 200 with it" ||
+    fail "entrypoint tokens" "$c1 $c2 $(tail -2 "$TMP/ep2.log")"
+exit 0
