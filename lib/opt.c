@@ -92,6 +92,7 @@ typedef struct {
     double *bw2;      /* squared boundary row weights (0: no row) */
     double *dg;       /* bw2 + mu */
     double *qt, *qval, *d;
+    double mu_factor;    /* omega_B^2 once harmonic guidance is on and mu_scaled */
     const double *bref;  /* targets of the boundary rows: x0 (lsq) or x_k (slide) */
     slide_ctx *sl;       /* slide mode only */
     solve_ctx *sol;
@@ -257,6 +258,7 @@ static qdc_status ctx_init(ctx_t *c, const mesh_t *m, const mesh_topo *tp, const
         }
     c->lbar = ecount ? esum / (double)ecount : 1.0;
     c->bref = c->x0;
+    c->mu_factor = 1.0;
     if (o->boundary == OPT_BOUNDARY_SLIDE) {
         qdc_status st = slide_new(tp, c->x0, o->feature_angle, &c->sl, NULL);
         if (st != QDC_OK)
@@ -315,6 +317,8 @@ static qdc_status set_harmonic(ctx_t *c, opt_result *res, qdc_error *err)
             if (c->bw2[v] > 0)
                 c->bw2[v] = wb * wb;
         }
+        if (c->o->mu_scaled)
+            c->mu_factor = wb * wb;
         logf_(c, 0, "harmonic guidance: %d medial vertices, omega_B %.3g", (int)nmed, wb);
     }
     qdc_free(h);
@@ -369,7 +373,7 @@ static qdc_status iterate(ctx_t *c, opt_result *res, opt_progress *r, int *stepp
         if (!(mu > 0))
             mu = 1.0;
     } else {
-        mu = o->mu;
+        mu = o->mu * c->mu_factor;
     }
     /* b = Q_F^T W (d - Q x_L) + bw2 x0 + mu x_k: locked vertices move to the right */
     for (int32_t v = 0; v < c->nv; v++) {

@@ -50,6 +50,8 @@ typedef struct {
     int max_iter;          /* global iterations, default 10 */
     int ls_halvings;       /* line search tries 1 .. 2^-ls_halvings, default 10 */
     double mu;             /* semi-implicit damping in normalized units, default 1 */
+    int mu_scaled;         /* with harmonic guidance, multiply mu by omega_B^2 (METHOD §5
+                            * open question), default 0 */
     double tol_move;       /* stop when max move < tol_move * mean edge, default 1e-3 */
     double eps_rel;        /* Escobar epsilon relative to a regular tet, default 1e-3 */
     double finish_frac;    /* fraction of worst tets in the finishing pass, default 0.2 */

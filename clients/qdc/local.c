@@ -93,6 +93,7 @@ static void optimize_usage(FILE *f)
           "  --finish-frac F            share of worst tets visited per sweep (default 0.2)\n"
           "  --max-iter N               global iterations (default 10)\n"
           "  --mu X                     damping in normalized units (default 1)\n"
+          "  --mu-scaled on|off         with --harmonic, scale mu by omega_B^2 (default off)\n"
           "  --time-limit SECONDS       stop with the best mesh so far\n"
           "  --in-format F, --out-format F   medit|tetgen|qmesh|json (default: by extension)\n"
           "  --fix FILE                 vertices that must not move (0-based indices)\n"
@@ -222,6 +223,8 @@ int cli_optimize(int argc, char **argv)
                 bad = on_off(v, &o.harmonic);
             else if (!strcmp(a, "--finish"))
                 bad = on_off(v, &o.finish);
+            else if (!strcmp(a, "--mu-scaled"))
+                bad = on_off(v, &o.mu_scaled);
             else if (!strcmp(a, "--max-iter")) {
                 char *end;
                 long n = strtol(v, &end, 10);
