@@ -340,7 +340,7 @@ def summary(rows):
     return '\n'.join(lines)
 
 
-def machine_info(cmdline, up0):
+def machine_info(cmdline, up0, qdc_mtime0):
     cpu = '?'
     with open('/proc/cpuinfo') as f:
         for line in f:
@@ -357,7 +357,8 @@ def machine_info(cmdline, up0):
             'qdc_commit': git('rev-parse', '--short', 'HEAD'),
             'qdc_tree_dirty': bool(dirty),
             'qdc_binary_mtime': datetime.datetime.fromtimestamp(
-                os.path.getmtime(QDC)).isoformat(timespec='seconds')}
+                qdc_mtime0).isoformat(timespec='seconds'),
+            'qdc_binary_rebuilt_during_run': os.path.getmtime(QDC) != qdc_mtime0}
 
 
 def write_results(path, info, tab, summ, rows):
@@ -376,6 +377,9 @@ def write_results(path, info, tab, summ, rows):
                                        ' + uncommitted changes in the working tree'
                                        if info['qdc_tree_dirty'] else '',
                                        info['qdc_binary_mtime']))
+        if info['qdc_binary_rebuilt_during_run']:
+            f.write('- **warning: build/rel/qdc was rebuilt while the bench ran** (shared '
+                    'working tree); later qdc rows may come from a newer binary\n')
         f.write('- peers: Gmsh %s (Debian python3-gmsh), `General.NumThreads` default\n' % gv)
         f.write('- quality: `/usr/bin/python3 %s OUT --orig IN --samples %d` for every '
                 'row\n' % (QUALITY, SAMPLES))
@@ -411,6 +415,7 @@ def main():
     tools = a.tools or [t for t in TOOLS if not (a.quick and t == 'gmsh-default')]
     if 'qdc' in ''.join(tools) and not os.access(QDC, os.X_OK):
         sys.exit('bench: %s missing; run `make all`' % QDC)
+    qdc_mtime0 = os.path.getmtime(QDC) if os.path.exists(QDC) else 0
     meshes = prepare_meshes(a)
     if not meshes:
         sys.exit('bench: no mesh selected')
@@ -434,7 +439,7 @@ def main():
                 tool, row['status'], row['wall'], row['cpu'], row['maxrss_mb'],
                 q_in['eta_mean'], fnum(q.get('eta_mean'), '%.3f'),
                 fnum(q.get('dihedral_min'), '%.2f')))
-    info = machine_info(a.cmdline or ' '.join(sys.argv), up0)
+    info = machine_info(a.cmdline or ' '.join(sys.argv), up0, qdc_mtime0)
     tab, summ = table(rows, inputs, meshes), summary(rows)
     with open(os.path.join(OUT, 'results.json'), 'w') as f:
         json.dump({'info': info, 'inputs': inputs, 'rows': rows}, f, indent=1)

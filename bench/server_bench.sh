@@ -1,0 +1,155 @@
+#!/bin/sh
+# server_bench.sh - the daemon's targets (issue 3), measured on loopback:
+#   1. upload + validate + enqueue of a 1M-tet binary mesh (target <= 0.5 s)
+#   2. 1000 parked long-polls: extra RSS (target <= 20 MB) and extra threads (0)
+#   3. p99 latency of GET /v1/jobs/{id} while two jobs run (target <= 5 ms)
+# Usage: bench/server_bench.sh [N_UPLOADS] (default 5). Prints one line per figure.
+set -eu
+ROOT=$(cd "$(dirname "$0")/.." && pwd)
+QDCD=${QDCD:-$ROOT/build/rel/qdcd}
+PY=/usr/bin/python3
+MT="$PY $ROOT/tests/server/meshtool.py"
+NUP=${1:-5}
+TMP=$(mktemp -d "${TMPDIR:-/tmp}/qdcd-bench.XXXXXX")
+QPID=
+trap 'if [ -n "$QPID" ]; then kill -9 $QPID 2>/dev/null; fi; rm -rf "$TMP"' EXIT
+
+start() { # DATADIR options...
+    d=$1; shift
+    "$QDCD" --listen 127.0.0.1:0 --port-file "$d.port" --data "$d" "$@" > "$d.log" 2>&1 &
+    QPID=$!
+    i=0
+    until [ -s "$d.port" ] && curl -sf "http://127.0.0.1:$(cat "$d.port")/livez" > /dev/null; do
+        i=$((i + 1)); [ $i -lt 100 ] || { echo "qdcd did not start" >&2; exit 1; }; sleep 0.1
+    done
+    URL=http://127.0.0.1:$(cat "$d.port")
+}
+stop() { kill -TERM "$QPID"; wait "$QPID" || true; QPID=; }
+rss_kb() { awk '/^VmRSS/ { print $2 }' "/proc/$1/status"; }
+
+# A 1M-tet structured grid (56^3 cells x 6 tets), written with numpy.
+$PY - "$TMP/1m.qmesh" <<'PYEOF'
+import sys, numpy as np
+n = 56
+i, j, k = np.meshgrid(np.arange(n + 1), np.arange(n + 1), np.arange(n + 1), indexing="ij")
+xyz = np.stack([i, j, k], -1).reshape(-1, 3).astype("<f8") / n
+idx = lambda a, b, c: (a * (n + 1) + b) * (n + 1) + c
+ci, cj, ck = [x.ravel() for x in np.meshgrid(np.arange(n), np.arange(n), np.arange(n), indexing="ij")]
+tets = []
+for p in [(0, 1, 2), (0, 2, 1), (1, 0, 2), (1, 2, 0), (2, 0, 1), (2, 1, 0)]:
+    cur = [ci.copy(), cj.copy(), ck.copy()]
+    path = [idx(*cur)]
+    for ax in p:
+        cur[ax] = cur[ax] + 1
+        path.append(idx(*cur))
+    t = np.stack(path, -1)
+    e = xyz[t[:, 1:]] - xyz[t[:, :1]]
+    neg = np.linalg.det(e) < 0
+    t[neg, 1], t[neg, 2] = t[neg, 2].copy(), t[neg, 1].copy()
+    tets.append(t)
+tets = np.concatenate(tets).astype("<i4")
+with open(sys.argv[1], "wb") as f:
+    f.write(b"QDCMESH\0" + np.array([1, 0], "<u4").tobytes() + np.array([len(xyz), len(tets)], "<u8").tobytes())
+    f.write(xyz.tobytes()); f.write(tets.tobytes())
+print("mesh: %d vertices, %d tets, %.1f MB" % (len(xyz), len(tets), (32 + xyz.nbytes + tets.nbytes) / 1e6))
+PYEOF
+
+# 1. upload + validate + enqueue (the 202 means committed and fsynced)
+start "$TMP/u" --workers 1 --max-queued 1000
+: > "$TMP/times"
+for r in $(seq "$NUP"); do
+    curl -s -o "$TMP/sub" -w '%{time_total}\n' -X POST -H 'Content-Type: application/vnd.qdc.mesh' \
+        --data-binary "@$TMP/1m.qmesh" "$URL/v1/jobs?max_iter=1" >> "$TMP/times"
+    jq -e '.mesh.tets > 1000000' "$TMP/sub" > /dev/null || { echo "upload failed: $(head -c 300 "$TMP/sub")" >&2; exit 1; }
+    curl -s -X POST "$URL/v1/jobs/$(jq -r .id "$TMP/sub"):cancel" > /dev/null
+done
+sort -n "$TMP/times" | awk -v n="$NUP" '{ t[NR] = $1 } END {
+    printf "1M-tet binary upload+validate+enqueue (202): median %.3f s, min %.3f s, max %.3f s over %d (target <= 0.5 s)\n",
+        t[int((n + 1) / 2)], t[1], t[n], n }'
+stop
+
+# 2. 1000 parked long-polls. One small job runs for ever; the polls wait on a
+#    second, queued job, so nothing but the parked connections changes.
+SAMPLE=$ROOT/tests/data/sample/cube.mesh
+start "$TMP/p" --workers 1
+curl -s -X POST -H 'Content-Type: model/x-medit' --data-binary "@$SAMPLE" \
+    "$URL/v1/jobs?max_iter=10000&tol_move=0&finish=0" > "$TMP/a"
+curl -s -X POST -H 'Content-Type: model/x-medit' --data-binary "@$SAMPLE" "$URL/v1/jobs" > "$TMP/b"
+B=$(jq -r .id "$TMP/b")
+sleep 2
+$PY - "$URL" "$B" "$QPID" 1000 <<'PYEOF'
+import os, socket, sys, time
+from urllib.parse import urlparse
+url, job, pid, n = sys.argv[1], sys.argv[2], sys.argv[3], int(sys.argv[4])
+u = urlparse(url)
+def rss():
+    for l in open("/proc/%s/status" % pid):
+        if l.startswith("VmRSS"):
+            return int(l.split()[1])
+def threads():
+    return len(os.listdir("/proc/%s/task" % pid))
+def metric(name):
+    s = socket.create_connection((u.hostname, u.port))
+    s.sendall(b"GET /metrics HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n")
+    data = b""
+    while True:
+        c = s.recv(65536)
+        if not c: break
+        data += c
+    for l in data.decode().splitlines():
+        if l.startswith(name + " "):
+            return float(l.split()[1])
+r0 = min(rss() for _ in range(5) if time.sleep(0.1) is None)
+t0 = threads()
+socks = []
+req = ("GET /v1/jobs/%s/progress?after=-1&wait=60 HTTP/1.1\r\nHost: x\r\n\r\n" % job).encode()
+for i in range(n):
+    s = socket.create_connection((u.hostname, u.port))
+    s.sendall(req)
+    socks.append(s)
+deadline = time.time() + 30
+while metric("qdcd_parked_connections") < n and time.time() < deadline:
+    time.sleep(0.2)
+parked = metric("qdcd_parked_connections")
+time.sleep(1)
+r1 = max(rss() for _ in range(5) if time.sleep(0.1) is None)
+t1 = threads()
+print("%d parked long-polls: RSS %.1f MB -> %.1f MB (+%.1f MB, %.1f KB each), threads %d -> %d (target <= 20 MB, no extra threads)"
+      % (parked, r0 / 1024, r1 / 1024, (r1 - r0) / 1024, (r1 - r0) / max(parked, 1), t0, t1))
+for s in socks:
+    s.close()
+PYEOF
+stop
+
+# 3. GET /v1/jobs/{id} latency while two jobs run (2 workers, 2 long jobs)
+gzip -dc "$ROOT/../shared/meshes/dev/cube_h0.1_lowq.mesh.gz" > "$TMP/cube.mesh"
+start "$TMP/l" --workers 2
+for k in 1 2; do
+    curl -s -X POST -H 'Content-Type: model/x-medit' --data-binary "@$TMP/cube.mesh" \
+        "$URL/v1/jobs?max_iter=10000&tol_move=0&finish=0" > "$TMP/j$k"
+done
+J=$(jq -r .id "$TMP/j1")
+curl -s "$URL/v1/jobs/$J/progress?after=0&wait=30" > /dev/null
+curl -s "$URL/v1/jobs/$(jq -r .id "$TMP/j2")/progress?after=0&wait=30" > /dev/null
+$PY - "$URL" "$J" 3000 <<'PYEOF'
+import http.client, sys, time, json
+from urllib.parse import urlparse
+url, job, n = sys.argv[1], sys.argv[2], int(sys.argv[3])
+u = urlparse(url)
+c = http.client.HTTPConnection(u.hostname, u.port)
+lat = []
+running = 0
+for i in range(n):
+    t = time.perf_counter()
+    c.request("GET", "/v1/jobs/" + job)
+    r = c.getresponse()
+    body = r.read()
+    lat.append(time.perf_counter() - t)
+    running += json.loads(body)["state"] == "running"
+lat.sort()
+p = lambda q: lat[min(len(lat) - 1, int(q * len(lat)))] * 1e3
+print("GET /v1/jobs/{id} while 2 jobs run: p50 %.2f ms, p99 %.2f ms, max %.2f ms over %d requests (%d saw 'running') (target p99 <= 5 ms)"
+      % (p(0.5), p(0.99), lat[-1] * 1e3, n, running))
+PYEOF
+curl -s "$URL/metrics" | grep -E '^qdcd_workers_busy'
+stop
