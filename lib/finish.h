@@ -20,9 +20,11 @@ typedef struct {
  * frac: share of the worst tets (by mean ratio) whose vertices are visited.
  * eps: Escobar epsilon, lbar: mean edge length (both in x's units).
  * sl (may be NULL): constraints of sliding boundary vertices (movable ones with
- * a SLIDE_SURFACE/SLIDE_LINE kind move tangentially and are projected back). */
+ * a SLIDE_SURFACE/SLIDE_LINE kind move tangentially and are projected back).
+ * rtol: a vertex stops once a step lowers its local objective by less than
+ * rtol times its value (0: all inner steps). */
 qdc_status finish_sweep(const mesh_topo *tp, const uint8_t *movable, const slide_ctx *sl,
                         double *x, opt_metric m, double eps, double lbar, double frac,
-                        finish_stats *st);
+                        double rtol, finish_stats *st);
 
 #endif

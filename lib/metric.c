@@ -48,6 +48,28 @@ void metric_parts_of(const double *p0, const double *p1, const double *p2, const
     out->adj2 = dot3(n0, n0) + dot3(n1, n1) + dot3(n2, n2) + dot3(n3, n3);
 }
 
+void metric_parts_for(opt_metric m, const double *p0, const double *p1, const double *p2,
+                      const double *p3, metric_parts *out)
+{
+    double e01[3], e02[3], e03[3], e12[3], e13[3], e23[3], n1[3];
+
+    if (m == OPT_METRIC_MICN) {
+        metric_parts_of(p0, p1, p2, p3, out);
+        return;
+    }
+    sub3(p1, p0, e01);
+    sub3(p2, p0, e02);
+    sub3(p3, p0, e03);
+    sub3(p2, p1, e12);
+    sub3(p3, p1, e13);
+    sub3(p3, p2, e23);
+    cross3(e02, e03, n1);
+    out->vol = dot3(e01, n1) / 6.0;
+    out->l2sum = dot3(e01, e01) + dot3(e02, e02) + dot3(e03, e03) + dot3(e12, e12) +
+                 dot3(e13, e13) + dot3(e23, e23);
+    out->adj2 = 0.0;
+}
+
 double metric_h(double s, double delta)
 {
     if (delta == 0.0)
@@ -98,7 +120,8 @@ double metric_qt(opt_metric m, const metric_parts *p, double delta)
     }
 }
 
-double metric_qt_grad(opt_metric m, const double *p12, int a, double delta, double g[3])
+double metric_qt_grad(opt_metric m, const double *p12, int a, double delta, double g[3],
+                      metric_parts *pt_out)
 {
     metric_parts pt;
     double p[4][3];
@@ -107,7 +130,9 @@ double metric_qt_grad(opt_metric m, const double *p12, int a, double delta, doub
     int fi[3];
 
     memcpy(p, p12, sizeof p);
-    metric_parts_of(p[0], p[1], p[2], p[3], &pt);
+    metric_parts_for(m, p[0], p[1], p[2], p[3], &pt);
+    if (pt_out)
+        *pt_out = pt;
     q = metric_qt(m, &pt, delta);
     g[0] = g[1] = g[2] = 0.0;
     if (!isfinite(q))

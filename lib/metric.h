@@ -16,6 +16,10 @@ typedef struct {
 
 void metric_parts_of(const double *p0, const double *p1, const double *p2, const double *p3,
                      metric_parts *out);
+/* The same, computing adj2 only for MICN (the other metrics never read it;
+ * adj2 is then 0). For hot loops. */
+void metric_parts_for(opt_metric m, const double *p0, const double *p1, const double *p2,
+                      const double *p3, metric_parts *out);
 
 /* Escobar's regularization h(s) = (s + sqrt(s^2 + 4 delta^2)) / 2 and its derivative. */
 double metric_h(double s, double delta);
@@ -33,8 +37,9 @@ double metric_delta(double smin, double eps);
 double metric_qt(opt_metric m, const metric_parts *p, double delta);
 
 /* q~ of the tet (p12: 4 corners, 3 doubles each) and its gradient with respect
- * to corner a. */
-double metric_qt_grad(opt_metric m, const double *p12, int a, double delta, double g[3]);
+ * to corner a. If pt is not NULL it receives the tet's parts. */
+double metric_qt_grad(opt_metric m, const double *p12, int a, double delta, double g[3],
+                      metric_parts *pt);
 
 /* Smallest and largest of the 6 dihedral angles (degrees), as metric_dihedrals
  * but with 2 acos instead of 6. */

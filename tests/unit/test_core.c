@@ -117,7 +117,7 @@ TEST(gradient_matches_finite_differences)
         for (int a = 0; a < 4; a++)
             for (int dl = 0; dl < 2; dl++) {
                 double delta = dl ? 0.02 : 0.0, g[3], h = 1e-6;
-                metric_qt_grad((opt_metric)mm, &t[0][0], a, delta, g);
+                metric_qt_grad((opt_metric)mm, &t[0][0], a, delta, g, NULL);
                 for (int k = 0; k < 3; k++) {
                     double tp[4][3], tm[4][3], qp, qm;
                     metric_parts pp, pm;
