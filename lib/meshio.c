@@ -25,18 +25,38 @@
 /* ------------------------------------------------------------------------ */
 /* Format names                                                              */
 
-static const char *const format_names[MESHIO_FORMAT_COUNT] = {"auto", "medit", "tetgen",
-                                                              "qmesh", "json"};
+static const char *const format_names[MESHIO_FORMAT_COUNT] = {
+    "auto",     "medit",  "tetgen", "qmesh",     "json", "gmsh",
+    "gmsh-bin", "gmsh22", "vtk",    "vtk-ascii", "vtu",  "vtu-ascii"};
 
 static const struct {
     const char *name;
     meshio_format fmt;
 } format_aliases[] = {
-    {"medit", MESHIO_MEDIT},   {"mesh", MESHIO_MEDIT},
-    {"tetgen", MESHIO_TETGEN}, {"node", MESHIO_TETGEN},
-    {"ele", MESHIO_TETGEN},    {"qmesh", MESHIO_QMESH},
-    {"binary", MESHIO_QMESH},  {"application/vnd.qdc.mesh", MESHIO_QMESH},
-    {"json", MESHIO_JSON},     {"application/json", MESHIO_JSON},
+    {"medit", MESHIO_MEDIT},
+    {"mesh", MESHIO_MEDIT},
+    {"tetgen", MESHIO_TETGEN},
+    {"node", MESHIO_TETGEN},
+    {"ele", MESHIO_TETGEN},
+    {"qmesh", MESHIO_QMESH},
+    {"binary", MESHIO_QMESH},
+    {"application/vnd.qdc.mesh", MESHIO_QMESH},
+    {"json", MESHIO_JSON},
+    {"application/json", MESHIO_JSON},
+    {"gmsh", MESHIO_GMSH41},
+    {"msh", MESHIO_GMSH41},
+    {"msh41", MESHIO_GMSH41},
+    {"gmsh41", MESHIO_GMSH41},
+    {"gmsh-bin", MESHIO_GMSH41_BIN},
+    {"msh41-bin", MESHIO_GMSH41_BIN},
+    {"gmsh41-bin", MESHIO_GMSH41_BIN},
+    {"gmsh22", MESHIO_GMSH22},
+    {"msh22", MESHIO_GMSH22},
+    {"vtk", MESHIO_VTK},
+    {"vtk-bin", MESHIO_VTK},
+    {"vtk-ascii", MESHIO_VTK_ASCII},
+    {"vtu", MESHIO_VTU},
+    {"vtu-ascii", MESHIO_VTU_ASCII},
 };
 
 #define N_ALIASES (sizeof format_aliases / sizeof format_aliases[0])
@@ -80,6 +100,150 @@ meshio_format meshio_format_from_name(const char *s)
     return ext ? alias_format(ext) : MESHIO_AUTO;
 }
 
+/* After "$MeshFormat": "2.2 ..." or "4.1 0|1 ...". */
+static meshio_format sniff_gmsh(const char *p, size_t n)
+{
+    size_t i = 0;
+
+    while (i < n && is_space((unsigned char)p[i]))
+        i++;
+    if (n - i >= 3 && p[i] == '2' && p[i + 1] == '.')
+        return MESHIO_GMSH22;
+    i += 3;
+    while (i < n && (p[i] == ' ' || p[i] == '\t'))
+        i++;
+    return i < n && p[i] == '1' ? MESHIO_GMSH41_BIN : MESHIO_GMSH41;
+}
+
+/* Third line of a legacy VTK file: ASCII or BINARY. */
+static meshio_format sniff_vtk(const char *p, size_t n)
+{
+    size_t i = 0;
+
+    for (int line = 0; line < 2 && i < n; i++)
+        line += p[i] == '\n';
+    while (i < n && is_space((unsigned char)p[i]))
+        i++;
+    return n - i >= 5 && strncasecmp(p + i, "ASCII", 5) == 0 ? MESHIO_VTK_ASCII
+                                                             : MESHIO_VTK;
+}
+
+/* An XML document whose first element, within 1 kB, is a VTKFile. */
+static meshio_format sniff_xml(const char *p, size_t n)
+{
+    static const char tag[] = "<VTKFile";
+    size_t lim = n < 1024 ? n : 1024;
+
+    for (size_t i = 0; i + sizeof tag - 1 <= lim; i++)
+        if (memcmp(p + i, tag, sizeof tag - 1) == 0)
+            return MESHIO_VTU;
+    return MESHIO_AUTO;
+}
+
+/* ------------------------------------------------------------------------ */
+/* Media types                                                               */
+
+static const struct {
+    const char *type;  /* without parameters */
+    const char *param; /* the one parameter that selects the format, or NULL */
+    meshio_format fmt;
+} media_types[] = {
+    {"application/vnd.qdc.mesh", NULL, MESHIO_QMESH},
+    {"application/json", NULL, MESHIO_JSON},
+    {"model/x-medit", NULL, MESHIO_MEDIT},
+    {"model/vnd.gmsh", "version=2.2", MESHIO_GMSH22},
+    {"model/vnd.gmsh", "encoding=binary", MESHIO_GMSH41_BIN},
+    {"model/vnd.gmsh", NULL, MESHIO_GMSH41},
+    {"application/vnd.vtk", "encoding=ascii", MESHIO_VTK_ASCII},
+    {"application/vnd.vtk", NULL, MESHIO_VTK},
+    {"application/vnd.vtk.vtu+xml", "encoding=ascii", MESHIO_VTU_ASCII},
+    {"application/vnd.vtk.vtu+xml", NULL, MESHIO_VTU},
+    {"text/x-medit", NULL, MESHIO_MEDIT},
+    {"application/x-gmsh", "version=2.2", MESHIO_GMSH22},
+    {"application/x-gmsh", "encoding=binary", MESHIO_GMSH41_BIN},
+    {"application/x-gmsh", NULL, MESHIO_GMSH41},
+    {"model/x-gmsh", NULL, MESHIO_GMSH41},
+    {"application/x-vtk", NULL, MESHIO_VTK},
+    {"application/x-vtu", NULL, MESHIO_VTU},
+};
+
+#define N_MEDIA (sizeof media_types / sizeof media_types[0])
+
+const char *meshio_media_type(meshio_format f)
+{
+    /* static strings with the parameter, in the order of the enum */
+    static const char *const full[MESHIO_FORMAT_COUNT] = {
+        NULL,
+        "model/x-medit",
+        NULL,
+        "application/vnd.qdc.mesh",
+        "application/json",
+        "model/vnd.gmsh",
+        "model/vnd.gmsh;encoding=binary",
+        "model/vnd.gmsh;version=2.2",
+        "application/vnd.vtk",
+        "application/vnd.vtk;encoding=ascii",
+        "application/vnd.vtk.vtu+xml",
+        "application/vnd.vtk.vtu+xml;encoding=ascii"};
+
+    if ((unsigned)f >= MESHIO_FORMAT_COUNT)
+        return NULL;
+    return full[f];
+}
+
+/* Does the parameter list [p, e) (";a=b; c=d") hold want ("a=b")? Spaces
+ * around ';' and '=' and the case are ignored, quotes around the value too. */
+static int has_param(const char *p, const char *e, const char *want)
+{
+    const char *eq = strchr(want, '=');
+    size_t kl = (size_t)(eq - want), vl = strlen(eq + 1);
+
+    while (p < e) {
+        const char *k, *ke, *v, *ve;
+        while (p < e && (*p == ';' || *p == ' ' || *p == '\t'))
+            p++;
+        for (k = p; p < e && *p != '=' && *p != ';'; p++)
+            ;
+        for (ke = p; ke > k && (ke[-1] == ' ' || ke[-1] == '\t'); ke--)
+            ;
+        if (p < e && *p == '=')
+            p++;
+        while (p < e && (*p == ' ' || *p == '\t' || *p == '"'))
+            p++;
+        for (v = p; p < e && *p != ';'; p++)
+            ;
+        for (ve = p; ve > v && (ve[-1] == ' ' || ve[-1] == '\t' || ve[-1] == '"'); ve--)
+            ;
+        if ((size_t)(ke - k) == kl && strncasecmp(k, want, kl) == 0 &&
+            (size_t)(ve - v) == vl && strncasecmp(v, eq + 1, vl) == 0)
+            return 1;
+    }
+    return 0;
+}
+
+meshio_format meshio_format_from_media_type(const char *ct)
+{
+    const char *semi, *e, *te;
+
+    if (!ct)
+        return MESHIO_AUTO;
+    while (*ct == ' ' || *ct == '\t')
+        ct++;
+    e = ct + strlen(ct);
+    semi = memchr(ct, ';', (size_t)(e - ct));
+    te = semi ? semi : e;
+    while (te > ct && (te[-1] == ' ' || te[-1] == '\t'))
+        te--;
+    for (size_t i = 0; i < N_MEDIA; i++) {
+        const char *t = media_types[i].type;
+        if (strlen(t) != (size_t)(te - ct) || strncasecmp(ct, t, (size_t)(te - ct)) != 0)
+            continue;
+        if (!media_types[i].param || (semi && has_param(semi, e, media_types[i].param)))
+            return media_types[i].fmt;
+    }
+    return MESHIO_AUTO;
+}
+
 meshio_format meshio_sniff(const char *buf, size_t len)
 {
     static const char *const medit_words[] = {"MeshVersionFormatted", "Dimension",
@@ -90,6 +254,8 @@ meshio_format meshio_sniff(const char *buf, size_t len)
         return MESHIO_AUTO;
     if (len >= 7 && memcmp(buf, "QDCMESH", 7) == 0)
         return MESHIO_QMESH;
+    if (len >= 14 && memcmp(buf, "# vtk DataFile", 14) == 0)
+        return sniff_vtk(buf, len);
     while (i < len) {
         if (is_space((unsigned char)buf[i])) {
             i++;
@@ -102,6 +268,10 @@ meshio_format meshio_sniff(const char *buf, size_t len)
     }
     if (i < len && buf[i] == '{')
         return MESHIO_JSON;
+    if (i < len && buf[i] == '<')
+        return sniff_xml(buf + i, len - i);
+    if (len - i >= 11 && memcmp(buf + i, "$MeshFormat", 11) == 0)
+        return sniff_gmsh(buf + i + 11, len - i - 11);
     for (w = i; w < len && is_word((unsigned char)buf[w]); w++)
         ;
     for (size_t k = 0; k < sizeof medit_words / sizeof medit_words[0]; k++)
@@ -988,6 +1158,12 @@ out:
 qdc_status meshio_read(const char *buf, size_t len, meshio_format fmt, mesh_t **out,
                        qdc_error *err)
 {
+    return meshio_read_ex(buf, len, fmt, NULL, out, err);
+}
+
+qdc_status meshio_read_ex(const char *buf, size_t len, meshio_format fmt,
+                          const meshio_options *o, mesh_t **out, qdc_error *err)
+{
     qdc_error_clear(err);
     if (!out || (!buf && len))
         return qdc_fail(err, QDC_EINVAL, "meshio_read: NULL argument");
@@ -1003,6 +1179,16 @@ qdc_status meshio_read(const char *buf, size_t len, meshio_format fmt, mesh_t **
         return read_qmesh(buf, len, out, err);
     case MESHIO_JSON:
         return read_json(buf, len, out, err);
+    case MESHIO_GMSH41:
+    case MESHIO_GMSH41_BIN:
+    case MESHIO_GMSH22:
+        return meshio_gmsh_read(buf, len, o, out, err);
+    case MESHIO_VTK:
+    case MESHIO_VTK_ASCII:
+        return meshio_vtk_read(buf, len, o, out, err);
+    case MESHIO_VTU:
+    case MESHIO_VTU_ASCII:
+        return meshio_vtu_read(buf, len, o, out, err);
     case MESHIO_TETGEN:
         return qdc_fail(err, QDC_EINVAL,
                         "TetGen needs two buffers: use meshio_read_tetgen");
@@ -1186,6 +1372,19 @@ static qdc_status write_fmt(const mesh_t *m, meshio_format fmt, int part, qdc_wr
     case MESHIO_JSON:
         write_json(m, &w);
         break;
+    case MESHIO_GMSH41:
+    case MESHIO_GMSH41_BIN:
+    case MESHIO_GMSH22:
+        st = meshio_gmsh_write(m, fmt, &w, err);
+        break;
+    case MESHIO_VTK:
+    case MESHIO_VTK_ASCII:
+        meshio_vtk_write(m, fmt == MESHIO_VTK, &w);
+        break;
+    case MESHIO_VTU:
+    case MESHIO_VTU_ASCII:
+        meshio_vtu_write(m, fmt == MESHIO_VTU, &w);
+        break;
     default:
         st = qdc_fail(err, QDC_EINVAL, "cannot write format %d", (int)fmt);
         break;
@@ -1319,6 +1518,12 @@ static int file_exists(const char *path)
 
 qdc_status meshio_load(const char *path, meshio_format fmt, mesh_t **out, qdc_error *err)
 {
+    return meshio_load_ex(path, fmt, NULL, out, err);
+}
+
+qdc_status meshio_load_ex(const char *path, meshio_format fmt, const meshio_options *o,
+                          mesh_t **out, qdc_error *err)
+{
     char *buf = NULL;
     size_t len = 0;
     const char *ext;
@@ -1341,7 +1546,7 @@ qdc_status meshio_load(const char *path, meshio_format fmt, mesh_t **out, qdc_er
         return load_tetgen(path, out, err);
     st = meshio_slurp(path, &buf, &len, err);
     if (st == QDC_OK)
-        st = meshio_read(buf, len, fmt, out, err);
+        st = meshio_read_ex(buf, len, fmt, o, out, err);
     qdc_free(buf);
     return st;
 }

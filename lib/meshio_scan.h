@@ -13,6 +13,7 @@
 
 #include "base.h"
 #include "mesh.h"
+#include "meshio.h"
 
 #include <math.h>
 #include <stdarg.h>
@@ -625,5 +626,86 @@ static inline qdc_status check_for_write(const mesh_t *m, qdc_error *err)
         return qdc_fail(err, QDC_EINVAL, "meshio_write: vertex index out of range");
     return QDC_OK;
 }
+
+/* ------------------------------------------------------------------------ */
+/* Notes and skipped element types                                           */
+
+static inline void note(const meshio_options *o, const char *fmt, ...)
+    __attribute__((format(printf, 2, 3)));
+
+static inline void note(const meshio_options *o, const char *fmt, ...)
+{
+    char msg[256];
+    va_list ap;
+
+    if (!o || !o->log)
+        return;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    o->log(o->log_ctx, 0, msg);
+}
+
+/* Element or cell types a reader skipped, counted for one note at the end. */
+enum { SKIP_TYPES = 128 };
+
+typedef struct {
+    int64_t n[SKIP_TYPES + 1]; /* last slot: types >= SKIP_TYPES or negative */
+} skipped;
+
+static inline void skip_count(skipped *sk, int64_t type, int64_t count)
+{
+    sk->n[type >= 0 && type < SKIP_TYPES ? type : SKIP_TYPES] += count;
+}
+
+/* "skipped 12 elements of type 15, 40 of type 1" through o->log. */
+static inline void skip_note(const meshio_options *o, const skipped *sk,
+                             const char *fmtname, const char *what)
+{
+    char msg[200];
+    size_t n = 0;
+
+    for (int t = 0; t <= SKIP_TYPES && n < sizeof msg - 40; t++) {
+        if (!sk->n[t])
+            continue;
+        n += (size_t)snprintf(msg + n, sizeof msg - n, "%s%lld %s of type %s%d",
+                              n ? ", " : "", (long long)sk->n[t], n ? "" : what,
+                              t == SKIP_TYPES ? ">=" : "", t);
+    }
+    if (n)
+        note(o, "%s: skipped %s (only tetrahedra and triangles are read)", fmtname, msg);
+}
+
+/* Regions from per-element physical tags phys[] (0 = none) and entity tags
+ * ent[]: the physical tags if any is non-zero, else the entity tags if they
+ * differ, else none (NULL). Returns the array to keep (phys or ent) and frees
+ * the other; *out NULL when neither is kept. */
+static inline void pick_regions(int32_t *phys, int32_t *ent, int64_t n, int32_t **out)
+{
+    int any = 0, differ = 0;
+
+    for (int64_t i = 0; i < n && !any; i++)
+        any = phys[i] != 0;
+    for (int64_t i = 1; i < n && !any && !differ; i++)
+        differ = ent[i] != ent[0];
+    *out = any ? phys : differ ? ent : NULL;
+    if (*out != phys)
+        qdc_free(phys);
+    if (*out != ent)
+        qdc_free(ent);
+}
+
+/* ------------------------------------------------------------------------ */
+/* Format modules, dispatched from meshio.c                                  */
+
+qdc_status meshio_gmsh_read(const char *buf, size_t len, const meshio_options *o,
+                            mesh_t **out, qdc_error *err);
+qdc_status meshio_gmsh_write(const mesh_t *m, meshio_format fmt, wbuf *w, qdc_error *err);
+qdc_status meshio_vtk_read(const char *buf, size_t len, const meshio_options *o,
+                           mesh_t **out, qdc_error *err);
+void meshio_vtk_write(const mesh_t *m, int binary, wbuf *w);
+qdc_status meshio_vtu_read(const char *buf, size_t len, const meshio_options *o,
+                           mesh_t **out, qdc_error *err);
+void meshio_vtu_write(const mesh_t *m, int appended, wbuf *w);
 
 #endif
