@@ -6,6 +6,8 @@
 #include "meshio.h"
 #include "opt.h"
 #include "report.h"
+#include "surface.h"
+#include "tetra.h"
 
 #include <signal.h>
 #include <stdio.h>
@@ -80,26 +82,39 @@ static void on_log(void *ctx, int level, const char *msg)
 
 static void optimize_usage(FILE *f)
 {
-    fputs("usage: qdc optimize IN OUT [options]\n"
-          "  --metric mivl|mimr|micn    quality metric (default mivl)\n"
-          "  --boundary lsq|fixed|slide boundary handling (default lsq)\n"
-          "  --feature-angle DEG        slide: sharper boundary edges are features (default 30)\n"
-          "  --harmonic on|off          harmonic guidance, paper Sec. 5.1 (default off)\n"
-          "  --mode safe|literal        safeguarded method or the paper as written (default safe)\n"
-          "  --weights optavg|paper     QDC weights (default optavg)\n"
-          "  --solver auto|cholmod|pcg  linear solver (default auto)\n"
-          "  --finish on|off            worst-tet finishing pass (default on)\n"
-          "  --finish-sweeps N          finishing sweeps (default 4)\n"
-          "  --finish-frac F            share of worst tets visited per sweep (default 0.2)\n"
-          "  --max-iter N               global iterations (default 10)\n"
-          "  --mu X                     damping in normalized units (default 1)\n"
-          "  --mu-scaled on|off         with --harmonic, scale mu by omega_B^2 (default off)\n"
-          "  --time-limit SECONDS       stop with the best mesh so far\n"
-          "  --in-format F, --out-format F   medit|tetgen|qmesh|json (default: by extension)\n"
-          "  --fix FILE                 vertices that must not move (0-based indices)\n"
-          "  --report FILE.json         write the quality/boundary report\n"
-          "  --quiet                    no progress output\n",
-          f);
+    fputs(
+        "usage: qdc optimize IN OUT [options]\n"
+        "  --metric mivl|mimr|micn    quality metric (default mivl)\n"
+        "  --boundary lsq|fixed|slide boundary handling (default lsq)\n"
+        "  --feature-angle DEG        slide: sharper boundary edges are features "
+        "(default 30)\n"
+        "  --harmonic on|off          harmonic guidance, paper Sec. 5.1 (default off)\n"
+        "  --mode safe|literal        safeguarded method or the paper as written "
+        "(default safe)\n"
+        "  --weights optavg|paper     QDC weights (default optavg)\n"
+        "  --solver auto|cholmod|pcg  linear solver (default auto)\n"
+        "  --finish on|off            worst-tet finishing pass (default on)\n"
+        "  --finish-sweeps N          finishing sweeps (default 4)\n"
+        "  --finish-frac F            share of worst tets visited per sweep (default "
+        "0.2)\n"
+        "  --max-iter N               global iterations (default 10)\n"
+        "  --mu X                     damping in normalized units (default 1)\n"
+        "  --mu-scaled on|off         with --harmonic, scale mu by omega_B^2 (default "
+        "off)\n"
+        "  --time-limit SECONDS       stop with the best mesh so far\n"
+        "  --in-format F, --out-format F   "
+        "medit|tetgen|qmesh|json|gmsh|gmsh-bin|gmsh22|\n"
+        "                             vtk|vtk-ascii|vtu|vtu-ascii (default: by "
+        "extension,\n"
+        "                             then content); input also stl|off|obj|poly|smesh\n"
+        "  --format F                 both of the above\n"
+        "  --tetgen-quality Q         surface input: TetGen radius-edge bound (default "
+        "2)\n"
+        "  --max-volume V             surface input: TetGen maximum tet volume\n"
+        "  --fix FILE                 vertices that must not move (0-based indices)\n"
+        "  --report FILE.json         write the quality/boundary report\n"
+        "  --quiet                    no progress output\n",
+        f);
 }
 
 static int on_off(const char *s, int *out)
@@ -147,7 +162,8 @@ static int load_fix(const char *path, mesh_t *m)
                 break;
             v = strtol(p, &end, 10);
             if (end == p || v < 0 || v >= m->nv) {
-                fprintf(stderr, "qdc: %s:%ld: expected a vertex index in [0, %d), got '%.20s'\n",
+                fprintf(stderr,
+                        "qdc: %s:%ld: expected a vertex index in [0, %d), got '%.20s'\n",
                         path, lineno, (int)m->nv, p);
                 fclose(f);
                 return CLI_EINPUT;
@@ -179,6 +195,44 @@ static int write_report(const char *path, const report_t *r)
     return CLI_OK;
 }
 
+/* A mesh, or a closed surface tetrahedralized with TetGen: a surface format
+ * named by --in-format or the extension, else a file no mesh reader claims
+ * whose content looks like a surface. to (NULL: defaults) only applies to
+ * surfaces; giving it for a mesh is an error. */
+static qdc_status load_input(const char *path, meshio_format fin, surface_format sin,
+                             const tetra_options *to, progress_state *ps, mesh_t **m,
+                             qdc_error *err)
+{
+    meshio_options mo = {on_log, ps};
+    char *buf = NULL;
+    size_t len = 0;
+    qdc_status st;
+
+    if (fin == MESHIO_AUTO && sin == SURFACE_AUTO &&
+        meshio_format_from_name(path) == MESHIO_AUTO) {
+        sin = surface_format_from_name(path);
+        if (sin == SURFACE_AUTO && meshio_slurp(path, &buf, &len, err) == QDC_OK &&
+            meshio_sniff(buf, len) == MESHIO_AUTO)
+            sin = surface_sniff(buf, len);
+        qdc_free(buf);
+        buf = NULL;
+    }
+    if (sin == SURFACE_AUTO) {
+        if (to)
+            return qdc_fail(
+                err, QDC_EINVAL,
+                "--tetgen-quality and --max-volume apply to surface input only");
+        return meshio_load_ex(path, fin, &mo, m, err);
+    }
+    st = meshio_slurp(path, &buf, &len, err);
+    if (st == QDC_OK)
+        st = tetra_from_buffer(buf, len, sin, to, m, err);
+    qdc_free(buf);
+    if (st == QDC_OK)
+        on_log(ps, 0, "tetrahedralized the surface with TetGen");
+    return st;
+}
+
 int cli_optimize(int argc, char **argv)
 {
     opt_options o;
@@ -186,6 +240,9 @@ int cli_optimize(int argc, char **argv)
     progress_state ps = {0, 0, 0};
     const char *in = NULL, *out = NULL, *report_path = NULL, *fix_path = NULL;
     meshio_format fin = MESHIO_AUTO, fout = MESHIO_AUTO;
+    surface_format sin = SURFACE_AUTO;
+    tetra_options to;
+    int tetgen_opts = 0;
     mesh_t *m = NULL, *orig = NULL;
     qdc_error err;
     qdc_status st;
@@ -193,6 +250,7 @@ int cli_optimize(int argc, char **argv)
     struct sigaction sa;
 
     opt_defaults(&o);
+    tetra_defaults(&to);
     qdc_error_clear(&err);
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
@@ -251,9 +309,23 @@ int cli_optimize(int argc, char **argv)
                     o.mu = x;
                 else
                     o.time_limit = x;
-            } else if (!strcmp(a, "--in-format"))
-                bad = (fin = meshio_format_from_name(v)) == MESHIO_AUTO;
-            else if (!strcmp(a, "--out-format"))
+            } else if (!strcmp(a, "--tetgen-quality") || !strcmp(a, "--max-volume")) {
+                char *end;
+                double x = strtod(v, &end);
+                bad = *end || !(x >= 0) || x > 1e300 ||
+                      (!strcmp(a, "--tetgen-quality") && x > 0 && x < 1);
+                if (!strcmp(a, "--tetgen-quality"))
+                    to.quality = x;
+                else
+                    to.max_volume = x;
+                tetgen_opts = 1;
+            } else if (!strcmp(a, "--in-format") || !strcmp(a, "--format")) {
+                fin = meshio_format_from_name(v);
+                sin = fin == MESHIO_AUTO ? surface_format_from_name(v) : SURFACE_AUTO;
+                bad = fin == MESHIO_AUTO && sin == SURFACE_AUTO;
+                if (!strcmp(a, "--format") && !bad)
+                    bad = (fout = fin) == MESHIO_AUTO;
+            } else if (!strcmp(a, "--out-format"))
                 bad = (fout = meshio_format_from_name(v)) == MESHIO_AUTO;
             else if (!strcmp(a, "--report"))
                 report_path = v;
@@ -291,7 +363,7 @@ int cli_optimize(int argc, char **argv)
     sigaction(SIGINT, &sa, NULL);
     sigaction(SIGTERM, &sa, NULL);
 
-    st = meshio_load(in, fin, &m, &err);
+    st = load_input(in, fin, sin, tetgen_opts ? &to : NULL, &ps, &m, &err);
     if (st == QDC_OK)
         st = mesh_validate(m, NULL, &err);
     if (st != QDC_OK) {
@@ -326,12 +398,14 @@ int cli_optimize(int argc, char **argv)
     }
     if (!ps.quiet)
         fprintf(stderr,
-                "qdc: %s -> %s: mean ratio %.4f -> %.4f, min %+.4f -> %+.4f, inverted %d -> %d, "
+                "qdc: %s -> %s: mean ratio %.4f -> %.4f, min %+.4f -> %+.4f, inverted %d "
+                "-> %d, "
                 "dihedral %.2f..%.2f -> %.2f..%.2f (%s, %d iterations, %s, %.2fs)\n",
                 in, out, res.before.q_mean, res.after.q_mean, res.before.q_min,
                 res.after.q_min, (int)res.before.n_inverted, (int)res.after.n_inverted,
-                res.before.dih_min, res.before.dih_max, res.after.dih_min, res.after.dih_max,
-                res.stop_reason, res.iterations, opt_solver_name(res.solver), res.t_total);
+                res.before.dih_min, res.before.dih_max, res.after.dih_min,
+                res.after.dih_max, res.stop_reason, res.iterations,
+                opt_solver_name(res.solver), res.t_total);
     if (!ps.quiet)
         fprintf(stderr,
                 "qdc: seconds: setup %.2f, weights %.2f, assembly %.2f, solve %.2f, "
@@ -376,7 +450,8 @@ int cli_quality(int argc, char **argv)
     for (int i = 1; i < argc; i++) {
         if (!strcmp(argv[i], "--json"))
             json = 1;
-        else if ((!strcmp(argv[i], "--ref") || !strcmp(argv[i], "--orig")) && i + 1 < argc)
+        else if ((!strcmp(argv[i], "--ref") || !strcmp(argv[i], "--orig")) &&
+                 i + 1 < argc)
             ref = argv[++i];
         else if (!strcmp(argv[i], "-h") || !strcmp(argv[i], "--help")) {
             puts("usage: qdc quality IN [--ref ORIG] [--json]");
@@ -422,17 +497,20 @@ int cli_quality(int argc, char **argv)
         printf("%s: %d vertices, %d tets, %d inverted, %d degenerate\n", in, (int)q.nv,
                (int)q.nt, (int)q.n_inverted, (int)q.n_degenerate);
         printf("mean ratio: mean %.4f std %.4f min %+.4f\n", q.q_mean, q.q_std, q.q_min);
-        printf("dihedral: min %.2f max %.2f deg; tets with min < 5/15/30/40: %d/%d/%d/%d; "
-               "max > 175/165/150/140: %d/%d/%d/%d\n",
-               q.dih_min, q.dih_max, (int)q.n_dmin_lt[0], (int)q.n_dmin_lt[1],
-               (int)q.n_dmin_lt[2], (int)q.n_dmin_lt[3], (int)q.n_dmax_gt[0],
-               (int)q.n_dmax_gt[1], (int)q.n_dmax_gt[2], (int)q.n_dmax_gt[3]);
-        printf("volume-length: mean %.4f min %+.4f; condition number: mean %.4f max %.4g\n",
-               q.vl_mean, q.vl_min, q.cn_mean, q.cn_max);
+        printf(
+            "dihedral: min %.2f max %.2f deg; tets with min < 5/15/30/40: %d/%d/%d/%d; "
+            "max > 175/165/150/140: %d/%d/%d/%d\n",
+            q.dih_min, q.dih_max, (int)q.n_dmin_lt[0], (int)q.n_dmin_lt[1],
+            (int)q.n_dmin_lt[2], (int)q.n_dmin_lt[3], (int)q.n_dmax_gt[0],
+            (int)q.n_dmax_gt[1], (int)q.n_dmax_gt[2], (int)q.n_dmax_gt[3]);
+        printf(
+            "volume-length: mean %.4f min %+.4f; condition number: mean %.4f max %.4g\n",
+            q.vl_mean, q.vl_min, q.cn_mean, q.cn_max);
         if (ref)
-            printf("boundary error vs %s: Hausdorff %.6g (%.3g%% of diagonal), mean %.3g, "
-                   "RMS %.3g\n",
-                   ref, be.hausdorff, 100 * be.hausdorff_rel, be.mean, be.rms);
+            printf(
+                "boundary error vs %s: Hausdorff %.6g (%.3g%% of diagonal), mean %.3g, "
+                "RMS %.3g\n",
+                ref, be.hausdorff, 100 * be.hausdorff_rel, be.mean, be.rms);
     }
 out:
     mesh_free(m);
