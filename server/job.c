@@ -18,6 +18,8 @@
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+#include <sys/resource.h>
+#include <sys/syscall.h>
 #include <unistd.h>
 
 typedef struct worker {
@@ -457,6 +459,11 @@ static void *worker_main(void *arg)
     job_rec j;
     int found;
 
+    /* Below the HTTP thread: optimizing is throughput work, answering is
+     * latency work. Linux nice values are per thread, and the OpenMP threads
+     * a job starts inherit this one. */
+    if (setpriority(PRIO_PROCESS, (id_t)syscall(SYS_gettid), 10))
+        fprintf(stderr, "qdcd: %s: cannot lower its priority\n", w->name);
     for (;;) {
         pthread_mutex_lock(&p->lock);
         while (!p->stopping && !p->pending) {
