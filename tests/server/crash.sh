@@ -84,7 +84,15 @@ if [ "$(jf "$TMP/job3" .state)" = failed ] && jf "$TMP/job3" .error.type | grep 
 else
     fail "attempts exhausted" "$(head -c 300 "$TMP/job3") result $rcode"
 fi
-# the earlier jobs survived both crashes
+# the earlier jobs survived both crashes, progress records included
+n1=$(wc -l < "$TMP/seqs.$id")
+req GET "/v1/jobs/$id/progress?after=0" "$TMP/pr" > /dev/null
+if [ "$(jf "$TMP/pr" .count)" = $((n1 - 1)) ] && [ "$(jq -r '.records[0].seq' "$TMP/pr")" = 1 ] &&
+    [ "$(jf "$TMP/pr" .done)" = true ]; then
+    pass "after a restart, progress?after=0 of a finished job still returns its $((n1 - 1)) later records"
+else
+    fail "progress after restart" "$(head -c 300 "$TMP/pr")"
+fi
 req GET "/v1/jobs/$id" "$TMP/job" > /dev/null
 [ "$(jf "$TMP/job" .state)" = succeeded ] && [ "$(req GET "/v1/jobs/$id/result" "$TMP/r.q")" = 200 ] &&
     pass "finished jobs and results survive restarts" || fail "finished job after restart" "$(head -c 200 "$TMP/job")"
