@@ -484,7 +484,8 @@ static void remote_usage(FILE *f) {
         "  the job id is printed on stdout. -o or --report imply --wait.\n"
         "  --idempotency-key K   key of this submission (default: a random one; reuse\n"
         "                        it to make a re-run return the same job)\n"
-        "  --in-format F, --out-format F   medit|tetgen|qmesh|json (default: extension)\n"
+        "  --in-format F, --out-format F   a format name, as in qdc optimize (default:\n"
+        "                        from the extension)\n"
         "  Optimizer options are those of `qdc optimize` (--max-iter 20,\n"
         "  --boundary fixed, ...): --some-name V is sent as some_name=V.\n"
         "Exit codes: 0 ok, 1 usage, 2 bad input file, 4 output not written,\n"
@@ -711,6 +712,17 @@ static meshio_format format_of(const char *path, const char *forced) {
     return meshio_format_from_name(forced ? forced : path);
 }
 
+/* Checked before anything is sent, so a typo does not cost a job. */
+static int out_format_ok(const args *a) {
+    if (!a->out || format_of(a->out, a->out_format) != MESHIO_AUTO)
+        return 1;
+    fprintf(stderr,
+            "qdc: %s: not a mesh format qdc writes (use its extension: .mesh, .node, "
+            ".qmesh, .json, ..., or --out-format)\n",
+            a->out);
+    return 0;
+}
+
 /* Writes len bytes to path through a temporary file and a rename; "-" is stdout. */
 static int write_file(const char *path, const char *buf, size_t len) {
     char tmp[4200];
@@ -862,13 +874,8 @@ static int cmd_submit(args *a) {
     qdc_error_clear(&err);
     if (a->out || a->report)
         a->wait = 1;
-    if (a->out && format_of(a->out, a->out_format) == MESHIO_AUTO) {
-        fprintf(stderr,
-                "qdc: %s: unknown output format (use .mesh, .node, .qmesh, .json or "
-                "--out-format)\n",
-                a->out);
+    if (!out_format_ok(a))
         return CLI_EUSAGE;
-    }
     st = meshio_load(
         in, a->in_format ? meshio_format_from_name(a->in_format) : MESHIO_AUTO, &m, &err);
     if (st != QDC_OK) {
@@ -982,10 +989,8 @@ static int cmd_fetch(args *a) {
         fprintf(stderr, "qdc: fetch: give -o OUT and/or --report R.json\n");
         return CLI_EUSAGE;
     }
-    if (a->out && format_of(a->out, a->out_format) == MESHIO_AUTO) {
-        fprintf(stderr, "qdc: %s: unknown output format\n", a->out);
+    if (!out_format_ok(a))
         return CLI_EUSAGE;
-    }
     if (a->wait) {
         rc = await_job(&a->rm, id, &v);
         if (rc >= 0)

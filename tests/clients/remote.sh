@@ -136,7 +136,7 @@ printf 'MeshVersionFormatted 1\nDimension 3\nVertices\n2\n0 0 0 0\n' > "$TMP/bad
 rc=$?
 [ $rc = 2 ] && grep -q "bad.mesh:" "$TMP/e.err" && pass "malformed local file: exit 2 before any upload ($(cat "$TMP/e.err"))" ||
     fail "exit 2" "rc $rc $(cat "$TMP/e.err")"
-"$QDC" submit "$MESH" -o "$TMP/x.vtk" 2> /dev/null
+"$QDC" submit "$MESH" -o "$TMP/x.xyz" 2> /dev/null
 rc1=$?
 "$QDC" fetch 2> /dev/null
 rc2=$?
