@@ -14,6 +14,7 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <limits.h>
+#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -481,7 +482,9 @@ static enum MHD_Result idem_replay(struct MHD_Connection *c, req *r, const job_r
     return reply_job(c, r, 202, old, h);
 }
 
-static enum MHD_Result finish_upload(struct MHD_Connection *c, req *r)
+/* Runs on the intake thread; the connection is suspended meanwhile, and
+ * MHD_queue_response is allowed on a suspended connection. */
+static enum MHD_Result process_upload(struct MHD_Connection *c, req *r)
 {
     qdcd *q = r->q;
     char d[400], extra[200];
@@ -495,27 +498,6 @@ static enum MHD_Result finish_upload(struct MHD_Connection *c, req *r)
     int dup = 0;
 
     qdc_error_clear(&e);
-    if (r->too_big) {
-        int json = r->fmt == MESHIO_JSON && q->cfg.max_json < q->cfg.max_body;
-        int64_t lim = json ? q->cfg.max_json : q->cfg.max_body;
-        if (json)
-            snprintf(d, sizeof d,
-                     "JSON mesh bodies are limited to %lld bytes; send larger meshes as "
-                     "%s (proto/mesh-binary.md)",
-                     (long long)lim, MEDIA_QMESH);
-        else
-            snprintf(d, sizeof d, "request bodies are limited to %lld bytes", (long long)lim);
-        snprintf(extra, sizeof extra, "\"max_bytes\":%lld%s", (long long)lim,
-                 json ? ",\"use\":\"" MEDIA_QMESH "\"" : "");
-        return http_problem(c, r, 413, "too-big", "request body too large", d, extra, NULL);
-    }
-    if (r->io_err || r->fd < 0)
-        return http_problem(c, r, 507, "io", "insufficient storage",
-                            "the upload could not be stored", NULL, NULL);
-    if (r->body_len == 0)
-        return http_problem(c, r, 400, "empty-body", "empty request body",
-                            "POST /v1/jobs needs a mesh in the body", NULL, NULL);
-
     memset(&j, 0, sizeof j);
     if (r->hashing) {
         uint8_t dig[32];
@@ -538,6 +520,7 @@ static enum MHD_Result finish_upload(struct MHD_Connection *c, req *r)
                                 NULL, NULL);
         }
     }
+    double t_parse = mono_now();
     st = meshio_read(buf, (size_t)r->body_len, r->fmt, &m, &e);
     munmap(buf, (size_t)r->body_len);
     if (st != QDC_OK) {
@@ -554,6 +537,7 @@ static enum MHD_Result finish_upload(struct MHD_Connection *c, req *r)
         return http_problem(c, r, 413, "too-big", "mesh exceeds server limits", d, extra,
                             NULL);
     }
+    double t_valid = mono_now();
     st = mesh_validate(m, &info, &e);
     if (st != QDC_OK) {
         mesh_free(m);
@@ -571,6 +555,7 @@ static enum MHD_Result finish_upload(struct MHD_Connection *c, req *r)
     j.created = wall_now();
     mesh_free(m);
 
+    double t_commit = mono_now();
     if (commit_input(r, j.id, j.format))
         return http_problem(c, r, 507, "io", "insufficient storage",
                             "the mesh could not be stored durably", NULL, NULL);
@@ -588,8 +573,11 @@ static enum MHD_Result finish_upload(struct MHD_Connection *c, req *r)
     atomic_fetch_add(&q->m.submitted, 1);
     job_pool_notify(q->pool);
     if (q->cfg.verbose)
-        fprintf(stderr, "qdcd: job %s queued (%s, %lld tets)\n", j.id, j.format,
-                (long long)j.nt);
+        fprintf(stderr,
+                "qdcd: job %s queued (%s, %lld tets; body %.3f s after the headers, "
+                "parse %.3f s, validate %.3f s, commit %.3f s)\n",
+                j.id, j.format, (long long)j.nt, t_parse - r->t0, t_valid - t_parse,
+                t_commit - t_valid, mono_now() - t_commit);
     char loc[80];
     snprintf(loc, sizeof loc, "/v1/jobs/%s", j.id);
     const char *const h[] = {MHD_HTTP_HEADER_LOCATION, loc, NULL};
@@ -598,6 +586,109 @@ static enum MHD_Result finish_upload(struct MHD_Connection *c, req *r)
         now = j;
     ret = reply_job(c, r, 202, &now, h);
     return ret;
+}
+
+static struct {
+    pthread_mutex_t lock;
+    pthread_cond_t cond;
+    req *head, *tail;
+    int stop, running;
+    pthread_t th;
+} intake = {PTHREAD_MUTEX_INITIALIZER, PTHREAD_COND_INITIALIZER, NULL, NULL, 0, 0, 0};
+
+static void *intake_main(void *arg)
+{
+    (void)arg;
+    pthread_mutex_lock(&intake.lock);
+    for (;;) {
+        while (!intake.head && !intake.stop)
+            pthread_cond_wait(&intake.cond, &intake.lock);
+        req *r = intake.head;
+        if (!r)
+            break; /* stopping and drained */
+        intake.head = r->intake_next;
+        if (!intake.head)
+            intake.tail = NULL;
+        pthread_mutex_unlock(&intake.lock);
+        process_upload(r->conn, r);
+        r->intake_done = 1;
+        MHD_resume_connection(r->conn);
+        pthread_mutex_lock(&intake.lock);
+    }
+    pthread_mutex_unlock(&intake.lock);
+    return NULL;
+}
+
+int api_start(qdcd *q)
+{
+    (void)q;
+    if (pthread_create(&intake.th, NULL, intake_main, NULL))
+        return -1;
+    intake.running = 1;
+    return 0;
+}
+
+void api_stop(void)
+{
+    if (!intake.running)
+        return;
+    pthread_mutex_lock(&intake.lock);
+    intake.stop = 1;
+    pthread_cond_signal(&intake.cond);
+    pthread_mutex_unlock(&intake.lock);
+    pthread_join(intake.th, NULL);
+    intake.running = 0;
+}
+
+/* Body complete (HTTP thread): refuse what needs no parsing, hand the rest
+ * to the intake thread with the connection suspended. */
+static enum MHD_Result finish_upload(struct MHD_Connection *c, req *r)
+{
+    qdcd *q = r->q;
+    char d[400], extra[200];
+
+    if (r->intake_done) /* resumed without a reply: queueing it failed */
+        return MHD_NO;
+    if (r->too_big) {
+        int json = r->fmt == MESHIO_JSON && q->cfg.max_json < q->cfg.max_body;
+        int64_t lim = json ? q->cfg.max_json : q->cfg.max_body;
+        if (json)
+            snprintf(d, sizeof d,
+                     "JSON mesh bodies are limited to %lld bytes; send larger meshes as "
+                     "%s (proto/mesh-binary.md)",
+                     (long long)lim, MEDIA_QMESH);
+        else
+            snprintf(d, sizeof d, "request bodies are limited to %lld bytes", (long long)lim);
+        snprintf(extra, sizeof extra, "\"max_bytes\":%lld%s", (long long)lim,
+                 json ? ",\"use\":\"" MEDIA_QMESH "\"" : "");
+        return http_problem(c, r, 413, "too-big", "request body too large", d, extra, NULL);
+    }
+    if (r->io_err || r->fd < 0)
+        return http_problem(c, r, 507, "io", "insufficient storage",
+                            "the upload could not be stored", NULL, NULL);
+    if (r->body_len == 0)
+        return http_problem(c, r, 400, "empty-body", "empty request body",
+                            "POST /v1/jobs needs a mesh in the body", NULL, NULL);
+
+    pthread_mutex_lock(&intake.lock);
+    if (intake.stop) {
+        pthread_mutex_unlock(&intake.lock);
+        static const char *const h[] = {MHD_HTTP_HEADER_RETRY_AFTER, "5", NULL};
+        return http_problem(c, r, 503, "shutting-down", "shutting down",
+                            "the server is stopping; retry later", NULL, h);
+    }
+    r->intake_next = NULL;
+    if (intake.tail)
+        intake.tail->intake_next = r;
+    else
+        intake.head = r;
+    intake.tail = r;
+    /* Suspended before the intake thread can see it, so its resume always
+     * follows this suspend. */
+    MHD_suspend_connection(c);
+    pthread_cond_signal(&intake.cond);
+    pthread_mutex_unlock(&intake.lock);
+    return MHD_YES;
 }
 
 /* ----------------------------------------------------------------- progress -- */

@@ -16,4 +16,10 @@ enum MHD_Result api_dispatch(struct MHD_Connection *c, req *r, const char *url,
 /* Release what the request still holds (temp upload file). */
 void api_req_done(req *r);
 
+/* The intake thread: parses, validates and commits complete uploads while
+ * their connections are suspended, so the HTTP thread never waits on a parse
+ * or an fsync. api_stop finishes what is queued (answering each) first. */
+int api_start(qdcd *q);
+void api_stop(void);
+
 #endif

@@ -34,6 +34,8 @@ typedef struct req {
     int sniff; /* format from the content (text/plain, octet-stream, none) */
     char idem[129];
     char options[1024];
+    struct req *intake_next; /* queued for the intake thread */
+    int intake_done;         /* the intake thread has handled this upload */
     /* long-poll and SSE */
     poll_waiter w;
     double deadline;

@@ -1,6 +1,7 @@
 /* main.c - qdcd: command line, start-up (data directory, store recovery,
  * workers, HTTP) and graceful shutdown on SIGTERM/SIGINT. */
 #define _GNU_SOURCE
+#include "api.h"
 #include "http.h"
 #include "job.h"
 #include "server.h"
@@ -371,6 +372,10 @@ int main(int argc, char **argv)
         fprintf(stderr, "qdcd: cannot start workers\n");
         goto out;
     }
+    if (api_start(q)) {
+        fprintf(stderr, "qdcd: cannot start the intake thread\n");
+        goto out;
+    }
     if (http_start(q, &err) != QDC_OK) {
         fprintf(stderr, "qdcd: %s\n", err.msg);
         goto out;
@@ -400,6 +405,7 @@ int main(int argc, char **argv)
     fprintf(stderr, "qdcd: shutting down\n");
     http_quiesce(q);
     poll_shutdown(q->hub);
+    api_stop(); /* uploads already received are answered (202 or 4xx) */
     job_pool_stop(q->pool, q->cfg.grace);
     q->pool = NULL;
     /* Let the answers of resumed long-polls and streams go out. */
@@ -415,6 +421,7 @@ int main(int argc, char **argv)
 out:
     if (q->hub)
         poll_shutdown(q->hub);
+    api_stop();
     http_stop(q);
     job_pool_stop(q->pool, 0);
     poll_free(q->hub);
