@@ -10,6 +10,7 @@ and one Markdown table to stdout and to the results file.
 import argparse
 import datetime
 import glob
+import hashlib
 import gzip
 import json
 import math
@@ -29,6 +30,7 @@ ROOT = os.path.dirname(HERE)
 OUT = os.path.join(HERE, 'out')
 PY = '/usr/bin/python3'
 QDC = os.path.join(ROOT, 'build', 'rel', 'qdc')
+QDC_RUN = os.path.join(OUT, 'bin', 'qdc')  # snapshot: others may rebuild QDC meanwhile
 SHARED = '/work/shared'
 QUALITY = os.path.join(SHARED, 'tools', 'quality.py')
 DEV = os.path.join(SHARED, 'meshes', 'dev')
@@ -59,7 +61,7 @@ def log(*a):
 
 def command(tool, src, dst, base):
     if tool.startswith('qdc'):
-        c = [QDC, 'optimize', src, dst, '--report', base + '.report.json', '--quiet']
+        c = [QDC_RUN, 'optimize', src, dst, '--report', base + '.report.json', '--quiet']
         return c + (['--boundary', 'fixed'] if tool == 'qdc-fixed' else [])
     method = {'gmsh-relocate3d': 'Relocate3D', 'gmsh-default': ''}[tool]
     return [PY, os.path.join(HERE, 'gmsh_opt.py'), src, dst, method, base + '.gmsh.json']
@@ -122,23 +124,52 @@ def evaluate(path, orig, dst):
 
 
 def renumbering(src, dst):
-    """Counts and tets equal but quality.py says the connectivity differs:
-    look for vertices that kept their exact position under another index
-    (i.e. the writer renumbered the nodes) and, if every vertex can be matched
-    that way, compare the connectivity through that map."""
+    """Counts equal but quality.py says the tets differ: find out whether the
+    writer renumbered the vertices (Gmsh writes the nodes of the boundary
+    Triangles first). Vertices that did not move are matched by position
+    (within 1e-12 of the bbox diagonal, Gmsh writes ~16 digits); the moved ones
+    are then found through the tets: an output tet with three matched vertices
+    names an input face, whose opposite vertex (the one nearer the output
+    position, when the face has two tets) is the fourth. The map is accepted
+    only if it is a bijection giving exactly the input's tets."""
+    from scipy.spatial import cKDTree
     quality = quality_module()
     p0, t0 = quality.compact(*quality.read_mesh(src))
     p1, t1 = quality.compact(*quality.read_mesh(dst))
-    index = {tuple(p): i for i, p in enumerate(p0)}
-    m = np.array([index.get(tuple(p), -1) for p in p1])
-    found = m >= 0
-    moved_index = int((found & (m != np.arange(len(p1)))).sum())
-    if moved_index == 0:
-        return 'changed'
-    if found.all():
-        same = np.array_equal(quality._tet_hash(m[t1]), quality._tet_hash(t0))
-        return 'same, renumbered' if same else 'changed, renumbered'
-    return 'renumbered (%d of %d vertices matched)' % (int(found.sum()), len(p1))
+    tol = 1e-12 * float(np.linalg.norm(p0.max(0) - p0.min(0)))
+    d, near = cKDTree(p0).query(p1)
+    m = np.where(d <= tol, near, -1)
+    if not (m[m >= 0] != np.nonzero(m >= 0)[0]).any():
+        return 'changed'  # the unmoved vertices kept their numbers
+    opposite = {}
+    for k in range(4):
+        for t, face in zip(t0[:, k], np.sort(np.delete(t0, k, axis=1), axis=1)):
+            opposite.setdefault(tuple(face), []).append(t)
+    used = np.zeros(len(p0), bool)
+    used[m[m >= 0]] = True
+    guess = 0
+    for _ in range(1000):
+        progress = 0
+        for ti in np.nonzero((m[t1] < 0).sum(axis=1) == 1)[0]:
+            left = np.nonzero(m[t1[ti]] < 0)[0]
+            if len(left) != 1:
+                continue  # mapped meanwhile by another tet
+            u = t1[ti, left[0]]
+            cand = [c for c in opposite.get(tuple(sorted(m[np.delete(t1[ti], left[0])])), [])
+                    if not used[c]]
+            if len(cand) == 1 or (cand and guess):
+                m[u] = min(cand, key=lambda c: np.linalg.norm(p0[c] - p1[u]))
+                used[m[u]] = True
+                progress += 1
+        if not progress:
+            if guess or (m >= 0).all():
+                break
+            guess = 1  # only ambiguous faces left: take the nearer candidate
+        else:
+            guess = 0
+    ok = ((m >= 0).all() and len(np.unique(m)) == len(m) and
+          np.array_equal(quality._tet_hash(m[t1]), quality._tet_hash(t0)))
+    return 'same, renumbered' if ok else 'changed, renumbered'
 
 
 def quality_module():
@@ -260,6 +291,21 @@ def notes(row, q_in):
 
 # ------------------------------------------------------------------- table --
 
+def failure(r):
+    """Status of a failed row with the tool's last error line, if any."""
+    msg = ''
+    try:
+        with open(os.path.join(OUT, 'runs', r['mesh'], r['tool'] + '.time.json.log'),
+                  errors='replace') as f:
+            for line in f:
+                if re.match(r'\s*(Exception|Error|error|qdc:)', line):
+                    msg = line.strip()
+    except OSError:
+        pass
+    msg = re.sub(r'^Exception:\s*', 'Gmsh: ', msg).replace('|', '/')
+    return r['status'] + (' (%s)' % msg[:120] if msg else '')
+
+
 def fnum(x, fmt):
     return '—' if x is None else fmt % x
 
@@ -287,7 +333,7 @@ def table(rows, inputs, meshes):
                     ratio_opt = r['opt_seconds'] / peer['opt_seconds']
             note = list(r.get('notes', []))
             if not ok:
-                note.insert(0, r['status'])
+                note.insert(0, failure(r))
             cells = [name, LABEL[r['tool']], fnum(q.get('n_tets'), '%d'),
                      fnum(q.get('n_verts'), '%d'), fnum(r.get('iterations'), '%d')]
             cells += [fnum(s.get(p), '%.2f') for p in PHASES]
@@ -340,6 +386,14 @@ def summary(rows):
     return '\n'.join(lines)
 
 
+def snapshot_qdc():
+    """Copy build/rel/qdc so that every qdc row of this run uses one binary."""
+    os.makedirs(os.path.dirname(QDC_RUN), exist_ok=True)
+    shutil.copy2(QDC, QDC_RUN + '.tmp')
+    os.replace(QDC_RUN + '.tmp', QDC_RUN)
+    return os.path.getmtime(QDC_RUN)
+
+
 def machine_info(cmdline, up0, qdc_mtime0):
     cpu = '?'
     with open('/proc/cpuinfo') as f:
@@ -350,15 +404,15 @@ def machine_info(cmdline, up0, qdc_mtime0):
     git = lambda *c: subprocess.run(['git', '-C', ROOT] + list(c), capture_output=True,
                                     text=True).stdout.strip()
     dirty = git('status', '--porcelain', '--', 'lib', 'clients', 'server', 'Makefile')
-    up1 = subprocess.run(['uptime'], capture_output=True, text=True).stdout.strip()
     return {'date': datetime.datetime.now().astimezone().isoformat(timespec='seconds'),
             'command': cmdline, 'nproc': os.cpu_count(), 'cpu': cpu,
-            'kernel': platform.release(), 'uptime_start': up0, 'uptime_end': up1,
+            'kernel': platform.release(), 'uptime_start': up0,
             'qdc_commit': git('rev-parse', '--short', 'HEAD'),
             'qdc_tree_dirty': bool(dirty),
             'qdc_binary_mtime': datetime.datetime.fromtimestamp(
                 qdc_mtime0).isoformat(timespec='seconds'),
-            'qdc_binary_rebuilt_during_run': os.path.getmtime(QDC) != qdc_mtime0}
+            'qdc_binary_sha256': hashlib.sha256(open(QDC_RUN, 'rb').read()).hexdigest()
+            if os.path.exists(QDC_RUN) else None}
 
 
 def write_results(path, info, tab, summ, rows):
@@ -372,14 +426,12 @@ def write_results(path, info, tab, summ, rows):
         f.write('- command: `%s`\n' % info['command'])
         f.write('- machine: %s, nproc = %d, Linux %s\n' % (info['cpu'], info['nproc'],
                                                           info['kernel']))
-        f.write('- qdc: commit %s%s, binary built %s (`build/rel/qdc`, default '
-                'OpenMP threads)\n' % (info['qdc_commit'],
+        f.write('- qdc: commit %s%s, binary built %s (`build/rel/qdc` copied to '
+                '`bench/out/bin/qdc` at the start, sha256 %s…), default OpenMP threads\n' % (info['qdc_commit'],
                                        ' + uncommitted changes in the working tree'
                                        if info['qdc_tree_dirty'] else '',
-                                       info['qdc_binary_mtime']))
-        if info['qdc_binary_rebuilt_during_run']:
-            f.write('- **warning: build/rel/qdc was rebuilt while the bench ran** (shared '
-                    'working tree); later qdc rows may come from a newer binary\n')
+                                       info['qdc_binary_mtime'],
+                                       (info['qdc_binary_sha256'] or '?')[:12]))
         f.write('- peers: Gmsh %s (Debian python3-gmsh), `General.NumThreads` default\n' % gv)
         f.write('- quality: `/usr/bin/python3 %s OUT --orig IN --samples %d` for every '
                 'row\n' % (QUALITY, SAMPLES))
@@ -415,7 +467,11 @@ def main():
     tools = a.tools or [t for t in TOOLS if not (a.quick and t == 'gmsh-default')]
     if 'qdc' in ''.join(tools) and not os.access(QDC, os.X_OK):
         sys.exit('bench: %s missing; run `make all`' % QDC)
-    qdc_mtime0 = os.path.getmtime(QDC) if os.path.exists(QDC) else 0
+    if a.resume and os.path.exists(QDC_RUN):
+        qdc_mtime0 = os.path.getmtime(QDC_RUN)  # keep the binary the reused rows came from
+    else:
+        qdc_mtime0 = snapshot_qdc() if os.path.exists(QDC) else 0
+    info = machine_info(a.cmdline or ' '.join(sys.argv), up0, qdc_mtime0)
     meshes = prepare_meshes(a)
     if not meshes:
         sys.exit('bench: no mesh selected')
@@ -439,7 +495,8 @@ def main():
                 tool, row['status'], row['wall'], row['cpu'], row['maxrss_mb'],
                 q_in['eta_mean'], fnum(q.get('eta_mean'), '%.3f'),
                 fnum(q.get('dihedral_min'), '%.2f')))
-    info = machine_info(a.cmdline or ' '.join(sys.argv), up0, qdc_mtime0)
+    info['uptime_end'] = subprocess.run(['uptime'], capture_output=True,
+                                        text=True).stdout.strip()
     tab, summ = table(rows, inputs, meshes), summary(rows)
     with open(os.path.join(OUT, 'results.json'), 'w') as f:
         json.dump({'info': info, 'inputs': inputs, 'rows': rows}, f, indent=1)
