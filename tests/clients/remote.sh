@@ -123,6 +123,24 @@ else
     fail "cancel" "rc $rc/$rcw/$rcf: $(cat "$TMP/cancel.out" "$TMP/cw.err" "$TMP/cf.err")"
 fi
 
+# 7b. Ctrl-C while waiting: exit 5, the job goes on on the server
+"$QDC" submit "$BIG" --max-iter 1000 --wait -o "$TMP/int.mesh" > "$TMP/int.id" 2> "$TMP/int.err" &
+QP=$!
+i=0
+while [ $i -lt 100 ] && [ ! -s "$TMP/int.id" ]; do sleep 0.1; i=$((i + 1)); done
+sleep 0.5
+kill -INT $QP
+wait $QP
+rc=$?
+id=$(cat "$TMP/int.id")
+st=$("$QDC" status "$id" 2> /dev/null | awk '{ print $2 }')
+if [ $rc = 5 ] && grep -q "job $id goes on on the server" "$TMP/int.err" && { [ "$st" = running ] || [ "$st" = queued ]; }; then
+    pass "SIGINT during submit --wait: exit 5 at once, says the job ($st) goes on"
+else
+    fail "SIGINT" "rc $rc state '$st': $(tail -2 "$TMP/int.err")"
+fi
+"$QDC" cancel "$id" > /dev/null 2>&1
+
 # 8. exit codes
 "$QDC" submit "$MESH" --metric nope -q 2> "$TMP/e.err"
 rc=$?
