@@ -1122,16 +1122,18 @@ static enum MHD_Result do_delete(struct MHD_Connection *c, req *r)
 
     if (!load_job(c, r, &j, &ret))
         return ret;
+    int running_here = 0;
     if (j.state == JOB_RUNNING) {
         q->store->ops->cancel(q->store, j.id, &now_done);
-        job_pool_cancel(q->pool, j.id);
+        running_here = job_pool_cancel(q->pool, j.id);
     }
     if (q->store->ops->remove(q->store, j.id) != QDC_OK)
         return http_problem(c, r, 500, "store", "job store error",
                             "the job could not be deleted", NULL, NULL);
     poll_drop(q->hub, j.id);
-    /* A running job's worker removes the directory when it stops. */
-    if (j.state != JOB_RUNNING) {
+    /* A running job's worker removes the directory when it stops (and also
+     * when it finished just before the row went away). */
+    if (!running_here) {
         job_path(q, j.id, NULL, dir, sizeof dir);
         dir_remove(dir);
     }

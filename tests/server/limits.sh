@@ -19,7 +19,11 @@ QM=application/vnd.qdc.mesh
 } > "$TMP/tokens"
 A="Authorization: Bearer alpha-secret"
 B="Authorization: Bearer beta-secret"
-grep -q alpha "$TMP/tokens" && fail "tokens file" "holds a plain token" || pass "tokens file holds only hashes"
+if ! grep -q alpha "$TMP/tokens" && grep -q "^$(printf %s alpha-secret | sha256sum | cut -c1-64)$" "$TMP/tokens"; then
+    pass "tokens file holds only hashes (--hash-token = sha256sum)"
+else
+    fail "tokens file" "$(cat "$TMP/tokens")"
+fi
 
 start_qdcd "$TMP/d" --workers 1 --max-queued 2 --retention 4 --shutdown-grace 1 --tokens "$TMP/tokens" ||
     { fail "start" "$(tail -3 "$TMP/d.log")"; exit 1; }
@@ -123,6 +127,34 @@ req GET "/v1/jobs/$id2" "$TMP/g3" -H "$A" > /dev/null
 cd_=$(req DELETE "/v1/jobs/$id2" "$TMP/del" -H "$A")
 cg=$(req GET "/v1/jobs/$id2" "$TMP/del2" -H "$A")
 [ "$cd_$cg" = 204404 ] && [ ! -e "$TMP/d/jobs/$id2" ] && pass "DELETE -> 204, then 404, directory gone" || fail "delete" "$cd_ $cg"
+
+# per-job time limit: a job asking for 200 iterations stops at time_limit=1
+# with the best mesh so far
+ct=$(submit "$TMP/big.qmesh" $QM "max_iter=200&finish=0&tol_move=0&time_limit=1" "$TMP/jt" -H "$A")
+idt=$(jf "$TMP/jt" .id)
+stt=$(poll_all "$idt" "$A")
+req GET "/v1/jobs/$idt" "$TMP/jt2" -H "$A" > /dev/null
+if [ "$ct" = 202 ] && [ "$stt" = succeeded ] && [ "$(jf "$TMP/jt2" .stop_reason)" = time-limit ] &&
+    [ "$(jf "$TMP/jt2" .options.time_limit)" = 1 ] && [ "$(req GET "/v1/jobs/$idt/result" "$TMP/jt3" -H "$A")" = 200 ]; then
+    pass "time_limit=1: stopped by the time limit after $(jf "$TMP/jt2" .iterations) records, result served"
+else
+    fail "time limit" "$ct $stt $(jq -c '[.stop_reason, .options.time_limit, .iterations]' "$TMP/jt2")"
+fi
+
+# DELETE a running job: gone at once; its worker stops and removes the files
+cdr=$(submit "$TMP/big.qmesh" $QM "max_iter=200&finish=0&tol_move=0" "$TMP/jd" -H "$A")
+idd=$(jf "$TMP/jd" .id)
+curl -s -m 30 -H "$A" "$URL/v1/jobs/$idd/progress?after=0&wait=20" > /dev/null
+cd1=$(req DELETE "/v1/jobs/$idd" "$TMP/jd1" -H "$A")
+cd2=$(req GET "/v1/jobs/$idd" "$TMP/jd2" -H "$A")
+n=0
+while [ -e "$TMP/d/jobs/$idd" ] && [ $n -lt 100 ]; do sleep 0.1; n=$((n + 1)); done
+busy=$(curl -s "$URL/metrics" | awk '$1 == "qdcd_workers_busy" { print $2 }')
+if [ "$cdr$cd1$cd2" = 202204404 ] && [ ! -e "$TMP/d/jobs/$idd" ] && [ "$busy" = 0 ]; then
+    pass "DELETE running job: 204, then 404; the worker stopped and removed its files"
+else
+    fail "delete running" "$cdr $cd1 $cd2 dir $(ls "$TMP/d/jobs/$idd" 2>&1 | head -2) busy $busy"
+fi
 
 # graceful shutdown: a parked long-poll is answered, the running job goes back to the queue
 cj=$(submit "$TMP/big.qmesh" $QM "max_iter=200&finish=0&tol_move=0" "$TMP/j5" -H "$A")
