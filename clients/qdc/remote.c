@@ -35,7 +35,8 @@
 
 static volatile sig_atomic_t interrupted;
 
-static void on_signal(int sig) {
+static void on_signal(int sig)
+{
     (void)sig;
     interrupted = 1;
 }
@@ -48,7 +49,8 @@ typedef struct {
     int oom;
 } rbuf;
 
-static int rb_add(rbuf *b, const void *p, size_t n) {
+static int rb_add(rbuf *b, const void *p, size_t n)
+{
     if (b->oom)
         return -1;
     if (b->len + n + 1 > b->cap) {
@@ -69,11 +71,13 @@ static int rb_add(rbuf *b, const void *p, size_t n) {
     return 0;
 }
 
-static int rb_writer(void *ctx, const void *data, size_t len) {
+static int rb_writer(void *ctx, const void *data, size_t len)
+{
     return rb_add(ctx, data, len) ? -1 : 0;
 }
 
-static void rb_free(rbuf *b) {
+static void rb_free(rbuf *b)
+{
     free(b->buf);
     memset(b, 0, sizeof *b);
 }
@@ -88,14 +92,16 @@ typedef struct {
     const char *p, *end;
 } jv;
 
-static const char *ws(const char *p, const char *end) {
+static const char *ws(const char *p, const char *end)
+{
     while (p < end && (*p == ' ' || *p == '\t' || *p == '\n' || *p == '\r'))
         p++;
     return p;
 }
 
 /* Past the value at p, or NULL if it is malformed. */
-static const char *skip_value(const char *p, const char *end, int depth) {
+static const char *skip_value(const char *p, const char *end, int depth)
+{
     p = ws(p, end);
     if (p >= end || depth > 64)
         return NULL;
@@ -139,7 +145,8 @@ static const char *skip_value(const char *p, const char *end, int depth) {
 }
 
 /* Member `key` of the object v; key may be a dotted path ("progress.seq"). */
-static int jget(jv v, const char *key, jv *out) {
+static int jget(jv v, const char *key, jv *out)
+{
     const char *dot = strchr(key, '.');
     size_t klen = dot ? (size_t)(dot - key) : strlen(key);
     const char *p = ws(v.p, v.end);
@@ -172,7 +179,8 @@ static int jget(jv v, const char *key, jv *out) {
 }
 
 /* String member (escapes decoded; non-ASCII \u escapes become '?'). */
-static int jstr(jv v, const char *key, char *out, size_t cap) {
+static int jstr(jv v, const char *key, char *out, size_t cap)
+{
     jv s;
     size_t n = 0;
 
@@ -203,7 +211,8 @@ static int jstr(jv v, const char *key, char *out, size_t cap) {
     return 1;
 }
 
-static int jnum(jv v, const char *key, double *out) {
+static int jnum(jv v, const char *key, double *out)
+{
     jv s;
     char tmp[64], *end;
     size_t n;
@@ -219,13 +228,15 @@ static int jnum(jv v, const char *key, double *out) {
     return *end == 0;
 }
 
-static int jbool(jv v, const char *key) {
+static int jbool(jv v, const char *key)
+{
     jv s;
     return jget(v, key, &s) && s.end - s.p == 4 && !memcmp(s.p, "true", 4);
 }
 
 /* Next element of the array whose position is *it (start: the array itself). */
-static int jnext(jv *it, jv *elem) {
+static int jnext(jv *it, jv *elem)
+{
     const char *p = ws(it->p, it->end);
     if (p < it->end && (*p == '[' || *p == ','))
         p = ws(p + 1, it->end);
@@ -240,7 +251,8 @@ static int jnext(jv *it, jv *elem) {
     return 1;
 }
 
-static jv jbody(const rbuf *b) {
+static jv jbody(const rbuf *b)
+{
     jv v = {b->buf ? b->buf : "", b->buf ? b->buf + b->len : ""};
     return v;
 }
@@ -264,12 +276,14 @@ typedef struct {
     char cerr[CURL_ERROR_SIZE];
 } reply;
 
-static size_t on_body(char *p, size_t size, size_t n, void *ctx) {
+static size_t on_body(char *p, size_t size, size_t n, void *ctx)
+{
     reply *r = ctx;
     return rb_add(&r->body, p, size * n) ? 0 : size * n;
 }
 
-static size_t on_header(char *p, size_t size, size_t n, void *ctx) {
+static size_t on_header(char *p, size_t size, size_t n, void *ctx)
+{
     reply *r = ctx;
     size_t len = size * n, k;
     char line[600];
@@ -306,8 +320,8 @@ static size_t on_header(char *p, size_t size, size_t n, void *ctx) {
     return len;
 }
 
-static int on_xfer(void *ctx, curl_off_t dt, curl_off_t dn, curl_off_t ut,
-                   curl_off_t un) {
+static int on_xfer(void *ctx, curl_off_t dt, curl_off_t dn, curl_off_t ut, curl_off_t un)
+{
     (void)ctx;
     (void)dt;
     (void)dn;
@@ -316,7 +330,8 @@ static int on_xfer(void *ctx, curl_off_t dt, curl_off_t dn, curl_off_t ut,
     return interrupted; /* non-zero aborts the transfer */
 }
 
-static void sleep_s(double s) {
+static void sleep_s(double s)
+{
     struct timespec ts;
     if (s <= 0)
         return;
@@ -333,7 +348,8 @@ static double jitter(void) { return 0.75 + 0.5 * ((double)rand() / RAND_MAX); }
  * an answer that is final for the caller arrived (r->status set), -1 when the
  * server could not be reached or kept answering 429/5xx. */
 static int http(remote *rm, const char *method, const char *path, const char *const *hdrs,
-                const char *body, size_t body_len, long timeout, reply *r) {
+                const char *body, size_t body_len, long timeout, reply *r)
+{
     char url[4096], auth[1100];
     double backoff = 0.5;
 
@@ -423,7 +439,8 @@ static int http(remote *rm, const char *method, const char *path, const char *co
 }
 
 /* Exit code and one line on stderr for an answer the caller did not expect. */
-static int http_fail(const char *what, int rc, const reply *r) {
+static int http_fail(const char *what, int rc, const reply *r)
+{
     char title[200], detail[600], state[32];
     jv b = jbody(&r->body);
 
@@ -464,7 +481,8 @@ typedef struct {
     rbuf query; /* optimizer options as a query string */
 } args;
 
-static void remote_usage(FILE *f) {
+static void remote_usage(FILE *f)
+{
     fputs(
         "usage: qdc submit IN [--wait] [-o OUT] [--report R.json] [optimizer options]\n"
         "       qdc status JOB [--json]\n"
@@ -494,7 +512,8 @@ static void remote_usage(FILE *f) {
         f);
 }
 
-static int query_add(rbuf *q, const char *name, const char *val, CURL *c) {
+static int query_add(rbuf *q, const char *name, const char *val, CURL *c)
+{
     char *ev = curl_easy_escape(c, val, 0);
     int rc = 0;
 
@@ -510,7 +529,8 @@ static int query_add(rbuf *q, const char *name, const char *val, CURL *c) {
 }
 
 /* Parses argv (argv[0] is the subcommand); returns -1 on success, else an exit code. */
-static int parse_args(int argc, char **argv, int max_pos, int allow_opt, args *a) {
+static int parse_args(int argc, char **argv, int max_pos, int allow_opt, args *a)
+{
     const char *server = getenv("QDC_SERVER");
     const char *retries = NULL;
 
@@ -590,7 +610,8 @@ static int parse_args(int argc, char **argv, int max_pos, int allow_opt, args *a
 }
 
 /* A job id from "ID", "jobs/ID" or a URL ending in /v1/jobs/ID. */
-static int job_id(const char *s, char out[33]) {
+static int job_id(const char *s, char out[33])
+{
     const char *slash = strrchr(s, '/');
     size_t n;
 
@@ -619,7 +640,8 @@ typedef struct {
     char state[32];
 } view;
 
-static void view_line(view *v, const char *line) {
+static void view_line(view *v, const char *line)
+{
     int n = (int)strlen(line);
     if (v->quiet)
         return;
@@ -632,7 +654,8 @@ static void view_line(view *v, const char *line) {
     fflush(v->f);
 }
 
-static void view_end(view *v) {
+static void view_end(view *v)
+{
     if (v->tty && v->last_len && !v->quiet) {
         fputc('\n', v->f);
         fflush(v->f);
@@ -641,7 +664,8 @@ static void view_end(view *v) {
 }
 
 /* One record of /progress: the same line as `qdc optimize` draws. */
-static void view_record(view *v, jv rec) {
+static void view_record(view *v, jv rec)
+{
     char phase[32], line[256];
     double it = 0, qm = 0, qmin = 0, dmin = 0, dmax = 0, inv = 0, step = 0, cg = 0,
            el = 0;
@@ -666,7 +690,8 @@ static void view_record(view *v, jv rec) {
 
 /* Follows /progress from the start until the job is done; *state gets the
  * final state. Returns -1 when done, else an exit code. */
-static int follow(remote *rm, const char *id, view *v, char *state, size_t cap) {
+static int follow(remote *rm, const char *id, view *v, char *state, size_t cap)
+{
     long after = -1;
     char path[256];
     reply r = {0};
@@ -683,22 +708,27 @@ static int follow(remote *rm, const char *id, view *v, char *state, size_t cap) 
         }
         jv b = jbody(&r.body), recs, it, rec;
         double na = (double)after;
-        jstr(b, "state", state, cap);
-        if (strcmp(state, v->state)) {
-            char line[96];
-            snprintf(line, sizeof line, "job %s %s", id, state);
-            if (!v->tty || strcmp(state, "running"))
-                view_line(v, line);
-            snprintf(v->state, sizeof v->state, "%s", state);
-        }
+        int done = jbool(b, "done");
         if (jget(b, "records", &recs)) {
             it = recs;
             while (jnext(&it, &rec))
                 view_record(v, rec);
         }
+        jstr(b, "state", state, cap);
+        if (strcmp(state, v->state)) {
+            /* On a terminal the live line shows "queued" until records come;
+             * the final state gets a line of its own below the last record. */
+            char line[96];
+            snprintf(line, sizeof line, "job %s %s", id, state);
+            if (done)
+                view_end(v);
+            if (!v->tty || strcmp(state, "running"))
+                view_line(v, line);
+            snprintf(v->state, sizeof v->state, "%s", state);
+        }
         if (jnum(b, "next_after", &na))
             after = (long)na;
-        if (jbool(b, "done"))
+        if (done)
             break;
     }
     view_end(v);
@@ -708,12 +738,14 @@ static int follow(remote *rm, const char *id, view *v, char *state, size_t cap) 
 
 /* ------------------------------------------------------------------- files -- */
 
-static meshio_format format_of(const char *path, const char *forced) {
+static meshio_format format_of(const char *path, const char *forced)
+{
     return meshio_format_from_name(forced ? forced : path);
 }
 
 /* Checked before anything is sent, so a typo does not cost a job. */
-static int out_format_ok(const args *a) {
+static int out_format_ok(const args *a)
+{
     if (!a->out || format_of(a->out, a->out_format) != MESHIO_AUTO)
         return 1;
     fprintf(stderr,
@@ -724,7 +756,8 @@ static int out_format_ok(const args *a) {
 }
 
 /* Writes len bytes to path through a temporary file and a rename; "-" is stdout. */
-static int write_file(const char *path, const char *buf, size_t len) {
+static int write_file(const char *path, const char *buf, size_t len)
+{
     char tmp[4200];
     FILE *f;
 
@@ -749,7 +782,8 @@ static int write_file(const char *path, const char *buf, size_t len) {
 /* Downloads the result (binary) into out, converted to its extension's format,
  * and the report into report; either may be NULL. */
 static int download(remote *rm, const char *id, const char *out, const char *out_format,
-                    const char *report) {
+                    const char *report)
+{
     char path[256];
     reply r = {0};
     mesh_t *m = NULL;
@@ -809,7 +843,8 @@ out:
 }
 
 /* Prints why a job ended without a result; CLI_EJOB. */
-static int job_failed(remote *rm, const char *id, const char *state) {
+static int job_failed(remote *rm, const char *id, const char *state)
+{
     char path[128], msg[600] = "";
     reply r = {0};
     jv b, e;
@@ -831,7 +866,8 @@ static int job_failed(remote *rm, const char *id, const char *state) {
 }
 
 /* Follows the job to its end: -1 when it succeeded, else an exit code. */
-static int await_job(remote *rm, const char *id, view *v) {
+static int await_job(remote *rm, const char *id, view *v)
+{
     char state[32] = "";
     int rc = follow(rm, id, v, state, sizeof state);
 
@@ -842,7 +878,8 @@ static int await_job(remote *rm, const char *id, view *v) {
 
 /* --------------------------------------------------------------- commands -- */
 
-static void random_key(char out[33]) {
+static void random_key(char out[33])
+{
     unsigned char b[16];
     int fd = open("/dev/urandom", O_RDONLY | O_CLOEXEC);
     ssize_t n = fd >= 0 ? read(fd, b, sizeof b) : -1;
@@ -860,7 +897,8 @@ static void random_key(char out[33]) {
         snprintf(out + 2 * i, 3, "%02x", b[i]);
 }
 
-static int cmd_submit(args *a) {
+static int cmd_submit(args *a)
+{
     const char *in = a->pos[0];
     mesh_t *m = NULL;
     rbuf body = {0};
@@ -925,7 +963,8 @@ out:
 }
 
 /* Summary of a job object on one line. */
-static void print_job(jv j, FILE *f) {
+static void print_job(jv j, FILE *f)
+{
     char id[64], state[32], fmt[16];
     double nt = 0, it = 0, qm = 0, qmin = 0, inv = 0;
     int has_q;
@@ -945,8 +984,8 @@ static void print_job(jv j, FILE *f) {
 }
 
 /* GET or POST a job route whose answer is the job; prints it. */
-static int job_request(args *a, const char *method, const char *suffix,
-                       const char *what) {
+static int job_request(args *a, const char *method, const char *suffix, const char *what)
+{
     char id[33], path[128];
     reply r = {0};
     int rc = CLI_OK, hr;
@@ -967,7 +1006,8 @@ static int job_request(args *a, const char *method, const char *suffix,
 
 static int cmd_status(args *a) { return job_request(a, "GET", "", "status"); }
 
-static int cmd_watch(args *a) {
+static int cmd_watch(args *a)
+{
     char id[33];
     view v = {stdout, isatty(1), 0, a->rm.quiet, ""};
     int rc;
@@ -978,7 +1018,8 @@ static int cmd_watch(args *a) {
     return rc >= 0 ? rc : CLI_OK;
 }
 
-static int cmd_fetch(args *a) {
+static int cmd_fetch(args *a)
+{
     char id[33];
     view v = {stderr, isatty(2), 0, a->rm.quiet, ""};
     int rc;
@@ -1001,7 +1042,8 @@ static int cmd_fetch(args *a) {
 
 static int cmd_cancel(args *a) { return job_request(a, "POST", ":cancel", "cancel"); }
 
-static int cmd_jobs(args *a) {
+static int cmd_jobs(args *a)
+{
     char path[256], token[64] = "";
     reply r = {0};
     int rc = CLI_OK, hr;
@@ -1033,7 +1075,8 @@ static int cmd_jobs(args *a) {
     return rc;
 }
 
-int cli_remote(int argc, char **argv) {
+int cli_remote(int argc, char **argv)
+{
     static const struct {
         const char *name;
         int (*fn)(args *);
