@@ -3,6 +3,7 @@
 #   1. upload + validate + enqueue of a 1M-tet binary mesh (target <= 0.5 s)
 #   2. 1000 parked long-polls: extra RSS (target <= 20 MB) and extra threads (0)
 #   3. p99 latency of GET /v1/jobs/{id} while two jobs run (target <= 5 ms)
+#   4. the same latency while 1M-tet uploads are being parsed (no target)
 # Usage: bench/server_bench.sh [N_UPLOADS] (default 5). Prints one line per figure.
 set -eu
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
@@ -152,5 +153,40 @@ p = lambda q: lat[min(len(lat) - 1, int(q * len(lat)))] * 1e3
 print("GET /v1/jobs/{id} while 2 jobs run: p50 %.2f ms, p99 %.2f ms, max %.2f ms over %d requests (%d saw 'running') (target p99 <= 5 ms)"
       % (p(0.5), p(0.99), lat[-1] * 1e3, n, running))
 PYEOF
-curl -s "$URL/metrics" | grep -E '^qdcd_workers_busy'
+stop
+
+# 4. the same GET while 1M-tet uploads are parsed and validated (intake thread)
+start "$TMP/i" --workers 1 --max-queued 100
+curl -s -X POST -H 'Content-Type: model/x-medit' --data-binary "@$ROOT/tests/data/sample/cube.mesh" \
+    "$URL/v1/jobs?max_iter=1" > "$TMP/s"
+$PY - "$URL" "$(jq -r .id "$TMP/s")" "$TMP/1m.qmesh" 3 <<'PYEOF'
+import http.client, sys, threading, time
+from urllib.parse import urlparse
+url, job, path, nup = sys.argv[1], sys.argv[2], sys.argv[3], int(sys.argv[4])
+u = urlparse(url)
+body = open(path, "rb").read()
+done = threading.Event()
+up = []
+def uploader():
+    c = http.client.HTTPConnection(u.hostname, u.port, timeout=60)
+    for i in range(nup):
+        t = time.perf_counter()
+        c.request("POST", "/v1/jobs?max_iter=1", body, {"Content-Type": "application/vnd.qdc.mesh"})
+        r = c.getresponse(); r.read()
+        up.append((r.status, time.perf_counter() - t))
+
+    done.set()
+th = threading.Thread(target=uploader); th.start()
+c = http.client.HTTPConnection(u.hostname, u.port)
+lat = []
+while not done.is_set():
+    t = time.perf_counter()
+    c.request("GET", "/v1/jobs/" + job); c.getresponse().read()
+    lat.append(time.perf_counter() - t)
+th.join()
+lat.sort()
+p = lambda q: lat[min(len(lat) - 1, int(q * len(lat)))] * 1e3
+print("GET /v1/jobs/{id} during %d 1M-tet uploads (%s): p50 %.2f ms, p99 %.2f ms, max %.2f ms over %d requests"
+      % (nup, ", ".join("%d in %.2f s" % x for x in up), p(0.5), p(0.99), lat[-1] * 1e3, len(lat)))
+PYEOF
 stop
