@@ -1010,7 +1010,9 @@ static void write41(const mesh_t *m, const distinct d[2], wbuf *w, int bin)
     wb_str(w, bin ? "\n$EndElements\n" : "$EndElements\n");
 }
 
-static void write22(const mesh_t *m, wbuf *w)
+/* Elementary tags follow the regions (as in 4.1), so Gmsh's entities match
+ * its physical groups. */
+static void write22(const mesh_t *m, const distinct d[2], wbuf *w)
 {
     wb_str(w, "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n");
     wb_int(w, m->nv);
@@ -1027,14 +1029,18 @@ static void write22(const mesh_t *m, wbuf *w)
         wb_int(w, (int64_t)t + 1);
         wb_str(w, " 4 2 ");
         wb_int(w, m->region ? m->region[t] : 0);
-        wb_str(w, " 1 ");
+        wb_str(w, " ");
+        wb_int(w, entity_of(&d[1], m->region, (size_t)t));
+        wb_str(w, " ");
         wb_ints(w, m->tets + 4 * (size_t)t, 4, 1, " ", "\n");
     }
     for (int32_t t = 0; t < m->ntri; t++) {
         wb_int(w, (int64_t)m->nt + t + 1);
         wb_str(w, " 2 2 ");
         wb_int(w, m->tri_ref ? m->tri_ref[t] : 0);
-        wb_str(w, " 1 ");
+        wb_str(w, " ");
+        wb_int(w, entity_of(&d[0], m->tri_ref, (size_t)t));
+        wb_str(w, " ");
         wb_ints(w, m->tris + 3 * (size_t)t, 3, 1, " ", "\n");
     }
     wb_str(w, "$EndElements\n");
@@ -1045,13 +1051,11 @@ qdc_status meshio_gmsh_write(const mesh_t *m, meshio_format fmt, wbuf *w, qdc_er
     distinct d[2] = {{NULL, 0}, {NULL, 0}};
     qdc_status st = QDC_OK;
 
-    if (fmt == MESHIO_GMSH22) {
-        write22(m, w);
-        return QDC_OK;
-    }
     if (distinct_of(&d[0], m->tri_ref, (size_t)m->ntri) != 0 ||
         distinct_of(&d[1], m->region, (size_t)m->nt) != 0)
         st = qdc_fail(err, QDC_ENOMEM, "out of memory for the Gmsh entities");
+    else if (fmt == MESHIO_GMSH22)
+        write22(m, d, w);
     else
         write41(m, d, w, fmt == MESHIO_GMSH41_BIN);
     qdc_free(d[0].u);

@@ -1021,10 +1021,9 @@ static qdc_status vtu_array(vtu *x, const xtag *t, int64_t n, vtype vt, int fini
     txt *s = &x->s;
     int64_t off;
     uint64_t nbytes;
-    unsigned char hdr[8];
     unsigned char *tmp = NULL;
     const unsigned char *data;
-    size_t hsz = x->hdr8 ? 8 : 4, want = (size_t)n * (size_t)vsize[vt];
+    size_t hsz = x->hdr8 ? 8 : 4, want = (size_t)n * (size_t)vsize[vt], got;
     qdc_status st;
 
     if (!tag_attr(t, "format", &fv, &fe))
@@ -1094,25 +1093,26 @@ static qdc_status vtu_array(vtu *x, const xtag *t, int64_t n, vtype vt, int fini
                         "VTU: DataArray format \"%.*s\" not supported",
                         (int)(fe - fv > 16 ? 16 : fe - fv), fv);
     }
-    /* base64: header, then the data */
-    if (b64_decode(p, s->end, hdr, hsz, &p) != hsz)
+    /* base64: header, then the data, decoded as one stream: VTK encodes the
+     * two separately (each padded), meshio together; both decode the same */
+    if (want / 3 * 4 > (size_t)(s->end - p))
         return fail_bin(err, QDC_EPARSE, p - s->base,
-                        "VTU: base64 block header truncated");
-    nbytes = 0;
-    for (size_t j = 0; j < hsz; j++)
-        nbytes = nbytes << 8 | hdr[x->big ? j : hsz - 1 - j];
-    if (nbytes != want || want / 3 * 4 > (size_t)(s->end - p))
-        return fail_bin(err, QDC_EPARSE, p - s->base,
-                        "VTU: base64 block of %llu bytes for %zu expected",
-                        (unsigned long long)nbytes, want);
-    tmp = qdc_malloc(want + 1);
+                        "VTU: %zu bytes of base64 data cannot fit in the input", want);
+    tmp = qdc_malloc(hsz + want + 1);
     if (!tmp)
         return qdc_fail(err, QDC_ENOMEM, "out of memory for a VTU array");
-    if (b64_decode(p, s->end, tmp, want, &p) != want) {
+    got = b64_decode(p, s->end, tmp, hsz + want, &p);
+    nbytes = 0;
+    for (size_t j = 0; j < hsz && got >= hsz; j++)
+        nbytes = nbytes << 8 | tmp[x->big ? j : hsz - 1 - j];
+    if (got != hsz + want || nbytes != want) {
         qdc_free(tmp);
-        return fail_bin(err, QDC_EPARSE, p - s->base, "VTU: base64 data truncated");
+        return fail_bin(
+            err, QDC_EPARSE, p - s->base,
+            "VTU: base64 block of %zu bytes (header says %llu) for %zu expected",
+            got < hsz ? 0 : got - hsz, (unsigned long long)nbytes, want);
     }
-    data = tmp;
+    data = tmp + hsz;
     st = QDC_OK;
     if (out) {
         decode_values(data, n, vt, x->big, out);

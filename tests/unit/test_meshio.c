@@ -2,183 +2,8 @@
  * malformed-input corpus (tests/data/meshio/<case>/input.* + expect) and a
  * replay of the fuzz seeds and crashes through every reader. */
 #include "meshio.h"
+#include "testio.h"
 #include "testlib.h"
-
-#include <dirent.h>
-#include <stdint.h>
-#include <sys/stat.h>
-#include <unistd.h>
-
-/* ---- helpers ---- */
-
-typedef struct {
-    char *b;
-    size_t n, cap;
-    size_t fail_after; /* fail once more than this many bytes were written; 0 = never */
-} sink;
-
-static int sink_write(void *ctx, const void *d, size_t len)
-{
-    sink *s = ctx;
-
-    if (s->fail_after && s->n + len > s->fail_after)
-        return -1;
-    if (s->n + len > s->cap) {
-        size_t cap = s->cap ? s->cap : 4096;
-        while (cap < s->n + len)
-            cap *= 2;
-        s->b = realloc(s->b, cap);
-        if (!s->b)
-            return -1;
-        s->cap = cap;
-    }
-    memcpy(s->b + s->n, d, len);
-    s->n += len;
-    return 0;
-}
-
-static uint64_t rng_state = 88172645463325252ULL;
-
-static uint64_t rnd(void)
-{
-    rng_state ^= rng_state << 13;
-    rng_state ^= rng_state >> 7;
-    rng_state ^= rng_state << 17;
-    return rng_state;
-}
-
-/* Doubles that stress exact printing: random bits, subnormals, signed zero,
- * extremes, short decimals. */
-static double nasty_double(int i)
-{
-    static const double fixed[] = {0.0,
-                                   -0.0,
-                                   0.1,
-                                   -0.3,
-                                   1e308,
-                                   -1.7976931348623157e308,
-                                   4.9406564584124654e-324,
-                                   2.2250738585072014e-308,
-                                   1.0 / 3.0,
-                                   123456789012345678.0,
-                                   5e-1,
-                                   9007199254740993.0};
-    uint64_t u;
-    double x;
-
-    if (i < (int)(sizeof fixed / sizeof fixed[0]))
-        return fixed[i];
-    if (i % 3 == 0)
-        return (double)(int64_t)(rnd() % 2001) / 1000.0 - 1.0;
-    do {
-        u = rnd();
-        memcpy(&x, &u, 8);
-    } while (!isfinite(x));
-    return x;
-}
-
-/* A mesh with every optional array filled (not a valid tet mesh: the formats
- * don't care). */
-static mesh_t *make_mesh(int32_t nv, int32_t nt, int32_t ntri)
-{
-    mesh_t *m = mesh_new(nv, nt, MESH_WITH_REGION | MESH_WITH_FIXED | MESH_WITH_VREF);
-
-    if (!m)
-        return NULL;
-    for (int32_t i = 0; i < 3 * nv; i++)
-        m->xyz[i] = nasty_double(i);
-    for (int32_t i = 0; i < nv; i++) {
-        m->vref[i] = (int32_t)(rnd() % 7) - 3;
-        m->fixed[i] = rnd() % 3 == 0;
-    }
-    for (int32_t i = 0; i < 4 * nt; i++)
-        m->tets[i] = (int32_t)(rnd() % (uint64_t)nv);
-    for (int32_t t = 0; t < nt; t++)
-        m->region[t] = t % 5 == 0 ? INT32_MIN + t : (int32_t)(rnd() % 1000) - 100;
-    if (ntri && mesh_set_tris(m, ntri, 1) != QDC_OK) {
-        mesh_free(m);
-        return NULL;
-    }
-    for (int32_t i = 0; i < 3 * ntri; i++)
-        m->tris[i] = (int32_t)(rnd() % (uint64_t)nv);
-    for (int32_t t = 0; t < ntri; t++)
-        m->tri_ref[t] = (int32_t)(rnd() % 100);
-    return m;
-}
-
-static int same_bytes(const void *a, const void *b, size_t n)
-{
-    if (!a || !b)
-        return a == b || n == 0;
-    return memcmp(a, b, n) == 0;
-}
-
-/* What survives a format: 1 xyz+tets, 2 region, 4 fixed, 8 vref, 16 tris. */
-enum { K_REGION = 2, K_FIXED = 4, K_VREF = 8, K_TRIS = 16 };
-
-static int same_mesh(const mesh_t *a, const mesh_t *b, unsigned keep)
-{
-    if (a->nv != b->nv || a->nt != b->nt)
-        return 0;
-    if (!same_bytes(a->xyz, b->xyz, 24 * (size_t)a->nv) ||
-        !same_bytes(a->tets, b->tets, 16 * (size_t)a->nt))
-        return 0;
-    if ((keep & K_REGION) && !same_bytes(a->region, b->region, 4 * (size_t)a->nt))
-        return 0;
-    if ((keep & K_FIXED) && !same_bytes(a->fixed, b->fixed, (size_t)a->nv))
-        return 0;
-    if ((keep & K_VREF) && !same_bytes(a->vref, b->vref, 4 * (size_t)a->nv))
-        return 0;
-    if ((keep & K_TRIS) &&
-        (a->ntri != b->ntri || !same_bytes(a->tris, b->tris, 12 * (size_t)a->ntri) ||
-         !same_bytes(a->tri_ref, b->tri_ref, 4 * (size_t)a->ntri)))
-        return 0;
-    return 1;
-}
-
-static qdc_status roundtrip(const mesh_t *m, meshio_format f, mesh_t **back)
-{
-    sink s = {0};
-    qdc_error err;
-    qdc_status st = meshio_write(m, f, sink_write, &s, &err);
-
-    *back = NULL;
-    if (st == QDC_OK)
-        st = meshio_read(s.b, s.n, f, back, &err);
-    if (st != QDC_OK)
-        printf("  %s: %s\n", meshio_format_name(f), err.msg);
-    free(s.b);
-    return st;
-}
-
-static const char *root_path(const char *rel, char *buf, size_t n)
-{
-    const char *root = getenv("ROOT");
-
-    snprintf(buf, n, "%s%s%s", root ? root : "", root ? "/" : "", rel);
-    return buf;
-}
-
-/* gunzip a dev mesh into /tmp; returns its path or NULL if the mesh is missing. */
-static const char *dev_mesh(const char *name, char *out, size_t n)
-{
-    char src[512], cmd[1200];
-    struct stat sb;
-
-    root_path("../shared/meshes/dev/", src, sizeof src);
-    strncat(src, name, sizeof src - strlen(src) - 1);
-    strncat(src, ".mesh.gz", sizeof src - strlen(src) - 1);
-    if (stat(src, &sb) != 0)
-        return NULL;
-    snprintf(out, n, "/tmp/qdc_test_meshio_%d_%s.mesh", (int)getpid(), name);
-    snprintf(cmd, sizeof cmd, "gzip -dc '%s' > '%s'", src, out);
-    return system(cmd) == 0 ? out : NULL;
-}
-
-static double now(void)
-{
-    return qdc_now();
-}
 
 /* ---- round trips ---- */
 
@@ -526,31 +351,14 @@ TEST(dev_speed)
 
 TEST(qmesh_1m_tets_speed)
 {
-    const int32_t nv = 200000, nt = 1000000;
-    mesh_t *m = mesh_new(nv, nt, MESH_WITH_REGION), *b;
-    sink s = {0};
-    qdc_error err;
-    double t0, t;
+    double t = read_1m_tets(MESHIO_QMESH);
 
-    ASSERT_TRUE(m);
-    for (int32_t i = 0; i < 3 * nv; i++)
-        m->xyz[i] = (double)(rnd() >> 11) * 0x1.0p-53;
-    for (int32_t i = 0; i < 4 * nt; i++)
-        m->tets[i] = (int32_t)(rnd() % (uint64_t)nv);
-    ASSERT_OK(meshio_write(m, MESHIO_QMESH, sink_write, &s, &err));
-    t0 = now();
-    ASSERT_OK(meshio_read(s.b, s.n, MESHIO_QMESH, &b, &err));
-    t = now() - t0;
-    printf("  # qmesh read of 1M tets (%.1f MB): %.3f s\n", s.n / 1e6, t);
-    ASSERT_TRUE(same_mesh(m, b, K_REGION));
+    ASSERT_TRUE(t >= 0);
 #if defined(__SANITIZE_ADDRESS__)
     ASSERT_TRUE(t < 5);
 #else
     ASSERT_TRUE(t < 0.5);
 #endif
-    mesh_free(b);
-    free(s.b);
-    mesh_free(m);
 }
 
 /* Every allocation failing in turn: ENOMEM, never a crash or a leak (run
@@ -593,149 +401,20 @@ TEST(allocation_failures)
 
 /* ---- corpus and fuzz replay ---- */
 
-static char *read_file(const char *path, size_t *len)
-{
-    char *buf;
-    qdc_error err;
-
-    if (meshio_slurp(path, &buf, len, &err) != QDC_OK)
-        return NULL;
-    return buf;
-}
-
-/* One case dir: input.<ext> (input.node + input.ele for TetGen) and expect:
- * "STATUS [LINE:COL | @OFFSET] message substring". Returns 0 if it passes. */
-static int run_case(const char *dir)
-{
-    static const char *const exts[] = {"mesh", "qmesh", "json", "node"};
-    char path[1024], want_status[32], where[32] = "", want_msg[256] = "";
-    char *in = NULL, *ele = NULL, *exp;
-    size_t len = 0, elen = 0, elen2;
-    mesh_t *m = NULL;
-    qdc_error err;
-    qdc_status st;
-    int i, ok = 1;
-    long long l = -1, c = -1, off = -1;
-
-    for (i = 0; i < 4 && !in; i++) {
-        snprintf(path, sizeof path, "%s/input.%s", dir, exts[i]);
-        in = read_file(path, &len);
-    }
-    snprintf(path, sizeof path, "%s/expect", dir);
-    exp = read_file(path, &elen2);
-    if (!in || !exp) {
-        printf("  %s: missing input.* or expect\n", dir);
-        return 1;
-    }
-    exp = realloc(exp, elen2 + 1);
-    exp[elen2] = '\0';
-    exp[strcspn(exp, "\n")] = '\0';
-    sscanf(exp, "%31s %31s", want_status, where);
-    if (sscanf(where, "%lld:%lld", &l, &c) == 2 || sscanf(where, "@%lld", &off) == 1)
-        snprintf(want_msg, sizeof want_msg, "%s", strstr(exp, where) + strlen(where) + 1);
-    else
-        snprintf(want_msg, sizeof want_msg, "%s", exp + strlen(want_status) + 1);
-    if (i == 4) {
-        snprintf(path, sizeof path, "%s/input.ele", dir);
-        ele = read_file(path, &elen);
-        st = meshio_read_tetgen(in, len, ele, elen, &m, &err);
-    } else {
-        st = meshio_read(in, len,
-                         (meshio_format)(i == 1   ? MESHIO_MEDIT
-                                         : i == 2 ? MESHIO_QMESH
-                                                  : MESHIO_JSON),
-                         &m, &err);
-    }
-    if (strcmp(qdc_status_name(st), want_status) != 0 || !strstr(err.msg, want_msg) ||
-        (l >= 0 && (err.line != l || err.col != c)) || (off >= 0 && err.offset != off) ||
-        (m != NULL) != (st == QDC_OK)) {
-        printf("  %s: got %s %lld:%lld @%lld \"%s\", expected \"%s\"\n", dir,
-               qdc_status_name(st), (long long)err.line, (long long)err.col,
-               (long long)err.offset, err.msg, exp);
-        ok = 0;
-    }
-    mesh_free(m);
-    qdc_free(in);
-    qdc_free(ele);
-    free(exp);
-    return ok ? 0 : 1;
-}
-
 TEST(malformed_corpus)
 {
-    char dir[512], sub[800];
-    DIR *d = opendir(root_path("tests/data/meshio", dir, sizeof dir));
-    struct dirent *e;
-    int n = 0, bad = 0;
+    int n, bad = run_corpus(NULL, &n);
 
-    ASSERT_TRUE(d);
-    while ((e = readdir(d))) {
-        if (e->d_name[0] == '.')
-            continue;
-        snprintf(sub, sizeof sub, "%s/%s", dir, e->d_name);
-        bad += run_case(sub);
-        n++;
-    }
-    closedir(d);
     printf("  # %d corpus cases\n", n);
+    ASSERT_TRUE(bad >= 0);
     ASSERT_TRUE(n >= 20);
     ASSERT_EQ_INT(bad, 0);
 }
 
-/* Every reader on buf: a valid status, a mesh exactly on success. */
-static int replay(const char *buf, size_t len)
-{
-    for (int f = 0; f < MESHIO_FORMAT_COUNT; f++) {
-        mesh_t *m = NULL;
-        qdc_error err;
-        qdc_status st;
-        if (f == MESHIO_TETGEN)
-            st = meshio_read_tetgen(buf, len / 2, buf + len / 2, len - len / 2, &m, &err);
-        else
-            st = meshio_read(buf, len, (meshio_format)f, &m, &err);
-        if ((unsigned)st >= QDC_STATUS_COUNT || (st == QDC_OK) != (m != NULL) ||
-            (st != QDC_OK && err.status != st))
-            return 1;
-        mesh_free(m);
-    }
-    return 0;
-}
-
 TEST(fuzz_replay)
 {
-    static const char *const dirs[] = {"tests/fuzz/seeds/meshio",
-                                       "tests/fuzz/crashes/meshio"};
-    int n = 0, bad = 0;
+    int n, bad = replay_fuzz("meshio", replay_meshio, &n);
 
-    for (int k = 0; k < 2; k++) {
-        char dir[512], path[800];
-        DIR *d = opendir(root_path(dirs[k], dir, sizeof dir));
-        struct dirent *e;
-        if (!d) {
-            ASSERT_TRUE(k == 1); /* crashes/ exists only when there were some */
-            continue;
-        }
-        while ((e = readdir(d))) {
-            size_t len;
-            char *buf;
-            if (e->d_name[0] == '.')
-                continue;
-            snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
-            buf = read_file(path, &len);
-            if (!buf)
-                continue;
-            if (replay(buf, len)) {
-                printf("  %s: bad status\n", path);
-                bad++;
-            }
-            /* and every prefix of the small ones: truncation anywhere */
-            for (size_t p = 0; len < 4096 && p < len; p++)
-                bad += replay(buf, p);
-            qdc_free(buf);
-            n++;
-        }
-        closedir(d);
-    }
     printf("  # %d fuzz inputs replayed\n", n);
     ASSERT_TRUE(n > 0);
     ASSERT_EQ_INT(bad, 0);

@@ -1,0 +1,84 @@
+/* fuzz_common.h - shared by the libFuzzer targets: read one buffer in one
+ * format, check the status contract, and for what parses, write-then-read
+ * must give the same mesh back. Traps on any violation. */
+#ifndef QDC_FUZZ_COMMON_H
+#define QDC_FUZZ_COMMON_H
+
+#include "meshio.h"
+
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+typedef struct {
+    char *b;
+    size_t n, cap;
+} sink;
+
+static int sink_write(void *ctx, const void *d, size_t len)
+{
+    sink *s = ctx;
+
+    if (s->n + len > s->cap) {
+        size_t cap = s->cap ? 2 * s->cap : 4096;
+        while (cap < s->n + len)
+            cap *= 2;
+        s->b = realloc(s->b, cap);
+        if (!s->b)
+            return -1;
+        s->cap = cap;
+    }
+    memcpy(s->b + s->n, d, len);
+    s->n += len;
+    return 0;
+}
+
+static int same(const void *a, const void *b, size_t n)
+{
+    return n == 0 || (!a && !b) || (a && b && memcmp(a, b, n) == 0);
+}
+
+/* What each format carries: QMESH and JSON drop vref and triangles; Gmsh and
+ * VTK keep triangles and their tags. */
+static void check_roundtrip(const mesh_t *m, meshio_format f)
+{
+    sink s = {0};
+    mesh_t *b = NULL;
+    int text = f == MESHIO_MEDIT, tris = text || f >= MESHIO_GMSH41;
+
+    if (meshio_write(m, f, sink_write, &s, NULL) != QDC_OK ||
+        meshio_read(s.b, s.n, f, &b, NULL) != QDC_OK)
+        __builtin_trap();
+    if (b->nv != m->nv || b->nt != m->nt || !same(b->xyz, m->xyz, 24 * (size_t)m->nv) ||
+        !same(b->tets, m->tets, 16 * (size_t)m->nt) ||
+        !same(b->region, m->region, 4 * (size_t)m->nt) ||
+        !same(b->fixed, m->fixed, (size_t)m->nv) ||
+        (text && !same(b->vref, m->vref, 4 * (size_t)m->nv)) ||
+        (tris && (b->ntri != m->ntri || !same(b->tris, m->tris, 12 * (size_t)m->ntri) ||
+                  (f != MESHIO_MEDIT && !same(b->tri_ref, m->tri_ref, 4 * (size_t)m->ntri)))))
+        __builtin_trap();
+    mesh_free(b);
+    free(s.b);
+}
+
+/* Read buf as format f (TETGEN: first half .node, second .ele); check the
+ * status contract and, for a mesh, the round trip through f. */
+static void fuzz_read(const char *buf, size_t size, meshio_format f)
+{
+    mesh_t *m = NULL;
+    qdc_error err;
+    qdc_status st;
+
+    if (f == MESHIO_TETGEN)
+        st = meshio_read_tetgen(buf, size / 2, buf + size / 2, size - size / 2, &m, &err);
+    else
+        st = meshio_read(buf, size, f, &m, &err);
+    if ((unsigned)st >= QDC_STATUS_COUNT || (st == QDC_OK) != (m != NULL) ||
+        (st != QDC_OK && err.status != st))
+        __builtin_trap();
+    if (m && f != MESHIO_AUTO && f != MESHIO_TETGEN)
+        check_roundtrip(m, f);
+    mesh_free(m);
+}
+
+#endif

@@ -1,0 +1,358 @@
+/* test_formats.c - Gmsh MSH 4.1/2.2 and VTK legacy/XML: exact round trips with
+ * tags, files in the shapes other writers produce (tags out of order, skipped
+ * element types, 5.1 cell layout, base64), names, sniffing, media types,
+ * speed on 1M tets, and a replay of the gmsh/vtk fuzz seeds and crashes.
+ * The malformed corpus (tests/data/meshio/gmsh_*, vtk_*, vtu_*) runs in
+ * test_meshio with the rest. */
+#include "meshio.h"
+#include "testio.h"
+#include "testlib.h"
+
+static const meshio_format new_formats[] = {MESHIO_GMSH41, MESHIO_GMSH41_BIN, MESHIO_GMSH22,
+                                            MESHIO_VTK,    MESHIO_VTK_ASCII,  MESHIO_VTU,
+                                            MESHIO_VTU_ASCII};
+#define N_NEW (int)(sizeof new_formats / sizeof new_formats[0])
+
+static int is_vtk(meshio_format f)
+{
+    return f >= MESHIO_VTK && f <= MESHIO_VTU_ASCII;
+}
+
+static qdc_status read_str(const char *s, meshio_format f, mesh_t **m, qdc_error *err)
+{
+    return meshio_read(s, strlen(s), f, m, err);
+}
+
+/* ---- round trips ---- */
+
+TEST(roundtrip_all_tags)
+{
+    mesh_t *m = make_mesh(300, 500, 80), *b;
+
+    ASSERT_TRUE(m);
+    for (int i = 0; i < N_NEW; i++) {
+        meshio_format f = new_formats[i];
+        ASSERT_OK(roundtrip(m, f, &b));
+        if (!same_mesh(m, b, K_REGION | K_TRIS | (is_vtk(f) ? K_VREF : 0)))
+            printf("  %s: arrays differ\n", meshio_format_name(f));
+        ASSERT_TRUE(same_mesh(m, b, K_REGION | K_TRIS | (is_vtk(f) ? K_VREF : 0)));
+        ASSERT_TRUE(b->fixed == NULL);
+        mesh_free(b);
+    }
+    mesh_free(m);
+}
+
+TEST(roundtrip_no_tags)
+{
+    mesh_t *m = make_mesh(40, 60, 0), *b;
+
+    ASSERT_TRUE(m);
+    qdc_free(m->region);
+    qdc_free(m->vref);
+    m->region = NULL;
+    m->vref = NULL;
+    for (int i = 0; i < N_NEW; i++) {
+        ASSERT_OK(roundtrip(m, new_formats[i], &b));
+        ASSERT_TRUE(same_mesh(m, b, 0));
+        ASSERT_TRUE(!b->region && !b->vref && b->ntri == 0);
+        mesh_free(b);
+    }
+    mesh_free(m);
+}
+
+TEST(roundtrip_empty)
+{
+    mesh_t *m = mesh_new(0, 0, 0), *b;
+
+    for (int i = 0; i < N_NEW; i++) {
+        ASSERT_OK(roundtrip(m, new_formats[i], &b));
+        ASSERT_EQ_INT(b->nv, 0);
+        ASSERT_EQ_INT(b->nt, 0);
+        mesh_free(b);
+    }
+    mesh_free(m);
+}
+
+TEST(roundtrip_files)
+{
+    static const char *const names[] = {"a.msh", "a.vtk", "a.vtu"};
+    mesh_t *m = make_mesh(30, 40, 5), *b;
+    qdc_error err;
+    char path[256];
+
+    for (int i = 0; i < 3; i++) {
+        snprintf(path, sizeof path, "/tmp/qdc_test_formats_%d_%s", (int)getpid(), names[i]);
+        ASSERT_OK(meshio_save(path, MESHIO_AUTO, m, &err));
+        ASSERT_OK(meshio_load(path, MESHIO_AUTO, &b, &err));
+        unlink(path);
+        ASSERT_TRUE(same_mesh(m, b, K_REGION | K_TRIS));
+        mesh_free(b);
+    }
+    mesh_free(m);
+}
+
+/* ---- what other writers produce ---- */
+
+static void note_count(void *ctx, int level, const char *msg)
+{
+    (void)level;
+    if (strstr(msg, "skipped"))
+        (*(int *)ctx)++;
+}
+
+TEST(gmsh41_tags_out_of_order_and_skipped_types)
+{
+    /* node tags sparse and unsorted (sorted-table path), a point and a line
+     * element skipped, tets on two volumes with physical groups 7 and 9 */
+    const char *msh = "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n"
+                      "$PhysicalNames\n1\n3 7 \"steel\"\n$EndPhysicalNames\n"
+                      "$Entities\n1 0 0 2\n1 0 0 0 0\n"
+                      "10 0 0 0 1 1 1 1 7 0\n11 0 0 0 1 1 1 1 9 0\n$EndEntities\n"
+                      "$Nodes\n2 5 5 9000000\n3 10 0 3\n9000000\n5\n77\n0 0 0\n1 0 0\n0 1 0\n"
+                      "3 11 0 2\n123456\n6\n0 0 1\n1 1 1\n$EndNodes\n"
+                      "$Elements\n4 5 1 5\n0 1 15 1\n1 5\n1 1 1 1\n2 5 77\n"
+                      "3 10 4 2\n3 9000000 5 77 123456\n4 5 77 6 123456\n"
+                      "3 11 4 1\n5 9000000 77 5 6\n$EndElements\n";
+    mesh_t *m;
+    qdc_error err;
+    int notes = 0;
+    meshio_options o = {note_count, &notes};
+
+    ASSERT_OK(meshio_read_ex(msh, strlen(msh), MESHIO_GMSH41, &o, &m, &err));
+    ASSERT_EQ_INT(m->nv, 5);
+    ASSERT_EQ_INT(m->nt, 3);
+    ASSERT_EQ_INT(notes, 1);
+    ASSERT_EQ_INT(m->tets[0], 0);
+    ASSERT_EQ_INT(m->tets[1], 1);
+    ASSERT_EQ_INT(m->tets[3], 3);
+    ASSERT_EQ_INT(m->tets[8], 0);
+    ASSERT_EQ_INT(m->region[0], 7);
+    ASSERT_EQ_INT(m->region[2], 9);
+    ASSERT_NEAR(m->xyz[3 * 4 + 2], 1, 0);
+    mesh_free(m);
+}
+
+TEST(gmsh_entity_tags_without_physicals)
+{
+    const char *msh22 = "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n4\n"
+                        "1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n$EndNodes\n$Elements\n3\n"
+                        "1 15 2 0 1 1\n2 4 2 0 5 1 2 3 4\n3 4 3 0 6 3 1 2 3 4\n$EndElements\n";
+    mesh_t *m;
+    qdc_error err;
+
+    ASSERT_OK(read_str(msh22, MESHIO_AUTO, &m, &err));
+    ASSERT_EQ_INT(m->nt, 2);
+    ASSERT_TRUE(m->region);
+    ASSERT_EQ_INT(m->region[0], 5);
+    ASSERT_EQ_INT(m->region[1], 6);
+    mesh_free(m);
+}
+
+TEST(gmsh_errors_say_where)
+{
+    mesh_t *m;
+    qdc_error err;
+    const char *bad = "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 2 1 2\n3 1 0 2\n1\n2\n"
+                      "0 0 0\n0 nan 0\n$EndNodes\n";
+
+    ASSERT_EQ_INT(read_str(bad, MESHIO_GMSH41, &m, &err), QDC_EPARSE);
+    ASSERT_EQ_INT(err.line, 10);
+    ASSERT_EQ_INT(err.col, 3);
+    ASSERT_TRUE(strstr(err.msg, "not finite"));
+    ASSERT_EQ_INT(read_str("$MeshFormat\n3.0 0 8\n$EndMeshFormat\n", MESHIO_GMSH41, &m, &err),
+                  QDC_EFORMAT);
+}
+
+TEST(vtk51_layout_and_field_data)
+{
+    const char *vtk = "# vtk DataFile Version 5.1\nmeshio\nASCII\nDATASET UNSTRUCTURED_GRID\n"
+                      "POINTS 5 float\n0 0 0 1 0 0 0 1 0 0 0 1 1 1 1\n"
+                      "CELLS 4 10\nOFFSETS vtktypeint64\n0 4 6 10\n"
+                      "CONNECTIVITY vtktypeint64\n0 1 2 3 0 4 1 2 3 4\n"
+                      "CELL_TYPES 3\n10\n3\n10\n"
+                      "CELL_DATA 3\nFIELD FieldData 2\nother 2 3 double\n1 2 3 4 5 6\n"
+                      "gmsh:physical 1 3 int\n4 0 8\n"
+                      "POINT_DATA 5\nSCALARS medit:ref int 1\nLOOKUP_TABLE default\n1 2 3 4 5\n";
+    mesh_t *m;
+    qdc_error err;
+
+    ASSERT_OK(read_str(vtk, MESHIO_AUTO, &m, &err));
+    ASSERT_EQ_INT(m->nt, 2);
+    ASSERT_EQ_INT(m->tets[4], 1);
+    ASSERT_EQ_INT(m->region[0], 4);
+    ASSERT_EQ_INT(m->region[1], 8);
+    ASSERT_EQ_INT(m->vref[4], 5);
+    mesh_free(m);
+}
+
+static void b64(const unsigned char *in, size_t n, char *out)
+{
+    static const char al[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    size_t o = strlen(out);
+
+    for (size_t i = 0; i < n; i += 3) {
+        unsigned v = (unsigned)in[i] << 16 | (i + 1 < n ? (unsigned)in[i + 1] << 8 : 0) |
+                     (i + 2 < n ? in[i + 2] : 0);
+        out[o++] = al[v >> 18 & 63];
+        out[o++] = al[v >> 12 & 63];
+        out[o++] = i + 1 < n ? al[v >> 6 & 63] : '=';
+        out[o++] = i + 2 < n ? al[v & 63] : '=';
+    }
+    out[o] = '\0';
+}
+
+/* Inline base64 with a UInt32 header encoded on its own (VTK's way). */
+TEST(vtu_inline_base64)
+{
+    char doc[4096] = "";
+    float pts[12] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1};
+    int32_t conn[4] = {0, 1, 2, 3}, offs[1] = {4}, reg[1] = {42};
+    unsigned char types[1] = {10};
+    uint32_t h;
+    mesh_t *m;
+    qdc_error err;
+
+    strcat(doc, "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" "
+                "byte_order=\"LittleEndian\">\n<UnstructuredGrid><Piece NumberOfPoints=\"4\" "
+                "NumberOfCells=\"1\">\n<!-- a comment -->\n<Points><DataArray type=\"Float32\" "
+                "NumberOfComponents=\"3\" format=\"binary\">");
+    h = sizeof pts;
+    b64((unsigned char *)&h, 4, doc);
+    b64((unsigned char *)pts, sizeof pts, doc);
+    strcat(doc, "</DataArray></Points><Cells><DataArray type=\"Int32\" Name=\"connectivity\" "
+                "format=\"binary\">\n  ");
+    h = sizeof conn;
+    b64((unsigned char *)&h, 4, doc);
+    b64((unsigned char *)conn, sizeof conn, doc);
+    strcat(doc, "</DataArray><DataArray type=\"Int32\" Name=\"offsets\" format=\"binary\">");
+    h = sizeof offs;
+    b64((unsigned char *)&h, 4, doc);
+    b64((unsigned char *)offs, sizeof offs, doc);
+    strcat(doc, "</DataArray><DataArray type=\"UInt8\" Name=\"types\" format=\"binary\">");
+    h = 1;
+    b64((unsigned char *)&h, 4, doc);
+    b64(types, 1, doc);
+    strcat(doc, "</DataArray></Cells><CellData><DataArray type=\"Int32\" Name=\"medit:ref\" "
+                "format=\"binary\">");
+    h = 4;
+    b64((unsigned char *)&h, 4, doc);
+    b64((unsigned char *)reg, 4, doc);
+    strcat(doc, "</DataArray></CellData></Piece></UnstructuredGrid></VTKFile>\n");
+    ASSERT_OK(read_str(doc, MESHIO_AUTO, &m, &err));
+    ASSERT_EQ_INT(m->nt, 1);
+    ASSERT_EQ_INT(m->tets[3], 3);
+    ASSERT_EQ_INT(m->region[0], 42);
+    ASSERT_NEAR(m->xyz[11], 1, 0);
+    mesh_free(m);
+    ASSERT_TRUE(strstr(doc, "format=\"binary\""));
+    memcpy(strstr(doc, "format=\"binary\""), "format=\"bonary\"", 15);
+    ASSERT_EQ_INT(read_str(doc, MESHIO_VTU, &m, &err), QDC_EFORMAT);
+}
+
+/* ---- names ---- */
+
+TEST(names_sniffing_media_types)
+{
+    ASSERT_EQ_INT(meshio_format_from_name("x/a.msh"), MESHIO_GMSH41);
+    ASSERT_EQ_INT(meshio_format_from_name("gmsh22"), MESHIO_GMSH22);
+    ASSERT_EQ_INT(meshio_format_from_name("msh41-bin"), MESHIO_GMSH41_BIN);
+    ASSERT_EQ_INT(meshio_format_from_name("A.VTU"), MESHIO_VTU);
+    ASSERT_EQ_INT(meshio_format_from_name("vtk-ascii"), MESHIO_VTK_ASCII);
+    for (int f = 1; f < MESHIO_FORMAT_COUNT; f++) {
+        const char *mt = meshio_media_type((meshio_format)f);
+        ASSERT_EQ_INT(meshio_format_from_name(meshio_format_name((meshio_format)f)), f);
+        if (f == MESHIO_TETGEN) {
+            ASSERT_TRUE(mt == NULL);
+            continue;
+        }
+        ASSERT_TRUE(mt != NULL);
+        ASSERT_EQ_INT(meshio_format_from_media_type(mt), f);
+    }
+    ASSERT_EQ_INT(meshio_format_from_media_type("Model/VND.Gmsh ; charset=utf-8; Version=\"2.2\""),
+                  MESHIO_GMSH22);
+    ASSERT_EQ_INT(meshio_format_from_media_type("application/x-vtk"), MESHIO_VTK);
+    ASSERT_EQ_INT(meshio_format_from_media_type("application/json; q=0.5"), MESHIO_JSON);
+    ASSERT_EQ_INT(meshio_format_from_media_type("model/stl"), MESHIO_AUTO);
+    ASSERT_EQ_INT(meshio_format_from_media_type(NULL), MESHIO_AUTO);
+    ASSERT_EQ_INT(meshio_sniff("$MeshFormat\n4.1 1 8\n", 20), MESHIO_GMSH41_BIN);
+    ASSERT_EQ_INT(meshio_sniff("\n$MeshFormat\n2.2 0 8\n", 21), MESHIO_GMSH22);
+    ASSERT_EQ_INT(meshio_sniff("# vtk DataFile Version 2.0\nx\nASCII\n", 35), MESHIO_VTK_ASCII);
+    ASSERT_EQ_INT(meshio_sniff("# vtk DataFile Version 2.0\nx\nBINARY\n", 36), MESHIO_VTK);
+    ASSERT_EQ_INT(meshio_sniff("<?xml version=\"1.0\"?><VTKFile", 29), MESHIO_VTU);
+    ASSERT_EQ_INT(meshio_sniff("<html>", 6), MESHIO_AUTO);
+}
+
+/* ---- dev meshes and speed ---- */
+
+TEST(dev_speed_ascii)
+{
+    static const meshio_format fs[] = {MESHIO_GMSH41, MESHIO_GMSH22, MESHIO_VTK_ASCII,
+                                       MESHIO_VTU_ASCII};
+    char path[256];
+    mesh_t *m = NULL, *b;
+    qdc_error err;
+
+    if (!dev_mesh("bunny_low_100k", path, sizeof path)) {
+        printf("  # dev meshes not found, skipped\n");
+        return;
+    }
+    ASSERT_OK(meshio_load(path, MESHIO_AUTO, &m, &err));
+    unlink(path);
+    for (int i = 0; i < 4; i++) {
+        sink s = {0};
+        double best = 1e9;
+        ASSERT_OK(meshio_write(m, fs[i], sink_write, &s, &err));
+        for (int rep = 0; rep < 3; rep++) {
+            double t0 = now();
+            ASSERT_OK(meshio_read(s.b, s.n, fs[i], &b, &err));
+            best = fmin(best, now() - t0);
+            if (rep < 2)
+                mesh_free(b);
+        }
+        printf("  # %s read: %.1f MB in %.3f s = %.0f MB/s\n", meshio_format_name(fs[i]),
+               s.n / 1e6, best, s.n / 1e6 / best);
+        ASSERT_TRUE(same_mesh(m, b, K_REGION));
+#if !defined(__SANITIZE_ADDRESS__)
+        ASSERT_TRUE(s.n / 1e6 / best >= 25); /* target 50; slack for a loaded machine */
+#endif
+        mesh_free(b);
+        free(s.b);
+    }
+    mesh_free(m);
+}
+
+TEST(gmsh41_binary_1m_tets_speed)
+{
+    double t = read_1m_tets(MESHIO_GMSH41_BIN);
+
+    ASSERT_TRUE(t >= 0);
+#if defined(__SANITIZE_ADDRESS__)
+    ASSERT_TRUE(t < 8);
+#else
+    ASSERT_TRUE(t < 1);
+#endif
+}
+
+/* ---- fuzz replay ---- */
+
+TEST(fuzz_replay)
+{
+    static const char *const names[] = {"gmsh", "vtk"};
+    int total = 0, bad = 0;
+
+    for (int k = 0; k < 2; k++) {
+        int n, b = replay_fuzz(names[k], replay_meshio, &n);
+        ASSERT_TRUE(b >= 0);
+        bad += b;
+        total += n;
+    }
+    printf("  # %d fuzz inputs replayed\n", total);
+    ASSERT_TRUE(total > 0);
+    ASSERT_EQ_INT(bad, 0);
+}
+
+TEST_MAIN("formats", T(roundtrip_all_tags), T(roundtrip_no_tags), T(roundtrip_empty),
+          T(roundtrip_files), T(gmsh41_tags_out_of_order_and_skipped_types),
+          T(gmsh_entity_tags_without_physicals), T(gmsh_errors_say_where),
+          T(vtk51_layout_and_field_data), T(vtu_inline_base64), T(names_sniffing_media_types),
+          T(dev_speed_ascii), T(gmsh41_binary_1m_tets_speed), T(fuzz_replay))

@@ -1,0 +1,408 @@
+/* testio.h - helpers shared by the format tests (test_meshio, test_formats,
+ * test_surface): a growable sink for writers, meshes full of awkward values,
+ * exact comparison, dev meshes, the malformed-input corpus runner and the
+ * fuzz seed/crash replayer. */
+#ifndef QDC_TESTIO_H
+#define QDC_TESTIO_H
+
+#include "meshio.h"
+#include "surface.h"
+
+#include <dirent.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+
+typedef struct {
+    char *b;
+    size_t n, cap;
+    size_t fail_after; /* fail once more than this many bytes were written; 0 = never */
+} sink;
+
+static inline int sink_write(void *ctx, const void *d, size_t len)
+{
+    sink *s = ctx;
+
+    if (s->fail_after && s->n + len > s->fail_after)
+        return -1;
+    if (s->n + len > s->cap) {
+        size_t cap = s->cap ? s->cap : 4096;
+        while (cap < s->n + len)
+            cap *= 2;
+        s->b = realloc(s->b, cap);
+        if (!s->b)
+            return -1;
+        s->cap = cap;
+    }
+    memcpy(s->b + s->n, d, len);
+    s->n += len;
+    return 0;
+}
+
+static uint64_t rng_state __attribute__((unused)) = 88172645463325252ULL;
+
+static inline uint64_t rnd(void)
+{
+    rng_state ^= rng_state << 13;
+    rng_state ^= rng_state >> 7;
+    rng_state ^= rng_state << 17;
+    return rng_state;
+}
+
+/* Doubles that stress exact printing: random bits, subnormals, signed zero,
+ * extremes, short decimals. */
+static inline double nasty_double(int i)
+{
+    static const double fixed[] = {0.0,
+                                   -0.0,
+                                   0.1,
+                                   -0.3,
+                                   1e308,
+                                   -1.7976931348623157e308,
+                                   4.9406564584124654e-324,
+                                   2.2250738585072014e-308,
+                                   1.0 / 3.0,
+                                   123456789012345678.0,
+                                   5e-1,
+                                   9007199254740993.0};
+    uint64_t u;
+    double x;
+
+    if (i < (int)(sizeof fixed / sizeof fixed[0]))
+        return fixed[i];
+    if (i % 3 == 0)
+        return (double)(int64_t)(rnd() % 2001) / 1000.0 - 1.0;
+    do {
+        u = rnd();
+        memcpy(&x, &u, 8);
+    } while (!isfinite(x));
+    return x;
+}
+
+/* A mesh with every optional array filled (not a valid tet mesh: the formats
+ * don't care). */
+static inline mesh_t *make_mesh(int32_t nv, int32_t nt, int32_t ntri)
+{
+    mesh_t *m = mesh_new(nv, nt, MESH_WITH_REGION | MESH_WITH_FIXED | MESH_WITH_VREF);
+
+    if (!m)
+        return NULL;
+    for (int32_t i = 0; i < 3 * nv; i++)
+        m->xyz[i] = nasty_double(i);
+    for (int32_t i = 0; i < nv; i++) {
+        m->vref[i] = (int32_t)(rnd() % 7) - 3;
+        m->fixed[i] = rnd() % 3 == 0;
+    }
+    for (int32_t i = 0; i < 4 * nt; i++)
+        m->tets[i] = (int32_t)(rnd() % (uint64_t)nv);
+    for (int32_t t = 0; t < nt; t++)
+        m->region[t] = t % 5 == 0 ? INT32_MIN + t : (int32_t)(rnd() % 1000) - 100;
+    if (ntri && mesh_set_tris(m, ntri, 1) != QDC_OK) {
+        mesh_free(m);
+        return NULL;
+    }
+    for (int32_t i = 0; i < 3 * ntri; i++)
+        m->tris[i] = (int32_t)(rnd() % (uint64_t)nv);
+    for (int32_t t = 0; t < ntri; t++)
+        m->tri_ref[t] = (int32_t)(rnd() % 100);
+    return m;
+}
+
+static inline int same_bytes(const void *a, const void *b, size_t n)
+{
+    if (!a || !b)
+        return a == b || n == 0;
+    return memcmp(a, b, n) == 0;
+}
+
+/* What survives a format: 1 xyz+tets, 2 region, 4 fixed, 8 vref, 16 tris. */
+enum { K_REGION = 2, K_FIXED = 4, K_VREF = 8, K_TRIS = 16 };
+
+static inline int same_mesh(const mesh_t *a, const mesh_t *b, unsigned keep)
+{
+    if (a->nv != b->nv || a->nt != b->nt)
+        return 0;
+    if (!same_bytes(a->xyz, b->xyz, 24 * (size_t)a->nv) ||
+        !same_bytes(a->tets, b->tets, 16 * (size_t)a->nt))
+        return 0;
+    if ((keep & K_REGION) && !same_bytes(a->region, b->region, 4 * (size_t)a->nt))
+        return 0;
+    if ((keep & K_FIXED) && !same_bytes(a->fixed, b->fixed, (size_t)a->nv))
+        return 0;
+    if ((keep & K_VREF) && !same_bytes(a->vref, b->vref, 4 * (size_t)a->nv))
+        return 0;
+    if ((keep & K_TRIS) &&
+        (a->ntri != b->ntri || !same_bytes(a->tris, b->tris, 12 * (size_t)a->ntri) ||
+         !same_bytes(a->tri_ref, b->tri_ref, 4 * (size_t)a->ntri)))
+        return 0;
+    return 1;
+}
+
+static inline qdc_status roundtrip(const mesh_t *m, meshio_format f, mesh_t **back)
+{
+    sink s = {0};
+    qdc_error err;
+    qdc_status st = meshio_write(m, f, sink_write, &s, &err);
+
+    *back = NULL;
+    if (st == QDC_OK)
+        st = meshio_read(s.b, s.n, f, back, &err);
+    if (st != QDC_OK)
+        printf("  %s: %s\n", meshio_format_name(f), err.msg);
+    free(s.b);
+    return st;
+}
+
+static inline const char *root_path(const char *rel, char *buf, size_t n)
+{
+    const char *root = getenv("ROOT");
+
+    snprintf(buf, n, "%s%s%s", root ? root : "", root ? "/" : "", rel);
+    return buf;
+}
+
+/* gunzip a dev mesh into /tmp; returns its path or NULL if the mesh is missing. */
+static inline const char *dev_mesh(const char *name, char *out, size_t n)
+{
+    char src[512], cmd[1200];
+    struct stat sb;
+
+    root_path("../shared/meshes/dev/", src, sizeof src);
+    strncat(src, name, sizeof src - strlen(src) - 1);
+    strncat(src, ".mesh.gz", sizeof src - strlen(src) - 1);
+    if (stat(src, &sb) != 0)
+        return NULL;
+    snprintf(out, n, "/tmp/qdc_test_meshio_%d_%s.mesh", (int)getpid(), name);
+    snprintf(cmd, sizeof cmd, "gzip -dc '%s' > '%s'", src, out);
+    return system(cmd) == 0 ? out : NULL;
+}
+
+static inline double now(void)
+{
+    return qdc_now();
+}
+
+/* Seconds to read back a random 200k-vertex, 1M-tet mesh (regions in blocks)
+ * written in format f, or -1 if the round trip fails or is not exact. */
+static inline double read_1m_tets(meshio_format f)
+{
+    const int32_t nv = 200000, nt = 1000000;
+    mesh_t *m = mesh_new(nv, nt, MESH_WITH_REGION), *b = NULL;
+    sink s = {0};
+    qdc_error err;
+    double t = -1, t0;
+
+    if (!m)
+        return -1;
+    for (int32_t i = 0; i < 3 * nv; i++)
+        m->xyz[i] = (double)(rnd() >> 11) * 0x1.0p-53;
+    for (int32_t i = 0; i < 4 * nt; i++)
+        m->tets[i] = (int32_t)(rnd() % (uint64_t)nv);
+    for (int32_t i = 0; i < nt; i++)
+        m->region[i] = 1 + i / 300000;
+    if (meshio_write(m, f, sink_write, &s, &err) == QDC_OK) {
+        t0 = now();
+        if (meshio_read(s.b, s.n, f, &b, &err) == QDC_OK)
+            t = now() - t0;
+        printf("  # %s read of 1M tets (%.1f MB): %.3f s\n", meshio_format_name(f), s.n / 1e6,
+               t);
+        if (b && !same_mesh(m, b, K_REGION))
+            t = -1;
+    }
+    mesh_free(b);
+    free(s.b);
+    mesh_free(m);
+    return t;
+}
+
+static inline char *read_file(const char *path, size_t *len)
+{
+    char *buf;
+    qdc_error err;
+
+    if (meshio_slurp(path, &buf, len, &err) != QDC_OK)
+        return NULL;
+    return buf;
+}
+
+/* The input file of a corpus case: "input.<ext>" (not input.ele); ext in *ext. */
+static inline int find_input(const char *dir, char *path, size_t n, const char **ext)
+{
+    DIR *d = opendir(dir);
+    struct dirent *e;
+    static char found[64];
+    int ok = 0;
+
+    if (!d)
+        return 0;
+    while (!ok && (e = readdir(d)))
+        if (strncmp(e->d_name, "input.", 6) == 0 && strcmp(e->d_name, "input.ele") != 0 &&
+            strlen(e->d_name) < sizeof found) {
+            snprintf(found, sizeof found, "%s", e->d_name + 6);
+            snprintf(path, n, "%s/%s", dir, e->d_name);
+            ok = 1;
+        }
+    closedir(d);
+    *ext = found;
+    return ok;
+}
+
+/* One case dir: input.<ext> (input.node + input.ele for TetGen; a surface
+ * extension goes to surface_read) and expect: "STATUS [LINE:COL | @OFFSET]
+ * message substring". Returns 0 if it passes. */
+static inline int run_case(const char *dir)
+{
+    char path[1024], want_status[32], where[32] = "", want_msg[256] = "";
+    char *in = NULL, *ele = NULL, *exp = NULL;
+    const char *ext = "";
+    size_t len = 0, elen = 0, elen2;
+    mesh_t *m = NULL;
+    surface_t *sf = NULL;
+    qdc_error err;
+    qdc_status st;
+    int ok = 1, got;
+    long long l = -1, c = -1, off = -1;
+
+    if (find_input(dir, path, sizeof path, &ext))
+        in = read_file(path, &len);
+    snprintf(path, sizeof path, "%s/expect", dir);
+    exp = read_file(path, &elen2);
+    if (!in || !exp) {
+        printf("  %s: missing input.* or expect\n", dir);
+        qdc_free(in);
+        qdc_free(exp);
+        return 1;
+    }
+    exp = realloc(exp, elen2 + 1);
+    exp[elen2] = '\0';
+    exp[strcspn(exp, "\n")] = '\0';
+    sscanf(exp, "%31s %31s", want_status, where);
+    if (sscanf(where, "%lld:%lld", &l, &c) == 2 || sscanf(where, "@%lld", &off) == 1)
+        snprintf(want_msg, sizeof want_msg, "%s", strstr(exp, where) + strlen(where) + 1);
+    else
+        snprintf(want_msg, sizeof want_msg, "%s", exp + strlen(want_status) + 1);
+    if (strcmp(ext, "node") == 0) {
+        snprintf(path, sizeof path, "%s/input.ele", dir);
+        ele = read_file(path, &elen);
+        st = meshio_read_tetgen(in, len, ele, elen, &m, &err);
+    } else if (meshio_format_from_name(ext) == MESHIO_AUTO &&
+               surface_format_from_name(ext) != SURFACE_AUTO) {
+        st = surface_read(in, len, surface_format_from_name(ext), &sf, &err);
+        if (st == QDC_OK)
+            st = surface_check(sf, &err);
+    } else {
+        st = meshio_read(in, len, meshio_format_from_name(ext), &m, &err);
+    }
+    got = m != NULL || sf != NULL;
+    if (strcmp(qdc_status_name(st), want_status) != 0 || !strstr(err.msg, want_msg) ||
+        (l >= 0 && (err.line != l || err.col != c)) || (off >= 0 && err.offset != off) ||
+        (got && st != QDC_OK && !sf) || (!got && st == QDC_OK)) {
+        printf("  %s: got %s %lld:%lld @%lld \"%s\", expected \"%s\"\n", dir,
+               qdc_status_name(st), (long long)err.line, (long long)err.col,
+               (long long)err.offset, err.msg, exp);
+        ok = 0;
+    }
+    mesh_free(m);
+    surface_free(sf);
+    qdc_free(in);
+    qdc_free(ele);
+    free(exp);
+    return ok ? 0 : 1;
+}
+
+/* Every case under tests/data/meshio whose name starts with one of the
+ * comma-separated prefixes (NULL: all); -1 if the directory is missing. */
+static inline int run_corpus(const char *prefixes, int *n)
+{
+    char dir[512], sub[800];
+    DIR *d = opendir(root_path("tests/data/meshio", dir, sizeof dir));
+    struct dirent *e;
+    int bad = 0;
+
+    *n = 0;
+    if (!d)
+        return -1;
+    while ((e = readdir(d))) {
+        int take = !prefixes;
+        for (const char *p = prefixes; p && *p && !take;) {
+            size_t k = strcspn(p, ",");
+            take = strncmp(e->d_name, p, k) == 0;
+            p += k + (p[k] == ',');
+        }
+        if (e->d_name[0] == '.' || !take)
+            continue;
+        snprintf(sub, sizeof sub, "%s/%s", dir, e->d_name);
+        bad += run_case(sub);
+        (*n)++;
+    }
+    closedir(d);
+    return bad;
+}
+
+/* Replay tests/fuzz/seeds/<name> and tests/fuzz/crashes/<name> through fn
+ * (0 = fine), each whole and every prefix of the small ones (truncation
+ * anywhere). Returns the failures; *n the inputs; -1 without seeds. */
+static inline int replay_fuzz(const char *name, int (*fn)(const char *, size_t), int *n)
+{
+    int bad = 0;
+
+    *n = 0;
+    for (int k = 0; k < 2; k++) {
+        char rel[256], dir[512], path[800];
+        DIR *d;
+        struct dirent *e;
+        snprintf(rel, sizeof rel, "tests/fuzz/%s/%s", k ? "crashes" : "seeds", name);
+        d = opendir(root_path(rel, dir, sizeof dir));
+        if (!d) {
+            if (k == 0)
+                return -1; /* crashes/ exists only when there were some */
+            continue;
+        }
+        while ((e = readdir(d))) {
+            size_t len;
+            char *buf;
+            if (e->d_name[0] == '.')
+                continue;
+            snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
+            buf = read_file(path, &len);
+            if (!buf)
+                continue;
+            if (fn(buf, len)) {
+                printf("  %s: bad status\n", path);
+                bad++;
+            }
+            for (size_t p = 0; len < 4096 && p < len; p++)
+                bad += fn(buf, p);
+            qdc_free(buf);
+            (*n)++;
+        }
+        closedir(d);
+    }
+    return bad;
+}
+
+/* Every mesh reader on buf: a valid status, a mesh exactly on success. */
+static inline int replay_meshio(const char *buf, size_t len)
+{
+    for (int f = 0; f < MESHIO_FORMAT_COUNT; f++) {
+        mesh_t *m = NULL;
+        qdc_error err;
+        qdc_status st;
+        if (f == MESHIO_TETGEN)
+            st = meshio_read_tetgen(buf, len / 2, buf + len / 2, len - len / 2, &m, &err);
+        else
+            st = meshio_read(buf, len, (meshio_format)f, &m, &err);
+        if ((unsigned)st >= QDC_STATUS_COUNT || (st == QDC_OK) != (m != NULL) ||
+            (st != QDC_OK && err.status != st))
+            return 1;
+        mesh_free(m);
+    }
+    return 0;
+}
+
+#endif
