@@ -61,8 +61,11 @@ static int route_of(const char *url, char *id)
     static const struct {
         const char *path;
         int route;
-    } fixed[] = {{"/livez", R_LIVEZ},   {"/readyz", R_READYZ},   {"/metrics", R_METRICS},
-                 {"/v1/jobs", R_JOBS},  {"/v1/jobs/", R_JOBS}};
+    } fixed[] = {{"/livez", R_LIVEZ},
+                 {"/readyz", R_READYZ},
+                 {"/metrics", R_METRICS},
+                 {"/v1/jobs", R_JOBS},
+                 {"/v1/jobs/", R_JOBS}};
     static const struct {
         const char *suffix;
         int route;
@@ -167,8 +170,9 @@ static void job_json(req *r, const job_rec *j, sbuf *b)
     int cnt = 0, done;
     long lastseq;
 
-    sb_printf(b, "{\"id\":\"%s\",\"name\":\"jobs/%s\",\"state\":\"%s\",\"done\":%s", j->id,
-              j->id, job_state_name(j->state), job_state_done(j->state) ? "true" : "false");
+    sb_printf(b, "{\"id\":\"%s\",\"name\":\"jobs/%s\",\"state\":\"%s\",\"done\":%s",
+              j->id, j->id, job_state_name(j->state),
+              job_state_done(j->state) ? "true" : "false");
     sb_printf(b, ",\"created\":%.3f", j->created);
     if (j->started > 0)
         sb_printf(b, ",\"started\":%.3f", j->started);
@@ -179,12 +183,14 @@ static void job_json(req *r, const job_rec *j, sbuf *b)
                   j->purged || j->expires < wall_now() ? "true" : "false");
     sb_printf(b, ",\"attempts\":%d,\"cancel_requested\":%s", j->attempts,
               j->cancel_requested ? "true" : "false");
-    sb_printf(b, ",\"mesh\":{\"format\":\"%s\",\"vertices\":%lld,\"tets\":%lld,\"bytes\":%lld}",
-              j->format, (long long)j->nv, (long long)j->nt, (long long)j->in_bytes);
+    sb_printf(
+        b, ",\"mesh\":{\"format\":\"%s\",\"vertices\":%lld,\"tets\":%lld,\"bytes\":%lld}",
+        j->format, (long long)j->nv, (long long)j->nt, (long long)j->in_bytes);
     sb_printf(b, ",\"options\":%s", j->options[0] ? j->options : "{}");
     /* Latest metrics: from memory while the run is live, else from the row. */
-    if (j->state == JOB_RUNNING && poll_read(r->q->hub, j->id, LONG_MAX, &last, &cnt,
-                                             &lastseq, &done) && lastseq >= 0) {
+    if (j->state == JOB_RUNNING &&
+        poll_read(r->q->hub, j->id, LONG_MAX, &last, &cnt, &lastseq, &done) &&
+        lastseq >= 0) {
         last.len = 0;
         poll_read(r->q->hub, j->id, lastseq - 1, &last, &cnt, &lastseq, &done);
         sb_printf(b, ",\"iterations\":%ld,\"progress\":%s", lastseq + 1,
@@ -200,11 +206,14 @@ static void job_json(req *r, const job_rec *j, sbuf *b)
     }
     if (j->error[0])
         sb_printf(b, ",\"error\":%s", j->error);
-    sb_printf(b, ",\"links\":{\"self\":\"/v1/jobs/%s\",\"progress\":\"/v1/jobs/%s/progress\","
-                 "\"events\":\"/v1/jobs/%s/events\"",
-              j->id, j->id, j->id);
+    sb_printf(
+        b,
+        ",\"links\":{\"self\":\"/v1/jobs/%s\",\"progress\":\"/v1/jobs/%s/progress\","
+        "\"events\":\"/v1/jobs/%s/events\"",
+        j->id, j->id, j->id);
     if (j->state == JOB_SUCCEEDED && !j->purged && j->expires >= wall_now())
-        sb_printf(b, ",\"result\":\"/v1/jobs/%s/result\",\"report\":\"/v1/jobs/%s/report\"",
+        sb_printf(b,
+                  ",\"result\":\"/v1/jobs/%s/result\",\"report\":\"/v1/jobs/%s/report\"",
                   j->id, j->id);
     sb_puts(b, "}}");
 }
@@ -258,7 +267,8 @@ static enum MHD_Result begin_upload(struct MHD_Connection *c, req *r)
     s.o.time_limit = s.cap;
     MHD_get_connection_values(c, MHD_GET_ARGUMENT_KIND, scan_option, &s);
     if (s.bad)
-        return http_problem(c, r, 400, "invalid-option", "invalid option", s.why, NULL, NULL);
+        return http_problem(c, r, 400, "invalid-option", "invalid option", s.why, NULL,
+                            NULL);
     sbuf oj = {0};
     job_opt_json(&s.o, &oj);
     snprintf(r->options, sizeof r->options, "%s", oj.buf ? oj.buf : "{}");
@@ -271,9 +281,9 @@ static enum MHD_Result begin_upload(struct MHD_Connection *c, req *r)
         for (size_t i = 0; ok && i < n; i++)
             ok = ik[i] > 32 && ik[i] < 127;
         if (!ok)
-            return http_problem(c, r, 400, "invalid-idempotency-key", "invalid Idempotency-Key",
-                                "the key must be 1 to 128 visible ASCII characters", NULL,
-                                NULL);
+            return http_problem(
+                c, r, 400, "invalid-idempotency-key", "invalid Idempotency-Key",
+                "the key must be 1 to 128 visible ASCII characters", NULL, NULL);
         memcpy(r->idem, ik, n + 1);
         r->hashing = 1;
         sha256_init(&r->hash);
@@ -282,7 +292,8 @@ static enum MHD_Result begin_upload(struct MHD_Connection *c, req *r)
 
     /* A replay of an accepted request is answered even when the queue is full. */
     job_rec prev;
-    if (!r->idem[0] || q->store->ops->find_idem(q->store, r->owner, r->idem, &prev) != QDC_OK) {
+    if (!r->idem[0] ||
+        q->store->ops->find_idem(q->store, r->owner, r->idem, &prev) != QDC_OK) {
         if (q->store->ops->counts(q->store, &cnt) == QDC_OK &&
             cnt.by_state[JOB_QUEUED] >= q->cfg.max_queued) {
             static const char *const h[] = {MHD_HTTP_HEADER_RETRY_AFTER, "5", NULL};
@@ -313,13 +324,14 @@ static enum MHD_Result begin_upload(struct MHD_Connection *c, req *r)
         char d[256];
         snprintf(d, sizeof d, "media type '%.100s' is not a mesh type this server reads",
                  ctype);
-        return http_problem(c, r, 415, "unsupported-media-type", "unsupported media type", d,
+        return http_problem(c, r, 415, "unsupported-media-type", "unsupported media type",
+                            d,
                             "\"accepted\":[\"" MEDIA_QMESH "\",\"application/json\","
                             "\"model/x-medit\",\"text/plain\"]",
                             NULL);
     }
     limit = r->fmt == MESHIO_JSON && q->cfg.max_json < q->cfg.max_body ? q->cfg.max_json
-                                                                        : q->cfg.max_body;
+                                                                       : q->cfg.max_body;
     cl = MHD_lookup_connection_value(c, MHD_HEADER_KIND, MHD_HTTP_HEADER_CONTENT_LENGTH);
     if (cl && strtoll(cl, NULL, 10) > limit) {
         r->too_big = 1;
@@ -408,8 +420,8 @@ static enum MHD_Result mesh_problem(struct MHD_Connection *c, req *r, qdc_status
      * the library's table says for unexpected codes. */
     if (status >= 500 && st != QDC_ENOMEM)
         status = 422;
-    sb_printf(&x, "\"format\":\"%s\"", meshio_format_name(r->fmt) ? meshio_format_name(r->fmt)
-                                                                  : "unknown");
+    sb_printf(&x, "\"format\":\"%s\"",
+              meshio_format_name(r->fmt) ? meshio_format_name(r->fmt) : "unknown");
     if (e->line >= 0)
         sb_printf(&x, ",\"line\":%lld", (long long)e->line);
     if (e->col >= 0)
@@ -474,11 +486,12 @@ static enum MHD_Result idem_replay(struct MHD_Connection *c, req *r, const job_r
         snprintf(extra, sizeof extra, "\"job\":\"%s\"", old->id);
         return http_problem(c, r, 422, "idempotency-key-reused",
                             "Idempotency-Key reused with a different request",
-                            "this key was already used for a different body or options", extra,
-                            NULL);
+                            "this key was already used for a different body or options",
+                            extra, NULL);
     }
     snprintf(loc, sizeof loc, "/v1/jobs/%s", old->id);
-    const char *const h[] = {MHD_HTTP_HEADER_LOCATION, loc, "Idempotent-Replayed", "true", NULL};
+    const char *const h[] = {MHD_HTTP_HEADER_LOCATION, loc, "Idempotent-Replayed", "true",
+                             NULL};
     return reply_job(c, r, 202, old, h);
 }
 
@@ -508,16 +521,17 @@ static enum MHD_Result process_upload(struct MHD_Connection *c, req *r)
     }
     buf = mmap(NULL, (size_t)r->body_len, PROT_READ, MAP_PRIVATE, r->fd, 0);
     if (buf == MAP_FAILED)
-        return http_problem(c, r, 500, "io", "i/o error", "cannot map the upload", NULL, NULL);
+        return http_problem(c, r, 500, "io", "i/o error", "cannot map the upload", NULL,
+                            NULL);
     if (r->sniff) {
         r->fmt = meshio_sniff(buf, (size_t)r->body_len);
         if (r->fmt == MESHIO_AUTO) {
             munmap(buf, (size_t)r->body_len);
-            return http_problem(c, r, 415, "unsupported-media-type", "unsupported media type",
-                                "the body is not a mesh this server recognises; set "
-                                "Content-Type to " MEDIA_QMESH
-                                ", application/json or model/x-medit",
-                                NULL, NULL);
+            return http_problem(
+                c, r, 415, "unsupported-media-type", "unsupported media type",
+                "the body is not a mesh this server recognises; set "
+                "Content-Type to " MEDIA_QMESH ", application/json or model/x-medit",
+                NULL, NULL);
         }
     }
     double t_parse = mono_now();
@@ -527,12 +541,16 @@ static enum MHD_Result process_upload(struct MHD_Connection *c, req *r)
         return mesh_problem(c, r, st, &e);
     }
     if (m->nv > q->cfg.max_vertices || m->nt > q->cfg.max_tets) {
-        snprintf(d, sizeof d, "the mesh has %d vertices and %d tets; this server accepts %lld "
-                              "and %lld at most",
-                 m->nv, m->nt, (long long)q->cfg.max_vertices, (long long)q->cfg.max_tets);
-        snprintf(extra, sizeof extra, "\"vertices\":%d,\"tets\":%d,\"max_vertices\":%lld,"
-                                      "\"max_tets\":%lld",
-                 m->nv, m->nt, (long long)q->cfg.max_vertices, (long long)q->cfg.max_tets);
+        snprintf(d, sizeof d,
+                 "the mesh has %d vertices and %d tets; this server accepts %lld "
+                 "and %lld at most",
+                 m->nv, m->nt, (long long)q->cfg.max_vertices,
+                 (long long)q->cfg.max_tets);
+        snprintf(extra, sizeof extra,
+                 "\"vertices\":%d,\"tets\":%d,\"max_vertices\":%lld,"
+                 "\"max_tets\":%lld",
+                 m->nv, m->nt, (long long)q->cfg.max_vertices,
+                 (long long)q->cfg.max_tets);
         mesh_free(m);
         return http_problem(c, r, 413, "too-big", "mesh exceeds server limits", d, extra,
                             NULL);
@@ -658,10 +676,12 @@ static enum MHD_Result finish_upload(struct MHD_Connection *c, req *r)
                      "%s (proto/mesh-binary.md)",
                      (long long)lim, MEDIA_QMESH);
         else
-            snprintf(d, sizeof d, "request bodies are limited to %lld bytes", (long long)lim);
+            snprintf(d, sizeof d, "request bodies are limited to %lld bytes",
+                     (long long)lim);
         snprintf(extra, sizeof extra, "\"max_bytes\":%lld%s", (long long)lim,
                  json ? ",\"use\":\"" MEDIA_QMESH "\"" : "");
-        return http_problem(c, r, 413, "too-big", "request body too large", d, extra, NULL);
+        return http_problem(c, r, 413, "too-big", "request body too large", d, extra,
+                            NULL);
     }
     if (r->io_err || r->fd < 0)
         return http_problem(c, r, 507, "io", "insufficient storage",
@@ -695,8 +715,8 @@ static enum MHD_Result finish_upload(struct MHD_Connection *c, req *r)
 
 /* Records of a finished run from DATA/jobs/ID/progress.jsonl (line k = seq k),
  * as a JSON list body (sse = 0) or as SSE events (sse = 1). */
-static void file_records(req *r, const char *id, long after, int sse, sbuf *out, int *count,
-                         long *last)
+static void file_records(req *r, const char *id, long after, int sse, sbuf *out,
+                         int *count, long *last)
 {
     char path[4300];
     size_t len = 0;
@@ -826,8 +846,8 @@ static enum MHD_Result do_progress(struct MHD_Connection *c, req *r)
                          "'wait' must be a number of seconds in [0, 3600] (the server "
                          "waits at most %g)",
                          q->cfg.wait_cap);
-                return http_problem(c, r, 400, "invalid-parameter", "invalid parameter", d,
-                                    "\"parameter\":\"wait\"", NULL);
+                return http_problem(c, r, 400, "invalid-parameter", "invalid parameter",
+                                    d, "\"parameter\":\"wait\"", NULL);
             }
         }
         if (wait > q->cfg.wait_cap)
@@ -850,8 +870,9 @@ static enum MHD_Result do_progress(struct MHD_Connection *c, req *r)
         if (q->store->ops->get(q->store, j.id, &j) != QDC_OK)
             break;
     }
-    sb_printf(&b, "{\"id\":\"%s\",\"state\":\"%s\",\"done\":%s,\"after\":%ld,"
-                  "\"next_after\":%ld,\"count\":%d,\"records\":[",
+    sb_printf(&b,
+              "{\"id\":\"%s\",\"state\":\"%s\",\"done\":%s,\"after\":%ld,"
+              "\"next_after\":%ld,\"count\":%d,\"records\":[",
               j.id, job_state_name(j.state), done ? "true" : "false", r->after,
               count ? last : r->after, count);
     if (recs.len)
@@ -899,8 +920,10 @@ static ssize_t sse_reader(void *cls, uint64_t pos, char *buf, size_t max)
             continue;
         }
         if (done || poll_shutting_down(q->hub)) {
-            sb_printf(&r->sse, "event: end\ndata: {\"id\":\"%s\",\"state\":\"%s\",\"done\":%s}\n\n",
-                      j.id, job_state_name(j.state), done ? "true" : "false");
+            sb_printf(
+                &r->sse,
+                "event: end\ndata: {\"id\":\"%s\",\"state\":\"%s\",\"done\":%s}\n\n",
+                j.id, job_state_name(j.state), done ? "true" : "false");
             r->sse_end = 1;
             continue;
         }
@@ -932,7 +955,8 @@ static enum MHD_Result do_events(struct MHD_Connection *c, req *r)
                             "Last-Event-ID / 'after' must be an integer >= -1",
                             "\"parameter\":\"after\"", NULL);
     r->parked_ever = 1; /* a stream: its duration is not a latency */
-    resp = MHD_create_response_from_callback(MHD_SIZE_UNKNOWN, 16384, sse_reader, r, NULL);
+    resp =
+        MHD_create_response_from_callback(MHD_SIZE_UNKNOWN, 16384, sse_reader, r, NULL);
     static const char *const h[] = {MHD_HTTP_HEADER_CONTENT_TYPE, "text/event-stream",
                                     MHD_HTTP_HEADER_CACHE_CONTROL, "no-store", NULL};
     return http_reply_response(c, r, 200, resp, h);
@@ -951,14 +975,17 @@ static int not_servable(struct MHD_Connection *c, req *r, const job_rec *j,
         snprintf(d, sizeof d, "job %s is %s; poll /v1/jobs/%s/progress", j->id,
                  job_state_name(j->state), j->id);
         snprintf(extra, sizeof extra, "\"state\":\"%s\"", job_state_name(j->state));
-        *ret = http_problem(c, r, 409, "not-ready", "the job has not finished", d, extra, h);
+        *ret =
+            http_problem(c, r, 409, "not-ready", "the job has not finished", d, extra, h);
         return 1;
     }
     if (j->state != JOB_SUCCEEDED) {
-        snprintf(d, sizeof d, "job %s %s and has no result", j->id, job_state_name(j->state));
+        snprintf(d, sizeof d, "job %s %s and has no result", j->id,
+                 job_state_name(j->state));
         snprintf(extra, sizeof extra, "\"state\":\"%s\"%s%s", job_state_name(j->state),
                  j->error[0] ? ",\"error\":" : "", j->error);
-        *ret = http_problem(c, r, 409, "no-result", "the job has no result", d, extra, NULL);
+        *ret =
+            http_problem(c, r, 409, "no-result", "the job has no result", d, extra, NULL);
         return 1;
     }
     if (j->purged || j->expires < wall_now()) {
@@ -1060,8 +1087,13 @@ static enum MHD_Result do_result(struct MHD_Connection *c, req *r)
     if (not_servable(c, r, &j, &ret))
         return ret;
     snprintf(etag, sizeof etag, "\"%s\"", (const char *)&j + fmts[k].etag_off);
-    const char *const h[] = {MHD_HTTP_HEADER_ETAG, etag, MHD_HTTP_HEADER_VARY, "Accept",
-                             MHD_HTTP_HEADER_CACHE_CONTROL, "private, max-age=3600", NULL};
+    const char *const h[] = {MHD_HTTP_HEADER_ETAG,
+                             etag,
+                             MHD_HTTP_HEADER_VARY,
+                             "Accept",
+                             MHD_HTTP_HEADER_CACHE_CONTROL,
+                             "private, max-age=3600",
+                             NULL};
     if (etag_matches(MHD_lookup_connection_value(c, MHD_HEADER_KIND,
                                                  MHD_HTTP_HEADER_IF_NONE_MATCH),
                      etag))
@@ -1106,8 +1138,8 @@ static enum MHD_Result do_cancel(struct MHD_Connection *c, req *r)
             job_pool_cancel(q->pool, j.id);
         }
         if (q->store->ops->get(q->store, j.id, &j) != QDC_OK)
-            return http_problem(c, r, 404, "not-found", "no such job", "the job was deleted",
-                                NULL, NULL);
+            return http_problem(c, r, 404, "not-found", "no such job",
+                                "the job was deleted", NULL, NULL);
     }
     return reply_job(c, r, 200, &j, no_headers);
 }
@@ -1160,12 +1192,13 @@ static enum MHD_Result do_list(struct MHD_Connection *c, req *r)
                             "\"parameter\":\"page_token\"", NULL);
     rows = malloc((size_t)size * sizeof *rows);
     if (!rows)
-        return http_problem(c, r, 503, "out-of-memory", "out of memory", "try a smaller page",
-                            NULL, NULL);
-    if (r->q->store->ops->list(r->q->store, r->owner, after, (int)size, rows, &n) != QDC_OK) {
+        return http_problem(c, r, 503, "out-of-memory", "out of memory",
+                            "try a smaller page", NULL, NULL);
+    if (r->q->store->ops->list(r->q->store, r->owner, after, (int)size, rows, &n) !=
+        QDC_OK) {
         free(rows);
-        return http_problem(c, r, 500, "store", "job store error", "cannot list jobs", NULL,
-                            NULL);
+        return http_problem(c, r, 500, "store", "job store error", "cannot list jobs",
+                            NULL, NULL);
     }
     sb_puts(&b, "{\"jobs\":[");
     for (int i = 0; i < n; i++) {
@@ -1199,35 +1232,45 @@ static enum MHD_Result do_metrics(struct MHD_Connection *c, req *r)
     for (int s = 0; s < JOB_STATE_COUNT; s++)
         sb_printf(&b, "qdcd_jobs{state=\"%s\"} %lld\n", job_state_name((job_state)s),
                   (long long)cnt.by_state[s]);
-    sb_printf(&b, "# HELP qdcd_queue_depth Jobs waiting for a worker.\n"
-                  "# TYPE qdcd_queue_depth gauge\nqdcd_queue_depth %lld\n",
+    sb_printf(&b,
+              "# HELP qdcd_queue_depth Jobs waiting for a worker.\n"
+              "# TYPE qdcd_queue_depth gauge\nqdcd_queue_depth %lld\n",
               (long long)cnt.by_state[JOB_QUEUED]);
-    sb_printf(&b, "# HELP qdcd_workers Worker threads.\n# TYPE qdcd_workers gauge\n"
-                  "qdcd_workers %d\n",
+    sb_printf(&b,
+              "# HELP qdcd_workers Worker threads.\n# TYPE qdcd_workers gauge\n"
+              "qdcd_workers %d\n",
               q->cfg.workers);
-    sb_printf(&b, "# HELP qdcd_workers_busy Workers running a job.\n"
-                  "# TYPE qdcd_workers_busy gauge\nqdcd_workers_busy %d\n",
+    sb_printf(&b,
+              "# HELP qdcd_workers_busy Workers running a job.\n"
+              "# TYPE qdcd_workers_busy gauge\nqdcd_workers_busy %d\n",
               job_pool_busy(q->pool));
-    sb_printf(&b, "# HELP qdcd_parked_connections Long-polls and event streams waiting.\n"
-                  "# TYPE qdcd_parked_connections gauge\nqdcd_parked_connections %d\n",
+    sb_printf(&b,
+              "# HELP qdcd_parked_connections Long-polls and event streams waiting.\n"
+              "# TYPE qdcd_parked_connections gauge\nqdcd_parked_connections %d\n",
               poll_parked_count(q->hub));
-    sb_printf(&b, "# HELP qdcd_iterations_total Progress records published.\n"
-                  "# TYPE qdcd_iterations_total counter\nqdcd_iterations_total %lld\n",
+    sb_printf(&b,
+              "# HELP qdcd_iterations_total Progress records published.\n"
+              "# TYPE qdcd_iterations_total counter\nqdcd_iterations_total %lld\n",
               (long long)atomic_load(&q->m.iterations));
-    sb_printf(&b, "# HELP qdcd_upload_bytes_total Request body bytes received on uploads.\n"
-                  "# TYPE qdcd_upload_bytes_total counter\nqdcd_upload_bytes_total %lld\n",
+    sb_printf(&b,
+              "# HELP qdcd_upload_bytes_total Request body bytes received on uploads.\n"
+              "# TYPE qdcd_upload_bytes_total counter\nqdcd_upload_bytes_total %lld\n",
               (long long)atomic_load(&q->m.upload_bytes));
-    sb_printf(&b, "# HELP qdcd_jobs_submitted_total Jobs accepted.\n"
-                  "# TYPE qdcd_jobs_submitted_total counter\nqdcd_jobs_submitted_total %lld\n",
-              (long long)atomic_load(&q->m.submitted));
-    sb_printf(&b, "# HELP qdcd_jobs_rejected_total Submissions refused (4xx).\n"
-                  "# TYPE qdcd_jobs_rejected_total counter\nqdcd_jobs_rejected_total %lld\n",
+    sb_printf(
+        &b,
+        "# HELP qdcd_jobs_submitted_total Jobs accepted.\n"
+        "# TYPE qdcd_jobs_submitted_total counter\nqdcd_jobs_submitted_total %lld\n",
+        (long long)atomic_load(&q->m.submitted));
+    sb_printf(&b,
+              "# HELP qdcd_jobs_rejected_total Submissions refused (4xx).\n"
+              "# TYPE qdcd_jobs_rejected_total counter\nqdcd_jobs_rejected_total %lld\n",
               (long long)atomic_load(&q->m.rejected));
     sb_puts(&b, "# HELP qdcd_jobs_finished_total Runs ended by this process, by state.\n"
                 "# TYPE qdcd_jobs_finished_total counter\n");
     for (int s = JOB_SUCCEEDED; s < JOB_STATE_COUNT; s++)
         sb_printf(&b, "qdcd_jobs_finished_total{state=\"%s\"} %lld\n",
-                  job_state_name((job_state)s), (long long)atomic_load(&q->m.finished[s]));
+                  job_state_name((job_state)s),
+                  (long long)atomic_load(&q->m.finished[s]));
     sb_puts(&b, "# HELP qdcd_http_responses_total Responses by status class.\n"
                 "# TYPE qdcd_http_responses_total counter\n");
     for (int k = 1; k < 6; k++)
@@ -1245,8 +1288,9 @@ static enum MHD_Result do_metrics(struct MHD_Connection *c, req *r)
             sb_printf(&b, "qdcd_http_request_duration_seconds_bucket{le=\"+Inf\"} %lld\n",
                       cum);
     }
-    sb_printf(&b, "qdcd_http_request_duration_seconds_sum %.6f\n"
-                  "qdcd_http_request_duration_seconds_count %lld\n",
+    sb_printf(&b,
+              "qdcd_http_request_duration_seconds_sum %.6f\n"
+              "qdcd_http_request_duration_seconds_count %lld\n",
               (double)atomic_load(&q->m.lat_sum_us) * 1e-6, cum);
     ret = http_reply(c, r, 200, "text/plain; version=0.0.4", b.buf ? b.buf : "",
                      b.buf ? b.len : 0, no_headers);
@@ -1260,8 +1304,8 @@ static enum MHD_Result do_readyz(struct MHD_Connection *c, req *r)
     char body[160];
 
     if (poll_shutting_down(r->q->hub) || r->q->stop)
-        return http_reply(c, r, 503, "application/json", "{\"status\":\"stopping\"}\n", 22,
-                          no_headers);
+        return http_reply(c, r, 503, "application/json", "{\"status\":\"stopping\"}\n",
+                          22, no_headers);
     if (r->q->store->ops->counts(r->q->store, &cnt) != QDC_OK)
         return http_reply(c, r, 503, "application/json", "{\"status\":\"store\"}\n", 19,
                           no_headers);

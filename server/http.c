@@ -114,7 +114,8 @@ enum MHD_Result http_reply(struct MHD_Connection *c, req *r, unsigned status,
 
     if (!resp)
         return MHD_NO;
-    if (ctype && MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE, ctype) != MHD_YES) {
+    if (ctype &&
+        MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE, ctype) != MHD_YES) {
         MHD_destroy_response(resp);
         return MHD_NO;
     }
@@ -164,8 +165,8 @@ enum MHD_Result http_reply_file(struct MHD_Connection *c, req *r, unsigned statu
     if (fd < 0 || fstat(fd, &sb)) {
         if (fd >= 0)
             close(fd);
-        return http_problem(c, r, 500, "io", "i/o error", "a stored file could not be read",
-                            NULL, NULL);
+        return http_problem(c, r, 500, "io", "i/o error",
+                            "a stored file could not be read", NULL, NULL);
     }
     resp = MHD_create_response_from_fd((uint64_t)sb.st_size, fd); /* owns fd */
     if (!resp) {
@@ -211,12 +212,11 @@ qdc_status http_start(qdcd *q, qdc_error *err)
         flags |= MHD_USE_IPv6;
     q->mhd = MHD_start_daemon(
         flags, 0, NULL, NULL, on_request, q, MHD_OPTION_EXTERNAL_LOGGER, log_mhd, q,
-        MHD_OPTION_SOCK_ADDR, ai->ai_addr,
-        MHD_OPTION_CONNECTION_LIMIT, (unsigned)q->cfg.max_connections,
-        MHD_OPTION_CONNECTION_TIMEOUT, (unsigned)q->cfg.conn_timeout,
-        MHD_OPTION_CONNECTION_MEMORY_LIMIT, (size_t)128 * 1024,
-        MHD_OPTION_LISTEN_BACKLOG_SIZE, 1024U, MHD_OPTION_NOTIFY_COMPLETED, on_completed, q,
-        MHD_OPTION_END);
+        MHD_OPTION_SOCK_ADDR, ai->ai_addr, MHD_OPTION_CONNECTION_LIMIT,
+        (unsigned)q->cfg.max_connections, MHD_OPTION_CONNECTION_TIMEOUT,
+        (unsigned)q->cfg.conn_timeout, MHD_OPTION_CONNECTION_MEMORY_LIMIT,
+        (size_t)128 * 1024, MHD_OPTION_LISTEN_BACKLOG_SIZE, 1024U,
+        MHD_OPTION_NOTIFY_COMPLETED, on_completed, q, MHD_OPTION_END);
     freeaddrinfo(ai);
     if (!q->mhd)
         return qdc_fail(err, QDC_EIO, "cannot listen on %s:%d", q->cfg.host, q->cfg.port);

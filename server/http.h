@@ -20,7 +20,7 @@ typedef struct req {
     int status;  /* status queued, for metrics (0 = none yet) */
     int replied; /* a response is queued: ignore the rest */
     int parked_ever;
-    int upload;  /* POST /v1/jobs: a 4xx counts as a rejected submission */
+    int upload; /* POST /v1/jobs: a 4xx counts as a rejected submission */
     int route;
     char id[JOB_ID_LEN + 1];
     char owner[65];
@@ -69,6 +69,7 @@ enum MHD_Result http_reply_file(struct MHD_Connection *c, req *r, unsigned statu
                                 const char *path, const char *ctype,
                                 const char *const *headers);
 enum MHD_Result http_reply_response(struct MHD_Connection *c, req *r, unsigned status,
-                                    struct MHD_Response *resp, const char *const *headers);
+                                    struct MHD_Response *resp,
+                                    const char *const *headers);
 
 #endif

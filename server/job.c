@@ -123,7 +123,8 @@ int job_opt_set(opt_options *o, const char *key, const char *val, double cap_tim
     case K_BOOL:
         if (!strcmp(val, "1") || !strcasecmp(val, "true") || !strcasecmp(val, "on"))
             *(int *)f = 1;
-        else if (!strcmp(val, "0") || !strcasecmp(val, "false") || !strcasecmp(val, "off"))
+        else if (!strcmp(val, "0") || !strcasecmp(val, "false") ||
+                 !strcasecmp(val, "off"))
             *(int *)f = 0;
         else
             st = QDC_EINVAL;
@@ -150,7 +151,8 @@ int job_opt_set(opt_options *o, const char *key, const char *val, double cap_tim
             snprintf(why, why_cap, "option '%s': '%s' is not a number in [%g, %g]", key,
                      val, opt_table[i].lo, opt_table[i].hi);
         else
-            snprintf(why, why_cap, "option '%s': '%s' is not an accepted value", key, val);
+            snprintf(why, why_cap, "option '%s': '%s' is not an accepted value", key,
+                     val);
         return -1;
     }
     if (cap_time > 0 && (o->time_limit <= 0 || o->time_limit > cap_time))
@@ -408,7 +410,8 @@ static void run_job(worker *w, job_rec *j)
         j->state = JOB_CANCELLED;
         snprintf(j->stop_reason, sizeof j->stop_reason, "cancelled");
     } else if (res.outcome == OPT_FAILED) {
-        snprintf(detail, sizeof detail, "the optimizer failed (%s); the input is unchanged",
+        snprintf(detail, sizeof detail,
+                 "the optimizer failed (%s); the input is unchanged",
                  res.stop_reason[0] ? res.stop_reason : "no detail");
         problem(j, 500, "optimizer-failed", "optimization failed", detail);
         j->state = JOB_FAILED;
@@ -490,7 +493,8 @@ static void *worker_main(void *arg)
         w->release = 0;
         pthread_mutex_unlock(&p->lock);
         if (q->cfg.verbose)
-            fprintf(stderr, "qdcd: %s runs job %s (attempt %d)\n", w->name, j.id, j.attempts);
+            fprintf(stderr, "qdcd: %s runs job %s (attempt %d)\n", w->name, j.id,
+                    j.attempts);
         run_job(w, &j);
         pthread_mutex_lock(&p->lock);
         w->job[0] = 0;

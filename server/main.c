@@ -9,9 +9,9 @@
 
 #include <errno.h>
 #include <getopt.h>
-#include <stddef.h>
 #include <pthread.h>
 #include <signal.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -43,7 +43,8 @@ static void usage(FILE *f)
         "  --max-tets N              (default 100000000)\n"
         "  --max-queued N            queued jobs before 429 (default 64)\n"
         "  --job-time-limit SECONDS  optimizer time budget per job (default 3600)\n"
-        "  --retention SECONDS       results kept after a job ends, then 410 (default 86400)\n"
+        "  --retention SECONDS       results kept after a job ends, then 410 (default "
+        "86400)\n"
         "  --max-wait SECONDS        cap of the long-poll 'wait' (default 60)\n"
         "  --max-attempts N          runs of a job interrupted by crashes before it\n"
         "                            fails (default 3)\n"
@@ -232,7 +233,8 @@ static int parse_args(int argc, char **argv, qdcd_config *c)
     while ((o = getopt_long(argc, argv, "vh", lo, NULL)) != -1) {
         if (o >= 0 && o < (int)N_CLI) {
             if (set_cli(&cli_opts[o], optarg, c)) {
-                fprintf(stderr, "qdcd: bad value for --%s: '%s'\n", cli_opts[o].name, optarg);
+                fprintf(stderr, "qdcd: bad value for --%s: '%s'\n", cli_opts[o].name,
+                        optarg);
                 return -1;
             }
         } else if (o == O_HASH) {
@@ -323,8 +325,9 @@ int main(int argc, char **argv)
     if (q->cfg.tokens_file[0] && load_tokens(q, q->cfg.tokens_file))
         return 2;
     if (!is_loopback(q->cfg.host) && !q->ntokens && !q->cfg.insecure) {
-        fprintf(stderr, "qdcd: refusing to listen on %s without --tokens (anyone could "
-                        "submit jobs); pass --insecure to do it anyway\n",
+        fprintf(stderr,
+                "qdcd: refusing to listen on %s without --tokens (anyone could "
+                "submit jobs); pass --insecure to do it anyway\n",
                 q->cfg.host);
         return 2;
     }
@@ -354,13 +357,15 @@ int main(int argc, char **argv)
         fprintf(stderr, "qdcd: %s\n", err.msg);
         return 1;
     }
-    if (q->store->ops->recover(q->store, q->cfg.max_attempts, &requeued, &failed) != QDC_OK) {
+    if (q->store->ops->recover(q->store, q->cfg.max_attempts, &requeued, &failed) !=
+        QDC_OK) {
         fprintf(stderr, "qdcd: cannot recover the job store\n");
         goto out;
     }
     if (requeued || failed)
-        fprintf(stderr, "qdcd: recovered after a crash: %d job(s) re-queued, %d failed "
-                        "(attempts exhausted)\n",
+        fprintf(stderr,
+                "qdcd: recovered after a crash: %d job(s) re-queued, %d failed "
+                "(attempts exhausted)\n",
                 requeued, failed);
     q->hub = poll_new();
     if (!q->hub || poll_start(q->hub)) {

@@ -206,7 +206,8 @@ void poll_begin(poll_hub *h, const char *id)
     pthread_mutex_unlock(&h->lock);
 }
 
-long poll_publish(poll_hub *h, const char *id, const char *json, size_t len, sbuf *line_out)
+long poll_publish(poll_hub *h, const char *id, const char *json, size_t len,
+                  sbuf *line_out)
 {
     sbuf line = {0};
     long seq = -1;

@@ -38,7 +38,8 @@ void poll_free(poll_hub *h);
  * (JSON object without the seq member, which is added); end: the run is over,
  * the channel stays readable for a while. publish returns the record's seq. */
 void poll_begin(poll_hub *h, const char *id);
-long poll_publish(poll_hub *h, const char *id, const char *json, size_t len, sbuf *line_out);
+long poll_publish(poll_hub *h, const char *id, const char *json, size_t len,
+                  sbuf *line_out);
 void poll_end(poll_hub *h, const char *id);
 /* Forget a channel (job deleted): waiters are resumed first. */
 void poll_drop(poll_hub *h, const char *id);

@@ -10,27 +10,27 @@
 #include <stdint.h>
 
 typedef struct {
-    char host[256];        /* --listen HOST:PORT */
+    char host[256]; /* --listen HOST:PORT */
     int port;
-    char data[4096];       /* --data DIR */
-    char port_file[4096];  /* --port-file FILE: the bound port is written there */
-    char tokens_file[4096];/* --tokens FILE */
-    int insecure;          /* --insecure: allow a public address without tokens */
-    int workers;           /* --workers N */
-    int64_t max_body;      /* --max-body BYTES (any format) */
-    int64_t max_json;      /* --max-json BYTES (JSON meshes) */
-    int64_t max_vertices;  /* --max-vertices N */
-    int64_t max_tets;      /* --max-tets N */
-    int max_queued;        /* --max-queued N: then 429 */
-    double job_time_limit; /* --job-time-limit S */
-    double retention;      /* --retention S: results are then 410 Gone */
-    double wait_cap;       /* --max-wait S: long-poll cap */
-    int max_attempts;      /* --max-attempts N */
-    int max_connections;   /* --max-connections N */
-    int conn_timeout;      /* --connection-timeout S */
-    double lease;          /* --lease S */
-    double grace;          /* --shutdown-grace S */
-    int64_t bderr_samples; /* --bderr-samples N: random samples per side */
+    char data[4096];        /* --data DIR */
+    char port_file[4096];   /* --port-file FILE: the bound port is written there */
+    char tokens_file[4096]; /* --tokens FILE */
+    int insecure;           /* --insecure: allow a public address without tokens */
+    int workers;            /* --workers N */
+    int64_t max_body;       /* --max-body BYTES (any format) */
+    int64_t max_json;       /* --max-json BYTES (JSON meshes) */
+    int64_t max_vertices;   /* --max-vertices N */
+    int64_t max_tets;       /* --max-tets N */
+    int max_queued;         /* --max-queued N: then 429 */
+    double job_time_limit;  /* --job-time-limit S */
+    double retention;       /* --retention S: results are then 410 Gone */
+    double wait_cap;        /* --max-wait S: long-poll cap */
+    int max_attempts;       /* --max-attempts N */
+    int max_connections;    /* --max-connections N */
+    int conn_timeout;       /* --connection-timeout S */
+    double lease;           /* --lease S */
+    double grace;           /* --shutdown-grace S */
+    int64_t bderr_samples;  /* --bderr-samples N: random samples per side */
     int verbose;
 } qdcd_config;
 
@@ -60,7 +60,7 @@ typedef struct qdcd {
     struct MHD_Daemon *mhd;
     char (*tokens)[65]; /* SHA-256 hex of each accepted bearer token */
     int ntokens;
-    char instance[48];  /* this process: lease owner prefix */
+    char instance[48]; /* this process: lease owner prefix */
     qdcd_metrics m;
     volatile sig_atomic_t stop;
 } qdcd;

@@ -8,8 +8,8 @@
 #include "util.h"
 
 #include <pthread.h>
-#include <stdarg.h>
 #include <sqlite3.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -39,19 +39,24 @@ static const char schema[] =
     " owner TEXT NOT NULL, state INTEGER NOT NULL, cancel_requested INTEGER DEFAULT 0,"
     " idem_key TEXT NOT NULL, body_hash TEXT NOT NULL, format TEXT NOT NULL,"
     " nv INTEGER, nt INTEGER, in_bytes INTEGER, options TEXT NOT NULL,"
-    " attempts INTEGER DEFAULT 0, lease_owner TEXT DEFAULT '', lease_until REAL DEFAULT 0,"
-    " created REAL, started REAL DEFAULT 0, finished REAL DEFAULT 0, expires REAL DEFAULT 0,"
-    " purged INTEGER DEFAULT 0, iterations INTEGER DEFAULT 0, last_progress TEXT DEFAULT '',"
+    " attempts INTEGER DEFAULT 0, lease_owner TEXT DEFAULT '', lease_until REAL DEFAULT "
+    "0,"
+    " created REAL, started REAL DEFAULT 0, finished REAL DEFAULT 0, expires REAL "
+    "DEFAULT 0,"
+    " purged INTEGER DEFAULT 0, iterations INTEGER DEFAULT 0, last_progress TEXT DEFAULT "
+    "'',"
     " error TEXT DEFAULT '', stop_reason TEXT DEFAULT '', etag_qmesh TEXT DEFAULT '',"
     " etag_json TEXT DEFAULT '', etag_medit TEXT DEFAULT '');"
-    "CREATE UNIQUE INDEX IF NOT EXISTS jobs_idem ON jobs(owner, idem_key) WHERE idem_key != '';"
+    "CREATE UNIQUE INDEX IF NOT EXISTS jobs_idem ON jobs(owner, idem_key) WHERE idem_key "
+    "!= '';"
     "CREATE INDEX IF NOT EXISTS jobs_state ON jobs(state, seq);"
     "CREATE INDEX IF NOT EXISTS jobs_expiry ON jobs(purged, expires);";
 
-#define COLS                                                                               \
-    "seq, id, owner, state, cancel_requested, idem_key, body_hash, format, nv, nt,"        \
-    " in_bytes, options, attempts, lease_owner, lease_until, created, started, finished,"  \
-    " expires, purged, iterations, last_progress, error, stop_reason, etag_qmesh,"         \
+#define COLS                                                                             \
+    "seq, id, owner, state, cancel_requested, idem_key, body_hash, format, nv, nt,"      \
+    " in_bytes, options, attempts, lease_owner, lease_until, created, started, "         \
+    "finished,"                                                                          \
+    " expires, purged, iterations, last_progress, error, stop_reason, etag_qmesh,"       \
     " etag_json, etag_medit"
 
 static void col_text(sqlite3_stmt *st, int i, char *dst, size_t cap)
@@ -182,8 +187,9 @@ static qdc_status sq_create(job_store *s_, const job_rec *j, int *dup, job_rec *
         }
         sqlite3_finalize(st);
     }
-    st = prep(s->wr, "INSERT INTO jobs(id, owner, state, idem_key, body_hash, format, nv, nt,"
-                     " in_bytes, options, created) VALUES(?,?,0,?,?,?,?,?,?,?,?)");
+    st = prep(s->wr,
+              "INSERT INTO jobs(id, owner, state, idem_key, body_hash, format, nv, nt,"
+              " in_bytes, options, created) VALUES(?,?,0,?,?,?,?,?,?,?,?)");
     if (!st)
         goto end;
     bind_text(st, 1, j->id);
@@ -269,8 +275,8 @@ out:
 
 /* The worker name is "<instance>/w<N>"; jobs leased by this instance are never
  * taken over, whatever their lease says (a slow iteration is not a dead worker). */
-static qdc_status sq_claim(job_store *s_, const char *worker, double lease_s, job_rec *out,
-                           int *found)
+static qdc_status sq_claim(job_store *s_, const char *worker, double lease_s,
+                           job_rec *out, int *found)
 {
     sq_store *s = (sq_store *)s_;
     qdc_status rc = QDC_EIO;
@@ -285,8 +291,9 @@ static qdc_status sq_claim(job_store *s_, const char *worker, double lease_s, jo
     pthread_mutex_lock(&s->wr_lock);
     if (exec(s->wr, "BEGIN IMMEDIATE") != QDC_OK)
         goto out;
-    st = prep(s->wr, "SELECT id FROM jobs WHERE state = 0 OR (state = 1 AND lease_until < ?"
-                     " AND lease_owner NOT LIKE ?) ORDER BY seq LIMIT 1");
+    st = prep(s->wr,
+              "SELECT id FROM jobs WHERE state = 0 OR (state = 1 AND lease_until < ?"
+              " AND lease_owner NOT LIKE ?) ORDER BY seq LIMIT 1");
     if (!st)
         goto end;
     sqlite3_bind_double(st, 1, now);
@@ -298,9 +305,10 @@ static qdc_status sq_claim(job_store *s_, const char *worker, double lease_s, jo
     }
     col_text(st, 0, id, sizeof id);
     sqlite3_finalize(st);
-    st = prep(s->wr, "UPDATE jobs SET state = 1, attempts = attempts + 1, lease_owner = ?,"
-                     " lease_until = ?, started = ?, iterations = 0, last_progress = ''"
-                     " WHERE id = ?");
+    st =
+        prep(s->wr, "UPDATE jobs SET state = 1, attempts = attempts + 1, lease_owner = ?,"
+                    " lease_until = ?, started = ?, iterations = 0, last_progress = ''"
+                    " WHERE id = ?");
     if (!st)
         goto end;
     bind_text(st, 1, worker);
@@ -355,11 +363,12 @@ out:
     return rc;
 }
 
-static qdc_status sq_renew(job_store *s_, const char *id, const char *worker, double lease_s)
+static qdc_status sq_renew(job_store *s_, const char *id, const char *worker,
+                           double lease_s)
 {
     return write1((sq_store *)s_, NULL,
-                  "UPDATE jobs SET lease_until = ? WHERE id = ? AND lease_owner = ?", "dtt",
-                  wall_now() + lease_s, id, worker);
+                  "UPDATE jobs SET lease_until = ? WHERE id = ? AND lease_owner = ?",
+                  "dtt", wall_now() + lease_s, id, worker);
 }
 
 static qdc_status sq_finish(job_store *s_, const job_rec *j)
@@ -388,16 +397,18 @@ static qdc_status sq_cancel(job_store *s_, const char *id, int *now_done)
     sq_store *s = (sq_store *)s_;
     int n = 0;
     double now = wall_now();
-    qdc_status rc = write1(s, &n,
-                           "UPDATE jobs SET state = 4, cancel_requested = 1, finished = ?,"
-                           " expires = ? WHERE id = ? AND state = 0",
-                           "ddt", now, now, id);
+    qdc_status rc =
+        write1(s, &n,
+               "UPDATE jobs SET state = 4, cancel_requested = 1, finished = ?,"
+               " expires = ? WHERE id = ? AND state = 0",
+               "ddt", now, now, id);
 
     *now_done = n > 0;
     if (rc != QDC_OK || n > 0)
         return rc;
-    return write1(s, NULL, "UPDATE jobs SET cancel_requested = 1 WHERE id = ? AND state = 1",
-                  "t", id);
+    return write1(s, NULL,
+                  "UPDATE jobs SET cancel_requested = 1 WHERE id = ? AND state = 1", "t",
+                  id);
 }
 
 static qdc_status sq_remove(job_store *s_, const char *id)
@@ -453,8 +464,8 @@ out:
     return rc;
 }
 
-static qdc_status sq_expired(job_store *s_, double now, char (*out)[JOB_ID_LEN + 1], int max,
-                             int *n)
+static qdc_status sq_expired(job_store *s_, double now, char (*out)[JOB_ID_LEN + 1],
+                             int max, int *n)
 {
     sq_store *s = (sq_store *)s_;
     sqlite3_stmt *st;
@@ -476,7 +487,8 @@ static qdc_status sq_expired(job_store *s_, double now, char (*out)[JOB_ID_LEN +
 
 static qdc_status sq_mark_purged(job_store *s_, const char *id)
 {
-    return write1((sq_store *)s_, NULL, "UPDATE jobs SET purged = 1 WHERE id = ?", "t", id);
+    return write1((sq_store *)s_, NULL, "UPDATE jobs SET purged = 1 WHERE id = ?", "t",
+                  id);
 }
 
 static void sq_close(job_store *s_)
@@ -492,14 +504,15 @@ static void sq_close(job_store *s_)
 }
 
 static const job_store_ops sq_ops = {
-    sq_create, sq_get,    sq_find_idem, sq_list,   sq_claim,   sq_renew,   sq_finish,       sq_release,
-    sq_cancel, sq_remove, sq_recover, sq_counts, sq_expired, sq_mark_purged, sq_close,
+    sq_create,  sq_get,    sq_find_idem, sq_list,        sq_claim,
+    sq_renew,   sq_finish, sq_release,   sq_cancel,      sq_remove,
+    sq_recover, sq_counts, sq_expired,   sq_mark_purged, sq_close,
 };
 
 static qdc_status open_db(const char *path, sqlite3 **db, qdc_error *err)
 {
-    if (sqlite3_open_v2(path, db, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE |
-                                      SQLITE_OPEN_NOMUTEX,
+    if (sqlite3_open_v2(path, db,
+                        SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE | SQLITE_OPEN_NOMUTEX,
                         NULL) != SQLITE_OK)
         return qdc_fail(err, QDC_EIO, "cannot open %s: %s", path,
                         *db ? sqlite3_errmsg(*db) : "out of memory");

@@ -28,24 +28,24 @@ int job_state_done(job_state s);         /* succeeded, failed or cancelled */
 /* One job row. Fixed-size fields so records copy by value between threads. */
 typedef struct {
     char id[JOB_ID_LEN + 1];
-    int64_t seq;            /* insertion order, for paging */
-    char owner[65];         /* SHA-256 hex of the creating token, "" without tokens */
+    int64_t seq;    /* insertion order, for paging */
+    char owner[65]; /* SHA-256 hex of the creating token, "" without tokens */
     job_state state;
     int cancel_requested;
-    char idem_key[129];     /* Idempotency-Key, "" if none */
-    char body_hash[65];     /* SHA-256 of query + body when idem_key is set */
-    char format[8];         /* input format name: "qmesh", "json", "medit" */
+    char idem_key[129]; /* Idempotency-Key, "" if none */
+    char body_hash[65]; /* SHA-256 of query + body when idem_key is set */
+    char format[8];     /* input format name: "qmesh", "json", "medit" */
     int64_t nv, nt;
     int64_t in_bytes;
-    char options[1024];     /* canonical options JSON */
+    char options[1024]; /* canonical options JSON */
     int attempts;
     char lease_owner[64];
     double lease_until;
     double created, started, finished, expires;
-    int purged;             /* files removed after retention (result: 410) */
-    int iterations;         /* progress records published by the last run */
-    char last_progress[768];/* latest progress record JSON, "" if none */
-    char error[1024];       /* problem+json object of a failed job, "" otherwise */
+    int purged;              /* files removed after retention (result: 410) */
+    int iterations;          /* progress records published by the last run */
+    char last_progress[768]; /* latest progress record JSON, "" if none */
+    char error[1024];        /* problem+json object of a failed job, "" otherwise */
     char stop_reason[64];
     char etag_qmesh[65], etag_json[65], etag_medit[65];
 } job_rec;
@@ -65,7 +65,8 @@ typedef struct {
     /* QDC_EINVAL when there is no such job. */
     qdc_status (*get)(job_store *s, const char *id, job_rec *out);
     /* The owner's job created with Idempotency-Key key; QDC_EINVAL if none. */
-    qdc_status (*find_idem)(job_store *s, const char *owner, const char *key, job_rec *out);
+    qdc_status (*find_idem)(job_store *s, const char *owner, const char *key,
+                            job_rec *out);
     /* Up to max jobs of owner with seq > after_seq, oldest first; *n set. */
     qdc_status (*list)(job_store *s, const char *owner, int64_t after_seq, int max,
                        job_rec *out, int *n);

@@ -196,7 +196,8 @@ void dir_remove(const char *path)
     if (!d)
         return;
     while ((e = readdir(d))) {
-        if (e->d_name[0] == '.' && (!e->d_name[1] || (e->d_name[1] == '.' && !e->d_name[2])))
+        if (e->d_name[0] == '.' &&
+            (!e->d_name[1] || (e->d_name[1] == '.' && !e->d_name[2])))
             continue;
         snprintf(p, sizeof p, "%s/%s", path, e->d_name);
         unlink(p);
