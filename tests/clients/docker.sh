@@ -56,8 +56,9 @@ sed -n '/ AS build$/,/^FROM /p' "$DF" | awk '$1 == "COPY" && $2 !~ /^--/ { for (
             mkdir -p "$TMP/ctx/$(dirname "$f")" && cp "$ROOT/$f" "$TMP/ctx/$f"
         done
     done
+# (-O0: this checks the file set, not the code, and compiles 3x faster)
 cmd=$(sed -n '/ AS build$/,/^FROM /p' "$DF" | grep '^RUN make' | sed 's/^RUN //; s/-j"$(nproc)"/-j2/')
-if (cd "$TMP/ctx" && sh scripts/deps.sh --check > /dev/null && eval "$cmd" > "$TMP/make.log" 2>&1) &&
+if (cd "$TMP/ctx" && sh scripts/deps.sh --check > /dev/null && eval "$cmd OPTFLAGS=-O0" > "$TMP/make.log" 2>&1) &&
     [ -x "$TMP/ctx/build/rel/qdcd" ] && [ -x "$TMP/ctx/build/rel/qdc" ]; then
     pass "build stage: '$cmd' succeeds on the copied files alone"
 else
