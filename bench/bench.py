@@ -214,6 +214,7 @@ def run_case(a, name, src, tool, q_in):
         row = load(rowf)
         if row:
             log('  %-16s reused %s' % (tool, rowf))
+            row['reused'] = True
             return row
     for f in (dst, base + '.report.json', base + '.gmsh.json', base + '.quality.json'):
         if os.path.exists(f):
@@ -284,7 +285,7 @@ def notes(row, q_in):
     if ra and abs(ra.get('mean_ratio_mean', q['eta_mean']) - q['eta_mean']) > 1e-3:
         n.append('report mean ratio %.4f vs evaluator %.4f' % (ra['mean_ratio_mean'],
                                                                 q['eta_mean']))
-    if row.get('stop_reason') not in (None, 'max-iter', 'converged', 'tolerance'):
+    if row.get('stop_reason') not in (None, 'max-iter', 'converged', 'no-descent'):
         n.append('stop: %s' % row['stop_reason'])
     return n
 
@@ -331,7 +332,7 @@ def table(rows, inputs, meshes):
                 ratio = r['wall'] / peer['wall']
                 if r.get('opt_seconds') is not None and peer.get('opt_seconds'):
                     ratio_opt = r['opt_seconds'] / peer['opt_seconds']
-            note = list(r.get('notes', []))
+            note = notes(r, qi) if r.get('quality') and timed_row(r) else []
             if not ok:
                 note.insert(0, failure(r))
             cells = [name, LABEL[r['tool']], fnum(q.get('n_tets'), '%d'),
@@ -353,7 +354,11 @@ def table(rows, inputs, meshes):
     return '\n'.join(out)
 
 
-def summary(rows):
+def timed_row(r):
+    return r['tool'] != 'input'
+
+
+def summary(rows, inputs):
     """Geometric-mean speed ratio and mean-ratio gain per tool over the meshes
     where both the tool and the peer succeeded."""
     lines = ['| tool | meshes | geo-mean × R3D wall | geo-mean × R3D opt | '
@@ -371,7 +376,7 @@ def summary(rows):
                 failed += 1
                 continue
             n += 1
-            flagged += bool(r.get('notes'))
+            flagged += bool(notes(r, inputs[r['mesh']]))
             d.append(r['quality']['eta_mean'] - r['eta_in'])
             if p and p['status'] == 'ok':
                 w.append(math.log(r['wall'] / p['wall']))
@@ -435,6 +440,9 @@ def write_results(path, info, tab, summ, rows):
         f.write('- peers: Gmsh %s (Debian python3-gmsh), `General.NumThreads` default\n' % gv)
         f.write('- quality: `/usr/bin/python3 %s OUT --orig IN --samples %d` for every '
                 'row\n' % (QUALITY, SAMPLES))
+        if info.get('table_regenerated'):
+            f.write('- table regenerated from the raw JSON (nothing re-measured): %s\n'
+                    % info['table_regenerated'])
         f.write('- `uptime` at start: `%s`\n- `uptime` at end: `%s`\n' % (
             info['uptime_start'], info['uptime_end']))
         if shared:
@@ -497,7 +505,14 @@ def main():
                 fnum(q.get('dihedral_min'), '%.2f')))
     info['uptime_end'] = subprocess.run(['uptime'], capture_output=True,
                                         text=True).stdout.strip()
-    tab, summ = table(rows, inputs, meshes), summary(rows)
+    old = load(os.path.join(OUT, 'results.json'))
+    if (rows and all(r.get('reused') for r in rows) and old and
+            {(r['mesh'], r['tool']) for r in old['rows']} == {(r['mesh'], r['tool']) for r in rows}):
+        # nothing was measured now: keep the measuring run's date, command and load
+        info = dict(old['info'], table_regenerated='%s by `%s`' % (info['date'], info['command']))
+    for r in rows:
+        r.pop('reused', None)
+    tab, summ = table(rows, inputs, meshes), summary(rows, inputs)
     with open(os.path.join(OUT, 'results.json'), 'w') as f:
         json.dump({'info': info, 'inputs': inputs, 'rows': rows}, f, indent=1)
     full = not (a.quick or a.only or a.tools)
