@@ -9,7 +9,7 @@ QDC=$BIN/qdc
 MESH=$(devmesh bunny_low_10k)
 BIG=$(devmesh bunny_low_100k)
 
-start_qdcd "$TMP/d" --workers 1 --max-queued 1 || { fail "start" "qdcd did not come up: $(tail -3 "$TMP/d.log")"; exit 1; }
+start_qdcd "$TMP/d" --workers 1 --max-queued 1 --shutdown-grace 1 || { fail "start" "qdcd did not come up: $(tail -3 "$TMP/d.log")"; exit 1; }
 export QDC_SERVER=$URL
 
 # A runs for ~4 s on the only worker, B waits in the queue: the queue is full.
