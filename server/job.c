@@ -403,8 +403,10 @@ static void run_job(worker *w, job_rec *j)
     release = w->release;
     pthread_mutex_unlock(&w->pool->lock);
     if (release) {
+        /* Back to the queue: this run's records are not the job's history. */
         q->store->ops->release(q->store, j->id, w->name);
-        goto out;
+        poll_drop(q->hub, j->id);
+        goto released;
     }
     if (w->cancel) {
         j->state = JOB_CANCELLED;
@@ -446,8 +448,8 @@ finish:
         job_path(q, j->id, NULL, path, sizeof path);
         dir_remove(path);
     }
-out:
     poll_end(q->hub, j->id);
+released:
     if (r.progress)
         fclose(r.progress);
     mesh_free(m);
