@@ -341,7 +341,10 @@ static void sleep_s(double s)
         ;
 }
 
-static double jitter(void) { return 0.75 + 0.5 * ((double)rand() / RAND_MAX); }
+static double jitter(void)
+{
+    return 0.75 + 0.5 * ((double)rand() / RAND_MAX);
+}
 
 /* One HTTP exchange with retries. body may be NULL (no request body); timeout
  * is the longest silence accepted from the server, in seconds. Returns 0 when
@@ -1004,7 +1007,10 @@ static int job_request(args *a, const char *method, const char *suffix, const ch
     return rc;
 }
 
-static int cmd_status(args *a) { return job_request(a, "GET", "", "status"); }
+static int cmd_status(args *a)
+{
+    return job_request(a, "GET", "", "status");
+}
 
 static int cmd_watch(args *a)
 {
@@ -1040,7 +1046,10 @@ static int cmd_fetch(args *a)
     return download(&a->rm, id, a->out, a->out_format, a->report);
 }
 
-static int cmd_cancel(args *a) { return job_request(a, "POST", ":cancel", "cancel"); }
+static int cmd_cancel(args *a)
+{
+    return job_request(a, "POST", ":cancel", "cancel");
+}
 
 static int cmd_jobs(args *a)
 {
