@@ -3,12 +3,19 @@
 # install missing Debian packages first (scripts/deps.sh, as root).
 
 SANITIZER ?=
+FAULT ?=
 ifeq ($(SANITIZER),)
 B := build/rel
 SANFLAGS :=
 else
 B := build/san
 SANFLAGS := -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined
+endif
+ifneq ($(FAULT),)
+# allocation-failure injection (lib/base.h qdc_fault_set) under the sanitizers
+B := build/fault
+SANFLAGS := -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined
+CPPFLAGS += -DQDC_FAULT_INJECTION
 endif
 
 CC ?= cc
@@ -41,7 +48,7 @@ UNIT_BIN := $(UNIT_C:tests/unit/%.c=$(B)/tests/%)
 
 PROGS := $(B)/qdc $(if $(SRV_C),$(B)/qdcd)
 
-.PHONY: all deps test test-quick run bench clean fuzz format
+.PHONY: all deps test test-quick run bench clean fuzz format fault
 all: $(B)/libqdc.a $(PROGS) $(UNIT_BIN)
 
 deps:
@@ -80,6 +87,11 @@ test: deps
 test-quick: all
 	@QDC_QUICK=1 tests/run.sh
 
+# Every allocation of the library failing in turn: clean errors, no leaks.
+fault:
+	$(MAKE) FAULT=1 $(UNIT_BIN:build/rel/%=build/fault/%)
+	@for t in build/fault/tests/test_*; do ASAN_OPTIONS=detect_leaks=1 $$t || exit 1; done
+
 run: deps
 	$(MAKE) all
 	@scripts/run.sh
@@ -95,3 +107,21 @@ format:
 	clang-format -i lib/*.c lib/*.h server/*.c server/*.h clients/qdc/*.c tests/unit/*.c
 
 -include $(shell find build -name '*.d' 2>/dev/null)
+
+# libFuzzer targets (clang, libclang-rt-14-dev): each tests/fuzz/fuzz_NAME.c is built
+# with the parsers it needs and run FUZZ_SECONDS on its seeds (tests/fuzz/seeds/NAME);
+# crashes land in tests/fuzz/crashes/NAME, which `make test` replays (unit tests).
+FUZZ_SECONDS ?= 60
+FUZZ_LIB := lib/base.c lib/mesh.c $(wildcard lib/meshio*.c) $(wildcard lib/surface.c)
+fuzz:
+	@mkdir -p build/fuzz
+	@set -e; for src in $(wildcard tests/fuzz/fuzz_*.c); do \
+	    name=$$(basename $$src .c); name=$${name#fuzz_}; \
+	    echo "# fuzz $$name ($(FUZZ_SECONDS) s)"; \
+	    clang -g -O1 -fsanitize=fuzzer,address,undefined $(CPPFLAGS) $$src $(FUZZ_LIB) \
+	        -lm -o build/fuzz/fuzz_$$name; \
+	    mkdir -p build/fuzz/corpus/$$name tests/fuzz/crashes/$$name; \
+	    build/fuzz/fuzz_$$name -max_total_time=$(FUZZ_SECONDS) -max_len=8192 \
+	        -artifact_prefix=tests/fuzz/crashes/$$name/ build/fuzz/corpus/$$name \
+	        tests/fuzz/seeds/$$name; \
+	done

@@ -269,9 +269,39 @@ TEST(bad_options_and_bad_mesh_rejected)
     mesh_free(m);
 }
 
+/* Every allocation of opt_run failing in turn: QDC_ENOMEM, the mesh untouched,
+ * no leak (the sanitizer build checks leaks); then a run without faults works. */
+TEST(allocation_failures_are_clean)
+{
+#ifdef QDC_FAULT_INJECTION
+    int n = 3;
+    mesh_t *m = tm_grid(n, 0), *orig;
+    opt_options o;
+    qdc_status st = QDC_ENOMEM;
+    long k;
+    tm_perturb(m, n, 0.4, 2);
+    orig = mesh_dup(m);
+    opt_defaults(&o);
+    for (k = 1; k < 5000 && st == QDC_ENOMEM; k++) {
+        qdc_fault_set(k);
+        st = opt_run(m, &o, NULL, NULL);
+        qdc_fault_set(0);
+        if (st == QDC_ENOMEM)
+            ASSERT_TRUE(memcmp(m->xyz, orig->xyz, 24 * (size_t)m->nv) == 0);
+    }
+    ASSERT_OK(st);
+    ASSERT_TRUE(k > 10);
+    printf("  # %ld allocation failure points, each clean\n", k - 1);
+    mesh_free(orig);
+    mesh_free(m);
+#else
+    printf("  # built without QDC_FAULT_INJECTION (make fault), skipped\n");
+#endif
+}
+
 TEST_MAIN("opt", T(improves_perturbed_grid), T(untangles_inverted_grid),
           T(never_worse_than_input), T(literal_mode_is_safe_and_reported),
           T(fixed_boundary_and_user_locks_do_not_move), T(regions_and_connectivity_untouched),
           T(cancel_from_progress_callback), T(cancel_flag_before_start),
           T(solvers_and_metrics_all_work), T(harmonic_guidance_runs),
-          T(bad_options_and_bad_mesh_rejected))
+          T(bad_options_and_bad_mesh_rejected), T(allocation_failures_are_clean))
