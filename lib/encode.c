@@ -12,23 +12,40 @@ static void tet_points(const mesh_topo *tp, const double *x, int32_t t, double p
         memcpy(p[a], x + 3 * (size_t)tp->tets[4 * (size_t)t + a], 3 * sizeof(double));
 }
 
+/* Sums over tets are formed per fixed chunk and added in chunk order, so the
+ * result (and every line-search decision taken on it) does not depend on the
+ * number of threads or their timing. */
+#define ENCODE_CHUNKS 256
+
 double encode_objective(const mesh_topo *tp, const double *x, opt_metric m, double delta,
                         double *qt, int32_t *n_nonpos)
 {
-    double sum = 0.0;
-    int32_t bad = 0;
+    double part[ENCODE_CHUNKS], sum = 0.0;
+    int32_t badc[ENCODE_CHUNKS], bad = 0;
 
-#pragma omp parallel for reduction(+ : sum, bad) schedule(static)
-    for (int32_t t = 0; t < tp->nt; t++) {
-        double p[4][3], q;
-        metric_parts pt;
-        tet_points(tp, x, t, p);
-        metric_parts_for(m, p[0], p[1], p[2], p[3], &pt);
-        bad += !(metric_arg(m, &pt) > 0.0);
-        q = metric_qt(m, &pt, delta);
-        if (qt)
-            qt[t] = q;
-        sum += q;
+#pragma omp parallel for schedule(static)
+    for (int c = 0; c < ENCODE_CHUNKS; c++) {
+        int32_t t0 = (int32_t)((int64_t)tp->nt * c / ENCODE_CHUNKS);
+        int32_t t1 = (int32_t)((int64_t)tp->nt * (c + 1) / ENCODE_CHUNKS);
+        double s = 0.0;
+        int32_t b = 0;
+        for (int32_t t = t0; t < t1; t++) {
+            double p[4][3], q;
+            metric_parts pt;
+            tet_points(tp, x, t, p);
+            metric_parts_for(m, p[0], p[1], p[2], p[3], &pt);
+            b += !(metric_arg(m, &pt) > 0.0);
+            q = metric_qt(m, &pt, delta);
+            if (qt)
+                qt[t] = q;
+            s += q;
+        }
+        part[c] = s;
+        badc[c] = b;
+    }
+    for (int c = 0; c < ENCODE_CHUNKS; c++) {
+        sum += part[c];
+        bad += badc[c];
     }
     if (n_nonpos)
         *n_nonpos = bad;

@@ -119,29 +119,44 @@ static void logf_(const ctx_t *c, int level, const char *fmt, ...)
 
 /* Quality record of x (normalized coordinates; mean ratio and angles are
  * scale-invariant). */
+#define EVAL_CHUNKS 256
+
 static void evaluate(const ctx_t *c, const double *x, double delta, opt_progress *r)
 {
     const mesh_topo *tp = c->tp;
+    double psum[EVAL_CHUNKS], psum2[EVAL_CHUNKS];
     double sum = 0, sum2 = 0, qmin = INFINITY, dmin = INFINITY, dmax = -INFINITY;
     int32_t ninv = 0;
 
-#pragma omp parallel for reduction(+ : sum, sum2, ninv) reduction(min : qmin, dmin)          \
-    reduction(max : dmax) schedule(static)
-    for (int32_t t = 0; t < tp->nt; t++) {
-        const int32_t *tt = tp->tets + 4 * (size_t)t;
-        const double *p0 = x + 3 * (size_t)tt[0], *p1 = x + 3 * (size_t)tt[1];
-        const double *p2 = x + 3 * (size_t)tt[2], *p3 = x + 3 * (size_t)tt[3];
-        metric_parts pt;
-        double eta, amin, amax;
-        metric_parts_of(p0, p1, p2, p3, &pt);
-        eta = metric_mean_ratio(&pt);
-        sum += eta;
-        sum2 += eta * eta;
-        qmin = eta < qmin ? eta : qmin;
-        ninv += !(pt.vol > 0.0);
-        metric_dihedral_range(p0, p1, p2, p3, &amin, &amax);
-        dmin = amin < dmin ? amin : dmin;
-        dmax = amax > dmax ? amax : dmax;
+    /* fixed chunks summed in order: reports do not depend on the thread count */
+#pragma omp parallel for reduction(+ : ninv) reduction(min : qmin, dmin) reduction(max : dmax) \
+    schedule(static)
+    for (int ch = 0; ch < EVAL_CHUNKS; ch++) {
+        int32_t t0 = (int32_t)((int64_t)tp->nt * ch / EVAL_CHUNKS);
+        int32_t t1 = (int32_t)((int64_t)tp->nt * (ch + 1) / EVAL_CHUNKS);
+        double s = 0, s2 = 0;
+        for (int32_t t = t0; t < t1; t++) {
+            const int32_t *tt = tp->tets + 4 * (size_t)t;
+            const double *p0 = x + 3 * (size_t)tt[0], *p1 = x + 3 * (size_t)tt[1];
+            const double *p2 = x + 3 * (size_t)tt[2], *p3 = x + 3 * (size_t)tt[3];
+            metric_parts pt;
+            double eta, amin, amax;
+            metric_parts_for(OPT_METRIC_MIVL, p0, p1, p2, p3, &pt);
+            eta = metric_mean_ratio(&pt);
+            s += eta;
+            s2 += eta * eta;
+            qmin = eta < qmin ? eta : qmin;
+            ninv += !(pt.vol > 0.0);
+            metric_dihedral_range(p0, p1, p2, p3, &amin, &amax);
+            dmin = amin < dmin ? amin : dmin;
+            dmax = amax > dmax ? amax : dmax;
+        }
+        psum[ch] = s;
+        psum2[ch] = s2;
+    }
+    for (int ch = 0; ch < EVAL_CHUNKS; ch++) {
+        sum += psum[ch];
+        sum2 += psum2[ch];
     }
     memset(r, 0, sizeof *r);
     r->q_mean = sum / tp->nt;
