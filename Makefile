@@ -79,8 +79,8 @@ $(B)/tests/%: tests/unit/%.c tests/unit/testlib.h $(B)/libqdc.a
 # The whole suite: release build, sanitizer build, unit + end-to-end + daemon tests.
 # The last line is "N passed, N failed".
 test: deps
-	$(MAKE) all
-	$(MAKE) SANITIZER=1 all
+	$(MAKE) -j$$(nproc) all
+	$(MAKE) -j$$(nproc) SANITIZER=1 all
 	@tests/run.sh
 
 # Unit tests of the release build only (seconds).
@@ -92,8 +92,9 @@ fault:
 	$(MAKE) FAULT=1 $(UNIT_BIN:build/rel/%=build/fault/%)
 	@for t in build/fault/tests/test_*; do ASAN_OPTIONS=detect_leaks=1 $$t || exit 1; done
 
+# Builds only what it serves (in parallel), so a fresh clone answers quickly.
 run: deps
-	$(MAKE) all
+	$(MAKE) -j$$(nproc) $(B)/qdcd $(B)/qdc
 	@scripts/run.sh
 
 bench: deps

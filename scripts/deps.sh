@@ -1,15 +1,24 @@
 #!/bin/sh
 # deps.sh - install the Debian 12 packages qdc builds, tests and benchmarks with.
 # Idempotent: only missing packages are installed, and only when run as root.
-# Usage: scripts/deps.sh [--check]   (--check: list what is missing, exit 1 if any)
+# Usage: scripts/deps.sh [--build|--runtime] [--check]
+#   (--check: list what is missing, exit 1 if any)
 set -eu
 
-PKGS="build-essential pkg-config ca-certificates curl
+# --build: what compiling needs; --runtime: the shared libraries qdcd/qdc load
+# (the Docker image's stages); default: everything, tests and benchmarks included.
+BUILD_PKGS="build-essential pkg-config ca-certificates
 libsuitesparse-dev libopenblas0-pthread libopenblas-dev
-libmicrohttpd-dev libjansson-dev libsqlite3-dev libcurl4-openssl-dev
-libtet1.5-dev tetgen
-clang libclang-rt-14-dev
-python3 python3-numpy python3-scipy python3-meshio python3-gmsh gmsh jq"
+libmicrohttpd-dev libjansson-dev libsqlite3-dev libcurl4-openssl-dev libtet1.5-dev"
+RUNTIME_PKGS="ca-certificates curl libcholmod3 libopenblas0-pthread libmicrohttpd12
+libjansson4 libsqlite3-0 libcurl4 libtet1.5 libgomp1"
+TEST_PKGS="curl tetgen clang libclang-rt-14-dev jq
+python3 python3-numpy python3-scipy python3-meshio python3-gmsh gmsh"
+case "${1:-}" in
+--build) PKGS=$BUILD_PKGS; shift ;;
+--runtime) PKGS=$RUNTIME_PKGS; shift ;;
+*) PKGS="$BUILD_PKGS $TEST_PKGS" ;;
+esac
 
 missing=""
 for p in $PKGS; do
