@@ -184,8 +184,22 @@ static void job_json(req *r, const job_rec *j, sbuf *b)
     sb_printf(b, ",\"attempts\":%d,\"cancel_requested\":%s", j->attempts,
               j->cancel_requested ? "true" : "false");
     sb_printf(
-        b, ",\"mesh\":{\"format\":\"%s\",\"vertices\":%lld,\"tets\":%lld,\"bytes\":%lld}",
-        j->format, (long long)j->nv, (long long)j->nt, (long long)j->in_bytes);
+        b, ",\"mesh\":{\"format\":\"%s\",\"vertices\":%lld,\"tets\":%lld,\"bytes\":%lld%s}",
+        j->format, (long long)j->nv, (long long)j->nt, (long long)j->in_bytes,
+        job_is_surface(j->format) ? ",\"surface\":true" : "");
+    if (j->notes[0]) {
+        /* one string per line */
+        sb_puts(b, ",\"notes\":[");
+        for (const char *p = j->notes; *p;) {
+            size_t n = strcspn(p, "\n");
+            char line[sizeof j->notes];
+            snprintf(line, sizeof line, "%.*s", (int)n, p);
+            sb_puts(b, p == j->notes ? "" : ",");
+            sb_json_str(b, line);
+            p += n + (p[n] == '\n');
+        }
+        sb_puts(b, "]");
+    }
     sb_printf(b, ",\"options\":%s", j->options[0] ? j->options : "{}");
     /* Latest metrics: from memory while the run is live, else from the row. */
     if (j->state == JOB_RUNNING &&
@@ -234,6 +248,7 @@ static enum MHD_Result reply_job(struct MHD_Connection *c, req *r, unsigned stat
 typedef struct {
     opt_options o;
     double cap;
+    double tq, tv; /* tetgen_quality, max_volume; -1 when not given */
     char why[200];
     int bad;
 } opt_scan;
@@ -245,16 +260,151 @@ static enum MHD_Result scan_option(void *cls, enum MHD_ValueKind kind, const cha
     (void)kind;
     if (s->bad)
         return MHD_NO;
-    if (job_opt_set(&s->o, key, val ? val : "", s->cap, s->why, sizeof s->why))
+    if (!val)
+        val = "";
+    if (!strcmp(key, "format"))
+        return MHD_YES; /* the body's format: begin_upload */
+    if (!strcmp(key, "tetgen_quality") || !strcmp(key, "max_volume")) {
+        /* Surface uploads: TetGen's -q radius-edge bound (>= 1, 0 = no
+         * refinement) and -a volume bound (0 = none), as `qdc tetra`. */
+        char *end;
+        double v = strtod(val, &end);
+        int q = !strcmp(key, "tetgen_quality");
+        if (!*val || *end || !(v >= 0 && v <= 1e300) || (q && v > 0 && v < 1)) {
+            snprintf(s->why, sizeof s->why, "option '%s': '%.40s' is not %s", key, val,
+                     q ? "0 or a number >= 1" : "a number >= 0");
+            s->bad = 1;
+            return MHD_NO;
+        }
+        *(q ? &s->tq : &s->tv) = v;
+        return MHD_YES;
+    }
+    if (job_opt_set(&s->o, key, val, s->cap, s->why, sizeof s->why))
         s->bad = 1;
     return s->bad ? MHD_NO : MHD_YES;
+}
+
+/* ------------------------------------------------------------ media types -- */
+
+/* Every mesh media type this server reads and writes (TetGen, two files, has
+ * none), then with surfaces those of the surfaces it tetrahedralizes: JSON
+ * strings joined by commas. */
+static void media_list(sbuf *b, int surfaces)
+{
+    int n = 0;
+    for (int f = 1; f < MESHIO_FORMAT_COUNT; f++) {
+        const char *t = meshio_media_type((meshio_format)f);
+        if (!t)
+            continue;
+        sb_puts(b, n++ ? "," : "");
+        sb_json_str(b, t);
+    }
+    for (int f = 1; surfaces && f < SURFACE_FORMAT_COUNT; f++) {
+        const char *t = surface_media_type((surface_format)f);
+        if (!t)
+            continue;
+        sb_puts(b, n++ ? "," : "");
+        sb_json_str(b, t);
+    }
+}
+
+/* The same as ?format= names. */
+static void format_names(sbuf *b, int surfaces)
+{
+    int n = 0;
+    for (int f = 1; f < MESHIO_FORMAT_COUNT; f++) {
+        if (!meshio_media_type((meshio_format)f))
+            continue;
+        sb_puts(b, n++ ? "," : "");
+        sb_json_str(b, meshio_format_name((meshio_format)f));
+    }
+    for (int f = 1; surfaces && f < SURFACE_FORMAT_COUNT; f++) {
+        sb_puts(b, n++ ? "," : "");
+        sb_json_str(b, surface_format_name((surface_format)f));
+    }
+}
+
+/* 415 for an upload: what was sent (detail) and everything accepted. */
+static enum MHD_Result unsupported(struct MHD_Connection *c, req *r, const char *detail)
+{
+    sbuf x = {0};
+    enum MHD_Result ret;
+
+    sb_puts(&x, "\"accepted\":[");
+    media_list(&x, 1);
+    sb_puts(&x, "],\"sniffed\":[\"application/octet-stream\",\"text/plain\"],"
+                "\"formats\":[");
+    format_names(&x, 1);
+    sb_puts(&x, "]");
+    ret = http_problem(c, r, 415, "unsupported-media-type", "unsupported media type",
+                       detail, x.oom ? NULL : x.buf, NULL);
+    sb_free(&x);
+    return ret;
+}
+
+/* Name of the upload's format ("gmsh-bin", "stl"), "unknown" before sniffing. */
+static const char *upload_format_name(const req *r)
+{
+    if (r->sfmt != SURFACE_AUTO)
+        return surface_format_name(r->sfmt);
+    return r->fmt != MESHIO_AUTO ? meshio_format_name(r->fmt) : "unknown";
+}
+
+/* The body's format: ?format= (a name), else Content-Type; sniffed from the
+ * content later when neither says (no type, octet-stream, text/plain, or
+ * form-urlencoded, which curl --data-binary sends without -H). 0, or -1 when
+ * the request gets a 415 (detail in why). */
+static int upload_format(struct MHD_Connection *c, req *r, char *why, size_t cap)
+{
+    const char *fq = MHD_lookup_connection_value(c, MHD_GET_ARGUMENT_KIND, "format");
+    const char *ct =
+        MHD_lookup_connection_value(c, MHD_HEADER_KIND, MHD_HTTP_HEADER_CONTENT_TYPE);
+    char ctype[128];
+
+    r->fmt = MESHIO_AUTO;
+    r->sfmt = SURFACE_AUTO;
+    if (fq) {
+        r->fmt = strchr(fq, '/') ? meshio_format_from_media_type(fq)
+                                 : meshio_format_from_name(fq);
+        if (r->fmt == MESHIO_AUTO)
+            r->sfmt = strchr(fq, '/') ? surface_format_from_media_type(fq)
+                                      : surface_format_from_name(fq);
+        if (r->fmt == MESHIO_TETGEN) {
+            snprintf(why, cap, "TetGen .node/.ele is two files; upload one of the "
+                               "accepted formats instead");
+            return -1;
+        }
+        if (r->fmt == MESHIO_AUTO && r->sfmt == SURFACE_AUTO) {
+            snprintf(why, cap, "format '%.60s' is not one this server reads", fq);
+            return -1;
+        }
+        return 0;
+    }
+    snprintf(ctype, sizeof ctype, "%s", ct ? ct : "");
+    ctype[strcspn(ctype, "; \t")] = 0;
+    if (!ctype[0] || !strcasecmp(ctype, "text/plain") ||
+        !strcasecmp(ctype, "application/octet-stream") ||
+        !strcasecmp(ctype, "application/x-www-form-urlencoded")) {
+        r->sniff = 1;
+        return 0;
+    }
+    r->fmt = meshio_format_from_media_type(ct);
+    if (r->fmt == MESHIO_AUTO)
+        r->sfmt = surface_format_from_media_type(ct);
+    if (r->fmt == MESHIO_AUTO && r->sfmt == SURFACE_AUTO) {
+        snprintf(why, cap, "media type '%.100s' is not a mesh or surface type this "
+                           "server reads",
+                 ctype);
+        return -1;
+    }
+    return 0;
 }
 
 static enum MHD_Result begin_upload(struct MHD_Connection *c, req *r)
 {
     qdcd *q = r->q;
-    const char *ct, *cl, *ik;
-    char ctype[128], tmpl[4200];
+    const char *cl, *ik;
+    char tmpl[4200];
     opt_scan s;
     job_counts cnt;
     int64_t limit;
@@ -265,14 +415,33 @@ static enum MHD_Result begin_upload(struct MHD_Connection *c, req *r)
     opt_defaults(&s.o);
     s.cap = q->cfg.job_time_limit;
     s.o.time_limit = s.cap;
+    s.tq = s.tv = -1;
     MHD_get_connection_values(c, MHD_GET_ARGUMENT_KIND, scan_option, &s);
     if (s.bad)
         return http_problem(c, r, 400, "invalid-option", "invalid option", s.why, NULL,
                             NULL);
     sbuf oj = {0};
     job_opt_json(&s.o, &oj);
-    snprintf(r->options, sizeof r->options, "%s", oj.buf ? oj.buf : "{}");
+    if (oj.len && (s.tq >= 0 || s.tv >= 0)) {
+        oj.len--; /* the closing brace */
+        if (s.tq >= 0)
+            sb_printf(&oj, ",\"tetgen_quality\":%.17g", s.tq);
+        if (s.tv >= 0)
+            sb_printf(&oj, ",\"max_volume\":%.17g", s.tv);
+        sb_puts(&oj, "}");
+        r->tetgen_opts = 1;
+    }
+    snprintf(r->options, sizeof r->options, "%s", oj.buf && !oj.oom ? oj.buf : "{}");
     sb_free(&oj);
+    {
+        char why[200];
+        if (upload_format(c, r, why, sizeof why))
+            return unsupported(c, r, why);
+    }
+    if (r->tetgen_opts && r->fmt != MESHIO_AUTO)
+        return http_problem(c, r, 400, "invalid-option", "invalid option",
+                            "tetgen_quality and max_volume apply to surface uploads only",
+                            NULL, NULL);
 
     ik = MHD_lookup_connection_value(c, MHD_HEADER_KIND, "Idempotency-Key");
     if (ik) {
@@ -288,6 +457,13 @@ static enum MHD_Result begin_upload(struct MHD_Connection *c, req *r)
         r->hashing = 1;
         sha256_init(&r->hash);
         sha256_update(&r->hash, r->options, strlen(r->options));
+        if (MHD_lookup_connection_value(c, MHD_GET_ARGUMENT_KIND, "format")) {
+            /* ?format= changes what the body means; a Content-Type does not
+             * count (a retry may send the same bytes under another type). */
+            const char *fn = upload_format_name(r);
+            sha256_update(&r->hash, "\nformat=", 8);
+            sha256_update(&r->hash, fn, strlen(fn));
+        }
     }
 
     /* A replay of an accepted request is answered even when the queue is full. */
@@ -305,31 +481,6 @@ static enum MHD_Result begin_upload(struct MHD_Connection *c, req *r)
         }
     }
 
-    ct = MHD_lookup_connection_value(c, MHD_HEADER_KIND, MHD_HTTP_HEADER_CONTENT_TYPE);
-    snprintf(ctype, sizeof ctype, "%s", ct ? ct : "");
-    ctype[strcspn(ctype, "; \t")] = 0;
-    if (!strcasecmp(ctype, MEDIA_QMESH)) {
-        r->fmt = MESHIO_QMESH;
-    } else if (!strcasecmp(ctype, "application/json")) {
-        r->fmt = MESHIO_JSON;
-    } else if (!strcasecmp(ctype, "model/x-medit")) {
-        r->fmt = MESHIO_MEDIT;
-    } else if (!ctype[0] || !strcasecmp(ctype, "text/plain") ||
-               !strcasecmp(ctype, "application/octet-stream") ||
-               !strcasecmp(ctype, "application/x-www-form-urlencoded")) {
-        /* curl --data-binary without -H sends form-urlencoded: sniff it too. */
-        r->fmt = MESHIO_AUTO;
-        r->sniff = 1;
-    } else {
-        char d[256];
-        snprintf(d, sizeof d, "media type '%.100s' is not a mesh type this server reads",
-                 ctype);
-        return http_problem(c, r, 415, "unsupported-media-type", "unsupported media type",
-                            d,
-                            "\"accepted\":[\"" MEDIA_QMESH "\",\"application/json\","
-                            "\"model/x-medit\",\"text/plain\"]",
-                            NULL);
-    }
     limit = r->fmt == MESHIO_JSON && q->cfg.max_json < q->cfg.max_body ? q->cfg.max_json
                                                                        : q->cfg.max_body;
     cl = MHD_lookup_connection_value(c, MHD_HEADER_KIND, MHD_HTTP_HEADER_CONTENT_LENGTH);
@@ -420,8 +571,7 @@ static enum MHD_Result mesh_problem(struct MHD_Connection *c, req *r, qdc_status
      * the library's table says for unexpected codes. */
     if (status >= 500 && st != QDC_ENOMEM)
         status = 422;
-    sb_printf(&x, "\"format\":\"%s\"",
-              meshio_format_name(r->fmt) ? meshio_format_name(r->fmt) : "unknown");
+    sb_printf(&x, "\"format\":\"%s\"", upload_format_name(r));
     if (e->line >= 0)
         sb_printf(&x, ",\"line\":%lld", (long long)e->line);
     if (e->col >= 0)
@@ -434,7 +584,12 @@ static enum MHD_Result mesh_problem(struct MHD_Connection *c, req *r, qdc_status
         sb_puts(&x, ",\"kind\":");
         sb_json_str(&x, e->kind);
     }
-    ret = http_problem(c, r, status, status_slug(st), qdc_status_str(st),
+    ret = http_problem(c, r, status,
+                       st == QDC_EMESH && r->sfmt != SURFACE_AUTO ? "invalid-surface"
+                                                                  : status_slug(st),
+                       st == QDC_EMESH && r->sfmt != SURFACE_AUTO
+                           ? "the surface cannot bound a volume"
+                           : qdc_status_str(st),
                        e->msg[0] ? e->msg : qdc_status_str(st), x.buf, NULL);
     sb_free(&x);
     return ret;
@@ -495,22 +650,136 @@ static enum MHD_Result idem_replay(struct MHD_Connection *c, req *r, const job_r
     return reply_job(c, r, 202, old, h);
 }
 
+/* 413 for a body over its cap: JSON meshes have their own (--max-json). */
+static enum MHD_Result too_big(struct MHD_Connection *c, req *r, int json)
+{
+    qdcd *q = r->q;
+    char d[400], extra[200];
+    int64_t lim;
+
+    json = json && q->cfg.max_json < q->cfg.max_body;
+    lim = json ? q->cfg.max_json : q->cfg.max_body;
+    if (json)
+        snprintf(d, sizeof d,
+                 "JSON mesh bodies are limited to %lld bytes; send larger meshes as "
+                 "%s (proto/mesh-binary.md)",
+                 (long long)lim, MEDIA_QMESH);
+    else
+        snprintf(d, sizeof d, "request bodies are limited to %lld bytes", (long long)lim);
+    snprintf(extra, sizeof extra, "\"max_bytes\":%lld%s", (long long)lim,
+             json ? ",\"use\":\"" MEDIA_QMESH "\"" : "");
+    return http_problem(c, r, 413, "too-big", "request body too large", d, extra, NULL);
+}
+
+/* meshio_options.log target: notes about the upload (skipped element types),
+ * one per line, kept with the job. */
+static void collect_note(void *ctx, int level, const char *msg)
+{
+    sbuf *b = ctx;
+    (void)level;
+    if (b->len + strlen(msg) + 2 > sizeof ((job_rec *)0)->notes)
+        return; /* the first few say enough */
+    sb_printf(b, "%s%s", b->len ? "\n" : "", msg);
+}
+
+/* The sizes of an upload over the server's limits: 413. */
+static enum MHD_Result over_limits(struct MHD_Connection *c, req *r, int64_t nv,
+                                   int64_t nt)
+{
+    qdcd *q = r->q;
+    char d[400], extra[200];
+
+    snprintf(d, sizeof d,
+             "the %s has %lld vertices and %lld tets; this server accepts %lld and %lld "
+             "at most",
+             r->sfmt != SURFACE_AUTO ? "surface" : "mesh", (long long)nv, (long long)nt,
+             (long long)q->cfg.max_vertices, (long long)q->cfg.max_tets);
+    snprintf(extra, sizeof extra,
+             "\"vertices\":%lld,\"tets\":%lld,\"max_vertices\":%lld,\"max_tets\":%lld",
+             (long long)nv, (long long)nt, (long long)q->cfg.max_vertices,
+             (long long)q->cfg.max_tets);
+    return http_problem(c, r, 413, "too-big", "mesh exceeds server limits", d, extra, NULL);
+}
+
+/* Parse and validate the upload (buf, len) into j's sizes and notes, or
+ * answer with the problem (returns 1 then, *ret set). A surface is checked
+ * (closed, manifold, oriented) but tetrahedralized later, by the worker. */
+static int check_upload(struct MHD_Connection *c, req *r, const char *buf, size_t len,
+                        job_rec *j, enum MHD_Result *ret, double *t_valid)
+{
+    qdcd *q = r->q;
+    qdc_error e;
+    qdc_status st;
+
+    qdc_error_clear(&e);
+    *t_valid = mono_now();
+    if (r->sfmt != SURFACE_AUTO) {
+        surface_t *sf = NULL;
+        st = surface_read(buf, len, r->sfmt, &sf, &e);
+        if (st == QDC_OK && sf->nv > q->cfg.max_vertices) {
+            *ret = over_limits(c, r, sf->nv, 0);
+            surface_free(sf);
+            return 1;
+        }
+        *t_valid = mono_now();
+        if (st == QDC_OK)
+            st = surface_check(sf, &e);
+        if (st == QDC_OK) {
+            j->nv = sf->nv;
+            j->nt = 0; /* known once TetGen ran */
+            snprintf(j->notes, sizeof j->notes,
+                     "surface of %d triangles: tetrahedralized with TetGen before the "
+                     "optimization",
+                     sf->ntri);
+        }
+        surface_free(sf);
+        if (st != QDC_OK) {
+            *ret = mesh_problem(c, r, st, &e);
+            return 1;
+        }
+        return 0;
+    }
+
+    mesh_t *m = NULL;
+    sbuf notes = {0};
+    meshio_options mo = {collect_note, &notes};
+    st = meshio_read_ex(buf, len, r->fmt, &mo, &m, &e);
+    if (st == QDC_OK && (m->nv > q->cfg.max_vertices || m->nt > q->cfg.max_tets)) {
+        *ret = over_limits(c, r, m->nv, m->nt);
+        mesh_free(m);
+        sb_free(&notes);
+        return 1;
+    }
+    *t_valid = mono_now();
+    if (st == QDC_OK)
+        st = mesh_validate(m, NULL, &e);
+    if (st == QDC_OK) {
+        j->nv = m->nv;
+        j->nt = m->nt;
+        snprintf(j->notes, sizeof j->notes, "%s", notes.buf && !notes.oom ? notes.buf : "");
+    }
+    mesh_free(m);
+    sb_free(&notes);
+    if (st != QDC_OK) {
+        *ret = mesh_problem(c, r, st, &e);
+        return 1;
+    }
+    return 0;
+}
+
 /* Runs on the intake thread; the connection is suspended meanwhile, and
  * MHD_queue_response is allowed on a suspended connection. */
 static enum MHD_Result process_upload(struct MHD_Connection *c, req *r)
 {
     qdcd *q = r->q;
-    char d[400], extra[200];
+    char d[400];
     char *buf = NULL;
-    mesh_t *m = NULL;
-    mesh_check info;
-    qdc_error e;
-    qdc_status st;
+    size_t len = (size_t)r->body_len;
     enum MHD_Result ret;
     job_rec j, old;
-    int dup = 0;
+    int dup = 0, bad;
+    double t_parse, t_valid;
 
-    qdc_error_clear(&e);
     memset(&j, 0, sizeof j);
     if (r->hashing) {
         uint8_t dig[32];
@@ -519,59 +788,44 @@ static enum MHD_Result process_upload(struct MHD_Connection *c, req *r)
         if (q->store->ops->find_idem(q->store, r->owner, r->idem, &old) == QDC_OK)
             return idem_replay(c, r, &old, j.body_hash);
     }
-    buf = mmap(NULL, (size_t)r->body_len, PROT_READ, MAP_PRIVATE, r->fd, 0);
+    buf = mmap(NULL, len, PROT_READ, MAP_PRIVATE, r->fd, 0);
     if (buf == MAP_FAILED)
         return http_problem(c, r, 500, "io", "i/o error", "cannot map the upload", NULL,
                             NULL);
     if (r->sniff) {
-        r->fmt = meshio_sniff(buf, (size_t)r->body_len);
-        if (r->fmt == MESHIO_AUTO) {
-            munmap(buf, (size_t)r->body_len);
-            return http_problem(
-                c, r, 415, "unsupported-media-type", "unsupported media type",
-                "the body is not a mesh this server recognises; set "
-                "Content-Type to " MEDIA_QMESH ", application/json or model/x-medit",
-                NULL, NULL);
+        r->fmt = meshio_sniff(buf, len);
+        if (r->fmt == MESHIO_AUTO)
+            r->sfmt = surface_sniff(buf, len);
+        if (r->fmt == MESHIO_AUTO && r->sfmt == SURFACE_AUTO) {
+            munmap(buf, len);
+            return unsupported(c, r,
+                               "the body is not a mesh or surface this server recognises; "
+                               "set Content-Type to one of the accepted types");
+        }
+        if (r->fmt == MESHIO_JSON && r->body_len > q->cfg.max_json) {
+            munmap(buf, len);
+            return too_big(c, r, 1);
         }
     }
-    double t_parse = mono_now();
-    st = meshio_read(buf, (size_t)r->body_len, r->fmt, &m, &e);
-    munmap(buf, (size_t)r->body_len);
-    if (st != QDC_OK) {
-        return mesh_problem(c, r, st, &e);
+    if (r->tetgen_opts && r->sfmt == SURFACE_AUTO) {
+        munmap(buf, len);
+        return http_problem(c, r, 400, "invalid-option", "invalid option",
+                            "tetgen_quality and max_volume apply to surface uploads only",
+                            NULL, NULL);
     }
-    if (m->nv > q->cfg.max_vertices || m->nt > q->cfg.max_tets) {
-        snprintf(d, sizeof d,
-                 "the mesh has %d vertices and %d tets; this server accepts %lld "
-                 "and %lld at most",
-                 m->nv, m->nt, (long long)q->cfg.max_vertices,
-                 (long long)q->cfg.max_tets);
-        snprintf(extra, sizeof extra,
-                 "\"vertices\":%d,\"tets\":%d,\"max_vertices\":%lld,"
-                 "\"max_tets\":%lld",
-                 m->nv, m->nt, (long long)q->cfg.max_vertices,
-                 (long long)q->cfg.max_tets);
-        mesh_free(m);
-        return http_problem(c, r, 413, "too-big", "mesh exceeds server limits", d, extra,
-                            NULL);
-    }
-    double t_valid = mono_now();
-    st = mesh_validate(m, &info, &e);
-    if (st != QDC_OK) {
-        mesh_free(m);
-        return mesh_problem(c, r, st, &e);
-    }
+    t_parse = mono_now();
+    bad = check_upload(c, r, buf, len, &j, &ret, &t_valid);
+    munmap(buf, len);
+    if (bad)
+        return ret;
 
     new_id(j.id);
     snprintf(j.owner, sizeof j.owner, "%s", r->owner);
     snprintf(j.idem_key, sizeof j.idem_key, "%s", r->idem);
-    snprintf(j.format, sizeof j.format, "%s", meshio_format_name(r->fmt));
-    j.nv = m->nv;
-    j.nt = m->nt;
+    snprintf(j.format, sizeof j.format, "%s", upload_format_name(r));
     j.in_bytes = r->body_len;
     snprintf(j.options, sizeof j.options, "%s", r->options);
     j.created = wall_now();
-    mesh_free(m);
 
     double t_commit = mono_now();
     if (commit_input(r, j.id, j.format))
@@ -606,83 +860,132 @@ static enum MHD_Result process_upload(struct MHD_Connection *c, req *r)
     return ret;
 }
 
-static struct {
+/* A thread serving suspended requests one at a time, so the HTTP thread never
+ * waits on a parse, a conversion or an fsync: the intake (parse, validate and
+ * commit uploads) and the converter (results in the formats the worker did not
+ * write). Each answers its request, then resumes it. */
+typedef struct {
     pthread_mutex_t lock;
     pthread_cond_t cond;
     req *head, *tail;
     int stop, running;
     pthread_t th;
-} intake = {PTHREAD_MUTEX_INITIALIZER, PTHREAD_COND_INITIALIZER, NULL, NULL, 0, 0, 0};
+    enum MHD_Result (*fn)(struct MHD_Connection *c, req *r);
+} offq;
 
-static void *intake_main(void *arg)
+static enum MHD_Result process_convert(struct MHD_Connection *c, req *r);
+
+static offq intake = {PTHREAD_MUTEX_INITIALIZER,
+                      PTHREAD_COND_INITIALIZER,
+                      NULL,
+                      NULL,
+                      0,
+                      0,
+                      0,
+                      process_upload};
+static offq convert = {PTHREAD_MUTEX_INITIALIZER,
+                       PTHREAD_COND_INITIALIZER,
+                       NULL,
+                       NULL,
+                       0,
+                       0,
+                       0,
+                       process_convert};
+
+static void *offq_main(void *arg)
 {
-    (void)arg;
-    pthread_mutex_lock(&intake.lock);
+    offq *o = arg;
+    pthread_mutex_lock(&o->lock);
     for (;;) {
-        while (!intake.head && !intake.stop)
-            pthread_cond_wait(&intake.cond, &intake.lock);
-        req *r = intake.head;
+        while (!o->head && !o->stop)
+            pthread_cond_wait(&o->cond, &o->lock);
+        req *r = o->head;
         if (!r)
             break; /* stopping and drained */
-        intake.head = r->intake_next;
-        if (!intake.head)
-            intake.tail = NULL;
-        pthread_mutex_unlock(&intake.lock);
-        process_upload(r->conn, r);
+        o->head = r->intake_next;
+        if (!o->head)
+            o->tail = NULL;
+        pthread_mutex_unlock(&o->lock);
+        o->fn(r->conn, r);
         r->intake_done = 1;
         MHD_resume_connection(r->conn);
-        pthread_mutex_lock(&intake.lock);
+        pthread_mutex_lock(&o->lock);
     }
-    pthread_mutex_unlock(&intake.lock);
+    pthread_mutex_unlock(&o->lock);
     return NULL;
+}
+
+static int offq_start(offq *o)
+{
+    if (pthread_create(&o->th, NULL, offq_main, o))
+        return -1;
+    o->running = 1;
+    return 0;
+}
+
+/* Answers what is queued first. */
+static void offq_stop(offq *o)
+{
+    if (!o->running)
+        return;
+    pthread_mutex_lock(&o->lock);
+    o->stop = 1;
+    pthread_cond_signal(&o->cond);
+    pthread_mutex_unlock(&o->lock);
+    pthread_join(o->th, NULL);
+    o->running = 0;
+}
+
+/* Hand r to o's thread with its connection suspended (HTTP thread). */
+static enum MHD_Result offq_push(offq *o, struct MHD_Connection *c, req *r)
+{
+    pthread_mutex_lock(&o->lock);
+    if (o->stop) {
+        pthread_mutex_unlock(&o->lock);
+        static const char *const h[] = {MHD_HTTP_HEADER_RETRY_AFTER, "5", NULL};
+        return http_problem(c, r, 503, "shutting-down", "shutting down",
+                            "the server is stopping; retry later", NULL, h);
+    }
+    r->intake_next = NULL;
+    if (o->tail)
+        o->tail->intake_next = r;
+    else
+        o->head = r;
+    o->tail = r;
+    /* Suspended before the thread can see it, so its resume always follows
+     * this suspend. */
+    MHD_suspend_connection(c);
+    pthread_cond_signal(&o->cond);
+    pthread_mutex_unlock(&o->lock);
+    return MHD_YES;
 }
 
 int api_start(qdcd *q)
 {
     (void)q;
-    if (pthread_create(&intake.th, NULL, intake_main, NULL))
+    if (offq_start(&intake))
         return -1;
-    intake.running = 1;
+    if (offq_start(&convert)) {
+        offq_stop(&intake);
+        return -1;
+    }
     return 0;
 }
 
 void api_stop(void)
 {
-    if (!intake.running)
-        return;
-    pthread_mutex_lock(&intake.lock);
-    intake.stop = 1;
-    pthread_cond_signal(&intake.cond);
-    pthread_mutex_unlock(&intake.lock);
-    pthread_join(intake.th, NULL);
-    intake.running = 0;
+    offq_stop(&intake);
+    offq_stop(&convert);
 }
 
 /* Body complete (HTTP thread): refuse what needs no parsing, hand the rest
  * to the intake thread with the connection suspended. */
 static enum MHD_Result finish_upload(struct MHD_Connection *c, req *r)
 {
-    qdcd *q = r->q;
-    char d[400], extra[200];
-
     if (r->intake_done) /* resumed without a reply: queueing it failed */
         return MHD_NO;
-    if (r->too_big) {
-        int json = r->fmt == MESHIO_JSON && q->cfg.max_json < q->cfg.max_body;
-        int64_t lim = json ? q->cfg.max_json : q->cfg.max_body;
-        if (json)
-            snprintf(d, sizeof d,
-                     "JSON mesh bodies are limited to %lld bytes; send larger meshes as "
-                     "%s (proto/mesh-binary.md)",
-                     (long long)lim, MEDIA_QMESH);
-        else
-            snprintf(d, sizeof d, "request bodies are limited to %lld bytes",
-                     (long long)lim);
-        snprintf(extra, sizeof extra, "\"max_bytes\":%lld%s", (long long)lim,
-                 json ? ",\"use\":\"" MEDIA_QMESH "\"" : "");
-        return http_problem(c, r, 413, "too-big", "request body too large", d, extra,
-                            NULL);
-    }
+    if (r->too_big)
+        return too_big(c, r, r->fmt == MESHIO_JSON);
     if (r->io_err || r->fd < 0)
         return http_problem(c, r, 507, "io", "insufficient storage",
                             "the upload could not be stored", NULL, NULL);
@@ -690,25 +993,7 @@ static enum MHD_Result finish_upload(struct MHD_Connection *c, req *r)
         return http_problem(c, r, 400, "empty-body", "empty request body",
                             "POST /v1/jobs needs a mesh in the body", NULL, NULL);
 
-    pthread_mutex_lock(&intake.lock);
-    if (intake.stop) {
-        pthread_mutex_unlock(&intake.lock);
-        static const char *const h[] = {MHD_HTTP_HEADER_RETRY_AFTER, "5", NULL};
-        return http_problem(c, r, 503, "shutting-down", "shutting down",
-                            "the server is stopping; retry later", NULL, h);
-    }
-    r->intake_next = NULL;
-    if (intake.tail)
-        intake.tail->intake_next = r;
-    else
-        intake.head = r;
-    intake.tail = r;
-    /* Suspended before the intake thread can see it, so its resume always
-     * follows this suspend. */
-    MHD_suspend_connection(c);
-    pthread_cond_signal(&intake.cond);
-    pthread_mutex_unlock(&intake.lock);
-    return MHD_YES;
+    return offq_push(&intake, c, r);
 }
 
 /* ----------------------------------------------------------------- progress -- */
@@ -1017,76 +1302,136 @@ static int etag_matches(const char *inm, const char *etag)
     return 0;
 }
 
-static enum MHD_Result do_result(struct MHD_Connection *c, req *r)
+/* The offered list for a 400/406 about the result's format. */
+static void offered(sbuf *x)
 {
-    static const struct {
-        const char *names[4];
-        const char *file;
-        const char *ctype;
-        size_t etag_off;
-    } fmts[] = {
-        {{"binary", "qmesh", MEDIA_QMESH, NULL},
-         "result.qmesh",
-         MEDIA_QMESH,
-         offsetof(job_rec, etag_qmesh)},
-        {{"json", "application/json", NULL, NULL},
-         "result.json",
-         "application/json",
-         offsetof(job_rec, etag_json)},
-        {{"medit", "mesh", "model/x-medit", "text/plain"},
-         "result.mesh",
-         "model/x-medit",
-         offsetof(job_rec, etag_medit)},
-    };
-    job_rec j;
-    enum MHD_Result ret;
-    int k = -1;
-    const char *f, *acc;
-    char etag[80], path[4300];
+    sb_puts(x, "\"offered\":[");
+    media_list(x, 0);
+    sb_puts(x, "],\"formats\":[");
+    format_names(x, 0);
+    sb_puts(x, "]");
+}
 
-    if (!load_job(c, r, &j, &ret))
-        return ret;
-    f = MHD_lookup_connection_value(c, MHD_GET_ARGUMENT_KIND, "format");
-    acc = MHD_lookup_connection_value(c, MHD_HEADER_KIND, MHD_HTTP_HEADER_ACCEPT);
+/* The format of a result representation a GET asks for: ?format= (a name or a
+ * media type), else the first entry of Accept that is offered (parameters
+ * like ";encoding=binary" and ";version=2.2" pick variants; entries with q=0
+ * are skipped, other q values ignored: the client's order decides), else the
+ * binary. 0, or -1 with the 400/406 answered in *ret. */
+static int result_format(struct MHD_Connection *c, req *r, meshio_format *out,
+                         enum MHD_Result *ret)
+{
+    const char *f = MHD_lookup_connection_value(c, MHD_GET_ARGUMENT_KIND, "format");
+    const char *acc = MHD_lookup_connection_value(c, MHD_HEADER_KIND, MHD_HTTP_HEADER_ACCEPT);
+    meshio_format k = MESHIO_AUTO;
+    sbuf x = {0};
+    char d[300];
+
     if (f) {
-        for (int i = 0; i < 3 && k < 0; i++)
-            for (int t = 0; t < 4 && fmts[i].names[t]; t++)
-                if (!strcasecmp(f, fmts[i].names[t]))
-                    k = i;
-        if (k < 0)
-            return http_problem(c, r, 400, "invalid-parameter", "invalid parameter",
-                                "'format' must be binary, json or medit",
-                                "\"parameter\":\"format\"", NULL);
-    } else if (acc && *acc) {
-        /* The first acceptable type in the client's order wins. */
-        const char *p = acc;
-        while (*p && k < 0) {
-            char t[96];
-            size_t n = strcspn(p, ",");
-            snprintf(t, sizeof t, "%.*s", (int)(n < 95 ? n : 95), p);
-            char *s = t + strspn(t, " ");
-            s[strcspn(s, "; ")] = 0;
-            if (!strcmp(s, "*/*") || !strcasecmp(s, "application/*"))
-                k = 0;
-            for (int i = 0; i < 3 && k < 0; i++)
-                for (int u = 1; u < 4 && fmts[i].names[u]; u++)
-                    if (strchr(fmts[i].names[u], '/') && !strcasecmp(s, fmts[i].names[u]))
-                        k = i;
-            p += n;
-            if (*p == ',')
-                p++;
+        if (!strcasecmp(f, "text/plain"))
+            k = MESHIO_MEDIT;
+        else
+            k = strchr(f, '/') ? meshio_format_from_media_type(f)
+                               : meshio_format_from_name(f);
+        if (k != MESHIO_AUTO && k != MESHIO_TETGEN) {
+            *out = k;
+            return 0;
         }
-        if (k < 0)
-            return http_problem(c, r, 406, "not-acceptable", "not acceptable",
-                                "results are " MEDIA_QMESH ", application/json or "
-                                "model/x-medit (or use ?format=)",
-                                NULL, NULL);
-    } else {
-        k = 0;
+        sb_puts(&x, "\"parameter\":\"format\",");
+        offered(&x);
+        snprintf(d, sizeof d, "'format' must name one of the offered formats, not '%.60s'",
+                 f);
+        *ret = http_problem(c, r, 400, "invalid-parameter", "invalid parameter", d,
+                            x.oom ? NULL : x.buf, NULL);
+        sb_free(&x);
+        return -1;
     }
-    if (not_servable(c, r, &j, &ret))
-        return ret;
-    snprintf(etag, sizeof etag, "\"%s\"", (const char *)&j + fmts[k].etag_off);
+    if (!acc || !*acc) {
+        *out = MESHIO_QMESH;
+        return 0;
+    }
+    for (const char *p = acc; *p;) {
+        char t[200], base[100];
+        size_t n = strcspn(p, ",");
+        snprintf(t, sizeof t, "%.*s", (int)(n < sizeof t - 1 ? n : sizeof t - 1), p);
+        p += n + (p[n] == ',');
+        const char *e = t + strspn(t, " \t");
+        snprintf(base, sizeof base, "%s", e);
+        base[strcspn(base, "; \t")] = 0;
+        int q0 = 0;
+        for (const char *sc = strchr(e, ';'); sc; sc = strchr(sc + 1, ';')) {
+            const char *pv = sc + 1 + strspn(sc + 1, " \t");
+            if ((pv[0] == 'q' || pv[0] == 'Q') && pv[1] == '=')
+                q0 = strtod(pv + 2, NULL) <= 0;
+        }
+        if (q0)
+            continue; /* q=0: "not acceptable" */
+        if (!strcmp(base, "*/*") || !strcasecmp(base, "application/*"))
+            k = MESHIO_QMESH;
+        else if (!strcasecmp(base, "model/*") || !strcasecmp(base, "text/plain"))
+            k = MESHIO_MEDIT;
+        else
+            k = meshio_format_from_media_type(e);
+        if (k != MESHIO_AUTO && k != MESHIO_TETGEN) {
+            *out = k;
+            return 0;
+        }
+    }
+    offered(&x);
+    snprintf(d, sizeof d,
+             "no offered type matches Accept: %.150s (or name one with ?format=)", acc);
+    *ret = http_problem(c, r, 406, "not-acceptable", "not acceptable", d,
+                        x.oom ? NULL : x.buf, NULL);
+    sb_free(&x);
+    return -1;
+}
+
+/* The file of the result in format f and its SHA-256 (the strong ETag) when
+ * the file exists: the worker writes the binary, JSON and Medit results and
+ * their hashes are in the row; other formats are written on first request
+ * (process_convert) with the hash beside them in FILE.etag. */
+static void result_file(req *r, const job_rec *j, meshio_format f, char *path, size_t cap,
+                        char hex[65])
+{
+    char name[64], side[4400];
+    const char *known = NULL;
+
+    hex[0] = 0;
+    switch (f) {
+    case MESHIO_QMESH:
+        snprintf(name, sizeof name, "result.qmesh");
+        known = j->etag_qmesh;
+        break;
+    case MESHIO_JSON:
+        snprintf(name, sizeof name, "result.json");
+        known = j->etag_json;
+        break;
+    case MESHIO_MEDIT:
+        snprintf(name, sizeof name, "result.mesh");
+        known = j->etag_medit;
+        break;
+    default:
+        snprintf(name, sizeof name, "result.%s", meshio_format_name(f));
+        break;
+    }
+    job_path(r->q, j->id, name, path, cap);
+    if (known) {
+        snprintf(hex, 65, "%s", known);
+        return;
+    }
+    snprintf(side, sizeof side, "%s.etag", path);
+    size_t len = 0;
+    char *b = file_read_all(side, &len);
+    if (b && len == 64 && access(path, R_OK) == 0)
+        snprintf(hex, 65, "%s", b);
+    free(b);
+}
+
+static enum MHD_Result serve_result(struct MHD_Connection *c, req *r, meshio_format f,
+                                    const char *path, const char *hex)
+{
+    char etag[80];
+
+    snprintf(etag, sizeof etag, "\"%s\"", hex);
     const char *const h[] = {MHD_HTTP_HEADER_ETAG,
                              etag,
                              MHD_HTTP_HEADER_VARY,
@@ -1098,8 +1443,71 @@ static enum MHD_Result do_result(struct MHD_Connection *c, req *r)
                                                  MHD_HTTP_HEADER_IF_NONE_MATCH),
                      etag))
         return http_reply(c, r, 304, NULL, "", 0, h);
-    job_path(r->q, j.id, fmts[k].file, path, sizeof path);
-    return http_reply_file(c, r, 200, path, fmts[k].ctype, h);
+    return http_reply_file(c, r, 200, path, meshio_media_type(f), h);
+}
+
+/* Converter thread: write the result in r->res_fmt from result.qmesh, hash
+ * it, serve it. One thread, so two requests never write the same file. */
+static enum MHD_Result process_convert(struct MHD_Connection *c, req *r)
+{
+    job_rec j;
+    enum MHD_Result ret;
+    char path[4300], src[4300], side[4400], hex[65], d[400];
+    mesh_t *m = NULL;
+    qdc_error e;
+    qdc_status st;
+
+    if (!load_job(c, r, &j, &ret) || not_servable(c, r, &j, &ret))
+        return ret;
+    result_file(r, &j, r->res_fmt, path, sizeof path, hex);
+    if (hex[0]) /* written for a request queued before this one */
+        return serve_result(c, r, r->res_fmt, path, hex);
+    qdc_error_clear(&e);
+    job_path(r->q, j.id, "result.qmesh", src, sizeof src);
+    snprintf(side, sizeof side, "%s.etag", path);
+    double t0 = mono_now();
+    st = meshio_load(src, MESHIO_QMESH, &m, &e);
+    if (st == QDC_OK)
+        st = meshio_save(path, r->res_fmt, m, &e);
+    mesh_free(m);
+    if (st == QDC_OK && sha256_file_hex(path, hex))
+        st = qdc_fail(&e, QDC_EIO, "cannot hash the result");
+    if (st == QDC_OK && file_write_atomic(side, hex, 64))
+        st = qdc_fail(&e, QDC_EIO, "cannot store the result's hash");
+    if (st != QDC_OK) {
+        /* Deleted or expired meanwhile: say that rather than an i/o error. */
+        if (!load_job(c, r, &j, &ret) || not_servable(c, r, &j, &ret))
+            return ret;
+        snprintf(d, sizeof d, "the result could not be written as %s: %.200s",
+                 meshio_format_name(r->res_fmt), e.msg);
+        return http_problem(c, r, 500, "io", "i/o error", d, NULL, NULL);
+    }
+    if (r->q->cfg.verbose)
+        fprintf(stderr, "qdcd: job %s: result written as %s in %.3f s\n", j.id,
+                meshio_format_name(r->res_fmt), mono_now() - t0);
+    return serve_result(c, r, r->res_fmt, path, hex);
+}
+
+static enum MHD_Result do_result(struct MHD_Connection *c, req *r)
+{
+    job_rec j;
+    enum MHD_Result ret;
+    meshio_format f;
+    char path[4300], hex[65];
+
+    if (r->intake_done) /* resumed without a reply: queueing it failed */
+        return MHD_NO;
+    if (!load_job(c, r, &j, &ret))
+        return ret;
+    if (result_format(c, r, &f, &ret))
+        return ret;
+    if (not_servable(c, r, &j, &ret))
+        return ret;
+    result_file(r, &j, f, path, sizeof path, hex);
+    if (hex[0])
+        return serve_result(c, r, f, path, hex);
+    r->res_fmt = f;
+    return offq_push(&convert, c, r);
 }
 
 static enum MHD_Result do_report(struct MHD_Connection *c, req *r)

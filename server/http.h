@@ -8,6 +8,7 @@
 #include "poll.h"
 #include "server.h"
 #include "sha256.h"
+#include "surface.h"
 
 #include <microhttpd.h>
 
@@ -30,12 +31,16 @@ typedef struct req {
     int64_t body_len;
     int too_big, io_err, hashing;
     sha256_ctx hash;
-    meshio_format fmt;
+    meshio_format fmt;    /* a mesh upload's format, or MESHIO_AUTO */
+    surface_format sfmt;  /* a surface upload's format (tetrahedralized), or AUTO */
     int sniff; /* format from the content (text/plain, octet-stream, none) */
+    int tetgen_opts; /* tetgen_quality or max_volume given: surfaces only */
     char idem[129];
     char options[1024];
-    struct req *intake_next; /* queued for the intake thread */
-    int intake_done;         /* the intake thread has handled this upload */
+    struct req *intake_next; /* queued for the intake or the convert thread */
+    int intake_done;         /* that thread has handled this request */
+    /* GET /result */
+    meshio_format res_fmt;
     /* long-poll and SSE */
     poll_waiter w;
     double deadline;

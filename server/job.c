@@ -8,10 +8,13 @@
 #include "job.h"
 
 #include "bderr.h"
+#include "child.h"
 #include "meshio.h"
 #include "report.h"
 #include "sha256.h"
+#include "surface.h"
 
+#include <errno.h>
 #include <jansson.h>
 #include <pthread.h>
 #include <stdio.h>
@@ -53,11 +56,24 @@ void job_path(const qdcd *q, const char *id, const char *name, char *out, size_t
 
 const char *job_input_name(const char *format)
 {
-    if (!strcmp(format, "qmesh"))
-        return "input.qmesh";
-    if (!strcmp(format, "json"))
-        return "input.json";
+    static const struct {
+        const char *format, *file;
+    } names[] = {
+        {"qmesh", "input.qmesh"},    {"json", "input.json"},     {"gmsh", "input.msh"},
+        {"gmsh-bin", "input.msh"},   {"gmsh22", "input.msh"},    {"vtk", "input.vtk"},
+        {"vtk-ascii", "input.vtk"},  {"vtu", "input.vtu"},       {"vtu-ascii", "input.vtu"},
+        {"stl", "input.stl"},        {"off", "input.off"},       {"obj", "input.obj"},
+        {"poly", "input.poly"},      {"smesh", "input.smesh"},
+    };
+    for (size_t i = 0; i < sizeof names / sizeof names[0]; i++)
+        if (!strcmp(format, names[i].format))
+            return names[i].file;
     return "input.mesh";
+}
+
+int job_is_surface(const char *format)
+{
+    return surface_format_from_name(format) != SURFACE_AUTO;
 }
 
 /* ---------------------------------------------------------------- options -- */
@@ -215,6 +231,8 @@ int job_opt_from_json(opt_options *o, const char *json, double cap_time)
     }
     json_object_foreach(root, key, v)
     {
+        if (!strcmp(key, "tetgen_quality") || !strcmp(key, "max_volume"))
+            continue; /* the surface's options: job_tetra_opts */
         if (json_is_string(v))
             snprintf(buf, sizeof buf, "%s", json_string_value(v));
         else if (json_is_boolean(v))
@@ -230,6 +248,21 @@ int job_opt_from_json(opt_options *o, const char *json, double cap_time)
     }
     json_decref(root);
     return rc;
+}
+
+void job_tetra_opts(const char *json, double *quality, double *max_volume)
+{
+    json_t *root = json_loads(json, 0, NULL);
+    json_t *v;
+
+    *quality = *max_volume = -1;
+    v = json_object_get(root, "tetgen_quality");
+    if (json_is_number(v))
+        *quality = json_number_value(v);
+    v = json_object_get(root, "max_volume");
+    if (json_is_number(v))
+        *max_volume = json_number_value(v);
+    json_decref(root);
 }
 
 /* ---------------------------------------------------------------- running -- */
@@ -347,6 +380,119 @@ static qdc_status save_outputs(qdcd *q, job_rec *j, const mesh_t *out, const mes
     return st;
 }
 
+/* A surface job's mesh: `qdc tetra` turns DATA/jobs/ID/input.EXT into
+ * tetra.qmesh in a child process (libtet can crash on some surfaces and
+ * prints to stdout; both stay in the child and its tetgen.log). TetGen's time
+ * comes out of the job's budget. Returns 0 with *out set, 1 when the job
+ * failed (j->error set), 2 when it was cancelled or handed back (w->cancel). */
+static int tetrahedralize(worker *w, job_rec *j, opt_options *opts, mesh_t **out)
+{
+    qdcd *q = w->pool->q;
+    char in[4200], res[4200], log[4200], qs[40], vs[40], msg[400], detail[600];
+    char *argv[10];
+    int k = 0;
+    double tq, tv, budget;
+    child_result cr;
+    qdc_error err;
+    qdc_status st;
+    char *buf;
+    size_t len = 0;
+
+    qdc_error_clear(&err);
+    job_path(q, j->id, job_input_name(j->format), in, sizeof in);
+    job_path(q, j->id, "tetra.qmesh", res, sizeof res);
+    job_path(q, j->id, "tetgen.log", log, sizeof log);
+    job_tetra_opts(j->options, &tq, &tv);
+    argv[k++] = q->cfg.qdc_path;
+    argv[k++] = "tetra";
+    argv[k++] = in;
+    argv[k++] = res;
+    if (tq >= 0) {
+        snprintf(qs, sizeof qs, "%.17g", tq);
+        argv[k++] = "--tetgen-quality";
+        argv[k++] = qs;
+    }
+    if (tv >= 0) {
+        snprintf(vs, sizeof vs, "%.17g", tv);
+        argv[k++] = "--max-volume";
+        argv[k++] = vs;
+    }
+    argv[k] = NULL;
+    budget = opts->time_limit > 0 ? opts->time_limit : q->cfg.job_time_limit;
+    child_run(argv, log, mono_now() + budget, &w->cancel, &cr);
+    if (q->cfg.verbose)
+        fprintf(stderr, "qdcd: job %s: qdc tetra %s after %.3f s (exit %d, signal %d)\n",
+                j->id, cr.exited && !cr.code ? "succeeded" : "failed", cr.seconds,
+                cr.exited ? cr.code : -1, cr.signal);
+    if (!cr.spawned) {
+        snprintf(detail, sizeof detail, "cannot run %.400s: %s", q->cfg.qdc_path,
+                 strerror(cr.errno_spawn));
+        problem(j, 500, "internal", "the surface could not be tetrahedralized", detail);
+        return 1;
+    }
+    if (cr.cancelled)
+        return 2;
+    if (cr.timed_out) {
+        snprintf(detail, sizeof detail,
+                 "TetGen did not finish within the job's time limit (%g s)", budget);
+        problem(j, 422, "tetgen", "the surface could not be tetrahedralized", detail);
+        return 1;
+    }
+    if (cr.signal) {
+        snprintf(detail, sizeof detail, "TetGen crashed (signal %d) on this surface",
+                 cr.signal);
+        problem(j, 422, "tetgen", "the surface could not be tetrahedralized", detail);
+        return 1;
+    }
+    if (cr.code) {
+        /* "qdc: DATA/jobs/ID/input.stl:3:1: message": the client knows its
+         * file as the upload, not by our path. */
+        child_last_line(log, "qdc: ", msg, sizeof msg);
+        const char *m = msg;
+        size_t n = strlen(in);
+        if (!strncmp(m, in, n) && (m[n] == ':' || m[n] == 0))
+            m += n + (m[n] == ':') + (m[n] == ':' && m[n + 1] == ' ');
+        if (cr.code == 2 || cr.code == 3) {
+            snprintf(detail, sizeof detail, "%s",
+                     *m ? m : "TetGen could not tetrahedralize this surface");
+            problem(j, 422, "tetgen", "the surface could not be tetrahedralized",
+                    detail);
+        } else {
+            snprintf(detail, sizeof detail, "qdc tetra exited with status %d: %s",
+                     cr.code, *m ? m : "no message");
+            problem(j, 500, "internal", "the surface could not be tetrahedralized",
+                    detail);
+        }
+        return 1;
+    }
+    buf = file_read_all(res, &len);
+    st = buf ? meshio_read(buf, len, MESHIO_QMESH, out, &err)
+             : qdc_fail(&err, QDC_EIO, "qdc tetra left no mesh");
+    free(buf);
+    if (st == QDC_OK && ((*out)->nv > q->cfg.max_vertices || (*out)->nt > q->cfg.max_tets))
+        st = qdc_fail(&err, QDC_ETOOBIG,
+                      "TetGen made %d vertices and %d tets; this server accepts %lld and "
+                      "%lld at most (raise max_volume or lower tetgen_quality)",
+                      (*out)->nv, (*out)->nt, (long long)q->cfg.max_vertices,
+                      (long long)q->cfg.max_tets);
+    if (st == QDC_OK)
+        st = mesh_validate(*out, NULL, &err);
+    if (st != QDC_OK) {
+        mesh_free(*out);
+        *out = NULL;
+        snprintf(detail, sizeof detail, "%s: %s", qdc_status_str(st), err.msg);
+        problem(j, st == QDC_ETOOBIG ? 413 : 500,
+                st == QDC_ETOOBIG ? "too-big" : "internal",
+                "the surface could not be tetrahedralized", detail);
+        return 1;
+    }
+    unlink(res);
+    j->nv = (*out)->nv;
+    j->nt = (*out)->nt;
+    opts->time_limit = budget - cr.seconds > 0.001 ? budget - cr.seconds : 0.001;
+    return 0;
+}
+
 static void run_job(worker *w, job_rec *j)
 {
     qdcd *q = w->pool->q;
@@ -368,17 +514,28 @@ static void run_job(worker *w, job_rec *j)
     job_path(q, j->id, "progress.jsonl", path, sizeof path);
     r.progress = fopen(path, "w");
 
-    job_path(q, j->id, job_input_name(j->format), path, sizeof path);
-    buf = file_read_all(path, &len);
-    if (!buf) {
-        st = qdc_fail(&err, QDC_EIO, "cannot read the job's input file");
-        goto failed;
+    job_opt_from_json(&opts, j->options, q->cfg.job_time_limit);
+    if (job_is_surface(j->format)) {
+        int t = tetrahedralize(w, j, &opts, &m);
+        if (t == 1) {
+            j->state = JOB_FAILED;
+            goto finish;
+        }
+        if (t == 2)
+            goto stopped;
+    } else {
+        job_path(q, j->id, job_input_name(j->format), path, sizeof path);
+        buf = file_read_all(path, &len);
+        if (!buf) {
+            st = qdc_fail(&err, QDC_EIO, "cannot read the job's input file");
+            goto failed;
+        }
+        st = meshio_read(buf, len, meshio_format_from_name(j->format), &m, &err);
+        free(buf);
+        buf = NULL;
+        if (st != QDC_OK)
+            goto failed;
     }
-    st = meshio_read(buf, len, meshio_format_from_name(j->format), &m, &err);
-    free(buf);
-    buf = NULL;
-    if (st != QDC_OK)
-        goto failed;
     ref = mesh_dup(m);
     if (!ref) {
         st = qdc_fail(&err, QDC_ENOMEM, "out of memory");
@@ -387,7 +544,6 @@ static void run_job(worker *w, job_rec *j)
     st = report_quality_compute(m, &before, &err);
     if (st != QDC_OK)
         goto failed;
-    job_opt_from_json(&opts, j->options, q->cfg.job_time_limit);
     /* Workers already run side by side: split the cores instead of letting
      * every job's OpenMP team take them all. */
     long ncpu = sysconf(_SC_NPROCESSORS_ONLN);
@@ -399,6 +555,7 @@ static void run_job(worker *w, job_rec *j)
     if (st != QDC_OK)
         goto failed;
 
+stopped:
     pthread_mutex_lock(&w->pool->lock);
     release = w->release;
     pthread_mutex_unlock(&w->pool->lock);

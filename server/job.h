@@ -30,7 +30,12 @@ void job_opt_json(const opt_options *o, sbuf *out);
 /* Rebuild options from job_opt_json output. */
 int job_opt_from_json(opt_options *o, const char *json, double cap_time);
 
-/* Input file name of a job for its format name ("input.qmesh"...). */
+/* Input file name of a job for its format name ("input.qmesh", "input.stl"...). */
 const char *job_input_name(const char *format);
+/* Is format (a job's) a surface format, tetrahedralized by the worker? */
+int job_is_surface(const char *format);
+/* The TetGen options stored in a surface job's options JSON ("tetgen_quality",
+ * "max_volume"); -1 for each one not given. */
+void job_tetra_opts(const char *json, double *quality, double *max_volume);
 
 #endif

@@ -55,6 +55,9 @@ static void usage(FILE *f)
         "                            giving them back to the queue (default 10)\n"
         "  --bderr-samples N         random samples per surface for the boundary error\n"
         "                            (default 20000)\n"
+        "  --qdc PATH                the qdc program that tetrahedralizes surface\n"
+        "                            uploads in a child process (`qdc tetra`; default:\n"
+        "                            qdc next to this qdcd)\n"
         "  -v, --verbose             log jobs and HTTP errors to stderr\n"
         "  -h, --help                this text\n",
         f);
@@ -169,6 +172,7 @@ static const cli_opt cli_opts[] = {
     {"port-file", 's', CFG(port_file), 0, 0, 0},
     {"data", 's', CFG(data), 0, 0, 0},
     {"tokens", 's', CFG(tokens_file), 0, 0, 0},
+    {"qdc", 's', CFG(qdc_path), 0, 0, 0},
     {"workers", 'i', CFG(workers), 1, 1024, 0},
     {"max-body", 'l', CFG(max_body), 1, 9.2e18, 1073741824},
     {"max-json", 'l', CFG(max_json), 1, 9.2e18, 16777216},
@@ -295,6 +299,27 @@ static void purge_expired(qdcd *q)
     }
 }
 
+/* Without --qdc: the qdc built beside this qdcd (both land in build/rel, and
+ * an install puts them in one bin directory). */
+static void default_qdc_path(qdcd_config *c)
+{
+    char exe[4096];
+    ssize_t n;
+
+    if (c->qdc_path[0])
+        return;
+    n = readlink("/proc/self/exe", exe, sizeof exe - 1);
+    if (n <= 0) {
+        snprintf(c->qdc_path, sizeof c->qdc_path, "qdc");
+        return;
+    }
+    exe[n] = 0;
+    char *slash = strrchr(exe, '/'); /* the link is an absolute path */
+    if (slash)
+        *slash = 0;
+    snprintf(c->qdc_path, sizeof c->qdc_path, "%.4090s/qdc", slash ? exe : ".");
+}
+
 static int prepare_data_dir(qdcd *q)
 {
     char p[4200];
@@ -324,6 +349,12 @@ int main(int argc, char **argv)
         return 2;
     if (q->cfg.tokens_file[0] && load_tokens(q, q->cfg.tokens_file))
         return 2;
+    default_qdc_path(&q->cfg);
+    if (access(q->cfg.qdc_path, X_OK))
+        fprintf(stderr,
+                "qdcd: warning: %s is not executable: surface uploads will fail "
+                "(--qdc PATH)\n",
+                q->cfg.qdc_path);
     if (!is_loopback(q->cfg.host) && !q->ntokens && !q->cfg.insecure) {
         fprintf(stderr,
                 "qdcd: refusing to listen on %s without --tokens (anyone could "

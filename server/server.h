@@ -15,6 +15,7 @@ typedef struct {
     char data[4096];        /* --data DIR */
     char port_file[4096];   /* --port-file FILE: the bound port is written there */
     char tokens_file[4096]; /* --tokens FILE */
+    char qdc_path[4096];    /* --qdc PATH: runs `qdc tetra` for surface jobs */
     int insecure;           /* --insecure: allow a public address without tokens */
     int workers;            /* --workers N */
     int64_t max_body;       /* --max-body BYTES (any format) */

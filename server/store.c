@@ -46,7 +46,7 @@ static const char schema[] =
     " purged INTEGER DEFAULT 0, iterations INTEGER DEFAULT 0, last_progress TEXT DEFAULT "
     "'',"
     " error TEXT DEFAULT '', stop_reason TEXT DEFAULT '', etag_qmesh TEXT DEFAULT '',"
-    " etag_json TEXT DEFAULT '', etag_medit TEXT DEFAULT '');"
+    " etag_json TEXT DEFAULT '', etag_medit TEXT DEFAULT '', notes TEXT DEFAULT '');"
     "CREATE UNIQUE INDEX IF NOT EXISTS jobs_idem ON jobs(owner, idem_key) WHERE idem_key "
     "!= '';"
     "CREATE INDEX IF NOT EXISTS jobs_state ON jobs(state, seq);"
@@ -57,7 +57,7 @@ static const char schema[] =
     " in_bytes, options, attempts, lease_owner, lease_until, created, started, "         \
     "finished,"                                                                          \
     " expires, purged, iterations, last_progress, error, stop_reason, etag_qmesh,"       \
-    " etag_json, etag_medit"
+    " etag_json, etag_medit, notes"
 
 static void col_text(sqlite3_stmt *st, int i, char *dst, size_t cap)
 {
@@ -95,6 +95,7 @@ static void row_to_rec(sqlite3_stmt *st, job_rec *j)
     col_text(st, 24, j->etag_qmesh, sizeof j->etag_qmesh);
     col_text(st, 25, j->etag_json, sizeof j->etag_json);
     col_text(st, 26, j->etag_medit, sizeof j->etag_medit);
+    col_text(st, 27, j->notes, sizeof j->notes);
 }
 
 /* Prepare sql on db; binds are done by the caller. NULL on failure. */
@@ -189,7 +190,7 @@ static qdc_status sq_create(job_store *s_, const job_rec *j, int *dup, job_rec *
     }
     st = prep(s->wr,
               "INSERT INTO jobs(id, owner, state, idem_key, body_hash, format, nv, nt,"
-              " in_bytes, options, created) VALUES(?,?,0,?,?,?,?,?,?,?,?)");
+              " in_bytes, options, created, notes) VALUES(?,?,0,?,?,?,?,?,?,?,?,?)");
     if (!st)
         goto end;
     bind_text(st, 1, j->id);
@@ -202,6 +203,7 @@ static qdc_status sq_create(job_store *s_, const job_rec *j, int *dup, job_rec *
     sqlite3_bind_int64(st, 8, j->in_bytes);
     bind_text(st, 9, j->options);
     sqlite3_bind_double(st, 10, j->created);
+    bind_text(st, 11, j->notes);
     ok = sqlite3_step(st) == SQLITE_DONE;
     rc = ok ? QDC_OK : QDC_EIO;
 end:
@@ -376,11 +378,12 @@ static qdc_status sq_finish(job_store *s_, const job_rec *j)
     return write1((sq_store *)s_, NULL,
                   "UPDATE jobs SET state = ?, finished = ?, expires = ?, iterations = ?,"
                   " last_progress = ?, error = ?, stop_reason = ?, etag_qmesh = ?,"
-                  " etag_json = ?, etag_medit = ?, lease_owner = '', lease_until = 0"
+                  " etag_json = ?, etag_medit = ?, nv = ?, nt = ?, lease_owner = '',"
+                  " lease_until = 0"
                   " WHERE id = ?",
-                  "iddittttttt", (int64_t)j->state, j->finished, j->expires,
+                  "iddittttttiit", (int64_t)j->state, j->finished, j->expires,
                   (int64_t)j->iterations, j->last_progress, j->error, j->stop_reason,
-                  j->etag_qmesh, j->etag_json, j->etag_medit, j->id);
+                  j->etag_qmesh, j->etag_json, j->etag_medit, j->nv, j->nt, j->id);
 }
 
 static qdc_status sq_release(job_store *s_, const char *id, const char *worker)
@@ -539,6 +542,11 @@ qdc_status store_sqlite_open(const char *dir, job_store **out, qdc_error *err)
     st = open_db(path, &s->wr, err);
     if (st == QDC_OK && exec(s->wr, schema) != QDC_OK)
         st = qdc_fail(err, QDC_EIO, "cannot create the schema in %s", path);
+    /* A store made before the notes column: add it (an error only means it
+     * is there already). */
+    if (st == QDC_OK)
+        sqlite3_exec(s->wr, "ALTER TABLE jobs ADD COLUMN notes TEXT DEFAULT ''", NULL,
+                     NULL, NULL);
     if (st == QDC_OK)
         st = open_db(path, &s->rd, err);
     if (st != QDC_OK) {

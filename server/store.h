@@ -34,7 +34,8 @@ typedef struct {
     int cancel_requested;
     char idem_key[129]; /* Idempotency-Key, "" if none */
     char body_hash[65]; /* SHA-256 of query + body when idem_key is set */
-    char format[8];     /* input format name: "qmesh", "json", "medit" */
+    char format[16];    /* input format name: meshio's ("qmesh", "gmsh-bin"...) or
+                           a surface's ("stl"...: tetrahedralized by the worker) */
     int64_t nv, nt;
     int64_t in_bytes;
     char options[1024]; /* canonical options JSON */
@@ -48,6 +49,7 @@ typedef struct {
     char error[1024];        /* problem+json object of a failed job, "" otherwise */
     char stop_reason[64];
     char etag_qmesh[65], etag_json[65], etag_medit[65];
+    char notes[512]; /* reader notes (skipped element types...), lines, "" if none */
 } job_rec;
 
 typedef struct {
@@ -57,8 +59,8 @@ typedef struct {
 typedef struct job_store job_store;
 
 typedef struct {
-    /* Insert j (id, owner, idem_key, body_hash, format, sizes, options, created
-     * filled by the caller). If j->idem_key is set and the owner already has a
+    /* Insert j (id, owner, idem_key, body_hash, format, sizes, options, created,
+     * notes filled by the caller). If j->idem_key is set and the owner already has a
      * job with that key, nothing is inserted, *existing receives that job and
      * *dup is set to 1. The row is durable when this returns QDC_OK. */
     qdc_status (*create)(job_store *s, const job_rec *j, int *dup, job_rec *existing);
@@ -76,7 +78,8 @@ typedef struct {
                         int *found);
     qdc_status (*renew)(job_store *s, const char *id, const char *worker, double lease_s);
     /* Terminal state from a worker: writes state, finished, expires, iterations,
-     * last_progress, error, stop_reason, etags of j. */
+     * last_progress, error, stop_reason, etags, nv and nt of j (a surface job
+     * learns its tet count from TetGen). */
     qdc_status (*finish)(job_store *s, const job_rec *j);
     /* Give a running job back to the queue (graceful shutdown): attempts - 1. */
     qdc_status (*release)(job_store *s, const char *id, const char *worker);

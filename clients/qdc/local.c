@@ -233,6 +233,34 @@ static qdc_status load_input(const char *path, meshio_format fin, surface_format
     return st;
 }
 
+/* --tetgen-quality Q (0 or >= 1) or --max-volume V (>= 0) into to; -1 if v is
+ * not such a number. Shared by optimize and tetra. */
+static int tetgen_opt(const char *a, const char *v, tetra_options *to)
+{
+    char *end;
+    int q = !strcmp(a, "--tetgen-quality");
+    double x = strtod(v, &end);
+
+    if (*end || !(x >= 0) || x > 1e300 || (q && x > 0 && x < 1))
+        return -1;
+    *(q ? &to->quality : &to->max_volume) = x;
+    return 0;
+}
+
+/* IN, then OUT; -1 (message said) for a third. */
+static int positional(const char *a, const char **in, const char **out)
+{
+    if (!*in) {
+        *in = a;
+    } else if (!*out) {
+        *out = a;
+    } else {
+        fprintf(stderr, "qdc: unexpected argument '%s'\n", a);
+        return -1;
+    }
+    return 0;
+}
+
 int cli_optimize(int argc, char **argv)
 {
     opt_options o;
@@ -310,14 +338,7 @@ int cli_optimize(int argc, char **argv)
                 else
                     o.time_limit = x;
             } else if (!strcmp(a, "--tetgen-quality") || !strcmp(a, "--max-volume")) {
-                char *end;
-                double x = strtod(v, &end);
-                bad = *end || !(x >= 0) || x > 1e300 ||
-                      (!strcmp(a, "--tetgen-quality") && x > 0 && x < 1);
-                if (!strcmp(a, "--tetgen-quality"))
-                    to.quality = x;
-                else
-                    to.max_volume = x;
+                bad = tetgen_opt(a, v, &to);
                 tetgen_opts = 1;
             } else if (!strcmp(a, "--in-format") || !strcmp(a, "--format")) {
                 fin = meshio_format_from_name(v);
@@ -339,12 +360,7 @@ int cli_optimize(int argc, char **argv)
                 fprintf(stderr, "qdc: bad value '%s' for %s\n", v, a);
                 return CLI_EUSAGE;
             }
-        } else if (!in) {
-            in = a;
-        } else if (!out) {
-            out = a;
-        } else {
-            fprintf(stderr, "qdc: unexpected argument '%s'\n", a);
+        } else if (positional(a, &in, &out)) {
             return CLI_EUSAGE;
         }
     }
@@ -433,6 +449,74 @@ int cli_optimize(int argc, char **argv)
 out:
     mesh_free(m);
     mesh_free(orig);
+    return rc;
+}
+
+/* qdc tetra IN OUT: a closed surface tetrahedralized with TetGen, no
+ * optimization. qdcd runs it in a child process for surface uploads, so
+ * exit codes are part of its contract: 2 bad surface, 3 TetGen failed, with
+ * one "qdc: " line on stderr saying why. */
+int cli_tetra(int argc, char **argv)
+{
+    const char *in = NULL, *out = NULL;
+    tetra_options to;
+    surface_t *s = NULL;
+    mesh_t *m = NULL;
+    qdc_error err;
+    qdc_status st;
+    int rc = CLI_OK;
+    static const char use[] =
+        "usage: qdc tetra IN OUT [--tetgen-quality Q] [--max-volume V]\n"
+        "  IN: closed triangle surface (.stl .off .obj .poly .smesh); OUT: any mesh "
+        "format\n"
+        "  exit 0 ok, 1 usage, 2 bad surface, 3 TetGen failed, 4 OUT not written\n";
+
+    tetra_defaults(&to);
+    qdc_error_clear(&err);
+    for (int i = 1; i < argc; i++) {
+        const char *a = argv[i];
+        if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
+            fputs(use, stdout);
+            return CLI_OK;
+        } else if (!strcmp(a, "--tetgen-quality") || !strcmp(a, "--max-volume")) {
+            if (i + 1 >= argc || tetgen_opt(a, argv[i + 1], &to)) {
+                fprintf(stderr, "qdc: bad value for %s\n", a);
+                return CLI_EUSAGE;
+            }
+            i++;
+        } else if (a[0] == '-' && a[1]) {
+            fprintf(stderr, "qdc: tetra: unknown option %s\n%s", a, use);
+            return CLI_EUSAGE;
+        } else if (positional(a, &in, &out)) {
+            return CLI_EUSAGE;
+        }
+    }
+    if (!in || !out) {
+        fputs(use, stderr);
+        return CLI_EUSAGE;
+    }
+    st = surface_load(in, SURFACE_AUTO, &s, &err);
+    if (st == QDC_OK)
+        st = surface_check(s, &err);
+    if (st == QDC_OK)
+        st = tetra_from_surface_t(s, &to, &m, &err);
+    if (st != QDC_OK) {
+        cli_error(in, &err, st);
+        rc = st == QDC_ETETGEN || st == QDC_ENOMEM || st == QDC_EINTERNAL ? CLI_EOPT
+                                                                            : CLI_EINPUT;
+        goto out;
+    }
+    st = meshio_save(out, MESHIO_AUTO, m, &err);
+    if (st != QDC_OK) {
+        cli_error(out, &err, st);
+        rc = CLI_EOUTPUT;
+        goto out;
+    }
+    fprintf(stderr, "qdc: %s -> %s: %d vertices, %d tets\n", in, out, (int)m->nv,
+            (int)m->nt);
+out:
+    surface_free(s);
+    mesh_free(m);
     return rc;
 }
 

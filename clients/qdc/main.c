@@ -14,6 +14,8 @@ static void usage(FILE *f)
           "Local commands:\n"
           "  optimize IN OUT [options]   optimize a tet mesh (qdc optimize --help)\n"
           "  quality IN [--ref ORIG] [--json]   quality report of a mesh\n"
+          "  tetra SURFACE OUT [--tetgen-quality Q] [--max-volume V]   tetrahedralize\n"
+          "                              a closed surface with TetGen (no optimization)\n"
           "\n"
           "Remote commands (qdcd at --server URL or $QDC_SERVER; token $QDC_TOKEN):\n"
           "  submit IN [--wait] [-o OUT] [--report R.json] [options]   new job; prints its id\n"
@@ -43,6 +45,8 @@ int main(int argc, char **argv)
         return cli_optimize(argc - 1, argv + 1);
     if (!strcmp(argv[1], "quality"))
         return cli_quality(argc - 1, argv + 1);
+    if (!strcmp(argv[1], "tetra"))
+        return cli_tetra(argc - 1, argv + 1);
     if (!strcmp(argv[1], "submit") || !strcmp(argv[1], "status") ||
         !strcmp(argv[1], "watch") || !strcmp(argv[1], "fetch") ||
         !strcmp(argv[1], "cancel") || !strcmp(argv[1], "jobs"))
