@@ -1,0 +1,275 @@
+#!/bin/sh
+# formats.sh - content negotiation (issue 6): an upload in every mesh format
+# (by Content-Type, ?format= or sniffed) becomes a job with the same sizes and
+# notes about skipped elements; the result comes back in every format (by
+# ?format= or Accept, with its own strong ETag) with the region tags; 415 and
+# 406 list the types. Closed surfaces (STL, OFF) are tetrahedralized by the
+# worker through `qdc tetra` in a child process: an open one is a 422 at
+# upload, a self-intersecting one a failed job with TetGen's reason, and a
+# crashing or hanging child (a stand-in for qdc) fails or cancels its job
+# while the daemon goes on serving.
+. "$(dirname "$0")/../lib.sh"
+. "$(dirname "$0")/daemon.inc"
+
+QDC=$BIN/qdc
+cat > "$TMP/h.py" << 'EOF'
+import sys
+
+def read_medit(path):
+    toks = open(path).read().split()
+    i = toks.index("Vertices"); nv = int(toks[i + 1])
+    xyz = [toks[i + 2 + 4 * k: i + 5 + 4 * k] for k in range(nv)]
+    i = toks.index("Tetrahedra"); nt = int(toks[i + 1])
+    tets = [toks[i + 2 + 5 * k: i + 7 + 5 * k] for k in range(nt)]
+    return xyz, tets
+
+def regions(src, out):
+    """src with tet refs 1..4 by the quadrant of the tet's centroid."""
+    xyz, tets = read_medit(src)
+    with open(out, "w") as f:
+        f.write("MeshVersionFormatted 2\nDimension 3\nVertices\n%d\n" % len(xyz))
+        f.writelines("%s %s %s 0\n" % tuple(v) for v in xyz)
+        f.write("Tetrahedra\n%d\n" % len(tets))
+        for t in tets:
+            c = [sum(float(xyz[int(v) - 1][a]) for v in t[:4]) / 4 for a in range(2)]
+            f.write("%s %s %s %s %d\n" % (*t[:4], 1 + (c[0] > 0.5) + 2 * (c[1] > 0.5)))
+        f.write("End\n")
+
+def same(a, b):
+    """Same vertex and tet counts, same tets with the same tags, in order."""
+    xa, ta = read_medit(a)
+    xb, tb = read_medit(b)
+    if len(xa) != len(xb) or len(ta) != len(tb):
+        sys.exit("%d/%d vertices, %d/%d tets" % (len(xa), len(xb), len(ta), len(tb)))
+    if [t[:4] for t in ta] != [t[:4] for t in tb]:
+        sys.exit("connectivity differs")
+    if [t[4] for t in ta] != [t[4] for t in tb]:
+        sys.exit("tags differ")
+    print(len(xa), "vertices,", len(ta), "tets, tags", sorted(set(t[4] for t in ta)))
+
+def point_element(src, out):
+    """A MSH 2.2 file with one more element: a point (type 15), which qdc skips."""
+    lines = open(src).read().split("\n")
+    k = lines.index("$Elements")
+    n = int(lines[k + 1])
+    lines[k + 1] = str(n + 1)
+    lines.insert(k + 2, "%d 15 2 0 1 1" % (n + 1000))
+    open(out, "w").write("\n".join(lines))
+
+cmd, a = sys.argv[1], sys.argv[2:]
+{"regions": lambda: regions(*a), "same": lambda: same(*a), "point": lambda: point_element(*a)}[cmd]()
+EOF
+H="$PY $TMP/h.py"
+
+$H regions "$ROOT/tests/data/sample/cube.mesh" "$TMP/in.mesh"
+# name:extension:media type of every format, inputs written by qdc itself
+FMTS="medit:mesh:model/x-medit qmesh:qmesh:application/vnd.qdc.mesh json:json:application/json
+gmsh:msh:model/vnd.gmsh gmsh-bin:msh:model/vnd.gmsh;encoding=binary
+gmsh22:msh:model/vnd.gmsh;version=2.2 vtk:vtk:application/vnd.vtk
+vtk-ascii:vtk:application/vnd.vtk;encoding=ascii vtu:vtu:application/vnd.vtk.vtu+xml
+vtu-ascii:vtu:application/vnd.vtk.vtu+xml;encoding=ascii"
+for e in $FMTS; do
+    f=${e%%:*}; x=${e#*:}; x=${x%%:*}
+    "$QDC" optimize --max-iter 0 --finish off --quiet --out-format "$f" "$TMP/in.mesh" "$TMP/in.$f.$x" ||
+        fail "write input $f" "qdc optimize exit $?"
+done
+$H point "$TMP/in.gmsh22.msh" "$TMP/in.point.msh"
+for k in cube open selfx; do $PY "$ROOT/tests/server/surfaces.py" stl $k "$TMP/$k.stl"; done
+$PY "$ROOT/tests/server/surfaces.py" off "$TMP/cube.off"
+
+start_qdcd "$TMP/d" --workers 2 || { fail "start" "$(tail -3 "$TMP/d.log")"; exit 1; }
+NV=$(awk '/^Vertices/ { getline; print; exit }' "$TMP/in.mesh")
+NT=$(awk '/^Tetrahedra/ { getline; print; exit }' "$TMP/in.mesh")
+
+# wait_done ID: the final state (jobs here take well under a second)
+wait_done() {
+    _i=0
+    while [ $_i -lt 300 ]; do
+        curl -s "$URL/v1/jobs/$1" > "$TMP/job.$1"
+        [ "$(jf "$TMP/job.$1" .done)" = true ] && { jf "$TMP/job.$1" .state; return; }
+        sleep 0.1
+        _i=$((_i + 1))
+    done
+    echo timeout
+}
+
+# Uploads: each format by its Content-Type (qmesh also by ?format= and sniffed).
+ids=
+for e in $FMTS; do
+    f=${e%%:*}; x=${e#*:}; t=${x#*:}; x=${x%%:*}
+    code=$(submit "$TMP/in.$f.$x" "$t" "max_iter=1" "$TMP/sub.$f")
+    if [ "$code" = 202 ] && [ "$(jf "$TMP/sub.$f" .mesh.format)" = "$f" ] &&
+        [ "$(jf "$TMP/sub.$f" .mesh.vertices)" = "$NV" ] && [ "$(jf "$TMP/sub.$f" .mesh.tets)" = "$NT" ]; then
+        ids="$ids $f:$(jf "$TMP/sub.$f" .id)"
+    else
+        fail "upload $f as $t" "$code $(head -c 300 "$TMP/sub.$f")"
+    fi
+done
+[ "$(echo $ids | wc -w)" = 10 ] && pass "upload: all 10 formats by Content-Type: 202, format named, $NV vertices, $NT tets"
+code=$(submit "$TMP/in.gmsh-bin.msh" application/octet-stream "format=gmsh&max_iter=1" "$TMP/out")
+[ "$code" = 202 ] && [ "$(jf "$TMP/out" .mesh.format)" = gmsh ] && [ "$(jf "$TMP/out" .mesh.tets)" = "$NT" ] &&
+    pass "upload: ?format=gmsh reads binary MSH 4.1 too" || fail "?format=gmsh" "$code $(head -c 300 "$TMP/out")"
+code=$(submit "$TMP/in.vtu.vtu" application/octet-stream "max_iter=1" "$TMP/out")
+[ "$code" = 202 ] && [ "$(jf "$TMP/out" .mesh.format)" = vtu ] &&
+    pass "upload: octet-stream VTU sniffed" || fail "sniff vtu" "$code $(head -c 300 "$TMP/out")"
+code=$(req POST "/v1/jobs?max_iter=1" "$TMP/out" --data-binary "@$TMP/in.gmsh22.msh")
+[ "$code" = 202 ] && [ "$(jf "$TMP/out" .mesh.format)" = gmsh22 ] &&
+    pass "upload: no Content-Type, MSH 2.2 sniffed" || fail "sniff msh22" "$code $(head -c 300 "$TMP/out")"
+code=$(submit "$TMP/in.point.msh" "model/vnd.gmsh;version=2.2" "max_iter=1" "$TMP/out")
+[ "$code" = 202 ] && jq -e '.notes | length >= 1 and (join(" ") | test("skip|type 15|ignored"; "i"))' "$TMP/out" > /dev/null &&
+    [ "$(jf "$TMP/out" .mesh.tets)" = "$NT" ] &&
+    pass "upload: a point element is skipped with a note: $(jq -c .notes "$TMP/out")" ||
+    fail "notes" "$code $(head -c 400 "$TMP/out")"
+
+# 415: unknown type, unknown ?format=, TetGen (two files), garbage sniffed.
+ntypes=$(
+    n=0
+    for e in $FMTS; do n=$((n + 1)); done
+    echo $((n + 5))
+)
+for c in "image/png::in.medit.mesh" "application/octet-stream:format=obj5:in.medit.mesh" \
+    "application/octet-stream:format=tetgen:in.medit.mesh" "application/octet-stream::h.py"; do
+    t=${c%%:*}; r=${c#*:}; q=${r%%:*}; f=${r#*:}
+    code=$(submit "$TMP/$f" "$t" "$q" "$TMP/out")
+    if [ "$code" = 415 ] && [ "$(hdr "$TMP/out" Content-Type)" = application/problem+json ] &&
+        jq -e --argjson n "$ntypes" '(.accepted | length == $n) and (.accepted | index("model/stl") != null)
+            and (.accepted | index("model/vnd.gmsh;encoding=binary") != null)
+            and (.accepted | index("application/vnd.qdc.surface+smesh") != null)
+            and (.formats | index("vtu-ascii") != null) and (.detail | length > 0)' "$TMP/out" > /dev/null; then
+        pass "415 for $t ${q:-(no ?format)} ($f): lists the $ntypes accepted types"
+    else
+        fail "415 $t $q" "$code $(head -c 400 "$TMP/out")"
+    fi
+done
+code=$(submit "$TMP/in.medit.mesh" model/x-medit "tetgen_quality=1.4" "$TMP/out")
+[ "$code" = 400 ] && jq -e '.detail | test("surface")' "$TMP/out" > /dev/null &&
+    pass "tetgen_quality on a mesh upload: 400" || fail "tetgen opt on mesh" "$code $(head -c 300 "$TMP/out")"
+
+# Every job succeeds with the same sizes; results of the medit job in every format.
+bad=0
+for p in $ids; do
+    st=$(wait_done "${p#*:}")
+    [ "$st" = succeeded ] || { bad=1; fail "job ${p%%:*}" "$st $(head -c 300 "$TMP/job.${p#*:}")"; }
+done
+[ $bad = 0 ] && pass "all 10 jobs succeeded"
+ID=$(echo $ids | tr ' ' '\n' | awk -F: '$1 == "medit" { print $2 }')
+for e in $FMTS; do
+    f=${e%%:*}; x=${e#*:}; t=${x#*:}; x=${x%%:*}
+    code=$(req GET "/v1/jobs/$ID/result?format=$f" "$TMP/res.$f.$x")
+    ct=$(hdr "$TMP/res.$f.$x" Content-Type)
+    etag=$(hdr "$TMP/res.$f.$x" ETag)
+    "$QDC" optimize --max-iter 0 --finish off --quiet "$TMP/res.$f.$x" "$TMP/back.$f.mesh" 2> "$TMP/err"
+    if [ "$code" = 200 ] && [ "$ct" = "$t" ] && [ ${#etag} = 66 ] &&
+        out=$($H same "$TMP/in.mesh" "$TMP/back.$f.mesh" 2>&1); then
+        echo "$etag" >> "$TMP/etags"
+        pass "result ?format=$f: $ct, strong ETag, read back: $out"
+    else
+        fail "result $f" "$code '$ct' '$etag' $(cat "$TMP/err") ${out:-}"
+    fi
+done
+[ "$(sort -u "$TMP/etags" | wc -l)" = 10 ] && pass "10 representations, 10 ETags" ||
+    fail "etags" "$(sort -u "$TMP/etags" | wc -l) distinct"
+for f in gmsh22.msh vtu.vtu vtk.vtk; do
+    nv=$($PY "$QUALITY" "$TMP/res.$f" 2> "$TMP/err" | jq -r '"\(.n_verts) \(.n_tets)"')
+    [ "$nv" = "$NV $NT" ] && pass "quality.py reads the $f result: $nv" || fail "quality.py $f" "'$nv' $(tail -2 "$TMP/err")"
+done
+
+# Accept: parameters pick variants, the client's order wins, q=0 excludes,
+# wildcards get the binary; nothing offered: 406 with the list.
+acc() { # ACCEPT WANT-CONTENT-TYPE
+    code=$(req GET "/v1/jobs/$ID/result" "$TMP/acc" -H "Accept: $1")
+    ct=$(hdr "$TMP/acc" Content-Type)
+    [ "$code" = 200 ] && [ "$ct" = "$2" ] && pass "Accept: $1 -> $ct" || fail "Accept: $1" "$code '$ct' (want $2)"
+}
+acc 'model/vnd.gmsh;version=2.2' 'model/vnd.gmsh;version=2.2'
+acc 'image/png, application/vnd.vtk.vtu+xml; encoding=ascii; q=0.2, model/x-medit' 'application/vnd.vtk.vtu+xml;encoding=ascii'
+acc 'application/vnd.vtk;q=0, model/vnd.gmsh;encoding=binary' 'model/vnd.gmsh;encoding=binary'
+acc '*/*' 'application/vnd.qdc.mesh'
+head -c 11 "$TMP/res.gmsh22.msh" | grep -q 'MeshFormat' && sed -n 2p "$TMP/res.gmsh22.msh" | grep -q '^2.2 0' &&
+    pass "the gmsh22 result is MSH 2.2 ASCII" || fail "gmsh22 header" "$(head -2 "$TMP/res.gmsh22.msh")"
+code=$(req GET "/v1/jobs/$ID/result" "$TMP/out" -H 'Accept: image/png, model/vnd.gmsh;q=0')
+[ "$code" = 406 ] && [ "$(hdr "$TMP/out" Content-Type)" = application/problem+json ] &&
+    jq -e '(.offered | length == 10) and (.offered | index("application/vnd.vtk.vtu+xml") != null)
+        and (.formats | index("gmsh22") != null)' "$TMP/out" > /dev/null &&
+    pass "406: lists the 10 offered types" || fail "406" "$code $(head -c 400 "$TMP/out")"
+code=$(req GET "/v1/jobs/$ID/result?format=tetgen" "$TMP/out")
+[ "$code" = 400 ] && jq -e '.parameter == "format" and (.offered | length == 10)' "$TMP/out" > /dev/null &&
+    pass "?format=tetgen: 400 with the offered list" || fail "format=tetgen" "$code $(head -c 300 "$TMP/out")"
+etag=$(hdr "$TMP/res.vtu.vtu" ETag)
+code=$(req GET "/v1/jobs/$ID/result?format=vtu" "$TMP/out" -H "If-None-Match: $etag")
+code2=$(req GET "/v1/jobs/$ID/result?format=vtu" "$TMP/out2")
+[ "$code" = 304 ] && [ "$code2" = 200 ] && [ "$(hdr "$TMP/out2" ETag)" = "$etag" ] && cmp -s "$TMP/out2" "$TMP/res.vtu.vtu" &&
+    [ "$(hdr "$TMP/out2" Vary)" = Accept ] &&
+    pass "converted result: 304 on If-None-Match, same bytes and ETag the second time, Vary: Accept" ||
+    fail "vtu etag" "$code $code2"
+
+# Surfaces.
+code=$(submit "$TMP/cube.stl" model/stl "max_iter=3&tetgen_quality=1.4&max_volume=0.005" "$TMP/sub.stl")
+code2=$(submit "$TMP/cube.off" application/octet-stream "max_iter=3" "$TMP/sub.off")
+code3=$(submit "$TMP/selfx.stl" model/stl "" "$TMP/sub.selfx")
+if [ "$code" = 202 ] && [ "$code2" = 202 ] && [ "$code3" = 202 ] &&
+    jq -e '.mesh.format == "stl" and .mesh.surface and .mesh.vertices == 8 and .options.tetgen_quality == 1.4' "$TMP/sub.stl" > /dev/null &&
+    [ "$(jf "$TMP/sub.off" .mesh.format)" = off ]; then
+    pass "surfaces: STL (model/stl) and OFF (sniffed) accepted as surface jobs"
+else
+    fail "surface upload" "$code $code2 $code3 $(head -c 300 "$TMP/sub.stl") $(head -c 200 "$TMP/sub.off")"
+fi
+code=$(submit "$TMP/open.stl" model/stl "" "$TMP/out")
+[ "$code" = 422 ] && jq -e '(.type | endswith("invalid-surface")) and (.detail | test("not closed")) and .format == "stl"' "$TMP/out" > /dev/null &&
+    pass "open STL: 422 at upload: $(jf "$TMP/out" .detail)" || fail "open stl" "$code $(head -c 300 "$TMP/out")"
+printf 'solid e\nendsolid e\n' > "$TMP/empty.stl"
+code=$(submit "$TMP/empty.stl" model/stl "" "$TMP/out")
+[ "$code" = 422 ] && pass "empty STL: 422: $(jf "$TMP/out" .detail)" || fail "empty stl" "$code $(head -c 300 "$TMP/out")"
+SID=$(jf "$TMP/sub.stl" .id)
+st=$(wait_done "$SID")
+req GET "/v1/jobs/$SID/result?format=medit" "$TMP/cube_res.mesh" > /dev/null
+q=$($PY "$QUALITY" "$TMP/cube_res.mesh" 2> "$TMP/err")
+nt=$(echo "$q" | jq -r .n_tets)
+if [ "$st" = succeeded ] && [ "$(echo "$q" | jq -r .n_inverted)" = 0 ] && [ "${nt:-0}" -gt 100 ] &&
+    [ "$(jf "$TMP/job.$SID" .mesh.tets)" = "$nt" ]; then
+    pass "closed STL cube: job succeeded, result $nt tets (job says $(jf "$TMP/job.$SID" .mesh.tets)), 0 inverted, min quality $(echo "$q" | jq -r .eta_min 2> /dev/null)"
+else
+    fail "stl job" "$st $(head -c 300 "$TMP/job.$SID") $q $(tail -2 "$TMP/err")"
+fi
+st=$(wait_done "$(jf "$TMP/sub.off" .id)")
+[ "$st" = succeeded ] && pass "closed OFF cube: job succeeded" || fail "off job" "$st"
+XID=$(jf "$TMP/sub.selfx" .id)
+st=$(wait_done "$XID")
+[ "$st" = failed ] && jq -e '(.error.type | endswith("/tetgen")) and .error.status == 422 and (.error.detail | test("intersect"))
+    and (.error.detail | test("jobs/") | not)' "$TMP/job.$XID" > /dev/null &&
+    pass "self-intersecting STL: job failed: $(jf "$TMP/job.$XID" .error.detail)" ||
+    fail "selfx job" "$st $(head -c 400 "$TMP/job.$XID")"
+code=$(submit "$TMP/in.medit.mesh" model/x-medit "max_iter=1" "$TMP/out")
+[ "$code" = 202 ] && [ "$(wait_done "$(jf "$TMP/out" .id)")" = succeeded ] && [ "$(req GET /livez "$TMP/lz")" = 200 ] &&
+    pass "after the TetGen failure: /livez 200, a new job succeeds" || fail "after selfx" "$code"
+stop_qdcd || fail "SIGTERM" "exit status $?"
+
+# A child that crashes, and one that hangs (time limit; cancel), stand in for qdc.
+printf '#!/bin/sh\necho "TetGen says something on stdout"\nkill -SEGV $$\n' > "$TMP/crash.sh"
+printf '#!/bin/sh\nexec sleep 30\n' > "$TMP/hang.sh"
+chmod +x "$TMP/crash.sh" "$TMP/hang.sh"
+start_qdcd "$TMP/c" --workers 2 --qdc "$TMP/crash.sh" || { fail "start crash" "$(tail -3 "$TMP/c.log")"; exit 1; }
+submit "$TMP/cube.stl" model/stl "" "$TMP/out" > /dev/null
+CID=$(jf "$TMP/out" .id)
+st=$(wait_done "$CID")
+[ "$st" = failed ] && jq -e '.error.detail == "TetGen crashed (signal 11) on this surface" and (.error.type | endswith("/tetgen"))' "$TMP/job.$CID" > /dev/null &&
+    [ "$(req GET /livez "$TMP/lz")" = 200 ] && grep -q 'stdout' "$TMP/c/jobs/$CID/tetgen.log" &&
+    pass "crashing child: job failed '$(jf "$TMP/job.$CID" .error.detail)', its output in tetgen.log, /livez 200" ||
+    fail "crash" "$st $(head -c 300 "$TMP/job.$CID")"
+stop_qdcd
+start_qdcd "$TMP/h" --workers 2 --qdc "$TMP/hang.sh" --job-time-limit 1 || { fail "start hang" "$(tail -3 "$TMP/h.log")"; exit 1; }
+submit "$TMP/cube.stl" model/stl "" "$TMP/out" > /dev/null
+HID=$(jf "$TMP/out" .id)
+submit "$TMP/cube.stl" model/stl "" "$TMP/out" > /dev/null
+KID=$(jf "$TMP/out" .id)
+sleep 0.3
+t0=$(date +%s)
+req POST "/v1/jobs/$KID:cancel" "$TMP/out" > /dev/null
+st=$(wait_done "$KID")
+st2=$(wait_done "$HID")
+[ "$st" = cancelled ] && [ $(($(date +%s) - t0)) -le 3 ] && pass "hanging child: cancel kills it, job cancelled" || fail "cancel hang" "$st"
+[ "$st2" = failed ] && jq -e '.error.detail | test("time limit")' "$TMP/job.$HID" > /dev/null &&
+    pass "hanging child: killed at the job's time limit: $(jf "$TMP/job.$HID" .error.detail)" ||
+    fail "hang" "$st2 $(head -c 300 "$TMP/job.$HID")"
+stop_qdcd || fail "SIGTERM" "exit status $?"
+exit $((NFAIL > 0))
