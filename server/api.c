@@ -1482,6 +1482,14 @@ static enum MHD_Result process_convert(struct MHD_Connection *c, req *r)
                  meshio_format_name(r->res_fmt), e.msg);
         return http_problem(c, r, 500, "io", "i/o error", d, NULL, NULL);
     }
+    /* Deleted (or purged) while converting: the directory may have been
+     * emptied before our file landed in it; remove what is left. */
+    if (r->q->store->ops->get(r->q->store, j.id, &j) == QDC_EINVAL || j.purged) {
+        job_path(r->q, j.id, NULL, d, sizeof d);
+        dir_remove(d);
+        if (!load_job(c, r, &j, &ret) || not_servable(c, r, &j, &ret))
+            return ret;
+    }
     if (r->q->cfg.verbose)
         fprintf(stderr, "qdcd: job %s: result written as %s in %.3f s\n", j.id,
                 meshio_format_name(r->res_fmt), mono_now() - t0);

@@ -20,7 +20,7 @@ typedef struct {
     double seconds;
 } child_result;
 
-/* Run argv[0] (a path) with argv, output to log_path (truncated), and wait.
+/* Run argv[0] (a path, or a name looked up in PATH) with argv, output to log_path (truncated), and wait.
  * The child is killed (SIGKILL, its whole process group) once mono_now()
  * passes deadline or *cancel (may be NULL) is set. */
 void child_run(char *const argv[], const char *log_path, double deadline,

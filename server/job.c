@@ -389,7 +389,7 @@ static int tetrahedralize(worker *w, job_rec *j, opt_options *opts, mesh_t **out
 {
     qdcd *q = w->pool->q;
     char in[4200], res[4200], log[4200], qs[40], vs[40], msg[400], detail[600];
-    char *argv[10];
+    char *argv[12];
     int k = 0;
     double tq, tv, budget;
     child_result cr;
@@ -407,6 +407,7 @@ static int tetrahedralize(worker *w, job_rec *j, opt_options *opts, mesh_t **out
     argv[k++] = "tetra";
     argv[k++] = in;
     argv[k++] = res;
+    argv[k++] = "--die-with-parent"; /* no orphan TetGen after a daemon crash */
     if (tq >= 0) {
         snprintf(qs, sizeof qs, "%.17g", tq);
         argv[k++] = "--tetgen-quality";

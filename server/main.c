@@ -350,7 +350,7 @@ int main(int argc, char **argv)
     if (q->cfg.tokens_file[0] && load_tokens(q, q->cfg.tokens_file))
         return 2;
     default_qdc_path(&q->cfg);
-    if (access(q->cfg.qdc_path, X_OK))
+    if (strchr(q->cfg.qdc_path, '/') && access(q->cfg.qdc_path, X_OK))
         fprintf(stderr,
                 "qdcd: warning: %s is not executable: surface uploads will fail "
                 "(--qdc PATH)\n",

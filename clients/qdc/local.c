@@ -14,6 +14,9 @@
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
+#ifdef __linux__
+#include <sys/prctl.h>
+#endif
 
 static volatile sig_atomic_t interrupted;
 static volatile int cancel_flag;
@@ -484,6 +487,13 @@ int cli_tetra(int argc, char **argv)
                 return CLI_EUSAGE;
             }
             i++;
+        } else if (!strcmp(a, "--die-with-parent")) {
+            /* qdcd's child: end with the worker that waits for us. */
+#ifdef __linux__
+            prctl(PR_SET_PDEATHSIG, SIGKILL);
+            if (getppid() == 1)
+                return CLI_EOPT;
+#endif
         } else if (a[0] == '-' && a[1]) {
             fprintf(stderr, "qdc: tetra: unknown option %s\n%s", a, use);
             return CLI_EUSAGE;
