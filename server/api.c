@@ -184,7 +184,8 @@ static void job_json(req *r, const job_rec *j, sbuf *b)
     sb_printf(b, ",\"attempts\":%d,\"cancel_requested\":%s", j->attempts,
               j->cancel_requested ? "true" : "false");
     sb_printf(
-        b, ",\"mesh\":{\"format\":\"%s\",\"vertices\":%lld,\"tets\":%lld,\"bytes\":%lld%s}",
+        b,
+        ",\"mesh\":{\"format\":\"%s\",\"vertices\":%lld,\"tets\":%lld,\"bytes\":%lld%s}",
         j->format, (long long)j->nv, (long long)j->nt, (long long)j->in_bytes,
         job_is_surface(j->format) ? ",\"surface\":true" : "");
     if (j->notes[0]) {
@@ -370,8 +371,9 @@ static int upload_format(struct MHD_Connection *c, req *r, char *why, size_t cap
             r->sfmt = strchr(fq, '/') ? surface_format_from_media_type(fq)
                                       : surface_format_from_name(fq);
         if (r->fmt == MESHIO_TETGEN) {
-            snprintf(why, cap, "TetGen .node/.ele is two files; upload one of the "
-                               "accepted formats instead");
+            snprintf(why, cap,
+                     "TetGen .node/.ele is two files; upload one of the "
+                     "accepted formats instead");
             return -1;
         }
         if (r->fmt == MESHIO_AUTO && r->sfmt == SURFACE_AUTO) {
@@ -392,8 +394,9 @@ static int upload_format(struct MHD_Connection *c, req *r, char *why, size_t cap
     if (r->fmt == MESHIO_AUTO)
         r->sfmt = surface_format_from_media_type(ct);
     if (r->fmt == MESHIO_AUTO && r->sfmt == SURFACE_AUTO) {
-        snprintf(why, cap, "media type '%.100s' is not a mesh or surface type this "
-                           "server reads",
+        snprintf(why, cap,
+                 "media type '%.100s' is not a mesh or surface type this "
+                 "server reads",
                  ctype);
         return -1;
     }
@@ -584,13 +587,12 @@ static enum MHD_Result mesh_problem(struct MHD_Connection *c, req *r, qdc_status
         sb_puts(&x, ",\"kind\":");
         sb_json_str(&x, e->kind);
     }
-    ret = http_problem(c, r, status,
-                       st == QDC_EMESH && r->sfmt != SURFACE_AUTO ? "invalid-surface"
-                                                                  : status_slug(st),
-                       st == QDC_EMESH && r->sfmt != SURFACE_AUTO
-                           ? "the surface cannot bound a volume"
-                           : qdc_status_str(st),
-                       e->msg[0] ? e->msg : qdc_status_str(st), x.buf, NULL);
+    ret = http_problem(
+        c, r, status,
+        st == QDC_EMESH && r->sfmt != SURFACE_AUTO ? "invalid-surface" : status_slug(st),
+        st == QDC_EMESH && r->sfmt != SURFACE_AUTO ? "the surface cannot bound a volume"
+                                                   : qdc_status_str(st),
+        e->msg[0] ? e->msg : qdc_status_str(st), x.buf, NULL);
     sb_free(&x);
     return ret;
 }
@@ -677,7 +679,7 @@ static void collect_note(void *ctx, int level, const char *msg)
 {
     sbuf *b = ctx;
     (void)level;
-    if (b->len + strlen(msg) + 2 > sizeof ((job_rec *)0)->notes)
+    if (b->len + strlen(msg) + 2 > sizeof((job_rec *)0)->notes)
         return; /* the first few say enough */
     sb_printf(b, "%s%s", b->len ? "\n" : "", msg);
 }
@@ -698,7 +700,8 @@ static enum MHD_Result over_limits(struct MHD_Connection *c, req *r, int64_t nv,
              "\"vertices\":%lld,\"tets\":%lld,\"max_vertices\":%lld,\"max_tets\":%lld",
              (long long)nv, (long long)nt, (long long)q->cfg.max_vertices,
              (long long)q->cfg.max_tets);
-    return http_problem(c, r, 413, "too-big", "mesh exceeds server limits", d, extra, NULL);
+    return http_problem(c, r, 413, "too-big", "mesh exceeds server limits", d, extra,
+                        NULL);
 }
 
 /* Parse and validate the upload (buf, len) into j's sizes and notes, or
@@ -756,7 +759,8 @@ static int check_upload(struct MHD_Connection *c, req *r, const char *buf, size_
     if (st == QDC_OK) {
         j->nv = m->nv;
         j->nt = m->nt;
-        snprintf(j->notes, sizeof j->notes, "%s", notes.buf && !notes.oom ? notes.buf : "");
+        snprintf(j->notes, sizeof j->notes, "%s",
+                 notes.buf && !notes.oom ? notes.buf : "");
     }
     mesh_free(m);
     sb_free(&notes);
@@ -798,9 +802,10 @@ static enum MHD_Result process_upload(struct MHD_Connection *c, req *r)
             r->sfmt = surface_sniff(buf, len);
         if (r->fmt == MESHIO_AUTO && r->sfmt == SURFACE_AUTO) {
             munmap(buf, len);
-            return unsupported(c, r,
-                               "the body is not a mesh or surface this server recognises; "
-                               "set Content-Type to one of the accepted types");
+            return unsupported(
+                c, r,
+                "the body is not a mesh or surface this server recognises; "
+                "set Content-Type to one of the accepted types");
         }
         if (r->fmt == MESHIO_JSON && r->body_len > q->cfg.max_json) {
             munmap(buf, len);
@@ -1321,7 +1326,8 @@ static int result_format(struct MHD_Connection *c, req *r, meshio_format *out,
                          enum MHD_Result *ret)
 {
     const char *f = MHD_lookup_connection_value(c, MHD_GET_ARGUMENT_KIND, "format");
-    const char *acc = MHD_lookup_connection_value(c, MHD_HEADER_KIND, MHD_HTTP_HEADER_ACCEPT);
+    const char *acc =
+        MHD_lookup_connection_value(c, MHD_HEADER_KIND, MHD_HTTP_HEADER_ACCEPT);
     meshio_format k = MESHIO_AUTO;
     sbuf x = {0};
     char d[300];
@@ -1338,8 +1344,8 @@ static int result_format(struct MHD_Connection *c, req *r, meshio_format *out,
         }
         sb_puts(&x, "\"parameter\":\"format\",");
         offered(&x);
-        snprintf(d, sizeof d, "'format' must name one of the offered formats, not '%.60s'",
-                 f);
+        snprintf(d, sizeof d,
+                 "'format' must name one of the offered formats, not '%.60s'", f);
         *ret = http_problem(c, r, 400, "invalid-parameter", "invalid parameter", d,
                             x.oom ? NULL : x.buf, NULL);
         sb_free(&x);

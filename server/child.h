@@ -10,9 +10,9 @@
 #include <stddef.h>
 
 typedef struct {
-    int spawned;   /* 0: posix_spawn failed (errno_spawn says why) */
+    int spawned; /* 0: posix_spawn failed (errno_spawn says why) */
     int errno_spawn;
-    int exited;    /* normal exit: code holds the exit status */
+    int exited; /* normal exit: code holds the exit status */
     int code;
     int signal;    /* killed by this signal (0 if it exited) */
     int timed_out; /* we killed it at the deadline */
@@ -20,9 +20,9 @@ typedef struct {
     double seconds;
 } child_result;
 
-/* Run argv[0] (a path, or a name looked up in PATH) with argv, output to log_path (truncated), and wait.
- * The child is killed (SIGKILL, its whole process group) once mono_now()
- * passes deadline or *cancel (may be NULL) is set. */
+/* Run argv[0] (a path, or a name looked up in PATH) with argv, output to log_path
+ * (truncated), and wait. The child is killed (SIGKILL, its whole process group) once
+ * mono_now() passes deadline or *cancel (may be NULL) is set. */
 void child_run(char *const argv[], const char *log_path, double deadline,
                const volatile int *cancel, child_result *out);
 

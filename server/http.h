@@ -31,10 +31,10 @@ typedef struct req {
     int64_t body_len;
     int too_big, io_err, hashing;
     sha256_ctx hash;
-    meshio_format fmt;    /* a mesh upload's format, or MESHIO_AUTO */
-    surface_format sfmt;  /* a surface upload's format (tetrahedralized), or AUTO */
-    int sniff; /* format from the content (text/plain, octet-stream, none) */
-    int tetgen_opts; /* tetgen_quality or max_volume given: surfaces only */
+    meshio_format fmt;   /* a mesh upload's format, or MESHIO_AUTO */
+    surface_format sfmt; /* a surface upload's format (tetrahedralized), or AUTO */
+    int sniff;           /* format from the content (text/plain, octet-stream, none) */
+    int tetgen_opts;     /* tetgen_quality or max_volume given: surfaces only */
     char idem[129];
     char options[1024];
     struct req *intake_next; /* queued for the intake or the convert thread */

@@ -59,11 +59,11 @@ const char *job_input_name(const char *format)
     static const struct {
         const char *format, *file;
     } names[] = {
-        {"qmesh", "input.qmesh"},    {"json", "input.json"},     {"gmsh", "input.msh"},
-        {"gmsh-bin", "input.msh"},   {"gmsh22", "input.msh"},    {"vtk", "input.vtk"},
-        {"vtk-ascii", "input.vtk"},  {"vtu", "input.vtu"},       {"vtu-ascii", "input.vtu"},
-        {"stl", "input.stl"},        {"off", "input.off"},       {"obj", "input.obj"},
-        {"poly", "input.poly"},      {"smesh", "input.smesh"},
+        {"qmesh", "input.qmesh"},   {"json", "input.json"},   {"gmsh", "input.msh"},
+        {"gmsh-bin", "input.msh"},  {"gmsh22", "input.msh"},  {"vtk", "input.vtk"},
+        {"vtk-ascii", "input.vtk"}, {"vtu", "input.vtu"},     {"vtu-ascii", "input.vtu"},
+        {"stl", "input.stl"},       {"off", "input.off"},     {"obj", "input.obj"},
+        {"poly", "input.poly"},     {"smesh", "input.smesh"},
     };
     for (size_t i = 0; i < sizeof names / sizeof names[0]; i++)
         if (!strcmp(format, names[i].format))
@@ -456,8 +456,7 @@ static int tetrahedralize(worker *w, job_rec *j, opt_options *opts, mesh_t **out
         if (cr.code == 2 || cr.code == 3) {
             snprintf(detail, sizeof detail, "%s",
                      *m ? m : "TetGen could not tetrahedralize this surface");
-            problem(j, 422, "tetgen", "the surface could not be tetrahedralized",
-                    detail);
+            problem(j, 422, "tetgen", "the surface could not be tetrahedralized", detail);
         } else {
             snprintf(detail, sizeof detail, "qdc tetra exited with status %d: %s",
                      cr.code, *m ? m : "no message");
@@ -470,7 +469,8 @@ static int tetrahedralize(worker *w, job_rec *j, opt_options *opts, mesh_t **out
     st = buf ? meshio_read(buf, len, MESHIO_QMESH, out, &err)
              : qdc_fail(&err, QDC_EIO, "qdc tetra left no mesh");
     free(buf);
-    if (st == QDC_OK && ((*out)->nv > q->cfg.max_vertices || (*out)->nt > q->cfg.max_tets))
+    if (st == QDC_OK &&
+        ((*out)->nv > q->cfg.max_vertices || (*out)->nt > q->cfg.max_tets))
         st = qdc_fail(&err, QDC_ETOOBIG,
                       "TetGen made %d vertices and %d tets; this server accepts %lld and "
                       "%lld at most (raise max_volume or lower tetgen_quality)",

@@ -513,7 +513,7 @@ int cli_tetra(int argc, char **argv)
     if (st != QDC_OK) {
         cli_error(in, &err, st);
         rc = st == QDC_ETETGEN || st == QDC_ENOMEM || st == QDC_EINTERNAL ? CLI_EOPT
-                                                                            : CLI_EINPUT;
+                                                                          : CLI_EINPUT;
         goto out;
     }
     st = meshio_save(out, MESHIO_AUTO, m, &err);
