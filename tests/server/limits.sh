@@ -36,7 +36,7 @@ code=$(req GET /v1/jobs "$TMP/out" -H "Authorization: Bearer wrong")
 [ "$(req GET /livez "$TMP/out")" = 200 ] && pass "/livez needs no token" || fail "livez" "token required"
 
 # job 1 runs long; jobs 2 and 3 wait; job 4 finds the queue full
-c1=$(submit "$TMP/big.qmesh" $QM "max_iter=200&finish=0&tol_move=0" "$TMP/j1" -H "$A")
+c1=$(submit "$TMP/big.qmesh" $QM "max_iter=200&finish=0&tol_move=0&mode=literal" "$TMP/j1" -H "$A")
 id1=$(jf "$TMP/j1" .id)
 curl -s -m 30 -H "$A" "$URL/v1/jobs/$id1/progress?after=-1&wait=20" > /dev/null
 c2=$(submit "$TMP/small.qmesh" $QM "max_iter=2" "$TMP/j2" -H "$A")
@@ -130,7 +130,7 @@ cg=$(req GET "/v1/jobs/$id2" "$TMP/del2" -H "$A")
 
 # per-job time limit: a job asking for 200 iterations stops at time_limit=1
 # with the best mesh so far
-ct=$(submit "$TMP/big.qmesh" $QM "max_iter=200&finish=0&tol_move=0&time_limit=1" "$TMP/jt" -H "$A")
+ct=$(submit "$TMP/big.qmesh" $QM "max_iter=200&finish=0&tol_move=0&mode=literal&time_limit=1" "$TMP/jt" -H "$A")
 idt=$(jf "$TMP/jt" .id)
 stt=$(poll_all "$idt" "$A")
 req GET "/v1/jobs/$idt" "$TMP/jt2" -H "$A" > /dev/null
@@ -142,7 +142,7 @@ else
 fi
 
 # DELETE a running job: gone at once; its worker stops and removes the files
-cdr=$(submit "$TMP/big.qmesh" $QM "max_iter=200&finish=0&tol_move=0" "$TMP/jd" -H "$A")
+cdr=$(submit "$TMP/big.qmesh" $QM "max_iter=200&finish=0&tol_move=0&mode=literal" "$TMP/jd" -H "$A")
 idd=$(jf "$TMP/jd" .id)
 curl -s -m 30 -H "$A" "$URL/v1/jobs/$idd/progress?after=0&wait=20" > /dev/null
 cd1=$(req DELETE "/v1/jobs/$idd" "$TMP/jd1" -H "$A")
@@ -157,7 +157,7 @@ else
 fi
 
 # graceful shutdown: a parked long-poll is answered, the running job goes back to the queue
-cj=$(submit "$TMP/big.qmesh" $QM "max_iter=200&finish=0&tol_move=0" "$TMP/j5" -H "$A")
+cj=$(submit "$TMP/big.qmesh" $QM "max_iter=200&finish=0&tol_move=0&mode=literal" "$TMP/j5" -H "$A")
 id5=$(jf "$TMP/j5" .id)
 curl -s -m 30 -H "$A" "$URL/v1/jobs/$id5/progress?after=0&wait=20" > /dev/null
 curl -s -m 30 -H "$A" "$URL/v1/jobs/$id5/progress?after=100000&wait=25" > "$TMP/parked" &
