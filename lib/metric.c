@@ -228,46 +228,15 @@ double metric_vol_length(const metric_parts *p)
     return 6.0 * SQRT2 * p->vol / (l * l * l);
 }
 
-void metric_dihedral_range(const double *p0, const double *p1, const double *p2,
-                           const double *p3, double *amin, double *amax)
-{
-    static const int opp[6][2] = {{2, 3}, {1, 3}, {1, 2}, {0, 3}, {0, 2}, {0, 1}};
-    double ab[3], ac[3], ad[3], g[4][3], len[4], cmin = 2, cmax = -2;
+/* Area vectors g_k of the faces opposite each corner k (as tools/quality.py
+ * builds them) and their lengths; returns 1 if a face is degenerate. The
+ * dihedral at edge (i, j) is acos(-u_k . u_l), {k, l} the other two corners. */
+static const int dihedral_opp[6][2] = {{2, 3}, {1, 3}, {1, 2}, {0, 3}, {0, 2}, {0, 1}};
 
-    sub3(p1, p0, ab);
-    sub3(p2, p0, ac);
-    sub3(p3, p0, ad);
-    cross3(ac, ad, g[1]);
-    cross3(ad, ab, g[2]);
-    cross3(ab, ac, g[3]);
-    for (int k = 0; k < 3; k++)
-        g[0][k] = -(g[1][k] + g[2][k] + g[3][k]);
-    for (int f = 0; f < 4; f++) {
-        len[f] = sqrt(dot3(g[f], g[f]));
-        if (!(len[f] > 0.0)) {
-            *amin = 0.0;
-            *amax = 180.0;
-            return;
-        }
-    }
-    for (int e = 0; e < 6; e++) {
-        int k = opp[e][0], l = opp[e][1];
-        double c = -dot3(g[k], g[l]) / (len[k] * len[l]);
-        cmin = c < cmin ? c : cmin;
-        cmax = c > cmax ? c : cmax;
-    }
-    /* acos is decreasing: the largest cosine is the smallest angle */
-    *amin = acos(cmax > 1.0 ? 1.0 : cmax) * (180.0 / 3.14159265358979323846);
-    *amax = acos(cmin < -1.0 ? -1.0 : cmin) * (180.0 / 3.14159265358979323846);
-}
-
-int metric_dihedrals(const double *p0, const double *p1, const double *p2, const double *p3,
-                     double ang[6])
+static int face_area_vectors(const double *p0, const double *p1, const double *p2,
+                             const double *p3, double g[4][3], double len[4])
 {
-    /* Same construction as tools/quality.py: g_k is the area vector of the face
-     * opposite k; the dihedral at edge (i, j) is acos(-u_k . u_l), {k, l} the rest. */
-    static const int opp[6][2] = {{2, 3}, {1, 3}, {1, 2}, {0, 3}, {0, 2}, {0, 1}};
-    double ab[3], ac[3], ad[3], g[4][3], len[4];
+    double ab[3], ac[3], ad[3];
     int degenerate = 0;
 
     sub3(p1, p0, ab);
@@ -282,16 +251,50 @@ int metric_dihedrals(const double *p0, const double *p1, const double *p2, const
         len[f] = sqrt(dot3(g[f], g[f]));
         degenerate |= !(len[f] > 0.0);
     }
+    return degenerate;
+}
+
+static double dihedral_cos(double g[4][3], const double len[4], int e)
+{
+    int k = dihedral_opp[e][0], l = dihedral_opp[e][1];
+    double c = -dot3(g[k], g[l]) / (len[k] * len[l]);
+    return c > 1.0 ? 1.0 : (c < -1.0 ? -1.0 : c);
+}
+
+#define RAD2DEG (180.0 / 3.14159265358979323846)
+
+void metric_dihedral_range(const double *p0, const double *p1, const double *p2,
+                           const double *p3, double *amin, double *amax)
+{
+    double g[4][3], len[4], cmin = 2, cmax = -2;
+
+    if (face_area_vectors(p0, p1, p2, p3, g, len)) {
+        *amin = 0.0;
+        *amax = 180.0;
+        return;
+    }
     for (int e = 0; e < 6; e++) {
-        int k = opp[e][0], l = opp[e][1];
-        double c;
-        if (!(len[k] > 0.0) || !(len[l] > 0.0)) {
+        double c = dihedral_cos(g, len, e);
+        cmin = c < cmin ? c : cmin;
+        cmax = c > cmax ? c : cmax;
+    }
+    /* acos is decreasing: the largest cosine is the smallest angle */
+    *amin = acos(cmax) * RAD2DEG;
+    *amax = acos(cmin) * RAD2DEG;
+}
+
+int metric_dihedrals(const double *p0, const double *p1, const double *p2, const double *p3,
+                     double ang[6])
+{
+    double g[4][3], len[4];
+    int degenerate = face_area_vectors(p0, p1, p2, p3, g, len);
+
+    for (int e = 0; e < 6; e++) {
+        int k = dihedral_opp[e][0], l = dihedral_opp[e][1];
+        if (!(len[k] > 0.0) || !(len[l] > 0.0))
             ang[e] = e & 1 ? 180.0 : 0.0;
-            continue;
-        }
-        c = -dot3(g[k], g[l]) / (len[k] * len[l]);
-        c = c > 1.0 ? 1.0 : (c < -1.0 ? -1.0 : c);
-        ang[e] = acos(c) * (180.0 / 3.14159265358979323846);
+        else
+            ang[e] = acos(dihedral_cos(g, len, e)) * RAD2DEG;
     }
     return degenerate;
 }
