@@ -1,0 +1,113 @@
+# tests/e2e/modes.sh - boundary modes on dev meshes (issue targets):
+#   fixed: boundary bit for bit (Hausdorff <= 1e-12 of the diagonal);
+#   slide: Hausdorff <= 1e-4 of the diagonal on flat-faced shapes and <= 0.5% on curved
+#          ones, with better mean and worst tet than fixed;
+#   every mode: tags kept, no inverted tets, never worse than the input.
+. "$(dirname "$0")/../lib.sh"
+
+run() { # run NAME MODE -> $TMP/NAME.MODE.json
+    "$BIN/qdc" optimize "$(devmesh "$1")" "$TMP/$1.$2.mesh" --boundary "$2" --quiet \
+        --report "$TMP/$1.$2.json"
+}
+
+for spec in cube_h0.1_good:1e-4 bracket_h0.1_good:1e-4 sphere_h0.1_good:5e-3 torus_h0.1_good:5e-3; do
+    name=${spec%%:*}
+    hmax=${spec#*:}
+    if ! run "$name" fixed || ! run "$name" slide; then
+        fail "modes.$name" "qdc failed"
+        continue
+    fi
+    why=$($PY - "$TMP/$name.fixed.json" "$TMP/$name.slide.json" "$hmax" \
+        "$TMP/$name.fixed.mesh" "$TMP/$name.slide.mesh" <<'PYEOF'
+import json, sys
+import numpy as np
+f, s, hmax = json.load(open(sys.argv[1])), json.load(open(sys.argv[2])), float(sys.argv[3])
+
+def boundary_tet_quality(path):
+    """Mean of the mean ratio over tets with a vertex on the boundary."""
+    t = open(path).read().split()
+    i = t.index("Vertices"); n = int(t[i + 1])
+    X = np.array(t[i + 2: i + 2 + 4 * n], float).reshape(n, 4)[:, :3]
+    j = t.index("Tetrahedra"); m = int(t[j + 1])
+    T = np.array(t[j + 2: j + 2 + 5 * m], int).reshape(m, 5)[:, :4] - 1
+    F = np.sort(np.concatenate([T[:, [1, 2, 3]], T[:, [0, 2, 3]], T[:, [0, 1, 3]], T[:, [0, 1, 2]]]), 1)
+    _, inv, cnt = np.unique(F, axis=0, return_inverse=True, return_counts=True)
+    onb = np.zeros(n, bool); onb[F[cnt[inv] == 1].ravel()] = True
+    P = X[T]; a, b, c, d = P[:, 0], P[:, 1], P[:, 2], P[:, 3]
+    v = np.einsum("ij,ij->i", b - a, np.cross(c - a, d - a)) / 6
+    l2 = sum(((P[:, p] - P[:, q]) ** 2).sum(1) for p, q in ((0,1),(0,2),(0,3),(1,2),(1,3),(2,3)))
+    eta = np.sign(v) * 12 * np.cbrt(3 * np.abs(v)) ** 2 / l2
+    return float(eta[onb[T].any(1)].mean())
+
+bf, bs = boundary_tet_quality(sys.argv[4]), boundary_tet_quality(sys.argv[5])
+why = []
+if f["boundary_error"]["hausdorff_rel"] > 1e-12:
+    why.append(f"fixed moved the boundary ({f['boundary_error']['hausdorff_rel']:.2e})")
+h = s["boundary_error"]["hausdorff_rel"]
+if h > hmax:
+    why.append(f"slide Hausdorff {h:.2e} > {hmax:.0e}")
+for tag, r in (("fixed", f), ("slide", s)):
+    a, b = r["after"], r["before"]
+    if a["n_inverted"] > 0 or a["mean_ratio_min"] < b["mean_ratio_min"]:
+        why.append(f"{tag} worse than input")
+if not s["after"]["mean_ratio_mean"] > f["after"]["mean_ratio_mean"]:
+    why.append("slide mean not above fixed")
+if not bs > bf:
+    why.append(f"boundary tets: slide {bs:.4f} not above fixed {bf:.4f}")
+if not s["after"]["mean_ratio_min"] >= f["after"]["mean_ratio_min"] - 0.005:
+    why.append("slide worst tet below fixed")
+print("; ".join(why) if why else
+      f"ok: slide {s['after']['mean_ratio_mean']:.4f}/{s['after']['mean_ratio_min']:.3f} "
+      f"boundary tets {bs:.4f} H {h:.1e} vs fixed {f['after']['mean_ratio_mean']:.4f}/"
+      f"{f['after']['mean_ratio_min']:.3f} boundary tets {bf:.4f}")
+PYEOF
+)
+    case "$why" in
+    ok:*) pass "modes.$name: ${why#ok: }" ;;
+    *) fail "modes.$name" "$why" ;;
+    esac
+done
+
+# Region tags survive every mode: a two-region mesh made from a dev mesh by tagging
+# tets by the sign of their centroid's x.
+in=$(devmesh cube_h0.1_lowq)
+$PY - "$in" "$TMP/regions.mesh" <<'PYEOF'
+import sys
+t = open(sys.argv[1]).read().split("\n")
+out, i, verts = [], 0, []
+while i < len(t):
+    line = t[i].strip()
+    out.append(t[i])
+    if line == "Vertices":
+        n = int(t[i + 1]); out.append(t[i + 1])
+        for k in range(n):
+            out.append(t[i + 2 + k]); verts.append([float(x) for x in t[i + 2 + k].split()[:3]])
+        i += n + 2; continue
+    if line == "Tetrahedra":
+        n = int(t[i + 1]); out.append(t[i + 1])
+        for k in range(n):
+            w = t[i + 2 + k].split()
+            cx = sum(verts[int(w[j]) - 1][0] for j in range(4)) / 4
+            out.append(" ".join(w[:4] + ["1" if cx < 0 else "2"]))
+        i += n + 2; continue
+    i += 1
+open(sys.argv[2], "w").write("\n".join(out))
+PYEOF
+for mode in lsq fixed slide; do
+    if "$BIN/qdc" optimize "$TMP/regions.mesh" "$TMP/regions.$mode.mesh" --boundary "$mode" --quiet; then
+        same=$($PY - "$TMP/regions.mesh" "$TMP/regions.$mode.mesh" <<'PYEOF'
+import sys
+def tets(p):
+    t = open(p).read().split()
+    i = t.index("Tetrahedra"); n = int(t[i + 1])
+    return t[i + 2: i + 2 + 5 * n]
+print(tets(sys.argv[1]) == tets(sys.argv[2]))
+PYEOF
+)
+        [ "$same" = True ] && pass "modes.regions.$mode: tets and tags unchanged" ||
+            fail "modes.regions.$mode" "connectivity or tags changed"
+    else
+        fail "modes.regions.$mode" "qdc failed"
+    fi
+done
+exit 0
