@@ -25,11 +25,11 @@ static double dot3(const double *a, const double *b)
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
 }
 
-void metric_parts_of(const double *p0, const double *p1, const double *p2, const double *p3,
-                     metric_parts *out)
+/* Volume and squared edge lengths: all that MIMR and MIVL need. */
+static void parts_basic(const double *p0, const double *p1, const double *p2, const double *p3,
+                        metric_parts *out)
 {
-    double e01[3], e02[3], e03[3], e12[3], e13[3], e23[3];
-    double n0[3], n1[3], n2[3], n3[3];
+    double e01[3], e02[3], e03[3], e12[3], e13[3], e23[3], n1[3];
 
     sub3(p1, p0, e01);
     sub3(p2, p0, e02);
@@ -41,33 +41,36 @@ void metric_parts_of(const double *p0, const double *p1, const double *p2, const
     out->vol = dot3(e01, n1) / 6.0;
     out->l2sum = dot3(e01, e01) + dot3(e02, e02) + dot3(e03, e03) + dot3(e12, e12) +
                  dot3(e13, e13) + dot3(e23, e23);
-    cross3(e12, e13, n0);
-    cross3(e01, e03, n2);
-    cross3(e01, e02, n3);
-    /* |n|^2 = 4 area^2, so 4 * sum area^2 = sum |n|^2 */
-    out->adj2 = dot3(n0, n0) + dot3(n1, n1) + dot3(n2, n2) + dot3(n3, n3);
+    out->adj2 = 0.0;
 }
 
-void metric_parts_for(opt_metric m, const double *p0, const double *p1, const double *p2,
-                      const double *p3, metric_parts *out)
+void metric_parts_of(const double *p0, const double *p1, const double *p2, const double *p3,
+                     metric_parts *out)
 {
-    double e01[3], e02[3], e03[3], e12[3], e13[3], e23[3], n1[3];
+    double e01[3], e02[3], e03[3], e12[3], e13[3], n[4][3];
 
-    if (m == OPT_METRIC_MICN) {
-        metric_parts_of(p0, p1, p2, p3, out);
-        return;
-    }
+    parts_basic(p0, p1, p2, p3, out);
     sub3(p1, p0, e01);
     sub3(p2, p0, e02);
     sub3(p3, p0, e03);
     sub3(p2, p1, e12);
     sub3(p3, p1, e13);
-    sub3(p3, p2, e23);
-    cross3(e02, e03, n1);
-    out->vol = dot3(e01, n1) / 6.0;
-    out->l2sum = dot3(e01, e01) + dot3(e02, e02) + dot3(e03, e03) + dot3(e12, e12) +
-                 dot3(e13, e13) + dot3(e23, e23);
-    out->adj2 = 0.0;
+    cross3(e12, e13, n[0]);
+    cross3(e02, e03, n[1]);
+    cross3(e01, e03, n[2]);
+    cross3(e01, e02, n[3]);
+    /* |n|^2 = 4 area^2, so 4 * sum area^2 = sum |n|^2 */
+    for (int f = 0; f < 4; f++)
+        out->adj2 += dot3(n[f], n[f]);
+}
+
+void metric_parts_for(opt_metric m, const double *p0, const double *p1, const double *p2,
+                      const double *p3, metric_parts *out)
+{
+    if (m == OPT_METRIC_MICN)
+        metric_parts_of(p0, p1, p2, p3, out);
+    else
+        parts_basic(p0, p1, p2, p3, out);
 }
 
 double metric_h(double s, double delta)
