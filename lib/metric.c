@@ -212,6 +212,63 @@ double metric_qt_grad(opt_metric m, const double *p12, int a, double delta, doub
     return q;
 }
 
+double metric_qt_hess(opt_metric m, const double *p12, int a, double delta, double g[3],
+                      double H[6], metric_parts *pt_out)
+{
+    double q, s, h, hp, hpp, r, al, be, u[3], dl2[3], dvol[3], cv;
+    metric_parts pt;
+
+    /* q = c A^al h(s)^-be with A = l2sum, s = cs V; ln q is a sum of simple
+     * terms: grad q = q u, u = al dA/A - be h' cs dV/h, and
+     * hess q = q (u u^T + al (6 I/A - dA dA^T/A^2) - be cs^2 (h''/h - h'^2/h^2) dV dV^T)
+     * (d2A/dp_a2 = 6 I, V is linear in p_a) */
+    if (m == OPT_METRIC_MICN)
+        return NAN;
+    metric_parts_for(m, p12, p12 + 3, p12 + 6, p12 + 9, &pt);
+    q = metric_qt(m, &pt, delta);
+    if (pt_out)
+        *pt_out = pt;
+    memset(H, 0, 6 * sizeof(double));
+    g[0] = g[1] = g[2] = 0.0;
+    if (!isfinite(q))
+        return q;
+    {
+        const double(*p)[3] = (const double(*)[3])p12;
+        static const int face_of[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+        double e1[3], e2[3], nf[3];
+        for (int k = 0; k < 3; k++)
+            dl2[k] = 2.0 * (3.0 * p[a][k] - p[(a + 1) & 3][k] - p[(a + 2) & 3][k] -
+                            p[(a + 3) & 3][k]);
+        sub3(p[face_of[a][1]], p[face_of[a][0]], e1);
+        sub3(p[face_of[a][2]], p[face_of[a][0]], e2);
+        cross3(e1, e2, nf);
+        for (int k = 0; k < 3; k++)
+            dvol[k] = -nf[k] / 6.0;
+    }
+    al = m == OPT_METRIC_MIVL ? 1.5 : 1.0;
+    be = m == OPT_METRIC_MIVL ? 1.0 : 2.0 / 3.0;
+    cv = m == OPT_METRIC_MIVL ? 1.0 : 6.0 * SQRT2;
+    s = metric_arg(m, &pt);
+    h = metric_h(s, delta);
+    hp = metric_hprime(s, delta);
+    r = s * s + 4.0 * delta * delta;
+    hpp = delta == 0.0 ? 0.0 : 2.0 * delta * delta / (r * sqrt(r));
+    for (int k = 0; k < 3; k++) {
+        u[k] = al * dl2[k] / pt.l2sum - be * hp * cv * dvol[k] / h;
+        g[k] = q * u[k];
+    }
+    {
+        static const int ij[6][2] = {{0, 0}, {0, 1}, {0, 2}, {1, 1}, {1, 2}, {2, 2}};
+        double A = pt.l2sum, cvv = be * cv * cv * (hpp / h - hp * hp / (h * h));
+        for (int e = 0; e < 6; e++) {
+            int i = ij[e][0], j = ij[e][1];
+            H[e] = q * (u[i] * u[j] + al * ((i == j ? 6.0 / A : 0.0) - dl2[i] * dl2[j] / (A * A)) -
+                        cvv * dvol[i] * dvol[j]);
+        }
+    }
+    return q;
+}
+
 double metric_mean_ratio(const metric_parts *p)
 {
     double v = fabs(p->vol), r;
@@ -300,6 +357,25 @@ int metric_dihedrals(const double *p0, const double *p1, const double *p2, const
             ang[e] = acos(dihedral_cos(g, len, e)) * RAD2DEG;
     }
     return degenerate;
+}
+
+void metric_dihedral_sines(const double *p0, const double *p1, const double *p2,
+                           const double *p3, double s[6])
+{
+    static const int ends[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
+    const double *p[4] = {p0, p1, p2, p3};
+    double g[4][3], len[4], ad[3], det;
+
+    face_area_vectors(p0, p1, p2, p3, g, len);
+    sub3(p3, p0, ad);
+    det = dot3(g[3], ad); /* 6 V */
+    for (int e = 0; e < 6; e++) {
+        int k = dihedral_opp[e][0], l = dihedral_opp[e][1];
+        double d[3], den = len[k] * len[l];
+        sub3(p[ends[e][1]], p[ends[e][0]], d);
+        /* sin = 3 V l / (2 A_k A_l) with |g| = 2 A */
+        s[e] = den > 0.0 ? det * sqrt(dot3(d, d)) / den : 0.0;
+    }
 }
 
 double metric_alpha_opt(opt_metric m, const double *f0, const double *f1, const double *f2)

@@ -41,6 +41,11 @@ double metric_qt(opt_metric m, const metric_parts *p, double delta);
 double metric_qt_grad(opt_metric m, const double *p12, int a, double delta, double g[3],
                       metric_parts *pt);
 
+/* q~, its gradient and its Hessian (upper triangle xx xy xz yy yz zz) with
+ * respect to corner a, for MIVL and MIMR (NAN for MICN: no Hessian). */
+double metric_qt_hess(opt_metric m, const double *p12, int a, double delta, double g[3],
+                      double H[6], metric_parts *pt);
+
 /* Smallest and largest of the 6 dihedral angles (degrees), as metric_dihedrals
  * but with 2 acos instead of 6. */
 void metric_dihedral_range(const double *p0, const double *p1, const double *p2,
@@ -55,6 +60,13 @@ double metric_vol_length(const metric_parts *p);
  * gives 0 and 180 for its angles. Returns 0, or 1 if a face is degenerate. */
 int metric_dihedrals(const double *p0, const double *p1, const double *p2, const double *p3,
                      double ang[6]);
+
+/* Signed sines of the 6 dihedral angles (edges 01 02 03 12 13 23),
+ * 3 V l_ij / (2 A_k A_l) (no acos needed), negative on an inverted
+ * tet, 0 when a face is degenerate. min over the tet is Stellar's and
+ * Freitag's worst-angle measure (small and large angles both score low). */
+void metric_dihedral_sines(const double *p0, const double *p1, const double *p2,
+                           const double *p3, double s[6]);
 
 /* Eq. 8 in closed form (METHOD §3): the distance alpha* along the unit inward
  * normal from the barycentre of face (f0, f1, f2) that minimizes q~ (delta = 0). */

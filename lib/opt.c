@@ -35,6 +35,7 @@ void opt_defaults(opt_options *o)
     o->eps_rel = 1e-3;
     o->finish_frac = 0.2;
     o->finish_sweeps = 4;
+    o->angle_polish = 1;
     o->feature_angle = 30.0;
 }
 
@@ -99,6 +100,7 @@ typedef struct {
     double t0;
     opt_progress input, best;
     int best_it;
+    int last_record; /* number of the last progress record */
 } ctx_t;
 
 static void logf_(const ctx_t *c, int level, const char *fmt, ...)
@@ -200,6 +202,7 @@ static void consider(ctx_t *c, const double *x, const opt_progress *r)
 static int report(ctx_t *c, opt_progress *r)
 {
     r->elapsed = qdc_now() - c->t0;
+    c->last_record = r->iteration;
     if (c->o->progress && c->o->progress(c->o->progress_ctx, r))
         return 1;
     return 0;
@@ -496,7 +499,96 @@ static qdc_status finish_pass(ctx_t *c, const uint8_t *movable, opt_result *res,
     return QDC_OK;
 }
 
-qdc_status opt_run(mesh_t *m, const opt_options *opts, opt_result *res_out, qdc_error *err)
+/* Worst-angle polish (finish.h) from the best iterate: sweeps over the worst
+ * 1% of tets by dihedral sine while their mean sine rises by 0.1%. The worst
+ * mean ratio may not fall below the best iterate's (the floor of every move)
+ * and the smallest sine cannot drop, so a sweep that raises the score is kept. */
+#define ANGLE_SWEEPS 12
+static qdc_status angle_pass(ctx_t *c, const uint8_t *movable, opt_result *res, opt_progress *r,
+                             int *next)
+{
+    for (int s = 0; s < ANGLE_SWEEPS; s++) {
+        finish_stats fs;
+        opt_progress base = c->best;
+        qdc_status st;
+        if (should_stop(c, res->stop_reason, sizeof res->stop_reason))
+            break;
+        memcpy(c->x, c->xbest, 3 * (size_t)c->nv * sizeof(double));
+        st = finish_dihedral_sweep(c->tp, movable, c->sl, c->x, c->lbar, 0.01, base.q_min, &fs);
+        if (st != QDC_OK)
+            return st;
+        evaluate(c, c->x, metric_delta(encode_min_arg(c->tp, c->x, c->o->metric), c->eps), r);
+        r->iteration = (*next)++;
+        r->phase = "angles";
+        r->step = fs.n_verts ? (double)fs.n_moves / fs.n_verts : 0;
+        if (report(c, r)) {
+            snprintf(res->stop_reason, sizeof res->stop_reason, "cancelled");
+            break;
+        }
+        /* the floor keeps q_min; a sweep is kept if it raises the smallest
+         * sine of the mesh, or keeps it and raises the mean of the worst 1%
+         * (measured on bunny_good_10k: the smallest angle 10.3 -> 11.7 degrees
+         * while that mean dips by 0.1%) */
+        if (!(eligible(c, r) && r->n_inverted <= base.n_inverted && r->q_min >= base.q_min &&
+              (fs.floor_after > fs.floor_before ||
+               (fs.floor_after >= fs.floor_before && fs.score_after > fs.score_before))))
+            break;
+        c->best = *r;
+        c->best_it = r->iteration;
+        memcpy(c->xbest, c->x, 3 * (size_t)c->nv * sizeof(double));
+        if (fs.n_moves == 0 || !(fs.floor_after > fs.floor_before * (1 + 1e-3) ||
+                                 fs.score_after > fs.score_before * (1 + 1e-3)))
+            break;
+    }
+    return QDC_OK;
+}
+
+/* Mean ratio of tet t at coordinates x. */
+static double tet_mean_ratio(const mesh_topo *tp, const double *x, int32_t t)
+{
+    const int32_t *tt = tp->tets + 4 * (size_t)t;
+    metric_parts pt;
+    metric_parts_of(x + 3 * (size_t)tt[0], x + 3 * (size_t)tt[1], x + 3 * (size_t)tt[2],
+                    x + 3 * (size_t)tt[3], &pt);
+    return metric_mean_ratio(&pt);
+}
+
+/* Slide mode: the corners of the smooth ears (slide.h) that the run squashed
+ * to less than half their input mean ratio, as an nv mask (NULL if none). */
+static qdc_status squashed_ears(const ctx_t *c, uint8_t **out)
+{
+    const mesh_topo *tp = c->tp;
+    uint8_t *ear = qdc_mallocn((size_t)tp->nt + 1, 1), *pins = NULL;
+    int32_t n;
+
+    *out = NULL;
+    if (!ear)
+        return QDC_ENOMEM;
+    n = slide_smooth_ears(c->sl, tp, ear);
+    if (n < 0) {
+        qdc_free(ear);
+        return QDC_ENOMEM;
+    }
+    for (int32_t t = 0; n > 0 && t < tp->nt; t++) {
+        if (!ear[t] || !(tet_mean_ratio(tp, c->xbest, t) < 0.5 * tet_mean_ratio(tp, c->x0, t)))
+            continue;
+        if (!pins && !(pins = qdc_calloc((size_t)c->nv, 1))) {
+            qdc_free(ear);
+            return QDC_ENOMEM;
+        }
+        for (int a = 0; a < 4; a++)
+            pins[tp->tets[4 * (size_t)t + a]] = 1;
+    }
+    qdc_free(ear);
+    *out = pins;
+    return QDC_OK;
+}
+
+/* One optimization of m. pins (nv flags, may be NULL): extra vertices that
+ * keep their input position. In slide mode *squashed (if not NULL) receives
+ * the corners of the ears this run squashed (see squashed_ears), else NULL. */
+static qdc_status run_once(mesh_t *m, const opt_options *opts, const uint8_t *pins,
+                           uint8_t **squashed, opt_result *res_out, qdc_error *err)
 {
     opt_options o;
     opt_result res;
@@ -531,6 +623,11 @@ qdc_status opt_run(mesh_t *m, const opt_options *opts, opt_result *res_out, qdc_
     st = ctx_init(&c, m, tp, &o);
     if (st != QDC_OK)
         goto out;
+    for (int32_t v = 0; pins && v < c.nv; v++)
+        if (pins[v]) {
+            c.locked[v] = 1;
+            c.bw2[v] = 0.0;
+        }
     c.t0 = t_start;
     st = solve_new(tp, c.locked, o.solver, &c.sol, err);
     if (st != QDC_OK)
@@ -621,6 +718,8 @@ qdc_status opt_run(mesh_t *m, const opt_options *opts, opt_result *res_out, qdc_
                 memcpy(c.x, c.xbest, 3 * (size_t)c.nv * sizeof(double));
                 st = finish_pass(&c, movable, &res, &r, &next);
             }
+            if (st == QDC_OK && o.angle_polish && strcmp(res.stop_reason, "cancelled") != 0)
+                st = angle_pass(&c, movable, &res, &r, &next);
             if (st != QDC_OK) {
                 qdc_free(movable);
                 goto out;
@@ -628,6 +727,11 @@ qdc_status opt_run(mesh_t *m, const opt_options *opts, opt_result *res_out, qdc_
         }
         qdc_free(movable);
         res.t_finish = qdc_now() - t;
+    }
+    if (squashed && c.sl && c.best_it > 0) {
+        st = squashed_ears(&c, squashed);
+        if (st != QDC_OK)
+            goto out;
     }
     /* map back; locked vertices keep their exact input coordinates, and if the
      * input itself is the best iterate the mesh is left bit-for-bit as it was */
@@ -637,6 +741,7 @@ qdc_status opt_run(mesh_t *m, const opt_options *opts, opt_result *res_out, qdc_
                 m->xyz[3 * (size_t)v + k] = c.xbest[3 * (size_t)v + k] * c.scale + c.center[k];
     res.after = c.best;
     res.best_iteration = c.best_it;
+    res.last_record = c.last_record;
     res.outcome = strcmp(res.stop_reason, "converged") == 0 ||
                           strcmp(res.stop_reason, "max-iter") == 0 ||
                           strcmp(res.stop_reason, "no-descent") == 0
@@ -651,5 +756,91 @@ out:
         *res_out = res;
     ctx_free(&c);
     mesh_topo_free(tp);
+    return st;
+}
+
+/* Progress of the second slide run: numbered after the first run's records,
+ * its starting record labelled "rerun". */
+typedef struct {
+    opt_progress_fn fn;
+    void *ctx;
+    int offset;
+    double t_offset;
+} rerun_progress;
+
+static int rerun_report(void *ctx, const opt_progress *p)
+{
+    const rerun_progress *rp = ctx;
+    opt_progress q = *p;
+    q.iteration += rp->offset;
+    q.elapsed += rp->t_offset;
+    if (p->iteration == 0)
+        q.phase = "rerun";
+    return rp->fn(rp->ctx, &q);
+}
+
+qdc_status opt_run(mesh_t *m, const opt_options *opts, opt_result *res_out, qdc_error *err)
+{
+    uint8_t *pins = NULL;
+    double *xin = NULL, *xfirst = NULL;
+    opt_result r1, r2;
+    qdc_status st;
+
+    if (!(opts && opts->boundary == OPT_BOUNDARY_SLIDE))
+        return run_once(m, opts, NULL, NULL, res_out, err);
+    xin = qdc_mallocn(3 * (size_t)m->nv + 1, sizeof(double));
+    if (!xin)
+        return qdc_fail(err, QDC_ENOMEM, "out of memory");
+    memcpy(xin, m->xyz, 3 * (size_t)m->nv * sizeof(double));
+    st = run_once(m, opts, NULL, &pins, &r1, err);
+    if (st != QDC_OK || !pins || r1.outcome != OPT_CONVERGED) {
+        if (res_out)
+            *res_out = r1;
+        goto out;
+    }
+    /* Slide squashed some smooth ears (measured on bunny_tangled-low_10k: an ear
+     * of mean ratio 0.061 ended at 1e-10): run again with their corners held
+     * and keep the better result. */
+    xfirst = qdc_mallocn(3 * (size_t)m->nv + 1, sizeof(double));
+    if (!xfirst) {
+        st = qdc_fail(err, QDC_ENOMEM, "out of memory");
+        goto out;
+    }
+    memcpy(xfirst, m->xyz, 3 * (size_t)m->nv * sizeof(double));
+    memcpy(m->xyz, xin, 3 * (size_t)m->nv * sizeof(double));
+    if (opts->log) {
+        char msg[160];
+        int32_t n = 0;
+        for (int32_t v = 0; v < m->nv; v++)
+            n += pins[v];
+        snprintf(msg, sizeof msg,
+                 "slide squashed ears of the surface: again with their %d corners held",
+                 (int)n);
+        opts->log(opts->log_ctx, 0, msg);
+    }
+    {
+        opt_options o2 = *opts;
+        rerun_progress rp = {opts->progress, opts->progress_ctx, 0, r1.t_total};
+        /* the last record's number: global iterations plus finishing sweeps */
+        rp.offset = r1.last_record + 1;
+        if (opts->progress) {
+            o2.progress = rerun_report;
+            o2.progress_ctx = &rp;
+        }
+        st = run_once(m, &o2, pins, NULL, &r2, err);
+    }
+    if (st != QDC_OK || !better(&r2.after, &r1.after)) {
+        memcpy(m->xyz, xfirst, 3 * (size_t)m->nv * sizeof(double));
+        st = QDC_OK;
+        r2 = r1;
+    } else {
+        r2.t_total += r1.t_total;
+    }
+    if (res_out)
+        *res_out = r2;
+out:
+    qdc_free(pins);
+    qdc_free(xin);
+    qdc_free(xfirst);
     return st;
 }

@@ -56,6 +56,8 @@ typedef struct {
     double eps_rel;        /* Escobar epsilon relative to a regular tet, default 1e-3 */
     double finish_frac;    /* fraction of worst tets in the finishing pass, default 0.2 */
     int finish_sweeps;     /* default 4 */
+    int angle_polish;      /* after the finishing pass: max-min of the dihedral sines
+                            * on the worst tets' vertices (finish.h), default 1 */
     double feature_angle;  /* degrees, for slide (issue 4), default 30 */
     double time_limit;     /* seconds, 0 = none: then OPT_STOPPED with the best mesh */
     int threads;           /* OpenMP threads for this run; 0 = all cores. A server running
@@ -85,6 +87,7 @@ typedef struct {
     opt_outcome outcome;
     int iterations;        /* global iterations done */
     int best_iteration;    /* which iterate was returned (0 = input) */
+    int last_record;       /* number of the last progress record */
     opt_solver solver;     /* solver used */
     double solver_flops;   /* CHOLMOD analysis estimate (0 if not analysed) */
     double t_setup, t_weights, t_assembly, t_solve, t_linesearch, t_harmonic, t_finish, t_total;

@@ -133,6 +133,87 @@ static qdc_status find_features(slide_ctx *s, const mesh_topo *tp, const double 
     return QDC_OK;
 }
 
+typedef struct {
+    int32_t v[3]; /* sorted */
+} tri_key;
+
+static int tri_cmp(const void *x, const void *y)
+{
+    const tri_key *p = x, *q = y;
+    for (int k = 0; k < 3; k++)
+        if (p->v[k] != q->v[k])
+            return p->v[k] < q->v[k] ? -1 : 1;
+    return 0;
+}
+
+static tri_key make_key(int32_t a, int32_t b, int32_t c)
+{
+    tri_key k;
+    int32_t t;
+    if (a > b) { t = a; a = b; b = t; }
+    if (b > c) { t = b; b = c; c = t; }
+    if (a > b) { t = a; a = b; b = t; }
+    k.v[0] = a;
+    k.v[1] = b;
+    k.v[2] = c;
+    return k;
+}
+
+static int is_feature_edge(const slide_ctx *s, int32_t a, int32_t b)
+{
+    for (int32_t k = s->fe_ptr[a]; k < s->fe_ptr[a + 1]; k++)
+        if (s->fe_nbr[k] == b)
+            return 1;
+    return 0;
+}
+
+int32_t slide_smooth_ears(const slide_ctx *s, const mesh_topo *tp, uint8_t *ear)
+{
+    static const int omit_pair[4][4][2] = {
+        {{-1, -1}, {2, 3}, {1, 3}, {1, 2}},
+        {{2, 3}, {-1, -1}, {0, 3}, {0, 2}},
+        {{1, 3}, {0, 3}, {-1, -1}, {0, 1}},
+        {{1, 2}, {0, 2}, {0, 1}, {-1, -1}}};
+    tri_key *keys = qdc_mallocn((size_t)tp->nbf + 1, sizeof *keys);
+    int32_t count = 0;
+
+    if (!keys)
+        return -1;
+    for (int32_t f = 0; f < tp->nbf; f++)
+        keys[f] = make_key(tp->bfaces[3 * (size_t)f], tp->bfaces[3 * (size_t)f + 1],
+                           tp->bfaces[3 * (size_t)f + 2]);
+    qsort(keys, (size_t)tp->nbf, sizeof *keys, tri_cmp);
+    for (int32_t t = 0; t < tp->nt; t++) {
+        const int32_t *tt = tp->tets + 4 * (size_t)t;
+        int onb[4], nb = 0, first = -1, pin = 0;
+        for (int a = 0; a < 4; a++)
+            if (!(tp->vflag[tt[a]] & MESH_V_BOUNDARY))
+                goto next;
+        for (int a = 0; a < 4; a++) { /* face a: the one without corner a */
+            tri_key k = make_key(tt[(a + 1) & 3], tt[(a + 2) & 3], tt[(a + 3) & 3]);
+            onb[a] = bsearch(&k, keys, (size_t)tp->nbf, sizeof *keys, tri_cmp) != NULL;
+            if (onb[a]) {
+                if (nb == 1) {
+                    const int *e = omit_pair[first][a];
+                    pin = !is_feature_edge(s, tt[e[0]], tt[e[1]]);
+                }
+                if (nb == 0)
+                    first = a;
+                nb++;
+            }
+        }
+        if (nb >= 3)
+            pin = 1;
+        ear[t] = (uint8_t)pin;
+        count += pin;
+        continue;
+    next:
+        ear[t] = 0;
+    }
+    qdc_free(keys);
+    return count;
+}
+
 qdc_status slide_new(const mesh_topo *tp, const double *x0, double feature_angle,
                      slide_ctx **out, qdc_error *err)
 {

@@ -29,4 +29,11 @@ void slide_project(const slide_ctx *s, int32_t v, const double p[3], double out[
 /* Project a direction onto the tangent space of v's constraint (plane or line). */
 void slide_tangent(const slide_ctx *s, int32_t v, const double g[3], double out[3]);
 
+/* Ears on smooth parts: tets with 4 boundary corners and two boundary faces
+ * whose common edge is not a feature (or three boundary faces). Such a tet's
+ * shape is pinned by how much the surface bends there, and sliding its
+ * corners over a piecewise-flat input surface can squash it flat. Sets
+ * ear[t] (nt entries) and returns how many, or -1 if out of memory. */
+int32_t slide_smooth_ears(const slide_ctx *s, const mesh_topo *tp, uint8_t *ear);
+
 #endif

@@ -98,6 +98,7 @@ static void optimize_usage(FILE *f)
         "  --solver auto|cholmod|pcg  linear solver (default auto)\n"
         "  --finish on|off            worst-tet finishing pass (default on)\n"
         "  --finish-sweeps N          finishing sweeps (default 4)\n"
+        "  --angle-polish on|off      then raise the smallest dihedral angles (default on)\n"
         "  --finish-frac F            share of worst tets visited per sweep (default "
         "0.2)\n"
         "  --max-iter N               global iterations (default 10)\n"
@@ -312,6 +313,8 @@ int cli_optimize(int argc, char **argv)
                 bad = on_off(v, &o.harmonic);
             else if (!strcmp(a, "--finish"))
                 bad = on_off(v, &o.finish);
+            else if (!strcmp(a, "--angle-polish"))
+                bad = on_off(v, &o.angle_polish);
             else if (!strcmp(a, "--mu-scaled"))
                 bad = on_off(v, &o.mu_scaled);
             else if (!strcmp(a, "--max-iter")) {

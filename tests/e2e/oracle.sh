@@ -28,6 +28,13 @@ grep -v '^#' "$ROOT/tests/data/oracle.tsv" | while IFS='	' read -r name mean qmi
     [ "$ai" -le "$inv" ] || why="$why $ai inverted;"
     [ "$ai" -le "$bi" ] || why="$why more inverted than input;"
     ge "$an" "$bn" || why="$why worst tet worse than input;"
+    # issue 4: the worst-angle polish lifts the good meshes whose worst tets are
+    # not all-boundary to >= 15 degrees (measured 15.5-16.0; the bunny's and the
+    # torus's worst tets have 4 boundary vertices, which lsq leaves to the global step)
+    case $name in cube*_good | bracket*_good | sphere*_good)
+        ad=$(field "$rep" after dihedral_min)
+        ge "$ad" 15 || why="$why smallest dihedral $ad < 15 degrees;" ;;
+    esac
     if [ -z "$why" ]; then pass "oracle.$name (mean $am min $an)"; else fail "oracle.$name" "$why"; fi
 done
 

@@ -134,6 +134,38 @@ TEST(gradient_matches_finite_differences)
             }
 }
 
+TEST(hessian_matches_finite_differences_of_the_gradient)
+{
+    double t[4][3] = {{0, 0, 0}, {1, 0.1, 0}, {0.2, 0.7, 0.1}, {0.3, 0.2, 0.4}};
+    static const int ij[6][2] = {{0, 0}, {0, 1}, {0, 2}, {1, 1}, {1, 2}, {2, 2}};
+    for (int mm = 0; mm < 2; mm++) /* MIVL, MIMR */
+        for (int a = 0; a < 4; a++)
+            for (int dl = 0; dl < 3; dl++) {
+                /* delta 0, moderate, and large enough to matter (vol ~ 0.06) */
+                double delta = dl == 0 ? 0.0 : (dl == 1 ? 0.02 : 0.2), g[3], H[6], h = 1e-6;
+                double q = metric_qt_hess((opt_metric)mm, &t[0][0], a, delta, g, H, NULL);
+                double g0[3];
+                ASSERT_NEAR(q, metric_qt_grad((opt_metric)mm, &t[0][0], a, delta, g0, NULL), 1e-14);
+                for (int k = 0; k < 3; k++)
+                    ASSERT_NEAR(g[k], g0[k], 1e-12 * (1 + fabs(g0[k])));
+                for (int e = 0; e < 6; e++) {
+                    int i = ij[e][0], j = ij[e][1];
+                    double tp[4][3], tm[4][3], gp[3], gm[3];
+                    memcpy(tp, t, sizeof t);
+                    memcpy(tm, t, sizeof t);
+                    tp[a][j] += h;
+                    tm[a][j] -= h;
+                    metric_qt_grad((opt_metric)mm, &tp[0][0], a, delta, gp, NULL);
+                    metric_qt_grad((opt_metric)mm, &tm[0][0], a, delta, gm, NULL);
+                    ASSERT_NEAR(H[e], (gp[i] - gm[i]) / (2 * h), 1e-5 * (1 + fabs(H[e])));
+                }
+            }
+    {
+        double g[3], H[6];
+        ASSERT_TRUE(isnan(metric_qt_hess(OPT_METRIC_MICN, &t[0][0], 0, 0.0, g, H, NULL)));
+    }
+}
+
 /* a regular tet split at its centroid: 4 congruent tets around vertex 4 */
 static mesh_t *star_mesh(void)
 {
@@ -377,7 +409,36 @@ TEST(validation_errors)
     mesh_free(m);
 }
 
-TEST_MAIN("core", T(regular_tet_metrics_are_one), T(scaled_regular_tet_is_still_one),
+TEST(dihedral_sines_are_the_sines_of_the_angles)
+{
+    /* regular tet: every angle is acos(1/3), sine 2 sqrt2 / 3 */
+    double s[6], ang[6], t[4][3] = {{0, 0, 0}, {1, 0.1, 0}, {0.2, 0.7, 0.1}, {0.3, 0.2, 0.4}};
+    metric_dihedral_sines(REG[0], REG[1], REG[2], REG[3], s);
+    for (int e = 0; e < 6; e++)
+        ASSERT_NEAR(s[e], 2.0 * sqrt(2.0) / 3.0, 1e-12);
+    /* the corner tet (0, e1, e2, e3): 90 degrees at the axis edges 01 02 03,
+     * acos(1/sqrt3) (sine sqrt(2/3)) at the edges 12 13 23 of the slanted face */
+    {
+        double c[4][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+        metric_dihedral_sines(c[0], c[1], c[2], c[3], s);
+        for (int e = 0; e < 6; e++)
+            ASSERT_NEAR(s[e], e < 3 ? 1.0 : sqrt(2.0 / 3.0), 1e-12);
+    }
+    /* a generic tet agrees with the acos-based angles */
+    metric_dihedral_sines(t[0], t[1], t[2], t[3], s);
+    metric_dihedrals(t[0], t[1], t[2], t[3], ang);
+    for (int e = 0; e < 6; e++)
+        ASSERT_NEAR(s[e], sin(ang[e] * 3.14159265358979323846 / 180.0), 1e-12);
+    /* inverted: the same magnitudes, negative */
+    {
+        double si[6];
+        metric_dihedral_sines(t[0], t[2], t[1], t[3], si);
+        for (int e = 0; e < 6; e++)
+            ASSERT_TRUE(si[e] < 0.0);
+    }
+}
+
+TEST_MAIN("core", T(hessian_matches_finite_differences_of_the_gradient), T(dihedral_sines_are_the_sines_of_the_angles), T(regular_tet_metrics_are_one), T(scaled_regular_tet_is_still_one),
           T(mivl_is_mimr_to_three_halves), T(inverted_tet_negative_mean_ratio_and_infinite_qt),
           T(h_is_continuous_and_regularizes), T(alpha_closed_form_matches_search),
           T(gradient_matches_finite_differences), T(qdc_of_symmetric_star),

@@ -1,6 +1,7 @@
 /* test_opt.c - behaviour of the optimizer on synthetic meshes: it improves,
  * untangles, never returns a worse mesh, respects locked vertices and tags,
  * stops on cancel. */
+#include "finish.h"
 #include "metric.h"
 #include "opt.h"
 #include "report.h"
@@ -299,7 +300,87 @@ TEST(allocation_failures_are_clean)
 #endif
 }
 
-TEST_MAIN("opt", T(improves_perturbed_grid), T(untangles_inverted_grid),
+/* smallest dihedral sine and smallest mean ratio of the mesh */
+static void worst_of(const mesh_t *m, double *smin, double *qmin)
+{
+    *smin = *qmin = INFINITY;
+    for (int32_t t = 0; t < m->nt; t++) {
+        const int32_t *tt = m->tets + 4 * (size_t)t;
+        double sn[6];
+        metric_parts pt;
+        metric_dihedral_sines(m->xyz + 3 * tt[0], m->xyz + 3 * tt[1], m->xyz + 3 * tt[2],
+                              m->xyz + 3 * tt[3], sn);
+        metric_parts_of(m->xyz + 3 * tt[0], m->xyz + 3 * tt[1], m->xyz + 3 * tt[2],
+                        m->xyz + 3 * tt[3], &pt);
+        for (int e = 0; e < 6; e++)
+            *smin = fmin(*smin, sn[e]);
+        *qmin = fmin(*qmin, metric_mean_ratio(&pt));
+    }
+}
+
+TEST(angle_sweep_raises_the_smallest_angle_within_its_rules)
+{
+    int n = 5;
+    mesh_t *m = tm_grid(n, 0);
+    mesh_topo *tp = NULL;
+    uint8_t *movable;
+    double *x0, s0, q0, s1, q1;
+    finish_stats fs;
+    int32_t locked = 1 + (n + 1) * (1 + (n + 1) * 1); /* interior vertex (1,1,1) */
+    tm_perturb(m, n, 0.3, 7);
+    ASSERT_OK(mesh_topo_build(m, &tp, NULL));
+    movable = calloc((size_t)m->nv, 1);
+    x0 = malloc(3 * (size_t)m->nv * sizeof(double));
+    ASSERT_TRUE(movable && x0);
+    memcpy(x0, m->xyz, 3 * (size_t)m->nv * sizeof(double));
+    for (int32_t v = 0; v < m->nv; v++)
+        movable[v] = !(tp->vflag[v] & MESH_V_BOUNDARY) && v != locked;
+    worst_of(m, &s0, &q0);
+    ASSERT_TRUE(s0 > 0.0);
+    ASSERT_OK(finish_dihedral_sweep(tp, movable, NULL, m->xyz, 1.0 / n, 0.05, q0, &fs));
+    worst_of(m, &s1, &q1);
+    ASSERT_TRUE(fs.n_moves > 0);
+    ASSERT_NEAR(fs.floor_before, s0, 1e-12);
+    ASSERT_NEAR(fs.floor_after, s1, 1e-12);
+    ASSERT_TRUE(s1 > s0);     /* the smallest sine rose */
+    ASSERT_TRUE(q1 >= q0);    /* no tet fell below the mean-ratio floor */
+    for (int32_t v = 0; v < m->nv; v++)
+        if (!movable[v])
+            for (int c = 0; c < 3; c++)
+                ASSERT_TRUE(m->xyz[3 * v + c] == x0[3 * v + c]);
+    free(movable);
+    free(x0);
+    mesh_topo_free(tp);
+    mesh_free(m);
+}
+
+TEST(angle_polish_option_keeps_every_guarantee)
+{
+    int n = 6;
+    mesh_t *a = tm_grid(n, 0), *b = tm_grid(n, 0);
+    opt_options o;
+    opt_result ra, rb;
+    report_quality qa, qb;
+    tm_perturb(a, n, 0.35, 11);
+    tm_perturb(b, n, 0.35, 11);
+    opt_defaults(&o);
+    o.angle_polish = 0;
+    ASSERT_OK(opt_run(a, &o, &ra, NULL));
+    o.angle_polish = 1;
+    ASSERT_OK(opt_run(b, &o, &rb, NULL));
+    qa = quality(a);
+    qb = quality(b);
+    ASSERT_TRUE(all_finite(b));
+    ASSERT_EQ_INT(qb.n_inverted, 0);
+    ASSERT_TRUE(qb.q_min >= qa.q_min);
+    ASSERT_TRUE(fmin(qb.dih_min, 180.0 - qb.dih_max) >= fmin(qa.dih_min, 180.0 - qa.dih_max));
+    ASSERT_NEAR(rb.after.dih_min, qb.dih_min, 1e-9);
+    mesh_free(a);
+    mesh_free(b);
+}
+
+TEST_MAIN("opt", T(angle_sweep_raises_the_smallest_angle_within_its_rules),
+          T(angle_polish_option_keeps_every_guarantee), T(improves_perturbed_grid), T(untangles_inverted_grid),
           T(never_worse_than_input), T(literal_mode_is_safe_and_reported),
           T(fixed_boundary_and_user_locks_do_not_move), T(regions_and_connectivity_untouched),
           T(cancel_from_progress_callback), T(cancel_flag_before_start),
