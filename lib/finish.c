@@ -1,7 +1,6 @@
 /* finish.c - worst-tet finishing pass (METHOD §5a). */
 #include "finish.h"
 
-#include "encode.h"
 #include "metric.h"
 
 #include <math.h>
@@ -153,13 +152,13 @@ static int newton_dir(const double H[6], const double g[3], double d[3])
  * edge), halved until the local objective drops without a new inverted tet;
  * where the Hessian is not positive definite, the normalized gradient step. */
 static int32_t newton_vertex(const mesh_topo *tp, double *x, int32_t v, opt_metric m,
-                             double delta, double lbar, double rtol)
+                             double delta, double lbar, double rtol, int inner)
 {
     double *xv = x + 3 * (size_t)v, g[3], H[6], f0;
     int32_t moves = 0, bad0;
 
     f0 = star_hess(tp, x, v, xv, m, delta, &bad0, g, H);
-    for (int it = 0; it < FINISH_INNER && isfinite(f0); it++) {
+    for (int it = 0; it < inner && isfinite(f0); it++) {
         double d[3], dn, y[3], f1 = f0, g1[3], H1[6];
         int32_t bad1;
         int ok = 0;
@@ -328,29 +327,20 @@ static int32_t colour_classes(const mesh_topo *tp, vq_pair *list, int32_t n, int
 }
 
 qdc_status finish_sweep(const mesh_topo *tp, const uint8_t *movable, const slide_ctx *sl,
-                        double *x, opt_metric m, double eps, double lbar, double frac,
-                        double rtol, finish_stats *st)
+                        double *x, opt_metric m, const double *eta, double delta, double lbar,
+                        double frac, double rtol, finish_stats *st)
 {
-    double *eta = qdc_mallocn((size_t)tp->nt, sizeof(double));
     double *sorted = qdc_mallocn((size_t)tp->nt, sizeof(double));
     double *vworst = qdc_mallocn((size_t)tp->nv, sizeof(double));
     vq_pair *list = NULL;
     int32_t n = 0, k;
-    double thresh, delta;
+    double thresh;
 
     memset(st, 0, sizeof *st);
-    if (!eta || !sorted || !vworst) {
-        qdc_free(eta);
+    if (!sorted || !vworst) {
         qdc_free(sorted);
         qdc_free(vworst);
         return QDC_ENOMEM;
-    }
-    for (int32_t t = 0; t < tp->nt; t++) {
-        const int32_t *tt = tp->tets + 4 * (size_t)t;
-        metric_parts pt;
-        metric_parts_of(x + 3 * (size_t)tt[0], x + 3 * (size_t)tt[1], x + 3 * (size_t)tt[2],
-                        x + 3 * (size_t)tt[3], &pt);
-        eta[t] = metric_mean_ratio(&pt);
     }
     memcpy(sorted, eta, (size_t)tp->nt * sizeof(double));
     k = (int32_t)(frac * tp->nt);
@@ -359,7 +349,6 @@ qdc_status finish_sweep(const mesh_topo *tp, const uint8_t *movable, const slide
     if (k > tp->nt)
         k = tp->nt;
     thresh = kth_smallest(sorted, tp->nt, k - 1);
-    delta = metric_delta(encode_min_arg(tp, x, m), eps);
     st->delta = delta;
     for (int32_t v = 0; v < tp->nv; v++)
         vworst[v] = 2.0;
@@ -376,7 +365,6 @@ qdc_status finish_sweep(const mesh_topo *tp, const uint8_t *movable, const slide
         n += movable[v] && vworst[v] < 2.0;
     list = qdc_mallocn((size_t)n + 1, sizeof *list);
     if (!list) {
-        qdc_free(eta);
         qdc_free(sorted);
         qdc_free(vworst);
         return QDC_ENOMEM;
@@ -399,7 +387,6 @@ qdc_status finish_sweep(const mesh_topo *tp, const uint8_t *movable, const slide
         qdc_free(colour);
         if (ncol < 0) {
             qdc_free(list);
-            qdc_free(eta);
             qdc_free(sorted);
             qdc_free(vworst);
             return QDC_ENOMEM;
@@ -410,7 +397,7 @@ qdc_status finish_sweep(const mesh_topo *tp, const uint8_t *movable, const slide
             for (int32_t i = start[c]; i < start[c + 1]; i++)
                 moves += m != OPT_METRIC_MICN &&
                                  !(sl && slide_kind(sl, list[i].v) != SLIDE_INTERIOR)
-                             ? newton_vertex(tp, x, list[i].v, m, delta, lbar, rtol)
+                             ? newton_vertex(tp, x, list[i].v, m, delta, lbar, rtol, FINISH_INNER)
                              : relax_vertex(tp, sl, x, list[i].v, m, delta, lbar, rtol);
             st->n_moves += moves;
         }
@@ -418,7 +405,6 @@ qdc_status finish_sweep(const mesh_topo *tp, const uint8_t *movable, const slide
     }
     st->n_verts = n;
     qdc_free(list);
-    qdc_free(eta);
     qdc_free(sorted);
     qdc_free(vworst);
     return QDC_OK;

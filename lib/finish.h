@@ -22,15 +22,16 @@ typedef struct {
 } finish_stats;
 
 /* One sweep over x (normalized coordinates, 3 per vertex). movable: nv flags.
+ * eta: the mean ratio of every tet at x; delta: the regularization for x.
  * frac: share of the worst tets (by mean ratio) whose vertices are visited.
- * eps: Escobar epsilon, lbar: mean edge length (both in x's units).
+ * lbar: mean edge length (in x's units).
  * sl (may be NULL): constraints of sliding boundary vertices (movable ones with
  * a SLIDE_SURFACE/SLIDE_LINE kind move tangentially and are projected back).
  * rtol: a vertex stops once a step lowers its local objective by less than
  * rtol times its value (0: all inner steps). */
 qdc_status finish_sweep(const mesh_topo *tp, const uint8_t *movable, const slide_ctx *sl,
-                        double *x, opt_metric m, double eps, double lbar, double frac,
-                        double rtol, finish_stats *st);
+                        double *x, opt_metric m, const double *eta, double delta, double lbar,
+                        double frac, double rtol, finish_stats *st);
 
 /* Worst-angle polish (beyond METHOD): max-min ascent of the smallest dihedral
  * sine of each star (Freitag's non-smooth smoothing: the steepest ascent is the

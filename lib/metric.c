@@ -323,21 +323,31 @@ static double dihedral_cos(double g[4][3], const double len[4], int e)
 
 #define RAD2DEG (180.0 / 3.14159265358979323846)
 
-void metric_dihedral_range(const double *p0, const double *p1, const double *p2,
-                           const double *p3, double *amin, double *amax)
+void metric_dihedral_cos_range(const double *p0, const double *p1, const double *p2,
+                               const double *p3, double *cmin, double *cmax)
 {
-    double g[4][3], len[4], cmin = 2, cmax = -2;
+    double g[4][3], len[4];
 
+    *cmin = 2;
+    *cmax = -2;
     if (face_area_vectors(p0, p1, p2, p3, g, len)) {
-        *amin = 0.0;
-        *amax = 180.0;
+        *cmin = -1.0;
+        *cmax = 1.0;
         return;
     }
     for (int e = 0; e < 6; e++) {
         double c = dihedral_cos(g, len, e);
-        cmin = c < cmin ? c : cmin;
-        cmax = c > cmax ? c : cmax;
+        *cmin = c < *cmin ? c : *cmin;
+        *cmax = c > *cmax ? c : *cmax;
     }
+}
+
+void metric_dihedral_range(const double *p0, const double *p1, const double *p2,
+                           const double *p3, double *amin, double *amax)
+{
+    double cmin, cmax;
+
+    metric_dihedral_cos_range(p0, p1, p2, p3, &cmin, &cmax);
     /* acos is decreasing: the largest cosine is the smallest angle */
     *amin = acos(cmax) * RAD2DEG;
     *amax = acos(cmin) * RAD2DEG;

@@ -50,6 +50,10 @@ double metric_qt_hess(opt_metric m, const double *p12, int a, double delta, doub
  * but with 2 acos instead of 6. */
 void metric_dihedral_range(const double *p0, const double *p1, const double *p2,
                            const double *p3, double *amin, double *amax);
+/* The same as cosines (cmin of the largest angle, cmax of the smallest; -1
+ * and 1 for a degenerate face): no acos, for whole-mesh scans. */
+void metric_dihedral_cos_range(const double *p0, const double *p1, const double *p2,
+                               const double *p3, double *cmin, double *cmax);
 
 /* Signed mean ratio 12 (3|V|)^(2/3) / l2sum in [-1, 1]. */
 double metric_mean_ratio(const metric_parts *p);

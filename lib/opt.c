@@ -93,6 +93,7 @@ typedef struct {
     double *bw2;      /* squared boundary row weights (0: no row) */
     double *dg;       /* bw2 + mu */
     double *qt, *qval, *d;
+    double *eta;      /* nt: mean ratio per tet, from evaluate() in the finishing pass */
     double mu_factor;    /* omega_B^2 once harmonic guidance is on and mu_scaled */
     const double *bref;  /* targets of the boundary rows: x0 (lsq) or x_k (slide) */
     slide_ctx *sl;       /* slide mode only */
@@ -119,20 +120,24 @@ static void logf_(const ctx_t *c, int level, const char *fmt, ...)
     c->o->log(c->o->log_ctx, level, buf);
 }
 
-/* Quality record of x (normalized coordinates; mean ratio and angles are
- * scale-invariant). */
 #define EVAL_CHUNKS 256
+#define M_PI_ 3.14159265358979323846
 
-static void evaluate(const ctx_t *c, const double *x, double delta, opt_progress *r)
+/* Quality record of x (normalized coordinates; mean ratio and angles are
+ * scale-invariant) in one pass over the tets, then the objective with the
+ * delta of x, which is returned. eta (nt entries, may be NULL) receives each
+ * tet's mean ratio for the finishing pass. */
+static double evaluate(const ctx_t *c, const double *x, opt_progress *r, double *eta_out)
 {
     const mesh_topo *tp = c->tp;
+    const opt_metric m = c->o->metric;
     double psum[EVAL_CHUNKS], psum2[EVAL_CHUNKS];
-    double sum = 0, sum2 = 0, qmin = INFINITY, dmin = INFINITY, dmax = -INFINITY;
+    double sum = 0, sum2 = 0, qmin = INFINITY, cmax = -2, cmin = 2, amin = INFINITY, delta;
     int32_t ninv = 0;
 
     /* fixed chunks summed in order: reports do not depend on the thread count */
-#pragma omp parallel for reduction(+ : ninv) reduction(min : qmin, dmin) reduction(max : dmax) \
-    schedule(static)
+#pragma omp parallel for reduction(+ : ninv) reduction(min : qmin, cmin, amin) \
+    reduction(max : cmax) schedule(static)
     for (int ch = 0; ch < EVAL_CHUNKS; ch++) {
         int32_t t0 = (int32_t)((int64_t)tp->nt * ch / EVAL_CHUNKS);
         int32_t t1 = (int32_t)((int64_t)tp->nt * (ch + 1) / EVAL_CHUNKS);
@@ -142,16 +147,20 @@ static void evaluate(const ctx_t *c, const double *x, double delta, opt_progress
             const double *p0 = x + 3 * (size_t)tt[0], *p1 = x + 3 * (size_t)tt[1];
             const double *p2 = x + 3 * (size_t)tt[2], *p3 = x + 3 * (size_t)tt[3];
             metric_parts pt;
-            double eta, amin, amax;
+            double eta, lo, hi, arg;
             metric_parts_for(OPT_METRIC_MIVL, p0, p1, p2, p3, &pt);
             eta = metric_mean_ratio(&pt);
+            if (eta_out)
+                eta_out[t] = eta;
             s += eta;
             s2 += eta * eta;
             qmin = eta < qmin ? eta : qmin;
             ninv += !(pt.vol > 0.0);
-            metric_dihedral_range(p0, p1, p2, p3, &amin, &amax);
-            dmin = amin < dmin ? amin : dmin;
-            dmax = amax > dmax ? amax : dmax;
+            arg = metric_arg(m, &pt); /* every metric's argument is a multiple of vol */
+            amin = arg < amin ? arg : amin;
+            metric_dihedral_cos_range(p0, p1, p2, p3, &lo, &hi);
+            cmin = lo < cmin ? lo : cmin;
+            cmax = hi > cmax ? hi : cmax;
         }
         psum[ch] = s;
         psum2[ch] = s2;
@@ -164,12 +173,14 @@ static void evaluate(const ctx_t *c, const double *x, double delta, opt_progress
     r->q_mean = sum / tp->nt;
     r->q_std = sqrt(fmax(0.0, sum2 / tp->nt - r->q_mean * r->q_mean));
     r->q_min = qmin;
-    r->dih_min = dmin;
-    r->dih_max = dmax;
+    r->dih_min = acos(cmax) * (180.0 / M_PI_);
+    r->dih_max = acos(cmin) * (180.0 / M_PI_);
     r->n_inverted = ninv;
-    r->objective = encode_objective(tp, x, c->o->metric, delta, NULL, NULL);
+    delta = metric_delta(amin, c->eps);
+    r->objective = encode_objective(tp, x, m, delta, NULL, NULL);
     r->elapsed = qdc_now() - c->t0;
     r->solver = c->sol ? (int)solve_kind(c->sol) : 0;
+    return delta;
 }
 
 /* METHOD §5: keep the best iterate (fewest inverted, then best worst tet, then
@@ -245,9 +256,10 @@ static qdc_status ctx_init(ctx_t *c, const mesh_t *m, const mesh_topo *tp, const
     c->bw2 = qdc_calloc((size_t)m->nv, sizeof(double));
     c->dg = qdc_mallocn((size_t)m->nv, sizeof(double));
     c->qt = qdc_mallocn((size_t)m->nt, sizeof(double));
+    c->eta = qdc_mallocn((size_t)m->nt, sizeof(double));
     c->qval = qdc_mallocn((size_t)tp->adj_ptr[tp->nv], sizeof(double));
     if (!c->x || !c->x0 || !c->xn || !c->xbest || !c->trial || !c->tmp || !c->rhs || !c->d ||
-        !c->locked || !c->wq2 || !c->bw2 || !c->dg || !c->qt || !c->qval)
+        !c->locked || !c->wq2 || !c->bw2 || !c->dg || !c->qt || !c->eta || !c->qval)
         return QDC_ENOMEM;
     /* METHOD §1: bbox centre to 0, diagonal to 1; every tolerance is in these units */
     diag = mesh_bbox(m, lo, hi);
@@ -309,6 +321,7 @@ static void ctx_free(ctx_t *c)
     qdc_free(c->bw2);
     qdc_free(c->dg);
     qdc_free(c->qt);
+    qdc_free(c->eta);
     qdc_free(c->qval);
 }
 
@@ -448,7 +461,7 @@ static qdc_status iterate(ctx_t *c, opt_result *res, opt_progress *r, int *stepp
         if (dd > move)
             move = dd;
     }
-    evaluate(c, c->x, metric_delta(encode_min_arg(tp, c->x, o->metric), c->eps), r);
+    evaluate(c, c->x, r, NULL);
     r->step = step;
     r->max_move = sqrt(move) / c->lbar;
     r->cg_iters = cg;
@@ -464,21 +477,25 @@ static qdc_status finish_pass(ctx_t *c, const uint8_t *movable, opt_result *res,
                               opt_progress *r, int *next)
 {
     const opt_options *o = c->o;
+    double delta, before;
 
+    /* each record's scan also yields the tet qualities and the delta of the
+     * next sweep */
+    delta = evaluate(c, c->x, r, c->eta);
     for (int s = 0; s < o->finish_sweeps + 8; s++) {
         int polish = s >= o->finish_sweeps;
         finish_stats fs;
-        double before = r->q_min;
         qdc_status st;
         if (should_stop(c, res->stop_reason, sizeof res->stop_reason))
             break;
+        before = r->q_min;
         /* broad sweeps stop a vertex early once its gains are small (measured:
          * same quality, 3-4x faster); the polish sweeps converge fully */
-        st = finish_sweep(c->tp, movable, c->sl, c->x, o->metric, c->eps, c->lbar,
+        st = finish_sweep(c->tp, movable, c->sl, c->x, o->metric, c->eta, delta, c->lbar,
                           polish ? 0.01 : o->finish_frac, polish ? 0.0 : 1e-3, &fs);
         if (st != QDC_OK)
             return st;
-        evaluate(c, c->x, fs.delta, r);
+        delta = evaluate(c, c->x, r, c->eta);
         r->iteration = (*next)++;
         r->phase = "finish";
         r->step = fs.n_verts ? (double)fs.n_moves / fs.n_verts : 0;
@@ -517,7 +534,7 @@ static qdc_status angle_pass(ctx_t *c, const uint8_t *movable, opt_result *res, 
         st = finish_dihedral_sweep(c->tp, movable, c->sl, c->x, c->lbar, 0.01, base.q_min, &fs);
         if (st != QDC_OK)
             return st;
-        evaluate(c, c->x, metric_delta(encode_min_arg(c->tp, c->x, c->o->metric), c->eps), r);
+        evaluate(c, c->x, r, NULL);
         r->iteration = (*next)++;
         r->phase = "angles";
         r->step = fs.n_verts ? (double)fs.n_moves / fs.n_verts : 0;
@@ -638,7 +655,7 @@ static qdc_status run_once(mesh_t *m, const opt_options *opts, const uint8_t *pi
           (int)m->nv, (int)tp->nb, (int)m->nt, opt_solver_name(res.solver), res.solver_flops);
     res.t_setup = qdc_now() - t_start;
 
-    evaluate(&c, c.x, metric_delta(encode_min_arg(tp, c.x, o.metric), c.eps), &r);
+    evaluate(&c, c.x, &r, NULL);
     r.phase = "input";
     c.input = c.best = r;
     res.before = r;
