@@ -521,8 +521,8 @@ static qdc_status finish_pass(ctx_t *c, const uint8_t *movable, opt_result *res,
  * mean ratio may not fall below the best iterate's (the floor of every move)
  * and the smallest sine cannot drop, so a sweep that raises the score is kept. */
 #define ANGLE_SWEEPS 12
-static qdc_status angle_pass(ctx_t *c, const uint8_t *movable, opt_result *res, opt_progress *r,
-                             int *next)
+static qdc_status angle_pass(ctx_t *c, const uint8_t *movable, const slide_ctx *sl,
+                             opt_result *res, opt_progress *r, int *next)
 {
     for (int s = 0; s < ANGLE_SWEEPS; s++) {
         finish_stats fs;
@@ -531,7 +531,7 @@ static qdc_status angle_pass(ctx_t *c, const uint8_t *movable, opt_result *res, 
         if (should_stop(c, res->stop_reason, sizeof res->stop_reason))
             break;
         memcpy(c->x, c->xbest, 3 * (size_t)c->nv * sizeof(double));
-        st = finish_dihedral_sweep(c->tp, movable, c->sl, c->x, c->lbar, 0.01, base.q_min, &fs);
+        st = finish_dihedral_sweep(c->tp, movable, sl, c->x, c->lbar, 0.01, base.q_min, &fs);
         if (st != QDC_OK)
             return st;
         evaluate(c, c->x, r, NULL);
@@ -558,6 +558,34 @@ static qdc_status angle_pass(ctx_t *c, const uint8_t *movable, opt_result *res, 
             break;
     }
     return QDC_OK;
+}
+
+/* The angle pass; with lsq, boundary vertices take part too, sliding on the
+ * input surface (projected back onto its triangles, as in slide mode): the
+ * worst tets of good meshes often have all four corners on the boundary
+ * (measured: bunny_good_10k 11.7 -> 14.9, torus_h0.1_good 10.4 -> 14.2 degrees,
+ * boundary error unchanged at the lsq level). */
+static qdc_status lsq_angle_pass(ctx_t *c, const uint8_t *movable, opt_result *res,
+                                 opt_progress *r, int *next)
+{
+    slide_ctx *sl = NULL;
+    uint8_t *mv = NULL;
+    qdc_status st;
+
+    if (c->sl || c->o->boundary != OPT_BOUNDARY_LSQ)
+        return angle_pass(c, movable, c->sl, res, r, next);
+    st = slide_new(c->tp, c->x0, c->o->feature_angle, &sl, NULL);
+    mv = st == QDC_OK ? qdc_mallocn((size_t)c->nv, 1) : NULL;
+    if (!mv) {
+        slide_free(sl);
+        return QDC_ENOMEM;
+    }
+    for (int32_t v = 0; v < c->nv; v++)
+        mv[v] = movable[v] || (!c->locked[v] && slide_kind(sl, v) != SLIDE_CORNER);
+    st = angle_pass(c, mv, sl, res, r, next);
+    qdc_free(mv);
+    slide_free(sl);
+    return st;
 }
 
 /* Mean ratio of tet t at coordinates x. */
@@ -736,7 +764,7 @@ static qdc_status run_once(mesh_t *m, const opt_options *opts, const uint8_t *pi
                 st = finish_pass(&c, movable, &res, &r, &next);
             }
             if (st == QDC_OK && o.angle_polish && strcmp(res.stop_reason, "cancelled") != 0)
-                st = angle_pass(&c, movable, &res, &r, &next);
+                st = lsq_angle_pass(&c, movable, &res, &r, &next);
             if (st != QDC_OK) {
                 qdc_free(movable);
                 goto out;
