@@ -619,12 +619,13 @@ static int32_t dihedral_vertex(const mesh_topo *tp, const slide_ctx *sl, double 
 /* Smallest dihedral sine of every tet into smin[]; returns the mean of the k
  * smallest (the sweep's score), reordering sorted[] (scratch of nt); *kth:
  * the k-th smallest, *lo: the smallest. */
-static double tet_sines(const mesh_topo *tp, const double *x, double *smin, double *sorted,
-                        int32_t k, double *kth, double *lo)
+static double tet_sines(const mesh_topo *tp, const double *x, double *smin, int fresh,
+                        double *sorted, int32_t k, double *kth, double *lo)
 {
     double sum = 0.0;
 
-    for (int32_t t = 0; t < tp->nt; t++) {
+#pragma omp parallel for schedule(static) if (fresh)
+    for (int32_t t = 0; t < (fresh ? tp->nt : 0); t++) {
         const int32_t *tt = tp->tets + 4 * (size_t)t;
         double s[6], m = INFINITY;
         metric_dihedral_sines(x + 3 * (size_t)tt[0], x + 3 * (size_t)tt[1],
@@ -646,9 +647,8 @@ static double tet_sines(const mesh_topo *tp, const double *x, double *smin, doub
 
 qdc_status finish_dihedral_sweep(const mesh_topo *tp, const uint8_t *movable,
                                  const slide_ctx *sl, double *x, double lbar, double frac,
-                                 double qfloor, finish_stats *st)
+                                 double qfloor, double *smin, int smin_valid, finish_stats *st)
 {
-    double *smin = qdc_mallocn((size_t)tp->nt, sizeof(double));
     double *sorted = qdc_mallocn((size_t)tp->nt, sizeof(double));
     double *vworst = qdc_mallocn((size_t)tp->nv, sizeof(double));
     int32_t *colour = qdc_mallocn((size_t)tp->nv, sizeof(int32_t));
@@ -658,11 +658,12 @@ qdc_status finish_dihedral_sweep(const mesh_topo *tp, const uint8_t *movable,
     qdc_status st_ = QDC_ENOMEM;
 
     memset(st, 0, sizeof *st);
-    if (!smin || !sorted || !vworst || !colour)
+    if (!sorted || !vworst || !colour)
         goto out;
     k = (int32_t)(frac * tp->nt);
     k = k < 1 ? 1 : (k > tp->nt ? tp->nt : k);
-    st->score_before = tet_sines(tp, x, smin, sorted, k, &thresh, &st->floor_before);
+    st->score_before =
+        tet_sines(tp, x, smin, !smin_valid, sorted, k, &thresh, &st->floor_before);
     if (st->floor_before > 0.0)
         thresh = fmin(thresh, LEVEL_MULT * st->floor_before);
     for (int32_t v = 0; v < tp->nv; v++)
@@ -703,7 +704,7 @@ qdc_status finish_dihedral_sweep(const mesh_topo *tp, const uint8_t *movable,
     st->score_after = st->score_before;
     st->floor_after = st->floor_before;
     if (st->n_moves)
-        st->score_after = tet_sines(tp, x, smin, sorted, k, &dummy, &st->floor_after);
+        st->score_after = tet_sines(tp, x, smin, 1, sorted, k, &dummy, &st->floor_after);
     st_ = QDC_OK;
 out:
     qdc_free(start);
@@ -711,6 +712,5 @@ out:
     qdc_free(colour);
     qdc_free(vworst);
     qdc_free(sorted);
-    qdc_free(smin);
     return st_;
 }

@@ -38,9 +38,12 @@ qdc_status finish_sweep(const mesh_topo *tp, const uint8_t *movable, const slide
  * minimum-norm point of the active gradients) on the movable vertices of the
  * worst frac of tets by dihedral sine. A move is kept only if the star's
  * smallest sine rises, every star tet stays positive and no star tet's mean
- * ratio falls below qfloor (so the mesh's worst mean ratio never drops under it). */
+ * ratio falls below qfloor (so the mesh's worst mean ratio never drops under it).
+ * smin (nt entries): each tet's smallest dihedral sine at x, read if smin_valid
+ * (as the previous sweep left it), else computed; on return it holds the values
+ * at the new x. */
 qdc_status finish_dihedral_sweep(const mesh_topo *tp, const uint8_t *movable,
                                  const slide_ctx *sl, double *x, double lbar, double frac,
-                                 double qfloor, finish_stats *st);
+                                 double qfloor, double *smin, int smin_valid, finish_stats *st);
 
 #endif

@@ -524,6 +524,10 @@ static qdc_status finish_pass(ctx_t *c, const uint8_t *movable, opt_result *res,
 static qdc_status angle_pass(ctx_t *c, const uint8_t *movable, const slide_ctx *sl,
                              opt_result *res, opt_progress *r, int *next)
 {
+    /* the tet sines a sweep leaves are those the next one starts from (a
+     * rejected sweep ends the pass); c->eta is free scratch here */
+    double *smin = c->eta;
+
     for (int s = 0; s < ANGLE_SWEEPS; s++) {
         finish_stats fs;
         opt_progress base = c->best;
@@ -531,7 +535,8 @@ static qdc_status angle_pass(ctx_t *c, const uint8_t *movable, const slide_ctx *
         if (should_stop(c, res->stop_reason, sizeof res->stop_reason))
             break;
         memcpy(c->x, c->xbest, 3 * (size_t)c->nv * sizeof(double));
-        st = finish_dihedral_sweep(c->tp, movable, sl, c->x, c->lbar, 0.01, base.q_min, &fs);
+        st = finish_dihedral_sweep(c->tp, movable, sl, c->x, c->lbar, 0.01, base.q_min, smin,
+                                   s > 0, &fs);
         if (st != QDC_OK)
             return st;
         evaluate(c, c->x, r, NULL);

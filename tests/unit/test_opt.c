@@ -324,7 +324,7 @@ TEST(angle_sweep_raises_the_smallest_angle_within_its_rules)
     mesh_t *m = tm_grid(n, 0);
     mesh_topo *tp = NULL;
     uint8_t *movable;
-    double *x0, s0, q0, s1, q1;
+    double *x0, *smin, s0, q0, s1, q1;
     finish_stats fs;
     int32_t locked = 1 + (n + 1) * (1 + (n + 1) * 1); /* interior vertex (1,1,1) */
     tm_perturb(m, n, 0.3, 7);
@@ -337,7 +337,9 @@ TEST(angle_sweep_raises_the_smallest_angle_within_its_rules)
         movable[v] = !(tp->vflag[v] & MESH_V_BOUNDARY) && v != locked;
     worst_of(m, &s0, &q0);
     ASSERT_TRUE(s0 > 0.0);
-    ASSERT_OK(finish_dihedral_sweep(tp, movable, NULL, m->xyz, 1.0 / n, 0.05, q0, &fs));
+    smin = malloc((size_t)m->nt * sizeof(double));
+    ASSERT_TRUE(smin);
+    ASSERT_OK(finish_dihedral_sweep(tp, movable, NULL, m->xyz, 1.0 / n, 0.05, q0, smin, 0, &fs));
     worst_of(m, &s1, &q1);
     ASSERT_TRUE(fs.n_moves > 0);
     ASSERT_NEAR(fs.floor_before, s0, 1e-12);
@@ -348,6 +350,16 @@ TEST(angle_sweep_raises_the_smallest_angle_within_its_rules)
         if (!movable[v])
             for (int c = 0; c < 3; c++)
                 ASSERT_TRUE(m->xyz[3 * v + c] == x0[3 * v + c]);
+    for (int32_t t = 0; t < m->nt; t++) { /* smin holds the sines at the new x */
+        double sn[6], lo = INFINITY;
+        const int32_t *tt = m->tets + 4 * (size_t)t;
+        metric_dihedral_sines(m->xyz + 3 * tt[0], m->xyz + 3 * tt[1], m->xyz + 3 * tt[2],
+                              m->xyz + 3 * tt[3], sn);
+        for (int e = 0; e < 6; e++)
+            lo = fmin(lo, sn[e]);
+        ASSERT_NEAR(smin[t], lo, 1e-15);
+    }
+    free(smin);
     free(movable);
     free(x0);
     mesh_topo_free(tp);
