@@ -95,6 +95,9 @@ enum MHD_Result http_reply_response(struct MHD_Connection *c, req *r, unsigned s
     for (int i = 0; headers && headers[i]; i += 2)
         if (MHD_add_response_header(resp, headers[i], headers[i + 1]) != MHD_YES)
             goto out;
+    if (r->close_after &&
+        MHD_add_response_header(resp, MHD_HTTP_HEADER_CONNECTION, "close") != MHD_YES)
+        goto out;
     ret = MHD_queue_response(c, status, resp);
     if (ret == MHD_YES) {
         r->status = (int)status;

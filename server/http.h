@@ -21,7 +21,8 @@ typedef struct req {
     int status;  /* status queued, for metrics (0 = none yet) */
     int replied; /* a response is queued: ignore the rest */
     int parked_ever;
-    int upload; /* POST /v1/jobs: a 4xx counts as a rejected submission */
+    int upload;      /* POST /v1/jobs: a 4xx counts as a rejected submission */
+    int close_after; /* the reply says Connection: close (http_reply_response) */
     int route;
     char id[JOB_ID_LEN + 1];
     char owner[65];

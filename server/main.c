@@ -46,6 +46,8 @@ static void usage(FILE *f)
         "  --retention SECONDS       results kept after a job ends, then 410 (default "
         "86400)\n"
         "  --max-wait SECONDS        cap of the long-poll 'wait' (default 60)\n"
+        "  --sse-keepalive SECONDS   comment line sent on an idle event stream\n"
+        "                            (default 15)\n"
         "  --max-attempts N          runs of a job interrupted by crashes before it\n"
         "                            fails (default 3)\n"
         "  --max-connections N       concurrent connections (default 4096)\n"
@@ -182,6 +184,7 @@ static const cli_opt cli_opts[] = {
     {"job-time-limit", 'd', CFG(job_time_limit), 0.001, 1e9, 3600},
     {"retention", 'd', CFG(retention), 0, 1e10, 86400},
     {"max-wait", 'd', CFG(wait_cap), 0, 3600, 60},
+    {"sse-keepalive", 'd', CFG(sse_keepalive), 0.1, 3600, 15},
     {"max-attempts", 'i', CFG(max_attempts), 1, 1000, 3},
     {"max-connections", 'i', CFG(max_connections), 1, 1e6, 4096},
     {"connection-timeout", 'i', CFG(conn_timeout), 1, 86400, 120},

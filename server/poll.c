@@ -7,6 +7,7 @@
 #define _GNU_SOURCE
 #include "poll.h"
 
+#include <poll.h>
 #include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -17,6 +18,8 @@
  * and how long an empty channel created by a parker may sit unused. */
 #define CHAN_DONE_TTL 120.0
 #define CHAN_IDLE_TTL 600.0
+/* How often the parked sockets are checked for clients that hung up. */
+#define SWEEP_INTERVAL 1.0
 
 typedef struct poll_chan {
     struct poll_chan *next;
@@ -36,6 +39,11 @@ struct poll_hub {
     int timer_running;
     int stop, shutting_down;
     int nparked;
+    long ngone;
+    double swept; /* mono time of the last sweep */
+    struct pollfd *pfd;
+    poll_waiter **pw;
+    size_t pcap;
     poll_chan *chans;
 };
 
@@ -121,13 +129,53 @@ static void free_chan(poll_chan *c)
     free(c);
 }
 
+/* Resume the parked connections whose client closed its end (FIN or reset);
+ * hub lock held. A parked connection stays suspended, so its socket stays
+ * open while it is linked here. */
+static void sweep_gone(poll_hub *h)
+{
+    size_t n = 0;
+
+    if ((size_t)h->nparked > h->pcap) {
+        size_t cap = (size_t)h->nparked + 64;
+        struct pollfd *pf = realloc(h->pfd, cap * sizeof *pf);
+        if (pf)
+            h->pfd = pf;
+        poll_waiter **pw = realloc(h->pw, cap * sizeof *pw);
+        if (pw)
+            h->pw = pw;
+        if (!pf || !pw)
+            return; /* try again next time */
+        h->pcap = cap;
+    }
+    for (poll_chan *c = h->chans; c; c = c->next)
+        for (poll_waiter *w = c->waiters; w; w = w->next)
+            if (w->fd >= 0 && n < h->pcap) {
+                h->pfd[n] = (struct pollfd){.fd = w->fd, .events = POLLRDHUP};
+                h->pw[n++] = w;
+            }
+    if (!n || poll(h->pfd, n, 0) <= 0)
+        return;
+    for (size_t i = 0; i < n; i++)
+        if (h->pfd[i].revents & (POLLRDHUP | POLLHUP | POLLERR | POLLNVAL)) {
+            h->pw[i]->gone = 1;
+            h->ngone++;
+            wake(h, h->pw[i]);
+        }
+}
+
 static void *timer_main(void *arg)
 {
     poll_hub *h = arg;
 
     pthread_mutex_lock(&h->lock);
     while (!h->stop) {
-        double now = mono_now(), next = now + 1.0;
+        double now = mono_now();
+        if (now - h->swept >= SWEEP_INTERVAL) {
+            sweep_gone(h);
+            h->swept = now;
+        }
+        double next = h->swept + SWEEP_INTERVAL;
         poll_chan **pp = &h->chans;
         while (*pp) {
             poll_chan *c = *pp;
@@ -191,6 +239,8 @@ void poll_free(poll_hub *h)
     }
     pthread_cond_destroy(&h->cond);
     pthread_mutex_destroy(&h->lock);
+    free(h->pfd);
+    free(h->pw);
     free(h);
 }
 
@@ -312,7 +362,11 @@ int poll_park(poll_hub *h, const char *id, long after, poll_waiter *w,
 {
     int parked = 0;
     poll_chan *c;
+    const union MHD_ConnectionInfo *ci =
+        MHD_get_connection_info(conn, MHD_CONNECTION_INFO_CONNECTION_FD);
 
+    w->fd = ci ? ci->connect_fd : -1;
+    w->gone = 0;
     pthread_mutex_lock(&h->lock);
     if (h->shutting_down)
         goto out;
@@ -342,6 +396,14 @@ int poll_parked_count(poll_hub *h)
 {
     pthread_mutex_lock(&h->lock);
     int n = h->nparked;
+    pthread_mutex_unlock(&h->lock);
+    return n;
+}
+
+long poll_gone_count(poll_hub *h)
+{
+    pthread_mutex_lock(&h->lock);
+    long n = h->ngone;
     pthread_mutex_unlock(&h->lock);
     return n;
 }

@@ -5,6 +5,9 @@
  * worker publishing a record, the end of a run, the waiter's deadline (one
  * timer thread for all) or shutdown resumes them; MHD then calls the handler
  * (or the SSE content reader) again, which re-reads and answers or parks again.
+ * MHD does not watch a suspended connection's socket, so the timer thread also
+ * polls the parked sockets every second: a client that hung up is resumed with
+ * `gone` set, and the handler drops the connection.
  * All functions are thread-safe. */
 #ifndef QDCD_POLL_H
 #define QDCD_POLL_H
@@ -22,6 +25,8 @@ typedef struct poll_waiter {
     struct MHD_Connection *conn;
     double deadline; /* mono_now() seconds */
     int parked;      /* 1 while suspended and linked */
+    int fd;          /* the connection's socket, watched while parked */
+    int gone;        /* resumed because the client closed it: answer nothing */
 } poll_waiter;
 
 typedef struct poll_hub poll_hub;
@@ -55,6 +60,8 @@ int poll_read(poll_hub *h, const char *id, long after, sbuf *out, int *count, lo
 int poll_park(poll_hub *h, const char *id, long after, poll_waiter *w,
               struct MHD_Connection *c, double deadline);
 int poll_parked_count(poll_hub *h);
+/* Parked connections resumed because their client had closed them. */
+long poll_gone_count(poll_hub *h);
 int poll_shutting_down(poll_hub *h);
 
 #endif

@@ -26,6 +26,7 @@ typedef struct {
     double job_time_limit;  /* --job-time-limit S */
     double retention;       /* --retention S: results are then 410 Gone */
     double wait_cap;        /* --max-wait S: long-poll cap */
+    double sse_keepalive;   /* --sse-keepalive S: comment on an idle event stream */
     int max_attempts;       /* --max-attempts N */
     int max_connections;    /* --max-connections N */
     int conn_timeout;       /* --connection-timeout S */
