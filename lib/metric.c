@@ -212,60 +212,103 @@ double metric_qt_grad(opt_metric m, const double *p12, int a, double delta, doub
     return q;
 }
 
+double metric_qt_hess_face(opt_metric m, const double *pa, const double *f0, const double *f1,
+                           const double *f2, double delta, double g[3], double H[6],
+                           double *vol)
+{
+    /* q = c A^al h(s)^-be with A = l2sum, s = cv V; ln q is a sum of simple
+     * terms: grad q = q u, u = al dA/A - be h' cv dV/h, and
+     * hess q = q (u u^T + al (6 I/A - dA dA^T/A^2) - be cv^2 (h''/h - h'^2/h^2) dV dV^T)
+     * (d2A/dp_a2 = 6 I; V is linear in p_a: V = dV . (p_a - f0)) */
+    double e1[3], e2[3], d0[3], d1[3], d2[3], dV[3], dA[3], u[3], A, V, sarg, h, hp, hpp, q;
+    double al, be, cv, iA, ih, cvv;
+
+    sub3(f1, f0, e1);
+    sub3(f2, f0, e2);
+    sub3(pa, f0, d0);
+    sub3(pa, f1, d1);
+    sub3(pa, f2, d2);
+    cross3(e1, e2, dV);
+    for (int k = 0; k < 3; k++) {
+        dV[k] *= -1.0 / 6.0;
+        dA[k] = 2.0 * (d0[k] + d1[k] + d2[k]);
+    }
+    V = dot3(dV, d0);
+    *vol = V;
+    A = dot3(d0, d0) + dot3(d1, d1) + dot3(d2, d2) + dot3(e1, e1) + dot3(e2, e2) +
+        (e2[0] - e1[0]) * (e2[0] - e1[0]) + (e2[1] - e1[1]) * (e2[1] - e1[1]) +
+        (e2[2] - e1[2]) * (e2[2] - e1[2]);
+    if (m == OPT_METRIC_MIVL) {
+        al = 1.5;
+        be = 1.0;
+        cv = 1.0;
+    } else if (m == OPT_METRIC_MIMR) {
+        al = 1.0;
+        be = 2.0 / 3.0;
+        cv = 6.0 * SQRT2;
+    } else {
+        return NAN;
+    }
+    sarg = cv * V;
+    if (delta == 0.0) {
+        h = sarg;
+        hp = 1.0;
+        hpp = 0.0;
+    } else {
+        double r = sqrt(sarg * sarg + 4.0 * delta * delta);
+        h = 0.5 * (sarg + r);
+        hp = 0.5 * (1.0 + sarg / r);
+        hpp = 2.0 * delta * delta / (r * r * r);
+    }
+    if (!(h > 0.0) || !(A > 0.0)) {
+        if (g) {
+            memset(H, 0, 6 * sizeof(double));
+            g[0] = g[1] = g[2] = 0.0;
+        }
+        return INFINITY;
+    }
+    if (m == OPT_METRIC_MIVL) {
+        double l = A / 6.0;
+        q = SQRT2 * l * sqrt(l) / (12.0 * h);
+    } else {
+        q = 0.5 * A / (3.0 * cbrt(h * h));
+    }
+    if (!g)
+        return q;
+    iA = 1.0 / A;
+    ih = 1.0 / h;
+    cvv = be * cv * cv * (hpp * ih - hp * hp * ih * ih);
+    {
+        double c1 = al * iA, c2 = be * hp * cv * ih;
+        double wa = -q * al * iA * iA, wv = -q * cvv, dg = 6.0 * q * al * iA;
+        for (int k = 0; k < 3; k++) {
+            u[k] = c1 * dA[k] - c2 * dV[k];
+            g[k] = q * u[k];
+        }
+        /* H = q u u^T + wa dA dA^T + wv dV dV^T + dg I, upper triangle */
+        H[0] = g[0] * u[0] + wa * dA[0] * dA[0] + wv * dV[0] * dV[0] + dg;
+        H[1] = g[0] * u[1] + wa * dA[0] * dA[1] + wv * dV[0] * dV[1];
+        H[2] = g[0] * u[2] + wa * dA[0] * dA[2] + wv * dV[0] * dV[2];
+        H[3] = g[1] * u[1] + wa * dA[1] * dA[1] + wv * dV[1] * dV[1] + dg;
+        H[4] = g[1] * u[2] + wa * dA[1] * dA[2] + wv * dV[1] * dV[2];
+        H[5] = g[2] * u[2] + wa * dA[2] * dA[2] + wv * dV[2] * dV[2] + dg;
+    }
+    return q;
+}
+
 double metric_qt_hess(opt_metric m, const double *p12, int a, double delta, double g[3],
                       double H[6], metric_parts *pt_out)
 {
-    double q, s, h, hp, hpp, r, al, be, u[3], dl2[3], dvol[3], cv;
-    metric_parts pt;
+    static const int face_of[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+    const double *p = p12;
+    double vol, q;
 
-    /* q = c A^al h(s)^-be with A = l2sum, s = cs V; ln q is a sum of simple
-     * terms: grad q = q u, u = al dA/A - be h' cs dV/h, and
-     * hess q = q (u u^T + al (6 I/A - dA dA^T/A^2) - be cs^2 (h''/h - h'^2/h^2) dV dV^T)
-     * (d2A/dp_a2 = 6 I, V is linear in p_a) */
     if (m == OPT_METRIC_MICN)
         return NAN;
-    metric_parts_for(m, p12, p12 + 3, p12 + 6, p12 + 9, &pt);
-    q = metric_qt(m, &pt, delta);
+    q = metric_qt_hess_face(m, p + 3 * a, p + 3 * face_of[a][0], p + 3 * face_of[a][1],
+                            p + 3 * face_of[a][2], delta, g, H, &vol);
     if (pt_out)
-        *pt_out = pt;
-    memset(H, 0, 6 * sizeof(double));
-    g[0] = g[1] = g[2] = 0.0;
-    if (!isfinite(q))
-        return q;
-    {
-        const double(*p)[3] = (const double(*)[3])p12;
-        static const int face_of[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
-        double e1[3], e2[3], nf[3];
-        for (int k = 0; k < 3; k++)
-            dl2[k] = 2.0 * (3.0 * p[a][k] - p[(a + 1) & 3][k] - p[(a + 2) & 3][k] -
-                            p[(a + 3) & 3][k]);
-        sub3(p[face_of[a][1]], p[face_of[a][0]], e1);
-        sub3(p[face_of[a][2]], p[face_of[a][0]], e2);
-        cross3(e1, e2, nf);
-        for (int k = 0; k < 3; k++)
-            dvol[k] = -nf[k] / 6.0;
-    }
-    al = m == OPT_METRIC_MIVL ? 1.5 : 1.0;
-    be = m == OPT_METRIC_MIVL ? 1.0 : 2.0 / 3.0;
-    cv = m == OPT_METRIC_MIVL ? 1.0 : 6.0 * SQRT2;
-    s = metric_arg(m, &pt);
-    h = metric_h(s, delta);
-    hp = metric_hprime(s, delta);
-    r = s * s + 4.0 * delta * delta;
-    hpp = delta == 0.0 ? 0.0 : 2.0 * delta * delta / (r * sqrt(r));
-    for (int k = 0; k < 3; k++) {
-        u[k] = al * dl2[k] / pt.l2sum - be * hp * cv * dvol[k] / h;
-        g[k] = q * u[k];
-    }
-    {
-        static const int ij[6][2] = {{0, 0}, {0, 1}, {0, 2}, {1, 1}, {1, 2}, {2, 2}};
-        double A = pt.l2sum, cvv = be * cv * cv * (hpp / h - hp * hp / (h * h));
-        for (int e = 0; e < 6; e++) {
-            int i = ij[e][0], j = ij[e][1];
-            H[e] = q * (u[i] * u[j] + al * ((i == j ? 6.0 / A : 0.0) - dl2[i] * dl2[j] / (A * A)) -
-                        cvv * dvol[i] * dvol[j]);
-        }
-    }
+        metric_parts_for(m, p12, p12 + 3, p12 + 6, p12 + 9, pt_out);
     return q;
 }
 
@@ -326,20 +369,23 @@ static double dihedral_cos(double g[4][3], const double len[4], int e)
 void metric_dihedral_cos_range(const double *p0, const double *p1, const double *p2,
                                const double *p3, double *cmin, double *cmax)
 {
-    double g[4][3], len[4];
+    double g[4][3], len[4], il[4], lo = 2, hi = -2;
 
-    *cmin = 2;
-    *cmax = -2;
     if (face_area_vectors(p0, p1, p2, p3, g, len)) {
         *cmin = -1.0;
         *cmax = 1.0;
         return;
     }
+    for (int f = 0; f < 4; f++)
+        il[f] = 1.0 / len[f];
     for (int e = 0; e < 6; e++) {
-        double c = dihedral_cos(g, len, e);
-        *cmin = c < *cmin ? c : *cmin;
-        *cmax = c > *cmax ? c : *cmax;
+        int k = dihedral_opp[e][0], l = dihedral_opp[e][1];
+        double c = -dot3(g[k], g[l]) * il[k] * il[l];
+        lo = c < lo ? c : lo;
+        hi = c > hi ? c : hi;
     }
+    *cmin = lo < -1.0 ? -1.0 : lo;
+    *cmax = hi > 1.0 ? 1.0 : hi;
 }
 
 void metric_dihedral_range(const double *p0, const double *p1, const double *p2,
@@ -374,17 +420,19 @@ void metric_dihedral_sines(const double *p0, const double *p1, const double *p2,
 {
     static const int ends[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
     const double *p[4] = {p0, p1, p2, p3};
-    double g[4][3], len[4], ad[3], det;
+    double g[4][3], len[4], il[4], ad[3], det;
 
     face_area_vectors(p0, p1, p2, p3, g, len);
     sub3(p3, p0, ad);
     det = dot3(g[3], ad); /* 6 V */
+    for (int f = 0; f < 4; f++)
+        il[f] = len[f] > 0.0 ? 1.0 / len[f] : 0.0;
     for (int e = 0; e < 6; e++) {
         int k = dihedral_opp[e][0], l = dihedral_opp[e][1];
-        double d[3], den = len[k] * len[l];
+        double d[3];
         sub3(p[ends[e][1]], p[ends[e][0]], d);
-        /* sin = 3 V l / (2 A_k A_l) with |g| = 2 A */
-        s[e] = den > 0.0 ? det * sqrt(dot3(d, d)) / den : 0.0;
+        /* sin = 3 V l / (2 A_k A_l) with |g| = 2 A; 0 on a degenerate face */
+        s[e] = det * sqrt(dot3(d, d)) * il[k] * il[l];
     }
 }
 

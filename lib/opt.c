@@ -34,7 +34,7 @@ void opt_defaults(opt_options *o)
     o->tol_move = 1e-3;
     o->eps_rel = 1e-3;
     o->finish_frac = 0.2;
-    o->finish_sweeps = 4;
+    o->finish_sweeps = 3;
     o->angle_polish = 1;
     o->feature_angle = 30.0;
 }
@@ -93,7 +93,8 @@ typedef struct {
     double *bw2;      /* squared boundary row weights (0: no row) */
     double *dg;       /* bw2 + mu */
     double *qt, *qval, *d;
-    double *eta;      /* nt: mean ratio per tet, from evaluate() in the finishing pass */
+    double *eta;      /* nt: mean ratio per tet at the x of the last evaluate() that asked */
+    double eta_delta; /* and the delta of that x */
     double mu_factor;    /* omega_B^2 once harmonic guidance is on and mu_scaled */
     const double *bref;  /* targets of the boundary rows: x0 (lsq) or x_k (slide) */
     slide_ctx *sl;       /* slide mode only */
@@ -131,7 +132,10 @@ static double evaluate(const ctx_t *c, const double *x, opt_progress *r, double 
 {
     const mesh_topo *tp = c->tp;
     const opt_metric m = c->o->metric;
-    double psum[EVAL_CHUNKS], psum2[EVAL_CHUNKS];
+    double psum[EVAL_CHUNKS], psum2[EVAL_CHUNKS], pobj[EVAL_CHUNKS], obj = 0;
+    /* the objective comes with the scan when delta turns out 0 (no tet below
+     * eps: the usual case once untangled); MICN needs parts the scan lacks */
+    const int fuse = m != OPT_METRIC_MICN;
     double sum = 0, sum2 = 0, qmin = INFINITY, cmax = -2, cmin = 2, amin = INFINITY, delta;
     int32_t ninv = 0;
 
@@ -141,7 +145,7 @@ static double evaluate(const ctx_t *c, const double *x, opt_progress *r, double 
     for (int ch = 0; ch < EVAL_CHUNKS; ch++) {
         int32_t t0 = (int32_t)((int64_t)tp->nt * ch / EVAL_CHUNKS);
         int32_t t1 = (int32_t)((int64_t)tp->nt * (ch + 1) / EVAL_CHUNKS);
-        double s = 0, s2 = 0;
+        double s = 0, s2 = 0, so = 0;
         for (int32_t t = t0; t < t1; t++) {
             const int32_t *tt = tp->tets + 4 * (size_t)t;
             const double *p0 = x + 3 * (size_t)tt[0], *p1 = x + 3 * (size_t)tt[1];
@@ -150,6 +154,8 @@ static double evaluate(const ctx_t *c, const double *x, opt_progress *r, double 
             double eta, lo, hi, arg;
             metric_parts_for(OPT_METRIC_MIVL, p0, p1, p2, p3, &pt);
             eta = metric_mean_ratio(&pt);
+            if (fuse)
+                so += metric_qt(m, &pt, 0.0);
             if (eta_out)
                 eta_out[t] = eta;
             s += eta;
@@ -164,10 +170,12 @@ static double evaluate(const ctx_t *c, const double *x, opt_progress *r, double 
         }
         psum[ch] = s;
         psum2[ch] = s2;
+        pobj[ch] = so;
     }
     for (int ch = 0; ch < EVAL_CHUNKS; ch++) {
         sum += psum[ch];
         sum2 += psum2[ch];
+        obj += pobj[ch];
     }
     memset(r, 0, sizeof *r);
     r->q_mean = sum / tp->nt;
@@ -177,10 +185,48 @@ static double evaluate(const ctx_t *c, const double *x, opt_progress *r, double 
     r->dih_max = acos(cmin) * (180.0 / M_PI_);
     r->n_inverted = ninv;
     delta = metric_delta(amin, c->eps);
-    r->objective = encode_objective(tp, x, m, delta, NULL, NULL);
+    r->objective = fuse && delta == 0.0 ? obj : encode_objective(tp, x, m, delta, NULL, NULL);
     r->elapsed = qdc_now() - c->t0;
     r->solver = c->sol ? (int)solve_kind(c->sol) : 0;
     return delta;
+}
+
+/* Mean ratio of every tet into eta and the fields of r that the choice of
+ * the best iterate reads (mean, worst, inverted count; fixed chunks summed in
+ * order); returns the delta of x. */
+static double scan_light(const ctx_t *c, const double *x, double *eta, opt_progress *r)
+{
+    const mesh_topo *tp = c->tp;
+    double psum[EVAL_CHUNKS], sum = 0, amin = INFINITY, qmin = INFINITY;
+    int32_t ninv = 0;
+
+#pragma omp parallel for reduction(min : amin, qmin) reduction(+ : ninv) schedule(static)
+    for (int ch = 0; ch < EVAL_CHUNKS; ch++) {
+        int32_t t0 = (int32_t)((int64_t)tp->nt * ch / EVAL_CHUNKS);
+        int32_t t1 = (int32_t)((int64_t)tp->nt * (ch + 1) / EVAL_CHUNKS);
+        double sm = 0;
+        for (int32_t t = t0; t < t1; t++) {
+            const int32_t *tt = tp->tets + 4 * (size_t)t;
+            metric_parts pt;
+            double arg;
+            metric_parts_for(OPT_METRIC_MIVL, x + 3 * (size_t)tt[0], x + 3 * (size_t)tt[1],
+                             x + 3 * (size_t)tt[2], x + 3 * (size_t)tt[3], &pt);
+            eta[t] = metric_mean_ratio(&pt);
+            sm += eta[t];
+            qmin = eta[t] < qmin ? eta[t] : qmin;
+            ninv += !(pt.vol > 0.0);
+            arg = metric_arg(c->o->metric, &pt);
+            amin = arg < amin ? arg : amin;
+        }
+        psum[ch] = sm;
+    }
+    for (int ch = 0; ch < EVAL_CHUNKS; ch++)
+        sum += psum[ch];
+    memset(r, 0, sizeof *r);
+    r->q_mean = sum / tp->nt;
+    r->q_min = qmin;
+    r->n_inverted = ninv;
+    return metric_delta(amin, c->eps);
 }
 
 /* METHOD §5: keep the best iterate (fewest inverted, then best worst tet, then
@@ -461,7 +507,7 @@ static qdc_status iterate(ctx_t *c, opt_result *res, opt_progress *r, int *stepp
         if (dd > move)
             move = dd;
     }
-    evaluate(c, c->x, r, NULL);
+    c->eta_delta = evaluate(c, c->x, r, c->eta);
     r->step = step;
     r->max_move = sqrt(move) / c->lbar;
     r->cg_iters = cg;
@@ -469,50 +515,84 @@ static qdc_status iterate(ctx_t *c, opt_result *res, opt_progress *r, int *stepp
     return QDC_OK;
 }
 
+/* The record of a finishing or angle pass, whose result is in c->trial. */
+static void pass_record(ctx_t *c, opt_progress *r, int *next, const char *phase)
+{
+    memcpy(c->x, c->trial, 3 * (size_t)c->nv * sizeof(double));
+    evaluate(c, c->x, r, NULL);
+    r->iteration = (*next)++;
+    r->phase = phase;
+}
+
 /* The finishing pass (METHOD §5a) from c->x: regular sweeps over the worst
  * finish_frac of tets, then polish sweeps over the worst 1% while the worst tet
  * still improves (measured on the dev corpus: it keeps rising for a few more
  * sweeps). Each sweep is a progress record numbered from *next. */
-static qdc_status finish_pass(ctx_t *c, const uint8_t *movable, opt_result *res,
-                              opt_progress *r, int *next)
+static qdc_status finish_pass(ctx_t *c, const uint8_t *movable, int x_evaluated,
+                              opt_result *res, opt_progress *r, int *next)
 {
     const opt_options *o = c->o;
-    double delta, before;
+    size_t n3 = 3 * (size_t)c->nv;
+    opt_progress cur, keep;
+    double delta;
+    int swept = 0;
 
-    /* each record's scan also yields the tet qualities and the delta of the
-     * next sweep */
-    delta = evaluate(c, c->x, r, c->eta);
-    for (int s = 0; s < o->finish_sweeps + 8; s++) {
-        int polish = s >= o->finish_sweeps;
+    /* The sweeps need the tet qualities and delta of x, which the last global
+     * iterate's record already has. Between sweeps only a light scan (a full
+     * record costs 3x as much); one record for the whole pass. */
+    if (x_evaluated) {
+        delta = c->eta_delta;
+        cur = *r;
+    } else {
+        delta = scan_light(c, c->x, c->eta, &cur);
+    }
+    for (int s = 0; s < o->finish_sweeps; s++) {
+        finish_stats fs;
+        qdc_status st;
+        if (should_stop(c, res->stop_reason, sizeof res->stop_reason))
+            return QDC_OK;
+        /* broad sweeps: one Newton step per vertex (finish.c) */
+        st = finish_sweep(c->tp, movable, c->sl, c->x, o->metric, c->eta, delta, c->lbar,
+                          o->finish_frac, 1e-3, &fs);
+        if (st != QDC_OK)
+            return st;
+        swept |= fs.n_moves > 0;
+        delta = scan_light(c, c->x, c->eta, &cur);
+        if (fs.n_moves == 0)
+            break;
+    }
+    /* polish sweeps over the worst 1% while the worst tet rises by 1e-3; the
+     * best state by (inverted, worst, mean) is kept in c->trial */
+    keep = cur;
+    memcpy(c->trial, c->x, n3 * sizeof(double));
+    for (int s = 0; s < 8; s++) {
         finish_stats fs;
         qdc_status st;
         if (should_stop(c, res->stop_reason, sizeof res->stop_reason))
             break;
-        before = r->q_min;
-        /* broad sweeps stop a vertex early once its gains are small (measured:
-         * same quality, 3-4x faster); the polish sweeps converge fully */
-        st = finish_sweep(c->tp, movable, c->sl, c->x, o->metric, c->eta, delta, c->lbar,
-                          polish ? 0.01 : o->finish_frac, polish ? 0.0 : 1e-3, &fs);
+        st = finish_sweep(c->tp, movable, c->sl, c->x, o->metric, c->eta, delta, c->lbar, 0.01,
+                          0.0, &fs);
         if (st != QDC_OK)
             return st;
-        delta = evaluate(c, c->x, r, c->eta);
-        r->iteration = (*next)++;
-        r->phase = "finish";
-        r->step = fs.n_verts ? (double)fs.n_moves / fs.n_verts : 0;
-        consider(c, c->x, r);
-        if (report(c, r)) {
-            snprintf(res->stop_reason, sizeof res->stop_reason, "cancelled");
+        if (fs.n_moves == 0)
+            break;
+        swept = 1;
+        delta = scan_light(c, c->x, c->eta, &cur);
+        if (!better(&cur, &keep))
+            break;
+        memcpy(c->trial, c->x, n3 * sizeof(double));
+        if (cur.q_min < keep.q_min + 1e-3) {
+            keep = cur;
             break;
         }
-        if (fs.n_moves == 0) {
-            if (!polish)
-                s = o->finish_sweeps - 1; /* go on with the polish sweeps */
-            else
-                break;
-        } else if (polish && r->q_min < before + 1e-3) {
-            break;
-        }
+        keep = cur;
     }
+    if (!swept)
+        return QDC_OK;
+    pass_record(c, r, next, "finish");
+    consider(c, c->x, r);
+    if (report(c, r))
+        snprintf(res->stop_reason, sizeof res->stop_reason, "cancelled");
     return QDC_OK;
 }
 
@@ -525,43 +605,47 @@ static qdc_status angle_pass(ctx_t *c, const uint8_t *movable, const slide_ctx *
                              opt_result *res, opt_progress *r, int *next)
 {
     /* the tet sines a sweep leaves are those the next one starts from (a
-     * rejected sweep ends the pass); c->eta is free scratch here */
+     * rejected sweep ends the pass); c->eta is free scratch here, c->trial
+     * holds the last accepted sweep */
     double *smin = c->eta;
+    const opt_progress base = c->best;
+    size_t n3 = 3 * (size_t)c->nv;
+    int kept = 0;
 
+    memcpy(c->x, c->xbest, n3 * sizeof(double));
     for (int s = 0; s < ANGLE_SWEEPS; s++) {
         finish_stats fs;
-        opt_progress base = c->best;
         qdc_status st;
         if (should_stop(c, res->stop_reason, sizeof res->stop_reason))
             break;
-        memcpy(c->x, c->xbest, 3 * (size_t)c->nv * sizeof(double));
         st = finish_dihedral_sweep(c->tp, movable, sl, c->x, c->lbar, 0.01, base.q_min, smin,
                                    s > 0, &fs);
         if (st != QDC_OK)
             return st;
-        evaluate(c, c->x, r, NULL);
-        r->iteration = (*next)++;
-        r->phase = "angles";
-        r->step = fs.n_verts ? (double)fs.n_moves / fs.n_verts : 0;
-        if (report(c, r)) {
-            snprintf(res->stop_reason, sizeof res->stop_reason, "cancelled");
+        /* the floor keeps q_min and positivity keeps the inverted count; a
+         * sweep is kept if it raises the smallest sine of the mesh, or keeps it
+         * and raises the mean of the worst 1% (measured on bunny_good_10k: the
+         * smallest angle 10.3 -> 11.7 degrees while that mean dips by 0.1%) */
+        if (!(fs.floor_after > fs.floor_before ||
+              (fs.floor_after >= fs.floor_before && fs.score_after > fs.score_before)))
             break;
-        }
-        /* the floor keeps q_min; a sweep is kept if it raises the smallest
-         * sine of the mesh, or keeps it and raises the mean of the worst 1%
-         * (measured on bunny_good_10k: the smallest angle 10.3 -> 11.7 degrees
-         * while that mean dips by 0.1%) */
-        if (!(eligible(c, r) && r->n_inverted <= base.n_inverted && r->q_min >= base.q_min &&
-              (fs.floor_after > fs.floor_before ||
-               (fs.floor_after >= fs.floor_before && fs.score_after > fs.score_before))))
-            break;
-        c->best = *r;
-        c->best_it = r->iteration;
-        memcpy(c->xbest, c->x, 3 * (size_t)c->nv * sizeof(double));
+        memcpy(c->trial, c->x, n3 * sizeof(double));
+        kept = 1;
         if (fs.n_moves == 0 || !(fs.floor_after > fs.floor_before * (1 + 1e-3) ||
                                  fs.score_after > fs.score_before * (1 + 1e-3)))
             break;
     }
+    if (!kept)
+        return QDC_OK;
+    /* one record for the pass (a record costs a sweep's worth of work) */
+    pass_record(c, r, next, "angles");
+    if (eligible(c, r) && r->n_inverted <= base.n_inverted && r->q_min >= base.q_min) {
+        c->best = *r;
+        c->best_it = r->iteration;
+        memcpy(c->xbest, c->x, n3 * sizeof(double));
+    }
+    if (report(c, r))
+        snprintf(res->stop_reason, sizeof res->stop_reason, "cancelled");
     return QDC_OK;
 }
 
@@ -688,7 +772,7 @@ static qdc_status run_once(mesh_t *m, const opt_options *opts, const uint8_t *pi
           (int)m->nv, (int)tp->nb, (int)m->nt, opt_solver_name(res.solver), res.solver_flops);
     res.t_setup = qdc_now() - t_start;
 
-    evaluate(&c, c.x, &r, NULL);
+    c.eta_delta = evaluate(&c, c.x, &r, c.eta);
     r.phase = "input";
     c.input = c.best = r;
     res.before = r;
@@ -759,14 +843,14 @@ static qdc_status run_once(mesh_t *m, const opt_options *opts, const uint8_t *pi
         {
             int from_last = c.best_it != res.iterations;
             int next = res.iterations + 1;
-            st = finish_pass(&c, movable, &res, &r, &next);
+            st = finish_pass(&c, movable, 1, &res, &r, &next);
             /* From the last iterate the pass may fail to lift the worst tets back
              * above the input's (seen with slide on curved surfaces): then run it
              * again from the best global iterate. */
             if (st == QDC_OK && from_last && c.best_it <= res.iterations &&
                 strcmp(res.stop_reason, "cancelled") != 0) {
                 memcpy(c.x, c.xbest, 3 * (size_t)c.nv * sizeof(double));
-                st = finish_pass(&c, movable, &res, &r, &next);
+                st = finish_pass(&c, movable, 0, &res, &r, &next);
             }
             if (st == QDC_OK && o.angle_polish && strcmp(res.stop_reason, "cancelled") != 0)
                 st = lsq_angle_pass(&c, movable, &res, &r, &next);

@@ -55,7 +55,7 @@ typedef struct {
     double tol_move;       /* stop when max move < tol_move * mean edge, default 1e-3 */
     double eps_rel;        /* Escobar epsilon relative to a regular tet, default 1e-3 */
     double finish_frac;    /* fraction of worst tets in the finishing pass, default 0.2 */
-    int finish_sweeps;     /* default 4 */
+    int finish_sweeps;     /* broad sweeps, default 3 */
     int angle_polish;      /* after the finishing pass: max-min of the dihedral sines
                             * on the worst tets' vertices (finish.h), default 1 */
     double feature_angle;  /* degrees, for slide (issue 4), default 30 */

@@ -18,6 +18,8 @@ harmonic on + mu scaled|--harmonic on --mu-scaled on
 weights paper|--weights paper
 finish off|--finish off
 finish frac 0.05|--finish-frac 0.05
+finish sweeps 2|--finish-sweeps 2
+angle polish off|--angle-polish off
 boundary fixed|--boundary fixed
 boundary slide|--boundary slide
 literal (paper as written)|--mode literal --finish off"

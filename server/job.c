@@ -93,6 +93,7 @@ static const struct {
     {"solver", K_SOLVER, offsetof(opt_options, solver), 0, 0},
     {"harmonic", K_BOOL, offsetof(opt_options, harmonic), 0, 1},
     {"finish", K_BOOL, offsetof(opt_options, finish), 0, 1},
+    {"angle_polish", K_BOOL, offsetof(opt_options, angle_polish), 0, 1},
     {"max_iter", K_INT, offsetof(opt_options, max_iter), 0, 10000},
     {"pre_iters", K_INT, offsetof(opt_options, pre_iters), 0, 10000},
     {"ls_halvings", K_INT, offsetof(opt_options, ls_halvings), 0, 60},

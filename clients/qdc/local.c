@@ -97,7 +97,7 @@ static void optimize_usage(FILE *f)
         "  --weights optavg|paper     QDC weights (default optavg)\n"
         "  --solver auto|cholmod|pcg  linear solver (default auto)\n"
         "  --finish on|off            worst-tet finishing pass (default on)\n"
-        "  --finish-sweeps N          finishing sweeps (default 4)\n"
+        "  --finish-sweeps N          broad finishing sweeps (default 3)\n"
         "  --angle-polish on|off      then raise the smallest dihedral angles (default on)\n"
         "  --finish-frac F            share of worst tets visited per sweep (default "
         "0.2)\n"
