@@ -19,6 +19,7 @@ weights paper|--weights paper
 finish off|--finish off
 finish frac 0.05|--finish-frac 0.05
 finish sweeps 2|--finish-sweeps 2
+finish sweeps 4|--finish-sweeps 4
 angle polish off|--angle-polish off
 boundary fixed|--boundary fixed
 boundary slide|--boundary slide
