@@ -534,7 +534,7 @@ static qdc_status finish_pass(ctx_t *c, const uint8_t *movable, int x_evaluated,
     const opt_options *o = c->o;
     size_t n3 = 3 * (size_t)c->nv;
     opt_progress cur, keep;
-    double delta;
+    double delta, moves = 0, visits = 0;
     int swept = 0;
 
     /* The sweeps need the tet qualities and delta of x, which the last global
@@ -557,6 +557,8 @@ static qdc_status finish_pass(ctx_t *c, const uint8_t *movable, int x_evaluated,
         if (st != QDC_OK)
             return st;
         swept |= fs.n_moves > 0;
+        moves += fs.n_moves;
+        visits += fs.n_verts;
         delta = scan_light(c, c->x, c->eta, &cur);
         if (fs.n_moves == 0)
             break;
@@ -577,6 +579,8 @@ static qdc_status finish_pass(ctx_t *c, const uint8_t *movable, int x_evaluated,
         if (fs.n_moves == 0)
             break;
         swept = 1;
+        moves += fs.n_moves;
+        visits += fs.n_verts;
         delta = scan_light(c, c->x, c->eta, &cur);
         if (!better(&cur, &keep))
             break;
@@ -590,6 +594,7 @@ static qdc_status finish_pass(ctx_t *c, const uint8_t *movable, int x_evaluated,
     if (!swept)
         return QDC_OK;
     pass_record(c, r, next, "finish");
+    r->step = visits > 0 ? moves / visits : 0; /* accepted moves per visited vertex */
     consider(c, c->x, r);
     if (report(c, r))
         snprintf(res->stop_reason, sizeof res->stop_reason, "cancelled");
@@ -611,6 +616,7 @@ static qdc_status angle_pass(ctx_t *c, const uint8_t *movable, const slide_ctx *
     const opt_progress base = c->best;
     size_t n3 = 3 * (size_t)c->nv;
     int kept = 0;
+    double moves = 0, visits = 0;
 
     memcpy(c->x, c->xbest, n3 * sizeof(double));
     for (int s = 0; s < ANGLE_SWEEPS; s++) {
@@ -631,6 +637,8 @@ static qdc_status angle_pass(ctx_t *c, const uint8_t *movable, const slide_ctx *
             break;
         memcpy(c->trial, c->x, n3 * sizeof(double));
         kept = 1;
+        moves += fs.n_moves;
+        visits += fs.n_verts;
         if (fs.n_moves == 0 || !(fs.floor_after > fs.floor_before * (1 + 1e-3) ||
                                  fs.score_after > fs.score_before * (1 + 1e-3)))
             break;
@@ -639,6 +647,7 @@ static qdc_status angle_pass(ctx_t *c, const uint8_t *movable, const slide_ctx *
         return QDC_OK;
     /* one record for the pass (a record costs a sweep's worth of work) */
     pass_record(c, r, next, "angles");
+    r->step = visits > 0 ? moves / visits : 0;
     if (eligible(c, r) && r->n_inverted <= base.n_inverted && r->q_min >= base.q_min) {
         c->best = *r;
         c->best_it = r->iteration;

@@ -24,7 +24,8 @@ typedef struct {
     int iteration;       /* 0 = the input; 1.. global iterations, then finish sweeps */
     const char *phase;   /* "input", "pre", "global", "finish" */
     double objective;    /* sum of the modified inverse quality */
-    double step;         /* line-search step taken (1 = full), 0 if rejected */
+    double step;         /* global: line-search step taken (1 = full), 0 if rejected;
+                          * finish/angles: accepted moves per visited vertex */
     double q_mean, q_std, q_min; /* signed mean ratio */
     double dih_min, dih_max;     /* degrees, over non-inverted tets */
     int32_t n_inverted;
