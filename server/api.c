@@ -402,6 +402,23 @@ static int upload_format(struct MHD_Connection *c, req *r, char *why, size_t cap
     return 0;
 }
 
+/* max_queued reached? (cnt receives the counts) */
+static int queue_full(qdcd *q, job_counts *cnt)
+{
+    return q->store->ops->counts(q->store, cnt) == QDC_OK &&
+           cnt->by_state[JOB_QUEUED] >= q->cfg.max_queued;
+}
+
+static enum MHD_Result queue_full_reply(struct MHD_Connection *c, req *r, const job_counts *cnt)
+{
+    static const char *const h[] = {MHD_HTTP_HEADER_RETRY_AFTER, "5", NULL};
+    char extra[96];
+    snprintf(extra, sizeof extra, "\"queued\":%lld,\"max_queued\":%d",
+             (long long)cnt->by_state[JOB_QUEUED], r->q->cfg.max_queued);
+    return http_problem(c, r, 429, "queue-full", "too many queued jobs",
+                        "the queue is full; retry later", extra, h);
+}
+
 static enum MHD_Result begin_upload(struct MHD_Connection *c, req *r)
 {
     qdcd *q = r->q;
@@ -468,19 +485,14 @@ static enum MHD_Result begin_upload(struct MHD_Connection *c, req *r)
         }
     }
 
-    /* A replay of an accepted request is answered even when the queue is full. */
+    /* A replay of an accepted request is answered even when the queue is full.
+     * Checked here so that a refused body is not uploaded, and again at commit
+     * (uploads that were in flight together). */
     job_rec prev;
     if (!r->idem[0] ||
         q->store->ops->find_idem(q->store, r->owner, r->idem, &prev) != QDC_OK) {
-        if (q->store->ops->counts(q->store, &cnt) == QDC_OK &&
-            cnt.by_state[JOB_QUEUED] >= q->cfg.max_queued) {
-            static const char *const h[] = {MHD_HTTP_HEADER_RETRY_AFTER, "5", NULL};
-            char extra[96];
-            snprintf(extra, sizeof extra, "\"queued\":%lld,\"max_queued\":%d",
-                     (long long)cnt.by_state[JOB_QUEUED], q->cfg.max_queued);
-            return http_problem(c, r, 429, "queue-full", "too many queued jobs",
-                                "the queue is full; retry later", extra, h);
-        }
+        if (queue_full(q, &cnt))
+            return queue_full_reply(c, r, &cnt);
     }
 
     limit = r->fmt == MESHIO_JSON && q->cfg.max_json < q->cfg.max_body ? q->cfg.max_json
@@ -831,6 +843,12 @@ static enum MHD_Result process_upload(struct MHD_Connection *c, req *r)
     snprintf(j.options, sizeof j.options, "%s", r->options);
     j.created = wall_now();
 
+    /* the intake thread commits one upload at a time, so this check is exact */
+    {
+        job_counts cnt;
+        if (queue_full(q, &cnt))
+            return queue_full_reply(c, r, &cnt);
+    }
     double t_commit = mono_now();
     if (commit_input(r, j.id, j.format))
         return http_problem(c, r, 507, "io", "insufficient storage",

@@ -184,6 +184,35 @@ fi
 req POST "/v1/jobs/$id5:cancel" "$TMP/c5" -H "$A" > /dev/null
 stop_qdcd || fail "SIGTERM 2" "exit status $?"
 
+# uploads in flight together while the queue fills: the limit holds at commit
+# (before, each passed the check made when its headers arrived: 6 of 6 accepted)
+if start_qdcd "$TMP/q" --workers 1 --max-queued 2; then
+    submit "$TMP/big.qmesh" $QM "max_iter=400&finish=0&tol_move=0&mode=literal" "$TMP/q1" > /dev/null
+    curl -s -m 30 "$URL/v1/jobs/$(jf "$TMP/q1" .id)/progress?after=-1&wait=20" > /dev/null
+    pids=
+    for i in 1 2 3 4 5 6; do # ~0.7 MB each at 400 kB/s: all in flight at once
+        submit "$TMP/big.qmesh" $QM "max_iter=1" "$TMP/qc$i" --limit-rate 400k > "$TMP/qc$i.code" &
+        pids="$pids $!"
+    done
+    wait $pids # not a bare wait: the daemon is a child too
+    n202=0
+    n429=0
+    for i in 1 2 3 4 5 6; do
+        case $(cat "$TMP/qc$i.code") in 202) n202=$((n202 + 1)) ;; 429) n429=$((n429 + 1)) ;; esac
+    done
+    req GET /metrics "$TMP/qm" > /dev/null
+    queued=$(awk '$1 == "qdcd_jobs{state=\"queued\"}" {print $2}' "$TMP/qm")
+    if [ "$n202" = 2 ] && [ "$n429" = 4 ] && [ "${queued:-x}" = 2 ]; then
+        pass "6 concurrent uploads, max-queued 2: 2 accepted, 4 refused with 429, 2 queued"
+    else
+        fail "concurrent 429" "202: $n202, 429: $n429, queued: ${queued:-?} ($(grep -h 'qdcd_jobs{' "$TMP/qm" | tr '\n' ' '))"
+    fi
+    req POST "/v1/jobs/$(jf "$TMP/q1" .id):cancel" "$TMP/qx" > /dev/null
+    stop_qdcd || fail "SIGTERM 3" "exit status $?"
+else
+    fail "start (queue)" "$(tail -3 "$TMP/q.log")"
+fi
+
 # public address: refused without tokens, accepted with --insecure
 "$QDCD" --listen 0.0.0.0:0 --data "$TMP/p" > "$TMP/pub.out" 2>&1
 rc=$?
