@@ -5,33 +5,11 @@
 #define QDC_FUZZ_COMMON_H
 
 #include "meshio.h"
+#include "../unit/testio.h" /* sink, sink_write */
 
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
-
-typedef struct {
-    char *b;
-    size_t n, cap;
-} sink;
-
-static int sink_write(void *ctx, const void *d, size_t len)
-{
-    sink *s = ctx;
-
-    if (s->n + len > s->cap) {
-        size_t cap = s->cap ? 2 * s->cap : 4096;
-        while (cap < s->n + len)
-            cap *= 2;
-        s->b = realloc(s->b, cap);
-        if (!s->b)
-            return -1;
-        s->cap = cap;
-    }
-    memcpy(s->b + s->n, d, len);
-    s->n += len;
-    return 0;
-}
 
 static int same(const void *a, const void *b, size_t n)
 {
