@@ -12,7 +12,7 @@ B := build/san
 SANFLAGS := -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined
 endif
 ifneq ($(FAULT),)
-# allocation-failure injection (lib/base.h qdc_fault_set) under the sanitizers
+# allocation-failure injection (lib/core/base.h qdc_fault_set) under the sanitizers
 B := build/fault
 SANFLAGS := -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined
 CPPFLAGS += -DQDC_FAULT_INJECTION
@@ -27,8 +27,8 @@ CFLAGS += -std=c11 $(OPTFLAGS) $(WARN) $(SANFLAGS) -fopenmp
 CXXFLAGS += -std=c++11 $(OPTFLAGS) -Wall -Wextra -Werror $(SANFLAGS)
 LDFLAGS += $(SANFLAGS) -fopenmp
 
-LIB_C := $(wildcard lib/*.c)
-LIB_CXX := $(wildcard lib/*.cpp)
+LIB_C := $(wildcard lib/*/*.c)
+LIB_CXX := $(wildcard lib/*/*.cpp)
 LIB_OBJ := $(LIB_C:%.c=$(B)/%.o) $(LIB_CXX:%.cpp=$(B)/%.o)
 LIB_LIBS := -lcholmod -lm
 ifneq ($(LIB_CXX),)
@@ -105,7 +105,7 @@ clean:
 	rm -rf build
 
 format:
-	clang-format -i lib/*.c lib/*.h server/*.c server/*.h clients/qdc/*.c tests/unit/*.c
+	clang-format -i lib/*.h lib/*/*.c lib/*/*.h server/*.c server/*.h clients/qdc/*.c tests/unit/*.c
 
 -include $(shell find build -name '*.d' 2>/dev/null)
 
@@ -113,7 +113,7 @@ format:
 # with the parsers it needs and run FUZZ_SECONDS on its seeds (tests/fuzz/seeds/NAME);
 # crashes land in tests/fuzz/crashes/NAME, which `make test` replays (unit tests).
 FUZZ_SECONDS ?= 60
-FUZZ_LIB := lib/base.c lib/mesh.c $(wildcard lib/meshio*.c) $(wildcard lib/surface.c)
+FUZZ_LIB := lib/core/base.c lib/core/mesh.c $(wildcard lib/io/meshio*.c) lib/io/surface.c
 fuzz:
 	@mkdir -p build/fuzz
 	@set -e; for src in $(wildcard tests/fuzz/fuzz_*.c); do \

@@ -7,8 +7,7 @@
 #include "api.h"
 
 #include "job.h"
-#include "mesh.h"
-#include "meshio.h"
+#include "qdc.h"
 
 #include <ctype.h>
 #include <errno.h>

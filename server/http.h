@@ -4,11 +4,10 @@
 #ifndef QDCD_HTTP_H
 #define QDCD_HTTP_H
 
-#include "meshio.h"
+#include "qdc.h"
 #include "poll.h"
 #include "server.h"
 #include "sha256.h"
-#include "surface.h"
 
 #include <microhttpd.h>
 

@@ -7,12 +7,9 @@
 #define _GNU_SOURCE
 #include "job.h"
 
-#include "bderr.h"
+#include "qdc.h"
 #include "child.h"
-#include "meshio.h"
-#include "report.h"
 #include "sha256.h"
-#include "surface.h"
 
 #include <errno.h>
 #include <jansson.h>

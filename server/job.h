@@ -4,7 +4,7 @@
 #ifndef QDCD_JOB_H
 #define QDCD_JOB_H
 
-#include "opt.h"
+#include "qdc.h"
 #include "server.h"
 #include "util.h"
 

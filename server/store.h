@@ -7,7 +7,7 @@
 #ifndef QDCD_STORE_H
 #define QDCD_STORE_H
 
-#include "base.h"
+#include "qdc.h"
 
 #include <stdint.h>
 

@@ -1,7 +1,10 @@
 #!/bin/sh
 # tests/run.sh - run every suite and print "N passed, N failed" last.
 # Suites: unit tests (release and sanitizer builds), end-to-end (tests/e2e/*.sh),
-# daemon (tests/server/*.sh), other suites (tests/*/run.sh).
+# daemon (tests/server/*.sh), clients (tests/clients/*.sh), house rules (tests/house/*.sh).
+# A suite prints "ok - ..." per passed check, "FAIL - ..." per failed one and
+# "ok - ... # SKIP reason" (or "# SKIP ...") for a check it could not run:
+# skips are counted apart, never as passes.
 # QDC_QUICK=1: release unit tests only.
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
 export ROOT
@@ -34,13 +37,15 @@ if [ -z "${QDC_QUICK:-}" ]; then
         [ -x "$t" ] && run_one "asan+ubsan $(basename "$t")" env ASAN_OPTIONS=detect_leaks=1 \
             UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 "$t"
     done
-    for t in tests/e2e/*.sh tests/server/*.sh tests/clients/*.sh; do
+    for t in tests/house/*.sh tests/e2e/*.sh tests/server/*.sh tests/clients/*.sh; do
         [ -f "$t" ] && run_one "$t" sh "$t"
     done
 fi
-passed=$(grep -c '^ok - ' "$LOG")
+skipped=$(grep -Ec '^(ok - .*)?# SKIP' "$LOG")
+passed=$(grep '^ok - ' "$LOG" | grep -vc '# SKIP')
 failed=$(grep -c '^FAIL - ' "$LOG")
 echo
 grep '^FAIL - ' "$LOG" | sed 's/^/  /'
-echo "$passed passed, $failed failed"
+grep -E '^(ok - .*)?# SKIP' "$LOG" | sed 's/^/  /'
+echo "$passed passed, $failed failed, $skipped skipped"
 [ "$failed" -eq 0 ] && [ "$passed" -gt 0 ]

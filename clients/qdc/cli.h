@@ -2,7 +2,7 @@
 #ifndef QDC_CLI_H
 #define QDC_CLI_H
 
-#include "base.h"
+#include "qdc.h"
 
 /* Exit codes (documented in README.md and `qdc --help`). */
 enum {

@@ -1,13 +1,7 @@
 /* local.c - `qdc optimize` and `qdc quality`: thin layers over libqdc. */
 #define _POSIX_C_SOURCE 200809L
-#include "bderr.h"
+#include "qdc.h"
 #include "cli.h"
-#include "mesh.h"
-#include "meshio.h"
-#include "opt.h"
-#include "report.h"
-#include "surface.h"
-#include "tetra.h"
 
 #include <signal.h>
 #include <stdio.h>

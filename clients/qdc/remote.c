@@ -13,8 +13,7 @@
  * returns the same job instead of making a second one. */
 #define _POSIX_C_SOURCE 200809L
 #include "cli.h"
-#include "mesh.h"
-#include "meshio.h"
+#include "qdc.h"
 
 #include <curl/curl.h>
 #include <errno.h>

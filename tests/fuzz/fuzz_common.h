@@ -4,7 +4,7 @@
 #ifndef QDC_FUZZ_COMMON_H
 #define QDC_FUZZ_COMMON_H
 
-#include "meshio.h"
+#include "io/meshio.h"
 #include "../unit/testio.h" /* sink, sink_write */
 
 #include <stdint.h>

@@ -1,7 +1,7 @@
 /* test_bderr.c - point-triangle distance, BVH queries and Hausdorff distances
  * against hand-computed and analytic values. */
-#include "bderr.h"
-#include "meshio.h"
+#include "geom/bderr.h"
+#include "io/meshio.h"
 #include "testlib.h"
 
 #include <stdint.h>

@@ -1,7 +1,7 @@
 /* test_core.c - analytic checks of metrics, QDC encoding and the linear solvers. */
-#include "encode.h"
-#include "metric.h"
-#include "solve.h"
+#include "opt/encode.h"
+#include "geom/metric.h"
+#include "opt/solve.h"
 #include "testlib.h"
 #include "testmesh.h"
 

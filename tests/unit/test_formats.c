@@ -4,7 +4,7 @@
  * speed on 1M tets, and a replay of the gmsh/vtk fuzz seeds and crashes.
  * The malformed corpus (tests/data/meshio/gmsh_*, vtk_*, vtu_*) runs in
  * test_meshio with the rest. */
-#include "meshio.h"
+#include "io/meshio.h"
 #include "testio.h"
 #include "testlib.h"
 

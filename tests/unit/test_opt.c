@@ -1,10 +1,10 @@
 /* test_opt.c - behaviour of the optimizer on synthetic meshes: it improves,
  * untangles, never returns a worse mesh, respects locked vertices and tags,
  * stops on cancel. */
-#include "finish.h"
-#include "metric.h"
-#include "opt.h"
-#include "report.h"
+#include "opt/finish.h"
+#include "geom/metric.h"
+#include "opt/opt.h"
+#include "eval/report.h"
 #include "testlib.h"
 #include "testmesh.h"
 

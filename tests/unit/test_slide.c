@@ -1,9 +1,9 @@
 /* test_slide.c - sliding boundary: feature detection, projection, and the
  * optimizer keeping the shape, the regions and the locked vertices. */
-#include "bderr.h"
-#include "opt.h"
-#include "report.h"
-#include "slide.h"
+#include "geom/bderr.h"
+#include "opt/opt.h"
+#include "eval/report.h"
+#include "opt/slide.h"
 #include "testlib.h"
 #include "testmesh.h"
 

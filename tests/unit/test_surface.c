@@ -3,9 +3,9 @@
  * bridge (valid positive tets, regions, facet markers, quality and volume
  * options, self-intersections and open surfaces as clear errors, never a
  * crash), names and media types, and the surface fuzz seeds and crashes. */
-#include "mesh.h"
-#include "surface.h"
-#include "tetra.h"
+#include "core/mesh.h"
+#include "io/surface.h"
+#include "io/tetra.h"
 #include "testio.h"
 #include "testlib.h"
 

@@ -5,8 +5,8 @@
 #ifndef QDC_TESTIO_H
 #define QDC_TESTIO_H
 
-#include "meshio.h"
-#include "surface.h"
+#include "io/meshio.h"
+#include "io/surface.h"
 
 #include <dirent.h>
 #include <math.h>

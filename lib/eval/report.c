@@ -1,0 +1,330 @@
+/* report.c - mesh quality evaluation and the JSON report (METHOD §9). */
+#include "eval/report.h"
+
+#include "geom/metric.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <string.h>
+
+const int report_dmin_thresholds[4] = {5, 15, 30, 40};
+const int report_dmax_thresholds[4] = {175, 165, 150, 140};
+
+qdc_status report_quality_compute(const mesh_t *m, report_quality *q, qdc_error *err)
+{
+    int32_t npos = 0, nneg = 0, nvalid = 0;
+    double sgn, sum = 0, sum2 = 0, vsum = 0, cnsum = 0;
+
+    memset(q, 0, sizeof *q);
+    if (!m || m->nt <= 0 || m->nv <= 0)
+        return qdc_fail(err, QDC_EMESH, "empty mesh");
+    for (int32_t t = 0; t < m->nt; t++)
+        for (int a = 0; a < 4; a++)
+            if (m->tets[4 * (size_t)t + a] < 0 || m->tets[4 * (size_t)t + a] >= m->nv)
+                return qdc_fail(err, QDC_EMESH, "tet %d: vertex index out of range", (int)t);
+    q->nv = m->nv;
+    q->nt = m->nt;
+    for (int32_t t = 0; t < m->nt; t++) {
+        const int32_t *tt = m->tets + 4 * (size_t)t;
+        metric_parts pt;
+        metric_parts_of(m->xyz + 3 * (size_t)tt[0], m->xyz + 3 * (size_t)tt[1],
+                        m->xyz + 3 * (size_t)tt[2], m->xyz + 3 * (size_t)tt[3], &pt);
+        npos += pt.vol > 0;
+        nneg += pt.vol < 0;
+    }
+    /* majority orientation (METHOD §1) */
+    sgn = nneg > npos ? -1.0 : 1.0;
+    q->q_min = q->vl_min = INFINITY;
+    q->dih_min = INFINITY;
+    q->dih_max = -INFINITY;
+    for (int32_t t = 0; t < m->nt; t++) {
+        const int32_t *tt = m->tets + 4 * (size_t)t;
+        const double *p0 = m->xyz + 3 * (size_t)tt[0], *p1 = m->xyz + 3 * (size_t)tt[1];
+        const double *p2 = m->xyz + 3 * (size_t)tt[2], *p3 = m->xyz + 3 * (size_t)tt[3];
+        metric_parts pt;
+        double eta, vl, ang[6], amin = 180, amax = 0;
+        metric_parts_of(p0, p1, p2, p3, &pt);
+        pt.vol *= sgn;
+        eta = metric_mean_ratio(&pt);
+        vl = metric_vol_length(&pt);
+        sum += eta;
+        sum2 += eta * eta;
+        vsum += vl;
+        if (eta < q->q_min)
+            q->q_min = eta;
+        if (vl < q->vl_min)
+            q->vl_min = vl;
+        if (pt.vol < 0)
+            q->n_inverted++;
+        else if (pt.vol == 0)
+            q->n_degenerate++;
+        else {
+            /* condition number ||S|| ||S^-1|| / 3 = ||S|| ||adj S|| / (3 sigma) = MICN */
+            double cn = metric_qt(OPT_METRIC_MICN, &pt, 0.0);
+            if (isfinite(cn)) {
+                cnsum += cn;
+                nvalid++;
+                if (cn > q->cn_max)
+                    q->cn_max = cn;
+            }
+        }
+        metric_dihedrals(p0, p1, p2, p3, ang);
+        for (int e = 0; e < 6; e++) {
+            int bin = (int)ang[e];
+            amin = ang[e] < amin ? ang[e] : amin;
+            amax = ang[e] > amax ? ang[e] : amax;
+            q->hist[bin < 0 ? 0 : (bin >= REPORT_HIST_BINS ? REPORT_HIST_BINS - 1 : bin)]++;
+        }
+        if (amin < q->dih_min)
+            q->dih_min = amin;
+        if (amax > q->dih_max)
+            q->dih_max = amax;
+        for (int k = 0; k < 4; k++) {
+            q->n_dmin_lt[k] += amin < report_dmin_thresholds[k];
+            q->n_dmax_gt[k] += amax > report_dmax_thresholds[k];
+        }
+    }
+    q->q_mean = sum / m->nt;
+    q->q_std = sqrt(fmax(0.0, sum2 / m->nt - q->q_mean * q->q_mean));
+    q->vl_mean = vsum / m->nt;
+    q->cn_mean = nvalid ? cnsum / nvalid : 0.0;
+    return QDC_OK;
+}
+
+/* ---- a small buffered JSON writer ------------------------------------------ */
+
+typedef struct {
+    qdc_write_fn fn;
+    void *ctx;
+    char buf[8192];
+    size_t len;
+    int failed;
+    int need_comma;
+} jw;
+
+static void jw_flush(jw *w)
+{
+    if (w->len && !w->failed && w->fn(w->ctx, w->buf, w->len))
+        w->failed = 1;
+    w->len = 0;
+}
+
+static void jw_raw(jw *w, const char *s, size_t n)
+{
+    while (n) {
+        size_t room = sizeof w->buf - w->len, k = n < room ? n : room;
+        memcpy(w->buf + w->len, s, k);
+        w->len += k;
+        s += k;
+        n -= k;
+        if (w->len == sizeof w->buf)
+            jw_flush(w);
+    }
+}
+
+static void jw_printf(jw *w, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+static void jw_printf(jw *w, const char *fmt, ...)
+{
+    char tmp[128];
+    va_list ap;
+    int n;
+
+    va_start(ap, fmt);
+    n = vsnprintf(tmp, sizeof tmp, fmt, ap);
+    va_end(ap);
+    if (n > 0)
+        jw_raw(w, tmp, (size_t)n < sizeof tmp ? (size_t)n : sizeof tmp - 1);
+}
+
+static void jw_key(jw *w, const char *k)
+{
+    if (w->need_comma)
+        jw_raw(w, ",", 1);
+    jw_printf(w, "\"%s\":", k);
+    w->need_comma = 1;
+}
+
+static void jw_open(jw *w, const char *k, char brace)
+{
+    if (k)
+        jw_key(w, k);
+    else if (w->need_comma)
+        jw_raw(w, ",", 1);
+    jw_raw(w, &brace, 1);
+    w->need_comma = 0;
+}
+
+static void jw_close(jw *w, char brace)
+{
+    jw_raw(w, &brace, 1);
+    w->need_comma = 1;
+}
+
+static void jw_num(jw *w, const char *k, double v)
+{
+    jw_key(w, k);
+    if (isfinite(v))
+        jw_printf(w, "%.10g", v);
+    else
+        jw_raw(w, "null", 4);
+}
+
+static void jw_int(jw *w, const char *k, long long v)
+{
+    jw_key(w, k);
+    jw_printf(w, "%lld", v);
+}
+
+static void jw_str(jw *w, const char *k, const char *s)
+{
+    jw_key(w, k);
+    jw_raw(w, "\"", 1);
+    for (; s && *s; s++) {
+        unsigned char ch = (unsigned char)*s;
+        if (ch == '"' || ch == '\\')
+            jw_printf(w, "\\%c", ch);
+        else if (ch < 0x20)
+            jw_printf(w, "\\u%04x", ch);
+        else
+            jw_raw(w, (const char *)&ch, 1);
+    }
+    jw_raw(w, "\"", 1);
+}
+
+static void write_quality(jw *w, const char *k, const report_quality *q)
+{
+    char key[32];
+
+    jw_open(w, k, '{');
+    jw_int(w, "n_vertices", q->nv);
+    jw_int(w, "n_tets", q->nt);
+    jw_int(w, "n_inverted", q->n_inverted);
+    jw_int(w, "n_degenerate", q->n_degenerate);
+    jw_num(w, "mean_ratio_mean", q->q_mean);
+    jw_num(w, "mean_ratio_std", q->q_std);
+    jw_num(w, "mean_ratio_min", q->q_min);
+    jw_num(w, "volume_length_mean", q->vl_mean);
+    jw_num(w, "volume_length_min", q->vl_min);
+    jw_num(w, "condition_number_mean", q->cn_mean);
+    jw_num(w, "condition_number_max", q->cn_max);
+    jw_num(w, "dihedral_min", q->dih_min);
+    jw_num(w, "dihedral_max", q->dih_max);
+    for (int i = 0; i < 4; i++) {
+        snprintf(key, sizeof key, "n_dmin_lt_%d", report_dmin_thresholds[i]);
+        jw_int(w, key, q->n_dmin_lt[i]);
+    }
+    for (int i = 0; i < 4; i++) {
+        snprintf(key, sizeof key, "n_dmax_gt_%d", report_dmax_thresholds[i]);
+        jw_int(w, key, q->n_dmax_gt[i]);
+    }
+    jw_open(w, "dihedral_histogram", '[');
+    for (int i = 0; i < REPORT_HIST_BINS; i++)
+        jw_printf(w, i ? ",%lld" : "%lld", (long long)q->hist[i]);
+    jw_close(w, ']');
+    jw_close(w, '}');
+}
+
+static void write_progress_fields(jw *w, const opt_progress *p)
+{
+    jw_int(w, "iteration", p->iteration);
+    jw_str(w, "phase", p->phase ? p->phase : "");
+    jw_num(w, "objective", p->objective);
+    jw_num(w, "step", p->step);
+    jw_num(w, "mean_ratio_mean", p->q_mean);
+    jw_num(w, "mean_ratio_std", p->q_std);
+    jw_num(w, "mean_ratio_min", p->q_min);
+    jw_num(w, "dihedral_min", p->dih_min);
+    jw_num(w, "dihedral_max", p->dih_max);
+    jw_int(w, "n_inverted", p->n_inverted);
+    jw_num(w, "max_move", p->max_move);
+    jw_num(w, "elapsed", p->elapsed);
+    jw_int(w, "cg_iterations", p->cg_iters);
+}
+
+qdc_status report_progress_json(const opt_progress *p, qdc_write_fn fn, void *ctx)
+{
+    jw w = {.fn = fn, .ctx = ctx};
+
+    jw_open(&w, NULL, '{');
+    write_progress_fields(&w, p);
+    jw_close(&w, '}');
+    jw_flush(&w);
+    return w.failed ? QDC_EIO : QDC_OK;
+}
+
+qdc_status report_write_json(const report_t *r, qdc_write_fn fn, void *ctx, qdc_error *err)
+{
+    jw w = {.fn = fn, .ctx = ctx};
+
+    jw_open(&w, NULL, '{');
+    if (r->options) {
+        const opt_options *o = r->options;
+        jw_open(&w, "options", '{');
+        jw_str(&w, "metric", opt_metric_name(o->metric));
+        jw_str(&w, "boundary", opt_boundary_name(o->boundary));
+        jw_str(&w, "mode", opt_mode_name(o->mode));
+        jw_str(&w, "weights", opt_weights_name(o->weights));
+        jw_str(&w, "solver", opt_solver_name(o->solver));
+        jw_int(&w, "harmonic", o->harmonic);
+        jw_int(&w, "finish", o->finish);
+        jw_int(&w, "max_iter", o->max_iter);
+        jw_num(&w, "mu", o->mu);
+        jw_close(&w, '}');
+    }
+    if (r->run) {
+        const opt_result *s = r->run;
+        static const char *const outcomes[] = {"converged", "stopped", "failed"};
+        jw_open(&w, "run", '{');
+        jw_str(&w, "outcome", (unsigned)s->outcome < 3 ? outcomes[s->outcome] : "?");
+        jw_str(&w, "stop_reason", s->stop_reason);
+        jw_int(&w, "iterations", s->iterations);
+        jw_int(&w, "best_iteration", s->best_iteration);
+        jw_str(&w, "solver", opt_solver_name(s->solver));
+        jw_num(&w, "solver_flops", s->solver_flops);
+        jw_open(&w, "seconds", '{');
+        jw_num(&w, "setup", s->t_setup);
+        jw_num(&w, "weights", s->t_weights);
+        jw_num(&w, "assembly", s->t_assembly);
+        jw_num(&w, "solve", s->t_solve);
+        jw_num(&w, "linesearch", s->t_linesearch);
+        jw_num(&w, "harmonic", s->t_harmonic);
+        jw_num(&w, "finish", s->t_finish);
+        jw_num(&w, "total", s->t_total);
+        jw_close(&w, '}');
+        jw_open(&w, "before_finish", '{');
+        write_progress_fields(&w, &s->before_finish);
+        jw_close(&w, '}');
+        jw_close(&w, '}');
+    }
+    if (r->before)
+        write_quality(&w, "before", r->before);
+    if (r->after)
+        write_quality(&w, "after", r->after);
+    if (r->boundary) {
+        const bderr_result *b = r->boundary;
+        jw_open(&w, "boundary_error", '{');
+        jw_num(&w, "hausdorff", b->hausdorff);
+        jw_num(&w, "hausdorff_rel", b->hausdorff_rel);
+        jw_num(&w, "hausdorff_out_to_in", b->h_a_to_b);
+        jw_num(&w, "hausdorff_in_to_out", b->h_b_to_a);
+        jw_num(&w, "mean", b->mean);
+        jw_num(&w, "mean_rel", b->mean_rel);
+        jw_num(&w, "rms", b->rms);
+        jw_num(&w, "rms_rel", b->rms_rel);
+        jw_num(&w, "bbox_diagonal", b->diag);
+        jw_int(&w, "n_samples", b->n_samples);
+        jw_close(&w, '}');
+    }
+    jw_close(&w, '}');
+    jw_raw(&w, "\n", 1);
+    jw_flush(&w);
+    if (w.failed)
+        return qdc_fail(err, QDC_EIO, "report: write failed");
+    return QDC_OK;
+}
+
+int report_file_writer(void *ctx, const void *data, size_t len)
+{
+    return fwrite(data, 1, len, (FILE *)ctx) != len;
+}

@@ -1,0 +1,51 @@
+/* report.h - mesh quality evaluation and the JSON report (METHOD §9).
+ * Quality convention: signed mean ratio eta = 12 (3|V|)^(2/3) / sum l^2, negative
+ * for tets against the mesh's majority orientation; dihedral angles in degrees.
+ * Thread-safe: no global state. */
+#ifndef QDC_REPORT_H
+#define QDC_REPORT_H
+
+#include "core/base.h"
+#include "geom/bderr.h"
+#include "core/mesh.h"
+#include "opt/opt.h"
+
+#define REPORT_HIST_BINS 180
+
+typedef struct {
+    int32_t nv, nt;
+    int32_t n_inverted;   /* against the majority orientation */
+    int32_t n_degenerate; /* zero volume */
+    double q_mean, q_std, q_min;   /* signed mean ratio */
+    double vl_mean, vl_min;        /* volume-length 6 sqrt2 V / l_rms^3, signed */
+    double cn_mean, cn_max;        /* condition number ||S|| ||S^-1|| / 3 (>= 1), valid tets */
+    double dih_min, dih_max;       /* over all tets (an inverted tet counts 0 and 180) */
+    int32_t n_dmin_lt[4];          /* tets with min dihedral < 5, 15, 30, 40 deg */
+    int32_t n_dmax_gt[4];          /* tets with max dihedral > 175, 165, 150, 140 deg */
+    int64_t hist[REPORT_HIST_BINS];/* every dihedral angle of every tet, 1 deg bins */
+} report_quality;
+
+extern const int report_dmin_thresholds[4]; /* 5, 15, 30, 40 */
+extern const int report_dmax_thresholds[4]; /* 175, 165, 150, 140 */
+
+qdc_status report_quality_compute(const mesh_t *m, report_quality *q, qdc_error *err);
+
+/* Everything the CLI and the daemon hand back about a run. Any pointer may be NULL
+ * (that section is left out). */
+typedef struct {
+    const report_quality *before;
+    const report_quality *after;
+    const opt_result *run;
+    const opt_options *options;
+    const bderr_result *boundary;
+} report_t;
+
+/* Stream the report as one JSON object. */
+qdc_status report_write_json(const report_t *r, qdc_write_fn fn, void *ctx, qdc_error *err);
+/* JSON of one progress record (one line, no newline), as the daemon streams it. */
+qdc_status report_progress_json(const opt_progress *p, qdc_write_fn fn, void *ctx);
+
+/* qdc_write_fn that appends to a FILE* (ctx). */
+int report_file_writer(void *ctx, const void *data, size_t len);
+
+#endif

@@ -1,0 +1,97 @@
+/* meshio.h - mesh file formats. Parsers take (buf, len): they check every size
+ * against the buffer, every index against bounds, reject NaN/Inf, and say
+ * where (err->line/col for text, err->offset for binary). Indices in files are
+ * converted to 0-based here and nowhere else. Writers stream through a
+ * qdc_write_fn, never building the output in memory.
+ * Thread-safe: no global state. */
+#ifndef QDC_MESHIO_H
+#define QDC_MESHIO_H
+
+#include "core/base.h"
+#include "core/mesh.h"
+
+#include <stddef.h>
+
+typedef enum {
+    MESHIO_AUTO = 0, /* by extension, else by sniffing the content */
+    MESHIO_MEDIT,    /* .mesh ASCII (Vertices, Tetrahedra with refs = regions, Triangles kept) */
+    MESHIO_TETGEN,   /* .node + .ele (+ attributes as regions) */
+    MESHIO_QMESH,    /* proto/mesh-binary.md, application/vnd.qdc.mesh, .qmesh */
+    MESHIO_JSON,     /* {"vertices":[[x,y,z],...],"tets":[[a,b,c,d],...],"regions":[...]} 0-based */
+    /* Gmsh .msh: tetrahedra (type 4) with their physical tag as region, triangles
+     * (type 2) kept with theirs as tri_ref; physical tag 0 means none, and a file
+     * without physical groups but with several volume entities gets the entity
+     * tags as regions. Other element types are skipped with a note. Reading
+     * accepts 4.1 ASCII/binary and 2.2 ASCII whichever of the three is named. */
+    MESHIO_GMSH41,     /* MSH 4.1 ASCII, model/vnd.gmsh, .msh */
+    MESHIO_GMSH41_BIN, /* MSH 4.1 binary (little-endian, data size 8) */
+    MESHIO_GMSH22,     /* MSH 2.2 ASCII */
+    /* VTK: cells of type 10 (tets) and 5 (triangles); region from the cell
+     * array "region", "gmsh:physical" or "medit:ref" (written as "region"),
+     * vref from the point array "medit:ref". Reading accepts either encoding. */
+    MESHIO_VTK,       /* legacy .vtk UNSTRUCTURED_GRID, binary (big-endian) */
+    MESHIO_VTK_ASCII, /* legacy .vtk, ASCII */
+    MESHIO_VTU,       /* VTK XML .vtu, appended raw data (reads ascii/base64/raw too) */
+    MESHIO_VTU_ASCII, /* VTK XML .vtu, ascii DataArrays */
+    MESHIO_FORMAT_COUNT
+} meshio_format;
+
+/* "medit", "tetgen", "qmesh", "json", "gmsh", "gmsh-bin", "gmsh22", "vtk",
+ * "vtk-ascii", "vtu", "vtu-ascii"; NULL for out-of-range values. */
+const char *meshio_format_name(meshio_format f);
+/* Accepts a format name (the above, and "mesh", "binary", "msh", "msh41",
+ * "msh22"...), a file name or extension (".mesh", "x.node", "a.msh", ".vtu");
+ * MESHIO_AUTO if unknown. */
+meshio_format meshio_format_from_name(const char *s);
+/* Guess from the first bytes: QDCMESH magic, '{', "MeshVersionFormatted",
+ * "$MeshFormat" (the version and encoding of its header line), "# vtk DataFile"
+ * (ASCII or BINARY), "<?xml"/"<VTKFile"...; MESHIO_AUTO if unknown. */
+meshio_format meshio_sniff(const char *buf, size_t len);
+
+/* HTTP media types, for the daemon's Content-Type / Accept / 415 lists:
+ * qmesh application/vnd.qdc.mesh, json application/json, medit model/x-medit,
+ * gmsh model/vnd.gmsh (";version=2.2", ";encoding=binary" pick the variants),
+ * vtk application/vnd.vtk (";encoding=ascii"), vtu application/vnd.vtk.vtu+xml
+ * (";encoding=ascii"). TetGen (two files) has none: NULL, as for AUTO and
+ * out-of-range values. The string is static. */
+const char *meshio_media_type(meshio_format f);
+/* The format of a Content-Type or Accept entry: case-insensitive, parameters
+ * after ';' honoured as above, others (charset, q) ignored; also accepts
+ * application/x-gmsh, model/x-gmsh, application/x-vtk, application/x-vtu,
+ * text/x-medit. MESHIO_AUTO if unknown or NULL (surfaces: see surface.h). */
+meshio_format meshio_format_from_media_type(const char *content_type);
+
+/* Optional reading options: notes (skipped element types...) go to log. */
+typedef struct {
+    qdc_log_fn log;
+    void *log_ctx;
+} meshio_options;
+
+/* Parse one buffer (not TETGEN: it needs two). fmt MESHIO_AUTO sniffs.
+ * On success *out is a new mesh (free with mesh_free); on failure *out is NULL
+ * and err says what and where. Does not call mesh_validate beyond bounds and
+ * finiteness: callers validate. */
+qdc_status meshio_read(const char *buf, size_t len, meshio_format fmt, mesh_t **out,
+                       qdc_error *err);
+/* meshio_read with options (o may be NULL). */
+qdc_status meshio_read_ex(const char *buf, size_t len, meshio_format fmt,
+                          const meshio_options *o, mesh_t **out, qdc_error *err);
+qdc_status meshio_read_tetgen(const char *node, size_t node_len, const char *ele,
+                              size_t ele_len, mesh_t **out, qdc_error *err);
+
+/* Stream m in format fmt (not TETGEN: see meshio_save). */
+qdc_status meshio_write(const mesh_t *m, meshio_format fmt, qdc_write_fn fn, void *ctx,
+                        qdc_error *err);
+
+/* Files: format from fmt, else from the extension, else by sniffing.
+ * TetGen: path may be "base", "base.node" or "base.ele".
+ * meshio_save writes a temporary file, fsyncs and renames it over path. */
+qdc_status meshio_load(const char *path, meshio_format fmt, mesh_t **out, qdc_error *err);
+qdc_status meshio_load_ex(const char *path, meshio_format fmt, const meshio_options *o,
+                          mesh_t **out, qdc_error *err);
+qdc_status meshio_save(const char *path, meshio_format fmt, const mesh_t *m, qdc_error *err);
+
+/* Read a whole file into a new buffer (free with qdc_free). */
+qdc_status meshio_slurp(const char *path, char **buf, size_t *len, qdc_error *err);
+
+#endif

@@ -1,0 +1,1064 @@
+/* meshio_gmsh.c - Gmsh MSH 4.1 (ASCII and binary) and 2.2 (ASCII).
+ *
+ * Reference: the Gmsh manual, "MSH file format" (4.1) and "Legacy formats"
+ * (2.2). Node tags are arbitrary positive numbers, so they are mapped to
+ * 0-based indices through a dense table when their range is compact and a
+ * sorted table otherwise. Tetrahedra (type 4) become tets, triangles (type 2)
+ * surface triangles; every other type is skipped and counted for a note.
+ * In 4.1 the physical tags live on the entities ($Entities), in 2.2 on each
+ * element (first tag); see pick_regions for the rule.
+ *
+ * Binary files are read with explicit little-endian loads at checked offsets
+ * (unaligned, any host); every block count is checked against the bytes left
+ * before anything is allocated. Sections other than the ones we need are
+ * skipped up to their $End marker. */
+#include "io/meshio.h"
+#include "io/meshio_scan.h"
+
+/* Nodes per element of the Gmsh types up to 31 (0 = unknown), to skip the
+ * ones we don't read in binary files. */
+static const unsigned char gmsh_nodes[32] = {0,  2,  3,  4,  4, 8, 6,  5,  3,  6, 9,
+                                             10, 27, 18, 14, 1, 8, 20, 15, 13, 9, 10,
+                                             12, 15, 15, 21, 4, 5, 6,  20, 35, 56};
+
+static int64_t type_nodes(int64_t type)
+{
+    if (type >= 0 && type < 32)
+        return gmsh_nodes[type];
+    if (type == 92)
+        return 64;
+    if (type == 93)
+        return 125;
+    return 0;
+}
+
+/* ------------------------------------------------------------------------ */
+/* Node tag -> index                                                         */
+
+typedef struct {
+    int64_t lo;      /* dense: index of tag t is dense[t - lo] (-1 = none) */
+    int64_t n;       /* entries of dense or of sorted */
+    int32_t *dense;  /* either this ... */
+    int64_t *sorted; /* ... or (tag << 31 | index) pairs sorted by tag */
+} tagmap;
+
+static int cmp_i64(const void *a, const void *b)
+{
+    int64_t x = *(const int64_t *)a, y = *(const int64_t *)b;
+
+    return (x > y) - (x < y);
+}
+
+/* Build the map of tags[nv] (each in [1, 2^31)); the index of a duplicate
+ * tag in *dup (or -1). */
+static qdc_status tagmap_build(tagmap *tm, const int64_t *tags, int64_t nv, int64_t *dup,
+                               qdc_error *err)
+{
+    int64_t lo = INT64_MAX, hi = 0;
+
+    *dup = -1;
+    for (int64_t i = 0; i < nv; i++) {
+        lo = tags[i] < lo ? tags[i] : lo;
+        hi = tags[i] > hi ? tags[i] : hi;
+    }
+    if (nv && hi - lo < 4 * nv + 16) {
+        tm->lo = lo;
+        tm->n = hi - lo + 1;
+        tm->dense = qdc_mallocn((size_t)tm->n, sizeof(int32_t));
+        if (!tm->dense)
+            return qdc_fail(err, QDC_ENOMEM, "out of memory for the node tags");
+        memset(tm->dense, 0xff, (size_t)tm->n * sizeof(int32_t));
+        for (int64_t i = 0; i < nv; i++) {
+            if (tm->dense[tags[i] - lo] >= 0) {
+                *dup = i;
+                return QDC_OK;
+            }
+            tm->dense[tags[i] - lo] = (int32_t)i;
+        }
+        return QDC_OK;
+    }
+    tm->n = nv;
+    tm->sorted = qdc_mallocn((size_t)nv + 1, sizeof(int64_t));
+    if (!tm->sorted)
+        return qdc_fail(err, QDC_ENOMEM, "out of memory for the node tags");
+    for (int64_t i = 0; i < nv; i++)
+        tm->sorted[i] = tags[i] << 31 | i;
+    qsort(tm->sorted, (size_t)nv, sizeof(int64_t), cmp_i64);
+    for (int64_t i = 1; i < nv; i++)
+        if (tm->sorted[i] >> 31 == tm->sorted[i - 1] >> 31) {
+            *dup = tm->sorted[i] & INT32_MAX;
+            return QDC_OK;
+        }
+    return QDC_OK;
+}
+
+/* Index of node tag t, or -1. */
+static int64_t tagmap_find(const tagmap *tm, int64_t t)
+{
+    int64_t a = 0, b = tm->n;
+
+    if (tm->dense)
+        return t >= tm->lo && t - tm->lo < tm->n ? tm->dense[t - tm->lo] : -1;
+    while (a < b) {
+        int64_t mid = a + (b - a) / 2, mt = tm->sorted[mid] >> 31;
+        if (mt == t)
+            return tm->sorted[mid] & INT32_MAX;
+        if (mt < t)
+            a = mid + 1;
+        else
+            b = mid;
+    }
+    return -1;
+}
+
+static void tagmap_free(tagmap *tm)
+{
+    qdc_free(tm->dense);
+    qdc_free(tm->sorted);
+    memset(tm, 0, sizeof *tm);
+}
+
+/* ------------------------------------------------------------------------ */
+/* Reader state                                                              */
+
+/* An entity of dimension 2 or 3 with its first physical tag (0 if none). */
+typedef struct {
+    int64_t key; /* tag << 32 | (uint32_t)phys, sorted by tag */
+} entity;
+
+/* One element type being collected: tets (k=4) or triangles (k=3). */
+typedef struct {
+    vec idx, phys, ent; /* int32: k indices, physical and entity tag per element */
+} elems;
+
+typedef struct {
+    txt s; /* ASCII scanner; also finds the section markers in binary */
+    const unsigned char *b;
+    int binary, dsize; /* data size of size_t values in binary files: 4 or 8 */
+    int v41;           /* 4.1, else 2.2 */
+    int have_nodes;
+    int64_t nv;
+    double *xyz;
+    int64_t *tags;
+    tagmap tm;
+    vec ent[2];  /* int64 entity keys of dimensions 2 and 3 (4.1) */
+    elems el[2]; /* 0 triangles, 1 tets */
+    skipped sk;
+} gmsh;
+
+static const char *const elem_names[2] = {"triangle", "tet"};
+
+static void gmsh_free(gmsh *g)
+{
+    qdc_free(g->xyz);
+    qdc_free(g->tags);
+    tagmap_free(&g->tm);
+    for (int k = 0; k < 2; k++) {
+        vec_free(&g->ent[k]);
+        vec_free(&g->el[k].idx);
+        vec_free(&g->el[k].phys);
+        vec_free(&g->el[k].ent);
+    }
+}
+
+/* ---- binary access ---- */
+
+static size_t boff(const gmsh *g)
+{
+    return (size_t)(g->s.p - g->s.base);
+}
+
+static qdc_status bin_need(gmsh *g, uint64_t n, const char *what, qdc_error *err)
+{
+    size_t left = (size_t)(g->s.end - g->s.p);
+
+    if (n > left)
+        return fail_bin(err, QDC_EPARSE, (int64_t)boff(g),
+                        "%s: needs %llu bytes, %zu left (truncated?)", what,
+                        (unsigned long long)n, left);
+    return QDC_OK;
+}
+
+static int32_t bin_i32(gmsh *g)
+{
+    int32_t v = (int32_t)get_le32(g->b + boff(g));
+
+    g->s.p += 4;
+    return v;
+}
+
+/* A size_t of the file's data size. */
+static uint64_t bin_size(gmsh *g)
+{
+    uint64_t v = g->dsize == 8 ? get_le64(g->b + boff(g)) : get_le32(g->b + boff(g));
+
+    g->s.p += g->dsize;
+    return v;
+}
+
+static double bin_f64(gmsh *g)
+{
+    uint64_t u = get_le64(g->b + boff(g));
+    double x;
+
+    g->s.p += 8;
+    memcpy(&x, &u, 8);
+    return x;
+}
+
+/* A count (size_t) of entries of `bytes` bytes each, checked against the bytes
+ * left and against max. */
+static qdc_status bin_count(gmsh *g, const char *what, uint64_t bytes, int64_t max,
+                            int64_t *c, qdc_error *err)
+{
+    size_t at = boff(g);
+    uint64_t v;
+    qdc_status st = bin_need(g, (uint64_t)g->dsize, what, err);
+
+    if (st != QDC_OK)
+        return st;
+    v = bin_size(g);
+    if (bytes && v > (uint64_t)(g->s.end - g->s.p) / bytes)
+        return fail_bin(err, QDC_EPARSE, (int64_t)at,
+                        "%s: count %llu does not fit in the %zu bytes left (truncated?)",
+                        what, (unsigned long long)v, (size_t)(g->s.end - g->s.p));
+    if (v > (uint64_t)max)
+        return fail_bin(err, QDC_ETOOBIG, (int64_t)at,
+                        "%s: count %llu exceeds the limit %lld", what,
+                        (unsigned long long)v, (long long)max);
+    *c = (int64_t)v;
+    return QDC_OK;
+}
+
+/* ---- values in either encoding ---- */
+
+/* A size_t-like value (count, tag) in [lo, hi]. */
+static qdc_status g_int(gmsh *g, const char *what, int64_t lo, int64_t hi, int64_t *v,
+                        qdc_error *err)
+{
+    size_t at;
+    uint64_t u;
+    qdc_status st;
+
+    if (!g->binary)
+        return txt_int(&g->s, what, lo, hi, v, err);
+    at = boff(g);
+    st = bin_need(g, (uint64_t)g->dsize, what, err);
+    if (st != QDC_OK)
+        return st;
+    u = bin_size(g);
+    if (u > (uint64_t)hi || (int64_t)u < lo)
+        return fail_bin(err, QDC_EPARSE, (int64_t)at, "%s %llu out of range [%lld, %lld]",
+                        what, (unsigned long long)u, (long long)lo, (long long)hi);
+    *v = (int64_t)u;
+    return QDC_OK;
+}
+
+/* An int (4 bytes in binary: entity dims and tags, element types, physical tags). */
+static qdc_status g_i32(gmsh *g, const char *what, int64_t lo, int64_t hi, int64_t *v,
+                        qdc_error *err)
+{
+    size_t at;
+    qdc_status st;
+
+    if (!g->binary)
+        return txt_int(&g->s, what, lo, hi, v, err);
+    at = boff(g);
+    st = bin_need(g, 4, what, err);
+    if (st != QDC_OK)
+        return st;
+    *v = bin_i32(g);
+    if (*v < lo || *v > hi)
+        return fail_bin(err, QDC_EPARSE, (int64_t)at, "%s %lld out of range [%lld, %lld]",
+                        what, (long long)*v, (long long)lo, (long long)hi);
+    return QDC_OK;
+}
+
+static qdc_status g_real(gmsh *g, const char *what, double *v, qdc_error *err)
+{
+    size_t at;
+    qdc_status st;
+
+    if (!g->binary)
+        return txt_real(&g->s, what, v, err);
+    at = boff(g);
+    st = bin_need(g, 8, what, err);
+    if (st != QDC_OK)
+        return st;
+    *v = bin_f64(g);
+    if (!isfinite(*v))
+        return fail_bin(err, QDC_EPARSE, (int64_t)at, "%s is not finite (NaN/Inf)", what);
+    return QDC_OK;
+}
+
+/* A count of entries of `tokens` ASCII tokens or `bytes` binary bytes each. */
+static qdc_status g_count(gmsh *g, const char *what, int tokens, uint64_t bytes,
+                          int64_t max, int64_t *c, qdc_error *err)
+{
+    if (g->binary)
+        return bin_count(g, what, bytes, max, c, err);
+    return txt_count(&g->s, what, tokens, max, c, err);
+}
+
+/* ---- sections ---- */
+
+/* After a section name: the rest of its line. In binary files the data start
+ * right after the newline, so nothing else may be skipped. */
+static void end_of_line(gmsh *g)
+{
+    txt *s = &g->s;
+
+    while (s->p < s->end && (*s->p == ' ' || *s->p == '\t' || *s->p == '\r'))
+        s->p++;
+    if (s->p < s->end && *s->p == '\n') {
+        s->p++;
+        s->line++;
+        s->bol = s->p;
+    }
+}
+
+/* The next "$Word" (after whitespace) into name; 0 at the end of input. */
+static qdc_status next_marker(gmsh *g, const char **name, size_t *nlen, qdc_error *err)
+{
+    txt *s = &g->s;
+    const char *w;
+    char q[32];
+
+    skip_ws(s);
+    *nlen = 0;
+    if (s->p == s->end)
+        return QDC_OK;
+    if (*s->p != '$')
+        return fail_txt(err, QDC_EPARSE, s, s->p, "expected a $Section, got %s",
+                        quote_tok(q, s, s->p, tok_end(s, s->p)));
+    w = ++s->p;
+    while (s->p < s->end && is_word((unsigned char)*s->p))
+        s->p++;
+    *name = w;
+    *nlen = (size_t)(s->p - w);
+    if (!*nlen)
+        return fail_txt(err, QDC_EPARSE, s, w - 1, "expected a section name after '$'");
+    return QDC_OK;
+}
+
+/* "$End<name>" must come next. */
+static qdc_status want_end(gmsh *g, const char *name, qdc_error *err)
+{
+    txt *s = &g->s;
+    size_t n = strlen(name);
+    char q[32];
+
+    skip_ws(s);
+    if ((size_t)(s->end - s->p) >= n + 4 && memcmp(s->p, "$End", 4) == 0 &&
+        memcmp(s->p + 4, name, n) == 0 &&
+        (s->p + 4 + n == s->end || !is_word((unsigned char)s->p[4 + n]))) {
+        s->p += 4 + n;
+        return QDC_OK;
+    }
+    return fail_txt(err, QDC_EPARSE, s, s->p, "expected $End%s, got %s", name,
+                    quote_tok(q, s, s->p, tok_end(s, s->p)));
+}
+
+/* Skip an unknown section up to "$End<name>" at the start of a line. */
+static qdc_status skip_section(gmsh *g, const char *name, size_t nlen, qdc_error *err)
+{
+    txt *s = &g->s;
+    const char *start = s->p - nlen - 1;
+
+    for (const char *p = s->p; p + 4 + nlen <= s->end; p++) {
+        if (*p == '\n') {
+            s->line++;
+            s->bol = p + 1;
+        }
+        if (p[0] == '$' && p[-1] == '\n' && memcmp(p + 1, "End", 3) == 0 &&
+            memcmp(p + 4, name, nlen) == 0 &&
+            (p + 4 + nlen == s->end || !is_word((unsigned char)p[4 + nlen]))) {
+            s->p = p + 4 + nlen;
+            return QDC_OK;
+        }
+    }
+    s->p = start;
+    return fail_txt(err, QDC_EPARSE, s, start, "$%.*s: no $End%.*s", (int)nlen, start + 1,
+                    (int)nlen, start + 1);
+}
+
+static qdc_status mesh_format(gmsh *g, qdc_error *err)
+{
+    txt *s = &g->s;
+    const char *at;
+    double ver;
+    int64_t ftype, dsize;
+    qdc_status st;
+
+    skip_ws(s);
+    at = s->p;
+    st = txt_real(s, "$MeshFormat: version", &ver, err);
+    if (st == QDC_OK && ver != 4.1 && ver != 2.2 && ver != 2.0 && ver != 2.1)
+        st = fail_txt(err, QDC_EFORMAT, s, at,
+                      "$MeshFormat: version %g not supported (4.1 or 2.2)", ver);
+    if (st == QDC_OK)
+        st = txt_int(s, "$MeshFormat: file type", 0, 1, &ftype, err);
+    if (st == QDC_OK)
+        st = txt_int(s, "$MeshFormat: data size", 4, 8, &dsize, err);
+    if (st == QDC_OK && dsize != 4 && dsize != 8)
+        st = fail_txt(err, QDC_EFORMAT, s, s->p, "$MeshFormat: data size %lld (4 or 8)",
+                      (long long)dsize);
+    if (st != QDC_OK)
+        return st;
+    g->v41 = ver == 4.1;
+    g->binary = (int)ftype;
+    g->dsize = (int)dsize;
+    if (g->binary && !g->v41)
+        return fail_txt(err, QDC_EFORMAT, s, at,
+                        "MSH 2.2 binary is not supported (use 4.1 or 2.2 ASCII)");
+    if (g->binary) {
+        end_of_line(g);
+        st = bin_need(g, 4, "$MeshFormat: endianness word", err);
+        if (st == QDC_OK && get_le32(g->b + boff(g)) != 1)
+            st = fail_bin(err, QDC_EFORMAT, (int64_t)boff(g),
+                          "$MeshFormat: big-endian binary files are not supported");
+        if (st != QDC_OK)
+            return st;
+        g->s.p += 4;
+    }
+    return want_end(g, "MeshFormat", err);
+}
+
+/* $Entities (4.1): keep the first physical tag of each surface and volume. */
+static qdc_status entities(gmsh *g, qdc_error *err)
+{
+    int64_t n[4], v, np, nb, tag, phys;
+    double x;
+    qdc_status st = QDC_OK;
+
+    for (int d = 0; d < 4 && st == QDC_OK; d++)
+        st = g_count(g, "$Entities: count", 1, 4, INT32_MAX, &n[d], err);
+    for (int d = 0; d < 4 && st == QDC_OK; d++) {
+        vec *ev = d >= 2 ? &g->ent[d - 2] : NULL;
+        if (ev && vec_grow(ev, (size_t)n[d]) != 0)
+            return qdc_fail(err, QDC_ENOMEM, "out of memory for %lld entities",
+                            (long long)n[d]);
+        for (int64_t i = 0; i < n[d] && st == QDC_OK; i++) {
+            st = g_i32(g, "$Entities: tag", INT32_MIN, INT32_MAX, &tag, err);
+            for (int j = 0; j < (d ? 6 : 3) && st == QDC_OK; j++)
+                st = g_real(g, "$Entities: bounding box", &x, err);
+            if (st == QDC_OK)
+                st = g_count(g, "$Entities: physical tag count", 1, 4, INT32_MAX, &np,
+                             err);
+            phys = 0;
+            for (int64_t j = 0; j < np && st == QDC_OK; j++) {
+                st = g_i32(g, "$Entities: physical tag", INT32_MIN, INT32_MAX, &v, err);
+                if (j == 0)
+                    phys = v;
+            }
+            if (st == QDC_OK && d)
+                st = g_count(g, "$Entities: bounding entity count", 1, 4, INT32_MAX, &nb,
+                             err);
+            for (int64_t j = 0; j < (d ? nb : 0) && st == QDC_OK; j++)
+                st =
+                    g_i32(g, "$Entities: bounding entity", INT32_MIN, INT32_MAX, &v, err);
+            if (st == QDC_OK && ev)
+                ((int64_t *)ev->a)[ev->n++] = tag * (INT64_C(1) << 32) + (uint32_t)phys;
+        }
+    }
+    for (int k = 0; k < 2 && st == QDC_OK; k++)
+        if (g->ent[k].n)
+            qsort(g->ent[k].a, g->ent[k].n, sizeof(int64_t), cmp_i64);
+    return st == QDC_OK ? want_end(g, "Entities", err) : st;
+}
+
+/* Physical tag of entity `tag` of dimension 2 (k=0) or 3 (k=1); 0 if none. */
+static int32_t entity_phys(const gmsh *g, int k, int64_t tag)
+{
+    const int64_t *e = g->ent[k].a;
+    size_t a = 0, b = g->ent[k].n;
+
+    while (a < b) {
+        size_t mid = a + (b - a) / 2;
+        int64_t mt = e[mid] >> 32; /* arithmetic shift: tags may be negative */
+        if (mt == tag)
+            return (int32_t)(uint32_t)e[mid];
+        if (mt < tag)
+            a = mid + 1;
+        else
+            b = mid;
+    }
+    return 0;
+}
+
+/* Room for c more vertices. */
+static qdc_status nodes_alloc(gmsh *g, int64_t c, qdc_error *err)
+{
+    g->xyz = qdc_mallocn((size_t)c * 3, sizeof(double));
+    g->tags = qdc_mallocn((size_t)c, sizeof(int64_t));
+    if (!g->xyz || !g->tags)
+        return qdc_fail(err, QDC_ENOMEM, "out of memory for %lld nodes", (long long)c);
+    return QDC_OK;
+}
+
+static qdc_status nodes_done(gmsh *g, qdc_error *err)
+{
+    int64_t dup;
+    qdc_status st = tagmap_build(&g->tm, g->tags, g->nv, &dup, err);
+
+    if (st == QDC_OK && dup >= 0) {
+        st = qdc_fail(err, QDC_EPARSE, "$Nodes: node tag %lld appears twice",
+                      (long long)g->tags[dup]);
+        set_index(err, "vertex", dup);
+    }
+    g->have_nodes = 1;
+    return st;
+}
+
+/* $Nodes (4.1): blocks of tags, then coordinates. */
+static qdc_status nodes41(gmsh *g, qdc_error *err)
+{
+    int64_t nblk, total, v, dim, par, c, i = 0;
+    qdc_status st;
+
+    st = g_count(g, "$Nodes: block count", 4, 16, INT32_MAX, &nblk, err);
+    if (st == QDC_OK)
+        st = g_count(g, "$Nodes: node count", 4, 32, MESH_MAX_VERTICES, &total, err);
+    for (int k = 0; k < 2 && st == QDC_OK; k++)
+        st = g_int(g, "$Nodes: node tag bound", 0, INT64_MAX, &v, err);
+    if (st == QDC_OK)
+        st = nodes_alloc(g, total, err);
+    for (int64_t b = 0; b < nblk && st == QDC_OK; b++) {
+        st = g_i32(g, "$Nodes: entity dimension", 0, 3, &dim, err);
+        if (st == QDC_OK)
+            st = g_i32(g, "$Nodes: entity tag", INT32_MIN, INT32_MAX, &v, err);
+        if (st == QDC_OK)
+            st = g_i32(g, "$Nodes: parametric", 0, 1, &par, err);
+        if (st == QDC_OK)
+            st = g_count(g, "$Nodes: nodes in block", 4, 32 + 8 * (uint64_t)(par * dim),
+                         INT64_MAX, &c, err);
+        if (st == QDC_OK && c > total - i)
+            st = qdc_fail(err, QDC_EPARSE,
+                          "$Nodes: more nodes in the blocks than the %lld announced",
+                          (long long)total);
+        for (int64_t j = 0; j < c && st == QDC_OK; j++)
+            st = g_int(g, "$Nodes: node tag", 1, INT32_MAX, &g->tags[i + j], err);
+        for (int64_t j = 0; j < c && st == QDC_OK; j++) {
+            double x;
+            for (int a = 0; a < 3 && st == QDC_OK; a++)
+                st = g_real(g, "$Nodes: coordinate", &g->xyz[3 * (i + j) + a], err);
+            for (int64_t a = 0; a < par * dim && st == QDC_OK; a++)
+                st = g_real(g, "$Nodes: parametric coordinate", &x, err);
+            if (st != QDC_OK)
+                set_index(err, "vertex", i + j);
+        }
+        i += c;
+    }
+    if (st == QDC_OK && i != total)
+        st = qdc_fail(err, QDC_EPARSE, "$Nodes: blocks hold %lld nodes, %lld announced",
+                      (long long)i, (long long)total);
+    g->nv = i;
+    if (st == QDC_OK)
+        st = nodes_done(g, err);
+    return st == QDC_OK ? want_end(g, "Nodes", err) : st;
+}
+
+/* $Nodes (2.2 ASCII): "n", then "tag x y z" lines. */
+static qdc_status nodes22(gmsh *g, qdc_error *err)
+{
+    int64_t total;
+    qdc_status st = txt_count(&g->s, "$Nodes", 4, MESH_MAX_VERTICES, &total, err);
+
+    if (st == QDC_OK)
+        st = nodes_alloc(g, total, err);
+    for (int64_t i = 0; i < total && st == QDC_OK; i++) {
+        st = txt_int(&g->s, "$Nodes: node tag", 1, INT32_MAX, &g->tags[i], err);
+        for (int a = 0; a < 3 && st == QDC_OK; a++)
+            st = txt_real(&g->s, "$Nodes: coordinate", &g->xyz[3 * i + a], err);
+        if (st != QDC_OK)
+            set_index(err, "vertex", i);
+    }
+    g->nv = total;
+    if (st == QDC_OK)
+        st = nodes_done(g, err);
+    return st == QDC_OK ? want_end(g, "Nodes", err) : st;
+}
+
+/* Room for c more elements of kind k. */
+static qdc_status elems_grow(gmsh *g, int k, int64_t c, qdc_error *err)
+{
+    elems *e = &g->el[k];
+
+    if (e->idx.n / (size_t)(3 + k) + (size_t)c >
+        (size_t)(k ? MESH_MAX_TETS : INT32_MAX / 3))
+        return qdc_fail(err, QDC_ETOOBIG, "more than %d %ss",
+                        k ? MESH_MAX_TETS : INT32_MAX / 3, elem_names[k]);
+    if (vec_grow(&e->idx, (size_t)c * (size_t)(3 + k)) != 0 ||
+        vec_grow(&e->phys, (size_t)c) != 0 || vec_grow(&e->ent, (size_t)c) != 0)
+        return qdc_fail(err, QDC_ENOMEM, "out of memory for %lld %ss", (long long)c,
+                        elem_names[k]);
+    return QDC_OK;
+}
+
+/* One node reference: tag -> index. */
+static qdc_status node_ref(gmsh *g, int k, int32_t *out, qdc_error *err)
+{
+    const char *at = g->s.p;
+    int64_t tag, i;
+    qdc_status st = g_int(g, "$Elements: node tag", 1, INT64_MAX, &tag, err);
+
+    if (st != QDC_OK)
+        return st;
+    i = tagmap_find(&g->tm, tag);
+    if (i < 0) {
+        if (g->binary)
+            fail_bin(err, QDC_EPARSE, at - g->s.base,
+                     "$Elements: %s: unknown node tag %lld", elem_names[k],
+                     (long long)tag);
+        else
+            fail_txt(err, QDC_EPARSE, &g->s, at, "$Elements: %s: unknown node tag %lld",
+                     elem_names[k], (long long)tag);
+        set_index(err, elem_names[k], (int64_t)(g->el[k].phys.n));
+        return QDC_EPARSE;
+    }
+    *out = (int32_t)i;
+    return QDC_OK;
+}
+
+/* One element of kind k: its nodes (the element tag was read). */
+static qdc_status elem_nodes(gmsh *g, int k, int32_t phys, int32_t ent, qdc_error *err)
+{
+    elems *e = &g->el[k];
+    int32_t *idx = (int32_t *)e->idx.a + e->idx.n;
+    qdc_status st = QDC_OK;
+
+    for (int j = 0; j < 3 + k && st == QDC_OK; j++)
+        st = node_ref(g, k, &idx[j], err);
+    if (st != QDC_OK)
+        return st;
+    e->idx.n += (size_t)(3 + k);
+    ((int32_t *)e->phys.a)[e->phys.n++] = phys;
+    ((int32_t *)e->ent.a)[e->ent.n++] = ent;
+    return QDC_OK;
+}
+
+/* Skip the rest of an ASCII line (an element of a type we don't read). */
+static void skip_line(txt *s)
+{
+    while (s->p < s->end && *s->p != '\n')
+        s->p++;
+}
+
+/* $Elements (4.1): blocks of one type on one entity. */
+static qdc_status elements41(gmsh *g, qdc_error *err)
+{
+    int64_t nblk, total, v, dim, etag, type, c;
+    int32_t phys;
+    qdc_status st;
+
+    st = g_count(g, "$Elements: block count", 4, 16, INT32_MAX, &nblk, err);
+    if (st == QDC_OK)
+        st = g_count(g, "$Elements: element count", 2, 16, INT64_MAX, &total, err);
+    for (int k = 0; k < 2 && st == QDC_OK; k++)
+        st = g_int(g, "$Elements: element tag bound", 0, INT64_MAX, &v, err);
+    for (int64_t b = 0; b < nblk && st == QDC_OK; b++) {
+        const char *at;
+        int64_t nn;
+        int k;
+        st = g_i32(g, "$Elements: entity dimension", 0, 3, &dim, err);
+        if (st == QDC_OK)
+            st = g_i32(g, "$Elements: entity tag", INT32_MIN, INT32_MAX, &etag, err);
+        at = g->s.p;
+        if (st == QDC_OK)
+            st = g_i32(g, "$Elements: element type", INT32_MIN, INT32_MAX, &type, err);
+        if (st != QDC_OK)
+            break;
+        nn = type_nodes(type);
+        if (!nn && g->binary)
+            return fail_bin(err, QDC_EFORMAT, at - g->s.base,
+                            "$Elements: unknown element type %lld", (long long)type);
+        st = g_count(g, "$Elements: elements in block", 2,
+                     (uint64_t)(nn + 1) * (uint64_t)g->dsize, INT64_MAX, &c, err);
+        if (st != QDC_OK)
+            break;
+        k = type == 4 ? 1 : type == 2 ? 0 : -1;
+        if (k < 0) {
+            skip_count(&g->sk, type, c);
+            if (g->binary) {
+                g->s.p += (size_t)c * (size_t)(nn + 1) * (size_t)g->dsize;
+            } else {
+                for (int64_t j = 0; j < c; j++) {
+                    skip_ws(&g->s);
+                    skip_line(&g->s);
+                }
+            }
+            continue;
+        }
+        st = elems_grow(g, k, c, err);
+        phys = entity_phys(g, k, etag);
+        for (int64_t j = 0; j < c && st == QDC_OK; j++) {
+            st = g_int(g, "$Elements: element tag", 0, INT64_MAX, &v, err);
+            if (st == QDC_OK)
+                st = elem_nodes(g, k, phys, (int32_t)etag, err);
+        }
+    }
+    return st == QDC_OK ? want_end(g, "Elements", err) : st;
+}
+
+/* $Elements (2.2 ASCII): "tag type ntags tags... nodes...". */
+static qdc_status elements22(gmsh *g, qdc_error *err)
+{
+    txt *s = &g->s;
+    int64_t total, v, type, ntags, phys, ent;
+    qdc_status st = txt_count(s, "$Elements", 4, INT64_MAX, &total, err);
+
+    for (int64_t i = 0; i < total && st == QDC_OK; i++) {
+        int k;
+        st = txt_int(s, "$Elements: element tag", 0, INT64_MAX, &v, err);
+        if (st == QDC_OK)
+            st = txt_int(s, "$Elements: element type", INT32_MIN, INT32_MAX, &type, err);
+        if (st != QDC_OK)
+            break;
+        k = type == 4 ? 1 : type == 2 ? 0 : -1;
+        if (k < 0) {
+            skip_count(&g->sk, type, 1);
+            skip_line(s);
+            continue;
+        }
+        st = txt_int(s, "$Elements: tag count", 0, 1000, &ntags, err);
+        phys = ent = 0;
+        for (int64_t j = 0; j < ntags && st == QDC_OK; j++) {
+            st = txt_int(s, "$Elements: tag", INT32_MIN, INT32_MAX, &v, err);
+            if (j == 0)
+                phys = v;
+            else if (j == 1)
+                ent = v;
+        }
+        if (st == QDC_OK)
+            st = elems_grow(g, k, 1, err);
+        if (st == QDC_OK)
+            st = elem_nodes(g, k, (int32_t)phys, (int32_t)ent, err);
+    }
+    return st == QDC_OK ? want_end(g, "Elements", err) : st;
+}
+
+static qdc_status gmsh_section(gmsh *g, const char *name, size_t nlen, qdc_error *err)
+{
+    if (word_is(name, nlen, "Entities") && g->v41) {
+        end_of_line(g);
+        return entities(g, err);
+    }
+    if (word_is(name, nlen, "Nodes")) {
+        if (g->have_nodes)
+            return fail_txt(err, QDC_EPARSE, &g->s, name - 1, "duplicate $Nodes section");
+        end_of_line(g);
+        return g->v41 ? nodes41(g, err) : nodes22(g, err);
+    }
+    if (word_is(name, nlen, "Elements")) {
+        if (!g->have_nodes)
+            return fail_txt(err, QDC_EPARSE, &g->s, name - 1, "$Elements before $Nodes");
+        if (g->el[0].phys.n || g->el[1].phys.n)
+            return fail_txt(err, QDC_EPARSE, &g->s, name - 1,
+                            "duplicate $Elements section");
+        end_of_line(g);
+        return g->v41 ? elements41(g, err) : elements22(g, err);
+    }
+    return skip_section(g, name, nlen, err);
+}
+
+static qdc_status gmsh_mesh(gmsh *g, const meshio_options *o, mesh_t **out,
+                            qdc_error *err)
+{
+    parsed pm;
+    int32_t *reg[2];
+    qdc_status st;
+
+    for (int k = 0; k < 2; k++) {
+        pick_regions(g->el[k].phys.a, g->el[k].ent.a, (int64_t)g->el[k].phys.n, &reg[k]);
+        g->el[k].phys.a = g->el[k].ent.a = NULL;
+    }
+    parsed_init(&pm);
+    pm.nv = g->nv;
+    pm.xyz = g->xyz;
+    pm.nt = (int64_t)g->el[1].phys.n;
+    pm.tets = g->el[1].idx.a;
+    pm.region = reg[1];
+    pm.ntri = (int64_t)g->el[0].phys.n;
+    pm.tris = g->el[0].idx.a;
+    pm.tri_ref = pm.ntri ? reg[0] : NULL;
+    st = parsed_mesh(&pm, out, err);
+    qdc_free(reg[0]);
+    qdc_free(reg[1]);
+    skip_note(o, &g->sk, "gmsh", "elements");
+    return st;
+}
+
+qdc_status meshio_gmsh_read(const char *buf, size_t len, const meshio_options *o,
+                            mesh_t **out, qdc_error *err)
+{
+    gmsh g;
+    const char *name = NULL;
+    size_t nlen;
+    qdc_status st;
+
+    memset(&g, 0, sizeof g);
+    for (int k = 0; k < 2; k++) {
+        g.ent[k].size = sizeof(int64_t);
+        g.el[k].idx.size = g.el[k].phys.size = g.el[k].ent.size = sizeof(int32_t);
+    }
+    g.s = txt_init(buf, len, 0);
+    g.b = (const unsigned char *)buf;
+    st = next_marker(&g, &name, &nlen, err);
+    if (st == QDC_OK && !word_is(name, nlen, "MeshFormat"))
+        st = fail_txt(err, QDC_EPARSE, &g.s, g.s.p, "expected $MeshFormat first");
+    if (st == QDC_OK) {
+        end_of_line(&g);
+        st = mesh_format(&g, err);
+    }
+    while (st == QDC_OK) {
+        st = next_marker(&g, &name, &nlen, err);
+        if (st != QDC_OK || !nlen)
+            break;
+        st = gmsh_section(&g, name, nlen, err);
+    }
+    if (st == QDC_OK && !g.have_nodes)
+        st = fail_txt(err, QDC_EPARSE, &g.s, g.s.p, "no $Nodes section");
+    if (st == QDC_OK)
+        st = gmsh_mesh(&g, o, out, err);
+    gmsh_free(&g);
+    return st;
+}
+
+/* ------------------------------------------------------------------------ */
+/* Writing                                                                   */
+
+static int cmp_i32(const void *a, const void *b)
+{
+    int32_t x = *(const int32_t *)a, y = *(const int32_t *)b;
+
+    return (x > y) - (x < y);
+}
+
+/* The distinct values of v[n] (NULL: the single value 0), sorted. */
+typedef struct {
+    int32_t *u;
+    size_t n;
+} distinct;
+
+static int distinct_of(distinct *d, const int32_t *v, size_t n)
+{
+    d->n = 0;
+    d->u = qdc_mallocn(n + 1, sizeof(int32_t));
+    if (!d->u)
+        return -1;
+    if (!v || !n) {
+        d->u[d->n++] = 0;
+        return 0;
+    }
+    memcpy(d->u, v, n * sizeof(int32_t));
+    qsort(d->u, n, sizeof(int32_t), cmp_i32);
+    for (size_t i = 0; i < n; i++)
+        if (!d->n || d->u[d->n - 1] != d->u[i])
+            d->u[d->n++] = d->u[i];
+    return 0;
+}
+
+/* 1-based entity tag of value x. */
+static int64_t entity_of(const distinct *d, const int32_t *v, size_t i)
+{
+    int32_t x = v ? v[i] : 0;
+    const int32_t *p = bsearch(&x, d->u, d->n, sizeof(int32_t), cmp_i32);
+
+    return p ? p - d->u + 1 : 1;
+}
+
+typedef struct {
+    wbuf *w;
+    int bin;
+} gw;
+
+static void gw_size(gw *g, uint64_t v, const char *sep)
+{
+    unsigned char b[8];
+
+    if (g->bin) {
+        put_le64(b, v);
+        wb_put(g->w, b, 8);
+        return;
+    }
+    wb_int(g->w, (int64_t)v);
+    wb_str(g->w, sep);
+}
+
+static void gw_i32(gw *g, int64_t v, const char *sep)
+{
+    unsigned char b[4];
+
+    if (g->bin) {
+        put_le32(b, (uint32_t)(int32_t)v);
+        wb_put(g->w, b, 4);
+        return;
+    }
+    wb_int(g->w, v);
+    wb_str(g->w, sep);
+}
+
+static void gw_real(gw *g, double x, const char *sep)
+{
+    unsigned char b[8];
+    uint64_t u;
+
+    if (g->bin) {
+        memcpy(&u, &x, 8);
+        put_le64(b, u);
+        wb_put(g->w, b, 8);
+        return;
+    }
+    wb_real(g->w, x);
+    wb_str(g->w, sep);
+}
+
+/* Surfaces (k=0) or volumes (k=1) of $Entities, one per distinct tag value;
+ * value 0 has no physical tag. */
+static void write_entities(gw *g, const distinct *d, const double lo[3],
+                           const double hi[3])
+{
+    for (size_t i = 0; i < d->n; i++) {
+        gw_i32(g, (int64_t)i + 1, " ");
+        for (int a = 0; a < 6; a++)
+            gw_real(g, a < 3 ? lo[a] : hi[a - 3], " ");
+        gw_size(g, d->u[i] != 0, " ");
+        if (d->u[i] != 0)
+            gw_i32(g, d->u[i], " ");
+        gw_size(g, 0, "\n");
+    }
+}
+
+/* Elements of one kind as blocks of consecutive equal tags (order kept). */
+static void write_blocks(gw *g, int dim, int type, const int32_t *idx, int k,
+                         const int32_t *tag, int32_t n, const distinct *d, int64_t *etag)
+{
+    for (int32_t i = 0; i < n;) {
+        int32_t j = i + 1;
+        if (!tag)
+            j = n;
+        while (j < n && tag[j] == tag[i])
+            j++;
+        gw_i32(g, dim, " ");
+        gw_i32(g, entity_of(d, tag, (size_t)i), " ");
+        gw_i32(g, type, " ");
+        gw_size(g, (uint64_t)(j - i), "\n");
+        for (; i < j; i++) {
+            gw_size(g, (uint64_t)++ * etag, " ");
+            for (int a = 0; a < k; a++)
+                gw_size(g, (uint64_t)idx[(size_t)k * (size_t)i + (size_t)a] + 1,
+                        a + 1 < k ? " " : "\n");
+        }
+    }
+}
+
+static int32_t count_blocks(const int32_t *tag, int32_t n)
+{
+    int32_t b = n > 0;
+
+    for (int32_t i = 1; tag && i < n; i++)
+        b += tag[i] != tag[i - 1];
+    return b;
+}
+
+static void write41(const mesh_t *m, const distinct d[2], wbuf *w, int bin)
+{
+    gw g = {w, bin};
+    double lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
+    int64_t etag = 0;
+    int32_t nb = count_blocks(m->region, m->nt) + count_blocks(m->tri_ref, m->ntri);
+    unsigned char one[4];
+
+    if (m->nv)
+        mesh_bbox(m, lo, hi);
+    wb_str(w, bin ? "$MeshFormat\n4.1 1 8\n" : "$MeshFormat\n4.1 0 8\n");
+    if (bin) {
+        put_le32(one, 1);
+        wb_put(w, one, 4);
+        wb_str(w, "\n");
+    }
+    wb_str(w, "$EndMeshFormat\n$Entities\n");
+    gw_size(&g, 0, " ");
+    gw_size(&g, 0, " ");
+    gw_size(&g, m->ntri ? d[0].n : 0, " ");
+    gw_size(&g, d[1].n, "\n");
+    if (m->ntri)
+        write_entities(&g, &d[0], lo, hi);
+    write_entities(&g, &d[1], lo, hi);
+    wb_str(w, bin ? "\n$EndEntities\n$Nodes\n" : "$EndEntities\n$Nodes\n");
+    gw_size(&g, m->nv ? 1 : 0, " ");
+    gw_size(&g, (uint64_t)m->nv, " ");
+    gw_size(&g, m->nv ? 1 : 0, " ");
+    gw_size(&g, (uint64_t)m->nv, "\n");
+    if (m->nv) {
+        gw_i32(&g, 3, " ");
+        gw_i32(&g, 1, " ");
+        gw_i32(&g, 0, " ");
+        gw_size(&g, (uint64_t)m->nv, "\n");
+        for (int32_t i = 0; i < m->nv; i++)
+            gw_size(&g, (uint64_t)i + 1, "\n");
+        for (size_t i = 0; i < 3 * (size_t)m->nv; i++)
+            gw_real(&g, m->xyz[i], i % 3 == 2 ? "\n" : " ");
+    }
+    wb_str(w, bin ? "\n$EndNodes\n$Elements\n" : "$EndNodes\n$Elements\n");
+    gw_size(&g, (uint64_t)nb, " ");
+    gw_size(&g, (uint64_t)m->nt + (uint64_t)m->ntri, " ");
+    gw_size(&g, m->nt + m->ntri ? 1 : 0, " ");
+    gw_size(&g, (uint64_t)m->nt + (uint64_t)m->ntri, "\n");
+    write_blocks(&g, 3, 4, m->tets, 4, m->region, m->nt, &d[1], &etag);
+    write_blocks(&g, 2, 2, m->tris, 3, m->tri_ref, m->ntri, &d[0], &etag);
+    wb_str(w, bin ? "\n$EndElements\n" : "$EndElements\n");
+}
+
+/* Elementary tags follow the regions (as in 4.1), so Gmsh's entities match
+ * its physical groups. */
+static void write22(const mesh_t *m, const distinct d[2], wbuf *w)
+{
+    wb_str(w, "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n");
+    wb_int(w, m->nv);
+    wb_str(w, "\n");
+    for (int32_t i = 0; i < m->nv; i++) {
+        wb_int(w, (int64_t)i + 1);
+        wb_str(w, " ");
+        wb_reals(w, m->xyz + 3 * (size_t)i, 3, " ", "\n");
+    }
+    wb_str(w, "$EndNodes\n$Elements\n");
+    wb_int(w, (int64_t)m->nt + m->ntri);
+    wb_str(w, "\n");
+    for (int32_t t = 0; t < m->nt; t++) {
+        wb_int(w, (int64_t)t + 1);
+        wb_str(w, " 4 2 ");
+        wb_int(w, m->region ? m->region[t] : 0);
+        wb_str(w, " ");
+        wb_int(w, entity_of(&d[1], m->region, (size_t)t));
+        wb_str(w, " ");
+        wb_ints(w, m->tets + 4 * (size_t)t, 4, 1, " ", "\n");
+    }
+    for (int32_t t = 0; t < m->ntri; t++) {
+        wb_int(w, (int64_t)m->nt + t + 1);
+        wb_str(w, " 2 2 ");
+        wb_int(w, m->tri_ref ? m->tri_ref[t] : 0);
+        wb_str(w, " ");
+        wb_int(w, entity_of(&d[0], m->tri_ref, (size_t)t));
+        wb_str(w, " ");
+        wb_ints(w, m->tris + 3 * (size_t)t, 3, 1, " ", "\n");
+    }
+    wb_str(w, "$EndElements\n");
+}
+
+qdc_status meshio_gmsh_write(const mesh_t *m, meshio_format fmt, wbuf *w, qdc_error *err)
+{
+    distinct d[2] = {{NULL, 0}, {NULL, 0}};
+    qdc_status st = QDC_OK;
+
+    if (distinct_of(&d[0], m->tri_ref, (size_t)m->ntri) != 0 ||
+        distinct_of(&d[1], m->region, (size_t)m->nt) != 0)
+        st = qdc_fail(err, QDC_ENOMEM, "out of memory for the Gmsh entities");
+    else if (fmt == MESHIO_GMSH22)
+        write22(m, d, w);
+    else
+        write41(m, d, w, fmt == MESHIO_GMSH41_BIN);
+    qdc_free(d[0].u);
+    qdc_free(d[1].u);
+    return st;
+}

@@ -1,0 +1,711 @@
+/* meshio_scan.h - internal to the meshio_* modules: the text scanner, number
+ * parsers, error helpers, growable arrays, the parsed-mesh builder and the
+ * buffered writer shared by every format. Not a public header.
+ *
+ * Text numbers take an exact fast path (Clinger: an integer mantissa below
+ * 2^53 times or divided by an exact power of ten is one correctly rounded
+ * operation) and fall back to strtod otherwise; writers print %.17g. Together
+ * these make write-then-read the identity on every double.
+ *
+ * Everything is static inline so the hot scanners inline into each parser. */
+#ifndef QDC_MESHIO_SCAN_H
+#define QDC_MESHIO_SCAN_H
+
+#include "core/base.h"
+#include "core/mesh.h"
+#include "io/meshio.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+
+static inline int is_space(unsigned char c)
+{
+    return c == ' ' || c == '\n' || c == '\t' || c == '\r' || c == '\f' || c == '\v';
+}
+
+static inline int is_alpha(unsigned char c)
+{
+    return (c | 0x20) >= 'a' && (c | 0x20) <= 'z';
+}
+
+static inline int is_word(unsigned char c)
+{
+    return is_alpha(c) || (c >= '0' && c <= '9') || c == '_';
+}
+
+static inline int word_is(const char *w, size_t n, const char *kw)
+{
+    return strlen(kw) == n && strncasecmp(w, kw, n) == 0;
+}
+
+/* ------------------------------------------------------------------------ */
+/* Errors                                                                    */
+
+static inline qdc_status vfail_at(qdc_error *err, qdc_status st, int64_t line,
+                                  int64_t col, int64_t offset, const char *fmt,
+                                  va_list ap)
+{
+    char msg[sizeof err->msg];
+
+    if (!err)
+        return st;
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    qdc_fail(err, st, "%s", msg);
+    err->line = line;
+    err->col = col;
+    err->offset = offset;
+    return st;
+}
+
+/* A binary input failed at byte offset `off`. */
+static inline qdc_status fail_bin(qdc_error *err, qdc_status st, int64_t off,
+                                  const char *fmt, ...)
+    __attribute__((format(printf, 4, 5)));
+
+static inline qdc_status fail_bin(qdc_error *err, qdc_status st, int64_t off,
+                                  const char *fmt, ...)
+{
+    va_list ap;
+
+    va_start(ap, fmt);
+    vfail_at(err, st, -1, -1, off, fmt, ap);
+    va_end(ap);
+    return st;
+}
+
+static inline void set_index(qdc_error *err, const char *kind, int64_t index)
+{
+    if (!err)
+        return;
+    err->index = index;
+    snprintf(err->kind, sizeof err->kind, "%s", kind);
+}
+
+/* ------------------------------------------------------------------------ */
+/* Text scanning                                                             */
+
+typedef struct {
+    const char *base, *p, *end;
+    const char *bol; /* beginning of the current line */
+    int64_t line;    /* 1-based */
+    int hash;        /* '#' starts a comment (Medit, TetGen; not JSON) */
+} txt;
+
+static inline txt txt_init(const char *buf, size_t len, int hash)
+{
+    txt s;
+
+    s.base = s.p = s.bol = buf;
+    s.end = buf + len;
+    s.line = 1;
+    s.hash = hash;
+    return s;
+}
+
+static inline void skip_ws(txt *s)
+{
+    const char *p = s->p, *end = s->end;
+
+    while (p < end) {
+        char c = *p;
+        if (c == '\n') {
+            s->line++;
+            s->bol = ++p;
+        } else if (c == ' ' || c == '\t' || c == '\r' || c == '\f' || c == '\v') {
+            p++;
+        } else if (c == '#' && s->hash) {
+            while (p < end && *p != '\n')
+                p++;
+        } else {
+            break;
+        }
+    }
+    s->p = p;
+}
+
+/* End of the whitespace-delimited token starting at t. */
+static inline const char *tok_end(const txt *s, const char *t)
+{
+    const char *p = t;
+
+    while (p < s->end && !is_space((unsigned char)*p) && !(*p == '#' && s->hash))
+        p++;
+    return p;
+}
+
+/* Printable copy of a token for messages: at most 24 bytes, non-ASCII as '?'
+ * (messages end up in JSON replies, which must be valid UTF-8). */
+static inline const char *quote_tok(char out[32], const txt *s, const char *t,
+                                    const char *te)
+{
+    size_t n = 0;
+
+    if (t >= s->end)
+        return "end of input";
+    if (te <= t)
+        te = t + 1;
+    out[n++] = '\'';
+    for (; t < te && n < 25; t++)
+        out[n++] = (*t >= 0x20 && *t < 0x7f) ? *t : '?';
+    if (t < te) {
+        out[n++] = '.';
+        out[n++] = '.';
+    }
+    out[n++] = '\'';
+    out[n] = '\0';
+    return out;
+}
+
+static inline qdc_status fail_txt(qdc_error *err, qdc_status st, const txt *s,
+                                  const char *at, const char *fmt, ...)
+    __attribute__((format(printf, 5, 6)));
+
+static inline qdc_status fail_txt(qdc_error *err, qdc_status st, const txt *s,
+                                  const char *at, const char *fmt, ...)
+{
+    va_list ap;
+
+    va_start(ap, fmt);
+    vfail_at(err, st, s->line, at - s->bol + 1, at - s->base, fmt, ap);
+    va_end(ap);
+    return st;
+}
+
+/* strtod on a NUL-terminated copy of [t, te). */
+static inline int slow_double(const char *t, const char *te, double *out)
+{
+    char tmp[512];
+    char *endp;
+    size_t n = (size_t)(te - t);
+
+    if (n == 0 || n >= sizeof tmp)
+        return -1;
+    memcpy(tmp, t, n);
+    tmp[n] = '\0';
+    *out = strtod(tmp, &endp);
+    return endp == tmp + n ? 0 : -1;
+}
+
+/* Decimal [t, te) to double, correctly rounded. Returns 0, or -1 on bad syntax.
+ * Trailing zeros of the mantissa are held back (5.0000000000000000e-01 is 5e-1),
+ * which keeps most printed values on the exact fast path. */
+static inline int parse_double(const char *t, const char *te, double *out)
+{
+    static const double pow10_exact[23] = {1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,
+                                           1e8,  1e9,  1e10, 1e11, 1e12, 1e13, 1e14, 1e15,
+                                           1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22};
+    const char *p = t;
+    uint64_t m = 0;
+    int neg = 0, nd = 0, ndig = 0, frac = 0, pend = 0, pend_frac = 0;
+    int64_t e10 = 0, ex = 0;
+
+    if (p < te && (*p == '+' || *p == '-'))
+        neg = *p++ == '-';
+    for (; p < te; p++) {
+        unsigned d = (unsigned)(unsigned char)*p - '0';
+        if (d > 9) {
+            if (*p == '.' && !frac) {
+                frac = 1;
+                continue;
+            }
+            break;
+        }
+        ndig++;
+        if (d == 0) {
+            if (m) {
+                pend++;
+                pend_frac += frac;
+            } else {
+                e10 -= frac;
+            }
+            continue;
+        }
+        if (nd + pend >= 19)
+            return slow_double(t, te, out);
+        nd += pend + 1;
+        for (; pend; pend--)
+            m *= 10;
+        e10 -= pend_frac + frac;
+        pend_frac = 0;
+        m = m * 10 + d;
+    }
+    if (ndig == 0)
+        return slow_double(t, te, out); /* "inf", "nan", hex: strtod decides */
+    e10 += pend - pend_frac;
+    if (p < te && (*p == 'e' || *p == 'E')) {
+        int eneg = 0, edig = 0;
+        p++;
+        if (p < te && (*p == '+' || *p == '-'))
+            eneg = *p++ == '-';
+        for (; p < te && (unsigned)(unsigned char)*p - '0' <= 9; p++, edig++)
+            if (ex < 100000)
+                ex = ex * 10 + (*p - '0');
+        if (!edig)
+            return -1;
+        e10 += eneg ? -ex : ex;
+    }
+    if (p != te)
+        return -1;
+    if (m == 0) {
+        *out = neg ? -0.0 : 0.0;
+        return 0;
+    }
+    if (m > (UINT64_C(1) << 53) || e10 < -22 || e10 > 22)
+        return slow_double(t, te, out);
+    *out = e10 < 0 ? (double)m / pow10_exact[-e10] : (double)m * pow10_exact[e10];
+    if (neg)
+        *out = -*out;
+    return 0;
+}
+
+/* Integer [t, te). strict (JSON): no '+', no leading zeros. Returns 0, -1 on
+ * bad syntax, -2 when the magnitude is beyond any count or index. */
+static inline int parse_int(const char *t, const char *te, int strict, int64_t *out)
+{
+    const char *p = t;
+    uint64_t u = 0;
+    int neg = 0, big = 0;
+
+    if (p < te && (*p == '-' || (*p == '+' && !strict)))
+        neg = *p++ == '-';
+    if (p == te || (strict && *p == '0' && te - p > 1))
+        return -1;
+    for (; p < te; p++) {
+        unsigned d = (unsigned)(unsigned char)*p - '0';
+        if (d > 9)
+            return -1;
+        if (u > UINT64_C(100000000000000000))
+            big = 1;
+        else
+            u = u * 10 + d;
+    }
+    if (big)
+        return -2;
+    *out = neg ? -(int64_t)u : (int64_t)u;
+    return 0;
+}
+
+/* The token [t, te) as an integer in [lo, hi]; on success the scanner moves past it. */
+static inline qdc_status tok_int(txt *s, const char *t, const char *te, int strict,
+                                 const char *what, int64_t lo, int64_t hi, int64_t *v,
+                                 qdc_error *err)
+{
+    char q[32];
+    int rc;
+
+    if (t == s->end)
+        return fail_txt(err, QDC_EPARSE, s, t, "%s: unexpected end of input", what);
+    rc = parse_int(t, te, strict, v);
+    if (rc == -1)
+        return fail_txt(err, QDC_EPARSE, s, t, "%s: expected an integer, got %s", what,
+                        quote_tok(q, s, t, tok_end(s, t)));
+    if (rc == -2 || *v < lo || *v > hi) /* the token is digits: print it as is */
+        return fail_txt(err, QDC_EPARSE, s, t, "%s %.*s%s out of range [%lld, %lld]",
+                        what, te - t > 24 ? 24 : (int)(te - t), t,
+                        te - t > 24 ? ".." : "", (long long)lo, (long long)hi);
+    s->p = te;
+    return QDC_OK;
+}
+
+static inline qdc_status tok_real(txt *s, const char *t, const char *te, const char *what,
+                                  double *v, qdc_error *err)
+{
+    char q[32];
+
+    if (t == s->end)
+        return fail_txt(err, QDC_EPARSE, s, t, "%s: unexpected end of input", what);
+    if (parse_double(t, te, v) != 0)
+        return fail_txt(err, QDC_EPARSE, s, t, "%s: expected a number, got %s", what,
+                        quote_tok(q, s, t, tok_end(s, t)));
+    if (!isfinite(*v))
+        return fail_txt(err, QDC_EPARSE, s, t, "%s %s is not finite (NaN/Inf)", what,
+                        quote_tok(q, s, t, te));
+    s->p = te;
+    return QDC_OK;
+}
+
+static inline qdc_status txt_int(txt *s, const char *what, int64_t lo, int64_t hi,
+                                 int64_t *v, qdc_error *err)
+{
+    skip_ws(s);
+    return tok_int(s, s->p, tok_end(s, s->p), 0, what, lo, hi, v, err);
+}
+
+static inline qdc_status txt_real(txt *s, const char *what, double *v, qdc_error *err)
+{
+    skip_ws(s);
+    return tok_real(s, s->p, tok_end(s, s->p), what, v, err);
+}
+
+/* c entries of `tokens` tokens each still to come: every token needs a
+ * separator and one character, so the count is checked against the bytes left
+ * before the caller allocates anything. */
+static inline qdc_status txt_fits(txt *s, const char *at, const char *what, int64_t c,
+                                  uint64_t tokens, qdc_error *err)
+{
+    size_t left = (size_t)(s->end - s->p);
+
+    if ((uint64_t)c > left / 2 / tokens)
+        return fail_txt(err, QDC_EPARSE, s, at,
+                        "%s: count %lld does not fit in the %zu bytes left (truncated?)",
+                        what, (long long)c, left);
+    return QDC_OK;
+}
+
+/* A count of entries of at least `tokens` tokens each (see txt_fits). */
+static inline qdc_status txt_count(txt *s, const char *what, int tokens, int64_t max,
+                                   int64_t *c, qdc_error *err)
+{
+    const char *at;
+    qdc_status st;
+
+    skip_ws(s);
+    at = s->p;
+    st = tok_int(s, at, tok_end(s, at), 0, what, INT64_MIN, INT64_MAX, c, err);
+    if (st != QDC_OK)
+        return st;
+    if (*c < 0)
+        return fail_txt(err, QDC_EPARSE, s, at, "%s: negative count %lld", what,
+                        (long long)*c);
+    st = txt_fits(s, at, what, *c, (uint64_t)tokens, err);
+    if (st != QDC_OK)
+        return st;
+    if (*c > max)
+        return fail_txt(err, QDC_ETOOBIG, s, at, "%s: count %lld exceeds the limit %lld",
+                        what, (long long)*c, (long long)max);
+    return QDC_OK;
+}
+
+/* Nothing but whitespace and comments may follow the mesh. */
+static inline qdc_status txt_done(txt *s, const char *after, qdc_error *err)
+{
+    char q[32];
+
+    skip_ws(s);
+    if (s->p != s->end)
+        return fail_txt(err, QDC_EPARSE, s, s->p, "trailing data after %s: %s", after,
+                        quote_tok(q, s, s->p, tok_end(s, s->p)));
+    return QDC_OK;
+}
+
+/* ------------------------------------------------------------------------ */
+/* Growable arrays (JSON, Medit sections)                                    */
+
+typedef struct {
+    void *a;
+    size_t n, cap, size; /* elements used, allocated, element size */
+} vec;
+
+static inline int vec_grow(vec *v, size_t more)
+{
+    size_t cap;
+    void *a;
+
+    if (v->cap - v->n >= more)
+        return 0;
+    cap = v->cap ? v->cap : 256;
+    while (cap - v->n < more) {
+        if (cap > SIZE_MAX / 2 / v->size)
+            return -1;
+        cap *= 2;
+    }
+    a = qdc_realloc(v->a, cap * v->size);
+    if (!a)
+        return -1;
+    v->a = a;
+    v->cap = cap;
+    return 0;
+}
+
+static inline void vec_free(vec *v)
+{
+    qdc_free(v->a);
+    v->a = NULL;
+    v->n = v->cap = 0;
+}
+
+/* ------------------------------------------------------------------------ */
+/* Building the mesh                                                         */
+
+/* Parsed arrays before they become a mesh_t; counts -1 = section absent. */
+typedef struct {
+    int64_t nv, nt, ntri, nfix;
+    double *xyz;
+    int32_t *vref, *tets, *region, *tris, *tri_ref;
+    int32_t *fix; /* nfix indices of fixed vertices */
+} parsed;
+
+static inline void parsed_init(parsed *pm)
+{
+    memset(pm, 0, sizeof *pm);
+    pm->nv = pm->nt = pm->ntri = pm->nfix = -1;
+}
+
+static inline void parsed_free(parsed *pm)
+{
+    qdc_free(pm->xyz);
+    qdc_free(pm->vref);
+    qdc_free(pm->tets);
+    qdc_free(pm->region);
+    qdc_free(pm->tris);
+    qdc_free(pm->tri_ref);
+    qdc_free(pm->fix);
+    parsed_init(pm);
+}
+
+static inline void copy_opt(void *dst, const void *src, size_t bytes)
+{
+    if (dst && src && bytes)
+        memcpy(dst, src, bytes);
+}
+
+static inline qdc_status parsed_mesh(const parsed *pm, mesh_t **out, qdc_error *err)
+{
+    unsigned flags = 0;
+    int64_t nt = pm->nt < 0 ? 0 : pm->nt;
+    mesh_t *m;
+
+    if (pm->vref)
+        flags |= MESH_WITH_VREF;
+    if (pm->region)
+        flags |= MESH_WITH_REGION;
+    if (pm->nfix >= 0)
+        flags |= MESH_WITH_FIXED;
+    m = mesh_new((int32_t)pm->nv, (int32_t)nt, flags);
+    if (!m)
+        return qdc_fail(err, QDC_ENOMEM, "out of memory for a mesh of %lld vertices",
+                        (long long)pm->nv);
+    copy_opt(m->xyz, pm->xyz, (size_t)pm->nv * 3 * sizeof(double));
+    copy_opt(m->vref, pm->vref, (size_t)pm->nv * sizeof(int32_t));
+    copy_opt(m->tets, pm->tets, (size_t)nt * 4 * sizeof(int32_t));
+    copy_opt(m->region, pm->region, (size_t)nt * sizeof(int32_t));
+    for (int64_t i = 0; i < pm->nfix && m->fixed; i++)
+        m->fixed[pm->fix[i]] = 1;
+    if (pm->ntri > 0) {
+        if (mesh_set_tris(m, (int32_t)pm->ntri, pm->tri_ref != NULL) != QDC_OK) {
+            mesh_free(m);
+            return qdc_fail(err, QDC_ENOMEM, "out of memory for %lld triangles",
+                            (long long)pm->ntri);
+        }
+        memcpy(m->tris, pm->tris, (size_t)pm->ntri * 3 * sizeof(int32_t));
+        copy_opt(m->tri_ref, pm->tri_ref, (size_t)pm->ntri * sizeof(int32_t));
+    }
+    *out = m;
+    return QDC_OK;
+}
+
+/* Index of the first entry of idx[n] outside [0, nv), or -1. */
+static inline int64_t first_bad_index(const int32_t *idx, int64_t n, int64_t nv)
+{
+    for (int64_t i = 0; i < n; i++)
+        if (idx[i] < 0 || idx[i] >= nv)
+            return i;
+    return -1;
+}
+
+static inline uint32_t get_le32(const unsigned char *p)
+{
+    return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 |
+           (uint32_t)p[3] << 24;
+}
+
+static inline uint64_t get_le64(const unsigned char *p)
+{
+    return (uint64_t)get_le32(p) | (uint64_t)get_le32(p + 4) << 32;
+}
+
+static inline void put_le32(unsigned char *p, uint32_t v)
+{
+    for (int i = 0; i < 4; i++)
+        p[i] = (unsigned char)(v >> (8 * i));
+}
+
+static inline void put_le64(unsigned char *p, uint64_t v)
+{
+    put_le32(p, (uint32_t)v);
+    put_le32(p + 4, (uint32_t)(v >> 32));
+}
+
+enum { WB_CAP = 65536 };
+
+typedef struct {
+    qdc_write_fn fn;
+    void *ctx;
+    char *b;
+    size_t n;
+    int bad;
+} wbuf;
+
+static inline void wb_flush(wbuf *w)
+{
+    if (w->n && !w->bad && w->fn(w->ctx, w->b, w->n) != 0)
+        w->bad = 1;
+    w->n = 0;
+}
+
+static inline void wb_put(wbuf *w, const void *d, size_t len)
+{
+    if (len > WB_CAP - w->n) {
+        wb_flush(w);
+        if (len >= WB_CAP) {
+            if (!w->bad && w->fn(w->ctx, d, len) != 0)
+                w->bad = 1;
+            return;
+        }
+    }
+    memcpy(w->b + w->n, d, len);
+    w->n += len;
+}
+
+static inline void wb_str(wbuf *w, const char *s)
+{
+    wb_put(w, s, strlen(s));
+}
+
+static inline void wb_int(wbuf *w, int64_t v)
+{
+    char tmp[24];
+    int n = sizeof tmp;
+    uint64_t u = v < 0 ? 0 - (uint64_t)v : (uint64_t)v;
+
+    do {
+        tmp[--n] = (char)('0' + u % 10);
+        u /= 10;
+    } while (u);
+    if (v < 0)
+        tmp[--n] = '-';
+    wb_put(w, tmp + n, sizeof tmp - (size_t)n);
+}
+
+static inline void wb_real(wbuf *w, double x)
+{
+    if (WB_CAP - w->n < 32)
+        wb_flush(w);
+    w->n += (size_t)snprintf(w->b + w->n, 32, "%.17g", x);
+}
+
+/* Values separated by sep, ended by end. */
+static inline void wb_ints(wbuf *w, const int32_t *v, int n, int64_t add, const char *sep,
+                           const char *end)
+{
+    for (int i = 0; i < n; i++) {
+        wb_int(w, v[i] + add);
+        wb_str(w, i + 1 < n ? sep : end);
+    }
+}
+
+static inline void wb_reals(wbuf *w, const double *v, int n, const char *sep,
+                            const char *end)
+{
+    for (int i = 0; i < n; i++) {
+        wb_real(w, v[i]);
+        wb_str(w, i + 1 < n ? sep : end);
+    }
+}
+
+/* Writers refuse what no reader would take back. */
+static inline qdc_status check_for_write(const mesh_t *m, qdc_error *err)
+{
+    if (!m || m->nv < 0 || m->nt < 0 || m->ntri < 0 || (m->nv && !m->xyz) ||
+        (m->nt && !m->tets) || (m->ntri && !m->tris))
+        return qdc_fail(err, QDC_EINVAL, "meshio_write: invalid mesh");
+    for (int64_t i = 0; i < 3 * (int64_t)m->nv; i++)
+        if (!isfinite(m->xyz[i])) {
+            qdc_fail(err, QDC_EINVAL, "vertex %lld has a non-finite coordinate",
+                     (long long)(i / 3));
+            set_index(err, "vertex", i / 3);
+            return QDC_EINVAL;
+        }
+    if (first_bad_index(m->tets, 4 * (int64_t)m->nt, m->nv) >= 0 ||
+        first_bad_index(m->tris, 3 * (int64_t)m->ntri, m->nv) >= 0)
+        return qdc_fail(err, QDC_EINVAL, "meshio_write: vertex index out of range");
+    return QDC_OK;
+}
+
+/* ------------------------------------------------------------------------ */
+/* Notes and skipped element types                                           */
+
+static inline void note(const meshio_options *o, const char *fmt, ...)
+    __attribute__((format(printf, 2, 3)));
+
+static inline void note(const meshio_options *o, const char *fmt, ...)
+{
+    char msg[256];
+    va_list ap;
+
+    if (!o || !o->log)
+        return;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    o->log(o->log_ctx, 0, msg);
+}
+
+/* Element or cell types a reader skipped, counted for one note at the end. */
+enum { SKIP_TYPES = 128 };
+
+typedef struct {
+    int64_t n[SKIP_TYPES + 1]; /* last slot: types >= SKIP_TYPES or negative */
+} skipped;
+
+static inline void skip_count(skipped *sk, int64_t type, int64_t count)
+{
+    sk->n[type >= 0 && type < SKIP_TYPES ? type : SKIP_TYPES] += count;
+}
+
+/* "skipped 12 elements of type 15, 40 of type 1" through o->log. */
+static inline void skip_note(const meshio_options *o, const skipped *sk,
+                             const char *fmtname, const char *what)
+{
+    char msg[200];
+    size_t n = 0;
+
+    for (int t = 0; t <= SKIP_TYPES && n < sizeof msg - 40; t++) {
+        if (!sk->n[t])
+            continue;
+        n += (size_t)snprintf(msg + n, sizeof msg - n, "%s%lld %s of type %s%d",
+                              n ? ", " : "", (long long)sk->n[t], n ? "" : what,
+                              t == SKIP_TYPES ? ">=" : "", t);
+    }
+    if (n)
+        note(o, "%s: skipped %s (only tetrahedra and triangles are read)", fmtname, msg);
+}
+
+/* Regions from per-element physical tags phys[] (0 = none) and entity tags
+ * ent[]: the physical tags if any is non-zero, else the entity tags if they
+ * differ, else none (NULL). Returns the array to keep (phys or ent) and frees
+ * the other; *out NULL when neither is kept. */
+static inline void pick_regions(int32_t *phys, int32_t *ent, int64_t n, int32_t **out)
+{
+    int any = 0, differ = 0;
+
+    for (int64_t i = 0; i < n && !any; i++)
+        any = phys[i] != 0;
+    for (int64_t i = 1; i < n && !any && !differ; i++)
+        differ = ent[i] != ent[0];
+    *out = any ? phys : differ ? ent : NULL;
+    if (*out != phys)
+        qdc_free(phys);
+    if (*out != ent)
+        qdc_free(ent);
+}
+
+/* ------------------------------------------------------------------------ */
+/* Format modules, dispatched from meshio.c                                  */
+
+qdc_status meshio_gmsh_read(const char *buf, size_t len, const meshio_options *o,
+                            mesh_t **out, qdc_error *err);
+qdc_status meshio_gmsh_write(const mesh_t *m, meshio_format fmt, wbuf *w, qdc_error *err);
+qdc_status meshio_vtk_read(const char *buf, size_t len, const meshio_options *o,
+                           mesh_t **out, qdc_error *err);
+void meshio_vtk_write(const mesh_t *m, int binary, wbuf *w);
+qdc_status meshio_vtu_read(const char *buf, size_t len, const meshio_options *o,
+                           mesh_t **out, qdc_error *err);
+void meshio_vtu_write(const mesh_t *m, int appended, wbuf *w);
+
+#endif

@@ -1,0 +1,1461 @@
+/* meshio_vtk.c - VTK legacy .vtk (ASCII and binary UNSTRUCTURED_GRID, the
+ * 4.2 cell list and the 5.1 OFFSETS/CONNECTIVITY layouts) and VTK XML .vtu
+ * (ascii, inline base64 and appended raw/base64 DataArrays, no compression).
+ *
+ * Reference: "VTK File Formats" (VTK User's Guide, ch. 19 and the 5.1 notes).
+ * Every array is read into doubles (integers up to 2^53 are exact, floats
+ * widen exactly) so one reader serves all value types and encodings; indices,
+ * offsets and cell types are then checked to be integers in range. Cells of
+ * type 10 become tets and of type 5 surface triangles, others are skipped and
+ * counted for a note. The region is the cell array "region", "gmsh:physical" or
+ * "medit:ref" (in that order of preference), vref the point array "medit:ref".
+ * Legacy binary data are big-endian; XML data follow byte_order. */
+#include "io/meshio.h"
+#include "io/meshio_scan.h"
+
+typedef enum { T_I8, T_U8, T_I16, T_U16, T_I32, T_U32, T_I64, T_U64, T_F32, T_F64 } vtype;
+
+static const int vsize[] = {1, 1, 2, 2, 4, 4, 8, 8, 4, 8};
+
+static const struct {
+    const char *name;
+    vtype t;
+} vtype_names[] = {
+    {"Int8", T_I8},          {"UInt8", T_U8},
+    {"Int16", T_I16},        {"UInt16", T_U16},
+    {"Int32", T_I32},        {"UInt32", T_U32},
+    {"Int64", T_I64},        {"UInt64", T_U64},
+    {"Float32", T_F32},      {"Float64", T_F64},
+    {"char", T_I8},          {"unsigned_char", T_U8},
+    {"short", T_I16},        {"unsigned_short", T_U16},
+    {"int", T_I32},          {"unsigned_int", T_U32},
+    {"long", T_I64},         {"unsigned_long", T_U64},
+    {"float", T_F32},        {"double", T_F64},
+    {"vtktypeint64", T_I64}, {"vtktypeuint64", T_U64},
+    {"vtktypeint32", T_I32}, {"vtktypeuint32", T_U32},
+    {"vtkIdType", T_I64},
+};
+
+static int vtype_of(const char *w, size_t n, vtype *t)
+{
+    for (size_t i = 0; i < sizeof vtype_names / sizeof vtype_names[0]; i++)
+        if (word_is(w, n, vtype_names[i].name)) {
+            *t = vtype_names[i].t;
+            return 0;
+        }
+    return -1;
+}
+
+/* n values of type t from bytes b (big-endian if big) into out. */
+static void decode_values(const unsigned char *b, int64_t n, vtype t, int big,
+                          double *out)
+{
+    int sz = vsize[t];
+
+    for (int64_t i = 0; i < n; i++, b += sz) {
+        unsigned char q[8];
+        uint64_t u = 0;
+        for (int j = 0; j < sz; j++)
+            q[j] = b[big ? sz - 1 - j : j];
+        for (int j = sz - 1; j >= 0; j--)
+            u = u << 8 | q[j];
+        switch (t) {
+        case T_I8:
+            out[i] = (int8_t)u;
+            break;
+        case T_I16:
+            out[i] = (int16_t)u;
+            break;
+        case T_I32:
+            out[i] = (int32_t)u;
+            break;
+        case T_I64:
+            out[i] = (double)(int64_t)u;
+            break;
+        case T_F32: {
+            uint32_t u32 = (uint32_t)u;
+            float f;
+            memcpy(&f, &u32, 4);
+            out[i] = f;
+            break;
+        }
+        case T_F64:
+            memcpy(&out[i], &u, 8);
+            break;
+        default: /* unsigned */
+            out[i] = (double)u;
+            break;
+        }
+    }
+}
+
+/* ------------------------------------------------------------------------ */
+/* From arrays to a mesh (both formats)                                      */
+
+enum { PRIO_NONE = 99 };
+
+/* Cell and point arrays a reader collected, all as doubles. */
+typedef struct {
+    int64_t nv, nc;
+    double *xyz;  /* 3 nv */
+    double *conn; /* connectivity */
+    int64_t nconn;
+    double *offs;  /* nc + 1 offsets into conn, or NULL for the legacy list */
+    double *types; /* nc cell types */
+    double *creg;  /* nc region values, or NULL */
+    int creg_prio; /* 0 region, 1 gmsh:physical, 2 medit:ref */
+    double *vref;  /* nv, or NULL */
+} cells;
+
+static void cells_free(cells *c)
+{
+    qdc_free(c->xyz);
+    qdc_free(c->conn);
+    qdc_free(c->offs);
+    qdc_free(c->types);
+    qdc_free(c->creg);
+    qdc_free(c->vref);
+}
+
+static int region_prio(const char *name, size_t n)
+{
+    static const char *const names[] = {"region", "gmsh:physical", "medit:ref"};
+
+    for (int i = 0; i < 3; i++)
+        if (strlen(names[i]) == n && memcmp(name, names[i], n) == 0)
+            return i;
+    return PRIO_NONE;
+}
+
+static int is_int32(double x)
+{
+    return x == floor(x) && x >= INT32_MIN && x <= INT32_MAX;
+}
+
+static qdc_status cells_mesh(cells *c, const char *fmtname, const meshio_options *o,
+                             mesh_t **out, qdc_error *err)
+{
+    parsed pm;
+    skipped sk;
+    int64_t pos = 0, nt = 0, ntri = 0;
+    qdc_status st = QDC_OK;
+
+    memset(&sk, 0, sizeof sk);
+    parsed_init(&pm);
+    if (!c->types && c->nc)
+        return qdc_fail(err, QDC_EPARSE, "%s: no cell types", fmtname);
+    /* pass 0 counts and checks, pass 1 fills */
+    for (int pass = 0; pass < 2 && st == QDC_OK; pass++) {
+        pos = nt = ntri = 0;
+        for (int64_t i = 0; i < c->nc; i++) {
+            int64_t a, k, type;
+            double t = c->types[i];
+            if (c->offs) {
+                a = (int64_t)c->offs[i];
+                k = (int64_t)c->offs[i + 1] - a;
+            } else {
+                if (pos >= c->nconn || !is_int32(c->conn[pos]) || c->conn[pos] < 0)
+                    goto bad_list;
+                k = (int64_t)c->conn[pos];
+                a = pos + 1;
+                pos = a + k;
+                if (pos > c->nconn)
+                    goto bad_list;
+            }
+            type = is_int32(t) ? (int64_t)t : -1;
+            if (!((type == 10 && k == 4) || (type == 5 && k == 3))) {
+                if (pass == 0)
+                    skip_count(&sk, type, 1);
+                continue;
+            }
+            for (int64_t j = 0; j < k; j++) {
+                double v = c->conn[a + j];
+                if (pass == 0 && !(v == floor(v) && v >= 0 && v < (double)c->nv)) {
+                    st = qdc_fail(
+                        err, QDC_EPARSE,
+                        "%s: cell %lld: point index %.17g out of range [0, %lld]",
+                        fmtname, (long long)i, v, (long long)c->nv - 1);
+                    set_index(err, "cell", i);
+                    break;
+                }
+                if (pass == 1)
+                    (k == 4 ? pm.tets + 4 * nt : pm.tris + 3 * ntri)[j] = (int32_t)v;
+            }
+            if (st != QDC_OK)
+                break;
+            if (pass == 0 && c->creg && !is_int32(c->creg[i])) {
+                st = qdc_fail(err, QDC_EPARSE,
+                              "%s: cell %lld: region %.17g is not an int32", fmtname,
+                              (long long)i, c->creg[i]);
+                set_index(err, "cell", i);
+                break;
+            }
+            if (pass == 1 && c->creg)
+                *(k == 4 ? &pm.region[nt] : &pm.tri_ref[ntri]) = (int32_t)c->creg[i];
+            if (k == 4)
+                nt++;
+            else
+                ntri++;
+        }
+        if (st != QDC_OK || pass == 1)
+            break;
+        if (nt > MESH_MAX_TETS || ntri > INT32_MAX / 3) {
+            st = qdc_fail(err, QDC_ETOOBIG, "%s: %lld tets exceed the limit", fmtname,
+                          (long long)nt);
+            break;
+        }
+        pm.tets = qdc_mallocn((size_t)nt * 4 + 1, sizeof(int32_t));
+        pm.tris = qdc_mallocn((size_t)ntri * 3 + 1, sizeof(int32_t));
+        if (c->creg) {
+            pm.region = qdc_mallocn((size_t)nt + 1, sizeof(int32_t));
+            pm.tri_ref = qdc_mallocn((size_t)ntri + 1, sizeof(int32_t));
+        }
+        if (!pm.tets || !pm.tris || (c->creg && (!pm.region || !pm.tri_ref)))
+            st = qdc_fail(err, QDC_ENOMEM, "out of memory for %lld cells",
+                          (long long)c->nc);
+    }
+    for (int64_t i = 0; st == QDC_OK && c->vref && i < c->nv; i++)
+        if (!is_int32(c->vref[i])) {
+            st = qdc_fail(err, QDC_EPARSE,
+                          "%s: point %lld: medit:ref %.17g is not an int32", fmtname,
+                          (long long)i, c->vref[i]);
+            set_index(err, "vertex", i);
+        }
+    if (st == QDC_OK && c->vref) {
+        pm.vref = qdc_mallocn((size_t)c->nv + 1, sizeof(int32_t));
+        if (!pm.vref)
+            st = qdc_fail(err, QDC_ENOMEM, "out of memory");
+        for (int64_t i = 0; st == QDC_OK && i < c->nv; i++)
+            pm.vref[i] = (int32_t)c->vref[i];
+    }
+    if (st == QDC_OK) {
+        pm.nv = c->nv;
+        pm.xyz = c->xyz;
+        pm.nt = nt;
+        pm.ntri = ntri;
+        if (!ntri) {
+            qdc_free(pm.tri_ref);
+            pm.tri_ref = NULL;
+        }
+        st = parsed_mesh(&pm, out, err);
+        pm.xyz = NULL; /* owned by c */
+    }
+    parsed_free(&pm);
+    if (st == QDC_OK)
+        skip_note(o, &sk, fmtname, "cells");
+    return st;
+bad_list:
+    parsed_free(&pm);
+    return qdc_fail(err, QDC_EPARSE, "%s: CELLS list ends inside a cell (wrong counts)",
+                    fmtname);
+}
+
+/* Offsets of the 5.1 / XML layout: nc+1 non-decreasing integers within
+ * [0, nconn], with a leading 0 added for XML (which stores the ends only). */
+static qdc_status check_offsets(const double *offs, int64_t nc, int64_t nconn,
+                                const char *fmtname, qdc_error *err)
+{
+    for (int64_t i = 0; i <= nc; i++) {
+        double o = offs[i];
+        if (!(o == floor(o) && o >= 0 && o <= (double)nconn &&
+              (i == 0 || o >= offs[i - 1]))) {
+            qdc_fail(err, QDC_EPARSE,
+                     "%s: cell offset %lld (%.17g) is not within [%s, %lld]", fmtname,
+                     (long long)i, o, i ? "previous" : "0", (long long)nconn);
+            set_index(err, "cell", i);
+            return QDC_EPARSE;
+        }
+    }
+    return QDC_OK;
+}
+
+/* ------------------------------------------------------------------------ */
+/* Legacy reader                                                             */
+
+typedef struct {
+    txt s;
+    const unsigned char *b;
+    int binary;
+    cells c;
+    int attr;       /* 0 none, 1 CELL_DATA, 2 POINT_DATA */
+    int64_t attr_n; /* its count */
+} vtk;
+
+/* The next word into (w, n); n = 0 at the end of input. */
+static void next_word(vtk *v, const char **w, size_t *n)
+{
+    skip_ws(&v->s);
+    *w = v->s.p;
+    *n = (size_t)(tok_end(&v->s, v->s.p) - v->s.p);
+    v->s.p += *n;
+}
+
+/* Is the next line's first word `kw`? Consumed if so; nothing is skipped
+ * otherwise (binary data may follow). */
+static int next_is(vtk *v, const char *kw)
+{
+    txt save = v->s;
+    const char *w;
+    size_t n;
+
+    next_word(v, &w, &n);
+    if (word_is(w, n, kw))
+        return 1;
+    v->s = save;
+    return 0;
+}
+
+/* Binary data start right after the newline ending the keyword line. */
+static qdc_status data_start(vtk *v, qdc_error *err)
+{
+    txt *s = &v->s;
+    char q[32];
+
+    if (!v->binary)
+        return QDC_OK;
+    while (s->p < s->end && (*s->p == ' ' || *s->p == '\t' || *s->p == '\r'))
+        s->p++;
+    if (s->p == s->end || *s->p != '\n')
+        return fail_txt(err, QDC_EPARSE, s, s->p, "expected the end of the line, got %s",
+                        quote_tok(q, s, s->p, tok_end(s, s->p)));
+    s->p++;
+    s->line++;
+    s->bol = s->p;
+    return QDC_OK;
+}
+
+/* n values of type t; into out if not NULL (else checked and dropped).
+ * finite: NaN/Inf are errors. */
+static qdc_status vtk_values(vtk *v, const char *what, int64_t n, vtype t, int finite,
+                             double *out, qdc_error *err)
+{
+    txt *s = &v->s;
+    qdc_status st = data_start(v, err);
+
+    if (st != QDC_OK)
+        return st;
+    if (v->binary) {
+        size_t left = (size_t)(s->end - s->p), off = (size_t)(s->p - s->base);
+        if ((uint64_t)n > left / (uint64_t)vsize[t])
+            return fail_bin(
+                err, QDC_EPARSE, (int64_t)off,
+                "%s: %lld values of %d bytes do not fit in the %zu bytes left", what,
+                (long long)n, vsize[t], left);
+        if (out) {
+            decode_values(v->b + off, n, t, 1, out);
+            for (int64_t i = 0; finite && i < n; i++)
+                if (!isfinite(out[i]))
+                    return fail_bin(
+                        err, QDC_EPARSE, (int64_t)(off + (size_t)i * (size_t)vsize[t]),
+                        "%s: value %lld is not finite (NaN/Inf)", what, (long long)i);
+        }
+        s->p += (size_t)n * (size_t)vsize[t];
+        return QDC_OK;
+    }
+    for (int64_t i = 0; i < n; i++) {
+        double x;
+        const char *te;
+        char q[32];
+        skip_ws(s);
+        te = tok_end(s, s->p);
+        if (finite) {
+            st = tok_real(s, s->p, te, what, &x, err);
+            if (st != QDC_OK)
+                return st;
+        } else {
+            if (s->p == te || parse_double(s->p, te, &x) != 0)
+                return fail_txt(err, QDC_EPARSE, s, s->p, "%s: expected a number, got %s",
+                                what, quote_tok(q, s, s->p, te));
+            s->p = te;
+        }
+        if (out)
+            out[i] = x;
+    }
+    return QDC_OK;
+}
+
+/* A count on a keyword line, checked against the bytes left for `per` values
+ * of at least `minsz` bytes (binary) or 2 (text) each. */
+static qdc_status vtk_count(vtk *v, const char *what, uint64_t per, int64_t max,
+                            int64_t *c, qdc_error *err)
+{
+    qdc_status st = txt_count(&v->s, what, 1, max, c, err);
+
+    if (st == QDC_OK && per > 1)
+        st = txt_fits(&v->s, v->s.p, what, *c, per, err);
+    return st;
+}
+
+/* n values of type t can still follow: vsize bytes each in binary, a digit
+ * and a separator in text. */
+static qdc_status vtk_fits(vtk *v, const char *what, int64_t n, vtype t, qdc_error *err)
+{
+    size_t left = (size_t)(v->s.end - v->s.p);
+
+    if ((uint64_t)n > left / (v->binary ? (size_t)vsize[t] : 2))
+        return fail_txt(err, QDC_EPARSE, &v->s, v->s.p,
+                        "%s: %lld values do not fit in the %zu bytes left (truncated?)",
+                        what, (long long)n, left);
+    return QDC_OK;
+}
+
+static qdc_status vtk_type(vtk *v, const char *what, vtype *t, qdc_error *err)
+{
+    const char *w;
+    size_t n;
+    char q[32];
+
+    next_word(v, &w, &n);
+    if (!n || vtype_of(w, n, t) != 0)
+        return fail_txt(err, QDC_EPARSE, &v->s, w, "%s: unknown data type %s", what,
+                        quote_tok(q, &v->s, w, w + n));
+    return QDC_OK;
+}
+
+static double *alloc_values(int64_t n, qdc_error *err)
+{
+    double *a = qdc_mallocn((size_t)n + 1, sizeof(double));
+
+    if (!a)
+        qdc_fail(err, QDC_ENOMEM, "out of memory for %lld values", (long long)n);
+    return a;
+}
+
+/* An attribute array of v->attr_n tuples of ncomp values: kept if it is a
+ * region (cells) or medit:ref (points) with one component. */
+static qdc_status vtk_attr_array(vtk *v, const char *name, size_t nlen, int64_t ncomp,
+                                 vtype t, qdc_error *err)
+{
+    int prio = v->attr == 1 && ncomp == 1 ? region_prio(name, nlen) : PRIO_NONE;
+    int vref = v->attr == 2 && ncomp == 1 && region_prio(name, nlen) == 2;
+    double *dst = NULL;
+    int64_t n = v->attr_n * ncomp;
+    qdc_status st;
+
+    if (ncomp && (uint64_t)v->attr_n > (uint64_t)(v->s.end - v->s.p) / (uint64_t)ncomp)
+        return fail_txt(err, QDC_EPARSE, &v->s, v->s.p,
+                        "%.*s: %lld tuples do not fit in the bytes left",
+                        (int)(nlen > 32 ? 32 : nlen), name, (long long)v->attr_n);
+    if ((prio < v->c.creg_prio) || vref) {
+        dst = alloc_values(n, err);
+        if (!dst)
+            return QDC_ENOMEM;
+    }
+    st = vtk_values(v, "attribute", n, t, dst != NULL, dst, err);
+    if (st != QDC_OK || !dst) {
+        qdc_free(dst);
+        return st;
+    }
+    if (vref) {
+        qdc_free(v->c.vref);
+        v->c.vref = dst;
+    } else {
+        qdc_free(v->c.creg);
+        v->c.creg = dst;
+        v->c.creg_prio = prio;
+    }
+    return QDC_OK;
+}
+
+static qdc_status vtk_keyword(vtk *v, const char *w, size_t n, qdc_error *err)
+{
+    txt *s = &v->s;
+    const char *name, *tw;
+    size_t nl, tn;
+    int64_t c, c2, k;
+    vtype t;
+    char q[32];
+    qdc_status st;
+
+    if (word_is(w, n, "DATASET")) {
+        next_word(v, &tw, &tn);
+        if (!word_is(tw, tn, "UNSTRUCTURED_GRID"))
+            return fail_txt(err, QDC_EFORMAT, s, tw,
+                            "DATASET %s: only UNSTRUCTURED_GRID is supported",
+                            quote_tok(q, s, tw, tw + tn));
+        return QDC_OK;
+    }
+    if (word_is(w, n, "POINTS")) {
+        if (v->c.xyz)
+            return fail_txt(err, QDC_EPARSE, s, w, "duplicate POINTS");
+        st = vtk_count(v, "POINTS", 3, MESH_MAX_VERTICES, &v->c.nv, err);
+        if (st == QDC_OK)
+            st = vtk_type(v, "POINTS", &t, err);
+        if (st == QDC_OK && !(v->c.xyz = alloc_values(3 * v->c.nv, err)))
+            st = QDC_ENOMEM;
+        return st == QDC_OK
+                   ? vtk_values(v, "POINTS: coordinate", 3 * v->c.nv, t, 1, v->c.xyz, err)
+                   : st;
+    }
+    if (word_is(w, n, "CELLS")) {
+        if (v->c.types || v->c.conn)
+            return fail_txt(err, QDC_EPARSE, s, w, "CELLS after CELL_TYPES or twice");
+        st = vtk_count(v, "CELLS", 1, INT64_MAX, &c, err);
+        if (st == QDC_OK)
+            st = vtk_count(v, "CELLS: size", 1, INT64_MAX, &c2, err);
+        if (st != QDC_OK)
+            return st;
+        if (next_is(v, "OFFSETS")) { /* 5.1 */
+            if (c < 1)
+                return fail_txt(err, QDC_EPARSE, s, w,
+                                "CELLS: 5.1 layout needs n+1 >= 1 offsets");
+            v->c.nc = c - 1;
+            st = vtk_type(v, "OFFSETS", &t, err);
+            if (st == QDC_OK)
+                st = vtk_fits(v, "OFFSETS", c, t, err);
+            if (st == QDC_OK && !(v->c.offs = alloc_values(c, err)))
+                st = QDC_ENOMEM;
+            if (st == QDC_OK)
+                st = vtk_values(v, "OFFSETS", c, t, 1, v->c.offs, err);
+            next_word(v, &tw, &tn);
+            if (st == QDC_OK && !word_is(tw, tn, "CONNECTIVITY"))
+                st = fail_txt(err, QDC_EPARSE, s, tw, "expected CONNECTIVITY, got %s",
+                              quote_tok(q, s, tw, tw + tn));
+            if (st == QDC_OK)
+                st = vtk_type(v, "CONNECTIVITY", &t, err);
+            v->c.nconn = c2;
+        } else {
+            v->c.nc = c;
+            v->c.nconn = c2;
+            t = T_I32;
+        }
+        if (st == QDC_OK)
+            st = vtk_fits(v, "CELLS", v->c.nconn, t, err);
+        if (st == QDC_OK && !(v->c.conn = alloc_values(v->c.nconn, err)))
+            st = QDC_ENOMEM;
+        if (st == QDC_OK)
+            st = vtk_values(v, "CELLS", v->c.nconn, t, 1, v->c.conn, err);
+        if (st == QDC_OK && v->c.offs)
+            st = check_offsets(v->c.offs, v->c.nc, v->c.nconn, "vtk", err);
+        return st;
+    }
+    if (word_is(w, n, "CELL_TYPES")) {
+        if (!v->c.conn)
+            return fail_txt(err, QDC_EPARSE, s, w, "CELL_TYPES before CELLS");
+        if (v->c.types)
+            return fail_txt(err, QDC_EPARSE, s, w, "duplicate CELL_TYPES");
+        st = vtk_count(v, "CELL_TYPES", 1, INT64_MAX, &c, err);
+        if (st == QDC_OK && c != v->c.nc)
+            st = fail_txt(err, QDC_EPARSE, s, s->p, "CELL_TYPES %lld for %lld CELLS",
+                          (long long)c, (long long)v->c.nc);
+        t = T_I32;
+        if (st == QDC_OK)
+            st = vtk_fits(v, "CELL_TYPES", c, t, err);
+        if (st == QDC_OK && !(v->c.types = alloc_values(c, err)))
+            st = QDC_ENOMEM;
+        return st == QDC_OK ? vtk_values(v, "CELL_TYPES", c, t, 1, v->c.types, err) : st;
+    }
+    if (word_is(w, n, "CELL_DATA") || word_is(w, n, "POINT_DATA")) {
+        int cell = word_is(w, n, "CELL_DATA");
+        st = vtk_count(v, cell ? "CELL_DATA" : "POINT_DATA", 1, INT64_MAX, &c, err);
+        if (st == QDC_OK && c != (cell ? v->c.nc : v->c.nv))
+            st = fail_txt(err, QDC_EPARSE, s, s->p, "%s %lld for %lld %s",
+                          cell ? "CELL_DATA" : "POINT_DATA", (long long)c,
+                          (long long)(cell ? v->c.nc : v->c.nv),
+                          cell ? "cells" : "points");
+        v->attr = cell ? 1 : 2;
+        v->attr_n = c;
+        return st;
+    }
+    if (word_is(w, n, "METADATA")) { /* up to an empty line */
+        for (;;) {
+            const char *p = s->p;
+            while (p < s->end && *p != '\n')
+                p++;
+            if (p == s->end) {
+                s->p = p;
+                return QDC_OK;
+            }
+            s->p = p + 1;
+            s->line++;
+            s->bol = s->p;
+            p = s->p;
+            while (p < s->end && (*p == ' ' || *p == '\t' || *p == '\r'))
+                p++;
+            if (p == s->end || *p == '\n')
+                return QDC_OK;
+        }
+    }
+    if (!v->attr && !word_is(w, n, "FIELD"))
+        return fail_txt(err, QDC_EPARSE, s, w, "unexpected %s",
+                        quote_tok(q, s, w, w + n));
+    if (word_is(w, n, "SCALARS")) {
+        const char *save;
+        next_word(v, &name, &nl);
+        st = vtk_type(v, "SCALARS", &t, err);
+        k = 1;
+        /* optional component count on the same line */
+        while (s->p < s->end && (*s->p == ' ' || *s->p == '\t' || *s->p == '\r'))
+            s->p++;
+        if (st == QDC_OK && s->p < s->end && *s->p != '\n')
+            st = txt_int(s, "SCALARS: components", 1, 4, &k, err);
+        save = s->p;
+        next_word(v, &tw, &tn);
+        if (word_is(tw, tn, "LOOKUP_TABLE"))
+            next_word(v, &tw, &tn);
+        else
+            s->p = save;
+        return st == QDC_OK ? vtk_attr_array(v, name, nl, k, t, err) : st;
+    }
+    if (word_is(w, n, "VECTORS") || word_is(w, n, "NORMALS") ||
+        word_is(w, n, "TENSORS")) {
+        next_word(v, &name, &nl);
+        st = vtk_type(v, "VECTORS", &t, err);
+        return st == QDC_OK
+                   ? vtk_attr_array(v, "", 0, word_is(w, n, "TENSORS") ? 9 : 3, t, err)
+                   : st;
+    }
+    if (word_is(w, n, "TEXTURE_COORDINATES")) {
+        next_word(v, &name, &nl);
+        st = txt_int(s, "TEXTURE_COORDINATES: dimension", 1, 3, &k, err);
+        if (st == QDC_OK)
+            st = vtk_type(v, "TEXTURE_COORDINATES", &t, err);
+        return st == QDC_OK ? vtk_attr_array(v, "", 0, k, t, err) : st;
+    }
+    if (word_is(w, n, "LOOKUP_TABLE")) {
+        next_word(v, &name, &nl);
+        st = vtk_count(v, "LOOKUP_TABLE", 4, INT64_MAX, &c, err);
+        return st == QDC_OK ? vtk_values(v, "LOOKUP_TABLE", 4 * c,
+                                         v->binary ? T_U8 : T_F64, 0, NULL, err)
+                            : st;
+    }
+    if (word_is(w, n, "FIELD")) {
+        int save_attr = v->attr;
+        int64_t save_n = v->attr_n;
+        next_word(v, &name, &nl);
+        st = txt_int(s, "FIELD: array count", 0, 1 << 20, &c, err);
+        for (int64_t i = 0; i < c && st == QDC_OK; i++) {
+            next_word(v, &name, &nl);
+            if (word_is(name, nl, "NULL") || !nl)
+                continue;
+            st = txt_int(s, "FIELD: components", 0, 1 << 20, &k, err);
+            if (st == QDC_OK)
+                st = vtk_count(v, "FIELD: tuples", 1, INT64_MAX, &c2, err);
+            if (st == QDC_OK)
+                st = vtk_type(v, "FIELD", &t, err);
+            if (st != QDC_OK)
+                break;
+            /* a field array only counts as a region if it spans the attribute set */
+            if (!save_attr || c2 != save_n)
+                v->attr = 0;
+            v->attr_n = c2;
+            st = vtk_attr_array(v, name, nl, k, t, err);
+            v->attr = save_attr;
+            v->attr_n = save_n;
+        }
+        return st;
+    }
+    return fail_txt(err, QDC_EPARSE, s, w, "unsupported keyword %s",
+                    quote_tok(q, s, w, w + n));
+}
+
+qdc_status meshio_vtk_read(const char *buf, size_t len, const meshio_options *o,
+                           mesh_t **out, qdc_error *err)
+{
+    vtk v;
+    txt *s = &v.s;
+    const char *w;
+    size_t n;
+    char q[32];
+    qdc_status st = QDC_OK;
+
+    memset(&v, 0, sizeof v);
+    v.c.creg_prio = PRIO_NONE;
+    v.s = txt_init(buf, len, 0);
+    v.b = (const unsigned char *)buf;
+    if (len < 14 || memcmp(buf, "# vtk DataFile", 14) != 0)
+        return fail_txt(err, QDC_EPARSE, s, s->p,
+                        "not a legacy VTK file (no \"# vtk DataFile\")");
+    for (int line = 0; line < 2; line++) { /* version line, title line */
+        while (s->p < s->end && *s->p != '\n')
+            s->p++;
+        if (s->p == s->end)
+            return fail_txt(err, QDC_EPARSE, s, s->p, "VTK: truncated header");
+        s->p++;
+        s->line++;
+        s->bol = s->p;
+    }
+    next_word(&v, &w, &n);
+    if (word_is(w, n, "BINARY"))
+        v.binary = 1;
+    else if (!word_is(w, n, "ASCII"))
+        return fail_txt(err, QDC_EPARSE, s, w, "VTK: expected ASCII or BINARY, got %s",
+                        quote_tok(q, s, w, w + n));
+    for (;;) {
+        next_word(&v, &w, &n);
+        if (!n)
+            break;
+        st = vtk_keyword(&v, w, n, err);
+        if (st != QDC_OK)
+            break;
+    }
+    if (st == QDC_OK && !v.c.xyz)
+        st = fail_txt(err, QDC_EPARSE, s, s->p, "VTK: no POINTS");
+    if (st == QDC_OK)
+        st = cells_mesh(&v.c, "vtk", o, out, err);
+    cells_free(&v.c);
+    return st;
+}
+
+/* ------------------------------------------------------------------------ */
+/* Legacy writer                                                             */
+
+/* One value in the encoding of the file: big-endian bytes or text. */
+typedef struct {
+    wbuf *w;
+    int bin, big, per_line, i;
+    int bin_nl; /* binary arrays end with a newline (legacy), or not (appended) */
+} vw;
+
+static void vw_sep(vw *o)
+{
+    if (!o->bin)
+        wb_str(o->w, ++o->i % o->per_line ? " " : "\n");
+}
+
+static void vw_int(vw *o, int64_t x, int bytes)
+{
+    unsigned char b[8];
+
+    if (!o->bin) {
+        wb_int(o->w, x);
+        vw_sep(o);
+        return;
+    }
+    for (int j = 0; j < bytes; j++)
+        b[o->big ? bytes - 1 - j : j] = (unsigned char)((uint64_t)x >> (8 * j));
+    wb_put(o->w, b, (size_t)bytes);
+}
+
+static void vw_real(vw *o, double x)
+{
+    uint64_t u;
+
+    if (!o->bin) {
+        wb_real(o->w, x);
+        vw_sep(o);
+        return;
+    }
+    memcpy(&u, &x, 8);
+    vw_int(o, (int64_t)u, 8);
+}
+
+/* End of an array: a newline (text arrays end with one unless complete). */
+static void vw_end(vw *o)
+{
+    if (o->bin ? o->bin_nl : o->i % o->per_line != 0)
+        wb_str(o->w, "\n");
+    o->i = 0;
+}
+
+static int has_regions(const mesh_t *m)
+{
+    return m->region || (m->ntri && m->tri_ref);
+}
+
+static int32_t cell_region(const mesh_t *m, int64_t c)
+{
+    if (c < m->nt)
+        return m->region ? m->region[c] : 0;
+    return m->tri_ref ? m->tri_ref[c - m->nt] : 0;
+}
+
+void meshio_vtk_write(const mesh_t *m, int binary, wbuf *w)
+{
+    vw o = {w, binary, 1, 3, 0, 1};
+    int64_t nc = (int64_t)m->nt + m->ntri;
+
+    wb_str(w, "# vtk DataFile Version 4.2\nqdc\n");
+    wb_str(w, binary ? "BINARY\n" : "ASCII\n");
+    wb_str(w, "DATASET UNSTRUCTURED_GRID\nPOINTS ");
+    wb_int(w, m->nv);
+    wb_str(w, " double\n");
+    for (size_t i = 0; i < 3 * (size_t)m->nv; i++)
+        vw_real(&o, m->xyz[i]);
+    vw_end(&o);
+    wb_str(w, "CELLS ");
+    wb_int(w, nc);
+    wb_str(w, " ");
+    wb_int(w, 5 * (int64_t)m->nt + 4 * (int64_t)m->ntri);
+    wb_str(w, "\n");
+    for (int64_t c = 0; c < nc; c++) {
+        int k = c < m->nt ? 4 : 3;
+        const int32_t *v = k == 4 ? m->tets + 4 * c : m->tris + 3 * (c - m->nt);
+        o.per_line = k + 1;
+        o.i = 0;
+        vw_int(&o, k, 4);
+        for (int j = 0; j < k; j++)
+            vw_int(&o, v[j], 4);
+    }
+    o.i = 0;
+    vw_end(&o);
+    wb_str(w, "CELL_TYPES ");
+    wb_int(w, nc);
+    wb_str(w, "\n");
+    o.per_line = 16;
+    for (int64_t c = 0; c < nc; c++)
+        vw_int(&o, c < m->nt ? 10 : 5, 4);
+    vw_end(&o);
+    if (has_regions(m)) {
+        wb_str(w, "CELL_DATA ");
+        wb_int(w, nc);
+        wb_str(w, "\nSCALARS region int 1\nLOOKUP_TABLE default\n");
+        for (int64_t c = 0; c < nc; c++)
+            vw_int(&o, cell_region(m, c), 4);
+        vw_end(&o);
+    }
+    if (m->vref) {
+        wb_str(w, "POINT_DATA ");
+        wb_int(w, m->nv);
+        wb_str(w, "\nSCALARS medit:ref int 1\nLOOKUP_TABLE default\n");
+        for (int64_t i = 0; i < m->nv; i++)
+            vw_int(&o, m->vref[i], 4);
+        vw_end(&o);
+    }
+}
+
+/* ------------------------------------------------------------------------ */
+/* VTU reader                                                                */
+
+/* A start tag: its name and attribute text [a, ae). */
+typedef struct {
+    const char *name, *a, *ae, *after; /* after: first byte after '>' */
+    size_t nlen;
+    int closing, empty; /* </x>, <x/> */
+} xtag;
+
+typedef struct {
+    txt s;
+    const unsigned char *b;
+    int big, hdr8;        /* byte_order BigEndian, header_type UInt64 */
+    const char *appended; /* first byte after '_' in AppendedData, or NULL */
+    xtag conn_tag;        /* connectivity seen before offsets: read at the end */
+    txt conn_at;
+    int app_base64;
+    cells c;
+} vtu;
+
+/* The next tag at or after s->p (comments, <? ?> and text skipped). */
+static qdc_status next_tag(vtu *x, xtag *t, qdc_error *err)
+{
+    txt *s = &x->s;
+    const char *p = s->p, *e = s->end;
+
+    memset(t, 0, sizeof *t);
+    for (;;) {
+        while (p < e && *p != '<') {
+            if (*p == '\n') {
+                s->line++;
+                s->bol = p + 1;
+            }
+            p++;
+        }
+        if (p == e) {
+            s->p = p;
+            return QDC_OK;
+        }
+        if (e - p >= 4 && memcmp(p, "<!--", 4) == 0) {
+            const char *q = p + 4;
+            while (q + 3 <= e && memcmp(q, "-->", 3) != 0)
+                q++;
+            if (q + 3 > e)
+                return fail_txt(err, QDC_EPARSE, s, p, "VTU: unterminated comment");
+            p = q + 3;
+            continue;
+        }
+        if (e - p >= 2 && (p[1] == '?' || p[1] == '!')) {
+            while (p < e && *p != '>')
+                p++;
+            if (p == e)
+                return fail_txt(err, QDC_EPARSE, s, s->p,
+                                "VTU: unterminated declaration");
+            p++;
+            continue;
+        }
+        break;
+    }
+    s->p = p;
+    p++;
+    if (p < e && *p == '/') {
+        t->closing = 1;
+        p++;
+    }
+    t->name = p;
+    while (p < e && (is_word((unsigned char)*p) || *p == ':' || *p == '-'))
+        p++;
+    t->nlen = (size_t)(p - t->name);
+    t->a = p;
+    while (p < e && *p != '>') {
+        if (*p == '"' || *p == '\'') {
+            char qc = *p++;
+            while (p < e && *p != qc)
+                p++;
+            if (p == e)
+                break;
+        }
+        p++;
+    }
+    if (p == e || !t->nlen)
+        return fail_txt(err, QDC_EPARSE, s, s->p, "VTU: malformed tag");
+    t->ae = p;
+    t->empty = p > t->a && p[-1] == '/';
+    if (t->empty)
+        t->ae--;
+    t->after = p + 1;
+    s->p = t->after;
+    return QDC_OK;
+}
+
+/* Attribute `key` of t: its value in [*v, *ve); 0 if absent. */
+static int tag_attr(const xtag *t, const char *key, const char **v, const char **ve)
+{
+    size_t kl = strlen(key);
+    const char *p = t->a;
+
+    while (p < t->ae) {
+        const char *k = p, *ke;
+        char qc;
+        while (p < t->ae && *p != '=')
+            p++;
+        for (ke = p; ke > k && is_space((unsigned char)ke[-1]); ke--)
+            ;
+        while (k < ke && is_space((unsigned char)*k))
+            k++;
+        if (p == t->ae)
+            return 0;
+        p++;
+        while (p < t->ae && is_space((unsigned char)*p))
+            p++;
+        if (p == t->ae || (*p != '"' && *p != '\''))
+            return 0;
+        qc = *p++;
+        *v = p;
+        while (p < t->ae && *p != qc)
+            p++;
+        *ve = p;
+        if (p < t->ae)
+            p++;
+        if ((size_t)(ke - k) == kl && memcmp(k, key, kl) == 0)
+            return 1;
+    }
+    return 0;
+}
+
+static int attr_is(const xtag *t, const char *key, const char *val)
+{
+    const char *v, *ve;
+
+    return tag_attr(t, key, &v, &ve) && (size_t)(ve - v) == strlen(val) &&
+           memcmp(v, val, (size_t)(ve - v)) == 0;
+}
+
+static qdc_status attr_int(vtu *x, const xtag *t, const char *key, int64_t lo, int64_t hi,
+                           int64_t *out, qdc_error *err)
+{
+    const char *v, *ve;
+    int rc;
+
+    if (!tag_attr(t, key, &v, &ve))
+        return fail_txt(err, QDC_EPARSE, &x->s, t->name, "VTU: %.*s without %s",
+                        (int)(t->nlen > 32 ? 32 : t->nlen), t->name, key);
+    rc = parse_int(v, ve, 0, out);
+    if (rc != 0 || *out < lo || *out > hi)
+        return fail_txt(
+            err, QDC_EPARSE, &x->s, v, "VTU: %s=\"%.*s\" is not in [%lld, %lld]", key,
+            (int)(ve - v > 24 ? 24 : ve - v), v, (long long)lo, (long long)hi);
+    return QDC_OK;
+}
+
+static int b64_val(unsigned char c)
+{
+    if (c >= 'A' && c <= 'Z')
+        return c - 'A';
+    if (c >= 'a' && c <= 'z')
+        return c - 'a' + 26;
+    if (c >= '0' && c <= '9')
+        return c - '0' + 52;
+    return c == '+' ? 62 : c == '/' ? 63 : -1;
+}
+
+/* Decode base64 from [p, e) until `want` bytes are out (or e / a '<').
+ * Quanta are decoded one by one, so blocks encoded separately (header, then
+ * data, each with its padding) decode like one stream. Returns the bytes
+ * written; *endp = where decoding stopped. */
+static size_t b64_decode(const char *p, const char *e, unsigned char *out, size_t want,
+                         const char **endp)
+{
+    size_t n = 0;
+    int q[4], k = 0, pad = 0;
+
+    while (p < e && n < want && *p != '<') {
+        unsigned char c = (unsigned char)*p++;
+        int d = b64_val(c);
+        if (c == '=') {
+            pad++;
+            d = 0;
+        } else if (d < 0) {
+            continue; /* whitespace */
+        }
+        q[k++] = d;
+        if (k < 4)
+            continue;
+        k = 0;
+        {
+            unsigned char b3[3] = {(unsigned char)(q[0] << 2 | q[1] >> 4),
+                                   (unsigned char)(q[1] << 4 | q[2] >> 2),
+                                   (unsigned char)(q[2] << 6 | q[3])};
+            for (int j = 0; j < 3 - pad && n < want; j++)
+                out[n++] = b3[j];
+        }
+        pad = 0;
+    }
+    *endp = p;
+    return n;
+}
+
+/* The data of one DataArray with n values of type t into out (NULL: skip). */
+static qdc_status vtu_array(vtu *x, const xtag *t, int64_t n, vtype vt, int finite,
+                            double *out, qdc_error *err)
+{
+    const char *fv, *fe, *p;
+    txt *s = &x->s;
+    int64_t off;
+    uint64_t nbytes;
+    unsigned char *tmp = NULL;
+    const unsigned char *data;
+    size_t hsz = x->hdr8 ? 8 : 4, want = (size_t)n * (size_t)vsize[vt], got;
+    qdc_status st;
+
+    if (!tag_attr(t, "format", &fv, &fe))
+        fv = fe = "ascii";
+    if ((size_t)(fe - fv) == 5 && memcmp(fv, "ascii", 5) == 0) {
+        if (t->empty && n)
+            return fail_txt(err, QDC_EPARSE, s, t->name, "VTU: empty ascii DataArray");
+        for (int64_t i = 0; i < n; i++) {
+            double y;
+            const char *te;
+            char q[32];
+            skip_ws(s);
+            for (te = s->p; te < s->end && !is_space((unsigned char)*te) && *te != '<';
+                 te++)
+                ;
+            if (finite)
+                st = tok_real(s, s->p, te, "DataArray", &y, err);
+            else
+                st = s->p < te && parse_double(s->p, te, &y) == 0
+                         ? QDC_OK
+                         : fail_txt(err, QDC_EPARSE, s, s->p,
+                                    "DataArray: expected a number, got %s",
+                                    quote_tok(q, s, s->p, te));
+            if (st != QDC_OK)
+                return st;
+            s->p = te;
+            if (out)
+                out[i] = y;
+        }
+        return QDC_OK;
+    }
+    if ((size_t)(fe - fv) == 6 && memcmp(fv, "binary", 6) == 0) {
+        p = t->after;
+    } else if ((size_t)(fe - fv) == 8 && memcmp(fv, "appended", 8) == 0) {
+        if (!x->appended)
+            return fail_txt(err, QDC_EPARSE, s, t->name,
+                            "VTU: appended DataArray without AppendedData");
+        st = attr_int(x, t, "offset", 0, (int64_t)(s->end - x->appended), &off, err);
+        if (st != QDC_OK)
+            return st;
+        p = x->appended + off;
+        if (!x->app_base64) {
+            if ((size_t)(s->end - p) < hsz)
+                return fail_bin(err, QDC_EPARSE, p - s->base,
+                                "VTU: appended block header truncated");
+            nbytes = 0;
+            for (size_t j = 0; j < hsz; j++)
+                nbytes = nbytes << 8 | (unsigned char)p[x->big ? j : hsz - 1 - j];
+            p += hsz;
+            if (nbytes != want || (size_t)(s->end - p) < want)
+                return fail_bin(
+                    err, QDC_EPARSE, p - hsz - s->base,
+                    "VTU: appended block of %llu bytes for %zu expected (%zu left)",
+                    (unsigned long long)nbytes, want, (size_t)(s->end - p));
+            if (out) {
+                decode_values((const unsigned char *)p, n, vt, x->big, out);
+                for (int64_t i = 0; finite && i < n; i++)
+                    if (!isfinite(out[i]))
+                        return fail_bin(err, QDC_EPARSE, p - s->base + i * vsize[vt],
+                                        "VTU: value %lld is not finite (NaN/Inf)",
+                                        (long long)i);
+            }
+            return QDC_OK;
+        }
+    } else {
+        return fail_txt(err, QDC_EFORMAT, s, fv,
+                        "VTU: DataArray format \"%.*s\" not supported",
+                        (int)(fe - fv > 16 ? 16 : fe - fv), fv);
+    }
+    /* base64: header, then the data, decoded as one stream: VTK encodes the
+     * two separately (each padded), meshio together; both decode the same */
+    if (want / 3 * 4 > (size_t)(s->end - p))
+        return fail_bin(err, QDC_EPARSE, p - s->base,
+                        "VTU: %zu bytes of base64 data cannot fit in the input", want);
+    tmp = qdc_malloc(hsz + want + 1);
+    if (!tmp)
+        return qdc_fail(err, QDC_ENOMEM, "out of memory for a VTU array");
+    got = b64_decode(p, s->end, tmp, hsz + want, &p);
+    nbytes = 0;
+    for (size_t j = 0; j < hsz && got >= hsz; j++)
+        nbytes = nbytes << 8 | tmp[x->big ? j : hsz - 1 - j];
+    if (got != hsz + want || nbytes != want) {
+        qdc_free(tmp);
+        return fail_bin(
+            err, QDC_EPARSE, p - s->base,
+            "VTU: base64 block of %zu bytes (header says %llu) for %zu expected",
+            got < hsz ? 0 : got - hsz, (unsigned long long)nbytes, want);
+    }
+    data = tmp + hsz;
+    st = QDC_OK;
+    if (out) {
+        decode_values(data, n, vt, x->big, out);
+        for (int64_t i = 0; finite && i < n && st == QDC_OK; i++)
+            if (!isfinite(out[i]))
+                st = qdc_fail(err, QDC_EPARSE, "VTU: value %lld is not finite (NaN/Inf)",
+                              (long long)i);
+    }
+    qdc_free(tmp);
+    return st;
+}
+
+enum { SEC_NONE, SEC_POINTS, SEC_CELLS, SEC_CELLDATA, SEC_POINTDATA };
+
+static qdc_status vtu_dataarray(vtu *x, const xtag *t, int sec, double **offs_end,
+                                qdc_error *err)
+{
+    const char *nv, *ne, *tv, *te;
+    int64_t ncomp = 1, n;
+    vtype vt;
+    double **dst = NULL;
+    int prio = PRIO_NONE;
+    qdc_status st;
+
+    if (!tag_attr(t, "type", &tv, &te) || vtype_of(tv, (size_t)(te - tv), &vt) != 0)
+        return fail_txt(err, QDC_EPARSE, &x->s, t->name,
+                        "VTU: DataArray without a known type");
+    if (!tag_attr(t, "Name", &nv, &ne))
+        nv = ne = "";
+    if (tag_attr(t, "NumberOfComponents", &tv, &te)) {
+        st = attr_int(x, t, "NumberOfComponents", 1, 1 << 16, &ncomp, err);
+        if (st != QDC_OK)
+            return st;
+    }
+    if (sec == SEC_POINTS) {
+        if (ncomp != 3)
+            return fail_txt(err, QDC_EPARSE, &x->s, t->name,
+                            "VTU: Points need 3 components");
+        dst = &x->c.xyz;
+        n = 3 * x->c.nv;
+    } else if (sec == SEC_CELLS) {
+        size_t l = (size_t)(ne - nv);
+        if (l == 12 && memcmp(nv, "connectivity", 12) == 0)
+            dst = &x->c.conn;
+        else if (l == 7 && memcmp(nv, "offsets", 7) == 0)
+            dst = offs_end;
+        else if (l == 5 && memcmp(nv, "types", 5) == 0)
+            dst = &x->c.types;
+        n = dst == &x->c.conn ? -1 : x->c.nc;
+    } else if (sec == SEC_CELLDATA) {
+        prio = ncomp == 1 ? region_prio(nv, (size_t)(ne - nv)) : PRIO_NONE;
+        if (prio < x->c.creg_prio)
+            dst = &x->c.creg;
+        n = ncomp * x->c.nc;
+    } else {
+        if (ncomp == 1 && region_prio(nv, (size_t)(ne - nv)) == 2)
+            dst = &x->c.vref;
+        n = ncomp * x->c.nv;
+    }
+    if (n < 0) { /* connectivity: its size is the last offset */
+        if (!*offs_end) {
+            if (x->conn_tag.name)
+                return fail_txt(err, QDC_EPARSE, &x->s, t->name,
+                                "VTU: duplicate DataArray");
+            x->conn_tag = *t;
+            x->conn_at = x->s;
+            return QDC_OK;
+        }
+        n = x->c.nc ? (int64_t)(*offs_end)[x->c.nc - 1] : 0;
+        x->c.nconn = n;
+    }
+    if (dst && *dst && dst != &x->c.creg)
+        return fail_txt(err, QDC_EPARSE, &x->s, t->name, "VTU: duplicate DataArray");
+    if ((uint64_t)n > (uint64_t)(x->s.end - x->s.base))
+        return fail_txt(err, QDC_EPARSE, &x->s, t->name,
+                        "VTU: %lld values cannot fit in the input", (long long)n);
+    if (!dst) /* not ours: its text or base64 is passed over with the tags */
+        return QDC_OK;
+    {
+        double *a = alloc_values(n, err);
+        if (!a)
+            return QDC_ENOMEM;
+        st = vtu_array(x, t, n, vt, 1, a, err);
+        if (st != QDC_OK) {
+            qdc_free(a);
+            return st;
+        }
+        qdc_free(*dst);
+        *dst = a;
+        if (dst == &x->c.creg)
+            x->c.creg_prio = prio;
+        if (dst == offs_end) {
+            for (int64_t i = 0; i < n; i++)
+                if (!(a[i] == floor(a[i]) && a[i] >= 0 && a[i] <= 4e18 &&
+                      (i == 0 || a[i] >= a[i - 1])))
+                    return fail_txt(err, QDC_EPARSE, &x->s, t->name,
+                                    "VTU: offsets not increasing from 0");
+        }
+        return QDC_OK;
+    }
+}
+
+/* Find <AppendedData ...> and its '_' first (offsets point into it). */
+static qdc_status find_appended(vtu *x, qdc_error *err)
+{
+    static const char key[] = "<AppendedData";
+    const char *p = x->s.base, *e = x->s.end;
+
+    for (; p + sizeof key - 1 <= e; p++) {
+        if (memcmp(p, key, sizeof key - 1) == 0) {
+            vtu y = *x;
+            xtag t;
+            qdc_status st;
+            y.s.p = p;
+            st = next_tag(&y, &t, err);
+            if (st != QDC_OK)
+                return st;
+            x->app_base64 = attr_is(&t, "encoding", "base64");
+            if (!x->app_base64 && !attr_is(&t, "encoding", "raw"))
+                return fail_txt(err, QDC_EFORMAT, &y.s, t.name,
+                                "VTU: AppendedData encoding must be raw or base64");
+            for (p = t.after; p < e && *p != '_'; p++)
+                ;
+            if (p == e)
+                return fail_txt(err, QDC_EPARSE, &y.s, t.after,
+                                "VTU: no '_' in AppendedData");
+            x->appended = p + 1;
+            return QDC_OK;
+        }
+    }
+    return QDC_OK;
+}
+
+qdc_status meshio_vtu_read(const char *buf, size_t len, const meshio_options *o,
+                           mesh_t **out, qdc_error *err)
+{
+    vtu x;
+    xtag t;
+    int sec = SEC_NONE, seen_file = 0, seen_piece = 0;
+    double *offs_end = NULL; /* XML offsets: the end of each cell */
+    qdc_status st;
+
+    memset(&x, 0, sizeof x);
+    x.c.creg_prio = PRIO_NONE;
+    x.s = txt_init(buf, len, 0);
+    x.b = (const unsigned char *)buf;
+    st = find_appended(&x, err);
+    while (st == QDC_OK) {
+        st = next_tag(&x, &t, err);
+        if (st != QDC_OK || !t.name || (x.appended && x.s.p >= x.appended))
+            break;
+        if (word_is(t.name, t.nlen, "VTKFile") && !t.closing) {
+            if (!attr_is(&t, "type", "UnstructuredGrid"))
+                st = fail_txt(err, QDC_EFORMAT, &x.s, t.name,
+                              "VTU: only type=\"UnstructuredGrid\" is supported");
+            else if (tag_attr(&t, "compressor", &(const char *){0}, &(const char *){0}))
+                st = fail_txt(err, QDC_EFORMAT, &x.s, t.name,
+                              "VTU: compressed data are not supported");
+            x.big = attr_is(&t, "byte_order", "BigEndian");
+            x.hdr8 = attr_is(&t, "header_type", "UInt64");
+            seen_file = 1;
+        } else if (word_is(t.name, t.nlen, "Piece") && !t.closing) {
+            if (seen_piece)
+                st = fail_txt(err, QDC_EFORMAT, &x.s, t.name, "VTU: more than one Piece");
+            if (st == QDC_OK)
+                st = attr_int(&x, &t, "NumberOfPoints", 0, MESH_MAX_VERTICES, &x.c.nv,
+                              err);
+            if (st == QDC_OK)
+                st = attr_int(&x, &t, "NumberOfCells", 0, INT64_MAX / 16, &x.c.nc, err);
+            seen_piece = 1;
+        } else if (word_is(t.name, t.nlen, "Points") ||
+                   word_is(t.name, t.nlen, "Cells") ||
+                   word_is(t.name, t.nlen, "CellData") ||
+                   word_is(t.name, t.nlen, "PointData")) {
+            sec = t.closing || t.empty                  ? SEC_NONE
+                  : word_is(t.name, t.nlen, "Points")   ? SEC_POINTS
+                  : word_is(t.name, t.nlen, "Cells")    ? SEC_CELLS
+                  : word_is(t.name, t.nlen, "CellData") ? SEC_CELLDATA
+                                                        : SEC_POINTDATA;
+        } else if (word_is(t.name, t.nlen, "DataArray") && !t.closing &&
+                   sec != SEC_NONE) {
+            if (!seen_piece)
+                st = fail_txt(err, QDC_EPARSE, &x.s, t.name,
+                              "VTU: DataArray outside a Piece");
+            else
+                st = vtu_dataarray(&x, &t, sec, &offs_end, err);
+        } else if (word_is(t.name, t.nlen, "AppendedData")) {
+            break;
+        }
+    }
+    if (st == QDC_OK && !seen_file)
+        st = fail_txt(err, QDC_EPARSE, &x.s, x.s.p, "VTU: no VTKFile element");
+    if (st == QDC_OK && (!seen_piece || !x.c.xyz))
+        st = fail_txt(err, QDC_EPARSE, &x.s, x.s.p, "VTU: no Piece with Points");
+    if (st == QDC_OK && x.conn_tag.name && offs_end) { /* VTK writes it before offsets */
+        txt here = x.s;
+        x.s = x.conn_at;
+        st = vtu_dataarray(&x, &x.conn_tag, SEC_CELLS, &offs_end, err);
+        if (st == QDC_OK)
+            x.s = here;
+    }
+    if (st == QDC_OK && x.c.nc && (!offs_end || !x.c.conn || !x.c.types))
+        st = fail_txt(err, QDC_EPARSE, &x.s, x.s.p,
+                      "VTU: Cells need connectivity, offsets and types");
+    if (st == QDC_OK) {
+        x.c.offs = alloc_values(x.c.nc + 1, err);
+        if (!x.c.offs)
+            st = QDC_ENOMEM;
+        else {
+            x.c.offs[0] = 0;
+            for (int64_t i = 0; i < x.c.nc; i++)
+                x.c.offs[i + 1] = offs_end[i];
+            st = check_offsets(x.c.offs, x.c.nc, x.c.nconn, "vtu", err);
+        }
+    }
+    if (st == QDC_OK)
+        st = cells_mesh(&x.c, "vtu", o, out, err);
+    qdc_free(offs_end);
+    cells_free(&x.c);
+    return st;
+}
+
+/* ------------------------------------------------------------------------ */
+/* VTU writer                                                                */
+
+typedef struct {
+    const char *name;
+    const char *type;
+    int ncomp;
+    uint64_t bytes;
+} vtu_arr;
+
+static void xml_array_head(wbuf *w, const vtu_arr *a, int appended, uint64_t *off)
+{
+    wb_str(w, "<DataArray type=\"");
+    wb_str(w, a->type);
+    wb_str(w, "\"");
+    if (a->name) {
+        wb_str(w, " Name=\"");
+        wb_str(w, a->name);
+        wb_str(w, "\"");
+    }
+    if (a->ncomp > 1) {
+        wb_str(w, " NumberOfComponents=\"");
+        wb_int(w, a->ncomp);
+        wb_str(w, "\"");
+    }
+    if (appended) {
+        wb_str(w, " format=\"appended\" offset=\"");
+        wb_int(w, (int64_t)*off);
+        wb_str(w, "\"/>\n");
+        *off += 8 + a->bytes;
+    } else {
+        wb_str(w, " format=\"ascii\">\n");
+    }
+}
+
+/* Array k of the file's fixed list (points, connectivity, offsets, types,
+ * region, medit:ref) written as data; i picks the value. */
+static void vtu_data(const mesh_t *m, int k, vw *o)
+{
+    int64_t nc = (int64_t)m->nt + m->ntri;
+
+    switch (k) {
+    case 0:
+        for (size_t i = 0; i < 3 * (size_t)m->nv; i++)
+            vw_real(o, m->xyz[i]);
+        break;
+    case 1:
+        for (size_t i = 0; i < 4 * (size_t)m->nt; i++)
+            vw_int(o, m->tets[i], 4);
+        for (size_t i = 0; i < 3 * (size_t)m->ntri; i++)
+            vw_int(o, m->tris[i], 4);
+        break;
+    case 2:
+        for (int64_t c = 0; c < nc; c++)
+            vw_int(o, c < m->nt ? 4 * (c + 1) : 4 * (int64_t)m->nt + 3 * (c - m->nt + 1),
+                   8);
+        break;
+    case 3:
+        for (int64_t c = 0; c < nc; c++)
+            vw_int(o, c < m->nt ? 10 : 5, 1);
+        break;
+    case 4:
+        for (int64_t c = 0; c < nc; c++)
+            vw_int(o, cell_region(m, c), 4);
+        break;
+    default:
+        for (int64_t i = 0; i < m->nv; i++)
+            vw_int(o, m->vref[i], 4);
+        break;
+    }
+    vw_end(o);
+}
+
+void meshio_vtu_write(const mesh_t *m, int appended, wbuf *w)
+{
+    int64_t nc = (int64_t)m->nt + m->ntri;
+    uint64_t nconn = 4 * (uint64_t)m->nt + 3 * (uint64_t)m->ntri, off = 0;
+    const vtu_arr arr[6] = {{NULL, "Float64", 3, 24 * (uint64_t)m->nv},
+                            {"connectivity", "Int32", 1, 4 * nconn},
+                            {"offsets", "Int64", 1, 8 * (uint64_t)nc},
+                            {"types", "UInt8", 1, (uint64_t)nc},
+                            {"region", "Int32", 1, 4 * (uint64_t)nc},
+                            {"medit:ref", "Int32", 1, 4 * (uint64_t)m->nv}};
+    static const char *const open[6] = {"<Points>\n", "<Cells>\n",    "",
+                                        "",           "<CellData>\n", "<PointData>\n"};
+    static const char *const close[6] = {
+        "</Points>\n", "", "", "</Cells>\n", "</CellData>\n", "</PointData>\n"};
+    int use[6] = {1, 1, 1, 1, has_regions(m), m->vref != NULL};
+    vw o = {w, appended, 0, 6, 0, 0};
+
+    wb_str(w,
+           "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" "
+           "byte_order=\"LittleEndian\" header_type=\"UInt64\">\n<UnstructuredGrid>\n"
+           "<Piece NumberOfPoints=\"");
+    wb_int(w, m->nv);
+    wb_str(w, "\" NumberOfCells=\"");
+    wb_int(w, nc);
+    wb_str(w, "\">\n");
+    for (int k = 0; k < 6; k++) {
+        if (!use[k])
+            continue;
+        wb_str(w, open[k]);
+        xml_array_head(w, &arr[k], appended, &off);
+        if (!appended) {
+            vtu_data(m, k, &o);
+            wb_str(w, "</DataArray>\n");
+        }
+        wb_str(w, close[k]);
+    }
+    wb_str(w, "</Piece>\n</UnstructuredGrid>\n");
+    if (appended) {
+        unsigned char b[8];
+        wb_str(w, "<AppendedData encoding=\"raw\">\n_");
+        for (int k = 0; k < 6; k++) {
+            if (!use[k])
+                continue;
+            put_le64(b, arr[k].bytes);
+            wb_put(w, b, 8);
+            vtu_data(m, k, &o);
+        }
+        wb_str(w, "\n</AppendedData>\n");
+    }
+    wb_str(w, "</VTKFile>\n");
+}

@@ -1,0 +1,35 @@
+/* encode.h - quality differential coordinates (paper Eqs. 3-8, METHOD §3-§4).
+ * Q lives on the 1-ring pattern of mesh_topo (adj_ptr/adj_idx): qval has one
+ * value per pattern slot; rows exist for every vertex and sum to 0 off the
+ * diagonal part (Q = I - W with rows of W summing to 1).
+ * Thread-safe: pure functions over caller arrays (OpenMP inside). */
+#ifndef QDC_ENCODE_H
+#define QDC_ENCODE_H
+
+#include "core/mesh.h"
+#include "opt/opt.h"
+
+/* Per-tet q~ at coordinates x for a given delta, their sum, and the number of
+ * tets whose metric argument is <= 0. Returns the sum (+inf if delta == 0 and a
+ * tet is not positive). qt may be NULL. */
+double encode_objective(const mesh_topo *tp, const double *x, opt_metric m, double delta,
+                        double *qt, int32_t *n_nonpos);
+
+/* Smallest metric argument (vol or sigma) over all tets: the input of metric_delta. */
+double encode_min_arg(const mesh_topo *tp, const double *x, opt_metric m);
+
+/* Optimal-position averaging (METHOD §4, default): row i of Q is
+ * v_i - sum_t c_ti bary(face opposite i in t), c_ti = qt_t / sum_{s in T(i)} qt_s,
+ * and d_i = sum_t c_ti alpha*_t n_ti (3 per vertex), so (Qx - d)_i = v_i - u_i. */
+void encode_optavg(const mesh_topo *tp, const double *x, opt_metric m, const double *qt,
+                   double *qval, double *d);
+
+/* Paper Eq. 6-7: w_ij = sum_{t in T(i)} qt_t^2 / max(|v_j - p_ti|^2, floor), rows
+ * normalized, Q = I - W, d = 0. */
+void encode_paper(const mesh_topo *tp, const double *x, opt_metric m, const double *qt,
+                  double *qval, double *d);
+
+/* Slot of entry (i, j) in the 1-ring pattern, or -1. */
+int32_t encode_slot(const mesh_topo *tp, int32_t i, int32_t j);
+
+#endif

@@ -1,0 +1,763 @@
+/* finish.c - worst-tet finishing pass (METHOD §5a). */
+#include "opt/finish.h"
+
+#include "geom/metric.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define FINISH_INNER 8
+/* Broad sweeps take one Newton step per vertex (and more sweeps do the rest):
+ * measured on 8 dev meshes, mean ratio 0.7729 against 0.7733 with up to 8
+ * steps, for 30% less work. */#define FINISH_HALVINGS 12
+
+typedef struct {
+    double q;
+    int32_t v;
+} vq_pair;
+
+/* Worst first, for the colouring: a stable counting sort of list[0..n) (built
+ * in vertex order) into 1024 buckets of q in [-1, 1] (mean ratios and sines),
+ * O(n) where qsort cost 2% of the pass. 0 if out of memory. */
+#define VQ_BUCKETS 1024
+static int vq_bucket(double q)
+{
+    return q > -1.0 ? (q < 1.0 ? (int)((q + 1.0) * (VQ_BUCKETS / 2)) : VQ_BUCKETS - 1) : 0;
+}
+
+static int vq_sort(vq_pair *list, int32_t n)
+{
+    int32_t *cnt = qdc_calloc(VQ_BUCKETS + 1, sizeof(int32_t));
+    vq_pair *tmp = qdc_mallocn((size_t)n + 1, sizeof *tmp);
+
+    if (!cnt || !tmp) {
+        qdc_free(cnt);
+        qdc_free(tmp);
+        return 0;
+    }
+    for (int32_t i = 0; i < n; i++)
+        cnt[vq_bucket(list[i].q) + 1]++;
+    for (int b = 0; b < VQ_BUCKETS; b++)
+        cnt[b + 1] += cnt[b];
+    for (int32_t i = 0; i < n; i++)
+        tmp[cnt[vq_bucket(list[i].q)]++] = list[i];
+    memcpy(list, tmp, (size_t)n * sizeof *list);
+    qdc_free(cnt);
+    qdc_free(tmp);
+    return 1;
+}
+
+/* k-th smallest of a[0..n) (0-based), reordering a: Hoare quickselect with a
+ * median-of-three pivot, O(n) expected. */
+static double kth_smallest(double *a, int32_t n, int32_t k)
+{
+    int32_t lo = 0, hi = n - 1;
+
+    while (lo < hi) {
+        int32_t mid = lo + (hi - lo) / 2, i = lo, j = hi;
+        double x = a[lo], y = a[mid], z = a[hi];
+        double piv = x < y ? (y < z ? y : (x < z ? z : x)) : (x < z ? x : (y < z ? z : y));
+        while (i <= j) {
+            while (a[i] < piv)
+                i++;
+            while (a[j] > piv)
+                j--;
+            if (i <= j) {
+                double t = a[i];
+                a[i++] = a[j];
+                a[j--] = t;
+            }
+        }
+        if (k <= j)
+            hi = j;
+        else if (k >= i)
+            lo = i;
+        else
+            return a[k];
+    }
+    return a[k];
+}
+
+/* Local objective of vertex v placed at y: sum of q~ over its star, the number
+ * of star tets that are not positive, and (if g) the gradient with respect to y. */
+static double star_eval(const mesh_topo *tp, const double *x, int32_t v, const double *y,
+                        opt_metric m, double delta, int32_t *nbad, double *qmax, double *g)
+{
+    double f = 0.0, worst = 0.0;
+    int32_t bad = 0;
+
+    if (g)
+        g[0] = g[1] = g[2] = 0.0;
+    for (int32_t k = tp->vt_ptr[v]; k < tp->vt_ptr[v + 1]; k++) {
+        int32_t t = tp->vt_idx[k] >> 2, a = tp->vt_idx[k] & 3;
+        double p[4][3], gt[3], q;
+        metric_parts pt;
+        for (int b = 0; b < 4; b++)
+            memcpy(p[b], b == a ? y : x + 3 * (size_t)tp->tets[4 * (size_t)t + b], sizeof p[b]);
+        if (g) {
+            q = metric_qt_grad(m, &p[0][0], a, delta, gt, &pt);
+            if (isfinite(q))
+                for (int c = 0; c < 3; c++)
+                    g[c] += gt[c];
+        } else {
+            metric_parts_for(m, p[0], p[1], p[2], p[3], &pt);
+            q = metric_qt(m, &pt, delta);
+        }
+        bad += !(pt.vol > 0.0);
+        f += q;
+        worst = q > worst ? q : worst;
+    }
+    *nbad = bad;
+    *qmax = worst;
+    return f;
+}
+
+/* Local objective of vertex v placed at y with its gradient and Hessian
+ * (upper triangle; both skipped if g is NULL), and the number of
+ * non-positive star tets; NAN if the metric has no Hessian. */
+static double star_hess(const mesh_topo *tp, const double *x, int32_t v, const double *y,
+                        opt_metric m, double delta, int32_t *nbad, double g[3], double H[6])
+{
+    double f = 0.0;
+    int32_t bad = 0;
+
+    if (g) {
+        memset(H, 0, 6 * sizeof(double));
+        g[0] = g[1] = g[2] = 0.0;
+    }
+    for (int32_t k = tp->vt_ptr[v]; k < tp->vt_ptr[v + 1]; k++) {
+        static const int face_of[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+        int32_t t = tp->vt_idx[k] >> 2, a = tp->vt_idx[k] & 3;
+        const int32_t *tt = tp->tets + 4 * (size_t)t;
+        double gt[3], Ht[6], q, vol;
+        q = metric_qt_hess_face(m, y, x + 3 * (size_t)tt[face_of[a][0]],
+                                x + 3 * (size_t)tt[face_of[a][1]], x + 3 * (size_t)tt[face_of[a][2]],
+                                delta, g ? gt : NULL, Ht, &vol);
+        bad += !(vol > 0.0);
+        f += q;
+        if (!g || !isfinite(q))
+            continue;
+        for (int c = 0; c < 3; c++)
+            g[c] += gt[c];
+        for (int e = 0; e < 6; e++)
+            H[e] += Ht[e];
+    }
+    *nbad = bad;
+    return f;
+}
+
+/* Solve H d = -g for a symmetric positive definite 3x3 H (upper triangle);
+ * 0 if H is not safely positive definite. */
+static int newton_dir(const double H[6], const double g[3], double d[3])
+{
+    double l00, l10, l20, l11, l21, l22, y0, y1, y2, t;
+
+    if (!(H[0] > 0.0))
+        return 0;
+    l00 = sqrt(H[0]);
+    l10 = H[1] / l00;
+    l20 = H[2] / l00;
+    t = H[3] - l10 * l10;
+    if (!(t > 1e-12 * H[3]))
+        return 0;
+    l11 = sqrt(t);
+    l21 = (H[4] - l20 * l10) / l11;
+    t = H[5] - l20 * l20 - l21 * l21;
+    if (!(t > 1e-12 * H[5]))
+        return 0;
+    l22 = sqrt(t);
+    y0 = -g[0] / l00;
+    y1 = (-g[1] - l10 * y0) / l11;
+    y2 = (-g[2] - l20 * y0 - l21 * y1) / l22;
+    d[2] = y2 / l22;
+    d[1] = (y1 - l21 * d[2]) / l11;
+    d[0] = (y0 - l10 * d[1] - l20 * d[2]) / l00;
+    return isfinite(d[0]) && isfinite(d[1]) && isfinite(d[2]);
+}
+
+/* Damped Newton on one interior vertex: full step first (capped at 0.3 mean
+ * edge), halved until the local objective drops without a new inverted tet;
+ * where the Hessian is not positive definite, the normalized gradient step. */
+static int32_t newton_vertex(const mesh_topo *tp, double *x, int32_t v, opt_metric m,
+                             double delta, double lbar, double rtol, int inner)
+{
+    double *xv = x + 3 * (size_t)v, g[3], H[6], f0;
+    int32_t moves = 0, bad0;
+
+    f0 = star_hess(tp, x, v, xv, m, delta, &bad0, g, H);
+    for (int it = 0; it < inner && isfinite(f0); it++) {
+        double d[3] = {0, 0, 0}, dn, y[3], f1 = f0, g1[3], H1[6];
+        int32_t bad1;
+        int ok = 0;
+        if (newton_dir(H, g, d)) {
+            /* predicted decrease -g.d/2 at rounding level: converged (else the
+             * line search would burn all its halvings) */
+            if (!(-0.5 * (g[0] * d[0] + g[1] * d[1] + g[2] * d[2]) > 1e-13 * f0))
+                break;
+        } else {
+            double gn = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+            if (!(gn > 0.0) || !isfinite(gn))
+                break;
+            for (int c = 0; c < 3; c++)
+                d[c] = -0.05 * lbar * g[c] / gn;
+        }
+        dn = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        if (dn > 0.3 * lbar)
+            for (int c = 0; c < 3; c++)
+                d[c] *= 0.3 * lbar / dn;
+        /* a trial is evaluated with its derivatives (the full step is nearly
+         * always taken, and they serve the next iteration), except in the last
+         * iteration */
+        for (int h = 0; h < FINISH_HALVINGS; h++) {
+            double sc = ldexp(1.0, -h);
+            for (int c = 0; c < 3; c++)
+                y[c] = xv[c] + sc * d[c];
+            f1 = star_hess(tp, x, v, y, m, delta, &bad1, it + 1 < inner ? g1 : NULL, H1);
+            if (f1 < f0 && bad1 <= bad0) {
+                ok = 1;
+                break;
+            }
+        }
+        if (!ok)
+            break;
+        memcpy(xv, y, sizeof y);
+        moves++;
+        if (it + 1 == inner)
+            break;
+        memcpy(g, g1, sizeof g1);
+        memcpy(H, H1, sizeof H1);
+        if (f0 - f1 < rtol * f0)
+            break;
+        f0 = f1;
+        bad0 = bad1;
+    }
+    return moves;
+}
+
+/* y = xv + t dir, put back on v's surface or line if sl (a sliding vertex). */
+static void trial_point(const slide_ctx *sl, int32_t v, const double *xv, const double dir[3],
+                        double t, double y[3])
+{
+    for (int c = 0; c < 3; c++)
+        y[c] = xv[c] + t * dir[c];
+    if (sl) {
+        double yp[3];
+        slide_project(sl, v, y, yp);
+        memcpy(y, yp, sizeof yp);
+    }
+}
+
+/* Adaptive normalized-gradient descent of one vertex (METHOD §5a): step along
+ * -g/|g|, start 0.05 mean edge, x1.6 after a success (cap 0.3), halve up to 12
+ * times until the local objective decreases without inverting a star tet. */
+static int32_t relax_vertex(const mesh_topo *tp, const slide_ctx *sl, double *x, int32_t v,
+                            opt_metric m, double delta, double lbar, double rtol)
+{
+    int sliding = sl && slide_kind(sl, v) != SLIDE_INTERIOR;
+    double s = 0.05 * lbar, *xv = x + 3 * (size_t)v;
+    int32_t moves = 0;
+
+    for (int it = 0; it < FINISH_INNER; it++) {
+        double g[3], gn, y[3], f0, f1, w0, w1;
+        int32_t bad0, bad1;
+        int ok = 0;
+        f0 = star_eval(tp, x, v, xv, m, delta, &bad0, &w0, g);
+        if (!isfinite(f0))
+            break;
+        if (sliding) {
+            double gt[3];
+            slide_tangent(sl, v, g, gt);
+            memcpy(g, gt, sizeof gt);
+        }
+        gn = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+        if (!(gn > 0.0) || !isfinite(gn))
+            break;
+        for (int h = 0; h < FINISH_HALVINGS; h++) {
+            trial_point(sliding ? sl : NULL, v, xv, g, -s / gn, y);
+            f1 = star_eval(tp, x, v, y, m, delta, &bad1, &w1, NULL);
+            /* The sum must drop and the inverted count must not grow. A sliding
+             * boundary vertex must not worsen its worst star tet either: on curved
+             * surfaces it otherwise flattens all-boundary tets (measured on the
+             * sphere: worst tet 0.259 -> 0.230). For interior vertices that rule
+             * blocks useful moves (measured -0.005 mean on the dev corpus). */
+            if (f1 < f0 && bad1 <= bad0 && (!sliding || w1 <= w0)) {
+                ok = 1;
+                break;
+            }
+            s *= 0.5;
+        }
+        if (!ok)
+            break;
+        memcpy(xv, y, sizeof y);
+        moves++;
+        s = fmin(s * 1.6, 0.3 * lbar);
+        if (f0 - f1 < rtol * f0)
+            break; /* converged enough (measured: same quality, 3-4x faster pass) */
+    }
+    return moves;
+}
+
+/* Greedy colouring of the visit list (worst first): no two vertices of a class
+ * share an edge, hence no tet, so a class can move in parallel. colour[] is
+ * scratch of nv entries; returns the number of classes and fills start[]. */
+static int32_t colour_classes(const mesh_topo *tp, vq_pair *list, int32_t n, int32_t *colour,
+                              int32_t **start_out)
+{
+    int32_t ncol = 0, *cnt, *start;
+    uint64_t used;
+    vq_pair *tmp;
+
+    /* every vertex, not only the listed ones: a stale entry of a neighbour
+     * outside the list would block colours at random and make the result
+     * depend on the heap's contents (found by the angle-polish unit test) */
+    for (int32_t v = 0; v < tp->nv; v++)
+        colour[v] = -1;
+    for (int32_t i = 0; i < n; i++) {
+        int32_t v = list[i].v, c = 0;
+        used = 0;
+        for (int32_t k = tp->adj_ptr[v]; k < tp->adj_ptr[v + 1]; k++) {
+            int32_t u = tp->adj_idx[k];
+            if (u != v && colour[u] >= 0 && colour[u] < 64)
+                used |= 1ULL << colour[u];
+        }
+        while (c < 64 && (used >> c & 1))
+            c++;
+        colour[v] = c; /* 64+ only on absurd valences: all share the last class */
+        if (c + 1 > ncol)
+            ncol = c + 1;
+    }
+    cnt = qdc_calloc((size_t)ncol + 1, sizeof(int32_t));
+    tmp = qdc_mallocn((size_t)n + 1, sizeof *tmp);
+    if (!cnt || !tmp) {
+        qdc_free(cnt);
+        qdc_free(tmp);
+        return -1;
+    }
+    for (int32_t i = 0; i < n; i++)
+        cnt[colour[list[i].v] + 1]++;
+    for (int32_t c = 0; c < ncol; c++)
+        cnt[c + 1] += cnt[c];
+    start = cnt;
+    {
+        int32_t *pos = qdc_mallocn((size_t)ncol + 1, sizeof(int32_t));
+        if (!pos) {
+            qdc_free(cnt);
+            qdc_free(tmp);
+            return -1;
+        }
+        memcpy(pos, cnt, ((size_t)ncol + 1) * sizeof(int32_t));
+        for (int32_t i = 0; i < n; i++)
+            tmp[pos[colour[list[i].v]]++] = list[i];
+        qdc_free(pos);
+    }
+    memcpy(list, tmp, (size_t)n * sizeof *list);
+    qdc_free(tmp);
+    *start_out = start;
+    return ncol;
+}
+
+qdc_status finish_sweep(const mesh_topo *tp, const uint8_t *movable, const slide_ctx *sl,
+                        double *x, opt_metric m, const double *eta, double delta, double lbar,
+                        double frac, double rtol, finish_stats *st)
+{
+    double *sorted = qdc_mallocn((size_t)tp->nt, sizeof(double));
+    double *vworst = qdc_mallocn((size_t)tp->nv, sizeof(double));
+    vq_pair *list = NULL;
+    int32_t n = 0, k;
+    double thresh;
+
+    memset(st, 0, sizeof *st);
+    if (!sorted || !vworst) {
+        qdc_free(sorted);
+        qdc_free(vworst);
+        return QDC_ENOMEM;
+    }
+    memcpy(sorted, eta, (size_t)tp->nt * sizeof(double));
+    k = (int32_t)(frac * tp->nt);
+    if (k < 1)
+        k = 1;
+    if (k > tp->nt)
+        k = tp->nt;
+    thresh = kth_smallest(sorted, tp->nt, k - 1);
+    st->delta = delta;
+    for (int32_t v = 0; v < tp->nv; v++)
+        vworst[v] = 2.0;
+    for (int32_t t = 0; t < tp->nt; t++) {
+        if (!(eta[t] <= thresh || eta[t] <= 0.0))
+            continue;
+        for (int a = 0; a < 4; a++) {
+            int32_t v = tp->tets[4 * (size_t)t + a];
+            if (eta[t] < vworst[v])
+                vworst[v] = eta[t];
+        }
+    }
+    for (int32_t v = 0; v < tp->nv; v++)
+        n += movable[v] && vworst[v] < 2.0;
+    list = qdc_mallocn((size_t)n + 1, sizeof *list);
+    if (!list) {
+        qdc_free(sorted);
+        qdc_free(vworst);
+        return QDC_ENOMEM;
+    }
+    n = 0;
+    for (int32_t v = 0; v < tp->nv; v++)
+        if (movable[v] && vworst[v] < 2.0) {
+            list[n].q = vworst[v];
+            list[n].v = v;
+            n++;
+        }
+    /* worst first into the colouring; classes in turn (Gauss-Seidel), the
+     * vertices of a class at once (independent stars) */
+    {
+        int32_t *start = NULL, ncol = -1;
+        int32_t *colour = qdc_mallocn((size_t)tp->nv, sizeof(int32_t));
+        if (colour && vq_sort(list, n))
+            ncol = colour_classes(tp, list, n, colour, &start);
+        qdc_free(colour);
+        if (ncol < 0) {
+            qdc_free(list);
+            qdc_free(sorted);
+            qdc_free(vworst);
+            return QDC_ENOMEM;
+        }
+        for (int32_t c = 0; c < ncol; c++) {
+            int32_t moves = 0;
+#pragma omp parallel for reduction(+ : moves) schedule(dynamic, 16)
+            for (int32_t i = start[c]; i < start[c + 1]; i++)
+                moves += m != OPT_METRIC_MICN &&
+                                 !(sl && slide_kind(sl, list[i].v) != SLIDE_INTERIOR)
+                             ? newton_vertex(tp, x, list[i].v, m, delta, lbar, rtol,
+                                             rtol > 0.0 ? 1 : FINISH_INNER)
+                             : relax_vertex(tp, sl, x, list[i].v, m, delta, lbar, rtol);
+            st->n_moves += moves;
+        }
+        qdc_free(start);
+    }
+    st->n_verts = n;
+    qdc_free(list);
+    qdc_free(sorted);
+    qdc_free(vworst);
+    return QDC_OK;
+}
+
+/* ---- worst-angle polish: max-min of dihedral sines (Freitag's non-smooth
+ * smoothing, as in Stellar) ---- */
+
+#define DIH_ACTIVE 1e-3 /* functions within this of the minimum are active */
+#define DIH_MAXACT 8
+#define DIH_INNER 10
+/* a sweep lifts the tets below min(1% quantile, 1.25 x the smallest sine):
+ * raising the floor step by step costs the neighbours little (measured on the
+ * good dev meshes: -0.0006 mean against -0.002 when every star of the worst
+ * 1% goes to its own optimum, same smallest angle) */
+#define LEVEL_MULT 1.25
+
+typedef struct {
+    int32_t k; /* position in v's star (vt_idx) */
+    int e;     /* edge 0..5 */
+} dih_fn;
+
+/* Corners of star tet k of v with v placed at y; returns v's corner index. */
+static int star_tet(const mesh_topo *tp, const double *x, int32_t k, const double *y,
+                    double p[4][3])
+{
+    int32_t t = tp->vt_idx[k] >> 2;
+    int a = tp->vt_idx[k] & 3;
+
+    for (int b = 0; b < 4; b++)
+        memcpy(p[b], b == a ? y : x + 3 * (size_t)tp->tets[4 * (size_t)t + b], sizeof p[b]);
+    return a;
+}
+
+/* Smallest dihedral sine of v's star with v at y, the smallest mean ratio
+ * (*qmin) and, if act, the active functions (at most DIH_MAXACT, the smallest). */
+static double star_sines(const mesh_topo *tp, const double *x, int32_t v, const double *y,
+                         double level, int *nbelow, double *qmin, dih_fn *act, int *nact)
+{
+    double smin = INFINITY, q = INFINITY;
+    double av[DIH_MAXACT];
+    int n = 0, below = 0;
+
+    for (int pass = 0; pass < (act ? 2 : 1); pass++)
+        for (int32_t k = tp->vt_ptr[v]; k < tp->vt_ptr[v + 1]; k++) {
+            double p[4][3], s[6];
+            star_tet(tp, x, k, y, p);
+            metric_dihedral_sines(p[0], p[1], p[2], p[3], s);
+            if (pass == 0) {
+                metric_parts pt;
+                double tmin = INFINITY;
+                metric_parts_of(p[0], p[1], p[2], p[3], &pt);
+                q = fmin(q, metric_mean_ratio(&pt));
+                for (int e = 0; e < 6; e++)
+                    tmin = fmin(tmin, s[e]);
+                smin = fmin(smin, tmin);
+                below += tmin < level;
+                continue;
+            }
+            for (int e = 0; e < 6; e++) {
+                int i;
+                if (!(s[e] <= smin + DIH_ACTIVE))
+                    continue;
+                /* insertion into the sorted, capped active list */
+                if (n == DIH_MAXACT && s[e] >= av[n - 1])
+                    continue;
+                i = n < DIH_MAXACT ? n++ : n - 1;
+                while (i > 0 && av[i - 1] > s[e]) {
+                    av[i] = av[i - 1];
+                    act[i] = act[i - 1];
+                    i--;
+                }
+                av[i] = s[e];
+                act[i].k = k;
+                act[i].e = e;
+            }
+        }
+    if (nact)
+        *nact = n;
+    *nbelow = below;
+    *qmin = q;
+    return smin;
+}
+
+/* Gradient of one dihedral sine with respect to v's position (central
+ * differences; h in x's units). */
+static void sine_grad(const mesh_topo *tp, const double *x, const double *y, dih_fn f, double h,
+                      double g[3])
+{
+    for (int c = 0; c < 3; c++) {
+        double yp[3], p[4][3], sp[6], sm[6];
+        memcpy(yp, y, sizeof yp);
+        yp[c] = y[c] + h;
+        star_tet(tp, x, f.k, yp, p);
+        metric_dihedral_sines(p[0], p[1], p[2], p[3], sp);
+        yp[c] = y[c] - h;
+        star_tet(tp, x, f.k, yp, p);
+        metric_dihedral_sines(p[0], p[1], p[2], p[3], sm);
+        g[c] = (sp[f.e] - sm[f.e]) / (2.0 * h);
+    }
+}
+
+/* Minimum-norm point d of the convex hull of g[0..n): the steepest ascent
+ * direction of min_i f_i (every active f_i rises at rate >= |d|^2 along d).
+ * In 3-D it lies on a face spanned by at most 3 points, so the candidates are
+ * the points, the segments and the triangles. Returns 0 if the hull contains
+ * the origin (no ascent direction). */
+static int min_norm_point(double g[][3], int n, double d[3])
+{
+    double best = INFINITY, cand[3];
+
+    for (int i = 0; i < n; i++)
+        for (int j = i; j < n; j++)
+            for (int k = j; k < n; k++) {
+                double u[3], w[3], uu, uw, ww, gu, gw, a = 0, b = 0, nn;
+                if ((j == i && k != i) || (k == j && j != i))
+                    continue; /* subsets {i}, {i,j}, {i,j,k} only */
+                for (int c = 0; c < 3; c++) {
+                    u[c] = g[j][c] - g[i][c];
+                    w[c] = g[k][c] - g[i][c];
+                }
+                uu = u[0] * u[0] + u[1] * u[1] + u[2] * u[2];
+                ww = w[0] * w[0] + w[1] * w[1] + w[2] * w[2];
+                uw = u[0] * w[0] + u[1] * w[1] + u[2] * w[2];
+                gu = g[i][0] * u[0] + g[i][1] * u[1] + g[i][2] * u[2];
+                gw = g[i][0] * w[0] + g[i][1] * w[1] + g[i][2] * w[2];
+                if (j == i) {
+                    a = b = 0;
+                } else if (k == j) {
+                    if (!(uu > 0))
+                        continue;
+                    a = -gu / uu;
+                    if (!(a > 0 && a < 1))
+                        continue;
+                } else {
+                    double det = uu * ww - uw * uw;
+                    if (!(det > 1e-14 * uu * ww))
+                        continue;
+                    a = (-gu * ww + gw * uw) / det;
+                    b = (-gw * uu + gu * uw) / det;
+                    if (!(a > 0 && b > 0 && a + b < 1))
+                        continue;
+                }
+                for (int c = 0; c < 3; c++)
+                    cand[c] = g[i][c] + a * u[c] + b * w[c];
+                nn = cand[0] * cand[0] + cand[1] * cand[1] + cand[2] * cand[2];
+                if (nn < best) {
+                    best = nn;
+                    memcpy(d, cand, sizeof cand);
+                }
+            }
+    if (!(best > 0) || !isfinite(best))
+        return 0;
+    /* optimality: every point sees d at least as far as d itself; else the
+     * origin is inside the hull */
+    for (int i = 0; i < n; i++)
+        if (g[i][0] * d[0] + g[i][1] * d[1] + g[i][2] * d[2] < best * (1.0 - 1e-9))
+            return 0;
+    return 1;
+}
+
+/* Max-min ascent of one vertex: raise the smallest dihedral sine of its star
+ * while every star tet stays positive and no star tet's mean ratio drops
+ * below qfloor. */
+static int32_t dihedral_vertex(const mesh_topo *tp, const slide_ctx *sl, double *x, int32_t v,
+                               double lbar, double qfloor, double target)
+{
+    int sliding = sl && slide_kind(sl, v) != SLIDE_INTERIOR;
+    double *xv = x + 3 * (size_t)v, s = 0.02 * lbar, h = 1e-6 * lbar;
+    int32_t moves = 0;
+
+    for (int it = 0; it < DIH_INNER; it++) {
+        dih_fn act[DIH_MAXACT];
+        double g[DIH_MAXACT][3], d[3], dn, y[3], q0, q1, f0, f1;
+        int nact = 0, ok = 0, nb0, nb1;
+        f0 = star_sines(tp, x, v, xv, target, &nb0, &q0, act, &nact);
+        if (!(f0 > 0.0) || nact == 0 || f0 >= target)
+            break; /* inverted stars are the smooth pass's job */
+        for (int i = 0; i < nact; i++) {
+            sine_grad(tp, x, xv, act[i], h, g[i]);
+            if (sliding) {
+                double gt[3];
+                slide_tangent(sl, v, g[i], gt);
+                memcpy(g[i], gt, sizeof gt);
+            }
+        }
+        if (!min_norm_point(g, nact, d))
+            break;
+        dn = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        for (int hv = 0; hv < FINISH_HALVINGS; hv++) {
+            trial_point(sliding ? sl : NULL, v, xv, d, s / dn, y);
+            f1 = star_sines(tp, x, v, y, target, &nb1, &q1, NULL, NULL);
+            /* no more star tets in the worst set (a stricter rule, no tet of the
+             * set getting worse, stalls: sphere_h0.1_good 13.1 against 16.0 degrees) */
+            if (f1 > f0 && nb1 <= nb0 && q1 >= q0 && q1 >= qfloor) {
+                ok = 1;
+                break;
+            }
+            s *= 0.5;
+        }
+        if (!ok)
+            break;
+        memcpy(xv, y, sizeof y);
+        moves++;
+        s = fmin(s * 1.6, 0.1 * lbar);
+        if (f1 - f0 < 1e-5)
+            break;
+    }
+    return moves;
+}
+
+/* Smallest dihedral sine of every tet into smin[]; returns the mean of the k
+ * smallest (the sweep's score), reordering sorted[] (scratch of nt); *kth:
+ * the k-th smallest, *lo: the smallest. */
+static double tet_sines(const mesh_topo *tp, const double *x, double *smin, int fresh,
+                        double *sorted, int32_t k, double *kth, double *lo)
+{
+    double sum = 0.0;
+
+#pragma omp parallel for schedule(static) if (fresh)
+    for (int32_t t = 0; t < (fresh ? tp->nt : 0); t++) {
+        const int32_t *tt = tp->tets + 4 * (size_t)t;
+        double s[6], m = INFINITY;
+        metric_dihedral_sines(x + 3 * (size_t)tt[0], x + 3 * (size_t)tt[1],
+                              x + 3 * (size_t)tt[2], x + 3 * (size_t)tt[3], s);
+        for (int e = 0; e < 6; e++)
+            m = fmin(m, s[e]);
+        smin[t] = m;
+    }
+    memcpy(sorted, smin, (size_t)tp->nt * sizeof(double));
+    *kth = kth_smallest(sorted, tp->nt, k - 1);
+    /* after quickselect sorted[0..k) holds the k smallest (in any order) */
+    *lo = INFINITY;
+    for (int32_t i = 0; i < k; i++) {
+        sum += sorted[i];
+        *lo = fmin(*lo, sorted[i]);
+    }
+    return sum / k;
+}
+
+qdc_status finish_dihedral_sweep(const mesh_topo *tp, const uint8_t *movable,
+                                 const slide_ctx *sl, double *x, double lbar, double frac,
+                                 double qfloor, double *smin, int smin_valid, finish_stats *st)
+{
+    double *sorted = qdc_mallocn((size_t)tp->nt, sizeof(double));
+    double *vworst = qdc_mallocn((size_t)tp->nv, sizeof(double));
+    int32_t *colour = qdc_mallocn((size_t)tp->nv, sizeof(int32_t));
+    int32_t *start = NULL, n = 0, k, ncol;
+    vq_pair *list = NULL;
+    double thresh, dummy;
+    qdc_status st_ = QDC_ENOMEM;
+
+    memset(st, 0, sizeof *st);
+    if (!sorted || !vworst || !colour)
+        goto out;
+    k = (int32_t)(frac * tp->nt);
+    k = k < 1 ? 1 : (k > tp->nt ? tp->nt : k);
+    st->score_before =
+        tet_sines(tp, x, smin, !smin_valid, sorted, k, &thresh, &st->floor_before);
+    if (st->floor_before > 0.0)
+        thresh = fmin(thresh, LEVEL_MULT * st->floor_before);
+    for (int32_t v = 0; v < tp->nv; v++)
+        vworst[v] = 2.0;
+    for (int32_t t = 0; t < tp->nt; t++)
+        if (smin[t] <= thresh)
+            for (int a = 0; a < 4; a++) {
+                int32_t v = tp->tets[4 * (size_t)t + a];
+                vworst[v] = fmin(vworst[v], smin[t]);
+            }
+    for (int32_t v = 0; v < tp->nv; v++)
+        n += movable[v] && vworst[v] < 2.0;
+    list = qdc_mallocn((size_t)n + 1, sizeof *list);
+    if (!list)
+        goto out;
+    n = 0;
+    for (int32_t v = 0; v < tp->nv; v++)
+        if (movable[v] && vworst[v] < 2.0) {
+            list[n].q = vworst[v];
+            list[n].v = v;
+            n++;
+        }
+    if (!vq_sort(list, n))
+        goto out;
+    ncol = colour_classes(tp, list, n, colour, &start);
+    if (ncol < 0)
+        goto out;
+    /* a vertex stops once its star leaves the worst set (measured: moving it
+     * further, to its own max-min optimum, costs the neighbours' mean ratio:
+     * -0.005 against -0.002 mean on the good dev meshes, same smallest angle) */
+    for (int32_t c = 0; c < ncol; c++) {
+        int32_t moves = 0;
+#pragma omp parallel for reduction(+ : moves) schedule(dynamic, 4)
+        for (int32_t i = start[c]; i < start[c + 1]; i++) {
+            int32_t mv = dihedral_vertex(tp, sl, x, list[i].v, lbar, qfloor, thresh);
+            list[i].q = mv > 0 ? -INFINITY : list[i].q; /* mark the moved (sines are >= -1) */
+            moves += mv;
+        }
+        st->n_moves += moves;
+    }
+    st->n_verts = n;
+    /* only the stars of the moved vertices changed */
+    for (int32_t i = 0; i < n; i++) {
+        int32_t v = list[i].v;
+        if (list[i].q != -INFINITY)
+            continue;
+        for (int32_t kk = tp->vt_ptr[v]; kk < tp->vt_ptr[v + 1]; kk++) {
+            const int32_t *tt = tp->tets + 4 * (size_t)(tp->vt_idx[kk] >> 2);
+            double sn[6], lo = INFINITY;
+            metric_dihedral_sines(x + 3 * (size_t)tt[0], x + 3 * (size_t)tt[1],
+                                  x + 3 * (size_t)tt[2], x + 3 * (size_t)tt[3], sn);
+            for (int e = 0; e < 6; e++)
+                lo = fmin(lo, sn[e]);
+            smin[tp->vt_idx[kk] >> 2] = lo;
+        }
+    }
+    st->score_after = tet_sines(tp, x, smin, 0, sorted, k, &dummy, &st->floor_after);
+    st_ = QDC_OK;
+out:
+    qdc_free(start);
+    qdc_free(list);
+    qdc_free(colour);
+    qdc_free(vworst);
+    qdc_free(sorted);
+    return st_;
+}

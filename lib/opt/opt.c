@@ -1,0 +1,989 @@
+/* opt.c - the QDC optimizer: outer loop of the semi-implicit gradient flow
+ * (paper Eq. 15) with the safeguards of METHOD §5 (mu = 1 in normalized units,
+ * backtracking line search on sum q~, best iterate kept), harmonic guidance
+ * (§6) and the finishing pass (§5a). */
+#include "opt/opt.h"
+
+#include "opt/encode.h"
+#include "opt/finish.h"
+#include "opt/harm.h"
+#include "geom/metric.h"
+#include "opt/slide.h"
+#include "opt/solve.h"
+
+#include <math.h>
+#include <omp.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <string.h>
+
+void opt_defaults(opt_options *o)
+{
+    memset(o, 0, sizeof *o);
+    o->metric = OPT_METRIC_MIVL;
+    o->boundary = OPT_BOUNDARY_LSQ;
+    o->mode = OPT_MODE_SAFE;
+    o->weights = OPT_WEIGHTS_OPTAVG;
+    o->solver = OPT_SOLVER_AUTO;
+    o->harmonic = 0;
+    o->pre_iters = 3;
+    o->finish = 1;
+    o->max_iter = 10;
+    o->ls_halvings = 10;
+    o->mu = 1.0;
+    o->tol_move = 1e-3;
+    o->eps_rel = 1e-3;
+    o->finish_frac = 0.2;
+    o->finish_sweeps = 3;
+    o->angle_polish = 1;
+    o->feature_angle = 30.0;
+}
+
+static const char *const metric_names[] = {"mivl", "mimr", "micn"};
+static const char *const boundary_names[] = {"lsq", "fixed", "slide"};
+static const char *const mode_names[] = {"safe", "literal"};
+static const char *const weights_names[] = {"optavg", "paper"};
+static const char *const solver_names[] = {"auto", "cholmod", "pcg"};
+
+static qdc_status parse_word(const char *s, const char *const *names, int n, int *out)
+{
+    for (int i = 0; s && i < n; i++)
+        if (strcmp(s, names[i]) == 0) {
+            *out = i;
+            return QDC_OK;
+        }
+    return QDC_EINVAL;
+}
+
+#define PARSER(fn, type, names)                                                         \
+    qdc_status fn(const char *s, type *out)                                             \
+    {                                                                                   \
+        int v;                                                                          \
+        qdc_status st = parse_word(s, names, (int)(sizeof names / sizeof names[0]), &v); \
+        if (st == QDC_OK)                                                               \
+            *out = (type)v;                                                             \
+        return st;                                                                      \
+    }
+PARSER(opt_parse_metric, opt_metric, metric_names)
+PARSER(opt_parse_boundary, opt_boundary, boundary_names)
+PARSER(opt_parse_mode, opt_mode, mode_names)
+PARSER(opt_parse_weights, opt_weights, weights_names)
+PARSER(opt_parse_solver, opt_solver, solver_names)
+
+#define NAMER(fn, type, names)                                                          \
+    const char *fn(type v)                                                              \
+    {                                                                                   \
+        return (unsigned)v < sizeof names / sizeof names[0] ? names[v] : "?";           \
+    }
+NAMER(opt_metric_name, opt_metric, metric_names)
+NAMER(opt_boundary_name, opt_boundary, boundary_names)
+NAMER(opt_mode_name, opt_mode, mode_names)
+NAMER(opt_weights_name, opt_weights, weights_names)
+NAMER(opt_solver_name, opt_solver, solver_names)
+
+typedef struct {
+    const opt_options *o;
+    const mesh_topo *tp;
+    int32_t nv, nt;
+    double center[3], scale; /* x = (X - center) / scale */
+    double lbar, eps;
+    double *x, *x0, *xn, *xbest, *trial, *tmp, *rhs;
+    uint8_t *locked;  /* not an unknown of the linear system */
+    double *wq2;      /* squared QDC row weights */
+    double *bw2;      /* squared boundary row weights (0: no row) */
+    double *dg;       /* bw2 + mu */
+    double *qt, *qval, *d;
+    double *eta;      /* nt: mean ratio per tet at the x of the last evaluate() that asked */
+    double eta_delta; /* and the delta of that x */
+    double mu_factor;    /* omega_B^2 once harmonic guidance is on and mu_scaled */
+    const double *bref;  /* targets of the boundary rows: x0 (lsq) or x_k (slide) */
+    slide_ctx *sl;       /* slide mode only */
+    solve_ctx *sol;
+    double t0;
+    opt_progress input, best;
+    int best_it;
+    int last_record; /* number of the last progress record */
+} ctx_t;
+
+static void logf_(const ctx_t *c, int level, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
+
+static void logf_(const ctx_t *c, int level, const char *fmt, ...)
+{
+    char buf[256];
+    va_list ap;
+
+    if (!c->o->log)
+        return;
+    va_start(ap, fmt);
+    vsnprintf(buf, sizeof buf, fmt, ap);
+    va_end(ap);
+    c->o->log(c->o->log_ctx, level, buf);
+}
+
+#define EVAL_CHUNKS 256
+#define M_PI_ 3.14159265358979323846
+
+/* Quality record of x (normalized coordinates; mean ratio and angles are
+ * scale-invariant) in one pass over the tets, then the objective with the
+ * delta of x, which is returned. eta (nt entries, may be NULL) receives each
+ * tet's mean ratio for the finishing pass. */
+static double evaluate(const ctx_t *c, const double *x, opt_progress *r, double *eta_out)
+{
+    const mesh_topo *tp = c->tp;
+    const opt_metric m = c->o->metric;
+    double psum[EVAL_CHUNKS], psum2[EVAL_CHUNKS], pobj[EVAL_CHUNKS], obj = 0;
+    /* the objective comes with the scan when delta turns out 0 (no tet below
+     * eps: the usual case once untangled); MICN needs parts the scan lacks */
+    const int fuse = m != OPT_METRIC_MICN;
+    double sum = 0, sum2 = 0, qmin = INFINITY, cmax = -2, cmin = 2, amin = INFINITY, delta;
+    int32_t ninv = 0;
+
+    /* fixed chunks summed in order: reports do not depend on the thread count */
+#pragma omp parallel for reduction(+ : ninv) reduction(min : qmin, cmin, amin) \
+    reduction(max : cmax) schedule(static)
+    for (int ch = 0; ch < EVAL_CHUNKS; ch++) {
+        int32_t t0 = (int32_t)((int64_t)tp->nt * ch / EVAL_CHUNKS);
+        int32_t t1 = (int32_t)((int64_t)tp->nt * (ch + 1) / EVAL_CHUNKS);
+        double s = 0, s2 = 0, so = 0;
+        for (int32_t t = t0; t < t1; t++) {
+            const int32_t *tt = tp->tets + 4 * (size_t)t;
+            const double *p0 = x + 3 * (size_t)tt[0], *p1 = x + 3 * (size_t)tt[1];
+            const double *p2 = x + 3 * (size_t)tt[2], *p3 = x + 3 * (size_t)tt[3];
+            metric_parts pt;
+            double eta, lo, hi, arg;
+            metric_parts_for(OPT_METRIC_MIVL, p0, p1, p2, p3, &pt);
+            eta = metric_mean_ratio(&pt);
+            if (fuse)
+                so += metric_qt(m, &pt, 0.0);
+            if (eta_out)
+                eta_out[t] = eta;
+            s += eta;
+            s2 += eta * eta;
+            qmin = eta < qmin ? eta : qmin;
+            ninv += !(pt.vol > 0.0);
+            arg = metric_arg(m, &pt); /* every metric's argument is a multiple of vol */
+            amin = arg < amin ? arg : amin;
+            metric_dihedral_cos_range(p0, p1, p2, p3, &lo, &hi);
+            cmin = lo < cmin ? lo : cmin;
+            cmax = hi > cmax ? hi : cmax;
+        }
+        psum[ch] = s;
+        psum2[ch] = s2;
+        pobj[ch] = so;
+    }
+    for (int ch = 0; ch < EVAL_CHUNKS; ch++) {
+        sum += psum[ch];
+        sum2 += psum2[ch];
+        obj += pobj[ch];
+    }
+    memset(r, 0, sizeof *r);
+    r->q_mean = sum / tp->nt;
+    r->q_std = sqrt(fmax(0.0, sum2 / tp->nt - r->q_mean * r->q_mean));
+    r->q_min = qmin;
+    r->dih_min = acos(cmax) * (180.0 / M_PI_);
+    r->dih_max = acos(cmin) * (180.0 / M_PI_);
+    r->n_inverted = ninv;
+    delta = metric_delta(amin, c->eps);
+    r->objective = fuse && delta == 0.0 ? obj : encode_objective(tp, x, m, delta, NULL, NULL);
+    r->elapsed = qdc_now() - c->t0;
+    r->solver = c->sol ? (int)solve_kind(c->sol) : 0;
+    return delta;
+}
+
+/* Mean ratio of every tet into eta and the fields of r that the choice of
+ * the best iterate reads (mean, worst, inverted count; fixed chunks summed in
+ * order); returns the delta of x. */
+static double scan_light(const ctx_t *c, const double *x, double *eta, opt_progress *r)
+{
+    const mesh_topo *tp = c->tp;
+    double psum[EVAL_CHUNKS], sum = 0, amin = INFINITY, qmin = INFINITY;
+    int32_t ninv = 0;
+
+#pragma omp parallel for reduction(min : amin, qmin) reduction(+ : ninv) schedule(static)
+    for (int ch = 0; ch < EVAL_CHUNKS; ch++) {
+        int32_t t0 = (int32_t)((int64_t)tp->nt * ch / EVAL_CHUNKS);
+        int32_t t1 = (int32_t)((int64_t)tp->nt * (ch + 1) / EVAL_CHUNKS);
+        double sm = 0;
+        for (int32_t t = t0; t < t1; t++) {
+            const int32_t *tt = tp->tets + 4 * (size_t)t;
+            metric_parts pt;
+            double arg;
+            metric_parts_for(OPT_METRIC_MIVL, x + 3 * (size_t)tt[0], x + 3 * (size_t)tt[1],
+                             x + 3 * (size_t)tt[2], x + 3 * (size_t)tt[3], &pt);
+            eta[t] = metric_mean_ratio(&pt);
+            sm += eta[t];
+            qmin = eta[t] < qmin ? eta[t] : qmin;
+            ninv += !(pt.vol > 0.0);
+            arg = metric_arg(c->o->metric, &pt);
+            amin = arg < amin ? arg : amin;
+        }
+        psum[ch] = sm;
+    }
+    for (int ch = 0; ch < EVAL_CHUNKS; ch++)
+        sum += psum[ch];
+    memset(r, 0, sizeof *r);
+    r->q_mean = sum / tp->nt;
+    r->q_min = qmin;
+    r->n_inverted = ninv;
+    return metric_delta(amin, c->eps);
+}
+
+/* METHOD §5: keep the best iterate (fewest inverted, then best worst tet, then
+ * best mean). Never accept one with more inverted tets or a worse worst tet
+ * than the input. Worst-tet differences under 1e-4 count as ties so that the
+ * mean decides between iterates whose worst tet did not really change. */
+static int better(const opt_progress *a, const opt_progress *b)
+{
+    if (a->n_inverted != b->n_inverted)
+        return a->n_inverted < b->n_inverted;
+    if (fabs(a->q_min - b->q_min) > 1e-4)
+        return a->q_min > b->q_min;
+    return a->q_mean > b->q_mean;
+}
+
+static int eligible(const ctx_t *c, const opt_progress *r)
+{
+    return r->n_inverted <= c->input.n_inverted && r->q_min >= c->input.q_min;
+}
+
+static void consider(ctx_t *c, const double *x, const opt_progress *r)
+{
+    if (eligible(c, r) && better(r, &c->best)) {
+        c->best = *r;
+        c->best_it = r->iteration;
+        memcpy(c->xbest, x, 3 * (size_t)c->nv * sizeof(double));
+    }
+}
+
+static int report(ctx_t *c, opt_progress *r)
+{
+    r->elapsed = qdc_now() - c->t0;
+    c->last_record = r->iteration;
+    if (c->o->progress && c->o->progress(c->o->progress_ctx, r))
+        return 1;
+    return 0;
+}
+
+static int should_stop(const ctx_t *c, char *why, size_t len)
+{
+    if (c->o->cancel && *c->o->cancel) {
+        snprintf(why, len, "cancelled");
+        return 1;
+    }
+    if (c->o->time_limit > 0 && qdc_now() - c->t0 > c->o->time_limit) {
+        snprintf(why, len, "time-limit");
+        return 1;
+    }
+    return 0;
+}
+
+static qdc_status ctx_init(ctx_t *c, const mesh_t *m, const mesh_topo *tp, const opt_options *o)
+{
+    size_t n3 = 3 * (size_t)m->nv;
+    double lo[3], hi[3], diag, esum = 0;
+    int64_t ecount = 0;
+
+    memset(c, 0, sizeof *c);
+    c->o = o;
+    c->tp = tp;
+    c->nv = m->nv;
+    c->nt = m->nt;
+    c->x = qdc_mallocn(n3, sizeof(double));
+    c->x0 = qdc_mallocn(n3, sizeof(double));
+    c->xn = qdc_mallocn(n3, sizeof(double));
+    c->xbest = qdc_mallocn(n3, sizeof(double));
+    c->trial = qdc_mallocn(n3, sizeof(double));
+    c->tmp = qdc_mallocn(n3, sizeof(double));
+    c->rhs = qdc_mallocn(n3, sizeof(double));
+    c->d = qdc_mallocn(n3, sizeof(double));
+    c->locked = qdc_calloc((size_t)m->nv, 1);
+    c->wq2 = qdc_mallocn((size_t)m->nv, sizeof(double));
+    c->bw2 = qdc_calloc((size_t)m->nv, sizeof(double));
+    c->dg = qdc_mallocn((size_t)m->nv, sizeof(double));
+    c->qt = qdc_mallocn((size_t)m->nt, sizeof(double));
+    c->eta = qdc_mallocn((size_t)m->nt, sizeof(double));
+    c->qval = qdc_mallocn((size_t)tp->adj_ptr[tp->nv], sizeof(double));
+    if (!c->x || !c->x0 || !c->xn || !c->xbest || !c->trial || !c->tmp || !c->rhs || !c->d ||
+        !c->locked || !c->wq2 || !c->bw2 || !c->dg || !c->qt || !c->eta || !c->qval)
+        return QDC_ENOMEM;
+    /* METHOD §1: bbox centre to 0, diagonal to 1; every tolerance is in these units */
+    diag = mesh_bbox(m, lo, hi);
+    c->scale = diag > 0 ? diag : 1.0;
+    for (int k = 0; k < 3; k++)
+        c->center[k] = 0.5 * (lo[k] + hi[k]);
+    for (int32_t v = 0; v < m->nv; v++)
+        for (int k = 0; k < 3; k++)
+            c->x[3 * (size_t)v + k] = (m->xyz[3 * (size_t)v + k] - c->center[k]) / c->scale;
+    memcpy(c->x0, c->x, n3 * sizeof(double));
+    memcpy(c->xbest, c->x, n3 * sizeof(double));
+    for (int32_t i = 0; i < tp->nv; i++)
+        for (int32_t s = tp->adj_ptr[i]; s < tp->adj_ptr[i + 1]; s++) {
+            int32_t j = tp->adj_idx[s];
+            const double *a = c->x + 3 * (size_t)i, *b = c->x + 3 * (size_t)j;
+            if (j <= i)
+                continue;
+            esum += sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) +
+                         (a[2] - b[2]) * (a[2] - b[2]));
+            ecount++;
+        }
+    c->lbar = ecount ? esum / (double)ecount : 1.0;
+    c->bref = c->x0;
+    c->mu_factor = 1.0;
+    if (o->boundary == OPT_BOUNDARY_SLIDE) {
+        qdc_status st = slide_new(tp, c->x0, o->feature_angle, &c->sl, NULL);
+        if (st != QDC_OK)
+            return st;
+        c->bref = c->x; /* rows keep a sliding vertex near where it is */
+    }
+    c->eps = metric_eps(o->metric, c->lbar, o->eps_rel);
+    for (int32_t v = 0; v < m->nv; v++) {
+        uint8_t f = tp->vflag[v];
+        int on_b = (f & (MESH_V_BOUNDARY | MESH_V_INTERFACE)) != 0;
+        c->locked[v] = (f & (MESH_V_FIXED | MESH_V_UNUSED)) ||
+                       (on_b && o->boundary == OPT_BOUNDARY_FIXED) ||
+                       (c->sl && slide_kind(c->sl, v) == SLIDE_CORNER);
+        /* Eq. 9: boundary rows B x = b with b the ORIGINAL positions (lsq) */
+        c->bw2[v] = on_b && !c->locked[v] ? 1.0 : 0.0;
+        c->wq2[v] = 1.0;
+    }
+    return QDC_OK;
+}
+
+static void ctx_free(ctx_t *c)
+{
+    solve_free(c->sol);
+    slide_free(c->sl);
+    qdc_free(c->x);
+    qdc_free(c->x0);
+    qdc_free(c->xn);
+    qdc_free(c->xbest);
+    qdc_free(c->trial);
+    qdc_free(c->tmp);
+    qdc_free(c->rhs);
+    qdc_free(c->d);
+    qdc_free(c->locked);
+    qdc_free(c->wq2);
+    qdc_free(c->bw2);
+    qdc_free(c->dg);
+    qdc_free(c->qt);
+    qdc_free(c->eta);
+    qdc_free(c->qval);
+}
+
+/* Harmonic guidance (Eq. 10): QDC rows weighted omega_1 h_i, boundary rows
+ * omega_B, omega_B = n / n_boundary, omega_1 = 0.4 omega_B (paper Sec. 5.1). */
+static qdc_status set_harmonic(ctx_t *c, opt_result *res, qdc_error *err)
+{
+    double t = qdc_now(), *h = qdc_mallocn((size_t)c->nv, sizeof(double));
+    double wb = (double)c->nv / (c->tp->nb > 0 ? c->tp->nb : 1), w1 = 0.4 * wb;
+    int32_t nmed = 0;
+    qdc_status st;
+
+    if (!h)
+        return QDC_ENOMEM;
+    st = harm_field(c->tp, c->x, h, &nmed, err);
+    if (st == QDC_OK) {
+        for (int32_t v = 0; v < c->nv; v++) {
+            c->wq2[v] = (w1 * h[v]) * (w1 * h[v]);
+            if (c->bw2[v] > 0)
+                c->bw2[v] = wb * wb;
+        }
+        if (c->o->mu_scaled)
+            c->mu_factor = wb * wb;
+        logf_(c, 0, "harmonic guidance: %d medial vertices, omega_B %.3g", (int)nmed, wb);
+    }
+    qdc_free(h);
+    res->t_harmonic += qdc_now() - t;
+    return st;
+}
+
+/* Slide mode: put the sliding vertices of y back on their input surface/line. */
+static void project_sliding(const ctx_t *c, double *y)
+{
+    if (!c->sl)
+        return;
+#pragma omp parallel for schedule(dynamic, 256)
+    for (int32_t v = 0; v < c->nv; v++) {
+        int k = slide_kind(c->sl, v);
+        if (k == SLIDE_SURFACE || k == SLIDE_LINE) {
+            double p[3];
+            slide_project(c->sl, v, y + 3 * (size_t)v, p);
+            memcpy(y + 3 * (size_t)v, p, sizeof p);
+        }
+    }
+}
+
+/* One iteration of Eq. 15 plus the line search. Fills r (without quality).
+ * Returns QDC_OK; *stepped = 0 when no step decreased the objective. */
+static qdc_status iterate(ctx_t *c, opt_result *res, opt_progress *r, int *stepped,
+                          qdc_error *err)
+{
+    const opt_options *o = c->o;
+    const mesh_topo *tp = c->tp;
+    size_t n3 = 3 * (size_t)c->nv;
+    int literal = o->mode == OPT_MODE_LITERAL;
+    double t = qdc_now(), delta, f0, mu, step = 1.0, move = 0;
+    int cg = 0;
+    qdc_status st;
+
+    /* q~ at x_k with one global delta (METHOD §2) */
+    delta = metric_delta(encode_min_arg(tp, c->x, o->metric), c->eps);
+    f0 = encode_objective(tp, c->x, o->metric, delta, c->qt, NULL);
+    if (literal || o->weights == OPT_WEIGHTS_PAPER)
+        encode_paper(tp, c->x, o->metric, c->qt, c->qval, c->d);
+    else
+        encode_optavg(tp, c->x, o->metric, c->qt, c->qval, c->d);
+    res->t_weights += qdc_now() - t;
+    t = qdc_now();
+    if (literal) {
+        /* paper as written: mu_k = ||G^T W^2 g||^2 = ||omega_B^2 b||^2 (constant) */
+        mu = 0;
+        for (int32_t v = 0; v < c->nv; v++)
+            for (int k = 0; k < 3; k++)
+                mu += c->bw2[v] * c->bw2[v] * c->x0[3 * (size_t)v + k] * c->x0[3 * (size_t)v + k];
+        if (!(mu > 0))
+            mu = 1.0;
+    } else {
+        mu = o->mu * c->mu_factor;
+    }
+    /* b = Q_F^T W (d - Q x_L) + bw2 x0 + mu x_k: locked vertices move to the right */
+    for (int32_t v = 0; v < c->nv; v++) {
+        for (int k = 0; k < 3; k++)
+            c->tmp[3 * (size_t)v + k] = c->locked[v] ? c->x[3 * (size_t)v + k] : 0.0;
+        c->dg[v] = c->bw2[v] + mu;
+    }
+    solve_q_mul(tp, c->qval, c->tmp, c->trial);
+    for (int32_t v = 0; v < c->nv; v++)
+        for (int k = 0; k < 3; k++) {
+            size_t q = 3 * (size_t)v + k;
+            c->trial[q] = c->wq2[v] * (c->d[q] - c->trial[q]);
+        }
+    solve_qt_mul(c->sol, c->qval, c->trial, c->rhs);
+    for (int32_t v = 0; v < c->nv; v++)
+        for (int k = 0; k < 3; k++) {
+            size_t q = 3 * (size_t)v + k;
+            c->rhs[q] += c->bw2[v] * c->bref[q] + mu * c->x[q];
+        }
+    res->t_assembly += qdc_now() - t;
+    t = qdc_now();
+    memcpy(c->xn, c->x, n3 * sizeof(double));
+    st = solve_system(c->sol, c->qval, c->wq2, c->dg, c->rhs, c->xn, &cg, err);
+    res->t_solve += qdc_now() - t;
+    if (st != QDC_OK)
+        return st;
+    for (size_t q = 0; q < n3; q++)
+        if (!isfinite(c->xn[q]))
+            return qdc_fail(err, QDC_ESOLVE, "linear solve returned a non-finite value");
+    t = qdc_now();
+    if (!literal) {
+        /* Not in the paper (METHOD §5): backtrack on sum q~ with delta frozen;
+         * with delta = 0 a trial that inverts a tet costs +inf. */
+        int h;
+        for (h = 0; h <= o->ls_halvings; h++) {
+            for (size_t q = 0; q < n3; q++)
+                c->trial[q] = c->x[q] + step * (c->xn[q] - c->x[q]);
+            project_sliding(c, c->trial);
+            if (encode_objective(tp, c->trial, o->metric, delta, NULL, NULL) <= f0)
+                break;
+            step *= 0.5;
+        }
+        if (h > o->ls_halvings)
+            step = 0.0;
+    }
+    res->t_linesearch += qdc_now() - t;
+    for (size_t q = 0; q < n3; q++)
+        c->trial[q] = c->x[q] + step * (c->xn[q] - c->x[q]);
+    if (step > 0.0)
+        project_sliding(c, c->trial);
+    for (int32_t v = 0; v < c->nv; v++) {
+        double dd = 0;
+        for (int k = 0; k < 3; k++) {
+            size_t q = 3 * (size_t)v + k;
+            double dx = step > 0.0 ? c->trial[q] - c->x[q] : 0.0;
+            c->x[q] += dx;
+            dd += dx * dx;
+        }
+        if (dd > move)
+            move = dd;
+    }
+    c->eta_delta = evaluate(c, c->x, r, c->eta);
+    r->step = step;
+    r->max_move = sqrt(move) / c->lbar;
+    r->cg_iters = cg;
+    *stepped = step > 0.0;
+    return QDC_OK;
+}
+
+/* The record of a finishing or angle pass, whose result is in c->trial. */
+static void pass_record(ctx_t *c, opt_progress *r, int *next, const char *phase)
+{
+    memcpy(c->x, c->trial, 3 * (size_t)c->nv * sizeof(double));
+    evaluate(c, c->x, r, NULL);
+    r->iteration = (*next)++;
+    r->phase = phase;
+}
+
+/* The finishing pass (METHOD §5a) from c->x: regular sweeps over the worst
+ * finish_frac of tets, then polish sweeps over the worst 1% while the worst tet
+ * still improves (measured on the dev corpus: it keeps rising for a few more
+ * sweeps). Each sweep is a progress record numbered from *next. */
+static qdc_status finish_pass(ctx_t *c, const uint8_t *movable, int x_evaluated,
+                              opt_result *res, opt_progress *r, int *next)
+{
+    const opt_options *o = c->o;
+    size_t n3 = 3 * (size_t)c->nv;
+    opt_progress cur, keep;
+    double delta, moves = 0, visits = 0;
+    int swept = 0;
+
+    /* The sweeps need the tet qualities and delta of x, which the last global
+     * iterate's record already has. Between sweeps only a light scan (a full
+     * record costs 3x as much); one record for the whole pass. */
+    if (x_evaluated) {
+        delta = c->eta_delta;
+        cur = *r;
+    } else {
+        delta = scan_light(c, c->x, c->eta, &cur);
+    }
+    for (int s = 0; s < o->finish_sweeps; s++) {
+        finish_stats fs;
+        qdc_status st;
+        if (should_stop(c, res->stop_reason, sizeof res->stop_reason))
+            return QDC_OK;
+        /* broad sweeps: one Newton step per vertex (finish.c) */
+        st = finish_sweep(c->tp, movable, c->sl, c->x, o->metric, c->eta, delta, c->lbar,
+                          o->finish_frac, 1e-3, &fs);
+        if (st != QDC_OK)
+            return st;
+        swept |= fs.n_moves > 0;
+        moves += fs.n_moves;
+        visits += fs.n_verts;
+        delta = scan_light(c, c->x, c->eta, &cur);
+        if (fs.n_moves == 0)
+            break;
+    }
+    /* polish sweeps over the worst 1% while the worst tet rises by 1e-3; the
+     * best state by (inverted, worst, mean) is kept in c->trial */
+    keep = cur;
+    memcpy(c->trial, c->x, n3 * sizeof(double));
+    for (int s = 0; s < 8; s++) {
+        finish_stats fs;
+        qdc_status st;
+        if (should_stop(c, res->stop_reason, sizeof res->stop_reason))
+            break;
+        st = finish_sweep(c->tp, movable, c->sl, c->x, o->metric, c->eta, delta, c->lbar, 0.01,
+                          0.0, &fs);
+        if (st != QDC_OK)
+            return st;
+        if (fs.n_moves == 0)
+            break;
+        swept = 1;
+        moves += fs.n_moves;
+        visits += fs.n_verts;
+        delta = scan_light(c, c->x, c->eta, &cur);
+        if (!better(&cur, &keep))
+            break;
+        memcpy(c->trial, c->x, n3 * sizeof(double));
+        if (cur.q_min < keep.q_min + 1e-3) {
+            keep = cur;
+            break;
+        }
+        keep = cur;
+    }
+    if (!swept)
+        return QDC_OK;
+    pass_record(c, r, next, "finish");
+    r->step = visits > 0 ? moves / visits : 0; /* accepted moves per visited vertex */
+    consider(c, c->x, r);
+    if (report(c, r))
+        snprintf(res->stop_reason, sizeof res->stop_reason, "cancelled");
+    return QDC_OK;
+}
+
+/* Worst-angle polish (finish.h) from the best iterate: sweeps over the worst
+ * 1% of tets by dihedral sine while their mean sine rises by 0.1%. The worst
+ * mean ratio may not fall below the best iterate's (the floor of every move)
+ * and the smallest sine cannot drop, so a sweep that raises the score is kept. */
+#define ANGLE_SWEEPS 12
+static qdc_status angle_pass(ctx_t *c, const uint8_t *movable, const slide_ctx *sl,
+                             opt_result *res, opt_progress *r, int *next)
+{
+    /* the tet sines a sweep leaves are those the next one starts from (a
+     * rejected sweep ends the pass); c->eta is free scratch here, c->trial
+     * holds the last accepted sweep */
+    double *smin = c->eta;
+    const opt_progress base = c->best;
+    size_t n3 = 3 * (size_t)c->nv;
+    int kept = 0;
+    double moves = 0, visits = 0;
+
+    memcpy(c->x, c->xbest, n3 * sizeof(double));
+    for (int s = 0; s < ANGLE_SWEEPS; s++) {
+        finish_stats fs;
+        qdc_status st;
+        if (should_stop(c, res->stop_reason, sizeof res->stop_reason))
+            break;
+        st = finish_dihedral_sweep(c->tp, movable, sl, c->x, c->lbar, 0.01, base.q_min, smin,
+                                   s > 0, &fs);
+        if (st != QDC_OK)
+            return st;
+        /* the floor keeps q_min and positivity keeps the inverted count; a
+         * sweep is kept if it raises the smallest sine of the mesh, or keeps it
+         * and raises the mean of the worst 1% (measured on bunny_good_10k: the
+         * smallest angle 10.3 -> 11.7 degrees while that mean dips by 0.1%) */
+        if (!(fs.floor_after > fs.floor_before ||
+              (fs.floor_after >= fs.floor_before && fs.score_after > fs.score_before)))
+            break;
+        memcpy(c->trial, c->x, n3 * sizeof(double));
+        kept = 1;
+        moves += fs.n_moves;
+        visits += fs.n_verts;
+        if (fs.n_moves == 0 || !(fs.floor_after > fs.floor_before * (1 + 1e-3) ||
+                                 fs.score_after > fs.score_before * (1 + 1e-3)))
+            break;
+    }
+    if (!kept)
+        return QDC_OK;
+    /* one record for the pass (a record costs a sweep's worth of work) */
+    pass_record(c, r, next, "angles");
+    r->step = visits > 0 ? moves / visits : 0;
+    if (eligible(c, r) && r->n_inverted <= base.n_inverted && r->q_min >= base.q_min) {
+        c->best = *r;
+        c->best_it = r->iteration;
+        memcpy(c->xbest, c->x, n3 * sizeof(double));
+    }
+    if (report(c, r))
+        snprintf(res->stop_reason, sizeof res->stop_reason, "cancelled");
+    return QDC_OK;
+}
+
+/* The angle pass; with lsq, boundary vertices take part too, sliding on the
+ * input surface (projected back onto its triangles, as in slide mode): the
+ * worst tets of good meshes often have all four corners on the boundary
+ * (measured: bunny_good_10k 11.7 -> 14.9, torus_h0.1_good 10.4 -> 14.2 degrees,
+ * boundary error unchanged at the lsq level). */
+static qdc_status lsq_angle_pass(ctx_t *c, const uint8_t *movable, opt_result *res,
+                                 opt_progress *r, int *next)
+{
+    slide_ctx *sl = NULL;
+    uint8_t *mv = NULL;
+    qdc_status st;
+
+    if (c->sl || c->o->boundary != OPT_BOUNDARY_LSQ)
+        return angle_pass(c, movable, c->sl, res, r, next);
+    st = slide_new(c->tp, c->x0, c->o->feature_angle, &sl, NULL);
+    mv = st == QDC_OK ? qdc_mallocn((size_t)c->nv, 1) : NULL;
+    if (!mv) {
+        slide_free(sl);
+        return QDC_ENOMEM;
+    }
+    for (int32_t v = 0; v < c->nv; v++)
+        mv[v] = movable[v] || (!c->locked[v] && slide_kind(sl, v) != SLIDE_CORNER);
+    st = angle_pass(c, mv, sl, res, r, next);
+    qdc_free(mv);
+    slide_free(sl);
+    return st;
+}
+
+/* Mean ratio of tet t at coordinates x. */
+static double tet_mean_ratio(const mesh_topo *tp, const double *x, int32_t t)
+{
+    const int32_t *tt = tp->tets + 4 * (size_t)t;
+    metric_parts pt;
+    metric_parts_of(x + 3 * (size_t)tt[0], x + 3 * (size_t)tt[1], x + 3 * (size_t)tt[2],
+                    x + 3 * (size_t)tt[3], &pt);
+    return metric_mean_ratio(&pt);
+}
+
+/* Slide mode: the corners of the smooth ears (slide.h) that the run squashed
+ * to less than half their input mean ratio, as an nv mask (NULL if none). */
+static qdc_status squashed_ears(const ctx_t *c, uint8_t **out)
+{
+    const mesh_topo *tp = c->tp;
+    uint8_t *ear = qdc_mallocn((size_t)tp->nt + 1, 1), *pins = NULL;
+    int32_t n;
+
+    *out = NULL;
+    if (!ear)
+        return QDC_ENOMEM;
+    n = slide_smooth_ears(c->sl, tp, ear);
+    if (n < 0) {
+        qdc_free(ear);
+        return QDC_ENOMEM;
+    }
+    for (int32_t t = 0; n > 0 && t < tp->nt; t++) {
+        if (!ear[t] || !(tet_mean_ratio(tp, c->xbest, t) < 0.5 * tet_mean_ratio(tp, c->x0, t)))
+            continue;
+        if (!pins && !(pins = qdc_calloc((size_t)c->nv, 1))) {
+            qdc_free(ear);
+            return QDC_ENOMEM;
+        }
+        for (int a = 0; a < 4; a++)
+            pins[tp->tets[4 * (size_t)t + a]] = 1;
+    }
+    qdc_free(ear);
+    *out = pins;
+    return QDC_OK;
+}
+
+/* One optimization of m. pins (nv flags, may be NULL): extra vertices that
+ * keep their input position. In slide mode *squashed (if not NULL) receives
+ * the corners of the ears this run squashed (see squashed_ears), else NULL. */
+static qdc_status run_once(mesh_t *m, const opt_options *opts, const uint8_t *pins,
+                           uint8_t **squashed, opt_result *res_out, qdc_error *err)
+{
+    opt_options o;
+    opt_result res;
+    mesh_topo *tp = NULL;
+    ctx_t c;
+    qdc_status st;
+    double t_start = qdc_now();
+    int it = 0, total_iters, stop = 0;
+    opt_progress r;
+
+    memset(&res, 0, sizeof res);
+    memset(&c, 0, sizeof c);
+    res.outcome = OPT_FAILED;
+    if (opts)
+        o = *opts;
+    else
+        opt_defaults(&o);
+    if (o.max_iter < 0 || o.ls_halvings < 0 || o.ls_halvings > 60 || !(o.mu > 0) ||
+        !(o.tol_move >= 0) || !(o.eps_rel > 0) || !(o.finish_frac >= 0 && o.finish_frac <= 1) ||
+        o.finish_sweeps < 0 || o.pre_iters < 0 || o.threads < 0 || (unsigned)o.metric > OPT_METRIC_MICN ||
+        (unsigned)o.boundary > OPT_BOUNDARY_SLIDE || (unsigned)o.mode > OPT_MODE_LITERAL ||
+        (unsigned)o.weights > OPT_WEIGHTS_PAPER || (unsigned)o.solver > OPT_SOLVER_PCG) {
+        st = qdc_fail(err, QDC_EINVAL, "invalid optimizer options");
+        goto out;
+    }
+    /* nthreads-var is per thread in OpenMP: this affects only this job */
+    if (o.threads > 0)
+        omp_set_num_threads(o.threads);
+    st = mesh_topo_build(m, &tp, err);
+    if (st != QDC_OK)
+        goto out;
+    st = ctx_init(&c, m, tp, &o);
+    if (st != QDC_OK)
+        goto out;
+    for (int32_t v = 0; pins && v < c.nv; v++)
+        if (pins[v]) {
+            c.locked[v] = 1;
+            c.bw2[v] = 0.0;
+        }
+    c.t0 = t_start;
+    st = solve_new(tp, c.locked, o.solver, &c.sol, err);
+    if (st != QDC_OK)
+        goto out;
+    res.solver = solve_kind(c.sol);
+    res.solver_flops = solve_flops(c.sol);
+    logf_(&c, 0, "%d vertices (%d boundary), %d tets; solver %s (analysis %.3g flops)",
+          (int)m->nv, (int)tp->nb, (int)m->nt, opt_solver_name(res.solver), res.solver_flops);
+    res.t_setup = qdc_now() - t_start;
+
+    c.eta_delta = evaluate(&c, c.x, &r, c.eta);
+    r.phase = "input";
+    c.input = c.best = r;
+    res.before = r;
+    snprintf(res.stop_reason, sizeof res.stop_reason, "max-iter");
+    if (report(&c, &r)) {
+        stop = 1;
+        snprintf(res.stop_reason, sizeof res.stop_reason, "cancelled");
+    }
+    total_iters = o.max_iter + (o.harmonic ? o.pre_iters : 0);
+    for (it = 1; !stop && it <= total_iters; it++) {
+        int stepped = 0, pre = o.harmonic && it <= o.pre_iters;
+        if (should_stop(&c, res.stop_reason, sizeof res.stop_reason)) {
+            stop = 1;
+            break;
+        }
+        if (o.harmonic && it == o.pre_iters + 1) {
+            st = set_harmonic(&c, &res, err);
+            if (st != QDC_OK)
+                goto out;
+        }
+        st = iterate(&c, &res, &r, &stepped, err);
+        if (st == QDC_ESOLVE) {
+            /* solver trouble: stop with the best mesh so far (STYLE §3) */
+            snprintf(res.stop_reason, sizeof res.stop_reason, "solver");
+            logf_(&c, 1, "iteration %d: %s", it, err ? err->msg : "solve failed");
+            st = QDC_OK;
+            stop = 1;
+            break;
+        }
+        if (st != QDC_OK)
+            goto out;
+        r.iteration = it;
+        r.phase = pre ? "pre" : "global";
+        res.iterations = it;
+        consider(&c, c.x, &r);
+        if (report(&c, &r)) {
+            snprintf(res.stop_reason, sizeof res.stop_reason, "cancelled");
+            stop = 1;
+            break;
+        }
+        if (!stepped) {
+            snprintf(res.stop_reason, sizeof res.stop_reason, "no-descent");
+            if (!pre)
+                break;
+        } else if (r.max_move < o.tol_move && !pre) {
+            snprintf(res.stop_reason, sizeof res.stop_reason, "converged");
+            break;
+        }
+    }
+    res.before_finish = c.best;
+    if (o.finish && !stop && o.finish_sweeps > 0) {
+        double t = qdc_now();
+        uint8_t *movable = qdc_mallocn((size_t)c.nv, 1);
+        if (!movable) {
+            st = QDC_ENOMEM;
+            goto out;
+        }
+        /* Boundary and interface vertices move here only in slide mode, along
+         * their input surface; lsq and fixed leave them where the global step put them. */
+        for (int32_t v = 0; v < c.nv; v++)
+            movable[v] = !c.locked[v] &&
+                         (c.sl || !(tp->vflag[v] & (MESH_V_BOUNDARY | MESH_V_INTERFACE)));
+        /* Start from the last global iterate (the lowest objective), as the
+         * oracle does, even if it has inverted tets: with delta > 0 the pass
+         * drives them out (measured on a 1.1M-tet sliver cube: the global phase
+         * leaves 49 inverted tets; starting from the best iterate instead, which
+         * was the input, threw the whole global phase away). */
+        {
+            int from_last = c.best_it != res.iterations;
+            int next = res.iterations + 1;
+            st = finish_pass(&c, movable, 1, &res, &r, &next);
+            /* From the last iterate the pass may fail to lift the worst tets back
+             * above the input's (seen with slide on curved surfaces): then run it
+             * again from the best global iterate. */
+            if (st == QDC_OK && from_last && c.best_it <= res.iterations &&
+                strcmp(res.stop_reason, "cancelled") != 0) {
+                memcpy(c.x, c.xbest, 3 * (size_t)c.nv * sizeof(double));
+                st = finish_pass(&c, movable, 0, &res, &r, &next);
+            }
+            if (st == QDC_OK && o.angle_polish && strcmp(res.stop_reason, "cancelled") != 0)
+                st = lsq_angle_pass(&c, movable, &res, &r, &next);
+            if (st != QDC_OK) {
+                qdc_free(movable);
+                goto out;
+            }
+        }
+        qdc_free(movable);
+        res.t_finish = qdc_now() - t;
+    }
+    if (squashed && c.sl && c.best_it > 0) {
+        st = squashed_ears(&c, squashed);
+        if (st != QDC_OK)
+            goto out;
+    }
+    /* map back; locked vertices keep their exact input coordinates, and if the
+     * input itself is the best iterate the mesh is left bit-for-bit as it was */
+    for (int32_t v = 0; c.best_it > 0 && v < c.nv; v++)
+        if (!c.locked[v])
+            for (int k = 0; k < 3; k++)
+                m->xyz[3 * (size_t)v + k] = c.xbest[3 * (size_t)v + k] * c.scale + c.center[k];
+    res.after = c.best;
+    res.best_iteration = c.best_it;
+    res.last_record = c.last_record;
+    res.outcome = strcmp(res.stop_reason, "converged") == 0 ||
+                          strcmp(res.stop_reason, "max-iter") == 0 ||
+                          strcmp(res.stop_reason, "no-descent") == 0
+                      ? OPT_CONVERGED
+                      : OPT_STOPPED;
+    st = QDC_OK;
+out:
+    res.t_total = qdc_now() - t_start;
+    if (st != QDC_OK)
+        res.outcome = OPT_FAILED;
+    if (res_out)
+        *res_out = res;
+    ctx_free(&c);
+    mesh_topo_free(tp);
+    return st;
+}
+
+/* Progress of the second slide run: numbered after the first run's records,
+ * its starting record labelled "rerun". */
+typedef struct {
+    opt_progress_fn fn;
+    void *ctx;
+    int offset;
+    double t_offset;
+} rerun_progress;
+
+static int rerun_report(void *ctx, const opt_progress *p)
+{
+    const rerun_progress *rp = ctx;
+    opt_progress q = *p;
+    q.iteration += rp->offset;
+    q.elapsed += rp->t_offset;
+    if (p->iteration == 0)
+        q.phase = "rerun";
+    return rp->fn(rp->ctx, &q);
+}
+
+qdc_status opt_run(mesh_t *m, const opt_options *opts, opt_result *res_out, qdc_error *err)
+{
+    uint8_t *pins = NULL;
+    double *xin = NULL, *xfirst = NULL;
+    opt_result r1, r2;
+    qdc_status st;
+
+    if (!(opts && opts->boundary == OPT_BOUNDARY_SLIDE))
+        return run_once(m, opts, NULL, NULL, res_out, err);
+    xin = qdc_mallocn(3 * (size_t)m->nv + 1, sizeof(double));
+    if (!xin)
+        return qdc_fail(err, QDC_ENOMEM, "out of memory");
+    memcpy(xin, m->xyz, 3 * (size_t)m->nv * sizeof(double));
+    st = run_once(m, opts, NULL, &pins, &r1, err);
+    if (st != QDC_OK || !pins || r1.outcome != OPT_CONVERGED) {
+        if (res_out)
+            *res_out = r1;
+        goto out;
+    }
+    /* Slide squashed some smooth ears (measured on bunny_tangled-low_10k: an ear
+     * of mean ratio 0.061 ended at 1e-10): run again with their corners held
+     * and keep the better result. */
+    xfirst = qdc_mallocn(3 * (size_t)m->nv + 1, sizeof(double));
+    if (!xfirst) {
+        st = qdc_fail(err, QDC_ENOMEM, "out of memory");
+        goto out;
+    }
+    memcpy(xfirst, m->xyz, 3 * (size_t)m->nv * sizeof(double));
+    memcpy(m->xyz, xin, 3 * (size_t)m->nv * sizeof(double));
+    if (opts->log) {
+        char msg[160];
+        int32_t n = 0;
+        for (int32_t v = 0; v < m->nv; v++)
+            n += pins[v];
+        snprintf(msg, sizeof msg,
+                 "slide squashed ears of the surface: again with their %d corners held",
+                 (int)n);
+        opts->log(opts->log_ctx, 0, msg);
+    }
+    {
+        opt_options o2 = *opts;
+        rerun_progress rp = {opts->progress, opts->progress_ctx, 0, r1.t_total};
+        /* the last record's number: global iterations plus finishing sweeps */
+        rp.offset = r1.last_record + 1;
+        if (opts->progress) {
+            o2.progress = rerun_report;
+            o2.progress_ctx = &rp;
+        }
+        st = run_once(m, &o2, pins, NULL, &r2, err);
+    }
+    if (st != QDC_OK || !better(&r2.after, &r1.after)) {
+        memcpy(m->xyz, xfirst, 3 * (size_t)m->nv * sizeof(double));
+        st = QDC_OK;
+        r2 = r1;
+    } else {
+        r2.t_total += r1.t_total;
+    }
+    if (res_out)
+        *res_out = r2;
+out:
+    qdc_free(pins);
+    qdc_free(xin);
+    qdc_free(xfirst);
+    return st;
+}

@@ -1,0 +1,107 @@
+/* opt.h - the QDC optimizer (paper Sec. 4-6, METHOD §4-§6, §8): moves vertices,
+ * never changes connectivity. Thread-safe: all state lives in the call. */
+#ifndef QDC_OPT_H
+#define QDC_OPT_H
+
+#include "core/base.h"
+#include "core/mesh.h"
+#include "geom/metric.h" /* opt_metric */
+
+typedef enum { OPT_BOUNDARY_LSQ = 0, OPT_BOUNDARY_FIXED, OPT_BOUNDARY_SLIDE } opt_boundary;
+typedef enum { OPT_MODE_SAFE = 0, OPT_MODE_LITERAL } opt_mode;
+typedef enum { OPT_WEIGHTS_OPTAVG = 0, OPT_WEIGHTS_PAPER } opt_weights;
+typedef enum { OPT_SOLVER_AUTO = 0, OPT_SOLVER_CHOLMOD, OPT_SOLVER_PCG } opt_solver;
+
+/* Outcome of a run (STYLE §3). */
+typedef enum {
+    OPT_CONVERGED = 0, /* stopping rule met */
+    OPT_STOPPED,       /* budget, cancel or solver trouble: best valid mesh returned */
+    OPT_FAILED         /* input left untouched */
+} opt_outcome;
+
+/* One record per global iteration (and one for the input, one per finishing sweep). */
+typedef struct {
+    int iteration;       /* 0 = the input; 1.. global iterations, then finish sweeps */
+    const char *phase;   /* "input", "pre", "global", "finish" */
+    double objective;    /* sum of the modified inverse quality */
+    double step;         /* global: line-search step taken (1 = full), 0 if rejected;
+                          * finish/angles: accepted moves per visited vertex */
+    double q_mean, q_std, q_min; /* signed mean ratio */
+    double dih_min, dih_max;     /* degrees, over non-inverted tets */
+    int32_t n_inverted;
+    double max_move;     /* largest vertex move this iteration, in mean edge lengths */
+    double elapsed;      /* seconds since opt_run started */
+    int solver;          /* opt_solver actually used */
+    int cg_iters;        /* PCG iterations (0 for CHOLMOD) */
+} opt_progress;
+
+/* Called after each record. Return non-zero to cancel (the run then stops
+ * with OPT_STOPPED and the best mesh so far). */
+typedef int (*opt_progress_fn)(void *ctx, const opt_progress *p);
+
+typedef struct {
+    opt_metric metric;     /* default MIVL */
+    opt_boundary boundary; /* default LSQ */
+    opt_mode mode;         /* default SAFE; LITERAL = paper as written (Eq. 6, mu = ||G^T g||^2, no line search) */
+    opt_weights weights;   /* default OPTAVG (METHOD §4) */
+    opt_solver solver;     /* default AUTO (chosen from the CHOLMOD analysis) */
+    int harmonic;          /* harmonic guidance (METHOD §6), default 0 */
+    int pre_iters;         /* iterations before the harmonic field, default 3 */
+    int finish;            /* worst-tet finishing pass (METHOD §5a), default 1 */
+    int max_iter;          /* global iterations, default 10 */
+    int ls_halvings;       /* line search tries 1 .. 2^-ls_halvings, default 10 */
+    double mu;             /* semi-implicit damping in normalized units, default 1 */
+    int mu_scaled;         /* with harmonic guidance, multiply mu by omega_B^2 (METHOD §5
+                            * open question), default 0 */
+    double tol_move;       /* stop when max move < tol_move * mean edge, default 1e-3 */
+    double eps_rel;        /* Escobar epsilon relative to a regular tet, default 1e-3 */
+    double finish_frac;    /* fraction of worst tets in the finishing pass, default 0.2 */
+    int finish_sweeps;     /* broad sweeps, default 3 */
+    int angle_polish;      /* after the finishing pass: max-min of the dihedral sines
+                            * on the worst tets' vertices (finish.h), default 1 */
+    double feature_angle;  /* degrees, for slide (issue 4), default 30 */
+    double time_limit;     /* seconds, 0 = none: then OPT_STOPPED with the best mesh */
+    int threads;           /* OpenMP threads for this run; 0 = all cores. A server running
+                            * several jobs at once should give each 1 (no oversubscription) */
+    const volatile int *cancel; /* if non-NULL and *cancel != 0: stop (checked every iteration) */
+    opt_progress_fn progress;
+    void *progress_ctx;
+    qdc_log_fn log;
+    void *log_ctx;
+} opt_options;
+
+void opt_defaults(opt_options *o);
+
+/* Parse option words ("mivl", "lsq", "safe", ...) into o; QDC_EINVAL if unknown. */
+qdc_status opt_parse_metric(const char *s, opt_metric *out);
+qdc_status opt_parse_boundary(const char *s, opt_boundary *out);
+qdc_status opt_parse_mode(const char *s, opt_mode *out);
+qdc_status opt_parse_weights(const char *s, opt_weights *out);
+qdc_status opt_parse_solver(const char *s, opt_solver *out);
+const char *opt_metric_name(opt_metric m);
+const char *opt_boundary_name(opt_boundary b);
+const char *opt_mode_name(opt_mode m);
+const char *opt_weights_name(opt_weights w);
+const char *opt_solver_name(opt_solver s);
+
+typedef struct {
+    opt_outcome outcome;
+    int iterations;        /* global iterations done */
+    int best_iteration;    /* which iterate was returned (0 = input) */
+    int last_record;       /* number of the last progress record */
+    opt_solver solver;     /* solver used */
+    double solver_flops;   /* CHOLMOD analysis estimate (0 if not analysed) */
+    double t_setup, t_weights, t_assembly, t_solve, t_linesearch, t_harmonic, t_finish, t_total;
+    opt_progress before;   /* the input's record */
+    opt_progress after;    /* the returned mesh's record */
+    opt_progress before_finish; /* record after the global iterations, before the finishing pass */
+    char stop_reason[64];  /* "converged", "max-iter", "no-descent", "cancelled", "time-limit", "solver" */
+} opt_result;
+
+/* Optimize m in place (coordinates only; tets, regions, fixed flags untouched).
+ * On OPT_FAILED (and on any status other than QDC_OK) m is unchanged.
+ * The returned mesh never has more inverted tets nor a lower minimum mean ratio
+ * than the input. res may be NULL. */
+qdc_status opt_run(mesh_t *m, const opt_options *o, opt_result *res, qdc_error *err);
+
+#endif

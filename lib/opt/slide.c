@@ -1,0 +1,383 @@
+/* slide.c - sliding boundary constraints. */
+#include "opt/slide.h"
+
+#include "geom/bderr.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+struct slide_ctx {
+    int32_t nv;
+    uint8_t *kind;
+    uint8_t *on_iface; /* surface vertex of an interface (not of the outer boundary) */
+    double *x0;        /* copy of the input coordinates */
+    double *normal;    /* per surface vertex: unit normal of the input surface */
+    double *tangent;   /* per line vertex: unit direction of the feature line */
+    int32_t *fe_ptr;   /* per vertex: feature edges around it (CSR), as vertex pairs */
+    int32_t *fe_nbr;
+    int32_t nfe;
+    bderr_bvh *outer;  /* input boundary triangles */
+    bderr_bvh *inter;  /* input interface triangles (NULL if none) */
+};
+
+typedef struct {
+    int32_t a, b; /* a < b */
+    int32_t f;    /* face index: 0..nbf-1 boundary, nbf.. interface */
+} edge_rec;
+
+static int edge_cmp(const void *x, const void *y)
+{
+    const edge_rec *p = x, *q = y;
+    if (p->a != q->a)
+        return p->a < q->a ? -1 : 1;
+    if (p->b != q->b)
+        return p->b < q->b ? -1 : 1;
+    return (p->f > q->f) - (p->f < q->f);
+}
+
+static void face_normal(const double *x, const int32_t *f, double n[3])
+{
+    const double *a = x + 3 * (size_t)f[0], *b = x + 3 * (size_t)f[1], *c = x + 3 * (size_t)f[2];
+    double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+    double w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+    n[0] = u[1] * w[2] - u[2] * w[1];
+    n[1] = u[2] * w[0] - u[0] * w[2];
+    n[2] = u[0] * w[1] - u[1] * w[0];
+}
+
+static void normalize(double v[3])
+{
+    double l = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    if (l > 0) {
+        v[0] /= l;
+        v[1] /= l;
+        v[2] /= l;
+    }
+}
+
+/* Feature edges: boundary edges whose two boundary faces' normals differ by more
+ * than the feature angle, plus boundary edges with other than 2 boundary faces. */
+static qdc_status find_features(slide_ctx *s, const mesh_topo *tp, const double *x0,
+                                double feature_angle, int32_t *deg)
+{
+    size_t ne = 3 * (size_t)tp->nbf;
+    edge_rec *e = qdc_mallocn(ne + 1, sizeof *e);
+    int32_t *pairs = NULL, np = 0;
+    double cosmax = cos(feature_angle * 3.14159265358979323846 / 180.0);
+
+    if (!e)
+        return QDC_ENOMEM;
+    for (int32_t f = 0; f < tp->nbf; f++)
+        for (int k = 0; k < 3; k++) {
+            int32_t a = tp->bfaces[3 * (size_t)f + k], b = tp->bfaces[3 * (size_t)f + (k + 1) % 3];
+            edge_rec *r = e + 3 * (size_t)f + k;
+            r->a = a < b ? a : b;
+            r->b = a < b ? b : a;
+            r->f = f;
+        }
+    qsort(e, ne, sizeof *e, edge_cmp);
+    pairs = qdc_mallocn(ne + 1, 2 * sizeof(int32_t));
+    if (!pairs) {
+        qdc_free(e);
+        return QDC_ENOMEM;
+    }
+    for (size_t i = 0; i < ne;) {
+        size_t j = i + 1;
+        int feature;
+        while (j < ne && e[j].a == e[i].a && e[j].b == e[i].b)
+            j++;
+        if (j - i == 2) {
+            double n1[3], n2[3];
+            face_normal(x0, tp->bfaces + 3 * (size_t)e[i].f, n1);
+            face_normal(x0, tp->bfaces + 3 * (size_t)e[i + 1].f, n2);
+            normalize(n1);
+            normalize(n2);
+            feature = n1[0] * n2[0] + n1[1] * n2[1] + n1[2] * n2[2] < cosmax;
+        } else {
+            feature = 1; /* non-manifold surface edge: keep it as a feature */
+        }
+        if (feature) {
+            pairs[2 * np] = e[i].a;
+            pairs[2 * np + 1] = e[i].b;
+            np++;
+            deg[e[i].a]++;
+            deg[e[i].b]++;
+        }
+        i = j;
+    }
+    qdc_free(e);
+    s->nfe = np;
+    s->fe_ptr = qdc_calloc((size_t)tp->nv + 1, sizeof(int32_t));
+    s->fe_nbr = qdc_mallocn(2 * (size_t)np + 1, sizeof(int32_t));
+    if (!s->fe_ptr || !s->fe_nbr) {
+        qdc_free(pairs);
+        return QDC_ENOMEM;
+    }
+    for (int32_t v = 0; v < tp->nv; v++)
+        s->fe_ptr[v + 1] = s->fe_ptr[v] + deg[v];
+    {
+        int32_t *pos = qdc_mallocn((size_t)tp->nv + 1, sizeof(int32_t));
+        if (!pos) {
+            qdc_free(pairs);
+            return QDC_ENOMEM;
+        }
+        memcpy(pos, s->fe_ptr, ((size_t)tp->nv + 1) * sizeof(int32_t));
+        for (int32_t i = 0; i < np; i++) {
+            s->fe_nbr[pos[pairs[2 * i]]++] = pairs[2 * i + 1];
+            s->fe_nbr[pos[pairs[2 * i + 1]]++] = pairs[2 * i];
+        }
+        qdc_free(pos);
+    }
+    qdc_free(pairs);
+    return QDC_OK;
+}
+
+typedef struct {
+    int32_t v[3]; /* sorted */
+} tri_key;
+
+static int tri_cmp(const void *x, const void *y)
+{
+    const tri_key *p = x, *q = y;
+    for (int k = 0; k < 3; k++)
+        if (p->v[k] != q->v[k])
+            return p->v[k] < q->v[k] ? -1 : 1;
+    return 0;
+}
+
+static tri_key make_key(int32_t a, int32_t b, int32_t c)
+{
+    tri_key k;
+    int32_t t;
+    if (a > b) { t = a; a = b; b = t; }
+    if (b > c) { t = b; b = c; c = t; }
+    if (a > b) { t = a; a = b; b = t; }
+    k.v[0] = a;
+    k.v[1] = b;
+    k.v[2] = c;
+    return k;
+}
+
+static int is_feature_edge(const slide_ctx *s, int32_t a, int32_t b)
+{
+    for (int32_t k = s->fe_ptr[a]; k < s->fe_ptr[a + 1]; k++)
+        if (s->fe_nbr[k] == b)
+            return 1;
+    return 0;
+}
+
+int32_t slide_smooth_ears(const slide_ctx *s, const mesh_topo *tp, uint8_t *ear)
+{
+    static const int omit_pair[4][4][2] = {
+        {{-1, -1}, {2, 3}, {1, 3}, {1, 2}},
+        {{2, 3}, {-1, -1}, {0, 3}, {0, 2}},
+        {{1, 3}, {0, 3}, {-1, -1}, {0, 1}},
+        {{1, 2}, {0, 2}, {0, 1}, {-1, -1}}};
+    tri_key *keys = qdc_mallocn((size_t)tp->nbf + 1, sizeof *keys);
+    int32_t count = 0;
+
+    if (!keys)
+        return -1;
+    for (int32_t f = 0; f < tp->nbf; f++)
+        keys[f] = make_key(tp->bfaces[3 * (size_t)f], tp->bfaces[3 * (size_t)f + 1],
+                           tp->bfaces[3 * (size_t)f + 2]);
+    qsort(keys, (size_t)tp->nbf, sizeof *keys, tri_cmp);
+    for (int32_t t = 0; t < tp->nt; t++) {
+        const int32_t *tt = tp->tets + 4 * (size_t)t;
+        int onb[4], nb = 0, first = -1, pin = 0;
+        for (int a = 0; a < 4; a++)
+            if (!(tp->vflag[tt[a]] & MESH_V_BOUNDARY))
+                goto next;
+        for (int a = 0; a < 4; a++) { /* face a: the one without corner a */
+            tri_key k = make_key(tt[(a + 1) & 3], tt[(a + 2) & 3], tt[(a + 3) & 3]);
+            onb[a] = bsearch(&k, keys, (size_t)tp->nbf, sizeof *keys, tri_cmp) != NULL;
+            if (onb[a]) {
+                if (nb == 1) {
+                    const int *e = omit_pair[first][a];
+                    pin = !is_feature_edge(s, tt[e[0]], tt[e[1]]);
+                }
+                if (nb == 0)
+                    first = a;
+                nb++;
+            }
+        }
+        if (nb >= 3)
+            pin = 1;
+        ear[t] = (uint8_t)pin;
+        count += pin;
+        continue;
+    next:
+        ear[t] = 0;
+    }
+    qdc_free(keys);
+    return count;
+}
+
+qdc_status slide_new(const mesh_topo *tp, const double *x0, double feature_angle,
+                     slide_ctx **out, qdc_error *err)
+{
+    slide_ctx *s = qdc_calloc(1, sizeof *s);
+    int32_t *deg = qdc_calloc((size_t)tp->nv, sizeof(int32_t));
+    qdc_status st = QDC_ENOMEM;
+
+    *out = NULL;
+    if (!s || !deg)
+        goto fail;
+    s->nv = tp->nv;
+    s->kind = qdc_calloc((size_t)tp->nv, 1);
+    s->on_iface = qdc_calloc((size_t)tp->nv, 1);
+    s->x0 = qdc_mallocn(3 * (size_t)tp->nv, sizeof(double));
+    s->normal = qdc_calloc(3 * (size_t)tp->nv, sizeof(double));
+    s->tangent = qdc_calloc(3 * (size_t)tp->nv, sizeof(double));
+    if (!s->kind || !s->on_iface || !s->x0 || !s->normal || !s->tangent)
+        goto fail;
+    memcpy(s->x0, x0, 3 * (size_t)tp->nv * sizeof(double));
+    st = find_features(s, tp, x0, feature_angle, deg);
+    if (st != QDC_OK)
+        goto fail;
+    /* area-weighted vertex normals of the input boundary surface */
+    for (int32_t f = 0; f < tp->nbf; f++) {
+        double n[3];
+        face_normal(x0, tp->bfaces + 3 * (size_t)f, n);
+        for (int k = 0; k < 3; k++)
+            for (int c = 0; c < 3; c++)
+                s->normal[3 * (size_t)tp->bfaces[3 * (size_t)f + k] + c] += n[c];
+    }
+    for (int32_t f = 0; f < tp->nif; f++) {
+        double n[3];
+        face_normal(x0, tp->ifaces + 3 * (size_t)f, n);
+        for (int k = 0; k < 3; k++) {
+            int32_t v = tp->ifaces[3 * (size_t)f + k];
+            double *nv = s->normal + 3 * (size_t)v;
+            /* interface faces come with either orientation: align to the sum */
+            double sg = nv[0] * n[0] + nv[1] * n[1] + nv[2] * n[2] < 0 ? -1.0 : 1.0;
+            if (tp->vflag[v] & MESH_V_BOUNDARY)
+                continue;
+            for (int c = 0; c < 3; c++)
+                nv[c] += sg * n[c];
+        }
+    }
+    for (int32_t v = 0; v < tp->nv; v++) {
+        uint8_t fl = tp->vflag[v];
+        if (!(fl & (MESH_V_BOUNDARY | MESH_V_INTERFACE)))
+            continue;
+        normalize(s->normal + 3 * (size_t)v);
+        if ((fl & MESH_V_FIXED) || ((fl & MESH_V_BOUNDARY) && (fl & MESH_V_INTERFACE)))
+            s->kind[v] = SLIDE_CORNER;
+        else if (deg[v] == 2) {
+            int32_t a = s->fe_nbr[s->fe_ptr[v]], b = s->fe_nbr[s->fe_ptr[v] + 1];
+            double *t = s->tangent + 3 * (size_t)v;
+            for (int c = 0; c < 3; c++)
+                t[c] = x0[3 * (size_t)b + c] - x0[3 * (size_t)a + c];
+            normalize(t);
+            s->kind[v] = SLIDE_LINE;
+        } else if (deg[v] > 0)
+            s->kind[v] = SLIDE_CORNER; /* 1 (line end) or 3+ feature edges */
+        else
+            s->kind[v] = SLIDE_SURFACE;
+        s->on_iface[v] = !(fl & MESH_V_BOUNDARY);
+    }
+    st = bderr_bvh_build(x0, tp->nv, tp->bfaces, tp->nbf, &s->outer, err);
+    if (st == QDC_OK && tp->nif > 0)
+        st = bderr_bvh_build(x0, tp->nv, tp->ifaces, tp->nif, &s->inter, err);
+    if (st != QDC_OK)
+        goto fail;
+    qdc_free(deg);
+    *out = s;
+    return QDC_OK;
+fail:
+    qdc_free(deg);
+    slide_free(s);
+    return st;
+}
+
+void slide_free(slide_ctx *s)
+{
+    if (!s)
+        return;
+    qdc_free(s->kind);
+    qdc_free(s->on_iface);
+    qdc_free(s->x0);
+    qdc_free(s->normal);
+    qdc_free(s->tangent);
+    qdc_free(s->fe_ptr);
+    qdc_free(s->fe_nbr);
+    bderr_bvh_free(s->outer);
+    bderr_bvh_free(s->inter);
+    qdc_free(s);
+}
+
+int slide_kind(const slide_ctx *s, int32_t v)
+{
+    return s->kind[v];
+}
+
+int32_t slide_n_feature_edges(const slide_ctx *s)
+{
+    return s->nfe;
+}
+
+/* Closest point on the feature segments around v and around its feature
+ * neighbours (a vertex moves at most a fraction of an edge per step). */
+static void project_line(const slide_ctx *s, int32_t v, const double p[3], double out[3])
+{
+    double best = INFINITY;
+
+    memcpy(out, s->x0 + 3 * (size_t)v, 3 * sizeof(double));
+    for (int32_t k = s->fe_ptr[v]; k < s->fe_ptr[v + 1]; k++) {
+        int32_t u = s->fe_nbr[k];
+        for (int32_t l = s->fe_ptr[u]; l < s->fe_ptr[u + 1]; l++) {
+            double cp[3];
+            int32_t w = s->fe_nbr[l];
+            double d = bderr_point_segment(p, s->x0 + 3 * (size_t)u, s->x0 + 3 * (size_t)w, cp);
+            if (d < best) {
+                best = d;
+                memcpy(out, cp, sizeof cp);
+            }
+        }
+    }
+}
+
+void slide_project(const slide_ctx *s, int32_t v, const double p[3], double out[3])
+{
+    switch (s->kind[v]) {
+    case SLIDE_SURFACE:
+        /* outer-boundary vertices onto the input boundary, interface vertices
+         * onto the input interface */
+        bderr_bvh_closest(s->on_iface[v] ? s->inter : s->outer, p, out, NULL);
+        break;
+    case SLIDE_LINE:
+        project_line(s, v, p, out);
+        break;
+    case SLIDE_CORNER:
+        memcpy(out, s->x0 + 3 * (size_t)v, 3 * sizeof(double));
+        break;
+    default:
+        memcpy(out, p, 3 * sizeof(double));
+    }
+}
+
+void slide_tangent(const slide_ctx *s, int32_t v, const double g[3], double out[3])
+{
+    const double *n = s->normal + 3 * (size_t)v, *t = s->tangent + 3 * (size_t)v;
+    double d;
+
+    switch (s->kind[v]) {
+    case SLIDE_SURFACE:
+        d = g[0] * n[0] + g[1] * n[1] + g[2] * n[2];
+        for (int c = 0; c < 3; c++)
+            out[c] = g[c] - d * n[c];
+        break;
+    case SLIDE_LINE:
+        d = g[0] * t[0] + g[1] * t[1] + g[2] * t[2];
+        for (int c = 0; c < 3; c++)
+            out[c] = d * t[c];
+        break;
+    case SLIDE_CORNER:
+        out[0] = out[1] = out[2] = 0.0;
+        break;
+    default:
+        memcpy(out, g, 3 * sizeof(double));
+    }
+}

@@ -1,0 +1,39 @@
+/* slide.h - sliding boundary constraints (issue: boundary mode `slide`).
+ * Boundary and interface vertices may move along the INPUT surfaces: a vertex
+ * on a smooth part slides on the surface (projected back to the closest point
+ * of the input triangles), a vertex on a feature line (boundary edges whose
+ * faces meet at a dihedral sharper than the feature angle) slides along that
+ * line, and corners (3+ feature edges, or a feature-line end) stay fixed.
+ * Vertices where an interface meets the outer boundary stay fixed too.
+ * Thread-safe: the context is read-only once built. */
+#ifndef QDC_SLIDE_H
+#define QDC_SLIDE_H
+
+#include "core/mesh.h"
+
+enum { SLIDE_INTERIOR = 0, SLIDE_SURFACE, SLIDE_LINE, SLIDE_CORNER };
+
+typedef struct slide_ctx slide_ctx;
+
+/* x0: input coordinates (3 per vertex) that define the surfaces to keep.
+ * feature_angle: degrees between adjacent face normals that makes an edge a feature. */
+qdc_status slide_new(const mesh_topo *tp, const double *x0, double feature_angle,
+                     slide_ctx **out, qdc_error *err);
+void slide_free(slide_ctx *s);
+
+int slide_kind(const slide_ctx *s, int32_t v);
+int32_t slide_n_feature_edges(const slide_ctx *s);
+
+/* Project p (a new position of vertex v) onto v's constraint set. */
+void slide_project(const slide_ctx *s, int32_t v, const double p[3], double out[3]);
+/* Project a direction onto the tangent space of v's constraint (plane or line). */
+void slide_tangent(const slide_ctx *s, int32_t v, const double g[3], double out[3]);
+
+/* Ears on smooth parts: tets with 4 boundary corners and two boundary faces
+ * whose common edge is not a feature (or three boundary faces). Such a tet's
+ * shape is pinned by how much the surface bends there, and sliding its
+ * corners over a piecewise-flat input surface can squash it flat. Sets
+ * ear[t] (nt entries) and returns how many, or -1 if out of memory. */
+int32_t slide_smooth_ears(const slide_ctx *s, const mesh_topo *tp, uint8_t *ear);
+
+#endif

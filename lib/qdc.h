@@ -1,0 +1,24 @@
+/* qdc.h - the public interface of libqdc: what the qdc CLI, the qdcd daemon
+ * and other programs include. Everything else under lib/ is internal.
+ *
+ * The library is in layers; a header includes only its own layer and lower ones:
+ *   core/  status codes, allocation, the mesh container
+ *   geom/  per-tet metrics, the boundary BVH and boundary error
+ *   io/    mesh and surface file formats, the TetGen bridge
+ *   opt/   the optimizer (QDC encoding, linear solve, harmonic guidance,
+ *          boundary sliding, finishing pass, driver)
+ *   eval/  quality and boundary-error reports
+ * (io/ and opt/ are peers: neither includes the other.) */
+#ifndef QDC_H
+#define QDC_H
+
+#include "core/base.h"
+#include "core/mesh.h"
+#include "geom/bderr.h"
+#include "io/meshio.h"
+#include "io/surface.h"
+#include "io/tetra.h"
+#include "opt/opt.h"
+#include "eval/report.h"
+
+#endif

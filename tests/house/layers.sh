@@ -1,0 +1,88 @@
+#!/bin/sh
+# tests/house/layers.sh - the include graph keeps its layers (docs/architecture.md):
+#   lib/ never includes server/ or clients/ headers, nor libmicrohttpd/jansson/SQLite;
+#   a lib/ file includes only its own layer and lower ones
+#   (core < geom < io, opt < eval < qdc.h; io and opt do not include each other);
+#   server/ and clients/ include the library only through lib/qdc.h;
+#   no include cycle among the project's headers.
+ROOT=${ROOT:-$(cd "$(dirname "$0")/../.." && pwd)}
+cd "$ROOT" || exit 1
+fail=0
+rank() {
+    case $1 in
+    core) echo 0 ;; geom) echo 1 ;; io | opt) echo 2 ;; eval) echo 3 ;; *) echo 9 ;;
+    esac
+}
+for f in lib/*/*.c lib/*/*.h lib/*/*.cpp; do
+    [ -f "$f" ] || continue
+    layer=$(basename "$(dirname "$f")")
+    r=$(rank "$layer")
+    for inc in $(sed -n 's/^[[:space:]]*#[[:space:]]*include[[:space:]]*"\([^"]*\)".*/\1/p' "$f"); do
+        dir=${inc%%/*}
+        if [ "$dir" = "$inc" ]; then
+            echo "FAIL - layers: $f includes \"$inc\" without its layer folder"
+            fail=1
+            continue
+        fi
+        ri=$(rank "$dir")
+        if [ "$ri" = 9 ]; then
+            echo "FAIL - layers: $f includes \"$inc\" (not a lib/ layer)"
+            fail=1
+        elif [ "$ri" -gt "$r" ] || { [ "$ri" = "$r" ] && [ "$dir" != "$layer" ]; }; then
+            echo "FAIL - layers: $f ($layer) includes $inc: a higher or peer layer"
+            fail=1
+        fi
+    done
+    if grep -Eq '#[[:space:]]*include[[:space:]]*<(microhttpd|jansson|sqlite3|libpq-fe|curl/curl)\.h>' "$f"; then
+        echo "FAIL - layers: $f includes a server or client library"
+        fail=1
+    fi
+done
+[ $fail = 0 ] && echo "ok - layers: lib/ files include only their own and lower layers"
+
+fail=0
+for f in server/*.c server/*.h clients/qdc/*.c clients/qdc/*.h; do
+    [ -f "$f" ] || continue
+    for inc in $(sed -n 's/^[[:space:]]*#[[:space:]]*include[[:space:]]*"\([^"]*\)".*/\1/p' "$f"); do
+        case $inc in
+        */*) echo "FAIL - layers: $f includes \"$inc\": use qdc.h"; fail=1 ;;
+        *) [ -f "lib/$inc" ] && [ "$inc" != qdc.h ] &&
+            { echo "FAIL - layers: $f includes lib/$inc"; fail=1; } ;;
+        esac
+    done
+done
+[ $fail = 0 ] && echo "ok - layers: server/ and clients/ use the library through qdc.h only"
+
+# Include cycles: a depth-first walk over "file -> included project header".
+if python3 -c 'pass' 2>/dev/null; then
+    if python3 - <<'PY'; then echo "ok - layers: no include cycle"; else echo "FAIL - layers: include cycle"; fi
+import glob, os, re, sys
+files = [f for pat in ("lib/*.h", "lib/*/*.h", "server/*.h", "clients/qdc/*.h")
+         for f in glob.glob(pat)]
+def resolve(src, inc):
+    for base in (os.path.dirname(src), "lib"):
+        p = os.path.normpath(os.path.join(base, inc))
+        if os.path.isfile(p):
+            return p
+    return None
+edges = {}
+for f in files:
+    text = open(f, encoding="utf-8", errors="replace").read()
+    edges[f] = [p for p in (resolve(f, i) for i in re.findall(r'#\s*include\s*"([^"]+)"', text)) if p]
+state = {}
+def visit(f, path):
+    state[f] = 1
+    for g in edges.get(f, []):
+        if state.get(g) == 1:
+            print("cycle: " + " -> ".join(path + [g]), file=sys.stderr)
+            sys.exit(1)
+        if g not in state:
+            visit(g, path + [g])
+    state[f] = 2
+for f in files:
+    if f not in state:
+        visit(f, [f])
+PY
+else
+    echo "FAIL - layers: python3 missing for the cycle check"
+fi
