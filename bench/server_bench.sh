@@ -1,5 +1,5 @@
 #!/bin/sh
-# server_bench.sh - the daemon's targets (issue 3), measured on loopback:
+# server_bench.sh - the daemon's targets, measured on loopback:
 #   1. upload + validate + enqueue of a 1M-tet binary mesh (target <= 0.5 s)
 #   2. 1000 parked long-polls: extra RSS (target <= 20 MB) and extra threads (0),
 #      on new connections and on the connections of clients that poll in a loop

@@ -1,4 +1,4 @@
-/* api.h - the endpoints (issue 3, item 2): routing, JSON <-> library. */
+/* api.h - the endpoints : routing, JSON <-> library. */
 #ifndef QDCD_API_H
 #define QDCD_API_H
 

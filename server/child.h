@@ -1,4 +1,4 @@
-/* child.h - run a helper program in a child process (issue 6: TetGen runs in
+/* child.h - run a helper program in a child process (TetGen runs in
  * `qdc tetra`, because libtet can crash the process on some inputs and
  * prints to stdout). posix_spawn, never fork without exec: the daemon is
  * multithreaded. The child gets an empty signal mask and default handlers,

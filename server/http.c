@@ -1,4 +1,4 @@
-/* http.c - the MHD daemon and the request life cycle (STYLE §7).
+/* http.c - the MHD daemon and the request life cycle (docs/style.md §7).
  * One internal epoll thread serves every connection; handlers never block on
  * optimization (workers do that) and waiting clients are suspended
  * connections, not threads. */

@@ -1,4 +1,4 @@
-/* poll.h - progress channels and parked connections (issue 3, long-poll and SSE).
+/* poll.h - progress channels and parked connections (long-poll and SSE).
  * A channel per job holds the progress records of its current run, in order
  * (record k has "seq": k). Readers that find nothing new park: their MHD
  * connection is suspended and linked to the channel, costing no thread. A

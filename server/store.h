@@ -1,4 +1,4 @@
-/* store.h - the durable job store behind the daemon (issue 3, item 3).
+/* store.h - the durable job store behind the daemon.
  * Handlers and workers talk to a job_store through its ops table only, so a
  * PostgreSQL backend can be added beside the SQLite one without touching them.
  * Every call is thread-safe (backends lock internally). Times are Unix seconds.

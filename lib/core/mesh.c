@@ -1,4 +1,4 @@
-/* mesh.c - mesh data, validation and connectivity (METHOD §1). */
+/* mesh.c - mesh data, validation and connectivity (docs/method.md §1). */
 #include "core/mesh.h"
 
 #include <math.h>
@@ -461,7 +461,7 @@ qdc_status mesh_topo_build(const mesh_t *m, mesh_topo **out, qdc_error *err)
         npos += d > 0;
         nneg += d < 0;
     }
-    /* METHOD §1: the connectivity's orientation is the majority sign. Swapping
+    /* docs/method.md §1: the connectivity's orientation is the majority sign. Swapping
      * two vertices of every tet flips them all and keeps faces consistent. */
     if (nneg > npos) {
         tp->flipped = 1;

@@ -1,4 +1,4 @@
-/* mesh.h - tetrahedral mesh data, validation and connectivity (METHOD §1).
+/* mesh.h - tetrahedral mesh data, validation and connectivity (docs/method.md §1).
  * Indices are 0-based int32. xyz holds 3 doubles per vertex, tets 4 indices per tet.
  * A tet (a,b,c,d) is positive when det[b-a, c-a, d-a] > 0 (Shewchuk's
  * orient3d(a,b,c,d) has the opposite sign).

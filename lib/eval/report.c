@@ -1,4 +1,4 @@
-/* report.c - mesh quality evaluation and the JSON report (METHOD §9). */
+/* report.c - mesh quality evaluation and the JSON report (docs/method.md §9). */
 #include "eval/report.h"
 
 #include "geom/metric.h"
@@ -33,7 +33,7 @@ qdc_status report_quality_compute(const mesh_t *m, report_quality *q, qdc_error 
         npos += pt.vol > 0;
         nneg += pt.vol < 0;
     }
-    /* majority orientation (METHOD §1) */
+    /* majority orientation (docs/method.md §1) */
     sgn = nneg > npos ? -1.0 : 1.0;
     q->q_min = q->vl_min = INFINITY;
     q->dih_min = INFINITY;

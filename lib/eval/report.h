@@ -1,4 +1,4 @@
-/* report.h - mesh quality evaluation and the JSON report (METHOD §9).
+/* report.h - mesh quality evaluation and the JSON report (docs/method.md §9).
  * Quality convention: signed mean ratio eta = 12 (3|V|)^(2/3) / sum l^2, negative
  * for tets against the mesh's majority orientation; dihedral angles in degrees.
  * Thread-safe: no global state. */

@@ -1,4 +1,4 @@
-/* bderr.c - boundary error (METHOD §9): symmetric Hausdorff distance between two
+/* bderr.c - boundary error (docs/method.md §9): symmetric Hausdorff distance between two
  * triangle surfaces, Metro style.
  *
  * Each side is sampled densely (every surface vertex, every face centroid, and

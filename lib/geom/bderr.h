@@ -1,4 +1,4 @@
-/* bderr.h - boundary error (METHOD §9): symmetric Hausdorff distance between two
+/* bderr.h - boundary error (docs/method.md §9): symmetric Hausdorff distance between two
  * triangle surfaces with exact point-triangle distances through a BVH over
  * Metro-style samples (every vertex, every face centroid, plus area-weighted
  * random points from a fixed seed), and closest-point queries used by the

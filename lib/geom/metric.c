@@ -1,4 +1,4 @@
-/* metric.c - per-tet quality metrics (paper Sec. 3.1, METHOD §2-§3). */
+/* metric.c - per-tet quality metrics (paper Sec. 3.1, docs/method.md §2-§3). */
 #include "geom/metric.h"
 
 #include <math.h>

@@ -1,4 +1,4 @@
-/* metric.h - per-tet quality metrics (paper Sec. 3.1, METHOD §2-§3).
+/* metric.h - per-tet quality metrics (paper Sec. 3.1, docs/method.md §2-§3).
  * A tet is given by its 4 corner points; it is positive when
  * det[p1-p0, p2-p0, p3-p0] > 0. Thread-safe: pure functions. */
 #ifndef QDC_METRIC_H
@@ -84,7 +84,7 @@ int metric_dihedrals(const double *p0, const double *p1, const double *p2, const
 void metric_dihedral_sines(const double *p0, const double *p1, const double *p2,
                            const double *p3, double s[6]);
 
-/* Eq. 8 in closed form (METHOD §3): the distance alpha* along the unit inward
+/* Eq. 8 in closed form (docs/method.md §3): the distance alpha* along the unit inward
  * normal from the barycentre of face (f0, f1, f2) that minimizes q~ (delta = 0). */
 double metric_alpha_opt(opt_metric m, const double *f0, const double *f1, const double *f2);
 

@@ -1,4 +1,4 @@
-/* encode.c - quality differential coordinates (paper Eqs. 3-8, METHOD §3-§4). */
+/* encode.c - quality differential coordinates (paper Eqs. 3-8, docs/method.md §3-§4). */
 #include "opt/encode.h"
 
 #include "geom/metric.h"
@@ -86,7 +86,7 @@ int32_t encode_slot(const mesh_topo *tp, int32_t i, int32_t j)
 }
 
 /* Face opposite local vertex a of tet t: its 3 vertex ids, barycentre, unit
- * inward normal (METHOD §1: from the connectivity's orientation, never from the
+ * inward normal (docs/method.md §1: from the connectivity's orientation, never from the
  * current side of the free vertex) and alpha* (Eq. 8, closed form). */
 static void face_target(const mesh_topo *tp, const double *x, opt_metric m, int32_t t, int a,
                         int32_t fv[3], double pc[3], double n[3], double *alpha)
@@ -164,7 +164,7 @@ void encode_paper(const mesh_topo *tp, const double *x, opt_metric m, const doub
         for (int32_t s = r0; s < r1; s++)
             qval[s] = 0.0;
         /* Eq. 6, 'all' reading: every tet of T(i) contributes to every 1-ring
-         * neighbour j (METHOD §4: the per-tet reading flattens the worst tet). */
+         * neighbour j (docs/method.md §4: the per-tet reading flattens the worst tet). */
         for (int32_t k = tp->vt_ptr[i]; k < tp->vt_ptr[i + 1]; k++) {
             int32_t t = tp->vt_idx[k] >> 2, a = tp->vt_idx[k] & 3, fv[3];
             double pc[3], n[3], alpha, p[3], q2 = qt[t] * qt[t];

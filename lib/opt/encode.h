@@ -1,4 +1,4 @@
-/* encode.h - quality differential coordinates (paper Eqs. 3-8, METHOD §3-§4).
+/* encode.h - quality differential coordinates (paper Eqs. 3-8, docs/method.md §3-§4).
  * Q lives on the 1-ring pattern of mesh_topo (adj_ptr/adj_idx): qval has one
  * value per pattern slot; rows exist for every vertex and sum to 0 off the
  * diagonal part (Q = I - W with rows of W summing to 1).
@@ -18,7 +18,7 @@ double encode_objective(const mesh_topo *tp, const double *x, opt_metric m, doub
 /* Smallest metric argument (vol or sigma) over all tets: the input of metric_delta. */
 double encode_min_arg(const mesh_topo *tp, const double *x, opt_metric m);
 
-/* Optimal-position averaging (METHOD §4, default): row i of Q is
+/* Optimal-position averaging (docs/method.md §4, default): row i of Q is
  * v_i - sum_t c_ti bary(face opposite i in t), c_ti = qt_t / sum_{s in T(i)} qt_s,
  * and d_i = sum_t c_ti alpha*_t n_ti (3 per vertex), so (Qx - d)_i = v_i - u_i. */
 void encode_optavg(const mesh_topo *tp, const double *x, opt_metric m, const double *qt,

@@ -1,4 +1,4 @@
-/* finish.c - worst-tet finishing pass (METHOD §5a). */
+/* finish.c - worst-tet finishing pass (docs/method.md §5a). */
 #include "opt/finish.h"
 
 #include "geom/metric.h"
@@ -248,7 +248,7 @@ static void trial_point(const slide_ctx *sl, int32_t v, const double *xv, const 
     }
 }
 
-/* Adaptive normalized-gradient descent of one vertex (METHOD §5a): step along
+/* Adaptive normalized-gradient descent of one vertex (docs/method.md §5a): step along
  * -g/|g|, start 0.05 mean edge, x1.6 after a success (cap 0.3), halve up to 12
  * times until the local objective decreases without inverting a star tet. */
 static int32_t relax_vertex(const mesh_topo *tp, const slide_ctx *sl, double *x, int32_t v,

@@ -1,4 +1,4 @@
-/* finish.h - worst-tet finishing pass (METHOD §5a; beyond the paper).
+/* finish.h - worst-tet finishing pass (docs/method.md §5a; beyond the paper).
  * Per-vertex minimization of the local objective sum_{t in T(v)} q~_t on the
  * movable vertices of the worst tets and of every inverted tet: damped Newton
  * with the analytic 3x3 Hessian for interior vertices (MIVL, MIMR), normalized
@@ -33,7 +33,7 @@ qdc_status finish_sweep(const mesh_topo *tp, const uint8_t *movable, const slide
                         double *x, opt_metric m, const double *eta, double delta, double lbar,
                         double frac, double rtol, finish_stats *st);
 
-/* Worst-angle polish (beyond METHOD): max-min ascent of the smallest dihedral
+/* Worst-angle polish (beyond the paper): max-min ascent of the smallest dihedral
  * sine of each star (Freitag's non-smooth smoothing: the steepest ascent is the
  * minimum-norm point of the active gradients) on the movable vertices of the
  * worst frac of tets by dihedral sine. A move is kept only if the star's

@@ -1,4 +1,4 @@
-/* harm.c - harmonic guidance field (paper Sec. 5.1, METHOD §6). */
+/* harm.c - harmonic guidance field (paper Sec. 5.1, docs/method.md §6). */
 #include "opt/harm.h"
 
 #include "geom/bderr.h"

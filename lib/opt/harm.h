@@ -1,4 +1,4 @@
-/* harm.h - harmonic guidance field (paper Sec. 5.1, METHOD §6).
+/* harm.h - harmonic guidance field (paper Sec. 5.1, docs/method.md §6).
  * h = 1 on boundary vertices, 0 on approximate medial-axis vertices, harmonic
  * (uniform graph Laplacian) elsewhere, clipped to [0, 1]. Thread-safe. */
 #ifndef QDC_HARM_H

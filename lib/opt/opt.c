@@ -1,5 +1,5 @@
 /* opt.c - the QDC optimizer: outer loop of the semi-implicit gradient flow
- * (paper Eq. 15) with the safeguards of METHOD §5 (mu = 1 in normalized units,
+ * (paper Eq. 15) with the safeguards of docs/method.md §5 (mu = 1 in normalized units,
  * backtracking line search on sum q~, best iterate kept), harmonic guidance
  * (§6) and the finishing pass (§5a). */
 #include "opt/opt.h"
@@ -229,7 +229,7 @@ static double scan_light(const ctx_t *c, const double *x, double *eta, opt_progr
     return metric_delta(amin, c->eps);
 }
 
-/* METHOD §5: keep the best iterate (fewest inverted, then best worst tet, then
+/* docs/method.md §5: keep the best iterate (fewest inverted, then best worst tet, then
  * best mean). Never accept one with more inverted tets or a worse worst tet
  * than the input. Worst-tet differences under 1e-4 count as ties so that the
  * mean decides between iterates whose worst tet did not really change. */
@@ -307,7 +307,7 @@ static qdc_status ctx_init(ctx_t *c, const mesh_t *m, const mesh_topo *tp, const
     if (!c->x || !c->x0 || !c->xn || !c->xbest || !c->trial || !c->tmp || !c->rhs || !c->d ||
         !c->locked || !c->wq2 || !c->bw2 || !c->dg || !c->qt || !c->eta || !c->qval)
         return QDC_ENOMEM;
-    /* METHOD §1: bbox centre to 0, diagonal to 1; every tolerance is in these units */
+    /* docs/method.md §1: bbox centre to 0, diagonal to 1; every tolerance is in these units */
     diag = mesh_bbox(m, lo, hi);
     c->scale = diag > 0 ? diag : 1.0;
     for (int k = 0; k < 3; k++)
@@ -427,7 +427,7 @@ static qdc_status iterate(ctx_t *c, opt_result *res, opt_progress *r, int *stepp
     int cg = 0;
     qdc_status st;
 
-    /* q~ at x_k with one global delta (METHOD §2) */
+    /* q~ at x_k with one global delta (docs/method.md §2) */
     delta = metric_delta(encode_min_arg(tp, c->x, o->metric), c->eps);
     f0 = encode_objective(tp, c->x, o->metric, delta, c->qt, NULL);
     if (literal || o->weights == OPT_WEIGHTS_PAPER)
@@ -477,7 +477,7 @@ static qdc_status iterate(ctx_t *c, opt_result *res, opt_progress *r, int *stepp
             return qdc_fail(err, QDC_ESOLVE, "linear solve returned a non-finite value");
     t = qdc_now();
     if (!literal) {
-        /* Not in the paper (METHOD §5): backtrack on sum q~ with delta frozen;
+        /* Not in the paper (docs/method.md §5): backtrack on sum q~ with delta frozen;
          * with delta = 0 a trial that inverts a tet costs +inf. */
         int h;
         for (h = 0; h <= o->ls_halvings; h++) {
@@ -524,7 +524,7 @@ static void pass_record(ctx_t *c, opt_progress *r, int *next, const char *phase)
     r->phase = phase;
 }
 
-/* The finishing pass (METHOD §5a) from c->x: regular sweeps over the worst
+/* The finishing pass (docs/method.md §5a) from c->x: regular sweeps over the worst
  * finish_frac of tets, then polish sweeps over the worst 1% while the worst tet
  * still improves (measured on the dev corpus: it keeps rising for a few more
  * sweeps). Each sweep is a progress record numbered from *next. */
@@ -804,7 +804,7 @@ static qdc_status run_once(mesh_t *m, const opt_options *opts, const uint8_t *pi
         }
         st = iterate(&c, &res, &r, &stepped, err);
         if (st == QDC_ESOLVE) {
-            /* solver trouble: stop with the best mesh so far (STYLE §3) */
+            /* solver trouble: stop with the best mesh so far (docs/style.md §3) */
             snprintf(res.stop_reason, sizeof res.stop_reason, "solver");
             logf_(&c, 1, "iteration %d: %s", it, err ? err->msg : "solve failed");
             st = QDC_OK;

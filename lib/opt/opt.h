@@ -1,4 +1,4 @@
-/* opt.h - the QDC optimizer (paper Sec. 4-6, METHOD §4-§6, §8): moves vertices,
+/* opt.h - the QDC optimizer (paper Sec. 4-6, docs/method.md §4-§6, §8): moves vertices,
  * never changes connectivity. Thread-safe: all state lives in the call. */
 #ifndef QDC_OPT_H
 #define QDC_OPT_H
@@ -12,7 +12,7 @@ typedef enum { OPT_MODE_SAFE = 0, OPT_MODE_LITERAL } opt_mode;
 typedef enum { OPT_WEIGHTS_OPTAVG = 0, OPT_WEIGHTS_PAPER } opt_weights;
 typedef enum { OPT_SOLVER_AUTO = 0, OPT_SOLVER_CHOLMOD, OPT_SOLVER_PCG } opt_solver;
 
-/* Outcome of a run (STYLE §3). */
+/* Outcome of a run (docs/style.md §3). */
 typedef enum {
     OPT_CONVERGED = 0, /* stopping rule met */
     OPT_STOPPED,       /* budget, cancel or solver trouble: best valid mesh returned */
@@ -43,15 +43,15 @@ typedef struct {
     opt_metric metric;     /* default MIVL */
     opt_boundary boundary; /* default LSQ */
     opt_mode mode;         /* default SAFE; LITERAL = paper as written (Eq. 6, mu = ||G^T g||^2, no line search) */
-    opt_weights weights;   /* default OPTAVG (METHOD §4) */
+    opt_weights weights;   /* default OPTAVG (docs/method.md §4) */
     opt_solver solver;     /* default AUTO (chosen from the CHOLMOD analysis) */
-    int harmonic;          /* harmonic guidance (METHOD §6), default 0 */
+    int harmonic;          /* harmonic guidance (docs/method.md §6), default 0 */
     int pre_iters;         /* iterations before the harmonic field, default 3 */
-    int finish;            /* worst-tet finishing pass (METHOD §5a), default 1 */
+    int finish;            /* worst-tet finishing pass (docs/method.md §5a), default 1 */
     int max_iter;          /* global iterations, default 10 */
     int ls_halvings;       /* line search tries 1 .. 2^-ls_halvings, default 10 */
     double mu;             /* semi-implicit damping in normalized units, default 1 */
-    int mu_scaled;         /* with harmonic guidance, multiply mu by omega_B^2 (METHOD §5
+    int mu_scaled;         /* with harmonic guidance, multiply mu by omega_B^2 (docs/method.md §5
                             * open question), default 0 */
     double tol_move;       /* stop when max move < tol_move * mean edge, default 1e-3 */
     double eps_rel;        /* Escobar epsilon relative to a regular tet, default 1e-3 */
@@ -59,7 +59,7 @@ typedef struct {
     int finish_sweeps;     /* broad sweeps, default 3 */
     int angle_polish;      /* after the finishing pass: max-min of the dihedral sines
                             * on the worst tets' vertices (finish.h), default 1 */
-    double feature_angle;  /* degrees, for slide (issue 4), default 30 */
+    double feature_angle;  /* degrees, for slide, default 30 */
     double time_limit;     /* seconds, 0 = none: then OPT_STOPPED with the best mesh */
     int threads;           /* OpenMP threads for this run; 0 = all cores. A server running
                             * several jobs at once should give each 1 (no oversubscription) */

@@ -1,4 +1,4 @@
-/* solve.c - sparse SPD solves for the QDC step (METHOD §5, §7). */
+/* solve.c - sparse SPD solves for the QDC step (docs/method.md §5, §7). */
 #include "opt/solve.h"
 
 #include "opt/encode.h"
@@ -9,7 +9,7 @@
 
 /* Above this many unknowns the direct path is not even analysed: METIS and the
  * supernodal factorization of the 2-ring pattern cost seconds to minutes
- * (METHOD §7: 22k vertices 1.6 s, 99k 26 s per factorization) while CG needs
+ * (docs/method.md §7: 22k vertices 1.6 s, 99k 26 s per factorization) while CG needs
  * 10-40 matrix-free products; measured on the dev corpus, the analysis alone
  * (METIS) costs more than all CG solves of a run above ~10k unknowns. */
 #define SOLVE_ANALYSE_MAX 10000

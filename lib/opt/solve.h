@@ -1,4 +1,4 @@
-/* solve.h - the linear system of one semi-implicit step (paper Eq. 15, METHOD §5, §7):
+/* solve.h - the linear system of one semi-implicit step (paper Eq. 15, docs/method.md §5, §7):
  *     (Q_F^T W Q_F + diag(dg)) X = B
  * over the free vertices F (locked vertices are eliminated by the caller, which
  * moves their contribution into B). Q lives on the 1-ring pattern of the mesh

@@ -1,4 +1,4 @@
-# tests/e2e/oracle.sh - the CLI on every dev mesh against METHOD §5a's oracle:
+# tests/e2e/oracle.sh - the CLI on every dev mesh against docs/method.md §5a's oracle:
 # quality within 0.005 of the oracle, zero inverted tets, never worse than the
 # input; plus the bunny fixed-boundary target and the tangled bunnies.
 . "$(dirname "$0")/../lib.sh"
@@ -28,7 +28,7 @@ grep -v '^#' "$ROOT/tests/data/oracle.tsv" | while IFS='	' read -r name mean qmi
     [ "$ai" -le "$inv" ] || why="$why $ai inverted;"
     [ "$ai" -le "$bi" ] || why="$why more inverted than input;"
     ge "$an" "$bn" || why="$why worst tet worse than input;"
-    # issue 4: the worst-angle polish lifts the smallest dihedral of the good
+    # the worst-angle polish lifts the smallest dihedral of the good
     # meshes (measured: cube 16.4, bracket 15.4, sphere 17.4, torus 14.2; inputs 6-7.5)
     case $name in cube*_good | bracket*_good | sphere*_good)
         ad=$(field "$rep" after dihedral_min)

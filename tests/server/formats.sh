@@ -1,5 +1,5 @@
 #!/bin/sh
-# formats.sh - content negotiation (issue 6): an upload in every mesh format
+# formats.sh - content negotiation: an upload in every mesh format
 # (by Content-Type, ?format= or sniffed) becomes a job with the same sizes and
 # notes about skipped elements; the result comes back in every format (by
 # ?format= or Accept, with its own strong ETag) with the region tags; 415 and

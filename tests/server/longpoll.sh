@@ -31,7 +31,7 @@ else
 fi
 stop_qdcd || fail "SIGTERM" "exit status $?"
 
-# Memory of parked long-polls (issue 3: 1000 of them <= 20 MB) from clients
+# Memory of parked long-polls (1000 of them <= 20 MB) from clients
 # that poll in a loop over keep-alive connections. libmicrohttpd 0.9.75 zeroes
 # a reused connection's whole 128 KiB pool, so a poll parked on a reused
 # connection costs ~135 KB against ~14 KB on a fresh one; progress replies

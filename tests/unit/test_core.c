@@ -74,7 +74,7 @@ TEST(h_is_continuous_and_regularizes)
     ASSERT_NEAR(metric_delta(-0.3, 0.1), sqrt(0.1 * 0.4), 1e-15);
 }
 
-/* closed-form alpha* (METHOD §3) against a brute-force 1D search of q~ */
+/* closed-form alpha* (docs/method.md §3) against a brute-force 1D search of q~ */
 TEST(alpha_closed_form_matches_search)
 {
     double f[3][3] = {{0.1, 0.0, 0.0}, {1.2, 0.2, 0.1}, {0.3, 0.9, -0.1}};
