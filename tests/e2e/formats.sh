@@ -14,7 +14,7 @@ fi
 
 # A converter on the library: qdcconv IN OUT [OUTFORMAT] (meshio_load/meshio_save).
 cat > "$TMP/conv.c" <<'EOF'
-#include "meshio.h"
+#include "io/meshio.h"
 #include <stdio.h>
 int main(int argc, char **argv)
 {
