@@ -13,7 +13,8 @@ libmicrohttpd-dev libjansson-dev libsqlite3-dev libcurl4-openssl-dev libtet1.5-d
 RUNTIME_PKGS="ca-certificates curl libcholmod3 libopenblas0-pthread libmicrohttpd12
 libjansson4 libsqlite3-0 libcurl4 libtet1.5 libgomp1"
 TEST_PKGS="curl tetgen clang libclang-rt-14-dev jq
-python3 python3-numpy python3-scipy python3-meshio python3-gmsh gmsh"
+python3 python3-numpy python3-scipy python3-meshio python3-gmsh gmsh
+podman debootstrap runc"
 case "${1:-}" in
 --build) PKGS=$BUILD_PKGS; shift ;;
 --runtime) PKGS=$RUNTIME_PKGS; shift ;;
@@ -26,6 +27,15 @@ for p in $PKGS; do
         missing="$missing $p"
     fi
 done
+
+# Node.js and npm (web console build and browser tests): Debian's packages,
+# unless a node with its npm is already installed (e.g. from another source,
+# whose nodejs package bundles npm and conflicts with Debian's npm).
+case " $PKGS " in
+*" podman "*)
+    command -v npm > /dev/null 2>&1 || missing="$missing nodejs npm"
+    ;;
+esac
 
 if [ -z "$missing" ]; then
     exit 0
