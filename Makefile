@@ -22,7 +22,7 @@ CC ?= cc
 CXX ?= c++
 OPTFLAGS ?= -O2 -g
 WARN := -Wall -Wextra -Wpedantic -Werror -Wshadow -Wstrict-prototypes
-CPPFLAGS += -D_POSIX_C_SOURCE=200809L -Ilib -I/usr/include/suitesparse
+CPPFLAGS += -D_POSIX_C_SOURCE=200809L -Ilib -I/usr/include/suitesparse -I/usr/include/postgresql
 CFLAGS += -std=c11 $(OPTFLAGS) $(WARN) $(SANFLAGS) -fopenmp
 CXXFLAGS += -std=c++11 $(OPTFLAGS) -Wall -Wextra -Werror $(SANFLAGS)
 LDFLAGS += $(SANFLAGS) -fopenmp
@@ -37,7 +37,7 @@ endif
 
 SRV_C := $(wildcard server/*.c)
 SRV_OBJ := $(SRV_C:%.c=$(B)/%.o)
-SRV_LIBS := -lmicrohttpd -ljansson -lsqlite3 -lpthread
+SRV_LIBS := -lmicrohttpd -ljansson -lsqlite3 -lpq -lpthread
 
 CLI_C := $(wildcard clients/qdc/*.c)
 CLI_OBJ := $(CLI_C:%.c=$(B)/%.o)

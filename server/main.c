@@ -30,6 +30,10 @@ static void usage(FILE *f)
         "  --port-file FILE          write the bound port to FILE once listening\n"
         "  --data DIR                data directory: qdcd.db (SQLite, WAL), jobs/, tmp/\n"
         "                            (default ./var)\n"
+        "  --store URI               job store: sqlite:DIR (the same as --data DIR, the\n"
+        "                            default) or a PostgreSQL connection URI\n"
+        "                            postgresql://USER@HOST:PORT/DB (job rows in the\n"
+        "                            database; --data holds the job files)\n"
         "  --workers N               optimizer threads (default: number of cores)\n"
         "  --tokens FILE             bearer tokens, one SHA-256 hex hash per line\n"
         "                            (make one with --hash-token); each job is visible\n"
@@ -173,6 +177,7 @@ static const cli_opt cli_opts[] = {
     {"listen", 'h', 0, 0, 0, 0},
     {"port-file", 's', CFG(port_file), 0, 0, 0},
     {"data", 's', CFG(data), 0, 0, 0},
+    {"store", 's', CFG(store), 0, 0, 0},
     {"tokens", 's', CFG(tokens_file), 0, 0, 0},
     {"qdc", 's', CFG(qdc_path), 0, 0, 0},
     {"workers", 'i', CFG(workers), 1, 1024, 0},
@@ -263,6 +268,13 @@ static int parse_args(int argc, char **argv, qdcd_config *c)
     }
     if (optind < argc) {
         fprintf(stderr, "qdcd: unexpected argument '%s'\n", argv[optind]);
+        return -1;
+    }
+    if (!strncmp(c->store, "sqlite:", 7) && c->store[7]) {
+        snprintf(c->data, sizeof c->data, "%s", c->store + 7);
+    } else if (c->store[0] && !store_pg_uri(c->store)) {
+        fprintf(stderr, "qdcd: --store takes sqlite:DIR or postgresql://USER@HOST:PORT/DB, "
+                        "not '%s'\n", c->store);
         return -1;
     }
     return 0;
@@ -387,7 +399,8 @@ int main(int argc, char **argv)
     signal(SIGPIPE, SIG_IGN);
 
     qdc_error_clear(&err);
-    if (store_sqlite_open(q->cfg.data, &q->store, &err) != QDC_OK) {
+    if (store_pg_uri(q->cfg.store) ? store_pg_open(q->cfg.store, &q->store, &err) != QDC_OK
+                                   : store_sqlite_open(q->cfg.data, &q->store, &err) != QDC_OK) {
         fprintf(stderr, "qdcd: %s\n", err.msg);
         return 1;
     }

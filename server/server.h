@@ -13,6 +13,8 @@ typedef struct {
     char host[256]; /* --listen HOST:PORT */
     int port;
     char data[4096];        /* --data DIR */
+    char store[4096];       /* --store URI: "" or sqlite:DIR (SQLite in data), or
+                             * postgresql://... */
     char port_file[4096];   /* --port-file FILE: the bound port is written there */
     char tokens_file[4096]; /* --tokens FILE */
     char qdc_path[4096];    /* --qdc PATH: runs `qdc tetra` for surface jobs */

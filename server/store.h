@@ -104,4 +104,10 @@ struct job_store {
 /* SQLite (WAL) backend: DIR/qdcd.db. */
 qdc_status store_sqlite_open(const char *dir, job_store **out, qdc_error *err);
 
+/* PostgreSQL backend (store_pg.c): uri is a libpq connection URI
+ * (postgresql://USER@HOST:PORT/DB). The schema is created or migrated on open. */
+qdc_status store_pg_open(const char *uri, job_store **out, qdc_error *err);
+/* 1 if uri names a PostgreSQL database (postgresql:// or postgres://). */
+int store_pg_uri(const char *uri);
+
 #endif

@@ -1,0 +1,177 @@
+#!/bin/sh
+# pg.sh - qdcd with its job rows in PostgreSQL (--store postgresql://...):
+# a real server started for the test (pg.inc), real qdcd processes.
+# One node: the whole job life cycle, a restart keeps the jobs, the schema is
+# created once and found again. Two nodes on one database (job files in one
+# shared --data directory): jobs submitted to either node run exactly once and
+# are read from the other; one Idempotency-Key sent to both nodes at the same
+# moment makes one job; a node killed mid-job leaves the job to the other;
+# the database stopped and restarted mid-run: no node dies, no job is lost.
+. "$(dirname "$0")/../lib.sh"
+. "$(dirname "$0")/pg.inc"
+QDCD=${QDCD:-$BIN/qdcd}
+QM='application/vnd.qdc.mesh'
+MT="$PY $ROOT/tests/server/meshtool.py"
+PIDS=
+trap 'for p in $PIDS; do kill -9 $p 2>/dev/null; done; pg_cleanup; rm -rf "$TMP"' EXIT
+
+if ! pg_available; then
+    for n in "one node" "restart" "schema" "two nodes" "idempotency" "node killed" "database restart"; do
+        echo "ok - pg: $n # SKIP no PostgreSQL server binaries (apt-get install postgresql) or not root"
+    done
+    exit 0
+fi
+pg_start || { fail "pg: start PostgreSQL" "$(tail -3 "$PGDIR/initdb.log" "$PGDIR/log" 2> /dev/null | tr '\n' ' ')"; exit 1; }
+
+# node NAME DATADIR [options]: starts qdcd on the database; sets URL_NAME, PID_NAME
+node() {
+    _n=$1 _d=$2
+    shift 2
+    rm -f "$TMP/$_n.port"
+    "$QDCD" --listen 127.0.0.1:0 --port-file "$TMP/$_n.port" --data "$_d" --store "$PGURI" \
+        "$@" >> "$TMP/$_n.log" 2>&1 &
+    _p=$!
+    PIDS="$PIDS $_p"
+    eval "PID_$_n=$_p"
+    _i=0
+    while [ $_i -lt 150 ]; do
+        if [ -s "$TMP/$_n.port" ]; then
+            eval "URL_$_n=http://127.0.0.1:$(cat "$TMP/$_n.port")"
+            curl -sf -m 2 "http://127.0.0.1:$(cat "$TMP/$_n.port")/livez" > /dev/null && return 0
+        fi
+        kill -0 $_p 2> /dev/null || return 1
+        sleep 0.1
+        _i=$((_i + 1))
+    done
+    return 1
+}
+jf() { jq -r "$2" "$1"; } # jf FILE FILTER
+stop() { # PID: SIGTERM, wait, exit status
+    kill -TERM "$1" 2> /dev/null
+    wait "$1"
+}
+post() { # URL FILE QUERY OUT [curl args]: prints the status code
+    _u=$1 _f=$2 _q=$3 _o=$4
+    shift 4
+    curl -s -m 60 -o "$_o" -w '%{http_code}' -X POST --data-binary "@$_f" -H "Content-Type: $QM" "$@" "$_u/v1/jobs?$_q"
+}
+wait_done() { # URL ID: polls until done (max 40 s); prints the state
+    [ -n "$2" ] || { echo no-id; return 1; }
+    _i=0
+    while [ $_i -lt 200 ]; do
+        _s=$(curl -s -m 10 "$1/v1/jobs/$2")
+        if [ "$(printf '%s' "$_s" | jq -r .done 2> /dev/null)" = true ]; then
+            printf '%s' "$_s" | jq -r .state
+            return 0
+        fi
+        sleep 0.2
+        _i=$((_i + 1))
+    done
+    echo timeout
+}
+
+$MT qmesh "$ROOT/tests/data/sample/cube.mesh" "$TMP/cube.qmesh" || { fail "pg: sample" "meshtool"; exit 1; }
+
+# 1. one node: submit, run, result and report, through PostgreSQL rows
+node a "$TMP/da" --workers 1 || { fail "pg: node a starts" "$(tail -3 "$TMP/a.log")"; exit 1; }
+c=$(post "$URL_a" "$TMP/cube.qmesh" "max_iter=5" "$TMP/j1")
+id1=$(jf "$TMP/j1" .id)
+st=$(wait_done "$URL_a" "$id1")
+curl -s -o "$TMP/r1.mesh" "$URL_a/v1/jobs/$id1/result?format=medit"
+rows=$(pg_sql "SELECT state FROM jobs WHERE id = '$id1'")
+if [ "$c" = 202 ] && [ "$st" = succeeded ] && [ "$rows" = 2 ] && "$BIN/qdc" quality "$TMP/r1.mesh" > /dev/null 2>&1; then
+    pass "pg: one node: 202, succeeded, the row is in PostgreSQL (state 2), result is a valid mesh"
+else
+    fail "pg: one node" "post $c state $st row '$rows'"
+fi
+
+# 2. restart: the job is still there; 3. the schema is version 1, recorded once
+stop "$PID_a"
+node a "$TMP/da" --workers 1 || { fail "pg: node a restarts" "$(tail -3 "$TMP/a.log")"; exit 1; }
+st=$(curl -s "$URL_a/v1/jobs/$id1" | jq -r .state)
+[ "$st" = succeeded ] && pass "pg: restart: the job is still there (succeeded)" || fail "pg: restart" "state '$st'"
+v=$(pg_sql "SELECT string_agg(version::text, ',') FROM qdc_schema")
+[ "$v" = 1 ] && pass "pg: schema created once and found again on restart (versions: $v)" ||
+    fail "pg: schema" "versions '$v'"
+
+# 4. a second node on the same database and job files: 6 jobs, round-robin
+node b "$TMP/da" --workers 1 || { fail "pg: node b starts" "$(tail -3 "$TMP/b.log")"; exit 1; }
+ids=
+for i in 1 2 3 4 5 6; do
+    if [ $((i % 2)) = 0 ]; then u=$URL_a; else u=$URL_b; fi
+    post "$u" "$TMP/cube.qmesh" "max_iter=3" "$TMP/rr$i" > /dev/null
+    ids="$ids $(jf "$TMP/rr$i" .id)"
+done
+bad=
+[ "$(echo $ids | wc -w)" = 6 ] || bad="submitted: '$ids'"
+for id in $ids; do
+    st=$(wait_done "$URL_a" "$id")
+    att=$(curl -s "$URL_b/v1/jobs/$id" | jq -r .attempts)
+    [ "$st" = succeeded ] && [ "$att" = 1 ] || bad="$bad $id:$st:$att"
+    curl -s -o "$TMP/ra.mesh" "$URL_a/v1/jobs/$id/result?format=medit"
+    curl -s -o "$TMP/rb.mesh" "$URL_b/v1/jobs/$id/result?format=medit"
+    cmp -s "$TMP/ra.mesh" "$TMP/rb.mesh" || bad="$bad $id:results-differ"
+done
+[ -z "$bad" ] && pass "pg: two nodes: 6 jobs round-robin, each succeeded once (attempts 1), same result from both nodes" ||
+    fail "pg: two nodes" "$bad"
+
+# 5. one Idempotency-Key sent to both nodes at the same moment: one job
+K='Idempotency-Key: pg-same-key'
+post "$URL_a" "$TMP/cube.qmesh" "max_iter=2" "$TMP/ka" -H "$K" > "$TMP/ka.code" &
+p1=$!
+post "$URL_b" "$TMP/cube.qmesh" "max_iter=2" "$TMP/kb" -H "$K" > "$TMP/kb.code" &
+p2=$!
+wait $p1 $p2
+ka=$(jf "$TMP/ka" .id)
+kb=$(jf "$TMP/kb" .id)
+n=$(pg_sql "SELECT COUNT(*) FROM jobs WHERE idem_key = 'pg-same-key'")
+if [ -n "$ka" ] && [ "$ka" = "$kb" ] && [ "$n" = 1 ]; then
+    pass "pg: one Idempotency-Key on two nodes at once: one job ($(cat "$TMP/ka.code")/$(cat "$TMP/kb.code"))"
+else
+    fail "pg: idempotency" "ids '$ka' '$kb', rows $n"
+fi
+wait_done "$URL_a" "$ka" > /dev/null
+
+# 6. kill -9 of the node running a job: the other node takes it over after
+# the lease expires and finishes it
+stop "$PID_a"
+stop "$PID_b"
+node a "$TMP/da" --workers 1 --lease 2 || { fail "pg: node a" "$(tail -3 "$TMP/a.log")"; exit 1; }
+post "$URL_a" "$TMP/cube.qmesh" "max_iter=60&finish=0&tol_move=0&mode=literal" "$TMP/jk" > /dev/null
+idk=$(jf "$TMP/jk" .id)
+i=0
+while [ $i -lt 100 ] && [ "$(curl -s "$URL_a/v1/jobs/$idk" | jq -r .state)" != running ]; do
+    sleep 0.05
+    i=$((i + 1))
+done
+kill -9 "$PID_a"
+wait "$PID_a" 2> /dev/null
+node b "$TMP/da" --workers 1 --lease 2 || { fail "pg: node b" "$(tail -3 "$TMP/b.log")"; exit 1; }
+st=$(wait_done "$URL_b" "$idk")
+att=$(curl -s "$URL_b/v1/jobs/$idk" | jq -r .attempts)
+if [ "$st" = succeeded ] && [ "$att" = 2 ]; then
+    pass "pg: kill -9 of the running node: the other node finished the job (attempts 2)"
+else
+    fail "pg: node killed" "state $st attempts $att"
+fi
+
+# 7. the database stops and comes back while a job runs: the node survives,
+# the job ends, nothing is lost
+post "$URL_b" "$TMP/cube.qmesh" "max_iter=40&finish=0&tol_move=0&mode=literal" "$TMP/jd" > /dev/null
+idd=$(jf "$TMP/jd" .id)
+sleep 0.3
+pg_stop
+sleep 1
+down=$(curl -s -o /dev/null -w '%{http_code}' -m 10 "$URL_b/v1/jobs/$idd")
+pg_up
+st=$(wait_done "$URL_b" "$idd")
+alive=no
+kill -0 "$PID_b" 2> /dev/null && alive=yes
+n=$(pg_sql "SELECT COUNT(*) FROM jobs")
+if [ "$alive" = yes ] && [ "$st" = succeeded ] && [ "$n" = 10 ]; then
+    pass "pg: database restarted mid-run: node alive, job succeeded, all 10 jobs kept (GET while down: $down)"
+else
+    fail "pg: database restart" "alive $alive state $st jobs $n (GET while down: $down) $(tail -2 "$TMP/b.log" | tr '\n' ' ')"
+fi
+stop "$PID_b"
+exit 0
