@@ -110,6 +110,9 @@ static void optimize_usage(FILE *f)
         "2)\n"
         "  --max-volume V             surface input: TetGen maximum tet volume\n"
         "  --fix FILE                 vertices that must not move (0-based indices)\n"
+        "  --reorient on|off          write every tet in the vertex order that is\n"
+        "                             positive under the mesh's orientation (default off:\n"
+        "                             tets are written in the input's vertex order)\n"
         "  --report FILE.json         write the quality/boundary report\n"
         "  --quiet                    no progress output\n",
         f);
@@ -268,7 +271,7 @@ int cli_optimize(int argc, char **argv)
     meshio_format fin = MESHIO_AUTO, fout = MESHIO_AUTO;
     surface_format sin = SURFACE_AUTO;
     tetra_options to;
-    int tetgen_opts = 0;
+    int tetgen_opts = 0, reorient = 0;
     mesh_t *m = NULL, *orig = NULL;
     qdc_error err;
     qdc_status st;
@@ -352,6 +355,8 @@ int cli_optimize(int argc, char **argv)
                 report_path = v;
             else if (!strcmp(a, "--fix"))
                 fix_path = v;
+            else if (!strcmp(a, "--reorient"))
+                bad = on_off(v, &reorient);
             else {
                 fprintf(stderr, "qdc: unknown option %s (see qdc optimize --help)\n", a);
                 return CLI_EUSAGE;
@@ -405,6 +410,20 @@ int cli_optimize(int argc, char **argv)
         cli_error(in, &err, st);
         rc = st == QDC_EMESH || st == QDC_EINVAL ? CLI_EINPUT : CLI_EOPT;
         goto out;
+    }
+    if (reorient) {
+        mesh_orientation mo;
+        st = mesh_reorient(m, &mo, &err);
+        if (st != QDC_OK) {
+            cli_error(in, &err, st);
+            rc = CLI_EOPT;
+            goto out;
+        }
+        if (!ps.quiet && mo.flipped)
+            fprintf(stderr,
+                    "qdc: note: %d of %d tets written in the other vertex order "
+                    "(--reorient): positive under the mesh's orientation\n",
+                    (int)mo.flipped, (int)m->nt);
     }
     st = meshio_save(out, fout, m, &err);
     if (st != QDC_OK) {

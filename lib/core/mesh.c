@@ -265,6 +265,144 @@ static qdc_status match_faces(int32_t nv, int32_t nt, const int32_t *tets, int32
     return st;
 }
 
+/* 1 when face f of tet tt and face g of tet tu (the same three vertices) run
+ * in opposite cyclic orders, i.e. the two tets are oriented alike: two tets of
+ * one orientation see their shared face from opposite sides. */
+static int faces_opposite(const int32_t *tt, int f, const int32_t *tu, int g)
+{
+    int32_t a0 = tt[mesh_face_of[f][0]], a1 = tt[mesh_face_of[f][1]];
+    int32_t b[3] = {tu[mesh_face_of[g][0]], tu[mesh_face_of[g][1]], tu[mesh_face_of[g][2]]};
+    int k = b[0] == a0 ? 0 : b[1] == a0 ? 1 : 2;
+
+    return b[(k + 1) % 3] != a1;
+}
+
+/* docs/method.md §1: the orientation comes from the connectivity. Walk each
+ * connected component across shared faces (nbr from match_faces), giving every
+ * tet the orientation that agrees with the tet it was reached from; a tet
+ * reached twice with different answers means the component cannot be oriented
+ * (QDC_EMESH). Then each component as a whole takes the sign most of its tets
+ * have geometrically, so that a mesh written with its tets in any vertex order
+ * (DOLFIN sorts them, GetFEM mixes them) is valid when it is, and a tangled
+ * mesh keeps the orientation of its majority. flip[t] = 1 when tet t must have
+ * two vertices swapped to be positive under that orientation. */
+static qdc_status orient_tets(const mesh_t *m, const int32_t *nbr, uint8_t *flip,
+                              mesh_orientation *o, qdc_error *err)
+{
+    int32_t nt = m->nt;
+    int32_t *queue = qdc_mallocn((size_t)nt + 1, sizeof(int32_t));
+    uint8_t *seen = qdc_calloc((size_t)nt + 1, 1);
+    qdc_status st = QDC_OK;
+
+    memset(o, 0, sizeof *o);
+    if (!queue || !seen) {
+        qdc_free(queue);
+        qdc_free(seen);
+        return QDC_ENOMEM;
+    }
+    for (int32_t t0 = 0; t0 < nt && st == QDC_OK; t0++) {
+        int32_t head = 0, tail = 0, npos = 0, nneg = 0;
+        if (seen[t0])
+            continue;
+        o->components++;
+        seen[t0] = 1;
+        flip[t0] = 0;
+        queue[tail++] = t0;
+        while (head < tail && st == QDC_OK) {
+            int32_t t = queue[head++];
+            const int32_t *tt = m->tets + 4 * (size_t)t;
+            for (int f = 0; f < 4; f++) {
+                int32_t other = nbr[4 * (size_t)t + f], u;
+                uint8_t want;
+                if (other < 0)
+                    continue;
+                u = other >> 2;
+                want = flip[t] ^ !faces_opposite(tt, f, m->tets + 4 * (size_t)u, other & 3);
+                if (!seen[u]) {
+                    seen[u] = 1;
+                    flip[u] = want;
+                    queue[tail++] = u;
+                } else if (flip[u] != want) {
+                    st = qdc_fail(err, QDC_EMESH,
+                                  "the tets cannot be oriented consistently (tets %d and %d "
+                                  "around their shared face disagree with the rest of "
+                                  "their component: a non-orientable connectivity)",
+                                  (int)t, (int)u);
+                    if (err) {
+                        err->index = u;
+                        strcpy(err->kind, "tet");
+                    }
+                    break;
+                }
+            }
+        }
+        if (st != QDC_OK)
+            break;
+        for (int32_t i = 0; i < tail; i++) {
+            double d = tet_det(m->xyz, m->tets + 4 * (size_t)queue[i]);
+            if (flip[queue[i]])
+                d = -d;
+            npos += d > 0;
+            nneg += d < 0;
+        }
+        for (int32_t i = 0; i < tail; i++) {
+            if (nneg > npos)
+                flip[queue[i]] ^= 1;
+            o->flipped += flip[queue[i]];
+        }
+        o->inverted += nneg > npos ? npos : nneg;
+    }
+    qdc_free(queue);
+    qdc_free(seen);
+    return st;
+}
+
+/* Swap the first two vertices of each flipped tet of tets (in place). */
+static void apply_flip(int32_t nt, int32_t *tets, const uint8_t *flip)
+{
+    for (int32_t t = 0; t < nt; t++)
+        if (flip[t]) {
+            int32_t x = tets[4 * (size_t)t];
+            tets[4 * (size_t)t] = tets[4 * (size_t)t + 1];
+            tets[4 * (size_t)t + 1] = x;
+        }
+}
+
+static qdc_status validate_basic(const mesh_t *m, mesh_check *c, qdc_error *err);
+
+qdc_status mesh_orient(const mesh_t *m, uint8_t *flip, mesh_orientation *o, qdc_error *err)
+{
+    mesh_check chk;
+    int32_t *nbr = NULL;
+    qdc_status st;
+
+    st = validate_basic(m, &chk, err);
+    if (st != QDC_OK)
+        return st;
+    nbr = qdc_mallocn((size_t)m->nt * 4, sizeof(int32_t));
+    if (!nbr)
+        return QDC_ENOMEM;
+    st = match_faces(m->nv, m->nt, m->tets, nbr, err);
+    if (st == QDC_OK)
+        st = orient_tets(m, nbr, flip, o, err);
+    qdc_free(nbr);
+    return st;
+}
+
+qdc_status mesh_reorient(mesh_t *m, mesh_orientation *o, qdc_error *err)
+{
+    uint8_t *flip = qdc_calloc((size_t)(m && m->nt > 0 ? m->nt : 0) + 1, 1);
+    qdc_status st;
+
+    if (!flip)
+        return QDC_ENOMEM;
+    st = mesh_orient(m, flip, o, err);
+    if (st == QDC_OK)
+        apply_flip(m->nt, m->tets, flip);
+    qdc_free(flip);
+    return st;
+}
+
 /* Counts, coordinates, indices, repeated vertices, orientation: everything but
  * the face matching. */
 static qdc_status validate_basic(const mesh_t *m, mesh_check *c, qdc_error *err)
@@ -339,7 +477,9 @@ static qdc_status validate_basic(const mesh_t *m, mesh_check *c, qdc_error *err)
 qdc_status mesh_validate(const mesh_t *m, mesh_check *info, qdc_error *err)
 {
     mesh_check c;
+    mesh_orientation o;
     int32_t *nbr = NULL;
+    uint8_t *flip = NULL;
     qdc_status st;
 
     st = validate_basic(m, &c, err);
@@ -348,10 +488,23 @@ qdc_status mesh_validate(const mesh_t *m, mesh_check *info, qdc_error *err)
     if (st != QDC_OK)
         return st;
     nbr = qdc_mallocn((size_t)m->nt * 4, sizeof(int32_t));
-    if (!nbr)
+    flip = qdc_calloc((size_t)m->nt, 1);
+    if (!nbr || !flip) {
+        qdc_free(nbr);
+        qdc_free(flip);
         return QDC_ENOMEM;
+    }
     st = match_faces(m->nv, m->nt, m->tets, nbr, err);
+    if (st == QDC_OK)
+        st = orient_tets(m, nbr, flip, &o, err);
+    if (st == QDC_OK && info) {
+        info->n_inverted = o.inverted;
+        info->n_flipped = o.flipped;
+        info->n_components = o.components;
+        info->negative_majority = o.flipped > m->nt / 2;
+    }
     qdc_free(nbr);
+    qdc_free(flip);
     return st;
 }
 
@@ -433,7 +586,7 @@ qdc_status mesh_topo_build(const mesh_t *m, mesh_topo **out, qdc_error *err)
 {
     mesh_topo *tp;
     int32_t *nbr = NULL;
-    int32_t npos = 0, nneg = 0;
+    uint8_t *flip = NULL;
     qdc_status st;
 
     *out = NULL;
@@ -456,25 +609,37 @@ qdc_status mesh_topo_build(const mesh_t *m, mesh_topo **out, qdc_error *err)
         goto fail;
     }
     memcpy(tp->tets, m->tets, (size_t)m->nt * 4 * sizeof(int32_t));
-    for (int32_t t = 0; t < m->nt; t++) {
-        double d = tet_det(m->xyz, tp->tets + 4 * (size_t)t);
-        npos += d > 0;
-        nneg += d < 0;
-    }
-    /* docs/method.md §1: the connectivity's orientation is the majority sign. Swapping
-     * two vertices of every tet flips them all and keeps faces consistent. */
-    if (nneg > npos) {
-        tp->flipped = 1;
-        for (int32_t t = 0; t < m->nt; t++) {
-            int32_t x = tp->tets[4 * (size_t)t];
-            tp->tets[4 * (size_t)t] = tp->tets[4 * (size_t)t + 1];
-            tp->tets[4 * (size_t)t + 1] = x;
-        }
-    }
-    st = build_incidence(m->nv, m->nt, tp->tets, &tp->vt_ptr, &tp->vt_idx);
+    /* the tets oriented from the connectivity (orient_tets); swapping two
+     * vertices keeps every face, so nbr stays valid for the flipped copy */
+    st = match_faces(m->nv, m->nt, m->tets, nbr, err);
     if (st != QDC_OK)
         goto fail;
-    st = match_faces(m->nv, m->nt, tp->tets, nbr, err);
+    flip = qdc_calloc((size_t)m->nt, 1);
+    if (!flip) {
+        st = QDC_ENOMEM;
+        goto fail;
+    }
+    st = orient_tets(m, nbr, flip, &tp->orientation, err);
+    if (st != QDC_OK)
+        goto fail;
+    apply_flip(m->nt, tp->tets, flip);
+    /* Swapping vertices 0 and 1 of a tet swaps its faces 0 and 1 (the face
+     * opposite a vertex goes with it): renumber nbr to the flipped tets. */
+    for (int32_t t = 0; t < m->nt; t++) {
+        int32_t *nb = nbr + 4 * (size_t)t;
+        if (flip[t]) {
+            int32_t x = nb[0];
+            nb[0] = nb[1];
+            nb[1] = x;
+        }
+        for (int f = 0; f < 4; f++)
+            if (nb[f] >= 0 && flip[nb[f] >> 2] && (nb[f] & 3) < 2)
+                nb[f] ^= 1;
+    }
+    tp->flipped = tp->orientation.flipped > 0;
+    qdc_free(flip);
+    flip = NULL;
+    st = build_incidence(m->nv, m->nt, tp->tets, &tp->vt_ptr, &tp->vt_idx);
     if (st != QDC_OK)
         goto fail;
     st = build_adjacency(tp);
@@ -523,6 +688,7 @@ qdc_status mesh_topo_build(const mesh_t *m, mesh_topo **out, qdc_error *err)
     return QDC_OK;
 fail:
     qdc_free(nbr);
+    qdc_free(flip);
     mesh_topo_free(tp);
     return st;
 }

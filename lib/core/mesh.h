@@ -43,10 +43,32 @@ void mesh_free(mesh_t *m);
 typedef struct {
     int32_t n_unreferenced;     /* vertices used by no tet (kept, never moved) */
     int32_t first_unreferenced; /* -1 if none */
-    int32_t n_inverted;         /* tets against the majority orientation */
+    int32_t n_inverted;         /* tets against the orientation of the connectivity */
     int32_t n_degenerate;       /* tets with exactly zero volume */
-    int negative_majority;      /* 1 if most tets are negative (orientation flipped) */
+    int negative_majority;      /* 1 if most tets are written negative (vertex order) */
+    int32_t n_flipped;          /* tets written in the other vertex order than their
+                                 * component's orientation (DOLFIN-sorted meshes: ~half) */
+    int32_t n_components;       /* face-connected components */
 } mesh_check;
+
+/* The orientation found from the connectivity (mesh_orient). */
+typedef struct {
+    int32_t components; /* face-connected components, each oriented as a whole */
+    int32_t flipped;    /* tets whose vertex order is the other one */
+    int32_t inverted;   /* tets whose geometry disagrees with the orientation */
+} mesh_orientation;
+
+/* docs/method.md §1: orient the tets from the connectivity. Two tets that share a
+ * face are oriented alike when they list it in opposite cyclic orders; each
+ * face-connected component is walked that way and then takes, as a whole, the
+ * sign most of its tets have. flip (nt bytes, caller's) receives 1 for each tet
+ * whose vertex order must have two vertices swapped to be positive under that
+ * orientation. A tet is inverted when its geometry disagrees with it.
+ * QDC_EMESH for a connectivity that cannot be oriented (a face of 3+ tets, or a
+ * component whose faces contradict each other), with err->index a tet. */
+qdc_status mesh_orient(const mesh_t *m, uint8_t *flip, mesh_orientation *o, qdc_error *err);
+/* The same, and the flipped tets of m rewritten in the positive vertex order. */
+qdc_status mesh_reorient(mesh_t *m, mesh_orientation *o, qdc_error *err);
 
 /* Check a mesh before use. Errors (QDC_EMESH unless said): empty mesh
  * (no vertices or no tets), a coordinate that is NaN/Inf (err->index = vertex),
@@ -69,8 +91,10 @@ enum {
 /* Connectivity, built once per job (the optimizer never changes it). */
 typedef struct mesh_topo {
     int32_t nv, nt;
-    int32_t *tets;      /* copy of the tets, reordered so the majority is positive */
-    int flipped;        /* 1 if the input's tets were flipped to get there */
+    int32_t *tets;      /* copy of the tets, each in the vertex order that is
+                         * positive under the connectivity's orientation */
+    int flipped;        /* 1 if any of the input's tets was flipped to get there */
+    mesh_orientation orientation; /* what mesh_orient found */
     int32_t *vt_ptr;    /* nv+1: incidences of vertex v are vt_idx[vt_ptr[v]..vt_ptr[v+1]) */
     int32_t *vt_idx;    /* 4*nt entries, each 4*t + a (tet t, local vertex a) */
     int32_t *adj_ptr;   /* nv+1: CSR pattern of the 1-ring, diagonal included, */

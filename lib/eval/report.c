@@ -14,7 +14,9 @@ const int report_dmax_thresholds[4] = {175, 165, 150, 140};
 qdc_status report_quality_compute(const mesh_t *m, report_quality *q, qdc_error *err)
 {
     int32_t npos = 0, nneg = 0, nvalid = 0;
-    double sgn, sum = 0, sum2 = 0, vsum = 0, cnsum = 0;
+    double sum = 0, sum2 = 0, vsum = 0, cnsum = 0;
+    uint8_t *flip = NULL;
+    mesh_orientation orient;
 
     memset(q, 0, sizeof *q);
     if (!m || m->nt <= 0 || m->nv <= 0)
@@ -25,27 +27,35 @@ qdc_status report_quality_compute(const mesh_t *m, report_quality *q, qdc_error 
                 return qdc_fail(err, QDC_EMESH, "tet %d: vertex index out of range", (int)t);
     q->nv = m->nv;
     q->nt = m->nt;
-    for (int32_t t = 0; t < m->nt; t++) {
-        const int32_t *tt = m->tets + 4 * (size_t)t;
-        metric_parts pt;
-        metric_parts_of(m->xyz + 3 * (size_t)tt[0], m->xyz + 3 * (size_t)tt[1],
-                        m->xyz + 3 * (size_t)tt[2], m->xyz + 3 * (size_t)tt[3], &pt);
-        npos += pt.vol > 0;
-        nneg += pt.vol < 0;
+    /* docs/method.md §1: each tet is measured in the vertex order its
+     * component's orientation gives it (mesh_orient); a connectivity that
+     * cannot be oriented (reported, never optimized) falls back to the
+     * majority sign of the whole mesh. */
+    flip = qdc_calloc((size_t)m->nt, 1);
+    if (!flip)
+        return QDC_ENOMEM;
+    if (mesh_orient(m, flip, &orient, NULL) != QDC_OK) {
+        for (int32_t t = 0; t < m->nt; t++) {
+            const int32_t *tt = m->tets + 4 * (size_t)t;
+            metric_parts pt;
+            metric_parts_of(m->xyz + 3 * (size_t)tt[0], m->xyz + 3 * (size_t)tt[1],
+                            m->xyz + 3 * (size_t)tt[2], m->xyz + 3 * (size_t)tt[3], &pt);
+            npos += pt.vol > 0;
+            nneg += pt.vol < 0;
+        }
+        memset(flip, nneg > npos, (size_t)m->nt);
     }
-    /* majority orientation (docs/method.md §1) */
-    sgn = nneg > npos ? -1.0 : 1.0;
     q->q_min = q->vl_min = INFINITY;
     q->dih_min = INFINITY;
     q->dih_max = -INFINITY;
     for (int32_t t = 0; t < m->nt; t++) {
         const int32_t *tt = m->tets + 4 * (size_t)t;
-        const double *p0 = m->xyz + 3 * (size_t)tt[0], *p1 = m->xyz + 3 * (size_t)tt[1];
+        int a = flip[t] ? 1 : 0, b = flip[t] ? 0 : 1; /* positive vertex order */
+        const double *p0 = m->xyz + 3 * (size_t)tt[a], *p1 = m->xyz + 3 * (size_t)tt[b];
         const double *p2 = m->xyz + 3 * (size_t)tt[2], *p3 = m->xyz + 3 * (size_t)tt[3];
         metric_parts pt;
         double eta, vl, ang[6], amin = 180, amax = 0;
         metric_parts_of(p0, p1, p2, p3, &pt);
-        pt.vol *= sgn;
         eta = metric_mean_ratio(&pt);
         vl = metric_vol_length(&pt);
         sum += eta;
@@ -89,6 +99,7 @@ qdc_status report_quality_compute(const mesh_t *m, report_quality *q, qdc_error 
     q->q_std = sqrt(fmax(0.0, sum2 / m->nt - q->q_mean * q->q_mean));
     q->vl_mean = vsum / m->nt;
     q->cn_mean = nvalid ? cnsum / nvalid : 0.0;
+    qdc_free(flip);
     return QDC_OK;
 }
 
