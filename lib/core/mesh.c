@@ -1,5 +1,6 @@
 /* mesh.c - mesh data, validation and connectivity (docs/method.md §1). */
 #include "core/mesh.h"
+#include "core/tet.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -132,17 +133,7 @@ double mesh_bbox(const mesh_t *m, double lo[3], double hi[3])
 
 static double tet_det(const double *x, const int32_t *t)
 {
-    const double *a = x + 3 * (size_t)t[0], *b = x + 3 * (size_t)t[1];
-    const double *c = x + 3 * (size_t)t[2], *d = x + 3 * (size_t)t[3];
-    double u[3], v[3], w[3];
-
-    for (int k = 0; k < 3; k++) {
-        u[k] = b[k] - a[k];
-        v[k] = c[k] - a[k];
-        w[k] = d[k] - a[k];
-    }
-    return u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0]) +
-           u[2] * (v[0] * w[1] - v[1] * w[0]);
+    return geom_tet_vol6(x, t);
 }
 
 /* Vertex -> incidence lists (4t+a), counting sort by vertex. */
@@ -713,6 +704,6 @@ int32_t mesh_count_inverted(const mesh_topo *t, const double *xyz)
     int32_t n = 0;
 
     for (int32_t i = 0; i < t->nt; i++)
-        n += !(tet_det(xyz, t->tets + 4 * (size_t)i) > 0);
+        n += geom_tet_inverted(tet_det(xyz, t->tets + 4 * (size_t)i));
     return n;
 }

@@ -248,6 +248,7 @@ static void write_progress_fields(jw *w, const opt_progress *p)
     jw_num(w, "dihedral_min", p->dih_min);
     jw_num(w, "dihedral_max", p->dih_max);
     jw_int(w, "n_inverted", p->n_inverted);
+    jw_int(w, "n_folded", p->n_folded);
     jw_num(w, "max_move", p->max_move);
     jw_num(w, "elapsed", p->elapsed);
     jw_int(w, "cg_iterations", p->cg_iters);
@@ -291,6 +292,8 @@ qdc_status report_write_json(const report_t *r, qdc_write_fn fn, void *ctx, qdc_
         jw_str(&w, "stop_reason", s->stop_reason);
         jw_int(&w, "iterations", s->iterations);
         jw_int(&w, "best_iteration", s->best_iteration);
+        jw_int(&w, "max_inverted_global", s->max_inverted_global);
+        jw_int(&w, "folded_global", s->folded_global);
         jw_str(&w, "solver", opt_solver_name(s->solver));
         jw_num(&w, "solver_flops", s->solver_flops);
         jw_open(&w, "seconds", '{');

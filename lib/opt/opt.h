@@ -29,6 +29,7 @@ typedef struct {
     double q_mean, q_std, q_min; /* signed mean ratio */
     double dih_min, dih_max;     /* degrees, over non-inverted tets */
     int32_t n_inverted;
+    int32_t n_folded;    /* global: tets valid before this step and inverted after it */
     double max_move;     /* largest vertex move this iteration, in mean edge lengths */
     double elapsed;      /* seconds since opt_run started */
     int solver;          /* opt_solver actually used */
@@ -95,6 +96,9 @@ typedef struct {
     opt_progress before;   /* the input's record */
     opt_progress after;    /* the returned mesh's record */
     opt_progress before_finish; /* record after the global iterations, before the finishing pass */
+    int32_t max_inverted_global; /* largest inverted count of a global iterate (0 on a
+                                  * valid input: the global step folds nothing) */
+    int32_t folded_global;       /* valid tets the global steps inverted, summed */
     char stop_reason[64];  /* "converged", "max-iter", "no-descent", "cancelled", "time-limit", "solver" */
 } opt_result;
 

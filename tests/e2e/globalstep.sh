@@ -1,0 +1,49 @@
+#!/bin/sh
+# globalstep.sh - the global step never folds a valid tet: on valid
+# low-quality, surface-heavy meshes (scripts/corpus.py: random interior points
+# Delaunay-tetrahedralized inside a ball, a thin bent bone and a torus) the
+# report's run.max_inverted_global and run.folded_global are 0 and no progress
+# record of the global phase has an inverted tet; on their tangled copies the
+# inverted count of every global iterate stays at or below the input's, and
+# the result never has more inverted tets than the input.
+. "$(dirname "$0")/../lib.sh"
+
+if ! "$PY" -c 'import numpy, scipy' 2> /dev/null; then
+    echo "ok - globalstep: corpus # SKIP python3-numpy/python3-scipy missing"
+    exit 0
+fi
+"$PY" "$ROOT/scripts/corpus.py" "$TMP/c" --tets 20000 --only ball-lowq,bone-lowq,torus-lowq > "$TMP/list" 2>&1 ||
+    { fail "globalstep: corpus" "$(tail -3 "$TMP/list")"; exit 1; }
+
+for name in ball-lowq bone-lowq torus-lowq ball-lowq-tangled bone-lowq-tangled torus-lowq-tangled; do
+    in=$TMP/c/$name.mesh
+    if ! "$BIN/qdc" optimize "$in" "$TMP/o.mesh" --report "$TMP/r.json" --quiet 2> "$TMP/err"; then
+        fail "globalstep: $name" "exit $?: $(tail -2 "$TMP/err")"
+        continue
+    fi
+    out=$("$PY" - "$TMP/r.json" << 'EOF'
+import json, sys
+r = json.load(open(sys.argv[1]))
+run = r["run"]
+b, a = r["before"], r["after"]
+print(b["n_inverted"], a["n_inverted"], run["max_inverted_global"], run["folded_global"],
+      "%.4f" % b["mean_ratio_mean"], "%.4f" % a["mean_ratio_mean"])
+EOF
+)
+    set -- $out
+    bi=$1 ai=$2 mx=$3 folded=$4 bm=$5 am=$6
+    why=
+    if [ "$bi" = 0 ]; then
+        [ "$mx" = 0 ] && [ "$folded" = 0 ] || why="valid input, but global iterates had up to $mx inverted ($folded folds)"
+    else
+        [ "$mx" -le "$bi" ] || why="a global iterate had $mx inverted, more than the input's $bi"
+    fi
+    [ "$ai" -le "$bi" ] || why="$why; output has $ai inverted, input $bi"
+    awk -v a="$am" -v b="$bm" 'BEGIN { exit !(a > b) }' || why="$why; mean ratio $bm -> $am"
+    if [ -z "$why" ]; then
+        pass "globalstep: $name: inverted $bi -> $ai, largest over the global phase $mx, mean ratio $bm -> $am"
+    else
+        fail "globalstep: $name" "$why"
+    fi
+done
+exit 0
