@@ -3,7 +3,7 @@
 
 For each mesh and each tool: run the tool once under measure.py (wall, CPU,
 peak RSS of that process, 600 s limit), then evaluate the output with the
-shared evaluator /work/shared/tools/quality.py against the input. Raw JSON
+evaluator tests/tools/evaluate.py against the input. Raw JSON
 goes to bench/out/runs/<mesh>/, the combined rows to bench/out/results.json,
 and one Markdown table to stdout and to the results file.
 """
@@ -31,17 +31,16 @@ OUT = os.path.join(HERE, 'out')
 PY = '/usr/bin/python3'
 QDC = os.path.join(ROOT, 'build', 'rel', 'qdc')
 QDC_RUN = os.path.join(OUT, 'bin', 'qdc')  # snapshot: others may rebuild QDC meanwhile
-SHARED = '/work/shared'
-QUALITY = os.path.join(SHARED, 'tools', 'quality.py')
-DEV = os.path.join(SHARED, 'meshes', 'dev')
-MAKE_MESHES = os.path.join(SHARED, 'meshes', 'make_meshes.py')
+QUALITY = os.path.join(ROOT, 'tests', 'tools', 'evaluate.py')  # one evaluator for all tools
+DEV = os.path.join(ROOT, 'tests', 'data', 'dev')
+CORPUS = os.path.join(ROOT, 'scripts', 'corpus.py')
 LIMIT = 600  # seconds, per command
 SAMPLES = 50000
 
 QUICK = ['bunny_low_10k', 'bunny_tangled-low_10k', 'bracket_h0.1_noisy']
-# generated meshes: (make_meshes --h, classes benchmarked, large?)
-GEN = [('0.06', ['lowq', 'tangled'], False),   # ~99k / ~81k tets
-       ('0.026', ['lowq'], True)]              # ~1.1M tets
+# generated meshes (scripts/corpus.py cube-lowq): (tets asked for, classes, large?)
+GEN = [('100000', ['lowq', 'tangled'], False),
+       ('1100000', ['lowq'], True)]
 
 TOOLS = ['qdc', 'qdc-fixed', 'gmsh-relocate3d', 'gmsh-default']
 PEER = 'gmsh-relocate3d'
@@ -97,14 +96,16 @@ def prepare_meshes(a):
         for h, classes, large in GEN:
             if large and a.no_large:
                 continue
-            want = [os.path.join(gdir, 'cube_h%s_%s.mesh' % (h, c)) for c in classes]
-            if a.only and not any(re.search(a.only, os.path.basename(w)) for w in want):
+            gd = os.path.join(gdir, h)
+            want = [os.path.join(gd, 'cube-%s%s.mesh' % ('lowq', '' if c == 'lowq' else '-' + c))
+                    for c in classes]
+            if a.only and not any(re.search(a.only, 'cube_%s_%s' % (h, c)) for c in classes):
                 continue
             if not all(os.path.exists(w) for w in want):
-                log('generating cube meshes, h =', h, '(once; reused from', gdir + ')')
-                subprocess.run(['timeout', str(LIMIT), PY, MAKE_MESHES, gdir, '--h', h,
-                                '--shapes', 'cube'], check=True)
-            sel += [(os.path.basename(w)[:-5], w) for w in want]
+                log('generating cube meshes,', h, 'tets (once; reused from', gd + ')')
+                subprocess.run(['timeout', str(LIMIT), PY, CORPUS, gd, '--tets', h,
+                                '--only', 'cube-lowq'], check=True, stdout=subprocess.DEVNULL)
+            sel += [('cube_%s_%s' % (h, c), w) for c, w in zip(classes, want)]
     if a.only:
         sel = [s for s in sel if re.search(a.only, s[0])]
     return sel
@@ -174,8 +175,8 @@ def renumbering(src, dst):
 
 def quality_module():
     sys.path.insert(0, os.path.dirname(QUALITY))
-    import quality
-    return quality
+    import evaluate
+    return evaluate
 
 
 def gmsh_input(name, src):

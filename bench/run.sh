@@ -18,8 +18,6 @@ for need in "$py" timeout; do
 done
 "$py" -c 'import numpy, scipy, meshio, gmsh' 2>/dev/null ||
     { echo "bench: $py lacks numpy/scipy/meshio/gmsh (make deps)" >&2; exit 1; }
-[ -r /work/shared/tools/quality.py ] ||
-    { echo "bench: /work/shared/tools/quality.py not found" >&2; exit 1; }
 
 # build/rel/qdc: `make bench` has just run `make all`; when run directly, build
 # it if missing. Others edit the tree concurrently, so retry a broken build.

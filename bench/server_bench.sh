@@ -79,7 +79,7 @@ sort -n "$TMP/times" | awk -v n="$NUP" '{ t[NR] = $1 } END {
 #    polls in a loop (one poll answered at once, then the parked one, over its
 #    keep-alive connection unless the daemon closed it, as HTTP clients do).
 #    The line says so if a poll was answered before RSS was sampled.
-gzip -dc "$ROOT/../shared/meshes/dev/cube_h0.1_lowq.mesh.gz" > "$TMP/cube.mesh"
+gzip -dc "$ROOT/tests/data/dev/cube_h0.1_lowq.mesh.gz" > "$TMP/cube.mesh"
 parked_polls() { # KIND: first | next
     rm -rf "$TMP/p" "$TMP/p.port"
     start "$TMP/p" --workers 1

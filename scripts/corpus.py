@@ -7,6 +7,8 @@ Classes (each as a Medit .mesh, valid unless named tangled):
         analytic surface plus random interior points, Delaunay-tetrahedralized
         (scipy), tets outside the shape dropped; 40-55% boundary vertices.
         bone: a thin bent capsule, aspect ratio about 12.
+  cube-lowq        the same in the unit cube (only when asked for with --only):
+                   the benchmark's scale series
   graded-box       Gmsh, a box refined toward one corner (size field), so
                    sizes vary 20x across the mesh
   part-cad         Gmsh OCC: a box minus a cylinder, with a fillet-like
@@ -119,7 +121,20 @@ def torus_inside(p):
     return torus_dist(p) < 0.0
 
 
+def cube_surface(n, rng):
+    corners = np.array([[i, j, k] for i in (0, 1) for j in (0, 1) for k in (0, 1)], float)
+    p = rng.uniform(0, 1, (n, 3))
+    axis = rng.integers(0, 3, n)
+    p[np.arange(n), axis] = rng.integers(0, 2, n)
+    return np.vstack([corners, p])
+
+
+def cube_inside(p):
+    return np.all((p > 0) & (p < 1), axis=1)
+
+
 SHAPES = {
+    "cube": (cube_surface, cube_inside, ((0, 0, 0), (1, 1, 1))),
     "ball": (ball_surface, ball_inside, ((-1, -1, -1), (1, 1, 1))),
     "bone": (bone_surface, bone_inside, ((-1, -1, -1), (13, 3, 1))),
     "torus": (torus_surface, torus_inside, ((-1.4, -1.4, -0.4), (1.4, 1.4, 0.4))),
@@ -239,9 +254,9 @@ def main():
     only = set(a.only.split(",")) - {""}
     n = int(a.tets)
     made = []
-    for shape in ("ball", "bone", "torus"):
+    for shape in ("ball", "bone", "torus", "cube"):
         name = shape + "-lowq"
-        if only and name not in only and name + "-tangled" not in only:
+        if (only or shape == "cube") and name not in only and name + "-tangled" not in only:
             continue
         if Delaunay is None:
             sys.exit("corpus.py: scipy is missing (apt-get install python3-scipy)")

@@ -6,7 +6,7 @@
 set -u
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
 QDC=$ROOT/build/rel/qdc
-DEV=$ROOT/../shared/meshes/dev
+DEV=$ROOT/tests/data/dev
 TMP=$(mktemp -d)
 trap 'rm -rf "$TMP"' EXIT
 MESHES=${*:-"cube_h0.1_lowq cube_h0.1_tangled sphere_h0.1_good sphere_h0.1_noisy torus_h0.1_lowq torus_h0.1_tangled bracket_h0.1_noisy bracket_h0.1_good bunny_low_10k bunny_tangled-low_10k"}

@@ -2,8 +2,8 @@
 # Output protocol shared with the C tests: "ok - name" / "FAIL - name: why".
 ROOT=${ROOT:-$(cd "$(dirname "$0")/../.." && pwd)}
 BIN=${BIN:-$ROOT/build/rel}
-DEV=${DEV:-$ROOT/../shared/meshes/dev}
-QUALITY=${QUALITY:-$ROOT/../shared/tools/quality.py}
+DEV=${DEV:-$ROOT/tests/data/dev}
+QUALITY=${QUALITY:-$ROOT/tests/tools/evaluate.py}
 PY=/usr/bin/python3
 TMP=$(mktemp -d "${TMPDIR:-/tmp}/qdc-test.XXXXXX")
 trap 'rm -rf "$TMP"' EXIT

@@ -20,7 +20,7 @@ if command -v npx > /dev/null 2>&1; then
         fail "dockerfile-utils lint" "rc $rc: $(printf '%s' "$out" | grep -v 'npm warn' | head -8 | tr '\n' ' ')"
     fi
 else
-    pass "dockerfile-utils lint: skipped, no npx here (apt-get install npm)"
+    echo "ok - dockerfile-utils lint # SKIP no npx here (apt-get install npm)"
 fi
 if command -v shellcheck > /dev/null 2>&1; then
     check "shellcheck docker/entrypoint.sh clients/batch/qdc-batch.sh" shellcheck -s sh "$EP" "$ROOT/clients/batch/qdc-batch.sh"

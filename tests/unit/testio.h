@@ -172,7 +172,7 @@ static inline const char *dev_mesh(const char *name, char *out, size_t n)
     char src[512], cmd[1200];
     struct stat sb;
 
-    root_path("../shared/meshes/dev/", src, sizeof src);
+    root_path("tests/data/dev/", src, sizeof src);
     strncat(src, name, sizeof src - strlen(src) - 1);
     strncat(src, ".mesh.gz", sizeof src - strlen(src) - 1);
     if (stat(src, &sb) != 0)

@@ -1,6 +1,7 @@
-/* testlib.h - tiny unit-test harness. Each TEST prints "ok - name" or
- * "FAIL - name: detail" lines; tests/run.sh counts them. main() comes from
- * TEST_MAIN(list of tests). */
+/* testlib.h - tiny unit-test harness. Each TEST prints "ok - name",
+ * "FAIL - name: detail" or, when it could not run (SKIP(reason)),
+ * "ok - name # SKIP reason"; tests/run.sh counts skips apart from passes.
+ * main() comes from TEST_MAIN(list of tests). */
 #ifndef QDC_TESTLIB_H
 #define QDC_TESTLIB_H
 
@@ -11,6 +12,15 @@
 
 static int tl_failed_now;
 static int tl_total_failed;
+static const char *tl_skip_reason;
+
+/* The test cannot run here (a build option or a tool is missing): reported
+ * as a skip, never as a pass. */
+#define SKIP(reason)                                                                    \
+    do {                                                                                \
+        tl_skip_reason = (reason);                                                      \
+        return;                                                                         \
+    } while (0)
 
 #define ASSERT_TRUE(c)                                                                  \
     do {                                                                                \
@@ -70,8 +80,11 @@ static int tl_run(const char *suite, const tl_case *cases, int n)
 {
     for (int i = 0; i < n; i++) {
         tl_failed_now = 0;
+        tl_skip_reason = NULL;
         cases[i].fn();
-        if (tl_failed_now) {
+        if (tl_skip_reason && !tl_failed_now) {
+            printf("ok - %s.%s # SKIP %s\n", suite, cases[i].name, tl_skip_reason);
+        } else if (tl_failed_now) {
             printf("FAIL - %s.%s\n", suite, cases[i].name);
             tl_total_failed++;
         } else {
