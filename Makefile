@@ -48,7 +48,7 @@ UNIT_BIN := $(UNIT_C:tests/unit/%.c=$(B)/tests/%)
 
 PROGS := $(B)/qdc $(if $(SRV_C),$(B)/qdcd)
 
-.PHONY: all deps test test-quick test-container run bench clean fuzz format fault
+.PHONY: all deps test test-quick test-container test-faults run bench clean fuzz format fault
 all: $(B)/libqdc.a $(PROGS) $(UNIT_BIN)
 
 deps:
@@ -86,6 +86,11 @@ test: deps
 # Unit tests of the release build only (seconds).
 test-quick: all
 	@QDC_QUICK=1 tests/run.sh
+
+# The daemon's fault suite alone (also part of make test).
+test-faults: deps
+	$(MAKE) -j$$(nproc) all
+	@for t in tests/faults/*.sh; do sh "$$t"; done
 
 # The image built and run by a container engine (Podman here; skipped without one).
 test-container: deps

@@ -19,6 +19,7 @@
 #include "io/surface.h"
 #include "io/tetra.h"
 #include "opt/opt.h"
+#include "opt/options.h"
 #include "eval/report.h"
 
 #endif

@@ -253,7 +253,7 @@ typedef struct {
 } opt_scan;
 
 static enum MHD_Result scan_option(void *cls, enum MHD_ValueKind kind, const char *key,
-                                   const char *val)
+                                   size_t key_size, const char *val, size_t val_size)
 {
     opt_scan *s = cls;
     (void)kind;
@@ -261,6 +261,13 @@ static enum MHD_Result scan_option(void *cls, enum MHD_ValueKind kind, const cha
         return MHD_NO;
     if (!val)
         val = "";
+    /* a %00 in the query would cut the value short: max_iter=5%00abc is not 5 */
+    if (strlen(key) != key_size || strlen(val) != val_size) {
+        snprintf(s->why, sizeof s->why, "option '%.40s': the value has a NUL byte (%%00)",
+                 key);
+        s->bad = 1;
+        return MHD_NO;
+    }
     if (!strcmp(key, "format"))
         return MHD_YES; /* the body's format: begin_upload */
     if (!strcmp(key, "tetgen_quality") || !strcmp(key, "max_volume")) {
@@ -434,7 +441,7 @@ static enum MHD_Result begin_upload(struct MHD_Connection *c, req *r)
     s.cap = q->cfg.job_time_limit;
     s.o.time_limit = s.cap;
     s.tq = s.tv = -1;
-    MHD_get_connection_values(c, MHD_GET_ARGUMENT_KIND, scan_option, &s);
+    MHD_get_connection_values_n(c, MHD_GET_ARGUMENT_KIND, scan_option, &s);
     if (s.bad)
         return http_problem(c, r, 400, "invalid-option", "invalid option", s.why, NULL,
                             NULL);

@@ -75,98 +75,17 @@ int job_is_surface(const char *format)
 
 /* ---------------------------------------------------------------- options -- */
 
-enum { K_METRIC, K_BOUNDARY, K_MODE, K_WEIGHTS, K_SOLVER, K_BOOL, K_INT, K_DBL };
-
-static const struct {
-    const char *name;
-    int kind;
-    size_t off;
-    double lo, hi;
-} opt_table[] = {
-    {"metric", K_METRIC, offsetof(opt_options, metric), 0, 0},
-    {"boundary", K_BOUNDARY, offsetof(opt_options, boundary), 0, 0},
-    {"mode", K_MODE, offsetof(opt_options, mode), 0, 0},
-    {"weights", K_WEIGHTS, offsetof(opt_options, weights), 0, 0},
-    {"solver", K_SOLVER, offsetof(opt_options, solver), 0, 0},
-    {"harmonic", K_BOOL, offsetof(opt_options, harmonic), 0, 1},
-    {"finish", K_BOOL, offsetof(opt_options, finish), 0, 1},
-    {"angle_polish", K_BOOL, offsetof(opt_options, angle_polish), 0, 1},
-    {"max_iter", K_INT, offsetof(opt_options, max_iter), 0, 10000},
-    {"pre_iters", K_INT, offsetof(opt_options, pre_iters), 0, 10000},
-    {"ls_halvings", K_INT, offsetof(opt_options, ls_halvings), 0, 60},
-    {"finish_sweeps", K_INT, offsetof(opt_options, finish_sweeps), 0, 1000},
-    {"mu", K_DBL, offsetof(opt_options, mu), 0, 1e12},
-    {"tol_move", K_DBL, offsetof(opt_options, tol_move), 0, 1},
-    {"eps_rel", K_DBL, offsetof(opt_options, eps_rel), 0, 1},
-    {"finish_frac", K_DBL, offsetof(opt_options, finish_frac), 0, 1},
-    {"feature_angle", K_DBL, offsetof(opt_options, feature_angle), 0, 180},
-    {"time_limit", K_DBL, offsetof(opt_options, time_limit), 0, 1e9},
-};
-#define N_OPTS (sizeof opt_table / sizeof opt_table[0])
-
+/* The options are the library's table (lib/opt/options.h): the same names,
+ * ranges and defaults as the CLI; a value accepted at submit time is one the
+ * optimizer accepts. */
 int job_opt_set(opt_options *o, const char *key, const char *val, double cap_time,
                 char *why, size_t why_cap)
 {
-    char *end;
-    size_t i;
+    qdc_error err;
 
-    for (i = 0; i < N_OPTS && strcmp(opt_table[i].name, key); i++)
-        ;
-    if (i == N_OPTS) {
-        snprintf(why, why_cap, "unknown option '%s'", key);
-        return -1;
-    }
-    void *f = (char *)o + opt_table[i].off;
-    qdc_status st = QDC_OK;
-    switch (opt_table[i].kind) {
-    case K_METRIC:
-        st = opt_parse_metric(val, f);
-        break;
-    case K_BOUNDARY:
-        st = opt_parse_boundary(val, f);
-        break;
-    case K_MODE:
-        st = opt_parse_mode(val, f);
-        break;
-    case K_WEIGHTS:
-        st = opt_parse_weights(val, f);
-        break;
-    case K_SOLVER:
-        st = opt_parse_solver(val, f);
-        break;
-    case K_BOOL:
-        if (!strcmp(val, "1") || !strcasecmp(val, "true") || !strcasecmp(val, "on"))
-            *(int *)f = 1;
-        else if (!strcmp(val, "0") || !strcasecmp(val, "false") ||
-                 !strcasecmp(val, "off"))
-            *(int *)f = 0;
-        else
-            st = QDC_EINVAL;
-        break;
-    case K_INT: {
-        long v = strtol(val, &end, 10);
-        if (!*val || *end || v < opt_table[i].lo || v > opt_table[i].hi)
-            st = QDC_EINVAL;
-        else
-            *(int *)f = (int)v;
-        break;
-    }
-    default: {
-        double v = strtod(val, &end);
-        if (!*val || *end || !(v >= opt_table[i].lo && v <= opt_table[i].hi))
-            st = QDC_EINVAL;
-        else
-            *(double *)f = v;
-        break;
-    }
-    }
-    if (st != QDC_OK) {
-        if (opt_table[i].kind >= K_INT)
-            snprintf(why, why_cap, "option '%s': '%s' is not a number in [%g, %g]", key,
-                     val, opt_table[i].lo, opt_table[i].hi);
-        else
-            snprintf(why, why_cap, "option '%s': '%s' is not an accepted value", key,
-                     val);
+    qdc_error_clear(&err);
+    if (opt_set(o, key, val, &err) != QDC_OK) {
+        snprintf(why, why_cap, "%.*s", (int)(why_cap > 0 ? why_cap - 1 : 0), err.msg);
         return -1;
     }
     if (cap_time > 0 && (o->time_limit <= 0 || o->time_limit > cap_time))
@@ -174,41 +93,28 @@ int job_opt_set(opt_options *o, const char *key, const char *val, double cap_tim
     return 0;
 }
 
+/* Canonical options JSON: every option of the table, in its order. */
 void job_opt_json(const opt_options *o, sbuf *out)
 {
+    size_t n;
+    const opt_desc *t = opt_table(&n);
+    char v[64];
+
     sb_puts(out, "{");
-    for (size_t i = 0; i < N_OPTS; i++) {
-        const void *f = (const char *)o + opt_table[i].off;
-        const char *s = NULL;
-        sb_printf(out, "%s\"%s\":", i ? "," : "", opt_table[i].name);
-        switch (opt_table[i].kind) {
-        case K_METRIC:
-            s = opt_metric_name(*(const opt_metric *)f);
+    for (size_t i = 0; i < n; i++) {
+        sb_printf(out, "%s\"%s\":", i ? "," : "", t[i].name);
+        opt_value_text(&t[i], o, v, sizeof v);
+        switch (t[i].type) {
+        case OPT_T_BOOL:
+            sb_puts(out, strcmp(v, "on") ? "false" : "true");
             break;
-        case K_BOUNDARY:
-            s = opt_boundary_name(*(const opt_boundary *)f);
-            break;
-        case K_MODE:
-            s = opt_mode_name(*(const opt_mode *)f);
-            break;
-        case K_WEIGHTS:
-            s = opt_weights_name(*(const opt_weights *)f);
-            break;
-        case K_SOLVER:
-            s = opt_solver_name(*(const opt_solver *)f);
-            break;
-        case K_BOOL:
-            sb_puts(out, *(const int *)f ? "true" : "false");
-            break;
-        case K_INT:
-            sb_printf(out, "%d", *(const int *)f);
+        case OPT_T_INT:
+        case OPT_T_REAL:
+            sb_puts(out, v);
             break;
         default:
-            sb_printf(out, "%.17g", *(const double *)f);
-            break;
+            sb_json_str(out, v);
         }
-        if (s)
-            sb_json_str(out, s);
     }
     sb_puts(out, "}");
 }

@@ -37,7 +37,7 @@ if [ -z "${QDC_QUICK:-}" ]; then
         [ -x "$t" ] && run_one "asan+ubsan $(basename "$t")" env ASAN_OPTIONS=detect_leaks=1 \
             UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 "$t"
     done
-    for t in tests/house/*.sh tests/e2e/*.sh tests/server/*.sh tests/clients/*.sh tests/container/*.sh; do
+    for t in tests/house/*.sh tests/e2e/*.sh tests/server/*.sh tests/faults/*.sh tests/clients/*.sh tests/container/*.sh; do
         [ -f "$t" ] && run_one "$t" sh "$t"
     done
 fi

@@ -77,29 +77,82 @@ static void on_log(void *ctx, int level, const char *msg)
     fprintf(stderr, "qdc: %s%s\n", level ? "warning: " : "", msg);
 }
 
+static void json_str(FILE *f, const char *s)
+{
+    fputc('"', f);
+    for (; *s; s++) {
+        if (*s == '"' || *s == '\\')
+            fputc('\\', f);
+        fputc(*s, f);
+    }
+    fputc('"', f);
+}
+
+int cli_options(int argc, char **argv)
+{
+    static const char *const types[] = {"word", "bool", "integer", "number", "hausd"};
+    size_t n;
+    const opt_desc *t = opt_table(&n);
+    opt_options d;
+
+    (void)argv;
+    if (argc > 1) {
+        fprintf(stderr, "usage: qdc options\n");
+        return CLI_EUSAGE;
+    }
+    opt_defaults(&d);
+    printf("[");
+    for (size_t i = 0; i < n; i++) {
+        char def[64], range[200];
+        opt_value_text(&t[i], &d, def, sizeof def);
+        opt_range_text(&t[i], range, sizeof range);
+        printf("%s\n {\"name\": ", i ? "," : "");
+        json_str(stdout, t[i].name);
+        printf(", \"type\": \"%s\", \"default\": ", types[t[i].type]);
+        json_str(stdout, def);
+        printf(", \"valid\": ");
+        json_str(stdout, range);
+        if (t[i].type == OPT_T_INT || t[i].type == OPT_T_REAL)
+            printf(", \"min\": %.17g, \"max\": %.17g, \"min_excluded\": %s", t[i].lo,
+                   t[i].hi, t[i].lo_open ? "true" : "false");
+        if (t[i].type == OPT_T_WORD) {
+            printf(", \"values\": [");
+            for (int w = 0; w < t[i].nwords; w++) {
+                printf("%s", w ? ", " : "");
+                json_str(stdout, t[i].words[w]);
+            }
+            printf("]");
+        }
+        printf(", \"help\": ");
+        json_str(stdout, t[i].help);
+        printf("}");
+    }
+    printf("\n]\n");
+    return CLI_OK;
+}
+
+/* The optimizer's options come from the library's table (lib/opt/options.h),
+ * with their valid values and defaults; then the CLI's own. */
 static void optimize_usage(FILE *f)
 {
+    size_t n;
+    const opt_desc *t = opt_table(&n);
+    opt_options d;
+
+    opt_defaults(&d);
+    fputs("usage: qdc optimize IN OUT [options]\n", f);
+    for (size_t i = 0; i < n; i++) {
+        char flag[40], range[200], def[64];
+        size_t k;
+        snprintf(flag, sizeof flag, "--%s", t[i].name);
+        for (k = 0; flag[k]; k++)
+            flag[k] = flag[k] == '_' ? '-' : flag[k];
+        opt_range_text(&t[i], range, sizeof range);
+        opt_value_text(&t[i], &d, def, sizeof def);
+        fprintf(f, "  %-26s %s\n  %-26s   %s; default %s\n", flag, t[i].help, "", range,
+                def);
+    }
     fputs(
-        "usage: qdc optimize IN OUT [options]\n"
-        "  --metric mivl|mimr|micn    quality metric (default mivl)\n"
-        "  --boundary lsq|fixed|slide boundary handling (default lsq)\n"
-        "  --feature-angle DEG        slide: sharper boundary edges are features "
-        "(default 30)\n"
-        "  --harmonic on|off          harmonic guidance, paper Sec. 5.1 (default off)\n"
-        "  --mode safe|literal        safeguarded method or the paper as written "
-        "(default safe)\n"
-        "  --weights optavg|paper     QDC weights (default optavg)\n"
-        "  --solver auto|cholmod|pcg  linear solver (default auto)\n"
-        "  --finish on|off            worst-tet finishing pass (default on)\n"
-        "  --finish-sweeps N          broad finishing sweeps (default 3)\n"
-        "  --angle-polish on|off      then raise the smallest dihedral angles (default on)\n"
-        "  --finish-frac F            share of worst tets visited per sweep (default "
-        "0.2)\n"
-        "  --max-iter N               global iterations (default 10)\n"
-        "  --mu X                     damping in normalized units (default 1)\n"
-        "  --mu-scaled on|off         with --harmonic, scale mu by omega_B^2 (default "
-        "off)\n"
-        "  --time-limit SECONDS       stop with the best mesh so far\n"
         "  --in-format F, --out-format F   "
         "medit|tetgen|qmesh|json|gmsh|gmsh-bin|gmsh22|\n"
         "                             vtk|vtk-ascii|vtu|vtu-ascii (default: by "
@@ -296,50 +349,12 @@ int cli_optimize(int argc, char **argv)
                 return CLI_EUSAGE;
             }
             i++;
-            if (!strcmp(a, "--metric"))
-                bad = opt_parse_metric(v, &o.metric) != QDC_OK;
-            else if (!strcmp(a, "--boundary"))
-                bad = opt_parse_boundary(v, &o.boundary) != QDC_OK;
-            else if (!strcmp(a, "--mode"))
-                bad = opt_parse_mode(v, &o.mode) != QDC_OK;
-            else if (!strcmp(a, "--weights"))
-                bad = opt_parse_weights(v, &o.weights) != QDC_OK;
-            else if (!strcmp(a, "--solver"))
-                bad = opt_parse_solver(v, &o.solver) != QDC_OK;
-            else if (!strcmp(a, "--harmonic"))
-                bad = on_off(v, &o.harmonic);
-            else if (!strcmp(a, "--finish"))
-                bad = on_off(v, &o.finish);
-            else if (!strcmp(a, "--angle-polish"))
-                bad = on_off(v, &o.angle_polish);
-            else if (!strcmp(a, "--mu-scaled"))
-                bad = on_off(v, &o.mu_scaled);
-            else if (!strcmp(a, "--max-iter")) {
-                char *end;
-                long n = strtol(v, &end, 10);
-                bad = *end || n < 0 || n > 100000;
-                o.max_iter = (int)n;
-            } else if (!strcmp(a, "--finish-sweeps")) {
-                char *end;
-                long n = strtol(v, &end, 10);
-                bad = *end || n < 0 || n > 1000;
-                o.finish_sweeps = (int)n;
-            } else if (!strcmp(a, "--finish-frac")) {
-                char *end;
-                o.finish_frac = strtod(v, &end);
-                bad = *end || !(o.finish_frac >= 0 && o.finish_frac <= 1);
-            } else if (!strcmp(a, "--feature-angle")) {
-                char *end;
-                o.feature_angle = strtod(v, &end);
-                bad = *end || !(o.feature_angle > 0 && o.feature_angle < 180);
-            } else if (!strcmp(a, "--mu") || !strcmp(a, "--time-limit")) {
-                char *end;
-                double x = strtod(v, &end);
-                bad = *end || !(x > 0) || x > 1e12;
-                if (!strcmp(a, "--mu"))
-                    o.mu = x;
-                else
-                    o.time_limit = x;
+            if (opt_find(a + 2)) {
+                /* the library's option table: its names, ranges and messages */
+                if (opt_set(&o, a + 2, v, &err) != QDC_OK) {
+                    fprintf(stderr, "qdc: %s\n", err.msg);
+                    return CLI_EUSAGE;
+                }
             } else if (!strcmp(a, "--tetgen-quality") || !strcmp(a, "--max-volume")) {
                 bad = tetgen_opt(a, v, &to);
                 tetgen_opts = 1;

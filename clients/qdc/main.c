@@ -14,6 +14,8 @@ static void usage(FILE *f)
           "Local commands:\n"
           "  optimize IN OUT [options]   optimize a tet mesh (qdc optimize --help)\n"
           "  quality IN [--ref ORIG] [--json]   quality report of a mesh\n"
+          "  options                     the optimizer's options as JSON (names, types,\n"
+          "                              valid values, defaults, help)\n"
           "  tetra SURFACE OUT [--tetgen-quality Q] [--max-volume V]   tetrahedralize\n"
           "                              a closed surface with TetGen (no optimization)\n"
           "\n"
@@ -45,6 +47,8 @@ int main(int argc, char **argv)
         return cli_optimize(argc - 1, argv + 1);
     if (!strcmp(argv[1], "quality"))
         return cli_quality(argc - 1, argv + 1);
+    if (!strcmp(argv[1], "options"))
+        return cli_options(argc - 1, argv + 1);
     if (!strcmp(argv[1], "tetra"))
         return cli_tetra(argc - 1, argv + 1);
     if (!strcmp(argv[1], "submit") || !strcmp(argv[1], "status") ||

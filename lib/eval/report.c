@@ -294,6 +294,7 @@ qdc_status report_write_json(const report_t *r, qdc_write_fn fn, void *ctx, qdc_
         jw_int(&w, "best_iteration", s->best_iteration);
         jw_int(&w, "max_inverted_global", s->max_inverted_global);
         jw_int(&w, "folded_global", s->folded_global);
+        jw_num(&w, "hausd_bound", s->hausd_bound);
         jw_str(&w, "solver", opt_solver_name(s->solver));
         jw_num(&w, "solver_flops", s->solver_flops);
         jw_open(&w, "seconds", '{');

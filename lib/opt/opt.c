@@ -12,7 +12,10 @@
 #include "opt/slide.h"
 #include "opt/solve.h"
 
+#include <ctype.h>
+#include <errno.h>
 #include <math.h>
+#include <stdlib.h>
 #include <omp.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -71,6 +74,53 @@ PARSER(opt_parse_mode, opt_mode, mode_names)
 PARSER(opt_parse_weights, opt_weights, weights_names)
 PARSER(opt_parse_solver, opt_solver, solver_names)
 
+/* A finite, non-negative number filling all of s (no spaces, no trailing bytes). */
+static int parse_nonneg(const char *s, double *out)
+{
+    char *end;
+    double v;
+
+    if (!s || !*s || isspace((unsigned char)*s))
+        return -1;
+    errno = 0;
+    v = strtod(s, &end);
+    if (end == s || *end || errno || !isfinite(v) || v < 0)
+        return -1;
+    *out = v;
+    return 0;
+}
+
+qdc_status opt_parse_hausd(const char *s, opt_options *o)
+{
+    size_t n = s ? strlen(s) : 0;
+    double v;
+    char buf[64];
+
+    if (!n || n >= sizeof buf)
+        return QDC_EINVAL;
+    if (!strncmp(s, "rel:", 4)) {
+        if (parse_nonneg(s + 4, &v))
+            return QDC_EINVAL;
+        o->hausd = 0;
+        o->hausd_rel = v;
+        return QDC_OK;
+    }
+    if (s[n - 1] == '%') {
+        memcpy(buf, s, n - 1);
+        buf[n - 1] = 0;
+        if (parse_nonneg(buf, &v))
+            return QDC_EINVAL;
+        o->hausd = 0;
+        o->hausd_rel = v / 100.0;
+        return QDC_OK;
+    }
+    if (parse_nonneg(s, &v))
+        return QDC_EINVAL;
+    o->hausd = v;
+    o->hausd_rel = 0;
+    return QDC_OK;
+}
+
 #define NAMER(fn, type, names)                                                          \
     const char *fn(type v)                                                              \
     {                                                                                   \
@@ -91,6 +141,7 @@ typedef struct {
     double *x, *x0, *xn, *xbest, *trial, *tmp, *rhs;
     uint8_t *locked;  /* not an unknown of the linear system */
     double *vfac;     /* nv: share of the step each vertex takes (feasible step) */
+    double hbound;    /* --hausd in normalized units (0: none) */
     uint8_t *vmark;   /* nv: scratch marks */
     double *wq2;      /* squared QDC row weights */
     double *bw2;      /* squared boundary row weights (0: no row) */
@@ -335,10 +386,12 @@ static qdc_status ctx_init(ctx_t *c, const mesh_t *m, const mesh_topo *tp, const
     c->lbar = ecount ? esum / (double)ecount : 1.0;
     c->bref = c->x0;
     c->mu_factor = 1.0;
+    c->hbound = o->hausd > 0 ? o->hausd / c->scale : o->hausd_rel > 0 ? o->hausd_rel : 0.0;
     if (o->boundary == OPT_BOUNDARY_SLIDE) {
         qdc_status st = slide_new(tp, c->x0, o->feature_angle, &c->sl, NULL);
         if (st != QDC_OK)
             return st;
+        slide_set_bound(c->sl, c->hbound);
         c->bref = c->x; /* rows keep a sliding vertex near where it is */
     }
     c->eps = metric_eps(o->metric, c->lbar, o->eps_rel);
@@ -439,6 +492,18 @@ static int32_t count_folds(const mesh_topo *tp, const double *x, const double *y
     return folds;
 }
 
+/* --hausd under lsq: boundary and interface vertices within c->hbound of their
+ * input positions (slide mode does it in slide_project). */
+static void clamp_boundary(const ctx_t *c, double *y)
+{
+    if (!(c->hbound > 0) || c->sl)
+        return;
+#pragma omp parallel for schedule(static)
+    for (int32_t v = 0; v < c->nv; v++)
+        if (c->tp->vflag[v] & (MESH_V_BOUNDARY | MESH_V_INTERFACE))
+            slide_clamp(c->x0, v, c->hbound, y + 3 * (size_t)v);
+}
+
 /* c->trial = the step of length s from c->x toward c->xn, feasible: no tet
  * that is valid at c->x is inverted at the trial, unless c->x is tangled
  * (ninv_x inverted tets) and the whole step leaves no more inverted tets than
@@ -449,7 +514,26 @@ static int32_t count_folds(const mesh_topo *tp, const double *x, const double *y
  * c->x can still leave a neighbour tet folded by its other corners, which are
  * then held in the next round; with every vertex held the trial is c->x,
  * which folds nothing, so the rounds end. */
-static void feasible_trial(ctx_t *c, double s, int32_t ninv_x)
+/* Mean ratio of tet tt at y (signed; MIVL's parts need no adjugate). */
+static double tet_eta(const double *y, const int32_t *tt)
+{
+    metric_parts pt;
+    metric_parts_for(OPT_METRIC_MIVL, y + 3 * (size_t)tt[0], y + 3 * (size_t)tt[1],
+                     y + 3 * (size_t)tt[2], y + 3 * (size_t)tt[3], &pt);
+    return metric_mean_ratio(&pt);
+}
+
+/* Whether a trial spoils tet tt: it folds a tet valid at x or, on a valid
+ * mesh, takes a tet below the worst mean ratio qfloor at x (the worst tet
+ * of the mesh never gets worse, so the global phase's work is kept). */
+static int spoils(const ctx_t *c, const double *y, const int32_t *tt, double qfloor)
+{
+    if (geom_tet_inverted(geom_tet_vol6(y, tt)))
+        return !geom_tet_inverted(geom_tet_vol6(c->x, tt));
+    return qfloor > 0 && tet_eta(y, tt) < qfloor;
+}
+
+static void feasible_trial(ctx_t *c, double s, int32_t ninv_x, double qfloor)
 {
     const mesh_topo *tp = c->tp;
     int32_t nv = c->nv;
@@ -465,18 +549,20 @@ static void feasible_trial(ctx_t *c, double s, int32_t ninv_x)
                 c->trial[q] = c->x[q] + s * c->vfac[v] * (c->xn[q] - c->x[q]);
             }
         project_sliding(c, c->trial);
+        clamp_boundary(c, c->trial);
 #pragma omp parallel for reduction(+ : folds, ninv) schedule(static)
         for (int32_t t = 0; t < tp->nt; t++) {
             const int32_t *tt = tp->tets + 4 * (size_t)t;
-            int bad = geom_tet_inverted(geom_tet_vol6(c->trial, tt));
-            ninv += bad;
-            folds += bad && !geom_tet_inverted(geom_tet_vol6(c->x, tt));
+            ninv += geom_tet_inverted(geom_tet_vol6(c->trial, tt));
+            folds += spoils(c, c->trial, tt, qfloor);
         }
         /* A tangled mesh untangles faster when a step may fold a few valid
          * tets while it frees more (measured on the tangled dev meshes: the
          * strict rule cost 0.008 of mean ratio on sphere and torus): the
-         * whole step is taken when the inverted count does not rise. */
-        if (!folds || (round == 0 && ninv_x > 0 && ninv <= ninv_x))
+         * whole step is taken when the inverted count does not rise. Not
+         * while sliding: there such steps squashed smooth ears flat
+         * (bunny_tangled-low_10k: worst tet 6e-11 instead of 0.054). */
+        if (!folds || (round == 0 && ninv_x > 0 && ninv <= ninv_x && !c->sl))
             return;
         if (round > 64) { /* cannot happen (see above); never loop for ever */
             memcpy(c->trial, c->x, 3 * (size_t)nv * sizeof(double));
@@ -485,8 +571,7 @@ static void feasible_trial(ctx_t *c, double s, int32_t ninv_x)
         /* few tets fold: mark their corners in one serial pass */
         for (int32_t t = 0; t < tp->nt; t++) {
             const int32_t *tt = tp->tets + 4 * (size_t)t;
-            if (geom_tet_inverted(geom_tet_vol6(c->trial, tt)) &&
-                !geom_tet_inverted(geom_tet_vol6(c->x, tt)))
+            if (spoils(c, c->trial, tt, qfloor))
                 for (int a = 0; a < 4; a++)
                     c->vmark[tt[a]] = 1;
         }
@@ -572,9 +657,15 @@ static qdc_status iterate(ctx_t *c, opt_result *res, opt_progress *r, int *stepp
          * and never raises the inverted count of a tangled one. */
         int h;
         int32_t ninv_x = 0;
+        double qfloor = INFINITY;
         (void)count_folds(tp, c->x, c->x, &ninv_x);
+#pragma omp parallel for reduction(min : qfloor) schedule(static)
+        for (int32_t e = 0; e < tp->nt; e++) {
+            double q = tet_eta(c->x, tp->tets + 4 * (size_t)e);
+            qfloor = q < qfloor ? q : qfloor;
+        }
         for (h = 0; h <= o->ls_halvings; h++) {
-            feasible_trial(c, step, ninv_x);
+            feasible_trial(c, step, ninv_x, qfloor);
             if (encode_objective(tp, c->trial, o->metric, delta, NULL, NULL) <= f0)
                 break;
             step *= 0.5;
@@ -772,6 +863,8 @@ static qdc_status lsq_angle_pass(ctx_t *c, const uint8_t *movable, opt_result *r
     if (c->sl || c->o->boundary != OPT_BOUNDARY_LSQ)
         return angle_pass(c, movable, c->sl, res, r, next);
     st = slide_new(c->tp, c->x0, c->o->feature_angle, &sl, NULL);
+    if (st == QDC_OK)
+        slide_set_bound(sl, c->hbound);
     mv = st == QDC_OK ? qdc_mallocn((size_t)c->nv, 1) : NULL;
     if (!mv) {
         slide_free(sl);
@@ -848,7 +941,8 @@ static qdc_status run_once(mesh_t *m, const opt_options *opts, const uint8_t *pi
         o = *opts;
     else
         opt_defaults(&o);
-    if (o.max_iter < 0 || o.ls_halvings < 0 || o.ls_halvings > 60 || !(o.mu > 0) ||
+    if (!(o.hausd >= 0 && isfinite(o.hausd)) || !(o.hausd_rel >= 0 && isfinite(o.hausd_rel)) ||
+        o.max_iter < 0 || o.ls_halvings < 0 || o.ls_halvings > 60 || !(o.mu > 0) ||
         !(o.tol_move >= 0) || !(o.eps_rel > 0) || !(o.finish_frac >= 0 && o.finish_frac <= 1) ||
         o.finish_sweeps < 0 || o.pre_iters < 0 || o.threads < 0 || (unsigned)o.metric > OPT_METRIC_MICN ||
         (unsigned)o.boundary > OPT_BOUNDARY_SLIDE || (unsigned)o.mode > OPT_MODE_LITERAL ||
@@ -884,6 +978,7 @@ static qdc_status run_once(mesh_t *m, const opt_options *opts, const uint8_t *pi
     r.phase = "input";
     c.input = c.best = r;
     res.before = r;
+    res.hausd_bound = c.hbound * c.scale;
     snprintf(res.stop_reason, sizeof res.stop_reason, "max-iter");
     if (report(&c, &r)) {
         stop = 1;
@@ -1026,66 +1121,80 @@ static int rerun_report(void *ctx, const opt_progress *p)
 
 qdc_status opt_run(mesh_t *m, const opt_options *opts, opt_result *res_out, qdc_error *err)
 {
-    uint8_t *pins = NULL;
-    double *xin = NULL, *xfirst = NULL;
-    opt_result r1, r2;
+    uint8_t *pins = NULL, *sq = NULL;
+    double *xin = NULL, *xbest = NULL;
+    opt_result best, r;
     qdc_status st;
+    size_t n3 = 3 * (size_t)(m && m->nv > 0 ? m->nv : 0);
 
     if (!(opts && opts->boundary == OPT_BOUNDARY_SLIDE))
         return run_once(m, opts, NULL, NULL, res_out, err);
-    xin = qdc_mallocn(3 * (size_t)m->nv + 1, sizeof(double));
-    if (!xin)
-        return qdc_fail(err, QDC_ENOMEM, "out of memory");
-    memcpy(xin, m->xyz, 3 * (size_t)m->nv * sizeof(double));
-    st = run_once(m, opts, NULL, &pins, &r1, err);
-    if (st != QDC_OK || !pins || r1.outcome != OPT_CONVERGED) {
-        if (res_out)
-            *res_out = r1;
-        goto out;
-    }
-    /* Slide squashed some smooth ears (measured on bunny_tangled-low_10k: an ear
-     * of mean ratio 0.061 ended at 1e-10): run again with their corners held
-     * and keep the better result. */
-    xfirst = qdc_mallocn(3 * (size_t)m->nv + 1, sizeof(double));
-    if (!xfirst) {
+    xin = qdc_mallocn(n3 + 1, sizeof(double));
+    xbest = qdc_mallocn(n3 + 1, sizeof(double));
+    pins = qdc_calloc(n3 / 3 + 1, 1);
+    if (!xin || !xbest || !pins) {
         st = qdc_fail(err, QDC_ENOMEM, "out of memory");
         goto out;
     }
-    memcpy(xfirst, m->xyz, 3 * (size_t)m->nv * sizeof(double));
-    memcpy(m->xyz, xin, 3 * (size_t)m->nv * sizeof(double));
-    if (opts->log) {
-        char msg[160];
-        int32_t n = 0;
-        for (int32_t v = 0; v < m->nv; v++)
-            n += pins[v];
-        snprintf(msg, sizeof msg,
-                 "slide squashed ears of the surface: again with their %d corners held",
-                 (int)n);
-        opts->log(opts->log_ctx, 0, msg);
-    }
-    {
-        opt_options o2 = *opts;
-        rerun_progress rp = {opts->progress, opts->progress_ctx, 0, r1.t_total};
-        /* the last record's number: global iterations plus finishing sweeps */
-        rp.offset = r1.last_record + 1;
-        if (opts->progress) {
-            o2.progress = rerun_report;
-            o2.progress_ctx = &rp;
+    memcpy(xin, m->xyz, n3 * sizeof(double));
+    st = run_once(m, opts, NULL, &sq, &best, err);
+    if (st != QDC_OK)
+        goto out;
+    memcpy(xbest, m->xyz, n3 * sizeof(double));
+    /* Slide squashed some smooth ears (measured on bunny_tangled-low_10k: an ear
+     * of mean ratio 0.061 ended at 1e-10): run again with their corners held,
+     * and again while a run squashes ears it did not hold (at most 3 reruns);
+     * keep the best result. */
+    for (int round = 0; round < 3 && sq && best.outcome == OPT_CONVERGED; round++) {
+        int32_t added = 0, held = 0;
+        for (int32_t v = 0; v < m->nv; v++) {
+            added += sq[v] && !pins[v];
+            pins[v] |= sq[v];
+            held += pins[v];
         }
-        st = run_once(m, &o2, pins, NULL, &r2, err);
+        qdc_free(sq);
+        sq = NULL;
+        if (!added)
+            break;
+        memcpy(m->xyz, xin, n3 * sizeof(double));
+        if (opts->log) {
+            char msg[160];
+            snprintf(msg, sizeof msg,
+                     "slide squashed ears of the surface: again with their %d corners held",
+                     (int)held);
+            opts->log(opts->log_ctx, 0, msg);
+        }
+        {
+            opt_options o2 = *opts;
+            rerun_progress rp = {opts->progress, opts->progress_ctx, 0, best.t_total};
+            /* the last record's number: global iterations plus finishing sweeps */
+            rp.offset = best.last_record + 1;
+            if (opts->progress) {
+                o2.progress = rerun_report;
+                o2.progress_ctx = &rp;
+            }
+            st = run_once(m, &o2, pins, &sq, &r, err);
+        }
+        if (st != QDC_OK)
+            break;
+        r.t_total += best.t_total;
+        if (better(&r.after, &best.after)) {
+            best = r;
+            memcpy(xbest, m->xyz, n3 * sizeof(double));
+        } else {
+            best.t_total = r.t_total;
+            best.last_record = r.last_record;
+        }
     }
-    if (st != QDC_OK || !better(&r2.after, &r1.after)) {
-        memcpy(m->xyz, xfirst, 3 * (size_t)m->nv * sizeof(double));
-        st = QDC_OK;
-        r2 = r1;
-    } else {
-        r2.t_total += r1.t_total;
-    }
+    /* a failed rerun leaves the best result so far */
+    memcpy(m->xyz, xbest, n3 * sizeof(double));
+    st = QDC_OK;
     if (res_out)
-        *res_out = r2;
+        *res_out = best;
 out:
+    qdc_free(sq);
     qdc_free(pins);
     qdc_free(xin);
-    qdc_free(xfirst);
+    qdc_free(xbest);
     return st;
 }

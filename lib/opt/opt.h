@@ -61,6 +61,12 @@ typedef struct {
     int angle_polish;      /* after the finishing pass: max-min of the dihedral sines
                             * on the worst tets' vertices (finish.h), default 1 */
     double feature_angle;  /* degrees, for slide, default 30 */
+    double hausd;          /* > 0: bound on the Hausdorff distance between the input and
+                            * output boundary surfaces, in the mesh's units (lsq and
+                            * slide; boundary vertices stay within it of where they
+                            * were); 0 = none (default) */
+    double hausd_rel;      /* the same relative to the bounding-box diagonal, used when
+                            * hausd is 0; 0 = none (default) */
     double time_limit;     /* seconds, 0 = none: then OPT_STOPPED with the best mesh */
     int threads;           /* OpenMP threads for this run; 0 = all cores. A server running
                             * several jobs at once should give each 1 (no oversubscription) */
@@ -72,6 +78,11 @@ typedef struct {
 } opt_options;
 
 void opt_defaults(opt_options *o);
+
+/* --hausd: "H" (absolute, mesh units), "P%" (percent of the bounding-box
+ * diagonal) or "rel:F" (fraction of it); sets o->hausd or o->hausd_rel.
+ * QDC_EINVAL for anything else, a negative, NaN or infinite value. */
+qdc_status opt_parse_hausd(const char *s, opt_options *o);
 
 /* Parse option words ("mivl", "lsq", "safe", ...) into o; QDC_EINVAL if unknown. */
 qdc_status opt_parse_metric(const char *s, opt_metric *out);
@@ -99,6 +110,7 @@ typedef struct {
     int32_t max_inverted_global; /* largest inverted count of a global iterate (0 on a
                                   * valid input: the global step folds nothing) */
     int32_t folded_global;       /* valid tets the global steps inverted, summed */
+    double hausd_bound;          /* the boundary bound applied, mesh units (0: none) */
     char stop_reason[64];  /* "converged", "max-iter", "no-descent", "cancelled", "time-limit", "solver" */
 } opt_result;
 

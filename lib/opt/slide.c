@@ -19,6 +19,7 @@ struct slide_ctx {
     int32_t nfe;
     bderr_bvh *outer;  /* input boundary triangles */
     bderr_bvh *inter;  /* input interface triangles (NULL if none) */
+    double bound;      /* > 0: no vertex farther than this from its input position */
 };
 
 typedef struct {
@@ -339,7 +340,32 @@ static void project_line(const slide_ctx *s, int32_t v, const double p[3], doubl
     }
 }
 
+void slide_set_bound(slide_ctx *s, double r)
+{
+    s->bound = r > 0 ? r : 0.0;
+}
+
+void slide_clamp(const double *x0, int32_t v, double r, double p[3])
+{
+    const double *o = x0 + 3 * (size_t)v;
+    double d[3] = {p[0] - o[0], p[1] - o[1], p[2] - o[2]};
+    double n = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+
+    if (n > r)
+        for (int k = 0; k < 3; k++)
+            p[k] = o[k] + d[k] * (r / n);
+}
+
 void slide_project(const slide_ctx *s, int32_t v, const double p[3], double out[3])
+{
+    slide_project_free(s, v, p, out);
+    /* the bound: back toward the input position along the segment (on a
+     * planar patch or a straight feature line the segment stays on it) */
+    if (s->bound > 0 && s->kind[v] != SLIDE_INTERIOR)
+        slide_clamp(s->x0, v, s->bound, out);
+}
+
+void slide_project_free(const slide_ctx *s, int32_t v, const double p[3], double out[3])
 {
     switch (s->kind[v]) {
     case SLIDE_SURFACE:

@@ -24,8 +24,19 @@ void slide_free(slide_ctx *s);
 int slide_kind(const slide_ctx *s, int32_t v);
 int32_t slide_n_feature_edges(const slide_ctx *s);
 
-/* Project p (a new position of vertex v) onto v's constraint set. */
+/* Project p (a new position of vertex v) onto v's constraint set, then within
+ * the bound (slide_set_bound) of v's input position. */
 void slide_project(const slide_ctx *s, int32_t v, const double p[3], double out[3]);
+/* The same without the bound. */
+void slide_project_free(const slide_ctx *s, int32_t v, const double p[3], double out[3]);
+/* --hausd: no boundary or interface vertex farther than r from its input
+ * position (0: no bound). Each output boundary triangle then lies within r of
+ * its input triangle point for point (the same convex combination of corners
+ * that moved by at most r), so the Hausdorff distance between the input and
+ * output boundary surfaces is at most r. */
+void slide_set_bound(slide_ctx *s, double r);
+/* p pulled back along the segment to within r of x0's vertex v. */
+void slide_clamp(const double *x0, int32_t v, double r, double p[3]);
 /* Project a direction onto the tangent space of v's constraint (plane or line). */
 void slide_tangent(const slide_ctx *s, int32_t v, const double g[3], double out[3]);
 

@@ -1,0 +1,200 @@
+/* options.c - the table of optimizer options (options.h). */
+#include "opt/options.h"
+
+#include <ctype.h>
+#include <errno.h>
+#include <limits.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+static const char *const metric_w[] = {"mivl", "mimr", "micn"};
+static const char *const boundary_w[] = {"lsq", "fixed", "slide"};
+static const char *const mode_w[] = {"safe", "literal"};
+static const char *const weights_w[] = {"optavg", "paper"};
+static const char *const solver_w[] = {"auto", "cholmod", "pcg"};
+
+#define OFF(f) offsetof(opt_options, f)
+#define WORDS(w) w, (int)(sizeof w / sizeof w[0])
+
+/* Ranges are those opt_run accepts (run_once checks them again), so that a
+ * value accepted here never fails later. */
+static const opt_desc table[] = {
+    {"metric", OPT_T_WORD, OFF(metric), 0, 0, 0, WORDS(metric_w), "quality metric"},
+    {"boundary", OPT_T_WORD, OFF(boundary), 0, 0, 0, WORDS(boundary_w),
+     "boundary handling"},
+    {"hausd", OPT_T_HAUSD, OFF(hausd), 0, 0, 0, NULL, 0,
+     "bound on the boundary's Hausdorff distance: H, P% or rel:F of the diagonal"},
+    {"feature_angle", OPT_T_REAL, OFF(feature_angle), 0, 180, 0, NULL, 0,
+     "slide: sharper boundary edges are features (degrees)"},
+    {"mode", OPT_T_WORD, OFF(mode), 0, 0, 0, WORDS(mode_w),
+     "safeguarded method or the paper as written"},
+    {"weights", OPT_T_WORD, OFF(weights), 0, 0, 0, WORDS(weights_w), "QDC weights"},
+    {"solver", OPT_T_WORD, OFF(solver), 0, 0, 0, WORDS(solver_w), "linear solver"},
+    {"harmonic", OPT_T_BOOL, OFF(harmonic), 0, 1, 0, NULL, 0,
+     "harmonic guidance, paper Sec. 5.1"},
+    {"pre_iters", OPT_T_INT, OFF(pre_iters), 0, 10000, 0, NULL, 0,
+     "iterations before the harmonic field"},
+    {"finish", OPT_T_BOOL, OFF(finish), 0, 1, 0, NULL, 0, "worst-tet finishing pass"},
+    {"finish_sweeps", OPT_T_INT, OFF(finish_sweeps), 0, 1000, 0, NULL, 0,
+     "broad finishing sweeps"},
+    {"finish_frac", OPT_T_REAL, OFF(finish_frac), 0, 1, 0, NULL, 0,
+     "share of worst tets visited per sweep"},
+    {"angle_polish", OPT_T_BOOL, OFF(angle_polish), 0, 1, 0, NULL, 0,
+     "then raise the smallest dihedral angles"},
+    {"max_iter", OPT_T_INT, OFF(max_iter), 0, 10000, 0, NULL, 0, "global iterations"},
+    {"ls_halvings", OPT_T_INT, OFF(ls_halvings), 0, 60, 0, NULL, 0,
+     "line search: steps 1 .. 2^-N"},
+    {"mu", OPT_T_REAL, OFF(mu), 0, 1e12, 1, NULL, 0, "damping in normalized units"},
+    {"mu_scaled", OPT_T_BOOL, OFF(mu_scaled), 0, 1, 0, NULL, 0,
+     "with harmonic guidance, scale mu by omega_B^2"},
+    {"tol_move", OPT_T_REAL, OFF(tol_move), 0, 1, 0, NULL, 0,
+     "stop when the largest move < this x mean edge"},
+    {"eps_rel", OPT_T_REAL, OFF(eps_rel), 0, 1, 1, NULL, 0,
+     "Escobar epsilon relative to a regular tet"},
+    {"time_limit", OPT_T_REAL, OFF(time_limit), 0, 1e9, 0, NULL, 0,
+     "seconds, then the best mesh so far (0: none)"},
+};
+#define N_TABLE (sizeof table / sizeof table[0])
+
+const opt_desc *opt_table(size_t *n)
+{
+    *n = N_TABLE;
+    return table;
+}
+
+static int same_key(const char *a, const char *b)
+{
+    for (; *a && *b; a++, b++)
+        if (*a != *b && !((*a == '-' || *a == '_') && (*b == '-' || *b == '_')))
+            return 0;
+    return *a == *b;
+}
+
+const opt_desc *opt_find(const char *key)
+{
+    for (size_t i = 0; key && i < N_TABLE; i++)
+        if (same_key(key, table[i].name))
+            return &table[i];
+    return NULL;
+}
+
+void opt_range_text(const opt_desc *d, char *buf, size_t n)
+{
+    size_t k = 0;
+
+    switch (d->type) {
+    case OPT_T_WORD:
+        buf[0] = 0;
+        for (int i = 0; i < d->nwords && k < n; i++)
+            k += (size_t)snprintf(buf + k, n - k, "%s%s", i ? "|" : "", d->words[i]);
+        break;
+    case OPT_T_BOOL:
+        snprintf(buf, n, "on|off");
+        break;
+    case OPT_T_HAUSD:
+        snprintf(buf, n, "H >= 0 (mesh units), P%% or rel:F (of the bbox diagonal)");
+        break;
+    default:
+        snprintf(buf, n, "%c%.17g, %.17g]", d->lo_open ? '(' : '[', d->lo, d->hi);
+    }
+}
+
+/* A finite number filling all of s: no leading space, nothing after it. */
+static int whole_number(const char *s, double *out)
+{
+    char *end;
+    double v;
+
+    if (!*s || isspace((unsigned char)*s))
+        return -1;
+    errno = 0;
+    v = strtod(s, &end);
+    if (end == s || *end || errno == ERANGE || !isfinite(v))
+        return -1;
+    *out = v;
+    return 0;
+}
+
+qdc_status opt_set(opt_options *o, const char *key, const char *text, qdc_error *err)
+{
+    const opt_desc *d = opt_find(key);
+    void *f;
+    double v = 0;
+    int ok = 0;
+    char range[160];
+
+    if (!d)
+        return qdc_fail(err, QDC_EINVAL, "unknown option '%.60s'", key ? key : "");
+    if (!text)
+        text = "";
+    f = (char *)o + d->off;
+    switch (d->type) {
+    case OPT_T_WORD:
+        for (int i = 0; i < d->nwords; i++)
+            if (!strcmp(text, d->words[i])) {
+                *(int *)f = i;
+                ok = 1;
+            }
+        break;
+    case OPT_T_BOOL:
+        if (!strcmp(text, "on") || !strcmp(text, "1") || !strcmp(text, "true") ||
+            !strcmp(text, "yes"))
+            *(int *)f = 1, ok = 1;
+        else if (!strcmp(text, "off") || !strcmp(text, "0") || !strcmp(text, "false") ||
+                 !strcmp(text, "no"))
+            *(int *)f = 0, ok = 1;
+        break;
+    case OPT_T_HAUSD:
+        ok = opt_parse_hausd(text, o) == QDC_OK;
+        break;
+    case OPT_T_INT:
+        /* digits only (a sign allowed): 5.0, 0x5 and 5e0 are not integers */
+        ok = !whole_number(text, &v) && v == floor(v) && v >= d->lo && v <= d->hi &&
+             strspn(text + (*text == '-' || *text == '+'), "0123456789") ==
+                 strlen(text + (*text == '-' || *text == '+'));
+        if (ok)
+            *(int *)f = (int)v;
+        break;
+    case OPT_T_REAL:
+        ok = !whole_number(text, &v) && (d->lo_open ? v > d->lo : v >= d->lo) && v <= d->hi;
+        if (ok)
+            *(double *)f = v;
+        break;
+    }
+    if (ok)
+        return QDC_OK;
+    opt_range_text(d, range, sizeof range);
+    return qdc_fail(err, QDC_EINVAL, "option '%s': '%.40s' is not one of the valid values: %s",
+                    d->name, text, range);
+}
+
+void opt_value_text(const opt_desc *d, const opt_options *o, char *buf, size_t n)
+{
+    const void *f = (const char *)o + d->off;
+
+    switch (d->type) {
+    case OPT_T_WORD: {
+        int i = *(const int *)f;
+        snprintf(buf, n, "%s", i >= 0 && i < d->nwords ? d->words[i] : "?");
+        break;
+    }
+    case OPT_T_BOOL:
+        snprintf(buf, n, "%s", *(const int *)f ? "on" : "off");
+        break;
+    case OPT_T_INT:
+        snprintf(buf, n, "%d", *(const int *)f);
+        break;
+    case OPT_T_HAUSD:
+        if (o->hausd > 0)
+            snprintf(buf, n, "%.17g", o->hausd);
+        else if (o->hausd_rel > 0)
+            snprintf(buf, n, "rel:%.17g", o->hausd_rel);
+        else
+            snprintf(buf, n, "0");
+        break;
+    default:
+        snprintf(buf, n, "%.17g", *(const double *)f);
+    }
+}
