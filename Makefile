@@ -48,7 +48,7 @@ UNIT_BIN := $(UNIT_C:tests/unit/%.c=$(B)/tests/%)
 
 PROGS := $(B)/qdc $(if $(SRV_C),$(B)/qdcd)
 
-.PHONY: all deps test test-quick test-container test-faults run bench clean fuzz format fault
+.PHONY: all deps test test-quick test-container test-faults run bench clean fuzz format format-check fault
 all: $(B)/libqdc.a $(PROGS) $(UNIT_BIN)
 
 deps:
@@ -114,8 +114,14 @@ bench: deps
 clean:
 	rm -rf build
 
+FORMAT_SRC = $(wildcard lib/*.h lib/*/*.c lib/*/*.h lib/*/*.cpp server/*.c server/*.h clients/qdc/*.c \
+              clients/qdc/*.h tests/unit/*.c tests/unit/*.h tests/fuzz/*.c tests/fuzz/*.h)
 format:
-	clang-format -i lib/*.h lib/*/*.c lib/*/*.h server/*.c server/*.h clients/qdc/*.c tests/unit/*.c
+	clang-format -i $(FORMAT_SRC)
+
+# No layout difference (also run by make test: tests/house/format.sh).
+format-check:
+	clang-format --dry-run -Werror $(FORMAT_SRC)
 
 -include $(shell find build -name '*.d' 2>/dev/null)
 

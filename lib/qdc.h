@@ -14,12 +14,12 @@
 
 #include "core/base.h"
 #include "core/mesh.h"
+#include "eval/report.h"
 #include "geom/bderr.h"
 #include "io/meshio.h"
 #include "io/surface.h"
 #include "io/tetra.h"
 #include "opt/opt.h"
 #include "opt/options.h"
-#include "eval/report.h"
 
 #endif

@@ -12,7 +12,7 @@ libsuitesparse-dev libopenblas0-pthread libopenblas-dev
 libmicrohttpd-dev libjansson-dev libsqlite3-dev libpq-dev libcurl4-openssl-dev libtet1.5-dev"
 RUNTIME_PKGS="ca-certificates curl libcholmod3 libopenblas0-pthread libmicrohttpd12
 libjansson4 libsqlite3-0 libpq5 libcurl4 libtet1.5 libgomp1"
-TEST_PKGS="curl tetgen clang libclang-rt-14-dev jq
+TEST_PKGS="curl tetgen clang clang-format libclang-rt-14-dev jq
 python3 python3-numpy python3-scipy python3-meshio python3-gmsh gmsh
 podman debootstrap runc postgresql"
 case "${1:-}" in

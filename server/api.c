@@ -415,7 +415,8 @@ static int queue_full(qdcd *q, job_counts *cnt)
            cnt->by_state[JOB_QUEUED] >= q->cfg.max_queued;
 }
 
-static enum MHD_Result queue_full_reply(struct MHD_Connection *c, req *r, const job_counts *cnt)
+static enum MHD_Result queue_full_reply(struct MHD_Connection *c, req *r,
+                                        const job_counts *cnt)
 {
     static const char *const h[] = {MHD_HTTP_HEADER_RETRY_AFTER, "5", NULL};
     char extra[96];

@@ -4,8 +4,8 @@
 #ifndef QDCD_HTTP_H
 #define QDCD_HTTP_H
 
-#include "qdc.h"
 #include "poll.h"
+#include "qdc.h"
 #include "server.h"
 #include "sha256.h"
 

@@ -7,8 +7,8 @@
 #define _GNU_SOURCE
 #include "job.h"
 
-#include "qdc.h"
 #include "child.h"
+#include "qdc.h"
 #include "sha256.h"
 
 #include <errno.h>

@@ -273,8 +273,10 @@ static int parse_args(int argc, char **argv, qdcd_config *c)
     if (!strncmp(c->store, "sqlite:", 7) && c->store[7]) {
         snprintf(c->data, sizeof c->data, "%s", c->store + 7);
     } else if (c->store[0] && !store_pg_uri(c->store)) {
-        fprintf(stderr, "qdcd: --store takes sqlite:DIR or postgresql://USER@HOST:PORT/DB, "
-                        "not '%s'\n", c->store);
+        fprintf(stderr,
+                "qdcd: --store takes sqlite:DIR or postgresql://USER@HOST:PORT/DB, "
+                "not '%s'\n",
+                c->store);
         return -1;
     }
     return 0;
@@ -399,8 +401,9 @@ int main(int argc, char **argv)
     signal(SIGPIPE, SIG_IGN);
 
     qdc_error_clear(&err);
-    if (store_pg_uri(q->cfg.store) ? store_pg_open(q->cfg.store, &q->store, &err) != QDC_OK
-                                   : store_sqlite_open(q->cfg.data, &q->store, &err) != QDC_OK) {
+    if (store_pg_uri(q->cfg.store)
+            ? store_pg_open(q->cfg.store, &q->store, &err) != QDC_OK
+            : store_sqlite_open(q->cfg.data, &q->store, &err) != QDC_OK) {
         fprintf(stderr, "qdcd: %s\n", err.msg);
         return 1;
     }

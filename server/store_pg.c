@@ -181,8 +181,8 @@ static qdc_status one(pg_store *s, const char *sql, const params *p, job_rec *ou
     pthread_mutex_lock(&s->lock);
     r = run(s, sql, p);
     if (r) {
-        int n = PQresultStatus(r) == PGRES_TUPLES_OK ? PQntuples(r)
-                                                      : atoi(PQcmdTuples(r));
+        int n =
+            PQresultStatus(r) == PGRES_TUPLES_OK ? PQntuples(r) : atoi(PQcmdTuples(r));
         if (out && PQresultStatus(r) == PGRES_TUPLES_OK && n > 0)
             row_to_rec(r, 0, out);
         if (rows)
@@ -255,8 +255,8 @@ static qdc_status pg_find_idem(job_store *s_, const char *owner, const char *key
 
     p_text(&p, owner);
     p_text(&p, key);
-    st = one((pg_store *)s_, "SELECT " COLS " FROM jobs WHERE owner = $1 AND idem_key = $2",
-             &p, out, &n);
+    st = one((pg_store *)s_,
+             "SELECT " COLS " FROM jobs WHERE owner = $1 AND idem_key = $2", &p, out, &n);
     return st != QDC_OK ? st : n ? QDC_OK : QDC_EINVAL;
 }
 
@@ -274,7 +274,8 @@ static qdc_status pg_list(job_store *s_, const char *owner, int64_t after_seq, i
     p_i64(&p, max);
     pthread_mutex_lock(&s->lock);
     r = run(s,
-            "SELECT " COLS " FROM jobs WHERE owner = $1 AND seq > $2 ORDER BY seq LIMIT $3",
+            "SELECT " COLS
+            " FROM jobs WHERE owner = $1 AND seq > $2 ORDER BY seq LIMIT $3",
             &p);
     if (r) {
         for (int i = 0; i < PQntuples(r) && *n < max; i++)
@@ -411,11 +412,12 @@ static qdc_status pg_recover(job_store *s_, int max_attempts, int *requeued, int
     double now = wall_now();
     qdc_status st;
 
-    snprintf(err, sizeof err,
-             "{\"type\":\"about:blank\",\"title\":\"job crashed the daemon\","
-             "\"status\":500,\"detail\":\"a daemon died while running this job on each of "
-             "its %d attempt(s); it is not retried\",\"attempts\":%d}",
-             max_attempts, max_attempts);
+    snprintf(
+        err, sizeof err,
+        "{\"type\":\"about:blank\",\"title\":\"job crashed the daemon\","
+        "\"status\":500,\"detail\":\"a daemon died while running this job on each of "
+        "its %d attempt(s); it is not retried\",\"attempts\":%d}",
+        max_attempts, max_attempts);
     p_dbl(&p, now);
     p_dbl(&p, now + 86400.0);
     p_text(&p, err);
@@ -469,9 +471,10 @@ static qdc_status pg_expired(job_store *s_, double now, char (*out)[JOB_ID_LEN +
     p_dbl(&p, now);
     p_i64(&p, max);
     pthread_mutex_lock(&s->lock);
-    r = run(s,
-            "SELECT id FROM jobs WHERE state >= 2 AND purged = 0 AND expires < $1 LIMIT $2",
-            &p);
+    r = run(
+        s,
+        "SELECT id FROM jobs WHERE state >= 2 AND purged = 0 AND expires < $1 LIMIT $2",
+        &p);
     if (r) {
         for (int i = 0; i < PQntuples(r) && *n < max; i++)
             col_text(r, i, 0, out[(*n)++], JOB_ID_LEN + 1);
@@ -487,7 +490,8 @@ static qdc_status pg_mark_purged(job_store *s_, const char *id)
     params p = {.n = 0};
 
     p_text(&p, id);
-    return one((pg_store *)s_, "UPDATE jobs SET purged = 1 WHERE id = $1", &p, NULL, NULL);
+    return one((pg_store *)s_, "UPDATE jobs SET purged = 1 WHERE id = $1", &p, NULL,
+               NULL);
 }
 
 static void pg_close(job_store *s_)
@@ -523,7 +527,8 @@ static qdc_status migrate(pg_store *s, qdc_error *err)
     r = run(s, "SELECT pg_advisory_xact_lock(7431267)", NULL);
     if (r) {
         PQclear(r);
-        r = run(s, "CREATE TABLE IF NOT EXISTS qdc_schema(version INTEGER NOT NULL)", NULL);
+        r = run(s, "CREATE TABLE IF NOT EXISTS qdc_schema(version INTEGER NOT NULL)",
+                NULL);
     }
     if (r) {
         PQclear(r);
@@ -546,8 +551,8 @@ static qdc_status migrate(pg_store *s, qdc_error *err)
         params p = {.n = 0};
         r = run(s, migrations[v], NULL);
         if (!r) {
-            st = qdc_fail(err, QDC_EIO, "postgresql: schema migration to version %d failed",
-                          v + 1);
+            st = qdc_fail(err, QDC_EIO,
+                          "postgresql: schema migration to version %d failed", v + 1);
             goto out;
         }
         PQclear(r);

@@ -7,14 +7,14 @@
 /* Exit codes (documented in README.md and `qdc --help`). */
 enum {
     CLI_OK = 0,
-    CLI_EUSAGE = 1,    /* bad command line */
-    CLI_EINPUT = 2,    /* input file unreadable, malformed or invalid */
-    CLI_EOPT = 3,      /* optimization failed */
-    CLI_EOUTPUT = 4,   /* output could not be written */
-    CLI_EINTR = 5,     /* interrupted (SIGINT/SIGTERM): best mesh so far was written */
-    CLI_EREJECTED = 10,/* remote: the server rejected the request (4xx) */
-    CLI_EJOB = 11,     /* remote: the job failed or was cancelled */
-    CLI_ENETWORK = 12  /* remote: server unreachable or 5xx after retries */
+    CLI_EUSAGE = 1,     /* bad command line */
+    CLI_EINPUT = 2,     /* input file unreadable, malformed or invalid */
+    CLI_EOPT = 3,       /* optimization failed */
+    CLI_EOUTPUT = 4,    /* output could not be written */
+    CLI_EINTR = 5,      /* interrupted (SIGINT/SIGTERM): best mesh so far was written */
+    CLI_EREJECTED = 10, /* remote: the server rejected the request (4xx) */
+    CLI_EJOB = 11,      /* remote: the job failed or was cancelled */
+    CLI_ENETWORK = 12   /* remote: server unreachable or 5xx after retries */
 };
 
 /* One-line error in the form "qdc: FILE:LINE:COL: message". */

@@ -1,7 +1,7 @@
 /* local.c - `qdc optimize` and `qdc quality`: thin layers over libqdc. */
 #define _POSIX_C_SOURCE 200809L
-#include "qdc.h"
 #include "cli.h"
+#include "qdc.h"
 
 #include <signal.h>
 #include <stdio.h>
@@ -164,7 +164,8 @@ static void optimize_usage(FILE *f)
         "  --max-volume V             surface input: TetGen maximum tet volume\n"
         "  --fix FILE                 vertices that must not move (0-based indices)\n"
         "  --reorient on|off          write every tet in the vertex order that is\n"
-        "                             positive under the mesh's orientation (default off:\n"
+        "                             positive under the mesh's orientation (default "
+        "off:\n"
         "                             tets are written in the input's vertex order)\n"
         "  --report FILE.json         write the quality/boundary report\n"
         "  --quiet                    no progress output\n",

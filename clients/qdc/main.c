@@ -9,25 +9,27 @@
 
 static void usage(FILE *f)
 {
-    fputs("usage: qdc COMMAND [ARGS]\n"
-          "\n"
-          "Local commands:\n"
-          "  optimize IN OUT [options]   optimize a tet mesh (qdc optimize --help)\n"
-          "  quality IN [--ref ORIG] [--json]   quality report of a mesh\n"
-          "  options                     the optimizer's options as JSON (names, types,\n"
-          "                              valid values, defaults, help)\n"
-          "  tetra SURFACE OUT [--tetgen-quality Q] [--max-volume V]   tetrahedralize\n"
-          "                              a closed surface with TetGen (no optimization)\n"
-          "\n"
-          "Remote commands (qdcd at --server URL or $QDC_SERVER; token $QDC_TOKEN):\n"
-          "  submit IN [--wait] [-o OUT] [--report R.json] [options]   new job; prints its id\n"
-          "  status JOB | watch JOB | cancel JOB | jobs\n"
-          "  fetch JOB -o OUT [--report R.json]   download the result (qdc submit --help)\n"
-          "\n"
-          "Exit codes: 0 ok, 1 usage, 2 bad input file, 3 optimization failed,\n"
-          "  4 output not written, 5 interrupted (best mesh so far written),\n"
-          "  10 server rejected the request, 11 job failed, 12 network failure.\n",
-          f);
+    fputs(
+        "usage: qdc COMMAND [ARGS]\n"
+        "\n"
+        "Local commands:\n"
+        "  optimize IN OUT [options]   optimize a tet mesh (qdc optimize --help)\n"
+        "  quality IN [--ref ORIG] [--json]   quality report of a mesh\n"
+        "  options                     the optimizer's options as JSON (names, types,\n"
+        "                              valid values, defaults, help)\n"
+        "  tetra SURFACE OUT [--tetgen-quality Q] [--max-volume V]   tetrahedralize\n"
+        "                              a closed surface with TetGen (no optimization)\n"
+        "\n"
+        "Remote commands (qdcd at --server URL or $QDC_SERVER; token $QDC_TOKEN):\n"
+        "  submit IN [--wait] [-o OUT] [--report R.json] [options]   new job; prints its "
+        "id\n"
+        "  status JOB | watch JOB | cancel JOB | jobs\n"
+        "  fetch JOB -o OUT [--report R.json]   download the result (qdc submit --help)\n"
+        "\n"
+        "Exit codes: 0 ok, 1 usage, 2 bad input file, 3 optimization failed,\n"
+        "  4 output not written, 5 interrupted (best mesh so far written),\n"
+        "  10 server rejected the request, 11 job failed, 12 network failure.\n",
+        f);
 }
 
 int main(int argc, char **argv)
@@ -39,7 +41,8 @@ int main(int argc, char **argv)
         usage(stderr);
         return CLI_EUSAGE;
     }
-    if (!strcmp(argv[1], "-h") || !strcmp(argv[1], "--help") || !strcmp(argv[1], "help")) {
+    if (!strcmp(argv[1], "-h") || !strcmp(argv[1], "--help") ||
+        !strcmp(argv[1], "help")) {
         usage(stdout);
         return CLI_OK;
     }

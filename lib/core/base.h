@@ -10,18 +10,18 @@
 /* One list of errors (libuv style). Append; never renumber. The third column is
  * the HTTP status the daemon answers with when the error is the request's fault
  * (5xx otherwise). */
-#define QDC_STATUS_LIST(X)                                                              \
-    X(QDC_OK, "ok", 200)                                                                \
-    X(QDC_ENOMEM, "out of memory", 503)                                                 \
-    X(QDC_EINVAL, "invalid argument", 400)                                              \
-    X(QDC_EPARSE, "malformed mesh input", 400)                                          \
-    X(QDC_ETOOBIG, "mesh exceeds limits", 413)                                          \
-    X(QDC_EMESH, "mesh failed validation", 422)                                         \
-    X(QDC_ESOLVE, "linear solve failed", 500)                                           \
-    X(QDC_EIO, "i/o error", 500)                                                        \
-    X(QDC_ECANCEL, "cancelled", 409)                                                    \
-    X(QDC_EFORMAT, "unsupported format", 415)                                           \
-    X(QDC_ETETGEN, "surface could not be tetrahedralized", 422)                         \
+#define QDC_STATUS_LIST(X)                                                               \
+    X(QDC_OK, "ok", 200)                                                                 \
+    X(QDC_ENOMEM, "out of memory", 503)                                                  \
+    X(QDC_EINVAL, "invalid argument", 400)                                               \
+    X(QDC_EPARSE, "malformed mesh input", 400)                                           \
+    X(QDC_ETOOBIG, "mesh exceeds limits", 413)                                           \
+    X(QDC_EMESH, "mesh failed validation", 422)                                          \
+    X(QDC_ESOLVE, "linear solve failed", 500)                                            \
+    X(QDC_EIO, "i/o error", 500)                                                         \
+    X(QDC_ECANCEL, "cancelled", 409)                                                     \
+    X(QDC_EFORMAT, "unsupported format", 415)                                            \
+    X(QDC_ETETGEN, "surface could not be tetrahedralized", 422)                          \
     X(QDC_EINTERNAL, "internal error", 500)
 
 typedef enum {

@@ -28,7 +28,8 @@ mesh_t *mesh_new(int32_t nv, int32_t nt, unsigned flags)
     if (flags & MESH_WITH_VREF)
         m->vref = qdc_calloc((size_t)nv, sizeof(int32_t));
     if (!m->xyz || !m->tets || ((flags & MESH_WITH_REGION) && !m->region) ||
-        ((flags & MESH_WITH_FIXED) && !m->fixed) || ((flags & MESH_WITH_VREF) && !m->vref)) {
+        ((flags & MESH_WITH_FIXED) && !m->fixed) ||
+        ((flags & MESH_WITH_VREF) && !m->vref)) {
         mesh_free(m);
         return NULL;
     }
@@ -241,7 +242,8 @@ static qdc_status match_faces(int32_t nv, int32_t nt, const int32_t *tets, int32
                 st = qdc_fail(err, QDC_EMESH,
                               "face (%d, %d, %d) is shared by %d tets (non-manifold); "
                               "tet %d is one of them",
-                              (int)v, (int)b[i].b, (int)b[i].c, j - i, (int)(b[i].id >> 2));
+                              (int)v, (int)b[i].b, (int)b[i].c, j - i,
+                              (int)(b[i].id >> 2));
                 if (err) {
                     err->index = b[i].id >> 2;
                     strcpy(err->kind, "tet");
@@ -262,7 +264,8 @@ static qdc_status match_faces(int32_t nv, int32_t nt, const int32_t *tets, int32
 static int faces_opposite(const int32_t *tt, int f, const int32_t *tu, int g)
 {
     int32_t a0 = tt[mesh_face_of[f][0]], a1 = tt[mesh_face_of[f][1]];
-    int32_t b[3] = {tu[mesh_face_of[g][0]], tu[mesh_face_of[g][1]], tu[mesh_face_of[g][2]]};
+    int32_t b[3] = {tu[mesh_face_of[g][0]], tu[mesh_face_of[g][1]],
+                    tu[mesh_face_of[g][2]]};
     int k = b[0] == a0 ? 0 : b[1] == a0 ? 1 : 2;
 
     return b[(k + 1) % 3] != a1;
@@ -308,17 +311,19 @@ static qdc_status orient_tets(const mesh_t *m, const int32_t *nbr, uint8_t *flip
                 if (other < 0)
                     continue;
                 u = other >> 2;
-                want = flip[t] ^ !faces_opposite(tt, f, m->tets + 4 * (size_t)u, other & 3);
+                want =
+                    flip[t] ^ !faces_opposite(tt, f, m->tets + 4 * (size_t)u, other & 3);
                 if (!seen[u]) {
                     seen[u] = 1;
                     flip[u] = want;
                     queue[tail++] = u;
                 } else if (flip[u] != want) {
-                    st = qdc_fail(err, QDC_EMESH,
-                                  "the tets cannot be oriented consistently (tets %d and %d "
-                                  "around their shared face disagree with the rest of "
-                                  "their component: a non-orientable connectivity)",
-                                  (int)t, (int)u);
+                    st = qdc_fail(
+                        err, QDC_EMESH,
+                        "the tets cannot be oriented consistently (tets %d and %d "
+                        "around their shared face disagree with the rest of "
+                        "their component: a non-orientable connectivity)",
+                        (int)t, (int)u);
                     if (err) {
                         err->index = u;
                         strcpy(err->kind, "tet");
@@ -361,7 +366,8 @@ static void apply_flip(int32_t nt, int32_t *tets, const uint8_t *flip)
 
 static qdc_status validate_basic(const mesh_t *m, mesh_check *c, qdc_error *err);
 
-qdc_status mesh_orient(const mesh_t *m, uint8_t *flip, mesh_orientation *o, qdc_error *err)
+qdc_status mesh_orient(const mesh_t *m, uint8_t *flip, mesh_orientation *o,
+                       qdc_error *err)
 {
     mesh_check chk;
     int32_t *nbr = NULL;
@@ -431,7 +437,8 @@ static qdc_status validate_basic(const mesh_t *m, mesh_check *c, qdc_error *err)
             }
             for (int b = 0; b < a && st == QDC_OK; b++)
                 if (tt[a] == tt[b]) {
-                    qdc_fail(err, QDC_EMESH, "tet %d repeats vertex %d", (int)t, (int)tt[a]);
+                    qdc_fail(err, QDC_EMESH, "tet %d repeats vertex %d", (int)t,
+                             (int)tt[a]);
                     st = QDC_EMESH;
                 }
             if (st != QDC_OK && err) {
@@ -642,12 +649,13 @@ qdc_status mesh_topo_build(const mesh_t *m, mesh_topo **out, qdc_error *err)
             for (int f = 0; f < 4; f++) {
                 int32_t o = nbr[4 * (size_t)t + f];
                 int is_b = o < 0;
-                int is_i = !is_b && m->region && o > 4 * t &&
-                           m->region[t] != m->region[o >> 2];
+                int is_i =
+                    !is_b && m->region && o > 4 * t && m->region[t] != m->region[o >> 2];
                 if (!is_b && !is_i)
                     continue;
                 if (pass == 1) {
-                    int32_t *dst = is_b ? tp->bfaces + 3 * (size_t)nb : tp->ifaces + 3 * (size_t)ni;
+                    int32_t *dst =
+                        is_b ? tp->bfaces + 3 * (size_t)nb : tp->ifaces + 3 * (size_t)ni;
                     for (int k = 0; k < 3; k++) {
                         dst[k] = tp->tets[4 * (size_t)t + mesh_face_of[f][k]];
                         tp->vflag[dst[k]] |= is_b ? MESH_V_BOUNDARY : MESH_V_INTERFACE;

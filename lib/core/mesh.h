@@ -16,16 +16,16 @@
 
 /* The mesh as data: plain arrays the caller may read and write. */
 typedef struct mesh {
-    int32_t nv;      /* vertex count */
-    int32_t nt;      /* tet count */
-    double *xyz;     /* 3*nv coordinates */
-    int32_t *tets;   /* 4*nt vertex indices, 0-based */
-    int32_t *region; /* nt region tags (Medit refs, physical groups), or NULL */
-    uint8_t *fixed;  /* nv flags: non-zero = vertex must not move, or NULL */
-    int32_t *vref;   /* nv per-vertex refs (Medit), or NULL; carried through */
-    int32_t ntri;    /* surface triangles carried through unchanged (Medit */
-    int32_t *tris;   /*   Triangles with their refs = boundary-condition tags): */
-    int32_t *tri_ref;/*   3*ntri indices and ntri refs (tri_ref may be NULL) */
+    int32_t nv;       /* vertex count */
+    int32_t nt;       /* tet count */
+    double *xyz;      /* 3*nv coordinates */
+    int32_t *tets;    /* 4*nt vertex indices, 0-based */
+    int32_t *region;  /* nt region tags (Medit refs, physical groups), or NULL */
+    uint8_t *fixed;   /* nv flags: non-zero = vertex must not move, or NULL */
+    int32_t *vref;    /* nv per-vertex refs (Medit), or NULL; carried through */
+    int32_t ntri;     /* surface triangles carried through unchanged (Medit */
+    int32_t *tris;    /*   Triangles with their refs = boundary-condition tags): */
+    int32_t *tri_ref; /*   3*ntri indices and ntri refs (tri_ref may be NULL) */
 } mesh_t;
 
 enum { MESH_WITH_REGION = 1, MESH_WITH_FIXED = 2, MESH_WITH_VREF = 4 };
@@ -66,7 +66,8 @@ typedef struct {
  * orientation. A tet is inverted when its geometry disagrees with it.
  * QDC_EMESH for a connectivity that cannot be oriented (a face of 3+ tets, or a
  * component whose faces contradict each other), with err->index a tet. */
-qdc_status mesh_orient(const mesh_t *m, uint8_t *flip, mesh_orientation *o, qdc_error *err);
+qdc_status mesh_orient(const mesh_t *m, uint8_t *flip, mesh_orientation *o,
+                       qdc_error *err);
 /* The same, and the flipped tets of m rewritten in the positive vertex order. */
 qdc_status mesh_reorient(mesh_t *m, mesh_orientation *o, qdc_error *err);
 
@@ -91,20 +92,20 @@ enum {
 /* Connectivity, built once per job (the optimizer never changes it). */
 typedef struct mesh_topo {
     int32_t nv, nt;
-    int32_t *tets;      /* copy of the tets, each in the vertex order that is
-                         * positive under the connectivity's orientation */
-    int flipped;        /* 1 if any of the input's tets was flipped to get there */
+    int32_t *tets; /* copy of the tets, each in the vertex order that is
+                    * positive under the connectivity's orientation */
+    int flipped;   /* 1 if any of the input's tets was flipped to get there */
     mesh_orientation orientation; /* what mesh_orient found */
-    int32_t *vt_ptr;    /* nv+1: incidences of vertex v are vt_idx[vt_ptr[v]..vt_ptr[v+1]) */
-    int32_t *vt_idx;    /* 4*nt entries, each 4*t + a (tet t, local vertex a) */
-    int32_t *adj_ptr;   /* nv+1: CSR pattern of the 1-ring, diagonal included, */
-    int32_t *adj_idx;   /*       columns sorted ascending */
-    int32_t nbf;        /* boundary faces (faces of one tet) */
-    int32_t *bfaces;    /* 3*nbf, outward for positively oriented tets */
-    int32_t nif;        /* interface faces (between tets of different regions) */
-    int32_t *ifaces;    /* 3*nif */
-    uint8_t *vflag;     /* nv MESH_V_* flags */
-    int32_t nb;         /* vertices with MESH_V_BOUNDARY */
+    int32_t *vt_ptr; /* nv+1: incidences of vertex v are vt_idx[vt_ptr[v]..vt_ptr[v+1]) */
+    int32_t *vt_idx; /* 4*nt entries, each 4*t + a (tet t, local vertex a) */
+    int32_t *adj_ptr; /* nv+1: CSR pattern of the 1-ring, diagonal included, */
+    int32_t *adj_idx; /*       columns sorted ascending */
+    int32_t nbf;      /* boundary faces (faces of one tet) */
+    int32_t *bfaces;  /* 3*nbf, outward for positively oriented tets */
+    int32_t nif;      /* interface faces (between tets of different regions) */
+    int32_t *ifaces;  /* 3*nif */
+    uint8_t *vflag;   /* nv MESH_V_* flags */
+    int32_t nb;       /* vertices with MESH_V_BOUNDARY */
 } mesh_topo;
 
 /* Face opposite local vertex a, ordered so its normal points out of a positive tet. */

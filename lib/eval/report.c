@@ -24,7 +24,8 @@ qdc_status report_quality_compute(const mesh_t *m, report_quality *q, qdc_error 
     for (int32_t t = 0; t < m->nt; t++)
         for (int a = 0; a < 4; a++)
             if (m->tets[4 * (size_t)t + a] < 0 || m->tets[4 * (size_t)t + a] >= m->nv)
-                return qdc_fail(err, QDC_EMESH, "tet %d: vertex index out of range", (int)t);
+                return qdc_fail(err, QDC_EMESH, "tet %d: vertex index out of range",
+                                (int)t);
     q->nv = m->nv;
     q->nt = m->nt;
     /* docs/method.md §1: each tet is measured in the vertex order its
@@ -84,7 +85,8 @@ qdc_status report_quality_compute(const mesh_t *m, report_quality *q, qdc_error 
             int bin = (int)ang[e];
             amin = ang[e] < amin ? ang[e] : amin;
             amax = ang[e] > amax ? ang[e] : amax;
-            q->hist[bin < 0 ? 0 : (bin >= REPORT_HIST_BINS ? REPORT_HIST_BINS - 1 : bin)]++;
+            q->hist[bin < 0 ? 0
+                            : (bin >= REPORT_HIST_BINS ? REPORT_HIST_BINS - 1 : bin)]++;
         }
         if (amin < q->dih_min)
             q->dih_min = amin;
@@ -265,7 +267,8 @@ qdc_status report_progress_json(const opt_progress *p, qdc_write_fn fn, void *ct
     return w.failed ? QDC_EIO : QDC_OK;
 }
 
-qdc_status report_write_json(const report_t *r, qdc_write_fn fn, void *ctx, qdc_error *err)
+qdc_status report_write_json(const report_t *r, qdc_write_fn fn, void *ctx,
+                             qdc_error *err)
 {
     jw w = {.fn = fn, .ctx = ctx};
 

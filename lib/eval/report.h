@@ -6,23 +6,23 @@
 #define QDC_REPORT_H
 
 #include "core/base.h"
-#include "geom/bderr.h"
 #include "core/mesh.h"
+#include "geom/bderr.h"
 #include "opt/opt.h"
 
 #define REPORT_HIST_BINS 180
 
 typedef struct {
     int32_t nv, nt;
-    int32_t n_inverted;   /* against the majority orientation */
-    int32_t n_degenerate; /* zero volume */
-    double q_mean, q_std, q_min;   /* signed mean ratio */
-    double vl_mean, vl_min;        /* volume-length 6 sqrt2 V / l_rms^3, signed */
-    double cn_mean, cn_max;        /* condition number ||S|| ||S^-1|| / 3 (>= 1), valid tets */
-    double dih_min, dih_max;       /* over all tets (an inverted tet counts 0 and 180) */
-    int32_t n_dmin_lt[4];          /* tets with min dihedral < 5, 15, 30, 40 deg */
-    int32_t n_dmax_gt[4];          /* tets with max dihedral > 175, 165, 150, 140 deg */
-    int64_t hist[REPORT_HIST_BINS];/* every dihedral angle of every tet, 1 deg bins */
+    int32_t n_inverted;          /* against the majority orientation */
+    int32_t n_degenerate;        /* zero volume */
+    double q_mean, q_std, q_min; /* signed mean ratio */
+    double vl_mean, vl_min;      /* volume-length 6 sqrt2 V / l_rms^3, signed */
+    double cn_mean, cn_max;  /* condition number ||S|| ||S^-1|| / 3 (>= 1), valid tets */
+    double dih_min, dih_max; /* over all tets (an inverted tet counts 0 and 180) */
+    int32_t n_dmin_lt[4];    /* tets with min dihedral < 5, 15, 30, 40 deg */
+    int32_t n_dmax_gt[4];    /* tets with max dihedral > 175, 165, 150, 140 deg */
+    int64_t hist[REPORT_HIST_BINS]; /* every dihedral angle of every tet, 1 deg bins */
 } report_quality;
 
 extern const int report_dmin_thresholds[4]; /* 5, 15, 30, 40 */
@@ -41,7 +41,8 @@ typedef struct {
 } report_t;
 
 /* Stream the report as one JSON object. */
-qdc_status report_write_json(const report_t *r, qdc_write_fn fn, void *ctx, qdc_error *err);
+qdc_status report_write_json(const report_t *r, qdc_write_fn fn, void *ctx,
+                             qdc_error *err);
 /* JSON of one progress record (one line, no newline), as the daemon streams it. */
 qdc_status report_progress_json(const opt_progress *p, qdc_write_fn fn, void *ctx);
 

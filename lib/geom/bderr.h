@@ -13,13 +13,14 @@
  * The BVH copies what it needs; it keeps no pointer to the caller's arrays. */
 typedef struct bderr_bvh bderr_bvh;
 
-qdc_status bderr_bvh_build(const double *xyz, int32_t nv, const int32_t *tris, int32_t ntri,
-                           bderr_bvh **out, qdc_error *err);
+qdc_status bderr_bvh_build(const double *xyz, int32_t nv, const int32_t *tris,
+                           int32_t ntri, bderr_bvh **out, qdc_error *err);
 void bderr_bvh_free(bderr_bvh *b);
 
 /* Closest point on the surface to p: distance, the point and the triangle index.
  * cp and tri may be NULL. A BVH with no triangles returns +inf. */
-double bderr_bvh_closest(const bderr_bvh *b, const double p[3], double cp[3], int32_t *tri);
+double bderr_bvh_closest(const bderr_bvh *b, const double p[3], double cp[3],
+                         int32_t *tri);
 
 /* Exact closest point on triangle (a,b,c) to p (Ericson 5.1.5); returns the distance. */
 double bderr_point_triangle(const double p[3], const double a[3], const double b[3],
@@ -30,13 +31,13 @@ double bderr_point_segment(const double p[3], const double a[3], const double b[
                            double cp[3]);
 
 typedef struct {
-    double hausdorff;      /* max of the two directed distances (absolute) */
-    double h_a_to_b;       /* max over samples of A of the distance to B */
+    double hausdorff; /* max of the two directed distances (absolute) */
+    double h_a_to_b;  /* max over samples of A of the distance to B */
     double h_b_to_a;
-    double mean, rms;      /* over the samples of both sides */
-    double diag;           /* bbox diagonal of B (the reference) */
+    double mean, rms;                        /* over the samples of both sides */
+    double diag;                             /* bbox diagonal of B (the reference) */
     double hausdorff_rel, mean_rel, rms_rel; /* divided by diag (0 if diag is 0) */
-    int64_t n_samples;     /* both sides */
+    int64_t n_samples;                       /* both sides */
     int32_t ntri_a, ntri_b;
 } bderr_result;
 

@@ -26,8 +26,8 @@ static double dot3(const double *a, const double *b)
 }
 
 /* Volume and squared edge lengths: all that MIMR and MIVL need. */
-static void parts_basic(const double *p0, const double *p1, const double *p2, const double *p3,
-                        metric_parts *out)
+static void parts_basic(const double *p0, const double *p1, const double *p2,
+                        const double *p3, metric_parts *out)
 {
     double e01[3], e02[3], e03[3], e12[3], e13[3], e23[3], n1[3];
 
@@ -44,8 +44,8 @@ static void parts_basic(const double *p0, const double *p1, const double *p2, co
     out->adj2 = 0.0;
 }
 
-void metric_parts_of(const double *p0, const double *p1, const double *p2, const double *p3,
-                     metric_parts *out)
+void metric_parts_of(const double *p0, const double *p1, const double *p2,
+                     const double *p3, metric_parts *out)
 {
     double e01[3], e02[3], e03[3], e12[3], e13[3], n[4][3];
 
@@ -142,7 +142,8 @@ double metric_qt_grad(opt_metric m, const double *p12, int a, double delta, doub
         return q;
     /* d l2sum / d p_a = 2 * sum_{b != a} (p_a - p_b) */
     for (int k = 0; k < 3; k++)
-        dl2[k] = 2.0 * (3.0 * p[a][k] - p[(a + 1) & 3][k] - p[(a + 2) & 3][k] - p[(a + 3) & 3][k]);
+        dl2[k] = 2.0 * (3.0 * p[a][k] - p[(a + 1) & 3][k] - p[(a + 2) & 3][k] -
+                        p[(a + 3) & 3][k]);
     /* d vol / d p_a = (inward face normal * area) / 3 = -(outward cross) / 6 */
     {
         static const int face_of[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
@@ -212,15 +213,16 @@ double metric_qt_grad(opt_metric m, const double *p12, int a, double delta, doub
     return q;
 }
 
-double metric_qt_hess_face(opt_metric m, const double *pa, const double *f0, const double *f1,
-                           const double *f2, double delta, double g[3], double H[6],
-                           double *vol)
+double metric_qt_hess_face(opt_metric m, const double *pa, const double *f0,
+                           const double *f1, const double *f2, double delta, double g[3],
+                           double H[6], double *vol)
 {
     /* q = c A^al h(s)^-be with A = l2sum, s = cv V; ln q is a sum of simple
      * terms: grad q = q u, u = al dA/A - be h' cv dV/h, and
      * hess q = q (u u^T + al (6 I/A - dA dA^T/A^2) - be cv^2 (h''/h - h'^2/h^2) dV dV^T)
      * (d2A/dp_a2 = 6 I; V is linear in p_a: V = dV . (p_a - f0)) */
-    double e1[3], e2[3], d0[3], d1[3], d2[3], dV[3], dA[3], u[3], A, V, sarg, h, hp, hpp, q;
+    double e1[3], e2[3], d0[3], d1[3], d2[3], dV[3], dA[3], u[3], A, V, sarg, h, hp, hpp,
+        q;
     double al, be, cv, iA, ih, cvv;
 
     sub3(f1, f0, e1);
@@ -399,8 +401,8 @@ void metric_dihedral_range(const double *p0, const double *p1, const double *p2,
     *amax = acos(cmin) * RAD2DEG;
 }
 
-int metric_dihedrals(const double *p0, const double *p1, const double *p2, const double *p3,
-                     double ang[6])
+int metric_dihedrals(const double *p0, const double *p1, const double *p2,
+                     const double *p3, double ang[6])
 {
     double g[4][3], len[4];
     int degenerate = face_area_vectors(p0, p1, p2, p3, g, len);
@@ -436,7 +438,8 @@ void metric_dihedral_sines(const double *p0, const double *p1, const double *p2,
     }
 }
 
-double metric_alpha_opt(opt_metric m, const double *f0, const double *f1, const double *f2)
+double metric_alpha_opt(opt_metric m, const double *f0, const double *f1,
+                        const double *f2)
 {
     double e01[3], e02[3], e12[3], F;
 
@@ -453,7 +456,8 @@ double metric_alpha_opt(opt_metric m, const double *f0, const double *f1, const 
         double pc[3], n[3], len, p[3];
         metric_parts a0, a1;
         double N0, N2, C0, C2;
-        cross3(e01, e02, n); /* this face ordering: normal points away from the free vertex */
+        cross3(e01, e02,
+               n); /* this face ordering: normal points away from the free vertex */
         len = sqrt(dot3(n, n));
         if (!(len > 0.0))
             return 0.0;

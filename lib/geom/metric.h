@@ -18,8 +18,8 @@ typedef struct {
     double adj2;  /* 4 * sum of the squared face areas */
 } metric_parts;
 
-void metric_parts_of(const double *p0, const double *p1, const double *p2, const double *p3,
-                     metric_parts *out);
+void metric_parts_of(const double *p0, const double *p1, const double *p2,
+                     const double *p3, metric_parts *out);
 /* The same, computing adj2 only for MICN (the other metrics never read it;
  * adj2 is then 0). For hot loops. */
 void metric_parts_for(opt_metric m, const double *p0, const double *p1, const double *p2,
@@ -54,9 +54,9 @@ double metric_qt_hess(opt_metric m, const double *p12, int a, double delta, doub
  * when pa is on the inner side); *vol receives the signed volume. g NULL:
  * the value only (H unused). Without copying the tet: for the finishing
  * pass's inner loop. */
-double metric_qt_hess_face(opt_metric m, const double *pa, const double *f0, const double *f1,
-                           const double *f2, double delta, double g[3], double H[6],
-                           double *vol);
+double metric_qt_hess_face(opt_metric m, const double *pa, const double *f0,
+                           const double *f1, const double *f2, double delta, double g[3],
+                           double H[6], double *vol);
 
 /* Smallest and largest of the 6 dihedral angles (degrees), as metric_dihedrals
  * but with 2 acos instead of 6. */
@@ -74,8 +74,8 @@ double metric_vol_length(const metric_parts *p);
 
 /* The 6 dihedral angles in degrees (edges 01 02 03 12 13 23); a degenerate face
  * gives 0 and 180 for its angles. Returns 0, or 1 if a face is degenerate. */
-int metric_dihedrals(const double *p0, const double *p1, const double *p2, const double *p3,
-                     double ang[6]);
+int metric_dihedrals(const double *p0, const double *p1, const double *p2,
+                     const double *p3, double ang[6]);
 
 /* Signed sines of the 6 dihedral angles (edges 01 02 03 12 13 23),
  * 3 V l_ij / (2 A_k A_l) (no acos needed), negative on an inverted
@@ -86,6 +86,7 @@ void metric_dihedral_sines(const double *p0, const double *p1, const double *p2,
 
 /* Eq. 8 in closed form (docs/method.md §3): the distance alpha* along the unit inward
  * normal from the barycentre of face (f0, f1, f2) that minimizes q~ (delta = 0). */
-double metric_alpha_opt(opt_metric m, const double *f0, const double *f1, const double *f2);
+double metric_alpha_opt(opt_metric m, const double *f0, const double *f1,
+                        const double *f2);
 
 #endif

@@ -14,10 +14,12 @@
 
 typedef enum {
     MESHIO_AUTO = 0, /* by extension, else by sniffing the content */
-    MESHIO_MEDIT,    /* .mesh ASCII (Vertices, Tetrahedra with refs = regions, Triangles kept) */
+    MESHIO_MEDIT,    /* .mesh ASCII (Vertices, Tetrahedra with refs = regions, Triangles
+                        kept) */
     MESHIO_TETGEN,   /* .node + .ele (+ attributes as regions) */
     MESHIO_QMESH,    /* proto/mesh-binary.md, application/vnd.qdc.mesh, .qmesh */
-    MESHIO_JSON,     /* {"vertices":[[x,y,z],...],"tets":[[a,b,c,d],...],"regions":[...]} 0-based */
+    MESHIO_JSON,     /* {"vertices":[[x,y,z],...],"tets":[[a,b,c,d],...],"regions":[...]}
+                        0-based */
     /* Gmsh .msh: tetrahedra (type 4) with their physical tag as region, triangles
      * (type 2) kept with theirs as tri_ref; physical tag 0 means none, and a file
      * without physical groups but with several volume entities gets the entity
@@ -89,7 +91,8 @@ qdc_status meshio_write(const mesh_t *m, meshio_format fmt, qdc_write_fn fn, voi
 qdc_status meshio_load(const char *path, meshio_format fmt, mesh_t **out, qdc_error *err);
 qdc_status meshio_load_ex(const char *path, meshio_format fmt, const meshio_options *o,
                           mesh_t **out, qdc_error *err);
-qdc_status meshio_save(const char *path, meshio_format fmt, const mesh_t *m, qdc_error *err);
+qdc_status meshio_save(const char *path, meshio_format fmt, const mesh_t *m,
+                       qdc_error *err);
 
 /* Read a whole file into a new buffer (free with qdc_free). */
 qdc_status meshio_slurp(const char *path, char **buf, size_t *len, qdc_error *err);

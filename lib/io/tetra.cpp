@@ -103,7 +103,8 @@ static qdc_status fill_input(tetgenio &in, const surface_t &s)
     return QDC_OK;
 }
 
-static qdc_status to_mesh(const tetgenio &out, bool with_faces, mesh_t **res, qdc_error *err)
+static qdc_status to_mesh(const tetgenio &out, bool with_faces, mesh_t **res,
+                          qdc_error *err)
 {
     int nv = out.numberofpoints, nt = out.numberoftetrahedra, npos = 0;
     bool attr = out.numberoftetrahedronattributes > 0 && out.tetrahedronattributelist;
@@ -133,7 +134,8 @@ static qdc_status to_mesh(const tetgenio &out, bool with_faces, mesh_t **res, qd
             tt[3] = x;
         }
     if (with_faces && out.numberoftrifaces > 0 && out.trifacelist) {
-        if (mesh_set_tris(m, out.numberoftrifaces, out.trifacemarkerlist != NULL) != QDC_OK) {
+        if (mesh_set_tris(m, out.numberoftrifaces, out.trifacemarkerlist != NULL) !=
+            QDC_OK) {
             mesh_free(m);
             return qdc_fail(err, QDC_ENOMEM, "out of memory for the boundary triangles");
         }
@@ -195,17 +197,18 @@ extern "C" qdc_status tetra_from_surface_t(const surface_t *s, const tetra_optio
         tetrahedralize(dsw, &in, &diag);
         if (diag.numberoftrifaces > 0 && diag.trifacelist && diag.pointlist) {
             const double *p = diag.pointlist + 3 * diag.trifacelist[0];
-            st = qdc_fail(err, QDC_ETETGEN,
-                          "the surface intersects itself: %d triangles involved, one near "
-                          "(%g, %g, %g)",
-                          diag.numberoftrifaces, p[0], p[1], p[2]);
+            st =
+                qdc_fail(err, QDC_ETETGEN,
+                         "the surface intersects itself: %d triangles involved, one near "
+                         "(%g, %g, %g)",
+                         diag.numberoftrifaces, p[0], p[1], p[2]);
         } else {
             tetrahedralize(sw, &in, &res);
             st = to_mesh(res, s->tri_ref != NULL, out, err);
         }
     } catch (int code) {
-        st = qdc_fail(err, code == 1 ? QDC_ENOMEM : QDC_ETETGEN, "TetGen (-%s): %s (code %d)",
-                      sw, tetgen_reason(code), code);
+        st = qdc_fail(err, code == 1 ? QDC_ENOMEM : QDC_ETETGEN,
+                      "TetGen (-%s): %s (code %d)", sw, tetgen_reason(code), code);
     } catch (const std::bad_alloc &) {
         st = qdc_fail(err, QDC_ENOMEM, "out of memory in TetGen");
     } catch (...) {
@@ -214,8 +217,9 @@ extern "C" qdc_status tetra_from_surface_t(const surface_t *s, const tetra_optio
     return st;
 }
 
-extern "C" qdc_status tetra_from_surface(const double *xyz, int32_t nv, const int32_t *tris,
-                                         int32_t ntri, const tetra_options *o, mesh_t **out,
+extern "C" qdc_status tetra_from_surface(const double *xyz, int32_t nv,
+                                         const int32_t *tris, int32_t ntri,
+                                         const tetra_options *o, mesh_t **out,
                                          qdc_error *err)
 {
     surface_t s;

@@ -88,8 +88,8 @@ int32_t encode_slot(const mesh_topo *tp, int32_t i, int32_t j)
 /* Face opposite local vertex a of tet t: its 3 vertex ids, barycentre, unit
  * inward normal (docs/method.md §1: from the connectivity's orientation, never from the
  * current side of the free vertex) and alpha* (Eq. 8, closed form). */
-static void face_target(const mesh_topo *tp, const double *x, opt_metric m, int32_t t, int a,
-                        int32_t fv[3], double pc[3], double n[3], double *alpha)
+static void face_target(const mesh_topo *tp, const double *x, opt_metric m, int32_t t,
+                        int a, int32_t fv[3], double pc[3], double n[3], double *alpha)
 {
     const double *f[3];
     double e1[3], e2[3], len;

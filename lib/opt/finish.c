@@ -10,7 +10,8 @@
 #define FINISH_INNER 8
 /* Broad sweeps take one Newton step per vertex (and more sweeps do the rest):
  * measured on 8 dev meshes, mean ratio 0.7729 against 0.7733 with up to 8
- * steps, for 30% less work. */#define FINISH_HALVINGS 12
+ * steps, for 30% less work. */
+#define FINISH_HALVINGS 12
 
 typedef struct {
     double q;
@@ -23,7 +24,8 @@ typedef struct {
 #define VQ_BUCKETS 1024
 static int vq_bucket(double q)
 {
-    return q > -1.0 ? (q < 1.0 ? (int)((q + 1.0) * (VQ_BUCKETS / 2)) : VQ_BUCKETS - 1) : 0;
+    return q > -1.0 ? (q < 1.0 ? (int)((q + 1.0) * (VQ_BUCKETS / 2)) : VQ_BUCKETS - 1)
+                    : 0;
 }
 
 static int vq_sort(vq_pair *list, int32_t n)
@@ -57,7 +59,8 @@ static double kth_smallest(double *a, int32_t n, int32_t k)
     while (lo < hi) {
         int32_t mid = lo + (hi - lo) / 2, i = lo, j = hi;
         double x = a[lo], y = a[mid], z = a[hi];
-        double piv = x < y ? (y < z ? y : (x < z ? z : x)) : (x < z ? x : (y < z ? z : y));
+        double piv =
+            x < y ? (y < z ? y : (x < z ? z : x)) : (x < z ? x : (y < z ? z : y));
         while (i <= j) {
             while (a[i] < piv)
                 i++;
@@ -82,7 +85,8 @@ static double kth_smallest(double *a, int32_t n, int32_t k)
 /* Local objective of vertex v placed at y: sum of q~ over its star, the number
  * of star tets that are not positive, and (if g) the gradient with respect to y. */
 static double star_eval(const mesh_topo *tp, const double *x, int32_t v, const double *y,
-                        opt_metric m, double delta, int32_t *nbad, double *qmax, double *g)
+                        opt_metric m, double delta, int32_t *nbad, double *qmax,
+                        double *g)
 {
     double f = 0.0, worst = 0.0;
     int32_t bad = 0;
@@ -94,7 +98,8 @@ static double star_eval(const mesh_topo *tp, const double *x, int32_t v, const d
         double p[4][3], gt[3], q;
         metric_parts pt;
         for (int b = 0; b < 4; b++)
-            memcpy(p[b], b == a ? y : x + 3 * (size_t)tp->tets[4 * (size_t)t + b], sizeof p[b]);
+            memcpy(p[b], b == a ? y : x + 3 * (size_t)tp->tets[4 * (size_t)t + b],
+                   sizeof p[b]);
         if (g) {
             q = metric_qt_grad(m, &p[0][0], a, delta, gt, &pt);
             if (isfinite(q))
@@ -117,7 +122,8 @@ static double star_eval(const mesh_topo *tp, const double *x, int32_t v, const d
  * (upper triangle; both skipped if g is NULL), and the number of
  * non-positive star tets; NAN if the metric has no Hessian. */
 static double star_hess(const mesh_topo *tp, const double *x, int32_t v, const double *y,
-                        opt_metric m, double delta, int32_t *nbad, double g[3], double H[6])
+                        opt_metric m, double delta, int32_t *nbad, double g[3],
+                        double H[6])
 {
     double f = 0.0;
     int32_t bad = 0;
@@ -131,9 +137,9 @@ static double star_hess(const mesh_topo *tp, const double *x, int32_t v, const d
         int32_t t = tp->vt_idx[k] >> 2, a = tp->vt_idx[k] & 3;
         const int32_t *tt = tp->tets + 4 * (size_t)t;
         double gt[3], Ht[6], q, vol;
-        q = metric_qt_hess_face(m, y, x + 3 * (size_t)tt[face_of[a][0]],
-                                x + 3 * (size_t)tt[face_of[a][1]], x + 3 * (size_t)tt[face_of[a][2]],
-                                delta, g ? gt : NULL, Ht, &vol);
+        q = metric_qt_hess_face(
+            m, y, x + 3 * (size_t)tt[face_of[a][0]], x + 3 * (size_t)tt[face_of[a][1]],
+            x + 3 * (size_t)tt[face_of[a][2]], delta, g ? gt : NULL, Ht, &vol);
         bad += !(vol > 0.0);
         f += q;
         if (!g || !isfinite(q))
@@ -236,8 +242,8 @@ static int32_t newton_vertex(const mesh_topo *tp, double *x, int32_t v, opt_metr
 }
 
 /* y = xv + t dir, put back on v's surface or line if sl (a sliding vertex). */
-static void trial_point(const slide_ctx *sl, int32_t v, const double *xv, const double dir[3],
-                        double t, double y[3])
+static void trial_point(const slide_ctx *sl, int32_t v, const double *xv,
+                        const double dir[3], double t, double y[3])
 {
     for (int c = 0; c < 3; c++)
         y[c] = xv[c] + t * dir[c];
@@ -251,8 +257,9 @@ static void trial_point(const slide_ctx *sl, int32_t v, const double *xv, const 
 /* Adaptive normalized-gradient descent of one vertex (docs/method.md §5a): step along
  * -g/|g|, start 0.05 mean edge, x1.6 after a success (cap 0.3), halve up to 12
  * times until the local objective decreases without inverting a star tet. */
-static int32_t relax_vertex(const mesh_topo *tp, const slide_ctx *sl, double *x, int32_t v,
-                            opt_metric m, double delta, double lbar, double rtol)
+static int32_t relax_vertex(const mesh_topo *tp, const slide_ctx *sl, double *x,
+                            int32_t v, opt_metric m, double delta, double lbar,
+                            double rtol)
 {
     int sliding = sl && slide_kind(sl, v) != SLIDE_INTERIOR;
     double s = 0.05 * lbar, *xv = x + 3 * (size_t)v;
@@ -301,8 +308,8 @@ static int32_t relax_vertex(const mesh_topo *tp, const slide_ctx *sl, double *x,
 /* Greedy colouring of the visit list (worst first): no two vertices of a class
  * share an edge, hence no tet, so a class can move in parallel. colour[] is
  * scratch of nv entries; returns the number of classes and fills start[]. */
-static int32_t colour_classes(const mesh_topo *tp, vq_pair *list, int32_t n, int32_t *colour,
-                              int32_t **start_out)
+static int32_t colour_classes(const mesh_topo *tp, vq_pair *list, int32_t n,
+                              int32_t *colour, int32_t **start_out)
 {
     int32_t ncol = 0, *cnt, *start;
     uint64_t used;
@@ -358,8 +365,8 @@ static int32_t colour_classes(const mesh_topo *tp, vq_pair *list, int32_t n, int
 }
 
 qdc_status finish_sweep(const mesh_topo *tp, const uint8_t *movable, const slide_ctx *sl,
-                        double *x, opt_metric m, const double *eta, double delta, double lbar,
-                        double frac, double rtol, finish_stats *st)
+                        double *x, opt_metric m, const double *eta, double delta,
+                        double lbar, double frac, double rtol, finish_stats *st)
 {
     double *sorted = qdc_mallocn((size_t)tp->nt, sizeof(double));
     double *vworst = qdc_mallocn((size_t)tp->nv, sizeof(double));
@@ -466,7 +473,8 @@ static int star_tet(const mesh_topo *tp, const double *x, int32_t k, const doubl
     int a = tp->vt_idx[k] & 3;
 
     for (int b = 0; b < 4; b++)
-        memcpy(p[b], b == a ? y : x + 3 * (size_t)tp->tets[4 * (size_t)t + b], sizeof p[b]);
+        memcpy(p[b], b == a ? y : x + 3 * (size_t)tp->tets[4 * (size_t)t + b],
+               sizeof p[b]);
     return a;
 }
 
@@ -522,8 +530,8 @@ static double star_sines(const mesh_topo *tp, const double *x, int32_t v, const 
 
 /* Gradient of one dihedral sine with respect to v's position (central
  * differences; h in x's units). */
-static void sine_grad(const mesh_topo *tp, const double *x, const double *y, dih_fn f, double h,
-                      double g[3])
+static void sine_grad(const mesh_topo *tp, const double *x, const double *y, dih_fn f,
+                      double h, double g[3])
 {
     for (int c = 0; c < 3; c++) {
         double yp[3], p[4][3], sp[6], sm[6];
@@ -600,8 +608,8 @@ static int min_norm_point(double g[][3], int n, double d[3])
 /* Max-min ascent of one vertex: raise the smallest dihedral sine of its star
  * while every star tet stays positive and no star tet's mean ratio drops
  * below qfloor. */
-static int32_t dihedral_vertex(const mesh_topo *tp, const slide_ctx *sl, double *x, int32_t v,
-                               double lbar, double qfloor, double target)
+static int32_t dihedral_vertex(const mesh_topo *tp, const slide_ctx *sl, double *x,
+                               int32_t v, double lbar, double qfloor, double target)
 {
     int sliding = sl && slide_kind(sl, v) != SLIDE_INTERIOR;
     double *xv = x + 3 * (size_t)v, s = 0.02 * lbar, h = 1e-6 * lbar;
@@ -678,7 +686,8 @@ static double tet_sines(const mesh_topo *tp, const double *x, double *smin, int 
 
 qdc_status finish_dihedral_sweep(const mesh_topo *tp, const uint8_t *movable,
                                  const slide_ctx *sl, double *x, double lbar, double frac,
-                                 double qfloor, double *smin, int smin_valid, finish_stats *st)
+                                 double qfloor, double *smin, int smin_valid,
+                                 finish_stats *st)
 {
     double *sorted = qdc_mallocn((size_t)tp->nt, sizeof(double));
     double *vworst = qdc_mallocn((size_t)tp->nv, sizeof(double));
@@ -730,7 +739,8 @@ qdc_status finish_dihedral_sweep(const mesh_topo *tp, const uint8_t *movable,
 #pragma omp parallel for reduction(+ : moves) schedule(dynamic, 4)
         for (int32_t i = start[c]; i < start[c + 1]; i++) {
             int32_t mv = dihedral_vertex(tp, sl, x, list[i].v, lbar, qfloor, thresh);
-            list[i].q = mv > 0 ? -INFINITY : list[i].q; /* mark the moved (sines are >= -1) */
+            list[i].q =
+                mv > 0 ? -INFINITY : list[i].q; /* mark the moved (sines are >= -1) */
             moves += mv;
         }
         st->n_moves += moves;

@@ -13,9 +13,9 @@
 #include "opt/slide.h"
 
 typedef struct {
-    int32_t n_verts; /* vertices visited */
-    int32_t n_moves; /* accepted moves */
-    double delta;    /* regularization used in this sweep */
+    int32_t n_verts;                  /* vertices visited */
+    int32_t n_moves;                  /* accepted moves */
+    double delta;                     /* regularization used in this sweep */
     double score_before, score_after; /* angle sweep: mean of the frac smallest
                                        * per-tet dihedral sines, before and after */
     double floor_before, floor_after; /* angle sweep: the smallest sine */
@@ -30,8 +30,8 @@ typedef struct {
  * rtol: a vertex stops once a step lowers its local objective by less than
  * rtol times its value (0: all inner steps). */
 qdc_status finish_sweep(const mesh_topo *tp, const uint8_t *movable, const slide_ctx *sl,
-                        double *x, opt_metric m, const double *eta, double delta, double lbar,
-                        double frac, double rtol, finish_stats *st);
+                        double *x, opt_metric m, const double *eta, double delta,
+                        double lbar, double frac, double rtol, finish_stats *st);
 
 /* Worst-angle polish (beyond the paper): max-min ascent of the smallest dihedral
  * sine of each star (Freitag's non-smooth smoothing: the steepest ascent is the
@@ -44,6 +44,7 @@ qdc_status finish_sweep(const mesh_topo *tp, const uint8_t *movable, const slide
  * at the new x. */
 qdc_status finish_dihedral_sweep(const mesh_topo *tp, const uint8_t *movable,
                                  const slide_ctx *sl, double *x, double lbar, double frac,
-                                 double qfloor, double *smin, int smin_valid, finish_stats *st);
+                                 double qfloor, double *smin, int smin_valid,
+                                 finish_stats *st);
 
 #endif

@@ -10,8 +10,8 @@
 /* Medial vertices: interior vertices that are local maxima of the distance to
  * the boundary over their 1-ring, or the farther endpoint of an interior edge
  * whose closest-point directions differ by more than 60 degrees. */
-static qdc_status medial(const mesh_topo *tp, const double *x, uint8_t *med, int32_t *count,
-                         qdc_error *err)
+static qdc_status medial(const mesh_topo *tp, const double *x, uint8_t *med,
+                         int32_t *count, qdc_error *err)
 {
     bderr_bvh *bvh = NULL;
     double *dist = qdc_calloc((size_t)tp->nv, sizeof(double));

@@ -8,7 +8,7 @@
 
 /* x: coordinates (3 per vertex) of the pre-optimized mesh; h_out: nv values.
  * *n_medial receives the number of medial vertices (may be NULL). */
-qdc_status harm_field(const mesh_topo *tp, const double *x, double *h_out, int32_t *n_medial,
-                      qdc_error *err);
+qdc_status harm_field(const mesh_topo *tp, const double *x, double *h_out,
+                      int32_t *n_medial, qdc_error *err);
 
 #endif

@@ -4,21 +4,21 @@
  * (§6) and the finishing pass (§5a). */
 #include "opt/opt.h"
 
+#include "core/tet.h"
+#include "geom/metric.h"
 #include "opt/encode.h"
 #include "opt/finish.h"
 #include "opt/harm.h"
-#include "core/tet.h"
-#include "geom/metric.h"
 #include "opt/slide.h"
 #include "opt/solve.h"
 
 #include <ctype.h>
 #include <errno.h>
 #include <math.h>
-#include <stdlib.h>
 #include <omp.h>
 #include <stdarg.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 void opt_defaults(opt_options *o)
@@ -59,14 +59,14 @@ static qdc_status parse_word(const char *s, const char *const *names, int n, int
     return QDC_EINVAL;
 }
 
-#define PARSER(fn, type, names)                                                         \
-    qdc_status fn(const char *s, type *out)                                             \
-    {                                                                                   \
-        int v;                                                                          \
+#define PARSER(fn, type, names)                                                          \
+    qdc_status fn(const char *s, type *out)                                              \
+    {                                                                                    \
+        int v;                                                                           \
         qdc_status st = parse_word(s, names, (int)(sizeof names / sizeof names[0]), &v); \
-        if (st == QDC_OK)                                                               \
-            *out = (type)v;                                                             \
-        return st;                                                                      \
+        if (st == QDC_OK)                                                                \
+            *out = (type)v;                                                              \
+        return st;                                                                       \
     }
 PARSER(opt_parse_metric, opt_metric, metric_names)
 PARSER(opt_parse_boundary, opt_boundary, boundary_names)
@@ -121,10 +121,10 @@ qdc_status opt_parse_hausd(const char *s, opt_options *o)
     return QDC_OK;
 }
 
-#define NAMER(fn, type, names)                                                          \
-    const char *fn(type v)                                                              \
-    {                                                                                   \
-        return (unsigned)v < sizeof names / sizeof names[0] ? names[v] : "?";           \
+#define NAMER(fn, type, names)                                                           \
+    const char *fn(type v)                                                               \
+    {                                                                                    \
+        return (unsigned)v < sizeof names / sizeof names[0] ? names[v] : "?";            \
     }
 NAMER(opt_metric_name, opt_metric, metric_names)
 NAMER(opt_boundary_name, opt_boundary, boundary_names)
@@ -139,19 +139,19 @@ typedef struct {
     double center[3], scale; /* x = (X - center) / scale */
     double lbar, eps;
     double *x, *x0, *xn, *xbest, *trial, *tmp, *rhs;
-    uint8_t *locked;  /* not an unknown of the linear system */
-    double *vfac;     /* nv: share of the step each vertex takes (feasible step) */
-    double hbound;    /* --hausd in normalized units (0: none) */
-    uint8_t *vmark;   /* nv: scratch marks */
-    double *wq2;      /* squared QDC row weights */
-    double *bw2;      /* squared boundary row weights (0: no row) */
-    double *dg;       /* bw2 + mu */
+    uint8_t *locked; /* not an unknown of the linear system */
+    double *vfac;    /* nv: share of the step each vertex takes (feasible step) */
+    double hbound;   /* --hausd in normalized units (0: none) */
+    uint8_t *vmark;  /* nv: scratch marks */
+    double *wq2;     /* squared QDC row weights */
+    double *bw2;     /* squared boundary row weights (0: no row) */
+    double *dg;      /* bw2 + mu */
     double *qt, *qval, *d;
-    double *eta;      /* nt: mean ratio per tet at the x of the last evaluate() that asked */
-    double eta_delta; /* and the delta of that x */
-    double mu_factor;    /* omega_B^2 once harmonic guidance is on and mu_scaled */
-    const double *bref;  /* targets of the boundary rows: x0 (lsq) or x_k (slide) */
-    slide_ctx *sl;       /* slide mode only */
+    double *eta; /* nt: mean ratio per tet at the x of the last evaluate() that asked */
+    double eta_delta;   /* and the delta of that x */
+    double mu_factor;   /* omega_B^2 once harmonic guidance is on and mu_scaled */
+    const double *bref; /* targets of the boundary rows: x0 (lsq) or x_k (slide) */
+    slide_ctx *sl;      /* slide mode only */
     solve_ctx *sol;
     double t0;
     opt_progress input, best;
@@ -190,7 +190,8 @@ static double evaluate(const ctx_t *c, const double *x, opt_progress *r, double 
     /* the objective comes with the scan when delta turns out 0 (no tet below
      * eps: the usual case once untangled); MICN needs parts the scan lacks */
     const int fuse = m != OPT_METRIC_MICN;
-    double sum = 0, sum2 = 0, qmin = INFINITY, cmax = -2, cmin = 2, amin = INFINITY, delta;
+    double sum = 0, sum2 = 0, qmin = INFINITY, cmax = -2, cmin = 2, amin = INFINITY,
+           delta;
     int32_t ninv = 0;
 
     /* fixed chunks summed in order: reports do not depend on the thread count */
@@ -239,7 +240,8 @@ static double evaluate(const ctx_t *c, const double *x, opt_progress *r, double 
     r->dih_max = acos(cmin) * (180.0 / M_PI_);
     r->n_inverted = ninv;
     delta = metric_delta(amin, c->eps);
-    r->objective = fuse && delta == 0.0 ? obj : encode_objective(tp, x, m, delta, NULL, NULL);
+    r->objective =
+        fuse && delta == 0.0 ? obj : encode_objective(tp, x, m, delta, NULL, NULL);
     r->elapsed = qdc_now() - c->t0;
     r->solver = c->sol ? (int)solve_kind(c->sol) : 0;
     return delta;
@@ -263,8 +265,9 @@ static double scan_light(const ctx_t *c, const double *x, double *eta, opt_progr
             const int32_t *tt = tp->tets + 4 * (size_t)t;
             metric_parts pt;
             double arg;
-            metric_parts_for(OPT_METRIC_MIVL, x + 3 * (size_t)tt[0], x + 3 * (size_t)tt[1],
-                             x + 3 * (size_t)tt[2], x + 3 * (size_t)tt[3], &pt);
+            metric_parts_for(OPT_METRIC_MIVL, x + 3 * (size_t)tt[0],
+                             x + 3 * (size_t)tt[1], x + 3 * (size_t)tt[2],
+                             x + 3 * (size_t)tt[3], &pt);
             eta[t] = metric_mean_ratio(&pt);
             sm += eta[t];
             qmin = eta[t] < qmin ? eta[t] : qmin;
@@ -332,7 +335,8 @@ static int should_stop(const ctx_t *c, char *why, size_t len)
     return 0;
 }
 
-static qdc_status ctx_init(ctx_t *c, const mesh_t *m, const mesh_topo *tp, const opt_options *o)
+static qdc_status ctx_init(ctx_t *c, const mesh_t *m, const mesh_topo *tp,
+                           const opt_options *o)
 {
     size_t n3 = 3 * (size_t)m->nv;
     double lo[3], hi[3], diag, esum = 0;
@@ -360,17 +364,20 @@ static qdc_status ctx_init(ctx_t *c, const mesh_t *m, const mesh_topo *tp, const
     c->qt = qdc_mallocn((size_t)m->nt, sizeof(double));
     c->eta = qdc_mallocn((size_t)m->nt, sizeof(double));
     c->qval = qdc_mallocn((size_t)tp->adj_ptr[tp->nv], sizeof(double));
-    if (!c->x || !c->x0 || !c->xn || !c->xbest || !c->trial || !c->tmp || !c->rhs || !c->d ||
-        !c->locked || !c->vfac || !c->vmark || !c->wq2 || !c->bw2 || !c->dg || !c->qt || !c->eta || !c->qval)
+    if (!c->x || !c->x0 || !c->xn || !c->xbest || !c->trial || !c->tmp || !c->rhs ||
+        !c->d || !c->locked || !c->vfac || !c->vmark || !c->wq2 || !c->bw2 || !c->dg ||
+        !c->qt || !c->eta || !c->qval)
         return QDC_ENOMEM;
-    /* docs/method.md §1: bbox centre to 0, diagonal to 1; every tolerance is in these units */
+    /* docs/method.md §1: bbox centre to 0, diagonal to 1; every tolerance is in these
+     * units */
     diag = mesh_bbox(m, lo, hi);
     c->scale = diag > 0 ? diag : 1.0;
     for (int k = 0; k < 3; k++)
         c->center[k] = 0.5 * (lo[k] + hi[k]);
     for (int32_t v = 0; v < m->nv; v++)
         for (int k = 0; k < 3; k++)
-            c->x[3 * (size_t)v + k] = (m->xyz[3 * (size_t)v + k] - c->center[k]) / c->scale;
+            c->x[3 * (size_t)v + k] =
+                (m->xyz[3 * (size_t)v + k] - c->center[k]) / c->scale;
     memcpy(c->x0, c->x, n3 * sizeof(double));
     memcpy(c->xbest, c->x, n3 * sizeof(double));
     for (int32_t i = 0; i < tp->nv; i++)
@@ -386,7 +393,9 @@ static qdc_status ctx_init(ctx_t *c, const mesh_t *m, const mesh_topo *tp, const
     c->lbar = ecount ? esum / (double)ecount : 1.0;
     c->bref = c->x0;
     c->mu_factor = 1.0;
-    c->hbound = o->hausd > 0 ? o->hausd / c->scale : o->hausd_rel > 0 ? o->hausd_rel : 0.0;
+    c->hbound = o->hausd > 0       ? o->hausd / c->scale
+                : o->hausd_rel > 0 ? o->hausd_rel
+                                   : 0.0;
     if (o->boundary == OPT_BOUNDARY_SLIDE) {
         qdc_status st = slide_new(tp, c->x0, o->feature_angle, &c->sl, NULL);
         if (st != QDC_OK)
@@ -611,7 +620,8 @@ static qdc_status iterate(ctx_t *c, opt_result *res, opt_progress *r, int *stepp
         mu = 0;
         for (int32_t v = 0; v < c->nv; v++)
             for (int k = 0; k < 3; k++)
-                mu += c->bw2[v] * c->bw2[v] * c->x0[3 * (size_t)v + k] * c->x0[3 * (size_t)v + k];
+                mu += c->bw2[v] * c->bw2[v] * c->x0[3 * (size_t)v + k] *
+                      c->x0[3 * (size_t)v + k];
         if (!(mu > 0))
             mu = 1.0;
     } else {
@@ -762,8 +772,8 @@ static qdc_status finish_pass(ctx_t *c, const uint8_t *movable, int x_evaluated,
         qdc_status st;
         if (should_stop(c, res->stop_reason, sizeof res->stop_reason))
             break;
-        st = finish_sweep(c->tp, movable, c->sl, c->x, o->metric, c->eta, delta, c->lbar, 0.01,
-                          0.0, &fs);
+        st = finish_sweep(c->tp, movable, c->sl, c->x, o->metric, c->eta, delta, c->lbar,
+                          0.01, 0.0, &fs);
         if (st != QDC_OK)
             return st;
         if (fs.n_moves == 0)
@@ -814,8 +824,8 @@ static qdc_status angle_pass(ctx_t *c, const uint8_t *movable, const slide_ctx *
         qdc_status st;
         if (should_stop(c, res->stop_reason, sizeof res->stop_reason))
             break;
-        st = finish_dihedral_sweep(c->tp, movable, sl, c->x, c->lbar, 0.01, base.q_min, smin,
-                                   s > 0, &fs);
+        st = finish_dihedral_sweep(c->tp, movable, sl, c->x, c->lbar, 0.01, base.q_min,
+                                   smin, s > 0, &fs);
         if (st != QDC_OK)
             return st;
         /* the floor keeps q_min and positivity keeps the inverted count; a
@@ -905,7 +915,8 @@ static qdc_status squashed_ears(const ctx_t *c, uint8_t **out)
         return QDC_ENOMEM;
     }
     for (int32_t t = 0; n > 0 && t < tp->nt; t++) {
-        if (!ear[t] || !(tet_mean_ratio(tp, c->xbest, t) < 0.5 * tet_mean_ratio(tp, c->x0, t)))
+        if (!ear[t] ||
+            !(tet_mean_ratio(tp, c->xbest, t) < 0.5 * tet_mean_ratio(tp, c->x0, t)))
             continue;
         if (!pins && !(pins = qdc_calloc((size_t)c->nv, 1))) {
             qdc_free(ear);
@@ -941,12 +952,15 @@ static qdc_status run_once(mesh_t *m, const opt_options *opts, const uint8_t *pi
         o = *opts;
     else
         opt_defaults(&o);
-    if (!(o.hausd >= 0 && isfinite(o.hausd)) || !(o.hausd_rel >= 0 && isfinite(o.hausd_rel)) ||
-        o.max_iter < 0 || o.ls_halvings < 0 || o.ls_halvings > 60 || !(o.mu > 0) ||
-        !(o.tol_move >= 0) || !(o.eps_rel > 0) || !(o.finish_frac >= 0 && o.finish_frac <= 1) ||
-        o.finish_sweeps < 0 || o.pre_iters < 0 || o.threads < 0 || (unsigned)o.metric > OPT_METRIC_MICN ||
-        (unsigned)o.boundary > OPT_BOUNDARY_SLIDE || (unsigned)o.mode > OPT_MODE_LITERAL ||
-        (unsigned)o.weights > OPT_WEIGHTS_PAPER || (unsigned)o.solver > OPT_SOLVER_PCG) {
+    if (!(o.hausd >= 0 && isfinite(o.hausd)) ||
+        !(o.hausd_rel >= 0 && isfinite(o.hausd_rel)) || o.max_iter < 0 ||
+        o.ls_halvings < 0 || o.ls_halvings > 60 || !(o.mu > 0) || !(o.tol_move >= 0) ||
+        !(o.eps_rel > 0) || !(o.finish_frac >= 0 && o.finish_frac <= 1) ||
+        o.finish_sweeps < 0 || o.pre_iters < 0 || o.threads < 0 ||
+        (unsigned)o.metric > OPT_METRIC_MICN ||
+        (unsigned)o.boundary > OPT_BOUNDARY_SLIDE ||
+        (unsigned)o.mode > OPT_MODE_LITERAL || (unsigned)o.weights > OPT_WEIGHTS_PAPER ||
+        (unsigned)o.solver > OPT_SOLVER_PCG) {
         st = qdc_fail(err, QDC_EINVAL, "invalid optimizer options");
         goto out;
     }
@@ -971,7 +985,8 @@ static qdc_status run_once(mesh_t *m, const opt_options *opts, const uint8_t *pi
     res.solver = solve_kind(c.sol);
     res.solver_flops = solve_flops(c.sol);
     logf_(&c, 0, "%d vertices (%d boundary), %d tets; solver %s (analysis %.3g flops)",
-          (int)m->nv, (int)tp->nb, (int)m->nt, opt_solver_name(res.solver), res.solver_flops);
+          (int)m->nv, (int)tp->nb, (int)m->nt, opt_solver_name(res.solver),
+          res.solver_flops);
     res.t_setup = qdc_now() - t_start;
 
     c.eta_delta = evaluate(&c, c.x, &r, c.eta);
@@ -1037,7 +1052,8 @@ static qdc_status run_once(mesh_t *m, const opt_options *opts, const uint8_t *pi
             goto out;
         }
         /* Boundary and interface vertices move here only in slide mode, along
-         * their input surface; lsq and fixed leave them where the global step put them. */
+         * their input surface; lsq and fixed leave them where the global step put them.
+         */
         for (int32_t v = 0; v < c.nv; v++)
             movable[v] = !c.locked[v] &&
                          (c.sl || !(tp->vflag[v] & (MESH_V_BOUNDARY | MESH_V_INTERFACE)));
@@ -1058,7 +1074,8 @@ static qdc_status run_once(mesh_t *m, const opt_options *opts, const uint8_t *pi
                 memcpy(c.x, c.xbest, 3 * (size_t)c.nv * sizeof(double));
                 st = finish_pass(&c, movable, 0, &res, &r, &next);
             }
-            if (st == QDC_OK && o.angle_polish && strcmp(res.stop_reason, "cancelled") != 0)
+            if (st == QDC_OK && o.angle_polish &&
+                strcmp(res.stop_reason, "cancelled") != 0)
                 st = lsq_angle_pass(&c, movable, &res, &r, &next);
             if (st != QDC_OK) {
                 qdc_free(movable);
@@ -1078,7 +1095,8 @@ static qdc_status run_once(mesh_t *m, const opt_options *opts, const uint8_t *pi
     for (int32_t v = 0; c.best_it > 0 && v < c.nv; v++)
         if (!c.locked[v])
             for (int k = 0; k < 3; k++)
-                m->xyz[3 * (size_t)v + k] = c.xbest[3 * (size_t)v + k] * c.scale + c.center[k];
+                m->xyz[3 * (size_t)v + k] =
+                    c.xbest[3 * (size_t)v + k] * c.scale + c.center[k];
     res.after = c.best;
     res.best_iteration = c.best_it;
     res.last_record = c.last_record;
@@ -1119,7 +1137,8 @@ static int rerun_report(void *ctx, const opt_progress *p)
     return rp->fn(rp->ctx, &q);
 }
 
-qdc_status opt_run(mesh_t *m, const opt_options *opts, opt_result *res_out, qdc_error *err)
+qdc_status opt_run(mesh_t *m, const opt_options *opts, opt_result *res_out,
+                   qdc_error *err)
 {
     uint8_t *pins = NULL, *sq = NULL;
     double *xin = NULL, *xbest = NULL;
@@ -1159,9 +1178,10 @@ qdc_status opt_run(mesh_t *m, const opt_options *opts, opt_result *res_out, qdc_
         memcpy(m->xyz, xin, n3 * sizeof(double));
         if (opts->log) {
             char msg[160];
-            snprintf(msg, sizeof msg,
-                     "slide squashed ears of the surface: again with their %d corners held",
-                     (int)held);
+            snprintf(
+                msg, sizeof msg,
+                "slide squashed ears of the surface: again with their %d corners held",
+                (int)held);
             opts->log(opts->log_ctx, 0, msg);
         }
         {

@@ -7,7 +7,11 @@
 #include "core/mesh.h"
 #include "geom/metric.h" /* opt_metric */
 
-typedef enum { OPT_BOUNDARY_LSQ = 0, OPT_BOUNDARY_FIXED, OPT_BOUNDARY_SLIDE } opt_boundary;
+typedef enum {
+    OPT_BOUNDARY_LSQ = 0,
+    OPT_BOUNDARY_FIXED,
+    OPT_BOUNDARY_SLIDE
+} opt_boundary;
 typedef enum { OPT_MODE_SAFE = 0, OPT_MODE_LITERAL } opt_mode;
 typedef enum { OPT_WEIGHTS_OPTAVG = 0, OPT_WEIGHTS_PAPER } opt_weights;
 typedef enum { OPT_SOLVER_AUTO = 0, OPT_SOLVER_CHOLMOD, OPT_SOLVER_PCG } opt_solver;
@@ -21,19 +25,19 @@ typedef enum {
 
 /* One record per global iteration (and one for the input, one per finishing sweep). */
 typedef struct {
-    int iteration;       /* 0 = the input; 1.. global iterations, then finish sweeps */
-    const char *phase;   /* "input", "pre", "global", "finish" */
-    double objective;    /* sum of the modified inverse quality */
-    double step;         /* global: line-search step taken (1 = full), 0 if rejected;
-                          * finish/angles: accepted moves per visited vertex */
+    int iteration;     /* 0 = the input; 1.. global iterations, then finish sweeps */
+    const char *phase; /* "input", "pre", "global", "finish" */
+    double objective;  /* sum of the modified inverse quality */
+    double step;       /* global: line-search step taken (1 = full), 0 if rejected;
+                        * finish/angles: accepted moves per visited vertex */
     double q_mean, q_std, q_min; /* signed mean ratio */
     double dih_min, dih_max;     /* degrees, over non-inverted tets */
     int32_t n_inverted;
-    int32_t n_folded;    /* global: tets valid before this step and inverted after it */
-    double max_move;     /* largest vertex move this iteration, in mean edge lengths */
-    double elapsed;      /* seconds since opt_run started */
-    int solver;          /* opt_solver actually used */
-    int cg_iters;        /* PCG iterations (0 for CHOLMOD) */
+    int32_t n_folded; /* global: tets valid before this step and inverted after it */
+    double max_move;  /* largest vertex move this iteration, in mean edge lengths */
+    double elapsed;   /* seconds since opt_run started */
+    int solver;       /* opt_solver actually used */
+    int cg_iters;     /* PCG iterations (0 for CHOLMOD) */
 } opt_progress;
 
 /* Called after each record. Return non-zero to cancel (the run then stops
@@ -43,34 +47,36 @@ typedef int (*opt_progress_fn)(void *ctx, const opt_progress *p);
 typedef struct {
     opt_metric metric;     /* default MIVL */
     opt_boundary boundary; /* default LSQ */
-    opt_mode mode;         /* default SAFE; LITERAL = paper as written (Eq. 6, mu = ||G^T g||^2, no line search) */
-    opt_weights weights;   /* default OPTAVG (docs/method.md §4) */
-    opt_solver solver;     /* default AUTO (chosen from the CHOLMOD analysis) */
-    int harmonic;          /* harmonic guidance (docs/method.md §6), default 0 */
-    int pre_iters;         /* iterations before the harmonic field, default 3 */
-    int finish;            /* worst-tet finishing pass (docs/method.md §5a), default 1 */
-    int max_iter;          /* global iterations, default 10 */
-    int ls_halvings;       /* line search tries 1 .. 2^-ls_halvings, default 10 */
-    double mu;             /* semi-implicit damping in normalized units, default 1 */
-    int mu_scaled;         /* with harmonic guidance, multiply mu by omega_B^2 (docs/method.md §5
-                            * open question), default 0 */
-    double tol_move;       /* stop when max move < tol_move * mean edge, default 1e-3 */
-    double eps_rel;        /* Escobar epsilon relative to a regular tet, default 1e-3 */
-    double finish_frac;    /* fraction of worst tets in the finishing pass, default 0.2 */
-    int finish_sweeps;     /* broad sweeps, default 3 */
-    int angle_polish;      /* after the finishing pass: max-min of the dihedral sines
-                            * on the worst tets' vertices (finish.h), default 1 */
-    double feature_angle;  /* degrees, for slide, default 30 */
-    double hausd;          /* > 0: bound on the Hausdorff distance between the input and
-                            * output boundary surfaces, in the mesh's units (lsq and
-                            * slide; boundary vertices stay within it of where they
-                            * were); 0 = none (default) */
-    double hausd_rel;      /* the same relative to the bounding-box diagonal, used when
-                            * hausd is 0; 0 = none (default) */
-    double time_limit;     /* seconds, 0 = none: then OPT_STOPPED with the best mesh */
-    int threads;           /* OpenMP threads for this run; 0 = all cores. A server running
-                            * several jobs at once should give each 1 (no oversubscription) */
-    const volatile int *cancel; /* if non-NULL and *cancel != 0: stop (checked every iteration) */
+    opt_mode mode; /* default SAFE; LITERAL = paper as written (Eq. 6, mu = ||G^T g||^2,
+                      no line search) */
+    opt_weights weights; /* default OPTAVG (docs/method.md §4) */
+    opt_solver solver;   /* default AUTO (chosen from the CHOLMOD analysis) */
+    int harmonic;        /* harmonic guidance (docs/method.md §6), default 0 */
+    int pre_iters;       /* iterations before the harmonic field, default 3 */
+    int finish;          /* worst-tet finishing pass (docs/method.md §5a), default 1 */
+    int max_iter;        /* global iterations, default 10 */
+    int ls_halvings;     /* line search tries 1 .. 2^-ls_halvings, default 10 */
+    double mu;           /* semi-implicit damping in normalized units, default 1 */
+    int mu_scaled; /* with harmonic guidance, multiply mu by omega_B^2 (docs/method.md §5
+                    * open question), default 0 */
+    double tol_move;      /* stop when max move < tol_move * mean edge, default 1e-3 */
+    double eps_rel;       /* Escobar epsilon relative to a regular tet, default 1e-3 */
+    double finish_frac;   /* fraction of worst tets in the finishing pass, default 0.2 */
+    int finish_sweeps;    /* broad sweeps, default 3 */
+    int angle_polish;     /* after the finishing pass: max-min of the dihedral sines
+                           * on the worst tets' vertices (finish.h), default 1 */
+    double feature_angle; /* degrees, for slide, default 30 */
+    double hausd;         /* > 0: bound on the Hausdorff distance between the input and
+                           * output boundary surfaces, in the mesh's units (lsq and
+                           * slide; boundary vertices stay within it of where they
+                           * were); 0 = none (default) */
+    double hausd_rel;     /* the same relative to the bounding-box diagonal, used when
+                           * hausd is 0; 0 = none (default) */
+    double time_limit;    /* seconds, 0 = none: then OPT_STOPPED with the best mesh */
+    int threads;          /* OpenMP threads for this run; 0 = all cores. A server running
+                           * several jobs at once should give each 1 (no oversubscription) */
+    const volatile int
+        *cancel; /* if non-NULL and *cancel != 0: stop (checked every iteration) */
     opt_progress_fn progress;
     void *progress_ctx;
     qdc_log_fn log;
@@ -98,20 +104,23 @@ const char *opt_solver_name(opt_solver s);
 
 typedef struct {
     opt_outcome outcome;
-    int iterations;        /* global iterations done */
-    int best_iteration;    /* which iterate was returned (0 = input) */
-    int last_record;       /* number of the last progress record */
-    opt_solver solver;     /* solver used */
-    double solver_flops;   /* CHOLMOD analysis estimate (0 if not analysed) */
-    double t_setup, t_weights, t_assembly, t_solve, t_linesearch, t_harmonic, t_finish, t_total;
-    opt_progress before;   /* the input's record */
-    opt_progress after;    /* the returned mesh's record */
-    opt_progress before_finish; /* record after the global iterations, before the finishing pass */
+    int iterations;      /* global iterations done */
+    int best_iteration;  /* which iterate was returned (0 = input) */
+    int last_record;     /* number of the last progress record */
+    opt_solver solver;   /* solver used */
+    double solver_flops; /* CHOLMOD analysis estimate (0 if not analysed) */
+    double t_setup, t_weights, t_assembly, t_solve, t_linesearch, t_harmonic, t_finish,
+        t_total;
+    opt_progress before; /* the input's record */
+    opt_progress after;  /* the returned mesh's record */
+    opt_progress
+        before_finish; /* record after the global iterations, before the finishing pass */
     int32_t max_inverted_global; /* largest inverted count of a global iterate (0 on a
                                   * valid input: the global step folds nothing) */
     int32_t folded_global;       /* valid tets the global steps inverted, summed */
     double hausd_bound;          /* the boundary bound applied, mesh units (0: none) */
-    char stop_reason[64];  /* "converged", "max-iter", "no-descent", "cancelled", "time-limit", "solver" */
+    char stop_reason[64];        /* "converged", "max-iter", "no-descent", "cancelled",
+                                    "time-limit", "solver" */
 } opt_result;
 
 /* Optimize m in place (coordinates only; tets, regions, fixed flags untouched).

@@ -158,7 +158,8 @@ qdc_status opt_set(opt_options *o, const char *key, const char *text, qdc_error 
             *(int *)f = (int)v;
         break;
     case OPT_T_REAL:
-        ok = !whole_number(text, &v) && (d->lo_open ? v > d->lo : v >= d->lo) && v <= d->hi;
+        ok = !whole_number(text, &v) && (d->lo_open ? v > d->lo : v >= d->lo) &&
+             v <= d->hi;
         if (ok)
             *(double *)f = v;
         break;
@@ -166,8 +167,9 @@ qdc_status opt_set(opt_options *o, const char *key, const char *text, qdc_error 
     if (ok)
         return QDC_OK;
     opt_range_text(d, range, sizeof range);
-    return qdc_fail(err, QDC_EINVAL, "option '%s': '%.40s' is not one of the valid values: %s",
-                    d->name, text, range);
+    return qdc_fail(err, QDC_EINVAL,
+                    "option '%s': '%.40s' is not one of the valid values: %s", d->name,
+                    text, range);
 }
 
 void opt_value_text(const opt_desc *d, const opt_options *o, char *buf, size_t n)

@@ -23,7 +23,7 @@ typedef enum {
 typedef struct {
     const char *name; /* query parameter and JSON key; the CLI flag is --name with '-' */
     opt_type type;
-    size_t off;       /* offset of the field in opt_options */
+    size_t off; /* offset of the field in opt_options */
     double lo, hi;
     int lo_open;
     const char *const *words; /* OPT_T_WORD */

@@ -17,9 +17,9 @@ struct slide_ctx {
     int32_t *fe_ptr;   /* per vertex: feature edges around it (CSR), as vertex pairs */
     int32_t *fe_nbr;
     int32_t nfe;
-    bderr_bvh *outer;  /* input boundary triangles */
-    bderr_bvh *inter;  /* input interface triangles (NULL if none) */
-    double bound;      /* > 0: no vertex farther than this from its input position */
+    bderr_bvh *outer; /* input boundary triangles */
+    bderr_bvh *inter; /* input interface triangles (NULL if none) */
+    double bound;     /* > 0: no vertex farther than this from its input position */
 };
 
 typedef struct {
@@ -39,7 +39,8 @@ static int edge_cmp(const void *x, const void *y)
 
 static void face_normal(const double *x, const int32_t *f, double n[3])
 {
-    const double *a = x + 3 * (size_t)f[0], *b = x + 3 * (size_t)f[1], *c = x + 3 * (size_t)f[2];
+    const double *a = x + 3 * (size_t)f[0], *b = x + 3 * (size_t)f[1],
+                 *c = x + 3 * (size_t)f[2];
     double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
     double w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
     n[0] = u[1] * w[2] - u[2] * w[1];
@@ -71,7 +72,8 @@ static qdc_status find_features(slide_ctx *s, const mesh_topo *tp, const double 
         return QDC_ENOMEM;
     for (int32_t f = 0; f < tp->nbf; f++)
         for (int k = 0; k < 3; k++) {
-            int32_t a = tp->bfaces[3 * (size_t)f + k], b = tp->bfaces[3 * (size_t)f + (k + 1) % 3];
+            int32_t a = tp->bfaces[3 * (size_t)f + k],
+                    b = tp->bfaces[3 * (size_t)f + (k + 1) % 3];
             edge_rec *r = e + 3 * (size_t)f + k;
             r->a = a < b ? a : b;
             r->b = a < b ? b : a;
@@ -151,9 +153,21 @@ static tri_key make_key(int32_t a, int32_t b, int32_t c)
 {
     tri_key k;
     int32_t t;
-    if (a > b) { t = a; a = b; b = t; }
-    if (b > c) { t = b; b = c; c = t; }
-    if (a > b) { t = a; a = b; b = t; }
+    if (a > b) {
+        t = a;
+        a = b;
+        b = t;
+    }
+    if (b > c) {
+        t = b;
+        b = c;
+        c = t;
+    }
+    if (a > b) {
+        t = a;
+        a = b;
+        b = t;
+    }
     k.v[0] = a;
     k.v[1] = b;
     k.v[2] = c;
@@ -170,11 +184,10 @@ static int is_feature_edge(const slide_ctx *s, int32_t a, int32_t b)
 
 int32_t slide_smooth_ears(const slide_ctx *s, const mesh_topo *tp, uint8_t *ear)
 {
-    static const int omit_pair[4][4][2] = {
-        {{-1, -1}, {2, 3}, {1, 3}, {1, 2}},
-        {{2, 3}, {-1, -1}, {0, 3}, {0, 2}},
-        {{1, 3}, {0, 3}, {-1, -1}, {0, 1}},
-        {{1, 2}, {0, 2}, {0, 1}, {-1, -1}}};
+    static const int omit_pair[4][4][2] = {{{-1, -1}, {2, 3}, {1, 3}, {1, 2}},
+                                           {{2, 3}, {-1, -1}, {0, 3}, {0, 2}},
+                                           {{1, 3}, {0, 3}, {-1, -1}, {0, 1}},
+                                           {{1, 2}, {0, 2}, {0, 1}, {-1, -1}}};
     tri_key *keys = qdc_mallocn((size_t)tp->nbf + 1, sizeof *keys);
     int32_t count = 0;
 
@@ -331,7 +344,8 @@ static void project_line(const slide_ctx *s, int32_t v, const double p[3], doubl
         for (int32_t l = s->fe_ptr[u]; l < s->fe_ptr[u + 1]; l++) {
             double cp[3];
             int32_t w = s->fe_nbr[l];
-            double d = bderr_point_segment(p, s->x0 + 3 * (size_t)u, s->x0 + 3 * (size_t)w, cp);
+            double d =
+                bderr_point_segment(p, s->x0 + 3 * (size_t)u, s->x0 + 3 * (size_t)w, cp);
             if (d < best) {
                 best = d;
                 memcpy(out, cp, sizeof cp);

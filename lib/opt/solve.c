@@ -151,8 +151,8 @@ static qdc_status build_pattern(solve_ctx *s, qdc_error *err)
         nnz += n;
         colptr[c + 1] = nnz;
     }
-    s->A = cholmod_l_allocate_sparse((size_t)nf, (size_t)nf, (size_t)nnz, 1, 1, 1, CHOLMOD_REAL,
-                                     &s->c);
+    s->A = cholmod_l_allocate_sparse((size_t)nf, (size_t)nf, (size_t)nnz, 1, 1, 1,
+                                     CHOLMOD_REAL, &s->c);
     if (!s->A) {
         st = qdc_fail(err, QDC_ENOMEM, "CHOLMOD could not allocate the %lld-entry matrix",
                       (long long)nnz);
@@ -209,7 +209,8 @@ static qdc_status build_pairslots(solve_ctx *s)
                 if (fa < 0 || fb < 0)
                     s->pairslot[n++] = -1;
                 else
-                    s->pairslot[n++] = find_in_col(s->A, fa > fb ? fa : fb, fa < fb ? fa : fb);
+                    s->pairslot[n++] =
+                        find_in_col(s->A, fa > fb ? fa : fb, fa < fb ? fa : fb);
             }
     for (int32_t f = 0; f < s->nfree; f++)
         s->diagslot[f] = find_in_col(s->A, f, f);
@@ -232,7 +233,8 @@ static qdc_status setup_cholmod(solve_ctx *s, opt_solver want, qdc_error *err)
      * (connectivity is fixed), so the symbolic factorization is kept. */
     s->L = cholmod_l_analyze(s->A, &s->c);
     if (!s->L || s->c.status < CHOLMOD_OK)
-        return qdc_fail(err, s->c.status == CHOLMOD_OUT_OF_MEMORY ? QDC_ENOMEM : QDC_ESOLVE,
+        return qdc_fail(err,
+                        s->c.status == CHOLMOD_OUT_OF_MEMORY ? QDC_ENOMEM : QDC_ESOLVE,
                         "cholmod_analyze failed (status %d)", s->c.status);
     s->flops = s->c.fl;
     if (want == OPT_SOLVER_AUTO) {
@@ -332,7 +334,8 @@ void solve_free(solve_ctx *s)
 }
 
 static qdc_status solve_direct(solve_ctx *s, const double *qval, const double *w2,
-                               const double *dg, const double *b, double *x, qdc_error *err)
+                               const double *dg, const double *b, double *x,
+                               qdc_error *err)
 {
     const mesh_topo *tp = s->tp;
     double *ax = s->A->x;
@@ -355,13 +358,15 @@ static qdc_status solve_direct(solve_ctx *s, const double *qval, const double *w
     for (int32_t f = 0; f < s->nfree; f++)
         ax[s->diagslot[f]] += dg[s->fvert[f]];
     if (!cholmod_l_factorize(s->A, s->L, &s->c) || s->c.status < CHOLMOD_OK)
-        return qdc_fail(err, QDC_ESOLVE, "cholmod_factorize failed (status %d)", s->c.status);
+        return qdc_fail(err, QDC_ESOLVE, "cholmod_factorize failed (status %d)",
+                        s->c.status);
     /* factorize returns TRUE for a matrix that is not positive definite:
      * the column where it stopped is in L->minor */
     if (s->L->minor < s->L->n)
         return qdc_fail(err, QDC_ESOLVE, "matrix not positive definite at column %lld",
                         (long long)s->L->minor);
-    B = cholmod_l_allocate_dense((size_t)s->nfree, 3, (size_t)s->nfree, CHOLMOD_REAL, &s->c);
+    B = cholmod_l_allocate_dense((size_t)s->nfree, 3, (size_t)s->nfree, CHOLMOD_REAL,
+                                 &s->c);
     if (!B)
         return QDC_ENOMEM;
     for (int32_t f = 0; f < s->nfree; f++)
@@ -373,7 +378,8 @@ static qdc_status solve_direct(solve_ctx *s, const double *qval, const double *w
     } else {
         for (int32_t f = 0; f < s->nfree; f++)
             for (int k = 0; k < 3; k++)
-                x[3 * (size_t)s->fvert[f] + k] = ((double *)X->x)[(size_t)k * s->nfree + f];
+                x[3 * (size_t)s->fvert[f] + k] =
+                    ((double *)X->x)[(size_t)k * s->nfree + f];
     }
     cholmod_l_free_dense(&B, &s->c);
     cholmod_l_free_dense(&X, &s->c);
@@ -395,7 +401,8 @@ static void apply_a(solve_ctx *s, const double *qval, const double *w2, const do
 #pragma omp parallel for schedule(static)
     for (int32_t i = 0; i < tp->nv; i++)
         for (int k = 0; k < 3; k++)
-            y[3 * (size_t)i + k] = s->locked[i] ? 0.0 : y[3 * (size_t)i + k] + dg[i] * v[3 * (size_t)i + k];
+            y[3 * (size_t)i + k] =
+                s->locked[i] ? 0.0 : y[3 * (size_t)i + k] + dg[i] * v[3 * (size_t)i + k];
 }
 
 static qdc_status solve_pcg(solve_ctx *s, const double *qval, const double *w2,
@@ -489,8 +496,9 @@ static qdc_status solve_pcg(solve_ctx *s, const double *qval, const double *w2,
     return QDC_OK;
 }
 
-qdc_status solve_system(solve_ctx *s, const double *qval, const double *w2, const double *dg,
-                        const double *b, double *x, int *iters, qdc_error *err)
+qdc_status solve_system(solve_ctx *s, const double *qval, const double *w2,
+                        const double *dg, const double *b, double *x, int *iters,
+                        qdc_error *err)
 {
     *iters = 0;
     if (s->nfree == 0)
@@ -518,9 +526,9 @@ static double pattern_mul(const mesh_topo *tp, const uint8_t *locked, const doub
     return vy;
 }
 
-qdc_status solve_cg_pattern(const mesh_topo *tp, const uint8_t *locked, const double *aval,
-                            const double *b, double *x, double rtol, int max_iter, int *iters,
-                            qdc_error *err)
+qdc_status solve_cg_pattern(const mesh_topo *tp, const uint8_t *locked,
+                            const double *aval, const double *b, double *x, double rtol,
+                            int max_iter, int *iters, qdc_error *err)
 {
     int32_t nv = tp->nv;
     double *r = qdc_mallocn((size_t)nv, sizeof(double));

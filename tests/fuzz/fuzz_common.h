@@ -4,8 +4,8 @@
 #ifndef QDC_FUZZ_COMMON_H
 #define QDC_FUZZ_COMMON_H
 
-#include "io/meshio.h"
 #include "../unit/testio.h" /* sink, sink_write */
+#include "io/meshio.h"
 
 #include <stdint.h>
 #include <stdlib.h>
@@ -32,8 +32,9 @@ static void check_roundtrip(const mesh_t *m, meshio_format f)
         !same(b->region, m->region, 4 * (size_t)m->nt) ||
         !same(b->fixed, m->fixed, (size_t)m->nv) ||
         (text && !same(b->vref, m->vref, 4 * (size_t)m->nv)) ||
-        (tris && (b->ntri != m->ntri || !same(b->tris, m->tris, 12 * (size_t)m->ntri) ||
-                  (f != MESHIO_MEDIT && !same(b->tri_ref, m->tri_ref, 4 * (size_t)m->ntri)))))
+        (tris &&
+         (b->ntri != m->ntri || !same(b->tris, m->tris, 12 * (size_t)m->ntri) ||
+          (f != MESHIO_MEDIT && !same(b->tri_ref, m->tri_ref, 4 * (size_t)m->ntri)))))
         __builtin_trap();
     mesh_free(b);
     free(s.b);

@@ -14,7 +14,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     for (int f = SURFACE_AUTO; f < SURFACE_FORMAT_COUNT; f++) {
         surface_t *s = NULL;
         qdc_error err;
-        qdc_status st = surface_read((const char *)data, size, (surface_format)f, &s, &err);
+        qdc_status st =
+            surface_read((const char *)data, size, (surface_format)f, &s, &err);
         if ((unsigned)st >= QDC_STATUS_COUNT || (st == QDC_OK) != (s != NULL) ||
             (st != QDC_OK && err.status != st))
             __builtin_trap();

@@ -1,6 +1,6 @@
 /* test_core.c - analytic checks of metrics, QDC encoding and the linear solvers. */
-#include "opt/encode.h"
 #include "geom/metric.h"
+#include "opt/encode.h"
 #include "opt/solve.h"
 #include "testlib.h"
 #include "testmesh.h"
@@ -48,8 +48,8 @@ TEST(mivl_is_mimr_to_three_halves)
     double t[4][3] = {{0, 0, 0}, {1, 0.1, 0}, {0.2, 0.7, 0.1}, {0.3, 0.2, 0.4}};
     metric_parts p;
     metric_parts_of(t[0], t[1], t[2], t[3], &p);
-    ASSERT_NEAR(metric_qt(OPT_METRIC_MIVL, &p, 0), pow(metric_qt(OPT_METRIC_MIMR, &p, 0), 1.5),
-                1e-12);
+    ASSERT_NEAR(metric_qt(OPT_METRIC_MIVL, &p, 0),
+                pow(metric_qt(OPT_METRIC_MIMR, &p, 0), 1.5), 1e-12);
 }
 
 TEST(inverted_tet_negative_mean_ratio_and_infinite_qt)
@@ -142,10 +142,13 @@ TEST(hessian_matches_finite_differences_of_the_gradient)
         for (int a = 0; a < 4; a++)
             for (int dl = 0; dl < 3; dl++) {
                 /* delta 0, moderate, and large enough to matter (vol ~ 0.06) */
-                double delta = dl == 0 ? 0.0 : (dl == 1 ? 0.02 : 0.2), g[3], H[6], h = 1e-6;
+                double delta = dl == 0 ? 0.0 : (dl == 1 ? 0.02 : 0.2), g[3], H[6],
+                       h = 1e-6;
                 double q = metric_qt_hess((opt_metric)mm, &t[0][0], a, delta, g, H, NULL);
                 double g0[3];
-                ASSERT_NEAR(q, metric_qt_grad((opt_metric)mm, &t[0][0], a, delta, g0, NULL), 1e-14);
+                ASSERT_NEAR(q,
+                            metric_qt_grad((opt_metric)mm, &t[0][0], a, delta, g0, NULL),
+                            1e-14);
                 for (int k = 0; k < 3; k++)
                     ASSERT_NEAR(g[k], g0[k], 1e-12 * (1 + fabs(g0[k])));
                 for (int e = 0; e < 6; e++) {
@@ -170,7 +173,8 @@ TEST(hessian_matches_finite_differences_of_the_gradient)
 static mesh_t *star_mesh(void)
 {
     mesh_t *m = mesh_new(5, 4, 0);
-    static const int32_t tets[4][4] = {{4, 1, 2, 3}, {0, 4, 2, 3}, {0, 1, 4, 3}, {0, 1, 2, 4}};
+    static const int32_t tets[4][4] = {
+        {4, 1, 2, 3}, {0, 4, 2, 3}, {0, 1, 4, 3}, {0, 1, 2, 4}};
     for (int a = 0; a < 4; a++)
         for (int k = 0; k < 3; k++) {
             m->xyz[3 * a + k] = REG[a][k];
@@ -247,11 +251,13 @@ static void dense_solve(const mesh_topo *tp, const uint8_t *locked, const double
                         const double *w2, const double *dg, const double *b, double *x)
 {
     int n = tp->nv;
-    double *A = calloc((size_t)n * n, sizeof(double)), *B = malloc(sizeof(double) * 3 * n);
+    double *A = calloc((size_t)n * n, sizeof(double)),
+           *B = malloc(sizeof(double) * 3 * n);
     for (int i = 0; i < n; i++)
         for (int32_t s1 = tp->adj_ptr[i]; s1 < tp->adj_ptr[i + 1]; s1++)
             for (int32_t s2 = tp->adj_ptr[i]; s2 < tp->adj_ptr[i + 1]; s2++)
-                A[(size_t)tp->adj_idx[s1] * n + tp->adj_idx[s2]] += w2[i] * qval[s1] * qval[s2];
+                A[(size_t)tp->adj_idx[s1] * n + tp->adj_idx[s2]] +=
+                    w2[i] * qval[s1] * qval[s2];
     for (int i = 0; i < n; i++) {
         A[(size_t)i * n + i] += dg[i];
         for (int k = 0; k < 3; k++)
@@ -412,7 +418,8 @@ TEST(validation_errors)
 TEST(dihedral_sines_are_the_sines_of_the_angles)
 {
     /* regular tet: every angle is acos(1/3), sine 2 sqrt2 / 3 */
-    double s[6], ang[6], t[4][3] = {{0, 0, 0}, {1, 0.1, 0}, {0.2, 0.7, 0.1}, {0.3, 0.2, 0.4}};
+    double s[6], ang[6],
+        t[4][3] = {{0, 0, 0}, {1, 0.1, 0}, {0.2, 0.7, 0.1}, {0.3, 0.2, 0.4}};
     metric_dihedral_sines(REG[0], REG[1], REG[2], REG[3], s);
     for (int e = 0; e < 6; e++)
         ASSERT_NEAR(s[e], 2.0 * sqrt(2.0) / 3.0, 1e-12);
@@ -438,9 +445,11 @@ TEST(dihedral_sines_are_the_sines_of_the_angles)
     }
 }
 
-TEST_MAIN("core", T(hessian_matches_finite_differences_of_the_gradient), T(dihedral_sines_are_the_sines_of_the_angles), T(regular_tet_metrics_are_one), T(scaled_regular_tet_is_still_one),
-          T(mivl_is_mimr_to_three_halves), T(inverted_tet_negative_mean_ratio_and_infinite_qt),
+TEST_MAIN("core", T(hessian_matches_finite_differences_of_the_gradient),
+          T(dihedral_sines_are_the_sines_of_the_angles), T(regular_tet_metrics_are_one),
+          T(scaled_regular_tet_is_still_one), T(mivl_is_mimr_to_three_halves),
+          T(inverted_tet_negative_mean_ratio_and_infinite_qt),
           T(h_is_continuous_and_regularizes), T(alpha_closed_form_matches_search),
           T(gradient_matches_finite_differences), T(qdc_of_symmetric_star),
-          T(optavg_weights_sum_to_one_on_random_mesh), T(cholmod_and_pcg_agree_with_dense),
-          T(topology_of_grid), T(validation_errors))
+          T(optavg_weights_sum_to_one_on_random_mesh),
+          T(cholmod_and_pcg_agree_with_dense), T(topology_of_grid), T(validation_errors))

@@ -8,9 +8,9 @@
 #include "testio.h"
 #include "testlib.h"
 
-static const meshio_format new_formats[] = {MESHIO_GMSH41, MESHIO_GMSH41_BIN, MESHIO_GMSH22,
-                                            MESHIO_VTK,    MESHIO_VTK_ASCII,  MESHIO_VTU,
-                                            MESHIO_VTU_ASCII};
+static const meshio_format new_formats[] = {
+    MESHIO_GMSH41,    MESHIO_GMSH41_BIN, MESHIO_GMSH22,   MESHIO_VTK,
+    MESHIO_VTK_ASCII, MESHIO_VTU,        MESHIO_VTU_ASCII};
 #define N_NEW (int)(sizeof new_formats / sizeof new_formats[0])
 
 static int is_vtk(meshio_format f)
@@ -81,7 +81,8 @@ TEST(roundtrip_files)
     char path[256];
 
     for (int i = 0; i < 3; i++) {
-        snprintf(path, sizeof path, "/tmp/qdc_test_formats_%d_%s", (int)getpid(), names[i]);
+        snprintf(path, sizeof path, "/tmp/qdc_test_formats_%d_%s", (int)getpid(),
+                 names[i]);
         ASSERT_OK(meshio_save(path, MESHIO_AUTO, m, &err));
         ASSERT_OK(meshio_load(path, MESHIO_AUTO, &b, &err));
         unlink(path);
@@ -104,15 +105,16 @@ TEST(gmsh41_tags_out_of_order_and_skipped_types)
 {
     /* node tags sparse and unsorted (sorted-table path), a point and a line
      * element skipped, tets on two volumes with physical groups 7 and 9 */
-    const char *msh = "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n"
-                      "$PhysicalNames\n1\n3 7 \"steel\"\n$EndPhysicalNames\n"
-                      "$Entities\n1 0 0 2\n1 0 0 0 0\n"
-                      "10 0 0 0 1 1 1 1 7 0\n11 0 0 0 1 1 1 1 9 0\n$EndEntities\n"
-                      "$Nodes\n2 5 5 9000000\n3 10 0 3\n9000000\n5\n77\n0 0 0\n1 0 0\n0 1 0\n"
-                      "3 11 0 2\n123456\n6\n0 0 1\n1 1 1\n$EndNodes\n"
-                      "$Elements\n4 5 1 5\n0 1 15 1\n1 5\n1 1 1 1\n2 5 77\n"
-                      "3 10 4 2\n3 9000000 5 77 123456\n4 5 77 6 123456\n"
-                      "3 11 4 1\n5 9000000 77 5 6\n$EndElements\n";
+    const char *msh =
+        "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n"
+        "$PhysicalNames\n1\n3 7 \"steel\"\n$EndPhysicalNames\n"
+        "$Entities\n1 0 0 2\n1 0 0 0 0\n"
+        "10 0 0 0 1 1 1 1 7 0\n11 0 0 0 1 1 1 1 9 0\n$EndEntities\n"
+        "$Nodes\n2 5 5 9000000\n3 10 0 3\n9000000\n5\n77\n0 0 0\n1 0 0\n0 1 0\n"
+        "3 11 0 2\n123456\n6\n0 0 1\n1 1 1\n$EndNodes\n"
+        "$Elements\n4 5 1 5\n0 1 15 1\n1 5\n1 1 1 1\n2 5 77\n"
+        "3 10 4 2\n3 9000000 5 77 123456\n4 5 77 6 123456\n"
+        "3 11 4 1\n5 9000000 77 5 6\n$EndElements\n";
     mesh_t *m;
     qdc_error err;
     int notes = 0;
@@ -134,9 +136,10 @@ TEST(gmsh41_tags_out_of_order_and_skipped_types)
 
 TEST(gmsh_entity_tags_without_physicals)
 {
-    const char *msh22 = "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n4\n"
-                        "1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n$EndNodes\n$Elements\n3\n"
-                        "1 15 2 0 1 1\n2 4 2 0 5 1 2 3 4\n3 4 3 0 6 3 1 2 3 4\n$EndElements\n";
+    const char *msh22 =
+        "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n4\n"
+        "1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n$EndNodes\n$Elements\n3\n"
+        "1 15 2 0 1 1\n2 4 2 0 5 1 2 3 4\n3 4 3 0 6 3 1 2 3 4\n$EndElements\n";
     mesh_t *m;
     qdc_error err;
 
@@ -152,27 +155,30 @@ TEST(gmsh_errors_say_where)
 {
     mesh_t *m;
     qdc_error err;
-    const char *bad = "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 2 1 2\n3 1 0 2\n1\n2\n"
-                      "0 0 0\n0 nan 0\n$EndNodes\n";
+    const char *bad =
+        "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 2 1 2\n3 1 0 2\n1\n2\n"
+        "0 0 0\n0 nan 0\n$EndNodes\n";
 
     ASSERT_EQ_INT(read_str(bad, MESHIO_GMSH41, &m, &err), QDC_EPARSE);
     ASSERT_EQ_INT(err.line, 10);
     ASSERT_EQ_INT(err.col, 3);
     ASSERT_TRUE(strstr(err.msg, "not finite"));
-    ASSERT_EQ_INT(read_str("$MeshFormat\n3.0 0 8\n$EndMeshFormat\n", MESHIO_GMSH41, &m, &err),
-                  QDC_EFORMAT);
+    ASSERT_EQ_INT(
+        read_str("$MeshFormat\n3.0 0 8\n$EndMeshFormat\n", MESHIO_GMSH41, &m, &err),
+        QDC_EFORMAT);
 }
 
 TEST(vtk51_layout_and_field_data)
 {
-    const char *vtk = "# vtk DataFile Version 5.1\nmeshio\nASCII\nDATASET UNSTRUCTURED_GRID\n"
-                      "POINTS 5 float\n0 0 0 1 0 0 0 1 0 0 0 1 1 1 1\n"
-                      "CELLS 4 10\nOFFSETS vtktypeint64\n0 4 6 10\n"
-                      "CONNECTIVITY vtktypeint64\n0 1 2 3 0 4 1 2 3 4\n"
-                      "CELL_TYPES 3\n10\n3\n10\n"
-                      "CELL_DATA 3\nFIELD FieldData 2\nother 2 3 double\n1 2 3 4 5 6\n"
-                      "gmsh:physical 1 3 int\n4 0 8\n"
-                      "POINT_DATA 5\nSCALARS medit:ref int 1\nLOOKUP_TABLE default\n1 2 3 4 5\n";
+    const char *vtk =
+        "# vtk DataFile Version 5.1\nmeshio\nASCII\nDATASET UNSTRUCTURED_GRID\n"
+        "POINTS 5 float\n0 0 0 1 0 0 0 1 0 0 0 1 1 1 1\n"
+        "CELLS 4 10\nOFFSETS vtktypeint64\n0 4 6 10\n"
+        "CONNECTIVITY vtktypeint64\n0 1 2 3 0 4 1 2 3 4\n"
+        "CELL_TYPES 3\n10\n3\n10\n"
+        "CELL_DATA 3\nFIELD FieldData 2\nother 2 3 double\n1 2 3 4 5 6\n"
+        "gmsh:physical 1 3 int\n4 0 8\n"
+        "POINT_DATA 5\nSCALARS medit:ref int 1\nLOOKUP_TABLE default\n1 2 3 4 5\n";
     mesh_t *m;
     qdc_error err;
 
@@ -187,7 +193,8 @@ TEST(vtk51_layout_and_field_data)
 
 static void b64(const unsigned char *in, size_t n, char *out)
 {
-    static const char al[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    static const char al[] =
+        "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
     size_t o = strlen(out);
 
     for (size_t i = 0; i < n; i += 3) {
@@ -212,28 +219,34 @@ TEST(vtu_inline_base64)
     mesh_t *m;
     qdc_error err;
 
-    strcat(doc, "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" "
-                "byte_order=\"LittleEndian\">\n<UnstructuredGrid><Piece NumberOfPoints=\"4\" "
-                "NumberOfCells=\"1\">\n<!-- a comment -->\n<Points><DataArray type=\"Float32\" "
-                "NumberOfComponents=\"3\" format=\"binary\">");
+    strcat(
+        doc,
+        "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" "
+        "byte_order=\"LittleEndian\">\n<UnstructuredGrid><Piece NumberOfPoints=\"4\" "
+        "NumberOfCells=\"1\">\n<!-- a comment -->\n<Points><DataArray type=\"Float32\" "
+        "NumberOfComponents=\"3\" format=\"binary\">");
     h = sizeof pts;
     b64((unsigned char *)&h, 4, doc);
     b64((unsigned char *)pts, sizeof pts, doc);
-    strcat(doc, "</DataArray></Points><Cells><DataArray type=\"Int32\" Name=\"connectivity\" "
-                "format=\"binary\">\n  ");
+    strcat(doc,
+           "</DataArray></Points><Cells><DataArray type=\"Int32\" Name=\"connectivity\" "
+           "format=\"binary\">\n  ");
     h = sizeof conn;
     b64((unsigned char *)&h, 4, doc);
     b64((unsigned char *)conn, sizeof conn, doc);
-    strcat(doc, "</DataArray><DataArray type=\"Int32\" Name=\"offsets\" format=\"binary\">");
+    strcat(doc,
+           "</DataArray><DataArray type=\"Int32\" Name=\"offsets\" format=\"binary\">");
     h = sizeof offs;
     b64((unsigned char *)&h, 4, doc);
     b64((unsigned char *)offs, sizeof offs, doc);
-    strcat(doc, "</DataArray><DataArray type=\"UInt8\" Name=\"types\" format=\"binary\">");
+    strcat(doc,
+           "</DataArray><DataArray type=\"UInt8\" Name=\"types\" format=\"binary\">");
     h = 1;
     b64((unsigned char *)&h, 4, doc);
     b64(types, 1, doc);
-    strcat(doc, "</DataArray></Cells><CellData><DataArray type=\"Int32\" Name=\"medit:ref\" "
-                "format=\"binary\">");
+    strcat(doc,
+           "</DataArray></Cells><CellData><DataArray type=\"Int32\" Name=\"medit:ref\" "
+           "format=\"binary\">");
     h = 4;
     b64((unsigned char *)&h, 4, doc);
     b64((unsigned char *)reg, 4, doc);
@@ -268,16 +281,19 @@ TEST(names_sniffing_media_types)
         ASSERT_TRUE(mt != NULL);
         ASSERT_EQ_INT(meshio_format_from_media_type(mt), f);
     }
-    ASSERT_EQ_INT(meshio_format_from_media_type("Model/VND.Gmsh ; charset=utf-8; Version=\"2.2\""),
-                  MESHIO_GMSH22);
+    ASSERT_EQ_INT(
+        meshio_format_from_media_type("Model/VND.Gmsh ; charset=utf-8; Version=\"2.2\""),
+        MESHIO_GMSH22);
     ASSERT_EQ_INT(meshio_format_from_media_type("application/x-vtk"), MESHIO_VTK);
     ASSERT_EQ_INT(meshio_format_from_media_type("application/json; q=0.5"), MESHIO_JSON);
     ASSERT_EQ_INT(meshio_format_from_media_type("model/stl"), MESHIO_AUTO);
     ASSERT_EQ_INT(meshio_format_from_media_type(NULL), MESHIO_AUTO);
     ASSERT_EQ_INT(meshio_sniff("$MeshFormat\n4.1 1 8\n", 20), MESHIO_GMSH41_BIN);
     ASSERT_EQ_INT(meshio_sniff("\n$MeshFormat\n2.2 0 8\n", 21), MESHIO_GMSH22);
-    ASSERT_EQ_INT(meshio_sniff("# vtk DataFile Version 2.0\nx\nASCII\n", 35), MESHIO_VTK_ASCII);
-    ASSERT_EQ_INT(meshio_sniff("# vtk DataFile Version 2.0\nx\nBINARY\n", 36), MESHIO_VTK);
+    ASSERT_EQ_INT(meshio_sniff("# vtk DataFile Version 2.0\nx\nASCII\n", 35),
+                  MESHIO_VTK_ASCII);
+    ASSERT_EQ_INT(meshio_sniff("# vtk DataFile Version 2.0\nx\nBINARY\n", 36),
+                  MESHIO_VTK);
     ASSERT_EQ_INT(meshio_sniff("<?xml version=\"1.0\"?><VTKFile", 29), MESHIO_VTU);
     ASSERT_EQ_INT(meshio_sniff("<html>", 6), MESHIO_AUTO);
 }
@@ -353,5 +369,6 @@ TEST(fuzz_replay)
 TEST_MAIN("formats", T(roundtrip_all_tags), T(roundtrip_no_tags), T(roundtrip_empty),
           T(roundtrip_files), T(gmsh41_tags_out_of_order_and_skipped_types),
           T(gmsh_entity_tags_without_physicals), T(gmsh_errors_say_where),
-          T(vtk51_layout_and_field_data), T(vtu_inline_base64), T(names_sniffing_media_types),
-          T(dev_speed_ascii), T(gmsh41_binary_1m_tets_speed), T(fuzz_replay))
+          T(vtk51_layout_and_field_data), T(vtu_inline_base64),
+          T(names_sniffing_media_types), T(dev_speed_ascii),
+          T(gmsh41_binary_1m_tets_speed), T(fuzz_replay))

@@ -1,10 +1,10 @@
 /* test_opt.c - behaviour of the optimizer on synthetic meshes: it improves,
  * untangles, never returns a worse mesh, respects locked vertices and tags,
  * stops on cancel. */
-#include "opt/finish.h"
-#include "geom/metric.h"
-#include "opt/opt.h"
 #include "eval/report.h"
+#include "geom/metric.h"
+#include "opt/finish.h"
+#include "opt/opt.h"
 #include "testlib.h"
 #include "testmesh.h"
 
@@ -339,13 +339,14 @@ TEST(angle_sweep_raises_the_smallest_angle_within_its_rules)
     ASSERT_TRUE(s0 > 0.0);
     smin = malloc((size_t)m->nt * sizeof(double));
     ASSERT_TRUE(smin);
-    ASSERT_OK(finish_dihedral_sweep(tp, movable, NULL, m->xyz, 1.0 / n, 0.05, q0, smin, 0, &fs));
+    ASSERT_OK(finish_dihedral_sweep(tp, movable, NULL, m->xyz, 1.0 / n, 0.05, q0, smin, 0,
+                                    &fs));
     worst_of(m, &s1, &q1);
     ASSERT_TRUE(fs.n_moves > 0);
     ASSERT_NEAR(fs.floor_before, s0, 1e-12);
     ASSERT_NEAR(fs.floor_after, s1, 1e-12);
-    ASSERT_TRUE(s1 > s0);     /* the smallest sine rose */
-    ASSERT_TRUE(q1 >= q0);    /* no tet fell below the mean-ratio floor */
+    ASSERT_TRUE(s1 > s0);  /* the smallest sine rose */
+    ASSERT_TRUE(q1 >= q0); /* no tet fell below the mean-ratio floor */
     for (int32_t v = 0; v < m->nv; v++)
         if (!movable[v])
             for (int c = 0; c < 3; c++)
@@ -385,16 +386,19 @@ TEST(angle_polish_option_keeps_every_guarantee)
     ASSERT_TRUE(all_finite(b));
     ASSERT_EQ_INT(qb.n_inverted, 0);
     ASSERT_TRUE(qb.q_min >= qa.q_min);
-    ASSERT_TRUE(fmin(qb.dih_min, 180.0 - qb.dih_max) >= fmin(qa.dih_min, 180.0 - qa.dih_max));
+    ASSERT_TRUE(fmin(qb.dih_min, 180.0 - qb.dih_max) >=
+                fmin(qa.dih_min, 180.0 - qa.dih_max));
     ASSERT_NEAR(rb.after.dih_min, qb.dih_min, 1e-9);
     mesh_free(a);
     mesh_free(b);
 }
 
 TEST_MAIN("opt", T(angle_sweep_raises_the_smallest_angle_within_its_rules),
-          T(angle_polish_option_keeps_every_guarantee), T(improves_perturbed_grid), T(untangles_inverted_grid),
-          T(never_worse_than_input), T(literal_mode_is_safe_and_reported),
-          T(fixed_boundary_and_user_locks_do_not_move), T(regions_and_connectivity_untouched),
-          T(cancel_from_progress_callback), T(cancel_flag_before_start),
-          T(solvers_and_metrics_all_work), T(harmonic_guidance_runs),
-          T(bad_options_and_bad_mesh_rejected), T(allocation_failures_are_clean))
+          T(angle_polish_option_keeps_every_guarantee), T(improves_perturbed_grid),
+          T(untangles_inverted_grid), T(never_worse_than_input),
+          T(literal_mode_is_safe_and_reported),
+          T(fixed_boundary_and_user_locks_do_not_move),
+          T(regions_and_connectivity_untouched), T(cancel_from_progress_callback),
+          T(cancel_flag_before_start), T(solvers_and_metrics_all_work),
+          T(harmonic_guidance_runs), T(bad_options_and_bad_mesh_rejected),
+          T(allocation_failures_are_clean))

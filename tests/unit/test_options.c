@@ -16,9 +16,9 @@ TEST(every_default_reads_back_as_itself)
         char v[64];
         opt_value_text(&t[i], &d, v, sizeof v);
         opt_defaults(&o);
-        memset((char *)&o + t[i].off, 0x5a, t[i].type == OPT_T_REAL || t[i].type == OPT_T_HAUSD
-                                                 ? sizeof(double)
-                                                 : sizeof(int));
+        memset((char *)&o + t[i].off, 0x5a,
+               t[i].type == OPT_T_REAL || t[i].type == OPT_T_HAUSD ? sizeof(double)
+                                                                   : sizeof(int));
         ASSERT_OK(opt_set(&o, t[i].name, v, NULL));
         ASSERT_TRUE(memcmp((char *)&o + t[i].off, (char *)&d + t[i].off,
                            t[i].type == OPT_T_REAL || t[i].type == OPT_T_HAUSD
@@ -36,8 +36,8 @@ TEST(ranges_and_strictness)
     ASSERT_OK(opt_set(&o, "mu", "0.25", NULL));
     ASSERT_NEAR(o.mu, 0.25, 0);
     /* mu > 0: zero, an underflow to zero, NaN, infinity and junk are refused */
-    static const char *const bad_mu[] = {"0", "1e-400", "nan", "inf", "-1", " 1", "1 ", "1x", "",
-                                         "1e13"};
+    static const char *const bad_mu[] = {"0",  "1e-400", "nan", "inf", "-1",
+                                         " 1", "1 ",     "1x",  "",    "1e13"};
     for (size_t i = 0; i < sizeof bad_mu / sizeof bad_mu[0]; i++) {
         ASSERT_EQ_INT(opt_set(&o, "mu", bad_mu[i], &e), QDC_EINVAL);
         ASSERT_NEAR(o.mu, 0.25, 0); /* unchanged */
@@ -80,8 +80,8 @@ TEST(hausd_forms)
     ASSERT_NEAR(o.hausd_rel, 0.001, 1e-18);
     ASSERT_OK(opt_set(&o, "hausd", "rel:1e-4", NULL));
     ASSERT_NEAR(o.hausd_rel, 1e-4, 0);
-    static const char *const bad[] = {"-1", "rel:", "rel:-1", "%", "nan", "1e-3x", "rel:inf",
-                                      ""};
+    static const char *const bad[] = {"-1",  "rel:",  "rel:-1",  "%",
+                                      "nan", "1e-3x", "rel:inf", ""};
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++)
         ASSERT_EQ_INT(opt_set(&o, "hausd", bad[i], NULL), QDC_EINVAL);
     ASSERT_NEAR(o.hausd_rel, 1e-4, 0);

@@ -49,7 +49,8 @@ static void sort_tets(mesh_t *m)
 TEST(two_tets_either_vertex_order)
 {
     /* tets (0,1,2,3) and (1,0,2,4) share face (0,1,2) from opposite sides */
-    static const double xyz[5][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0.2, 0.2, 1}, {0.3, 0.3, -1}};
+    static const double xyz[5][3] = {
+        {0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0.2, 0.2, 1}, {0.3, 0.3, -1}};
     mesh_t *m = mesh_new(5, 2, 0);
     uint8_t flip[2];
     mesh_orientation o;
@@ -169,7 +170,7 @@ TEST(tangled_component_keeps_its_majority)
     mesh_orientation o, os;
     int32_t nneg = 0;
     tm_perturb(m, 3, 0.2, 3); /* a valid, irregular grid first */
-    m->xyz[3 * 21] += 0.9; /* vertex (1,1,1) of the 4x4x4 lattice */
+    m->xyz[3 * 21] += 0.9;    /* vertex (1,1,1) of the 4x4x4 lattice */
     for (int32_t t = 0; t < m->nt; t++)
         nneg += det4(m, m->tets + 4 * (size_t)t) < 0;
     ASSERT_TRUE(nneg > 0);
@@ -219,12 +220,14 @@ TEST(non_orientable_connectivity_is_an_error)
     }
     /* without the twist the same ring is fine */
     for (int k = 0; k < 12; k++)
-        m->tets[12 * (K - 1) + k] = (int32_t[]){9, 10, 11, 0, 10, 11, 0, 1, 11, 0, 1, 2}[k];
+        m->tets[12 * (K - 1) + k] =
+            (int32_t[]){9, 10, 11, 0, 10, 11, 0, 1, 11, 0, 1, 2}[k];
     ASSERT_OK(mesh_orient(m, flip, &o, NULL));
     ASSERT_EQ_INT(o.components, 1);
     mesh_free(m);
 }
 
 TEST_MAIN("orient", T(two_tets_either_vertex_order), T(dolfin_sorted_grid_is_valid),
-          T(all_inverted_components_each_flip_whole), T(tangled_component_keeps_its_majority),
+          T(all_inverted_components_each_flip_whole),
+          T(tangled_component_keeps_its_majority),
           T(non_orientable_connectivity_is_an_error))

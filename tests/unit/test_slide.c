@@ -1,8 +1,8 @@
 /* test_slide.c - sliding boundary: feature detection, projection, and the
  * optimizer keeping the shape, the regions and the locked vertices. */
+#include "eval/report.h"
 #include "geom/bderr.h"
 #include "opt/opt.h"
-#include "eval/report.h"
 #include "opt/slide.h"
 #include "testlib.h"
 #include "testmesh.h"
@@ -58,7 +58,8 @@ TEST(projection_onto_face_line_and_corner)
     mesh_t *m = tm_grid(n, 0);
     mesh_topo *tp = NULL;
     slide_ctx *s = NULL;
-    /* vertex (0.5, 0.5, 0) is on the z = 0 face; (0.5, 0, 0) on an edge; (0,0,0) a corner */
+    /* vertex (0.5, 0.5, 0) is on the z = 0 face; (0.5, 0, 0) on an edge; (0,0,0) a corner
+     */
     int32_t vf = 1 + 3 * 1, ve = 1, vc = 0;
     double p[3], q[3], g[3] = {1, 2, 3}, t[3];
     ASSERT_OK(mesh_topo_build(m, &tp, NULL));
@@ -190,4 +191,5 @@ TEST(slide_keeps_region_interfaces_and_tags)
 
 TEST_MAIN("slide", T(cube_features_are_its_12_edges_and_8_corners),
           T(projection_onto_face_line_and_corner), T(bvh_picks_the_closest_triangle),
-          T(slide_keeps_the_cube_and_beats_fixed), T(slide_keeps_region_interfaces_and_tags))
+          T(slide_keeps_the_cube_and_beats_fixed),
+          T(slide_keeps_region_interfaces_and_tags))

@@ -25,7 +25,8 @@ static void cube_stl(char *out, size_t n, double dx, int open)
             int tri[3] = {cube_q[f][0], cube_q[f][1 + h], cube_q[f][2 + h]};
             if (open && f == 5 && h == 1)
                 continue;
-            o += (size_t)snprintf(out + o, n - o, "  facet normal 0 0 0\n    outer loop\n");
+            o += (size_t)snprintf(out + o, n - o,
+                                  "  facet normal 0 0 0\n    outer loop\n");
             for (int k = 0; k < 3; k++)
                 o += (size_t)snprintf(out + o, n - o, "      vertex %g %g %g\n",
                                       cube_v[tri[k]][0] + dx, cube_v[tri[k]][1],
@@ -35,7 +36,8 @@ static void cube_stl(char *out, size_t n, double dx, int open)
     snprintf(out + o, n - o, "endsolid cube\n");
 }
 
-static qdc_status surf_str(const char *s, surface_format f, surface_t **out, qdc_error *err)
+static qdc_status surf_str(const char *s, surface_format f, surface_t **out,
+                           qdc_error *err)
 {
     return surface_read(s, strlen(s), f, out, err);
 }
@@ -116,7 +118,8 @@ TEST(stl_binary)
     ASSERT_EQ_INT(s->nv, 8);
     ASSERT_OK(surface_check(s, &err));
     surface_free(s);
-    ASSERT_EQ_INT(surface_read((char *)b, sizeof b - 1, SURFACE_STL, &s, &err), QDC_EPARSE);
+    ASSERT_EQ_INT(surface_read((char *)b, sizeof b - 1, SURFACE_STL, &s, &err),
+                  QDC_EPARSE);
 }
 
 TEST(off_obj_poly_smesh)
@@ -124,10 +127,11 @@ TEST(off_obj_poly_smesh)
     const char *off = "OFF\n# cube\n8 6 0\n0 0 0\n0 0 1\n0 1 0\n0 1 1\n1 0 0\n1 0 1\n"
                       "1 1 0\n1 1 1\n4 0 1 3 2\n4 4 6 7 5\n4 0 4 5 1\n4 2 3 7 6\n"
                       "4 0 2 6 4 255 0 0\n4 1 5 7 3\n";
-    const char *obj = "# cube\nmtllib x.mtl\no cube\nv 0 0 0\nv 0 0 1\nv 0 1 0\nv 0 1 1\n"
-                      "v 1 0 0\nv 1 0 1\nv 1 1 0\nv 1 1 1\nvn 0 0 1\ns off\n"
-                      "f 1//1 2//1 4//1 3//1\nf 5 7 8 6\nf 1/1 5/1 6/1 2/1\nf -6 -5 -1 -2\n"
-                      "f 1 3 7 5\nf 2 6 8 4\n";
+    const char *obj =
+        "# cube\nmtllib x.mtl\no cube\nv 0 0 0\nv 0 0 1\nv 0 1 0\nv 0 1 1\n"
+        "v 1 0 0\nv 1 0 1\nv 1 1 0\nv 1 1 1\nvn 0 0 1\ns off\n"
+        "f 1//1 2//1 4//1 3//1\nf 5 7 8 6\nf 1/1 5/1 6/1 2/1\nf -6 -5 -1 -2\n"
+        "f 1 3 7 5\nf 2 6 8 4\n";
     const char *poly = "8 3 0 0\n1 0 0 0\n2 0 0 1\n3 0 1 0\n4 0 1 1\n5 1 0 0\n6 1 0 1\n"
                        "7 1 1 0\n8 1 1 1\n6 1\n1 0 1\n4 1 2 4 3\n1 0 2\n4 5 7 8 6\n"
                        "1 0 3\n4 1 5 6 2\n1 0 4\n4 3 4 8 7\n1 0 5\n4 1 3 7 5\n"
@@ -140,8 +144,8 @@ TEST(off_obj_poly_smesh)
     qdc_error err;
 
     for (int i = 0; i < 4; i++) {
-        ASSERT_OK(surf_str(in[i], i == 1 ? SURFACE_AUTO : (surface_format)(SURFACE_OFF + i), &s,
-                           &err));
+        ASSERT_OK(surf_str(
+            in[i], i == 1 ? SURFACE_AUTO : (surface_format)(SURFACE_OFF + i), &s, &err));
         ASSERT_EQ_INT(s->nv, 8);
         ASSERT_EQ_INT(s->ntri, 12);
         ASSERT_OK(surface_check(s, &err));
@@ -162,11 +166,13 @@ TEST(reader_errors_say_where)
     surface_t *s;
     qdc_error err;
 
-    ASSERT_EQ_INT(surf_str("OFF\n3 1 0\n0 0 0\n1 0 0\n0 nan 0\n3 0 1 2\n", SURFACE_OFF, &s, &err),
-                  QDC_EPARSE);
+    ASSERT_EQ_INT(
+        surf_str("OFF\n3 1 0\n0 0 0\n1 0 0\n0 nan 0\n3 0 1 2\n", SURFACE_OFF, &s, &err),
+        QDC_EPARSE);
     ASSERT_EQ_INT(err.line, 5);
     ASSERT_EQ_INT(err.col, 3);
-    ASSERT_EQ_INT(surf_str("OFF\n3 1000000000 0\n0 0 0\n", SURFACE_OFF, &s, &err), QDC_EPARSE);
+    ASSERT_EQ_INT(surf_str("OFF\n3 1000000000 0\n0 0 0\n", SURFACE_OFF, &s, &err),
+                  QDC_EPARSE);
     ASSERT_TRUE(strstr(err.msg, "does not fit"));
     ASSERT_EQ_INT(surf_str("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n", SURFACE_OBJ, &s, &err),
                   QDC_EPARSE);
@@ -284,10 +290,12 @@ TEST(tetgen_bad_surfaces)
     ASSERT_TRUE(strstr(err.msg, "intersects itself"));
     ASSERT_TRUE(m == NULL);
     cube_stl(a, sizeof a, 0, 1);
-    ASSERT_EQ_INT(tetra_from_buffer(a, strlen(a), SURFACE_STL, NULL, &m, &err), QDC_EMESH);
-    ASSERT_TRUE(strstr(err.msg, "not closed"));
-    ASSERT_EQ_INT(tetra_from_buffer("solid x\nendsolid x\n", 19, SURFACE_STL, NULL, &m, &err),
+    ASSERT_EQ_INT(tetra_from_buffer(a, strlen(a), SURFACE_STL, NULL, &m, &err),
                   QDC_EMESH);
+    ASSERT_TRUE(strstr(err.msg, "not closed"));
+    ASSERT_EQ_INT(
+        tetra_from_buffer("solid x\nendsolid x\n", 19, SURFACE_STL, NULL, &m, &err),
+        QDC_EMESH);
     ASSERT_EQ_INT(qdc_status_http(QDC_ETETGEN), 422);
     ASSERT_EQ_INT(qdc_status_http(QDC_EMESH), 422);
 }
@@ -300,10 +308,13 @@ TEST(names_and_media_types)
     ASSERT_EQ_INT(surface_format_from_name("smesh"), SURFACE_SMESH);
     ASSERT_EQ_INT(surface_format_from_name("x.mesh"), SURFACE_AUTO);
     for (int f = 1; f < SURFACE_FORMAT_COUNT; f++) {
-        ASSERT_EQ_INT(surface_format_from_name(surface_format_name((surface_format)f)), f);
-        ASSERT_EQ_INT(surface_format_from_media_type(surface_media_type((surface_format)f)), f);
+        ASSERT_EQ_INT(surface_format_from_name(surface_format_name((surface_format)f)),
+                      f);
+        ASSERT_EQ_INT(
+            surface_format_from_media_type(surface_media_type((surface_format)f)), f);
     }
-    ASSERT_EQ_INT(surface_format_from_media_type("model/stl; charset=binary"), SURFACE_STL);
+    ASSERT_EQ_INT(surface_format_from_media_type("model/stl; charset=binary"),
+                  SURFACE_STL);
     ASSERT_EQ_INT(surface_format_from_media_type("model/vnd.gmsh"), SURFACE_AUTO);
     ASSERT_EQ_INT(surface_sniff("OFF\n", 4), SURFACE_OFF);
     ASSERT_EQ_INT(surface_sniff("# x\nv 1 2 3\n", 12), SURFACE_OBJ);

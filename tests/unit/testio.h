@@ -17,7 +17,6 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-
 typedef struct {
     char *b;
     size_t n, cap;
@@ -209,8 +208,8 @@ static inline double read_1m_tets(meshio_format f)
         t0 = now();
         if (meshio_read(s.b, s.n, f, &b, &err) == QDC_OK)
             t = now() - t0;
-        printf("  # %s read of 1M tets (%.1f MB): %.3f s\n", meshio_format_name(f), s.n / 1e6,
-               t);
+        printf("  # %s read of 1M tets (%.1f MB): %.3f s\n", meshio_format_name(f),
+               s.n / 1e6, t);
         if (b && !same_mesh(m, b, K_REGION))
             t = -1;
     }

@@ -16,55 +16,55 @@ static const char *tl_skip_reason;
 
 /* The test cannot run here (a build option or a tool is missing): reported
  * as a skip, never as a pass. */
-#define SKIP(reason)                                                                    \
-    do {                                                                                \
-        tl_skip_reason = (reason);                                                      \
-        return;                                                                         \
+#define SKIP(reason)                                                                     \
+    do {                                                                                 \
+        tl_skip_reason = (reason);                                                       \
+        return;                                                                          \
     } while (0)
 
-#define ASSERT_TRUE(c)                                                                  \
-    do {                                                                                \
-        if (!(c)) {                                                                     \
-            printf("  %s:%d: assertion failed: %s\n", __FILE__, __LINE__, #c);          \
-            tl_failed_now = 1;                                                          \
-            return;                                                                     \
-        }                                                                               \
+#define ASSERT_TRUE(c)                                                                   \
+    do {                                                                                 \
+        if (!(c)) {                                                                      \
+            printf("  %s:%d: assertion failed: %s\n", __FILE__, __LINE__, #c);           \
+            tl_failed_now = 1;                                                           \
+            return;                                                                      \
+        }                                                                                \
     } while (0)
 
-#define ASSERT_EQ_INT(a, b)                                                             \
-    do {                                                                                \
-        long long a_ = (long long)(a), b_ = (long long)(b);                             \
-        if (a_ != b_) {                                                                 \
+#define ASSERT_EQ_INT(a, b)                                                              \
+    do {                                                                                 \
+        long long a_ = (long long)(a), b_ = (long long)(b);                              \
+        if (a_ != b_) {                                                                  \
             printf("  %s:%d: %s == %lld, expected %s == %lld\n", __FILE__, __LINE__, #a, \
-                   a_, #b, b_);                                                         \
-            tl_failed_now = 1;                                                          \
-            return;                                                                     \
-        }                                                                               \
+                   a_, #b, b_);                                                          \
+            tl_failed_now = 1;                                                           \
+            return;                                                                      \
+        }                                                                                \
     } while (0)
 
-#define ASSERT_NEAR(a, b, tol)                                                          \
-    do {                                                                                \
-        double a_ = (double)(a), b_ = (double)(b);                                      \
-        if (!(fabs(a_ - b_) <= (tol))) {                                                \
+#define ASSERT_NEAR(a, b, tol)                                                           \
+    do {                                                                                 \
+        double a_ = (double)(a), b_ = (double)(b);                                       \
+        if (!(fabs(a_ - b_) <= (tol))) {                                                 \
             printf("  %s:%d: %s = %.17g, expected %s = %.17g (tol %g)\n", __FILE__,      \
-                   __LINE__, #a, a_, #b, b_, (double)(tol));                            \
-            tl_failed_now = 1;                                                          \
-            return;                                                                     \
-        }                                                                               \
+                   __LINE__, #a, a_, #b, b_, (double)(tol));                             \
+            tl_failed_now = 1;                                                           \
+            return;                                                                      \
+        }                                                                                \
     } while (0)
 
-#define ASSERT_OK(expr)                                                                 \
-    do {                                                                                \
-        qdc_error e_;                                                                   \
-        qdc_error_clear(&e_);                                                           \
-        (void)e_;                                                                       \
-        int st_ = (int)(expr);                                                          \
-        if (st_ != 0) {                                                                 \
+#define ASSERT_OK(expr)                                                                  \
+    do {                                                                                 \
+        qdc_error e_;                                                                    \
+        qdc_error_clear(&e_);                                                            \
+        (void)e_;                                                                        \
+        int st_ = (int)(expr);                                                           \
+        if (st_ != 0) {                                                                  \
             printf("  %s:%d: %s returned %d (%s)\n", __FILE__, __LINE__, #expr, st_,     \
-                   qdc_status_str((qdc_status)st_));                                    \
-            tl_failed_now = 1;                                                          \
-            return;                                                                     \
-        }                                                                               \
+                   qdc_status_str((qdc_status)st_));                                     \
+            tl_failed_now = 1;                                                           \
+            return;                                                                      \
+        }                                                                                \
     } while (0)
 
 typedef void (*tl_fn)(void);
@@ -74,7 +74,10 @@ typedef struct {
 } tl_case;
 
 #define TEST(name) static void name(void)
-#define T(name) {#name, name}
+#define T(name)                                                                          \
+    {                                                                                    \
+#name, name                                                                      \
+    }
 
 static int tl_run(const char *suite, const tl_case *cases, int n)
 {
@@ -95,11 +98,11 @@ static int tl_run(const char *suite, const tl_case *cases, int n)
     return tl_total_failed ? 1 : 0;
 }
 
-#define TEST_MAIN(suite, ...)                                                           \
-    int main(void)                                                                      \
-    {                                                                                   \
-        static const tl_case cases_[] = {__VA_ARGS__};                                  \
-        return tl_run(suite, cases_, (int)(sizeof cases_ / sizeof cases_[0]));          \
+#define TEST_MAIN(suite, ...)                                                            \
+    int main(void)                                                                       \
+    {                                                                                    \
+        static const tl_case cases_[] = {__VA_ARGS__};                                   \
+        return tl_run(suite, cases_, (int)(sizeof cases_ / sizeof cases_[0]));           \
     }
 
 #endif

@@ -18,7 +18,8 @@ static double tm_rand(uint64_t *s)
 /* n x n x n cubes on [0,1]^3, each split into 6 Kuhn tets, all positive. */
 static mesh_t *tm_grid(int n, unsigned flags)
 {
-    static const int perm[6][3] = {{0, 1, 2}, {1, 2, 0}, {2, 0, 1}, {0, 2, 1}, {2, 1, 0}, {1, 0, 2}};
+    static const int perm[6][3] = {{0, 1, 2}, {1, 2, 0}, {2, 0, 1},
+                                   {0, 2, 1}, {2, 1, 0}, {1, 0, 2}};
     int32_t nv = (n + 1) * (n + 1) * (n + 1), nt = 6 * n * n * n, t = 0;
     mesh_t *m = mesh_new(nv, nt, flags);
 
