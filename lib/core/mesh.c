@@ -128,8 +128,18 @@ double mesh_bbox(const mesh_t *m, double lo[3], double hi[3])
             if (x > hi[k])
                 hi[k] = x;
         }
-    return sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
-                (hi[2] - lo[2]) * (hi[2] - lo[2]));
+    {
+        double d[3] = {hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]};
+        double e = fmax(d[0], fmax(d[1], d[2]));
+        /* the usual sum of squares where it can neither overflow nor lose
+         * everything to underflow; scaled by the largest extent outside */
+        if (e > 1e-140 && e < 1e140)
+            return sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        if (!(e > 0) || !isfinite(e))
+            return e;
+        return e * sqrt((d[0] / e) * (d[0] / e) + (d[1] / e) * (d[1] / e) +
+                        (d[2] / e) * (d[2] / e));
+    }
 }
 
 static double tet_det(const double *x, const int32_t *t)
@@ -235,6 +245,17 @@ static qdc_status match_faces(int32_t nv, int32_t nt, const int32_t *tets, int32
                 j++;
             if (j - i == 1) {
                 nbr[b[i].id] = -1;
+            } else if (j - i == 2 && tets[b[i].id] == tets[b[i + 1].id]) {
+                /* the vertices opposite the shared face agree: one tet twice */
+                int32_t t1 = b[i].id >> 2, t2 = b[i + 1].id >> 2;
+                st = qdc_fail(err, QDC_EMESH,
+                              "tets %d and %d have the same four vertices (a duplicate tet)",
+                              (int)(t1 < t2 ? t1 : t2), (int)(t1 < t2 ? t2 : t1));
+                if (err) {
+                    err->index = t1 < t2 ? t2 : t1;
+                    strcpy(err->kind, "tet");
+                }
+                break;
             } else if (j - i == 2) {
                 nbr[b[i].id] = b[i + 1].id;
                 nbr[b[i + 1].id] = b[i].id;
@@ -405,7 +426,8 @@ qdc_status mesh_reorient(mesh_t *m, mesh_orientation *o, qdc_error *err)
 static qdc_status validate_basic(const mesh_t *m, mesh_check *c, qdc_error *err)
 {
     uint8_t *used = NULL;
-    int32_t npos = 0, nneg = 0;
+    int32_t npos = 0, nneg = 0, etiny = 0;
+    double bb_lo[3], bb_hi[3], diag0;
     qdc_status st = QDC_OK;
 
     memset(c, 0, sizeof *c);
@@ -423,9 +445,25 @@ static qdc_status validate_basic(const mesh_t *m, mesh_check *c, qdc_error *err)
                 }
                 return QDC_EMESH;
             }
+    {
+        double lo[3], hi[3], diag = mesh_bbox(m, lo, hi);
+        /* The optimizer and the reports work in coordinates scaled to a unit
+         * diagonal; that needs a diagonal that is a normal finite number. */
+        if (!isfinite(diag))
+            return qdc_fail(err, QDC_EMESH,
+                            "the coordinates span more than the largest double (bounding "
+                            "box [%g, %g] x [%g, %g] x [%g, %g]): scale the mesh",
+                            lo[0], hi[0], lo[1], hi[1], lo[2], hi[2]);
+        if (diag < 1e-290)
+            return qdc_fail(err, QDC_EMESH,
+                            "the mesh is too small to compute with (bounding-box diagonal "
+                            "%g, the smallest accepted is 1e-290): scale the mesh",
+                            diag);
+    }
     used = qdc_calloc((size_t)m->nv, 1);
     if (!used)
         return QDC_ENOMEM;
+    diag0 = mesh_bbox(m, bb_lo, bb_hi);
     for (int32_t t = 0; t < m->nt && st == QDC_OK; t++) {
         const int32_t *tt = m->tets + 4 * (size_t)t;
         double d;
@@ -450,6 +488,13 @@ static qdc_status validate_basic(const mesh_t *m, mesh_check *c, qdc_error *err)
             break;
         for (int a = 0; a < 4; a++)
             used[tt[a]] = 1;
+        {
+            /* the first edge of each tet, for the mean edge length below */
+            const double *p0 = m->xyz + 3 * (size_t)tt[0], *p1 = m->xyz + 3 * (size_t)tt[1];
+            double e[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
+            double em = fmax(fabs(e[0]), fmax(fabs(e[1]), fabs(e[2])));
+            etiny += em < 1e-12 * diag0;
+        }
         d = tet_det(m->xyz, tt);
         if (d > 0)
             npos++;
@@ -467,6 +512,14 @@ static qdc_status validate_basic(const mesh_t *m, mesh_check *c, qdc_error *err)
             }
         c->negative_majority = nneg > npos;
         c->n_inverted = c->negative_majority ? npos : nneg;
+        /* Computing in units of the diagonal (the optimizer, the reports)
+         * flattens every tet of a mesh whose edges are 1e-12 of its extent:
+         * a coordinate far off (1e308 among ones) or a unit mix-up. */
+        if (etiny > m->nt / 2)
+            st = qdc_fail(err, QDC_EMESH,
+                          "%d of the %d tets have an edge shorter than 1e-12 of the mesh's "
+                          "extent (%g): a vertex far from the others? (check the coordinates)",
+                          (int)etiny, (int)m->nt, diag0);
     }
     qdc_free(used);
     return st;

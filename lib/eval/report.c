@@ -28,6 +28,23 @@ qdc_status report_quality_compute(const mesh_t *m, report_quality *q, qdc_error 
                                 (int)t);
     q->nv = m->nv;
     q->nt = m->nt;
+    {
+        /* Metrics are scale-free, but sums of squared edges of a mesh of size
+         * 1e200 overflow (1e-200: underflow): measure such a mesh in units of
+         * its diagonal. */
+        double lo[3], hi[3], diag = mesh_bbox(m, lo, hi);
+        if (isfinite(diag) && diag > 0 && (diag < 1e-50 || diag > 1e50)) {
+            mesh_t *n = mesh_dup(m);
+            qdc_status st;
+            if (!n)
+                return QDC_ENOMEM;
+            for (size_t i = 0; i < 3 * (size_t)n->nv; i++)
+                n->xyz[i] = (m->xyz[i] - lo[i % 3]) / diag;
+            st = report_quality_compute(n, q, err);
+            mesh_free(n);
+            return st;
+        }
+    }
     /* docs/method.md §1: each tet is measured in the vertex order its
      * component's orientation gives it (mesh_orient); a connectivity that
      * cannot be oriented (reported, never optimized) falls back to the

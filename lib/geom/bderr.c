@@ -820,14 +820,43 @@ qdc_status bderr_meshes(const mesh_t *out, const mesh_t *ref, int64_t samples_pe
     int32_t *ta = NULL, *tb = NULL, na = 0, nb = 0;
     qdc_status st;
 
+    double lo[3], hi[3], diag, *xa = NULL, *xb = NULL;
+
     if (!out || !ref || !r)
         return qdc_fail(err, QDC_EINVAL, "bderr_meshes: NULL argument");
     st = boundary_faces(out, "output mesh", &ta, &na, err);
     if (st == QDC_OK)
         st = boundary_faces(ref, "reference mesh", &tb, &nb, err);
-    if (st == QDC_OK)
+    diag = mesh_bbox(ref, lo, hi);
+    if (st == QDC_OK && isfinite(diag) && diag > 0 && (diag < 1e-50 || diag > 1e50)) {
+        /* squared distances of a mesh of size 1e200 overflow, of 1e-200
+         * underflow: measure in units of the reference's diagonal */
+        xa = qdc_mallocn(3 * (size_t)out->nv + 1, sizeof(double));
+        xb = qdc_mallocn(3 * (size_t)ref->nv + 1, sizeof(double));
+        if (!xa || !xb) {
+            st = QDC_ENOMEM;
+        } else {
+            for (size_t i = 0; i < 3 * (size_t)out->nv; i++)
+                xa[i] = (out->xyz[i] - lo[i % 3]) / diag;
+            for (size_t i = 0; i < 3 * (size_t)ref->nv; i++)
+                xb[i] = (ref->xyz[i] - lo[i % 3]) / diag;
+            st = bderr_surfaces(xa, out->nv, ta, na, xb, ref->nv, tb, nb, samples_per_side,
+                                UINT64_C(0x51ab5eed), r, err);
+            if (st == QDC_OK) {
+                r->hausdorff *= diag;
+                r->h_a_to_b *= diag;
+                r->h_b_to_a *= diag;
+                r->mean *= diag;
+                r->rms *= diag;
+                r->diag = diag;
+            }
+        }
+    } else if (st == QDC_OK) {
         st = bderr_surfaces(out->xyz, out->nv, ta, na, ref->xyz, ref->nv, tb, nb,
                             samples_per_side, UINT64_C(0x51ab5eed), r, err);
+    }
+    qdc_free(xa);
+    qdc_free(xb);
     qdc_free(ta);
     qdc_free(tb);
     return st;
