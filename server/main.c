@@ -8,6 +8,9 @@
 #include "sha256.h"
 
 #include <errno.h>
+#include <dirent.h>
+#include <fcntl.h>
+#include <sys/file.h>
 #include <getopt.h>
 #include <pthread.h>
 #include <signal.h>
@@ -337,7 +340,38 @@ static void default_qdc_path(qdcd_config *c)
     snprintf(c->qdc_path, sizeof c->qdc_path, "%.4090s/qdc", slash ? exe : ".");
 }
 
-static int prepare_data_dir(qdcd *q)
+/* One qdcd per data directory (SQLite store): an exclusive lock on
+ * DATA/qdcd.lock, held until the process ends (the kernel drops it even on
+ * kill -9). A second daemon on the same directory would re-queue the first
+ * one's running jobs and run them again. Returns the locked fd, -1 if another
+ * process holds it (its pid in *holder), -2 on other errors. */
+static int lock_data_dir(const char *dir, long *holder)
+{
+    char p[4200], buf[32];
+    int fd;
+    ssize_t n;
+
+    snprintf(p, sizeof p, "%.4096s/qdcd.lock", dir);
+    fd = open(p, O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    if (fd < 0)
+        return -2;
+    if (flock(fd, LOCK_EX | LOCK_NB)) {
+        int busy = errno == EWOULDBLOCK;
+        n = pread(fd, buf, sizeof buf - 1, 0);
+        buf[n > 0 ? n : 0] = 0;
+        *holder = strtol(buf, NULL, 10);
+        close(fd);
+        return busy ? -1 : -2;
+    }
+    n = snprintf(buf, sizeof buf, "%ld\n", (long)getpid());
+    if (ftruncate(fd, 0) || pwrite(fd, buf, (size_t)n, 0) != n) {
+        close(fd);
+        return -2;
+    }
+    return fd;
+}
+
+static int prepare_data_dir(qdcd *q, int shared)
 {
     char p[4200];
 
@@ -347,9 +381,41 @@ static int prepare_data_dir(qdcd *q)
     if (dir_ensure(p))
         return -1;
     snprintf(p, sizeof p, "%s/tmp", q->cfg.data);
-    /* Uploads cut short by a crash: never committed, never acknowledged. */
-    dir_remove(p);
+    /* Uploads cut short by a crash: never committed, never acknowledged.
+     * Not when nodes share the directory (PostgreSQL store): another node
+     * may be receiving one right now. */
+    if (!shared)
+        dir_remove(p);
     return dir_ensure(p);
+}
+
+/* Job directories without a row: a crash between the input's rename and its
+ * INSERT, or between a DELETE's row removal and its directory removal. The
+ * job was never acknowledged (or is gone): its files go. */
+static int remove_orphans(qdcd *q)
+{
+    char p[sizeof q->cfg.data + 300];
+    DIR *d;
+    struct dirent *e;
+    int n = 0;
+
+    snprintf(p, sizeof p, "%s/jobs", q->cfg.data);
+    d = opendir(p);
+    if (!d)
+        return 0;
+    while ((e = readdir(d))) {
+        job_rec j;
+        if (e->d_name[0] == '.' || strlen(e->d_name) != JOB_ID_LEN ||
+            strspn(e->d_name, "0123456789abcdef") != JOB_ID_LEN)
+            continue;
+        if (q->store->ops->get(q->store, e->d_name, &j) == QDC_EINVAL) {
+            snprintf(p, sizeof p, "%s/jobs/%.*s", q->cfg.data, JOB_ID_LEN, e->d_name);
+            dir_remove(p);
+            n++;
+        }
+    }
+    closedir(d);
+    return n;
 }
 
 int main(int argc, char **argv)
@@ -379,10 +445,27 @@ int main(int argc, char **argv)
                 q->cfg.host);
         return 2;
     }
-    if (prepare_data_dir(q)) {
+    if (prepare_data_dir(q, store_pg_uri(q->cfg.store))) {
         fprintf(stderr, "qdcd: cannot use data directory %s: %s\n", q->cfg.data,
                 strerror(errno));
         return 1;
+    }
+    if (!store_pg_uri(q->cfg.store)) {
+        long holder = 0;
+        int lk = lock_data_dir(q->cfg.data, &holder);
+        if (lk == -1) {
+            fprintf(stderr,
+                    "qdcd: data directory %s is in use by another qdcd (pid %ld); one "
+                    "daemon per directory (several nodes share a PostgreSQL store)\n",
+                    q->cfg.data, holder);
+            return 1;
+        }
+        if (lk < 0) {
+            fprintf(stderr, "qdcd: cannot lock data directory %s: %s\n", q->cfg.data,
+                    strerror(errno));
+            return 1;
+        }
+        /* lk stays open (and locked) until the process ends */
     }
     gethostname(host, sizeof host);
     host[sizeof host - 1] = 0;
@@ -417,6 +500,12 @@ int main(int argc, char **argv)
                 "qdcd: recovered after a crash: %d job(s) re-queued, %d failed "
                 "(attempts exhausted)\n",
                 requeued, failed);
+    if (!store_pg_uri(q->cfg.store)) {
+        int orphans = remove_orphans(q);
+        if (orphans)
+            fprintf(stderr, "qdcd: removed %d job director%s without a job\n", orphans,
+                    orphans == 1 ? "y" : "ies");
+    }
     q->hub = poll_new();
     if (!q->hub || poll_start(q->hub)) {
         fprintf(stderr, "qdcd: cannot start the poll timer\n");

@@ -157,7 +157,7 @@ else
 fi
 
 # graceful shutdown: a parked long-poll is answered, the running job goes back to the queue
-cj=$(submit "$TMP/big.qmesh" $QM "max_iter=200&finish=0&tol_move=0&mode=literal" "$TMP/j5" -H "$A")
+cj=$(submit "$TMP/big.qmesh" $QM "max_iter=5000&finish=0&tol_move=0&mode=literal" "$TMP/j5" -H "$A")
 id5=$(jf "$TMP/j5" .id)
 curl -s -m 30 -H "$A" "$URL/v1/jobs/$id5/progress?after=0&wait=20" > /dev/null
 curl -s -m 30 -H "$A" "$URL/v1/jobs/$id5/progress?after=100000&wait=25" > "$TMP/parked" &
