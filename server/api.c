@@ -34,6 +34,7 @@ enum {
     R_LIVEZ,
     R_READYZ,
     R_METRICS,
+    R_PROBLEM,
 };
 
 #define MEDIA_QMESH "application/vnd.qdc.mesh"
@@ -73,6 +74,11 @@ static int route_of(const char *url, char *id)
     for (size_t i = 0; i < sizeof fixed / sizeof fixed[0]; i++)
         if (!strcmp(url, fixed[i].path))
             return fixed[i].route;
+    if (!strncmp(url, "/problems/", 10) && url[10] && strlen(url + 10) <= JOB_ID_LEN &&
+        strspn(url + 10, "abcdefghijklmnopqrstuvwxyz-") == strlen(url + 10)) {
+        snprintf(id, JOB_ID_LEN + 1, "%.32s", url + 10);
+        return R_PROBLEM;
+    }
     if (strncmp(url, "/v1/jobs/", 9))
         return R_NONE;
     const char *p = url + 9;
@@ -1771,11 +1777,36 @@ static enum MHD_Result do_readyz(struct MHD_Connection *c, req *r)
 
 /* ---------------------------------------------------------------- dispatch -- */
 
+/* Content-Length and Transfer-Encoding headers of a request, counted. */
+static enum MHD_Result count_framing(void *cls, enum MHD_ValueKind kind, const char *key,
+                                     const char *val)
+{
+    int *n = cls;
+    (void)kind;
+    (void)val;
+    if (!strcasecmp(key, MHD_HTTP_HEADER_CONTENT_LENGTH))
+        n[0]++;
+    else if (!strcasecmp(key, MHD_HTTP_HEADER_TRANSFER_ENCODING))
+        n[1]++;
+    return MHD_YES;
+}
+
 enum MHD_Result api_begin(struct MHD_Connection *c, req *r, const char *url,
                           const char *method)
 {
+    int framing[2] = {0, 0};
+
     r->conn = c;
     r->route = route_of(url, r->id);
+    /* Two Content-Lengths, or one with a Transfer-Encoding, can frame the
+     * body two ways (request smuggling behind a proxy): refuse, and close. */
+    MHD_get_connection_values(c, MHD_HEADER_KIND, count_framing, framing);
+    if (framing[0] > 1 || (framing[0] && framing[1])) {
+        r->close_after = 1;
+        return http_problem(c, r, 400, "ambiguous-framing", "ambiguous request framing",
+                            "send one Content-Length, or Transfer-Encoding without it",
+                            NULL, NULL);
+    }
     /* libmicrohttpd 0.9.75 zeroes a keep-alive connection's whole memory pool
      * (MHD_OPTION_CONNECTION_MEMORY_LIMIT, 128 KiB) when it goes on to its
      * next request (MHD_pool_reset), so a long-poll parked on a reused
@@ -1798,7 +1829,9 @@ enum MHD_Result api_begin(struct MHD_Connection *c, req *r, const char *url,
         return http_problem(c, r, 405, "method-not-allowed", "method not allowed",
                             "see the Allow header", NULL, h);
     }
-    if (r->route >= R_JOBS && r->route <= R_CANCEL && !authenticate(c, r)) {
+    if (((r->route >= R_JOBS && r->route <= R_CANCEL) ||
+         ((r->route == R_METRICS || r->route == R_READYZ) && !r->q->cfg.public_metrics)) &&
+        !authenticate(c, r)) {
         static const char *const h[] = {MHD_HTTP_HEADER_WWW_AUTHENTICATE,
                                         "Bearer realm=\"qdcd\"", NULL};
         return http_problem(c, r, 401, "unauthorized", "unauthorized",
@@ -1809,10 +1842,46 @@ enum MHD_Result api_begin(struct MHD_Connection *c, req *r, const char *url,
     return MHD_YES;
 }
 
+/* The page of a problem type: problem+json bodies name their type as
+ * /problems/<slug>, a URI this daemon serves. */
+static enum MHD_Result do_problem_page(struct MHD_Connection *c, req *r, const char *url)
+{
+    static const struct {
+        const char *slug, *text;
+    } pages[] = {
+        {"invalid-option", "An optimizer option has a value outside its range; the detail "
+                           "names the valid values (GET the option table with `qdc options`)."},
+        {"invalid-mesh", "The mesh failed validation: the detail names the vertex or tet."},
+        {"too-big", "The body or the mesh exceeds the server's limits (413)."},
+        {"queue-full", "Too many queued jobs; retry after the Retry-After seconds (429)."},
+        {"unauthorized", "Send Authorization: Bearer <token> (401)."},
+        {"ambiguous-framing", "The request had two Content-Length headers, or one with "
+                              "Transfer-Encoding (400)."},
+        {"attempts-exhausted", "The daemon died while running the job on each attempt; "
+                               "it is not retried."},
+        {"io", "The server could not read or write its data (507 when the disk is full)."},
+    };
+    const char *slug = url + 10;
+    sbuf b = {0};
+    enum MHD_Result ret;
+    const char *text = "A problem qdcd reports; the response's title and detail describe "
+                       "the occurrence.";
+
+    for (size_t i = 0; i < sizeof pages / sizeof pages[0]; i++)
+        if (!strcmp(slug, pages[i].slug))
+            text = pages[i].text;
+    sb_printf(&b, "qdcd problem type: %s\n\n%s\n\nSee proto/openapi.yaml of the qdc "
+                  "repository for the whole API.\n",
+              slug, text);
+    ret = http_reply(c, r, 200, "text/plain; charset=utf-8", b.buf ? b.buf : "", b.len,
+                     no_headers);
+    sb_free(&b);
+    return ret;
+}
+
 enum MHD_Result api_dispatch(struct MHD_Connection *c, req *r, const char *url,
                              const char *method)
 {
-    (void)url;
     switch (r->route) {
     case R_JOBS:
         return strcmp(method, "POST") ? do_list(c, r) : finish_upload(c, r);
@@ -1828,6 +1897,13 @@ enum MHD_Result api_dispatch(struct MHD_Connection *c, req *r, const char *url,
     case R_PROGRESS:
         return do_progress(c, r);
     case R_EVENTS:
+        if (!strcmp(method, "HEAD")) { /* the stream's headers, no stream */
+            job_rec j;
+            enum MHD_Result ret;
+            if (!load_job(c, r, &j, &ret))
+                return ret;
+            return http_reply(c, r, 200, "text/event-stream", "", 0, no_headers);
+        }
         return do_events(c, r);
     case R_RESULT:
         return do_result(c, r);
@@ -1842,6 +1918,8 @@ enum MHD_Result api_dispatch(struct MHD_Connection *c, req *r, const char *url,
         return do_readyz(c, r);
     case R_METRICS:
         return do_metrics(c, r);
+    case R_PROBLEM:
+        return do_problem_page(c, r, url);
     default:
         return http_problem(c, r, 404, "not-found", "not found", "no such resource", NULL,
                             NULL);

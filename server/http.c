@@ -142,7 +142,7 @@ enum MHD_Result http_problem(struct MHD_Connection *c, req *r, unsigned status,
     sbuf b = {0};
     enum MHD_Result ret;
 
-    sb_printf(&b, "{\"type\":\"https://qdc.dev/errors/%s\",\"title\":", slug);
+    sb_printf(&b, "{\"type\":\"/problems/%s\",\"title\":", slug);
     sb_json_str(&b, title);
     sb_printf(&b, ",\"status\":%u,\"detail\":", status);
     sb_json_str(&b, detail);

@@ -214,7 +214,7 @@ static void problem(job_rec *j, int status, const char *slug, const char *title,
                     const char *detail)
 {
     sbuf b = {0};
-    sb_printf(&b, "{\"type\":\"https://qdc.dev/errors/%s\",\"title\":", slug);
+    sb_printf(&b, "{\"type\":\"/problems/%s\",\"title\":", slug);
     sb_json_str(&b, title);
     sb_printf(&b, ",\"status\":%d,\"detail\":", status);
     sb_json_str(&b, detail);

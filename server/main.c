@@ -11,6 +11,7 @@
 #include <dirent.h>
 #include <fcntl.h>
 #include <sys/file.h>
+#include <sys/stat.h>
 #include <getopt.h>
 #include <pthread.h>
 #include <signal.h>
@@ -43,6 +44,8 @@ static void usage(FILE *f)
         "                            only to the token that created it\n"
         "  --hash-token TOKEN        print the line to put in the tokens file, exit\n"
         "  --insecure                allow a non-loopback address without --tokens\n"
+        "  --public-metrics          with --tokens, serve /metrics and /readyz without a\n"
+        "                            token (they count the jobs of every owner)\n"
         "  --max-body BYTES          largest request body (default 1073741824)\n"
         "  --max-json BYTES          largest JSON mesh body (default 16777216); larger\n"
         "                            meshes must use application/vnd.qdc.mesh\n"
@@ -124,9 +127,17 @@ static int load_tokens(qdcd *q, const char *path)
     FILE *f = fopen(path, "r");
     char line[512];
     int lineno = 0;
+    struct stat sb;
 
     if (!f) {
         fprintf(stderr, "qdcd: cannot open %s: %s\n", path, strerror(errno));
+        return -1;
+    }
+    /* a regular file of sane size: --tokens /dev/zero used to hang here */
+    if (fstat(fileno(f), &sb) || !S_ISREG(sb.st_mode) || sb.st_size > (1 << 20)) {
+        fprintf(stderr, "qdcd: %s: not a regular file of at most 1 MiB (a tokens file has "
+                        "one hashed token per line)\n", path);
+        fclose(f);
         return -1;
     }
     while (fgets(line, sizeof line, f)) {
@@ -234,14 +245,15 @@ static int set_cli(const cli_opt *o, const char *arg, qdcd_config *c)
 
 static int parse_args(int argc, char **argv, qdcd_config *c)
 {
-    enum { O_HASH = 1000, O_INSECURE };
-    struct option lo[N_CLI + 5];
+    enum { O_HASH = 1000, O_INSECURE, O_PUBLIC_METRICS };
+    struct option lo[N_CLI + 6];
     int o, n = 0;
 
     for (size_t i = 0; i < N_CLI; i++)
         lo[n++] = (struct option){cli_opts[i].name, required_argument, NULL, (int)i};
     lo[n++] = (struct option){"hash-token", required_argument, NULL, O_HASH};
     lo[n++] = (struct option){"insecure", no_argument, NULL, O_INSECURE};
+    lo[n++] = (struct option){"public-metrics", no_argument, NULL, O_PUBLIC_METRICS};
     lo[n++] = (struct option){"verbose", no_argument, NULL, 'v'};
     lo[n++] = (struct option){"help", no_argument, NULL, 'h'};
     lo[n] = (struct option){NULL, 0, NULL, 0};
@@ -257,6 +269,8 @@ static int parse_args(int argc, char **argv, qdcd_config *c)
             sha256_hex(optarg, strlen(optarg), hex);
             printf("%s\n", hex);
             exit(0);
+        } else if (o == O_PUBLIC_METRICS) {
+            c->public_metrics = 1;
         } else if (o == O_INSECURE) {
             c->insecure = 1;
         } else if (o == 'v') {

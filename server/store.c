@@ -426,7 +426,7 @@ static qdc_status sq_recover(job_store *s_, int max_attempts, int *requeued, int
     qdc_status rc;
 
     snprintf(err, sizeof err,
-             "{\"type\":\"https://qdc.dev/errors/attempts-exhausted\",\"title\":\"job "
+             "{\"type\":\"/problems/attempts-exhausted\",\"title\":\"job "
              "crashed the daemon\",\"status\":500,\"detail\":\"the daemon died while "
              "running this job on each of its %d attempt(s); it is not retried\","
              "\"attempts\":%d}",

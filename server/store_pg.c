@@ -414,7 +414,7 @@ static qdc_status pg_recover(job_store *s_, int max_attempts, int *requeued, int
 
     snprintf(
         err, sizeof err,
-        "{\"type\":\"about:blank\",\"title\":\"job crashed the daemon\","
+        "{\"type\":\"/problems/attempts-exhausted\",\"title\":\"job crashed the daemon\","
         "\"status\":500,\"detail\":\"a daemon died while running this job on each of "
         "its %d attempt(s); it is not retried\",\"attempts\":%d}",
         max_attempts, max_attempts);

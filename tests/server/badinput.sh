@@ -20,7 +20,7 @@ expect() {
     _name=$1; _want=$2; _cond=$3; _got=$4
     _ct=$(hdr "$TMP/out" Content-Type)
     if [ "$_got" = "$_want" ] && [ "$_ct" = application/problem+json ] &&
-        jq -e --argjson s "$_want" '(.status == $s) and (.type | startswith("https://")) and
+        jq -e --argjson s "$_want" '(.status == $s) and (.type | startswith("/problems/")) and
             (.title | length > 0) and (.detail | length > 0) and ('"$_cond"')' "$TMP/out" > /dev/null 2>&1; then
         pass "$_name: $_got $(jq -c 'del(.type, .title, .status)' "$TMP/out" | head -c 200)"
     else

@@ -149,7 +149,7 @@ cd1=$(req DELETE "/v1/jobs/$idd" "$TMP/jd1" -H "$A")
 cd2=$(req GET "/v1/jobs/$idd" "$TMP/jd2" -H "$A")
 n=0
 while [ -e "$TMP/d/jobs/$idd" ] && [ $n -lt 100 ]; do sleep 0.1; n=$((n + 1)); done
-busy=$(curl -s "$URL/metrics" | awk '$1 == "qdcd_workers_busy" { print $2 }')
+busy=$(curl -s -H "$A" "$URL/metrics" | awk '$1 == "qdcd_workers_busy" { print $2 }')
 if [ "$cdr$cd1$cd2" = 202204404 ] && [ ! -e "$TMP/d/jobs/$idd" ] && [ "$busy" = 0 ]; then
     pass "DELETE running job: 204, then 404; the worker stopped and removed its files"
 else
