@@ -1830,7 +1830,8 @@ enum MHD_Result api_begin(struct MHD_Connection *c, req *r, const char *url,
                             "see the Allow header", NULL, h);
     }
     if (((r->route >= R_JOBS && r->route <= R_CANCEL) ||
-         ((r->route == R_METRICS || r->route == R_READYZ) && !r->q->cfg.public_metrics)) &&
+         ((r->route == R_METRICS || r->route == R_READYZ) &&
+          !r->q->cfg.public_metrics)) &&
         !authenticate(c, r)) {
         static const char *const h[] = {MHD_HTTP_HEADER_WWW_AUTHENTICATE,
                                         "Bearer realm=\"qdcd\"", NULL};
@@ -1849,17 +1850,21 @@ static enum MHD_Result do_problem_page(struct MHD_Connection *c, req *r, const c
     static const struct {
         const char *slug, *text;
     } pages[] = {
-        {"invalid-option", "An optimizer option has a value outside its range; the detail "
-                           "names the valid values (GET the option table with `qdc options`)."},
-        {"invalid-mesh", "The mesh failed validation: the detail names the vertex or tet."},
+        {"invalid-option",
+         "An optimizer option has a value outside its range; the detail "
+         "names the valid values (GET the option table with `qdc options`)."},
+        {"invalid-mesh",
+         "The mesh failed validation: the detail names the vertex or tet."},
         {"too-big", "The body or the mesh exceeds the server's limits (413)."},
-        {"queue-full", "Too many queued jobs; retry after the Retry-After seconds (429)."},
+        {"queue-full",
+         "Too many queued jobs; retry after the Retry-After seconds (429)."},
         {"unauthorized", "Send Authorization: Bearer <token> (401)."},
         {"ambiguous-framing", "The request had two Content-Length headers, or one with "
                               "Transfer-Encoding (400)."},
         {"attempts-exhausted", "The daemon died while running the job on each attempt; "
                                "it is not retried."},
-        {"io", "The server could not read or write its data (507 when the disk is full)."},
+        {"io",
+         "The server could not read or write its data (507 when the disk is full)."},
     };
     const char *slug = url + 10;
     sbuf b = {0};
@@ -1870,8 +1875,9 @@ static enum MHD_Result do_problem_page(struct MHD_Connection *c, req *r, const c
     for (size_t i = 0; i < sizeof pages / sizeof pages[0]; i++)
         if (!strcmp(slug, pages[i].slug))
             text = pages[i].text;
-    sb_printf(&b, "qdcd problem type: %s\n\n%s\n\nSee proto/openapi.yaml of the qdc "
-                  "repository for the whole API.\n",
+    sb_printf(&b,
+              "qdcd problem type: %s\n\n%s\n\nSee proto/openapi.yaml of the qdc "
+              "repository for the whole API.\n",
               slug, text);
     ret = http_reply(c, r, 200, "text/plain; charset=utf-8", b.buf ? b.buf : "", b.len,
                      no_headers);

@@ -18,7 +18,7 @@
 extern char **environ;
 
 void child_run(char *const argv[], const char *log_path, double deadline,
-               const volatile int *cancel, child_result *out)
+               const atomic_int *cancel, child_result *out)
 {
     posix_spawn_file_actions_t fa;
     posix_spawnattr_t at;
@@ -66,8 +66,8 @@ void child_run(char *const argv[], const char *log_path, double deadline,
             status = 0;
             break;
         }
-        if (w == 0 && (mono_now() >= deadline || (cancel && *cancel))) {
-            if (cancel && *cancel)
+        if (w == 0 && (mono_now() >= deadline || (cancel && atomic_load(cancel)))) {
+            if (cancel && atomic_load(cancel))
                 out->cancelled = 1;
             else
                 out->timed_out = 1;

@@ -7,6 +7,7 @@
 #ifndef QDCD_CHILD_H
 #define QDCD_CHILD_H
 
+#include <stdatomic.h>
 #include <stddef.h>
 
 typedef struct {
@@ -24,7 +25,7 @@ typedef struct {
  * (truncated), and wait. The child is killed (SIGKILL, its whole process group) once
  * mono_now() passes deadline or *cancel (may be NULL) is set. */
 void child_run(char *const argv[], const char *log_path, double deadline,
-               const volatile int *cancel, child_result *out);
+               const atomic_int *cancel, child_result *out);
 
 /* The last line of the log starting with prefix, without it and without the
  * newline, into out (cap bytes); "" if none. */

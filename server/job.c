@@ -29,7 +29,7 @@ typedef struct worker {
     char name[64];
     /* Guarded by pool->lock. */
     char job[JOB_ID_LEN + 1]; /* "" when idle */
-    volatile int cancel;      /* read by opt_run through opts.cancel */
+    atomic_int cancel;        /* read by opt_run through opts.cancel */
     int release;              /* shutdown: give the lease back instead of finishing */
 } worker;
 
@@ -207,7 +207,7 @@ static int on_progress(void *ctx, const opt_progress *p)
         r->q->store->ops->renew(r->q->store, r->id, r->w->name, r->q->cfg.lease);
         r->renewed = mono_now();
     }
-    return r->w->cancel;
+    return atomic_load(&r->w->cancel);
 }
 
 static void problem(job_rec *j, int status, const char *slug, const char *title,
@@ -470,7 +470,7 @@ stopped:
         poll_drop(q->hub, j->id);
         goto released;
     }
-    if (w->cancel) {
+    if (atomic_load(&w->cancel)) {
         j->state = JOB_CANCELLED;
         snprintf(j->stop_reason, sizeof j->stop_reason, "cancelled");
     } else if (res.outcome == OPT_FAILED) {
@@ -553,7 +553,7 @@ static void *worker_main(void *arg)
             continue;
         pthread_mutex_lock(&p->lock);
         snprintf(w->job, sizeof w->job, "%s", j.id);
-        w->cancel = j.cancel_requested;
+        atomic_store(&w->cancel, j.cancel_requested);
         w->release = 0;
         pthread_mutex_unlock(&p->lock);
         if (q->cfg.verbose)
@@ -613,7 +613,7 @@ int job_pool_cancel(job_pool *p, const char *id)
     pthread_mutex_lock(&p->lock);
     for (int i = 0; i < p->n; i++) {
         if (!strcmp(p->w[i].job, id)) {
-            p->w[i].cancel = 1;
+            atomic_store(&p->w[i].cancel, 1);
             hit = 1;
         }
     }
@@ -646,7 +646,7 @@ void job_pool_stop(job_pool *p, double grace)
     for (int i = 0; i < p->n; i++) {
         if (p->w[i].job[0]) {
             p->w[i].release = 1;
-            p->w[i].cancel = 1;
+            atomic_store(&p->w[i].cancel, 1);
         }
     }
     pthread_mutex_unlock(&p->lock);

@@ -7,11 +7,9 @@
 #include "server.h"
 #include "sha256.h"
 
-#include <errno.h>
 #include <dirent.h>
+#include <errno.h>
 #include <fcntl.h>
-#include <sys/file.h>
-#include <sys/stat.h>
 #include <getopt.h>
 #include <pthread.h>
 #include <signal.h>
@@ -20,6 +18,8 @@
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+#include <sys/file.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 static qdcd g;
@@ -44,7 +44,8 @@ static void usage(FILE *f)
         "                            only to the token that created it\n"
         "  --hash-token TOKEN        print the line to put in the tokens file, exit\n"
         "  --insecure                allow a non-loopback address without --tokens\n"
-        "  --public-metrics          with --tokens, serve /metrics and /readyz without a\n"
+        "  --public-metrics          with --tokens, serve /metrics and /readyz without "
+        "a\n"
         "                            token (they count the jobs of every owner)\n"
         "  --max-body BYTES          largest request body (default 1073741824)\n"
         "  --max-json BYTES          largest JSON mesh body (default 16777216); larger\n"
@@ -135,8 +136,10 @@ static int load_tokens(qdcd *q, const char *path)
     }
     /* a regular file of sane size: --tokens /dev/zero used to hang here */
     if (fstat(fileno(f), &sb) || !S_ISREG(sb.st_mode) || sb.st_size > (1 << 20)) {
-        fprintf(stderr, "qdcd: %s: not a regular file of at most 1 MiB (a tokens file has "
-                        "one hashed token per line)\n", path);
+        fprintf(stderr,
+                "qdcd: %s: not a regular file of at most 1 MiB (a tokens file has "
+                "one hashed token per line)\n",
+                path);
         fclose(f);
         return -1;
     }

@@ -13,13 +13,13 @@
 #endif
 
 static volatile sig_atomic_t interrupted;
-static volatile int cancel_flag;
+static atomic_int cancel_flag; /* read by opt_run on its thread */
 
 static void on_signal(int sig)
 {
     (void)sig;
     interrupted = 1;
-    cancel_flag = 1;
+    atomic_store(&cancel_flag, 1);
 }
 
 void cli_error(const char *path, const qdc_error *err, qdc_status st)
@@ -48,7 +48,7 @@ static int on_progress(void *ctx, const opt_progress *p)
     int n;
 
     if (ps->quiet)
-        return cancel_flag;
+        return atomic_load(&cancel_flag);
     n = snprintf(line, sizeof line,
                  "%-6s %3d  q mean %.4f min %+.4f  dihedral %6.2f..%6.2f  inverted %d  "
                  "step %.3g  cg %d  %.1fs",
@@ -61,7 +61,7 @@ static int on_progress(void *ctx, const opt_progress *p)
         fprintf(stderr, "%s\n", line);
     }
     fflush(stderr);
-    return cancel_flag;
+    return atomic_load(&cancel_flag);
 }
 
 static void on_log(void *ctx, int level, const char *msg)

@@ -248,9 +248,10 @@ static qdc_status match_faces(int32_t nv, int32_t nt, const int32_t *tets, int32
             } else if (j - i == 2 && tets[b[i].id] == tets[b[i + 1].id]) {
                 /* the vertices opposite the shared face agree: one tet twice */
                 int32_t t1 = b[i].id >> 2, t2 = b[i + 1].id >> 2;
-                st = qdc_fail(err, QDC_EMESH,
-                              "tets %d and %d have the same four vertices (a duplicate tet)",
-                              (int)(t1 < t2 ? t1 : t2), (int)(t1 < t2 ? t2 : t1));
+                st = qdc_fail(
+                    err, QDC_EMESH,
+                    "tets %d and %d have the same four vertices (a duplicate tet)",
+                    (int)(t1 < t2 ? t1 : t2), (int)(t1 < t2 ? t2 : t1));
                 if (err) {
                     err->index = t1 < t2 ? t2 : t1;
                     strcpy(err->kind, "tet");
@@ -455,10 +456,11 @@ static qdc_status validate_basic(const mesh_t *m, mesh_check *c, qdc_error *err)
                             "box [%g, %g] x [%g, %g] x [%g, %g]): scale the mesh",
                             lo[0], hi[0], lo[1], hi[1], lo[2], hi[2]);
         if (diag < 1e-290)
-            return qdc_fail(err, QDC_EMESH,
-                            "the mesh is too small to compute with (bounding-box diagonal "
-                            "%g, the smallest accepted is 1e-290): scale the mesh",
-                            diag);
+            return qdc_fail(
+                err, QDC_EMESH,
+                "the mesh is too small to compute with (bounding-box diagonal "
+                "%g, the smallest accepted is 1e-290): scale the mesh",
+                diag);
     }
     used = qdc_calloc((size_t)m->nv, 1);
     if (!used)
@@ -490,7 +492,8 @@ static qdc_status validate_basic(const mesh_t *m, mesh_check *c, qdc_error *err)
             used[tt[a]] = 1;
         {
             /* the first edge of each tet, for the mean edge length below */
-            const double *p0 = m->xyz + 3 * (size_t)tt[0], *p1 = m->xyz + 3 * (size_t)tt[1];
+            const double *p0 = m->xyz + 3 * (size_t)tt[0],
+                         *p1 = m->xyz + 3 * (size_t)tt[1];
             double e[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
             double em = fmax(fabs(e[0]), fmax(fabs(e[1]), fabs(e[2])));
             etiny += em < 1e-12 * diag0;
@@ -516,10 +519,11 @@ static qdc_status validate_basic(const mesh_t *m, mesh_check *c, qdc_error *err)
          * flattens every tet of a mesh whose edges are 1e-12 of its extent:
          * a coordinate far off (1e308 among ones) or a unit mix-up. */
         if (etiny > m->nt / 2)
-            st = qdc_fail(err, QDC_EMESH,
-                          "%d of the %d tets have an edge shorter than 1e-12 of the mesh's "
-                          "extent (%g): a vertex far from the others? (check the coordinates)",
-                          (int)etiny, (int)m->nt, diag0);
+            st = qdc_fail(
+                err, QDC_EMESH,
+                "%d of the %d tets have an edge shorter than 1e-12 of the mesh's "
+                "extent (%g): a vertex far from the others? (check the coordinates)",
+                (int)etiny, (int)m->nt, diag0);
     }
     qdc_free(used);
     return st;

@@ -840,8 +840,8 @@ qdc_status bderr_meshes(const mesh_t *out, const mesh_t *ref, int64_t samples_pe
                 xa[i] = (out->xyz[i] - lo[i % 3]) / diag;
             for (size_t i = 0; i < 3 * (size_t)ref->nv; i++)
                 xb[i] = (ref->xyz[i] - lo[i % 3]) / diag;
-            st = bderr_surfaces(xa, out->nv, ta, na, xb, ref->nv, tb, nb, samples_per_side,
-                                UINT64_C(0x51ab5eed), r, err);
+            st = bderr_surfaces(xa, out->nv, ta, na, xb, ref->nv, tb, nb,
+                                samples_per_side, UINT64_C(0x51ab5eed), r, err);
             if (st == QDC_OK) {
                 r->hausdorff *= diag;
                 r->h_a_to_b *= diag;

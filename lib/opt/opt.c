@@ -322,14 +322,29 @@ static int report(ctx_t *c, opt_progress *r)
     return 0;
 }
 
-static int should_stop(const ctx_t *c, char *why, size_t len)
+static const char *const stop_names[] = {"max-iter",  "converged",  "no-descent",
+                                         "cancelled", "time-limit", "solver"};
+
+const char *opt_stop_name(opt_stop s)
 {
-    if (c->o->cancel && *c->o->cancel) {
-        snprintf(why, len, "cancelled");
+    return (unsigned)s < sizeof stop_names / sizeof stop_names[0] ? stop_names[s] : "?";
+}
+
+/* The reason a run stops: the enum decides, the name is for reports. */
+static void set_stop(opt_result *res, opt_stop s)
+{
+    res->stop = s;
+    snprintf(res->stop_reason, sizeof res->stop_reason, "%s", opt_stop_name(s));
+}
+
+static int should_stop(const ctx_t *c, opt_result *res)
+{
+    if (c->o->cancel && atomic_load(c->o->cancel)) {
+        set_stop(res, OPT_STOP_CANCELLED);
         return 1;
     }
     if (c->o->time_limit > 0 && qdc_now() - c->t0 > c->o->time_limit) {
-        snprintf(why, len, "time-limit");
+        set_stop(res, OPT_STOP_TIME_LIMIT);
         return 1;
     }
     return 0;
@@ -749,7 +764,7 @@ static qdc_status finish_pass(ctx_t *c, const uint8_t *movable, int x_evaluated,
     for (int s = 0; s < o->finish_sweeps; s++) {
         finish_stats fs;
         qdc_status st;
-        if (should_stop(c, res->stop_reason, sizeof res->stop_reason))
+        if (should_stop(c, res))
             return QDC_OK;
         /* broad sweeps: one Newton step per vertex (finish.c) */
         st = finish_sweep(c->tp, movable, c->sl, c->x, o->metric, c->eta, delta, c->lbar,
@@ -770,7 +785,7 @@ static qdc_status finish_pass(ctx_t *c, const uint8_t *movable, int x_evaluated,
     for (int s = 0; s < 8; s++) {
         finish_stats fs;
         qdc_status st;
-        if (should_stop(c, res->stop_reason, sizeof res->stop_reason))
+        if (should_stop(c, res))
             break;
         st = finish_sweep(c->tp, movable, c->sl, c->x, o->metric, c->eta, delta, c->lbar,
                           0.01, 0.0, &fs);
@@ -797,7 +812,7 @@ static qdc_status finish_pass(ctx_t *c, const uint8_t *movable, int x_evaluated,
     r->step = visits > 0 ? moves / visits : 0; /* accepted moves per visited vertex */
     consider(c, c->x, r);
     if (report(c, r))
-        snprintf(res->stop_reason, sizeof res->stop_reason, "cancelled");
+        set_stop(res, OPT_STOP_CANCELLED);
     return QDC_OK;
 }
 
@@ -822,7 +837,7 @@ static qdc_status angle_pass(ctx_t *c, const uint8_t *movable, const slide_ctx *
     for (int s = 0; s < ANGLE_SWEEPS; s++) {
         finish_stats fs;
         qdc_status st;
-        if (should_stop(c, res->stop_reason, sizeof res->stop_reason))
+        if (should_stop(c, res))
             break;
         st = finish_dihedral_sweep(c->tp, movable, sl, c->x, c->lbar, 0.01, base.q_min,
                                    smin, s > 0, &fs);
@@ -854,7 +869,7 @@ static qdc_status angle_pass(ctx_t *c, const uint8_t *movable, const slide_ctx *
         memcpy(c->xbest, c->x, n3 * sizeof(double));
     }
     if (report(c, r))
-        snprintf(res->stop_reason, sizeof res->stop_reason, "cancelled");
+        set_stop(res, OPT_STOP_CANCELLED);
     return QDC_OK;
 }
 
@@ -944,6 +959,7 @@ static qdc_status run_once(mesh_t *m, const opt_options *opts, const uint8_t *pi
     double t_start = qdc_now();
     int it = 0, total_iters, stop = 0;
     opt_progress r;
+    int saved_threads = 0;
 
     memset(&res, 0, sizeof res);
     memset(&c, 0, sizeof c);
@@ -964,7 +980,10 @@ static qdc_status run_once(mesh_t *m, const opt_options *opts, const uint8_t *pi
         st = qdc_fail(err, QDC_EINVAL, "invalid optimizer options");
         goto out;
     }
-    /* nthreads-var is per thread in OpenMP: this affects only this job */
+    /* nthreads-var is per thread in OpenMP: this sets the team size of this
+     * job's regions (on the caller's thread), and is put back at the end so
+     * the caller's later parallel regions are not affected */
+    saved_threads = omp_get_max_threads();
     if (o.threads > 0)
         omp_set_num_threads(o.threads);
     st = mesh_topo_build(m, &tp, err);
@@ -994,15 +1013,15 @@ static qdc_status run_once(mesh_t *m, const opt_options *opts, const uint8_t *pi
     c.input = c.best = r;
     res.before = r;
     res.hausd_bound = c.hbound * c.scale;
-    snprintf(res.stop_reason, sizeof res.stop_reason, "max-iter");
+    set_stop(&res, OPT_STOP_MAX_ITER);
     if (report(&c, &r)) {
         stop = 1;
-        snprintf(res.stop_reason, sizeof res.stop_reason, "cancelled");
+        set_stop(&res, OPT_STOP_CANCELLED);
     }
     total_iters = o.max_iter + (o.harmonic ? o.pre_iters : 0);
     for (it = 1; !stop && it <= total_iters; it++) {
         int stepped = 0, pre = o.harmonic && it <= o.pre_iters;
-        if (should_stop(&c, res.stop_reason, sizeof res.stop_reason)) {
+        if (should_stop(&c, &res)) {
             stop = 1;
             break;
         }
@@ -1014,7 +1033,7 @@ static qdc_status run_once(mesh_t *m, const opt_options *opts, const uint8_t *pi
         st = iterate(&c, &res, &r, &stepped, err);
         if (st == QDC_ESOLVE) {
             /* solver trouble: stop with the best mesh so far (docs/style.md §3) */
-            snprintf(res.stop_reason, sizeof res.stop_reason, "solver");
+            set_stop(&res, OPT_STOP_SOLVER);
             logf_(&c, 1, "iteration %d: %s", it, err ? err->msg : "solve failed");
             st = QDC_OK;
             stop = 1;
@@ -1030,16 +1049,16 @@ static qdc_status run_once(mesh_t *m, const opt_options *opts, const uint8_t *pi
         res.folded_global += r.n_folded;
         consider(&c, c.x, &r);
         if (report(&c, &r)) {
-            snprintf(res.stop_reason, sizeof res.stop_reason, "cancelled");
+            set_stop(&res, OPT_STOP_CANCELLED);
             stop = 1;
             break;
         }
         if (!stepped) {
-            snprintf(res.stop_reason, sizeof res.stop_reason, "no-descent");
+            set_stop(&res, OPT_STOP_NO_DESCENT);
             if (!pre)
                 break;
         } else if (r.max_move < o.tol_move && !pre) {
-            snprintf(res.stop_reason, sizeof res.stop_reason, "converged");
+            set_stop(&res, OPT_STOP_CONVERGED);
             break;
         }
     }
@@ -1070,12 +1089,11 @@ static qdc_status run_once(mesh_t *m, const opt_options *opts, const uint8_t *pi
              * above the input's (seen with slide on curved surfaces): then run it
              * again from the best global iterate. */
             if (st == QDC_OK && from_last && c.best_it <= res.iterations &&
-                strcmp(res.stop_reason, "cancelled") != 0) {
+                res.stop != OPT_STOP_CANCELLED) {
                 memcpy(c.x, c.xbest, 3 * (size_t)c.nv * sizeof(double));
                 st = finish_pass(&c, movable, 0, &res, &r, &next);
             }
-            if (st == QDC_OK && o.angle_polish &&
-                strcmp(res.stop_reason, "cancelled") != 0)
+            if (st == QDC_OK && o.angle_polish && res.stop != OPT_STOP_CANCELLED)
                 st = lsq_angle_pass(&c, movable, &res, &r, &next);
             if (st != QDC_OK) {
                 qdc_free(movable);
@@ -1100,9 +1118,8 @@ static qdc_status run_once(mesh_t *m, const opt_options *opts, const uint8_t *pi
     res.after = c.best;
     res.best_iteration = c.best_it;
     res.last_record = c.last_record;
-    res.outcome = strcmp(res.stop_reason, "converged") == 0 ||
-                          strcmp(res.stop_reason, "max-iter") == 0 ||
-                          strcmp(res.stop_reason, "no-descent") == 0
+    res.outcome = res.stop == OPT_STOP_CONVERGED || res.stop == OPT_STOP_MAX_ITER ||
+                          res.stop == OPT_STOP_NO_DESCENT
                       ? OPT_CONVERGED
                       : OPT_STOPPED;
     st = QDC_OK;
@@ -1114,6 +1131,8 @@ out:
         *res_out = res;
     ctx_free(&c);
     mesh_topo_free(tp);
+    if (saved_threads > 0)
+        omp_set_num_threads(saved_threads);
     return st;
 }
 

@@ -4,8 +4,10 @@
 #define QDC_OPT_H
 
 #include "core/base.h"
+
 #include "core/mesh.h"
 #include "geom/metric.h" /* opt_metric */
+#include <stdatomic.h>
 
 typedef enum {
     OPT_BOUNDARY_LSQ = 0,
@@ -15,6 +17,17 @@ typedef enum {
 typedef enum { OPT_MODE_SAFE = 0, OPT_MODE_LITERAL } opt_mode;
 typedef enum { OPT_WEIGHTS_OPTAVG = 0, OPT_WEIGHTS_PAPER } opt_weights;
 typedef enum { OPT_SOLVER_AUTO = 0, OPT_SOLVER_CHOLMOD, OPT_SOLVER_PCG } opt_solver;
+
+/* Why a run stopped. */
+typedef enum {
+    OPT_STOP_MAX_ITER = 0,
+    OPT_STOP_CONVERGED,
+    OPT_STOP_NO_DESCENT,
+    OPT_STOP_CANCELLED,
+    OPT_STOP_TIME_LIMIT,
+    OPT_STOP_SOLVER
+} opt_stop;
+const char *opt_stop_name(opt_stop s);
 
 /* Outcome of a run (docs/style.md §3). */
 typedef enum {
@@ -75,8 +88,9 @@ typedef struct {
     double time_limit;    /* seconds, 0 = none: then OPT_STOPPED with the best mesh */
     int threads;          /* OpenMP threads for this run; 0 = all cores. A server running
                            * several jobs at once should give each 1 (no oversubscription) */
-    const volatile int
-        *cancel; /* if non-NULL and *cancel != 0: stop (checked every iteration) */
+    const atomic_int
+        *cancel; /* if non-NULL and *cancel != 0: stop (checked every
+                  * iteration; set from another thread or a signal handler) */
     opt_progress_fn progress;
     void *progress_ctx;
     qdc_log_fn log;
@@ -119,8 +133,9 @@ typedef struct {
                                   * valid input: the global step folds nothing) */
     int32_t folded_global;       /* valid tets the global steps inverted, summed */
     double hausd_bound;          /* the boundary bound applied, mesh units (0: none) */
-    char stop_reason[64];        /* "converged", "max-iter", "no-descent", "cancelled",
-                                    "time-limit", "solver" */
+    opt_stop stop;               /* why the run stopped (decides; stop_reason names it) */
+    char stop_reason[64]; /* opt_stop_name(stop): "converged", "max-iter", "no-descent",
+                           * "cancelled", "time-limit", "solver" */
 } opt_result;
 
 /* Optimize m in place (coordinates only; tets, regions, fixed flags untouched).

@@ -180,7 +180,7 @@ TEST(cancel_from_progress_callback)
 TEST(cancel_flag_before_start)
 {
     int n = 3;
-    volatile int flag = 1;
+    atomic_int flag = 1;
     mesh_t *m = tm_grid(n, 0), *orig;
     opt_options o;
     opt_result r;
