@@ -20,6 +20,7 @@
 #include <strings.h>
 #include <sys/resource.h>
 #include <sys/syscall.h>
+#include <time.h>
 #include <unistd.h>
 
 typedef struct worker {
@@ -208,6 +209,52 @@ static int on_progress(void *ctx, const opt_progress *p)
         r->renewed = mono_now();
     }
     return atomic_load(&r->w->cancel);
+}
+
+/* A store write that must not be lost (the end of a job, a job given back):
+ * tried again with a growing pause (0.1 s doubling to 5 s) while it fails,
+ * for up to `limit` seconds; a full disk or a database that went away is
+ * usually back by then. Returns QDC_OK once it succeeded. */
+typedef qdc_status (*store_write_fn)(qdcd *q, worker *w, const job_rec *j);
+
+static qdc_status store_finish_once(qdcd *q, worker *w, const job_rec *j)
+{
+    (void)w;
+    return q->store->ops->finish(q->store, j);
+}
+
+static qdc_status store_release_once(qdcd *q, worker *w, const job_rec *j)
+{
+    return q->store->ops->release(q->store, j->id, w->name);
+}
+
+static qdc_status retry_store(qdcd *q, const char *what, const char *id,
+                              store_write_fn fn, worker *w, const job_rec *j,
+                              double limit)
+{
+    double pause = 0.1, t0 = mono_now();
+    qdc_status st;
+
+    while ((st = fn(q, w, j)) != QDC_OK && mono_now() - t0 < limit) {
+        if (pause == 0.1)
+            fprintf(stderr, "qdcd: cannot %s job %s; trying again\n", what, id);
+        struct timespec ts = {(time_t)pause, (long)((pause - (time_t)pause) * 1e9)};
+        nanosleep(&ts, NULL);
+        pause = pause * 2 > 5.0 ? 5.0 : pause * 2;
+    }
+    return st;
+}
+
+/* The end of a run, recorded for sure: retried; if it still cannot be
+ * written, the job is handed back to the queue (another run, or another node,
+ * will finish it); a job is never left running without a worker. */
+static void record_end(qdcd *q, worker *w, job_rec *j)
+{
+    if (retry_store(q, "record the end of", j->id, store_finish_once, w, j, 600.0) ==
+        QDC_OK)
+        return;
+    fprintf(stderr, "qdcd: cannot record the end of job %s: giving it back\n", j->id);
+    (void)retry_store(q, "give back", j->id, store_release_once, w, j, 600.0);
 }
 
 static void problem(job_rec *j, int status, const char *slug, const char *title,
@@ -466,7 +513,8 @@ stopped:
     pthread_mutex_unlock(&w->pool->lock);
     if (release) {
         /* Back to the queue: this run's records are not the job's history. */
-        q->store->ops->release(q->store, j->id, w->name);
+        /* at shutdown: briefly (an expired lease is reclaimed anyway) */
+        (void)retry_store(q, "give back", j->id, store_release_once, w, j, 5.0);
         poll_drop(q->hub, j->id);
         goto released;
     }
@@ -501,8 +549,7 @@ finish:
     j->expires = j->finished + q->cfg.retention;
     j->iterations = r.iterations;
     snprintf(j->last_progress, sizeof j->last_progress, "%s", r.last);
-    if (q->store->ops->finish(q->store, j) != QDC_OK)
-        fprintf(stderr, "qdcd: cannot record the end of job %s\n", j->id);
+    record_end(q, w, j);
     atomic_fetch_add(&q->m.finished[j->state], 1);
     /* Deleted while running: nothing refers to the files any more. */
     job_rec chk;

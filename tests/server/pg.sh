@@ -156,12 +156,14 @@ else
 fi
 
 # 7. the database stops and comes back while a job runs: the node survives,
-# the job ends, nothing is lost
+# the job's end (written while the database is away) is retried until it is
+# recorded, nothing is lost
 post "$URL_b" "$TMP/cube.qmesh" "max_iter=40&finish=0&tol_move=0&mode=literal" "$TMP/jd" > /dev/null
 idd=$(jf "$TMP/jd" .id)
 sleep 0.3
 pg_stop
-sleep 1
+# the job ends while the database is away: its end is written when it is back
+sleep 3
 down=$(curl -s -o /dev/null -w '%{http_code}' -m 10 "$URL_b/v1/jobs/$idd")
 pg_up
 st=$(wait_done "$URL_b" "$idd")
