@@ -1611,13 +1611,15 @@ static enum MHD_Result do_delete(struct MHD_Connection *c, req *r)
     if (!load_job(c, r, &j, &ret))
         return ret;
     int running_here = 0;
-    if (j.state == JOB_RUNNING) {
+    if (j.state == JOB_RUNNING)
         q->store->ops->cancel(q->store, j.id, &now_done);
-        running_here = job_pool_cancel(q->pool, j.id);
-    }
     if (q->store->ops->remove(q->store, j.id) != QDC_OK)
         return http_problem(c, r, 500, "store", "job store error",
                             "the job could not be deleted", NULL, NULL);
+    /* Whatever state was read above: a worker may have claimed the job since
+     * (a DELETE right after the 202). The row is gone first, so a worker that
+     * registers after this cancel finds it gone (job.c) and does not run it. */
+    running_here = job_pool_cancel(q->pool, j.id);
     poll_drop(q->hub, j.id);
     /* A running job's worker removes the directory when it stops (and also
      * when it finished just before the row went away). */

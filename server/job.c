@@ -603,6 +603,21 @@ static void *worker_main(void *arg)
         atomic_store(&w->cancel, j.cancel_requested);
         w->release = 0;
         pthread_mutex_unlock(&p->lock);
+        /* A DELETE removes the row and then cancels the job's worker: a worker
+         * registered before that cancel is cancelled; one registered after it
+         * finds the row gone here. Either way a deleted job does not run. */
+        {
+            job_rec chk;
+            if (q->store->ops->get(q->store, j.id, &chk) == QDC_EINVAL) {
+                char path[4200];
+                job_path(q, j.id, NULL, path, sizeof path);
+                dir_remove(path);
+                pthread_mutex_lock(&p->lock);
+                w->job[0] = 0;
+                pthread_mutex_unlock(&p->lock);
+                continue;
+            }
+        }
         if (q->cfg.verbose)
             fprintf(stderr, "qdcd: %s runs job %s (attempt %d)\n", w->name, j.id,
                     j.attempts);
