@@ -339,8 +339,9 @@ static qdc_status save_outputs(qdcd *q, job_rec *j, const mesh_t *out, const mes
 static int tetrahedralize(worker *w, job_rec *j, opt_options *opts, mesh_t **out)
 {
     qdcd *q = w->pool->q;
-    char in[4200], res[4200], log[4200], qs[40], vs[40], msg[400], detail[600];
-    char *argv[12];
+    char in[4200], res[4200], log[4200], qs[40], vs[40], ts[40], ms[40], msg[400],
+        detail[600];
+    char *argv[16];
     int k = 0;
     double tq, tv, budget;
     child_result cr;
@@ -369,6 +370,14 @@ static int tetrahedralize(worker *w, job_rec *j, opt_options *opts, mesh_t **out
         argv[k++] = "--max-volume";
         argv[k++] = vs;
     }
+    /* refused at once when the volume bound alone exceeds the tet limit, and
+     * TetGen bounded in memory (it grows ~70 MB/s on a tiny max_volume) */
+    snprintf(ts, sizeof ts, "%lld", (long long)q->cfg.max_tets);
+    argv[k++] = "--max-tets";
+    argv[k++] = ts;
+    snprintf(ms, sizeof ms, "%lld", (long long)q->cfg.child_memory);
+    argv[k++] = "--max-memory";
+    argv[k++] = ms;
     argv[k] = NULL;
     budget = opts->time_limit > 0 ? opts->time_limit : q->cfg.job_time_limit;
     child_run(argv, log, mono_now() + budget, &w->cancel, &cr);

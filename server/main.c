@@ -66,6 +66,9 @@ static void usage(FILE *f)
         "  --lease SECONDS           job lease, renewed while running (default 60)\n"
         "  --shutdown-grace SECONDS  on SIGTERM, wait this long for running jobs before\n"
         "                            giving them back to the queue (default 10)\n"
+        "  --child-memory BYTES      address-space limit of a TetGen child (surface\n"
+        "                            uploads; default: the machine's memory / (workers + "
+        "1))\n"
         "  --bderr-samples N         random samples per surface for the boundary error\n"
         "                            (default 20000)\n"
         "  --qdc PATH                the qdc program that tetrahedralizes surface\n"
@@ -213,6 +216,7 @@ static const cli_opt cli_opts[] = {
     {"lease", 'd', CFG(lease), 1, 86400, 60},
     {"shutdown-grace", 'd', CFG(grace), 0, 86400, 10},
     {"bderr-samples", 'l', CFG(bderr_samples), 0, 1e8, 20000},
+    {"child-memory", 'l', CFG(child_memory), 1 << 26, 9.2e18, 0},
 };
 #define N_CLI (sizeof cli_opts / sizeof cli_opts[0])
 
@@ -447,6 +451,14 @@ int main(int argc, char **argv)
     defaults(&q->cfg);
     if (parse_args(argc, argv, &q->cfg))
         return 2;
+    if (!q->cfg.child_memory) {
+        /* the machine's memory shared by the workers and the daemon */
+        long pages = sysconf(_SC_PHYS_PAGES), psize = sysconf(_SC_PAGESIZE);
+        int64_t phys = pages > 0 && psize > 0 ? (int64_t)pages * psize : (int64_t)4 << 30;
+        q->cfg.child_memory = phys / (q->cfg.workers + 1);
+        if (q->cfg.child_memory < ((int64_t)256 << 20))
+            q->cfg.child_memory = (int64_t)256 << 20;
+    }
     if (q->cfg.tokens_file[0] && load_tokens(q, q->cfg.tokens_file))
         return 2;
     default_qdc_path(&q->cfg);

@@ -20,6 +20,7 @@ typedef struct {
     char qdc_path[4096];    /* --qdc PATH: runs `qdc tetra` for surface jobs */
     int insecure;           /* --insecure: allow a public address without tokens */
     int public_metrics;     /* --public-metrics: /metrics and /readyz without a token */
+    int64_t child_memory;   /* --child-memory: address-space limit of a TetGen child */
     int workers;            /* --workers N */
     int64_t max_body;       /* --max-body BYTES (any format) */
     int64_t max_json;       /* --max-json BYTES (JSON meshes) */

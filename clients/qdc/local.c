@@ -3,10 +3,13 @@
 #include "cli.h"
 #include "qdc.h"
 
+#include <errno.h>
+#include <math.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
 #include <unistd.h>
 #ifdef __linux__
 #include <sys/prctl.h>
@@ -500,10 +503,14 @@ int cli_tetra(int argc, char **argv)
     qdc_error err;
     qdc_status st;
     int rc = CLI_OK;
+    long long max_tets = 0, max_memory = 0;
     static const char use[] =
-        "usage: qdc tetra IN OUT [--tetgen-quality Q] [--max-volume V]\n"
+        "usage: qdc tetra IN OUT [--tetgen-quality Q] [--max-volume V] [--max-tets N]\n"
+        "                 [--max-memory BYTES]\n"
         "  IN: closed triangle surface (.stl .off .obj .poly .smesh); OUT: any mesh "
         "format\n"
+        "  --max-tets N: refuse at once when the volume bound alone makes more tets\n"
+        "  (the enclosed volume / V); --max-memory: address-space limit of the run\n"
         "  exit 0 ok, 1 usage, 2 bad surface, 3 TetGen failed, 4 OUT not written\n";
 
     tetra_defaults(&to);
@@ -518,6 +525,15 @@ int cli_tetra(int argc, char **argv)
                 fprintf(stderr, "qdc: bad value for %s\n", a);
                 return CLI_EUSAGE;
             }
+            i++;
+        } else if (!strcmp(a, "--max-tets") || !strcmp(a, "--max-memory")) {
+            char *end;
+            long long v = i + 1 < argc ? strtoll(argv[i + 1], &end, 10) : -1;
+            if (i + 1 >= argc || *end || v <= 0) {
+                fprintf(stderr, "qdc: bad value for %s\n", a);
+                return CLI_EUSAGE;
+            }
+            *(!strcmp(a, "--max-tets") ? &max_tets : &max_memory) = v;
             i++;
         } else if (!strcmp(a, "--die-with-parent")) {
             /* qdcd's child: end with the worker that waits for us. */
@@ -537,11 +553,48 @@ int cli_tetra(int argc, char **argv)
         fputs(use, stderr);
         return CLI_EUSAGE;
     }
+    if (max_memory > 0) {
+        /* TetGen asked for 1e-9 volumes grows by ~70 MB/s: bound the process so
+         * that it fails with out-of-memory instead of eating the machine */
+        struct rlimit rl = {(rlim_t)max_memory, (rlim_t)max_memory};
+        if (setrlimit(RLIMIT_AS, &rl)) {
+            fprintf(stderr, "qdc: cannot limit memory: %s\n", strerror(errno));
+            return CLI_EOPT;
+        }
+    }
     st = surface_load(in, SURFACE_AUTO, &s, &err);
     if (st == QDC_OK)
         st = surface_check(s, &err);
+    if (st == QDC_OK && max_tets > 0 && to.max_volume > 0) {
+        /* The enclosed volume (divergence theorem over the closed surface)
+         * over the volume bound is a floor of TetGen's tet count. */
+        double vol = 0;
+        for (int32_t t = 0; t < s->ntri; t++) {
+            const double *a = s->xyz + 3 * (size_t)s->tris[3 * (size_t)t];
+            const double *b = s->xyz + 3 * (size_t)s->tris[3 * (size_t)t + 1];
+            const double *c = s->xyz + 3 * (size_t)s->tris[3 * (size_t)t + 2];
+            vol += a[0] * (b[1] * c[2] - b[2] * c[1]) -
+                   a[1] * (b[0] * c[2] - b[2] * c[0]) +
+                   a[2] * (b[0] * c[1] - b[1] * c[0]);
+        }
+        vol = fabs(vol) / 6.0;
+        if (vol / to.max_volume > (double)max_tets) {
+            fprintf(
+                stderr,
+                "qdc: %s: the volume bound %g would make at least %.3g tets (enclosed "
+                "volume %g / %g), more than the %lld allowed: raise max_volume\n",
+                in, to.max_volume, vol / to.max_volume, vol, to.max_volume, max_tets);
+            surface_free(s);
+            return CLI_EINPUT;
+        }
+    }
     if (st == QDC_OK)
         st = tetra_from_surface_t(s, &to, &m, &err);
+    if (st == QDC_ENOMEM && max_memory > 0)
+        fprintf(stderr,
+                "qdc: %s: TetGen ran out of its %lld-byte memory limit (raise "
+                "max_volume, or the daemon's --child-memory)\n",
+                in, max_memory);
     if (st != QDC_OK) {
         cli_error(in, &err, st);
         rc = st == QDC_ETETGEN || st == QDC_ENOMEM || st == QDC_EINTERNAL ? CLI_EOPT
