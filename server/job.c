@@ -13,6 +13,7 @@
 
 #include <errno.h>
 #include <jansson.h>
+#include <omp.h>
 #include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -587,6 +588,13 @@ static void *worker_main(void *arg)
      * a job starts inherit this one. */
     if (setpriority(PRIO_PROCESS, (id_t)syscall(SYS_gettid), 10))
         fprintf(stderr, "qdcd: %s: cannot lower its priority\n", w->name);
+    /* This worker's share of the cores for everything it runs in parallel
+     * (the optimizer gets it as opts.threads; the boundary error and the
+     * other library calls of a job use this thread's OpenMP setting). */
+    {
+        long ncpu = sysconf(_SC_NPROCESSORS_ONLN);
+        omp_set_num_threads(ncpu > q->cfg.workers ? (int)(ncpu / q->cfg.workers) : 1);
+    }
     for (;;) {
         pthread_mutex_lock(&p->lock);
         while (!p->stopping && !p->pending) {
