@@ -73,19 +73,57 @@ void sb_printf(sbuf *b, const char *fmt, ...)
     b->len += (size_t)n;
 }
 
+/* Length of the valid UTF-8 sequence at s (1-4), or 0 if s does not start
+ * one (a stray continuation byte, an overlong form, a surrogate, a sequence
+ * cut short: by the end of the string or by a %.Ns that cut a character). */
+static int utf8_len(const unsigned char *s)
+{
+    int n;
+    unsigned cp;
+
+    if (s[0] < 0x80)
+        return 1;
+    if (s[0] >= 0xc2 && s[0] <= 0xdf)
+        n = 2, cp = s[0] & 0x1fu;
+    else if (s[0] >= 0xe0 && s[0] <= 0xef)
+        n = 3, cp = s[0] & 0x0fu;
+    else if (s[0] >= 0xf0 && s[0] <= 0xf4)
+        n = 4, cp = s[0] & 0x07u;
+    else
+        return 0;
+    for (int i = 1; i < n; i++) {
+        if ((s[i] & 0xc0) != 0x80)
+            return 0;
+        cp = cp << 6 | (s[i] & 0x3fu);
+    }
+    if ((n == 3 && cp < 0x800) || (n == 4 && (cp < 0x10000 || cp > 0x10ffff)) ||
+        (cp >= 0xd800 && cp <= 0xdfff))
+        return 0;
+    return n;
+}
+
+/* A JSON string of s: always valid UTF-8 (bytes that are not are written as
+ * U+FFFD, so a client's bytes echoed in a problem detail cannot break it). */
 void sb_json_str(sbuf *b, const char *s)
 {
     sb_add(b, "\"", 1);
-    for (; *s; s++) {
+    while (*s) {
         unsigned char c = (unsigned char)*s;
+        int n = utf8_len((const unsigned char *)s);
         if (c == '"' || c == '\\') {
             char e[2] = {'\\', (char)c};
             sb_add(b, e, 2);
         } else if (c < 0x20) {
             sb_printf(b, "\\u%04x", c);
+        } else if (n == 0) {
+            sb_add(b, "\xef\xbf\xbd", 3); /* U+FFFD */
+            n = 1;
         } else {
-            sb_add(b, s, 1);
+            sb_add(b, s, (size_t)n);
+            s += n;
+            continue;
         }
+        s += n ? n : 1;
     }
     sb_add(b, "\"", 1);
 }
