@@ -248,6 +248,22 @@ static enum MHD_Result reply_job(struct MHD_Connection *c, req *r, unsigned stat
     return ret;
 }
 
+/* Disk full (or quota): 507 and a Retry-After, since space is usually freed;
+ * the detail says what could not be stored, never where. */
+static enum MHD_Result storage_full(struct MHD_Connection *c, req *r, const char *what)
+{
+    static const char *const h[] = {MHD_HTTP_HEADER_RETRY_AFTER, "30", NULL};
+    char d[600];
+
+    snprintf(d, sizeof d, "%.400s: the server's disk is full; try again later", what);
+    return http_problem(c, r, 507, "io", "insufficient storage", d, NULL, h);
+}
+
+static int disk_full(int e)
+{
+    return e == ENOSPC || e == EDQUOT;
+}
+
 /* ------------------------------------------------------------------- upload -- */
 
 typedef struct {
@@ -519,6 +535,8 @@ static enum MHD_Result begin_upload(struct MHD_Connection *c, req *r)
 
     snprintf(tmpl, sizeof tmpl, "%s/tmp/upload-XXXXXX", q->cfg.data);
     r->fd = mkostemp(tmpl, O_CLOEXEC);
+    if (r->fd < 0 && disk_full(errno))
+        return storage_full(c, r, "the upload could not be stored");
     if (r->fd < 0)
         return http_problem(c, r, 500, "io", "i/o error", "cannot create an upload file",
                             NULL, NULL);
@@ -864,8 +882,7 @@ static enum MHD_Result process_upload(struct MHD_Connection *c, req *r)
     }
     double t_commit = mono_now();
     if (commit_input(r, j.id, j.format))
-        return http_problem(c, r, 507, "io", "insufficient storage",
-                            "the mesh could not be stored durably", NULL, NULL);
+        return storage_full(c, r, "the mesh could not be stored durably");
     if (q->store->ops->create(q->store, &j, &dup, &old) != QDC_OK) {
         job_path(q, j.id, NULL, d, sizeof d);
         dir_remove(d);
@@ -1022,8 +1039,7 @@ static enum MHD_Result finish_upload(struct MHD_Connection *c, req *r)
     if (r->too_big)
         return too_big(c, r, r->fmt == MESHIO_JSON);
     if (r->io_err || r->fd < 0)
-        return http_problem(c, r, 507, "io", "insufficient storage",
-                            "the upload could not be stored", NULL, NULL);
+        return storage_full(c, r, "the upload could not be stored");
     if (r->body_len == 0)
         return http_problem(c, r, 400, "empty-body", "empty request body",
                             "POST /v1/jobs needs a mesh in the body", NULL, NULL);
@@ -1515,11 +1531,18 @@ static enum MHD_Result process_convert(struct MHD_Connection *c, req *r)
     if (st == QDC_OK && file_write_atomic(side, hex, 64))
         st = qdc_fail(&e, QDC_EIO, "cannot store the result's hash");
     if (st != QDC_OK) {
+        int full = disk_full(errno) || strstr(e.msg, strerror(ENOSPC)) != NULL;
         /* Deleted or expired meanwhile: say that rather than an i/o error. */
         if (!load_job(c, r, &j, &ret) || not_servable(c, r, &j, &ret))
             return ret;
-        snprintf(d, sizeof d, "the result could not be written as %s: %.200s",
-                 meshio_format_name(r->res_fmt), e.msg);
+        unlink(path);
+        snprintf(d, sizeof d, "the result could not be written as %s",
+                 meshio_format_name(r->res_fmt));
+        /* the library's message names our files: it goes to the log, not out */
+        if (r->q->cfg.verbose)
+            fprintf(stderr, "qdcd: job %s: %s: %s\n", j.id, d, e.msg);
+        if (full)
+            return storage_full(c, r, d);
         return http_problem(c, r, 500, "io", "i/o error", d, NULL, NULL);
     }
     /* Deleted (or purged) while converting: the directory may have been
