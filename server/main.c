@@ -519,8 +519,8 @@ int main(int argc, char **argv)
         fprintf(stderr, "qdcd: %s\n", err.msg);
         return 1;
     }
-    if (q->store->ops->recover(q->store, q->cfg.max_attempts, &requeued, &failed) !=
-        QDC_OK) {
+    if (q->store->ops->recover(q->store, q->cfg.max_attempts, q->cfg.retention, &requeued,
+                               &failed) != QDC_OK) {
         fprintf(stderr, "qdcd: cannot recover the job store\n");
         goto out;
     }

@@ -419,7 +419,8 @@ static qdc_status sq_remove(job_store *s_, const char *id)
     return write1((sq_store *)s_, NULL, "DELETE FROM jobs WHERE id = ?", "t", id);
 }
 
-static qdc_status sq_recover(job_store *s_, int max_attempts, int *requeued, int *failed)
+static qdc_status sq_recover(job_store *s_, int max_attempts, double retention,
+                             int *requeued, int *failed)
 {
     sq_store *s = (sq_store *)s_;
     char err[512];
@@ -434,7 +435,7 @@ static qdc_status sq_recover(job_store *s_, int max_attempts, int *requeued, int
     rc = write1(s, failed,
                 "UPDATE jobs SET state = 3, finished = ?, expires = ?, error = ?,"
                 " lease_owner = '', lease_until = 0 WHERE state = 1 AND attempts >= ?",
-                "ddti", wall_now(), wall_now() + 86400.0, err, (int64_t)max_attempts);
+                "ddti", wall_now(), wall_now() + retention, err, (int64_t)max_attempts);
     if (rc != QDC_OK)
         return rc;
     return write1(s, requeued,

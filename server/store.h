@@ -87,8 +87,10 @@ typedef struct {
     qdc_status (*cancel)(job_store *s, const char *id, int *now_done);
     qdc_status (*remove)(job_store *s, const char *id);
     /* Start-up after a crash: running jobs go back to queued, or to failed when
-     * they already used max_attempts. *requeued / *failed counted. */
-    qdc_status (*recover)(job_store *s, int max_attempts, int *requeued, int *failed);
+     * they already used max_attempts (kept for retention seconds, as any
+     * finished job). *requeued / *failed counted. */
+    qdc_status (*recover)(job_store *s, int max_attempts, double retention, int *requeued,
+                          int *failed);
     qdc_status (*counts)(job_store *s, job_counts *c);
     /* Done jobs whose expires < now and not yet purged: ids into out (max). */
     qdc_status (*expired)(job_store *s, double now, char (*out)[JOB_ID_LEN + 1], int max,

@@ -404,7 +404,8 @@ static qdc_status pg_remove(job_store *s_, const char *id)
 /* Start-up of a node: jobs whose lease expired (their node died) go back to
  * the queue, or fail when they used all their attempts. Jobs that other,
  * live nodes are running keep their leases. */
-static qdc_status pg_recover(job_store *s_, int max_attempts, int *requeued, int *failed)
+static qdc_status pg_recover(job_store *s_, int max_attempts, double retention,
+                             int *requeued, int *failed)
 {
     pg_store *s = (pg_store *)s_;
     params p = {.n = 0};
@@ -419,7 +420,7 @@ static qdc_status pg_recover(job_store *s_, int max_attempts, int *requeued, int
         "its %d attempt(s); it is not retried\",\"attempts\":%d}",
         max_attempts, max_attempts);
     p_dbl(&p, now);
-    p_dbl(&p, now + 86400.0);
+    p_dbl(&p, now + retention);
     p_text(&p, err);
     p_i64(&p, max_attempts);
     st = one(s,
