@@ -540,6 +540,31 @@ stopped:
         snprintf(j->stop_reason, sizeof j->stop_reason, "%s", res.stop_reason);
     } else {
         st = save_outputs(q, j, m, ref, &opts, &res, &before, &err);
+        /* A full disk (or an I/O error) is a passing condition: the result is
+         * in memory, so writing it is tried again with a growing pause (up to
+         * 10 min); then the job goes back to the queue rather than failing
+         * an accepted job for good. */
+        for (double pause = 0.5, t0 = mono_now();
+             st == QDC_EIO && mono_now() - t0 < 600.0 && !atomic_load(&w->cancel) &&
+             !w->pool->stopping;
+             pause = pause * 2 > 10.0 ? 10.0 : pause * 2) {
+            if (pause == 0.5)
+                fprintf(stderr,
+                        "qdcd: job %s: cannot write its results (%s); trying again\n",
+                        j->id, err.msg);
+            struct timespec ts = {(time_t)pause, (long)((pause - (time_t)pause) * 1e9)};
+            nanosleep(&ts, NULL);
+            qdc_error_clear(&err);
+            st = save_outputs(q, j, m, ref, &opts, &res, &before, &err);
+        }
+        if (st == QDC_EIO) {
+            fprintf(stderr,
+                    "qdcd: job %s: still cannot write its results: back to the queue\n",
+                    j->id);
+            (void)retry_store(q, "give back", j->id, store_release_once, w, j, 60.0);
+            poll_drop(q->hub, j->id);
+            goto released;
+        }
         if (st != QDC_OK)
             goto failed;
         j->state = JOB_SUCCEEDED;

@@ -43,5 +43,22 @@ code=$(req GET "/v1/jobs/$id/result?format=vtu" "$TMP/r2")
 code2=$(submit "$CUBE" model/x-medit "max_iter=2" "$TMP/u2")
 [ "$code$code2" = 200202 ] && pass "diskfull: space freed: the conversion (200) and a new upload (202) succeed" ||
     fail "diskfull: after freeing" "conversion $code upload $code2"
+# a job that finishes while the disk is full: its results (and its row) are
+# written once space is back; it is never failed for good
+$MT qmesh "$CUBE" "$TMP/c.qmesh"
+code=$(submit "$TMP/c.qmesh" application/vnd.qdc.mesh "max_iter=400&finish=0&tol_move=0&mode=literal&ls_halvings=0" "$TMP/u3")
+id3=$(jf "$TMP/u3" .id)
+curl -s -m 30 "$URL/v1/jobs/$id3/progress?after=0&wait=20" > /dev/null
+dd if=/dev/zero of="$MNT/filler" bs=1M count=64 2> /dev/null
+sleep 4
+st_full=$(curl -s "$URL/v1/jobs/$id3" | jq -r .state)
+rm -f "$MNT/filler"
+st=$(poll_all "$id3")
+code=$(req GET "/v1/jobs/$id3/result?format=medit" "$TMP/r3.mesh")
+if [ "$st" = succeeded ] && [ "$code" = 200 ] && [ "$st_full" != failed ] && "$BIN/qdc" quality "$TMP/r3.mesh" > /dev/null 2>&1; then
+    pass "diskfull: a job ending on a full disk waited ($st_full) and succeeded once space was freed"
+else
+    fail "diskfull: job on a full disk" "while full: $st_full, then $st, result $code $(tail -3 "$MNT/d.log" | tr '\n' ' ')"
+fi
 stop_qdcd || fail "diskfull: stop" "exit $?"
 exit 0
