@@ -30,7 +30,7 @@ LDFLAGS += $(SANFLAGS) -fopenmp
 LIB_C := $(wildcard lib/*/*.c)
 LIB_CXX := $(wildcard lib/*/*.cpp)
 LIB_OBJ := $(LIB_C:%.c=$(B)/%.o) $(LIB_CXX:%.cpp=$(B)/%.o)
-LIB_LIBS := -lcholmod -lm
+LIB_LIBS := -lcholmod -lz -lm
 ifneq ($(LIB_CXX),)
 LIB_LIBS += -ltet -lstdc++
 endif
@@ -129,14 +129,14 @@ format-check:
 # with the parsers it needs and run FUZZ_SECONDS on its seeds (tests/fuzz/seeds/NAME);
 # crashes land in tests/fuzz/crashes/NAME, which `make test` replays (unit tests).
 FUZZ_SECONDS ?= 60
-FUZZ_LIB := lib/core/base.c lib/core/mesh.c $(wildcard lib/io/meshio*.c) lib/io/surface.c
+FUZZ_LIB := lib/core/base.c lib/core/mesh.c $(wildcard lib/io/meshio*.c) lib/io/gz.c lib/io/surface.c
 fuzz:
 	@mkdir -p build/fuzz
 	@set -e; for src in $(wildcard tests/fuzz/fuzz_*.c); do \
 	    name=$$(basename $$src .c); name=$${name#fuzz_}; \
 	    echo "# fuzz $$name ($(FUZZ_SECONDS) s)"; \
 	    clang -g -O1 -fsanitize=fuzzer,address,undefined $(CPPFLAGS) $$src $(FUZZ_LIB) \
-	        -lm -o build/fuzz/fuzz_$$name; \
+	        -lz -lm -o build/fuzz/fuzz_$$name; \
 	    mkdir -p build/fuzz/corpus/$$name tests/fuzz/crashes/$$name; \
 	    build/fuzz/fuzz_$$name -max_total_time=$(FUZZ_SECONDS) -max_len=8192 \
 	        -artifact_prefix=tests/fuzz/crashes/$$name/ build/fuzz/corpus/$$name \

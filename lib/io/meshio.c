@@ -9,6 +9,7 @@
  * The scanners, number parsers and writer they share with the other formats
  * (meshio_gmsh.c, meshio_vtk.c) are in meshio_scan.h. */
 #include "io/meshio.h"
+#include "io/gz.h"
 #include "io/meshio_scan.h"
 
 #include <errno.h>
@@ -76,14 +77,38 @@ static meshio_format alias_format(const char *s)
     return MESHIO_AUTO;
 }
 
-/* The extension of the last path component, without the dot; NULL if none. */
+/* alias_format of an extension that ends at the first '.' or the end
+ * ("mesh" in "mesh.gz"). */
+static meshio_format ext_format(const char *ext)
+{
+    size_t n = strcspn(ext, ".");
+    for (size_t i = 0; i < N_ALIASES; i++)
+        if (strlen(format_aliases[i].name) == n &&
+            strncasecmp(ext, format_aliases[i].name, n) == 0)
+            return format_aliases[i].fmt;
+    return MESHIO_AUTO;
+}
+
+/* 1 if path ends in ".gz" (a gzip-compressed file of the format before it). */
+static int path_gz(const char *path)
+{
+    size_t n = strlen(path);
+    return n > 3 && strcasecmp(path + n - 3, ".gz") == 0;
+}
+
+/* The extension that names the format: "mesh" for a.mesh, "mesh.gz" for
+ * a.mesh.gz (ext_format reads it up to the next dot). */
 static const char *path_ext(const char *path)
 {
     const char *slash = strrchr(path, '/');
     const char *base = slash ? slash + 1 : path;
-    const char *dot = strrchr(base, '.');
+    const char *end = base + strlen(base) - (path_gz(base) ? 3 : 0);
+    const char *dot = NULL;
 
-    return dot && dot[1] ? dot + 1 : NULL;
+    for (const char *p = base; p < end; p++)
+        if (*p == '.')
+            dot = p;
+    return dot && dot + 1 < end ? dot + 1 : NULL;
 }
 
 meshio_format meshio_format_from_name(const char *s)
@@ -97,7 +122,7 @@ meshio_format meshio_format_from_name(const char *s)
     if (f != MESHIO_AUTO)
         return f;
     ext = path_ext(s);
-    return ext ? alias_format(ext) : MESHIO_AUTO;
+    return ext ? ext_format(ext) : MESHIO_AUTO;
 }
 
 /* After "$MeshFormat": "2.2 ..." or "4.1 0|1 ...". */
@@ -1170,6 +1195,18 @@ qdc_status meshio_read_ex(const char *buf, size_t len, meshio_format fmt,
     *out = NULL;
     if (!buf)
         buf = "";
+    if (gz_is_gzip(buf, len)) {
+        /* a gzip-compressed file of any format: read what it holds */
+        char *plain = NULL;
+        size_t plen = 0;
+        qdc_status st = gz_inflate(buf, len, &plain, &plen, err);
+        if (st == QDC_OK && gz_is_gzip(plain, plen))
+            st = qdc_fail(err, QDC_EPARSE, "gzip: compressed twice");
+        if (st == QDC_OK)
+            st = meshio_read_ex(plain, plen, fmt, o, out, err);
+        qdc_free(plain);
+        return st;
+    }
     if (fmt == MESHIO_AUTO)
         fmt = meshio_sniff(buf, len);
     switch (fmt) {
@@ -1535,7 +1572,7 @@ qdc_status meshio_load_ex(const char *path, meshio_format fmt, const meshio_opti
     *out = NULL;
     ext = path_ext(path);
     if (fmt == MESHIO_AUTO && ext)
-        fmt = alias_format(ext);
+        fmt = ext_format(ext);
     if (fmt == MESHIO_AUTO && !file_exists(path)) {
         char *np = with_ext(path, ".node");
         if (np && file_exists(np))
@@ -1642,7 +1679,15 @@ static qdc_status save_atomic(const char *path, meshio_format fmt, int part,
         qdc_free(tmp);
         return st;
     }
-    st = write_fmt(m, fmt, part, fd_write, &fd, err);
+    if (path_gz(path)) {
+        gz_writer *gw = gz_writer_new(fd_write, &fd);
+        st = gw ? write_fmt(m, fmt, part, gz_write, gw, err)
+                : qdc_fail(err, QDC_ENOMEM, "out of memory");
+        if (gz_writer_finish(gw) && st == QDC_OK)
+            st = QDC_EIO;
+    } else {
+        st = write_fmt(m, fmt, part, fd_write, &fd, err);
+    }
     if (st == QDC_EIO)
         st = fail_errno(err, "cannot write", tmp, errno);
     if (st == QDC_OK && fsync(fd) != 0)
@@ -1670,7 +1715,7 @@ qdc_status meshio_save(const char *path, meshio_format fmt, const mesh_t *m,
         return qdc_fail(err, QDC_EINVAL, "meshio_save: NULL argument");
     if (fmt == MESHIO_AUTO) {
         const char *ext = path_ext(path);
-        fmt = ext ? alias_format(ext) : MESHIO_AUTO;
+        fmt = ext ? ext_format(ext) : MESHIO_AUTO;
     }
     if (fmt == MESHIO_AUTO)
         return qdc_fail(err, QDC_EFORMAT, "cannot tell the format of %s", path);

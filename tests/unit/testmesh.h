@@ -7,7 +7,7 @@
 #include <stdint.h>
 
 /* Deterministic pseudo-random numbers in [-1, 1]. */
-static double tm_rand(uint64_t *s)
+static inline double tm_rand(uint64_t *s)
 {
     *s ^= *s << 13;
     *s ^= *s >> 7;
@@ -16,7 +16,7 @@ static double tm_rand(uint64_t *s)
 }
 
 /* n x n x n cubes on [0,1]^3, each split into 6 Kuhn tets, all positive. */
-static mesh_t *tm_grid(int n, unsigned flags)
+static inline mesh_t *tm_grid(int n, unsigned flags)
 {
     static const int perm[6][3] = {{0, 1, 2}, {1, 2, 0}, {2, 0, 1},
                                    {0, 2, 1}, {2, 1, 0}, {1, 0, 2}};
@@ -59,7 +59,7 @@ static mesh_t *tm_grid(int n, unsigned flags)
 }
 
 /* Move interior vertices randomly by up to amp (in grid units of 1/n). */
-static void tm_perturb(mesh_t *m, int n, double amp, uint64_t seed)
+static inline void tm_perturb(mesh_t *m, int n, double amp, uint64_t seed)
 {
     uint64_t s = seed ? seed : 88172645463325252ULL;
     for (int k = 1; k < n; k++)
