@@ -150,6 +150,15 @@ static int authenticate(struct MHD_Connection *c, req *r)
 }
 
 /* The job of the route, if it exists and belongs to the caller; else a 404. */
+/* The job store did not answer (a database that went away, SQLite busy or
+ * out of space): a passing condition, 503 with a Retry-After. */
+static enum MHD_Result store_unavailable(struct MHD_Connection *c, req *r, const char *what)
+{
+    static const char *const h[] = {MHD_HTTP_HEADER_RETRY_AFTER, "5", NULL};
+    return http_problem(c, r, 503, "store-unavailable", "job store unavailable", what, NULL,
+                        h);
+}
+
 static int load_job(struct MHD_Connection *c, req *r, job_rec *j, enum MHD_Result *ret)
 {
     qdc_status st = r->q->store->ops->get(r->q->store, r->id, j);
@@ -160,8 +169,7 @@ static int load_job(struct MHD_Connection *c, req *r, job_rec *j, enum MHD_Resul
         snprintf(d, sizeof d, "there is no job '%s'", r->id);
         *ret = http_problem(c, r, 404, "not-found", "no such job", d, NULL, NULL);
     } else {
-        *ret = http_problem(c, r, 500, "store", "job store error",
-                            "the job store could not be read", NULL, NULL);
+        *ret = store_unavailable(c, r, "the job store could not be read");
     }
     return 0;
 }
@@ -886,8 +894,7 @@ static enum MHD_Result process_upload(struct MHD_Connection *c, req *r)
     if (q->store->ops->create(q->store, &j, &dup, &old) != QDC_OK) {
         job_path(q, j.id, NULL, d, sizeof d);
         dir_remove(d);
-        return http_problem(c, r, 500, "store", "job store error",
-                            "the job could not be recorded", NULL, NULL);
+        return store_unavailable(c, r, "the job could not be recorded");
     }
     if (dup) { /* a concurrent request with the same key won */
         job_path(q, j.id, NULL, d, sizeof d);
@@ -1608,8 +1615,7 @@ static enum MHD_Result do_cancel(struct MHD_Connection *c, req *r)
         return ret;
     if (!job_state_done(j.state)) {
         if (q->store->ops->cancel(q->store, j.id, &now_done) != QDC_OK)
-            return http_problem(c, r, 500, "store", "job store error",
-                                "the cancellation could not be recorded", NULL, NULL);
+            return store_unavailable(c, r, "the cancellation could not be recorded");
         if (now_done) {
             atomic_fetch_add(&q->m.finished[JOB_CANCELLED], 1);
             poll_end(q->hub, j.id);
@@ -1637,8 +1643,7 @@ static enum MHD_Result do_delete(struct MHD_Connection *c, req *r)
     if (j.state == JOB_RUNNING)
         q->store->ops->cancel(q->store, j.id, &now_done);
     if (q->store->ops->remove(q->store, j.id) != QDC_OK)
-        return http_problem(c, r, 500, "store", "job store error",
-                            "the job could not be deleted", NULL, NULL);
+        return store_unavailable(c, r, "the job could not be deleted");
     /* Whatever state was read above: a worker may have claimed the job since
      * (a DELETE right after the 202). The row is gone first, so a worker that
      * registers after this cancel finds it gone (job.c) and does not run it. */
@@ -1678,8 +1683,7 @@ static enum MHD_Result do_list(struct MHD_Connection *c, req *r)
     if (r->q->store->ops->list(r->q->store, r->owner, after, (int)size, rows, &n) !=
         QDC_OK) {
         free(rows);
-        return http_problem(c, r, 500, "store", "job store error", "cannot list jobs",
-                            NULL, NULL);
+        return store_unavailable(c, r, "cannot list jobs");
     }
     sb_puts(&b, "{\"jobs\":[");
     for (int i = 0; i < n; i++) {

@@ -164,14 +164,15 @@ sleep 0.3
 pg_stop
 # the job ends while the database is away: its end is written when it is back
 sleep 3
-down=$(curl -s -o /dev/null -w '%{http_code}' -m 10 "$URL_b/v1/jobs/$idd")
+down=$(curl -s -o /dev/null -D "$TMP/down.h" -w '%{http_code}' -m 10 "$URL_b/v1/jobs/$idd")
+grep -qi '^retry-after: ' "$TMP/down.h" || down="$down without Retry-After"
 pg_up
 st=$(wait_done "$URL_b" "$idd")
 alive=no
 kill -0 "$PID_b" 2> /dev/null && alive=yes
 n=$(pg_sql "SELECT COUNT(*) FROM jobs")
-if [ "$alive" = yes ] && [ "$st" = succeeded ] && [ "$n" = 10 ]; then
-    pass "pg: database restarted mid-run: node alive, job succeeded, all 10 jobs kept (GET while down: $down)"
+if [ "$alive" = yes ] && [ "$st" = succeeded ] && [ "$n" = 10 ] && [ "$down" = 503 ]; then
+    pass "pg: database restarted mid-run: node alive, GET while down 503 (+ Retry-After), job succeeded, all 10 jobs kept"
 else
     fail "pg: database restart" "alive $alive state $st jobs $n (GET while down: $down) $(tail -2 "$TMP/b.log" | tr '\n' ' ')"
 fi
