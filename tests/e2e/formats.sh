@@ -36,7 +36,7 @@ int main(int argc, char **argv)
     return 0;
 }
 EOF
-if ! cc -O1 -I"$ROOT/lib" "$TMP/conv.c" "$BIN/libqdc.a" -lcholmod -lm -fopenmp -ltet -lstdc++ \
+if ! cc -O1 -I"$ROOT/lib" "$TMP/conv.c" "$BIN/libqdc.a" -lcholmod -lz -lm -fopenmp -ltet -lstdc++ \
         -o "$TMP/conv" 2> "$TMP/cc.log"; then
     fail "formats: build converter" "$(tail -3 "$TMP/cc.log")"
     exit 1

@@ -271,7 +271,9 @@ TEST(formats_and_sniffing)
     ASSERT_EQ_INT(meshio_format_from_name("application/vnd.qdc.mesh"), MESHIO_QMESH);
     ASSERT_EQ_INT(meshio_format_from_name(".json"), MESHIO_JSON);
     ASSERT_EQ_INT(meshio_format_from_name("a.node"), MESHIO_TETGEN);
-    ASSERT_EQ_INT(meshio_format_from_name("a.mesh.gz"), MESHIO_AUTO);
+    /* a gzip-compressed file is named after what it holds */
+    ASSERT_EQ_INT(meshio_format_from_name("a.mesh.gz"), MESHIO_MEDIT);
+    ASSERT_EQ_INT(meshio_format_from_name("a.gz"), MESHIO_AUTO);
     ASSERT_EQ_INT(meshio_format_from_name("dir.mesh/file"), MESHIO_AUTO);
     ASSERT_TRUE(strcmp(meshio_format_name(MESHIO_QMESH), "qmesh") == 0);
     ASSERT_TRUE(meshio_format_name(MESHIO_FORMAT_COUNT) == NULL);
