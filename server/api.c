@@ -152,11 +152,12 @@ static int authenticate(struct MHD_Connection *c, req *r)
 /* The job of the route, if it exists and belongs to the caller; else a 404. */
 /* The job store did not answer (a database that went away, SQLite busy or
  * out of space): a passing condition, 503 with a Retry-After. */
-static enum MHD_Result store_unavailable(struct MHD_Connection *c, req *r, const char *what)
+static enum MHD_Result store_unavailable(struct MHD_Connection *c, req *r,
+                                         const char *what)
 {
     static const char *const h[] = {MHD_HTTP_HEADER_RETRY_AFTER, "5", NULL};
-    return http_problem(c, r, 503, "store-unavailable", "job store unavailable", what, NULL,
-                        h);
+    return http_problem(c, r, 503, "store-unavailable", "job store unavailable", what,
+                        NULL, h);
 }
 
 static int load_job(struct MHD_Connection *c, req *r, job_rec *j, enum MHD_Result *ret)
