@@ -179,6 +179,7 @@ typedef struct {
     const char *id;
     FILE *progress;
     double renewed;
+    double checked; /* last read of the row for a cancel from another node */
     int iterations;
     char last[768];
 } run_ctx;
@@ -208,6 +209,15 @@ static int on_progress(void *ctx, const opt_progress *p)
     if (mono_now() - r->renewed > r->q->cfg.lease / 4) {
         r->q->store->ops->renew(r->q->store, r->id, r->w->name, r->q->cfg.lease);
         r->renewed = mono_now();
+    }
+    /* Several nodes on one database: a cancel or a DELETE sent to another
+     * node is only in the row; read it at most twice a second. */
+    if (store_pg_uri(r->q->cfg.store) && mono_now() - r->checked > 0.5) {
+        job_rec row;
+        qdc_status st = r->q->store->ops->get(r->q->store, r->id, &row);
+        if (st == QDC_EINVAL || (st == QDC_OK && row.cancel_requested))
+            atomic_store(&r->w->cancel, 1);
+        r->checked = mono_now();
     }
     return atomic_load(&r->w->cancel);
 }
@@ -467,7 +477,7 @@ static void run_job(worker *w, job_rec *j)
     report_quality before;
     qdc_error err;
     qdc_status st;
-    run_ctx r = {w, q, j->id, NULL, mono_now(), 0, ""};
+    run_ctx r = {w, q, j->id, NULL, mono_now(), mono_now(), 0, ""};
     int release;
 
     memset(&res, 0, sizeof res);

@@ -132,6 +132,30 @@ else
 fi
 wait_done "$URL_a" "$ka" > /dev/null
 
+# 5b. a cancel sent to the node that does not run the job reaches its worker
+post "$URL_a" "$TMP/cube.qmesh" "max_iter=10000&finish=0&tol_move=0&mode=literal&ls_halvings=0" "$TMP/jc" > /dev/null
+idc=$(jf "$TMP/jc" .id)
+i=0
+while [ $i -lt 100 ] && [ "$(curl -s "$URL_a/v1/jobs/$idc" | jq -r .state)" != running ]; do
+    sleep 0.05
+    i=$((i + 1))
+done
+runner=$(pg_sql "SELECT lease_owner FROM jobs WHERE id = '$idc'")
+# the other node's URL
+case $runner in
+*:"$PID_a":*) other=$URL_b ;;
+*) other=$URL_a ;;
+esac
+t0=$(date +%s%N)
+curl -s -o /dev/null -X POST "$other/v1/jobs/$idc:cancel"
+st=$(wait_done "$other" "$idc")
+ms=$((($(date +%s%N) - t0) / 1000000))
+if [ "$st" = cancelled ] && [ $ms -lt 3000 ]; then
+    pass "pg: cancel sent to the other node stopped the running job in $ms ms"
+else
+    fail "pg: cross-node cancel" "state $st after $ms ms (runner $runner)"
+fi
+
 # 6. kill -9 of the node running a job: the other node takes it over after
 # the lease expires and finishes it
 stop "$PID_a"
@@ -171,8 +195,8 @@ st=$(wait_done "$URL_b" "$idd")
 alive=no
 kill -0 "$PID_b" 2> /dev/null && alive=yes
 n=$(pg_sql "SELECT COUNT(*) FROM jobs")
-if [ "$alive" = yes ] && [ "$st" = succeeded ] && [ "$n" = 10 ] && [ "$down" = 503 ]; then
-    pass "pg: database restarted mid-run: node alive, GET while down 503 (+ Retry-After), job succeeded, all 10 jobs kept"
+if [ "$alive" = yes ] && [ "$st" = succeeded ] && [ "$n" = 11 ] && [ "$down" = 503 ]; then
+    pass "pg: database restarted mid-run: node alive, GET while down 503 (+ Retry-After), job succeeded, all 11 jobs kept"
 else
     fail "pg: database restart" "alive $alive state $st jobs $n (GET while down: $down) $(tail -2 "$TMP/b.log" | tr '\n' ' ')"
 fi
