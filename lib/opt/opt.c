@@ -143,6 +143,7 @@ typedef struct {
     double *vfac;    /* nv: share of the step each vertex takes (feasible step) */
     double hbound;   /* --hausd in normalized units (0: none) */
     uint8_t *vmark;  /* nv: scratch marks */
+    int32_t *vlist;  /* nv: scratch list of vertices */
     double *wq2;     /* squared QDC row weights */
     double *bw2;     /* squared boundary row weights (0: no row) */
     double *dg;      /* bw2 + mu */
@@ -373,6 +374,7 @@ static qdc_status ctx_init(ctx_t *c, const mesh_t *m, const mesh_topo *tp,
     c->locked = qdc_calloc((size_t)m->nv, 1);
     c->vfac = qdc_mallocn((size_t)m->nv, sizeof(double));
     c->vmark = qdc_calloc((size_t)m->nv, 1);
+    c->vlist = qdc_mallocn((size_t)m->nv + 1, sizeof(int32_t));
     c->wq2 = qdc_mallocn((size_t)m->nv, sizeof(double));
     c->bw2 = qdc_calloc((size_t)m->nv, sizeof(double));
     c->dg = qdc_mallocn((size_t)m->nv, sizeof(double));
@@ -380,8 +382,8 @@ static qdc_status ctx_init(ctx_t *c, const mesh_t *m, const mesh_topo *tp,
     c->eta = qdc_mallocn((size_t)m->nt, sizeof(double));
     c->qval = qdc_mallocn((size_t)tp->adj_ptr[tp->nv], sizeof(double));
     if (!c->x || !c->x0 || !c->xn || !c->xbest || !c->trial || !c->tmp || !c->rhs ||
-        !c->d || !c->locked || !c->vfac || !c->vmark || !c->wq2 || !c->bw2 || !c->dg ||
-        !c->qt || !c->eta || !c->qval)
+        !c->d || !c->locked || !c->vfac || !c->vmark || !c->vlist || !c->wq2 || !c->bw2 ||
+        !c->dg || !c->qt || !c->eta || !c->qval)
         return QDC_ENOMEM;
     /* docs/method.md §1: bbox centre to 0, diagonal to 1; every tolerance is in these
      * units */
@@ -438,6 +440,7 @@ static void ctx_free(ctx_t *c)
     slide_free(c->sl);
     qdc_free(c->vfac);
     qdc_free(c->vmark);
+    qdc_free(c->vlist);
     qdc_free(c->x);
     qdc_free(c->x0);
     qdc_free(c->xn);
@@ -557,53 +560,106 @@ static int spoils(const ctx_t *c, const double *y, const int32_t *tt, double qfl
     return qfloor > 0 && tet_eta(y, tt) < qfloor;
 }
 
+/* c->trial of vertex v: its share vfac[v] of the step s, then onto its
+ * sliding constraint or within the --hausd bound (as project_sliding and
+ * clamp_boundary do for the whole mesh). */
+static void place_vertex(ctx_t *c, int32_t v, double s)
+{
+    double *y = c->trial + 3 * (size_t)v;
+
+    for (int k = 0; k < 3; k++) {
+        size_t q = 3 * (size_t)v + k;
+        y[k] = c->x[q] + s * c->vfac[v] * (c->xn[q] - c->x[q]);
+    }
+    if (c->sl) {
+        int kind = slide_kind(c->sl, v);
+        if (kind == SLIDE_SURFACE || kind == SLIDE_LINE) {
+            double p[3];
+            slide_project(c->sl, v, y, p);
+            memcpy(y, p, sizeof p);
+        }
+    } else if (c->hbound > 0 &&
+               (c->tp->vflag[v] & (MESH_V_BOUNDARY | MESH_V_INTERFACE))) {
+        slide_clamp(c->x0, v, c->hbound, y);
+    }
+}
+
+static void mark_corners(ctx_t *c, const int32_t *tt)
+{
+    for (int a = 0; a < 4; a++) {
+#pragma omp atomic write
+        c->vmark[tt[a]] = 1;
+    }
+}
+
 static void feasible_trial(ctx_t *c, double s, int32_t ninv_x, double qfloor)
 {
     const mesh_topo *tp = c->tp;
-    int32_t nv = c->nv;
+    int32_t nv = c->nv, folds = 0, ninv = 0;
 
-    for (int32_t v = 0; v < nv; v++)
-        c->vfac[v] = 1.0;
-    for (int round = 0;; round++) {
-        int32_t folds = 0, ninv = 0;
 #pragma omp parallel for schedule(static)
-        for (int32_t v = 0; v < nv; v++)
-            for (int k = 0; k < 3; k++) {
-                size_t q = 3 * (size_t)v + k;
-                c->trial[q] = c->x[q] + s * c->vfac[v] * (c->xn[q] - c->x[q]);
-            }
-        project_sliding(c, c->trial);
-        clamp_boundary(c, c->trial);
-#pragma omp parallel for reduction(+ : folds, ninv) schedule(static)
-        for (int32_t t = 0; t < tp->nt; t++) {
-            const int32_t *tt = tp->tets + 4 * (size_t)t;
-            ninv += geom_tet_inverted(geom_tet_vol6(c->trial, tt));
-            folds += spoils(c, c->trial, tt, qfloor);
+    for (int32_t v = 0; v < nv; v++) {
+        c->vfac[v] = 1.0;
+        for (int k = 0; k < 3; k++) {
+            size_t q = 3 * (size_t)v + k;
+            c->trial[q] = c->x[q] + s * (c->xn[q] - c->x[q]);
         }
-        /* A tangled mesh untangles faster when a step may fold a few valid
-         * tets while it frees more (measured on the tangled dev meshes: the
-         * strict rule cost 0.008 of mean ratio on sphere and torus): the
-         * whole step is taken when the inverted count does not rise. Not
-         * while sliding: there such steps squashed smooth ears flat
-         * (bunny_tangled-low_10k: worst tet 6e-11 instead of 0.054). */
-        if (!folds || (round == 0 && ninv_x > 0 && ninv <= ninv_x && !c->sl))
+    }
+    project_sliding(c, c->trial);
+    clamp_boundary(c, c->trial);
+#pragma omp parallel for reduction(+ : folds, ninv) schedule(static)
+    for (int32_t t = 0; t < tp->nt; t++) {
+        const int32_t *tt = tp->tets + 4 * (size_t)t;
+        int bad = spoils(c, c->trial, tt, qfloor);
+        ninv += geom_tet_inverted(geom_tet_vol6(c->trial, tt));
+        folds += bad;
+        if (bad)
+            mark_corners(c, tt);
+    }
+    /* A tangled mesh untangles faster when a step may fold a few valid
+     * tets while it frees more (measured on the tangled dev meshes: the
+     * strict rule cost 0.008 of mean ratio on sphere and torus): the
+     * whole step is taken when the inverted count does not rise. Not
+     * while sliding: there such steps squashed smooth ears flat
+     * (bunny_tangled-low_10k: worst tet 6e-11 instead of 0.054). */
+    if (!folds || (ninv_x > 0 && ninv <= ninv_x && !c->sl)) {
+        if (folds)
+            memset(c->vmark, 0, (size_t)nv);
+        return;
+    }
+    /* Then only the marked vertices move back, and only their tets can
+     * change: each round looks at those alone (a whole-mesh scan per round
+     * made the line search 24x slower at 1M tets). */
+    for (int round = 0;; round++) {
+        int32_t n = 0, again = 0;
+        for (int32_t v = 0; v < nv; v++)
+            if (c->vmark[v]) {
+                c->vmark[v] = 0;
+                c->vlist[n++] = v;
+            }
+        if (!n)
             return;
         if (round > 64) { /* cannot happen (see above); never loop for ever */
             memcpy(c->trial, c->x, 3 * (size_t)nv * sizeof(double));
             return;
         }
-        /* few tets fold: mark their corners in one serial pass */
-        for (int32_t t = 0; t < tp->nt; t++) {
-            const int32_t *tt = tp->tets + 4 * (size_t)t;
-            if (spoils(c, c->trial, tt, qfloor))
-                for (int a = 0; a < 4; a++)
-                    c->vmark[tt[a]] = 1;
+        for (int32_t i = 0; i < n; i++) {
+            int32_t v = c->vlist[i];
+            c->vfac[v] = round < 6 && c->vfac[v] > 0.0 ? 0.5 * c->vfac[v] : 0.0;
+            place_vertex(c, v, s);
         }
-        for (int32_t v = 0; v < nv; v++)
-            if (c->vmark[v]) {
-                c->vmark[v] = 0;
-                c->vfac[v] = round < 6 && c->vfac[v] > 0.0 ? 0.5 * c->vfac[v] : 0.0;
+        for (int32_t i = 0; i < n; i++) {
+            int32_t v = c->vlist[i];
+            for (int32_t k = tp->vt_ptr[v]; k < tp->vt_ptr[v + 1]; k++) {
+                const int32_t *tt = tp->tets + 4 * (size_t)(tp->vt_idx[k] >> 2);
+                if (spoils(c, c->trial, tt, qfloor)) {
+                    mark_corners(c, tt);
+                    again = 1;
+                }
             }
+        }
+        if (!again)
+            return;
     }
 }
 
