@@ -10,7 +10,9 @@ Classes (each as a Medit .mesh, valid unless named tangled):
   cube-lowq        the same in the unit cube (only when asked for with --only):
                    the benchmark's scale series
   graded-box       Gmsh, a box refined toward one corner (size field), so
-                   sizes vary 20x across the mesh
+                   sizes vary 10x across the mesh
+  graded-layer     Gmsh, a box refined along one face (the sizes of a
+                   boundary layer, 9x)
   part-cad         Gmsh OCC: a box minus a cylinder, with a fillet-like
                    curved patch: sharp features and curved patches
   two-region       Gmsh: a box with an embedded ball (two physical volumes)
@@ -167,38 +169,46 @@ def lowq(shape, ntets, rng):
     return x[used], remap[t]
 
 
-def gmsh_mesh(kind, ntets):
+def gmsh_mesh(kind, ntets, k=1.0):
+    """k scales every mesh size; gmsh_sized() calibrates it to ntets."""
     import gmsh
 
     gmsh.initialize(["-noenv"])
     gmsh.option.setNumber("General.Terminal", 0)
-    gmsh.option.setNumber("General.NumThreads", 2)
+    gmsh.option.setNumber("General.NumThreads", 1)  # 2 threads: not the same mesh twice
     gmsh.model.add(kind)
     occ = gmsh.model.occ
-    if kind == "graded-box":
+    h = k * (6.0 * 1.2 / ntets) ** (1 / 3) * 1.6  # uniform size for ntets in a unit cube
+    if kind in ("graded-box", "graded-layer"):
         occ.addBox(0, 0, 0, 1, 1, 1)
         occ.synchronize()
         f = gmsh.model.mesh.field
         f.add("Distance", 1)
-        f.setNumbers(1, "PointsList", [1])
+        if kind == "graded-box":  # refined toward one corner, sizes vary 10x
+            f.setNumbers(1, "PointsList", [1])
+            lo, hi, d0, d1 = h / 4, h * 2.5, 0.05, 1.2
+        else:  # a layer of refinement along the face z = 0 (a boundary layer's sizes)
+            zf = [tag for dim, tag in gmsh.model.getEntities(2)
+                  if abs(gmsh.model.occ.getCenterOfMass(2, tag)[2]) < 1e-9]
+            f.setNumbers(1, "SurfacesList", zf)
+            lo, hi, d0, d1 = h / 5, h * 1.8, 0.02, 0.5
         f.add("Threshold", 2)
         f.setNumber(2, "InField", 1)
-        h = 1.6 * (1.0 / ntets) ** (1 / 3) * 6
-        f.setNumber(2, "SizeMin", h / 8)
-        f.setNumber(2, "SizeMax", h * 2.5)
-        f.setNumber(2, "DistMin", 0.05)
-        f.setNumber(2, "DistMax", 1.2)
+        f.setNumber(2, "SizeMin", lo)
+        f.setNumber(2, "SizeMax", hi)
+        f.setNumber(2, "DistMin", d0)
+        f.setNumber(2, "DistMax", d1)
         f.setAsBackgroundMesh(2)
         gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 0)
         gmsh.option.setNumber("Mesh.MeshSizeFromPoints", 0)
+        gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", 0)
     elif kind == "part-cad":
         b = occ.addBox(0, 0, 0, 2, 1, 0.6)
         c = occ.addCylinder(1.0, 0.5, -0.1, 0, 0, 0.8, 0.3)
         s = occ.addSphere(2.0, 1.0, 0.6, 0.35)
         occ.cut([(3, b)], [(3, c), (3, s)])
         occ.synchronize()
-        h = (2 * 1 * 0.6 / ntets * 6 * 1.2) ** (1 / 3) * 1.6
-        gmsh.option.setNumber("Mesh.MeshSizeMax", h)
+        gmsh.option.setNumber("Mesh.MeshSizeMax", h * (2 * 1 * 0.6) ** (1 / 3))
     elif kind == "two-region":
         b = occ.addBox(0, 0, 0, 1, 1, 1)
         s = occ.addSphere(0.5, 0.5, 0.5, 0.3)
@@ -206,7 +216,6 @@ def gmsh_mesh(kind, ntets):
         occ.synchronize()
         for i, (dim, tag) in enumerate(gmsh.model.getEntities(3)):
             gmsh.model.addPhysicalGroup(3, [tag], i + 1)
-        h = (1.0 / ntets * 6 * 1.2) ** (1 / 3) * 1.6
         gmsh.option.setNumber("Mesh.MeshSizeMax", h)
     gmsh.option.setNumber("Mesh.Optimize", 0)
     gmsh.model.mesh.generate(3)
@@ -228,6 +237,16 @@ def gmsh_mesh(kind, ntets):
     remap[used] = np.arange(len(used))
     t, _ = positive(x[used], remap[t])
     return x[used], t, np.concatenate(regs)
+
+
+def gmsh_sized(kind, ntets):
+    """Gmsh's count for a size is not known beforehand: mesh once, rescale the
+    sizes by the cube root of the count ratio, mesh again."""
+    x, t, reg = gmsh_mesh(kind, ntets)
+    k = (len(t) / ntets) ** (1 / 3)
+    if abs(k - 1) > 0.1:
+        x, t, reg = gmsh_mesh(kind, ntets, k)
+    return x, t, reg
 
 
 def tangle(x, t, rng, frac=0.01):
@@ -265,11 +284,11 @@ def main():
         write_medit(os.path.join(a.outdir, name + ".mesh"), x, t)
         write_medit(os.path.join(a.outdir, name + "-tangled.mesh"), tangle(x, t, rng), t)
         made += [name, name + "-tangled"]
-    for kind in ("graded-box", "part-cad", "two-region"):
+    for kind in ("graded-box", "graded-layer", "part-cad", "two-region"):
         if only and kind not in only and kind + "-tangled" not in only:
             continue
         rng = np.random.default_rng(a.seed)
-        x, t, reg = gmsh_mesh(kind, n)
+        x, t, reg = gmsh_sized(kind, n)
         write_medit(os.path.join(a.outdir, kind + ".mesh"), x, t, reg)
         write_medit(os.path.join(a.outdir, kind + "-tangled.mesh"), tangle(x, t, rng), t, reg)
         made += [kind, kind + "-tangled"]
