@@ -315,6 +315,8 @@ qdc_status report_write_json(const report_t *r, qdc_write_fn fn, void *ctx,
         jw_int(&w, "max_inverted_global", s->max_inverted_global);
         jw_int(&w, "folded_global", s->folded_global);
         jw_num(&w, "hausd_bound", s->hausd_bound);
+        jw_num(&w, "lift_bound", s->lift_bound);
+        jw_int(&w, "held_back", s->held_back);
         jw_str(&w, "solver", opt_solver_name(s->solver));
         jw_num(&w, "solver_flops", s->solver_flops);
         jw_open(&w, "seconds", '{');
@@ -343,6 +345,8 @@ qdc_status report_write_json(const report_t *r, qdc_write_fn fn, void *ctx,
         jw_num(&w, "hausdorff_rel", b->hausdorff_rel);
         jw_num(&w, "hausdorff_out_to_in", b->h_a_to_b);
         jw_num(&w, "hausdorff_in_to_out", b->h_b_to_a);
+        jw_num(&w, "vertex_max", b->vertex_max);
+        jw_num(&w, "vertex_max_rel", b->vertex_max_rel);
         jw_num(&w, "mean", b->mean);
         jw_num(&w, "mean_rel", b->mean_rel);
         jw_num(&w, "rms", b->rms);

@@ -654,6 +654,18 @@ qdc_status bderr_surfaces(const double *xa, int32_t nva, const int32_t *ta, int3
     if (st == QDC_OK)
         st = directed(&sb, ba, &db, err);
     if (st == QDC_OK) {
+        uint8_t *used = qdc_calloc((size_t)nva + 1, 1);
+        if (!used)
+            st = qdc_fail(err, QDC_ENOMEM, "out of memory");
+        for (int64_t i = 0; used && i < 3 * (int64_t)nta; i++)
+            used[ta[i]] = 1;
+        for (int32_t v = 0; used && v < nva; v++)
+            if (used[v])
+                r->vertex_max = fmax(
+                    r->vertex_max, bderr_bvh_closest(bb, xa + 3 * (size_t)v, NULL, NULL));
+        qdc_free(used);
+    }
+    if (st == QDC_OK) {
         n = da.n + db.n;
         r->h_a_to_b = da.max;
         r->h_b_to_a = db.max;
@@ -665,6 +677,7 @@ qdc_status bderr_surfaces(const double *xa, int32_t nva, const int32_t *ta, int3
             r->hausdorff_rel = r->hausdorff / r->diag;
             r->mean_rel = r->mean / r->diag;
             r->rms_rel = r->rms / r->diag;
+            r->vertex_max_rel = r->vertex_max / r->diag;
         }
         r->n_samples = n;
         r->ntri_a = nta;

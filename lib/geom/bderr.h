@@ -34,10 +34,12 @@ typedef struct {
     double hausdorff; /* max of the two directed distances (absolute) */
     double h_a_to_b;  /* max over samples of A of the distance to B */
     double h_b_to_a;
-    double mean, rms;                        /* over the samples of both sides */
-    double diag;                             /* bbox diagonal of B (the reference) */
+    double vertex_max; /* max over the vertices of A of the distance to B */
+    double mean, rms;  /* over the samples of both sides */
+    double diag;       /* bbox diagonal of B (the reference) */
     double hausdorff_rel, mean_rel, rms_rel; /* divided by diag (0 if diag is 0) */
-    int64_t n_samples;                       /* both sides */
+    double vertex_max_rel;
+    int64_t n_samples; /* both sides */
     int32_t ntri_a, ntri_b;
 } bderr_result;
 

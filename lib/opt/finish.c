@@ -153,6 +153,42 @@ static double star_hess(const mesh_topo *tp, const double *x, int32_t v, const d
     return f;
 }
 
+/* Smallest mean ratio over the star of v placed at y. */
+static double star_min_eta(const mesh_topo *tp, const double *x, int32_t v,
+                           const double *y)
+{
+    double e = INFINITY;
+
+    for (int32_t k = tp->vt_ptr[v]; k < tp->vt_ptr[v + 1]; k++) {
+        int32_t t = tp->vt_idx[k] >> 2, a = tp->vt_idx[k] & 3;
+        const double *p[4];
+        metric_parts pt;
+        double q;
+        for (int b = 0; b < 4; b++)
+            p[b] = b == a ? y : x + 3 * (size_t)tp->tets[4 * (size_t)t + b];
+        metric_parts_for(OPT_METRIC_MIVL, p[0], p[1], p[2], p[3], &pt);
+        q = metric_mean_ratio(&pt);
+        e = q < e ? q : e;
+    }
+    return e;
+}
+
+/* On a valid mesh a move must not take a star tet below the mesh's worst
+ * mean ratio qfloor (> 0), unless that star was already below it and its
+ * worst does not drop: else a sweep that raises the mean lowers the worst
+ * tet, and the whole pass is thrown away by the best-iterate rule (measured
+ * on a thin surface-heavy bone: the pass took the worst tet from 6e-4 to 0). */
+static int keeps_floor(const mesh_topo *tp, const double *x, int32_t v, const double *y,
+                       double qfloor)
+{
+    double e1;
+
+    if (!(qfloor > 0.0))
+        return 1;
+    e1 = star_min_eta(tp, x, v, y);
+    return e1 >= qfloor || e1 >= star_min_eta(tp, x, v, x + 3 * (size_t)v);
+}
+
 /* Solve H d = -g for a symmetric positive definite 3x3 H (upper triangle);
  * 0 if H is not safely positive definite. */
 static int newton_dir(const double H[6], const double g[3], double d[3])
@@ -186,7 +222,8 @@ static int newton_dir(const double H[6], const double g[3], double d[3])
  * edge), halved until the local objective drops without a new inverted tet;
  * where the Hessian is not positive definite, the normalized gradient step. */
 static int32_t newton_vertex(const mesh_topo *tp, double *x, int32_t v, opt_metric m,
-                             double delta, double lbar, double rtol, int inner)
+                             double delta, double lbar, double rtol, int inner,
+                             double qfloor)
 {
     double *xv = x + 3 * (size_t)v, g[3], H[6], f0;
     int32_t moves = 0, bad0;
@@ -220,7 +257,7 @@ static int32_t newton_vertex(const mesh_topo *tp, double *x, int32_t v, opt_metr
             for (int c = 0; c < 3; c++)
                 y[c] = xv[c] + sc * d[c];
             f1 = star_hess(tp, x, v, y, m, delta, &bad1, it + 1 < inner ? g1 : NULL, H1);
-            if (f1 < f0 && bad1 <= bad0) {
+            if (f1 < f0 && bad1 <= bad0 && keeps_floor(tp, x, v, y, qfloor)) {
                 ok = 1;
                 break;
             }
@@ -259,7 +296,7 @@ static void trial_point(const slide_ctx *sl, int32_t v, const double *xv,
  * times until the local objective decreases without inverting a star tet. */
 static int32_t relax_vertex(const mesh_topo *tp, const slide_ctx *sl, double *x,
                             int32_t v, opt_metric m, double delta, double lbar,
-                            double rtol)
+                            double rtol, double qfloor)
 {
     int sliding = sl && slide_kind(sl, v) != SLIDE_INTERIOR;
     double s = 0.05 * lbar, *xv = x + 3 * (size_t)v;
@@ -288,7 +325,8 @@ static int32_t relax_vertex(const mesh_topo *tp, const slide_ctx *sl, double *x,
              * surfaces it otherwise flattens all-boundary tets (measured on the
              * sphere: worst tet 0.259 -> 0.230). For interior vertices that rule
              * blocks useful moves (measured -0.005 mean on the dev corpus). */
-            if (f1 < f0 && bad1 <= bad0 && (!sliding || w1 <= w0)) {
+            if (f1 < f0 && bad1 <= bad0 && (!sliding || w1 <= w0) &&
+                keeps_floor(tp, x, v, y, qfloor)) {
                 ok = 1;
                 break;
             }
@@ -372,7 +410,7 @@ qdc_status finish_sweep(const mesh_topo *tp, const uint8_t *movable, const slide
     double *vworst = qdc_mallocn((size_t)tp->nv, sizeof(double));
     vq_pair *list = NULL;
     int32_t n = 0, k;
-    double thresh;
+    double thresh, qfloor;
 
     memset(st, 0, sizeof *st);
     if (!sorted || !vworst) {
@@ -387,6 +425,7 @@ qdc_status finish_sweep(const mesh_topo *tp, const uint8_t *movable, const slide
     if (k > tp->nt)
         k = tp->nt;
     thresh = kth_smallest(sorted, tp->nt, k - 1);
+    qfloor = kth_smallest(sorted, tp->nt, 0); /* > 0 only on a valid mesh */
     st->delta = delta;
     for (int32_t v = 0; v < tp->nv; v++)
         vworst[v] = 2.0;
@@ -435,8 +474,9 @@ qdc_status finish_sweep(const mesh_topo *tp, const uint8_t *movable, const slide
                 moves += m != OPT_METRIC_MICN &&
                                  !(sl && slide_kind(sl, list[i].v) != SLIDE_INTERIOR)
                              ? newton_vertex(tp, x, list[i].v, m, delta, lbar, rtol,
-                                             rtol > 0.0 ? 1 : FINISH_INNER)
-                             : relax_vertex(tp, sl, x, list[i].v, m, delta, lbar, rtol);
+                                             rtol > 0.0 ? 1 : FINISH_INNER, qfloor)
+                             : relax_vertex(tp, sl, x, list[i].v, m, delta, lbar, rtol,
+                                            qfloor);
             st->n_moves += moves;
         }
         qdc_free(start);

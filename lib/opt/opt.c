@@ -25,7 +25,8 @@ void opt_defaults(opt_options *o)
 {
     memset(o, 0, sizeof *o);
     o->metric = OPT_METRIC_MIVL;
-    o->boundary = OPT_BOUNDARY_LSQ;
+    o->boundary = OPT_BOUNDARY_SLIDE;
+    o->hausd_rel = OPT_HAUSD_AUTO;
     o->mode = OPT_MODE_SAFE;
     o->weights = OPT_WEIGHTS_OPTAVG;
     o->solver = OPT_SOLVER_AUTO;
@@ -98,6 +99,11 @@ qdc_status opt_parse_hausd(const char *s, opt_options *o)
 
     if (!n || n >= sizeof buf)
         return QDC_EINVAL;
+    if (!strcmp(s, "auto") || !strcmp(s, "none")) {
+        o->hausd = 0;
+        o->hausd_rel = s[0] == 'a' ? OPT_HAUSD_AUTO : 0.0;
+        return QDC_OK;
+    }
     if (!strncmp(s, "rel:", 4)) {
         if (parse_nonneg(s + 4, &v))
             return QDC_EINVAL;
@@ -142,6 +148,7 @@ typedef struct {
     uint8_t *locked; /* not an unknown of the linear system */
     double *vfac;    /* nv: share of the step each vertex takes (feasible step) */
     double hbound;   /* --hausd in normalized units (0: none) */
+    double lift;     /* slide without --hausd: off the curved surface by at most this */
     uint8_t *vmark;  /* nv: scratch marks */
     int32_t *vlist;  /* nv: scratch list of vertices */
     double *wq2;     /* squared QDC row weights */
@@ -413,11 +420,14 @@ static qdc_status ctx_init(ctx_t *c, const mesh_t *m, const mesh_topo *tp,
     c->hbound = o->hausd > 0       ? o->hausd / c->scale
                 : o->hausd_rel > 0 ? o->hausd_rel
                                    : 0.0;
+    /* the default: slide, curved parts off the surface by at most this */
+    c->lift = o->hausd <= 0 && o->hausd_rel == OPT_HAUSD_AUTO ? OPT_HAUSD_DEFAULT : 0.0;
     if (o->boundary == OPT_BOUNDARY_SLIDE) {
         qdc_status st = slide_new(tp, c->x0, o->feature_angle, &c->sl, NULL);
         if (st != QDC_OK)
             return st;
         slide_set_bound(c->sl, c->hbound);
+        slide_set_lift(c->sl, c->lift);
         c->bref = c->x; /* rows keep a sliding vertex near where it is */
     }
     c->eps = metric_eps(o->metric, c->lbar, o->eps_rel);
@@ -1001,11 +1011,120 @@ static qdc_status squashed_ears(const ctx_t *c, uint8_t **out)
     return QDC_OK;
 }
 
+/* Do no harm on a valid input (docs/method.md §5): no tet of the returned mesh
+ * may be inverted, below the input's worst mean ratio or below its smallest
+ * dihedral angle. The best iterate already keeps the first two over the whole
+ * mesh; the finishing and angle passes can still trade the smallest angle
+ * for the mean (a structured cube: 45 -> 39 degrees). The corners of every
+ * tet that breaks a rule go back to their input positions, and again while
+ * the tets around them break one; with all corners back the mesh is the
+ * input, so the rounds end. Returns how many vertices went back. */
+static int32_t hold_back(ctx_t *c)
+{
+    const mesh_topo *tp = c->tp;
+    double cmax0 = -2.0, qmin0 = c->input.q_min;
+    int32_t back = 0;
+
+    if (c->input.n_inverted > 0 || c->best_it == 0)
+        return 0;
+#pragma omp parallel for reduction(max : cmax0) schedule(static)
+    for (int32_t t = 0; t < tp->nt; t++) {
+        const int32_t *tt = tp->tets + 4 * (size_t)t;
+        double lo, hi;
+        metric_dihedral_cos_range(c->x0 + 3 * (size_t)tt[0], c->x0 + 3 * (size_t)tt[1],
+                                  c->x0 + 3 * (size_t)tt[2], c->x0 + 3 * (size_t)tt[3],
+                                  &lo, &hi);
+        cmax0 = hi > cmax0 ? hi : cmax0;
+    }
+    memset(c->vmark, 0, (size_t)c->nv);
+    for (;;) {
+        int32_t n = 0;
+#pragma omp parallel for schedule(static)
+        for (int32_t t = 0; t < tp->nt; t++) {
+            const int32_t *tt = tp->tets + 4 * (size_t)t;
+            const double *y = c->xbest;
+            double lo, hi;
+            if (geom_tet_inverted(geom_tet_vol6(y, tt))) {
+                mark_corners(c, tt);
+                continue;
+            }
+            metric_dihedral_cos_range(y + 3 * (size_t)tt[0], y + 3 * (size_t)tt[1],
+                                      y + 3 * (size_t)tt[2], y + 3 * (size_t)tt[3], &lo,
+                                      &hi);
+            if (hi > cmax0 || tet_eta(y, tt) < qmin0)
+                mark_corners(c, tt);
+        }
+        for (int32_t v = 0; v < c->nv; v++) {
+            double *y = c->xbest + 3 * (size_t)v;
+            const double *o = c->x0 + 3 * (size_t)v;
+            if (!c->vmark[v])
+                continue;
+            c->vmark[v] = 0;
+            if (y[0] != o[0] || y[1] != o[1] || y[2] != o[2]) {
+                memcpy(y, o, 3 * sizeof(double));
+                n++;
+            }
+        }
+        if (!n)
+            return back;
+        back += n;
+    }
+}
+
+/* The default slide mode, on a tangled input, when the best iterate still
+ * has inverted tets: the boundary and interface vertices of those tets, of the
+ * tets inverted in the input and of the tets around them, as an nv mask (NULL
+ * if none). Where the tangle
+ * reaches the boundary, sliding on the input surface may not undo it
+ * (torus_h0.1_tangled: 15 tets left inverted; lsq: none); opt_run then runs
+ * again with these vertices free. */
+static qdc_status stuck_boundary(const ctx_t *c, uint8_t **out)
+{
+    const mesh_topo *tp = c->tp;
+    uint8_t *core = qdc_calloc((size_t)c->nv + 1, 1), *mask = NULL;
+    int32_t n = 0;
+
+    *out = NULL;
+    if (!core)
+        return QDC_ENOMEM;
+    for (int32_t t = 0; t < tp->nt; t++) {
+        const int32_t *tt = tp->tets + 4 * (size_t)t;
+        if (geom_tet_inverted(geom_tet_vol6(c->xbest, tt)) ||
+            geom_tet_inverted(geom_tet_vol6(c->x0, tt)))
+            for (int a = 0; a < 4; a++)
+                core[tt[a]] = 1;
+    }
+    mask = qdc_calloc((size_t)c->nv + 1, 1);
+    if (!mask) {
+        qdc_free(core);
+        return QDC_ENOMEM;
+    }
+    for (int32_t t = 0; t < tp->nt; t++) {
+        const int32_t *tt = tp->tets + 4 * (size_t)t;
+        if (!(core[tt[0]] | core[tt[1]] | core[tt[2]] | core[tt[3]]))
+            continue;
+        for (int a = 0; a < 4; a++)
+            if ((tp->vflag[tt[a]] & (MESH_V_BOUNDARY | MESH_V_INTERFACE)) &&
+                !mask[tt[a]]) {
+                mask[tt[a]] = 1;
+                n++;
+            }
+    }
+    qdc_free(core);
+    if (!n) {
+        qdc_free(mask);
+        mask = NULL;
+    }
+    *out = mask;
+    return QDC_OK;
+}
+
 /* One optimization of m. pins (nv flags, may be NULL): extra vertices that
  * keep their input position. In slide mode *squashed (if not NULL) receives
  * the corners of the ears this run squashed (see squashed_ears), else NULL. */
 static qdc_status run_once(mesh_t *m, const opt_options *opts, const uint8_t *pins,
-                           uint8_t **squashed, opt_result *res_out, qdc_error *err)
+                           const uint8_t *loose, uint8_t **squashed, uint8_t **stuck,
+                           opt_result *res_out, qdc_error *err)
 {
     opt_options o;
     opt_result res;
@@ -1025,11 +1144,11 @@ static qdc_status run_once(mesh_t *m, const opt_options *opts, const uint8_t *pi
     else
         opt_defaults(&o);
     if (!(o.hausd >= 0 && isfinite(o.hausd)) ||
-        !(o.hausd_rel >= 0 && isfinite(o.hausd_rel)) || o.max_iter < 0 ||
-        o.ls_halvings < 0 || o.ls_halvings > 60 || !(o.mu > 0) || !(o.tol_move >= 0) ||
-        !(o.eps_rel > 0) || !(o.finish_frac >= 0 && o.finish_frac <= 1) ||
-        o.finish_sweeps < 0 || o.pre_iters < 0 || o.threads < 0 ||
-        (unsigned)o.metric > OPT_METRIC_MICN ||
+        !((o.hausd_rel >= 0 && isfinite(o.hausd_rel)) || o.hausd_rel == OPT_HAUSD_AUTO) ||
+        o.max_iter < 0 || o.ls_halvings < 0 || o.ls_halvings > 60 || !(o.mu > 0) ||
+        !(o.tol_move >= 0) || !(o.eps_rel > 0) ||
+        !(o.finish_frac >= 0 && o.finish_frac <= 1) || o.finish_sweeps < 0 ||
+        o.pre_iters < 0 || o.threads < 0 || (unsigned)o.metric > OPT_METRIC_MICN ||
         (unsigned)o.boundary > OPT_BOUNDARY_SLIDE ||
         (unsigned)o.mode > OPT_MODE_LITERAL || (unsigned)o.weights > OPT_WEIGHTS_PAPER ||
         (unsigned)o.solver > OPT_SOLVER_PCG) {
@@ -1048,6 +1167,12 @@ static qdc_status run_once(mesh_t *m, const opt_options *opts, const uint8_t *pi
     st = ctx_init(&c, m, tp, &o);
     if (st != QDC_OK)
         goto out;
+    for (int32_t v = 0; loose && c.sl && v < c.nv; v++)
+        if (loose[v] && !(tp->vflag[v] & MESH_V_FIXED)) {
+            slide_release(c.sl, v);
+            c.locked[v] = 0;
+            c.bw2[v] = 1.0;
+        }
     for (int32_t v = 0; pins && v < c.nv; v++)
         if (pins[v]) {
             c.locked[v] = 1;
@@ -1069,6 +1194,7 @@ static qdc_status run_once(mesh_t *m, const opt_options *opts, const uint8_t *pi
     c.input = c.best = r;
     res.before = r;
     res.hausd_bound = c.hbound * c.scale;
+    res.lift_bound = c.sl ? c.lift * c.scale : 0.0;
     set_stop(&res, OPT_STOP_MAX_ITER);
     if (report(&c, &r)) {
         stop = 1;
@@ -1159,8 +1285,28 @@ static qdc_status run_once(mesh_t *m, const opt_options *opts, const uint8_t *pi
         qdc_free(movable);
         res.t_finish = qdc_now() - t;
     }
+    {
+        int32_t back = hold_back(&c);
+        if (back > 0) {
+            opt_progress b;
+            evaluate(&c, c.xbest, &b, NULL);
+            b.iteration = c.best.iteration;
+            b.phase = c.best.phase;
+            c.best = b;
+            res.held_back = back;
+            logf_(&c, 0,
+                  "%d vertices held at their input positions (no tet below the "
+                  "input's worst)",
+                  (int)back);
+        }
+    }
     if (squashed && c.sl && c.best_it > 0) {
         st = squashed_ears(&c, squashed);
+        if (st != QDC_OK)
+            goto out;
+    }
+    if (stuck && c.sl && c.lift > 0 && c.best.n_inverted > 0) {
+        st = stuck_boundary(&c, stuck);
         if (st != QDC_OK)
             goto out;
     }
@@ -1212,28 +1358,72 @@ static int rerun_report(void *ctx, const opt_progress *p)
     return rp->fn(rp->ctx, &q);
 }
 
+/* run_once again after the run prev, its progress records numbered on. */
+static qdc_status run_again(mesh_t *m, const opt_options *opts, const opt_result *prev,
+                            const uint8_t *pins, const uint8_t *loose, uint8_t **squashed,
+                            uint8_t **stuck, opt_result *r, qdc_error *err)
+{
+    opt_options o2 = *opts;
+    /* the last record's number: global iterations plus finishing sweeps */
+    rerun_progress rp = {opts->progress, opts->progress_ctx, prev->last_record + 1,
+                         prev->t_total};
+
+    if (opts->progress) {
+        o2.progress = rerun_report;
+        o2.progress_ctx = &rp;
+    }
+    return run_once(m, &o2, pins, loose, squashed, stuck, r, err);
+}
+
+/* After a rerun r with coordinates x: best and xbest become r's if better;
+ * either way the times add up and the records go on. */
+static void keep_better(opt_result *best, opt_result *r, double *xbest, const double *x,
+                        size_t n3)
+{
+    r->t_total += best->t_total;
+    if (better(&r->after, &best->after)) {
+        *best = *r;
+        memcpy(xbest, x, n3 * sizeof(double));
+    } else {
+        best->t_total = r->t_total;
+        best->last_record = r->last_record;
+    }
+}
+
 qdc_status opt_run(mesh_t *m, const opt_options *opts, opt_result *res_out,
                    qdc_error *err)
 {
-    uint8_t *pins = NULL, *sq = NULL;
+    uint8_t *pins = NULL, *sq = NULL, *stk = NULL, *loose = NULL;
     double *xin = NULL, *xbest = NULL;
     opt_result best, r;
+    opt_options dflt;
     qdc_status st;
     size_t n3 = 3 * (size_t)(m && m->nv > 0 ? m->nv : 0);
 
-    if (!(opts && opts->boundary == OPT_BOUNDARY_SLIDE))
-        return run_once(m, opts, NULL, NULL, res_out, err);
+    memset(&best, 0, sizeof best);
+    best.outcome = OPT_FAILED;
+    if (!opts) {
+        opt_defaults(&dflt);
+        opts = &dflt;
+    }
+    if (opts->boundary != OPT_BOUNDARY_SLIDE)
+        return run_once(m, opts, NULL, NULL, NULL, NULL, res_out, err);
     xin = qdc_mallocn(n3 + 1, sizeof(double));
     xbest = qdc_mallocn(n3 + 1, sizeof(double));
     pins = qdc_calloc(n3 / 3 + 1, 1);
     if (!xin || !xbest || !pins) {
         st = qdc_fail(err, QDC_ENOMEM, "out of memory");
+        if (res_out)
+            *res_out = best;
         goto out;
     }
     memcpy(xin, m->xyz, n3 * sizeof(double));
-    st = run_once(m, opts, NULL, &sq, &best, err);
-    if (st != QDC_OK)
+    st = run_once(m, opts, NULL, NULL, &sq, &stk, &best, err);
+    if (st != QDC_OK) {
+        if (res_out)
+            *res_out = best;
         goto out;
+    }
     memcpy(xbest, m->xyz, n3 * sizeof(double));
     /* Slide squashed some smooth ears (measured on bunny_tangled-low_10k: an ear
      * of mean ratio 0.061 ended at 1e-10): run again with their corners held,
@@ -1259,27 +1449,32 @@ qdc_status opt_run(mesh_t *m, const opt_options *opts, opt_result *res_out,
                 (int)held);
             opts->log(opts->log_ctx, 0, msg);
         }
-        {
-            opt_options o2 = *opts;
-            rerun_progress rp = {opts->progress, opts->progress_ctx, 0, best.t_total};
-            /* the last record's number: global iterations plus finishing sweeps */
-            rp.offset = best.last_record + 1;
-            if (opts->progress) {
-                o2.progress = rerun_report;
-                o2.progress_ctx = &rp;
-            }
-            st = run_once(m, &o2, pins, &sq, &r, err);
-        }
+        st = run_again(m, opts, &best, pins, loose, &sq, stk ? NULL : &stk, &r, err);
         if (st != QDC_OK)
             break;
-        r.t_total += best.t_total;
-        if (better(&r.after, &best.after)) {
-            best = r;
-            memcpy(xbest, m->xyz, n3 * sizeof(double));
-        } else {
-            best.t_total = r.t_total;
-            best.last_record = r.last_record;
+        keep_better(&best, &r, xbest, m->xyz, n3);
+    }
+    /* Inverted tets left where the tangle reaches the boundary: once more with
+     * the boundary vertices around them free (stuck_boundary), ears held as
+     * before; kept only if better (fewer inverted tets first). */
+    if (st == QDC_OK && stk && best.outcome == OPT_CONVERGED) {
+        int32_t nfree = 0;
+        loose = stk;
+        stk = NULL;
+        for (int32_t v = 0; v < m->nv; v++)
+            nfree += loose[v];
+        memcpy(m->xyz, xin, n3 * sizeof(double));
+        if (opts->log) {
+            char msg[160];
+            snprintf(msg, sizeof msg,
+                     "%d tets left inverted by sliding: again with %d boundary vertices "
+                     "around them free",
+                     (int)best.after.n_inverted, (int)nfree);
+            opts->log(opts->log_ctx, 0, msg);
         }
+        st = run_again(m, opts, &best, pins, loose, NULL, NULL, &r, err);
+        if (st == QDC_OK)
+            keep_better(&best, &r, xbest, m->xyz, n3);
     }
     /* a failed rerun leaves the best result so far */
     memcpy(m->xyz, xbest, n3 * sizeof(double));
@@ -1288,6 +1483,8 @@ qdc_status opt_run(mesh_t *m, const opt_options *opts, opt_result *res_out,
         *res_out = best;
 out:
     qdc_free(sq);
+    qdc_free(stk);
+    qdc_free(loose);
     qdc_free(pins);
     qdc_free(xin);
     qdc_free(xbest);

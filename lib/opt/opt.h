@@ -59,7 +59,7 @@ typedef int (*opt_progress_fn)(void *ctx, const opt_progress *p);
 
 typedef struct {
     opt_metric metric;     /* default MIVL */
-    opt_boundary boundary; /* default LSQ */
+    opt_boundary boundary; /* default SLIDE (the shape is kept) */
     opt_mode mode; /* default SAFE; LITERAL = paper as written (Eq. 6, mu = ||G^T g||^2,
                       no line search) */
     opt_weights weights; /* default OPTAVG (docs/method.md §4) */
@@ -82,9 +82,12 @@ typedef struct {
     double hausd;         /* > 0: bound on the Hausdorff distance between the input and
                            * output boundary surfaces, in the mesh's units (lsq and
                            * slide; boundary vertices stay within it of where they
-                           * were); 0 = none (default) */
+                           * were, or slide on a planar patch or a straight edge);
+                           * 0 = none or hausd_rel */
     double hausd_rel;     /* the same relative to the bounding-box diagonal, used when
-                           * hausd is 0; 0 = none (default) */
+                           * hausd is 0; 0 = none; OPT_HAUSD_AUTO (default): no
+                           * Hausdorff bound, but with slide every boundary vertex
+                           * stays within OPT_HAUSD_DEFAULT of the input surface */
     double time_limit;    /* seconds, 0 = none: then OPT_STOPPED with the best mesh */
     int threads;          /* OpenMP threads for this run; 0 = all cores. A server running
                            * several jobs at once should give each 1 (no oversubscription) */
@@ -103,6 +106,8 @@ void opt_defaults(opt_options *o);
  * diagonal) or "rel:F" (fraction of it); sets o->hausd or o->hausd_rel.
  * QDC_EINVAL for anything else, a negative, NaN or infinite value. */
 qdc_status opt_parse_hausd(const char *s, opt_options *o);
+#define OPT_HAUSD_AUTO (-1.0)
+#define OPT_HAUSD_DEFAULT 1e-3 /* of the diagonal (docs/defaults.md) */
 
 /* Parse option words ("mivl", "lsq", "safe", ...) into o; QDC_EINVAL if unknown. */
 qdc_status opt_parse_metric(const char *s, opt_metric *out);
@@ -133,7 +138,11 @@ typedef struct {
                                   * valid input: the global step folds nothing) */
     int32_t folded_global;       /* valid tets the global steps inverted, summed */
     double hausd_bound;          /* the boundary bound applied, mesh units (0: none) */
-    opt_stop stop;               /* why the run stopped (decides; stop_reason names it) */
+    double lift_bound;    /* slide without --hausd: how far a boundary vertex may be
+                           * from the input surface, mesh units (0: none) */
+    int32_t held_back;    /* vertices put back to their input positions so that no
+                           * tet ends below the valid input's worst (opt_run) */
+    opt_stop stop;        /* why the run stopped (decides; stop_reason names it) */
     char stop_reason[64]; /* opt_stop_name(stop): "converged", "max-iter", "no-descent",
                            * "cancelled", "time-limit", "solver" */
 } opt_result;

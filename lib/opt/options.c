@@ -25,7 +25,8 @@ static const opt_desc table[] = {
     {"boundary", OPT_T_WORD, OFF(boundary), 0, 0, 0, WORDS(boundary_w),
      "boundary handling"},
     {"hausd", OPT_T_HAUSD, OFF(hausd), 0, 0, 0, NULL, 0,
-     "bound on the boundary's Hausdorff distance: H, P% or rel:F of the diagonal"},
+     "bound on the boundary's Hausdorff distance: H, P%, rel:F of the diagonal, none, "
+     "auto (with slide: vertices within 0.001 of the diagonal of the input surface)"},
     {"feature_angle", OPT_T_REAL, OFF(feature_angle), 0, 180, 0, NULL, 0,
      "slide: sharper boundary edges are features (degrees)"},
     {"mode", OPT_T_WORD, OFF(mode), 0, 0, 0, WORDS(mode_w),
@@ -193,8 +194,10 @@ void opt_value_text(const opt_desc *d, const opt_options *o, char *buf, size_t n
             snprintf(buf, n, "%.17g", o->hausd);
         else if (o->hausd_rel > 0)
             snprintf(buf, n, "rel:%.17g", o->hausd_rel);
+        else if (o->hausd_rel == OPT_HAUSD_AUTO)
+            snprintf(buf, n, "auto");
         else
-            snprintf(buf, n, "0");
+            snprintf(buf, n, "none");
         break;
     default:
         snprintf(buf, n, "%.17g", *(const double *)f);

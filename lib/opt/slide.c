@@ -11,15 +11,17 @@ struct slide_ctx {
     int32_t nv;
     uint8_t *kind;
     uint8_t *on_iface; /* surface vertex of an interface (not of the outer boundary) */
-    double *x0;        /* copy of the input coordinates */
-    double *normal;    /* per surface vertex: unit normal of the input surface */
-    double *tangent;   /* per line vertex: unit direction of the feature line */
-    int32_t *fe_ptr;   /* per vertex: feature edges around it (CSR), as vertex pairs */
+    uint8_t *flat;  /* surface vertex on a planar patch, line vertex on a straight line */
+    double *x0;     /* copy of the input coordinates */
+    double *normal; /* per surface vertex: unit normal of the input surface */
+    double *tangent; /* per line vertex: unit direction of the feature line */
+    int32_t *fe_ptr; /* per vertex: feature edges around it (CSR), as vertex pairs */
     int32_t *fe_nbr;
     int32_t nfe;
     bderr_bvh *outer; /* input boundary triangles */
     bderr_bvh *inter; /* input interface triangles (NULL if none) */
     double bound;     /* > 0: no vertex farther than this from its input position */
+    double lift;      /* > 0: curved-surface vertices slide, within this of the surface */
 };
 
 typedef struct {
@@ -228,6 +230,58 @@ int32_t slide_smooth_ears(const slide_ctx *s, const mesh_topo *tp, uint8_t *ear)
     return count;
 }
 
+/* Whether the faces f (n of them, 3 vertices each) around surface vertex v
+ * all lie in one plane with it: every face normal within FLAT_COS of v's
+ * normal (either sign on an interface, whose faces come in both orientations). */
+#define FLAT_COS (1.0 - 1e-10) /* 1.4e-5 radians */
+
+static void flat_faces(slide_ctx *s, const double *x0, const int32_t *f, int32_t n,
+                       uint8_t *bad, int iface)
+{
+    for (int32_t i = 0; i < n; i++) {
+        double nf[3];
+        face_normal(x0, f + 3 * (size_t)i, nf);
+        normalize(nf);
+        for (int k = 0; k < 3; k++) {
+            int32_t v = f[3 * (size_t)i + k];
+            const double *nv = s->normal + 3 * (size_t)v;
+            double d = nf[0] * nv[0] + nf[1] * nv[1] + nf[2] * nv[2];
+            if (s->on_iface[v] != iface)
+                continue;
+            if ((iface ? fabs(d) : d) < FLAT_COS)
+                bad[v] = 1;
+        }
+    }
+}
+
+/* s->flat: surface vertices whose input star is planar, and line vertices
+ * whose two feature edges are collinear. Sliding such a vertex keeps the
+ * shape exactly, however far it goes, so the --hausd bound does not hold
+ * it back (slide_project). */
+static void mark_flat(slide_ctx *s, const mesh_topo *tp, const double *x0)
+{
+    uint8_t *bad = s->flat; /* reused: 1 = not flat, inverted below */
+
+    flat_faces(s, x0, tp->bfaces, tp->nbf, bad, 0);
+    flat_faces(s, x0, tp->ifaces, tp->nif, bad, 1);
+    for (int32_t v = 0; v < tp->nv; v++) {
+        int flat = 0;
+        if (s->kind[v] == SLIDE_SURFACE)
+            flat = !bad[v];
+        else if (s->kind[v] == SLIDE_LINE) {
+            const double *o = x0 + 3 * (size_t)v;
+            const double *a = x0 + 3 * (size_t)s->fe_nbr[s->fe_ptr[v]];
+            const double *b = x0 + 3 * (size_t)s->fe_nbr[s->fe_ptr[v] + 1];
+            double da[3] = {a[0] - o[0], a[1] - o[1], a[2] - o[2]};
+            double db[3] = {o[0] - b[0], o[1] - b[1], o[2] - b[2]};
+            normalize(da);
+            normalize(db);
+            flat = da[0] * db[0] + da[1] * db[1] + da[2] * db[2] >= FLAT_COS;
+        }
+        s->flat[v] = (uint8_t)flat;
+    }
+}
+
 qdc_status slide_new(const mesh_topo *tp, const double *x0, double feature_angle,
                      slide_ctx **out, qdc_error *err)
 {
@@ -244,7 +298,8 @@ qdc_status slide_new(const mesh_topo *tp, const double *x0, double feature_angle
     s->x0 = qdc_mallocn(3 * (size_t)tp->nv, sizeof(double));
     s->normal = qdc_calloc(3 * (size_t)tp->nv, sizeof(double));
     s->tangent = qdc_calloc(3 * (size_t)tp->nv, sizeof(double));
-    if (!s->kind || !s->on_iface || !s->x0 || !s->normal || !s->tangent)
+    s->flat = qdc_calloc((size_t)tp->nv, 1);
+    if (!s->kind || !s->on_iface || !s->x0 || !s->normal || !s->tangent || !s->flat)
         goto fail;
     memcpy(s->x0, x0, 3 * (size_t)tp->nv * sizeof(double));
     st = find_features(s, tp, x0, feature_angle, deg);
@@ -292,6 +347,7 @@ qdc_status slide_new(const mesh_topo *tp, const double *x0, double feature_angle
             s->kind[v] = SLIDE_SURFACE;
         s->on_iface[v] = !(fl & MESH_V_BOUNDARY);
     }
+    mark_flat(s, tp, x0);
     st = bderr_bvh_build(x0, tp->nv, tp->bfaces, tp->nbf, &s->outer, err);
     if (st == QDC_OK && tp->nif > 0)
         st = bderr_bvh_build(x0, tp->nv, tp->ifaces, tp->nif, &s->inter, err);
@@ -312,6 +368,7 @@ void slide_free(slide_ctx *s)
         return;
     qdc_free(s->kind);
     qdc_free(s->on_iface);
+    qdc_free(s->flat);
     qdc_free(s->x0);
     qdc_free(s->normal);
     qdc_free(s->tangent);
@@ -359,6 +416,11 @@ void slide_set_bound(slide_ctx *s, double r)
     s->bound = r > 0 ? r : 0.0;
 }
 
+void slide_set_lift(slide_ctx *s, double r)
+{
+    s->lift = r > 0 ? r : 0.0;
+}
+
 void slide_clamp(const double *x0, int32_t v, double r, double p[3])
 {
     const double *o = x0 + 3 * (size_t)v;
@@ -370,12 +432,54 @@ void slide_clamp(const double *x0, int32_t v, double r, double p[3])
             p[k] = o[k] + d[k] * (r / n);
 }
 
+void slide_release(slide_ctx *s, int32_t v)
+{
+    if (s->kind[v] != SLIDE_CORNER || !s->on_iface[v])
+        s->kind[v] = SLIDE_INTERIOR;
+}
+
+int slide_flat(const slide_ctx *s, int32_t v)
+{
+    return s->flat[v];
+}
+
+int slide_lifts(const slide_ctx *s, int32_t v)
+{
+    return (s->bound > 0 || s->lift > 0) && s->kind[v] == SLIDE_SURFACE && !s->flat[v];
+}
+
 void slide_project(const slide_ctx *s, int32_t v, const double p[3], double out[3])
 {
-    slide_project_free(s, v, p, out);
-    /* the bound: back toward the input position along the segment (on a
-     * planar patch or a straight feature line the segment stays on it) */
-    if (s->bound > 0 && s->kind[v] != SLIDE_INTERIOR)
+    if (s->kind[v] == SLIDE_INTERIOR || !(s->bound > 0 || s->lift > 0)) {
+        slide_project_free(s, v, p, out);
+        return;
+    }
+    if (s->flat[v]) { /* on a planar patch or a straight line: the shape holds */
+        slide_project_free(s, v, p, out);
+        return;
+    }
+    /* Curved parts. A move off a curved surface is what opens the tets whose
+     * four corners are on it. Without a bound a surface vertex slides and
+     * leaves the surface by at most s->lift (the default mode: every vertex
+     * within s->lift of the input surface); with a bound it moves freely
+     * within the bound of its input position (then the Hausdorff distance
+     * holds, slide.h). A curved feature line's vertex stays on its line. */
+    if (s->kind[v] == SLIDE_SURFACE && !(s->bound > 0)) {
+        /* slide on the surface, and off it by at most s->lift */
+        double q[3], d[3], n;
+        slide_project_free(s, v, p, q);
+        for (int k = 0; k < 3; k++)
+            d[k] = p[k] - q[k];
+        n = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        for (int k = 0; k < 3; k++)
+            out[k] = q[k] + (n > s->lift ? d[k] * (s->lift / n) : d[k]);
+        return;
+    }
+    if (s->kind[v] == SLIDE_SURFACE)
+        memcpy(out, p, 3 * sizeof(double));
+    else
+        slide_project_free(s, v, p, out);
+    if (s->bound > 0)
         slide_clamp(s->x0, v, s->bound, out);
 }
 
@@ -405,6 +509,10 @@ void slide_tangent(const slide_ctx *s, int32_t v, const double g[3], double out[
 
     switch (s->kind[v]) {
     case SLIDE_SURFACE:
+        if (slide_lifts(s, v)) {
+            memcpy(out, g, 3 * sizeof(double));
+            break;
+        }
         d = g[0] * n[0] + g[1] * n[1] + g[2] * n[2];
         for (int c = 0; c < 3; c++)
             out[c] = g[c] - d * n[c];

@@ -24,20 +24,42 @@ void slide_free(slide_ctx *s);
 int slide_kind(const slide_ctx *s, int32_t v);
 int32_t slide_n_feature_edges(const slide_ctx *s);
 
-/* Project p (a new position of vertex v) onto v's constraint set, then within
- * the bound (slide_set_bound) of v's input position. */
+/* v moves freely from now on, as an interior vertex (the default mode frees
+ * the boundary vertices of tets inverted in the input: there the input
+ * surface is folded and sliding on it cannot untangle). */
+void slide_release(slide_ctx *s, int32_t v);
+
+/* Whether v is on a planar patch (surface vertex) or a straight feature line
+ * (line vertex) of the input: sliding it changes nothing of the shape. */
+int slide_flat(const slide_ctx *s, int32_t v);
+/* Whether v may leave the input surface: a surface vertex on a curved part
+ * when a bound or a lift is set (slide_set_bound, slide_set_lift). */
+int slide_lifts(const slide_ctx *s, int32_t v);
+
+/* Project p (a new position of vertex v) onto v's constraint set. With a
+ * bound (slide_set_bound): vertices on planar patches and straight lines slide
+ * freely (the shape is kept exactly); a surface vertex on a curved part moves
+ * freely in space and a curved line's vertex along its line, both within the
+ * bound of the input position. With a lift instead (slide_set_lift), a
+ * curved-surface vertex slides and leaves the surface by at most the lift. */
 void slide_project(const slide_ctx *s, int32_t v, const double p[3], double out[3]);
 /* The same without the bound. */
 void slide_project_free(const slide_ctx *s, int32_t v, const double p[3], double out[3]);
-/* --hausd: no boundary or interface vertex farther than r from its input
- * position (0: no bound). Each output boundary triangle then lies within r of
- * its input triangle point for point (the same convex combination of corners
- * that moved by at most r), so the Hausdorff distance between the input and
- * output boundary surfaces is at most r. */
+/* --hausd: no boundary or interface vertex off a planar patch or a straight
+ * line farther than r from its input position (0: no bound). A triangle of a
+ * planar patch stays in the patch's plane; any other output boundary triangle
+ * lies within r of its input triangle point for point where all its corners
+ * are bounded (the same convex combination of corners that moved by at most
+ * r), and within r of the patch's plane where some corners slide on it. */
 void slide_set_bound(slide_ctx *s, double r);
+/* Without a bound: surface vertices on curved parts may leave the input
+ * surface by at most r (they slide on it, then move off it by at most r), so
+ * every boundary vertex stays within r of the input surface (0: none). */
+void slide_set_lift(slide_ctx *s, double r);
 /* p pulled back along the segment to within r of x0's vertex v. */
 void slide_clamp(const double *x0, int32_t v, double r, double p[3]);
-/* Project a direction onto the tangent space of v's constraint (plane or line). */
+/* Project a direction onto the tangent space of v's constraint (plane or line;
+ * unchanged for a vertex that slide_lifts). */
 void slide_tangent(const slide_ctx *s, int32_t v, const double g[3], double out[3]);
 
 /* Ears on smooth parts: tets with 4 boundary corners and two boundary faces
