@@ -42,9 +42,10 @@ QUICK = ['bunny_low_10k', 'bunny_tangled-low_10k', 'bracket_h0.1_noisy']
 GEN = [('100000', ['lowq', 'tangled'], False),
        ('1100000', ['lowq'], True)]
 
-TOOLS = ['qdc', 'qdc-fixed', 'gmsh-relocate3d', 'gmsh-default']
+TOOLS = ['qdc', 'qdc-lsq', 'qdc-fixed', 'gmsh-relocate3d', 'gmsh-default']
 PEER = 'gmsh-relocate3d'
-LABEL = {'input': 'input', 'qdc': 'qdc (lsq)', 'qdc-fixed': 'qdc --boundary fixed',
+LABEL = {'input': 'input', 'qdc': 'qdc (default: slide)', 'qdc-lsq': 'qdc --boundary lsq',
+         'qdc-fixed': 'qdc --boundary fixed',
          'gmsh-relocate3d': 'Gmsh Relocate3D', 'gmsh-default': 'Gmsh default opt'}
 PHASES = ['setup', 'weights', 'assembly', 'solve', 'linesearch', 'finish']
 QKEYS = ['n_verts', 'n_tets', 'eta_mean', 'eta_std', 'eta_min', 'eta_p01', 'dihedral_min',
@@ -61,7 +62,8 @@ def log(*a):
 def command(tool, src, dst, base):
     if tool.startswith('qdc'):
         c = [QDC_RUN, 'optimize', src, dst, '--report', base + '.report.json', '--quiet']
-        return c + (['--boundary', 'fixed'] if tool == 'qdc-fixed' else [])
+        return c + {'qdc-fixed': ['--boundary', 'fixed'],
+                    'qdc-lsq': ['--boundary', 'lsq']}.get(tool, [])
     method = {'gmsh-relocate3d': 'Relocate3D', 'gmsh-default': ''}[tool]
     return [PY, os.path.join(HERE, 'gmsh_opt.py'), src, dst, method, base + '.gmsh.json']
 

@@ -1,5 +1,5 @@
 #!/bin/sh
-# qdc benchmark: qdc (default and --boundary fixed) against Gmsh Relocate3D and
+# qdc benchmark: qdc (default, --boundary lsq and --boundary fixed) against Gmsh Relocate3D and
 # Gmsh's default tet optimizer, on the dev meshes and generated ~100k/~1M-tet
 # cubes. Progress on stderr, one Markdown table on stdout; raw JSON in
 # bench/out/ and the table in bench/RESULTS.md (full run). See bench/README.md.
