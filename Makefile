@@ -48,7 +48,7 @@ UNIT_BIN := $(UNIT_C:tests/unit/%.c=$(B)/tests/%)
 
 PROGS := $(B)/qdc $(if $(SRV_C),$(B)/qdcd)
 
-.PHONY: all deps test test-quick test-container test-faults run bench clean fuzz format format-check fault
+.PHONY: all deps test test-quick test-container test-faults test-load run bench clean fuzz format format-check fault
 all: $(B)/libqdc.a $(PROGS) $(UNIT_BIN)
 
 deps:
@@ -91,6 +91,11 @@ test-quick: all
 test-faults: deps
 	$(MAKE) -j$$(nproc) all
 	@for t in tests/faults/*.sh; do sh "$$t"; done
+
+# The mixed-traffic load test for 10 minutes (make test runs it for 30 s).
+test-load: deps
+	$(MAKE) -j$$(nproc) all
+	QDC_LOAD_SECONDS=600 sh tests/faults/load.sh
 
 # The image built and run by a container engine (Podman here; skipped without one).
 test-container: deps

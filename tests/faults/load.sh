@@ -1,0 +1,28 @@
+#!/bin/sh
+# load.sh - mixed traffic for QDC_LOAD_SECONDS (default 30; `make test-load`
+# runs 600): job submissions, event streams opened and closed at once or
+# later, long-polls, uploads cut half-way, refused uploads whose client hangs
+# up without reading (tests/faults/load.py). Checks: /livez p99 <= 100 ms
+# throughout, no accepted job lost or left queued/running, every one
+# succeeded, fds and threads back to their baseline and RSS within 64 MB of it.
+. "$(dirname "$0")/../lib.sh"
+. "$ROOT/tests/server/daemon.inc"
+secs=${QDC_LOAD_SECONDS:-30}
+gzip -dc "$DEV/cube_h0.1_good.mesh.gz" > "$TMP/in.mesh"
+start_qdcd "$TMP/d" --workers 2 --max-connections 100 --max-queued 50 ||
+    { fail "load: start" "$(tail -3 "$TMP/d.log")"; exit 1; }
+"$PY" "$ROOT/tests/faults/load.py" "$URL" "$QPID" "$secs" "$TMP/in.mesh" > "$TMP/load.json" 2> "$TMP/load.err" ||
+    { fail "load: driver" "$(tail -3 "$TMP/load.err")"; exit 1; }
+L=$TMP/load.json
+summary=$(jq -c '{s: .seconds, accepted, states, counts, p99: .livez_p99_ms, max: .livez_max_ms, base, end: .end}' "$L")
+jq -e '.livez_n > 0 and .livez_p99_ms <= 100' "$L" > /dev/null &&
+    pass "load: /livez p99 $(jq .livez_p99_ms "$L") ms over $(jq .livez_n "$L") probes in ${secs} s (max $(jq .livez_max_ms "$L") ms)" ||
+    fail "load: /livez p99 > 100 ms" "$summary"
+jq -e '.accepted > 0 and .stuck == 0 and (.states | keys) == ["succeeded"] and .n_errors == 0' "$L" > /dev/null &&
+    pass "load: $(jq .accepted "$L") accepted jobs all succeeded, none stuck, no request errors" ||
+    fail "load: jobs lost, stuck or failed" "$summary $(jq -c .errors "$L")"
+jq -e '.end.fds <= .base.fds + 2 and .end.threads <= .base.threads and .end.rss_kb <= .base.rss_kb + 65536' "$L" > /dev/null &&
+    pass "load: fds $(jq .base.fds "$L") -> $(jq .end.fds "$L"), threads $(jq .base.threads "$L") -> $(jq .end.threads "$L"), RSS $(jq .base.rss_kb "$L") -> $(jq .end.rss_kb "$L") kB" ||
+    fail "load: resources not back to baseline" "$summary"
+stop_qdcd
+[ "$NFAIL" -eq 0 ]
