@@ -72,15 +72,22 @@ def submitter():
         time.sleep(0.05)
 
 
+def recent(rnd):
+    """One of the last 5 accepted jobs, or None after a short wait."""
+    with lock:
+        ids = accepted[-5:]
+    if not ids:
+        time.sleep(0.1)
+        return None
+    return rnd.choice(ids)
+
+
 def streamer():
     rnd = random.Random(1)
     while not stop.is_set():
-        with lock:
-            ids = accepted[-5:]
-        if not ids:
-            time.sleep(0.1)
+        jid = recent(rnd)
+        if not jid:
             continue
-        jid = rnd.choice(ids)
         req = b'GET /v1/jobs/%s/events HTTP/1.1\r\nHost: x\r\n\r\n' % jid.encode()
         try:
             raw(req, hold=rnd.choice([0, 0, 0.3, 1.0]), read=rnd.random() < 0.5)
@@ -93,12 +100,10 @@ def streamer():
 def poller():
     rnd = random.Random(2)
     while not stop.is_set():
-        with lock:
-            ids = accepted[-5:]
-        if not ids:
-            time.sleep(0.1)
+        jid = recent(rnd)
+        if not jid:
             continue
-        st, _ = http('GET', '/v1/jobs/%s/progress?after=-1&wait=1' % rnd.choice(ids))
+        st, _ = http('GET', '/v1/jobs/%s/progress?after=-1&wait=1' % jid)
         if st not in (200, 404):
             with lock:
                 errors.append('poll %d' % st)
