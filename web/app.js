@@ -451,6 +451,7 @@ function jobView(id) {
     $('job-state').textContent = '';
     $('job-state').className = 'state';
     $('job-meta').textContent = 'loading…';
+    $('job-options-text').textContent = '';
     $('job-error').hidden = true;
     $('job-notes').hidden = true;
     $('job-stats').replaceChildren();
@@ -480,8 +481,15 @@ function jobView(id) {
     window.addEventListener('resize', onResize);
     $('hist-log').onchange = onResize;
     $('view3d-load').onclick = () => load3d(st);
+    // the header (state, elapsed, cancel requested) every 2 s until the job ends
+    const header = async () => {
+        if (st.stopped || (st.job && st.job.done)) return;
+        if (!document.hidden && st.job) await loadJob(st);
+        st.headerTimer = setTimeout(header, 2000);
+    };
     (async () => {
         if (!(await loadJob(st))) return;
+        st.headerTimer = setTimeout(header, 2000);
         await follow(st, ctl.signal);
     })();
     return {
@@ -490,6 +498,7 @@ function jobView(id) {
             st.stopped = true;
             ctl.abort();
             clearTimeout(st.timer);
+            clearTimeout(st.headerTimer);
             window.removeEventListener('resize', onResize);
             if (st.gl) st.gl.stop();
         },
@@ -510,7 +519,10 @@ async function loadJob(st) {
     }
     if (st.stopped) return false;
     renderJob(st);
-    if (st.job.done && !st.report && st.job.links.report) loadReport(st);
+    if (st.job.done && !st.report && !st.reportLoading && st.job.links.report) {
+        st.reportLoading = true;
+        loadReport(st).finally(() => { st.reportLoading = false; });
+    }
     return true;
 }
 
@@ -526,9 +538,9 @@ function renderJob(st) {
         'submitted ' + when(j.created), 'elapsed ' + elapsed(j),
         j.attempts > 1 ? j.attempts + ' attempts' : null,
         j.stop_reason ? 'stopped: ' + j.stop_reason : null,
-        'options: ' + Object.entries(o).map(([k, v]) => k + '=' + v).join(' '),
     ].filter(Boolean);
     $('job-meta').textContent = meta.join(' · ');
+    $('job-options-text').textContent = Object.entries(o).map(([k, v]) => k + '=' + v).join(' ');
     if (j.error) {
         $('job-error').textContent = describeProblem(j.error.status, j.error);
         $('job-error').hidden = false;
@@ -591,6 +603,10 @@ async function follow(st, signal) {
                         after = rec.seq;
                         st.recs.push(rec);
                         st.redraw();
+                        if (st.job && st.job.state === 'queued') { // it started: say so now
+                            st.job.state = 'running';
+                            loadJob(st);
+                        }
                     } else if (ev.event === 'end') {
                         ended = true;
                     }
@@ -842,7 +858,7 @@ function drawHist(c, r, log) {
     for (const t of ticks) {
         const y = Math.round(Y(t)) + 0.5;
         g.beginPath(); g.moveTo(L, y); g.lineTo(w - R, y); g.stroke();
-        g.fillText(t >= 1e4 ? t.toExponential(0) : String(t), L - 4, y + 4);
+        g.fillText(t >= 1e6 ? t / 1e6 + 'M' : t >= 1e3 ? t / 1e3 + 'k' : String(t), L - 4, y + 4);
     }
     g.textAlign = 'center';
     for (let d = 0; d <= 180; d += 30) {

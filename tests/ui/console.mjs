@@ -52,7 +52,7 @@ const browser = await chromium.launch({
 const context = await browser.newContext({ viewport: { width: 1280, height: 900 }, acceptDownloads: true });
 const page = await context.newPage();
 const errors = [];
-let errors404 = Infinity;
+const expected = []; // [from, to, regex]: errors[from..to) the test provoked
 page.on('console', (m) => { if (m.type() === 'error') errors.push(m.text()); });
 page.on('pageerror', (e) => errors.push('page error: ' + e.message));
 await page.addInitScript(() => {
@@ -172,6 +172,32 @@ try {
         }
         check(!bad.length && compared >= 7, 'submit form: ' + compared + ' options with the defaults of `qdc options` shown', bad.join('; '));
 
+        // drag and drop picks the file; a surface enables the TetGen option
+        const tq = () => page.$eval('#opts [name="tetgen_quality"]', (e) => e.disabled);
+        const tqBefore = await tq();
+        const dt = await page.evaluateHandle(() => {
+            const d = new DataTransfer();
+            d.items.add(new File(['solid s\nendsolid s\n'], 'part.stl', { type: 'model/stl' }));
+            return d;
+        });
+        await page.dispatchEvent('#drop', 'dragover', { dataTransfer: dt });
+        await page.dispatchEvent('#drop', 'drop', { dataTransfer: dt });
+        const info = await page.textContent('#file-info');
+        check(tqBefore && !(await tq()) && /part\.stl/.test(info) && /surface/.test(info),
+            'drag and drop: the dropped part.stl is chosen as a surface, tetgen_quality enabled (' + info + ')', info);
+        // a bad file: the daemon's problem, with its line, shown under the form
+        await page.setInputFiles('#file', { name: 'bad.mesh', mimeType: 'text/plain',
+            buffer: Buffer.from('MeshVersionFormatted 2\nDimension 3\nVertices\n2\n0 0 0 0\n1 nan 0 0\nEnd\n') });
+        check(await tq(), 'a .mesh file disables the surface-only option', 'enabled');
+        const e400 = errors.length;
+        await page.click('#submit-btn');
+        await page.waitForSelector('#submit-error:not([hidden])', { timeout: 10000 });
+        expected.push([e400, errors.length, /status of 400/]);
+        const perr = await page.textContent('#submit-error');
+        check(/\(400\)/.test(perr) && /line 6/.test(perr) && /view-list/.test(await page.evaluate(() =>
+            document.getElementById('view-list').hidden ? 'view-job' : 'view-list')),
+            'a malformed upload: the page shows the problem (' + perr.split('\n')[0].slice(0, 70) + '…, line 6) and stays', perr);
+
         // the sample through the file input
         const t0 = Date.now();
         const id1 = await submitFile(env.SAMPLE);
@@ -235,7 +261,22 @@ try {
                 else await sleep(5);
             }
         })();
+        // upload at 4 MB/s (DevTools network emulation) to see the progress bar move
+        const cdp = await context.newCDPSession(page);
+        await cdp.send('Network.emulateNetworkConditions', { offline: false, latency: 0,
+            downloadThroughput: -1, uploadThroughput: 4e6 });
+        await page.evaluate(() => {
+            window.__bar = [];
+            const bar = document.getElementById('upload-progress');
+            const t = setInterval(() => { if (!bar.hidden) window.__bar.push(bar.value); }, 20);
+            window.__barStop = () => clearInterval(t);
+        });
         const id2 = await submitFile(env.BIG, { max_iter: 60, mode: 'literal' });
+        await cdp.send('Network.emulateNetworkConditions', { offline: false, latency: 0, downloadThroughput: -1, uploadThroughput: -1 });
+        const bar = await page.evaluate(() => { window.__barStop(); return window.__bar; });
+        const mid = bar.filter((v) => v > 0.05 && v < 0.95);
+        check(mid.length >= 2 && bar[bar.length - 1] >= mid[mid.length - 1], 'upload progress bar moves (' + mid.length +
+            ' readings between 5% and 95% at 4 MB/s)', JSON.stringify(bar.slice(0, 20)));
         await watchNew;
         const seen = [];
         const tRun = Date.now();
@@ -331,16 +372,18 @@ try {
         const ov2 = await page.evaluate(() => [document.documentElement.scrollWidth, window.innerWidth]);
         check(ov2[0] <= ov2[1], 'phone (390 px): the list has no horizontal overflow', ov2.join(' > '));
         // an unknown job (its 404s are the page's business: not counted below)
-        errors404 = errors.length;
+        const e404 = errors.length;
         await page.goto(URL + '/ui/jobs/' + '0'.repeat(32));
         await page.waitForFunction(() => /no job/i.test(document.getElementById('job-meta').textContent), null, { timeout: 5000 })
             .then(() => pass('an unknown job id: the job view says there is no such job'))
             .catch((e) => fail('unknown job', e.message));
+        expected.push([e404, errors.length, /status of 404/]);
         figures.ids = { sample: id1, big: id2 };
     }
-    // expected: the 401s that make the page ask for a token, the unknown job's 404s
+    // expected: the 401s that make the page ask for a token, the resource
+    // errors of the steps that provoke them (a bad upload, an unknown job)
     const real = errors.filter((e, i) => !(env.UI_MODE === 'tokens' && /status of 401/.test(e)) &&
-        !(i >= errors404 && /status of 404/.test(e)));
+        !expected.some(([a, b, re]) => i >= a && i < b && re.test(e)));
     check(!real.length, 'no console errors (' + env.UI_MODE + ')', real.join(' | '));
 } catch (e) {
     fail('browser run (' + env.UI_MODE + ')', e.stack || e);
