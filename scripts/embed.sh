@@ -15,7 +15,7 @@ tmp=$out.tmp
     echo
     i=0
     for f in "$@"; do
-        echo "static const unsigned char f$i[] = {"
+        echo "static const unsigned char f${i}[] = {"
         od -An -v -tu1 "$f" | awk '{ s = ""; for (k = 1; k <= NF; k++) s = s $k ","; print s }'
         echo "0};"
         i=$((i + 1))

@@ -104,8 +104,8 @@ pass "playwright-core $(node -p "require('$MODS/node_modules/playwright-core/pac
 
 "$BIN/qdc" options > "$TMP/options.json"
 mkdir -p "$TMP/out"
-export UI_MODULES=$MODS QDC_URL=$URL UI_OUT=$TMP/out OPTIONS_JSON=$TMP/options.json CHROMIUM
-export SAMPLE=$ROOT/tests/data/sample/cube.mesh BIG=$DEV/bunny_low_100k.mesh.gz
+export UI_MODULES="$MODS" QDC_URL="$URL" UI_OUT="$TMP/out" OPTIONS_JSON="$TMP/options.json" CHROMIUM
+export SAMPLE="$ROOT/tests/data/sample/cube.mesh" BIG="$DEV/bunny_low_100k.mesh.gz"
 # screenshots: build/ui-shots unless UI_SHOTS names a directory (UI_SHOTS=docs
 # remakes the ones in the README)
 UI_SHOTS=${UI_SHOTS:-$ROOT/build/ui-shots}
@@ -169,5 +169,5 @@ else
     fail "--tokens download" "$(ls -la "$TMP/out")"
 fi
 stop_qdcd || fail "SIGTERM (tokens)" "exit status $?"
-echo "# figures: $(cat "$TMP/out/figures-open.json" | tr -d '\n ')"
+echo "# figures: $(tr -d '\n ' < "$TMP/out/figures-open.json")"
 exit $((NFAIL > 0))
