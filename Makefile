@@ -36,7 +36,10 @@ LIB_LIBS += -ltet -lstdc++
 endif
 
 SRV_C := $(wildcard server/*.c)
-SRV_OBJ := $(SRV_C:%.c=$(B)/%.o)
+# The web console (web/) is compiled into qdcd: scripts/embed.sh turns its files
+# into byte arrays (plain files, no build step of their own).
+WEB_FILES := $(sort $(wildcard web/*.html web/*.js web/*.css web/*.svg))
+SRV_OBJ := $(SRV_C:%.c=$(B)/%.o) $(if $(SRV_C),$(B)/gen/web_assets.o)
 SRV_LIBS := -lmicrohttpd -ljansson -lsqlite3 -lpq -lpthread
 
 CLI_C := $(wildcard clients/qdc/*.c)
@@ -61,6 +64,13 @@ $(B)/%.o: %.c
 $(B)/%.o: %.cpp
 	@mkdir -p $(dir $@)
 	$(CXX) $(CPPFLAGS) $(CXXFLAGS) -MMD -MP -c $< -o $@
+
+$(B)/gen/web_assets.c: scripts/embed.sh $(WEB_FILES) web
+	@mkdir -p $(dir $@)
+	sh scripts/embed.sh $@ $(WEB_FILES)
+
+$(B)/gen/web_assets.o: $(B)/gen/web_assets.c server/ui.h
+	$(CC) $(CPPFLAGS) -Iserver $(CFLAGS) -c $< -o $@
 
 $(B)/libqdc.a: $(LIB_OBJ)
 	@mkdir -p $(dir $@)

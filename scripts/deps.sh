@@ -14,7 +14,7 @@ RUNTIME_PKGS="ca-certificates curl libcholmod3 libopenblas0-pthread libmicrohttp
 libjansson4 libsqlite3-0 libpq5 zlib1g libcurl4 libtet1.5 libgomp1"
 TEST_PKGS="curl tetgen clang clang-format libclang-rt-14-dev jq
 python3 python3-numpy python3-scipy python3-meshio python3-gmsh gmsh
-podman debootstrap runc postgresql"
+podman debootstrap runc postgresql chromium"
 case "${1:-}" in
 --build) PKGS=$BUILD_PKGS; shift ;;
 --runtime) PKGS=$RUNTIME_PKGS; shift ;;
@@ -28,7 +28,7 @@ for p in $PKGS; do
     fi
 done
 
-# Node.js and npm (web console build and browser tests): Debian's packages,
+# Node.js and npm (the web console's browser tests, tests/server/ui.sh): Debian's packages,
 # unless a node with its npm is already installed (e.g. from another source,
 # whose nodejs package bundles npm and conflicts with Debian's npm).
 case " $PKGS " in

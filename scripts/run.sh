@@ -10,6 +10,7 @@ BIN=build/rel/qdcd
 URL=http://$LISTEN
 cat <<MSG
 qdcd listens on $URL (data in $DATA; API: proto/openapi.yaml)
+Web console: $URL/
 
 Submit the sample mesh (750 tets, Medit) and follow it:
   curl -s -i -X POST -H 'Content-Type: model/x-medit' --data-binary @tests/data/sample/cube.mesh '$URL/v1/jobs?max_iter=10'

@@ -8,6 +8,7 @@
 
 #include "job.h"
 #include "qdc.h"
+#include "ui.h"
 
 #include <ctype.h>
 #include <errno.h>
@@ -35,6 +36,7 @@ enum {
     R_READYZ,
     R_METRICS,
     R_PROBLEM,
+    R_UI, /* the web console (ui.c) */
 };
 
 #define MEDIA_QMESH "application/vnd.qdc.mesh"
@@ -71,6 +73,8 @@ static int route_of(const char *url, char *id)
     } sub[] = {{"", R_JOB},           {"/progress", R_PROGRESS}, {"/events", R_EVENTS},
                {"/result", R_RESULT}, {"/report", R_REPORT},     {":cancel", R_CANCEL}};
 
+    if (ui_asset_of(url))
+        return R_UI;
     for (size_t i = 0; i < sizeof fixed / sizeof fixed[0]; i++)
         if (!strcmp(url, fixed[i].path))
             return fixed[i].route;
@@ -1346,7 +1350,7 @@ static int not_servable(struct MHD_Connection *c, req *r, const job_rec *j,
 }
 
 /* Does If-None-Match match etag (quoted)? Weak comparison (RFC 9110 13.1.2). */
-static int etag_matches(const char *inm, const char *etag)
+int etag_matches(const char *inm, const char *etag)
 {
     size_t n = strlen(etag);
     if (!inm)
@@ -1956,6 +1960,8 @@ enum MHD_Result api_dispatch(struct MHD_Connection *c, req *r, const char *url,
         return do_metrics(c, r);
     case R_PROBLEM:
         return do_problem_page(c, r, url);
+    case R_UI:
+        return ui_serve(c, r, url);
     default:
         return http_problem(c, r, 404, "not-found", "not found", "no such resource", NULL,
                             NULL);

@@ -1,7 +1,8 @@
 #!/bin/sh
 # make_run.sh - a fresh clone of HEAD: `make run` (deps check, release build,
 # scripts/run.sh) serves /livez within 60 s, prints where it listens and a
-# ready-to-paste curl command, and that command submits the bundled sample.
+# ready-to-paste curl command, and that command submits the bundled sample;
+# the web console it prints the address of is served.
 . "$(dirname "$0")/../lib.sh"
 MPID=
 trap 'if [ -n "$MPID" ]; then kill -TERM -"$MPID" 2> /dev/null; fi; rm -rf "$TMP"' EXIT
@@ -41,6 +42,15 @@ if [ "$code" = 202 ]; then
     pass "make run's curl command submits the sample mesh: 202"
 else
     fail "make run curl" "'$cmd' -> '$code'"
+fi
+# the web console, compiled in: the page it prints, and its script
+url=$(sed -n 's/^Web console: //p' "$TMP/run.log")
+if [ "$url" = "http://127.0.0.1:$P/" ] &&
+    curl -sf -m 5 "$url" | grep -q '<script src="/ui/app.js"' &&
+    curl -sf -m 5 "${url}ui/app.js" | cmp -s - web/app.js; then
+    pass "make run prints the web console's address, which serves web/ (compiled in)"
+else
+    fail "make run web console" "'$url'"
 fi
 kill -TERM -"$MPID" 2> /dev/null
 wait "$MPID"

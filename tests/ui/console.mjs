@@ -1,0 +1,394 @@
+// console.mjs - the qdcd web console in a real headless browser (Debian's
+// chromium, driven by playwright-core). Run by tests/server/ui.sh, which
+// starts qdcd and passes everything through the environment:
+//   UI_MODULES   directory holding node_modules/playwright-core (npm ci)
+//   QDC_URL      the daemon, e.g. http://127.0.0.1:41417
+//   UI_MODE      "open" (no tokens) or "tokens" (UI_TOKEN is valid)
+//   UI_OUT       directory for downloads and measurements (figures.json)
+//   UI_SHOTS     where the screenshots go (docs/ of the repository), or empty
+//   SAMPLE       tests/data/sample/cube.mesh; BIG a gzipped dev mesh
+//   OPTIONS_JSON `qdc options` output
+// Prints "ok - ..." / "FAIL - ..." lines like the shell suites.
+import { createRequire } from 'node:module';
+import { readFileSync, writeFileSync } from 'node:fs';
+import path from 'node:path';
+
+const env = process.env;
+const require = createRequire(path.join(env.UI_MODULES, 'package.json'));
+const { chromium } = require('playwright-core');
+
+const URL = env.QDC_URL;
+const OUT = env.UI_OUT;
+const figures = {};
+let nfail = 0;
+const pass = (m) => console.log('ok - ' + m);
+const fail = (m, why) => { console.log('FAIL - ' + m + ': ' + String(why).replace(/\s+/g, ' ').slice(0, 400)); nfail++; };
+const check = (cond, m, why) => (cond ? pass(m) : fail(m, why));
+const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
+
+async function until(fn, ms, what) {
+    const t0 = Date.now();
+    for (;;) {
+        const v = await fn();
+        if (v) return v;
+        if (Date.now() - t0 > ms) throw new Error('timed out waiting for ' + what);
+        await sleep(50);
+    }
+}
+
+const authH = env.UI_MODE === 'tokens' ? { Authorization: 'Bearer ' + env.UI_TOKEN } : {};
+async function apiJSON(p, opts) {
+    const res = await fetch(URL + p, Object.assign({ headers: authH }, opts || {}));
+    return { status: res.status, body: await res.json().catch(() => null) };
+}
+
+const browser = await chromium.launch({
+    executablePath: env.CHROMIUM || '/usr/bin/chromium',
+    headless: true,
+    // root in a container: no user namespaces for the sandbox; SwiftShader
+    // gives headless chromium a WebGL (software) for the 3D view
+    args: ['--no-sandbox', '--enable-unsafe-swiftshader', '--use-angle=swiftshader'],
+});
+const context = await browser.newContext({ viewport: { width: 1280, height: 900 }, acceptDownloads: true });
+const page = await context.newPage();
+const errors = [];
+const expected = []; // [from, to, regex]: errors[from..to) the test provoked
+page.on('console', (m) => { if (m.type() === 'error') errors.push(m.text()); });
+page.on('pageerror', (e) => errors.push('page error: ' + e.message));
+await page.addInitScript(() => {
+    window.__draws = [];
+    document.addEventListener('qdc:chart', (e) => window.__draws.push({ t: Date.now(), seq: e.detail.seq, points: e.detail.points }));
+});
+
+async function firstPaint(pg) {
+    await pg.goto(URL + '/', { waitUntil: 'load' });
+    // first-contentful-paint, from the start of the navigation (buffered: it
+    // may have happened before this script runs)
+    return pg.evaluate(() => new Promise((resolve) => {
+        const nav = performance.getEntriesByType('navigation')[0];
+        const done = (e) => resolve({ fcp: e ? e.startTime : null, load: nav ? nav.loadEventEnd : null });
+        new PerformanceObserver((l) => {
+            const e = l.getEntries().find((x) => x.name === 'first-contentful-paint');
+            if (e) done(e);
+        }).observe({ type: 'paint', buffered: true });
+        setTimeout(() => done(null), 5000);
+    }));
+}
+
+async function submitFile(file, opts) {
+    await page.setInputFiles('#file', file);
+    for (const [k, v] of Object.entries(opts || {})) {
+        const sel = '#opts [name="' + k + '"]';
+        if (typeof v === 'boolean') await page.setChecked(sel, v);
+        else if ((await page.$eval(sel, (e) => e.tagName)) === 'SELECT') await page.selectOption(sel, v);
+        else await page.fill(sel, String(v));
+    }
+    await page.click('#submit-btn');
+    await page.waitForURL(/\/ui\/jobs\/[0-9a-f]{32}$/, { timeout: 60000 });
+    return page.url().split('/').pop();
+}
+
+async function waitDone(id, ms) {
+    await until(async () => (await apiJSON('/v1/jobs/' + id)).body.done, ms, 'job ' + id + ' to end');
+    await page.waitForSelector('#report-card:not([hidden])', { timeout: 15000 });
+    await page.waitForFunction(() => +document.getElementById('hist').dataset.drawn > 0, null, { timeout: 5000 });
+}
+
+async function download(format, file) {
+    const [dl] = await Promise.all([page.waitForEvent('download'), page.click('#downloads a[data-format="' + format + '"]')]);
+    await dl.saveAs(path.join(OUT, file));
+    return dl.suggestedFilename();
+}
+
+try {
+    if (env.UI_MODE === 'tokens') {
+        // ------------------------------------------------------ with tokens --
+        await page.goto(URL + '/');
+        await page.waitForSelector('#token-dialog[open]', { timeout: 5000 });
+        pass('tokens: the page asks for a token when /v1 answers 401');
+        await page.fill('#token-input', 'not-the-token');
+        await page.click('#token-form button[type=submit]');
+        await page.waitForFunction(() => document.getElementById('token-dialog').open &&
+            !document.getElementById('token-error').hidden, null, { timeout: 5000 });
+        pass('tokens: a wrong token is refused and asked again');
+        await page.fill('#token-input', env.UI_TOKEN);
+        await page.click('#token-form button[type=submit]');
+        await page.waitForFunction(() => /No jobs yet/.test(document.getElementById('jobs-empty').textContent), null, { timeout: 5000 });
+        const store = await page.evaluate(() => ({ s: sessionStorage.getItem('qdc.token'), l: localStorage.length, c: document.cookie }));
+        check(store.s === env.UI_TOKEN && store.l === 0 && store.c === '',
+            'tokens: the token is kept in sessionStorage only (no localStorage, no cookie)', JSON.stringify(store));
+        const id = await submitFile(env.SAMPLE);
+        await waitDone(id, 60000);
+        const job = (await apiJSON('/v1/jobs/' + id)).body;
+        check(job && job.state === 'succeeded', 'tokens: the sample submitted through the page succeeded (job visible to this token)', JSON.stringify(job && job.state));
+        const other = await fetch(URL + '/v1/jobs/' + id);
+        check(other.status === 401, 'tokens: the same job without the token is 401', other.status);
+        const name = await download('medit', 'tok.mesh');
+        pass('tokens: result downloaded with the token (fetch + blob), as ' + name);
+        // a reload in the same tab keeps the token; a new tab asks again
+        await page.reload();
+        await page.waitForSelector('#view-job:not([hidden]) #report-card:not([hidden])', { timeout: 10000 });
+        const asked = await page.evaluate(() => document.getElementById('token-dialog').open);
+        check(!asked, 'tokens: a reload of the tab keeps the token', 'dialog open');
+        const p2 = await context.newPage();
+        await p2.goto(URL + '/');
+        await p2.waitForSelector('#token-dialog[open]', { timeout: 5000 });
+        pass('tokens: another tab (its own session storage) asks again');
+        await p2.close();
+    } else {
+        // ---------------------------------------------------------- no tokens --
+        // First paint, in a chromium of its own with default flags (SwiftShader
+        // GL, which the 3D view needs here, slows the compositor's start). The
+        // browser's own start (a renderer for this origin) is not the page's:
+        // open a same-origin URL first, then / with an empty cache, twice more
+        // revalidated.
+        const fpb = await chromium.launch({ executablePath: env.CHROMIUM || '/usr/bin/chromium', args: ['--no-sandbox'] });
+        const fpp = await fpb.newPage();
+        await fpp.goto(URL + '/livez');
+        const p1 = await firstPaint(fpp);
+        const p2 = await firstPaint(fpp);
+        const p3 = await firstPaint(fpp);
+        await fpb.close();
+        await page.goto(URL + '/');
+        figures.first_paint_ms = [p1.fcp, p2.fcp, p3.fcp];
+        check(figures.first_paint_ms.every((x) => x !== null && x <= 300), 'first paint of / in ' + figures.first_paint_ms.map((x) => (x === null ? 'none' : x.toFixed(0))).join(', ') +
+            ' ms (empty cache, then revalidated by ETag; target <= 300 ms)', JSON.stringify(figures.first_paint_ms));
+        await page.waitForFunction(() => /No jobs yet/.test(document.getElementById('jobs-empty').textContent), null, { timeout: 5000 });
+        pass('/ loads without a token: empty job list');
+
+        // the form's defaults are the library's (qdc options)
+        const table = JSON.parse(readFileSync(env.OPTIONS_JSON, 'utf8'));
+        const form = await page.$$eval('#opts [data-default]', (es) => es.map((e) => [e.name, e.dataset.default,
+            e.type === 'checkbox' ? (e.checked ? 'on' : 'off') : e.value]));
+        const bad = [];
+        let compared = 0;
+        for (const [name, def, shown] of form) {
+            if (def !== shown) bad.push(name + ': shows ' + shown + ', default ' + def);
+            const o = table.find((t) => t.name === name);
+            if (!o) { if (name !== 'tetgen_quality') bad.push(name + ': not an option'); continue; }
+            compared++;
+            if (o.type === 'integer' || o.type === 'number' ? +o.default !== +def : o.default !== def)
+                bad.push(name + ': form ' + def + ', qdc options ' + o.default);
+        }
+        check(!bad.length && compared >= 7, 'submit form: ' + compared + ' options with the defaults of `qdc options` shown', bad.join('; '));
+
+        // drag and drop picks the file; a surface enables the TetGen option
+        const tq = () => page.$eval('#opts [name="tetgen_quality"]', (e) => e.disabled);
+        const tqBefore = await tq();
+        const dt = await page.evaluateHandle(() => {
+            const d = new DataTransfer();
+            d.items.add(new File(['solid s\nendsolid s\n'], 'part.stl', { type: 'model/stl' }));
+            return d;
+        });
+        await page.dispatchEvent('#drop', 'dragover', { dataTransfer: dt });
+        await page.dispatchEvent('#drop', 'drop', { dataTransfer: dt });
+        const info = await page.textContent('#file-info');
+        check(tqBefore && !(await tq()) && /part\.stl/.test(info) && /surface/.test(info),
+            'drag and drop: the dropped part.stl is chosen as a surface, tetgen_quality enabled (' + info + ')', info);
+        // a bad file: the daemon's problem, with its line, shown under the form
+        await page.setInputFiles('#file', { name: 'bad.mesh', mimeType: 'text/plain',
+            buffer: Buffer.from('MeshVersionFormatted 2\nDimension 3\nVertices\n2\n0 0 0 0\n1 nan 0 0\nEnd\n') });
+        check(await tq(), 'a .mesh file disables the surface-only option', 'enabled');
+        const e400 = errors.length;
+        await page.click('#submit-btn');
+        await page.waitForSelector('#submit-error:not([hidden])', { timeout: 10000 });
+        expected.push([e400, errors.length, /status of 400/]);
+        const perr = await page.textContent('#submit-error');
+        check(/\(400\)/.test(perr) && /line 6/.test(perr) && /view-list/.test(await page.evaluate(() =>
+            document.getElementById('view-list').hidden ? 'view-job' : 'view-list')),
+            'a malformed upload: the page shows the problem (' + perr.split('\n')[0].slice(0, 70) + '…, line 6) and stays', perr);
+
+        // the sample through the file input
+        const t0 = Date.now();
+        const id1 = await submitFile(env.SAMPLE);
+        pass('sample submitted through the file input, job view at /ui/jobs/' + id1 + ' (' + (Date.now() - t0) + ' ms)');
+        await waitDone(id1, 60000);
+        const prog = (await apiJSON('/v1/jobs/' + id1 + '/progress?after=-1')).body;
+        await page.waitForFunction((n) => +document.getElementById('chart').dataset.points === n, prog.count, { timeout: 5000 })
+            .then(() => pass('chart: all ' + prog.count + ' progress records drawn from /events'))
+            .catch(() => fail('chart points', 'want ' + prog.count));
+        const rows = await page.$$eval('#threshold-table tbody tr', (t) => t.length);
+        const q = await page.$$eval('#quality-table tbody tr', (t) => t.map((r) => r.textContent));
+        const rep = (await apiJSON('/v1/jobs/' + id1 + '/report')).body;
+        check(rows === 8 && q[0].includes(rep.after.mean_ratio_mean.toFixed(4)) && q[0].includes(rep.before.mean_ratio_mean.toFixed(4)),
+            'report: histograms drawn, 8 threshold rows, mean ratio ' + rep.before.mean_ratio_mean.toFixed(4) + ' -> ' +
+            rep.after.mean_ratio_mean.toFixed(4) + ' as in /report', rows + ' ' + q[0]);
+        // downloads: every format the daemon offers (its 400 lists them)
+        const offered = (await apiJSON('/v1/jobs/' + id1 + '/result?format=none')).body.formats;
+        const links = await page.$$eval('#downloads a', (as) => as.map((a) => a.dataset.format));
+        const missing = offered.filter((f) => !links.includes(f));
+        check(offered.length >= 10 && !missing.length, 'downloads: a link per offered format (' + offered.join(' ') + ') and the report',
+            'missing ' + missing.join(' '));
+        const name = await download('medit', 'sample-out.mesh');
+        await download('qmesh', 'sample-out.qmesh');
+        pass('result downloaded through the page (' + name + ')');
+        const tri = await page.waitForFunction(() => {
+            const c = document.getElementById('view3d');
+            const s = document.getElementById('view3d-status').textContent;
+            return +c.dataset.triangles > 0 ? 'webgl:' + c.dataset.triangles : /WebGL/.test(s) && /not available/.test(s) ? 'none' : null;
+        }, null, { timeout: 15000 }).then((h) => h.jsonValue()).catch((e) => 'error ' + e.message);
+        if (tri === 'none') console.log('ok - 3D view # SKIP no WebGL in this chromium (the page says so and works without it)');
+        else check(tri.startsWith('webgl:'), '3D view: ' + tri.slice(6) + ' boundary triangles drawn (WebGL)', tri);
+        if (tri.startsWith('webgl:')) {
+            // a cube's boundary: 6 faces; this sample's boundary is 2 x 6 x 6 x 6... compare with the mesh
+            figures.sample_boundary_triangles = +tri.slice(6);
+        }
+
+        // a longer run (literal mode: no early stop): the chart grows while it runs
+        await page.click('a[data-nav][href="/"]');
+        await page.waitForSelector('#view-list:not([hidden])');
+        await page.waitForFunction((id) => !!document.querySelector('#jobs tr[data-id="' + id + '"]'), id1, { timeout: 5000 });
+        const polled = {};
+        let polling = true;
+        let pollId = null;
+        const poller = (async () => {
+            while (polling && !pollId) await sleep(5);
+            let after = -1;
+            while (polling) {
+                const b = (await apiJSON('/v1/jobs/' + pollId + '/progress?after=' + after + '&wait=20')).body;
+                const t = Date.now();
+                for (const r of b.records) polled[r.seq] = t;
+                after = b.next_after;
+                if (b.done) break;
+            }
+        })();
+        // find the new job's id as soon as it exists, for the long-poll
+        const watchNew = (async () => {
+            while (!pollId && polling) {
+                const l = (await apiJSON('/v1/jobs')).body.jobs;
+                const j = l.find((x) => x.id !== id1);
+                if (j) pollId = j.id;
+                else await sleep(5);
+            }
+        })();
+        // upload at 4 MB/s (DevTools network emulation) to see the progress bar move
+        const cdp = await context.newCDPSession(page);
+        await cdp.send('Network.emulateNetworkConditions', { offline: false, latency: 0,
+            downloadThroughput: -1, uploadThroughput: 4e6 });
+        await page.evaluate(() => {
+            window.__bar = [];
+            const bar = document.getElementById('upload-progress');
+            const t = setInterval(() => { if (!bar.hidden) window.__bar.push(bar.value); }, 20);
+            window.__barStop = () => clearInterval(t);
+        });
+        const id2 = await submitFile(env.BIG, { max_iter: 60, mode: 'literal' });
+        await cdp.send('Network.emulateNetworkConditions', { offline: false, latency: 0, downloadThroughput: -1, uploadThroughput: -1 });
+        const bar = await page.evaluate(() => { window.__barStop(); return window.__bar; });
+        const mid = bar.filter((v) => v > 0.05 && v < 0.95);
+        check(mid.length >= 2 && bar[bar.length - 1] >= mid[mid.length - 1], 'upload progress bar moves (' + mid.length +
+            ' readings between 5% and 95% at 4 MB/s)', JSON.stringify(bar.slice(0, 20)));
+        await watchNew;
+        const seen = [];
+        const tRun = Date.now();
+        for (;;) {
+            const s = await page.evaluate(() => [document.getElementById('job-state').textContent,
+                +document.getElementById('chart').dataset.points]);
+            if (s[0] === 'running' && (!seen.length || seen[seen.length - 1] !== s[1])) seen.push(s[1]);
+            if (/succeeded|failed|cancelled/.test(s[0]) || Date.now() - tRun > 120000) break;
+            await sleep(30);
+        }
+        check(seen.length >= 3 && seen.every((v, i) => !i || v > seen[i - 1]), 'chart gains points while the job runs: ' +
+            seen.length + ' distinct counts seen in state running (' + seen.slice(0, 6).join(', ') + (seen.length > 6 ? ', … ' + seen[seen.length - 1] : '') + ')',
+            JSON.stringify(seen));
+        await waitDone(id2, 120000);
+        polling = false;
+        await poller;
+        // chart latency: when the page drew a record vs when a long-poll got it
+        const draws = await page.evaluate(() => window.__draws);
+        const firstDraw = draws.find((d) => d.points > 0);
+        const lat = [];
+        for (const [seq, t] of Object.entries(polled)) {
+            if (!firstDraw || t < firstDraw.t) continue; // delivered before the stream was open
+            const d = draws.find((x) => x.seq >= +seq && x.t >= t - 1000);
+            if (d) lat.push(d.t - t);
+        }
+        lat.sort((a, b) => a - b);
+        figures.chart_latency_ms = { n: lat.length, median: lat[lat.length >> 1], p90: lat[Math.floor(lat.length * 0.9)], max: lat[lat.length - 1] };
+        check(lat.length >= 10 && figures.chart_latency_ms.p90 <= 250, 'chart latency (drawn after a long-poll got the record): median ' +
+            figures.chart_latency_ms.median + ' ms, p90 ' + figures.chart_latency_ms.p90 + ' ms, max ' + figures.chart_latency_ms.max +
+            ' ms over ' + lat.length + ' records (target 250 ms)', JSON.stringify(figures.chart_latency_ms));
+        const j2 = (await apiJSON('/v1/jobs/' + id2)).body;
+        check(j2.state === 'succeeded' && j2.mesh.tets > 100000, 'gzipped ' + path.basename(env.BIG) + ' gunzipped by the page and optimized (' +
+            j2.mesh.tets + ' tets, ' + j2.iterations + ' records)', JSON.stringify(j2.state));
+        await download('medit', 'big-out.mesh');
+        // the 3D view of the 100k-tet result
+        await page.waitForFunction(() => +document.getElementById('view3d').dataset.triangles > 0 ||
+            /not available/.test(document.getElementById('view3d-status').textContent), null, { timeout: 30000 }).catch(() => {});
+        // the job view of a finished job opens (a reload: page, job, all records, report)
+        const tOpen = Date.now();
+        await page.reload();
+        await page.waitForFunction((n) => +document.getElementById('chart').dataset.points === n &&
+            +document.getElementById('hist').dataset.drawn > 0, j2.iterations, { timeout: 10000 });
+        figures.finished_job_view_ms = Date.now() - tOpen;
+        check(figures.finished_job_view_ms <= 2000, 'finished ' + j2.mesh.tets + '-tet job view opens with chart and histograms in ' +
+            figures.finished_job_view_ms + ' ms (target 2 s)', figures.finished_job_view_ms);
+        await page.waitForFunction(() => +document.getElementById('view3d').dataset.triangles > 0 ||
+            /not available/.test(document.getElementById('view3d-status').textContent), null, { timeout: 30000 }).catch(() => {});
+        figures.view3d_status = await page.textContent('#view3d-status');
+        await page.evaluate(() => document.getElementById('hist-log').click());
+        await sleep(300);
+        if (env.UI_SHOTS) await page.screenshot({ path: path.join(env.UI_SHOTS, 'ui-job.png'), fullPage: true });
+
+        // the list: filter, cancel, delete
+        const id3 = (await (await fetch(URL + '/v1/jobs?max_iter=2000&mode=literal&format=medit', { method: 'POST',
+            body: readFileSync(path.join(OUT, 'big-out.mesh')) })).json()).id;
+        await page.click('a[data-nav][href="/"]');
+        const rowSel = (id) => '#jobs tr[data-id="' + id + '"]';
+        await page.waitForSelector(rowSel(id3));
+        await page.waitForSelector(rowSel(id3) + '[data-state="running"]', { timeout: 15000 })
+            .then(() => pass('list: a job submitted by another client shows up, running, within the polling interval'))
+            .catch((e) => fail('list running', e.message));
+        const inout = await page.textContent(rowSel(id2) + ' td:nth-child(6)');
+        check(/^0\.\d{4} → 0\.\d{4}$/.test(inout.trim()), 'list: mean ratio in → out shown (' + inout.trim() + ')', inout);
+        await page.click('#filters button[data-state="succeeded"]');
+        const states = await page.$$eval('#jobs tbody tr', (t) => t.map((r) => r.dataset.state));
+        check(states.length === 2 && states.every((s) => s === 'succeeded'), 'list: the succeeded filter shows the 2 succeeded jobs only', states.join(' '));
+        await page.click('#filters button[data-state=""]');
+        await page.click(rowSel(id3) + ' button[data-act="cancel"]');
+        await page.waitForSelector(rowSel(id3) + '[data-state="cancelled"]', { timeout: 15000 })
+            .then(() => pass('list: Cancel stops the running job (cancelled)'))
+            .catch((e) => fail('cancel', e.message));
+        await page.waitForFunction(() => document.querySelectorAll('#jobs tbody tr').length === 3 &&
+            [...document.querySelectorAll('#jobs tbody td:nth-child(6)')].filter((t) => /→ 0\./.test(t.textContent)).length >= 2, null, { timeout: 5000 }).catch(() => {});
+        if (env.UI_SHOTS) await page.screenshot({ path: path.join(env.UI_SHOTS, 'ui-list.png') });
+        await page.click(rowSel(id3) + ' button[data-act="delete"]');
+        await page.waitForSelector(rowSel(id3), { state: 'detached', timeout: 10000 })
+            .then(() => pass('list: Delete removes the job'))
+            .catch((e) => fail('delete', e.message));
+        const gone = await apiJSON('/v1/jobs/' + id3);
+        check(gone.status === 404, 'deleted job: GET /v1/jobs/{id} is 404', gone.status);
+
+        // a phone: no horizontal overflow, chart and histograms drawn
+        await page.setViewportSize({ width: 390, height: 844 });
+        await page.goto(URL + '/ui/jobs/' + id2);
+        await page.waitForFunction(() => +document.getElementById('hist').dataset.drawn > 0, null, { timeout: 10000 });
+        const ov = await page.evaluate(() => [document.documentElement.scrollWidth, window.innerWidth,
+            [...document.querySelectorAll('body *')].filter((e) => e.getBoundingClientRect().right > window.innerWidth + 0.5)
+                .slice(0, 3).map((e) => e.tagName + '#' + e.id + '.' + e.className)]);
+        check(ov[0] <= ov[1], 'phone (390 px): the job view has no horizontal overflow', ov.join(' > '));
+        if (env.UI_SHOTS) await page.screenshot({ path: path.join(env.UI_SHOTS, 'ui-phone.png') });
+        await page.goto(URL + '/');
+        await page.waitForSelector('#jobs tbody tr');
+        const ov2 = await page.evaluate(() => [document.documentElement.scrollWidth, window.innerWidth]);
+        check(ov2[0] <= ov2[1], 'phone (390 px): the list has no horizontal overflow', ov2.join(' > '));
+        // an unknown job (its 404s are the page's business: not counted below)
+        const e404 = errors.length;
+        await page.goto(URL + '/ui/jobs/' + '0'.repeat(32));
+        await page.waitForFunction(() => /no job/i.test(document.getElementById('job-meta').textContent), null, { timeout: 5000 })
+            .then(() => pass('an unknown job id: the job view says there is no such job'))
+            .catch((e) => fail('unknown job', e.message));
+        expected.push([e404, errors.length, /status of 404/]);
+        figures.ids = { sample: id1, big: id2 };
+    }
+    // expected: the 401s that make the page ask for a token, the resource
+    // errors of the steps that provoke them (a bad upload, an unknown job)
+    const real = errors.filter((e, i) => !(env.UI_MODE === 'tokens' && /status of 401/.test(e)) &&
+        !expected.some(([a, b, re]) => i >= a && i < b && re.test(e)));
+    check(!real.length, 'no console errors (' + env.UI_MODE + ')', real.join(' | '));
+} catch (e) {
+    fail('browser run (' + env.UI_MODE + ')', e.stack || e);
+} finally {
+    writeFileSync(path.join(OUT, 'figures-' + env.UI_MODE + '.json'), JSON.stringify(figures, null, 1));
+    await browser.close();
+}
+process.exit(nfail ? 1 : 0);
