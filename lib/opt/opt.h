@@ -73,6 +73,9 @@ typedef struct {
     int mu_scaled; /* with harmonic guidance, multiply mu by omega_B^2 (docs/method.md §5
                     * open question), default 0 */
     double tol_move;      /* stop when max move < tol_move * mean edge, default 1e-3 */
+    double stall;         /* stop the global phase when an iteration (the 3rd or later, on
+                           * a valid iterate) raises the mean ratio by less; default
+                           * 2e-3, 0 = never (docs/defaults.md) */
     double eps_rel;       /* Escobar epsilon relative to a regular tet, default 1e-3 */
     double finish_frac;   /* fraction of worst tets in the finishing pass, default 0.2 */
     int finish_sweeps;    /* broad sweeps, default 3 */
