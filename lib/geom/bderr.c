@@ -171,6 +171,7 @@ struct bderr_bvh {
     bvh_node *nodes;
     double *tri; /* 9 coordinates per triangle, in leaf order */
     int32_t *id; /* caller's index of each triangle, in leaf order */
+    int32_t *at; /* leaf position of each caller's triangle (id's inverse) */
 };
 
 /* Reorder ix[lo, hi) so ix[k] has the k-th smallest key and no smaller key
@@ -296,11 +297,12 @@ qdc_status bderr_bvh_build(const double *xyz, int32_t nv, const int32_t *tris,
     b->ntri = ntri;
     b->nodes = qdc_mallocn(2 * (size_t)ntri + 1, sizeof *b->nodes);
     b->tri = qdc_mallocn(9 * (size_t)ntri, sizeof(double));
-    b->id = qdc_mallocn((size_t)ntri, sizeof(int32_t));
+    b->id = qdc_mallocn((size_t)ntri + 1, sizeof(int32_t));
+    b->at = qdc_mallocn((size_t)ntri + 1, sizeof(int32_t));
     cen = qdc_mallocn(3 * (size_t)ntri, sizeof(double));
     memset(&bb, 0, sizeof bb);
     bb.key = qdc_mallocn((size_t)ntri, sizeof(double));
-    if (!b->nodes || !b->tri || !b->id || !cen || !bb.key) {
+    if (!b->nodes || !b->tri || !b->id || !b->at || !cen || !bb.key) {
         st = qdc_fail(err, QDC_ENOMEM, "out of memory for a BVH of %d triangles", ntri);
         goto out;
     }
@@ -326,10 +328,12 @@ qdc_status bderr_bvh_build(const double *xyz, int32_t nv, const int32_t *tris,
         st = qdc_fail(err, QDC_EINTERNAL, "BVH too deep (%d)", bb.depth);
         goto out;
     }
-    for (int32_t i = 0; i < ntri; i++)
+    for (int32_t i = 0; i < ntri; i++) {
+        b->at[b->id[i]] = i;
         for (int v = 0; v < 3; v++)
             memcpy(b->tri + 9 * (size_t)i + 3 * v,
                    xyz + 3 * (size_t)tris[3 * (size_t)b->id[i] + v], 3 * sizeof(double));
+    }
 out:
     qdc_free(cen);
     qdc_free(bb.key);
@@ -348,6 +352,7 @@ void bderr_bvh_free(bderr_bvh *b)
     qdc_free(b->nodes);
     qdc_free(b->tri);
     qdc_free(b->id);
+    qdc_free(b->at);
     qdc_free(b);
 }
 
@@ -368,6 +373,12 @@ static double box_dist2(const bvh_node *nd, const double p[3])
 double bderr_bvh_closest(const bderr_bvh *b, const double p[3], double cp[3],
                          int32_t *tri)
 {
+    return bderr_bvh_closest_near(b, p, -1, cp, tri);
+}
+
+double bderr_bvh_closest_near(const bderr_bvh *b, const double p[3], int32_t near,
+                              double cp[3], int32_t *tri)
+{
     int32_t stack[BVH_STACK];
     double sd[BVH_STACK], best = INFINITY, q[3], bq[3] = {0, 0, 0};
     int sp = 0;
@@ -377,6 +388,15 @@ double bderr_bvh_closest(const bderr_bvh *b, const double p[3], double cp[3],
         *tri = -1;
     if (!b || b->ntri == 0)
         return INFINITY;
+    if (near >= 0 && near < b->ntri) {
+        /* a bound to start from: the search then skips every box farther
+         * than this triangle (a sliding vertex stays near its own faces) */
+        const double *t = b->tri + 9 * (size_t)b->at[near];
+        best = closest_on_triangle(p, t, t + 3, t + 6, bq);
+        bt = best == best ? b->at[near] : -1;
+        if (bt < 0)
+            best = INFINITY;
+    }
     stack[sp] = 0;
     sd[sp++] = box_dist2(&b->nodes[0], p);
     while (sp > 0) {

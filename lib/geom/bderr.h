@@ -22,6 +22,12 @@ void bderr_bvh_free(bderr_bvh *b);
 double bderr_bvh_closest(const bderr_bvh *b, const double p[3], double cp[3],
                          int32_t *tri);
 
+/* The same, starting from the caller's triangle near (an index into the tris
+ * given to bderr_bvh_build, or -1): the same answer, found faster when p is
+ * close to that triangle. */
+double bderr_bvh_closest_near(const bderr_bvh *b, const double p[3], int32_t near,
+                              double cp[3], int32_t *tri);
+
 /* Exact closest point on triangle (a,b,c) to p (Ericson 5.1.5); returns the distance. */
 double bderr_point_triangle(const double p[3], const double a[3], const double b[3],
                             const double c[3], double cp[3]);

@@ -11,9 +11,12 @@ struct slide_ctx {
     int32_t nv;
     uint8_t *kind;
     uint8_t *on_iface; /* surface vertex of an interface (not of the outer boundary) */
-    uint8_t *flat;  /* surface vertex on a planar patch, line vertex on a straight line */
-    double *x0;     /* copy of the input coordinates */
-    double *normal; /* per surface vertex: unit normal of the input surface */
+    uint8_t *flat; /* surface vertex on a planar patch, line vertex on a straight line */
+    int32_t *near; /* per surface vertex: one of its input faces (projection start) */
+    int32_t *sf_ptr; /* per vertex: its input faces (CSR), as vertex triples */
+    int32_t *sf_tri;
+    double *x0;      /* copy of the input coordinates */
+    double *normal;  /* per surface vertex: unit normal of the input surface */
     double *tangent; /* per line vertex: unit direction of the feature line */
     int32_t *fe_ptr; /* per vertex: feature edges around it (CSR), as vertex pairs */
     int32_t *fe_nbr;
@@ -282,6 +285,98 @@ static void mark_flat(slide_ctx *s, const mesh_topo *tp, const double *x0)
     }
 }
 
+/* s->sf_*: the input faces around each surface vertex (boundary faces for
+ * outer-boundary vertices, interface faces for interface vertices). */
+static qdc_status star_faces(slide_ctx *s, const mesh_topo *tp)
+{
+    int32_t *pos;
+
+    s->sf_ptr = qdc_calloc((size_t)tp->nv + 1, sizeof(int32_t));
+    if (!s->sf_ptr)
+        return QDC_ENOMEM;
+    for (int pass = 0; pass < 2; pass++) {
+        for (int which = 0; which < 2; which++) {
+            const int32_t *f = which ? tp->ifaces : tp->bfaces;
+            int32_t n = which ? tp->nif : tp->nbf;
+            for (int32_t i = 0; i < n; i++)
+                for (int k = 0; k < 3; k++) {
+                    int32_t v = f[3 * (size_t)i + k];
+                    if (s->kind[v] != SLIDE_SURFACE || s->on_iface[v] != which)
+                        continue;
+                    if (!pass)
+                        s->sf_ptr[v + 1]++;
+                    else
+                        memcpy(s->sf_tri + 3 * (size_t)pos[v]++, f + 3 * (size_t)i,
+                               3 * sizeof(int32_t));
+                }
+        }
+        if (pass)
+            break;
+        for (int32_t v = 0; v < tp->nv; v++)
+            s->sf_ptr[v + 1] += s->sf_ptr[v];
+        s->sf_tri = qdc_mallocn(3 * (size_t)s->sf_ptr[tp->nv] + 1, sizeof(int32_t));
+        pos = qdc_mallocn((size_t)tp->nv + 1, sizeof(int32_t));
+        if (!s->sf_tri || !pos) {
+            qdc_free(pos);
+            return QDC_ENOMEM;
+        }
+        memcpy(pos, s->sf_ptr, (size_t)tp->nv * sizeof(int32_t));
+    }
+    qdc_free(pos);
+    return QDC_OK;
+}
+
+/* Closest point to p on the input faces around surface vertex v, if it lies
+ * inside v's star (not on its outer edges, where a face beyond may be
+ * closer). That is the closest point of v's own part of the surface; the
+ * whole-surface search gives the same point unless another part of the
+ * surface (across a thin wall) is closer still, which a vertex sliding on its
+ * own side should ignore anyway. 0 if the search is needed. */
+static int project_star(const slide_ctx *s, int32_t v, const double p[3], double out[3])
+{
+    double best = INFINITY, cp[3];
+    int32_t bi = -1;
+
+    for (int32_t k = s->sf_ptr[v]; k < s->sf_ptr[v + 1]; k++) {
+        const int32_t *t = s->sf_tri + 3 * (size_t)k;
+        double d =
+            bderr_point_triangle(p, s->x0 + 3 * (size_t)t[0], s->x0 + 3 * (size_t)t[1],
+                                 s->x0 + 3 * (size_t)t[2], cp);
+        if (d < best) {
+            best = d;
+            bi = k;
+            memcpy(out, cp, sizeof cp);
+        }
+    }
+    if (bi < 0)
+        return 0;
+    {
+        /* on the edge opposite v (where the next face begins)? */
+        const int32_t *t = s->sf_tri + 3 * (size_t)bi;
+        const double *a = NULL, *b = NULL;
+        double e[3], w[3], ee, tt, dd = 0;
+        for (int c = 0; c < 3; c++)
+            if (t[c] == v) {
+                a = s->x0 + 3 * (size_t)t[(c + 1) % 3];
+                b = s->x0 + 3 * (size_t)t[(c + 2) % 3];
+            }
+        if (!a)
+            return 0;
+        for (int c = 0; c < 3; c++) {
+            e[c] = b[c] - a[c];
+            w[c] = out[c] - a[c];
+        }
+        ee = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
+        tt = ee > 0 ? (w[0] * e[0] + w[1] * e[1] + w[2] * e[2]) / ee : 0;
+        tt = tt < 0 ? 0 : tt > 1 ? 1 : tt;
+        for (int c = 0; c < 3; c++) {
+            double r = w[c] - tt * e[c];
+            dd += r * r;
+        }
+        return dd > 1e-24 * ee;
+    }
+}
+
 qdc_status slide_new(const mesh_topo *tp, const double *x0, double feature_angle,
                      slide_ctx **out, qdc_error *err)
 {
@@ -299,7 +394,9 @@ qdc_status slide_new(const mesh_topo *tp, const double *x0, double feature_angle
     s->normal = qdc_calloc(3 * (size_t)tp->nv, sizeof(double));
     s->tangent = qdc_calloc(3 * (size_t)tp->nv, sizeof(double));
     s->flat = qdc_calloc((size_t)tp->nv, 1);
-    if (!s->kind || !s->on_iface || !s->x0 || !s->normal || !s->tangent || !s->flat)
+    s->near = qdc_mallocn((size_t)tp->nv + 1, sizeof(int32_t));
+    if (!s->kind || !s->on_iface || !s->x0 || !s->normal || !s->tangent || !s->flat ||
+        !s->near)
         goto fail;
     memcpy(s->x0, x0, 3 * (size_t)tp->nv * sizeof(double));
     st = find_features(s, tp, x0, feature_angle, deg);
@@ -348,6 +445,19 @@ qdc_status slide_new(const mesh_topo *tp, const double *x0, double feature_angle
         s->on_iface[v] = !(fl & MESH_V_BOUNDARY);
     }
     mark_flat(s, tp, x0);
+    for (int32_t v = 0; v < tp->nv; v++)
+        s->near[v] = -1;
+    for (int32_t f = 0; f < tp->nbf; f++)
+        for (int k = 0; k < 3; k++)
+            if (!s->on_iface[tp->bfaces[3 * (size_t)f + k]])
+                s->near[tp->bfaces[3 * (size_t)f + k]] = f;
+    for (int32_t f = 0; f < tp->nif; f++)
+        for (int k = 0; k < 3; k++)
+            if (s->on_iface[tp->ifaces[3 * (size_t)f + k]])
+                s->near[tp->ifaces[3 * (size_t)f + k]] = f;
+    st = star_faces(s, tp);
+    if (st != QDC_OK)
+        goto fail;
     st = bderr_bvh_build(x0, tp->nv, tp->bfaces, tp->nbf, &s->outer, err);
     if (st == QDC_OK && tp->nif > 0)
         st = bderr_bvh_build(x0, tp->nv, tp->ifaces, tp->nif, &s->inter, err);
@@ -369,6 +479,9 @@ void slide_free(slide_ctx *s)
     qdc_free(s->kind);
     qdc_free(s->on_iface);
     qdc_free(s->flat);
+    qdc_free(s->near);
+    qdc_free(s->sf_ptr);
+    qdc_free(s->sf_tri);
     qdc_free(s->x0);
     qdc_free(s->normal);
     qdc_free(s->tangent);
@@ -489,7 +602,9 @@ void slide_project_free(const slide_ctx *s, int32_t v, const double p[3], double
     case SLIDE_SURFACE:
         /* outer-boundary vertices onto the input boundary, interface vertices
          * onto the input interface */
-        bderr_bvh_closest(s->on_iface[v] ? s->inter : s->outer, p, out, NULL);
+        if (!project_star(s, v, p, out))
+            bderr_bvh_closest_near(s->on_iface[v] ? s->inter : s->outer, p, s->near[v],
+                                   out, NULL);
         break;
     case SLIDE_LINE:
         project_line(s, v, p, out);

@@ -145,6 +145,11 @@ TEST(bvh_matches_brute_force)
         d = bderr_bvh_closest(b, p, cp, &tri);
         ASSERT_NEAR(d, best, 0);
         ASSERT_TRUE(tri >= 0 && tri < NT);
+        /* starting from any triangle (or none, or an index out of range) gives
+         * the same distance */
+        ASSERT_NEAR(bderr_bvh_closest_near(b, p, q % NT, NULL, NULL), best, 0);
+        ASSERT_NEAR(bderr_bvh_closest_near(b, p, -1, NULL, NULL), best, 0);
+        ASSERT_NEAR(bderr_bvh_closest_near(b, p, NT + q, NULL, NULL), best, 0);
         ASSERT_NEAR(
             bderr_point_triangle(p, x + 9 * tri, x + 9 * tri + 3, x + 9 * tri + 6, NULL),
             d, 0);
