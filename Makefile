@@ -11,6 +11,12 @@ else
 B := build/san
 SANFLAGS := -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined
 endif
+ifneq ($(TSAN),)
+# ThreadSanitizer: qdcd's own threads (HTTP, intake, workers, poll timer)
+B := build/tsan
+SANFLAGS := -fsanitize=thread -fno-omit-frame-pointer
+OPTFLAGS := -O1 -g
+endif
 ifneq ($(FAULT),)
 # allocation-failure injection (lib/core/base.h qdc_fault_set) under the sanitizers
 B := build/fault
@@ -91,6 +97,7 @@ $(B)/tests/%: tests/unit/%.c tests/unit/testlib.h $(B)/libqdc.a
 test: deps
 	$(MAKE) -j$$(nproc) all
 	$(MAKE) -j$$(nproc) SANITIZER=1 all
+	$(MAKE) -j$$(nproc) TSAN=1 build/tsan/qdcd
 	@tests/run.sh
 
 # Unit tests of the release build only (seconds).
