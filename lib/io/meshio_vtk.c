@@ -1067,7 +1067,7 @@ static qdc_status vtu_inflate(vtu *x, const unsigned char *hdr, const unsigned c
 
     if (nb == 0)
         total = 0;
-    else if (lastsz > bs || (nb > 1 && (bs > want || nb - 1 > want / bs)))
+    else if (lastsz > bs || (nb > 1 && (bs == 0 || bs > want || nb - 1 > want / bs)))
         total = UINT64_MAX;
     else
         total = (nb - 1) * bs + lastsz;
@@ -1171,6 +1171,7 @@ static qdc_status vtu_bytes(vtu *x, const xtag *t, int appended, size_t want, sr
             *data = h + hn;
             if (rec) { /* in place: offsets per vertex */
                 rec->kind = SRC_BIN;
+                rec->blk_b = (uint64_t)at + hn + want;
                 st = srcrec_alloc(rec, rec->nv, err);
                 for (int64_t v = 0; st == QDC_OK && v < rec->nv; v++)
                     rec->off[v] = (uint64_t)(at + (int64_t)hn) +
@@ -1441,12 +1442,14 @@ static qdc_status vtu_note_offset(vtu *x, const xtag *t, qdc_error *err)
 
     if (!x->rec || !attr_is(t, "format", "appended") || !tag_attr(t, "offset", &v, &ve))
         return QDC_OK;
-    if (attr_int(x, t, "offset", 0, INT64_MAX, &off, err) != QDC_OK)
-        return err ? err->status : QDC_EPARSE;
     while (v < ve && is_space((unsigned char)*v))
         v++;
     while (ve > v && is_space((unsigned char)ve[-1]))
         ve--;
+    if (parse_int(v, ve, 0, &off) != 0 || off < 0) { /* its reader says so, if read */
+        srcrec_refuse(x->rec, "VTU: an appended offset is not a number");
+        return QDC_OK;
+    }
     if (vec_grow(&x->rec->appoff, 3) != 0)
         return qdc_fail(err, QDC_ENOMEM, "out of memory");
     a = (uint64_t *)x->rec->appoff.a + x->rec->appoff.n;
@@ -1455,6 +1458,78 @@ static qdc_status vtu_note_offset(vtu *x, const xtag *t, qdc_error *err)
     a[2] = (uint64_t)off;
     x->rec->appoff.n += 3;
     return QDC_OK;
+}
+
+/* The end of the appended array at offset off (raw or base64, zlib or not),
+ * or NULL if its header does not fit. */
+static const char *app_extent(vtu *x, uint64_t off)
+{
+    size_t hsz = x->hdr8 ? 8 : 4, hn = x->zlib ? 3 * hsz : hsz, left;
+    const char *p, *endp = NULL;
+    unsigned char *h = NULL;
+    uint64_t n = 0;
+
+    if (off > (uint64_t)(x->s.end - x->appended))
+        return NULL;
+    p = x->appended + off;
+    left = (size_t)(x->s.end - p);
+    if (!x->app_base64) {
+        const unsigned char *b = (const unsigned char *)p;
+        if (left < hn)
+            return NULL;
+        if (!x->zlib) {
+            n = hdr_word(x, b, 0);
+            return n <= left - hn ? p + hn + n : NULL;
+        }
+        n = hdr_word(x, b, 0);
+        if (n > (left - hn) / hsz)
+            return NULL;
+        hn += (size_t)n * hsz;
+        n = 0;
+        for (uint64_t k = 0; k < hdr_word(x, b, 0); k++)
+            n += hdr_word(x, b, 3 + k);
+        return n <= left - hn ? p + hn + n : NULL;
+    }
+    if (b64_take(x, p, hn, &h, &endp, NULL) != QDC_OK)
+        goto fail;
+    n = hdr_word(x, h, 0);
+    if (x->zlib) {
+        uint64_t nb = n;
+        if (nb > left / hsz || b64_take(x, p, hn + (size_t)nb * hsz, &h, &endp, NULL) != QDC_OK)
+            goto fail;
+        hn += (size_t)nb * hsz;
+        n = 0;
+        for (uint64_t k = 0; k < nb; k++)
+            n += hdr_word(x, h, 3 + k);
+    }
+    if (n > left || b64_take(x, p, hn + (size_t)n, &h, &endp, NULL) != QDC_OK)
+        goto fail;
+    qdc_free(h);
+    return endp;
+fail:
+    qdc_free(h);
+    return NULL;
+}
+
+/* A spliced write replaces the appended Points block: no other array may
+ * share its bytes (a valid file never does; a damaged one is not spliced). */
+static void check_app_overlap(vtu *x)
+{
+    srcrec *r = x->rec;
+    const uint64_t *ao = r->appoff.a;
+    int self = 0;
+
+    for (size_t i = 0; i + 3 <= r->appoff.n; i += 3) {
+        const char *e;
+        if (ao[i + 2] == r->app_off && !self++)
+            continue;
+        e = app_extent(x, ao[i + 2]); /* NULL unless the offset is within the input */
+        if (!e || ((uint64_t)(x->appended - x->s.base) + ao[i + 2] < r->blk_b &&
+                   (uint64_t)(e - x->s.base) > r->blk_a)) {
+            srcrec_refuse(r, "VTU: an appended array overlaps the Points");
+            return;
+        }
+    }
 }
 
 /* Find <AppendedData ...> and its '_' first (offsets point into it). */
@@ -1583,6 +1658,8 @@ qdc_status meshio_vtu_read(const char *buf, size_t len, const meshio_options *o,
             st = check_offsets(x.c.offs, x.c.nc, x.c.nconn, "vtu", err);
         }
     }
+    if (st == QDC_OK && rec && rec->appended && rec->kind != SRC_NONE)
+        check_app_overlap(&x);
     if (st == QDC_OK)
         st = cells_mesh(&x.c, "vtu", o, out, err);
     qdc_free(offs_end);

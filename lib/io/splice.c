@@ -24,7 +24,8 @@ typedef struct {
     char *ele; /* TetGen .ele, copied unchanged */
     size_t ele_len;
     int32_t nv;
-    uint64_t hash;
+    uint64_t hash;     /* mesh_hash at reading */
+    uint64_t xyz_hash; /* of the coordinates as read: unchanged, the file is copied */
 } source;
 
 static void source_release(mesh_source *ms)
@@ -106,6 +107,7 @@ qdc_status splice_attach(mesh_t *m, srcrec *r, char *buf, size_t len, int own,
     srcrec_init(r);
     s->nv = m->nv;
     s->hash = mesh_hash(m);
+    s->xyz_hash = hash_bytes(0, m->xyz, 24 * (size_t)m->nv);
     if (s->r.kind != SRC_BLOCK && s->r.kind != SRC_NONE &&
         (s->r.nv != m->nv || !s->r.off))
         srcrec_refuse(&s->r, "the reader did not record every vertex");
@@ -424,6 +426,10 @@ qdc_status splice_write(const mesh_t *m, int part, wbuf *w, qdc_error *err)
         if (!s->ele)
             return qdc_fail(err, QDC_EINTERNAL, "source: no .ele kept");
         wb_put(w, s->ele, s->ele_len);
+        return QDC_OK;
+    }
+    if (hash_bytes(0, m->xyz, 24 * (size_t)m->nv) == s->xyz_hash) {
+        wb_put(w, s->buf, s->len); /* nothing moved (a base64 or zlib block as is) */
         return QDC_OK;
     }
     switch (s->r.kind) {
