@@ -1495,7 +1495,8 @@ static const char *app_extent(vtu *x, uint64_t off)
     n = hdr_word(x, h, 0);
     if (x->zlib) {
         uint64_t nb = n;
-        if (nb > left / hsz || b64_take(x, p, hn + (size_t)nb * hsz, &h, &endp, NULL) != QDC_OK)
+        if (nb > left / hsz ||
+            b64_take(x, p, hn + (size_t)nb * hsz, &h, &endp, NULL) != QDC_OK)
             goto fail;
         hn += (size_t)nb * hsz;
         n = 0;

@@ -99,6 +99,15 @@ grep -q 'conv.vtu: written by qdc.s vtu writer (another format, version or encod
 grep -q 'conv22.msh: written by qdc.s gmsh22 writer' err && ! grep -q PhysicalNames conv22.msh &&
     pass "roundtrip: MSH 4.1 asked as 2.2 (--out-format): converted, with the note" ||
     fail "roundtrip: 4.1 -> 2.2" "$(grep note err | head -2)"
+# --reorient rewrites tets: the file cannot be spliced any more, and a note says so
+awk '/Tetrahedra/ { t = 1; print; next } t == 1 && NF == 1 { print; t = 2; next }
+     t == 2 && NF == 5 { print $2, $1, $3, $4, $5; next } { print }' gmsh.mesh > flip.mesh
+"$BIN/qdc" optimize flip.mesh flip_on.mesh --reorient on --max-iter 3 2> err
+"$BIN/qdc" optimize flip.mesh flip_off.mesh --max-iter 3 2> err2
+grep -q 'flip_on.mesh: written by qdc.s medit writer (the connectivity, regions or tags changed since reading)' err &&
+    ! grep -q 'written by' err2 && ! grep -q '^Edges' flip_on.mesh && grep -q 'Edges' flip_off.mesh &&
+    pass "roundtrip: --reorient on: qdc's writer with a note (Edges dropped); off: spliced" ||
+    fail "roundtrip: --reorient" "$(grep note err err2 | head -2)"
 "$BIN/qdc" optimize gmsh41.msh nokeep.msh --no-keep-source --max-iter 5 2> err
 ! grep -q note err && ! grep -q PhysicalNames nokeep.msh &&
     pass "roundtrip: --no-keep-source: qdc's own MSH writer, no note" ||

@@ -420,7 +420,8 @@ static inline int splice_check(const char *buf, size_t len, meshio_format f)
     }
     if (meshio_write(m, sf, sink_write, &s, &err) != QDC_OK)
         bad = 1;
-    else if (!(len >= 2 && (unsigned char)buf[0] == 0x1f && (unsigned char)buf[1] == 0x8b) &&
+    else if (!(len >= 2 && (unsigned char)buf[0] == 0x1f &&
+               (unsigned char)buf[1] == 0x8b) &&
              (s.n != len || memcmp(s.b, buf, len) != 0))
         bad = 2;
     for (int64_t i = 0; i < 3 * (int64_t)m->nv; i++)
@@ -438,7 +439,8 @@ static inline int splice_check(const char *buf, size_t len, meshio_format f)
                  memcmp(b->tets, m->tets, 16 * (size_t)m->nt) != 0))
         bad = 5;
     if (bad)
-        printf("  splice %s: check %d failed: %s\n", meshio_format_name(sf), bad, err.msg);
+        printf("  splice %s: check %d failed: %s\n", meshio_format_name(sf), bad,
+               err.msg);
     mesh_free(m);
     mesh_free(b);
     free(s.b);
