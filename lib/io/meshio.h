@@ -84,7 +84,9 @@ qdc_status meshio_read_ex(const char *buf, size_t len, meshio_format fmt,
 qdc_status meshio_read_tetgen(const char *node, size_t node_len, const char *ele,
                               size_t ele_len, mesh_t **out, qdc_error *err);
 
-/* Stream m in format fmt (not TETGEN: see meshio_save). */
+/* Stream m in format fmt (not TETGEN: see meshio_save); spliced when fmt is
+ * its source's (below). MESHIO_AUTO: the source's format (QDC_EINVAL if m
+ * has no source). */
 qdc_status meshio_write(const mesh_t *m, meshio_format fmt, qdc_write_fn fn, void *ctx,
                         qdc_error *err);
 
