@@ -1225,8 +1225,9 @@ static qdc_status vtu_bytes(vtu *x, const xtag *t, int appended, size_t want, sr
             hn += (size_t)nb * hsz;
             st = b64_take(x, p, hn, &z, &endp, err);
         }
-        for (uint64_t k = 0; st == QDC_OK && k < nb; k++)
-            sum += hdr_word(x, z, 3 + k);
+        for (uint64_t k = 0; st == QDC_OK && k < nb && sum <= (size_t)(s->end - p); k++)
+            sum += hdr_word(x, z, 3 + k) > (size_t)(s->end - p) ? UINT64_MAX / 2
+                                                                : hdr_word(x, z, 3 + k);
         if (st == QDC_OK && sum > (size_t)(s->end - p))
             st = fail_bin(err, QDC_EPARSE, at,
                           "VTU: zlib blocks of %llu bytes cannot fit in the input",
@@ -1486,9 +1487,10 @@ static const char *app_extent(vtu *x, uint64_t off)
             return NULL;
         hn += (size_t)n * hsz;
         n = 0;
-        for (uint64_t k = 0; k < hdr_word(x, b, 0); k++)
-            n += hdr_word(x, b, 3 + k);
-        return n <= left - hn ? p + hn + n : NULL;
+        for (uint64_t k = 0, c; k < hdr_word(x, b, 0); k++, n += c)
+            if ((c = hdr_word(x, b, 3 + k)) > left - hn - n)
+                return NULL;
+        return p + hn + n;
     }
     if (b64_take(x, p, hn, &h, &endp, NULL) != QDC_OK)
         goto fail;
@@ -1500,8 +1502,9 @@ static const char *app_extent(vtu *x, uint64_t off)
             goto fail;
         hn += (size_t)nb * hsz;
         n = 0;
-        for (uint64_t k = 0; k < nb; k++)
-            n += hdr_word(x, h, 3 + k);
+        for (uint64_t k = 0, c; k < nb; k++, n += c)
+            if ((c = hdr_word(x, h, 3 + k)) > left - n)
+                goto fail;
     }
     if (n > left || b64_take(x, p, hn + (size_t)n, &h, &endp, NULL) != QDC_OK)
         goto fail;
