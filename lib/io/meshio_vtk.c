@@ -863,7 +863,9 @@ typedef struct {
 static qdc_status next_tag(vtu *x, xtag *t, qdc_error *err)
 {
     txt *s = &x->s;
-    const char *p = s->p, *e = s->end;
+    /* no tag reaches into the appended data: what the XML says never depends
+     * on those bytes (a spliced write changes them) */
+    const char *p = s->p, *e = x->appended && p < x->appended ? x->appended : s->end;
 
     memset(t, 0, sizeof *t);
     for (;;) {
@@ -1095,19 +1097,28 @@ static qdc_status vtu_inflate(vtu *x, const unsigned char *hdr, const unsigned c
     return QDC_OK;
 }
 
+/* Where the data of an array at p must end: inline arrays before the
+ * appended data, appended ones at the end of the input. */
+static const char *data_end(const vtu *x, const char *p)
+{
+    return x->appended && p < x->appended ? x->appended : x->s.end;
+}
+
 /* Base64 from p, decoded until `want` bytes are out, into a new *tmp;
  * *endp where it stopped. */
 static qdc_status b64_take(vtu *x, const char *p, size_t want, unsigned char **tmp,
                            const char **endp, qdc_error *err)
 {
-    if (want / 3 * 4 > (size_t)(x->s.end - p))
+    const char *end = data_end(x, p);
+
+    if (want / 3 * 4 > (size_t)(end - p))
         return fail_bin(err, QDC_EPARSE, p - x->s.base,
                         "VTU: %zu bytes of base64 data cannot fit in the input", want);
     qdc_free(*tmp);
     *tmp = qdc_malloc(want + 1);
     if (!*tmp)
         return qdc_fail(err, QDC_ENOMEM, "out of memory for a VTU array");
-    if (b64_decode(p, x->s.end, *tmp, want, endp) != want)
+    if (b64_decode(p, end, *tmp, want, endp) != want)
         return fail_bin(err, QDC_EPARSE, p - x->s.base,
                         "VTU: base64 data end before %zu bytes", want);
     return QDC_OK;
@@ -1292,13 +1303,12 @@ static qdc_status vtu_array(vtu *x, const xtag *t, int64_t n, vtype vt, int fini
         }
         for (int64_t i = 0; i < n; i++) {
             double y;
-            const char *te;
+            const char *te, *lim = data_end(x, s->p);
             char q[32];
             skip_ws(s);
             if (rec && i % 3 == 0)
                 rec->off[i / 3] = (uint64_t)(s->p - s->base);
-            for (te = s->p; te < s->end && !is_space((unsigned char)*te) && *te != '<';
-                 te++)
+            for (te = s->p; te < lim && !is_space((unsigned char)*te) && *te != '<'; te++)
                 ;
             if (finite)
                 st = tok_real(s, s->p, te, "DataArray", &y, err);
