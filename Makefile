@@ -151,7 +151,8 @@ format-check:
 # with the parsers it needs and run FUZZ_SECONDS on its seeds (tests/fuzz/seeds/NAME);
 # crashes land in tests/fuzz/crashes/NAME, which `make test` replays (unit tests).
 FUZZ_SECONDS ?= 60
-FUZZ_LIB := lib/core/base.c lib/core/mesh.c $(wildcard lib/io/meshio*.c) lib/io/gz.c lib/io/surface.c
+FUZZ_LIB := lib/core/base.c lib/core/mesh.c $(wildcard lib/io/meshio*.c) lib/io/gz.c lib/io/splice.c \
+    lib/io/surface.c
 fuzz:
 	@mkdir -p build/fuzz
 	@set -e; for src in $(wildcard tests/fuzz/fuzz_*.c); do \

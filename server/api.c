@@ -800,7 +800,7 @@ static int check_upload(struct MHD_Connection *c, req *r, const char *buf, size_
 
     mesh_t *m = NULL;
     sbuf notes = {0};
-    meshio_options mo = {collect_note, &notes};
+    meshio_options mo = {collect_note, &notes, 0};
     st = meshio_read_ex(buf, len, r->fmt, &mo, &m, &e);
     if (st == QDC_OK && (m->nv > q->cfg.max_vertices || m->nt > q->cfg.max_tets)) {
         *ret = over_limits(c, r, m->nv, m->nt);

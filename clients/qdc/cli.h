@@ -22,6 +22,8 @@ void cli_error(const char *path, const qdc_error *err, qdc_status st);
 
 int cli_optimize(int argc, char **argv);
 int cli_quality(int argc, char **argv);
+/* qdc convert IN OUT: read and write (spliced when OUT is in IN's format). */
+int cli_convert(int argc, char **argv);
 /* qdc options: the library's option table as JSON on stdout. */
 int cli_options(int argc, char **argv);
 /* qdc tetra IN OUT: tetrahedralize a surface (also run by qdcd, in a child). */

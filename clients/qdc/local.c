@@ -171,8 +171,105 @@ static void optimize_usage(FILE *f)
         "off:\n"
         "                             tets are written in the input's vertex order)\n"
         "  --report FILE.json         write the quality/boundary report\n"
+        "  --no-keep-source           do not keep the input file in memory: OUT is\n"
+        "                             written by qdc's writer even in the input's\n"
+        "                             format (default: the input file with only the\n"
+        "                             coordinates replaced, when OUT is in its format)\n"
         "  --quiet                    no progress output\n",
         f);
+}
+
+/* Before writing m to out in fmt: say in one note line when the input's
+ * extra data (tags, names, arrays) cannot come along, or that float32
+ * coordinates stay float32. */
+static void source_note(const mesh_t *m, const char *out, meshio_format fmt, int quiet)
+{
+    const char *why = NULL;
+    int f32 = 0;
+
+    if (quiet || meshio_source_format(m) == MESHIO_AUTO)
+        return;
+    fmt = meshio_save_format(out, fmt, m);
+    meshio_source_bytes(m, &f32);
+    if (!meshio_splices(m, fmt, &why))
+        fprintf(stderr,
+                "qdc: note: %s: written by qdc's %s writer (%s): only vertices, tets, "
+                "triangles and their region tags are kept\n",
+                out, meshio_format_name(fmt) ? meshio_format_name(fmt) : "?", why);
+    else if (f32)
+        fprintf(stderr,
+                "qdc: note: %s: coordinates written as float32, as in the input\n", out);
+}
+
+static int positional(const char *a, const char **in, const char **out);
+static qdc_status load_input(const char *path, meshio_format fin, surface_format sin,
+                             const tetra_options *to, progress_state *ps, int keep,
+                             mesh_t **m, qdc_error *err);
+
+/* qdc convert IN OUT: read, then write (spliced when OUT is in IN's format). */
+int cli_convert(int argc, char **argv)
+{
+    const char *in = NULL, *out = NULL;
+    meshio_format fin = MESHIO_AUTO, fout = MESHIO_AUTO;
+    progress_state ps = {0, 0, 0};
+    int keep = 1;
+    mesh_t *m = NULL;
+    qdc_error err;
+    qdc_status st;
+    int rc = CLI_OK;
+
+    qdc_error_clear(&err);
+    for (int i = 1; i < argc; i++) {
+        const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
+        if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
+            puts("usage: qdc convert IN OUT [--in-format F] [--out-format F] "
+                 "[--no-keep-source] [--quiet]\n"
+                 "  OUT in IN's format: IN with only the coordinates replaced (here: "
+                 "unchanged)");
+            return CLI_OK;
+        } else if (!strcmp(a, "--quiet") || !strcmp(a, "-q")) {
+            ps.quiet = 1;
+        } else if (!strcmp(a, "--no-keep-source")) {
+            keep = 0;
+        } else if ((!strcmp(a, "--in-format") || !strcmp(a, "--out-format")) && v) {
+            meshio_format f = meshio_format_from_name(v);
+            if (f == MESHIO_AUTO) {
+                fprintf(stderr, "qdc: bad value '%s' for %s\n", v, a);
+                return CLI_EUSAGE;
+            }
+            *(a[2] == 'i' ? &fin : &fout) = f;
+            i++;
+        } else if (a[0] == '-' && a[1]) {
+            fprintf(stderr, "qdc: convert: unexpected argument '%s'\n", a);
+            return CLI_EUSAGE;
+        } else if (positional(a, &in, &out)) {
+            return CLI_EUSAGE;
+        }
+    }
+    if (!in || !out) {
+        fputs("usage: qdc convert IN OUT [--in-format F] [--out-format F] "
+              "[--no-keep-source] [--quiet]\n",
+              stderr);
+        return CLI_EUSAGE;
+    }
+    st = load_input(in, fin, SURFACE_AUTO, NULL, &ps, keep, &m, &err);
+    if (st != QDC_OK) {
+        cli_error(in, &err, st);
+        rc = st == QDC_ENOMEM ? CLI_EOPT : CLI_EINPUT;
+        goto out;
+    }
+    source_note(m, out, fout, ps.quiet);
+    st = meshio_save(out, fout, m, &err);
+    if (st != QDC_OK) {
+        cli_error(out, &err, st);
+        rc = CLI_EOUTPUT;
+    } else if (!ps.quiet) {
+        fprintf(stderr, "qdc: %s -> %s: %d vertices, %d tets\n", in, out, (int)m->nv,
+                (int)m->nt);
+    }
+out:
+    mesh_free(m);
+    return rc;
 }
 
 static int on_off(const char *s, int *out)
@@ -258,10 +355,10 @@ static int write_report(const char *path, const report_t *r)
  * whose content looks like a surface. to (NULL: defaults) only applies to
  * surfaces; giving it for a mesh is an error. */
 static qdc_status load_input(const char *path, meshio_format fin, surface_format sin,
-                             const tetra_options *to, progress_state *ps, mesh_t **m,
-                             qdc_error *err)
+                             const tetra_options *to, progress_state *ps, int keep,
+                             mesh_t **m, qdc_error *err)
 {
-    meshio_options mo = {on_log, ps};
+    meshio_options mo = {on_log, ps, keep ? 1 : -1};
     char *buf = NULL;
     size_t len = 0;
     qdc_status st;
@@ -328,7 +425,7 @@ int cli_optimize(int argc, char **argv)
     meshio_format fin = MESHIO_AUTO, fout = MESHIO_AUTO;
     surface_format sin = SURFACE_AUTO;
     tetra_options to;
-    int tetgen_opts = 0, reorient = 0;
+    int tetgen_opts = 0, reorient = 0, keep = 1;
     mesh_t *m = NULL, *orig = NULL;
     qdc_error err;
     qdc_status st;
@@ -346,6 +443,9 @@ int cli_optimize(int argc, char **argv)
             return CLI_OK;
         } else if (!strcmp(a, "--quiet") || !strcmp(a, "-q")) {
             ps.quiet = 1;
+            continue;
+        } else if (!strcmp(a, "--no-keep-source")) {
+            keep = 0;
             continue;
         } else if (a[0] == '-' && a[1] == '-') {
             if (!v) {
@@ -403,7 +503,7 @@ int cli_optimize(int argc, char **argv)
     sigaction(SIGINT, &sa, NULL);
     sigaction(SIGTERM, &sa, NULL);
 
-    st = load_input(in, fin, sin, tetgen_opts ? &to : NULL, &ps, &m, &err);
+    st = load_input(in, fin, sin, tetgen_opts ? &to : NULL, &ps, keep, &m, &err);
     if (st == QDC_OK)
         st = mesh_validate(m, NULL, &err);
     if (st != QDC_OK) {
@@ -444,6 +544,7 @@ int cli_optimize(int argc, char **argv)
                     "(--reorient): positive under the mesh's orientation\n",
                     (int)mo.flipped, (int)m->nt);
     }
+    source_note(m, out, fout, ps.quiet);
     st = meshio_save(out, fout, m, &err);
     if (st != QDC_OK) {
         cli_error(out, &err, st);
@@ -620,6 +721,7 @@ int cli_quality(int argc, char **argv)
     const char *in = NULL, *ref = NULL;
     int json = 0, rc = CLI_OK;
     mesh_t *m = NULL, *r = NULL;
+    meshio_options nokeep = {NULL, NULL, -1}; /* nothing is written back */
     report_quality q;
     bderr_result be;
     qdc_error err;
@@ -646,7 +748,7 @@ int cli_quality(int argc, char **argv)
         fputs("usage: qdc quality IN [--ref ORIG] [--json]\n", stderr);
         return CLI_EUSAGE;
     }
-    st = meshio_load(in, MESHIO_AUTO, &m, &err);
+    st = meshio_load_ex(in, MESHIO_AUTO, &nokeep, &m, &err);
     if (st == QDC_OK)
         st = report_quality_compute(m, &q, &err);
     if (st != QDC_OK) {
@@ -655,7 +757,7 @@ int cli_quality(int argc, char **argv)
         goto out;
     }
     if (ref) {
-        st = meshio_load(ref, MESHIO_AUTO, &r, &err);
+        st = meshio_load_ex(ref, MESHIO_AUTO, &nokeep, &r, &err);
         if (st != QDC_OK) {
             cli_error(ref, &err, st);
             rc = CLI_EINPUT;

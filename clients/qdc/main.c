@@ -15,6 +15,8 @@ static void usage(FILE *f)
         "Local commands:\n"
         "  optimize IN OUT [options]   optimize a tet mesh (qdc optimize --help)\n"
         "  quality IN [--ref ORIG] [--json]   quality report of a mesh\n"
+        "  convert IN OUT [--out-format F]   another format (OUT in IN's format: IN\n"
+        "                              with only the coordinates replaced)\n"
         "  options                     the optimizer's options as JSON (names, types,\n"
         "                              valid values, defaults, help)\n"
         "  tetra SURFACE OUT [--tetgen-quality Q] [--max-volume V]   tetrahedralize\n"
@@ -50,6 +52,8 @@ int main(int argc, char **argv)
         return cli_optimize(argc - 1, argv + 1);
     if (!strcmp(argv[1], "quality"))
         return cli_quality(argc - 1, argv + 1);
+    if (!strcmp(argv[1], "convert"))
+        return cli_convert(argc - 1, argv + 1);
     if (!strcmp(argv[1], "options"))
         return cli_options(argc - 1, argv + 1);
     if (!strcmp(argv[1], "tetra"))

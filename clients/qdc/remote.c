@@ -910,14 +910,16 @@ static int cmd_submit(args *a)
     char key[200], hkey[260], path[4200], id[64] = "";
     int rc = CLI_OK, hr;
     view v = {stderr, isatty(2), 0, a->rm.quiet, ""};
+    meshio_options nokeep = {NULL, NULL, -1};
 
     qdc_error_clear(&err);
     if (a->out || a->report)
         a->wait = 1;
     if (!out_format_ok(a))
         return CLI_EUSAGE;
-    st = meshio_load(
-        in, a->in_format ? meshio_format_from_name(a->in_format) : MESHIO_AUTO, &m, &err);
+    st = meshio_load_ex(
+        in, a->in_format ? meshio_format_from_name(a->in_format) : MESHIO_AUTO, &nokeep,
+        &m, &err); /* sent as binary: the file is not kept */
     if (st != QDC_OK) {
         cli_error(in, &err, st);
         return CLI_EINPUT;

@@ -111,6 +111,8 @@ void mesh_free(mesh_t *m)
     qdc_free(m->vref);
     qdc_free(m->tris);
     qdc_free(m->tri_ref);
+    if (m->source)
+        m->source->release(m->source);
     qdc_free(m);
 }
 

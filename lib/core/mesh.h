@@ -14,18 +14,27 @@
 #define MESH_MAX_VERTICES 2000000000
 #define MESH_MAX_TETS 500000000
 
+/* The file a mesh was read from, kept by io/ so that a write in the same
+ * format can give that file back with only the coordinates replaced (see
+ * io/meshio.h, "Spliced writing"). Opaque here: io/ extends it, and it is
+ * released with the mesh through its first member. */
+typedef struct mesh_source {
+    void (*release)(struct mesh_source *);
+} mesh_source;
+
 /* The mesh as data: plain arrays the caller may read and write. */
 typedef struct mesh {
-    int32_t nv;       /* vertex count */
-    int32_t nt;       /* tet count */
-    double *xyz;      /* 3*nv coordinates */
-    int32_t *tets;    /* 4*nt vertex indices, 0-based */
-    int32_t *region;  /* nt region tags (Medit refs, physical groups), or NULL */
-    uint8_t *fixed;   /* nv flags: non-zero = vertex must not move, or NULL */
-    int32_t *vref;    /* nv per-vertex refs (Medit), or NULL; carried through */
-    int32_t ntri;     /* surface triangles carried through unchanged (Medit */
-    int32_t *tris;    /*   Triangles with their refs = boundary-condition tags): */
-    int32_t *tri_ref; /*   3*ntri indices and ntri refs (tri_ref may be NULL) */
+    int32_t nv;          /* vertex count */
+    int32_t nt;          /* tet count */
+    double *xyz;         /* 3*nv coordinates */
+    int32_t *tets;       /* 4*nt vertex indices, 0-based */
+    int32_t *region;     /* nt region tags (Medit refs, physical groups), or NULL */
+    uint8_t *fixed;      /* nv flags: non-zero = vertex must not move, or NULL */
+    int32_t *vref;       /* nv per-vertex refs (Medit), or NULL; carried through */
+    int32_t ntri;        /* surface triangles carried through unchanged (Medit */
+    int32_t *tris;       /*   Triangles with their refs = boundary-condition tags): */
+    int32_t *tri_ref;    /*   3*ntri indices and ntri refs (tri_ref may be NULL) */
+    mesh_source *source; /* the input file (io/), or NULL; owned by the mesh */
 } mesh_t;
 
 enum { MESH_WITH_REGION = 1, MESH_WITH_FIXED = 2, MESH_WITH_VREF = 4 };
@@ -36,6 +45,7 @@ enum { MESH_WITH_REGION = 1, MESH_WITH_FIXED = 2, MESH_WITH_VREF = 4 };
 mesh_t *mesh_new(int32_t nv, int32_t nt, unsigned flags);
 /* Allocate m->tris (and m->tri_ref if with_ref), replacing any previous ones. */
 qdc_status mesh_set_tris(mesh_t *m, int32_t ntri, int with_ref);
+/* A deep copy of the arrays; the source file (m->source) is not copied. */
 mesh_t *mesh_dup(const mesh_t *m);
 void mesh_free(mesh_t *m);
 

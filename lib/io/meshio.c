@@ -344,12 +344,16 @@ static const struct {
 };
 
 static qdc_status medit_vertices(txt *s, int64_t c, double *xyz, int32_t *vref,
-                                 qdc_error *err)
+                                 uint64_t *off, qdc_error *err)
 {
     qdc_status st = QDC_OK;
     int64_t i, ref;
 
     for (i = 0; i < c; i++) {
+        if (off) {
+            skip_ws(s);
+            off[i] = (uint64_t)(s->p - s->base);
+        }
         for (int j = 0; j < 3; j++) {
             st = txt_real(s, "Vertices: coordinate", &xyz[3 * i + j], err);
             if (st != QDC_OK)
@@ -456,6 +460,7 @@ static qdc_status medit_skip_unknown(txt *s, const char *kw, size_t kl, qdc_erro
 typedef struct {
     parsed pm;
     txt tet_at, tri_at, fix_at; /* section bodies, rescanned if nv came later */
+    srcrec *rec;                /* where the coordinates are, or NULL */
 } medit_state;
 
 /* An element section: count, allocation, entries. */
@@ -529,7 +534,15 @@ static qdc_status medit_keyword(txt *s, const char *kw, size_t kl, medit_state *
         if (!pm->xyz || !pm->vref)
             return qdc_fail(err, QDC_ENOMEM, "out of memory for %lld vertices",
                             (long long)pm->nv);
-        return medit_vertices(s, pm->nv, pm->xyz, pm->vref, err);
+        if (ms->rec) {
+            st = srcrec_alloc(ms->rec, pm->nv, err);
+            if (st != QDC_OK)
+                return st;
+            ms->rec->kind = SRC_TEXT;
+            ms->rec->hash = 1;
+        }
+        return medit_vertices(s, pm->nv, pm->xyz, pm->vref, ms->rec ? ms->rec->off : NULL,
+                              err);
     }
     if (word_is(kw, kl, "Tetrahedra"))
         return medit_elem_section(s, "Tetrahedra", 4, MESH_MAX_TETS, pm, &pm->nt,
@@ -547,7 +560,8 @@ static qdc_status medit_keyword(txt *s, const char *kw, size_t kl, medit_state *
     return medit_skip_unknown(s, kw, kl, err);
 }
 
-static qdc_status read_medit(const char *buf, size_t len, mesh_t **out, qdc_error *err)
+static qdc_status read_medit(const char *buf, size_t len, srcrec *rec, mesh_t **out,
+                             qdc_error *err)
 {
     medit_state ms;
     parsed *pm = &ms.pm;
@@ -556,6 +570,9 @@ static qdc_status read_medit(const char *buf, size_t len, mesh_t **out, qdc_erro
     char q[32];
 
     memset(&ms, 0, sizeof ms);
+    ms.rec = rec;
+    if (rec)
+        rec->fmt = MESHIO_MEDIT;
     parsed_init(pm);
     for (;;) {
         const char *kw, *ke;
@@ -604,7 +621,8 @@ out:
 
 /* .node: "<n> 3 <nattr> <0|1>", then "<i> x y z [attrs] [marker]"; the first
  * i (0 or 1) sets the numbering of both files. */
-static qdc_status tetgen_node(txt *s, parsed *pm, int64_t *base, qdc_error *err)
+static qdc_status tetgen_node(txt *s, parsed *pm, int64_t *base, srcrec *rec,
+                              qdc_error *err)
 {
     int64_t dim, nattr, nbm, num, v;
     double a;
@@ -626,11 +644,23 @@ static qdc_status tetgen_node(txt *s, parsed *pm, int64_t *base, qdc_error *err)
     if (!pm->xyz || (nbm && !pm->vref))
         return qdc_fail(err, QDC_ENOMEM, "out of memory for %lld vertices",
                         (long long)pm->nv);
+    if (rec) {
+        st = srcrec_alloc(rec, pm->nv, err);
+        if (st != QDC_OK)
+            return st;
+        rec->fmt = MESHIO_TETGEN;
+        rec->kind = SRC_TEXT;
+        rec->hash = 1;
+    }
     for (int64_t i = 0; i < pm->nv; i++) {
         int64_t lo = i ? *base + i : 0, hi = i ? *base + i : 1;
         st = txt_int(s, ".node: vertex number", lo, hi, &num, err);
         if (st == QDC_OK && i == 0)
             *base = num;
+        if (st == QDC_OK && rec) {
+            skip_ws(s);
+            rec->off[i] = (uint64_t)(s->p - s->base);
+        }
         for (int j = 0; j < 3 && st == QDC_OK; j++)
             st = txt_real(s, ".node: coordinate", &pm->xyz[3 * i + j], err);
         for (int64_t j = 0; j < nattr && st == QDC_OK; j++)
@@ -701,21 +731,18 @@ static qdc_status tetgen_ele(txt *s, parsed *pm, int64_t base, qdc_error *err)
     return txt_done(s, "the tets", err);
 }
 
-qdc_status meshio_read_tetgen(const char *node, size_t node_len, const char *ele,
-                              size_t ele_len, mesh_t **out, qdc_error *err)
+/* TetGen from its two buffers; with rec, the .node's vertex offsets. */
+static qdc_status read_tetgen(const char *node, size_t node_len, const char *ele,
+                              size_t ele_len, srcrec *rec, mesh_t **out, qdc_error *err)
 {
     parsed pm;
     txt s;
     int64_t base = 0;
     qdc_status st;
 
-    qdc_error_clear(err);
-    if (!out || (!node && node_len) || (!ele && ele_len))
-        return qdc_fail(err, QDC_EINVAL, "meshio_read_tetgen: NULL argument");
-    *out = NULL;
     parsed_init(&pm);
     s = txt_init(node ? node : "", node_len, 1);
-    st = tetgen_node(&s, &pm, &base, err);
+    st = tetgen_node(&s, &pm, &base, rec, err);
     if (st == QDC_OK && ele) {
         s = txt_init(ele, ele_len, 1);
         st = tetgen_ele(&s, &pm, base, err);
@@ -724,6 +751,16 @@ qdc_status meshio_read_tetgen(const char *node, size_t node_len, const char *ele
         st = parsed_mesh(&pm, out, err);
     parsed_free(&pm);
     return st;
+}
+
+qdc_status meshio_read_tetgen(const char *node, size_t node_len, const char *ele,
+                              size_t ele_len, mesh_t **out, qdc_error *err)
+{
+    qdc_error_clear(err);
+    if (!out || (!node && node_len) || (!ele && ele_len))
+        return qdc_fail(err, QDC_EINVAL, "meshio_read_tetgen: NULL argument");
+    *out = NULL;
+    return read_tetgen(node, node_len, ele, ele_len, NULL, out, err);
 }
 
 /* ------------------------------------------------------------------------ */
@@ -1186,6 +1223,82 @@ qdc_status meshio_read(const char *buf, size_t len, meshio_format fmt, mesh_t **
     return meshio_read_ex(buf, len, fmt, NULL, out, err);
 }
 
+/* One plain (not gzip) buffer in format fmt; rec NULL or to be filled. */
+static qdc_status read_plain(const char *buf, size_t len, meshio_format fmt,
+                             const meshio_options *o, srcrec *rec, mesh_t **out,
+                             qdc_error *err)
+{
+    if (fmt == MESHIO_AUTO)
+        fmt = meshio_sniff(buf, len);
+    switch (fmt) {
+    case MESHIO_MEDIT:
+        return read_medit(buf, len, rec, out, err);
+    case MESHIO_QMESH:
+        return read_qmesh(buf, len, out, err);
+    case MESHIO_JSON:
+        return read_json(buf, len, out, err);
+    case MESHIO_GMSH41:
+    case MESHIO_GMSH41_BIN:
+    case MESHIO_GMSH22:
+        return meshio_gmsh_read(buf, len, o, rec, out, err);
+    case MESHIO_VTK:
+    case MESHIO_VTK_ASCII:
+        return meshio_vtk_read(buf, len, o, rec, out, err);
+    case MESHIO_VTU:
+    case MESHIO_VTU_ASCII:
+        return meshio_vtu_read(buf, len, o, rec, out, err);
+    case MESHIO_TETGEN:
+        return qdc_fail(err, QDC_EINVAL,
+                        "TetGen needs two buffers: use meshio_read_tetgen");
+    case MESHIO_AUTO:
+        return qdc_fail(err, QDC_EFORMAT, "unrecognized mesh format");
+    default:
+        return qdc_fail(err, QDC_EINVAL, "unknown format %d", (int)fmt);
+    }
+}
+
+/* buf (gzip or not) into *out; keep: attach the (decompressed) buffer as the
+ * mesh's source. own: buf is qdc_malloc'ed and ours to take (it is then
+ * always consumed, freed or kept). */
+static qdc_status read_buf(char *buf, size_t len, int own, meshio_format fmt,
+                           const meshio_options *o, int keep, mesh_t **out,
+                           qdc_error *err)
+{
+    srcrec rec;
+    qdc_status st;
+
+    if (gz_is_gzip(buf, len)) {
+        /* a gzip-compressed file of any format: read what it holds */
+        char *plain = NULL;
+        size_t plen = 0;
+        st = gz_inflate(buf, len, &plain, &plen, err);
+        if (own)
+            qdc_free(buf);
+        if (st == QDC_OK && gz_is_gzip(plain, plen))
+            st = qdc_fail(err, QDC_EPARSE, "gzip: compressed twice");
+        if (st != QDC_OK) {
+            qdc_free(plain);
+            return st;
+        }
+        return read_buf(plain, plen, 1, fmt, o, keep, out, err);
+    }
+    srcrec_init(&rec);
+    st = read_plain(buf, len, fmt, o, keep ? &rec : NULL, out, err);
+    if (st == QDC_OK && keep && rec.fmt != MESHIO_AUTO) { /* a format that splices */
+        st = splice_attach(*out, &rec, buf, len, own, NULL, 0, err);
+        if (st == QDC_OK && own)
+            own = 0; /* the source has it */
+        if (st != QDC_OK) {
+            mesh_free(*out);
+            *out = NULL;
+        }
+    }
+    srcrec_free(&rec);
+    if (own)
+        qdc_free(buf);
+    return st;
+}
+
 qdc_status meshio_read_ex(const char *buf, size_t len, meshio_format fmt,
                           const meshio_options *o, mesh_t **out, qdc_error *err)
 {
@@ -1195,45 +1308,8 @@ qdc_status meshio_read_ex(const char *buf, size_t len, meshio_format fmt,
     *out = NULL;
     if (!buf)
         buf = "";
-    if (gz_is_gzip(buf, len)) {
-        /* a gzip-compressed file of any format: read what it holds */
-        char *plain = NULL;
-        size_t plen = 0;
-        qdc_status st = gz_inflate(buf, len, &plain, &plen, err);
-        if (st == QDC_OK && gz_is_gzip(plain, plen))
-            st = qdc_fail(err, QDC_EPARSE, "gzip: compressed twice");
-        if (st == QDC_OK)
-            st = meshio_read_ex(plain, plen, fmt, o, out, err);
-        qdc_free(plain);
-        return st;
-    }
-    if (fmt == MESHIO_AUTO)
-        fmt = meshio_sniff(buf, len);
-    switch (fmt) {
-    case MESHIO_MEDIT:
-        return read_medit(buf, len, out, err);
-    case MESHIO_QMESH:
-        return read_qmesh(buf, len, out, err);
-    case MESHIO_JSON:
-        return read_json(buf, len, out, err);
-    case MESHIO_GMSH41:
-    case MESHIO_GMSH41_BIN:
-    case MESHIO_GMSH22:
-        return meshio_gmsh_read(buf, len, o, out, err);
-    case MESHIO_VTK:
-    case MESHIO_VTK_ASCII:
-        return meshio_vtk_read(buf, len, o, out, err);
-    case MESHIO_VTU:
-    case MESHIO_VTU_ASCII:
-        return meshio_vtu_read(buf, len, o, out, err);
-    case MESHIO_TETGEN:
-        return qdc_fail(err, QDC_EINVAL,
-                        "TetGen needs two buffers: use meshio_read_tetgen");
-    case MESHIO_AUTO:
-        return qdc_fail(err, QDC_EFORMAT, "unrecognized mesh format");
-    default:
-        return qdc_fail(err, QDC_EINVAL, "unknown format %d", (int)fmt);
-    }
+    /* not ours: never freed or kept (a source is a copy) */
+    return read_buf((char *)(uintptr_t)buf, len, 0, fmt, o, o && o->source > 0, out, err);
 }
 
 /* ------------------------------------------------------------------------ */
@@ -1393,7 +1469,13 @@ static qdc_status write_fmt(const mesh_t *m, meshio_format fmt, int part, qdc_wr
     w.b = qdc_malloc(WB_CAP);
     if (!w.b)
         return qdc_fail(err, QDC_ENOMEM, "out of memory for the write buffer");
+    if (splice_ok(m, fmt, NULL)) {
+        st = splice_write(m, part, &w, err);
+        fmt = MESHIO_FORMAT_COUNT; /* done */
+    }
     switch (fmt) {
+    case MESHIO_FORMAT_COUNT:
+        break;
     case MESHIO_MEDIT:
         write_medit(m, &w);
         break;
@@ -1437,8 +1519,12 @@ qdc_status meshio_write(const mesh_t *m, meshio_format fmt, qdc_write_fn fn, voi
                         qdc_error *err)
 {
     qdc_error_clear(err);
+    if (fmt == MESHIO_AUTO)
+        fmt = meshio_source_format(m);
     if (fmt == MESHIO_TETGEN)
         return qdc_fail(err, QDC_EINVAL, "TetGen is two files: use meshio_save");
+    if (fmt == MESHIO_AUTO)
+        return qdc_fail(err, QDC_EINVAL, "meshio_write: no format and no source file");
     return write_fmt(m, fmt, 0, fn, ctx, err);
 }
 
@@ -1524,7 +1610,7 @@ static char *with_ext(const char *path, const char *ext)
     return s;
 }
 
-static qdc_status load_tetgen(const char *path, mesh_t **out, qdc_error *err)
+static qdc_status load_tetgen(const char *path, int keep, mesh_t **out, qdc_error *err)
 {
     char *np = with_ext(path, ".node"), *ep = with_ext(path, ".ele");
     char *nb = NULL, *eb = NULL;
@@ -1537,8 +1623,22 @@ static qdc_status load_tetgen(const char *path, mesh_t **out, qdc_error *err)
         st = meshio_slurp(np, &nb, &nl, err);
     if (st == QDC_OK)
         st = meshio_slurp(ep, &eb, &el, err);
-    if (st == QDC_OK)
-        st = meshio_read_tetgen(nb, nl, eb, el, out, err);
+    if (st == QDC_OK) {
+        srcrec rec;
+        srcrec_init(&rec);
+        *out = NULL;
+        st = read_tetgen(nb, nl, eb, el, keep ? &rec : NULL, out, err);
+        if (st == QDC_OK && keep) {
+            st = splice_attach(*out, &rec, nb, nl, 1, eb, el, err);
+            if (st == QDC_OK)
+                nb = NULL; /* the source has it */
+            else {
+                mesh_free(*out);
+                *out = NULL;
+            }
+        }
+        srcrec_free(&rec);
+    }
     qdc_free(nb);
     qdc_free(eb);
     qdc_free(np);
@@ -1564,6 +1664,7 @@ qdc_status meshio_load_ex(const char *path, meshio_format fmt, const meshio_opti
     char *buf = NULL;
     size_t len = 0;
     const char *ext;
+    int keep = !o || o->source >= 0;
     qdc_status st;
 
     qdc_error_clear(err);
@@ -1580,11 +1681,10 @@ qdc_status meshio_load_ex(const char *path, meshio_format fmt, const meshio_opti
         qdc_free(np);
     }
     if (fmt == MESHIO_TETGEN)
-        return load_tetgen(path, out, err);
+        return load_tetgen(path, keep, out, err);
     st = meshio_slurp(path, &buf, &len, err);
     if (st == QDC_OK)
-        st = meshio_read_ex(buf, len, fmt, o, out, err);
-    qdc_free(buf);
+        st = read_buf(buf, len, 1, fmt, o, keep, out, err); /* takes buf */
     return st;
 }
 
@@ -1704,6 +1804,33 @@ static qdc_status save_atomic(const char *path, meshio_format fmt, int part,
     return st;
 }
 
+/* The formats one extension stands for. */
+static int family(meshio_format f)
+{
+    switch (f) {
+    case MESHIO_GMSH41_BIN:
+    case MESHIO_GMSH22:
+        return MESHIO_GMSH41;
+    case MESHIO_VTK_ASCII:
+        return MESHIO_VTK;
+    case MESHIO_VTU_ASCII:
+        return MESHIO_VTU;
+    default:
+        return f;
+    }
+}
+
+meshio_format meshio_save_format(const char *path, meshio_format fmt, const mesh_t *m)
+{
+    const char *ext = path ? path_ext(path) : NULL;
+    meshio_format src = meshio_source_format(m);
+
+    if (fmt != MESHIO_AUTO || !ext)
+        return fmt;
+    fmt = ext_format(ext);
+    return fmt != MESHIO_AUTO && family(fmt) == family(src) ? src : fmt;
+}
+
 qdc_status meshio_save(const char *path, meshio_format fmt, const mesh_t *m,
                        qdc_error *err)
 {
@@ -1713,10 +1840,7 @@ qdc_status meshio_save(const char *path, meshio_format fmt, const mesh_t *m,
     qdc_error_clear(err);
     if (!path || !m)
         return qdc_fail(err, QDC_EINVAL, "meshio_save: NULL argument");
-    if (fmt == MESHIO_AUTO) {
-        const char *ext = path_ext(path);
-        fmt = ext ? ext_format(ext) : MESHIO_AUTO;
-    }
+    fmt = meshio_save_format(path, fmt, m);
     if (fmt == MESHIO_AUTO)
         return qdc_fail(err, QDC_EFORMAT, "cannot tell the format of %s", path);
     if (fmt != MESHIO_TETGEN)

@@ -63,10 +63,13 @@ const char *meshio_media_type(meshio_format f);
  * text/x-medit. MESHIO_AUTO if unknown or NULL (surfaces: see surface.h). */
 meshio_format meshio_format_from_media_type(const char *content_type);
 
-/* Optional reading options: notes (skipped element types...) go to log. */
+/* Optional reading options: notes (skipped element types...) go to log.
+ * source: keep the input for a spliced write (below): 0 the default
+ * (meshio_load*: yes, meshio_read*: no), 1 yes, -1 no. */
 typedef struct {
     qdc_log_fn log;
     void *log_ctx;
+    int source;
 } meshio_options;
 
 /* Parse one buffer (not TETGEN: it needs two). fmt MESHIO_AUTO sniffs.
@@ -81,7 +84,9 @@ qdc_status meshio_read_ex(const char *buf, size_t len, meshio_format fmt,
 qdc_status meshio_read_tetgen(const char *node, size_t node_len, const char *ele,
                               size_t ele_len, mesh_t **out, qdc_error *err);
 
-/* Stream m in format fmt (not TETGEN: see meshio_save). */
+/* Stream m in format fmt (not TETGEN: see meshio_save); spliced when fmt is
+ * its source's (below). MESHIO_AUTO: the source's format (QDC_EINVAL if m
+ * has no source). */
 qdc_status meshio_write(const mesh_t *m, meshio_format fmt, qdc_write_fn fn, void *ctx,
                         qdc_error *err);
 
@@ -93,6 +98,39 @@ qdc_status meshio_load_ex(const char *path, meshio_format fmt, const meshio_opti
                           mesh_t **out, qdc_error *err);
 qdc_status meshio_save(const char *path, meshio_format fmt, const mesh_t *m,
                        qdc_error *err);
+
+/* Spliced writing. qdc never changes connectivity, so a mesh can be written
+ * back as the very file it was read from with only the coordinates
+ * replaced: every tag, name, boundary or point element, $Periodic, data
+ * array, comment, the numbering and the version stay byte for byte.
+ * A mesh read with its source kept (m->source: the decompressed file and one
+ * uint64 offset per vertex, 8 bytes/vertex beyond the file itself) is written
+ * that way when the format asked for is the file's own variant (same
+ * version and encoding; meshio_save with MESHIO_AUTO picks it when the
+ * extension names the same family: .msh, .vtk, .vtu, .mesh, .node) and its
+ * connectivity, regions, triangles and refs are unchanged since reading
+ * (checked by a hash; the fixed flags are not part of it). Text numbers are
+ * printed with %.17g (an unmoved coordinate keeps its original text); binary
+ * values are overwritten in their own width and byte order: float32 stays
+ * float32. VTU Points under zlib or base64 are re-encoded the same way
+ * (zlib blocks of the same size), and the offset="" of the appended arrays
+ * after them shifted by the change in size. Spliced: Medit .mesh, TetGen
+ * .node/.ele, Gmsh MSH 2.x ASCII and 4.1 ASCII/binary, legacy VTK ASCII and
+ * binary, VTU ascii, base64, appended raw/base64, zlib-compressed or not. */
+
+/* The format of the file m's source holds, or MESHIO_AUTO if none is kept. */
+meshio_format meshio_source_format(const mesh_t *m);
+/* 1 if writing m in fmt splices its source (see above); 0 with *why (static
+ * text, may be NULL) otherwise. */
+int meshio_splices(const mesh_t *m, meshio_format fmt, const char **why);
+/* The format meshio_save(path, fmt, m) writes: fmt, else the source's own
+ * variant if the extension names its family, else by extension; AUTO if none. */
+meshio_format meshio_save_format(const char *path, meshio_format fmt, const mesh_t *m);
+/* Bytes held by m's source (0 if none); *float32 set if its coordinates are
+ * stored as float32 (may be NULL). */
+size_t meshio_source_bytes(const mesh_t *m, int *float32);
+/* Forget m's source (frees it). */
+void meshio_drop_source(mesh_t *m);
 
 /* Read a whole file into a new buffer (free with qdc_free). */
 qdc_status meshio_slurp(const char *path, char **buf, size_t *len, qdc_error *err);

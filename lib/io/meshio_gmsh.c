@@ -144,6 +144,7 @@ typedef struct {
     vec ent[2];  /* int64 entity keys of dimensions 2 and 3 (4.1) */
     elems el[2]; /* 0 triangles, 1 tets */
     skipped sk;
+    srcrec *rec; /* where the coordinates are, or NULL */
 } gmsh;
 
 static const char *const elem_names[2] = {"triangle", "tet"};
@@ -486,14 +487,31 @@ static int32_t entity_phys(const gmsh *g, int k, int64_t tag)
     return 0;
 }
 
-/* Room for c more vertices. */
+/* Room for c more vertices (and their offsets if recorded). */
 static qdc_status nodes_alloc(gmsh *g, int64_t c, qdc_error *err)
 {
     g->xyz = qdc_mallocn((size_t)c * 3, sizeof(double));
     g->tags = qdc_mallocn((size_t)c, sizeof(int64_t));
     if (!g->xyz || !g->tags)
         return qdc_fail(err, QDC_ENOMEM, "out of memory for %lld nodes", (long long)c);
+    if (g->rec) {
+        srcrec *r = g->rec;
+        r->fmt = !g->v41 ? MESHIO_GMSH22 : g->binary ? MESHIO_GMSH41_BIN : MESHIO_GMSH41;
+        r->kind = g->binary ? SRC_BIN : SRC_TEXT;
+        r->width = 8;
+        return srcrec_alloc(r, c, err);
+    }
     return QDC_OK;
+}
+
+/* Vertex i's first coordinate comes next: note where. */
+static void node_at(gmsh *g, int64_t i)
+{
+    if (!g->rec)
+        return;
+    if (!g->binary)
+        skip_ws(&g->s);
+    g->rec->off[i] = (uint64_t)(g->s.p - g->s.base);
 }
 
 static qdc_status nodes_done(gmsh *g, qdc_error *err)
@@ -540,6 +558,7 @@ static qdc_status nodes41(gmsh *g, qdc_error *err)
             st = g_int(g, "$Nodes: node tag", 1, INT32_MAX, &g->tags[i + j], err);
         for (int64_t j = 0; j < c && st == QDC_OK; j++) {
             double x;
+            node_at(g, i + j);
             for (int a = 0; a < 3 && st == QDC_OK; a++)
                 st = g_real(g, "$Nodes: coordinate", &g->xyz[3 * (i + j) + a], err);
             for (int64_t a = 0; a < par * dim && st == QDC_OK; a++)
@@ -568,6 +587,8 @@ static qdc_status nodes22(gmsh *g, qdc_error *err)
         st = nodes_alloc(g, total, err);
     for (int64_t i = 0; i < total && st == QDC_OK; i++) {
         st = txt_int(&g->s, "$Nodes: node tag", 1, INT32_MAX, &g->tags[i], err);
+        if (st == QDC_OK)
+            node_at(g, i);
         for (int a = 0; a < 3 && st == QDC_OK; a++)
             st = txt_real(&g->s, "$Nodes: coordinate", &g->xyz[3 * i + a], err);
         if (st != QDC_OK)
@@ -789,7 +810,7 @@ static qdc_status gmsh_mesh(gmsh *g, const meshio_options *o, mesh_t **out,
 }
 
 qdc_status meshio_gmsh_read(const char *buf, size_t len, const meshio_options *o,
-                            mesh_t **out, qdc_error *err)
+                            srcrec *rec, mesh_t **out, qdc_error *err)
 {
     gmsh g;
     const char *name = NULL;
@@ -797,6 +818,7 @@ qdc_status meshio_gmsh_read(const char *buf, size_t len, const meshio_options *o
     qdc_status st;
 
     memset(&g, 0, sizeof g);
+    g.rec = rec;
     for (int k = 0; k < 2; k++) {
         g.ent[k].size = sizeof(int64_t);
         g.el[k].idx.size = g.el[k].phys.size = g.el[k].ent.size = sizeof(int32_t);

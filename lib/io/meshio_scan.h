@@ -696,16 +696,96 @@ static inline void pick_regions(int32_t *phys, int32_t *ent, int64_t n, int32_t 
 }
 
 /* ------------------------------------------------------------------------ */
+/* Where the coordinates are (splice.c)                                      */
+
+/* What a reader records, when asked (rec not NULL), so that the file can be
+ * written back with only the coordinates replaced. Offsets are bytes into
+ * the buffer the reader was given. */
+enum {
+    SRC_NONE = 0, /* nothing recorded (or a layout that cannot be spliced: why) */
+    SRC_TEXT,     /* off[v]: first byte of vertex v's x token; y, z follow as
+                     tokens (whitespace, '#' comments if hash, '<' ends a
+                     token if lt) */
+    SRC_BIN,      /* off[v]: first byte of x; y, z follow, `width` bytes each */
+    SRC_BLOCK     /* VTU base64 or zlib Points: bytes [blk_a, blk_b) re-encoded */
+};
+
+typedef struct {
+    int kind;
+    meshio_format fmt; /* the file's own variant (version, encoding) */
+    int64_t nv;
+    uint64_t *off;   /* nv offsets (SRC_TEXT, SRC_BIN) */
+    int hash, lt;    /* SRC_TEXT tokenizing */
+    int width, big;  /* value size 4 (float32) or 8, byte order (BIN, BLOCK) */
+    const char *why; /* SRC_NONE: why the layout is not kept */
+    /* SRC_BLOCK */
+    uint64_t blk_a, blk_b;
+    int b64, b64_sep; /* base64, header and data encoded separately */
+    int zlib, hdr8;   /* vtkZLibDataCompressor blocks; header words of 8 bytes */
+    uint64_t zhdr[3]; /* zlib: block count, block size, last block size as read */
+    int appended;     /* in AppendedData: later arrays' offsets shift */
+    uint64_t app_off; /* the Points' offset="" */
+    vec appoff;       /* uint64 triples: [start, end) of each appended DataArray's
+                         offset value in the file, and the value */
+} srcrec;
+
+static inline void srcrec_init(srcrec *r)
+{
+    memset(r, 0, sizeof *r);
+    r->appoff.size = sizeof(uint64_t);
+}
+
+static inline void srcrec_free(srcrec *r)
+{
+    qdc_free(r->off);
+    r->off = NULL;
+    vec_free(&r->appoff);
+}
+
+/* Room for nv vertex offsets; QDC_ENOMEM. */
+static inline qdc_status srcrec_alloc(srcrec *r, int64_t nv, qdc_error *err)
+{
+    qdc_free(r->off);
+    r->nv = nv;
+    r->off = qdc_mallocn((size_t)nv + 1, sizeof(uint64_t));
+    if (!r->off)
+        return qdc_fail(err, QDC_ENOMEM, "out of memory for %lld vertex offsets",
+                        (long long)nv);
+    return QDC_OK;
+}
+
+/* The layout read cannot be written back in place: no splicing, and why. */
+static inline void srcrec_refuse(srcrec *r, const char *why)
+{
+    if (!r)
+        return;
+    r->kind = SRC_NONE;
+    if (!r->why)
+        r->why = why;
+}
+
+/* Attach the file (buf, owned if own, else copied; TetGen: ele too) and the
+ * record (moved) to m; on failure m is unchanged and the record freed. */
+qdc_status splice_attach(mesh_t *m, srcrec *r, char *buf, size_t len, int own,
+                         const char *ele, size_t ele_len, qdc_error *err);
+/* 1 if m's source can be written in fmt with only the coordinates replaced
+ * (same variant, connectivity and tags unchanged since reading); else 0 and
+ * *why (static). */
+int splice_ok(const mesh_t *m, meshio_format fmt, const char **why);
+/* Write the source with m's coordinates; part 1 = TetGen's .ele. */
+qdc_status splice_write(const mesh_t *m, int part, wbuf *w, qdc_error *err);
+
+/* ------------------------------------------------------------------------ */
 /* Format modules, dispatched from meshio.c                                  */
 
 qdc_status meshio_gmsh_read(const char *buf, size_t len, const meshio_options *o,
-                            mesh_t **out, qdc_error *err);
+                            srcrec *rec, mesh_t **out, qdc_error *err);
 qdc_status meshio_gmsh_write(const mesh_t *m, meshio_format fmt, wbuf *w, qdc_error *err);
 qdc_status meshio_vtk_read(const char *buf, size_t len, const meshio_options *o,
-                           mesh_t **out, qdc_error *err);
+                           srcrec *rec, mesh_t **out, qdc_error *err);
 void meshio_vtk_write(const mesh_t *m, int binary, wbuf *w);
 qdc_status meshio_vtu_read(const char *buf, size_t len, const meshio_options *o,
-                           mesh_t **out, qdc_error *err);
+                           srcrec *rec, mesh_t **out, qdc_error *err);
 void meshio_vtu_write(const mesh_t *m, int appended, wbuf *w);
 
 #endif

@@ -13,6 +13,9 @@
 #include "io/meshio.h"
 #include "io/meshio_scan.h"
 
+#include <limits.h>
+#include <zlib.h>
+
 typedef enum { T_I8, T_U8, T_I16, T_U16, T_I32, T_U32, T_I64, T_U64, T_F32, T_F64 } vtype;
 
 static const int vsize[] = {1, 1, 2, 2, 4, 4, 8, 8, 4, 8};
@@ -279,6 +282,8 @@ typedef struct {
     cells c;
     int attr;       /* 0 none, 1 CELL_DATA, 2 POINT_DATA */
     int64_t attr_n; /* its count */
+    srcrec *rec;    /* where the coordinates are, or NULL */
+    uint64_t *voff; /* while reading POINTS with rec: where each vertex starts */
 } vtk;
 
 /* The next word into (w, n); n = 0 at the end of input. */
@@ -341,6 +346,8 @@ static qdc_status vtk_values(vtk *v, const char *what, int64_t n, vtype t, int f
                 err, QDC_EPARSE, (int64_t)off,
                 "%s: %lld values of %d bytes do not fit in the %zu bytes left", what,
                 (long long)n, vsize[t], left);
+        for (int64_t i = 0; v->voff && i < n; i += 3)
+            v->voff[i / 3] = off + (uint64_t)i * (uint64_t)vsize[t];
         if (out) {
             decode_values(v->b + off, n, t, 1, out);
             for (int64_t i = 0; finite && i < n; i++)
@@ -358,6 +365,8 @@ static qdc_status vtk_values(vtk *v, const char *what, int64_t n, vtype t, int f
         char q[32];
         skip_ws(s);
         te = tok_end(s, s->p);
+        if (v->voff && i % 3 == 0)
+            v->voff[i / 3] = (uint64_t)(s->p - s->base);
         if (finite) {
             st = tok_real(s, s->p, te, what, &x, err);
             if (st != QDC_OK)
@@ -483,9 +492,21 @@ static qdc_status vtk_keyword(vtk *v, const char *w, size_t n, qdc_error *err)
             st = vtk_type(v, "POINTS", &t, err);
         if (st == QDC_OK && !(v->c.xyz = alloc_values(3 * v->c.nv, err)))
             st = QDC_ENOMEM;
-        return st == QDC_OK
-                   ? vtk_values(v, "POINTS: coordinate", 3 * v->c.nv, t, 1, v->c.xyz, err)
-                   : st;
+        if (st == QDC_OK && v->rec) {
+            srcrec *r = v->rec;
+            r->fmt = v->binary ? MESHIO_VTK : MESHIO_VTK_ASCII;
+            r->kind = v->binary ? SRC_BIN : SRC_TEXT;
+            r->width = vsize[t];
+            r->big = 1;
+            if (t != T_F32 && t != T_F64)
+                srcrec_refuse(r, "POINTS of an integer type");
+            st = srcrec_alloc(r, v->c.nv, err);
+            v->voff = r->off;
+        }
+        if (st == QDC_OK)
+            st = vtk_values(v, "POINTS: coordinate", 3 * v->c.nv, t, 1, v->c.xyz, err);
+        v->voff = NULL;
+        return st;
     }
     if (word_is(w, n, "CELLS")) {
         if (v->c.types || v->c.conn)
@@ -650,7 +671,7 @@ static qdc_status vtk_keyword(vtk *v, const char *w, size_t n, qdc_error *err)
 }
 
 qdc_status meshio_vtk_read(const char *buf, size_t len, const meshio_options *o,
-                           mesh_t **out, qdc_error *err)
+                           srcrec *rec, mesh_t **out, qdc_error *err)
 {
     vtk v;
     txt *s = &v.s;
@@ -660,6 +681,7 @@ qdc_status meshio_vtk_read(const char *buf, size_t len, const meshio_options *o,
     qdc_status st = QDC_OK;
 
     memset(&v, 0, sizeof v);
+    v.rec = rec;
     v.c.creg_prio = PRIO_NONE;
     v.s = txt_init(buf, len, 0);
     v.b = (const unsigned char *)buf;
@@ -832,14 +854,18 @@ typedef struct {
     xtag conn_tag;        /* connectivity seen before offsets: read at the end */
     txt conn_at;
     int app_base64;
+    int zlib; /* compressor="vtkZLibDataCompressor" */
     cells c;
+    srcrec *rec; /* where the coordinates are, or NULL */
 } vtu;
 
 /* The next tag at or after s->p (comments, <? ?> and text skipped). */
 static qdc_status next_tag(vtu *x, xtag *t, qdc_error *err)
 {
     txt *s = &x->s;
-    const char *p = s->p, *e = s->end;
+    /* no tag reaches into the appended data: what the XML says never depends
+     * on those bytes (a spliced write changes them) */
+    const char *p = s->p, *e = x->appended && p < x->appended ? x->appended : s->end;
 
     memset(t, 0, sizeof *t);
     for (;;) {
@@ -958,6 +984,10 @@ static qdc_status attr_int(vtu *x, const xtag *t, const char *key, int64_t lo, i
     if (!tag_attr(t, key, &v, &ve))
         return fail_txt(err, QDC_EPARSE, &x->s, t->name, "VTU: %.*s without %s",
                         (int)(t->nlen > 32 ? 32 : t->nlen), t->name, key);
+    while (v < ve && is_space((unsigned char)*v)) /* FreeFEM: NumberOfCells=" 7200" */
+        v++;
+    while (ve > v && is_space((unsigned char)ve[-1]))
+        ve--;
     rc = parse_int(v, ve, 0, out);
     if (rc != 0 || *out < lo || *out > hi)
         return fail_txt(
@@ -1013,31 +1043,272 @@ static size_t b64_decode(const char *p, const char *e, unsigned char *out, size_
     return n;
 }
 
-/* The data of one DataArray with n values of type t into out (NULL: skip). */
-static qdc_status vtu_array(vtu *x, const xtag *t, int64_t n, vtype vt, int finite,
-                            double *out, qdc_error *err)
+/* Header word k (hsz bytes, byte order of the file) at h. */
+static uint64_t hdr_word(const vtu *x, const unsigned char *h, size_t k)
 {
-    const char *fv, *fe, *p;
+    size_t hsz = x->hdr8 ? 8 : 4;
+    uint64_t v = 0;
+
+    h += k * hsz;
+    for (size_t j = 0; j < hsz; j++)
+        v = v << 8 | h[x->big ? j : hsz - 1 - j];
+    return v;
+}
+
+/* Inflate the zlib blocks of a compressed array: header words hdr (count,
+ * block size, last block size, then each block's compressed size), data at
+ * z (zlen bytes available) into out (want bytes). *used: the compressed
+ * bytes. */
+static qdc_status vtu_inflate(vtu *x, const unsigned char *hdr, const unsigned char *z,
+                              size_t zlen, unsigned char *out, size_t want, size_t *used,
+                              int64_t at, qdc_error *err)
+{
+    uint64_t nb = hdr_word(x, hdr, 0), bs = hdr_word(x, hdr, 1),
+             last = hdr_word(x, hdr, 2);
+    uint64_t lastsz = last ? last : bs, total, zoff = 0;
+
+    if (nb == 0)
+        total = 0;
+    else if (lastsz > bs || (nb > 1 && (bs == 0 || bs > want || nb - 1 > want / bs)))
+        total = UINT64_MAX;
+    else
+        total = (nb - 1) * bs + lastsz;
+    if (total != want)
+        return fail_bin(err, QDC_EPARSE, at,
+                        "VTU: zlib header of %llu blocks of %llu bytes (last %llu) for "
+                        "%zu bytes expected",
+                        (unsigned long long)nb, (unsigned long long)bs,
+                        (unsigned long long)last, want);
+    for (uint64_t k = 0; k < nb; k++) {
+        uint64_t c = hdr_word(x, hdr, 3 + k), sz = k + 1 < nb ? bs : lastsz;
+        uLongf dl = (uLongf)sz;
+        if (c > zlen - zoff || c > ULONG_MAX || sz > ULONG_MAX)
+            return fail_bin(
+                err, QDC_EPARSE, at,
+                "VTU: zlib block %llu of %llu bytes does not fit in the input",
+                (unsigned long long)k, (unsigned long long)c);
+        if (uncompress(out + k * bs, &dl, z + zoff, (uLong)c) != Z_OK || dl != sz)
+            return fail_bin(err, QDC_EPARSE, at,
+                            "VTU: zlib block %llu is corrupt (or not %llu bytes)",
+                            (unsigned long long)k, (unsigned long long)sz);
+        zoff += c;
+    }
+    *used = (size_t)zoff;
+    return QDC_OK;
+}
+
+/* Where the data of an array at p must end: inline arrays before the
+ * appended data, appended ones at the end of the input. */
+static const char *data_end(const vtu *x, const char *p)
+{
+    return x->appended && p < x->appended ? x->appended : x->s.end;
+}
+
+/* Base64 from p, decoded until `want` bytes are out, into a new *tmp;
+ * *endp where it stopped. */
+static qdc_status b64_take(vtu *x, const char *p, size_t want, unsigned char **tmp,
+                           const char **endp, qdc_error *err)
+{
+    const char *end = data_end(x, p);
+
+    if (want / 3 * 4 > (size_t)(end - p))
+        return fail_bin(err, QDC_EPARSE, p - x->s.base,
+                        "VTU: %zu bytes of base64 data cannot fit in the input", want);
+    qdc_free(*tmp);
+    *tmp = qdc_malloc(want + 1);
+    if (!*tmp)
+        return qdc_fail(err, QDC_ENOMEM, "out of memory for a VTU array");
+    if (b64_decode(p, end, *tmp, want, endp) != want)
+        return fail_bin(err, QDC_EPARSE, p - x->s.base,
+                        "VTU: base64 data end before %zu bytes", want);
+    return QDC_OK;
+}
+
+static int is_b64(unsigned char c)
+{
+    return b64_val(c) >= 0 || c == '=';
+}
+
+/* The bytes of a binary (base64) or appended DataArray, decoded and
+ * decompressed: exactly `want` bytes at *data, which points into the input
+ * or into *tmp (the caller frees it). rec (Points only): where they are. */
+static qdc_status vtu_bytes(vtu *x, const xtag *t, int appended, size_t want, srcrec *rec,
+                            const unsigned char **data, unsigned char **tmp,
+                            qdc_error *err)
+{
     txt *s = &x->s;
-    int64_t off;
-    uint64_t nbytes;
+    size_t hsz = x->hdr8 ? 8 : 4, hn = x->zlib ? 3 * hsz : hsz, used = 0;
+    int b64 = !appended || x->app_base64;
+    const char *p, *endp = NULL;
+    unsigned char *z = NULL; /* base64 with zlib: the header and blocks decoded */
+    int64_t off = 0, at;
+    qdc_status st;
+
+    if (appended) {
+        if (!x->appended)
+            return fail_txt(err, QDC_EPARSE, s, t->name,
+                            "VTU: appended DataArray without AppendedData");
+        st = attr_int(x, t, "offset", 0, (int64_t)(s->end - x->appended), &off, err);
+        if (st != QDC_OK)
+            return st;
+        p = x->appended + off;
+    } else {
+        for (p = t->after; p < s->end && is_space((unsigned char)*p); p++)
+            ;
+    }
+    at = p - s->base;
+    if (rec) {
+        rec->kind = SRC_BLOCK;
+        rec->fmt = MESHIO_VTU;
+        rec->blk_a = (uint64_t)at;
+        rec->b64 = b64;
+        rec->zlib = x->zlib;
+        rec->hdr8 = x->hdr8;
+        rec->appended = appended;
+        rec->app_off = (uint64_t)off;
+    }
+    if (!b64) { /* raw: header words, then the data */
+        const unsigned char *h = (const unsigned char *)p;
+        size_t left = (size_t)(s->end - p);
+        if (left < hn)
+            return fail_bin(err, QDC_EPARSE, at, "VTU: appended block header truncated");
+        if (!x->zlib) {
+            uint64_t nbytes = hdr_word(x, h, 0);
+            if (nbytes != want || left - hn < want)
+                return fail_bin(
+                    err, QDC_EPARSE, at,
+                    "VTU: appended block of %llu bytes for %zu expected (%zu left)",
+                    (unsigned long long)nbytes, want, left - hn);
+            *data = h + hn;
+            if (rec) { /* in place: offsets per vertex */
+                rec->kind = SRC_BIN;
+                rec->blk_b = (uint64_t)at + hn + want;
+                st = srcrec_alloc(rec, rec->nv, err);
+                for (int64_t v = 0; st == QDC_OK && v < rec->nv; v++)
+                    rec->off[v] = (uint64_t)(at + (int64_t)hn) +
+                                  (uint64_t)v * 3 * (uint64_t)rec->width;
+                return st;
+            }
+            return QDC_OK;
+        }
+        {
+            uint64_t nb = hdr_word(x, h, 0);
+            if (nb > (left - hn) / hsz)
+                return fail_bin(err, QDC_EPARSE, at,
+                                "VTU: zlib header of %llu blocks does not fit",
+                                (unsigned long long)nb);
+            hn += (size_t)nb * hsz;
+            *tmp = qdc_malloc(want + 1);
+            if (!*tmp)
+                return qdc_fail(err, QDC_ENOMEM, "out of memory for a VTU array");
+            st = vtu_inflate(x, h, h + hn, left - hn, *tmp, want, &used, at, err);
+            if (st != QDC_OK)
+                return st;
+            *data = *tmp;
+            if (rec) {
+                for (int k = 0; k < 3; k++)
+                    rec->zhdr[k] = hdr_word(x, h, (size_t)k);
+                rec->blk_b = (uint64_t)at + hn + used;
+            }
+            return QDC_OK;
+        }
+    }
+    /* base64: header and data decoded as one stream: VTK and meshio encode
+     * the two separately (each padded), others together; both decode alike */
+    if (!x->zlib) {
+        st = b64_take(x, p, hn + want, tmp, &endp, err);
+        if (st == QDC_OK && hdr_word(x, *tmp, 0) != want)
+            st = fail_bin(err, QDC_EPARSE, at,
+                          "VTU: base64 block of %llu bytes for %zu expected",
+                          (unsigned long long)hdr_word(x, *tmp, 0), want);
+        if (st != QDC_OK)
+            return st;
+        *data = *tmp + hn;
+    } else {
+        uint64_t nb, sum = 0;
+        st = b64_take(x, p, hn, &z, &endp, err);
+        nb = st == QDC_OK ? hdr_word(x, z, 0) : 0;
+        if (st == QDC_OK && nb > (size_t)(s->end - p) / hsz)
+            st = fail_bin(err, QDC_EPARSE, at,
+                          "VTU: zlib header of %llu blocks does not fit",
+                          (unsigned long long)nb);
+        if (st == QDC_OK) {
+            hn += (size_t)nb * hsz;
+            st = b64_take(x, p, hn, &z, &endp, err);
+        }
+        for (uint64_t k = 0; st == QDC_OK && k < nb && sum <= (size_t)(s->end - p); k++)
+            sum += hdr_word(x, z, 3 + k) > (size_t)(s->end - p) ? UINT64_MAX / 2
+                                                                : hdr_word(x, z, 3 + k);
+        if (st == QDC_OK && sum > (size_t)(s->end - p))
+            st = fail_bin(err, QDC_EPARSE, at,
+                          "VTU: zlib blocks of %llu bytes cannot fit in the input",
+                          (unsigned long long)sum);
+        if (st == QDC_OK)
+            st = b64_take(x, p, hn + (size_t)sum, &z, &endp, err);
+        if (st == QDC_OK && !(*tmp = qdc_malloc(want + 1)))
+            st = qdc_fail(err, QDC_ENOMEM, "out of memory for a VTU array");
+        if (st == QDC_OK)
+            st = vtu_inflate(x, z, z + hn, (size_t)sum, *tmp, want, &used, at, err);
+        if (st == QDC_OK && rec)
+            for (int k = 0; k < 3; k++)
+                rec->zhdr[k] = hdr_word(x, z, (size_t)k);
+        qdc_free(z);
+        if (st != QDC_OK)
+            return st;
+        *data = *tmp;
+    }
+    if (rec) {
+        size_t hc = (hn + 2) / 3 * 4; /* header characters if encoded alone */
+        rec->blk_b = (uint64_t)(endp - s->base);
+        rec->b64_sep = hn % 3 == 0 || (hc <= (size_t)(endp - p) && p[hc - 1] == '=');
+        for (const char *q = p; q < endp; q++)
+            if (!is_b64((unsigned char)*q)) {
+                srcrec_refuse(rec, "VTU Points: whitespace inside base64 data");
+                break;
+            }
+    }
+    return QDC_OK;
+}
+
+/* The data of one DataArray with n values of type t into out (NULL: skip).
+ * rec (Points only): where the coordinates are. */
+static qdc_status vtu_array(vtu *x, const xtag *t, int64_t n, vtype vt, int finite,
+                            double *out, srcrec *rec, qdc_error *err)
+{
+    const char *fv, *fe;
+    txt *s = &x->s;
     unsigned char *tmp = NULL;
-    const unsigned char *data;
-    size_t hsz = x->hdr8 ? 8 : 4, want = (size_t)n * (size_t)vsize[vt], got;
+    const unsigned char *data = NULL;
+    size_t want = (size_t)n * (size_t)vsize[vt];
+    int appended;
     qdc_status st;
 
     if (!tag_attr(t, "format", &fv, &fe))
         fv = fe = "ascii";
+    if (rec) {
+        rec->width = vsize[vt];
+        rec->big = x->big;
+        rec->nv = n / 3;
+    }
     if ((size_t)(fe - fv) == 5 && memcmp(fv, "ascii", 5) == 0) {
         if (t->empty && n)
             return fail_txt(err, QDC_EPARSE, s, t->name, "VTU: empty ascii DataArray");
+        if (rec) {
+            rec->fmt = MESHIO_VTU_ASCII;
+            rec->kind = SRC_TEXT;
+            rec->lt = 1;
+            st = srcrec_alloc(rec, n / 3, err);
+            if (st != QDC_OK)
+                return st;
+        }
         for (int64_t i = 0; i < n; i++) {
             double y;
-            const char *te;
+            const char *te, *lim = data_end(x, s->p);
             char q[32];
             skip_ws(s);
-            for (te = s->p; te < s->end && !is_space((unsigned char)*te) && *te != '<';
-                 te++)
+            if (rec && i % 3 == 0)
+                rec->off[i / 3] = (uint64_t)(s->p - s->base);
+            for (te = s->p; te < lim && !is_space((unsigned char)*te) && *te != '<'; te++)
                 ;
             if (finite)
                 st = tok_real(s, s->p, te, "DataArray", &y, err);
@@ -1055,71 +1326,24 @@ static qdc_status vtu_array(vtu *x, const xtag *t, int64_t n, vtype vt, int fini
         }
         return QDC_OK;
     }
-    if ((size_t)(fe - fv) == 6 && memcmp(fv, "binary", 6) == 0) {
-        p = t->after;
-    } else if ((size_t)(fe - fv) == 8 && memcmp(fv, "appended", 8) == 0) {
-        if (!x->appended)
-            return fail_txt(err, QDC_EPARSE, s, t->name,
-                            "VTU: appended DataArray without AppendedData");
-        st = attr_int(x, t, "offset", 0, (int64_t)(s->end - x->appended), &off, err);
-        if (st != QDC_OK)
-            return st;
-        p = x->appended + off;
-        if (!x->app_base64) {
-            if ((size_t)(s->end - p) < hsz)
-                return fail_bin(err, QDC_EPARSE, p - s->base,
-                                "VTU: appended block header truncated");
-            nbytes = 0;
-            for (size_t j = 0; j < hsz; j++)
-                nbytes = nbytes << 8 | (unsigned char)p[x->big ? j : hsz - 1 - j];
-            p += hsz;
-            if (nbytes != want || (size_t)(s->end - p) < want)
-                return fail_bin(
-                    err, QDC_EPARSE, p - hsz - s->base,
-                    "VTU: appended block of %llu bytes for %zu expected (%zu left)",
-                    (unsigned long long)nbytes, want, (size_t)(s->end - p));
-            if (out) {
-                decode_values((const unsigned char *)p, n, vt, x->big, out);
-                for (int64_t i = 0; finite && i < n; i++)
-                    if (!isfinite(out[i]))
-                        return fail_bin(err, QDC_EPARSE, p - s->base + i * vsize[vt],
-                                        "VTU: value %lld is not finite (NaN/Inf)",
-                                        (long long)i);
-            }
-            return QDC_OK;
-        }
-    } else {
+    if ((size_t)(fe - fv) == 6 && memcmp(fv, "binary", 6) == 0)
+        appended = 0;
+    else if ((size_t)(fe - fv) == 8 && memcmp(fv, "appended", 8) == 0)
+        appended = 1;
+    else
         return fail_txt(err, QDC_EFORMAT, s, fv,
                         "VTU: DataArray format \"%.*s\" not supported",
                         (int)(fe - fv > 16 ? 16 : fe - fv), fv);
-    }
-    /* base64: header, then the data, decoded as one stream: VTK encodes the
-     * two separately (each padded), meshio together; both decode the same */
-    if (want / 3 * 4 > (size_t)(s->end - p))
-        return fail_bin(err, QDC_EPARSE, p - s->base,
-                        "VTU: %zu bytes of base64 data cannot fit in the input", want);
-    tmp = qdc_malloc(hsz + want + 1);
-    if (!tmp)
-        return qdc_fail(err, QDC_ENOMEM, "out of memory for a VTU array");
-    got = b64_decode(p, s->end, tmp, hsz + want, &p);
-    nbytes = 0;
-    for (size_t j = 0; j < hsz && got >= hsz; j++)
-        nbytes = nbytes << 8 | tmp[x->big ? j : hsz - 1 - j];
-    if (got != hsz + want || nbytes != want) {
-        qdc_free(tmp);
-        return fail_bin(
-            err, QDC_EPARSE, p - s->base,
-            "VTU: base64 block of %zu bytes (header says %llu) for %zu expected",
-            got < hsz ? 0 : got - hsz, (unsigned long long)nbytes, want);
-    }
-    data = tmp + hsz;
-    st = QDC_OK;
-    if (out) {
+    st = vtu_bytes(x, t, appended, want, rec, &data, &tmp, err);
+    if (st == QDC_OK && out) {
         decode_values(data, n, vt, x->big, out);
         for (int64_t i = 0; finite && i < n && st == QDC_OK; i++)
             if (!isfinite(out[i]))
-                st = qdc_fail(err, QDC_EPARSE, "VTU: value %lld is not finite (NaN/Inf)",
-                              (long long)i);
+                st = fail_bin(err, QDC_EPARSE,
+                              appended && !x->app_base64 && !x->zlib
+                                  ? (const char *)data - s->base + i * vsize[vt]
+                                  : -1,
+                              "VTU: value %lld is not finite (NaN/Inf)", (long long)i);
     }
     qdc_free(tmp);
     return st;
@@ -1186,7 +1410,8 @@ static qdc_status vtu_dataarray(vtu *x, const xtag *t, int sec, double **offs_en
     }
     if (dst && *dst && dst != &x->c.creg)
         return fail_txt(err, QDC_EPARSE, &x->s, t->name, "VTU: duplicate DataArray");
-    if ((uint64_t)n > (uint64_t)(x->s.end - x->s.base))
+    /* zlib inflates at most 1032 to 1 */
+    if ((uint64_t)n > (uint64_t)(x->s.end - x->s.base) * (x->zlib ? 1032 : 1))
         return fail_txt(err, QDC_EPARSE, &x->s, t->name,
                         "VTU: %lld values cannot fit in the input", (long long)n);
     if (!dst) /* not ours: its text or base64 is passed over with the tags */
@@ -1195,7 +1420,10 @@ static qdc_status vtu_dataarray(vtu *x, const xtag *t, int sec, double **offs_en
         double *a = alloc_values(n, err);
         if (!a)
             return QDC_ENOMEM;
-        st = vtu_array(x, t, n, vt, 1, a, err);
+        if (dst == &x->c.xyz && x->rec && vt != T_F32 && vt != T_F64)
+            srcrec_refuse(x->rec, "VTU Points of an integer type");
+        st = vtu_array(x, t, n, vt, 1, a,
+                       dst == &x->c.xyz && x->rec && !x->rec->why ? x->rec : NULL, err);
         if (st != QDC_OK) {
             qdc_free(a);
             return st;
@@ -1212,6 +1440,109 @@ static qdc_status vtu_dataarray(vtu *x, const xtag *t, int sec, double **offs_en
                                     "VTU: offsets not increasing from 0");
         }
         return QDC_OK;
+    }
+}
+
+/* With a record: where an appended DataArray's offset="" value is, and the
+ * value, so a spliced write can shift it. */
+static qdc_status vtu_note_offset(vtu *x, const xtag *t, qdc_error *err)
+{
+    const char *v, *ve;
+    int64_t off;
+    uint64_t *a;
+
+    if (!x->rec || !attr_is(t, "format", "appended") || !tag_attr(t, "offset", &v, &ve))
+        return QDC_OK;
+    while (v < ve && is_space((unsigned char)*v))
+        v++;
+    while (ve > v && is_space((unsigned char)ve[-1]))
+        ve--;
+    if (parse_int(v, ve, 0, &off) != 0 || off < 0) { /* its reader says so, if read */
+        srcrec_refuse(x->rec, "VTU: an appended offset is not a number");
+        return QDC_OK;
+    }
+    if (vec_grow(&x->rec->appoff, 3) != 0)
+        return qdc_fail(err, QDC_ENOMEM, "out of memory");
+    a = (uint64_t *)x->rec->appoff.a + x->rec->appoff.n;
+    a[0] = (uint64_t)(v - x->s.base);
+    a[1] = (uint64_t)(ve - x->s.base);
+    a[2] = (uint64_t)off;
+    x->rec->appoff.n += 3;
+    return QDC_OK;
+}
+
+/* The end of the appended array at offset off (raw or base64, zlib or not),
+ * or NULL if its header does not fit. */
+static const char *app_extent(vtu *x, uint64_t off)
+{
+    size_t hsz = x->hdr8 ? 8 : 4, hn = x->zlib ? 3 * hsz : hsz, left;
+    const char *p, *endp = NULL;
+    unsigned char *h = NULL;
+    uint64_t n = 0;
+
+    if (off > (uint64_t)(x->s.end - x->appended))
+        return NULL;
+    p = x->appended + off;
+    left = (size_t)(x->s.end - p);
+    if (!x->app_base64) {
+        const unsigned char *b = (const unsigned char *)p;
+        if (left < hn)
+            return NULL;
+        if (!x->zlib) {
+            n = hdr_word(x, b, 0);
+            return n <= left - hn ? p + hn + n : NULL;
+        }
+        n = hdr_word(x, b, 0);
+        if (n > (left - hn) / hsz)
+            return NULL;
+        hn += (size_t)n * hsz;
+        n = 0;
+        for (uint64_t k = 0, c; k < hdr_word(x, b, 0); k++, n += c)
+            if ((c = hdr_word(x, b, 3 + k)) > left - hn - n)
+                return NULL;
+        return p + hn + n;
+    }
+    if (b64_take(x, p, hn, &h, &endp, NULL) != QDC_OK)
+        goto fail;
+    n = hdr_word(x, h, 0);
+    if (x->zlib) {
+        uint64_t nb = n;
+        if (nb > left / hsz ||
+            b64_take(x, p, hn + (size_t)nb * hsz, &h, &endp, NULL) != QDC_OK)
+            goto fail;
+        hn += (size_t)nb * hsz;
+        n = 0;
+        for (uint64_t k = 0, c; k < nb; k++, n += c)
+            if ((c = hdr_word(x, h, 3 + k)) > left - n)
+                goto fail;
+    }
+    if (n > left || b64_take(x, p, hn + (size_t)n, &h, &endp, NULL) != QDC_OK)
+        goto fail;
+    qdc_free(h);
+    return endp;
+fail:
+    qdc_free(h);
+    return NULL;
+}
+
+/* A spliced write replaces the appended Points block: no other array may
+ * share its bytes (a valid file never does; a damaged one is not spliced). */
+static void check_app_overlap(vtu *x)
+{
+    srcrec *r = x->rec;
+    const uint64_t *ao = r->appoff.a;
+    int self = 0;
+
+    for (size_t i = 0; i + 3 <= r->appoff.n; i += 3) {
+        const char *e;
+        if (ao[i + 2] == r->app_off && !self++)
+            continue;
+        e = app_extent(x, ao[i + 2]); /* NULL unless the offset is within the input */
+        if (!e || ((uint64_t)(x->appended - x->s.base) + ao[i + 2] < r->blk_b &&
+                   (uint64_t)(e - x->s.base) > r->blk_a)) {
+            srcrec_refuse(r, "VTU: an appended array overlaps the Points");
+            return;
+        }
     }
 }
 
@@ -1247,15 +1578,19 @@ static qdc_status find_appended(vtu *x, qdc_error *err)
 }
 
 qdc_status meshio_vtu_read(const char *buf, size_t len, const meshio_options *o,
-                           mesh_t **out, qdc_error *err)
+                           srcrec *rec, mesh_t **out, qdc_error *err)
 {
     vtu x;
     xtag t;
     int sec = SEC_NONE, seen_file = 0, seen_piece = 0;
     double *offs_end = NULL; /* XML offsets: the end of each cell */
+    const char *cv, *ce;
     qdc_status st;
 
     memset(&x, 0, sizeof x);
+    x.rec = rec;
+    if (rec)
+        rec->fmt = MESHIO_VTU;
     x.c.creg_prio = PRIO_NONE;
     x.s = txt_init(buf, len, 0);
     x.b = (const unsigned char *)buf;
@@ -1268,9 +1603,15 @@ qdc_status meshio_vtu_read(const char *buf, size_t len, const meshio_options *o,
             if (!attr_is(&t, "type", "UnstructuredGrid"))
                 st = fail_txt(err, QDC_EFORMAT, &x.s, t.name,
                               "VTU: only type=\"UnstructuredGrid\" is supported");
-            else if (tag_attr(&t, "compressor", &(const char *){0}, &(const char *){0}))
-                st = fail_txt(err, QDC_EFORMAT, &x.s, t.name,
-                              "VTU: compressed data are not supported");
+            else if (tag_attr(&t, "compressor", &cv, &ce) && ce > cv) {
+                x.zlib = (size_t)(ce - cv) == 21 &&
+                         memcmp(cv, "vtkZLibDataCompressor", 21) == 0;
+                if (!x.zlib)
+                    st = fail_txt(err, QDC_EFORMAT, &x.s, cv,
+                                  "VTU: compressor \"%.*s\" not supported (only "
+                                  "vtkZLibDataCompressor)",
+                                  (int)(ce - cv > 32 ? 32 : ce - cv), cv);
+            }
             x.big = attr_is(&t, "byte_order", "BigEndian");
             x.hdr8 = attr_is(&t, "header_type", "UInt64");
             seen_file = 1;
@@ -1292,6 +1633,9 @@ qdc_status meshio_vtu_read(const char *buf, size_t len, const meshio_options *o,
                   : word_is(t.name, t.nlen, "Cells")    ? SEC_CELLS
                   : word_is(t.name, t.nlen, "CellData") ? SEC_CELLDATA
                                                         : SEC_POINTDATA;
+        } else if (word_is(t.name, t.nlen, "DataArray") && !t.closing &&
+                   (st = vtu_note_offset(&x, &t, err)) != QDC_OK) {
+            break;
         } else if (word_is(t.name, t.nlen, "DataArray") && !t.closing &&
                    sec != SEC_NONE) {
             if (!seen_piece)
@@ -1328,6 +1672,8 @@ qdc_status meshio_vtu_read(const char *buf, size_t len, const meshio_options *o,
             st = check_offsets(x.c.offs, x.c.nc, x.c.nconn, "vtu", err);
         }
     }
+    if (st == QDC_OK && rec && rec->appended && rec->kind != SRC_NONE)
+        check_app_overlap(&x);
     if (st == QDC_OK)
         st = cells_mesh(&x.c, "vtu", o, out, err);
     qdc_free(offs_end);

@@ -118,7 +118,7 @@ TEST(gmsh41_tags_out_of_order_and_skipped_types)
     mesh_t *m;
     qdc_error err;
     int notes = 0;
-    meshio_options o = {note_count, &notes};
+    meshio_options o = {note_count, &notes, 0};
 
     ASSERT_OK(meshio_read_ex(msh, strlen(msh), MESHIO_GMSH41, &o, &m, &err));
     ASSERT_EQ_INT(m->nv, 5);

@@ -391,12 +391,167 @@ TEST(allocation_failures)
         }
         ASSERT_TRUE(same_mesh(m, b, 0));
         mesh_free(b);
+        /* with the source kept, then a spliced write of moved coordinates */
+        for (long n = 1;; n++) {
+            meshio_options keep = {NULL, NULL, 1};
+            qdc_fault_set(n);
+            st = meshio_read_ex(s.b, s.n, (meshio_format)f, &keep, &b, &err);
+            qdc_fault_set(0);
+            if (st == QDC_OK)
+                break;
+            ASSERT_EQ_INT(st, QDC_ENOMEM);
+            ASSERT_TRUE(b == NULL);
+        }
+        b->xyz[0] += 1;
+        free(s.b);
+        s = (sink){0};
+        qdc_fault_set(1);
+        ASSERT_EQ_INT(meshio_write(b, (meshio_format)f, sink_write, &s, &err),
+                      QDC_ENOMEM);
+        qdc_fault_set(0);
+        mesh_free(b);
         free(s.b);
     }
     mesh_free(m);
 #else
     SKIP("built without QDC_FAULT_INJECTION (make fault runs it)");
 #endif
+}
+
+/* ---- spliced writing ---- */
+
+/* A file written by qdc, read with its source kept and its vertices moved
+ * (a permutation of the positions: Gmsh's entity boxes stay the same), is
+ * written spliced exactly as qdc's own writer writes the moved mesh. */
+TEST(splice_equals_writer)
+{
+    static const meshio_format fs[] = {MESHIO_MEDIT,  MESHIO_GMSH41,   MESHIO_GMSH41_BIN,
+                                       MESHIO_GMSH22, MESHIO_VTK,      MESHIO_VTK_ASCII,
+                                       MESHIO_VTU,    MESHIO_VTU_ASCII};
+    meshio_options keep = {NULL, NULL, 1};
+    mesh_t *m = make_mesh(300, 500, 60);
+
+    ASSERT_TRUE(m);
+    for (size_t k = 0; k < sizeof fs / sizeof fs[0]; k++) {
+        sink a = {0}, b = {0}, c = {0};
+        mesh_t *r = NULL, *d;
+        qdc_error err;
+        const char *why = NULL;
+        ASSERT_OK(meshio_write(m, fs[k], sink_write, &a, &err));
+        ASSERT_OK(meshio_read_ex(a.b, a.n, fs[k], &keep, &r, &err));
+        ASSERT_EQ_INT(meshio_source_format(r), fs[k]);
+        ASSERT_TRUE(meshio_source_bytes(r, NULL) >= a.n + 8 * (size_t)r->nv);
+        for (int32_t v = 0; v < r->nv; v++)
+            memcpy(r->xyz + 3 * v, m->xyz + 3 * (m->nv - 1 - v), 24);
+        ASSERT_TRUE(meshio_splices(r, fs[k], &why));
+        ASSERT_OK(meshio_write(r, MESHIO_AUTO, sink_write, &b, &err)); /* the source's */
+        d = mesh_dup(r);
+        ASSERT_TRUE(d && !d->source);
+        ASSERT_OK(meshio_write(d, fs[k], sink_write, &c, &err));
+        if (b.n != c.n || memcmp(b.b, c.b, b.n) != 0)
+            printf("  %s: spliced %zu bytes, written %zu\n", meshio_format_name(fs[k]),
+                   b.n, c.n);
+        ASSERT_TRUE(b.n == c.n && memcmp(b.b, c.b, b.n) == 0);
+        /* another variant of the family is a conversion */
+        ASSERT_TRUE(
+            !meshio_splices(r, fs[k] == MESHIO_MEDIT ? MESHIO_VTK : MESHIO_MEDIT, &why));
+        ASSERT_TRUE(strstr(why, "another format") != NULL);
+        /* changed connectivity: not spliced, qdc's writer instead */
+        r->tets[0] ^= r->tets[1];
+        r->tets[1] ^= r->tets[0];
+        r->tets[0] ^= r->tets[1];
+        ASSERT_TRUE(!meshio_splices(r, fs[k], &why));
+        ASSERT_TRUE(strstr(why, "connectivity") != NULL);
+        free(b.b);
+        b = (sink){0};
+        mesh_free(d);
+        d = mesh_dup(r);
+        free(c.b);
+        c = (sink){0};
+        ASSERT_OK(meshio_write(r, fs[k], sink_write, &b, &err));
+        ASSERT_OK(meshio_write(d, fs[k], sink_write, &c, &err));
+        ASSERT_TRUE(b.n == c.n && memcmp(b.b, c.b, b.n) == 0);
+        meshio_drop_source(r);
+        ASSERT_EQ_INT(meshio_source_format(r), MESHIO_AUTO);
+        mesh_free(d);
+        mesh_free(r);
+        free(a.b);
+        free(b.b);
+        free(c.b);
+    }
+    mesh_free(m);
+}
+
+/* The format a save picks: the source's variant for its family's extension. */
+TEST(splice_save_format)
+{
+    meshio_options keep = {NULL, NULL, 1};
+    mesh_t *m = make_mesh(20, 30, 4), *r = NULL;
+    sink a = {0};
+    qdc_error err;
+
+    ASSERT_TRUE(m);
+    ASSERT_OK(meshio_write(m, MESHIO_GMSH41_BIN, sink_write, &a, &err));
+    ASSERT_OK(meshio_read_ex(a.b, a.n, MESHIO_GMSH41, &keep, &r, &err));
+    ASSERT_EQ_INT(meshio_source_format(r),
+                  MESHIO_GMSH41_BIN); /* the file's, not the name */
+    ASSERT_EQ_INT(meshio_save_format("o.msh", MESHIO_AUTO, r), MESHIO_GMSH41_BIN);
+    ASSERT_EQ_INT(meshio_save_format("o.msh.gz", MESHIO_AUTO, r), MESHIO_GMSH41_BIN);
+    ASSERT_EQ_INT(meshio_save_format("o.msh", MESHIO_GMSH22, r), MESHIO_GMSH22);
+    ASSERT_EQ_INT(meshio_save_format("o.vtk", MESHIO_AUTO, r), MESHIO_VTK);
+    ASSERT_EQ_INT(meshio_save_format("o.msh", MESHIO_AUTO, m), MESHIO_GMSH41);
+    mesh_free(r);
+    /* meshio_read keeps no source unless asked; a JSON or QMESH one never */
+    ASSERT_OK(meshio_read(a.b, a.n, MESHIO_AUTO, &r, &err));
+    ASSERT_TRUE(!r->source);
+    mesh_free(r);
+    free(a.b);
+    a = (sink){0};
+    ASSERT_OK(meshio_write(m, MESHIO_JSON, sink_write, &a, &err));
+    ASSERT_OK(meshio_read_ex(a.b, a.n, MESHIO_AUTO, &keep, &r, &err));
+    ASSERT_TRUE(!r->source);
+    ASSERT_EQ_INT(meshio_write(r, MESHIO_AUTO, sink_write, &a, &err), QDC_EINVAL);
+    mesh_free(r);
+    free(a.b);
+    mesh_free(m);
+}
+
+/* TetGen files (0-based, comments, attributes) saved back: the .node with the
+ * moved coordinates only, the .ele unchanged. */
+TEST(splice_tetgen_files)
+{
+    const char *node = "# nodes\n4 3 1 1\n0 0 0 0 0.5 7 # first\n1 1 0 0 0.5 8\n"
+                       "2 0 1 0 0.5 9\n3 0 0 1 0.5 10\n";
+    const char *ele = "1 4 2\n0 0 1 2 3 -4 0.25\n";
+    const char *want = "# nodes\n4 3 1 1\n0 0 0 0 0.5 7 # first\n1 1 0 0 0.5 8\n"
+                       "2 0 1 0 0.5 9\n3 0 0 0.25 0.5 10\n";
+    char dir[] = "/tmp/qdc_test_splice_XXXXXX", path[256], *b;
+    mesh_t *m = NULL;
+    size_t n;
+    qdc_error err;
+    FILE *f;
+
+    ASSERT_TRUE(mkdtemp(dir));
+    snprintf(path, sizeof path, "%s/in.node", dir);
+    ASSERT_TRUE((f = fopen(path, "w")) && fputs(node, f) >= 0 && fclose(f) == 0);
+    snprintf(path, sizeof path, "%s/in.ele", dir);
+    ASSERT_TRUE((f = fopen(path, "w")) && fputs(ele, f) >= 0 && fclose(f) == 0);
+    snprintf(path, sizeof path, "%s/in", dir);
+    ASSERT_OK(meshio_load(path, MESHIO_TETGEN, &m, &err));
+    ASSERT_EQ_INT(meshio_source_format(m), MESHIO_TETGEN);
+    m->xyz[11] = 0.25;
+    snprintf(path, sizeof path, "%s/out.node", dir);
+    ASSERT_OK(meshio_save(path, MESHIO_AUTO, m, &err));
+    b = read_file(path, &n);
+    ASSERT_TRUE(b && n == strlen(want) && memcmp(b, want, n) == 0);
+    qdc_free(b);
+    snprintf(path, sizeof path, "%s/out.ele", dir);
+    b = read_file(path, &n);
+    ASSERT_TRUE(b && n == strlen(ele) && memcmp(b, ele, n) == 0);
+    qdc_free(b);
+    mesh_free(m);
+    snprintf(path, sizeof path, "rm -rf '%s'", dir);
+    ASSERT_EQ_INT(system(path), 0);
 }
 
 /* ---- corpus and fuzz replay ---- */
@@ -426,4 +581,5 @@ TEST_MAIN("meshio", T(roundtrip_medit), T(roundtrip_qmesh), T(roundtrip_json),
           T(medit_deferred_error_position), T(json_features), T(json_not_nul_terminated),
           T(tetgen_read), T(huge_counts_fail_fast), T(formats_and_sniffing), T(dev_cube),
           T(dev_speed), T(qmesh_1m_tets_speed), T(allocation_failures),
+          T(splice_equals_writer), T(splice_save_format), T(splice_tetgen_files),
           T(malformed_corpus), T(fuzz_replay))

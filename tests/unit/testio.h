@@ -385,7 +385,71 @@ static inline int replay_fuzz(const char *name, int (*fn)(const char *, size_t),
     return bad;
 }
 
-/* Every mesh reader on buf: a valid status, a mesh exactly on success. */
+/* buf read as f with its source kept: the status contract, and for a mesh
+ * that splices, written back unchanged it is buf itself (gzip aside), and
+ * with moved coordinates it reads back as the same mesh at the new
+ * coordinates (rounded to float32 if the file stores float32). 0 if so. */
+static inline int splice_check(const char *buf, size_t len, meshio_format f)
+{
+    meshio_options o = {NULL, NULL, 1};
+    mesh_t *m = NULL, *b = NULL;
+    sink s = {0}, s2 = {0};
+    qdc_error err;
+    qdc_status st = meshio_read_ex(buf, len, f, &o, &m, &err);
+    meshio_format sf;
+    int bad = 0, f32 = 0;
+
+    if ((unsigned)st >= QDC_STATUS_COUNT || (st == QDC_OK) != (m != NULL) ||
+        (st != QDC_OK && err.status != st))
+        return 1;
+    if (meshio_read(buf, len, f, &b, &err) != st) { /* keeping it changes nothing */
+        printf("  splice: read with and without the source differ\n");
+        mesh_free(m);
+        mesh_free(b);
+        return 1;
+    }
+    mesh_free(b);
+    b = NULL;
+    if (!m)
+        return 0;
+    sf = meshio_source_format(m);
+    meshio_source_bytes(m, &f32);
+    if (sf == MESHIO_AUTO || sf == MESHIO_TETGEN || !meshio_splices(m, sf, NULL)) {
+        mesh_free(m);
+        return 0;
+    }
+    if (meshio_write(m, sf, sink_write, &s, &err) != QDC_OK)
+        bad = 1;
+    else if (!(len >= 2 && (unsigned char)buf[0] == 0x1f &&
+               (unsigned char)buf[1] == 0x8b) &&
+             (s.n != len || memcmp(s.b, buf, len) != 0))
+        bad = 2;
+    for (int64_t i = 0; i < 3 * (int64_t)m->nv; i++)
+        m->xyz[i] = m->xyz[i] * 0.5 + 0.125;
+    if (!bad && (!meshio_splices(m, sf, NULL) ||
+                 meshio_write(m, sf, sink_write, &s2, &err) != QDC_OK ||
+                 meshio_read(s2.b, s2.n, sf, &b, &err) != QDC_OK))
+        bad = 3;
+    for (int64_t i = 0; !bad && i < 3 * (int64_t)m->nv; i++) {
+        double want = f32 ? (double)(float)m->xyz[i] : m->xyz[i];
+        if (memcmp(&want, &b->xyz[i], sizeof want) != 0)
+            bad = 4;
+    }
+    if (!bad && (b->nt != m->nt || b->nv != m->nv ||
+                 memcmp(b->tets, m->tets, 16 * (size_t)m->nt) != 0))
+        bad = 5;
+    if (bad)
+        printf("  splice %s: check %d failed: %s\n", meshio_format_name(sf), bad,
+               err.msg);
+    mesh_free(m);
+    mesh_free(b);
+    free(s.b);
+    free(s2.b);
+    return bad != 0;
+}
+
+/* Every mesh reader on buf: a valid status, a mesh exactly on success; and
+ * each with its source kept (splice_check). */
 static inline int replay_meshio(const char *buf, size_t len)
 {
     for (int f = 0; f < MESHIO_FORMAT_COUNT; f++) {
@@ -400,6 +464,8 @@ static inline int replay_meshio(const char *buf, size_t len)
             (st != QDC_OK && err.status != st))
             return 1;
         mesh_free(m);
+        if (f != MESHIO_TETGEN && splice_check(buf, len, (meshio_format)f))
+            return 1;
     }
     return 0;
 }

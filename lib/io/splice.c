@@ -1,0 +1,445 @@
+/* splice.c - writing a mesh back as the file it was read from, with only
+ * the coordinates replaced (meshio.h, "Spliced writing").
+ *
+ * The source keeps the decompressed input and what its reader recorded
+ * (meshio_scan.h, srcrec): one uint64 offset per vertex for text and binary
+ * coordinates, or, for VTU Points under base64 or zlib, the byte range of the
+ * encoded block. Writing streams the input through the writer's buffer and
+ * replaces the coordinate fields on the way; the source itself is never
+ * written to, and every offset is checked against its length before use, so
+ * a damaged record gives QDC_EINTERNAL, never an access outside the buffer.
+ * A hash of everything the optimizer must not change (connectivity, regions,
+ * triangles and refs) taken at reading is checked again at writing. */
+#include "io/meshio.h"
+#include "io/meshio_scan.h"
+
+#include <limits.h>
+#include <zlib.h>
+
+typedef struct {
+    mesh_source base; /* first: released through it */
+    srcrec r;
+    char *buf;
+    size_t len;
+    char *ele; /* TetGen .ele, copied unchanged */
+    size_t ele_len;
+    int32_t nv;
+    uint64_t hash;     /* mesh_hash at reading */
+    uint64_t xyz_hash; /* of the coordinates as read: unchanged, the file is copied */
+} source;
+
+static void source_release(mesh_source *ms)
+{
+    source *s = (source *)ms;
+
+    srcrec_free(&s->r);
+    qdc_free(s->buf);
+    qdc_free(s->ele);
+    qdc_free(s);
+}
+
+static uint64_t mix(uint64_t h, uint64_t x)
+{
+    h ^= x;
+    h *= UINT64_C(0x9e3779b97f4a7c15);
+    return h ^ (h >> 29);
+}
+
+static uint64_t hash_bytes(uint64_t h, const void *p, size_t n)
+{
+    const unsigned char *b = p;
+    uint64_t x;
+
+    h = mix(h, p ? n : UINT64_MAX); /* present or not */
+    for (; b && n >= 8; b += 8, n -= 8) {
+        memcpy(&x, b, 8);
+        h = mix(h, x);
+    }
+    if (b && n) {
+        x = 0;
+        memcpy(&x, b, n);
+        h = mix(h, x);
+    }
+    return h;
+}
+
+/* Everything a spliced write takes from the file instead of the mesh. */
+static uint64_t mesh_hash(const mesh_t *m)
+{
+    uint64_t h = mix(0, (uint64_t)(uint32_t)m->nv << 32 | (uint32_t)m->nt);
+
+    h = mix(h, (uint64_t)(uint32_t)m->ntri);
+    h = hash_bytes(h, m->tets, 16 * (size_t)m->nt);
+    h = hash_bytes(h, m->region, 4 * (size_t)m->nt);
+    h = hash_bytes(h, m->vref, 4 * (size_t)m->nv);
+    h = hash_bytes(h, m->tris, 12 * (size_t)m->ntri);
+    h = hash_bytes(h, m->tri_ref, 4 * (size_t)m->ntri);
+    return h;
+}
+
+qdc_status splice_attach(mesh_t *m, srcrec *r, char *buf, size_t len, int own,
+                         const char *ele, size_t ele_len, qdc_error *err)
+{
+    source *s = qdc_calloc(1, sizeof *s);
+
+    if (!s || (!own && !(s->buf = qdc_malloc(len + 1))) ||
+        (ele && !(s->ele = qdc_malloc(ele_len + 1)))) {
+        if (s) {
+            qdc_free(own ? NULL : s->buf);
+            qdc_free(s);
+        }
+        srcrec_free(r);
+        return qdc_fail(err, QDC_ENOMEM, "out of memory for the source file");
+    }
+    if (own) {
+        s->buf = buf;
+    } else {
+        memcpy(s->buf, buf, len);
+        s->buf[len] = '\0';
+    }
+    if (ele) {
+        memcpy(s->ele, ele, ele_len);
+        s->ele_len = ele_len;
+    }
+    s->len = len;
+    s->base.release = source_release;
+    s->r = *r;
+    srcrec_init(r);
+    s->nv = m->nv;
+    s->hash = mesh_hash(m);
+    s->xyz_hash = hash_bytes(0, m->xyz, 24 * (size_t)m->nv);
+    if (s->r.kind != SRC_BLOCK && s->r.kind != SRC_NONE &&
+        (s->r.nv != m->nv || !s->r.off))
+        srcrec_refuse(&s->r, "the reader did not record every vertex");
+    if (m->source)
+        m->source->release(m->source);
+    m->source = &s->base;
+    return QDC_OK;
+}
+
+meshio_format meshio_source_format(const mesh_t *m)
+{
+    return m && m->source ? ((const source *)m->source)->r.fmt : MESHIO_AUTO;
+}
+
+size_t meshio_source_bytes(const mesh_t *m, int *float32)
+{
+    const source *s = m ? (const source *)m->source : NULL;
+
+    if (float32)
+        *float32 = s && s->r.kind != SRC_TEXT && s->r.kind != SRC_NONE && s->r.width == 4;
+    if (!s)
+        return 0;
+    return sizeof *s + s->len + s->ele_len + (s->r.off ? 8 * (size_t)s->r.nv : 0) +
+           s->r.appoff.n * sizeof(uint64_t);
+}
+
+void meshio_drop_source(mesh_t *m)
+{
+    if (m && m->source) {
+        m->source->release(m->source);
+        m->source = NULL;
+    }
+}
+
+int splice_ok(const mesh_t *m, meshio_format fmt, const char **why)
+{
+    const source *s = m ? (const source *)m->source : NULL;
+    const char *w = NULL;
+
+    if (!s)
+        w = "no source file kept";
+    else if (fmt != s->r.fmt)
+        w = "another format, version or encoding than the input's";
+    else if (s->r.kind == SRC_NONE)
+        w = s->r.why ? s->r.why : "the input's layout is not kept";
+    else if (m->nv != s->nv || mesh_hash(m) != s->hash)
+        w = "the connectivity, regions or tags changed since reading";
+    if (why)
+        *why = w;
+    return w == NULL;
+}
+
+int meshio_splices(const mesh_t *m, meshio_format fmt, const char **why)
+{
+    return splice_ok(m, fmt, why);
+}
+
+/* ---- text ---- */
+
+static size_t skip_sep(const source *s, size_t p)
+{
+    while (p < s->len) {
+        unsigned char c = (unsigned char)s->buf[p];
+        if (is_space(c)) {
+            p++;
+        } else if (c == '#' && s->r.hash) {
+            while (p < s->len && s->buf[p] != '\n')
+                p++;
+        } else {
+            break;
+        }
+    }
+    return p;
+}
+
+static size_t token_end(const source *s, size_t p)
+{
+    while (p < s->len) {
+        unsigned char c = (unsigned char)s->buf[p];
+        if (is_space(c) || (c == '#' && s->r.hash) || (c == '<' && s->r.lt))
+            break;
+        p++;
+    }
+    return p;
+}
+
+/* x in place of the token [t, te): the token itself if it reads as x. */
+static void put_number(wbuf *w, const char *t, const char *te, double x)
+{
+    double old;
+
+    if (parse_double(t, te, &old) == 0 && memcmp(&old, &x, sizeof x) == 0)
+        wb_put(w, t, (size_t)(te - t));
+    else
+        wb_real(w, x);
+}
+
+static qdc_status splice_text(const source *s, const double *xyz, wbuf *w, qdc_error *err)
+{
+    size_t pos = 0;
+
+    for (int32_t v = 0; v < s->nv; v++) {
+        size_t p = s->r.off[v];
+        if (p < pos || p >= s->len)
+            return qdc_fail(err, QDC_EINTERNAL,
+                            "source: vertex %d at byte %zu is out of order", (int)v, p);
+        for (int a = 0; a < 3; a++) {
+            size_t te;
+            if (a)
+                p = skip_sep(s, p);
+            te = token_end(s, p);
+            if (te == p)
+                return qdc_fail(err, QDC_EINTERNAL,
+                                "source: no coordinate of vertex %d at byte %zu", (int)v,
+                                p);
+            wb_put(w, s->buf + pos, p - pos);
+            put_number(w, s->buf + p, s->buf + te, xyz[3 * (size_t)v + (size_t)a]);
+            pos = p = te;
+        }
+    }
+    wb_put(w, s->buf + pos, s->len - pos);
+    return QDC_OK;
+}
+
+/* ---- binary ---- */
+
+/* x as `width` bytes (4: float32) in the byte order big. */
+static void encode_value(unsigned char *b, double x, int width, int big)
+{
+    uint64_t u;
+
+    if (width == 4) {
+        float f = (float)x;
+        uint32_t u32;
+        memcpy(&u32, &f, 4);
+        u = u32;
+    } else {
+        memcpy(&u, &x, 8);
+    }
+    for (int j = 0; j < width; j++)
+        b[big ? width - 1 - j : j] = (unsigned char)(u >> (8 * j));
+}
+
+static qdc_status splice_bin(const source *s, const double *xyz, wbuf *w, qdc_error *err)
+{
+    size_t pos = 0, vb = 3 * (size_t)s->r.width;
+    unsigned char b[24];
+
+    for (int32_t v = 0; v < s->nv; v++) {
+        size_t p = s->r.off[v];
+        if (p < pos || p > s->len || s->len - p < vb)
+            return qdc_fail(err, QDC_EINTERNAL,
+                            "source: vertex %d at byte %zu is out of order or range",
+                            (int)v, p);
+        for (int a = 0; a < 3; a++)
+            encode_value(b + a * s->r.width, xyz[3 * (size_t)v + (size_t)a], s->r.width,
+                         s->r.big);
+        wb_put(w, s->buf + pos, p - pos);
+        wb_put(w, b, vb);
+        pos = p + vb;
+    }
+    wb_put(w, s->buf + pos, s->len - pos);
+    return QDC_OK;
+}
+
+/* ---- VTU blocks ---- */
+
+static const char b64_chars[] =
+    "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+
+/* base64 of [b, b+n) appended at out (4*ceil(n/3) bytes); returns the end. */
+static char *b64_encode(const unsigned char *b, size_t n, char *out)
+{
+    for (size_t i = 0; i < n; i += 3) {
+        uint32_t v = (uint32_t)b[i] << 16 | (i + 1 < n ? (uint32_t)b[i + 1] << 8 : 0) |
+                     (i + 2 < n ? b[i + 2] : 0);
+        *out++ = b64_chars[v >> 18 & 63];
+        *out++ = b64_chars[v >> 12 & 63];
+        *out++ = i + 1 < n ? b64_chars[v >> 6 & 63] : '=';
+        *out++ = i + 2 < n ? b64_chars[v & 63] : '=';
+    }
+    return out;
+}
+
+static void put_word(unsigned char *p, uint64_t v, int hsz, int big)
+{
+    for (int j = 0; j < hsz; j++)
+        p[big ? hsz - 1 - j : j] = (unsigned char)(v >> (8 * j));
+}
+
+/* The new encoded Points block: header and (compressed) data, base64 if the
+ * file had it. *out (qdc_free) of *n bytes. */
+static qdc_status encode_block(const source *s, const double *xyz, char **out, size_t *n,
+                               qdc_error *err)
+{
+    const srcrec *r = &s->r;
+    int hsz = r->hdr8 ? 8 : 4;
+    size_t raw_n = 3 * (size_t)s->nv * (size_t)r->width, hn, dn = 0, nb = 1;
+    unsigned char *raw = qdc_malloc(raw_n + 1), *hdr = NULL, *data = NULL;
+    qdc_status st = QDC_OK;
+
+    *out = NULL;
+    if (!raw)
+        return qdc_fail(err, QDC_ENOMEM, "out of memory for the Points block");
+    for (size_t i = 0; i < 3 * (size_t)s->nv; i++)
+        encode_value(raw + i * (size_t)r->width, xyz[i], r->width, r->big);
+    if (r->zlib) {
+        size_t bs = (size_t)r->zhdr[1];
+        nb = (size_t)r->zhdr[0];
+        if (bs == 0 || nb == 0 || nb > (raw_n + bs - 1) / bs + 1 ||
+            (nb - 1) * bs >= raw_n + (raw_n == 0)) {
+            qdc_free(raw);
+            return qdc_fail(err, QDC_EINTERNAL, "source: zlib header does not fit");
+        }
+        hn = (3 + nb) * (size_t)hsz;
+        hdr = qdc_malloc(hn);
+        data = qdc_malloc(nb * compressBound((uLong)bs) + 1);
+        if (!hdr || !data)
+            st = qdc_fail(err, QDC_ENOMEM, "out of memory for the Points block");
+        for (size_t k = 0; k < 3 && st == QDC_OK; k++)
+            put_word(hdr + k * (size_t)hsz, r->zhdr[k], hsz, r->big);
+        for (size_t k = 0; k < nb && st == QDC_OK; k++) {
+            size_t a = k * bs, len = k + 1 < nb ? bs : raw_n - a;
+            uLongf cn = compressBound((uLong)bs);
+            if (compress2(data + dn, &cn, raw + a, (uLong)len, Z_DEFAULT_COMPRESSION) !=
+                Z_OK)
+                st = qdc_fail(err, QDC_EINTERNAL, "zlib: cannot compress the Points");
+            put_word(hdr + (3 + k) * (size_t)hsz, cn, hsz, r->big);
+            dn += cn;
+        }
+    } else {
+        hn = (size_t)hsz;
+        hdr = qdc_malloc(hn);
+        if (!hdr)
+            st = qdc_fail(err, QDC_ENOMEM, "out of memory for the Points block");
+        else
+            put_word(hdr, raw_n, hsz, r->big);
+        data = raw;
+        raw = NULL;
+        dn = raw_n;
+    }
+    if (st == QDC_OK) {
+        size_t cap = r->b64 ? 4 * ((hn + 2) / 3 + (dn + 2) / 3 + 1) : hn + dn;
+        char *o = qdc_malloc(cap + 1), *e;
+        if (!o) {
+            st = qdc_fail(err, QDC_ENOMEM, "out of memory for the Points block");
+        } else if (!r->b64) {
+            memcpy(o, hdr, hn);
+            memcpy(o + hn, data, dn);
+            e = o + hn + dn;
+        } else if (r->b64_sep) {
+            e = b64_encode(data, dn, b64_encode(hdr, hn, o));
+        } else {
+            unsigned char *j = qdc_malloc(hn + dn + 1);
+            if (j) {
+                memcpy(j, hdr, hn);
+                memcpy(j + hn, data, dn);
+                e = b64_encode(j, hn + dn, o);
+                qdc_free(j);
+            } else {
+                qdc_free(o);
+                o = NULL;
+                st = qdc_fail(err, QDC_ENOMEM, "out of memory for the Points block");
+            }
+        }
+        if (o) {
+            *out = o;
+            *n = (size_t)(e - o);
+        }
+    }
+    qdc_free(raw);
+    qdc_free(hdr);
+    qdc_free(data);
+    return st;
+}
+
+static qdc_status splice_block(const source *s, const double *xyz, wbuf *w,
+                               qdc_error *err)
+{
+    const srcrec *r = &s->r;
+    const uint64_t *ao = r->appoff.a;
+    size_t pos = 0, n = 0;
+    char *blk = NULL;
+    int64_t delta;
+    qdc_status st;
+
+    if (r->blk_a > r->blk_b || r->blk_b > s->len)
+        return qdc_fail(err, QDC_EINTERNAL, "source: Points block out of range");
+    st = encode_block(s, xyz, &blk, &n, err);
+    if (st != QDC_OK)
+        return st;
+    delta = (int64_t)n - (int64_t)(r->blk_b - r->blk_a);
+    for (size_t i = 0; r->appended && delta && i + 3 <= r->appoff.n; i += 3) {
+        if (ao[i + 2] <= r->app_off)
+            continue;
+        if (ao[i] < pos || ao[i + 1] < ao[i] || ao[i + 1] > r->blk_a) {
+            qdc_free(blk);
+            return qdc_fail(err, QDC_EINTERNAL, "source: appended offsets out of order");
+        }
+        wb_put(w, s->buf + pos, (size_t)(ao[i] - pos));
+        wb_int(w, (int64_t)ao[i + 2] + delta);
+        pos = (size_t)ao[i + 1];
+    }
+    wb_put(w, s->buf + pos, (size_t)r->blk_a - pos);
+    wb_put(w, blk, n);
+    wb_put(w, s->buf + r->blk_b, s->len - (size_t)r->blk_b);
+    qdc_free(blk);
+    return QDC_OK;
+}
+
+qdc_status splice_write(const mesh_t *m, int part, wbuf *w, qdc_error *err)
+{
+    const source *s = (const source *)m->source;
+
+    if (part == 1) {
+        if (!s->ele)
+            return qdc_fail(err, QDC_EINTERNAL, "source: no .ele kept");
+        wb_put(w, s->ele, s->ele_len);
+        return QDC_OK;
+    }
+    if (hash_bytes(0, m->xyz, 24 * (size_t)m->nv) == s->xyz_hash) {
+        wb_put(w, s->buf, s->len); /* nothing moved (a base64 or zlib block as is) */
+        return QDC_OK;
+    }
+    switch (s->r.kind) {
+    case SRC_TEXT:
+        return splice_text(s, m->xyz, w, err);
+    case SRC_BIN:
+        return splice_bin(s, m->xyz, w, err);
+    case SRC_BLOCK:
+        return splice_block(s, m->xyz, w, err);
+    default:
+        return qdc_fail(err, QDC_EINTERNAL, "source: nothing recorded");
+    }
+}

@@ -1,0 +1,141 @@
+#!/bin/sh
+# make.sh - regenerate the files of tests/data/real (see README.md) with the
+# tools that write them: gmsh (the gmsh Debian package, 4.8), meshio (python3-meshio,
+# 5.0) and tetgen (the tetgen package, 1.6). Run from anywhere:
+#   sh tests/data/real/make.sh
+# Each file is stored gzip-compressed (gzip -n: no name or time, so a rerun with the
+# same tool versions gives the same bytes).
+set -e
+here=$(cd "$(dirname "$0")" && pwd)
+tmp=$(mktemp -d "${TMPDIR:-/tmp}/qdc-real.XXXXXX")
+trap 'rm -rf "$tmp"' EXIT
+cd "$tmp"
+
+# A unit box holding a sphere: two volumes, 7 surfaces, physical names for both
+# volumes, two boundary groups, a curve and a point (line and point elements).
+cat > box_sphere.geo <<'EOF'
+SetFactory("OpenCASCADE");
+Box(1) = {0, 0, 0, 1, 1, 1};
+Sphere(2) = {0.5, 0.5, 0.5, 0.25};
+BooleanFragments{ Volume{1}; Delete; }{ Volume{2}; Delete; }
+e = 1e-6;
+inner() = Volume In BoundingBox{0.25 - e, 0.25 - e, 0.25 - e, 0.75 + e, 0.75 + e, 0.75 + e};
+outer() = Volume{:};
+outer() -= inner();
+Physical Volume("material_0") = {outer()};
+Physical Volume("material_1") = {inner()};
+Physical Surface("inlet") = Surface In BoundingBox{-e, -e, -e, e, 1 + e, 1 + e};
+w1() = Surface In BoundingBox{1 - e, -e, -e, 1 + e, 1 + e, 1 + e};
+w2() = Surface In BoundingBox{-e, -e, -e, 1 + e, 1 + e, e};
+Physical Surface("wall") = {w1(), w2()};
+Physical Curve("edge") = Curve In BoundingBox{-e, -e, -e, e, e, 1 + e};
+Physical Point("origin") = Point In BoundingBox{-e, -e, -e, e, e, e};
+Mesh.CharacteristicLengthMax = 0.2;
+Mesh.MaxNumThreads3D = 1;
+Mesh.RandomSeed = 1;
+EOF
+gmsh -3 -nt 1 box_sphere.geo -format msh41 -o gmsh41.msh > /dev/null
+gmsh -3 -nt 1 box_sphere.geo -format msh41 -bin -o gmsh41_bin.msh > /dev/null
+gmsh -3 -nt 1 box_sphere.geo -format msh22 -o gmsh22.msh > /dev/null
+gmsh -3 -nt 1 box_sphere.geo -format vtk -o gmsh.vtk > /dev/null
+gmsh -3 -nt 1 box_sphere.geo -format mesh -o gmsh.mesh > /dev/null
+
+# meshio: the Gmsh mesh with a point array and cell arrays of several types.
+/usr/bin/python3 - <<'EOF'
+import zlib, struct
+import numpy as np
+import meshio
+
+m = meshio.read("gmsh41.msh")
+tets = m.cells_dict["tetra"]
+tris = m.cells_dict["triangle"]
+pts = m.points
+cells = [("tetra", tets), ("triangle", tris)]
+temperature = 300 + 10 * pts[:, 0] + pts[:, 1] * pts[:, 2]
+material = [np.arange(len(tets), dtype=np.int32) % 3, np.full(len(tris), 7, dtype=np.int32)]
+stress = [np.linspace(0, 1, len(tets)), np.linspace(1, 2, len(tris))]
+velocity = np.stack([pts[:, 1], -pts[:, 0], 0 * pts[:, 2]], axis=1)
+out = meshio.Mesh(pts, cells, point_data={"temperature": temperature, "velocity": velocity},
+                  cell_data={"material": material, "stress": stress})
+out.write("meshio_zlib.vtu")  # meshio's default: base64, vtkZLibDataCompressor
+out.write("meshio_ascii.vtu", binary=False)
+out.write("meshio_bin.vtk")  # legacy 5.1 binary
+out.write("meshio_ascii.vtk", binary=False)
+
+# The layout VTK's own writer (vtkXMLUnstructuredGridWriter) uses by default:
+# appended raw data, UInt64 headers, zlib blocks (4 kB here, 32 kB in VTK: the
+# Points take several), RangeMin/RangeMax.
+BS = 4096
+def zblock(raw):
+    blocks = [raw[i:i + BS] for i in range(0, len(raw), BS)] or [b""]
+    comp = [zlib.compress(b, 6) for b in blocks]
+    last = len(blocks[-1]) if len(raw) % BS else BS
+    hdr = struct.pack("<%dQ" % (3 + len(comp)), len(comp), BS, last, *[len(c) for c in comp])
+    return hdr + b"".join(comp)
+conn = np.concatenate([tets.ravel(), tris.ravel()]).astype(np.int64)
+offs = np.concatenate([4 * np.arange(1, len(tets) + 1),
+                       4 * len(tets) + 3 * np.arange(1, len(tris) + 1)]).astype(np.int64)
+types = np.concatenate([np.full(len(tets), 10), np.full(len(tris), 5)]).astype(np.uint8)
+arrays = [("PointData", 'type="Float64" Name="temperature"', temperature.astype("<f8")),
+          ("CellData", 'type="Int32" Name="material"', np.concatenate(material).astype("<i4")),
+          ("Points", 'type="Float64" Name="Points" NumberOfComponents="3" RangeMin="0" RangeMax="1.7320508076"', pts.astype("<f8")),
+          ("Cells", 'type="Int64" Name="connectivity"', conn),
+          ("Cells", 'type="Int64" Name="offsets"', offs),
+          ("Cells", 'type="UInt8" Name="types"', types)]
+blobs, off, heads = [], 0, {}
+for sec, attrs, a in arrays:
+    b = zblock(np.ascontiguousarray(a).tobytes())
+    heads.setdefault(sec, []).append('        <DataArray %s format="appended" offset="%d"/>\n' % (attrs, off))
+    blobs.append(b)
+    off += len(b)
+with open("vtk_appended_zlib.vtu", "wb") as f:
+    f.write(b'<?xml version="1.0"?>\n<VTKFile type="UnstructuredGrid" version="1.0" '
+            b'byte_order="LittleEndian" header_type="UInt64" compressor="vtkZLibDataCompressor">\n'
+            b'  <UnstructuredGrid>\n    <Piece NumberOfPoints="%d" NumberOfCells="%d">\n'
+            % (len(pts), len(tets) + len(tris)))
+    for sec in ("PointData", "CellData", "Points", "Cells"):
+        f.write(("      <%s>\n%s      </%s>\n" % (sec, "".join(heads[sec]), sec)).encode())
+    f.write(b'    </Piece>\n  </UnstructuredGrid>\n  <AppendedData encoding="raw">\n   _')
+    f.write(b"".join(blobs))
+    f.write(b"\n  </AppendedData>\n</VTKFile>\n")
+EOF
+
+# TetGen: a box with a region attribute, boundary markers, 0-based numbering.
+cat > box.poly <<'EOF'
+# a unit box, two facets marked
+8 3 0 1
+0 0.0 0.0 0.0 1
+1 0.0 0.0 1.0 1
+2 0.0 1.0 0.0 1
+3 0.0 1.0 1.0 1
+4 1.0 0.0 0.0 2
+5 1.0 0.0 1.0 2
+6 1.0 1.0 0.0 2
+7 1.0 1.0 1.0 2
+6 1
+1 0 1
+4 0 1 3 2
+1 0 2
+4 4 6 7 5
+1 0 3
+4 0 4 5 1
+1 0 3
+4 2 3 7 6
+1 0 3
+4 0 2 6 4
+1 0 3
+4 1 5 7 3
+0
+1
+0 0.5 0.5 0.5 7 0.002
+EOF
+tetgen -pq1.4aAzQ box.poly
+mv box.1.node tetgen.node
+mv box.1.ele tetgen.ele
+
+for f in gmsh41.msh gmsh41_bin.msh gmsh22.msh gmsh.vtk gmsh.mesh meshio_zlib.vtu \
+    meshio_ascii.vtu meshio_bin.vtk meshio_ascii.vtk vtk_appended_zlib.vtu tetgen.node \
+    tetgen.ele; do
+    gzip -n -9 -c "$f" > "$here/$f.gz"
+done
+ls -l "$here"

@@ -1,0 +1,115 @@
+#!/bin/sh
+# roundtrip.sh - files come back whole: `qdc optimize IN OUT` with OUT in IN's
+# format gives IN with only the coordinates changed, for files written by Gmsh
+# (MSH 4.1 ASCII/binary, 2.2, VTK, Medit), meshio (VTU zlib and ascii, legacy
+# VTK binary and ascii), a VTK-style appended zlib VTU and TetGen (0-based)
+# from tests/data/real. tests/tools/splicecheck.py masks the coordinate
+# fields with its own parsers and compares the rest byte for byte, then reads
+# both files with meshio (same cells, cell/point/field data) and compares the
+# coordinates with qdc's own Medit output of the same run.
+. "$(dirname "$0")/../lib.sh"
+REAL=$ROOT/tests/data/real
+CHECK=$ROOT/tests/tools/splicecheck.py
+have_meshio=0
+"$PY" -c 'import meshio, numpy' 2> /dev/null && have_meshio=1
+cd "$TMP" || exit 1
+for gz in "$REAL"/*.gz; do
+    gzip -dc "$gz" > "$(basename "$gz" .gz)"
+done
+files="gmsh41.msh gmsh41_bin.msh gmsh22.msh gmsh.vtk gmsh.mesh meshio_zlib.vtu meshio_ascii.vtu
+meshio_bin.vtk meshio_ascii.vtk vtk_appended_zlib.vtu tetgen.node"
+for f in $files; do
+    base=${f%%.*}
+    ext=${f#*.}
+    # read and written unchanged: the very same bytes
+    if "$BIN/qdc" convert "$f" "same.$ext" --quiet 2> err && cmp -s "$f" "same.$ext" &&
+        { [ "$ext" != node ] || cmp -s tetgen.ele same.ele; }; then
+        pass "roundtrip: $f: qdc convert to .$ext gives the same bytes"
+    else
+        fail "roundtrip: $f: convert" "$(cmp "$f" "same.$ext" 2>&1) $(head -2 err)"
+    fi
+    if ! "$BIN/qdc" optimize "$f" "out_$f" --quiet --max-iter 5 2> err ||
+        ! "$BIN/qdc" optimize "$f" "ref_$base.mesh" --quiet --max-iter 5 --no-keep-source \
+            2>> err; then
+        fail "roundtrip: $f: optimize" "$(head -3 err)"
+        continue
+    fi
+    [ -s err ] && fail "roundtrip: $f: no note when the output is spliced" "$(head -2 err)"
+    if [ "$ext" = node ]; then
+        cmp -s tetgen.ele out_tetgen.ele && pass "roundtrip: $f: the .ele comes back unchanged" ||
+            fail "roundtrip: $f: .ele" "$(cmp tetgen.ele out_tetgen.ele 2>&1)"
+    fi
+    if [ $have_meshio = 1 ]; then
+        "$PY" "$CHECK" "$f" "out_$f" "ref_$base.mesh" > chk 2>&1 ||
+            grep -q '^FAIL - ' chk || fail "roundtrip: $f: splicecheck" "$(tail -2 chk)"
+        sed -n 's/^\(ok\|FAIL\) - /\1 - roundtrip: /p' chk
+    else
+        pass "roundtrip: $f: masked comparison # SKIP python3-meshio or numpy missing"
+    fi
+done
+# Gmsh reads the spliced files back
+if command -v gmsh > /dev/null; then
+    for f in out_gmsh41.msh out_gmsh41_bin.msh out_gmsh22.msh; do
+        if gmsh -0 "$f" -o back.msh > log 2>&1 && ! grep -q '^Error' log &&
+            grep -q 'material_1' back.msh; then
+            pass "roundtrip: gmsh reads $f back (physical names kept)"
+        else
+            fail "roundtrip: gmsh reads $f" "$(grep Error log | head -2)"
+        fi
+    done
+else
+    pass "roundtrip: gmsh reads the outputs # SKIP gmsh missing"
+fi
+
+# gzip in, gzip out, the same bytes inside
+gzip -c gmsh41_bin.msh > in.msh.gz
+if "$BIN/qdc" optimize in.msh.gz out.msh.gz --quiet --max-iter 5 2> err &&
+    gzip -t out.msh.gz && gzip -dc out.msh.gz | cmp -s - out_gmsh41_bin.msh; then
+    pass "roundtrip: .msh.gz in, .msh.gz out: the spliced binary file, compressed"
+else
+    fail "roundtrip: gzip" "$(head -2 err)"
+fi
+
+# float32 points stay float32, and the CLI says so
+"$PY" - 2> /dev/null << 'EOF' && have_f32=1 || have_f32=0
+import meshio, numpy as np
+m = meshio.read("meshio_bin.vtk")
+meshio.Mesh(m.points.astype(np.float32), m.cells, point_data=m.point_data,
+            cell_data=m.cell_data).write("f32.vtk")
+EOF
+if [ $have_f32 = 1 ]; then
+    if "$BIN/qdc" optimize f32.vtk out_f32.vtk --max-iter 5 2> err &&
+        grep -q 'out_f32.vtk: coordinates written as float32, as in the input' err &&
+        "$BIN/qdc" optimize f32.vtk ref_f32.mesh --quiet --max-iter 5 --no-keep-source &&
+        "$PY" "$CHECK" f32.vtk out_f32.vtk ref_f32.mesh > chk 2>&1; then
+        pass "roundtrip: float32 VTK points: spliced as float32 (a note says so), equal to qdc's coordinates rounded"
+    else
+        fail "roundtrip: float32" "$(grep -h 'FAIL\|note\|rror' err chk | head -3)"
+    fi
+else
+    pass "roundtrip: float32 VTK points # SKIP python3-meshio missing"
+fi
+
+# Another format, or no source kept: qdc's own writer, and a note says what is kept
+"$BIN/qdc" optimize gmsh41.msh conv.vtu --max-iter 5 2> err
+grep -q 'conv.vtu: written by qdc.s vtu writer (another format, version or encoding than the input.s): only vertices, tets, triangles and their region tags are kept' err &&
+    pass "roundtrip: .msh to .vtu: one note line says what is kept" ||
+    fail "roundtrip: conversion note" "$(grep note err | head -2)"
+"$BIN/qdc" optimize gmsh41.msh conv22.msh --out-format gmsh22 --max-iter 5 2> err
+grep -q 'conv22.msh: written by qdc.s gmsh22 writer' err && ! grep -q PhysicalNames conv22.msh &&
+    pass "roundtrip: MSH 4.1 asked as 2.2 (--out-format): converted, with the note" ||
+    fail "roundtrip: 4.1 -> 2.2" "$(grep note err | head -2)"
+# --reorient rewrites tets: the file cannot be spliced any more, and a note says so
+awk '/Tetrahedra/ { t = 1; print; next } t == 1 && NF == 1 { print; t = 2; next }
+     t == 2 && NF == 5 { print $2, $1, $3, $4, $5; next } { print }' gmsh.mesh > flip.mesh
+"$BIN/qdc" optimize flip.mesh flip_on.mesh --reorient on --max-iter 3 2> err
+"$BIN/qdc" optimize flip.mesh flip_off.mesh --max-iter 3 2> err2
+grep -q 'flip_on.mesh: written by qdc.s medit writer (the connectivity, regions or tags changed since reading)' err &&
+    ! grep -q 'written by' err2 && ! grep -q '^Edges' flip_on.mesh && grep -q 'Edges' flip_off.mesh &&
+    pass "roundtrip: --reorient on: qdc's writer with a note (Edges dropped); off: spliced" ||
+    fail "roundtrip: --reorient" "$(grep note err err2 | head -2)"
+"$BIN/qdc" optimize gmsh41.msh nokeep.msh --no-keep-source --max-iter 5 2> err
+! grep -q note err && ! grep -q PhysicalNames nokeep.msh &&
+    pass "roundtrip: --no-keep-source: qdc's own MSH writer, no note" ||
+    fail "roundtrip: --no-keep-source" "$(head -2 err)"
+exit 0

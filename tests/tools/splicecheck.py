@@ -1,0 +1,314 @@
+#!/usr/bin/python3
+"""splicecheck.py IN OUT [REF.mesh]: is OUT the file IN with only the vertex
+coordinates changed?
+
+Finds the coordinate fields of both files with its own small parsers (Medit
+.mesh, TetGen .node, Gmsh MSH 2.x ASCII and 4.1 ASCII/binary, legacy VTK
+ASCII/binary, VTU ascii/base64/appended, zlib or not), masks them and compares
+what is left byte for byte (for VTU, the offset="" of appended arrays may
+differ too). Then, with meshio: both files read with the same cells, cell,
+point and field data, OUT's coordinates are the numbers in its coordinate
+fields, some of them changed, and, given REF (the same optimization written
+as Medit by qdc), equal to REF's (rounded to float32 if the file stores
+float32). Prints one line per finding; exit 0 if all hold, 1 otherwise.
+"""
+import base64
+import re
+import struct
+import sys
+import zlib
+
+import numpy as np
+
+TOKEN = re.compile(rb"[^\s#]+|#[^\n]*")
+TOKEN_NOHASH = re.compile(rb"\S+")
+
+
+def tokens(b, start=0, hash_comments=True):
+    """(start, end) of each token from start; '#' comments skipped."""
+    for m in (TOKEN if hash_comments else TOKEN_NOHASH).finditer(b, start):
+        if hash_comments and b[m.start()] == ord("#"):
+            continue
+        yield m.start(), m.end()
+
+
+class Fields:
+    def __init__(self):
+        self.ranges = []  # (start, end) of each masked field, in order
+        self.coords = []  # (start, end, kind) of each coordinate: 'text', '<f8', '>f4'...
+        self.width = 8
+
+
+def medit(b):
+    f = Fields()
+    it = tokens(b)
+    for s, e in it:
+        if b[s:e] == b"Vertices":
+            s, e = next(it)
+            n = int(b[s:e])
+            for _ in range(n):
+                for k in range(4):
+                    s, e = next(it)
+                    if k < 3:
+                        f.coords.append((s, e, "text"))
+            break
+    return f
+
+
+def tetgen_node(b):
+    f = Fields()
+    it = tokens(b)
+    head = [int(b[s:e]) for s, e in (next(it) for _ in range(4))]
+    n, _, nattr, nbm = head
+    for _ in range(n):
+        for k in range(4 + nattr + nbm):
+            s, e = next(it)
+            if 1 <= k <= 3:
+                f.coords.append((s, e, "text"))
+    return f
+
+
+def gmsh(b):
+    f = Fields()
+    fmt = b.index(b"$MeshFormat") + len(b"$MeshFormat")
+    ver, ftype, dsize = b[fmt:b.index(b"$EndMeshFormat")].split()[:3]
+    at = b.index(b"\n$Nodes") + len(b"\n$Nodes")
+    at = b.index(b"\n", at) + 1
+    if ver.startswith(b"2"):
+        it = tokens(b, at, False)
+        s, e = next(it)
+        for _ in range(int(b[s:e])):
+            for k in range(4):
+                s, e = next(it)
+                if k:
+                    f.coords.append((s, e, "text"))
+        return f
+    if ftype == b"0":
+        it = tokens(b, at, False)
+        nblk = int(b[slice(*next(it))])
+        for _ in range(3):
+            next(it)
+        for _ in range(nblk):
+            dim, _, par, c = (int(b[slice(*next(it))]) for _ in range(4))
+            for _ in range(c):
+                next(it)
+            for _ in range(c):
+                for k in range(3 + par * dim):
+                    s, e = next(it)
+                    if k < 3:
+                        f.coords.append((s, e, "text"))
+        return f
+    sz = "<Q" if dsize == b"8" else "<I"
+    ds = struct.calcsize(sz)
+    nblk = struct.unpack_from(sz, b, at)[0]
+    at += 4 * ds
+    for _ in range(nblk):
+        dim, _, par = struct.unpack_from("<3i", b, at)
+        c = struct.unpack_from(sz, b, at + 12)[0]
+        at += 12 + ds + c * ds
+        for _ in range(c):
+            for k in range(3):
+                f.coords.append((at + 8 * k, at + 8 * k + 8, "<f8"))
+            at += 8 * (3 + par * dim)
+    return f
+
+
+def vtk(b):
+    f = Fields()
+    m = re.search(rb"\nPOINTS\s+(\d+)\s+(\w+)[^\n]*\n", b)
+    n, t = int(m.group(1)), m.group(2)
+    binary = re.search(rb"^BINARY", b.split(b"\n", 3)[2]) is not None
+    if not binary:
+        it = tokens(b, m.end(), False)
+        for _ in range(3 * n):
+            s, e = next(it)
+            f.coords.append((s, e, "text"))
+        return f
+    w = 4 if t == b"float" else 8
+    f.width = w
+    for i in range(3 * n):
+        f.coords.append((m.end() + w * i, m.end() + w * (i + 1), ">f%d" % w))
+    return f
+
+
+def attr(tag, key):
+    m = re.search(rb"\s" + key + rb'\s*=\s*"([^"]*)"', tag)
+    return m.group(1) if m else None
+
+
+def vtu(b):
+    f = Fields()
+    head = re.search(rb"<VTKFile[^>]*>", b).group(0)
+    big = attr(head, b"byte_order") == b"BigEndian"
+    hsz = 8 if attr(head, b"header_type") == b"UInt64" else 4
+    zl = attr(head, b"compressor") is not None
+    app = b.find(b"<AppendedData")
+    app_data = b.index(b"_", app) + 1 if app >= 0 else -1
+    pts = b.index(b"<Points")
+    tag = re.compile(rb"<DataArray[^>]*>").search(b, pts)
+    t = tag.group(0)
+    w = 4 if attr(t, b"type") == b"Float32" else 8
+    f.width = w
+    kind = (">f%d" if big else "<f%d") % w
+    fmt = attr(t, b"format") or b"ascii"
+    # every appended offset="" may shift
+    for m in re.finditer(rb"<DataArray[^>]*>", b[:app if app >= 0 else len(b)]):
+        if attr(m.group(0), b"format") == b"appended":
+            o = re.search(rb'\soffset\s*=\s*"\s*(\d+)\s*"', m.group(0))
+            f.ranges.append((m.start() + o.start(1), m.start() + o.end(1)))
+    if fmt == b"ascii":
+        end = b.index(b"<", tag.end())
+        for m in TOKEN_NOHASH.finditer(b, tag.end(), end):
+            f.coords.append((m.start(), m.end(), "text"))
+        return f
+    word = (">" if big else "<") + ("Q" if hsz == 8 else "I")
+    if fmt == b"binary":
+        end = b.index(b"<", tag.end())
+        s = tag.end()
+        while b[s:s + 1].isspace():
+            s += 1
+        e = end
+        while b[e - 1:e].isspace():
+            e -= 1
+        f.ranges.append((s, e))
+        f.block = ("b64", s, e, hsz, word, zl, kind)
+        return f
+    off = int(attr(t, b"offset").strip())
+    s = app_data + off
+    if zl:
+        nb = struct.unpack_from(word, b, s)[0]
+        sizes = struct.unpack_from(word[0] + word[1] * (3 + nb), b, s)
+        e = s + (3 + nb) * hsz + sum(sizes[3:])
+    else:
+        e = s + hsz + struct.unpack_from(word, b, s)[0]
+    f.ranges.append((s, e))
+    f.block = ("raw", s, e, hsz, word, zl, kind)
+    return f
+
+
+def block_values(b, blk):
+    """The coordinates of a VTU Points block, decoded."""
+    how, s, e, hsz, word, zl, kind = blk
+    data = base64.b64decode(b[s:e]) if how == "raw" else None
+    if how == "b64":
+        # header and data may be encoded separately, each padded
+        raw = b[s:e]
+        parts = re.findall(rb"[A-Za-z0-9+/]+=*", raw)
+        data = b"".join(base64.b64decode(p + b"=" * (-len(p) % 4)) for p in parts)
+    else:
+        data = b[s:e]
+    if zl:
+        nb = struct.unpack_from(word, data, 0)[0]
+        sizes = struct.unpack_from(word[0] + word[1] * (3 + nb), data, 0)
+        at = (3 + nb) * hsz
+        out = b""
+        for c in sizes[3:]:
+            out += zlib.decompress(data[at:at + c])
+            at += c
+    else:
+        out = data[hsz:hsz + struct.unpack_from(word, data, 0)[0]]
+    return np.frombuffer(out, dtype=np.dtype(kind))
+
+
+def fields(path, b):
+    p = path[:-3] if path.endswith(".gz") else path
+    if p.endswith(".mesh"):
+        return medit(b)
+    if p.endswith(".node"):
+        return tetgen_node(b)
+    if p.endswith(".msh"):
+        return gmsh(b)
+    if p.endswith(".vtk"):
+        return vtk(b)
+    if p.endswith(".vtu"):
+        return vtu(b)
+    raise SystemExit("splicecheck: unknown format: " + path)
+
+
+def masked(b, f):
+    """The bytes between the masked fields."""
+    spans = sorted([(s, e) for s, e, _ in f.coords] + f.ranges)
+    out, pos = [], 0
+    for s, e in spans:
+        assert s >= pos, "overlapping fields"
+        out.append(b[pos:s])
+        pos = e
+    out.append(b[pos:])
+    return out
+
+
+def values(b, f):
+    vals = []
+    for s, e, kind in f.coords:
+        vals.append(float(b[s:e]) if kind == "text" else np.frombuffer(b[s:e], kind)[0])
+    if not f.coords:
+        vals = block_values(b, f.block)
+    return np.array(vals, dtype=float)
+
+
+def meshio_read(path):
+    import meshio
+    if path.endswith(".node"):
+        return meshio.read(path, file_format="tetgen")
+    return meshio.read(path)
+
+
+def main():
+    inp, outp = sys.argv[1], sys.argv[2]
+    ref = sys.argv[3] if len(sys.argv) > 3 else None
+    bi, bo = open(inp, "rb").read(), open(outp, "rb").read()
+    fi, fo = fields(inp, bi), fields(outp, bo)
+    bad = 0
+
+    def check(ok, msg):
+        nonlocal bad
+        print(("ok - " if ok else "FAIL - ") + msg)
+        bad += not ok
+
+    mi, mo = masked(bi, fi), masked(bo, fo)
+    same = len(mi) == len(mo) and all(x == y for x, y in zip(mi, mo))
+    where = ""
+    if not same:
+        k = next((i for i, (x, y) in enumerate(zip(mi, mo)) if x != y), min(len(mi), len(mo)))
+        where = ": segment %d of %d/%d differs: %r vs %r" % (
+            k, len(mi), len(mo), mi[k][:60] if k < len(mi) else b"", mo[k][:60] if k < len(mo) else b"")
+    check(same, "%s: all but the %d coordinate fields byte-identical (%d bytes compared)%s"
+          % (outp, len(fo.coords) or 1, sum(len(x) for x in mo), where))
+    vi, vo = values(bi, fi), values(bo, fo)
+    check(len(vi) == len(vo) and np.any(vi != vo),
+          "%s: %d of %d coordinates changed" % (outp, int(np.sum(vi != vo)) if len(vi) == len(vo) else -1, len(vo)))
+    a, c = meshio_read(inp), meshio_read(outp)
+    pts = c.points.astype(float).ravel()
+    check(np.array_equal(pts, vo), "%s: meshio reads the coordinates in the fields" % outp)
+    cells_same = len(a.cells) == len(c.cells) and all(
+        x.type == y.type and np.array_equal(x.data, y.data) for x, y in zip(a.cells, c.cells))
+    check(cells_same, "%s: meshio reads the same %d cell blocks (%s)" % (
+        outp, len(c.cells), ", ".join("%d %s" % (len(x.data), x.type) for x in c.cells)))
+
+    def same_dict(x, y):
+        if sorted(x) != sorted(y):
+            return False
+        for k in x:
+            u, v = x[k], y[k]
+            if isinstance(u, list):
+                if len(u) != len(v) or not all(np.array_equal(p, q) for p, q in zip(u, v)):
+                    return False
+            elif not np.array_equal(u, v):
+                return False
+        return True
+    check(same_dict(a.cell_data, c.cell_data) and same_dict(a.point_data, c.point_data)
+          and same_dict(a.field_data, c.field_data),
+          "%s: same cell data %s, point data %s, field data %s" % (
+              outp, sorted(c.cell_data), sorted(c.point_data), sorted(c.field_data)))
+    if ref:
+        r = meshio_read(ref).points.astype(float).ravel()
+        if fo.width == 4:
+            r = r.astype(np.float32).astype(float)
+        check(len(r) == len(vo) and np.array_equal(r, vo),
+              "%s: coordinates equal to qdc's own %s%s" % (
+                  outp, ref, " (as float32)" if fo.width == 4 else ""))
+    return 1 if bad else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
