@@ -193,8 +193,11 @@ const listState = { filter: '', jobs: [], first: new Map(), firstBusy: new Set()
 let chosen = null; // {file, name, format, surface, gz}
 
 // The short help shown under a name: the table's text up to its first
-// parenthesis or colon (the whole text is the tooltip).
-const shortHelp = (h) => h.split(/ \(|: /)[0];
+// parenthesis, and up to a colon when still long (the whole text is the tooltip).
+function shortHelp(h) {
+    const s = h.split(' (')[0];
+    return s.length > 60 ? s.split(': ')[0] : s;
+}
 
 let optionsLoading = null;
 function buildOptions() {
@@ -467,6 +470,7 @@ function jobView(id) {
     $('view3d').hidden = true;
     $('view3d-layers').hidden = true;
     $('view3d-load').hidden = false;
+    $('view3d-status').textContent = VIEW3D_HELP;
     $('chart').dataset.points = '0';
     $('hist').dataset.drawn = '0';
     const chartRedraw = () => {
@@ -707,7 +711,11 @@ function renderDownloads(st) {
     $('downloads-input').replaceChildren(...links(items('input', '-input')));
     $('downloads-card').hidden = false;
     $('view3d-card').hidden = false;
-    if (st.job.mesh.tets && st.job.mesh.tets <= 300000 && !st.gl) load3d(st);
+    const nt = st.job.mesh.tets;
+    if (nt && nt <= AUTO_3D_TETS && !st.gl) load3d(st);
+    else if (nt > AUTO_3D_TETS && nt <= MAX_3D_TETS && !st.gl)
+        $('view3d-status').textContent = int(nt) + ' tets: the 3D view loads the input and the result (about 2 × ' +
+            Math.round((24 * st.job.mesh.vertices + 16 * nt) / 1048576) + ' MiB) and finds their boundary and worst tets when asked.';
 }
 
 // A plain link cannot carry the token: with one, fetch the file and save it
@@ -821,7 +829,8 @@ function drawChart(c, recs) {
             if (t < lo - 1e-9 || t > hi + 1e-9) continue;
             const y = Math.round(Y(t)) + 0.5;
             g.beginPath(); g.moveTo(L, y); g.lineTo(w - R, y); g.stroke();
-            g.fillText(String(t), L - 4, y + 4);
+            // kept inside the panel: a bottom label does not run into the next panel's top one
+            g.fillText(String(t), L - 4, Math.max(p.top + 9, Math.min(p.top + p.h - 1, y + 4)));
         }
         g.textAlign = 'left';
         g.fillText(p.label, L + 4, p.top + 11);
@@ -905,6 +914,8 @@ function drawHist(c, r, log) {
 // card says so and the rest of the page is unaffected.
 
 const MAX_3D_TETS = 3000000;
+const VIEW3D_HELP = document.getElementById('view3d-status').textContent;
+const AUTO_3D_TETS = 300000; // loaded with the page up to this size, on request above
 
 async function fetchQmesh(st, what) {
     const res = await api('/v1/jobs/' + st.id + '/' + what + '?format=qmesh');

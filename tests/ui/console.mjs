@@ -473,6 +473,26 @@ try {
         await page.waitForSelector('#jobs tbody tr');
         const ov2 = await page.evaluate(() => [document.documentElement.scrollWidth, window.innerWidth]);
         check(ov2[0] <= ov2[1], 'phone (390 px): the list has no horizontal overflow', ov2.join(' > '));
+        // a browser without WebGL: the job view works, the 3D card says why it is empty
+        const ctx2 = await browser.newContext({ viewport: { width: 1280, height: 900 } });
+        const nogl = await ctx2.newPage();
+        const noglErrors = [];
+        nogl.on('pageerror', (e) => noglErrors.push(e.message));
+        nogl.on('console', (m) => { if (m.type() === 'error') noglErrors.push(m.text()); });
+        await nogl.addInitScript(() => {
+            const get = HTMLCanvasElement.prototype.getContext;
+            HTMLCanvasElement.prototype.getContext = function (kind, ...a) {
+                return /webgl/.test(kind) ? null : get.call(this, kind, ...a);
+            };
+        });
+        await nogl.goto(URL + '/ui/jobs/' + id4);
+        const noglState = await nogl.waitForFunction(() => /WebGL/.test(document.getElementById('view3d-status').textContent) &&
+            +document.getElementById('hist').dataset.drawn > 0 && +document.getElementById('chart').dataset.points > 0 &&
+            document.getElementById('view3d').hidden ? document.getElementById('view3d-status').textContent : null, null, { timeout: 10000 })
+            .then((h) => h.jsonValue()).catch((e) => 'timeout: ' + e.message);
+        check(/not available/.test(noglState) && !noglErrors.length, 'without WebGL: chart, histograms and report shown, the 3D card says "' +
+            noglState.slice(0, 60) + '…", no errors', noglState + ' ' + noglErrors.join(' | '));
+        await ctx2.close();
         // an unknown job (its 404s are the page's business: not counted below)
         const e404 = errors.length;
         await page.goto(URL + '/ui/jobs/' + '0'.repeat(32));
