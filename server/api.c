@@ -31,6 +31,8 @@ enum {
     R_EVENTS,
     R_RESULT,
     R_REPORT,
+    R_INPUT,   /* the job's input mesh: served like R_RESULT */
+    R_OPTIONS, /* the option table */
     R_CANCEL,
     R_LIVEZ,
     R_READYZ,
@@ -62,16 +64,14 @@ static int route_of(const char *url, char *id)
     static const struct {
         const char *path;
         int route;
-    } fixed[] = {{"/livez", R_LIVEZ},
-                 {"/readyz", R_READYZ},
-                 {"/metrics", R_METRICS},
-                 {"/v1/jobs", R_JOBS},
-                 {"/v1/jobs/", R_JOBS}};
+    } fixed[] = {{"/livez", R_LIVEZ},  {"/readyz", R_READYZ}, {"/metrics", R_METRICS},
+                 {"/v1/jobs", R_JOBS}, {"/v1/jobs/", R_JOBS}, {"/v1/options", R_OPTIONS}};
     static const struct {
         const char *suffix;
         int route;
     } sub[] = {{"", R_JOB},           {"/progress", R_PROGRESS}, {"/events", R_EVENTS},
-               {"/result", R_RESULT}, {"/report", R_REPORT},     {":cancel", R_CANCEL}};
+               {"/result", R_RESULT}, {"/report", R_REPORT},     {":cancel", R_CANCEL},
+               {"/input", R_INPUT}};
 
     if (ui_asset_of(url))
         return R_UI;
@@ -1316,12 +1316,35 @@ static enum MHD_Result do_events(struct MHD_Connection *c, req *r)
 
 /* ------------------------------------------------------------ result/report -- */
 
-/* 409 / 410 for a job without a result to give; 0 if it has one. */
+/* The input mesh of a job as the optimizer read it: the upload, or TetGen's
+ * mesh of a surface once the worker has made it. */
+static meshio_format input_source(req *r, const job_rec *j, char *path, size_t cap)
+{
+    int surf = job_is_surface(j->format);
+    job_path(r->q, j->id, surf ? JOB_INPUT_TETS : job_input_name(j->format), path, cap);
+    return surf ? MESHIO_QMESH : meshio_format_from_name(j->format);
+}
+
+/* 409 / 410 for a job without a result (or, GET /input, an input mesh) to
+ * give; 0 if it has one. */
 static int not_servable(struct MHD_Connection *c, req *r, const job_rec *j,
                         enum MHD_Result *ret)
 {
-    char d[200], extra[1200];
+    char d[200], extra[1200], src[4300];
+    int gone = j->purged || j->expires < wall_now();
 
+    if (r->route == R_INPUT && !(job_state_done(j->state) && gone)) {
+        input_source(r, j, src, sizeof src);
+        if (access(src, R_OK) == 0)
+            return 0;
+        if (job_state_done(j->state)) { /* a surface TetGen could not mesh */
+            snprintf(d, sizeof d, "job %s %s before its surface was tetrahedralized",
+                     j->id, job_state_name(j->state));
+            *ret = http_problem(c, r, 409, "no-result", "the job has no input mesh", d,
+                                NULL, NULL);
+            return 1;
+        }
+    }
     if (!job_state_done(j->state)) {
         static const char *const h[] = {MHD_HTTP_HEADER_RETRY_AFTER, "2", NULL};
         snprintf(d, sizeof d, "job %s is %s; poll /v1/jobs/%s/progress", j->id,
@@ -1331,7 +1354,7 @@ static int not_servable(struct MHD_Connection *c, req *r, const job_rec *j,
             http_problem(c, r, 409, "not-ready", "the job has not finished", d, extra, h);
         return 1;
     }
-    if (j->state != JOB_SUCCEEDED) {
+    if (j->state != JOB_SUCCEEDED && r->route != R_INPUT) {
         snprintf(d, sizeof d, "job %s %s and has no result", j->id,
                  job_state_name(j->state));
         snprintf(extra, sizeof extra, "\"state\":\"%s\"%s%s", job_state_name(j->state),
@@ -1340,8 +1363,9 @@ static int not_servable(struct MHD_Connection *c, req *r, const job_rec *j,
             http_problem(c, r, 409, "no-result", "the job has no result", d, extra, NULL);
         return 1;
     }
-    if (j->purged || j->expires < wall_now()) {
-        snprintf(d, sizeof d, "the result of job %s expired and was deleted", j->id);
+    if (gone) {
+        snprintf(d, sizeof d, "the %s of job %s expired and was deleted",
+                 r->route == R_INPUT ? "input" : "result", j->id);
         snprintf(extra, sizeof extra, "\"expired\":%.3f", j->expires);
         *ret = http_problem(c, r, 410, "gone", "result expired", d, extra, NULL);
         return 1;
@@ -1456,7 +1480,8 @@ static int result_format(struct MHD_Connection *c, req *r, meshio_format *out,
 /* The file of the result in format f and its SHA-256 (the strong ETag) when
  * the file exists: the worker writes the binary, JSON and Medit results and
  * their hashes are in the row; other formats are written on first request
- * (process_convert) with the hash beside them in FILE.etag. */
+ * (process_convert) with the hash beside them in FILE.etag, and so is the
+ * input mesh (GET /input) in every format, as input-as.FORMAT. */
 static void result_file(req *r, const job_rec *j, meshio_format f, char *path, size_t cap,
                         char hex[65])
 {
@@ -1464,7 +1489,7 @@ static void result_file(req *r, const job_rec *j, meshio_format f, char *path, s
     const char *known = NULL;
 
     hex[0] = 0;
-    switch (f) {
+    switch (r->route == R_INPUT ? MESHIO_AUTO : f) {
     case MESHIO_QMESH:
         snprintf(name, sizeof name, "result.qmesh");
         known = j->etag_qmesh;
@@ -1478,7 +1503,8 @@ static void result_file(req *r, const job_rec *j, meshio_format f, char *path, s
         known = j->etag_medit;
         break;
     default:
-        snprintf(name, sizeof name, "result.%s", meshio_format_name(f));
+        snprintf(name, sizeof name, "%s.%s", r->route == R_INPUT ? "input-as" : "result",
+                 meshio_format_name(f));
         break;
     }
     job_path(r->q, j->id, name, path, cap);
@@ -1514,8 +1540,9 @@ static enum MHD_Result serve_result(struct MHD_Connection *c, req *r, meshio_for
     return http_reply_file(c, r, 200, path, meshio_media_type(f), h);
 }
 
-/* Converter thread: write the result in r->res_fmt from result.qmesh, hash
- * it, serve it. One thread, so two requests never write the same file. */
+/* Converter thread: write the result in r->res_fmt from result.qmesh (or the
+ * input from its file), hash it, serve it. One thread, so two requests never
+ * write the same file. */
 static enum MHD_Result process_convert(struct MHD_Connection *c, req *r)
 {
     job_rec j;
@@ -1531,10 +1558,14 @@ static enum MHD_Result process_convert(struct MHD_Connection *c, req *r)
     if (hex[0]) /* written for a request queued before this one */
         return serve_result(c, r, r->res_fmt, path, hex);
     qdc_error_clear(&e);
-    job_path(r->q, j.id, "result.qmesh", src, sizeof src);
+    meshio_format sf = MESHIO_QMESH;
+    if (r->route == R_INPUT)
+        sf = input_source(r, &j, src, sizeof src);
+    else
+        job_path(r->q, j.id, "result.qmesh", src, sizeof src);
     snprintf(side, sizeof side, "%s.etag", path);
     double t0 = mono_now();
-    st = meshio_load(src, MESHIO_QMESH, &m, &e);
+    st = meshio_load(src, sf, &m, &e);
     if (st == QDC_OK)
         st = meshio_save(path, r->res_fmt, m, &e);
     mesh_free(m);
@@ -1548,7 +1579,8 @@ static enum MHD_Result process_convert(struct MHD_Connection *c, req *r)
         if (!load_job(c, r, &j, &ret) || not_servable(c, r, &j, &ret))
             return ret;
         unlink(path);
-        snprintf(d, sizeof d, "the result could not be written as %s",
+        snprintf(d, sizeof d, "the %s could not be written as %s",
+                 r->route == R_INPUT ? "input" : "result",
                  meshio_format_name(r->res_fmt));
         /* the library's message names our files: it goes to the log, not out */
         if (r->q->cfg.verbose)
@@ -1566,8 +1598,9 @@ static enum MHD_Result process_convert(struct MHD_Connection *c, req *r)
             return ret;
     }
     if (r->q->cfg.verbose)
-        fprintf(stderr, "qdcd: job %s: result written as %s in %.3f s\n", j.id,
-                meshio_format_name(r->res_fmt), mono_now() - t0);
+        fprintf(stderr, "qdcd: job %s: %s written as %s in %.3f s\n", j.id,
+                r->route == R_INPUT ? "input" : "result", meshio_format_name(r->res_fmt),
+                mono_now() - t0);
     return serve_result(c, r, r->res_fmt, path, hex);
 }
 
@@ -1946,7 +1979,15 @@ enum MHD_Result api_dispatch(struct MHD_Connection *c, req *r, const char *url,
         }
         return do_events(c, r);
     case R_RESULT:
+    case R_INPUT:
         return do_result(c, r);
+    case R_OPTIONS: {
+        sbuf b = {0};
+        job_opt_table_json(&b);
+        enum MHD_Result ret = http_reply_json(c, r, 200, &b, no_headers);
+        sb_free(&b);
+        return ret;
+    }
     case R_REPORT:
         return do_report(c, r);
     case R_CANCEL:

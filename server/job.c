@@ -121,6 +121,60 @@ void job_opt_json(const opt_options *o, sbuf *out)
     sb_puts(out, "}");
 }
 
+/* GET /v1/options: the table as `qdc options` prints it (the same members),
+ * then the daemon's two surface options with TetGen's defaults. */
+void job_opt_table_json(sbuf *out)
+{
+    static const char *const types[] = {"word", "bool", "integer", "number", "hausd"};
+    size_t n;
+    const opt_desc *t = opt_table(&n);
+    opt_options d;
+    tetra_options td;
+    char def[64], range[200];
+
+    opt_defaults(&d);
+    tetra_defaults(&td);
+    sb_puts(out, "{\"options\":[");
+    for (size_t i = 0; i < n; i++) {
+        opt_value_text(&t[i], &d, def, sizeof def);
+        opt_range_text(&t[i], range, sizeof range);
+        sb_printf(out, "%s\n{\"name\":", i ? "," : "");
+        sb_json_str(out, t[i].name);
+        sb_printf(out, ",\"type\":\"%s\",\"default\":", types[t[i].type]);
+        sb_json_str(out, def);
+        sb_puts(out, ",\"valid\":");
+        sb_json_str(out, range);
+        if (t[i].type == OPT_T_INT || t[i].type == OPT_T_REAL)
+            sb_printf(out, ",\"min\":%.17g,\"max\":%.17g,\"min_excluded\":%s", t[i].lo,
+                      t[i].hi, t[i].lo_open ? "true" : "false");
+        if (t[i].type == OPT_T_WORD) {
+            sb_puts(out, ",\"values\":[");
+            for (int w = 0; w < t[i].nwords; w++) {
+                sb_puts(out, w ? "," : "");
+                sb_json_str(out, t[i].words[w]);
+            }
+            sb_puts(out, "]");
+        }
+        sb_puts(out, ",\"help\":");
+        sb_json_str(out, t[i].help);
+        sb_puts(out, "}");
+    }
+    sb_printf(
+        out,
+        ",\n{\"name\":\"tetgen_quality\",\"type\":\"number\",\"default\":\"%g\","
+        "\"valid\":\"0 or >= 1\",\"min\":0,\"max\":1e300,\"min_excluded\":false,"
+        "\"surface\":true,\"help\":\"surfaces: TetGen radius-edge bound (-q); 0: no "
+        "refinement\"}",
+        td.quality);
+    sb_printf(out,
+              ",\n{\"name\":\"max_volume\",\"type\":\"number\",\"default\":\"%g\","
+              "\"valid\":\">= 0\",\"min\":0,\"max\":1e300,\"min_excluded\":false,"
+              "\"surface\":true,\"help\":\"surfaces: TetGen largest tet volume (-a); 0: "
+              "none\"}",
+              td.max_volume);
+    sb_puts(out, "\n]}\n");
+}
+
 int job_opt_from_json(opt_options *o, const char *json, double cap_time)
 {
     json_error_t jerr;
@@ -458,7 +512,10 @@ static int tetrahedralize(worker *w, job_rec *j, opt_options *opts, mesh_t **out
                 "the surface could not be tetrahedralized", detail);
         return 1;
     }
-    unlink(res);
+    /* kept as the job's input mesh (GET /v1/jobs/{id}/input) */
+    job_path(q, j->id, JOB_INPUT_TETS, in, sizeof in);
+    if (rename(res, in))
+        unlink(res);
     j->nv = (*out)->nv;
     j->nt = (*out)->nt;
     opts->time_limit = budget - cr.seconds > 0.001 ? budget - cr.seconds : 0.001;

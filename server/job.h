@@ -30,6 +30,14 @@ void job_opt_json(const opt_options *o, sbuf *out);
 /* Rebuild options from job_opt_json output. */
 int job_opt_from_json(opt_options *o, const char *json, double cap_time);
 
+/* GET /v1/options: the option table (names, types, defaults, ranges, help) as
+ * `qdc options` prints it, plus tetgen_quality and max_volume ("surface": true),
+ * as {"options": [...]}. */
+void job_opt_table_json(sbuf *out);
+
+/* A surface job's tet mesh (TetGen's), kept beside its input once the worker
+ * has read it: the mesh the optimizer started from. */
+#define JOB_INPUT_TETS "input-tets.qmesh"
 /* Input file name of a job for its format name ("input.qmesh", "input.stl"...). */
 const char *job_input_name(const char *format);
 /* Is format (a job's) a surface format, tetrahedralized by the worker? */

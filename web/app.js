@@ -179,19 +179,12 @@ window.addEventListener('popstate', route);
 
 // ---------------------------------------------------------------- job list --
 
-// The options the form offers, with the library's defaults (lib/opt/options.c,
-// `qdc options`; tests/server/ui.sh checks these against it).
-const OPTIONS = [
-    { name: 'metric', type: 'word', def: 'mivl', values: ['mivl', 'mimr', 'micn'], help: 'quality metric' },
-    { name: 'boundary', type: 'word', def: 'lsq', values: ['lsq', 'fixed', 'slide'], help: 'boundary handling' },
-    { name: 'max_iter', type: 'integer', def: '10', min: 0, max: 10000, help: 'global iterations' },
-    { name: 'mode', type: 'word', def: 'safe', values: ['safe', 'literal'], help: 'safeguarded, or the paper as written' },
-    { name: 'hausd', type: 'hausd', def: '0', help: 'Hausdorff bound: H, P% or rel:F (0 = none)' },
-    { name: 'time_limit', type: 'number', def: '0', min: 0, help: 'seconds (0 = none)' },
-    { name: 'finish', type: 'bool', def: 'on', help: 'worst-tet finishing pass' },
-    { name: 'angle_polish', type: 'bool', def: 'on', help: 'then raise the smallest dihedral angles' },
-    { name: 'tetgen_quality', type: 'number', def: '2', min: 0, surface: true, help: 'surfaces: TetGen radius-edge bound (-q)' },
-];
+// The options the form offers: their types, valid values, defaults and help
+// come from GET /v1/options (the library's table, as `qdc options` prints it),
+// so a new default shows here without touching the page.
+const MAIN_OPTIONS = ['metric', 'boundary', 'hausd', 'max_iter', 'stall', 'mode', 'time_limit',
+    'finish', 'angle_polish', 'tetgen_quality'];
+let OPTIONS = []; // the table's entries named in MAIN_OPTIONS, in that order
 
 const MESH_EXT = { mesh: 'medit', qmesh: 'qmesh', json: 'json', msh: 'gmsh', vtk: 'vtk', vtu: 'vtu' };
 const SURF_EXT = { stl: 'stl', obj: 'obj', off: 'off', poly: 'poly', smesh: 'smesh' };
@@ -199,31 +192,46 @@ const SURF_EXT = { stl: 'stl', obj: 'obj', off: 'off', poly: 'poly', smesh: 'sme
 const listState = { filter: '', jobs: [], first: new Map(), firstBusy: new Set() };
 let chosen = null; // {file, name, format, surface, gz}
 
+// The short help shown under a name: the table's text up to its first
+// parenthesis, and up to a colon when still long (the whole text is the tooltip).
+function shortHelp(h) {
+    const s = h.split(' (')[0];
+    return s.length > 60 ? s.split(': ')[0] : s;
+}
+
+let optionsLoading = null;
 function buildOptions() {
     const box = $('opts');
-    if (box.childElementCount) return;
-    for (const o of OPTIONS) {
-        let input;
-        if (o.type === 'word') {
-            input = el('select', { name: o.name }, ...o.values.map((v) => el('option', { value: v, text: v })));
-            input.value = o.def;
-        } else if (o.type === 'bool') {
-            input = el('input', { type: 'checkbox', name: o.name });
-            input.checked = o.def === 'on';
-        } else {
-            input = el('input', { type: o.type === 'hausd' ? 'text' : 'number', name: o.name, value: o.def,
-                min: o.min !== undefined ? String(o.min) : null, max: o.max !== undefined ? String(o.max) : null,
-                step: o.type === 'integer' ? '1' : 'any' });
+    if (box.childElementCount || optionsLoading) return;
+    optionsLoading = apiJSON('/v1/options').then((b) => {
+        OPTIONS = MAIN_OPTIONS.map((n) => b.options.find((o) => o.name === n)).filter(Boolean);
+        for (const o of OPTIONS) {
+            let input;
+            if (o.type === 'word') {
+                input = el('select', { name: o.name }, ...o.values.map((v) => el('option', { value: v, text: v })));
+                input.value = o.default;
+            } else if (o.type === 'bool') {
+                input = el('input', { type: 'checkbox', name: o.name });
+                input.checked = o.default === 'on';
+            } else {
+                input = el('input', { type: o.type === 'hausd' ? 'text' : 'number', name: o.name, value: o.default,
+                    min: o.min !== undefined ? String(o.min) : null, max: o.max !== undefined && o.max < 1e100 ? String(o.max) : null,
+                    step: o.type === 'integer' ? '1' : 'any' });
+            }
+            input.dataset.default = o.default;
+            const title = o.help + ' (valid: ' + o.valid + ')';
+            const def = el('span', { class: 'def', text: 'default ' + o.default + ' · ' + shortHelp(o.help) });
+            const label = o.type === 'bool'
+                ? el('label', { class: 'check', title }, input, el('span', {}, o.name + ' ', def))
+                : el('label', { title }, el('span', {}, o.name + ' ', def), input);
+            if (o.surface) label.dataset.surface = '1';
+            box.append(label);
         }
-        input.dataset.default = o.def;
-        const def = el('span', { class: 'def', text: 'default ' + o.def + ' · ' + o.help });
-        const label = o.type === 'bool'
-            ? el('label', { class: 'check', title: o.help }, input, el('span', {}, o.name + ' ', def))
-            : el('label', { title: o.help }, el('span', {}, o.name + ' ', def), input);
-        if (o.surface) label.dataset.surface = '1';
-        box.append(label);
-    }
-    surfaceOptions(false);
+        surfaceOptions(chosen ? chosen.surface : false);
+    }).catch((e) => {
+        $('submit-error').textContent = 'The option table (GET /v1/options) did not load: ' + (e.message || e);
+        $('submit-error').hidden = false;
+    }).finally(() => { optionsLoading = null; });
 }
 
 function surfaceOptions(on) {
@@ -256,7 +264,7 @@ function optionQuery() {
         const input = $('opts').querySelector('[name="' + o.name + '"]');
         if (o.surface && !chosen.surface) continue;
         const v = o.type === 'bool' ? (input.checked ? 'on' : 'off') : input.value.trim();
-        if (v !== '' && v !== o.def) q.set(o.name, v);
+        if (v !== '' && v !== o.default) q.set(o.name, v);
     }
     return q.toString();
 }
@@ -423,6 +431,7 @@ function listView() {
     };
     const tick = async () => {
         if (stopped) return;
+        buildOptions(); // again if the table did not load the first time
         if (!document.hidden) await refreshList();
         if (!stopped) timer = setTimeout(tick, 1500);
     };
@@ -459,7 +468,9 @@ function jobView(id) {
     $('downloads-card').hidden = true;
     $('view3d-card').hidden = true;
     $('view3d').hidden = true;
+    $('view3d-layers').hidden = true;
     $('view3d-load').hidden = false;
+    $('view3d-status').textContent = VIEW3D_HELP;
     $('chart').dataset.points = '0';
     $('hist').dataset.drawn = '0';
     const chartRedraw = () => {
@@ -661,19 +672,26 @@ function renderReport(st) {
     for (const d of [175, 165, 150, 140]) th.push(['largest angle > ' + d + '°', int(b['n_dmax_gt_' + d]), int(a['n_dmax_gt_' + d])]);
     kvTable($('threshold-table'), ['tets', 'before', 'after'], th);
     const be = r.boundary_error || {};
-    const pct = (x) => (typeof x === 'number' ? (100 * x).toPrecision(3) + '% of diagonal' : '');
-    kvTable($('boundary-table'), ['', 'absolute', 'relative'], [
-        ['Hausdorff', be.hausdorff !== undefined ? be.hausdorff.toPrecision(4) : '–', pct(be.hausdorff_rel)],
-        ['mean', be.mean !== undefined ? be.mean.toPrecision(4) : '–', pct(be.mean_rel)],
-        ['rms', be.rms !== undefined ? be.rms.toPrecision(4) : '–', pct(be.rms_rel)],
-        ['bound (hausd)', r.run && r.run.hausd_bound ? String(r.run.hausd_bound) : 'none', ''],
-    ]);
+    const pct = (x) => (typeof x === 'number' ? (100 * x).toPrecision(3) + '%' : '');
     const run = r.run || {};
+    const abs = (x) => (typeof x === 'number' ? x.toPrecision(4) : '–');
+    const rel = (x) => (typeof x === 'number' && be.bbox_diagonal > 0 ? pct(x / be.bbox_diagonal) : '');
+    kvTable($('boundary-table'), ['', 'absolute', '% of diagonal'], [
+        ['Hausdorff', abs(be.hausdorff), pct(be.hausdorff_rel)],
+        ['mean', abs(be.mean), pct(be.mean_rel)],
+        ['rms', abs(be.rms), pct(be.rms_rel)],
+        ['vertex off the surface (max)', abs(be.vertex_max), pct(be.vertex_max_rel)],
+        // hausd=H|P%|rel:F bounds the distance; auto (with slide) bounds how far a vertex leaves the surface
+        run.hausd_bound ? ['bound (hausd)', abs(run.hausd_bound), rel(run.hausd_bound)]
+            : run.lift_bound ? ['bound (auto: vertex off the surface)', abs(run.lift_bound), rel(run.lift_bound)]
+                : ['bound (hausd)', 'none', ''],
+    ]);
     const sec = run.seconds || {};
     kvTable($('run-table'), ['', ''], [
         ['outcome', (run.outcome || '–') + (run.stop_reason ? ' (' + run.stop_reason + ')' : '')],
         ['iterations', String(run.iterations) + (run.best_iteration !== undefined ? ', best record ' + run.best_iteration : '')],
         ['solver', run.solver || '–'],
+        ...(run.held_back ? [['vertices held back at their input position', int(run.held_back)]] : []),
         ...Object.entries(sec).map(([k, v]) => [k + ' time', dur(v)]),
     ]);
 }
@@ -683,13 +701,21 @@ function renderDownloads(st) {
     if (box.dataset.id === st.id) return;
     box.dataset.id = st.id;
     const base = '/v1/jobs/' + st.id;
-    const items = FORMATS.map(([f, ext, label]) => [base + '/result?format=' + f, 'qdc-' + short(st.id) + (f.includes('-') || f === 'gmsh22' ? '-' + f : '') + '.' + ext, label, f]);
-    items.push([base + '/report', 'qdc-' + short(st.id) + '-report.json', 'report (JSON)', 'report']);
-    box.replaceChildren(...items.map(([href, name, label, f]) =>
-        el('a', { class: 'button small', href, download: name, 'data-format': f, text: label, onclick: (ev) => authDownload(ev, href, name) })));
+    const items = (what, tag) => FORMATS.map(([f, ext, label]) => [base + '/' + what + '?format=' + f,
+        'qdc-' + short(st.id) + tag + (f.includes('-') || f === 'gmsh22' ? '-' + f : '') + '.' + ext, label, f]);
+    const links = (list) => list.map(([href, name, label, f]) =>
+        el('a', { class: 'button small', href, download: name, 'data-format': f, text: label, onclick: (ev) => authDownload(ev, href, name) }));
+    const res = items('result', '');
+    res.push([base + '/report', 'qdc-' + short(st.id) + '-report.json', 'report (JSON)', 'report']);
+    box.replaceChildren(...links(res));
+    $('downloads-input').replaceChildren(...links(items('input', '-input')));
     $('downloads-card').hidden = false;
     $('view3d-card').hidden = false;
-    if (st.job.mesh.tets && st.job.mesh.tets <= 300000 && !st.gl) load3d(st);
+    const nt = st.job.mesh.tets;
+    if (nt && nt <= AUTO_3D_TETS && !st.gl) load3d(st);
+    else if (nt > AUTO_3D_TETS && nt <= MAX_3D_TETS && !st.gl)
+        $('view3d-status').textContent = int(nt) + ' tets: the 3D view loads the input and the result (about 2 × ' +
+            Math.round((24 * st.job.mesh.vertices + 16 * nt) / 1048576) + ' MiB) and finds their boundary and worst tets when asked.';
 }
 
 // A plain link cannot carry the token: with one, fetch the file and save it
@@ -803,7 +829,8 @@ function drawChart(c, recs) {
             if (t < lo - 1e-9 || t > hi + 1e-9) continue;
             const y = Math.round(Y(t)) + 0.5;
             g.beginPath(); g.moveTo(L, y); g.lineTo(w - R, y); g.stroke();
-            g.fillText(String(t), L - 4, y + 4);
+            // kept inside the panel: a bottom label does not run into the next panel's top one
+            g.fillText(String(t), L - 4, Math.max(p.top + 9, Math.min(p.top + p.h - 1, y + 4)));
         }
         g.textAlign = 'left';
         g.fillText(p.label, L + 4, p.top + 11);
@@ -881,11 +908,20 @@ function drawHist(c, r, log) {
 }
 
 // ------------------------------------------------------------------ 3D view --
-// The result's boundary triangles (faces of exactly one tet) and its worst
-// tets by mean ratio, in WebGL with no library. Optional: without WebGL the
+// The result's boundary triangles (faces of exactly one tet), the input's
+// worst tets (orange) and the result's (red) by mean ratio, in WebGL with no
+// library; two checkboxes show or hide each set. Optional: without WebGL the
 // card says so and the rest of the page is unaffected.
 
 const MAX_3D_TETS = 3000000;
+const VIEW3D_HELP = document.getElementById('view3d-status').textContent;
+const AUTO_3D_TETS = 300000; // loaded with the page up to this size, on request above
+
+async function fetchQmesh(st, what) {
+    const res = await api('/v1/jobs/' + st.id + '/' + what + '?format=qmesh');
+    if (!res.ok) throw problem(res.status, await res.json().catch(() => null));
+    return parseQmesh(await res.arrayBuffer());
+}
 
 async function load3d(st) {
     const status = $('view3d-status');
@@ -896,29 +932,40 @@ async function load3d(st) {
         return;
     }
     const canvas = $('view3d');
-    const gl = canvas.getContext('webgl', { antialias: true });
+    // preserveDrawingBuffer: the picture can be read back (a screenshot, a test)
+    const gl = canvas.getContext('webgl', { antialias: true, preserveDrawingBuffer: true });
     if (!gl) {
         status.textContent = 'No WebGL in this browser: the 3D view is not available (everything else is).';
         return;
     }
-    status.textContent = 'loading the result (' + int(nt) + ' tets)…';
-    let mesh;
-    try {
-        const res = await api('/v1/jobs/' + st.id + '/result?format=qmesh');
-        if (!res.ok) throw problem(res.status, await res.json().catch(() => null));
-        mesh = parseQmesh(await res.arrayBuffer());
-    } catch (e) {
-        status.textContent = 'The 3D view could not load the result: ' + (e.message || e);
+    status.textContent = 'loading the input and the result (' + int(nt) + ' tets each)…';
+    const t0 = performance.now();
+    const [inp, out] = await Promise.allSettled([fetchQmesh(st, 'input'), fetchQmesh(st, 'result')]);
+    if (out.status === 'rejected') {
+        status.textContent = 'The 3D view could not load the result: ' + (out.reason.message || out.reason);
         return;
     }
     if (st.stopped) return;
-    const t0 = performance.now();
-    const geo = surfaceGeometry(mesh);
+    const t1 = performance.now();
+    const result = out.value;
+    const frame = unitFrame(result);
+    const surf = surfaceTriangles(result, frame);
+    const after = worstTets(result, frame);
+    const before = inp.status === 'fulfilled' && inp.value.nt ? worstTets(inp.value, frame) : null;
     canvas.hidden = false;
-    st.gl = viewer(canvas, gl, geo);
-    status.textContent = int(geo.nsurf) + ' boundary triangles; in red the ' + geo.nworst +
-        ' worst tets (mean ratio ≤ ' + fix(geo.worstQ, 3) + '). Drag to rotate, wheel or pinch to zoom. (' +
-        Math.round(performance.now() - t0) + ' ms to build)';
+    $('view3d-layers').hidden = false;
+    $('view3d-before').disabled = !before;
+    st.gl = viewer(canvas, gl, [
+        { name: 'before', data: before ? before.buf : new Float32Array(0), color: [0.98, 0.58, 0.1, 1], box: $('view3d-before') },
+        { name: 'after', data: after.buf, color: [0.95, 0.16, 0.16, 1], box: $('view3d-after') },
+        { name: 'surface', data: surf.buf, color: [0.75, 0.82, 0.92, 0.35], blend: true },
+    ]);
+    const ms = (t) => Math.round(t) + ' ms';
+    status.textContent = int(surf.n) + ' boundary triangles of the result; ' +
+        (before ? 'in orange the input\'s ' + before.n + ' worst tets (mean ratio ≤ ' + sgn(before.q, 3) + '), '
+            : 'the input is not available (' + (inp.reason && (inp.reason.message || inp.reason)) + '), ') +
+        'in red the result\'s ' + after.n + ' worst (≤ ' + sgn(after.q, 3) + '). Drag to rotate, wheel or pinch to zoom. (' +
+        ms(t1 - t0) + ' to load, ' + ms(performance.now() - t1) + ' to build)';
 }
 
 function parseQmesh(buf) {
@@ -948,10 +995,43 @@ function meanRatio(x, a, b, c, d) {
     return det < 0 ? -q : q;
 }
 
-function surfaceGeometry(m) {
-    const { nv, nt, xyz, tets } = m;
-    // Faces bucketed by their smallest vertex; a face seen once is boundary.
-    const F = [[1, 2, 3], [0, 3, 2], [0, 1, 3], [0, 2, 1]];
+// The faces of a tet, outward for a positive one.
+const FACES = [[1, 2, 3], [0, 3, 2], [0, 1, 3], [0, 2, 1]];
+
+// Bounding box -> the cube [-1, 1]^3 around the origin (both meshes use the
+// result's, so the input's tets land where they were).
+function unitFrame(m) {
+    const mn = [Infinity, Infinity, Infinity], mx = [-Infinity, -Infinity, -Infinity];
+    for (let i = 0; i < m.nv; i++) for (let k = 0; k < 3; k++) {
+        const v = m.xyz[3 * i + k];
+        if (v < mn[k]) mn[k] = v;
+        if (v > mx[k]) mx[k] = v;
+    }
+    const ctr = [0, 1, 2].map((k) => (mn[k] + mx[k]) / 2);
+    const sc = 2 / Math.max(mx[0] - mn[0], mx[1] - mn[1], mx[2] - mn[2], 1e-300);
+    return { ctr, sc };
+}
+
+// Append triangle a b c of mesh m (flat normal) to out at o: 3 x (xyz, normal).
+function putTri(out, o, m, fr, a, b, c) {
+    const x = m.xyz, p = [];
+    for (const v of [a, b, c]) p.push((x[3 * v] - fr.ctr[0]) * fr.sc, (x[3 * v + 1] - fr.ctr[1]) * fr.sc, (x[3 * v + 2] - fr.ctr[2]) * fr.sc);
+    const ux = p[3] - p[0], uy = p[4] - p[1], uz = p[5] - p[2];
+    const vx = p[6] - p[0], vy = p[7] - p[1], vz = p[8] - p[2];
+    let nx = uy * vz - uz * vy, ny = uz * vx - ux * vz, nz = ux * vy - uy * vx;
+    const l = Math.hypot(nx, ny, nz) || 1;
+    nx /= l; ny /= l; nz /= l;
+    for (let k = 0; k < 3; k++) {
+        out[o++] = p[3 * k]; out[o++] = p[3 * k + 1]; out[o++] = p[3 * k + 2];
+        out[o++] = nx; out[o++] = ny; out[o++] = nz;
+    }
+    return o;
+}
+
+// The boundary: faces bucketed by their smallest vertex; a face seen once.
+function surfaceTriangles(m, fr) {
+    const { nv, nt, tets } = m;
+    const F = FACES;
     const cnt = new Int32Array(nv + 1);
     for (let t = 0; t < nt; t++) for (let f = 0; f < 4; f++) {
         const a = tets[4 * t + F[f][0]], b = tets[4 * t + F[f][1]], c = tets[4 * t + F[f][2]];
@@ -977,47 +1057,39 @@ function surfaceGeometry(m) {
             if (twin >= 0) seen[twin] = 1; else surf.push(fid[i]);
         }
     }
-    // worst tets by mean ratio
-    const q = new Float64Array(nt);
-    for (let t = 0; t < nt; t++) q[t] = meanRatio(xyz, tets[4 * t], tets[4 * t + 1], tets[4 * t + 2], tets[4 * t + 3]);
-    const nworst = Math.min(nt, Math.max(10, Math.min(200, Math.ceil(nt * 0.002))));
-    const order = Array.from({ length: nt }, (_, i) => i);
-    const idx = nt > 50000 ? order.filter((i) => q[i] < 0.35) : order;
-    (idx.length >= nworst ? idx : order).sort((i, j) => q[i] - q[j]);
-    const worst = (idx.length >= nworst ? idx : order).slice(0, nworst);
-    // bounding box -> unit cube around the origin
-    let mn = [Infinity, Infinity, Infinity], mx = [-Infinity, -Infinity, -Infinity];
-    for (let i = 0; i < nv; i++) for (let k = 0; k < 3; k++) {
-        const v = xyz[3 * i + k];
-        if (v < mn[k]) mn[k] = v;
-        if (v > mx[k]) mx[k] = v;
-    }
-    const ctr = [0, 1, 2].map((k) => (mn[k] + mx[k]) / 2);
-    const sc = 2 / Math.max(mx[0] - mn[0], mx[1] - mn[1], mx[2] - mn[2], 1e-300);
-    const tri = (out, o, a, b, c) => {
-        const p = [a, b, c].map((v) => [0, 1, 2].map((k) => (xyz[3 * v + k] - ctr[k]) * sc));
-        const ux = p[1][0] - p[0][0], uy = p[1][1] - p[0][1], uz = p[1][2] - p[0][2];
-        const vx = p[2][0] - p[0][0], vy = p[2][1] - p[0][1], vz = p[2][2] - p[0][2];
-        let nx = uy * vz - uz * vy, ny = uz * vx - ux * vz, nz = ux * vy - uy * vx;
-        const l = Math.hypot(nx, ny, nz) || 1;
-        nx /= l; ny /= l; nz /= l;
-        for (let k = 0; k < 3; k++) {
-            out[o++] = p[k][0]; out[o++] = p[k][1]; out[o++] = p[k][2];
-            out[o++] = nx; out[o++] = ny; out[o++] = nz;
-        }
-        return o;
-    };
-    const sbuf = new Float32Array(surf.length * 18);
+    const buf = new Float32Array(surf.length * 18);
     let o = 0;
     for (const fidx of surf) {
         const t = fidx >> 2, f = fidx & 3;
-        o = tri(sbuf, o, tets[4 * t + F[f][0]], tets[4 * t + F[f][1]], tets[4 * t + F[f][2]]);
+        o = putTri(buf, o, m, fr, tets[4 * t + F[f][0]], tets[4 * t + F[f][1]], tets[4 * t + F[f][2]]);
     }
-    const wbuf = new Float32Array(worst.length * 4 * 18);
-    o = 0;
-    for (const t of worst) for (let f = 0; f < 4; f++)
-        o = tri(wbuf, o, tets[4 * t + F[f][0]], tets[4 * t + F[f][1]], tets[4 * t + F[f][2]]);
-    return { surf: sbuf, worst: wbuf, nsurf: surf.length, nworst: worst.length, worstQ: worst.length ? q[worst[worst.length - 1]] : NaN };
+    return { buf, n: surf.length };
+}
+
+// The worst tets by mean ratio (0.2% of them, 10 to 200), as their four faces.
+// Candidates below a threshold taken from a 1024-bin histogram, so only a few
+// are sorted even on a million tets.
+function worstTets(m, fr) {
+    const { nt, xyz, tets } = m;
+    const q = new Float64Array(nt);
+    const bins = new Int32Array(1024);
+    const bin = (v) => Math.max(0, Math.min(1023, Math.floor((v + 1) * 512)));
+    for (let t = 0; t < nt; t++) {
+        q[t] = meanRatio(xyz, tets[4 * t], tets[4 * t + 1], tets[4 * t + 2], tets[4 * t + 3]);
+        bins[bin(q[t])]++;
+    }
+    const n = Math.min(nt, Math.max(10, Math.min(200, Math.ceil(nt * 0.002))));
+    let last = 0;
+    for (let acc = 0; last < 1024 && (acc += bins[last]) < n; last++);
+    const cand = [];
+    for (let t = 0; t < nt; t++) if (bin(q[t]) <= last) cand.push(t);
+    cand.sort((i, j) => q[i] - q[j]);
+    const worst = cand.slice(0, n);
+    const buf = new Float32Array(worst.length * 4 * 18);
+    let o = 0;
+    for (const t of worst) for (const f of FACES)
+        o = putTri(buf, o, m, fr, tets[4 * t + f[0]], tets[4 * t + f[1]], tets[4 * t + f[2]]);
+    return { buf, n: worst.length, q: worst.length ? q[worst[worst.length - 1]] : NaN };
 }
 
 // 4x4 column-major matrices
@@ -1043,7 +1115,9 @@ function rotation(yaw, pitch) {
     return mul(rx, ry);
 }
 
-function viewer(canvas, gl, geo) {
+// layers: [{name, data (Float32Array of xyz+normal), color [r,g,b,a], blend,
+// box (a checkbox that shows/hides it)}]; opaque layers are drawn first.
+function viewer(canvas, gl, layers) {
     const vs = 'attribute vec3 p; attribute vec3 n; uniform mat4 mvp; uniform mat4 rot; varying vec3 vn;' +
         'void main() { gl_Position = mvp * vec4(p, 1.0); vn = (rot * vec4(n, 0.0)).xyz; }';
     const fs = 'precision mediump float; varying vec3 vn; uniform vec4 color;' +
@@ -1062,8 +1136,8 @@ function viewer(canvas, gl, geo) {
     const P = gl.getAttribLocation(prog, 'p'), N = gl.getAttribLocation(prog, 'n');
     const U = { mvp: gl.getUniformLocation(prog, 'mvp'), rot: gl.getUniformLocation(prog, 'rot'), color: gl.getUniformLocation(prog, 'color') };
     const mk = (data) => { const b = gl.createBuffer(); gl.bindBuffer(gl.ARRAY_BUFFER, b); gl.bufferData(gl.ARRAY_BUFFER, data, gl.STATIC_DRAW); return { b, n: data.length / 6 }; };
-    const surf = mk(geo.surf), worst = mk(geo.worst);
-    const cam = { yaw: 0.6, pitch: 0.4, dist: 3.6 };
+    const bufs = layers.map((l) => Object.assign(mk(l.data), l));
+    const cam = { yaw: 0.6, pitch: 0.4, dist: 3.0 };
     let queued = false, stopped = false;
     const bind = (buf) => {
         gl.bindBuffer(gl.ARRAY_BUFFER, buf.b);
@@ -1087,19 +1161,25 @@ function viewer(canvas, gl, geo) {
         gl.uniformMatrix4fv(U.mvp, false, mvp);
         gl.uniformMatrix4fv(U.rot, false, rot);
         gl.enable(gl.DEPTH_TEST);
-        gl.disable(gl.BLEND);
+        const shown = bufs.filter((l) => l.n && (!l.box || l.box.checked));
+        const opaque = shown.some((l) => !l.blend);
+        for (const l of shown) {
+            gl.depthMask(!l.blend);
+            if (l.blend) {
+                gl.enable(gl.BLEND);
+                gl.blendFunc(gl.SRC_ALPHA, gl.ONE_MINUS_SRC_ALPHA);
+            } else {
+                gl.disable(gl.BLEND);
+            }
+            bind(l);
+            // alone, the surface is drawn nearly opaque
+            gl.uniform4f(U.color, l.color[0], l.color[1], l.color[2], l.blend && !opaque ? 0.9 : l.color[3]);
+            gl.drawArrays(gl.TRIANGLES, 0, l.n);
+        }
         gl.depthMask(true);
-        bind(worst);
-        gl.uniform4f(U.color, 0.95, 0.2, 0.2, 1);
-        gl.drawArrays(gl.TRIANGLES, 0, worst.n);
-        gl.enable(gl.BLEND);
-        gl.blendFunc(gl.SRC_ALPHA, gl.ONE_MINUS_SRC_ALPHA);
-        gl.depthMask(false);
-        bind(surf);
-        gl.uniform4f(U.color, 0.75, 0.82, 0.92, worst.n ? 0.35 : 0.9);
-        gl.drawArrays(gl.TRIANGLES, 0, surf.n);
-        gl.depthMask(true);
-        canvas.dataset.triangles = String(surf.n / 3);
+        canvas.dataset.layers = shown.map((l) => l.name + ':' + l.n / 3).join(' ');
+        const surf = bufs.find((l) => l.name === 'surface');
+        canvas.dataset.triangles = String(surf ? surf.n / 3 : 0);
     };
     const redraw = () => { if (!queued) { queued = true; requestAnimationFrame(draw); } };
     const ptrs = new Map();
@@ -1128,6 +1208,7 @@ function viewer(canvas, gl, geo) {
         redraw();
     }, { passive: false });
     window.addEventListener('resize', redraw);
+    for (const l of layers) if (l.box) l.box.onchange = redraw;
     redraw();
     return { stop: () => { stopped = true; window.removeEventListener('resize', redraw); } };
 }

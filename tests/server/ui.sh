@@ -7,10 +7,18 @@
 # submitted through the file input, the chart growing while a job runs, the
 # histograms, downloads checked with `qdc quality`, cancel/delete/filter, a
 # phone-sized layout, no console errors, and the token prompt with --tokens.
-# Screenshots of the list and of a job go to docs/ui-list.png, docs/ui-job.png.
+# Before the browser: GET /v1/options (the form's table) and GET /input (the
+# job's input mesh: every format, Accept, ETag, 404/409, a surface's TetGen
+# mesh) with curl; their token rules on the --tokens daemon. The screenshot
+# job is a default-mode run submitted with the form untouched; its 3D view
+# must show the input's worst tets (orange) and the result's (red).
+# Screenshots go to build/ui-shots, or to UI_SHOTS (UI_SHOTS=docs remakes
+# docs/ui-list.png, ui-job.png, ui-phone.png for the README). UI_1M=1 adds the
+# view of a finished ~1M-tet job (a few minutes; not in the default run).
 # Without chromium or npm the browser part prints # SKIP lines.
 . "$(dirname "$0")/../lib.sh"
 . "$(dirname "$0")/daemon.inc"
+SAMPLE=$ROOT/tests/data/sample/cube.mesh
 
 start_qdcd "$TMP/d" --workers 1 || { fail "start" "$(tail -3 "$TMP/d.log")"; exit 1; }
 
@@ -72,6 +80,117 @@ else
     pass "web/ names no other origin (the page needs nothing beyond qdcd)"
 fi
 
+# --------------------------------------------- /v1/options, /input (curl) --
+# the page's form is built from /v1/options: the library's table as `qdc options`
+"$BIN/qdc" options > "$TMP/options.json"
+code=$(req GET /v1/options "$TMP/opts")
+if [ "$code" = 200 ] && jq -e --slurpfile t "$TMP/options.json" \
+    '[.options[] | select(.surface | not)] == $t[0] and ([.options[] | select(.surface) | .name] == ["tetgen_quality", "max_volume"])' \
+    "$TMP/opts" > /dev/null; then
+    pass "GET /v1/options: the $(jq length "$TMP/options.json") options of \`qdc options\` (same members), then tetgen_quality and max_volume for surfaces"
+else
+    fail "/v1/options" "status $code $(head -c 300 "$TMP/opts")"
+fi
+
+# wait_done ID: the final state
+wait_done() {
+    _i=0
+    while [ $_i -lt 600 ]; do
+        curl -s "$URL/v1/jobs/$1" > "$TMP/job.$1"
+        [ "$(jf "$TMP/job.$1" .done)" = true ] && { jf "$TMP/job.$1" .state; return; }
+        sleep 0.1
+        _i=$((_i + 1))
+    done
+    echo timeout
+}
+ext_of() { case $1 in medit) echo mesh ;; gmsh*) echo msh ;; vtk*) echo vtk ;; vtu*) echo vtu ;; *) echo "$1" ;; esac; }
+# the input (sample cube) and what qdc quality says of it, without the file name
+"$BIN/qdc" quality "$SAMPLE" 2>&1 | sed 1s/^[^:]*:// > "$TMP/q.in"
+# a long job holds the one worker: the surface behind it is still queued
+code=$(submit "$SAMPLE" model/x-medit "max_iter=10000&mode=literal&finish=off&tol_move=0&time_limit=30" "$TMP/hold")
+HOLD=$(jf "$TMP/hold" .id)
+code2=$(submit "$SAMPLE" model/x-medit "max_iter=3" "$TMP/sub")
+SJ=$(jf "$TMP/sub" .id)
+$PY "$ROOT/tests/server/surfaces.py" stl cube "$TMP/cube.stl"
+$PY "$ROOT/tests/server/surfaces.py" stl selfx "$TMP/selfx.stl"
+code3=$(submit "$TMP/cube.stl" model/stl "tetgen_quality=1.4&max_volume=0.005" "$TMP/subs")
+SS=$(jf "$TMP/subs" .id)
+code4=$(submit "$TMP/selfx.stl" model/stl "" "$TMP/subx")
+SX=$(jf "$TMP/subx" .id)
+[ "$code$code2$code3$code4" = 202202202202 ] || fail "submit for /input" "$code $code2 $code3 $code4"
+# at once, while queued: the uploaded mesh is there; the surface's tets are not yet
+code=$(req GET "/v1/jobs/$SJ/input" "$TMP/in.qmesh")
+if [ "$code" = 200 ] && [ "$(curl -s "$URL/v1/jobs/$SJ" | jq -r .state)" = queued ] &&
+    [ "$(hdr "$TMP/in.qmesh" Content-Type)" = application/vnd.qdc.mesh ] &&
+    "$BIN/qdc" quality "$TMP/in.qmesh" 2>&1 | sed 1s/^[^:]*:// | cmp -s - "$TMP/q.in"; then
+    pass "GET /input of a queued job: 200, the binary by default, qdc quality reads the sample's figures ($(head -1 "$TMP/q.in" | cut -c1-40)...)"
+else
+    fail "/input queued" "status $code $(head -c 200 "$TMP/in.qmesh")"
+fi
+code=$(req GET "/v1/jobs/$SS/input" "$TMP/sin")
+if [ "$code" = 409 ] && [ "$(hdr "$TMP/sin" Retry-After)" = 2 ] && jq -e '.type | endswith("not-ready")' "$TMP/sin" > /dev/null; then
+    pass "GET /input of a queued surface job: 409 not-ready with Retry-After (no tets yet)"
+else
+    fail "/input queued surface" "status $code $(head -c 200 "$TMP/sin")"
+fi
+curl -s -X POST "$URL/v1/jobs/$HOLD:cancel" > /dev/null
+st1=$(wait_done "$SJ")
+st2=$(wait_done "$SS")
+st3=$(wait_done "$SX")
+[ "$st1 $st2 $st3" = "succeeded succeeded failed" ] || fail "jobs for /input" "$st1 $st2 $st3"
+# every format of /result, by name: the same media type as /result, read back by qdc quality
+formats=$(curl -s "$URL/v1/jobs/$SJ/input?format=none" | jq -r '.formats[]')
+bad=
+n=0
+for f in $formats; do
+    [ "$f" = binary ] || [ "$f" = mesh ] && continue
+    x=$(ext_of "$f")
+    code=$(req GET "/v1/jobs/$SJ/input?format=$f" "$TMP/in-$f.$x")
+    req GET "/v1/jobs/$SJ/result?format=$f" "$TMP/out-$f.$x" > /dev/null
+    if [ "$code" != 200 ] || [ "$(hdr "$TMP/in-$f.$x" Content-Type)" != "$(hdr "$TMP/out-$f.$x" Content-Type)" ] ||
+        ! "$BIN/qdc" quality "$TMP/in-$f.$x" 2>&1 | sed 1s/^[^:]*:// | cmp -s - "$TMP/q.in"; then
+        bad="$bad $f:$code:$(hdr "$TMP/in-$f.$x" Content-Type)"
+    fi
+    n=$((n + 1))
+done
+[ -z "$bad" ] && [ $n -ge 10 ] && pass "GET /input?format=F: all $n formats, media types as /result, each read back by qdc quality as the uploaded sample" ||
+    fail "/input formats" "$bad (of $n)"
+# Accept, ETag, 304, Vary, 400/406 as /result
+code=$(req GET "/v1/jobs/$SJ/input" "$TMP/in22" -H 'Accept: image/png, model/vnd.gmsh;version=2.2')
+etag=$(hdr "$TMP/in22" ETag)
+if [ "$code" = 200 ] && [ "$(sed -n 2p "$TMP/in22" | cut -c1-3)" = 2.2 ] && [ "$(hdr "$TMP/in22" Vary)" = Accept ] &&
+    [ "\"$(sha256sum < "$TMP/in22" | cut -c1-64)\"" = "$etag" ]; then
+    pass "GET /input, Accept: image/png, model/vnd.gmsh;version=2.2: MSH 2.2, Vary: Accept, strong ETag = SHA-256 of the body"
+else
+    fail "/input Accept" "status $code ETag $etag $(head -c 100 "$TMP/in22")"
+fi
+code=$(req GET "/v1/jobs/$SJ/input" "$TMP/in304" -H 'Accept: model/vnd.gmsh;version=2.2' -H "If-None-Match: $etag")
+[ "$code" = 304 ] && [ ! -s "$TMP/in304" ] && pass "GET /input with If-None-Match: 304" || fail "/input 304" "status $code"
+code=$(req GET "/v1/jobs/$SJ/input" "$TMP/in406" -H 'Accept: image/png')
+code2=$(req GET "/v1/jobs/$SJ/input?format=png" "$TMP/in400")
+[ "$code $code2" = "406 400" ] && jq -e '.formats | length >= 10' "$TMP/in400" > /dev/null &&
+    pass "GET /input: 406 for Accept: image/png, 400 listing the formats for ?format=png" || fail "/input 406/400" "$code $code2"
+for p in "/v1/jobs/0123456789abcdef0123456789abcdef/input" "/v1/jobs/xyz/input"; do
+    code=$(req GET "$p" "$TMP/in404")
+    [ "$code" = 404 ] && jq -e '.status == 404' "$TMP/in404" > /dev/null && pass "GET $p: 404 problem" || fail "GET $p" "status $code"
+done
+code=$(req POST "/v1/jobs/$SJ/input" "$TMP/in405")
+[ "$code" = 405 ] && pass "POST /input: 405" || fail "POST /input" "status $code"
+# the surface job's input is TetGen's mesh: the tets the report's "before" counts
+code=$(req GET "/v1/jobs/$SS/input?format=medit" "$TMP/sin.mesh")
+nt=$("$BIN/qdc" quality "$TMP/sin.mesh" 2> /dev/null | sed -n '1s/.* \([0-9]*\) tets.*/\1/p')
+bt=$(curl -s "$URL/v1/jobs/$SS/report" | jq -r .before.n_tets)
+[ "$code" = 200 ] && [ -n "$nt" ] && [ "$nt" = "$bt" ] && [ "$nt" = "$(jf "$TMP/job.$SS" .mesh.tets)" ] &&
+    pass "GET /input of a surface job: TetGen's mesh ($nt tets, as the report's before and the job)" ||
+    fail "/input surface" "status $code, $nt tets, report $bt"
+code=$(req GET "/v1/jobs/$SX/input" "$TMP/xin")
+[ "$code" = 409 ] && jq -e '.title | test("no input")' "$TMP/xin" > /dev/null &&
+    pass "GET /input of a surface job TetGen failed on: 409 (no input mesh)" || fail "/input failed surface" "status $code $(head -c 200 "$TMP/xin")"
+code=$(req GET "/v1/jobs/$HOLD/input" "$TMP/hin")
+[ "$code" = 200 ] && pass "GET /input of a cancelled job: 200 (the input stays until the job expires)" || fail "/input cancelled" "status $code"
+# the page starts from an empty list
+for j in $HOLD $SJ $SS $SX; do curl -s -X DELETE "$URL/v1/jobs/$j" > /dev/null; done
+
 # ---------------------------------------------------------------- browser --
 CHROMIUM=${CHROMIUM:-/usr/bin/chromium}
 if [ ! -x "$CHROMIUM" ]; then
@@ -102,10 +221,9 @@ if ! cmp -s "$ROOT/tests/ui/package-lock.json" "$MODS/package-lock.json" ||
 fi
 pass "playwright-core $(node -p "require('$MODS/node_modules/playwright-core/package.json').version") installed by npm ci from tests/ui/package-lock.json"
 
-"$BIN/qdc" options > "$TMP/options.json"
 mkdir -p "$TMP/out"
 export UI_MODULES="$MODS" QDC_URL="$URL" UI_OUT="$TMP/out" OPTIONS_JSON="$TMP/options.json" CHROMIUM
-export SAMPLE="$ROOT/tests/data/sample/cube.mesh" BIG="$DEV/bunny_low_100k.mesh.gz"
+export SAMPLE BIG="$DEV/bunny_low_100k.mesh.gz" SHOT="$DEV/torus_h0.1_noisy.mesh.gz"
 # screenshots: build/ui-shots unless UI_SHOTS names a directory (UI_SHOTS=docs
 # remakes the ones in the README)
 UI_SHOTS=${UI_SHOTS:-$ROOT/build/ui-shots}
@@ -141,7 +259,7 @@ for f in sample-out.mesh sample-out.qmesh big-out.mesh; do
         fail "qdc quality $f" "$(head -2 "$TMP/q.txt" | tr '\n' ' ') (report: $nt tets, $mr)"
     fi
 done
-[ -n "$UI_SHOTS" ] && for s in ui-list ui-job; do
+[ -n "$UI_SHOTS" ] && for s in ui-list ui-job ui-phone; do
     if [ -s "$UI_SHOTS/$s.png" ] && [ "$(head -c 8 "$UI_SHOTS/$s.png" | od -An -tx1 | tr -d ' ')" = 89504e470d0a1a0a ]; then
         pass "screenshot $UI_SHOTS/$s.png ($(wc -c < "$UI_SHOTS/$s.png") bytes)"
     else
@@ -152,7 +270,9 @@ stop_qdcd || fail "SIGTERM" "exit status $?"
 
 # --tokens: the page asks for a token, keeps it in sessionStorage
 TOKEN=ui-test-$(od -An -N8 -tx1 /dev/urandom | tr -d ' \n')
+TOKEN2=ui-other-$(od -An -N8 -tx1 /dev/urandom | tr -d ' \n')
 "$QDCD" --hash-token "$TOKEN" > "$TMP/tokens"
+"$QDCD" --hash-token "$TOKEN2" >> "$TMP/tokens"
 start_qdcd "$TMP/t" --workers 1 --tokens "$TMP/tokens" || { fail "start --tokens" "$(tail -3 "$TMP/t.log")"; exit 1; }
 code=$(req GET / "$TMP/tp")
 [ "$code" = 200 ] && pass "--tokens: / loads without a token (the page asks for one)" || fail "--tokens: /" "status $code"
@@ -168,6 +288,42 @@ if "$BIN/qdc" quality "$TMP/out/tok.mesh" 2>&1 | grep -q " 750 tets, 0 inverted"
 else
     fail "--tokens download" "$(ls -la "$TMP/out")"
 fi
+# /input and /v1/options follow the token rules of /result
+code=$(submit "$SAMPLE" model/x-medit "max_iter=2" "$TMP/tsub" -H "Authorization: Bearer $TOKEN")
+TJ=$(jf "$TMP/tsub" .id)
+c1=$(req GET "/v1/jobs/$TJ/input" "$TMP/ti1")
+c2=$(req GET "/v1/jobs/$TJ/input" "$TMP/ti2" -H "Authorization: Bearer $TOKEN2")
+c3=$(req GET "/v1/jobs/$TJ/input?format=medit" "$TMP/ti3.mesh" -H "Authorization: Bearer $TOKEN")
+c4=$(req GET /v1/options "$TMP/to1")
+c5=$(req GET /v1/options "$TMP/to2" -H "Authorization: Bearer $TOKEN2")
+if [ "$code $c1 $c2 $c3 $c4 $c5" = "202 401 404 200 401 200" ] && [ "$(hdr "$TMP/ti1" WWW-Authenticate)" != "" ] &&
+    "$BIN/qdc" quality "$TMP/ti3.mesh" 2>&1 | sed 1s/^[^:]*:// | cmp -s - "$TMP/q.in"; then
+    pass "--tokens: GET /input is 401 without a token, 404 for another token, the sample for the owner; /v1/options needs a token"
+else
+    fail "--tokens /input" "submit $code, input $c1 $c2 $c3, options $c4 $c5"
+fi
 stop_qdcd || fail "SIGTERM (tokens)" "exit status $?"
+
+# UI_1M=1: the view of a finished ~1M-tet job (scripts/corpus.py ball-lowq,
+# ~800k tets: ~1 min to make, ~20 s to optimize); not in the default run
+if [ -n "${UI_1M:-}" ]; then
+    if ! /usr/bin/python3 "$ROOT/scripts/corpus.py" "$TMP/c1m" --tets 1000000 --only ball-lowq > "$TMP/c1m.log" 2>&1; then
+        echo "ok - 1M-tet job view # SKIP scripts/corpus.py failed: $(tail -1 "$TMP/c1m.log")"
+    else
+        start_qdcd "$TMP/b" --workers 1 || { fail "start (1M)" "$(tail -3 "$TMP/b.log")"; exit 1; }
+        code=$(submit "$TMP/c1m/ball-lowq.mesh" model/x-medit "" "$TMP/bsub")
+        BJ=$(jf "$TMP/bsub" .id)
+        st=$(wait_done "$BJ")
+        [ "$code $st" = "202 succeeded" ] || fail "1M-tet job" "$code $st"
+        BIG_ID=$BJ BIG_RECORDS=$(jf "$TMP/job.$BJ" .iterations) QDC_URL=$URL UI_MODE=big \
+            node "$ROOT/tests/ui/console.mjs" > "$TMP/big.out" 2>&1
+        rc=$?
+        cat "$TMP/big.out"
+        [ $rc -ne 0 ] && ! grep -q '^FAIL - ' "$TMP/big.out" && fail "console.mjs big" "exit $rc"
+        NFAIL=$((NFAIL + $(grep -c '^FAIL - ' "$TMP/big.out")))
+        stop_qdcd || fail "SIGTERM (1M)" "exit status $?"
+        echo "# figures (1M): $(tr -d '\n ' < "$TMP/out/figures-big.json")"
+    fi
+fi
 echo "# figures: $(tr -d '\n ' < "$TMP/out/figures-open.json")"
 exit $((NFAIL > 0))

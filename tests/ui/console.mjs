@@ -6,8 +6,11 @@
 //   UI_MODE      "open" (no tokens) or "tokens" (UI_TOKEN is valid)
 //   UI_OUT       directory for downloads and measurements (figures.json)
 //   UI_SHOTS     where the screenshots go (docs/ of the repository), or empty
-//   SAMPLE       tests/data/sample/cube.mesh; BIG a gzipped dev mesh
+//   SAMPLE       tests/data/sample/cube.mesh; BIG a gzipped dev mesh (a long
+//                literal-mode run: the chart grows); SHOT a gzipped dev mesh
+//                submitted with the form untouched (the screenshots)
 //   OPTIONS_JSON `qdc options` output
+//   UI_MODE=big: BIG_ID, BIG_RECORDS name a finished ~1M-tet job: time its view
 // Prints "ok - ..." / "FAIL - ..." lines like the shell suites.
 import { createRequire } from 'node:module';
 import { readFileSync, writeFileSync } from 'node:fs';
@@ -101,7 +104,37 @@ async function download(format, file) {
 }
 
 try {
-    if (env.UI_MODE === 'tokens') {
+    if (env.UI_MODE === 'big') {
+        // ---------------------------------------- a finished ~1M-tet job --
+        const n = +env.BIG_RECORDS;
+        const job = (await apiJSON('/v1/jobs/' + env.BIG_ID)).body;
+        figures.big_tets = job.mesh.tets;
+        figures.big_view_ms = [];
+        for (let k = 0; k < 3; k++) {
+            const t0 = Date.now();
+            await page.goto(URL + '/ui/jobs/' + env.BIG_ID);
+            await page.waitForFunction((m) => +document.getElementById('chart').dataset.points === m &&
+                +document.getElementById('hist').dataset.drawn > 0 && document.querySelectorAll('#threshold-table tbody tr').length === 8 &&
+                document.querySelectorAll('#downloads a').length > 10, n, { timeout: 20000 });
+            figures.big_view_ms.push(Date.now() - t0);
+        }
+        check(Math.max(...figures.big_view_ms) <= 2000, 'finished ' + job.mesh.tets + '-tet job: the view opens with its ' + n +
+            ' records charted, histograms, threshold counts and downloads in ' + figures.big_view_ms.join(', ') + ' ms (target 2 s)',
+            JSON.stringify(figures.big_view_ms));
+        const auto = await page.evaluate(() => !document.getElementById('view3d-load').hidden);
+        const t1 = Date.now();
+        await page.click('#view3d-load');
+        const layers = await page.waitForFunction(() => {
+            const c = document.getElementById('view3d');
+            const s = document.getElementById('view3d-status').textContent;
+            return /after:/.test(c.dataset.layers || '') ? c.dataset.layers : /not available/.test(s) ? 'none' : null;
+        }, null, { timeout: 60000 }).then((h) => h.jsonValue());
+        figures.big_3d_ms = Date.now() - t1;
+        figures.big_3d_status = await page.textContent('#view3d-status');
+        if (layers === 'none') console.log('ok - 1M-tet 3D view # SKIP no WebGL in this chromium');
+        else check(auto && /before:\d+/.test(layers), '1M-tet job: the 3D view waits for its button, then shows the boundary and the worst tets before and after in ' +
+            figures.big_3d_ms + ' ms (' + layers + ')', layers);
+    } else if (env.UI_MODE === 'tokens') {
         // ------------------------------------------------------ with tokens --
         await page.goto(URL + '/');
         await page.waitForSelector('#token-dialog[open]', { timeout: 5000 });
@@ -156,7 +189,8 @@ try {
         await page.waitForFunction(() => /No jobs yet/.test(document.getElementById('jobs-empty').textContent), null, { timeout: 5000 });
         pass('/ loads without a token: empty job list');
 
-        // the form's defaults are the library's (qdc options)
+        // the form's defaults are the library's (qdc options), read from /v1/options
+        await page.waitForSelector('#opts [data-default]', { timeout: 5000 });
         const table = JSON.parse(readFileSync(env.OPTIONS_JSON, 'utf8'));
         const form = await page.$$eval('#opts [data-default]', (es) => es.map((e) => [e.name, e.dataset.default,
             e.type === 'checkbox' ? (e.checked ? 'on' : 'off') : e.value]));
@@ -170,7 +204,9 @@ try {
             if (o.type === 'integer' || o.type === 'number' ? +o.default !== +def : o.default !== def)
                 bad.push(name + ': form ' + def + ', qdc options ' + o.default);
         }
-        check(!bad.length && compared >= 7, 'submit form: ' + compared + ' options with the defaults of `qdc options` shown', bad.join('; '));
+        const shownDefs = Object.fromEntries(form.map(([n, d]) => [n, d]));
+        check(!bad.length && compared >= 8, 'submit form: ' + compared + ' options with the defaults of `qdc options` shown (boundary ' +
+            shownDefs.boundary + ', hausd ' + shownDefs.hausd + ', stall ' + shownDefs.stall + ')', bad.join('; '));
 
         // drag and drop picks the file; a surface enables the TetGen option
         const tq = () => page.$eval('#opts [name="tetgen_quality"]', (e) => e.disabled);
@@ -325,6 +361,72 @@ try {
         await page.waitForFunction(() => +document.getElementById('view3d').dataset.triangles > 0 ||
             /not available/.test(document.getElementById('view3d-status').textContent), null, { timeout: 30000 }).catch(() => {});
         figures.view3d_status = await page.textContent('#view3d-status');
+
+        // the screenshot job: a mesh with inverted tets, the form untouched
+        await page.click('a[data-nav][href="/"]');
+        await page.waitForSelector('#view-list:not([hidden])');
+        const id4 = await submitFile(env.SHOT);
+        await waitDone(id4, 120000);
+        const j4 = (await apiJSON('/v1/jobs/' + id4)).body;
+        const odiff = table.filter((o) => o.name !== 'time_limit').filter((o) => {
+            const v = j4.options[o.name];
+            return o.type === 'bool' ? v !== (o.default === 'on') : o.type === 'integer' || o.type === 'number' ? v !== +o.default : v !== o.default;
+        }).map((o) => o.name + ' ' + j4.options[o.name] + ' (default ' + o.default + ')');
+        check(j4.state === 'succeeded' && !odiff.length, path.basename(env.SHOT) + ' submitted with the form untouched: the job ran with the defaults of `qdc options` (boundary ' +
+            j4.options.boundary + ', hausd ' + j4.options.hausd + ', stall ' + j4.options.stall + ')', j4.state + ' ' + odiff.join('; '));
+        const r4 = (await apiJSON('/v1/jobs/' + id4 + '/progress?after=-1')).body.records;
+        await page.waitForFunction((n) => +document.getElementById('chart').dataset.points === n, r4.length, { timeout: 5000 }).catch(() => {});
+        const [f4, l4] = [r4[0], r4[r4.length - 1]];
+        figures.shot_run = { records: r4.length, phases: [...new Set(r4.map((r) => r.phase))].join(' '),
+            mean: [f4.mean_ratio_mean, l4.mean_ratio_mean], worst: [f4.mean_ratio_min, l4.mean_ratio_min], inverted: [f4.n_inverted, l4.n_inverted] };
+        check(+(await page.getAttribute('#chart', 'data-points')) === r4.length && f4.n_inverted > 0 && l4.n_inverted === 0 &&
+            l4.mean_ratio_min > f4.mean_ratio_min && l4.mean_ratio_mean > f4.mean_ratio_mean,
+            'chart of the default run: ' + r4.length + ' records (' + figures.shot_run.phases + '), worst mean ratio ' + f4.mean_ratio_min.toFixed(3) +
+            ' -> ' + l4.mean_ratio_min.toFixed(3) + ', mean ' + f4.mean_ratio_mean.toFixed(3) + ' -> ' + l4.mean_ratio_mean.toFixed(3) +
+            ', inverted ' + f4.n_inverted + ' -> 0', JSON.stringify(figures.shot_run));
+        // the 3D view: the input's worst tets (orange) and the result's (red),
+        // counted in the canvas's pixels, each set hidden by its checkbox
+        const layers = await page.waitForFunction(() => {
+            const c = document.getElementById('view3d');
+            const s = document.getElementById('view3d-status').textContent;
+            return /after:/.test(c.dataset.layers || '') ? c.dataset.layers : /not available/.test(s) ? 'none' : null;
+        }, null, { timeout: 30000 }).then((h) => h.jsonValue()).catch((e) => 'error ' + e.message);
+        if (layers === 'none') {
+            console.log('ok - 3D view of the worst tets before and after # SKIP no WebGL in this chromium');
+        } else {
+            const px = () => page.evaluate(() => new Promise((res) => requestAnimationFrame(() => requestAnimationFrame(() => {
+                const c = document.getElementById('view3d');
+                const t = document.createElement('canvas');
+                t.width = c.width;
+                t.height = c.height;
+                const g = t.getContext('2d');
+                g.drawImage(c, 0, 0);
+                const d = g.getImageData(0, 0, t.width, t.height).data;
+                let orange = 0, red = 0;
+                for (let i = 0; i < d.length; i += 4) {
+                    const [R, G, B] = [d[i], d[i + 1], d[i + 2]];
+                    if (G - B > 40 && R > G) orange++;
+                    else if (R - G > 60 && Math.abs(G - B) < 25) red++;
+                }
+                res({ orange, red, layers: c.dataset.layers });
+            }))));
+            const both = await px();
+            await page.click('#view3d-before');
+            const noBefore = await px();
+            await page.click('#view3d-after');
+            const none = await px();
+            await page.click('#view3d-before');
+            await page.click('#view3d-after');
+            const again = await px();
+            figures.view3d_pixels = { both, noBefore, none, again };
+            const nb = /before:(\d+)/.exec(both.layers), na = /after:(\d+)/.exec(both.layers);
+            check(nb && na && +nb[1] > 0 && +na[1] > 0 && both.orange > 100 && both.red > 100 && noBefore.orange === 0 && noBefore.red > 100 &&
+                none.orange === 0 && none.red === 0 && again.orange > 100 && again.red > 100,
+                '3D view: the input\'s ' + (+nb[1] / 4) + ' worst tets drawn in orange (' + both.orange + ' px) and the result\'s ' + (+na[1] / 4) +
+                ' in red (' + both.red + ' px); unchecking "before" leaves ' + noBefore.orange + ' orange px, both unchecked ' + (none.orange + none.red) + ' px',
+                JSON.stringify(figures.view3d_pixels));
+        }
+        figures.shot_view3d_status = await page.textContent('#view3d-status');
         await page.evaluate(() => document.getElementById('hist-log').click());
         await sleep(300);
         if (env.UI_SHOTS) await page.screenshot({ path: path.join(env.UI_SHOTS, 'ui-job.png'), fullPage: true });
@@ -342,14 +444,14 @@ try {
         check(/^0\.\d{4} → 0\.\d{4}$/.test(inout.trim()), 'list: mean ratio in → out shown (' + inout.trim() + ')', inout);
         await page.click('#filters button[data-state="succeeded"]');
         const states = await page.$$eval('#jobs tbody tr', (t) => t.map((r) => r.dataset.state));
-        check(states.length === 2 && states.every((s) => s === 'succeeded'), 'list: the succeeded filter shows the 2 succeeded jobs only', states.join(' '));
+        check(states.length === 3 && states.every((s) => s === 'succeeded'), 'list: the succeeded filter shows the 3 succeeded jobs only', states.join(' '));
         await page.click('#filters button[data-state=""]');
         await page.click(rowSel(id3) + ' button[data-act="cancel"]');
         await page.waitForSelector(rowSel(id3) + '[data-state="cancelled"]', { timeout: 15000 })
             .then(() => pass('list: Cancel stops the running job (cancelled)'))
             .catch((e) => fail('cancel', e.message));
-        await page.waitForFunction(() => document.querySelectorAll('#jobs tbody tr').length === 3 &&
-            [...document.querySelectorAll('#jobs tbody td:nth-child(6)')].filter((t) => /→ 0\./.test(t.textContent)).length >= 2, null, { timeout: 5000 }).catch(() => {});
+        await page.waitForFunction(() => document.querySelectorAll('#jobs tbody tr').length === 4 &&
+            [...document.querySelectorAll('#jobs tbody td:nth-child(6)')].filter((t) => /→ 0\./.test(t.textContent)).length >= 3, null, { timeout: 5000 }).catch(() => {});
         if (env.UI_SHOTS) await page.screenshot({ path: path.join(env.UI_SHOTS, 'ui-list.png') });
         await page.click(rowSel(id3) + ' button[data-act="delete"]');
         await page.waitForSelector(rowSel(id3), { state: 'detached', timeout: 10000 })
@@ -360,7 +462,7 @@ try {
 
         // a phone: no horizontal overflow, chart and histograms drawn
         await page.setViewportSize({ width: 390, height: 844 });
-        await page.goto(URL + '/ui/jobs/' + id2);
+        await page.goto(URL + '/ui/jobs/' + id4);
         await page.waitForFunction(() => +document.getElementById('hist').dataset.drawn > 0, null, { timeout: 10000 });
         const ov = await page.evaluate(() => [document.documentElement.scrollWidth, window.innerWidth,
             [...document.querySelectorAll('body *')].filter((e) => e.getBoundingClientRect().right > window.innerWidth + 0.5)
@@ -371,6 +473,26 @@ try {
         await page.waitForSelector('#jobs tbody tr');
         const ov2 = await page.evaluate(() => [document.documentElement.scrollWidth, window.innerWidth]);
         check(ov2[0] <= ov2[1], 'phone (390 px): the list has no horizontal overflow', ov2.join(' > '));
+        // a browser without WebGL: the job view works, the 3D card says why it is empty
+        const ctx2 = await browser.newContext({ viewport: { width: 1280, height: 900 } });
+        const nogl = await ctx2.newPage();
+        const noglErrors = [];
+        nogl.on('pageerror', (e) => noglErrors.push(e.message));
+        nogl.on('console', (m) => { if (m.type() === 'error') noglErrors.push(m.text()); });
+        await nogl.addInitScript(() => {
+            const get = HTMLCanvasElement.prototype.getContext;
+            HTMLCanvasElement.prototype.getContext = function (kind, ...a) {
+                return /webgl/.test(kind) ? null : get.call(this, kind, ...a);
+            };
+        });
+        await nogl.goto(URL + '/ui/jobs/' + id4);
+        const noglState = await nogl.waitForFunction(() => /WebGL/.test(document.getElementById('view3d-status').textContent) &&
+            +document.getElementById('hist').dataset.drawn > 0 && +document.getElementById('chart').dataset.points > 0 &&
+            document.getElementById('view3d').hidden ? document.getElementById('view3d-status').textContent : null, null, { timeout: 10000 })
+            .then((h) => h.jsonValue()).catch((e) => 'timeout: ' + e.message);
+        check(/not available/.test(noglState) && !noglErrors.length, 'without WebGL: chart, histograms and report shown, the 3D card says "' +
+            noglState.slice(0, 60) + '…", no errors', noglState + ' ' + noglErrors.join(' | '));
+        await ctx2.close();
         // an unknown job (its 404s are the page's business: not counted below)
         const e404 = errors.length;
         await page.goto(URL + '/ui/jobs/' + '0'.repeat(32));
@@ -378,7 +500,7 @@ try {
             .then(() => pass('an unknown job id: the job view says there is no such job'))
             .catch((e) => fail('unknown job', e.message));
         expected.push([e404, errors.length, /status of 404/]);
-        figures.ids = { sample: id1, big: id2 };
+        figures.ids = { sample: id1, big: id2, shot: id4 };
     }
     // expected: the 401s that make the page ask for a token, the resource
     // errors of the steps that provoke them (a bad upload, an unknown job)
