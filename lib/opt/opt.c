@@ -1120,9 +1120,198 @@ static qdc_status stuck_boundary(const ctx_t *c, uint8_t **out)
     return QDC_OK;
 }
 
+/* Whether o is a set of options opt_run accepts (the table's ranges). */
+static int options_valid(const opt_options *o)
+{
+    return o->hausd >= 0 && isfinite(o->hausd) &&
+           ((o->hausd_rel >= 0 && isfinite(o->hausd_rel)) ||
+            o->hausd_rel == OPT_HAUSD_AUTO) &&
+           o->max_iter >= 0 && o->ls_halvings >= 0 && o->ls_halvings <= 60 && o->mu > 0 &&
+           o->tol_move >= 0 && o->stall >= 0 && o->stall <= 1 && o->eps_rel > 0 &&
+           o->finish_frac >= 0 && o->finish_frac <= 1 && o->finish_sweeps >= 0 &&
+           o->pre_iters >= 0 && o->threads >= 0 &&
+           (unsigned)o->metric <= OPT_METRIC_MICN &&
+           (unsigned)o->boundary <= OPT_BOUNDARY_SLIDE &&
+           (unsigned)o->mode <= OPT_MODE_LITERAL &&
+           (unsigned)o->weights <= OPT_WEIGHTS_PAPER &&
+           (unsigned)o->solver <= OPT_SOLVER_PCG;
+}
+
+/* The context of one run: topology, ctx, loose and pinned vertices, the
+ * solver, the input's record (reported). */
+static qdc_status run_setup(ctx_t *c, mesh_t *m, const opt_options *o,
+                            const uint8_t *pins, const uint8_t *loose, mesh_topo **tpp,
+                            opt_result *res, opt_progress *r, qdc_error *err)
+{
+    mesh_topo *tp;
+    double t0 = c->t0;
+    qdc_status st = mesh_topo_build(m, tpp, err);
+
+    if (st != QDC_OK)
+        return st;
+    tp = *tpp;
+    st = ctx_init(c, m, tp, o); /* clears c */
+    c->t0 = t0;
+    if (st != QDC_OK)
+        return st;
+    for (int32_t v = 0; loose && c->sl && v < c->nv; v++)
+        if (loose[v] && !(tp->vflag[v] & MESH_V_FIXED)) {
+            slide_release(c->sl, v);
+            c->locked[v] = 0;
+            c->bw2[v] = 1.0;
+        }
+    for (int32_t v = 0; pins && v < c->nv; v++)
+        if (pins[v]) {
+            c->locked[v] = 1;
+            c->bw2[v] = 0.0;
+        }
+    st = solve_new(tp, c->locked, o->solver, &c->sol, err);
+    if (st != QDC_OK)
+        return st;
+    res->solver = solve_kind(c->sol);
+    res->solver_flops = solve_flops(c->sol);
+    logf_(c, 0, "%d vertices (%d boundary), %d tets; solver %s (analysis %.3g flops)",
+          (int)m->nv, (int)tp->nb, (int)m->nt, opt_solver_name(res->solver),
+          res->solver_flops);
+    res->t_setup = qdc_now() - c->t0;
+    c->eta_delta = evaluate(c, c->x, r, c->eta);
+    r->phase = "input";
+    c->input = c->best = *r;
+    res->before = *r;
+    res->hausd_bound = c->hbound * c->scale;
+    res->lift_bound = c->sl ? c->lift * c->scale : 0.0;
+    set_stop(res, OPT_STOP_MAX_ITER);
+    return QDC_OK;
+}
+
+/* The global iterations (Eq. 15 with the line search). *stop is set when the
+ * run must end without the finishing pass (cancelled, solver trouble). */
+static qdc_status global_phase(ctx_t *c, opt_result *res, opt_progress *r, int *stop,
+                               qdc_error *err)
+{
+    const opt_options *o = c->o;
+    int total_iters = o->max_iter + (o->harmonic ? o->pre_iters : 0);
+    double q_prev = c->input.q_mean;
+
+    for (int it = 1; !*stop && it <= total_iters; it++) {
+        int stepped = 0, pre = o->harmonic && it <= o->pre_iters;
+        qdc_status st;
+        if (should_stop(c, res)) {
+            *stop = 1;
+            break;
+        }
+        if (o->harmonic && it == o->pre_iters + 1) {
+            st = set_harmonic(c, res, err);
+            if (st != QDC_OK)
+                return st;
+        }
+        st = iterate(c, res, r, &stepped, err);
+        if (st == QDC_ESOLVE) {
+            /* solver trouble: stop with the best mesh so far (docs/style.md §3) */
+            set_stop(res, OPT_STOP_SOLVER);
+            logf_(c, 1, "iteration %d: %s", it, err ? err->msg : "solve failed");
+            *stop = 1;
+            break;
+        }
+        if (st != QDC_OK)
+            return st;
+        r->iteration = it;
+        r->phase = pre ? "pre" : "global";
+        res->iterations = it;
+        if (r->n_inverted > res->max_inverted_global)
+            res->max_inverted_global = r->n_inverted;
+        res->folded_global += r->n_folded;
+        consider(c, c->x, r);
+        if (report(c, r)) {
+            set_stop(res, OPT_STOP_CANCELLED);
+            *stop = 1;
+            break;
+        }
+        if (!stepped) {
+            set_stop(res, OPT_STOP_NO_DESCENT);
+            if (!pre)
+                break;
+        } else if (r->max_move < o->tol_move && !pre) {
+            set_stop(res, OPT_STOP_CONVERGED);
+            break;
+        } else if (!pre && o->stall > 0 && it >= 3 && r->n_inverted == 0 &&
+                   o->mode != OPT_MODE_LITERAL && r->q_mean - q_prev < o->stall) {
+            /* the global phase has done its work (docs/defaults.md: at 800k
+             * tets iterations 5..10 added 0.0009 of final mean ratio for 60%
+             * of the run's time); the finishing pass takes it from here */
+            set_stop(res, OPT_STOP_CONVERGED);
+            logf_(c, 0,
+                  "iteration %d raised the mean ratio by %.2g (< %g): global phase done",
+                  it, r->q_mean - q_prev, o->stall);
+            break;
+        }
+        q_prev = r->q_mean;
+    }
+    return QDC_OK;
+}
+
+/* The finishing pass and the angle polish. */
+static qdc_status finishing_phase(ctx_t *c, opt_result *res, opt_progress *r)
+{
+    const mesh_topo *tp = c->tp;
+    double t = qdc_now();
+    uint8_t *movable = qdc_mallocn((size_t)c->nv, 1);
+    int from_last = c->best_it != res->iterations;
+    int next = res->iterations + 1;
+    qdc_status st;
+
+    if (!movable)
+        return QDC_ENOMEM;
+    /* Boundary and interface vertices move here only in slide mode, along
+     * their input surface; lsq and fixed leave them where the global step put them. */
+    for (int32_t v = 0; v < c->nv; v++)
+        movable[v] = !c->locked[v] &&
+                     (c->sl || !(tp->vflag[v] & (MESH_V_BOUNDARY | MESH_V_INTERFACE)));
+    /* Start from the last global iterate (the lowest objective), as the
+     * oracle does, even if it has inverted tets: with delta > 0 the pass
+     * drives them out (measured on a 1.1M-tet sliver cube: the global phase
+     * leaves 49 inverted tets; starting from the best iterate instead, which
+     * was the input, threw the whole global phase away). */
+    st = finish_pass(c, movable, 1, res, r, &next);
+    /* From the last iterate the pass may fail to lift the worst tets back
+     * above the input's (seen with slide on curved surfaces): then run it
+     * again from the best global iterate. */
+    if (st == QDC_OK && from_last && c->best_it <= res->iterations &&
+        res->stop != OPT_STOP_CANCELLED) {
+        memcpy(c->x, c->xbest, 3 * (size_t)c->nv * sizeof(double));
+        st = finish_pass(c, movable, 0, res, r, &next);
+    }
+    if (st == QDC_OK && c->o->angle_polish && res->stop != OPT_STOP_CANCELLED)
+        st = lsq_angle_pass(c, movable, res, r, &next);
+    qdc_free(movable);
+    res->t_finish = qdc_now() - t;
+    return st;
+}
+
+/* hold_back, with the best record brought up to date. */
+static void hold_back_best(ctx_t *c, opt_result *res)
+{
+    int32_t back = hold_back(c);
+    opt_progress b;
+
+    if (back <= 0)
+        return;
+    evaluate(c, c->xbest, &b, NULL);
+    b.iteration = c->best.iteration;
+    b.phase = c->best.phase;
+    c->best = b;
+    res->held_back = back;
+    logf_(c, 0,
+          "%d vertices held at their input positions (no tet below the input's worst)",
+          (int)back);
+}
+
 /* One optimization of m. pins (nv flags, may be NULL): extra vertices that
- * keep their input position. In slide mode *squashed (if not NULL) receives
- * the corners of the ears this run squashed (see squashed_ears), else NULL. */
+ * keep their input position; loose (may be NULL): sliding vertices that move
+ * freely (slide_release). In slide mode *squashed (if not NULL) receives the
+ * corners of the ears this run squashed (see squashed_ears), and *stuck (if
+ * not NULL) the boundary vertices around tets left inverted (stuck_boundary);
+ * else NULL. */
 static qdc_status run_once(mesh_t *m, const opt_options *opts, const uint8_t *pins,
                            const uint8_t *loose, uint8_t **squashed, uint8_t **stuck,
                            opt_result *res_out, qdc_error *err)
@@ -1132,28 +1321,18 @@ static qdc_status run_once(mesh_t *m, const opt_options *opts, const uint8_t *pi
     mesh_topo *tp = NULL;
     ctx_t c;
     qdc_status st;
-    double t_start = qdc_now();
-    int it = 0, total_iters, stop = 0;
-    double q_prev;
+    int stop = 0, saved_threads = 0;
     opt_progress r;
-    int saved_threads = 0;
 
     memset(&res, 0, sizeof res);
     memset(&c, 0, sizeof c);
+    c.t0 = qdc_now();
     res.outcome = OPT_FAILED;
     if (opts)
         o = *opts;
     else
         opt_defaults(&o);
-    if (!(o.hausd >= 0 && isfinite(o.hausd)) ||
-        !((o.hausd_rel >= 0 && isfinite(o.hausd_rel)) || o.hausd_rel == OPT_HAUSD_AUTO) ||
-        o.max_iter < 0 || o.ls_halvings < 0 || o.ls_halvings > 60 || !(o.mu > 0) ||
-        !(o.tol_move >= 0) || !(o.stall >= 0 && o.stall <= 1) || !(o.eps_rel > 0) ||
-        !(o.finish_frac >= 0 && o.finish_frac <= 1) || o.finish_sweeps < 0 ||
-        o.pre_iters < 0 || o.threads < 0 || (unsigned)o.metric > OPT_METRIC_MICN ||
-        (unsigned)o.boundary > OPT_BOUNDARY_SLIDE ||
-        (unsigned)o.mode > OPT_MODE_LITERAL || (unsigned)o.weights > OPT_WEIGHTS_PAPER ||
-        (unsigned)o.solver > OPT_SOLVER_PCG) {
+    if (!options_valid(&o)) {
         st = qdc_fail(err, QDC_EINVAL, "invalid optimizer options");
         goto out;
     }
@@ -1163,157 +1342,23 @@ static qdc_status run_once(mesh_t *m, const opt_options *opts, const uint8_t *pi
     saved_threads = omp_get_max_threads();
     if (o.threads > 0)
         omp_set_num_threads(o.threads);
-    st = mesh_topo_build(m, &tp, err);
+    st = run_setup(&c, m, &o, pins, loose, &tp, &res, &r, err);
     if (st != QDC_OK)
         goto out;
-    st = ctx_init(&c, m, tp, &o);
-    if (st != QDC_OK)
-        goto out;
-    for (int32_t v = 0; loose && c.sl && v < c.nv; v++)
-        if (loose[v] && !(tp->vflag[v] & MESH_V_FIXED)) {
-            slide_release(c.sl, v);
-            c.locked[v] = 0;
-            c.bw2[v] = 1.0;
-        }
-    for (int32_t v = 0; pins && v < c.nv; v++)
-        if (pins[v]) {
-            c.locked[v] = 1;
-            c.bw2[v] = 0.0;
-        }
-    c.t0 = t_start;
-    st = solve_new(tp, c.locked, o.solver, &c.sol, err);
-    if (st != QDC_OK)
-        goto out;
-    res.solver = solve_kind(c.sol);
-    res.solver_flops = solve_flops(c.sol);
-    logf_(&c, 0, "%d vertices (%d boundary), %d tets; solver %s (analysis %.3g flops)",
-          (int)m->nv, (int)tp->nb, (int)m->nt, opt_solver_name(res.solver),
-          res.solver_flops);
-    res.t_setup = qdc_now() - t_start;
-
-    c.eta_delta = evaluate(&c, c.x, &r, c.eta);
-    r.phase = "input";
-    c.input = c.best = r;
-    res.before = r;
-    res.hausd_bound = c.hbound * c.scale;
-    res.lift_bound = c.sl ? c.lift * c.scale : 0.0;
-    set_stop(&res, OPT_STOP_MAX_ITER);
     if (report(&c, &r)) {
         stop = 1;
         set_stop(&res, OPT_STOP_CANCELLED);
     }
-    total_iters = o.max_iter + (o.harmonic ? o.pre_iters : 0);
-    q_prev = c.input.q_mean;
-    for (it = 1; !stop && it <= total_iters; it++) {
-        int stepped = 0, pre = o.harmonic && it <= o.pre_iters;
-        if (should_stop(&c, &res)) {
-            stop = 1;
-            break;
-        }
-        if (o.harmonic && it == o.pre_iters + 1) {
-            st = set_harmonic(&c, &res, err);
-            if (st != QDC_OK)
-                goto out;
-        }
-        st = iterate(&c, &res, &r, &stepped, err);
-        if (st == QDC_ESOLVE) {
-            /* solver trouble: stop with the best mesh so far (docs/style.md §3) */
-            set_stop(&res, OPT_STOP_SOLVER);
-            logf_(&c, 1, "iteration %d: %s", it, err ? err->msg : "solve failed");
-            st = QDC_OK;
-            stop = 1;
-            break;
-        }
-        if (st != QDC_OK)
-            goto out;
-        r.iteration = it;
-        r.phase = pre ? "pre" : "global";
-        res.iterations = it;
-        if (r.n_inverted > res.max_inverted_global)
-            res.max_inverted_global = r.n_inverted;
-        res.folded_global += r.n_folded;
-        consider(&c, c.x, &r);
-        if (report(&c, &r)) {
-            set_stop(&res, OPT_STOP_CANCELLED);
-            stop = 1;
-            break;
-        }
-        if (!stepped) {
-            set_stop(&res, OPT_STOP_NO_DESCENT);
-            if (!pre)
-                break;
-        } else if (r.max_move < o.tol_move && !pre) {
-            set_stop(&res, OPT_STOP_CONVERGED);
-            break;
-        } else if (!pre && o.stall > 0 && it >= 3 && r.n_inverted == 0 &&
-                   o.mode != OPT_MODE_LITERAL && r.q_mean - q_prev < o.stall) {
-            /* the global phase has done its work (docs/defaults.md: at 800k
-             * tets iterations 5..10 added 0.0009 of final mean ratio for 60%
-             * of the run's time); the finishing pass takes it from here */
-            set_stop(&res, OPT_STOP_CONVERGED);
-            logf_(&c, 0,
-                  "iteration %d raised the mean ratio by %.2g (< %g): global phase done",
-                  it, r.q_mean - q_prev, o.stall);
-            break;
-        }
-        q_prev = r.q_mean;
-    }
+    st = global_phase(&c, &res, &r, &stop, err);
+    if (st != QDC_OK)
+        goto out;
     res.before_finish = c.best;
     if (o.finish && !stop && o.finish_sweeps > 0) {
-        double t = qdc_now();
-        uint8_t *movable = qdc_mallocn((size_t)c.nv, 1);
-        if (!movable) {
-            st = QDC_ENOMEM;
+        st = finishing_phase(&c, &res, &r);
+        if (st != QDC_OK)
             goto out;
-        }
-        /* Boundary and interface vertices move here only in slide mode, along
-         * their input surface; lsq and fixed leave them where the global step put them.
-         */
-        for (int32_t v = 0; v < c.nv; v++)
-            movable[v] = !c.locked[v] &&
-                         (c.sl || !(tp->vflag[v] & (MESH_V_BOUNDARY | MESH_V_INTERFACE)));
-        /* Start from the last global iterate (the lowest objective), as the
-         * oracle does, even if it has inverted tets: with delta > 0 the pass
-         * drives them out (measured on a 1.1M-tet sliver cube: the global phase
-         * leaves 49 inverted tets; starting from the best iterate instead, which
-         * was the input, threw the whole global phase away). */
-        {
-            int from_last = c.best_it != res.iterations;
-            int next = res.iterations + 1;
-            st = finish_pass(&c, movable, 1, &res, &r, &next);
-            /* From the last iterate the pass may fail to lift the worst tets back
-             * above the input's (seen with slide on curved surfaces): then run it
-             * again from the best global iterate. */
-            if (st == QDC_OK && from_last && c.best_it <= res.iterations &&
-                res.stop != OPT_STOP_CANCELLED) {
-                memcpy(c.x, c.xbest, 3 * (size_t)c.nv * sizeof(double));
-                st = finish_pass(&c, movable, 0, &res, &r, &next);
-            }
-            if (st == QDC_OK && o.angle_polish && res.stop != OPT_STOP_CANCELLED)
-                st = lsq_angle_pass(&c, movable, &res, &r, &next);
-            if (st != QDC_OK) {
-                qdc_free(movable);
-                goto out;
-            }
-        }
-        qdc_free(movable);
-        res.t_finish = qdc_now() - t;
     }
-    {
-        int32_t back = hold_back(&c);
-        if (back > 0) {
-            opt_progress b;
-            evaluate(&c, c.xbest, &b, NULL);
-            b.iteration = c.best.iteration;
-            b.phase = c.best.phase;
-            c.best = b;
-            res.held_back = back;
-            logf_(&c, 0,
-                  "%d vertices held at their input positions (no tet below the "
-                  "input's worst)",
-                  (int)back);
-        }
-    }
+    hold_back_best(&c, &res);
     if (squashed && c.sl && c.best_it > 0) {
         st = squashed_ears(&c, squashed);
         if (st != QDC_OK)
@@ -1340,7 +1385,7 @@ static qdc_status run_once(mesh_t *m, const opt_options *opts, const uint8_t *pi
                       : OPT_STOPPED;
     st = QDC_OK;
 out:
-    res.t_total = qdc_now() - t_start;
+    res.t_total = qdc_now() - c.t0;
     if (st != QDC_OK)
         res.outcome = OPT_FAILED;
     if (res_out)
