@@ -6,7 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-const int mesh_face_of[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+const int tet_face_of[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
 
 mesh_t *mesh_new(int32_t nv, int32_t nt, unsigned flags)
 {
@@ -210,8 +210,8 @@ static qdc_status match_faces(int32_t nv, int32_t nt, const int32_t *tets, int32
         for (int32_t t = 0; t < nt; t++) {
             const int32_t *tt = tets + 4 * (size_t)t;
             for (int f = 0; f < 4; f++) {
-                int32_t x = tt[mesh_face_of[f][0]], y = tt[mesh_face_of[f][1]];
-                int32_t z = tt[mesh_face_of[f][2]];
+                int32_t x = tt[tet_face_of[f][0]], y = tt[tet_face_of[f][1]];
+                int32_t z = tt[tet_face_of[f][2]];
                 int32_t lo = x < y ? (x < z ? x : z) : (y < z ? y : z);
                 if (pass == 0) {
                     start[lo + 2]++;
@@ -287,9 +287,8 @@ static qdc_status match_faces(int32_t nv, int32_t nt, const int32_t *tets, int32
  * one orientation see their shared face from opposite sides. */
 static int faces_opposite(const int32_t *tt, int f, const int32_t *tu, int g)
 {
-    int32_t a0 = tt[mesh_face_of[f][0]], a1 = tt[mesh_face_of[f][1]];
-    int32_t b[3] = {tu[mesh_face_of[g][0]], tu[mesh_face_of[g][1]],
-                    tu[mesh_face_of[g][2]]};
+    int32_t a0 = tt[tet_face_of[f][0]], a1 = tt[tet_face_of[f][1]];
+    int32_t b[3] = {tu[tet_face_of[g][0]], tu[tet_face_of[g][1]], tu[tet_face_of[g][2]]};
     int k = b[0] == a0 ? 0 : b[1] == a0 ? 1 : 2;
 
     return b[(k + 1) % 3] != a1;
@@ -716,7 +715,7 @@ qdc_status mesh_topo_build(const mesh_t *m, mesh_topo **out, qdc_error *err)
                     int32_t *dst =
                         is_b ? tp->bfaces + 3 * (size_t)nb : tp->ifaces + 3 * (size_t)ni;
                     for (int k = 0; k < 3; k++) {
-                        dst[k] = tp->tets[4 * (size_t)t + mesh_face_of[f][k]];
+                        dst[k] = tp->tets[4 * (size_t)t + tet_face_of[f][k]];
                         tp->vflag[dst[k]] |= is_b ? MESH_V_BOUNDARY : MESH_V_INTERFACE;
                     }
                 }

@@ -118,9 +118,6 @@ typedef struct mesh_topo {
     int32_t nb;       /* vertices with MESH_V_BOUNDARY */
 } mesh_topo;
 
-/* Face opposite local vertex a, ordered so its normal points out of a positive tet. */
-extern const int mesh_face_of[4][3];
-
 qdc_status mesh_topo_build(const mesh_t *m, mesh_topo **out, qdc_error *err);
 void mesh_topo_free(mesh_topo *t);
 

@@ -10,6 +10,10 @@
 #include <stddef.h>
 #include <stdint.h>
 
+/* Face opposite local vertex a, ordered so that its normal points out of a
+ * positive tet (defined in mesh.c; the one face table of the library). */
+extern const int tet_face_of[4][3];
+
 /* 6 x the signed volume of tet tt (4 vertex indices into x). */
 static inline double geom_tet_vol6(const double *x, const int32_t *tt)
 {

@@ -7,6 +7,7 @@
  * (seed, side, k), and partial sums are formed per fixed-size chunk and added
  * in chunk order, so the result does not depend on the number of threads. */
 #include "geom/bderr.h"
+#include "core/tet.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -714,7 +715,6 @@ qdc_status bderr_surfaces(const double *xa, int32_t nva, const int32_t *ta, int3
 /* Boundary faces                                                            */
 
 /* Local faces of a tet, each seen from outside a positive tet. */
-static const int face_of[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
 
 typedef struct {
     uint64_t key; /* the two larger vertices of the face */
@@ -748,7 +748,8 @@ static void sort_faces(face_rec *r, int64_t n)
 
 static void face_sorted(const int32_t *t, int f, int32_t s[3])
 {
-    int32_t a = t[face_of[f][0]], b = t[face_of[f][1]], c = t[face_of[f][2]], x;
+    int32_t a = t[tet_face_of[f][0]], b = t[tet_face_of[f][1]], c = t[tet_face_of[f][2]],
+            x;
 
     if (a > b) {
         x = a;
@@ -825,7 +826,7 @@ static qdc_status boundary_faces(const mesh_t *m, const char *what, int32_t **ou
                 if (j == i + 1 && pass == 1) {
                     const int32_t *t = m->tets + 4 * (size_t)(rec[i].face / 4);
                     for (int k = 0; k < 3; k++)
-                        tris[3 * (size_t)nb + k] = t[face_of[rec[i].face % 4][k]];
+                        tris[3 * (size_t)nb + k] = t[tet_face_of[rec[i].face % 4][k]];
                 }
                 nb += j == i + 1;
                 i = j;

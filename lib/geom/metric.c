@@ -1,5 +1,6 @@
 /* metric.c - per-tet quality metrics (paper Sec. 3.1, docs/method.md §2-§3). */
 #include "geom/metric.h"
+#include "core/tet.h"
 
 #include <math.h>
 #include <string.h>
@@ -146,9 +147,8 @@ double metric_qt_grad(opt_metric m, const double *p12, int a, double delta, doub
                         p[(a + 3) & 3][k]);
     /* d vol / d p_a = (inward face normal * area) / 3 = -(outward cross) / 6 */
     {
-        static const int face_of[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
         for (int k = 0; k < 3; k++)
-            fi[k] = face_of[a][k];
+            fi[k] = tet_face_of[a][k];
         f0 = p[fi[0]];
         f1 = p[fi[1]];
         f2 = p[fi[2]];
@@ -172,9 +172,8 @@ double metric_qt_grad(opt_metric m, const double *p12, int a, double delta, doub
         /* q = sqrt(l2/2 * adj2) / (3h); adj2 = sum |n_f|^2 over faces; for a face
          * (a, b, c) containing p_a, d|n|^2/dp_a = 2 (b - c) x n. */
         double dadj[3] = {0, 0, 0};
-        static const int face_of[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
         for (int f = 0; f < 4; f++) {
-            int v0 = face_of[f][0], v1 = face_of[f][1], v2 = face_of[f][2];
+            int v0 = tet_face_of[f][0], v1 = tet_face_of[f][1], v2 = tet_face_of[f][2];
             int b, c;
             double n[3], bc[3], t[3];
             if (f == a)
@@ -301,14 +300,14 @@ double metric_qt_hess_face(opt_metric m, const double *pa, const double *f0,
 double metric_qt_hess(opt_metric m, const double *p12, int a, double delta, double g[3],
                       double H[6], metric_parts *pt_out)
 {
-    static const int face_of[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
     const double *p = p12;
     double vol, q;
 
     if (m == OPT_METRIC_MICN)
         return NAN;
-    q = metric_qt_hess_face(m, p + 3 * a, p + 3 * face_of[a][0], p + 3 * face_of[a][1],
-                            p + 3 * face_of[a][2], delta, g, H, &vol);
+    q = metric_qt_hess_face(m, p + 3 * a, p + 3 * tet_face_of[a][0],
+                            p + 3 * tet_face_of[a][1], p + 3 * tet_face_of[a][2], delta,
+                            g, H, &vol);
     if (pt_out)
         metric_parts_for(m, p12, p12 + 3, p12 + 6, p12 + 9, pt_out);
     return q;

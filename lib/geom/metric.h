@@ -50,7 +50,7 @@ double metric_qt_grad(opt_metric m, const double *p12, int a, double delta, doub
 double metric_qt_hess(opt_metric m, const double *p12, int a, double delta, double g[3],
                       double H[6], metric_parts *pt);
 /* The same with corner a at pa and the opposite face (f0, f1, f2) ordered as
- * the face_of table of metric.c orders it for a (so that the tet is positive
+ * tet_face_of (core/tet.h) orders it for a (so that the tet is positive
  * when pa is on the inner side); *vol receives the signed volume. g NULL:
  * the value only (H unused). Without copying the tet: for the finishing
  * pass's inner loop. */

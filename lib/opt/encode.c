@@ -1,6 +1,8 @@
 /* encode.c - quality differential coordinates (paper Eqs. 3-8, docs/method.md §3-§4). */
 #include "opt/encode.h"
 
+#include "core/tet.h"
+
 #include "geom/metric.h"
 
 #include <math.h>
@@ -95,7 +97,7 @@ static void face_target(const mesh_topo *tp, const double *x, opt_metric m, int3
     double e1[3], e2[3], len;
 
     for (int k = 0; k < 3; k++) {
-        fv[k] = tp->tets[4 * (size_t)t + mesh_face_of[a][k]];
+        fv[k] = tp->tets[4 * (size_t)t + tet_face_of[a][k]];
         f[k] = x + 3 * (size_t)fv[k];
     }
     for (int k = 0; k < 3; k++) {

@@ -1,5 +1,6 @@
 /* finish.c - worst-tet finishing pass (docs/method.md §5a). */
 #include "opt/finish.h"
+#include "core/tet.h"
 
 #include "geom/metric.h"
 
@@ -133,13 +134,13 @@ static double star_hess(const mesh_topo *tp, const double *x, int32_t v, const d
         g[0] = g[1] = g[2] = 0.0;
     }
     for (int32_t k = tp->vt_ptr[v]; k < tp->vt_ptr[v + 1]; k++) {
-        static const int face_of[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
         int32_t t = tp->vt_idx[k] >> 2, a = tp->vt_idx[k] & 3;
         const int32_t *tt = tp->tets + 4 * (size_t)t;
         double gt[3], Ht[6], q, vol;
-        q = metric_qt_hess_face(
-            m, y, x + 3 * (size_t)tt[face_of[a][0]], x + 3 * (size_t)tt[face_of[a][1]],
-            x + 3 * (size_t)tt[face_of[a][2]], delta, g ? gt : NULL, Ht, &vol);
+        q = metric_qt_hess_face(m, y, x + 3 * (size_t)tt[tet_face_of[a][0]],
+                                x + 3 * (size_t)tt[tet_face_of[a][1]],
+                                x + 3 * (size_t)tt[tet_face_of[a][2]], delta,
+                                g ? gt : NULL, Ht, &vol);
         bad += !(vol > 0.0);
         f += q;
         if (!g || !isfinite(q))
