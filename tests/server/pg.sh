@@ -23,53 +23,6 @@ if ! pg_available; then
 fi
 pg_start || { fail "pg: start PostgreSQL" "$(tail -3 "$PGDIR/initdb.log" "$PGDIR/log" 2> /dev/null | tr '\n' ' ')"; exit 1; }
 
-# node NAME DATADIR [options]: starts qdcd on the database; sets URL_NAME, PID_NAME
-node() {
-    _n=$1 _d=$2
-    shift 2
-    rm -f "$TMP/$_n.port"
-    "$QDCD" --listen 127.0.0.1:0 --port-file "$TMP/$_n.port" --data "$_d" --store "$PGURI" \
-        "$@" >> "$TMP/$_n.log" 2>&1 &
-    _p=$!
-    PIDS="$PIDS $_p"
-    eval "PID_$_n=$_p"
-    _i=0
-    while [ $_i -lt 150 ]; do
-        if [ -s "$TMP/$_n.port" ]; then
-            eval "URL_$_n=http://127.0.0.1:$(cat "$TMP/$_n.port")"
-            curl -sf -m 2 "http://127.0.0.1:$(cat "$TMP/$_n.port")/livez" > /dev/null && return 0
-        fi
-        kill -0 $_p 2> /dev/null || return 1
-        sleep 0.1
-        _i=$((_i + 1))
-    done
-    return 1
-}
-jf() { jq -r "$2" "$1"; } # jf FILE FILTER
-stop() { # PID: SIGTERM, wait, exit status
-    kill -TERM "$1" 2> /dev/null
-    wait "$1"
-}
-post() { # URL FILE QUERY OUT [curl args]: prints the status code
-    _u=$1 _f=$2 _q=$3 _o=$4
-    shift 4
-    curl -s -m 60 -o "$_o" -w '%{http_code}' -X POST --data-binary "@$_f" -H "Content-Type: $QM" "$@" "$_u/v1/jobs?$_q"
-}
-wait_done() { # URL ID: polls until done (max 40 s); prints the state
-    [ -n "$2" ] || { echo no-id; return 1; }
-    _i=0
-    while [ $_i -lt 200 ]; do
-        _s=$(curl -s -m 10 "$1/v1/jobs/$2")
-        if [ "$(printf '%s' "$_s" | jq -r .done 2> /dev/null)" = true ]; then
-            printf '%s' "$_s" | jq -r .state
-            return 0
-        fi
-        sleep 0.2
-        _i=$((_i + 1))
-    done
-    echo timeout
-}
-
 $MT qmesh "$ROOT/tests/data/sample/cube.mesh" "$TMP/cube.qmesh" || { fail "pg: sample" "meshtool"; exit 1; }
 
 # 1. one node: submit, run, result and report, through PostgreSQL rows
