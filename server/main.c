@@ -572,11 +572,24 @@ int main(int argc, char **argv)
             strchr(q->cfg.host, ':') ? "]" : "", q->cfg.port, q->cfg.data, q->cfg.workers,
             q->ntokens ? ", tokens on" : "");
 
-    double next_purge = 0, next_sweep = mono_now() + 60;
+    double next_purge = 0, next_sweep = mono_now() + 60, next_recover = mono_now() + 2;
     while (!q->stop) {
         if (mono_now() >= next_purge) {
             purge_expired(q);
             next_purge = mono_now() + 1;
+        }
+        if (shared_on(q) && mono_now() >= next_recover) {
+            /* jobs of a node that died: back to the queue, or failed after
+             * --max-attempts (the claims leave those alone) */
+            int rq = 0, fl = 0;
+            if (q->store->ops->recover(q->store, q->cfg.max_attempts, q->cfg.retention,
+                                       &rq, &fl) == QDC_OK &&
+                (rq || fl))
+                fprintf(stderr,
+                        "qdcd: jobs of a node that stopped: %d re-queued, %d failed "
+                        "(attempts exhausted)\n",
+                        rq, fl);
+            next_recover = mono_now() + 2;
         }
         if (shared_on(q) && mono_now() >= next_sweep) {
             /* other nodes deleted or expired jobs this node has files of */

@@ -57,6 +57,7 @@ typedef struct {
     PGconn *conn;
     pthread_mutex_t lock;
     char uri[1024];
+    int max_attempts; /* from recover: claims leave exhausted jobs to it */
     /* blob transfers */
     pthread_mutex_t pool_lock;
     pthread_cond_t pool_cond;
@@ -410,13 +411,15 @@ static qdc_status pg_claim(job_store *s_, const char *worker, double lease_s,
     p_dbl(&p, now + lease_s);
     p_dbl(&p, now);
     p_text(&p, inst);
+    p_i64(&p, ((pg_store *)s_)->max_attempts);
     /* the records of an earlier run (a node that died) are not this run's */
     st = one((pg_store *)s_,
              "WITH c AS (UPDATE jobs SET state = 1, attempts = attempts + 1,"
              " lease_owner = $1, lease_until = $2, started = $3, iterations = 0,"
              " last_progress = ''"
              " WHERE seq = (SELECT seq FROM jobs WHERE state = 0"
-             " OR (state = 1 AND lease_until < $3 AND lease_owner NOT LIKE $4)"
+             " OR (state = 1 AND lease_until < $3 AND lease_owner NOT LIKE $4"
+             " AND attempts < $5)"
              " ORDER BY seq LIMIT 1 FOR UPDATE SKIP LOCKED)"
              " RETURNING " COLS "),"
              " d AS (DELETE FROM progress WHERE job_id IN (SELECT id FROM c))"
@@ -516,9 +519,10 @@ static qdc_status pg_remove(job_store *s_, const char *id)
                &p, NULL, NULL);
 }
 
-/* Start-up of a node: jobs whose lease expired (their node died) go back to
- * the queue, or fail when they used all their attempts. Jobs that other,
- * live nodes are running keep their leases. */
+/* Jobs whose lease expired (their node died) go back to the queue, or fail
+ * when they used all their attempts (a job that keeps killing nodes). Run at
+ * a node's start-up and then every few seconds by every node; jobs that
+ * other, live nodes are running keep their leases. */
 static qdc_status pg_recover(job_store *s_, int max_attempts, double retention,
                              int *requeued, int *failed)
 {
@@ -534,6 +538,7 @@ static qdc_status pg_recover(job_store *s_, int max_attempts, double retention,
         "\"status\":500,\"detail\":\"a daemon died while running this job on each of "
         "its %d attempt(s); it is not retried\",\"attempts\":%d}",
         max_attempts, max_attempts);
+    s->max_attempts = max_attempts;
     p_dbl(&p, now);
     p_dbl(&p, now + retention);
     p_text(&p, err);
@@ -1403,6 +1408,7 @@ qdc_status store_pg_open(const char *uri, job_store **out, qdc_error *err)
     pthread_cond_init(&s->wq_cond, NULL);
     pthread_cond_init(&s->wq_done, NULL);
     snprintf(s->uri, sizeof s->uri, "%s", uri);
+    s->max_attempts = 1000;
     s->conn = pg_connect(uri);
     if (!s->conn || PQstatus(s->conn) != CONNECTION_OK) {
         /* libpq's message names the host and the reason; never the password */

@@ -9,7 +9,9 @@
 #    format with the worker's ETags, also after its cache was emptied;
 #  - DELETE on one node removes the job's files from the database and from
 #    the other nodes' caches;
-#  - kill -9 of the node running a job: another node finishes it;
+#  - kill -9 of the node running a job: another node finishes it; a job
+#    whose run killed a node on each of its --max-attempts fails, with a
+#    clear problem;
 #  - one Idempotency-Key sent to the three nodes at once: one job;
 #  - PostgreSQL stopped and restarted mid-run: no job lost, no node dies;
 #  - rolling SIGTERM restart of every node while jobs run: no job fails.
@@ -22,7 +24,7 @@ XN="$PY $ROOT/tests/server/xnode.py"
 PIDS=
 trap 'for p in $PIDS; do kill -9 $p 2>/dev/null; done; pg_cleanup; rm -rf "$TMP"' EXIT
 
-CHECKS="round-robin|wake-up|events|live progress|progress|report|results|cache emptied|delete|node killed|idempotency|database restart|rolling restart"
+CHECKS="round-robin|wake-up|events|live progress|progress|report|results|cache emptied|delete|node killed|attempts exhausted|idempotency|database restart|rolling restart"
 if ! pg_available; then
     echo "$CHECKS" | tr '|' '\n' | while read -r n; do
         echo "ok - pg3: $n # SKIP no PostgreSQL server binaries (apt-get install postgresql) or not root"
@@ -31,7 +33,7 @@ if ! pg_available; then
 fi
 pg_start || { fail "pg3: start PostgreSQL" "$(tail -3 "$PGDIR/initdb.log" "$PGDIR/log" 2> /dev/null | tr '\n' ' ')"; exit 1; }
 
-NODEOPTS="--workers 1 --lease 3 --shutdown-grace 1"
+NODEOPTS="--workers 1 --lease 3 --shutdown-grace 1 --max-attempts 2"
 for n in a b c; do
     node $n "$TMP/d$n" $NODEOPTS || { fail "pg3: node $n starts" "$(tail -3 "$TMP/$n.log")"; exit 1; }
 done
@@ -201,6 +203,33 @@ else
 fi
 node "$k" "$TMP/d$k" $NODEOPTS || { fail "pg3: node $k restarts" "$(tail -3 "$TMP/$k.log")"; exit 1; }
 
+# 4b. a job during which its node dies on each of its 2 attempts fails
+# (attempts exhausted), whichever nodes ran it
+post "$URL_c" "$TMP/bunny.qmesh" "max_iter=150&finish=0&tol_move=0&mode=literal" "$TMP/jp" > /dev/null
+idp=$(jf "$TMP/jp" .id)
+killed=
+for attempt in 1 2; do
+    i=0
+    while [ $i -lt 300 ] && [ "$(pg_sql "SELECT state || ' ' || attempts FROM jobs WHERE id = '$idp'")" != "1 $attempt" ]; do
+        sleep 0.05
+        i=$((i + 1))
+    done
+    sleep 0.2
+    k=$(runner "$idp")
+    [ -n "$k" ] || break
+    kill -9 "$(pid_of "$k")"
+    wait "$(pid_of "$k")" 2> /dev/null
+    killed="$killed $k"
+    node "$k" "$TMP/d$k" $NODEOPTS || { fail "pg3: node $k restarts" "$(tail -3 "$TMP/$k.log")"; exit 1; }
+done
+st=$(wait_done "$URL_a" "$idp")
+typ=$(curl -s "$URL_b/v1/jobs/$idp" | jq -r '"\(.attempts) \(.error.type)"')
+if [ "$st" = failed ] && [ "$typ" = "2 /problems/attempts-exhausted" ] && [ "$(echo $killed | wc -w)" = 2 ]; then
+    pass "pg3: attempts exhausted: nodes$killed killed during the job's 2 attempts; it failed with /problems/attempts-exhausted"
+else
+    fail "pg3: attempts exhausted" "killed '$killed', state $st, '$typ'"
+fi
+
 # 5. one Idempotency-Key sent to the three nodes at the same moment: one job
 K='Idempotency-Key: pg3-same-key'
 for n in a b c; do
@@ -266,9 +295,10 @@ for id in $ids; do
     st=$(wait_done "$URL_c" "$id")
     [ "$st" = succeeded ] || bad="$bad $id:$st"
 done
-failed=$(pg_sql "SELECT COUNT(*) FROM jobs WHERE state = 3")
+inlist=$(echo $ids | sed "s/\([0-9a-f]*\)/'\1'/g; s/ /,/g")
+failed=$(pg_sql "SELECT COUNT(*) FROM jobs WHERE state = 3 AND id IN ($inlist)")
 if [ -z "$bad" ] && [ "$(echo $ids | wc -w)" = 9 ] && [ "$failed" = 0 ]; then
-    pass "pg3: rolling restart: each node SIGTERMed and restarted in turn; 9 jobs succeeded, 0 failed jobs in the database"
+    pass "pg3: rolling restart: each node SIGTERMed and restarted in turn; 9 jobs succeeded, none failed (database)"
 else
     fail "pg3: rolling restart" "$bad; failed jobs $failed"
 fi
