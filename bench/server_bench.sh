@@ -29,32 +29,8 @@ start() { # DATADIR options...
 stop() { kill -TERM "$QPID"; wait "$QPID" || true; QPID=; }
 rss_kb() { awk '/^VmRSS/ { print $2 }' "/proc/$1/status"; }
 
-# A 1M-tet structured grid (56^3 cells x 6 tets), written with numpy.
-$PY - "$TMP/1m.qmesh" <<'PYEOF'
-import sys, numpy as np
-n = 56
-i, j, k = np.meshgrid(np.arange(n + 1), np.arange(n + 1), np.arange(n + 1), indexing="ij")
-xyz = np.stack([i, j, k], -1).reshape(-1, 3).astype("<f8") / n
-idx = lambda a, b, c: (a * (n + 1) + b) * (n + 1) + c
-ci, cj, ck = [x.ravel() for x in np.meshgrid(np.arange(n), np.arange(n), np.arange(n), indexing="ij")]
-tets = []
-for p in [(0, 1, 2), (0, 2, 1), (1, 0, 2), (1, 2, 0), (2, 0, 1), (2, 1, 0)]:
-    cur = [ci.copy(), cj.copy(), ck.copy()]
-    path = [idx(*cur)]
-    for ax in p:
-        cur[ax] = cur[ax] + 1
-        path.append(idx(*cur))
-    t = np.stack(path, -1)
-    e = xyz[t[:, 1:]] - xyz[t[:, :1]]
-    neg = np.linalg.det(e) < 0
-    t[neg, 1], t[neg, 2] = t[neg, 2].copy(), t[neg, 1].copy()
-    tets.append(t)
-tets = np.concatenate(tets).astype("<i4")
-with open(sys.argv[1], "wb") as f:
-    f.write(b"QDCMESH\0" + np.array([1, 0], "<u4").tobytes() + np.array([len(xyz), len(tets)], "<u8").tobytes())
-    f.write(xyz.tobytes()); f.write(tets.tobytes())
-print("mesh: %d vertices, %d tets, %.1f MB" % (len(xyz), len(tets), (32 + xyz.nbytes + tets.nbytes) / 1e6))
-PYEOF
+# A 1M-tet structured grid (56^3 cells x 6 tets).
+$PY "$ROOT/bench/grid_qmesh.py" 56 "$TMP/1m.qmesh"
 
 # 1. upload + validate + enqueue (the 202 means committed and fsynced). A fresh
 #    daemon for each upload, so no earlier 1M-tet job competes for the cores.

@@ -2,12 +2,16 @@
  * a request that is refused (401, 404, 413, 415, 429) is answered before its
  * body is read. Mesh bodies are streamed to a temporary file in DATA/tmp and
  * parsed by libqdc (never by jansson) once complete; the job row is committed
- * and the input file fsynced and renamed into DATA/jobs/ID before the 202. */
+ * and the input file fsynced and renamed into DATA/jobs/ID before the 202.
+ * With a PostgreSQL store (shared.h) the input is stored in the database in
+ * the transaction that inserts the row, and any node serves any job's
+ * records, results and report, fetching what its cache lacks. */
 #define _GNU_SOURCE
 #include "api.h"
 
 #include "job.h"
 #include "qdc.h"
+#include "shared.h"
 #include "ui.h"
 
 #include <ctype.h>
@@ -670,19 +674,21 @@ static void new_id(char out[JOB_ID_LEN + 1])
     out[JOB_ID_LEN] = 0;
 }
 
-/* Make the upload the job's input: fsync, rename into DATA/jobs/ID, fsync dirs. */
+/* Make the upload the job's input: fsync, rename into DATA/jobs/ID, fsync dirs.
+ * Shared (PostgreSQL): the database keeps it durably; here it is a cache. */
 static int commit_input(req *r, const char *id, const char *format)
 {
     char dir[4200], path[4300];
+    int durable = !shared_on(r->q);
 
     job_path(r->q, id, NULL, dir, sizeof dir);
     job_path(r->q, id, job_input_name(format), path, sizeof path);
-    if (dir_ensure(dir) || fsync(r->fd) || rename(r->tmp, path)) {
+    if (dir_ensure(dir) || (durable && fsync(r->fd)) || rename(r->tmp, path)) {
         dir_remove(dir);
         return -1;
     }
     r->tmp[0] = 0;
-    if (fsync_parent(path) || fsync_parent(dir))
+    if (durable && (fsync_parent(path) || fsync_parent(dir)))
         return -1;
     return 0;
 }
@@ -838,6 +844,7 @@ static enum MHD_Result process_upload(struct MHD_Connection *c, req *r)
     job_rec j, old;
     int dup = 0, bad;
     double t_parse, t_valid;
+    qdc_status st_create;
 
     memset(&j, 0, sizeof j);
     if (r->hashing) {
@@ -896,7 +903,14 @@ static enum MHD_Result process_upload(struct MHD_Connection *c, req *r)
     double t_commit = mono_now();
     if (commit_input(r, j.id, j.format))
         return storage_full(c, r, "the mesh could not be stored durably");
-    if (q->store->ops->create(q->store, &j, &dup, &old) != QDC_OK) {
+    if (shared_on(q)) {
+        job_path(q, j.id, job_input_name(j.format), d, sizeof d);
+        st_create = q->store->ops->create_with_input(
+            q->store, &j, job_input_name(j.format), d, &dup, &old);
+    } else {
+        st_create = q->store->ops->create(q->store, &j, &dup, &old);
+    }
+    if (st_create != QDC_OK) {
         job_path(q, j.id, NULL, d, sizeof d);
         dir_remove(d);
         return store_unavailable(c, r, "the job could not be recorded");
@@ -1102,7 +1116,32 @@ static void file_records(req *r, const char *id, long after, int sse, sbuf *out,
     free(buf);
 }
 
-/* Records after `after` from memory, else (finished run) from the file. */
+/* store_record_fn target: frames records like file_records. */
+typedef struct {
+    sbuf *out;
+    int sse, *count;
+    long *last;
+} rec_sink;
+
+static void sink_record(void *ctx, long seq, const char *json, size_t len)
+{
+    rec_sink *k = ctx;
+    if (k->sse) {
+        sb_printf(k->out, "id: %ld\nevent: progress\ndata: ", seq);
+        sb_add(k->out, json, len);
+        sb_puts(k->out, "\n\n");
+    } else {
+        if (*k->count)
+            sb_puts(k->out, ",");
+        sb_add(k->out, json, len);
+    }
+    (*k->count)++;
+    *k->last = seq;
+}
+
+/* Records after `after` from memory (a run of this process), else from the
+ * store (shared: any state, the run may be on another node) or, for a
+ * finished run, from the file. */
 static void collect(req *r, const job_rec *j, long after, int sse, sbuf *out, int *count,
                     long *last, int *done)
 {
@@ -1151,8 +1190,14 @@ static void collect(req *r, const job_rec *j, long after, int sse, sbuf *out, in
     *count = 0;
     *last = -1;
     *done = job_state_done(j->state);
-    if (*done)
+    if (shared_on(r->q)) {
+        rec_sink k = {out, sse, count, last};
+        r->q->store->ops->progress_read(r->q->store, j->id, after, sink_record, &k);
+        if (!*count)
+            *last = after;
+    } else if (*done) {
         file_records(r, j->id, after, sse, out, count, last);
+    }
 }
 
 static int parse_long(const char *s, long lo, long hi, long *out)
@@ -1206,12 +1251,14 @@ static enum MHD_Result do_progress(struct MHD_Connection *c, req *r)
         r->wait_set = 1;
     }
     for (int tries = 0;; tries++) {
+        /* before the read: a kick from another node after it refuses the park */
+        unsigned long gen = poll_kick_gen(q->hub);
         recs.len = 0;
         collect(r, &j, r->after, 0, &recs, &count, &last, &done);
         if (count || done || tries || mono_now() >= r->deadline ||
             poll_shutting_down(q->hub))
             break;
-        if (poll_park(q->hub, j.id, r->after, &r->w, c, r->deadline)) {
+        if (poll_park_since(q->hub, j.id, r->after, &r->w, c, r->deadline, gen)) {
             r->parked_ever = 1;
             sb_free(&recs);
             return MHD_YES;
@@ -1259,6 +1306,7 @@ static ssize_t sse_reader(void *cls, uint64_t pos, char *buf, size_t max)
         r->sse_off = 0;
         if (r->sse_end)
             return MHD_CONTENT_READER_END_OF_STREAM;
+        unsigned long gen = poll_kick_gen(q->hub); /* before the reads, as do_progress */
         if (q->store->ops->get(q->store, r->id, &j) != QDC_OK) {
             sb_puts(&r->sse, "event: end\ndata: {\"state\":\"deleted\"}\n\n");
             r->sse_end = 1;
@@ -1285,7 +1333,7 @@ static ssize_t sse_reader(void *cls, uint64_t pos, char *buf, size_t max)
             continue;
         }
         r->deadline = mono_now() + q->cfg.sse_keepalive;
-        if (poll_park(q->hub, j.id, r->after, &r->w, r->conn, r->deadline))
+        if (poll_park_since(q->hub, j.id, r->after, &r->w, r->conn, r->deadline, gen))
             return 0; /* resumed by a record, the end, the keep-alive or shutdown */
     }
 }
@@ -1335,6 +1383,8 @@ static int not_servable(struct MHD_Connection *c, req *r, const job_rec *j,
 
     if (r->route == R_INPUT && !(job_state_done(j->state) && gone)) {
         input_source(r, j, src, sizeof src);
+        if (access(src, R_OK) != 0 && shared_on(r->q) && !job_is_surface(j->format))
+            (void)shared_fetch(r->q, j->id, job_input_name(j->format), NULL);
         if (access(src, R_OK) == 0)
             return 0;
         if (job_state_done(j->state)) { /* a surface TetGen could not mesh */
@@ -1555,6 +1605,25 @@ static enum MHD_Result process_convert(struct MHD_Connection *c, req *r)
     if (!load_job(c, r, &j, &ret) || not_servable(c, r, &j, &ret))
         return ret;
     result_file(r, &j, r->res_fmt, path, sizeof path, hex);
+    snprintf(side, sizeof side, "%s.etag", path);
+    if (shared_on(r->q) && access(path, R_OK) != 0) {
+        /* not in this node's cache: the stored file (the worker's formats,
+         * or a conversion another node stored), with the same ETag */
+        char sha[65] = "";
+        qdc_status fs = shared_fetch(r->q, j.id, strrchr(path, '/') + 1, sha);
+        if (fs == QDC_EIO)
+            return store_unavailable(c, r, "the result could not be read");
+        if (fs == QDC_OK && !hex[0] && strlen(sha) == 64 &&
+            file_write_atomic(side, sha, 64) == 0)
+            snprintf(hex, sizeof hex, "%s", sha);
+        if (fs == QDC_OK && hex[0])
+            return serve_result(c, r, r->res_fmt, path, hex);
+        hex[0] = 0;
+        if (shared_fetch(r->q, j.id,
+                         r->route == R_INPUT ? job_input_name(j.format) : "result.qmesh",
+                         NULL) == QDC_EIO)
+            return store_unavailable(c, r, "the result could not be read");
+    }
     if (hex[0]) /* written for a request queued before this one */
         return serve_result(c, r, r->res_fmt, path, hex);
     qdc_error_clear(&e);
@@ -1601,6 +1670,10 @@ static enum MHD_Result process_convert(struct MHD_Connection *c, req *r)
         fprintf(stderr, "qdcd: job %s: %s written as %s in %.3f s\n", j.id,
                 r->route == R_INPUT ? "input" : "result", meshio_format_name(r->res_fmt),
                 mono_now() - t0);
+    /* the other nodes serve this conversion from the store (best effort:
+     * converting again gives the same bytes) */
+    if (shared_on(r->q))
+        (void)shared_put(r->q, j.id, strrchr(path, '/') + 1, hex, NULL);
     return serve_result(c, r, r->res_fmt, path, hex);
 }
 
@@ -1620,7 +1693,8 @@ static enum MHD_Result do_result(struct MHD_Connection *c, req *r)
     if (not_servable(c, r, &j, &ret))
         return ret;
     result_file(r, &j, f, path, sizeof path, hex);
-    if (hex[0])
+    /* shared: a file missing from this node's cache is fetched off-thread */
+    if (hex[0] && (!shared_on(r->q) || access(path, R_OK) == 0))
         return serve_result(c, r, f, path, hex);
     r->res_fmt = f;
     return offq_push(&convert, c, r);
@@ -1637,6 +1711,9 @@ static enum MHD_Result do_report(struct MHD_Connection *c, req *r)
     if (not_servable(c, r, &j, &ret))
         return ret;
     job_path(r->q, j.id, "report.json", path, sizeof path);
+    /* shared: from the store when this node's cache lacks it (a few kB) */
+    if (shared_on(r->q) && shared_fetch(r->q, j.id, "report.json", NULL) == QDC_EIO)
+        return store_unavailable(c, r, "the report could not be read");
     return http_reply_file(c, r, 200, path, "application/json", no_headers);
 }
 

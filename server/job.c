@@ -3,13 +3,17 @@
  * and appends it to DATA/jobs/ID/progress.jsonl, then writes the result in the
  * three formats plus report.json (each written, fsynced and renamed) and only
  * then marks the row done: a crash at any point leaves a running row that the
- * next start re-queues. */
+ * next start re-queues. With a PostgreSQL store (shared.h) the input comes
+ * from the database when this node's cache lacks it, the records go to the
+ * database (behind the local ones) and the results are stored there before
+ * the row is marked done. */
 #define _GNU_SOURCE
 #include "job.h"
 
 #include "child.h"
 #include "qdc.h"
 #include "sha256.h"
+#include "shared.h"
 
 #include <errno.h>
 #include <jansson.h>
@@ -255,6 +259,10 @@ static int on_progress(void *ctx, const opt_progress *p)
                 fputc('\n', r->progress);
                 fflush(r->progress);
             }
+            /* other nodes' readers: queued, written by the store's thread */
+            if (shared_on(r->q))
+                r->q->store->ops->progress_add(r->q->store, r->id, r->w->name, seq,
+                                               line.buf, line.len);
         }
     }
     sb_free(&js);
@@ -285,6 +293,9 @@ typedef qdc_status (*store_write_fn)(qdcd *q, worker *w, const job_rec *j);
 static qdc_status store_finish_once(qdcd *q, worker *w, const job_rec *j)
 {
     (void)w;
+    /* every record of the run is stored before the row says it is over */
+    if (shared_on(q) && q->store->ops->progress_sync(q->store, 5.0) != QDC_OK)
+        return QDC_EIO;
     return q->store->ops->finish(q->store, j);
 }
 
@@ -383,6 +394,10 @@ static qdc_status save_outputs(qdcd *q, job_rec *j, const mesh_t *out, const mes
             return st;
         if (sha256_file_hex(path, (char *)j + outs[i].etag_off))
             return qdc_fail(err, QDC_EIO, "cannot hash %s", path);
+        if (shared_on(q) &&
+            (st = shared_put(q, j->id, outs[i].name, (char *)j + outs[i].etag_off,
+                             j->lease_owner)) != QDC_OK)
+            return qdc_fail(err, st, "cannot store %s in the database", outs[i].name);
     }
     st = report_quality_compute(out, &after, err);
     if (st != QDC_OK)
@@ -393,6 +408,9 @@ static qdc_status save_outputs(qdcd *q, job_rec *j, const mesh_t *out, const mes
     st = write_report(path, &rep, err);
     if (st == QDC_OK && fsync_parent(path))
         st = qdc_fail(err, QDC_EIO, "cannot sync the job directory");
+    if (st == QDC_OK && shared_on(q) &&
+        (st = shared_put(q, j->id, "report.json", "", j->lease_owner)) != QDC_OK)
+        qdc_fail(err, st, "cannot store the report in the database");
     return st;
 }
 
@@ -541,7 +559,22 @@ static void run_job(worker *w, job_rec *j)
     qdc_error_clear(&err);
     poll_begin(q->hub, j->id);
     job_path(q, j->id, "progress.jsonl", path, sizeof path);
-    r.progress = fopen(path, "w");
+    r.progress = shared_on(q) ? NULL : fopen(path, "w"); /* shared: in the store */
+    if (shared_on(q)) {
+        /* the input, from the database unless this node received it */
+        st = shared_fetch(q, j->id, job_input_name(j->format), NULL);
+        if (st == QDC_EINVAL) {
+            st = qdc_fail(&err, QDC_EIO, "the job's input is missing from the store");
+            goto failed;
+        }
+        if (st != QDC_OK) {
+            fprintf(stderr, "qdcd: job %s: cannot fetch its input: back to the queue\n",
+                    j->id);
+            (void)retry_store(q, "give back", j->id, store_release_once, w, j, 60.0);
+            poll_drop(q->hub, j->id);
+            goto released;
+        }
+    }
 
     job_opt_from_json(&opts, j->options, q->cfg.job_time_limit);
     if (job_is_surface(j->format)) {

@@ -6,6 +6,7 @@
 #include "job.h"
 #include "server.h"
 #include "sha256.h"
+#include "shared.h"
 
 #include <dirent.h>
 #include <errno.h>
@@ -36,8 +37,9 @@ static void usage(FILE *f)
         "                            (default ./var)\n"
         "  --store URI               job store: sqlite:DIR (the same as --data DIR, the\n"
         "                            default) or a PostgreSQL connection URI\n"
-        "                            postgresql://USER@HOST:PORT/DB (job rows in the\n"
-        "                            database; --data holds the job files)\n"
+        "                            postgresql://USER@HOST:PORT/DB (jobs and their\n"
+        "                            files in the database: nodes share nothing else;\n"
+        "                            --data is this node's cache and scratch space)\n"
         "  --workers N               optimizer threads (default: number of cores)\n"
         "  --tokens FILE             bearer tokens, one SHA-256 hex hash per line\n"
         "                            (make one with --hash-token); each job is visible\n"
@@ -534,6 +536,8 @@ int main(int argc, char **argv)
         if (orphans)
             fprintf(stderr, "qdcd: removed %d job director%s without a job\n", orphans,
                     orphans == 1 ? "y" : "ies");
+    } else {
+        shared_sweep(q, 60); /* cached files of jobs deleted or expired meanwhile */
     }
     q->hub = poll_new();
     if (!q->hub || poll_start(q->hub)) {
@@ -543,6 +547,10 @@ int main(int argc, char **argv)
     q->pool = job_pool_start(q);
     if (!q->pool) {
         fprintf(stderr, "qdcd: cannot start workers\n");
+        goto out;
+    }
+    if (shared_listen_start(q)) {
+        fprintf(stderr, "qdcd: cannot start the database listener\n");
         goto out;
     }
     if (api_start(q)) {
@@ -564,11 +572,29 @@ int main(int argc, char **argv)
             strchr(q->cfg.host, ':') ? "]" : "", q->cfg.port, q->cfg.data, q->cfg.workers,
             q->ntokens ? ", tokens on" : "");
 
-    double next_purge = 0;
+    double next_purge = 0, next_sweep = mono_now() + 60, next_recover = mono_now() + 2;
     while (!q->stop) {
         if (mono_now() >= next_purge) {
             purge_expired(q);
             next_purge = mono_now() + 1;
+        }
+        if (shared_on(q) && mono_now() >= next_recover) {
+            /* jobs of a node that died: back to the queue, or failed after
+             * --max-attempts (the claims leave those alone) */
+            int rq = 0, fl = 0;
+            if (q->store->ops->recover(q->store, q->cfg.max_attempts, q->cfg.retention,
+                                       &rq, &fl) == QDC_OK &&
+                (rq || fl))
+                fprintf(stderr,
+                        "qdcd: jobs of a node that stopped: %d re-queued, %d failed "
+                        "(attempts exhausted)\n",
+                        rq, fl);
+            next_recover = mono_now() + 2;
+        }
+        if (shared_on(q) && mono_now() >= next_sweep) {
+            /* other nodes deleted or expired jobs this node has files of */
+            shared_sweep(q, 60);
+            next_sweep = mono_now() + 60;
         }
         int sig = sigtimedwait(&stopset, NULL, &tick);
         if (sig == SIGTERM || sig == SIGINT)
@@ -579,6 +605,9 @@ int main(int argc, char **argv)
     http_quiesce(q);
     poll_shutdown(q->hub);
     api_stop(); /* uploads already received are answered (202 or 4xx) */
+    /* the listener calls into the pool; a cancel from another node still
+     * reaches a running job through its row (job.c) */
+    shared_listen_stop(q);
     job_pool_stop(q->pool, q->cfg.grace);
     q->pool = NULL;
     /* Let the answers of resumed long-polls and streams go out. */
@@ -596,6 +625,8 @@ out:
         poll_shutdown(q->hub);
     api_stop();
     http_stop(q);
+    if (q->store)
+        shared_listen_stop(q);
     job_pool_stop(q->pool, 0);
     poll_free(q->hub);
     if (q->store)

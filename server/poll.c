@@ -20,6 +20,8 @@
 #define CHAN_IDLE_TTL 600.0
 /* How often the parked sockets are checked for clients that hung up. */
 #define SWEEP_INTERVAL 1.0
+/* Recent kicks remembered for poll_park_since. */
+#define KICK_RING 256
 
 typedef struct poll_chan {
     struct poll_chan *next;
@@ -28,6 +30,7 @@ typedef struct poll_chan {
     size_t *rlen;
     long n, cap;
     int done;
+    int local;      /* a run of this process (begin/publish): records are here */
     double touched; /* mono time of the last begin/publish/end/park */
     poll_waiter *waiters;
 } poll_chan;
@@ -45,6 +48,10 @@ struct poll_hub {
     poll_waiter **pw;
     size_t pcap;
     poll_chan *chans;
+    /* kicks: kick k (k = 1, 2, ...) named ring[k % KICK_RING]; kick_all_gen
+     * is the gen of the last kick of everything */
+    unsigned long kick_gen, kick_all_gen;
+    char ring[KICK_RING][64];
 };
 
 poll_hub *poll_new(void)
@@ -251,6 +258,7 @@ void poll_begin(poll_hub *h, const char *id)
     if (c) {
         clear_records(c);
         c->done = 0;
+        c->local = 1;
         c->touched = mono_now();
     }
     pthread_mutex_unlock(&h->lock);
@@ -267,6 +275,7 @@ long poll_publish(poll_hub *h, const char *id, const char *json, size_t len,
     c = find_or_add(h, id);
     if (!c)
         goto out;
+    c->local = 1;
     if (c->n == c->cap) {
         long cap = c->cap ? 2 * c->cap : 32;
         char **r = realloc(c->rec, (size_t)cap * sizeof *r);
@@ -342,6 +351,8 @@ int poll_read(poll_hub *h, const char *id, long after, sbuf *out, int *count, lo
     *done = 0;
     pthread_mutex_lock(&h->lock);
     c = find(h, id);
+    if (c && !c->local)
+        c = NULL; /* only parked readers: the records are elsewhere */
     if (c) {
         long start = after < 0 ? 0 : after >= c->n ? c->n : after + 1;
         for (long i = start; i < c->n; i++) {
@@ -357,8 +368,58 @@ int poll_read(poll_hub *h, const char *id, long after, sbuf *out, int *count, lo
     return c != NULL;
 }
 
+/* Was id kicked after gen? Hub lock held. Conservative: yes when the ring
+ * no longer reaches back to gen. */
+static int kicked_since(poll_hub *h, const char *id, unsigned long gen)
+{
+    if (h->kick_gen == gen)
+        return 0;
+    if (h->kick_all_gen > gen || h->kick_gen - gen >= KICK_RING)
+        return 1;
+    for (unsigned long k = gen + 1; k <= h->kick_gen; k++)
+        if (!strcmp(h->ring[k % KICK_RING], id))
+            return 1;
+    return 0;
+}
+
 int poll_park(poll_hub *h, const char *id, long after, poll_waiter *w,
               struct MHD_Connection *conn, double deadline)
+{
+    return poll_park_since(h, id, after, w, conn, deadline, poll_kick_gen(h));
+}
+
+unsigned long poll_kick_gen(poll_hub *h)
+{
+    pthread_mutex_lock(&h->lock);
+    unsigned long g = h->kick_gen;
+    pthread_mutex_unlock(&h->lock);
+    return g;
+}
+
+void poll_kick(poll_hub *h, const char *id)
+{
+    pthread_mutex_lock(&h->lock);
+    h->kick_gen++;
+    snprintf(h->ring[h->kick_gen % KICK_RING], sizeof h->ring[0], "%s", id);
+    poll_chan *c = find(h, id);
+    if (c && !c->local)
+        wake_all(h, c);
+    pthread_mutex_unlock(&h->lock);
+}
+
+void poll_kick_all(poll_hub *h)
+{
+    pthread_mutex_lock(&h->lock);
+    h->kick_all_gen = ++h->kick_gen;
+    h->ring[h->kick_gen % KICK_RING][0] = 0;
+    for (poll_chan *c = h->chans; c; c = c->next)
+        if (!c->local)
+            wake_all(h, c);
+    pthread_mutex_unlock(&h->lock);
+}
+
+int poll_park_since(poll_hub *h, const char *id, long after, poll_waiter *w,
+                    struct MHD_Connection *conn, double deadline, unsigned long gen)
 {
     int parked = 0;
     poll_chan *c;
@@ -371,7 +432,7 @@ int poll_park(poll_hub *h, const char *id, long after, poll_waiter *w,
     if (h->shutting_down)
         goto out;
     c = find_or_add(h, id);
-    if (!c || c->done || c->n - 1 > after)
+    if (!c || c->done || c->n - 1 > after || (!c->local && kicked_since(h, id, gen)))
         goto out;
     w->chan = c;
     w->conn = conn;

@@ -508,9 +508,29 @@ static void sq_close(job_store *s_)
 }
 
 static const job_store_ops sq_ops = {
-    sq_create,  sq_get,    sq_find_idem, sq_list,        sq_claim,
-    sq_renew,   sq_finish, sq_release,   sq_cancel,      sq_remove,
-    sq_recover, sq_counts, sq_expired,   sq_mark_purged, sq_close,
+    sq_create,
+    sq_get,
+    sq_find_idem,
+    sq_list,
+    sq_claim,
+    sq_renew,
+    sq_finish,
+    sq_release,
+    sq_cancel,
+    sq_remove,
+    sq_recover,
+    sq_counts,
+    sq_expired,
+    sq_mark_purged,
+    sq_close,
+    /* the job files are in the data directory: no blob or progress ops */
+    NULL,
+    NULL,
+    NULL,
+    NULL,
+    NULL,
+    NULL,
+    NULL,
 };
 
 static qdc_status open_db(const char *path, sqlite3 **db, qdc_error *err)

@@ -2,8 +2,11 @@
  * Handlers and workers talk to a job_store through its ops table only, so a
  * PostgreSQL backend can be added beside the SQLite one without touching them.
  * Every call is thread-safe (backends lock internally). Times are Unix seconds.
- * Mesh bodies, results, reports and progress logs are files in the data
- * directory (job_dir), never rows. */
+ * SQLite: mesh bodies, results, reports and progress logs are files in the
+ * data directory (job_path), never rows. PostgreSQL (nodes that share nothing
+ * but the database): they are stored in the database too, in chunks (the
+ * blob_* and progress_* ops, NULL in the SQLite backend), and DATA/jobs is
+ * each node's cache. */
 #ifndef QDCD_STORE_H
 #define QDCD_STORE_H
 
@@ -58,6 +61,26 @@ typedef struct {
 
 typedef struct job_store job_store;
 
+/* What another node changed, as heard by listen (LISTEN/NOTIFY). */
+typedef enum {
+    STORE_EV_JOB,      /* a job row was inserted, changed state or was flagged
+                          for cancellation (state, cancel), or deleted (state -1) */
+    STORE_EV_PROGRESS, /* records up to seq were written for id */
+    STORE_EV_RESYNC    /* the connection was lost and is back: anything may
+                          have happened meanwhile (id "") */
+} store_ev_kind;
+
+typedef struct {
+    store_ev_kind kind;
+    char id[JOB_ID_LEN + 1];
+    int state, cancel;
+    long seq;
+} store_event;
+
+typedef void (*store_event_fn)(void *ctx, const store_event *ev);
+/* progress_read's callback: one record (JSON object with its "seq"). */
+typedef void (*store_record_fn)(void *ctx, long seq, const char *json, size_t len);
+
 typedef struct {
     /* Insert j (id, owner, idem_key, body_hash, format, sizes, options, created,
      * notes filled by the caller). If j->idem_key is set and the owner already has a
@@ -97,6 +120,38 @@ typedef struct {
                           int *n);
     qdc_status (*mark_purged)(job_store *s, const char *id);
     void (*close)(job_store *s);
+
+    /* ---- Node-shared job files (PostgreSQL); NULL in the SQLite backend. ---- */
+    /* create, with the job's input: the file at path, stored as blob `name` in
+     * the same transaction as the row (streamed in chunks). */
+    qdc_status (*create_with_input)(job_store *s, const job_rec *j, const char *name,
+                                    const char *path, int *dup, job_rec *existing);
+    /* Store the file at path as job id's blob `name` (replacing an older one),
+     * with its SHA-256 hex (sha, or "" if none), streamed in chunks. worker:
+     * only while that worker holds the job's lease (NULL: any time). QDC_EINVAL
+     * when the job is gone or the lease is lost. */
+    qdc_status (*blob_put)(job_store *s, const char *id, const char *name,
+                           const char *path, const char *sha, const char *worker);
+    /* Blob `name` of job id into path (via path.tmp, renamed), streamed; its
+     * SHA-256 hex into sha (65 bytes) if not NULL. QDC_EINVAL if there is none. */
+    qdc_status (*blob_get)(job_store *s, const char *id, const char *name,
+                           const char *path, char *sha);
+    /* Record seq of worker's run of id (a JSON object with its "seq"): queued
+     * and written by a background thread with the job row's latest progress,
+     * so the optimizer never waits on the database. Dropped if the worker
+     * no longer holds the lease. */
+    void (*progress_add)(job_store *s, const char *id, const char *worker, long seq,
+                         const char *json, size_t len);
+    /* Wait up to timeout seconds until every record queued so far is written
+     * (or dropped). QDC_OK, or QDC_EIO if the database did not take them. */
+    qdc_status (*progress_sync)(job_store *s, double timeout);
+    /* The stored records of id with seq > after, in order, to fn. */
+    qdc_status (*progress_read)(job_store *s, const char *id, long after,
+                                store_record_fn fn, void *ctx);
+    /* Start a thread (own connection) that hears other nodes' changes and
+     * calls fn from it; reconnects with a growing pause (then STORE_EV_RESYNC).
+     * fn NULL: stop that thread and wait for it. */
+    qdc_status (*listen)(job_store *s, store_event_fn fn, void *ctx);
 } job_store_ops;
 
 struct job_store {

@@ -8,26 +8,85 @@
  *   moment make one job, not two);
  * - a versioned schema that qdcd creates or migrates itself, under an advisory
  *   lock so that nodes starting together do not race.
- * One connection, serialized by a mutex; a broken connection is reset and the
- * statement tried once more, so a restarted database costs one failed call,
- * not a dead node. Every call is a single statement (autocommit) unless it
- * says otherwise. */
+ * - the job files too (schema 2): input meshes, results and reports are
+ *   blobs cut into 1 MiB bytea chunks (streamed both ways: never a whole body
+ *   in memory), progress records are rows, so nodes share nothing but the
+ *   database and each node's --data is a cache;
+ * - LISTEN/NOTIFY: triggers announce new jobs, state changes, cancellations,
+ *   deletions and progress records; one listening connection per node hears
+ *   them (listen) and wakes that node's parked readers and idle workers.
+ * Row operations go through one connection serialized by a mutex; blob
+ * transfers take a connection from a small pool (a 1 GB upload does not hold
+ * up the claims), the progress writer and the listener have their own. A
+ * broken connection is reset and the statement (or transaction) tried once
+ * more, so a restarted database costs one failed call, not a dead node.
+ * Every call is a single statement (autocommit) unless it says otherwise. */
 #define _GNU_SOURCE
 #include "store.h"
 #include "util.h"
 
+#include <errno.h>
+#include <fcntl.h>
 #include <libpq-fe.h>
+#include <poll.h>
 #include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <time.h>
+#include <unistd.h>
+
+#define CHUNK ((size_t)1 << 20)  /* bytes per blob row */
+#define POOL_MAX 4               /* connections for blob transfers */
+#define PROGRESS_QUEUE_MAX 20000 /* records waiting for the database */
+
+/* A progress record waiting for the writer thread. */
+typedef struct prec {
+    struct prec *next;
+    char id[JOB_ID_LEN + 1];
+    char worker[64];
+    long seq;
+    unsigned long ticket;
+    size_t len;
+    char json[]; /* len bytes + NUL */
+} prec;
 
 typedef struct {
     job_store base;
     PGconn *conn;
     pthread_mutex_t lock;
     char uri[1024];
+    int max_attempts; /* from recover: claims leave exhausted jobs to it */
+    /* blob transfers */
+    pthread_mutex_t pool_lock;
+    pthread_cond_t pool_cond;
+    PGconn *pool[POOL_MAX];
+    int pool_busy[POOL_MAX];
+    /* progress writer */
+    pthread_mutex_t wq_lock;
+    pthread_cond_t wq_cond, wq_done;
+    prec *wq_head, *wq_tail;
+    long wq_n, wq_dropped;
+    unsigned long wq_next, wq_written; /* tickets: issued, all written up to */
+    int wq_stop, wq_running;
+    pthread_t wq_th;
+    /* listener */
+    pthread_t ln_th;
+    int ln_running;
+    volatile int ln_stop;
+    store_event_fn ln_fn;
+    void *ln_ctx;
 } pg_store;
+
+/* A connection with a bounded connect time and quiet NOTICEs ("relation
+ * already exists"); the URI may set either itself. PQreset keeps both. */
+static PGconn *pg_connect(const char *uri)
+{
+    const char *const keys[] = {"connect_timeout", "options", "dbname", NULL};
+    const char *const vals[] = {"5", "-c client_min_messages=warning", uri, NULL};
+    return PQconnectdbParams(keys, vals, 1);
+}
 
 /* The schema, one entry per version; each runs once, in order, in one
  * transaction that also records the version. Append; never edit a version
@@ -54,6 +113,35 @@ static const char *const migrations[] = {
     "CREATE UNIQUE INDEX jobs_idem ON jobs(owner, idem_key) WHERE idem_key <> '';"
     "CREATE INDEX jobs_state ON jobs(state, seq);"
     "CREATE INDEX jobs_expiry ON jobs(purged, expires);",
+    /* 2: the job files in the database (nodes share nothing else), and
+     * notifications for the other nodes */
+    "CREATE TABLE blobs(job_id TEXT NOT NULL REFERENCES jobs(id) ON DELETE CASCADE,"
+    " name TEXT NOT NULL, size BIGINT NOT NULL, sha256 TEXT NOT NULL,"
+    " nchunks INTEGER NOT NULL, PRIMARY KEY(job_id, name));"
+    "CREATE TABLE blob_chunks(job_id TEXT NOT NULL, name TEXT NOT NULL,"
+    " k INTEGER NOT NULL, data BYTEA NOT NULL, PRIMARY KEY(job_id, name, k),"
+    " FOREIGN KEY(job_id, name) REFERENCES blobs(job_id, name) ON DELETE CASCADE);"
+    /* meshes compress poorly and pglz costs more than it saves */
+    "ALTER TABLE blob_chunks ALTER COLUMN data SET STORAGE EXTERNAL;"
+    "CREATE TABLE progress(job_id TEXT NOT NULL, seq INTEGER NOT NULL,"
+    " rec TEXT NOT NULL, PRIMARY KEY(job_id, seq));"
+    "CREATE FUNCTION qdc_job_notify() RETURNS trigger LANGUAGE plpgsql AS $$ BEGIN"
+    " IF TG_OP = 'DELETE' THEN PERFORM pg_notify('qdc_job', OLD.id || ' -1 1');"
+    " ELSIF TG_OP = 'INSERT' THEN"
+    "  PERFORM pg_notify('qdc_job', NEW.id || ' ' || NEW.state || ' ' || "
+    "NEW.cancel_requested);"
+    " ELSIF NEW.state <> OLD.state OR NEW.cancel_requested <> OLD.cancel_requested THEN"
+    "  PERFORM pg_notify('qdc_job', NEW.id || ' ' || NEW.state || ' ' || "
+    "NEW.cancel_requested);"
+    " END IF; RETURN NULL; END $$;"
+    "CREATE TRIGGER jobs_notify AFTER INSERT OR UPDATE OR DELETE ON jobs"
+    " FOR EACH ROW EXECUTE PROCEDURE qdc_job_notify();"
+    "CREATE FUNCTION qdc_progress_notify() RETURNS trigger LANGUAGE plpgsql AS $$ BEGIN"
+    " PERFORM pg_notify('qdc_progress', job_id || ' ' || MAX(seq)) FROM new_rows"
+    " GROUP BY job_id; RETURN NULL; END $$;"
+    "CREATE TRIGGER progress_notify AFTER INSERT ON progress"
+    " REFERENCING NEW TABLE AS new_rows FOR EACH STATEMENT"
+    " EXECUTE PROCEDURE qdc_progress_notify();",
 };
 #define N_MIGRATIONS ((int)(sizeof migrations / sizeof migrations[0]))
 
@@ -116,7 +204,7 @@ typedef struct {
     const char *v[16];
     char num[16][32];
     int n;
-} params;
+} params; /* a NULL value is SQL NULL */
 
 static void p_text(params *p, const char *s)
 {
@@ -194,38 +282,37 @@ static qdc_status one(pg_store *s, const char *sql, const params *p, job_rec *ou
     return st;
 }
 
-static qdc_status pg_create(job_store *s_, const job_rec *j, int *dup, job_rec *existing)
+#define INSERT_JOB                                                                       \
+    "INSERT INTO jobs(id, owner, state, idem_key, body_hash, format, nv, nt,"            \
+    " in_bytes, options, created, notes)"                                                \
+    " VALUES($1,$2,0,$3,$4,$5,$6,$7,$8,$9,$10,$11)"                                      \
+    " ON CONFLICT (owner, idem_key) WHERE idem_key <> '' DO NOTHING"                     \
+    " RETURNING seq"
+
+static void create_params(const job_rec *j, params *p)
 {
-    pg_store *s = (pg_store *)s_;
+    p->n = 0;
+    p_text(p, j->id);
+    p_text(p, j->owner);
+    p_text(p, j->idem_key);
+    p_text(p, j->body_hash);
+    p_text(p, j->format);
+    p_i64(p, j->nv);
+    p_i64(p, j->nt);
+    p_i64(p, j->in_bytes);
+    p_text(p, j->options);
+    p_dbl(p, j->created);
+    p_text(p, j->notes);
+}
+
+/* The job that holds j's Idempotency-Key (an insert found it taken). */
+static qdc_status existing_idem(pg_store *s, const job_rec *j, int *dup,
+                                job_rec *existing)
+{
     params p = {.n = 0};
     int n = 0;
     qdc_status st;
 
-    *dup = 0;
-    p_text(&p, j->id);
-    p_text(&p, j->owner);
-    p_text(&p, j->idem_key);
-    p_text(&p, j->body_hash);
-    p_text(&p, j->format);
-    p_i64(&p, j->nv);
-    p_i64(&p, j->nt);
-    p_i64(&p, j->in_bytes);
-    p_text(&p, j->options);
-    p_dbl(&p, j->created);
-    p_text(&p, j->notes);
-    /* The unique index decides a duplicate key in this statement, whichever
-     * node gets there first. */
-    st = one(s,
-             "INSERT INTO jobs(id, owner, state, idem_key, body_hash, format, nv, nt,"
-             " in_bytes, options, created, notes)"
-             " VALUES($1,$2,0,$3,$4,$5,$6,$7,$8,$9,$10,$11)"
-             " ON CONFLICT (owner, idem_key) WHERE idem_key <> '' DO NOTHING"
-             " RETURNING seq",
-             &p, NULL, &n);
-    if (st != QDC_OK || n == 1)
-        return st;
-    /* the key was taken: the job that holds it */
-    p.n = 0;
     p_text(&p, j->owner);
     p_text(&p, j->idem_key);
     st = one(s, "SELECT " COLS " FROM jobs WHERE owner = $1 AND idem_key = $2", &p,
@@ -233,6 +320,23 @@ static qdc_status pg_create(job_store *s_, const job_rec *j, int *dup, job_rec *
     if (st == QDC_OK && n == 1)
         *dup = 1;
     return st == QDC_OK && n == 1 ? QDC_OK : QDC_EIO;
+}
+
+static qdc_status pg_create(job_store *s_, const job_rec *j, int *dup, job_rec *existing)
+{
+    pg_store *s = (pg_store *)s_;
+    params p;
+    int n = 0;
+    qdc_status st;
+
+    *dup = 0;
+    create_params(j, &p);
+    /* The unique index decides a duplicate key in this statement, whichever
+     * node gets there first. */
+    st = one(s, INSERT_JOB, &p, NULL, &n);
+    if (st != QDC_OK || n == 1)
+        return st;
+    return existing_idem(s, j, dup, existing);
 }
 
 static qdc_status pg_get(job_store *s_, const char *id, job_rec *out)
@@ -307,13 +411,19 @@ static qdc_status pg_claim(job_store *s_, const char *worker, double lease_s,
     p_dbl(&p, now + lease_s);
     p_dbl(&p, now);
     p_text(&p, inst);
+    p_i64(&p, ((pg_store *)s_)->max_attempts);
+    /* the records of an earlier run (a node that died) are not this run's */
     st = one((pg_store *)s_,
-             "UPDATE jobs SET state = 1, attempts = attempts + 1, lease_owner = $1,"
-             " lease_until = $2, started = $3, iterations = 0, last_progress = ''"
+             "WITH c AS (UPDATE jobs SET state = 1, attempts = attempts + 1,"
+             " lease_owner = $1, lease_until = $2, started = $3, iterations = 0,"
+             " last_progress = ''"
              " WHERE seq = (SELECT seq FROM jobs WHERE state = 0"
-             " OR (state = 1 AND lease_until < $3 AND lease_owner NOT LIKE $4)"
+             " OR (state = 1 AND lease_until < $3 AND lease_owner NOT LIKE $4"
+             " AND attempts < $5)"
              " ORDER BY seq LIMIT 1 FOR UPDATE SKIP LOCKED)"
-             " RETURNING " COLS,
+             " RETURNING " COLS "),"
+             " d AS (DELETE FROM progress WHERE job_id IN (SELECT id FROM c))"
+             " SELECT * FROM c",
              &p, out, &n);
     *found = st == QDC_OK && n == 1;
     return st;
@@ -349,11 +459,15 @@ static qdc_status pg_finish(job_store *s_, const job_rec *j)
     p_i64(&p, j->nv);
     p_i64(&p, j->nt);
     p_text(&p, j->id);
+    p_text(&p, j->lease_owner);
+    /* Only the run that holds the lease ends the job: a node whose lease
+     * expired (the database was away too long) and was taken over by another
+     * node must not write a second outcome. */
     return one((pg_store *)s_,
                "UPDATE jobs SET state = $1, finished = $2, expires = $3, iterations = $4,"
                " last_progress = $5, error = $6, stop_reason = $7, etag_qmesh = $8,"
                " etag_json = $9, etag_medit = $10, nv = $11, nt = $12, lease_owner = '',"
-               " lease_until = 0 WHERE id = $13",
+               " lease_until = 0 WHERE id = $13 AND state = 1 AND lease_owner = $14",
                &p, NULL, NULL);
 }
 
@@ -398,12 +512,17 @@ static qdc_status pg_remove(job_store *s_, const char *id)
     params p = {.n = 0};
 
     p_text(&p, id);
-    return one((pg_store *)s_, "DELETE FROM jobs WHERE id = $1", &p, NULL, NULL);
+    /* blobs go with the row (ON DELETE CASCADE), records here */
+    return one((pg_store *)s_,
+               "WITH d AS (DELETE FROM progress WHERE job_id = $1)"
+               " DELETE FROM jobs WHERE id = $1",
+               &p, NULL, NULL);
 }
 
-/* Start-up of a node: jobs whose lease expired (their node died) go back to
- * the queue, or fail when they used all their attempts. Jobs that other,
- * live nodes are running keep their leases. */
+/* Jobs whose lease expired (their node died) go back to the queue, or fail
+ * when they used all their attempts (a job that keeps killing nodes). Run at
+ * a node's start-up and then every few seconds by every node; jobs that
+ * other, live nodes are running keep their leases. */
 static qdc_status pg_recover(job_store *s_, int max_attempts, double retention,
                              int *requeued, int *failed)
 {
@@ -419,6 +538,7 @@ static qdc_status pg_recover(job_store *s_, int max_attempts, double retention,
         "\"status\":500,\"detail\":\"a daemon died while running this job on each of "
         "its %d attempt(s); it is not retried\",\"attempts\":%d}",
         max_attempts, max_attempts);
+    s->max_attempts = max_attempts;
     p_dbl(&p, now);
     p_dbl(&p, now + retention);
     p_text(&p, err);
@@ -491,8 +611,675 @@ static qdc_status pg_mark_purged(job_store *s_, const char *id)
     params p = {.n = 0};
 
     p_text(&p, id);
-    return one((pg_store *)s_, "UPDATE jobs SET purged = 1 WHERE id = $1", &p, NULL,
-               NULL);
+    /* the files of an expired job: its blobs and records (the row stays) */
+    return one((pg_store *)s_,
+               "WITH b AS (DELETE FROM blobs WHERE job_id = $1),"
+               " r AS (DELETE FROM progress WHERE job_id = $1)"
+               " UPDATE jobs SET purged = 1 WHERE id = $1",
+               &p, NULL, NULL);
+}
+
+/* ------------------------------------------------------------------ blobs -- */
+
+/* sql with p on c (any connection); NULL if it failed, with the SQLSTATE in
+ * state ("" when the connection broke). Foreign-key violations (the job was
+ * deleted meanwhile) are expected and not logged. */
+static PGresult *cx(PGconn *c, const char *sql, const params *p, char state[6])
+{
+    PGresult *r =
+        p ? PQexecParams(c, sql, p->n, NULL, p->v, NULL, NULL, 0) : PQexec(c, sql);
+    const char *f;
+
+    if (r && result_ok(r))
+        return r;
+    f = r ? PQresultErrorField(r, PG_DIAG_SQLSTATE) : NULL;
+    snprintf(state, 6, "%s", f ? f : "");
+    if (strcmp(state, "23503"))
+        fprintf(stderr, "qdcd: postgresql: %s",
+                r ? PQresultErrorMessage(r) : PQerrorMessage(c));
+    PQclear(r);
+    return NULL;
+}
+
+/* A pooled connection for one transfer; waits while all are in use. The
+ * slot, or -1 when no connection can be made (the database is away). */
+static int pool_take(pg_store *s)
+{
+    int i;
+
+    pthread_mutex_lock(&s->pool_lock);
+    for (;;) {
+        for (i = 0; i < POOL_MAX && s->pool_busy[i]; i++)
+            ;
+        if (i < POOL_MAX)
+            break;
+        pthread_cond_wait(&s->pool_cond, &s->pool_lock);
+    }
+    s->pool_busy[i] = 1;
+    pthread_mutex_unlock(&s->pool_lock);
+    if (!s->pool[i])
+        s->pool[i] = pg_connect(s->uri);
+    else if (PQstatus(s->pool[i]) != CONNECTION_OK)
+        PQreset(s->pool[i]);
+    if (s->pool[i] && PQstatus(s->pool[i]) == CONNECTION_OK)
+        return i;
+    pthread_mutex_lock(&s->pool_lock);
+    s->pool_busy[i] = 0;
+    pthread_cond_signal(&s->pool_cond);
+    pthread_mutex_unlock(&s->pool_lock);
+    return -1;
+}
+
+static void pool_give(pg_store *s, int i)
+{
+    PGconn *c = s->pool[i];
+
+    if (PQstatus(c) == CONNECTION_OK && PQtransactionStatus(c) != PQTRANS_IDLE)
+        PQclear(PQexec(c, "ROLLBACK"));
+    pthread_mutex_lock(&s->pool_lock);
+    s->pool_busy[i] = 0;
+    pthread_cond_signal(&s->pool_cond);
+    pthread_mutex_unlock(&s->pool_lock);
+}
+
+/* The file at path as blob `name` of id, inside the caller's transaction on
+ * c: one row of metadata, then CHUNK-sized rows sent as binary parameters,
+ * one buffer at a time. QDC_EINVAL when the job row is gone. */
+static qdc_status put_chunks(PGconn *c, const char *id, const char *name,
+                             const char *path, const char *sha)
+{
+    params p = {.n = 0};
+    struct stat sb;
+    char state[6] = "", kb[24];
+    char *buf = NULL;
+    qdc_status st = QDC_EIO;
+    PGresult *r;
+    int fd = open(path, O_RDONLY | O_CLOEXEC);
+
+    if (fd < 0)
+        return QDC_EIO;
+    if (fstat(fd, &sb))
+        goto out;
+    int64_t size = (int64_t)sb.st_size;
+    int64_t nch = (size + (int64_t)CHUNK - 1) / (int64_t)CHUNK;
+    p_text(&p, id);
+    p_text(&p, name);
+    p_i64(&p, size);
+    p_text(&p, sha ? sha : "");
+    p_i64(&p, nch);
+    r = cx(c,
+           "INSERT INTO blobs(job_id, name, size, sha256, nchunks)"
+           " VALUES($1, $2, $3, $4, $5)",
+           &p, state);
+    if (!r) {
+        st = !strcmp(state, "23503") ? QDC_EINVAL : QDC_EIO;
+        goto out;
+    }
+    PQclear(r);
+    buf = malloc(CHUNK);
+    if (!buf) {
+        st = QDC_ENOMEM;
+        goto out;
+    }
+    for (int64_t k = 0; k < nch; k++) {
+        size_t want = k == nch - 1 ? (size_t)(size - k * (int64_t)CHUNK) : CHUNK, got = 0;
+        while (got < want) {
+            ssize_t n = read(fd, buf + got, want - got);
+            if (n < 0 && errno == EINTR)
+                continue;
+            if (n <= 0)
+                goto out;
+            got += (size_t)n;
+        }
+        snprintf(kb, sizeof kb, "%lld", (long long)k);
+        const char *v[4] = {id, name, kb, buf};
+        const int len[4] = {0, 0, 0, (int)want}, fmt[4] = {0, 0, 0, 1};
+        r = PQexecParams(c,
+                         "INSERT INTO blob_chunks(job_id, name, k, data)"
+                         " VALUES($1, $2, $3, $4)",
+                         4, NULL, v, len, fmt, 0);
+        if (!r || !result_ok(r)) {
+            fprintf(stderr, "qdcd: postgresql: %s",
+                    r ? PQresultErrorMessage(r) : PQerrorMessage(c));
+            PQclear(r);
+            goto out;
+        }
+        PQclear(r);
+    }
+    st = QDC_OK;
+out:
+    free(buf);
+    close(fd);
+    return st;
+}
+
+static qdc_status put_tx(PGconn *c, const char *id, const char *name, const char *path,
+                         const char *sha, const char *worker)
+{
+    params p = {.n = 0};
+    char state[6];
+    qdc_status st = QDC_EIO;
+    PGresult *r = cx(c, "BEGIN", NULL, state);
+
+    if (!r)
+        return QDC_EIO;
+    PQclear(r);
+    p_text(&p, id);
+    if (worker) {
+        /* KEY SHARE: a claim by another node (FOR UPDATE SKIP LOCKED) passes
+         * this row by until the results are in, progress updates do not wait */
+        p_text(&p, worker);
+        r = cx(c,
+               "SELECT 1 FROM jobs WHERE id = $1 AND lease_owner = $2 AND state = 1"
+               " FOR KEY SHARE",
+               &p, state);
+        if (!r)
+            return QDC_EIO;
+        int n = PQntuples(r);
+        PQclear(r);
+        if (!n)
+            return QDC_EINVAL;
+        p.n = 1;
+    }
+    p_text(&p, name);
+    r = cx(c, "DELETE FROM blobs WHERE job_id = $1 AND name = $2", &p, state);
+    if (!r)
+        return QDC_EIO;
+    PQclear(r);
+    st = put_chunks(c, id, name, path, sha);
+    if (st != QDC_OK)
+        return st;
+    r = cx(c, "COMMIT", NULL, state);
+    if (!r)
+        return QDC_EIO;
+    PQclear(r);
+    return QDC_OK;
+}
+
+static qdc_status pg_blob_put(job_store *s_, const char *id, const char *name,
+                              const char *path, const char *sha, const char *worker)
+{
+    pg_store *s = (pg_store *)s_;
+    qdc_status st = QDC_EIO;
+
+    /* a connection found broken: once more on a fresh one */
+    for (int attempt = 0; attempt < 2; attempt++) {
+        int i = pool_take(s);
+        if (i < 0)
+            return QDC_EIO;
+        st = put_tx(s->pool[i], id, name, path, sha, worker);
+        int bad = PQstatus(s->pool[i]) != CONNECTION_OK;
+        pool_give(s, i);
+        if (st != QDC_EIO || !bad)
+            break;
+    }
+    return st;
+}
+
+static qdc_status get_tx(PGconn *c, const char *id, const char *name, const char *path,
+                         char *sha)
+{
+    params p = {.n = 0};
+    char state[6], tmp[4400];
+    qdc_status st = QDC_EIO;
+    int64_t size, nch, total = 0, rows = 0;
+    int fd, bad = 0;
+    PGresult *r;
+
+    /* one snapshot: a blob replaced meanwhile is read whole, old or new */
+    r = cx(c, "BEGIN ISOLATION LEVEL REPEATABLE READ READ ONLY", NULL, state);
+    if (!r)
+        return QDC_EIO;
+    PQclear(r);
+    p_text(&p, id);
+    p_text(&p, name);
+    r = cx(c, "SELECT size, sha256, nchunks FROM blobs WHERE job_id = $1 AND name = $2",
+           &p, state);
+    if (!r)
+        return QDC_EIO;
+    if (!PQntuples(r)) {
+        PQclear(r);
+        return QDC_EINVAL;
+    }
+    size = col_i64(r, 0, 0);
+    if (sha)
+        col_text(r, 0, 1, sha, 65);
+    nch = col_i64(r, 0, 2);
+    PQclear(r);
+    snprintf(tmp, sizeof tmp, "%s.XXXXXX", path);
+    fd = mkostemp(tmp, O_CLOEXEC);
+    if (fd < 0)
+        return QDC_EIO;
+    /* single-row mode: one chunk in memory at a time */
+    if (!PQsendQueryParams(c,
+                           "SELECT data FROM blob_chunks WHERE job_id = $1 AND name = $2"
+                           " ORDER BY k",
+                           2, NULL, p.v, NULL, NULL, 1) ||
+        !PQsetSingleRowMode(c))
+        bad = 1;
+    while ((r = PQgetResult(c))) {
+        ExecStatusType es = PQresultStatus(r);
+        if (es == PGRES_SINGLE_TUPLE && !bad) {
+            const char *d = PQgetvalue(r, 0, 0);
+            size_t n = (size_t)PQgetlength(r, 0, 0);
+            rows++;
+            total += (int64_t)n;
+            while (n) {
+                ssize_t w = write(fd, d, n);
+                if (w < 0 && errno == EINTR)
+                    continue;
+                if (w <= 0) {
+                    bad = 1;
+                    break;
+                }
+                d += w;
+                n -= (size_t)w;
+            }
+        } else if (es != PGRES_TUPLES_OK && es != PGRES_SINGLE_TUPLE) {
+            fprintf(stderr, "qdcd: postgresql: %s", PQresultErrorMessage(r));
+            bad = 1;
+        }
+        PQclear(r);
+    }
+    r = cx(c, "COMMIT", NULL, state);
+    PQclear(r);
+    if (close(fd))
+        bad = 1;
+    if (!bad && rows == nch && total == size && rename(tmp, path) == 0)
+        st = QDC_OK;
+    else
+        unlink(tmp);
+    return st;
+}
+
+static qdc_status pg_blob_get(job_store *s_, const char *id, const char *name,
+                              const char *path, char *sha)
+{
+    pg_store *s = (pg_store *)s_;
+    qdc_status st = QDC_EIO;
+
+    for (int attempt = 0; attempt < 2; attempt++) {
+        int i = pool_take(s);
+        if (i < 0)
+            return QDC_EIO;
+        st = get_tx(s->pool[i], id, name, path, sha);
+        int bad = PQstatus(s->pool[i]) != CONNECTION_OK;
+        pool_give(s, i);
+        if (st != QDC_EIO || !bad)
+            break;
+    }
+    return st;
+}
+
+/* The row and its input in one transaction: other nodes see (and claim) the
+ * job only once its input is there; a duplicate Idempotency-Key stores
+ * nothing. */
+static qdc_status create_tx(PGconn *c, const job_rec *j, const char *name,
+                            const char *path, int *inserted)
+{
+    params p = {.n = 0};
+    char state[6];
+    qdc_status st;
+    PGresult *r = cx(c, "BEGIN", NULL, state);
+
+    *inserted = 0;
+    if (!r)
+        return QDC_EIO;
+    PQclear(r);
+    create_params(j, &p);
+    r = cx(c, INSERT_JOB, &p, state);
+    if (!r)
+        return QDC_EIO;
+    *inserted = PQntuples(r) == 1;
+    PQclear(r);
+    if (!*inserted)
+        return QDC_OK; /* the key was taken: the caller rolls back */
+    st = put_chunks(c, j->id, name, path, "");
+    if (st != QDC_OK)
+        return st;
+    r = cx(c, "COMMIT", NULL, state);
+    if (!r) {
+        *inserted = 0;
+        return QDC_EIO;
+    }
+    PQclear(r);
+    return QDC_OK;
+}
+
+static qdc_status pg_create_with_input(job_store *s_, const job_rec *j, const char *name,
+                                       const char *path, int *dup, job_rec *existing)
+{
+    pg_store *s = (pg_store *)s_;
+    qdc_status st = QDC_EIO;
+    int inserted = 0;
+
+    *dup = 0;
+    for (int attempt = 0; attempt < 2; attempt++) {
+        int i = pool_take(s);
+        if (i < 0)
+            return QDC_EIO;
+        st = create_tx(s->pool[i], j, name, path, &inserted);
+        int bad = PQstatus(s->pool[i]) != CONNECTION_OK;
+        pool_give(s, i); /* rolls back what was not committed */
+        if (st != QDC_EIO || !bad)
+            break;
+    }
+    if (st != QDC_OK || inserted)
+        return st;
+    return existing_idem(s, j, dup, existing);
+}
+
+/* --------------------------------------------------------------- progress -- */
+
+/* A PostgreSQL array literal element: "..." with " and \ escaped. */
+static void arr_str(sbuf *b, const char *s, size_t n)
+{
+    sb_puts(b, b->len > 1 ? ",\"" : "\"");
+    for (size_t i = 0; i < n; i++) {
+        if (s[i] == '"' || s[i] == '\\')
+            sb_add(b, "\\", 1);
+        sb_add(b, s + i, 1);
+    }
+    sb_puts(b, "\"");
+}
+
+/* One job's consecutive records (first .. last, same worker) in one
+ * statement: stored only while that worker holds the lease, and the row's
+ * latest progress moves with them (any node's GET shows it). 0 when done
+ * (written or refused for good), -1 when the connection failed. */
+static int write_group(PGconn *c, prec *first, prec *last)
+{
+    sbuf seqs = {0}, recs = {0};
+    params p = {.n = 0};
+    char state[6];
+    PGresult *r;
+    int rc = 0;
+
+    sb_puts(&seqs, "{");
+    sb_puts(&recs, "{");
+    for (prec *e = first;; e = e->next) {
+        sb_printf(&seqs, "%s%ld", seqs.len > 1 ? "," : "", e->seq);
+        arr_str(&recs, e->json, e->len);
+        if (e == last)
+            break;
+    }
+    sb_puts(&seqs, "}");
+    sb_puts(&recs, "}");
+    if (seqs.oom || recs.oom)
+        goto out; /* dropped */
+    p_text(&p, first->id);
+    p_text(&p, first->worker);
+    p_i64(&p, last->seq + 1);
+    /* the row keeps the last record when it fits (job_rec.last_progress) */
+    p_text(&p, last->len < sizeof((job_rec *)0)->last_progress ? last->json : NULL);
+    p_text(&p, seqs.buf);
+    p_text(&p, recs.buf);
+    r = cx(
+        c,
+        "WITH j AS (UPDATE jobs SET iterations = $3,"
+        " last_progress = COALESCE($4, last_progress)"
+        " WHERE id = $1 AND lease_owner = $2 AND state = 1 RETURNING id)"
+        " INSERT INTO progress(job_id, seq, rec)"
+        " SELECT j.id, u.seq, u.rec FROM j, unnest($5::int[], $6::text[]) AS u(seq, rec)"
+        " ON CONFLICT DO NOTHING",
+        &p, state);
+    if (r)
+        PQclear(r);
+    else if (PQstatus(c) != CONNECTION_OK)
+        rc = -1;
+out:
+    sb_free(&seqs);
+    sb_free(&recs);
+    return rc;
+}
+
+static void *writer_main(void *arg)
+{
+    pg_store *s = arg;
+    PGconn *c = NULL;
+    double pause = 0.1;
+    int failures = 0;
+
+    pthread_mutex_lock(&s->wq_lock);
+    for (;;) {
+        while (!s->wq_head && !s->wq_stop)
+            pthread_cond_wait(&s->wq_cond, &s->wq_lock);
+        if (!s->wq_head)
+            break; /* stopping, nothing left */
+        /* a batch of up to 256 records, left in the queue until written */
+        prec *head = s->wq_head, *end = head;
+        for (int k = 1; k < 256 && end->next; k++)
+            end = end->next;
+        pthread_mutex_unlock(&s->wq_lock);
+
+        int ok = 1;
+        if (!c)
+            c = pg_connect(s->uri);
+        else if (PQstatus(c) != CONNECTION_OK)
+            PQreset(c);
+        if (!c || PQstatus(c) != CONNECTION_OK)
+            ok = 0;
+        for (prec *g = head; ok;) {
+            prec *e = g;
+            while (e != end && e->next && !strcmp(e->next->id, g->id) &&
+                   !strcmp(e->next->worker, g->worker))
+                e = e->next;
+            if (write_group(c, g, e)) {
+                ok = 0;
+                break;
+            }
+            if (e == end)
+                break;
+            g = e->next;
+        }
+
+        pthread_mutex_lock(&s->wq_lock);
+        if (!ok && !(s->wq_stop && failures >= 3)) {
+            /* the database is away: keep the records, try again later */
+            if (!failures++)
+                fprintf(stderr, "qdcd: postgresql: progress records wait for the "
+                                "database\n");
+            struct timespec ts;
+            clock_gettime(CLOCK_REALTIME, &ts);
+            double t = (double)ts.tv_sec + ts.tv_nsec * 1e-9 + pause;
+            ts.tv_sec = (time_t)t;
+            ts.tv_nsec = (long)((t - (double)ts.tv_sec) * 1e9);
+            pthread_cond_timedwait(&s->wq_cond, &s->wq_lock, &ts);
+            pause = pause * 2 > 5 ? 5 : pause * 2;
+            continue;
+        }
+        if (!ok)
+            fprintf(stderr, "qdcd: postgresql: progress records dropped at shutdown\n");
+        failures = 0;
+        pause = 0.1;
+        s->wq_head = end->next;
+        if (!s->wq_head)
+            s->wq_tail = NULL;
+        end->next = NULL;
+        s->wq_written = end->ticket;
+        while (head) {
+            prec *nx = head->next;
+            free(head);
+            s->wq_n--;
+            head = nx;
+        }
+        pthread_cond_broadcast(&s->wq_done);
+    }
+    pthread_mutex_unlock(&s->wq_lock);
+    PQfinish(c);
+    return NULL;
+}
+
+static void pg_progress_add(job_store *s_, const char *id, const char *worker, long seq,
+                            const char *json, size_t len)
+{
+    pg_store *s = (pg_store *)s_;
+    prec *e = malloc(sizeof *e + len + 1);
+
+    if (!e)
+        return;
+    e->next = NULL;
+    snprintf(e->id, sizeof e->id, "%s", id);
+    snprintf(e->worker, sizeof e->worker, "%s", worker);
+    e->seq = seq;
+    e->len = len;
+    memcpy(e->json, json, len);
+    e->json[len] = 0;
+    pthread_mutex_lock(&s->wq_lock);
+    if (s->wq_n >= PROGRESS_QUEUE_MAX || s->wq_stop || !s->wq_running) {
+        if (!s->wq_dropped++)
+            fprintf(stderr, "qdcd: postgresql: too many progress records waiting for the "
+                            "database: new ones are dropped\n");
+        pthread_mutex_unlock(&s->wq_lock);
+        free(e);
+        return;
+    }
+    e->ticket = ++s->wq_next;
+    if (s->wq_tail)
+        s->wq_tail->next = e;
+    else
+        s->wq_head = e;
+    s->wq_tail = e;
+    s->wq_n++;
+    pthread_cond_signal(&s->wq_cond);
+    pthread_mutex_unlock(&s->wq_lock);
+}
+
+static qdc_status pg_progress_sync(job_store *s_, double timeout)
+{
+    pg_store *s = (pg_store *)s_;
+    struct timespec ts;
+    int ok;
+
+    clock_gettime(CLOCK_REALTIME, &ts);
+    double t = (double)ts.tv_sec + ts.tv_nsec * 1e-9 + timeout;
+    ts.tv_sec = (time_t)t;
+    ts.tv_nsec = (long)((t - (double)ts.tv_sec) * 1e9);
+    pthread_mutex_lock(&s->wq_lock);
+    unsigned long target = s->wq_next;
+    while (s->wq_written < target &&
+           pthread_cond_timedwait(&s->wq_done, &s->wq_lock, &ts) == 0)
+        ;
+    ok = s->wq_written >= target;
+    pthread_mutex_unlock(&s->wq_lock);
+    return ok ? QDC_OK : QDC_EIO;
+}
+
+static qdc_status pg_progress_read(job_store *s_, const char *id, long after,
+                                   store_record_fn fn, void *ctx)
+{
+    pg_store *s = (pg_store *)s_;
+    params p = {.n = 0};
+    PGresult *r;
+    qdc_status st = QDC_EIO;
+
+    p_text(&p, id);
+    p_i64(&p, after);
+    pthread_mutex_lock(&s->lock);
+    r = run(s,
+            "SELECT seq, rec FROM progress WHERE job_id = $1 AND seq > $2 ORDER BY seq",
+            &p);
+    pthread_mutex_unlock(&s->lock);
+    if (r) {
+        for (int i = 0; i < PQntuples(r); i++)
+            fn(ctx, (long)col_i64(r, i, 0), PQgetvalue(r, i, 1),
+               (size_t)PQgetlength(r, i, 1));
+        PQclear(r);
+        st = QDC_OK;
+    }
+    return st;
+}
+
+/* --------------------------------------------------------------- listener -- */
+
+static void nap(pg_store *s, double seconds)
+{
+    for (double t = 0; t < seconds && !s->ln_stop; t += 0.05) {
+        struct timespec ts = {0, 50 * 1000 * 1000};
+        nanosleep(&ts, NULL);
+    }
+}
+
+static void *listen_main(void *arg)
+{
+    pg_store *s = arg;
+    PGconn *c = NULL;
+    double pause = 0.1;
+
+    while (!s->ln_stop) {
+        if (!c || PQstatus(c) != CONNECTION_OK) {
+            char state[6];
+            PGresult *r = NULL;
+            if (!c)
+                c = pg_connect(s->uri);
+            else
+                PQreset(c);
+            if (c && PQstatus(c) == CONNECTION_OK)
+                r = cx(c, "LISTEN qdc_job; LISTEN qdc_progress", NULL, state);
+            if (!r) {
+                nap(s, pause);
+                pause = pause * 2 > 5 ? 5 : pause * 2;
+                continue;
+            }
+            PQclear(r);
+            pause = 0.1;
+            /* whatever was announced while nobody listened */
+            store_event ev = {.kind = STORE_EV_RESYNC};
+            s->ln_fn(s->ln_ctx, &ev);
+        }
+        struct pollfd pf = {.fd = PQsocket(c), .events = POLLIN};
+        int n = poll(&pf, 1, 200);
+        if (n < 0 && errno != EINTR) {
+            PQfinish(c);
+            c = NULL;
+            continue;
+        }
+        if (n > 0 && !PQconsumeInput(c)) {
+            PQfinish(c); /* the server went away: connect again */
+            c = NULL;
+            continue;
+        }
+        PGnotify *nt;
+        while ((nt = PQnotifies(c))) {
+            store_event ev;
+            memset(&ev, 0, sizeof ev);
+            if (!strcmp(nt->relname, "qdc_job") &&
+                sscanf(nt->extra, "%32s %d %d", ev.id, &ev.state, &ev.cancel) == 3) {
+                ev.kind = STORE_EV_JOB;
+                s->ln_fn(s->ln_ctx, &ev);
+            } else if (!strcmp(nt->relname, "qdc_progress") &&
+                       sscanf(nt->extra, "%32s %ld", ev.id, &ev.seq) == 2) {
+                ev.kind = STORE_EV_PROGRESS;
+                s->ln_fn(s->ln_ctx, &ev);
+            }
+            PQfreemem(nt);
+        }
+    }
+    PQfinish(c);
+    return NULL;
+}
+
+static qdc_status pg_listen(job_store *s_, store_event_fn fn, void *ctx)
+{
+    pg_store *s = (pg_store *)s_;
+
+    if (!fn) {
+        if (s->ln_running) {
+            s->ln_stop = 1;
+            pthread_join(s->ln_th, NULL);
+            s->ln_running = 0;
+        }
+        return QDC_OK;
+    }
+    if (s->ln_running)
+        return QDC_OK;
+    s->ln_fn = fn;
+    s->ln_ctx = ctx;
+    s->ln_stop = 0;
+    if (pthread_create(&s->ln_th, NULL, listen_main, s))
+        return QDC_EIO;
+    s->ln_running = 1;
+    return QDC_OK;
 }
 
 static void pg_close(job_store *s_)
@@ -501,15 +1288,38 @@ static void pg_close(job_store *s_)
 
     if (!s)
         return;
+    pg_listen(s_, NULL, NULL);
+    if (s->wq_running) {
+        pthread_mutex_lock(&s->wq_lock);
+        s->wq_stop = 1;
+        pthread_cond_signal(&s->wq_cond);
+        pthread_mutex_unlock(&s->wq_lock);
+        pthread_join(s->wq_th, NULL);
+    }
+    while (s->wq_head) {
+        prec *nx = s->wq_head->next;
+        free(s->wq_head);
+        s->wq_head = nx;
+    }
+    for (int i = 0; i < POOL_MAX; i++)
+        PQfinish(s->pool[i]);
     PQfinish(s->conn);
     pthread_mutex_destroy(&s->lock);
+    pthread_mutex_destroy(&s->pool_lock);
+    pthread_cond_destroy(&s->pool_cond);
+    pthread_mutex_destroy(&s->wq_lock);
+    pthread_cond_destroy(&s->wq_cond);
+    pthread_cond_destroy(&s->wq_done);
     free(s);
 }
 
 static const job_store_ops pg_ops = {
-    pg_create,  pg_get,    pg_find_idem, pg_list,        pg_claim,
-    pg_renew,   pg_finish, pg_release,   pg_cancel,      pg_remove,
-    pg_recover, pg_counts, pg_expired,   pg_mark_purged, pg_close,
+    pg_create,        pg_get,         pg_find_idem,    pg_list,
+    pg_claim,         pg_renew,       pg_finish,       pg_release,
+    pg_cancel,        pg_remove,      pg_recover,      pg_counts,
+    pg_expired,       pg_mark_purged, pg_close,        pg_create_with_input,
+    pg_blob_put,      pg_blob_get,    pg_progress_add, pg_progress_sync,
+    pg_progress_read, pg_listen,
 };
 
 /* Bring the schema to the newest version, in one transaction under an
@@ -592,8 +1402,14 @@ qdc_status store_pg_open(const char *uri, job_store **out, qdc_error *err)
         return qdc_fail(err, QDC_ENOMEM, "out of memory");
     s->base.ops = &pg_ops;
     pthread_mutex_init(&s->lock, NULL);
+    pthread_mutex_init(&s->pool_lock, NULL);
+    pthread_cond_init(&s->pool_cond, NULL);
+    pthread_mutex_init(&s->wq_lock, NULL);
+    pthread_cond_init(&s->wq_cond, NULL);
+    pthread_cond_init(&s->wq_done, NULL);
     snprintf(s->uri, sizeof s->uri, "%s", uri);
-    s->conn = PQconnectdb(uri);
+    s->max_attempts = 1000;
+    s->conn = pg_connect(uri);
     if (!s->conn || PQstatus(s->conn) != CONNECTION_OK) {
         /* libpq's message names the host and the reason; never the password */
         st = qdc_fail(err, QDC_EIO, "postgresql: cannot connect: %s",
@@ -601,13 +1417,16 @@ qdc_status store_pg_open(const char *uri, job_store **out, qdc_error *err)
         pg_close(&s->base);
         return st;
     }
-    /* quiet NOTICEs (e.g. "relation already exists"), UTC timestamps */
-    PQclear(run(s, "SET client_min_messages = warning", NULL));
     st = migrate(s, err);
     if (st != QDC_OK) {
         pg_close(&s->base);
         return st;
     }
+    if (pthread_create(&s->wq_th, NULL, writer_main, s)) {
+        pg_close(&s->base);
+        return qdc_fail(err, QDC_ENOMEM, "cannot start the progress writer");
+    }
+    s->wq_running = 1;
     *out = &s->base;
     return QDC_OK;
 }
