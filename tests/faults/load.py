@@ -17,7 +17,8 @@ body = open(mesh, 'rb').read()
 stop = threading.Event()
 lock = threading.Lock()
 accepted, errors, lat = [], [], []
-counts = {'submits': 0, 'streams': 0, 'polls': 0, 'aborted': 0, 'refused': 0, '429': 0}
+counts = {'submits': 0, 'streams': 0, 'polls': 0, 'aborted': 0, 'refused': 0, '429': 0,
+          'closed_early': 0}
 
 
 def proc_stats():
@@ -41,6 +42,10 @@ def http(method, path, data=None, ctype=None, timeout=30):
             return r.status, r.read()
     except urllib.error.HTTPError as e:
         return e.code, e.read()
+    except (urllib.error.URLError, OSError) as e:
+        # qdcd answers a refused upload (429 with a full queue) before the
+        # body is in and closes: the client may see a broken pipe instead
+        return 0, str(e).encode()
 
 
 def raw(lines, payload=b'', read=False, hold=0.0):
@@ -63,8 +68,8 @@ def submitter():
             with lock:
                 accepted.append(json.loads(b)['id'])
             bump('submits')
-        elif st == 429:
-            bump('429')
+        elif st in (429, 0):
+            bump('429' if st else 'closed_early')
             time.sleep(0.2)
         else:
             with lock:
@@ -104,7 +109,7 @@ def poller():
         if not jid:
             continue
         st, _ = http('GET', '/v1/jobs/%s/progress?after=-1&wait=1' % jid)
-        if st not in (200, 404):
+        if st not in (200, 404, 0):
             with lock:
                 errors.append('poll %d' % st)
         bump('polls')
