@@ -158,7 +158,8 @@ static void optimize_usage(FILE *f)
     fputs(
         "  --in-format F, --out-format F   "
         "medit|tetgen|qmesh|json|gmsh|gmsh-bin|gmsh22|\n"
-        "                             vtk|vtk-ascii|vtu|vtu-ascii (default: by "
+        "                             gmsh22-bin|gmsh40|vtk|vtk-ascii|vtu|vtu-ascii\n"
+        "                             (default: by "
         "extension,\n"
         "                             then content); input also stl|off|obj|poly|smesh\n"
         "  --format F                 both of the above\n"

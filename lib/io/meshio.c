@@ -27,8 +27,8 @@
 /* Format names                                                              */
 
 static const char *const format_names[MESHIO_FORMAT_COUNT] = {
-    "auto",     "medit",  "tetgen", "qmesh",     "json", "gmsh",
-    "gmsh-bin", "gmsh22", "vtk",    "vtk-ascii", "vtu",  "vtu-ascii"};
+    "auto",   "medit", "tetgen",    "qmesh", "json",      "gmsh",       "gmsh-bin",
+    "gmsh22", "vtk",   "vtk-ascii", "vtu",   "vtu-ascii", "gmsh22-bin", "gmsh40"};
 
 static const struct {
     const char *name;
@@ -53,6 +53,10 @@ static const struct {
     {"gmsh41-bin", MESHIO_GMSH41_BIN},
     {"gmsh22", MESHIO_GMSH22},
     {"msh22", MESHIO_GMSH22},
+    {"gmsh22-bin", MESHIO_GMSH22_BIN},
+    {"msh22-bin", MESHIO_GMSH22_BIN},
+    {"gmsh40", MESHIO_GMSH40},
+    {"msh40", MESHIO_GMSH40},
     {"vtk", MESHIO_VTK},
     {"vtk-bin", MESHIO_VTK},
     {"vtk-ascii", MESHIO_VTK_ASCII},
@@ -125,19 +129,26 @@ meshio_format meshio_format_from_name(const char *s)
     return ext ? ext_format(ext) : MESHIO_AUTO;
 }
 
-/* After "$MeshFormat": "2.2 ..." or "4.1 0|1 ...". */
+/* After "$MeshFormat": the version ("2.2", "4", "4.1") and the file type (0
+ * ASCII, 1 binary). Unsupported versions go to the reader, which names them. */
 static meshio_format sniff_gmsh(const char *p, size_t n)
 {
-    size_t i = 0;
+    size_t i = 0, v, vn;
+    int bin;
 
     while (i < n && is_space((unsigned char)p[i]))
         i++;
-    if (n - i >= 3 && p[i] == '2' && p[i + 1] == '.')
-        return MESHIO_GMSH22;
-    i += 3;
+    for (v = i; i < n && !is_space((unsigned char)p[i]); i++)
+        ;
+    vn = i - v;
     while (i < n && (p[i] == ' ' || p[i] == '\t'))
         i++;
-    return i < n && p[i] == '1' ? MESHIO_GMSH41_BIN : MESHIO_GMSH41;
+    bin = i < n && p[i] == '1';
+    if (vn >= 1 && p[v] == '2')
+        return bin ? MESHIO_GMSH22_BIN : MESHIO_GMSH22;
+    if ((vn == 1 && p[v] == '4') || (vn >= 3 && memcmp(p + v, "4.0", 3) == 0))
+        return MESHIO_GMSH40;
+    return bin ? MESHIO_GMSH41_BIN : MESHIO_GMSH41;
 }
 
 /* Third line of a legacy VTK file: ASCII or BINARY. */
@@ -209,7 +220,9 @@ const char *meshio_media_type(meshio_format f)
         "application/vnd.vtk",
         "application/vnd.vtk;encoding=ascii",
         "application/vnd.vtk.vtu+xml",
-        "application/vnd.vtk.vtu+xml;encoding=ascii"};
+        "application/vnd.vtk.vtu+xml;encoding=ascii",
+        NULL,
+        NULL};
 
     if ((unsigned)f >= MESHIO_FORMAT_COUNT)
         return NULL;
@@ -297,6 +310,8 @@ meshio_format meshio_sniff(const char *buf, size_t len)
         return sniff_xml(buf + i, len - i);
     if (len - i >= 11 && memcmp(buf + i, "$MeshFormat", 11) == 0)
         return sniff_gmsh(buf + i + 11, len - i - 11);
+    if (len - i >= 4 && memcmp(buf + i, "$NOD", 4) == 0)
+        return MESHIO_GMSH41; /* MSH 1: the reader says what is supported */
     for (w = i; w < len && is_word((unsigned char)buf[w]); w++)
         ;
     for (size_t k = 0; k < sizeof medit_words / sizeof medit_words[0]; k++)
@@ -1240,6 +1255,8 @@ static qdc_status read_plain(const char *buf, size_t len, meshio_format fmt,
     case MESHIO_GMSH41:
     case MESHIO_GMSH41_BIN:
     case MESHIO_GMSH22:
+    case MESHIO_GMSH22_BIN:
+    case MESHIO_GMSH40:
         return meshio_gmsh_read(buf, len, o, rec, out, err);
     case MESHIO_VTK:
     case MESHIO_VTK_ASCII:
@@ -1494,6 +1511,8 @@ static qdc_status write_fmt(const mesh_t *m, meshio_format fmt, int part, qdc_wr
     case MESHIO_GMSH41:
     case MESHIO_GMSH41_BIN:
     case MESHIO_GMSH22:
+    case MESHIO_GMSH22_BIN:
+    case MESHIO_GMSH40:
         st = meshio_gmsh_write(m, fmt, &w, err);
         break;
     case MESHIO_VTK:
@@ -1810,6 +1829,8 @@ static int family(meshio_format f)
     switch (f) {
     case MESHIO_GMSH41_BIN:
     case MESHIO_GMSH22:
+    case MESHIO_GMSH22_BIN:
+    case MESHIO_GMSH40:
         return MESHIO_GMSH41;
     case MESHIO_VTK_ASCII:
         return MESHIO_VTK;

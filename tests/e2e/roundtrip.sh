@@ -1,7 +1,7 @@
 #!/bin/sh
 # roundtrip.sh - files come back whole: `qdc optimize IN OUT` with OUT in IN's
 # format gives IN with only the coordinates changed, for files written by Gmsh
-# (MSH 4.1 ASCII/binary, 2.2, VTK, Medit), meshio (VTU zlib and ascii, legacy
+# (MSH 4.1 ASCII/binary, 4.0, 2.2 ASCII/binary, VTK, Medit), meshio (VTU zlib and ascii, legacy
 # VTK binary and ascii), a VTK-style appended zlib VTU and TetGen (0-based)
 # from tests/data/real. tests/tools/splicecheck.py masks the coordinate
 # fields with its own parsers and compares the rest byte for byte, then reads
@@ -16,7 +16,7 @@ cd "$TMP" || exit 1
 for gz in "$REAL"/*.gz; do
     gzip -dc "$gz" > "$(basename "$gz" .gz)"
 done
-files="gmsh41.msh gmsh41_bin.msh gmsh22.msh gmsh.vtk gmsh.mesh meshio_zlib.vtu meshio_ascii.vtu
+files="gmsh41.msh gmsh41_bin.msh gmsh22.msh gmsh22_bin.msh gmsh40.msh gmsh.vtk gmsh.mesh meshio_zlib.vtu meshio_ascii.vtu
 meshio_bin.vtk meshio_ascii.vtk vtk_appended_zlib.vtu tetgen.node"
 for f in $files; do
     base=${f%%.*}
@@ -49,7 +49,8 @@ for f in $files; do
 done
 # Gmsh reads the spliced files back
 if command -v gmsh > /dev/null; then
-    for f in out_gmsh41.msh out_gmsh41_bin.msh out_gmsh22.msh; do
+    for f in out_gmsh41.msh out_gmsh41_bin.msh out_gmsh22.msh out_gmsh22_bin.msh \
+        out_gmsh40.msh; do
         if gmsh -0 "$f" -o back.msh > log 2>&1 && ! grep -q '^Error' log &&
             grep -q 'material_1' back.msh; then
             pass "roundtrip: gmsh reads $f back (physical names kept)"

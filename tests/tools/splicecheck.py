@@ -3,7 +3,7 @@
 coordinates changed?
 
 Finds the coordinate fields of both files with its own small parsers (Medit
-.mesh, TetGen .node, Gmsh MSH 2.x ASCII and 4.1 ASCII/binary, legacy VTK
+.mesh, TetGen .node, Gmsh MSH 2.x ASCII/binary, 4.0 ASCII and 4.1 ASCII/binary, legacy VTK
 ASCII/binary, VTU ascii/base64/appended, zlib or not), masks them and compares
 what is left byte for byte (for VTU, the offset="" of appended arrays may
 differ too). Then, with meshio: both files read with the same cells, cell,
@@ -74,6 +74,26 @@ def gmsh(b):
     ver, ftype, dsize = b[fmt:b.index(b"$EndMeshFormat")].split()[:3]
     at = b.index(b"\n$Nodes") + len(b"\n$Nodes")
     at = b.index(b"\n", at) + 1
+    if ver.startswith(b"2") and ftype == b"1":
+        e = b.index(b"\n", at)
+        n, at = int(b[at:e]), e + 1
+        for _ in range(n):  # int32 tag, 3 float64
+            for k in range(3):
+                f.coords.append((at + 4 + 8 * k, at + 12 + 8 * k, "<f8"))
+            at += 28
+        return f
+    if ver in (b"4", b"4.0"):
+        it = tokens(b, at, False)
+        nblk = int(b[slice(*next(it))])
+        next(it)
+        for _ in range(nblk):
+            _, dim, par, c = (int(b[slice(*next(it))]) for _ in range(4))
+            for _ in range(c):
+                for k in range(4 + par * dim):
+                    s, e = next(it)
+                    if 1 <= k <= 3:
+                        f.coords.append((s, e, "text"))
+        return f
     if ver.startswith(b"2"):
         it = tokens(b, at, False)
         s, e = next(it)
@@ -250,6 +270,16 @@ def meshio_read(path):
     import meshio
     if path.endswith(".node"):
         return meshio.read(path, file_format="tetgen")
+    if path.endswith(".msh"):
+        b = open(path, "rb").read()
+        if re.match(rb"\s*\$MeshFormat\s+4\s", b):
+            # Gmsh writes MSH 4.0 as "4 0 8", which meshio takes for 4.1:
+            # give it the version spelled out (a copy, the file is unchanged)
+            import tempfile
+            with tempfile.NamedTemporaryFile(suffix=".msh") as t:
+                t.write(re.sub(rb"^(\s*\$MeshFormat\s+)4(\s)", rb"\g<1>4.0\2", b, 1))
+                t.flush()
+                return meshio.read(t.name)
     return meshio.read(path)
 
 

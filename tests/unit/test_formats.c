@@ -9,8 +9,8 @@
 #include "testlib.h"
 
 static const meshio_format new_formats[] = {
-    MESHIO_GMSH41,    MESHIO_GMSH41_BIN, MESHIO_GMSH22,   MESHIO_VTK,
-    MESHIO_VTK_ASCII, MESHIO_VTU,        MESHIO_VTU_ASCII};
+    MESHIO_GMSH41, MESHIO_GMSH41_BIN, MESHIO_GMSH22,     MESHIO_VTK,   MESHIO_VTK_ASCII,
+    MESHIO_VTU,    MESHIO_VTU_ASCII,  MESHIO_GMSH22_BIN, MESHIO_GMSH40};
 #define N_NEW (int)(sizeof new_formats / sizeof new_formats[0])
 
 static int is_vtk(meshio_format f)
@@ -151,6 +151,161 @@ TEST(gmsh_entity_tags_without_physicals)
     mesh_free(m);
 }
 
+/* Signed volume of tet t. */
+static double tet_vol(const mesh_t *m, int32_t t)
+{
+    const double *p[4];
+    double a[3], b[3], c[3];
+
+    for (int k = 0; k < 4; k++)
+        p[k] = m->xyz + 3 * (size_t)m->tets[4 * (size_t)t + (size_t)k];
+    for (int i = 0; i < 3; i++) {
+        a[i] = p[1][i] - p[0][i];
+        b[i] = p[2][i] - p[0][i];
+        c[i] = p[3][i] - p[0][i];
+    }
+    return (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) +
+            a[2] * (b[0] * c[1] - b[1] * c[0])) /
+           6;
+}
+
+/* A unit tet and a second one on another volume, node tags 10, 20, 30, 40,
+ * 50, in MSH 2.2 binary as Gmsh lays it out: counts on ASCII lines, int32
+ * and float64 records, groups of one element type. */
+static size_t gmsh22_bin_doc(char *d, double z4)
+{
+    static const double xyz[5][3] = {
+        {0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 1, 1}};
+    size_t n = 0;
+    int32_t one = 1;
+
+#define PUT(p, k) (memcpy(d + n, (p), (k)), n += (k))
+#define STR(s) PUT(s, strlen(s))
+#define I32(v) (memcpy(d + n, &(int32_t){(v)}, 4), n += 4)
+    STR("$MeshFormat\n2.2 1 8\n");
+    PUT(&one, 4);
+    STR("\n$EndMeshFormat\n$Nodes\n5\n");
+    for (int i = 0; i < 5; i++) {
+        I32(10 * (i + 1));
+        for (int a = 0; a < 3; a++) {
+            double x = i == 3 && a == 2 ? z4 : xyz[i][a];
+            PUT(&x, 8);
+        }
+    }
+    STR("\n$EndNodes\n$Elements\n4\n");
+    I32(15), I32(1), I32(2); /* a point element: skipped */
+    I32(1), I32(0), I32(1), I32(10);
+    I32(4), I32(2), I32(2); /* two tets, physical 7 and 9 */
+    I32(2), I32(7), I32(1), I32(10), I32(20), I32(30), I32(40);
+    I32(3), I32(9), I32(2), I32(50), I32(20), I32(30), I32(40);
+    I32(2), I32(1), I32(2); /* a triangle, physical 3 */
+    I32(4), I32(3), I32(5), I32(10), I32(20), I32(30);
+    STR("\n$EndElements\n");
+#undef PUT
+#undef STR
+#undef I32
+    return n;
+}
+
+TEST(gmsh22_binary_and_40)
+{
+    char doc[1024];
+    size_t n = gmsh22_bin_doc(doc, 1);
+    const char *msh40 =
+        "$MeshFormat\n4 0 8\n$EndMeshFormat\n"
+        "$Entities\n1 0 1 2\n5 0 0 0 0 0 0 0\n"
+        "3 0 0 0 1 1 1 1 3 0\n"
+        "1 0 0 0 1 1 1 1 7 0\n2 0 0 0 1 1 1 1 9 0\n$EndEntities\n"
+        "$Nodes\n2 5\n5 0 0 1\n10 0 0 0\n1 3 0 4\n20 1 0 0\n30 0 1 0\n40 0 0 1\n"
+        "50 1 1 1\n$EndNodes\n"
+        "$Elements\n4 4\n5 0 15 1\n1 10\n1 3 4 1\n2 10 20 30 40\n"
+        "2 3 4 1\n3 50 20 30 40\n3 2 2 1\n4 10 20 30\n$EndElements\n";
+    mesh_t *m, *b;
+    qdc_error err;
+    sink s = {0};
+
+    ASSERT_EQ_INT(meshio_sniff(doc, n), MESHIO_GMSH22_BIN);
+    ASSERT_EQ_INT(meshio_sniff(msh40, strlen(msh40)), MESHIO_GMSH40);
+    for (int k = 0; k < 2; k++) {
+        if (k == 0)
+            ASSERT_OK(meshio_read(doc, n, MESHIO_AUTO, &m, &err));
+        else
+            ASSERT_OK(read_str(msh40, MESHIO_AUTO, &m, &err));
+        ASSERT_EQ_INT(m->nv, 5);
+        ASSERT_EQ_INT(m->nt, 2);
+        ASSERT_EQ_INT(m->ntri, 1);
+        ASSERT_EQ_INT(m->tets[0], 0);
+        ASSERT_EQ_INT(m->tets[3], 3);
+        ASSERT_EQ_INT(m->tets[4], 4);
+        ASSERT_EQ_INT(m->region[0], 7);
+        ASSERT_EQ_INT(m->region[1], 9);
+        ASSERT_EQ_INT(m->tri_ref[0], 3);
+        /* the unit tet's volume is 1/6 */
+        ASSERT_NEAR(tet_vol(m, 0), 1.0 / 6, 1e-15);
+        ASSERT_NEAR(tet_vol(m, 1), -1.0 / 3, 1e-15); /* (1,1,1) over the face */
+        mesh_free(m);
+    }
+    /* spliced: only the coordinates change, in place */
+    {
+        meshio_options o = {NULL, NULL, 1};
+        char moved[1024];
+        ASSERT_OK(meshio_read_ex(doc, n, MESHIO_AUTO, &o, &m, &err));
+        ASSERT_EQ_INT(meshio_source_format(m), MESHIO_GMSH22_BIN);
+        m->xyz[3 * 3 + 2] = 0.5;
+        ASSERT_OK(meshio_write(m, MESHIO_AUTO, sink_write, &s, &err));
+        ASSERT_EQ_INT(s.n, n);
+        ASSERT_EQ_INT(gmsh22_bin_doc(moved, 0.5), n);
+        ASSERT_TRUE(memcmp(s.b, moved, n) == 0);
+        mesh_free(m);
+        s.n = 0;
+        ASSERT_OK(meshio_read_ex(msh40, strlen(msh40), MESHIO_AUTO, &o, &m, &err));
+        ASSERT_EQ_INT(meshio_source_format(m), MESHIO_GMSH40);
+        m->xyz[3 * 3 + 2] = 0.5;
+        ASSERT_OK(meshio_write(m, MESHIO_AUTO, sink_write, &s, &err));
+        ASSERT_EQ_INT(s.n, strlen(msh40) + 2);
+        ASSERT_TRUE(strstr(s.b, "40 0 0 0.5\n50 1 1 1\n"));
+        mesh_free(m);
+    }
+    free(s.b);
+    /* qdc's own writers, read back exactly */
+    ASSERT_OK(meshio_read(doc, n, MESHIO_AUTO, &m, &err));
+    ASSERT_OK(roundtrip(m, MESHIO_GMSH22_BIN, &b));
+    ASSERT_TRUE(same_mesh(m, b, K_REGION | K_TRIS));
+    mesh_free(b);
+    ASSERT_OK(roundtrip(m, MESHIO_GMSH40, &b));
+    ASSERT_TRUE(same_mesh(m, b, K_REGION | K_TRIS));
+    mesh_free(b);
+    mesh_free(m);
+    /* errors: a truncated record, an unknown node, NaN, 4.0 binary, MSH 1 */
+    ASSERT_EQ_INT(meshio_read(doc, n - 40, MESHIO_AUTO, &m, &err), QDC_EPARSE);
+    {
+        char bad[1024];
+        double nan_ = NAN;
+        memcpy(bad, doc, n);
+        memcpy(bad + strlen("$MeshFormat\n2.2 1 8\n") + 4 +
+                   strlen("\n$EndMeshFormat\n$Nodes\n5\n") + 4 + 8,
+               &nan_, 8);
+        ASSERT_EQ_INT(meshio_read(bad, n, MESHIO_AUTO, &m, &err), QDC_EPARSE);
+        ASSERT_TRUE(strstr(err.msg, "not finite"));
+        ASSERT_TRUE(err.offset > 0);
+    }
+    {
+        char *bad = strdup(msh40);
+        memcpy(strstr(bad, "3 50 20"), "3 51 20", 7);
+        ASSERT_EQ_INT(read_str(bad, MESHIO_AUTO, &m, &err), QDC_EPARSE);
+        ASSERT_TRUE(strstr(err.msg, "unknown node tag 51"));
+        ASSERT_EQ_INT(err.line, 28);
+        ASSERT_EQ_INT(err.col, 3);
+        free(bad);
+    }
+    ASSERT_EQ_INT(read_str("$MeshFormat\n4 1 8\n$EndMeshFormat\n", MESHIO_AUTO, &m, &err),
+                  QDC_EFORMAT);
+    ASSERT_TRUE(strstr(err.msg, "4.0 binary is not supported"));
+    ASSERT_EQ_INT(read_str("$NOD\n1\n1 0 0 0\n$ENDNOD\n", MESHIO_AUTO, &m, &err),
+                  QDC_EFORMAT);
+    ASSERT_TRUE(strstr(err.msg, "MSH 1"));
+}
+
 TEST(gmsh_errors_say_where)
 {
     mesh_t *m;
@@ -274,7 +429,7 @@ TEST(names_sniffing_media_types)
     for (int f = 1; f < MESHIO_FORMAT_COUNT; f++) {
         const char *mt = meshio_media_type((meshio_format)f);
         ASSERT_EQ_INT(meshio_format_from_name(meshio_format_name((meshio_format)f)), f);
-        if (f == MESHIO_TETGEN) {
+        if (f == MESHIO_TETGEN || f > MESHIO_VTU_ASCII) { /* no media type */
             ASSERT_TRUE(mt == NULL);
             continue;
         }
@@ -368,7 +523,7 @@ TEST(fuzz_replay)
 
 TEST_MAIN("formats", T(roundtrip_all_tags), T(roundtrip_no_tags), T(roundtrip_empty),
           T(roundtrip_files), T(gmsh41_tags_out_of_order_and_skipped_types),
-          T(gmsh_entity_tags_without_physicals), T(gmsh_errors_say_where),
-          T(vtk51_layout_and_field_data), T(vtu_inline_base64),
+          T(gmsh_entity_tags_without_physicals), T(gmsh22_binary_and_40),
+          T(gmsh_errors_say_where), T(vtk51_layout_and_field_data), T(vtu_inline_base64),
           T(names_sniffing_media_types), T(dev_speed_ascii),
           T(gmsh41_binary_1m_tets_speed), T(fuzz_replay))

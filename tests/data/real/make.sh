@@ -37,6 +37,8 @@ EOF
 gmsh -3 -nt 1 box_sphere.geo -format msh41 -o gmsh41.msh > /dev/null
 gmsh -3 -nt 1 box_sphere.geo -format msh41 -bin -o gmsh41_bin.msh > /dev/null
 gmsh -3 -nt 1 box_sphere.geo -format msh22 -o gmsh22.msh > /dev/null
+gmsh -3 -nt 1 box_sphere.geo -format msh22 -bin -o gmsh22_bin.msh > /dev/null
+gmsh -3 -nt 1 box_sphere.geo -format msh40 -o gmsh40.msh > /dev/null
 gmsh -3 -nt 1 box_sphere.geo -format vtk -o gmsh.vtk > /dev/null
 gmsh -3 -nt 1 box_sphere.geo -format mesh -o gmsh.mesh > /dev/null
 
@@ -133,7 +135,7 @@ tetgen -pq1.4aAzQ box.poly
 mv box.1.node tetgen.node
 mv box.1.ele tetgen.ele
 
-for f in gmsh41.msh gmsh41_bin.msh gmsh22.msh gmsh.vtk gmsh.mesh meshio_zlib.vtu \
+for f in gmsh41.msh gmsh41_bin.msh gmsh22.msh gmsh22_bin.msh gmsh40.msh gmsh.vtk gmsh.mesh meshio_zlib.vtu \
     meshio_ascii.vtu meshio_bin.vtk meshio_ascii.vtk vtk_appended_zlib.vtu tetgen.node \
     tetgen.ele; do
     gzip -n -9 -c "$f" > "$here/$f.gz"
