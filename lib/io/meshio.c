@@ -27,8 +27,9 @@
 /* Format names                                                              */
 
 static const char *const format_names[MESHIO_FORMAT_COUNT] = {
-    "auto",   "medit", "tetgen",    "qmesh", "json",      "gmsh",       "gmsh-bin",
-    "gmsh22", "vtk",   "vtk-ascii", "vtu",   "vtu-ascii", "gmsh22-bin", "gmsh40"};
+    "auto",       "medit",  "tetgen", "qmesh",     "json",  "gmsh",
+    "gmsh-bin",   "gmsh22", "vtk",    "vtk-ascii", "vtu",   "vtu-ascii",
+    "gmsh22-bin", "gmsh40", "dolfin", "abaqus",    "netgen"};
 
 static const struct {
     const char *name;
@@ -57,6 +58,14 @@ static const struct {
     {"msh22-bin", MESHIO_GMSH22_BIN},
     {"gmsh40", MESHIO_GMSH40},
     {"msh40", MESHIO_GMSH40},
+    {"dolfin", MESHIO_DOLFIN},
+    {"dolfin-xml", MESHIO_DOLFIN},
+    {"xml", MESHIO_DOLFIN},
+    {"abaqus", MESHIO_ABAQUS},
+    {"calculix", MESHIO_ABAQUS},
+    {"inp", MESHIO_ABAQUS},
+    {"netgen", MESHIO_NETGEN},
+    {"vol", MESHIO_NETGEN},
     {"vtk", MESHIO_VTK},
     {"vtk-bin", MESHIO_VTK},
     {"vtk-ascii", MESHIO_VTK_ASCII},
@@ -164,15 +173,20 @@ static meshio_format sniff_vtk(const char *p, size_t n)
                                                              : MESHIO_VTK;
 }
 
-/* An XML document whose first element, within 1 kB, is a VTKFile. */
+/* An XML document whose first element, within 1 kB, is a VTKFile or a
+ * dolfin. */
 static meshio_format sniff_xml(const char *p, size_t n)
 {
-    static const char tag[] = "<VTKFile";
+    static const char tag[] = "<VTKFile", dtag[] = "<dolfin";
     size_t lim = n < 1024 ? n : 1024;
 
     for (size_t i = 0; i + sizeof tag - 1 <= lim; i++)
         if (memcmp(p + i, tag, sizeof tag - 1) == 0)
             return MESHIO_VTU;
+    for (size_t i = 0; i + sizeof dtag - 1 <= lim; i++)
+        if (memcmp(p + i, dtag, sizeof dtag - 1) == 0 &&
+            (i + sizeof dtag - 1 == n || !is_word((unsigned char)p[i + sizeof dtag - 1])))
+            return MESHIO_DOLFIN;
     return MESHIO_AUTO;
 }
 
@@ -221,6 +235,9 @@ const char *meshio_media_type(meshio_format f)
         "application/vnd.vtk;encoding=ascii",
         "application/vnd.vtk.vtu+xml",
         "application/vnd.vtk.vtu+xml;encoding=ascii",
+        NULL,
+        NULL,
+        NULL,
         NULL,
         NULL};
 
@@ -312,11 +329,15 @@ meshio_format meshio_sniff(const char *buf, size_t len)
         return sniff_gmsh(buf + i + 11, len - i - 11);
     if (len - i >= 4 && memcmp(buf + i, "$NOD", 4) == 0)
         return MESHIO_GMSH41; /* MSH 1: the reader says what is supported */
+    if (i < len && buf[i] == '*' && (i == 0 || buf[i - 1] == '\n'))
+        return MESHIO_ABAQUS;
     for (w = i; w < len && is_word((unsigned char)buf[w]); w++)
         ;
     for (size_t k = 0; k < sizeof medit_words / sizeof medit_words[0]; k++)
         if (word_is(buf + i, w - i, medit_words[k]))
             return MESHIO_MEDIT;
+    if (word_is(buf + i, w - i, "mesh3d") || word_is(buf + i, w - i, "mesh2d"))
+        return MESHIO_NETGEN;
     return MESHIO_AUTO;
 }
 
@@ -1264,6 +1285,12 @@ static qdc_status read_plain(const char *buf, size_t len, meshio_format fmt,
     case MESHIO_VTU:
     case MESHIO_VTU_ASCII:
         return meshio_vtu_read(buf, len, o, rec, out, err);
+    case MESHIO_DOLFIN:
+        return meshio_dolfin_read(buf, len, o, rec, out, err);
+    case MESHIO_ABAQUS:
+        return meshio_abaqus_read(buf, len, o, rec, out, err);
+    case MESHIO_NETGEN:
+        return meshio_netgen_read(buf, len, o, rec, out, err);
     case MESHIO_TETGEN:
         return qdc_fail(err, QDC_EINVAL,
                         "TetGen needs two buffers: use meshio_read_tetgen");
@@ -1478,9 +1505,15 @@ static qdc_status write_fmt(const mesh_t *m, meshio_format fmt, int part, qdc_wr
 {
     wbuf w = {fn, ctx, NULL, 0, 0};
     qdc_status st = check_for_write(m, err);
+    const char *why = NULL;
 
     if (st != QDC_OK)
         return st;
+    if ((fmt == MESHIO_ABAQUS || fmt == MESHIO_NETGEN) && !splice_ok(m, fmt, &why))
+        return qdc_fail(err, QDC_EINVAL,
+                        "%s: written only as the input file with new coordinates, and "
+                        "here %s (qdc has no %s writer of its own)",
+                        format_names[fmt], why, format_names[fmt]);
     if (!fn)
         return qdc_fail(err, QDC_EINVAL, "meshio_write: NULL write function");
     w.b = qdc_malloc(WB_CAP);
@@ -1522,6 +1555,12 @@ static qdc_status write_fmt(const mesh_t *m, meshio_format fmt, int part, qdc_wr
     case MESHIO_VTU:
     case MESHIO_VTU_ASCII:
         meshio_vtu_write(m, fmt == MESHIO_VTU, &w);
+        break;
+    case MESHIO_DOLFIN:
+        meshio_dolfin_write(m, &w);
+        break;
+    case MESHIO_ABAQUS: /* spliced above, or refused */
+    case MESHIO_NETGEN:
         break;
     default:
         st = qdc_fail(err, QDC_EINVAL, "cannot write format %d", (int)fmt);

@@ -40,11 +40,21 @@ typedef enum {
      * media type (the daemon neither lists nor names them). */
     MESHIO_GMSH22_BIN, /* MSH 2.2 binary (little-endian, data size 8) */
     MESHIO_GMSH40,     /* MSH 4.0 ASCII (Gmsh 4.0; 4.0 binary is refused) */
+    MESHIO_DOLFIN,     /* DOLFIN/FEniCS legacy XML .xml, celltype tetrahedron: vertices
+                          and tets (domains, mesh functions kept only by splicing) */
+    /* Read, and written only as the input with new coordinates (spliced):
+     * meshio_write refuses them for a mesh without such a source. */
+    MESHIO_ABAQUS, /* Abaqus/CalculiX .inp: *NODE, *ELEMENT TYPE=C3D4 (regions:
+                      the 1-based order of their ELSET names), other elements
+                      skipped with a note; *INCLUDE and C3D10 refused */
+    MESHIO_NETGEN, /* Netgen .vol mesh3d: points, volumeelements (material as
+                      region), surfaceelements triangles (bc as ref) */
     MESHIO_FORMAT_COUNT
 } meshio_format;
 
 /* "medit", "tetgen", "qmesh", "json", "gmsh", "gmsh-bin", "gmsh22", "vtk",
- * "vtk-ascii", "vtu", "vtu-ascii", "gmsh22-bin", "gmsh40"; NULL for
+ * "vtk-ascii", "vtu", "vtu-ascii", "gmsh22-bin", "gmsh40", "dolfin",
+ * "abaqus", "netgen"; NULL for
  * out-of-range values. */
 const char *meshio_format_name(meshio_format f);
 /* Accepts a format name (the above, and "mesh", "binary", "msh", "msh41",
@@ -55,7 +65,8 @@ meshio_format meshio_format_from_name(const char *s);
  * "$MeshFormat" (the version and encoding of its header line), "# vtk DataFile"
  * (ASCII or BINARY), "<?xml"/"<VTKFile"...; MESHIO_AUTO if unknown.
  * "$NOD" (MSH 1) and "$MeshFormat" of any version are Gmsh: reading says
- * which versions are supported. */
+ * which versions are supported. "<dolfin" in the first kB of an XML
+ * document, "mesh3d" (Netgen), a first line starting with '*' (Abaqus). */
 meshio_format meshio_sniff(const char *buf, size_t len);
 
 /* HTTP media types, for the daemon's Content-Type / Accept / 415 lists:

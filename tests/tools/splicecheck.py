@@ -3,7 +3,8 @@
 coordinates changed?
 
 Finds the coordinate fields of both files with its own small parsers (Medit
-.mesh, TetGen .node, Gmsh MSH 2.x ASCII/binary, 4.0 ASCII and 4.1 ASCII/binary, legacy VTK
+.mesh, TetGen .node, Gmsh MSH 2.x ASCII/binary, 4.0 ASCII and 4.1 ASCII/binary,
+DOLFIN XML, Abaqus .inp, Netgen .vol, legacy VTK
 ASCII/binary, VTU ascii/base64/appended, zlib or not), masks them and compares
 what is left byte for byte (for VTU, the offset="" of appended arrays may
 differ too). Then, with meshio: both files read with the same cells, cell,
@@ -133,6 +134,47 @@ def gmsh(b):
     return f
 
 
+def dolfin(b):
+    f = Fields()
+    for m in re.finditer(rb"<vertex\b[^>]*>", b):
+        for a in (b"x", b"y", b"z"):
+            v = re.search(rb"\s" + a + rb"\s*=\s*[\"']\s*([^\"'\s]+)", m.group(0))
+            f.coords.append((m.start() + v.start(1), m.start() + v.end(1), "text"))
+    f.coords.sort()
+    return f
+
+
+def abaqus(b):
+    f = Fields()
+    node = False
+    for m in re.finditer(rb"[^\n]*\n?", b):
+        line, at = m.group(0), m.start()
+        t = line.strip()
+        if t.startswith(b"*"):
+            node = not t.startswith(b"**") and re.match(rb"\*node\b", t, re.I) is not None
+            continue
+        if not node or not t:
+            continue
+        fields = list(re.finditer(rb"[^,\s]+", line))
+        for v in fields[1:4]:
+            f.coords.append((at + v.start(), at + v.end(), "text"))
+    return f
+
+
+def netgen(b):
+    f = Fields()
+    it = tokens(b)
+    for s, e in it:
+        if b[s:e] == b"points":
+            s, e = next(it)
+            for _ in range(int(b[s:e])):
+                for k in range(3):
+                    s, e = next(it)
+                    f.coords.append((s, e, "text"))
+            break
+    return f
+
+
 def vtk(b):
     f = Fields()
     m = re.search(rb"\nPOINTS\s+(\d+)\s+(\w+)[^\n]*\n", b)
@@ -240,6 +282,12 @@ def fields(path, b):
         return gmsh(b)
     if p.endswith(".vtk"):
         return vtk(b)
+    if p.endswith(".xml"):
+        return dolfin(b)
+    if p.endswith(".inp"):
+        return abaqus(b)
+    if p.endswith(".vol"):
+        return netgen(b)
     if p.endswith(".vtu"):
         return vtu(b)
     raise SystemExit("splicecheck: unknown format: " + path)

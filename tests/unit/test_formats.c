@@ -1,7 +1,8 @@
 /* test_formats.c - Gmsh MSH 4.1/2.2 and VTK legacy/XML: exact round trips with
  * tags, files in the shapes other writers produce (tags out of order, skipped
  * element types, 5.1 cell layout, base64), names, sniffing, media types,
- * speed on 1M tets, and a replay of the gmsh/vtk fuzz seeds and crashes.
+ * DOLFIN XML, Abaqus and Netgen (reading, splicing, errors), speed on 1M
+ * tets, and a replay of the gmsh/vtk/fe fuzz seeds and crashes.
  * The malformed corpus (tests/data/meshio/gmsh_*, vtk_*, vtu_*) runs in
  * test_meshio with the rest. */
 #include "io/meshio.h"
@@ -306,6 +307,174 @@ TEST(gmsh22_binary_and_40)
     ASSERT_TRUE(strstr(err.msg, "MSH 1"));
 }
 
+/* ---- DOLFIN XML, Abaqus, Netgen ---- */
+
+/* Read doc (its source kept), move vertex 3 to z = 0.5, write it back: only
+ * the coordinate's text may change, into want. */
+static int splices_to(const char *doc, meshio_format f, const char *want)
+{
+    meshio_options o = {NULL, NULL, 1};
+    mesh_t *m = NULL;
+    qdc_error err;
+    sink s = {0};
+    int ok;
+
+    if (meshio_read_ex(doc, strlen(doc), f, &o, &m, &err) != QDC_OK) {
+        printf("  %s\n", err.msg);
+        return 0;
+    }
+    ok = meshio_source_format(m) == f && meshio_splices(m, f, NULL);
+    m->xyz[3 * 3 + 2] = 0.5;
+    ok = ok && meshio_write(m, MESHIO_AUTO, sink_write, &s, &err) == QDC_OK &&
+         s.n == strlen(want) && memcmp(s.b, want, s.n) == 0;
+    if (!ok)
+        printf("  %s splice: got %.*s\n", meshio_format_name(f), (int)s.n, s.b);
+    free(s.b);
+    mesh_free(m);
+    return ok;
+}
+
+/* Two tets on five vertices, 0-based a b c d and e b c d (volumes 1/6 and
+ * -1/3 with a = origin, e = (1,1,1)), as each format holds them. */
+static void check_two_tets(const mesh_t *m, int regions)
+{
+    ASSERT_EQ_INT(m->nv, 5);
+    ASSERT_EQ_INT(m->nt, 2);
+    ASSERT_NEAR(tet_vol(m, 0), 1.0 / 6, 1e-15);
+    ASSERT_NEAR(tet_vol(m, 1), -1.0 / 3, 1e-15);
+    if (regions) {
+        ASSERT_TRUE(m->region);
+        ASSERT_EQ_INT(m->region[0], 1);
+        ASSERT_EQ_INT(m->region[1], 2);
+    }
+}
+
+TEST(dolfin_abaqus_netgen)
+{
+    static const char xml[] =
+        "<?xml version=\"1.0\"?>\n<!-- a comment <vertex> -->\n"
+        "<dolfin nsmap=\"{'dolfin': 'https://fenicsproject.org/'}\">\n"
+        "  <mesh celltype=\"tetrahedron\" dim=\"3\">\n    <vertices size=\"5\">\n"
+        "      <vertex index=\"0\" x=\"0\" y=\"0\" z=\"0\"/>\n"
+        "      <vertex index=\"1\" x=\"1\" y=\"0\" z=\"0\"/>\n"
+        "      <vertex index=\"2\" x=\"0\" y=\"1.0\" z=\"0\"/>\n"
+        "      <vertex index=\"3\" x=\"0\" y=\"0\" z='1.0' />\n"
+        "      <vertex index=\"4\" x=\"1\" y=\"1\" z=\"1\"/>\n    </vertices>\n"
+        "    <cells size=\"2\">\n"
+        "      <tetrahedron index=\"1\" v0=\"4\" v1=\"1\" v2=\"2\" v3=\"3\"/>\n"
+        "      <tetrahedron index=\"0\" v0=\"0\" v1=\"1\" v2=\"2\" v3=\"3\"/>\n"
+        "    </cells>\n    <domains/>\n  </mesh>\n</dolfin>\n";
+    static const char inp[] =
+        "** two tets\n*Heading\n two tets\n*NODE, NSET=Nall\n"
+        "10, 0, 0, 0\n20, 1., 0., 0.\n30, 0.0, 1.0, 0.0\n40,0,0,1.0\n"
+        "50, 1, 1, 1\n*ELEMENT, TYPE=C3D4, ELSET=EA\n1, 10, 20, 30, 40\n"
+        "*element, type=c3d4, elset=EB\n2, 50, 20,\n 30, 40\n"
+        "*ELEMENT, TYPE=S3\n3, 10, 20, 30\n*NSET, NSET=top\n50\n*STEP\n*STATIC\n*END "
+        "STEP\n";
+    static const char vol[] =
+        "# made by hand\nmesh3d\ndimension\n3\ngeomtype\n0\n\n"
+        "# surfnr bcnr domin domout np p1 p2 p3\nsurfaceelements\n1\n"
+        "1 7 1 0 3 1 2 3\n\n#  matnr np p1 p2 p3 p4\nvolumeelements\n2\n"
+        "1 4 1 2 3 4\n2 4 5 2 3 4\n\nedgesegmentsgi2\n0\n\npoints\n5\n"
+        "0 0 0\n1 0 0\n0 1 0\n0 0 1.0\n1 1 1\n\nmaterials\n2\n1 steel\n2 points\n"
+        "endmesh\n";
+    mesh_t *m, *b;
+    qdc_error err;
+    char *bad;
+    sink s = {0};
+
+    /* sniffing and names */
+    ASSERT_EQ_INT(meshio_sniff(xml, strlen(xml)), MESHIO_DOLFIN);
+    ASSERT_EQ_INT(meshio_sniff(inp, strlen(inp)), MESHIO_ABAQUS);
+    ASSERT_EQ_INT(meshio_sniff(vol, strlen(vol)), MESHIO_NETGEN);
+    ASSERT_EQ_INT(meshio_format_from_name("a.xml"), MESHIO_DOLFIN);
+    ASSERT_EQ_INT(meshio_format_from_name("a.inp"), MESHIO_ABAQUS);
+    ASSERT_EQ_INT(meshio_format_from_name("a.vol.gz"), MESHIO_NETGEN);
+
+    /* DOLFIN: cells by their index, no regions */
+    ASSERT_OK(read_str(xml, MESHIO_AUTO, &m, &err));
+    check_two_tets(m, 0);
+    ASSERT_TRUE(m->region == NULL && m->ntri == 0);
+    ASSERT_OK(roundtrip(m, MESHIO_DOLFIN, &b));
+    ASSERT_TRUE(same_mesh(m, b, 0));
+    mesh_free(b);
+    mesh_free(m);
+    bad = strdup(xml);
+    memcpy(strstr(bad, "z='1.0'"), "z='0.5'", 7);
+    ASSERT_TRUE(splices_to(xml, MESHIO_DOLFIN, bad));
+    free(bad);
+
+    /* Abaqus: node numbers mapped, continuation line, ELSETs as regions */
+    ASSERT_OK(read_str(inp, MESHIO_AUTO, &m, &err));
+    check_two_tets(m, 1);
+    ASSERT_EQ_INT(meshio_write(m, MESHIO_ABAQUS, sink_write, &s, &err), QDC_EINVAL);
+    ASSERT_TRUE(strstr(err.msg, "no abaqus writer of its own"));
+    ASSERT_EQ_INT(s.n, 0);
+    mesh_free(m);
+    bad = strdup(inp);
+    memcpy(strstr(bad, "40,0,0,1.0"), "40,0,0,0.5", 10);
+    ASSERT_TRUE(splices_to(inp, MESHIO_ABAQUS, bad));
+    free(bad);
+
+    /* Netgen: points after the elements, material and bc numbers kept */
+    ASSERT_OK(read_str(vol, MESHIO_AUTO, &m, &err));
+    check_two_tets(m, 1);
+    ASSERT_EQ_INT(m->ntri, 1);
+    ASSERT_EQ_INT(m->tri_ref[0], 7);
+    ASSERT_EQ_INT(m->tris[2], 2);
+    mesh_free(m);
+    bad = strdup(vol);
+    memcpy(strstr(bad, "0 0 1.0"), "0 0 0.5", 7);
+    ASSERT_TRUE(splices_to(vol, MESHIO_NETGEN, bad));
+    free(bad);
+
+    /* errors, each where it is */
+#define BAD(doc, from, to, f, status, ln, text)                                          \
+    do {                                                                                 \
+        char *d_ = strdup(doc), *at_ = strstr(d_, from);                                 \
+        ASSERT_TRUE(at_ &&strlen(from) == strlen(to));                                   \
+        memcpy(at_, to, strlen(to));                                                     \
+        ASSERT_EQ_INT(read_str(d_, f, &m, &err), status);                                \
+        if (!strstr(err.msg, text) || err.line != (ln))                                  \
+            printf("  got %d: %s\n", (int)err.line, err.msg);                            \
+        ASSERT_TRUE(strstr(err.msg, text) != NULL);                                      \
+        ASSERT_EQ_INT(err.line, ln);                                                     \
+        free(d_);                                                                        \
+    } while (0)
+    BAD(xml, "tetrahedron\" dim", "triangle\"    dim", MESHIO_DOLFIN, QDC_EFORMAT, 4,
+        "celltype \"triangle\" is not supported");
+    BAD(xml, "y=\"1.0\"", "y=\"nan\"", MESHIO_DOLFIN, QDC_EPARSE, 8, "not finite");
+    BAD(xml, "v3=\"3\"/>\n      <tetrahedron index=\"0\"",
+        "v3=\"5\"/>\n      <tetrahedron index=\"0\"", MESHIO_DOLFIN, QDC_EPARSE, 13,
+        "v3 '5' out of range [0, 4]");
+    BAD(xml, "index=\"4\"", "index=\"3\"", MESHIO_DOLFIN, QDC_EPARSE, 10,
+        "vertex 3 appears twice");
+    BAD(xml, "cells size=\"2\"", "cells size=\"3\"", MESHIO_DOLFIN, QDC_EPARSE, 15,
+        "2 <tetrahedron> elements, <cells size=\"3\">");
+    BAD(inp, "TYPE=C3D4, ELSET=EA", "TYPE=C3D10,ELSET=EA", MESHIO_ABAQUS, QDC_EFORMAT, 10,
+        "second-order tetrahedra");
+    BAD(inp, "2, 50, 20,", "2, 50, 21,", MESHIO_ABAQUS, QDC_EPARSE, 13,
+        "unknown node 21");
+    BAD(inp, "50, 1, 1, 1", "50, 1, 1   ", MESHIO_ABAQUS, QDC_EPARSE, 9,
+        "node 50 has 2 coordinates");
+    BAD(inp, "0.0, 1.0, 0.0", "0.0, inf, 0.0", MESHIO_ABAQUS, QDC_EPARSE, 7,
+        "not finite");
+    BAD(vol, "2 4 5 2 3 4", "2 4 6 2 3 4", MESHIO_NETGEN, QDC_EPARSE, 17,
+        "volumeelements: element 2: point 6 out of range [1, 5]");
+    BAD(vol, "1 4 1 2 3 4", "1 10 1 2 34", MESHIO_NETGEN, QDC_EFORMAT, 16,
+        "second-order tetrahedra (10 points) are not supported");
+    BAD(vol, "mesh3d", "mesh2d", MESHIO_NETGEN, QDC_EFORMAT, 2, "2D meshes");
+    BAD(vol, "\n0 0 1.0\n", "\n0 0 NaN\n", MESHIO_NETGEN, QDC_EPARSE, 27, "not finite");
+#undef BAD
+    /* *INCLUDE refused, data before any keyword refused */
+    ASSERT_EQ_INT(read_str("*NODE\n1, 0, 0, 0\n*INCLUDE, INPUT=more.inp\n", MESHIO_ABAQUS,
+                           &m, &err),
+                  QDC_EFORMAT);
+    ASSERT_TRUE(strstr(err.msg, "*INCLUDE is not supported"));
+    ASSERT_EQ_INT(err.line, 3);
+    ASSERT_EQ_INT(read_str("1, 0, 0, 0\n", MESHIO_ABAQUS, &m, &err), QDC_EFORMAT);
+}
+
 TEST(gmsh_errors_say_where)
 {
     mesh_t *m;
@@ -507,10 +676,10 @@ TEST(gmsh41_binary_1m_tets_speed)
 
 TEST(fuzz_replay)
 {
-    static const char *const names[] = {"gmsh", "vtk"};
+    static const char *const names[] = {"gmsh", "vtk", "fe"};
     int total = 0, bad = 0;
 
-    for (int k = 0; k < 2; k++) {
+    for (int k = 0; k < 3; k++) {
         int n, b = replay_fuzz(names[k], replay_meshio, &n);
         ASSERT_TRUE(b >= 0);
         bad += b;
@@ -524,6 +693,7 @@ TEST(fuzz_replay)
 TEST_MAIN("formats", T(roundtrip_all_tags), T(roundtrip_no_tags), T(roundtrip_empty),
           T(roundtrip_files), T(gmsh41_tags_out_of_order_and_skipped_types),
           T(gmsh_entity_tags_without_physicals), T(gmsh22_binary_and_40),
-          T(gmsh_errors_say_where), T(vtk51_layout_and_field_data), T(vtu_inline_base64),
+          T(dolfin_abaqus_netgen), T(gmsh_errors_say_where),
+          T(vtk51_layout_and_field_data), T(vtu_inline_base64),
           T(names_sniffing_media_types), T(dev_speed_ascii),
           T(gmsh41_binary_1m_tets_speed), T(fuzz_replay))
