@@ -159,7 +159,7 @@ static void optimize_usage(FILE *f)
         "  --in-format F, --out-format F   "
         "medit|tetgen|qmesh|json|gmsh|gmsh-bin|gmsh22|\n"
         "                             gmsh22-bin|gmsh40|vtk|vtk-ascii|vtu|vtu-ascii|\n"
-        "                             dolfin|abaqus|netgen\n"
+        "                             dolfin|meshb|abaqus|netgen\n"
         "                             (default: by "
         "extension,\n"
         "                             then content); input also stl|off|obj|poly|smesh\n"

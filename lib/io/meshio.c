@@ -27,9 +27,9 @@
 /* Format names                                                              */
 
 static const char *const format_names[MESHIO_FORMAT_COUNT] = {
-    "auto",       "medit",  "tetgen", "qmesh",     "json",  "gmsh",
-    "gmsh-bin",   "gmsh22", "vtk",    "vtk-ascii", "vtu",   "vtu-ascii",
-    "gmsh22-bin", "gmsh40", "dolfin", "abaqus",    "netgen"};
+    "auto",       "medit",  "tetgen", "qmesh",     "json",   "gmsh",
+    "gmsh-bin",   "gmsh22", "vtk",    "vtk-ascii", "vtu",    "vtu-ascii",
+    "gmsh22-bin", "gmsh40", "dolfin", "meshb",     "abaqus", "netgen"};
 
 static const struct {
     const char *name;
@@ -61,6 +61,8 @@ static const struct {
     {"dolfin", MESHIO_DOLFIN},
     {"dolfin-xml", MESHIO_DOLFIN},
     {"xml", MESHIO_DOLFIN},
+    {"meshb", MESHIO_MESHB},
+    {"medit-bin", MESHIO_MESHB},
     {"abaqus", MESHIO_ABAQUS},
     {"calculix", MESHIO_ABAQUS},
     {"inp", MESHIO_ABAQUS},
@@ -239,6 +241,7 @@ const char *meshio_media_type(meshio_format f)
         NULL,
         NULL,
         NULL,
+        NULL,
         NULL};
 
     if ((unsigned)f >= MESHIO_FORMAT_COUNT)
@@ -309,6 +312,12 @@ meshio_format meshio_sniff(const char *buf, size_t len)
         return MESHIO_AUTO;
     if (len >= 7 && memcmp(buf, "QDCMESH", 7) == 0)
         return MESHIO_QMESH;
+    if (len >= 12 && ((get_le32((const unsigned char *)buf) == 1 &&
+                       get_le32((const unsigned char *)buf + 4) - 1 < 4 &&
+                       get_le32((const unsigned char *)buf + 8) == 3) ||
+                      (memcmp(buf, "\0\0\0\1\0\0\0", 7) == 0 && buf[7] >= 1 &&
+                       buf[7] <= 4 && memcmp(buf + 8, "\0\0\0\3", 4) == 0)))
+        return MESHIO_MESHB;
     if (len >= 14 && memcmp(buf, "# vtk DataFile", 14) == 0)
         return sniff_vtk(buf, len);
     while (i < len) {
@@ -1287,6 +1296,8 @@ static qdc_status read_plain(const char *buf, size_t len, meshio_format fmt,
         return meshio_vtu_read(buf, len, o, rec, out, err);
     case MESHIO_DOLFIN:
         return meshio_dolfin_read(buf, len, o, rec, out, err);
+    case MESHIO_MESHB:
+        return meshio_meshb_read(buf, len, o, rec, out, err);
     case MESHIO_ABAQUS:
         return meshio_abaqus_read(buf, len, o, rec, out, err);
     case MESHIO_NETGEN:
@@ -1558,6 +1569,9 @@ static qdc_status write_fmt(const mesh_t *m, meshio_format fmt, int part, qdc_wr
         break;
     case MESHIO_DOLFIN:
         meshio_dolfin_write(m, &w);
+        break;
+    case MESHIO_MESHB:
+        meshio_meshb_write(m, &w);
         break;
     case MESHIO_ABAQUS: /* spliced above, or refused */
     case MESHIO_NETGEN:

@@ -42,6 +42,8 @@ typedef enum {
     MESHIO_GMSH40,     /* MSH 4.0 ASCII (Gmsh 4.0; 4.0 binary is refused) */
     MESHIO_DOLFIN,     /* DOLFIN/FEniCS legacy XML .xml, celltype tetrahedron: vertices
                           and tets (domains, mesh functions kept only by splicing) */
+    MESHIO_MESHB,      /* Medit binary .meshb (libMeshb versions 1-4, either byte
+                          order; written: version 2 little-endian), read as .mesh */
     /* Read, and written only as the input with new coordinates (spliced):
      * meshio_write refuses them for a mesh without such a source. */
     MESHIO_ABAQUS, /* Abaqus/CalculiX .inp: *NODE, *ELEMENT TYPE=C3D4 (regions:
@@ -54,7 +56,7 @@ typedef enum {
 
 /* "medit", "tetgen", "qmesh", "json", "gmsh", "gmsh-bin", "gmsh22", "vtk",
  * "vtk-ascii", "vtu", "vtu-ascii", "gmsh22-bin", "gmsh40", "dolfin",
- * "abaqus", "netgen"; NULL for
+ * "meshb", "abaqus", "netgen"; NULL for
  * out-of-range values. */
 const char *meshio_format_name(meshio_format f);
 /* Accepts a format name (the above, and "mesh", "binary", "msh", "msh41",
@@ -66,7 +68,8 @@ meshio_format meshio_format_from_name(const char *s);
  * (ASCII or BINARY), "<?xml"/"<VTKFile"...; MESHIO_AUTO if unknown.
  * "$NOD" (MSH 1) and "$MeshFormat" of any version are Gmsh: reading says
  * which versions are supported. "<dolfin" in the first kB of an XML
- * document, "mesh3d" (Netgen), a first line starting with '*' (Abaqus). */
+ * document, "mesh3d" (Netgen), a first line starting with '*' (Abaqus),
+ * the int32 words 1, 1..4, 3 in either byte order (Medit binary). */
 meshio_format meshio_sniff(const char *buf, size_t len);
 
 /* HTTP media types, for the daemon's Content-Type / Accept / 415 lists:

@@ -881,6 +881,9 @@ qdc_status meshio_dolfin_read(const char *buf, size_t len, const meshio_options 
 void meshio_dolfin_write(const mesh_t *m, wbuf *w);
 qdc_status meshio_abaqus_read(const char *buf, size_t len, const meshio_options *o,
                               srcrec *rec, mesh_t **out, qdc_error *err);
+qdc_status meshio_meshb_read(const char *buf, size_t len, const meshio_options *o,
+                             srcrec *rec, mesh_t **out, qdc_error *err);
+void meshio_meshb_write(const mesh_t *m, wbuf *w);
 qdc_status meshio_netgen_read(const char *buf, size_t len, const meshio_options *o,
                               srcrec *rec, mesh_t **out, qdc_error *err);
 

@@ -2,7 +2,7 @@
 # roundtrip.sh - files come back whole: `qdc optimize IN OUT` with OUT in IN's
 # format gives IN with only the coordinates changed, for files written by Gmsh
 # (MSH 4.1 ASCII/binary, 4.0, 2.2 ASCII/binary, VTK, Medit), meshio (VTU zlib and ascii, legacy
-# VTK binary and ascii, DOLFIN XML, Abaqus, Netgen), a VTK-style appended zlib
+# VTK binary and ascii, DOLFIN XML, Abaqus, Netgen, Medit binary), a VTK-style appended zlib
 # VTU, a CalculiX-style .inp and TetGen (0-based)
 # from tests/data/real. tests/tools/splicecheck.py masks the coordinate
 # fields with its own parsers and compares the rest byte for byte, then reads
@@ -19,7 +19,7 @@ for gz in "$REAL"/*.gz; do
 done
 files="gmsh41.msh gmsh41_bin.msh gmsh22.msh gmsh22_bin.msh gmsh40.msh gmsh.vtk gmsh.mesh meshio_zlib.vtu meshio_ascii.vtu
 meshio_bin.vtk meshio_ascii.vtk vtk_appended_zlib.vtu tetgen.node dolfin.xml meshio.inp calculix.inp
-meshio.vol"
+meshio.vol meshio.meshb"
 for f in $files; do
     base=${f%%.*}
     ext=${f#*.}

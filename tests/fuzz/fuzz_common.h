@@ -18,12 +18,13 @@ static int same(const void *a, const void *b, size_t n)
 
 /* What each format carries: QMESH and JSON drop vref and triangles; Gmsh and
  * VTK keep triangles and their tags; DOLFIN keeps vertices and tets only;
- * Abaqus and Netgen have no writer of qdc's own (spliced only). */
+ * Medit binary keeps what Medit does, triangle refs too; Abaqus and Netgen
+ * have no writer of qdc's own (spliced only). */
 static void check_roundtrip(const mesh_t *m, meshio_format f)
 {
     sink s = {0};
     mesh_t *b = NULL;
-    int text = f == MESHIO_MEDIT,
+    int text = f == MESHIO_MEDIT || f == MESHIO_MESHB,
         tris = text || (f >= MESHIO_GMSH41 && f != MESHIO_DOLFIN);
     int regions = f != MESHIO_DOLFIN;
 

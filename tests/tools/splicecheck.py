@@ -4,7 +4,7 @@ coordinates changed?
 
 Finds the coordinate fields of both files with its own small parsers (Medit
 .mesh, TetGen .node, Gmsh MSH 2.x ASCII/binary, 4.0 ASCII and 4.1 ASCII/binary,
-DOLFIN XML, Abaqus .inp, Netgen .vol, legacy VTK
+DOLFIN XML, Medit binary, Abaqus .inp, Netgen .vol, legacy VTK
 ASCII/binary, VTU ascii/base64/appended, zlib or not), masks them and compares
 what is left byte for byte (for VTU, the offset="" of appended arrays may
 differ too). Then, with meshio: both files read with the same cells, cell,
@@ -175,6 +175,28 @@ def netgen(b):
     return f
 
 
+def meshb(b):
+    f = Fields()
+    end = "<" if struct.unpack_from("<i", b, 0)[0] == 1 else ">"
+    ver = struct.unpack_from(end + "i", b, 4)[0]
+    rs, isz, ps = (4 if ver == 1 else 8), (8 if ver == 4 else 4), (8 if ver >= 3 else 4)
+    at = 8
+    while at < len(b):
+        kw = struct.unpack_from(end + "i", b, at)[0]
+        nxt = struct.unpack_from(end + ("q" if ps == 8 else "i"), b, at + 4)[0]
+        if kw == 54:
+            break
+        if kw == 4:
+            n = struct.unpack_from(end + ("q" if isz == 8 else "i"), b, at + 4 + ps)[0]
+            p = at + 4 + ps + isz
+            for _ in range(n):
+                for k in range(3):
+                    f.coords.append((p + rs * k, p + rs * (k + 1), end + "f%d" % rs))
+                p += 3 * rs + isz
+        at = nxt
+    return f
+
+
 def vtk(b):
     f = Fields()
     m = re.search(rb"\nPOINTS\s+(\d+)\s+(\w+)[^\n]*\n", b)
@@ -276,6 +298,8 @@ def fields(path, b):
     p = path[:-3] if path.endswith(".gz") else path
     if p.endswith(".mesh"):
         return medit(b)
+    if p.endswith(".meshb"):
+        return meshb(b)
     if p.endswith(".node"):
         return tetgen_node(b)
     if p.endswith(".msh"):

@@ -475,6 +475,122 @@ TEST(dolfin_abaqus_netgen)
     ASSERT_EQ_INT(read_str("1, 0, 0, 0\n", MESHIO_ABAQUS, &m, &err), QDC_EFORMAT);
 }
 
+/* (Positions: n is past the keyword code when its position is written.)
+ * The two tets as Medit binary version 1 (float32, int32), big-endian, with
+ * a Corners keyword (skipped through its position) and RequiredVertices;
+ * z4: vertex 4's z. */
+static size_t meshb_doc(unsigned char *d, float z4)
+{
+    static const float xyz[5][3] = {
+        {0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 1, 1}};
+    size_t n = 0;
+
+#define W(v)                                                                             \
+    do {                                                                                 \
+        uint32_t u_ = (uint32_t)(v);                                                     \
+        d[n++] = (unsigned char)(u_ >> 24), d[n++] = (unsigned char)(u_ >> 16);          \
+        d[n++] = (unsigned char)(u_ >> 8), d[n++] = (unsigned char)u_;                   \
+    } while (0)
+    W(1);
+    W(1);
+    W(3);
+    W(20);
+    W(3); /* Dimension 3 */
+    W(4);
+    W(20 + 12 + 5 * 16);
+    W(5); /* Vertices */
+    for (int i = 0; i < 5; i++) {
+        for (int a = 0; a < 3; a++) {
+            float x = i == 3 && a == 2 ? z4 : xyz[i][a];
+            uint32_t u;
+            memcpy(&u, &x, 4);
+            W(u);
+        }
+        W(i + 10);
+    }
+    W(13);
+    W(n + 16);
+    W(2);
+    W(1);
+    W(2); /* Corners: skipped */
+    W(8);
+    W(n + 48);
+    W(2); /* Tetrahedra */
+    W(1);
+    W(2);
+    W(3);
+    W(4);
+    W(1);
+    W(5);
+    W(2);
+    W(3);
+    W(4);
+    W(2);
+    W(15);
+    W(n + 12);
+    W(1);
+    W(5); /* RequiredVertices: vertex 5 */
+    W(54);
+    W(0);
+#undef W
+    return n;
+}
+
+TEST(meshb_versions_and_byte_order)
+{
+    unsigned char doc[512], moved[512], bad[512];
+    size_t n = meshb_doc(doc, 1);
+    meshio_options o = {NULL, NULL, 1};
+    mesh_t *m, *b;
+    qdc_error err;
+    sink s = {0};
+    int f32 = 0;
+
+    ASSERT_EQ_INT(meshio_sniff((const char *)doc, n), MESHIO_MESHB);
+    ASSERT_EQ_INT(meshio_format_from_name("x.meshb"), MESHIO_MESHB);
+    ASSERT_OK(meshio_read_ex((const char *)doc, n, MESHIO_AUTO, &o, &m, &err));
+    check_two_tets(m, 1);
+    ASSERT_EQ_INT(m->vref[4], 14);
+    ASSERT_TRUE(m->fixed && m->fixed[4] && !m->fixed[3]);
+    /* spliced: float32 big-endian in place */
+    ASSERT_EQ_INT(meshio_source_format(m), MESHIO_MESHB);
+    meshio_source_bytes(m, &f32);
+    ASSERT_TRUE(f32);
+    m->xyz[3 * 3 + 2] = 0.5;
+    ASSERT_OK(meshio_write(m, MESHIO_AUTO, sink_write, &s, &err));
+    ASSERT_EQ_INT(meshb_doc(moved, 0.5f), n);
+    ASSERT_EQ_INT(s.n, n);
+    ASSERT_TRUE(memcmp(s.b, moved, n) == 0);
+    free(s.b);
+    /* qdc's writer (version 2, little-endian): everything back */
+    ASSERT_OK(roundtrip(m, MESHIO_MESHB, &b));
+    ASSERT_TRUE(same_mesh(m, b, K_REGION | K_FIXED | K_VREF));
+    mesh_free(b);
+    mesh_free(m);
+    m = make_mesh(300, 500, 80);
+    ASSERT_OK(roundtrip(m, MESHIO_MESHB, &b));
+    ASSERT_TRUE(same_mesh(m, b, K_REGION | K_FIXED | K_VREF | K_TRIS));
+    mesh_free(b);
+    mesh_free(m);
+    /* errors: truncated, a vertex number out of range, NaN, version 5 */
+    ASSERT_EQ_INT(meshio_read((const char *)doc, n - 30, MESHIO_MESHB, &m, &err),
+                  QDC_EPARSE);
+    memcpy(bad, doc, n);
+    bad[20 + 12 + 5 * 16 + 20 + 12 + 15] = 6; /* the first tet's 4th vertex */
+    ASSERT_EQ_INT(meshio_read((const char *)bad, n, MESHIO_MESHB, &m, &err), QDC_EPARSE);
+    ASSERT_TRUE(
+        strstr(err.msg, "Tetrahedra: entry 3: vertex number out of range [1, 5]"));
+    memcpy(bad, doc, n);
+    memcpy(bad + 32 + 16 + 4, "\x7f\xc0\x00\x00", 4); /* vertex 2's y: NaN */
+    ASSERT_EQ_INT(meshio_read((const char *)bad, n, MESHIO_MESHB, &m, &err), QDC_EPARSE);
+    ASSERT_TRUE(strstr(err.msg, "vertex 2: a coordinate is not finite"));
+    ASSERT_EQ_INT(err.offset, 48);
+    memcpy(bad, doc, n);
+    bad[7] = 5;
+    ASSERT_EQ_INT(meshio_read((const char *)bad, n, MESHIO_MESHB, &m, &err), QDC_EFORMAT);
+    ASSERT_TRUE(strstr(err.msg, "version 5 not supported"));
+}
+
 TEST(gmsh_errors_say_where)
 {
     mesh_t *m;
@@ -693,7 +809,7 @@ TEST(fuzz_replay)
 TEST_MAIN("formats", T(roundtrip_all_tags), T(roundtrip_no_tags), T(roundtrip_empty),
           T(roundtrip_files), T(gmsh41_tags_out_of_order_and_skipped_types),
           T(gmsh_entity_tags_without_physicals), T(gmsh22_binary_and_40),
-          T(dolfin_abaqus_netgen), T(gmsh_errors_say_where),
-          T(vtk51_layout_and_field_data), T(vtu_inline_base64),
+          T(dolfin_abaqus_netgen), T(meshb_versions_and_byte_order),
+          T(gmsh_errors_say_where), T(vtk51_layout_and_field_data), T(vtu_inline_base64),
           T(names_sniffing_media_types), T(dev_speed_ascii),
           T(gmsh41_binary_1m_tets_speed), T(fuzz_replay))

@@ -66,7 +66,8 @@ out.write("meshio_ascii.vtk", binary=False)
 
 # DOLFIN XML (a plain tet mesh: meshio writes cell data to separate files),
 # Abaqus (tets and boundary triangles, element sets per material, a node
-# set) and Netgen (materials and boundary conditions as netgen:index).
+# set), Netgen (materials and boundary conditions as netgen:index) and Medit
+# binary (refs).
 phys = m.cell_data_dict["gmsh:physical"]
 tp, sp = phys["tetra"], phys["triangle"]
 meshio.Mesh(pts, [("tetra", tets)]).write("dolfin.xml")
@@ -75,6 +76,9 @@ sets = {"material_%d" % i: [np.nonzero(tp == p)[0], np.zeros(0, dtype=int)]
 sets["boundary"] = [np.zeros(0, dtype=int), np.arange(len(tris))]
 meshio.Mesh(pts, cells, cell_sets=sets, point_sets={"origin": np.array([0])}).write("meshio.inp")
 meshio.Mesh(pts, cells, cell_data={"netgen:index": [tp, sp]}).write("meshio.vol")
+# Medit binary (meshio writes GMF version 3: float64, int32, 64-bit positions)
+meshio.Mesh(pts, cells, point_data={"medit:ref": np.arange(len(pts), dtype=np.int32) % 4},
+            cell_data={"medit:ref": [tp, sp]}).write("meshio.meshb")
 
 # CalculiX's layout (as cgx writes it): one *ELEMENT block per material with
 # its ELSET, S3 boundary triangles, a material, a section and a step.
@@ -170,7 +174,7 @@ mv box.1.ele tetgen.ele
 
 for f in gmsh41.msh gmsh41_bin.msh gmsh22.msh gmsh22_bin.msh gmsh40.msh gmsh.vtk gmsh.mesh meshio_zlib.vtu \
     meshio_ascii.vtu meshio_bin.vtk meshio_ascii.vtk vtk_appended_zlib.vtu tetgen.node \
-    tetgen.ele dolfin.xml meshio.inp calculix.inp meshio.vol; do
+    tetgen.ele dolfin.xml meshio.inp calculix.inp meshio.vol meshio.meshb; do
     gzip -n -9 -c "$f" > "$here/$f.gz"
 done
 ls -l "$here"
