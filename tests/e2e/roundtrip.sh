@@ -92,6 +92,17 @@ else
     fail "roundtrip: gzip" "$(head -2 err)"
 fi
 
+# the same for the formats added later: .vol.gz, .xml.gz, .inp.gz, .meshb.gz
+for f in meshio.vol dolfin.xml calculix.inp meshio.meshb gmsh22_bin.msh gmsh40.msh; do
+    gzip -c "$f" > "in_$f.gz"
+    if "$BIN/qdc" optimize "in_$f.gz" "o_$f.gz" --quiet --max-iter 5 2> err && gzip -t "o_$f.gz" &&
+        gzip -dc "o_$f.gz" | cmp -s - "out_$f"; then
+        pass "roundtrip: $f.gz in, $f.gz out: the spliced file, compressed"
+    else
+        fail "roundtrip: gzip $f" "$(head -2 err)"
+    fi
+done
+
 # float32 points stay float32, and the CLI says so
 "$PY" - 2> /dev/null << 'EOF' && have_f32=1 || have_f32=0
 import meshio, numpy as np
