@@ -126,7 +126,8 @@ qdc_status meshio_save(const char *path, meshio_format fmt, const mesh_t *m,
  * replaced: every tag, name, boundary or point element, $Periodic, data
  * array, comment, the numbering and the version stay byte for byte.
  * A mesh read with its source kept (m->source: the decompressed file and one
- * uint64 offset per vertex, 8 bytes/vertex beyond the file itself) is written
+ * uint64 offset per vertex, 8 bytes/vertex beyond the file itself; three for
+ * DOLFIN and Abaqus, whose coordinates are separate fields) is written
  * that way when the format asked for is the file's own variant (same
  * version and encoding; meshio_save with MESHIO_AUTO picks it when the
  * extension names the same family: .msh, .vtk, .vtu, .mesh, .node) and its
