@@ -130,7 +130,8 @@ qdc_status meshio_save(const char *path, meshio_format fmt, const mesh_t *m,
  * DOLFIN and Abaqus, whose coordinates are separate fields) is written
  * that way when the format asked for is the file's own variant (same
  * version and encoding; meshio_save with MESHIO_AUTO picks it when the
- * extension names the same family: .msh, .vtk, .vtu, .mesh, .node) and its
+ * extension names the same family: .msh, .vtk, .vtu, .mesh, .meshb, .node,
+ * .xml, .inp, .vol) and its
  * connectivity, regions, triangles and refs are unchanged since reading
  * (checked by a hash; the fixed flags are not part of it). Text numbers are
  * printed with %.17g (an unmoved coordinate keeps its original text); binary
