@@ -353,6 +353,14 @@ static void media_list(sbuf *b, int surfaces)
     }
 }
 
+/* Whether results and inputs are served in format k: the formats with a media
+ * type (TetGen is two files; Abaqus and Netgen are written only over their
+ * own source file, which a result does not have). */
+static int offerable(meshio_format k)
+{
+    return k != MESHIO_AUTO && k != MESHIO_TETGEN && meshio_media_type(k) != NULL;
+}
+
 /* The same as ?format= names. */
 static void format_names(sbuf *b, int surfaces)
 {
@@ -1474,7 +1482,7 @@ static int result_format(struct MHD_Connection *c, req *r, meshio_format *out,
         else
             k = strchr(f, '/') ? meshio_format_from_media_type(f)
                                : meshio_format_from_name(f);
-        if (k != MESHIO_AUTO && k != MESHIO_TETGEN) {
+        if (offerable(k)) {
             *out = k;
             return 0;
         }
@@ -1513,7 +1521,7 @@ static int result_format(struct MHD_Connection *c, req *r, meshio_format *out,
             k = MESHIO_MEDIT;
         else
             k = meshio_format_from_media_type(e);
-        if (k != MESHIO_AUTO && k != MESHIO_TETGEN) {
+        if (offerable(k)) {
             *out = k;
             return 0;
         }
@@ -1587,7 +1595,9 @@ static enum MHD_Result serve_result(struct MHD_Connection *c, req *r, meshio_for
                                                  MHD_HTTP_HEADER_IF_NONE_MATCH),
                      etag))
         return http_reply(c, r, 304, NULL, "", 0, h);
-    return http_reply_file(c, r, 200, path, meshio_media_type(f), h);
+    return http_reply_file(
+        c, r, 200, path,
+        meshio_media_type(f) ? meshio_media_type(f) : "application/octet-stream", h);
 }
 
 /* Converter thread: write the result in r->res_fmt from result.qmesh (or the

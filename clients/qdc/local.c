@@ -158,7 +158,9 @@ static void optimize_usage(FILE *f)
     fputs(
         "  --in-format F, --out-format F   "
         "medit|tetgen|qmesh|json|gmsh|gmsh-bin|gmsh22|\n"
-        "                             vtk|vtk-ascii|vtu|vtu-ascii (default: by "
+        "                             gmsh22-bin|gmsh40|vtk|vtk-ascii|vtu|vtu-ascii|\n"
+        "                             dolfin|meshb|abaqus|netgen\n"
+        "                             (default: by "
         "extension,\n"
         "                             then content); input also stl|off|obj|poly|smesh\n"
         "  --format F                 both of the above\n"
@@ -191,7 +193,7 @@ static void source_note(const mesh_t *m, const char *out, meshio_format fmt, int
         return;
     fmt = meshio_save_format(out, fmt, m);
     meshio_source_bytes(m, &f32);
-    if (!meshio_splices(m, fmt, &why))
+    if (!meshio_splices(m, fmt, &why) && fmt != MESHIO_ABAQUS && fmt != MESHIO_NETGEN)
         fprintf(stderr,
                 "qdc: note: %s: written by qdc's %s writer (%s): only vertices, tets, "
                 "triangles and their region tags are kept\n",

@@ -27,8 +27,9 @@
 /* Format names                                                              */
 
 static const char *const format_names[MESHIO_FORMAT_COUNT] = {
-    "auto",     "medit",  "tetgen", "qmesh",     "json", "gmsh",
-    "gmsh-bin", "gmsh22", "vtk",    "vtk-ascii", "vtu",  "vtu-ascii"};
+    "auto",       "medit",  "tetgen", "qmesh",     "json",   "gmsh",
+    "gmsh-bin",   "gmsh22", "vtk",    "vtk-ascii", "vtu",    "vtu-ascii",
+    "gmsh22-bin", "gmsh40", "dolfin", "meshb",     "abaqus", "netgen"};
 
 static const struct {
     const char *name;
@@ -53,6 +54,20 @@ static const struct {
     {"gmsh41-bin", MESHIO_GMSH41_BIN},
     {"gmsh22", MESHIO_GMSH22},
     {"msh22", MESHIO_GMSH22},
+    {"gmsh22-bin", MESHIO_GMSH22_BIN},
+    {"msh22-bin", MESHIO_GMSH22_BIN},
+    {"gmsh40", MESHIO_GMSH40},
+    {"msh40", MESHIO_GMSH40},
+    {"dolfin", MESHIO_DOLFIN},
+    {"dolfin-xml", MESHIO_DOLFIN},
+    {"xml", MESHIO_DOLFIN},
+    {"meshb", MESHIO_MESHB},
+    {"medit-bin", MESHIO_MESHB},
+    {"abaqus", MESHIO_ABAQUS},
+    {"calculix", MESHIO_ABAQUS},
+    {"inp", MESHIO_ABAQUS},
+    {"netgen", MESHIO_NETGEN},
+    {"vol", MESHIO_NETGEN},
     {"vtk", MESHIO_VTK},
     {"vtk-bin", MESHIO_VTK},
     {"vtk-ascii", MESHIO_VTK_ASCII},
@@ -125,19 +140,26 @@ meshio_format meshio_format_from_name(const char *s)
     return ext ? ext_format(ext) : MESHIO_AUTO;
 }
 
-/* After "$MeshFormat": "2.2 ..." or "4.1 0|1 ...". */
+/* After "$MeshFormat": the version ("2.2", "4", "4.1") and the file type (0
+ * ASCII, 1 binary). Unsupported versions go to the reader, which names them. */
 static meshio_format sniff_gmsh(const char *p, size_t n)
 {
-    size_t i = 0;
+    size_t i = 0, v, vn;
+    int bin;
 
     while (i < n && is_space((unsigned char)p[i]))
         i++;
-    if (n - i >= 3 && p[i] == '2' && p[i + 1] == '.')
-        return MESHIO_GMSH22;
-    i += 3;
+    for (v = i; i < n && !is_space((unsigned char)p[i]); i++)
+        ;
+    vn = i - v;
     while (i < n && (p[i] == ' ' || p[i] == '\t'))
         i++;
-    return i < n && p[i] == '1' ? MESHIO_GMSH41_BIN : MESHIO_GMSH41;
+    bin = i < n && p[i] == '1';
+    if (vn >= 1 && p[v] == '2')
+        return bin ? MESHIO_GMSH22_BIN : MESHIO_GMSH22;
+    if ((vn == 1 && p[v] == '4') || (vn >= 3 && memcmp(p + v, "4.0", 3) == 0))
+        return MESHIO_GMSH40;
+    return bin ? MESHIO_GMSH41_BIN : MESHIO_GMSH41;
 }
 
 /* Third line of a legacy VTK file: ASCII or BINARY. */
@@ -153,15 +175,20 @@ static meshio_format sniff_vtk(const char *p, size_t n)
                                                              : MESHIO_VTK;
 }
 
-/* An XML document whose first element, within 1 kB, is a VTKFile. */
+/* An XML document whose first element, within 1 kB, is a VTKFile or a
+ * dolfin. */
 static meshio_format sniff_xml(const char *p, size_t n)
 {
-    static const char tag[] = "<VTKFile";
+    static const char tag[] = "<VTKFile", dtag[] = "<dolfin";
     size_t lim = n < 1024 ? n : 1024;
 
     for (size_t i = 0; i + sizeof tag - 1 <= lim; i++)
         if (memcmp(p + i, tag, sizeof tag - 1) == 0)
             return MESHIO_VTU;
+    for (size_t i = 0; i + sizeof dtag - 1 <= lim; i++)
+        if (memcmp(p + i, dtag, sizeof dtag - 1) == 0 &&
+            (i + sizeof dtag - 1 == n || !is_word((unsigned char)p[i + sizeof dtag - 1])))
+            return MESHIO_DOLFIN;
     return MESHIO_AUTO;
 }
 
@@ -209,7 +236,13 @@ const char *meshio_media_type(meshio_format f)
         "application/vnd.vtk",
         "application/vnd.vtk;encoding=ascii",
         "application/vnd.vtk.vtu+xml",
-        "application/vnd.vtk.vtu+xml;encoding=ascii"};
+        "application/vnd.vtk.vtu+xml;encoding=ascii",
+        NULL,
+        NULL,
+        NULL,
+        NULL,
+        NULL,
+        NULL};
 
     if ((unsigned)f >= MESHIO_FORMAT_COUNT)
         return NULL;
@@ -279,6 +312,12 @@ meshio_format meshio_sniff(const char *buf, size_t len)
         return MESHIO_AUTO;
     if (len >= 7 && memcmp(buf, "QDCMESH", 7) == 0)
         return MESHIO_QMESH;
+    if (len >= 12 && ((get_le32((const unsigned char *)buf) == 1 &&
+                       get_le32((const unsigned char *)buf + 4) - 1 < 4 &&
+                       get_le32((const unsigned char *)buf + 8) == 3) ||
+                      (memcmp(buf, "\0\0\0\1\0\0\0", 7) == 0 && buf[7] >= 1 &&
+                       buf[7] <= 4 && memcmp(buf + 8, "\0\0\0\3", 4) == 0)))
+        return MESHIO_MESHB;
     if (len >= 14 && memcmp(buf, "# vtk DataFile", 14) == 0)
         return sniff_vtk(buf, len);
     while (i < len) {
@@ -297,11 +336,17 @@ meshio_format meshio_sniff(const char *buf, size_t len)
         return sniff_xml(buf + i, len - i);
     if (len - i >= 11 && memcmp(buf + i, "$MeshFormat", 11) == 0)
         return sniff_gmsh(buf + i + 11, len - i - 11);
+    if (len - i >= 4 && memcmp(buf + i, "$NOD", 4) == 0)
+        return MESHIO_GMSH41; /* MSH 1: the reader says what is supported */
+    if (i < len && buf[i] == '*' && (i == 0 || buf[i - 1] == '\n'))
+        return MESHIO_ABAQUS;
     for (w = i; w < len && is_word((unsigned char)buf[w]); w++)
         ;
     for (size_t k = 0; k < sizeof medit_words / sizeof medit_words[0]; k++)
         if (word_is(buf + i, w - i, medit_words[k]))
             return MESHIO_MEDIT;
+    if (word_is(buf + i, w - i, "mesh3d") || word_is(buf + i, w - i, "mesh2d"))
+        return MESHIO_NETGEN;
     return MESHIO_AUTO;
 }
 
@@ -1240,6 +1285,8 @@ static qdc_status read_plain(const char *buf, size_t len, meshio_format fmt,
     case MESHIO_GMSH41:
     case MESHIO_GMSH41_BIN:
     case MESHIO_GMSH22:
+    case MESHIO_GMSH22_BIN:
+    case MESHIO_GMSH40:
         return meshio_gmsh_read(buf, len, o, rec, out, err);
     case MESHIO_VTK:
     case MESHIO_VTK_ASCII:
@@ -1247,6 +1294,14 @@ static qdc_status read_plain(const char *buf, size_t len, meshio_format fmt,
     case MESHIO_VTU:
     case MESHIO_VTU_ASCII:
         return meshio_vtu_read(buf, len, o, rec, out, err);
+    case MESHIO_DOLFIN:
+        return meshio_dolfin_read(buf, len, o, rec, out, err);
+    case MESHIO_MESHB:
+        return meshio_meshb_read(buf, len, o, rec, out, err);
+    case MESHIO_ABAQUS:
+        return meshio_abaqus_read(buf, len, o, rec, out, err);
+    case MESHIO_NETGEN:
+        return meshio_netgen_read(buf, len, o, rec, out, err);
     case MESHIO_TETGEN:
         return qdc_fail(err, QDC_EINVAL,
                         "TetGen needs two buffers: use meshio_read_tetgen");
@@ -1461,9 +1516,15 @@ static qdc_status write_fmt(const mesh_t *m, meshio_format fmt, int part, qdc_wr
 {
     wbuf w = {fn, ctx, NULL, 0, 0};
     qdc_status st = check_for_write(m, err);
+    const char *why = NULL;
 
     if (st != QDC_OK)
         return st;
+    if ((fmt == MESHIO_ABAQUS || fmt == MESHIO_NETGEN) && !splice_ok(m, fmt, &why))
+        return qdc_fail(err, QDC_EINVAL,
+                        "%s: written only as the input file with new coordinates, and "
+                        "here %s (qdc has no %s writer of its own)",
+                        format_names[fmt], why, format_names[fmt]);
     if (!fn)
         return qdc_fail(err, QDC_EINVAL, "meshio_write: NULL write function");
     w.b = qdc_malloc(WB_CAP);
@@ -1494,6 +1555,8 @@ static qdc_status write_fmt(const mesh_t *m, meshio_format fmt, int part, qdc_wr
     case MESHIO_GMSH41:
     case MESHIO_GMSH41_BIN:
     case MESHIO_GMSH22:
+    case MESHIO_GMSH22_BIN:
+    case MESHIO_GMSH40:
         st = meshio_gmsh_write(m, fmt, &w, err);
         break;
     case MESHIO_VTK:
@@ -1503,6 +1566,15 @@ static qdc_status write_fmt(const mesh_t *m, meshio_format fmt, int part, qdc_wr
     case MESHIO_VTU:
     case MESHIO_VTU_ASCII:
         meshio_vtu_write(m, fmt == MESHIO_VTU, &w);
+        break;
+    case MESHIO_DOLFIN:
+        meshio_dolfin_write(m, &w);
+        break;
+    case MESHIO_MESHB:
+        meshio_meshb_write(m, &w);
+        break;
+    case MESHIO_ABAQUS: /* spliced above, or refused */
+    case MESHIO_NETGEN:
         break;
     default:
         st = qdc_fail(err, QDC_EINVAL, "cannot write format %d", (int)fmt);
@@ -1810,6 +1882,8 @@ static int family(meshio_format f)
     switch (f) {
     case MESHIO_GMSH41_BIN:
     case MESHIO_GMSH22:
+    case MESHIO_GMSH22_BIN:
+    case MESHIO_GMSH40:
         return MESHIO_GMSH41;
     case MESHIO_VTK_ASCII:
         return MESHIO_VTK;

@@ -24,7 +24,8 @@ typedef enum {
      * (type 2) kept with theirs as tri_ref; physical tag 0 means none, and a file
      * without physical groups but with several volume entities gets the entity
      * tags as regions. Other element types are skipped with a note. Reading
-     * accepts 4.1 ASCII/binary and 2.2 ASCII whichever of the three is named. */
+     * accepts 4.1 ASCII/binary, 4.0 ASCII and 2.x ASCII/binary whichever Gmsh
+     * variant is named. */
     MESHIO_GMSH41,     /* MSH 4.1 ASCII, model/vnd.gmsh, .msh */
     MESHIO_GMSH41_BIN, /* MSH 4.1 binary (little-endian, data size 8) */
     MESHIO_GMSH22,     /* MSH 2.2 ASCII */
@@ -35,11 +36,28 @@ typedef enum {
     MESHIO_VTK_ASCII, /* legacy .vtk, ASCII */
     MESHIO_VTU,       /* VTK XML .vtu, appended raw data (reads ascii/base64/raw too) */
     MESHIO_VTU_ASCII, /* VTK XML .vtu, ascii DataArrays */
+    /* Formats read, and written back spliced; qdc's own writer too, but no
+     * media type (the daemon neither lists nor names them). */
+    MESHIO_GMSH22_BIN, /* MSH 2.2 binary (little-endian, data size 8) */
+    MESHIO_GMSH40,     /* MSH 4.0 ASCII (Gmsh 4.0; 4.0 binary is refused) */
+    MESHIO_DOLFIN,     /* DOLFIN/FEniCS legacy XML .xml, celltype tetrahedron: vertices
+                          and tets (domains, mesh functions kept only by splicing) */
+    MESHIO_MESHB,      /* Medit binary .meshb (libMeshb versions 1-4, either byte
+                          order; written: version 2 little-endian), read as .mesh */
+    /* Read, and written only as the input with new coordinates (spliced):
+     * meshio_write refuses them for a mesh without such a source. */
+    MESHIO_ABAQUS, /* Abaqus/CalculiX .inp: *NODE, *ELEMENT TYPE=C3D4 (regions:
+                      the 1-based order of their ELSET names), other elements
+                      skipped with a note; *INCLUDE and C3D10 refused */
+    MESHIO_NETGEN, /* Netgen .vol mesh3d: points, volumeelements (material as
+                      region), surfaceelements triangles (bc as ref) */
     MESHIO_FORMAT_COUNT
 } meshio_format;
 
 /* "medit", "tetgen", "qmesh", "json", "gmsh", "gmsh-bin", "gmsh22", "vtk",
- * "vtk-ascii", "vtu", "vtu-ascii"; NULL for out-of-range values. */
+ * "vtk-ascii", "vtu", "vtu-ascii", "gmsh22-bin", "gmsh40", "dolfin",
+ * "meshb", "abaqus", "netgen"; NULL for
+ * out-of-range values. */
 const char *meshio_format_name(meshio_format f);
 /* Accepts a format name (the above, and "mesh", "binary", "msh", "msh41",
  * "msh22"...), a file name or extension (".mesh", "x.node", "a.msh", ".vtu");
@@ -47,15 +65,19 @@ const char *meshio_format_name(meshio_format f);
 meshio_format meshio_format_from_name(const char *s);
 /* Guess from the first bytes: QDCMESH magic, '{', "MeshVersionFormatted",
  * "$MeshFormat" (the version and encoding of its header line), "# vtk DataFile"
- * (ASCII or BINARY), "<?xml"/"<VTKFile"...; MESHIO_AUTO if unknown. */
+ * (ASCII or BINARY), "<?xml"/"<VTKFile"...; MESHIO_AUTO if unknown.
+ * "$NOD" (MSH 1) and "$MeshFormat" of any version are Gmsh: reading says
+ * which versions are supported. "<dolfin" in the first kB of an XML
+ * document, "mesh3d" (Netgen), a first line starting with '*' (Abaqus),
+ * the int32 words 1, 1..4, 3 in either byte order (Medit binary). */
 meshio_format meshio_sniff(const char *buf, size_t len);
 
 /* HTTP media types, for the daemon's Content-Type / Accept / 415 lists:
  * qmesh application/vnd.qdc.mesh, json application/json, medit model/x-medit,
  * gmsh model/vnd.gmsh (";version=2.2", ";encoding=binary" pick the variants),
  * vtk application/vnd.vtk (";encoding=ascii"), vtu application/vnd.vtk.vtu+xml
- * (";encoding=ascii"). TetGen (two files) has none: NULL, as for AUTO and
- * out-of-range values. The string is static. */
+ * (";encoding=ascii"). TetGen (two files) and the formats after VTU_ASCII
+ * have none: NULL, as for AUTO and out-of-range values. The string is static. */
 const char *meshio_media_type(meshio_format f);
 /* The format of a Content-Type or Accept entry: case-insensitive, parameters
  * after ';' honoured as above, others (charset, q) ignored; also accepts
@@ -104,10 +126,12 @@ qdc_status meshio_save(const char *path, meshio_format fmt, const mesh_t *m,
  * replaced: every tag, name, boundary or point element, $Periodic, data
  * array, comment, the numbering and the version stay byte for byte.
  * A mesh read with its source kept (m->source: the decompressed file and one
- * uint64 offset per vertex, 8 bytes/vertex beyond the file itself) is written
+ * uint64 offset per vertex, 8 bytes/vertex beyond the file itself; three for
+ * DOLFIN and Abaqus, whose coordinates are separate fields) is written
  * that way when the format asked for is the file's own variant (same
  * version and encoding; meshio_save with MESHIO_AUTO picks it when the
- * extension names the same family: .msh, .vtk, .vtu, .mesh, .node) and its
+ * extension names the same family: .msh, .vtk, .vtu, .mesh, .meshb, .node,
+ * .xml, .inp, .vol) and its
  * connectivity, regions, triangles and refs are unchanged since reading
  * (checked by a hash; the fixed flags are not part of it). Text numbers are
  * printed with %.17g (an unmoved coordinate keeps its original text); binary
@@ -115,8 +139,8 @@ qdc_status meshio_save(const char *path, meshio_format fmt, const mesh_t *m,
  * float32. VTU Points under zlib or base64 are re-encoded the same way
  * (zlib blocks of the same size), and the offset="" of the appended arrays
  * after them shifted by the change in size. Spliced: Medit .mesh, TetGen
- * .node/.ele, Gmsh MSH 2.x ASCII and 4.1 ASCII/binary, legacy VTK ASCII and
- * binary, VTU ascii, base64, appended raw/base64, zlib-compressed or not. */
+ * .node/.ele, Gmsh MSH 2.x ASCII/binary, 4.0 ASCII and 4.1 ASCII/binary, legacy VTK ASCII
+ * and binary, VTU ascii, base64, appended raw/base64, zlib-compressed or not. */
 
 /* The format of the file m's source holds, or MESHIO_AUTO if none is kept. */
 meshio_format meshio_source_format(const mesh_t *m);

@@ -1,12 +1,16 @@
-/* meshio_gmsh.c - Gmsh MSH 4.1 (ASCII and binary) and 2.2 (ASCII).
+/* meshio_gmsh.c - Gmsh MSH 4.1 (ASCII and binary), 4.0 (ASCII) and 2.x
+ * (ASCII and binary).
  *
  * Reference: the Gmsh manual, "MSH file format" (4.1) and "Legacy formats"
- * (2.2). Node tags are arbitrary positive numbers, so they are mapped to
- * 0-based indices through a dense table when their range is compact and a
- * sorted table otherwise. Tetrahedra (type 4) become tets, triangles (type 2)
- * surface triangles; every other type is skipped and counted for a note.
- * In 4.1 the physical tags live on the entities ($Entities), in 2.2 on each
- * element (first tag); see pick_regions for the rule.
+ * (4.0, 2.2). 4.0 differs from 4.1 in the order of the block headers (entity
+ * tag before dimension), node tags interleaved with the coordinates, and
+ * 6-value bounding boxes for points; 2.2 binary writes its counts as ASCII
+ * lines and its records as int32 and float64 values. Node tags are arbitrary positive
+ * numbers, so they are mapped to 0-based indices through a dense table when their range
+ * is compact and a sorted table otherwise. Tetrahedra (type 4) become tets, triangles
+ * (type 2) surface triangles; every other type is skipped and counted for a note. In 4.1
+ * the physical tags live on the entities ($Entities), in 2.2 on each element (first tag);
+ * see pick_regions for the rule.
  *
  * Binary files are read with explicit little-endian loads at checked offsets
  * (unaligned, any host); every block count is checked against the bytes left
@@ -33,92 +37,6 @@ static int64_t type_nodes(int64_t type)
 }
 
 /* ------------------------------------------------------------------------ */
-/* Node tag -> index                                                         */
-
-typedef struct {
-    int64_t lo;      /* dense: index of tag t is dense[t - lo] (-1 = none) */
-    int64_t n;       /* entries of dense or of sorted */
-    int32_t *dense;  /* either this ... */
-    int64_t *sorted; /* ... or (tag << 31 | index) pairs sorted by tag */
-} tagmap;
-
-static int cmp_i64(const void *a, const void *b)
-{
-    int64_t x = *(const int64_t *)a, y = *(const int64_t *)b;
-
-    return (x > y) - (x < y);
-}
-
-/* Build the map of tags[nv] (each in [1, 2^31)); the index of a duplicate
- * tag in *dup (or -1). */
-static qdc_status tagmap_build(tagmap *tm, const int64_t *tags, int64_t nv, int64_t *dup,
-                               qdc_error *err)
-{
-    int64_t lo = INT64_MAX, hi = 0;
-
-    *dup = -1;
-    for (int64_t i = 0; i < nv; i++) {
-        lo = tags[i] < lo ? tags[i] : lo;
-        hi = tags[i] > hi ? tags[i] : hi;
-    }
-    if (nv && hi - lo < 4 * nv + 16) {
-        tm->lo = lo;
-        tm->n = hi - lo + 1;
-        tm->dense = qdc_mallocn((size_t)tm->n, sizeof(int32_t));
-        if (!tm->dense)
-            return qdc_fail(err, QDC_ENOMEM, "out of memory for the node tags");
-        memset(tm->dense, 0xff, (size_t)tm->n * sizeof(int32_t));
-        for (int64_t i = 0; i < nv; i++) {
-            if (tm->dense[tags[i] - lo] >= 0) {
-                *dup = i;
-                return QDC_OK;
-            }
-            tm->dense[tags[i] - lo] = (int32_t)i;
-        }
-        return QDC_OK;
-    }
-    tm->n = nv;
-    tm->sorted = qdc_mallocn((size_t)nv + 1, sizeof(int64_t));
-    if (!tm->sorted)
-        return qdc_fail(err, QDC_ENOMEM, "out of memory for the node tags");
-    for (int64_t i = 0; i < nv; i++)
-        tm->sorted[i] = tags[i] << 31 | i;
-    qsort(tm->sorted, (size_t)nv, sizeof(int64_t), cmp_i64);
-    for (int64_t i = 1; i < nv; i++)
-        if (tm->sorted[i] >> 31 == tm->sorted[i - 1] >> 31) {
-            *dup = tm->sorted[i] & INT32_MAX;
-            return QDC_OK;
-        }
-    return QDC_OK;
-}
-
-/* Index of node tag t, or -1. */
-static int64_t tagmap_find(const tagmap *tm, int64_t t)
-{
-    int64_t a = 0, b = tm->n;
-
-    if (tm->dense)
-        return t >= tm->lo && t - tm->lo < tm->n ? tm->dense[t - tm->lo] : -1;
-    while (a < b) {
-        int64_t mid = a + (b - a) / 2, mt = tm->sorted[mid] >> 31;
-        if (mt == t)
-            return tm->sorted[mid] & INT32_MAX;
-        if (mt < t)
-            a = mid + 1;
-        else
-            b = mid;
-    }
-    return -1;
-}
-
-static void tagmap_free(tagmap *tm)
-{
-    qdc_free(tm->dense);
-    qdc_free(tm->sorted);
-    memset(tm, 0, sizeof *tm);
-}
-
-/* ------------------------------------------------------------------------ */
 /* Reader state                                                              */
 
 /* An entity of dimension 2 or 3 with its first physical tag (0 if none). */
@@ -135,7 +53,7 @@ typedef struct {
     txt s; /* ASCII scanner; also finds the section markers in binary */
     const unsigned char *b;
     int binary, dsize; /* data size of size_t values in binary files: 4 or 8 */
-    int v41;           /* 4.1, else 2.2 */
+    int ver;           /* 41, 40 or 22 (2.0, 2.1 and 2.2) */
     int have_nodes;
     int64_t nv;
     double *xyz;
@@ -394,9 +312,11 @@ static qdc_status mesh_format(gmsh *g, qdc_error *err)
     skip_ws(s);
     at = s->p;
     st = txt_real(s, "$MeshFormat: version", &ver, err);
-    if (st == QDC_OK && ver != 4.1 && ver != 2.2 && ver != 2.0 && ver != 2.1)
+    if (st == QDC_OK && ver != 4.1 && ver != 4.0 && ver != 2.2 && ver != 2.0 &&
+        ver != 2.1)
         st = fail_txt(err, QDC_EFORMAT, s, at,
-                      "$MeshFormat: version %g not supported (4.1 or 2.2)", ver);
+                      "$MeshFormat: version %g not supported (4.1, 4.0, 2.2, 2.1 or 2.0)",
+                      ver);
     if (st == QDC_OK)
         st = txt_int(s, "$MeshFormat: file type", 0, 1, &ftype, err);
     if (st == QDC_OK)
@@ -406,12 +326,17 @@ static qdc_status mesh_format(gmsh *g, qdc_error *err)
                       (long long)dsize);
     if (st != QDC_OK)
         return st;
-    g->v41 = ver == 4.1;
+    g->ver = ver == 4.1 ? 41 : ver == 4.0 ? 40 : 22;
     g->binary = (int)ftype;
     g->dsize = (int)dsize;
-    if (g->binary && !g->v41)
+    if (g->binary && g->ver == 40)
         return fail_txt(err, QDC_EFORMAT, s, at,
-                        "MSH 2.2 binary is not supported (use 4.1 or 2.2 ASCII)");
+                        "MSH 4.0 binary is not supported (4.0 ASCII, 4.1 ASCII or "
+                        "binary, 2.2 ASCII or binary)");
+    if (g->binary && g->ver == 22 && g->dsize != 8)
+        return fail_txt(err, QDC_EFORMAT, s, at,
+                        "$MeshFormat: MSH 2.2 binary with data size %d (8 only)",
+                        g->dsize);
     if (g->binary) {
         end_of_line(g);
         st = bin_need(g, 4, "$MeshFormat: endianness word", err);
@@ -441,7 +366,7 @@ static qdc_status entities(gmsh *g, qdc_error *err)
                             (long long)n[d]);
         for (int64_t i = 0; i < n[d] && st == QDC_OK; i++) {
             st = g_i32(g, "$Entities: tag", INT32_MIN, INT32_MAX, &tag, err);
-            for (int j = 0; j < (d ? 6 : 3) && st == QDC_OK; j++)
+            for (int j = 0; j < (d || g->ver == 40 ? 6 : 3) && st == QDC_OK; j++)
                 st = g_real(g, "$Entities: bounding box", &x, err);
             if (st == QDC_OK)
                 st = g_count(g, "$Entities: physical tag count", 1, 4, INT32_MAX, &np,
@@ -496,7 +421,10 @@ static qdc_status nodes_alloc(gmsh *g, int64_t c, qdc_error *err)
         return qdc_fail(err, QDC_ENOMEM, "out of memory for %lld nodes", (long long)c);
     if (g->rec) {
         srcrec *r = g->rec;
-        r->fmt = !g->v41 ? MESHIO_GMSH22 : g->binary ? MESHIO_GMSH41_BIN : MESHIO_GMSH41;
+        r->fmt = g->ver == 40   ? MESHIO_GMSH40
+                 : g->ver == 22 ? (g->binary ? MESHIO_GMSH22_BIN : MESHIO_GMSH22)
+                 : g->binary    ? MESHIO_GMSH41_BIN
+                                : MESHIO_GMSH41;
         r->kind = g->binary ? SRC_BIN : SRC_TEXT;
         r->width = 8;
         return srcrec_alloc(r, c, err);
@@ -577,20 +505,75 @@ static qdc_status nodes41(gmsh *g, qdc_error *err)
     return st == QDC_OK ? want_end(g, "Nodes", err) : st;
 }
 
-/* $Nodes (2.2 ASCII): "n", then "tag x y z" lines. */
+/* $Nodes (4.0 ASCII): blocks "entity dim parametric n", then "tag x y z" lines. */
+static qdc_status nodes40(gmsh *g, qdc_error *err)
+{
+    int64_t nblk, total, v, dim, par, c, i = 0;
+    qdc_status st;
+
+    st = g_count(g, "$Nodes: block count", 4, 0, INT32_MAX, &nblk, err);
+    if (st == QDC_OK)
+        st = g_count(g, "$Nodes: node count", 4, 0, MESH_MAX_VERTICES, &total, err);
+    if (st == QDC_OK)
+        st = nodes_alloc(g, total, err);
+    for (int64_t b = 0; b < nblk && st == QDC_OK; b++) {
+        st = g_i32(g, "$Nodes: entity tag", INT32_MIN, INT32_MAX, &v, err);
+        if (st == QDC_OK)
+            st = g_i32(g, "$Nodes: entity dimension", 0, 3, &dim, err);
+        if (st == QDC_OK)
+            st = g_i32(g, "$Nodes: parametric", 0, 1, &par, err);
+        if (st == QDC_OK)
+            st = g_count(g, "$Nodes: nodes in block", 4, 0, INT64_MAX, &c, err);
+        if (st == QDC_OK && c > total - i)
+            st = fail_txt(err, QDC_EPARSE, &g->s, g->s.p,
+                          "$Nodes: more nodes in the blocks than the %lld announced",
+                          (long long)total);
+        for (int64_t j = 0; j < c && st == QDC_OK; j++) {
+            double x;
+            st = g_int(g, "$Nodes: node tag", 1, INT32_MAX, &g->tags[i + j], err);
+            if (st == QDC_OK)
+                node_at(g, i + j);
+            for (int a = 0; a < 3 && st == QDC_OK; a++)
+                st = g_real(g, "$Nodes: coordinate", &g->xyz[3 * (i + j) + a], err);
+            for (int64_t a = 0; a < par * dim && st == QDC_OK; a++)
+                st = g_real(g, "$Nodes: parametric coordinate", &x, err);
+            if (st != QDC_OK)
+                set_index(err, "vertex", i + j);
+        }
+        i += c;
+    }
+    if (st == QDC_OK && i != total)
+        st = fail_txt(err, QDC_EPARSE, &g->s, g->s.p,
+                      "$Nodes: blocks hold %lld nodes, %lld announced", (long long)i,
+                      (long long)total);
+    g->nv = i;
+    if (st == QDC_OK)
+        st = nodes_done(g, err);
+    return st == QDC_OK ? want_end(g, "Nodes", err) : st;
+}
+
+/* $Nodes (2.x): "n" on its own line, then "tag x y z" lines (ASCII) or n
+ * records of an int32 tag and three float64 (binary). */
 static qdc_status nodes22(gmsh *g, qdc_error *err)
 {
     int64_t total;
     qdc_status st = txt_count(&g->s, "$Nodes", 4, MESH_MAX_VERTICES, &total, err);
 
+    if (st == QDC_OK && g->binary) {
+        end_of_line(g);
+        st = bin_need(g, (uint64_t)total * 28, "$Nodes: binary records", err);
+    }
     if (st == QDC_OK)
         st = nodes_alloc(g, total, err);
     for (int64_t i = 0; i < total && st == QDC_OK; i++) {
-        st = txt_int(&g->s, "$Nodes: node tag", 1, INT32_MAX, &g->tags[i], err);
+        if (g->binary)
+            st = g_i32(g, "$Nodes: node tag", 1, INT32_MAX, &g->tags[i], err);
+        else
+            st = txt_int(&g->s, "$Nodes: node tag", 1, INT32_MAX, &g->tags[i], err);
         if (st == QDC_OK)
             node_at(g, i);
         for (int a = 0; a < 3 && st == QDC_OK; a++)
-            st = txt_real(&g->s, "$Nodes: coordinate", &g->xyz[3 * i + a], err);
+            st = g_real(g, "$Nodes: coordinate", &g->xyz[3 * i + a], err);
         if (st != QDC_OK)
             set_index(err, "vertex", i);
     }
@@ -619,9 +602,16 @@ static qdc_status elems_grow(gmsh *g, int k, int64_t c, qdc_error *err)
 /* One node reference: tag -> index. */
 static qdc_status node_ref(gmsh *g, int k, int32_t *out, qdc_error *err)
 {
-    const char *at = g->s.p;
+    const char *at;
     int64_t tag, i;
-    qdc_status st = g_int(g, "$Elements: node tag", 1, INT64_MAX, &tag, err);
+    qdc_status st;
+
+    if (!g->binary)
+        skip_ws(&g->s); /* errors point at the tag */
+    at = g->s.p;
+    st = g->binary && g->ver == 22
+             ? g_i32(g, "$Elements: node tag", 1, INT32_MAX, &tag, err)
+             : g_int(g, "$Elements: node tag", 1, INT64_MAX, &tag, err);
 
     if (st != QDC_OK)
         return st;
@@ -758,9 +748,104 @@ static qdc_status elements22(gmsh *g, qdc_error *err)
     return st == QDC_OK ? want_end(g, "Elements", err) : st;
 }
 
+/* $Elements (4.0 ASCII): blocks "entity dim type n", then "tag nodes..." lines. */
+static qdc_status elements40(gmsh *g, qdc_error *err)
+{
+    int64_t nblk, total, v, dim, etag, type, c;
+    qdc_status st;
+
+    st = g_count(g, "$Elements: block count", 4, 0, INT32_MAX, &nblk, err);
+    if (st == QDC_OK)
+        st = g_count(g, "$Elements: element count", 2, 0, INT64_MAX, &total, err);
+    for (int64_t b = 0; b < nblk && st == QDC_OK; b++) {
+        int k;
+        st = g_i32(g, "$Elements: entity tag", INT32_MIN, INT32_MAX, &etag, err);
+        if (st == QDC_OK)
+            st = g_i32(g, "$Elements: entity dimension", 0, 3, &dim, err);
+        if (st == QDC_OK)
+            st = g_i32(g, "$Elements: element type", INT32_MIN, INT32_MAX, &type, err);
+        if (st == QDC_OK)
+            st = g_count(g, "$Elements: elements in block", 2, 0, INT64_MAX, &c, err);
+        if (st != QDC_OK)
+            break;
+        k = type == 4 ? 1 : type == 2 ? 0 : -1;
+        if (k < 0) {
+            skip_count(&g->sk, type, c);
+            for (int64_t j = 0; j < c; j++) {
+                skip_ws(&g->s);
+                skip_line(&g->s);
+            }
+            continue;
+        }
+        st = elems_grow(g, k, c, err);
+        for (int64_t j = 0; j < c && st == QDC_OK; j++) {
+            st = g_int(g, "$Elements: element tag", 0, INT64_MAX, &v, err);
+            if (st == QDC_OK)
+                st = elem_nodes(g, k, entity_phys(g, k, etag), (int32_t)etag, err);
+        }
+    }
+    return st == QDC_OK ? want_end(g, "Elements", err) : st;
+}
+
+/* $Elements (2.2 binary): "n" on its own line, then groups of one type: an
+ * int32 header "type count ntags", then count records of int32 "tag tags...
+ * nodes...". */
+static qdc_status elements22_bin(gmsh *g, qdc_error *err)
+{
+    txt *s = &g->s;
+    int64_t total, done = 0, type, cnt, ntags, v, phys, ent;
+    qdc_status st = txt_count(s, "$Elements", 4, INT64_MAX, &total, err);
+
+    if (st == QDC_OK)
+        end_of_line(g);
+    while (done < total && st == QDC_OK) {
+        const char *at = s->p;
+        uint64_t rec;
+        int64_t nn;
+        int k;
+        st = g_i32(g, "$Elements: element type", INT32_MIN, INT32_MAX, &type, err);
+        if (st == QDC_OK)
+            st = g_i32(g, "$Elements: elements in group", 1, total - done, &cnt, err);
+        if (st == QDC_OK)
+            st = g_i32(g, "$Elements: tag count", 0, 1000, &ntags, err);
+        if (st != QDC_OK)
+            break;
+        nn = type_nodes(type);
+        if (!nn)
+            return fail_bin(err, QDC_EFORMAT, at - s->base,
+                            "$Elements: unknown element type %lld", (long long)type);
+        rec = 4 * (uint64_t)(1 + ntags + nn);
+        st = bin_need(g, (uint64_t)cnt * rec, "$Elements: element group", err);
+        if (st != QDC_OK)
+            break;
+        done += cnt;
+        k = type == 4 ? 1 : type == 2 ? 0 : -1;
+        if (k < 0) {
+            skip_count(&g->sk, type, cnt);
+            s->p += (size_t)cnt * (size_t)rec;
+            continue;
+        }
+        st = elems_grow(g, k, cnt, err);
+        for (int64_t j = 0; j < cnt && st == QDC_OK; j++) {
+            st = g_i32(g, "$Elements: element tag", INT32_MIN, INT32_MAX, &v, err);
+            phys = ent = 0;
+            for (int64_t t = 0; t < ntags && st == QDC_OK; t++) {
+                st = g_i32(g, "$Elements: tag", INT32_MIN, INT32_MAX, &v, err);
+                if (t == 0)
+                    phys = v;
+                else if (t == 1)
+                    ent = v;
+            }
+            if (st == QDC_OK)
+                st = elem_nodes(g, k, (int32_t)phys, (int32_t)ent, err);
+        }
+    }
+    return st == QDC_OK ? want_end(g, "Elements", err) : st;
+}
+
 static qdc_status gmsh_section(gmsh *g, const char *name, size_t nlen, qdc_error *err)
 {
-    if (word_is(name, nlen, "Entities") && g->v41) {
+    if (word_is(name, nlen, "Entities") && g->ver >= 40) {
         end_of_line(g);
         return entities(g, err);
     }
@@ -768,7 +853,9 @@ static qdc_status gmsh_section(gmsh *g, const char *name, size_t nlen, qdc_error
         if (g->have_nodes)
             return fail_txt(err, QDC_EPARSE, &g->s, name - 1, "duplicate $Nodes section");
         end_of_line(g);
-        return g->v41 ? nodes41(g, err) : nodes22(g, err);
+        return g->ver == 41   ? nodes41(g, err)
+               : g->ver == 40 ? nodes40(g, err)
+                              : nodes22(g, err);
     }
     if (word_is(name, nlen, "Elements")) {
         if (!g->have_nodes)
@@ -777,7 +864,10 @@ static qdc_status gmsh_section(gmsh *g, const char *name, size_t nlen, qdc_error
             return fail_txt(err, QDC_EPARSE, &g->s, name - 1,
                             "duplicate $Elements section");
         end_of_line(g);
-        return g->v41 ? elements41(g, err) : elements22(g, err);
+        return g->ver == 41   ? elements41(g, err)
+               : g->ver == 40 ? elements40(g, err)
+               : g->binary    ? elements22_bin(g, err)
+                              : elements22(g, err);
     }
     return skip_section(g, name, nlen, err);
 }
@@ -826,7 +916,10 @@ qdc_status meshio_gmsh_read(const char *buf, size_t len, const meshio_options *o
     g.s = txt_init(buf, len, 0);
     g.b = (const unsigned char *)buf;
     st = next_marker(&g, &name, &nlen, err);
-    if (st == QDC_OK && !word_is(name, nlen, "MeshFormat"))
+    if (st == QDC_OK && word_is(name, nlen, "NOD"))
+        st = fail_txt(err, QDC_EFORMAT, &g.s, name - 1,
+                      "MSH 1 ($NOD) is not supported (4.1, 4.0, 2.2, 2.1 or 2.0)");
+    else if (st == QDC_OK && !word_is(name, nlen, "MeshFormat"))
         st = fail_txt(err, QDC_EPARSE, &g.s, g.s.p, "expected $MeshFormat first");
     if (st == QDC_OK) {
         end_of_line(&g);
@@ -1032,21 +1125,127 @@ static void write41(const mesh_t *m, const distinct d[2], wbuf *w, int bin)
     wb_str(w, bin ? "\n$EndElements\n" : "$EndElements\n");
 }
 
-/* Elementary tags follow the regions (as in 4.1), so Gmsh's entities match
- * its physical groups. */
-static void write22(const mesh_t *m, const distinct d[2], wbuf *w)
+/* MSH 4.0 ASCII: as 4.1, with 4.0's block headers and node lines. */
+static void write40(const mesh_t *m, const distinct d[2], wbuf *w)
 {
-    wb_str(w, "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n");
+    gw g = {w, 0};
+    double lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
+    int64_t etag = 0;
+    int32_t nb = count_blocks(m->region, m->nt) + count_blocks(m->tri_ref, m->ntri);
+    const int32_t *tag[2] = {m->tri_ref, m->region}, *idx[2] = {m->tris, m->tets};
+    int32_t n[2] = {m->ntri, m->nt};
+
+    if (m->nv)
+        mesh_bbox(m, lo, hi);
+    wb_str(w, "$MeshFormat\n4 0 8\n$EndMeshFormat\n$Entities\n");
+    wb_str(w, "0 0 ");
+    wb_int(w, m->ntri ? (int64_t)d[0].n : 0);
+    wb_str(w, " ");
+    wb_int(w, (int64_t)d[1].n);
+    wb_str(w, "\n");
+    if (m->ntri)
+        write_entities(&g, &d[0], lo, hi);
+    write_entities(&g, &d[1], lo, hi);
+    wb_str(w, "$EndEntities\n$Nodes\n");
+    wb_str(w, m->nv ? "1 " : "0 ");
+    wb_int(w, m->nv);
+    wb_str(w, "\n");
+    if (m->nv) {
+        wb_str(w, "1 3 0 ");
+        wb_int(w, m->nv);
+        wb_str(w, "\n");
+        for (int32_t i = 0; i < m->nv; i++) {
+            wb_int(w, (int64_t)i + 1);
+            wb_str(w, " ");
+            wb_reals(w, m->xyz + 3 * (size_t)i, 3, " ", "\n");
+        }
+    }
+    wb_str(w, "$EndNodes\n$Elements\n");
+    wb_int(w, nb);
+    wb_str(w, " ");
+    wb_int(w, (int64_t)m->nt + m->ntri);
+    wb_str(w, "\n");
+    for (int k = 1; k >= 0; k--) {
+        for (int32_t i = 0; i < n[k];) {
+            int32_t j = tag[k] ? i + 1 : n[k];
+            while (j < n[k] && tag[k][j] == tag[k][i])
+                j++;
+            wb_int(w, entity_of(&d[k], tag[k], (size_t)i));
+            wb_str(w, k ? " 3 4 " : " 2 2 ");
+            wb_int(w, j - i);
+            wb_str(w, "\n");
+            for (; i < j; i++) {
+                wb_int(w, ++etag);
+                wb_str(w, " ");
+                wb_ints(w, idx[k] + (size_t)(3 + k) * (size_t)i, 3 + k, 1, " ", "\n");
+            }
+        }
+    }
+    wb_str(w, "$EndElements\n");
+}
+
+/* 2.2 binary element group header and records: int32 values. */
+static void put_i32s(wbuf *w, const int32_t *v, int n, int64_t add)
+{
+    unsigned char b[4];
+
+    for (int i = 0; i < n; i++) {
+        put_le32(b, (uint32_t)(v[i] + add));
+        wb_put(w, b, 4);
+    }
+}
+
+/* Elementary tags follow the regions (as in 4.1), so Gmsh's entities match
+ * its physical groups. bin: 2.2 binary (one group per element type). */
+static void write22(const mesh_t *m, const distinct d[2], wbuf *w, int bin)
+{
+    unsigned char b[28];
+
+    wb_str(w, bin ? "$MeshFormat\n2.2 1 8\n" : "$MeshFormat\n2.2 0 8\n");
+    if (bin) {
+        put_le32(b, 1);
+        wb_put(w, b, 4);
+        wb_str(w, "\n");
+    }
+    wb_str(w, "$EndMeshFormat\n$Nodes\n");
     wb_int(w, m->nv);
     wb_str(w, "\n");
     for (int32_t i = 0; i < m->nv; i++) {
+        if (bin) {
+            put_le32(b, (uint32_t)i + 1);
+            for (int a = 0; a < 3; a++) {
+                uint64_t u;
+                memcpy(&u, &m->xyz[3 * (size_t)i + (size_t)a], 8);
+                put_le64(b + 4 + 8 * a, u);
+            }
+            wb_put(w, b, 28);
+            continue;
+        }
         wb_int(w, (int64_t)i + 1);
         wb_str(w, " ");
         wb_reals(w, m->xyz + 3 * (size_t)i, 3, " ", "\n");
     }
-    wb_str(w, "$EndNodes\n$Elements\n");
+    wb_str(w, bin ? "\n$EndNodes\n$Elements\n" : "$EndNodes\n$Elements\n");
     wb_int(w, (int64_t)m->nt + m->ntri);
     wb_str(w, "\n");
+    if (bin) {
+        const int32_t *tag[2] = {m->tri_ref, m->region}, *idx[2] = {m->tris, m->tets};
+        int32_t n[2] = {m->ntri, m->nt}, e = 0;
+        for (int k = 1; k >= 0; k--) {
+            int32_t h[3] = {k ? 4 : 2, n[k], 2};
+            if (!n[k])
+                continue;
+            put_i32s(w, h, 3, 0);
+            for (int32_t t = 0; t < n[k]; t++) {
+                int32_t r[3] = {++e, tag[k] ? tag[k][t] : 0,
+                                (int32_t)entity_of(&d[k], tag[k], (size_t)t)};
+                put_i32s(w, r, 3, 0);
+                put_i32s(w, idx[k] + (size_t)(3 + k) * (size_t)t, 3 + k, 1);
+            }
+        }
+        wb_str(w, "\n$EndElements\n");
+        return;
+    }
     for (int32_t t = 0; t < m->nt; t++) {
         wb_int(w, (int64_t)t + 1);
         wb_str(w, " 4 2 ");
@@ -1076,8 +1275,10 @@ qdc_status meshio_gmsh_write(const mesh_t *m, meshio_format fmt, wbuf *w, qdc_er
     if (distinct_of(&d[0], m->tri_ref, (size_t)m->ntri) != 0 ||
         distinct_of(&d[1], m->region, (size_t)m->nt) != 0)
         st = qdc_fail(err, QDC_ENOMEM, "out of memory for the Gmsh entities");
-    else if (fmt == MESHIO_GMSH22)
-        write22(m, d, w);
+    else if (fmt == MESHIO_GMSH22 || fmt == MESHIO_GMSH22_BIN)
+        write22(m, d, w, fmt == MESHIO_GMSH22_BIN);
+    else if (fmt == MESHIO_GMSH40)
+        write40(m, d, w);
     else
         write41(m, d, w, fmt == MESHIO_GMSH41_BIN);
     qdc_free(d[0].u);

@@ -696,6 +696,92 @@ static inline void pick_regions(int32_t *phys, int32_t *ent, int64_t n, int32_t 
 }
 
 /* ------------------------------------------------------------------------ */
+/* Node tag -> index (Gmsh, Abaqus) */
+
+typedef struct {
+    int64_t lo;      /* dense: index of tag t is dense[t - lo] (-1 = none) */
+    int64_t n;       /* entries of dense or of sorted */
+    int32_t *dense;  /* either this ... */
+    int64_t *sorted; /* ... or (tag << 31 | index) pairs sorted by tag */
+} tagmap;
+
+static inline int cmp_i64(const void *a, const void *b)
+{
+    int64_t x = *(const int64_t *)a, y = *(const int64_t *)b;
+
+    return (x > y) - (x < y);
+}
+
+/* Build the map of tags[nv] (each in [1, 2^31)); the index of a duplicate
+ * tag in *dup (or -1). */
+static inline qdc_status tagmap_build(tagmap *tm, const int64_t *tags, int64_t nv,
+                                      int64_t *dup, qdc_error *err)
+{
+    int64_t lo = INT64_MAX, hi = 0;
+
+    *dup = -1;
+    for (int64_t i = 0; i < nv; i++) {
+        lo = tags[i] < lo ? tags[i] : lo;
+        hi = tags[i] > hi ? tags[i] : hi;
+    }
+    if (nv && hi - lo < 4 * nv + 16) {
+        tm->lo = lo;
+        tm->n = hi - lo + 1;
+        tm->dense = qdc_mallocn((size_t)tm->n, sizeof(int32_t));
+        if (!tm->dense)
+            return qdc_fail(err, QDC_ENOMEM, "out of memory for the node tags");
+        memset(tm->dense, 0xff, (size_t)tm->n * sizeof(int32_t));
+        for (int64_t i = 0; i < nv; i++) {
+            if (tm->dense[tags[i] - lo] >= 0) {
+                *dup = i;
+                return QDC_OK;
+            }
+            tm->dense[tags[i] - lo] = (int32_t)i;
+        }
+        return QDC_OK;
+    }
+    tm->n = nv;
+    tm->sorted = qdc_mallocn((size_t)nv + 1, sizeof(int64_t));
+    if (!tm->sorted)
+        return qdc_fail(err, QDC_ENOMEM, "out of memory for the node tags");
+    for (int64_t i = 0; i < nv; i++)
+        tm->sorted[i] = tags[i] << 31 | i;
+    qsort(tm->sorted, (size_t)nv, sizeof(int64_t), cmp_i64);
+    for (int64_t i = 1; i < nv; i++)
+        if (tm->sorted[i] >> 31 == tm->sorted[i - 1] >> 31) {
+            *dup = tm->sorted[i] & INT32_MAX;
+            return QDC_OK;
+        }
+    return QDC_OK;
+}
+
+/* Index of node tag t, or -1. */
+static inline int64_t tagmap_find(const tagmap *tm, int64_t t)
+{
+    int64_t a = 0, b = tm->n;
+
+    if (tm->dense)
+        return t >= tm->lo && t - tm->lo < tm->n ? tm->dense[t - tm->lo] : -1;
+    while (a < b) {
+        int64_t mid = a + (b - a) / 2, mt = tm->sorted[mid] >> 31;
+        if (mt == t)
+            return tm->sorted[mid] & INT32_MAX;
+        if (mt < t)
+            a = mid + 1;
+        else
+            b = mid;
+    }
+    return -1;
+}
+
+static inline void tagmap_free(tagmap *tm)
+{
+    qdc_free(tm->dense);
+    qdc_free(tm->sorted);
+    memset(tm, 0, sizeof *tm);
+}
+
+/* ------------------------------------------------------------------------ */
 /* Where the coordinates are (splice.c)                                      */
 
 /* What a reader records, when asked (rec not NULL), so that the file can be
@@ -707,6 +793,9 @@ enum {
                      tokens (whitespace, '#' comments if hash, '<' ends a
                      token if lt) */
     SRC_BIN,      /* off[v]: first byte of x; y, z follow, `width` bytes each */
+    SRC_TEXT3,    /* off[3v + a]: first byte of coordinate a of vertex v, in
+                     increasing order; a token ends at whitespace, ',', a quote
+                     or '<' (XML attributes, Abaqus comma lists) */
     SRC_BLOCK     /* VTU base64 or zlib Points: bytes [blk_a, blk_b) re-encoded */
 };
 
@@ -787,5 +876,15 @@ void meshio_vtk_write(const mesh_t *m, int binary, wbuf *w);
 qdc_status meshio_vtu_read(const char *buf, size_t len, const meshio_options *o,
                            srcrec *rec, mesh_t **out, qdc_error *err);
 void meshio_vtu_write(const mesh_t *m, int appended, wbuf *w);
+qdc_status meshio_dolfin_read(const char *buf, size_t len, const meshio_options *o,
+                              srcrec *rec, mesh_t **out, qdc_error *err);
+void meshio_dolfin_write(const mesh_t *m, wbuf *w);
+qdc_status meshio_abaqus_read(const char *buf, size_t len, const meshio_options *o,
+                              srcrec *rec, mesh_t **out, qdc_error *err);
+qdc_status meshio_meshb_read(const char *buf, size_t len, const meshio_options *o,
+                             srcrec *rec, mesh_t **out, qdc_error *err);
+void meshio_meshb_write(const mesh_t *m, wbuf *w);
+qdc_status meshio_netgen_read(const char *buf, size_t len, const meshio_options *o,
+                              srcrec *rec, mesh_t **out, qdc_error *err);
 
 #endif

@@ -127,10 +127,12 @@ size_t meshio_source_bytes(const mesh_t *m, int *float32)
     const source *s = m ? (const source *)m->source : NULL;
 
     if (float32)
-        *float32 = s && s->r.kind != SRC_TEXT && s->r.kind != SRC_NONE && s->r.width == 4;
+        *float32 =
+            s && (s->r.kind == SRC_BIN || s->r.kind == SRC_BLOCK) && s->r.width == 4;
     if (!s)
         return 0;
-    return sizeof *s + s->len + s->ele_len + (s->r.off ? 8 * (size_t)s->r.nv : 0) +
+    return sizeof *s + s->len + s->ele_len +
+           (s->r.off ? (s->r.kind == SRC_TEXT3 ? 24 : 8) * (size_t)s->r.nv : 0) +
            s->r.appoff.n * sizeof(uint64_t);
 }
 
@@ -227,6 +229,33 @@ static qdc_status splice_text(const source *s, const double *xyz, wbuf *w, qdc_e
             put_number(w, s->buf + p, s->buf + te, xyz[3 * (size_t)v + (size_t)a]);
             pos = p = te;
         }
+    }
+    wb_put(w, s->buf + pos, s->len - pos);
+    return QDC_OK;
+}
+
+/* Coordinates one by one (SRC_TEXT3). */
+static qdc_status splice_text3(const source *s, const double *xyz, wbuf *w,
+                               qdc_error *err)
+{
+    size_t pos = 0;
+
+    for (size_t i = 0; i < 3 * (size_t)s->nv; i++) {
+        size_t p = s->r.off[i], te = p;
+        while (te < s->len) {
+            unsigned char c = (unsigned char)s->buf[te];
+            if (is_space(c) || c == ',' || c == '"' || c == '\'' || c == '<')
+                break;
+            te++;
+        }
+        if (p < pos || p >= s->len || te == p)
+            return qdc_fail(err, QDC_EINTERNAL,
+                            "source: coordinate %zu of vertex %zu at byte %zu is out of "
+                            "order or empty",
+                            i % 3, i / 3, p);
+        wb_put(w, s->buf + pos, p - pos);
+        put_number(w, s->buf + p, s->buf + te, xyz[i]);
+        pos = te;
     }
     wb_put(w, s->buf + pos, s->len - pos);
     return QDC_OK;
@@ -437,6 +466,8 @@ qdc_status splice_write(const mesh_t *m, int part, wbuf *w, qdc_error *err)
         return splice_text(s, m->xyz, w, err);
     case SRC_BIN:
         return splice_bin(s, m->xyz, w, err);
+    case SRC_TEXT3:
+        return splice_text3(s, m->xyz, w, err);
     case SRC_BLOCK:
         return splice_block(s, m->xyz, w, err);
     default:

@@ -69,7 +69,8 @@ for r in regs:
     sel = [t for t in tets if region(t) == r]
     gmsh.model.mesh.addElementsByType(r, 4, list(range(eid, eid + len(sel))), [v for t in sel for v in t])
     eid += len(sel)
-for name, ver, binary in [("a41.msh", 4.1, 0), ("b41.msh", 4.1, 1), ("a22.msh", 2.2, 0), ("b22.msh", 2.2, 1)]:
+for name, ver, binary in [("a41.msh", 4.1, 0), ("b41.msh", 4.1, 1), ("a22.msh", 2.2, 0), ("b22.msh", 2.2, 1),
+                          ("a40.msh", 4.0, 0)]:
     gmsh.option.setNumber("Mesh.MshFileVersion", ver); gmsh.option.setNumber("Mesh.Binary", binary)
     gmsh.write(out + "/" + name)
 gmsh.option.setNumber("Mesh.Binary", 0); gmsh.write(out + "/a.vtk")
@@ -78,7 +79,7 @@ gmsh.finalize()
 json.dump({"tets": sorted([sorted(xyz[v - 1] for v in t), 100 + region(t)] for t in tets)},
           open(out + "/truth.json", "w"))
 EOF
-check "formats: gmsh writes msh 4.1/2.2 ascii+binary and vtk" $PY "$TMP/gmsh_write.py" "$IN" "$TMP"
+check "formats: gmsh writes msh 4.1/4.0/2.2 ascii+binary and vtk" $PY "$TMP/gmsh_write.py" "$IN" "$TMP"
 
 # Same tets (as coordinate sets) and tags in qdc's JSON output as in the truth.
 cat > "$TMP/same.py" <<'EOF'
@@ -94,7 +95,7 @@ want = sorted([sorted(tuple(map(r, p)) for p in t[0]), t[1] if with_tags else 0]
 if got != want:
     sys.exit("differ: %d vs %d tets, first %s vs %s" % (len(got), len(want), got[:1], want[:1]))
 EOF
-for f in a41.msh b41.msh a22.msh; do
+for f in a41.msh b41.msh a22.msh b22.msh a40.msh; do
     if $CONV "$TMP/$f" "$TMP/$f.json" 2> "$TMP/err"; then
         check "formats: gmsh-written $f read with physical tags" $PY "$TMP/same.py" "$TMP/truth.json" "$TMP/$f.json" tags
     else
@@ -108,12 +109,14 @@ for f in a.vtk b.vtk; do
         fail "formats: gmsh-written $f read" "$(cat "$TMP/err")"
     fi
 done
-if $CONV "$TMP/b22.msh" "$TMP/b22.json" 2> "$TMP/err"; then
-    fail "formats: msh 2.2 binary" "accepted, expected a clear refusal"
-elif grep -q "2.2 binary is not supported" "$TMP/err"; then
-    pass "formats: msh 2.2 binary refused with a clear message"
+# Gmsh itself writes 4.0 in ASCII only; a 4.0 binary header is refused
+printf '$MeshFormat\n4 1 8\n\001\000\000\000\n$EndMeshFormat\n' > "$TMP/b40.msh"
+if $CONV "$TMP/b40.msh" "$TMP/b40.json" 2> "$TMP/err"; then
+    fail "formats: msh 4.0 binary" "accepted, expected a clear refusal"
+elif grep -q "b40.msh.*MSH 4.0 binary is not supported (4.0 ASCII, 4.1 ASCII or binary, 2.2 ASCII or binary)" "$TMP/err"; then
+    pass "formats: msh 4.0 binary refused with a clear message naming the supported versions"
 else
-    fail "formats: msh 2.2 binary" "$(cat "$TMP/err")"
+    fail "formats: msh 4.0 binary" "$(cat "$TMP/err")"
 fi
 
 # qdc writes; Gmsh and meshio read back, tags included.

@@ -272,4 +272,30 @@ st2=$(wait_done "$HID")
     pass "hanging child: killed at the job's time limit: $(jf "$TMP/job.$HID" .error.detail)" ||
     fail "hang" "$st2 $(head -c 300 "$TMP/job.$HID")"
 stop_qdcd || fail "SIGTERM" "exit status $?"
+
+# A DOLFIN XML upload (a format without a media type) is taken by sniffing and
+# optimized; results and inputs are offered only in formats with a media type:
+# ?format=dolfin/abaqus/netgen/... is a 400 naming the offered ones, not a
+# dropped connection.
+start_qdcd "$TMP/x" --workers 1 || { fail "start x" "$(tail -3 "$TMP/x.log")"; exit 1; }
+gzip -dc "$ROOT/tests/data/real/dolfin.xml.gz" > "$TMP/a.xml"
+code=$(req POST /v1/jobs "$TMP/dx" --data-binary "@$TMP/a.xml" -H "Content-Type: application/octet-stream")
+DX=$(jf "$TMP/dx" .id)
+st=$(wait_done "$DX")
+[ "$code" = 202 ] && [ "$st" = succeeded ] && pass "DOLFIN XML upload sniffed and optimized ($st)" ||
+    fail "DOLFIN XML upload" "$code $st $(head -c 300 "$TMP/dx")"
+bad=
+for f in dolfin abaqus netgen meshb; do
+    for what in result input; do
+        c=$(req GET "/v1/jobs/$DX/$what?format=$f" "$TMP/fx")
+        [ "$c" = 400 ] && jq -e '.offered | length > 0' "$TMP/fx" > /dev/null 2>&1 || bad="$bad $what:$f=$c"
+    done
+done
+for f in qmesh medit gmsh vtu; do
+    c=$(req GET "/v1/jobs/$DX/result?format=$f" "$TMP/fx")
+    [ "$c" = 200 ] || bad="$bad result:$f=$c"
+done
+[ -z "$bad" ] && pass "formats without a media type: 400 with the offered list; the others 200" ||
+    fail "result formats" "$bad"
+stop_qdcd || fail "SIGTERM x" "exit status $?"
 exit $((NFAIL > 0))

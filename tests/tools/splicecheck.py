@@ -3,7 +3,8 @@
 coordinates changed?
 
 Finds the coordinate fields of both files with its own small parsers (Medit
-.mesh, TetGen .node, Gmsh MSH 2.x ASCII and 4.1 ASCII/binary, legacy VTK
+.mesh, TetGen .node, Gmsh MSH 2.x ASCII/binary, 4.0 ASCII and 4.1 ASCII/binary,
+DOLFIN XML, Medit binary, Abaqus .inp, Netgen .vol, legacy VTK
 ASCII/binary, VTU ascii/base64/appended, zlib or not), masks them and compares
 what is left byte for byte (for VTU, the offset="" of appended arrays may
 differ too). Then, with meshio: both files read with the same cells, cell,
@@ -74,6 +75,26 @@ def gmsh(b):
     ver, ftype, dsize = b[fmt:b.index(b"$EndMeshFormat")].split()[:3]
     at = b.index(b"\n$Nodes") + len(b"\n$Nodes")
     at = b.index(b"\n", at) + 1
+    if ver.startswith(b"2") and ftype == b"1":
+        e = b.index(b"\n", at)
+        n, at = int(b[at:e]), e + 1
+        for _ in range(n):  # int32 tag, 3 float64
+            for k in range(3):
+                f.coords.append((at + 4 + 8 * k, at + 12 + 8 * k, "<f8"))
+            at += 28
+        return f
+    if ver in (b"4", b"4.0"):
+        it = tokens(b, at, False)
+        nblk = int(b[slice(*next(it))])
+        next(it)
+        for _ in range(nblk):
+            _, dim, par, c = (int(b[slice(*next(it))]) for _ in range(4))
+            for _ in range(c):
+                for k in range(4 + par * dim):
+                    s, e = next(it)
+                    if 1 <= k <= 3:
+                        f.coords.append((s, e, "text"))
+        return f
     if ver.startswith(b"2"):
         it = tokens(b, at, False)
         s, e = next(it)
@@ -110,6 +131,69 @@ def gmsh(b):
             for k in range(3):
                 f.coords.append((at + 8 * k, at + 8 * k + 8, "<f8"))
             at += 8 * (3 + par * dim)
+    return f
+
+
+def dolfin(b):
+    f = Fields()
+    for m in re.finditer(rb"<vertex\b[^>]*>", b):
+        for a in (b"x", b"y", b"z"):
+            v = re.search(rb"\s" + a + rb"\s*=\s*[\"']\s*([^\"'\s]+)", m.group(0))
+            f.coords.append((m.start() + v.start(1), m.start() + v.end(1), "text"))
+    f.coords.sort()
+    return f
+
+
+def abaqus(b):
+    f = Fields()
+    node = False
+    for m in re.finditer(rb"[^\n]*\n?", b):
+        line, at = m.group(0), m.start()
+        t = line.strip()
+        if t.startswith(b"*"):
+            node = not t.startswith(b"**") and re.match(rb"\*node\b", t, re.I) is not None
+            continue
+        if not node or not t:
+            continue
+        fields = list(re.finditer(rb"[^,\s]+", line))
+        for v in fields[1:4]:
+            f.coords.append((at + v.start(), at + v.end(), "text"))
+    return f
+
+
+def netgen(b):
+    f = Fields()
+    it = tokens(b)
+    for s, e in it:
+        if b[s:e] == b"points":
+            s, e = next(it)
+            for _ in range(int(b[s:e])):
+                for k in range(3):
+                    s, e = next(it)
+                    f.coords.append((s, e, "text"))
+            break
+    return f
+
+
+def meshb(b):
+    f = Fields()
+    end = "<" if struct.unpack_from("<i", b, 0)[0] == 1 else ">"
+    ver = struct.unpack_from(end + "i", b, 4)[0]
+    rs, isz, ps = (4 if ver == 1 else 8), (8 if ver == 4 else 4), (8 if ver >= 3 else 4)
+    at = 8
+    while at < len(b):
+        kw = struct.unpack_from(end + "i", b, at)[0]
+        nxt = struct.unpack_from(end + ("q" if ps == 8 else "i"), b, at + 4)[0]
+        if kw == 54:
+            break
+        if kw == 4:
+            n = struct.unpack_from(end + ("q" if isz == 8 else "i"), b, at + 4 + ps)[0]
+            p = at + 4 + ps + isz
+            for _ in range(n):
+                for k in range(3):
+                    f.coords.append((p + rs * k, p + rs * (k + 1), end + "f%d" % rs))
+                p += 3 * rs + isz
+        at = nxt
     return f
 
 
@@ -214,12 +298,20 @@ def fields(path, b):
     p = path[:-3] if path.endswith(".gz") else path
     if p.endswith(".mesh"):
         return medit(b)
+    if p.endswith(".meshb"):
+        return meshb(b)
     if p.endswith(".node"):
         return tetgen_node(b)
     if p.endswith(".msh"):
         return gmsh(b)
     if p.endswith(".vtk"):
         return vtk(b)
+    if p.endswith(".xml"):
+        return dolfin(b)
+    if p.endswith(".inp"):
+        return abaqus(b)
+    if p.endswith(".vol"):
+        return netgen(b)
     if p.endswith(".vtu"):
         return vtu(b)
     raise SystemExit("splicecheck: unknown format: " + path)
@@ -250,6 +342,16 @@ def meshio_read(path):
     import meshio
     if path.endswith(".node"):
         return meshio.read(path, file_format="tetgen")
+    if path.endswith(".msh"):
+        b = open(path, "rb").read()
+        if re.match(rb"\s*\$MeshFormat\s+4\s", b):
+            # Gmsh writes MSH 4.0 as "4 0 8", which meshio takes for 4.1:
+            # give it the version spelled out (a copy, the file is unchanged)
+            import tempfile
+            with tempfile.NamedTemporaryFile(suffix=".msh") as t:
+                t.write(re.sub(rb"^(\s*\$MeshFormat\s+)4(\s)", rb"\g<1>4.0\2", b, 1))
+                t.flush()
+                return meshio.read(t.name)
     return meshio.read(path)
 
 

@@ -37,6 +37,8 @@ EOF
 gmsh -3 -nt 1 box_sphere.geo -format msh41 -o gmsh41.msh > /dev/null
 gmsh -3 -nt 1 box_sphere.geo -format msh41 -bin -o gmsh41_bin.msh > /dev/null
 gmsh -3 -nt 1 box_sphere.geo -format msh22 -o gmsh22.msh > /dev/null
+gmsh -3 -nt 1 box_sphere.geo -format msh22 -bin -o gmsh22_bin.msh > /dev/null
+gmsh -3 -nt 1 box_sphere.geo -format msh40 -o gmsh40.msh > /dev/null
 gmsh -3 -nt 1 box_sphere.geo -format vtk -o gmsh.vtk > /dev/null
 gmsh -3 -nt 1 box_sphere.geo -format mesh -o gmsh.mesh > /dev/null
 
@@ -61,6 +63,43 @@ out.write("meshio_zlib.vtu")  # meshio's default: base64, vtkZLibDataCompressor
 out.write("meshio_ascii.vtu", binary=False)
 out.write("meshio_bin.vtk")  # legacy 5.1 binary
 out.write("meshio_ascii.vtk", binary=False)
+
+# DOLFIN XML (a plain tet mesh: meshio writes cell data to separate files),
+# Abaqus (tets and boundary triangles, element sets per material, a node
+# set), Netgen (materials and boundary conditions as netgen:index) and Medit
+# binary (refs).
+phys = m.cell_data_dict["gmsh:physical"]
+tp, sp = phys["tetra"], phys["triangle"]
+meshio.Mesh(pts, [("tetra", tets)]).write("dolfin.xml")
+sets = {"material_%d" % i: [np.nonzero(tp == p)[0], np.zeros(0, dtype=int)]
+        for i, p in enumerate(sorted(set(tp)))}
+sets["boundary"] = [np.zeros(0, dtype=int), np.arange(len(tris))]
+meshio.Mesh(pts, cells, cell_sets=sets, point_sets={"origin": np.array([0])}).write("meshio.inp")
+meshio.Mesh(pts, cells, cell_data={"netgen:index": [tp, sp]}).write("meshio.vol")
+# Medit binary (meshio writes GMF version 3: float64, int32, 64-bit positions)
+meshio.Mesh(pts, cells, point_data={"medit:ref": np.arange(len(pts), dtype=np.int32) % 4},
+            cell_data={"medit:ref": [tp, sp]}).write("meshio.meshb")
+
+# CalculiX's layout (as cgx writes it): one *ELEMENT block per material with
+# its ELSET, S3 boundary triangles, a material, a section and a step.
+with open("calculix.inp", "w") as f:
+    f.write("** box with a sphere, two materials\n*NODE, NSET=Nall\n")
+    for i, p in enumerate(pts):
+        f.write("%d, %.12e, %.12e, %.12e\n" % (i + 1, p[0], p[1], p[2]))
+    e = 1
+    for k, p in enumerate(sorted(set(tp))):
+        f.write("*ELEMENT, TYPE=C3D4, ELSET=material_%d\n" % k)
+        for t in tets[tp == p]:
+            f.write("%d, %d, %d, %d, %d\n" % (e, t[0] + 1, t[1] + 1, t[2] + 1, t[3] + 1))
+            e += 1
+    f.write("*ELEMENT, TYPE=S3, ELSET=skin\n")
+    for t in tris:
+        f.write("%d,%d,%d,%d\n" % (e, t[0] + 1, t[1] + 1, t[2] + 1))
+        e += 1
+    f.write("*MATERIAL, NAME=steel\n*ELASTIC\n210000, 0.3\n"
+            "*SOLID SECTION, ELSET=material_0, MATERIAL=steel\n"
+            "*SOLID SECTION, ELSET=material_1, MATERIAL=steel\n"
+            "*BOUNDARY\nNall, 1, 3, 0.\n*STEP\n*STATIC\n*NODE FILE\nU\n*END STEP\n")
 
 # The layout VTK's own writer (vtkXMLUnstructuredGridWriter) uses by default:
 # appended raw data, UInt64 headers, zlib blocks (4 kB here, 32 kB in VTK: the
@@ -133,9 +172,9 @@ tetgen -pq1.4aAzQ box.poly
 mv box.1.node tetgen.node
 mv box.1.ele tetgen.ele
 
-for f in gmsh41.msh gmsh41_bin.msh gmsh22.msh gmsh.vtk gmsh.mesh meshio_zlib.vtu \
+for f in gmsh41.msh gmsh41_bin.msh gmsh22.msh gmsh22_bin.msh gmsh40.msh gmsh.vtk gmsh.mesh meshio_zlib.vtu \
     meshio_ascii.vtu meshio_bin.vtk meshio_ascii.vtk vtk_appended_zlib.vtu tetgen.node \
-    tetgen.ele; do
+    tetgen.ele dolfin.xml meshio.inp calculix.inp meshio.vol meshio.meshb; do
     gzip -n -9 -c "$f" > "$here/$f.gz"
 done
 ls -l "$here"

@@ -1,0 +1,1170 @@
+/* meshio_fe.c - the formats of finite-element solvers and meshers: DOLFIN
+ * (FEniCS) legacy XML, Abaqus/CalculiX .inp and Netgen .vol.
+ *
+ * Each reader takes (buf, len), checks every count against the bytes left
+ * before allocating, every index against the vertex count, rejects NaN/Inf,
+ * and says where (line:column) a problem is. What qdc does not use (DOLFIN
+ * domains and mesh functions, Abaqus sets, materials and steps, Netgen
+ * surface elements of other kinds, edge segments, materials, geometry) is
+ * skipped when reading and kept byte for byte by a spliced write, which is
+ * the only way to write Abaqus and Netgen files (no writer of qdc's own:
+ * meshio_write refuses them for a mesh without a source of that format).
+ * DOLFIN gets a writer: vertices and tetrahedra (regions and triangles have
+ * no place in its plain mesh file). */
+#include "io/meshio.h"
+#include "io/meshio_scan.h"
+
+/* Move the scanner to `to`, counting the lines passed. */
+static void adv(txt *s, const char *to)
+{
+    const char *p = s->p;
+
+    while (p < to) {
+        const char *nl = memchr(p, '\n', (size_t)(to - p));
+        if (!nl)
+            break;
+        s->line++;
+        s->bol = p = nl + 1;
+    }
+    s->p = to;
+}
+
+/* The scanner as it was at line/bol (for errors in a tag already passed). */
+static txt at_line(const txt *s, int64_t line, const char *bol)
+{
+    txt e = *s;
+
+    e.line = line;
+    e.bol = bol;
+    return e;
+}
+
+static qdc_status rec_alloc3(srcrec *r, meshio_format fmt, int64_t nv, qdc_error *err)
+{
+    if (!r)
+        return QDC_OK;
+    r->fmt = fmt;
+    r->kind = SRC_TEXT3;
+    r->nv = nv;
+    qdc_free(r->off);
+    r->off = qdc_mallocn(3 * (size_t)nv + 1, sizeof(uint64_t));
+    if (!r->off)
+        return qdc_fail(err, QDC_ENOMEM, "out of memory for %lld vertex offsets",
+                        (long long)nv);
+    return QDC_OK;
+}
+
+/* The number [t, te) as a finite double, or an error at t. */
+static qdc_status num_at(const txt *s, const char *t, const char *te, const char *what,
+                         double *v, qdc_error *err)
+{
+    char q[32];
+
+    if (parse_double(t, te, v) != 0)
+        return fail_txt(err, QDC_EPARSE, s, t, "%s: expected a number, got %s", what,
+                        quote_tok(q, s, t, te));
+    if (!isfinite(*v))
+        return fail_txt(err, QDC_EPARSE, s, t, "%s %s is not finite (NaN/Inf)", what,
+                        quote_tok(q, s, t, te));
+    return QDC_OK;
+}
+
+static qdc_status int_at(const txt *s, const char *t, const char *te, const char *what,
+                         int64_t lo, int64_t hi, int64_t *v, qdc_error *err)
+{
+    char q[32];
+    int rc = parse_int(t, te, 0, v);
+
+    if (rc == -1)
+        return fail_txt(err, QDC_EPARSE, s, t, "%s: expected an integer, got %s", what,
+                        quote_tok(q, s, t, te));
+    if (rc == -2 || *v < lo || *v > hi)
+        return fail_txt(err, QDC_EPARSE, s, t, "%s %s out of range [%lld, %lld]", what,
+                        quote_tok(q, s, t, te), (long long)lo, (long long)hi);
+    return QDC_OK;
+}
+
+/* ------------------------------------------------------------------------ */
+/* DOLFIN XML                                                                */
+
+enum { XML_ATTRS = 16 };
+
+typedef struct {
+    const char *n, *v; /* name, value (between the quotes) */
+    size_t nl, vl;
+} xattr;
+
+typedef struct {
+    const char *at, *name; /* '<', the name */
+    size_t nlen;
+    int close, empty; /* </name>, <name/> */
+    int na;
+    xattr a[XML_ATTRS];
+    int64_t line; /* of the '<' */
+    const char *bol;
+} xtag;
+
+static int xml_name_char(unsigned char c)
+{
+    return is_word(c) || c == ':' || c == '-' || c == '.';
+}
+
+/* The next tag (comments, <?...?> and <!...> skipped); *eof at the end. */
+static qdc_status xml_tag(txt *s, xtag *t, int *eof, qdc_error *err)
+{
+    const char *p, *e = s->end;
+
+    *eof = 0;
+    for (;;) {
+        const char *lt = memchr(s->p, '<', (size_t)(e - s->p)), *close;
+        if (!lt) {
+            adv(s, e);
+            *eof = 1;
+            return QDC_OK;
+        }
+        adv(s, lt);
+        if (e - lt >= 4 && memcmp(lt, "<!--", 4) == 0) {
+            for (close = lt + 4; close + 3 <= e && memcmp(close, "-->", 3) != 0; close++)
+                ;
+            if (close + 3 > e)
+                return fail_txt(err, QDC_EPARSE, s, lt, "unterminated comment");
+            adv(s, close + 3);
+            continue;
+        }
+        if (e - lt >= 2 && (lt[1] == '?' || lt[1] == '!')) {
+            close = memchr(lt, '>', (size_t)(e - lt));
+            if (!close)
+                return fail_txt(err, QDC_EPARSE, s, lt, "unterminated <%c", lt[1]);
+            adv(s, close + 1);
+            continue;
+        }
+        break;
+    }
+    memset(t, 0, sizeof *t);
+    t->at = s->p;
+    t->line = s->line;
+    t->bol = s->bol;
+    p = s->p + 1;
+    if (p < e && *p == '/') {
+        t->close = 1;
+        p++;
+    }
+    t->name = p;
+    while (p < e && xml_name_char((unsigned char)*p))
+        p++;
+    t->nlen = (size_t)(p - t->name);
+    if (!t->nlen)
+        return fail_txt(err, QDC_EPARSE, s, t->at, "expected a tag name after '<'");
+    for (;;) {
+        const char *n, *q;
+        size_t nl;
+        while (p < e && is_space((unsigned char)*p))
+            p++;
+        if (p >= e)
+            return fail_txt(err, QDC_EPARSE, s, t->at, "<%.*s: unterminated tag",
+                            (int)(t->nlen > 32 ? 32 : t->nlen), t->name);
+        if (*p == '>') {
+            p++;
+            break;
+        }
+        if (*p == '/' && p + 1 < e && p[1] == '>') {
+            t->empty = 1;
+            p += 2;
+            break;
+        }
+        n = p;
+        while (p < e && xml_name_char((unsigned char)*p))
+            p++;
+        nl = (size_t)(p - n);
+        while (p < e && is_space((unsigned char)*p))
+            p++;
+        if (!nl || p >= e || *p != '=') {
+            adv(s, p < e ? p : e);
+            return fail_txt(err, QDC_EPARSE, s, p < e ? p : e,
+                            "<%.*s: expected attribute=\"value\"",
+                            (int)(t->nlen > 32 ? 32 : t->nlen), t->name);
+        }
+        p++;
+        while (p < e && is_space((unsigned char)*p))
+            p++;
+        if (p >= e || (*p != '"' && *p != '\'')) {
+            adv(s, p < e ? p : e);
+            return fail_txt(
+                err, QDC_EPARSE, s, p < e ? p : e, "<%.*s %.*s=: expected a quoted value",
+                (int)(t->nlen > 32 ? 32 : t->nlen), t->name, (int)(nl > 32 ? 32 : nl), n);
+        }
+        q = memchr(p + 1, *p, (size_t)(e - p - 1));
+        if (!q) {
+            adv(s, p);
+            return fail_txt(err, QDC_EPARSE, s, p, "unterminated attribute value");
+        }
+        if (t->na < XML_ATTRS) {
+            xattr *a = &t->a[t->na++];
+            a->n = n;
+            a->nl = nl;
+            a->v = p + 1;
+            a->vl = (size_t)(q - p - 1);
+        }
+        p = q + 1;
+    }
+    adv(s, p);
+    return QDC_OK;
+}
+
+static const xattr *xml_attr(const xtag *t, const char *name)
+{
+    for (int i = 0; i < t->na; i++)
+        if (t->a[i].nl == strlen(name) && memcmp(t->a[i].n, name, t->a[i].nl) == 0)
+            return &t->a[i];
+    return NULL;
+}
+
+static int tag_is(const xtag *t, const char *name)
+{
+    return t->nlen == strlen(name) && memcmp(t->name, name, t->nlen) == 0;
+}
+
+/* Attribute `name` of t, required; trimmed of spaces. */
+static qdc_status xml_need(const txt *s, const xtag *t, const char *name, const char **v,
+                           const char **ve, qdc_error *err)
+{
+    const xattr *a = xml_attr(t, name);
+    txt e = at_line(s, t->line, t->bol);
+
+    if (!a)
+        return fail_txt(err, QDC_EPARSE, &e, t->at, "<%.*s>: no %s=\"\" attribute",
+                        (int)(t->nlen > 32 ? 32 : t->nlen), t->name, name);
+    *v = a->v;
+    *ve = a->v + a->vl;
+    while (*v < *ve && is_space((unsigned char)**v))
+        (*v)++;
+    while (*ve > *v && is_space((unsigned char)(*ve)[-1]))
+        (*ve)--;
+    return QDC_OK;
+}
+
+static qdc_status xml_int(const txt *s, const xtag *t, const char *name, int64_t lo,
+                          int64_t hi, int64_t *out, qdc_error *err)
+{
+    const char *v, *ve;
+    txt e = at_line(s, t->line, t->bol);
+    char what[48];
+    qdc_status st = xml_need(s, t, name, &v, &ve, err);
+
+    snprintf(what, sizeof what, "<%.*s> %s", (int)(t->nlen > 20 ? 20 : t->nlen), t->name,
+             name);
+    return st != QDC_OK ? st : int_at(&e, v, ve, what, lo, hi, out, err);
+}
+
+typedef struct {
+    parsed pm;
+    uint8_t *seen_v, *seen_t; /* each vertex and cell index once */
+    int64_t nvd, ntd;         /* declared sizes (-1 before <vertices>/<cells>) */
+    int64_t got_v, got_t;
+    int in_mesh, ordered; /* vertices in index order: the file can be spliced */
+} dolfin;
+
+static qdc_status dolfin_mesh(txt *s, const xtag *t, qdc_error *err)
+{
+    const char *v, *ve;
+    txt e = at_line(s, t->line, t->bol);
+    qdc_status st = xml_need(s, t, "celltype", &v, &ve, err);
+    int64_t dim;
+
+    if (st != QDC_OK)
+        return st;
+    if ((size_t)(ve - v) != 11 || memcmp(v, "tetrahedron", 11) != 0)
+        return fail_txt(err, QDC_EFORMAT, &e, v,
+                        "DOLFIN: celltype \"%.*s\" is not supported (tetrahedron)",
+                        (int)(ve - v > 24 ? 24 : ve - v), v);
+    st = xml_int(s, t, "dim", 3, 3, &dim, err);
+    return st;
+}
+
+static qdc_status dolfin_vertices(txt *s, const xtag *t, dolfin *d, srcrec *rec,
+                                  qdc_error *err)
+{
+    txt e = at_line(s, t->line, t->bol);
+    int64_t n;
+    qdc_status st;
+
+    if (d->nvd >= 0)
+        return fail_txt(err, QDC_EPARSE, &e, t->at, "DOLFIN: a second <vertices>");
+    st = xml_int(s, t, "size", 0, INT64_MAX, &n, err);
+    if (st != QDC_OK)
+        return st;
+    /* every vertex takes a tag of at least 24 bytes: <vertex index="" x=""/> */
+    if ((uint64_t)n > (uint64_t)(s->end - s->p) / 24)
+        return fail_txt(err, QDC_EPARSE, &e, t->at,
+                        "<vertices> size %lld does not fit in the %zu bytes left "
+                        "(truncated?)",
+                        (long long)n, (size_t)(s->end - s->p));
+    if (n > MESH_MAX_VERTICES)
+        return fail_txt(err, QDC_ETOOBIG, &e, t->at,
+                        "<vertices> size %lld exceeds the limit %d", (long long)n,
+                        MESH_MAX_VERTICES);
+    d->nvd = n;
+    d->pm.nv = n;
+    d->pm.xyz = qdc_mallocn(3 * (size_t)n + 1, sizeof(double));
+    d->seen_v = qdc_calloc((size_t)n + 1, 1);
+    if (!d->pm.xyz || !d->seen_v)
+        return qdc_fail(err, QDC_ENOMEM, "out of memory for %lld vertices", (long long)n);
+    return rec_alloc3(rec, MESHIO_DOLFIN, n, err);
+}
+
+static qdc_status dolfin_vertex(txt *s, const xtag *t, dolfin *d, srcrec *rec,
+                                qdc_error *err)
+{
+    static const char *const axis[3] = {"x", "y", "z"};
+    txt e = at_line(s, t->line, t->bol);
+    const char *last = NULL;
+    int64_t i;
+    qdc_status st;
+
+    if (d->nvd < 0)
+        return fail_txt(err, QDC_EPARSE, &e, t->at,
+                        "DOLFIN: <vertex> outside <vertices>");
+    if (d->got_v == d->nvd)
+        return fail_txt(err, QDC_EPARSE, &e, t->at,
+                        "DOLFIN: more <vertex> than the %lld of <vertices size>",
+                        (long long)d->nvd);
+    st = xml_int(s, t, "index", 0, d->nvd - 1, &i, err);
+    if (st == QDC_OK && d->seen_v[i])
+        st = fail_txt(err, QDC_EPARSE, &e, t->at, "DOLFIN: vertex %lld appears twice",
+                      (long long)i);
+    for (int a = 0; a < 3 && st == QDC_OK; a++) {
+        const char *v, *ve;
+        st = xml_need(s, t, axis[a], &v, &ve, err);
+        if (st == QDC_OK)
+            st = num_at(&e, v, ve, axis[a], &d->pm.xyz[3 * i + a], err);
+        if (st == QDC_OK && rec) {
+            rec->off[3 * i + a] = (uint64_t)(v - s->base);
+            if (v < last)
+                d->ordered = 0; /* attributes not in x, y, z order */
+            last = v;
+        }
+    }
+    if (st != QDC_OK) {
+        set_index(err, "vertex", d->got_v);
+        return st;
+    }
+    if (i != d->got_v)
+        d->ordered = 0;
+    d->seen_v[i] = 1;
+    d->got_v++;
+    return QDC_OK;
+}
+
+static qdc_status dolfin_cells(txt *s, const xtag *t, dolfin *d, qdc_error *err)
+{
+    txt e = at_line(s, t->line, t->bol);
+    int64_t n;
+    qdc_status st;
+
+    if (d->nvd < 0)
+        return fail_txt(err, QDC_EPARSE, &e, t->at, "DOLFIN: <cells> before <vertices>");
+    if (d->ntd >= 0)
+        return fail_txt(err, QDC_EPARSE, &e, t->at, "DOLFIN: a second <cells>");
+    st = xml_int(s, t, "size", 0, INT64_MAX, &n, err);
+    if (st != QDC_OK)
+        return st;
+    if ((uint64_t)n > (uint64_t)(s->end - s->p) / 40)
+        return fail_txt(err, QDC_EPARSE, &e, t->at,
+                        "<cells> size %lld does not fit in the %zu bytes left "
+                        "(truncated?)",
+                        (long long)n, (size_t)(s->end - s->p));
+    if (n > MESH_MAX_TETS)
+        return fail_txt(err, QDC_ETOOBIG, &e, t->at,
+                        "<cells> size %lld exceeds the limit %d", (long long)n,
+                        MESH_MAX_TETS);
+    d->ntd = n;
+    d->pm.nt = n;
+    d->pm.tets = qdc_mallocn(4 * (size_t)n + 1, sizeof(int32_t));
+    d->seen_t = qdc_calloc((size_t)n + 1, 1);
+    if (!d->pm.tets || !d->seen_t)
+        return qdc_fail(err, QDC_ENOMEM, "out of memory for %lld tets", (long long)n);
+    return QDC_OK;
+}
+
+static qdc_status dolfin_tet(txt *s, const xtag *t, dolfin *d, qdc_error *err)
+{
+    static const char *const vk[4] = {"v0", "v1", "v2", "v3"};
+    txt e = at_line(s, t->line, t->bol);
+    int64_t i, v;
+    qdc_status st;
+
+    if (d->ntd < 0)
+        return fail_txt(err, QDC_EPARSE, &e, t->at,
+                        "DOLFIN: <tetrahedron> outside <cells>");
+    if (d->got_t == d->ntd)
+        return fail_txt(err, QDC_EPARSE, &e, t->at,
+                        "DOLFIN: more cells than the %lld of <cells size>",
+                        (long long)d->ntd);
+    st = xml_int(s, t, "index", 0, d->ntd - 1, &i, err);
+    if (st == QDC_OK && d->seen_t[i])
+        st = fail_txt(err, QDC_EPARSE, &e, t->at, "DOLFIN: cell %lld appears twice",
+                      (long long)i);
+    for (int k = 0; k < 4 && st == QDC_OK; k++) {
+        st = xml_int(s, t, vk[k], 0, d->nvd - 1, &v, err);
+        if (st == QDC_OK)
+            d->pm.tets[4 * i + k] = (int32_t)v;
+    }
+    if (st != QDC_OK) {
+        set_index(err, "tet", d->got_t);
+        return st;
+    }
+    d->seen_t[i] = 1;
+    d->got_t++;
+    return QDC_OK;
+}
+
+qdc_status meshio_dolfin_read(const char *buf, size_t len, const meshio_options *o,
+                              srcrec *rec, mesh_t **out, qdc_error *err)
+{
+    txt s = txt_init(buf, len, 0);
+    dolfin d;
+    xtag t;
+    int eof = 0, root = 0;
+    int64_t skipped_cells = 0;
+    qdc_status st = QDC_OK;
+
+    memset(&d, 0, sizeof d);
+    parsed_init(&d.pm);
+    d.nvd = d.ntd = -1;
+    d.ordered = 1;
+    while (st == QDC_OK) {
+        st = xml_tag(&s, &t, &eof, err);
+        if (st != QDC_OK || eof)
+            break;
+        if (!root) {
+            if (!tag_is(&t, "dolfin") || t.close) {
+                txt e = at_line(&s, t.line, t.bol);
+                st = fail_txt(err, QDC_EFORMAT, &e, t.at,
+                              "not a DOLFIN XML file: the first element is <%.*s>",
+                              (int)(t.nlen > 24 ? 24 : t.nlen), t.name);
+            }
+            root = 1;
+            continue;
+        }
+        if (t.close) {
+            txt e = at_line(&s, t.line, t.bol);
+            if (tag_is(&t, "mesh"))
+                d.in_mesh = 0;
+            else if (d.in_mesh && tag_is(&t, "vertices") && d.got_v != d.nvd)
+                st = fail_txt(err, QDC_EPARSE, &e, t.at,
+                              "DOLFIN: %lld <vertex> elements, <vertices size=\"%lld\">",
+                              (long long)d.got_v, (long long)d.nvd);
+            else if (d.in_mesh && tag_is(&t, "cells") && d.got_t != d.ntd)
+                st =
+                    fail_txt(err, QDC_EPARSE, &e, t.at,
+                             "DOLFIN: %lld <tetrahedron> elements, <cells size=\"%lld\">",
+                             (long long)d.got_t, (long long)d.ntd);
+            continue;
+        }
+        if (tag_is(&t, "mesh")) {
+            if (d.nvd >= 0) {
+                txt e = at_line(&s, t.line, t.bol);
+                st = fail_txt(err, QDC_EPARSE, &e, t.at, "DOLFIN: a second <mesh>");
+            } else {
+                d.in_mesh = 1;
+                st = dolfin_mesh(&s, &t, err);
+            }
+        } else if (!d.in_mesh) {
+            continue; /* mesh functions, data: kept by a spliced write */
+        } else if (tag_is(&t, "vertices")) {
+            st = dolfin_vertices(&s, &t, &d, rec, err);
+        } else if (tag_is(&t, "vertex")) {
+            st = dolfin_vertex(&s, &t, &d, rec, err);
+        } else if (tag_is(&t, "cells")) {
+            st = dolfin_cells(&s, &t, &d, err);
+        } else if (tag_is(&t, "tetrahedron")) {
+            st = dolfin_tet(&s, &t, &d, err);
+        } else if (d.ntd >= 0 && !tag_is(&t, "domains")) {
+            skipped_cells++;
+        }
+    }
+    if (st == QDC_OK && !root)
+        st = fail_txt(err, QDC_EFORMAT, &s, s.p, "not a DOLFIN XML file: no <dolfin>");
+    if (st == QDC_OK && d.nvd < 0)
+        st = fail_txt(err, QDC_EPARSE, &s, s.p, "DOLFIN: no <mesh> with <vertices>");
+    if (st == QDC_OK && d.got_v != d.nvd)
+        st = fail_txt(err, QDC_EPARSE, &s, s.p,
+                      "DOLFIN: %lld <vertex> elements, <vertices size=\"%lld\">",
+                      (long long)d.got_v, (long long)d.nvd);
+    if (st == QDC_OK && d.ntd >= 0 && d.got_t != d.ntd)
+        st = fail_txt(err, QDC_EPARSE, &s, s.p,
+                      "DOLFIN: %lld <tetrahedron> elements, <cells size=\"%lld\">",
+                      (long long)d.got_t, (long long)d.ntd);
+    if (st == QDC_OK && rec && !d.ordered)
+        srcrec_refuse(rec, "the vertices are not in index order with x, y, z attributes");
+    if (st == QDC_OK) {
+        if (skipped_cells)
+            note(o,
+                 "dolfin: skipped %lld elements inside <cells> that are not "
+                 "<tetrahedron>",
+                 (long long)skipped_cells);
+        st = parsed_mesh(&d.pm, out, err);
+    }
+    qdc_free(d.seen_v);
+    qdc_free(d.seen_t);
+    parsed_free(&d.pm);
+    return st;
+}
+
+void meshio_dolfin_write(const mesh_t *m, wbuf *w)
+{
+    wb_str(w, "<?xml version=\"1.0\"?>\n<dolfin nsmap=\"{'dolfin': "
+              "'https://fenicsproject.org/'}\">\n"
+              "  <mesh celltype=\"tetrahedron\" dim=\"3\">\n    <vertices size=\"");
+    wb_int(w, m->nv);
+    wb_str(w, "\">\n");
+    for (int32_t i = 0; i < m->nv; i++) {
+        const double *p = m->xyz + 3 * (size_t)i;
+        wb_str(w, "      <vertex index=\"");
+        wb_int(w, i);
+        wb_str(w, "\" x=\"");
+        wb_real(w, p[0]);
+        wb_str(w, "\" y=\"");
+        wb_real(w, p[1]);
+        wb_str(w, "\" z=\"");
+        wb_real(w, p[2]);
+        wb_str(w, "\" />\n");
+    }
+    wb_str(w, "    </vertices>\n    <cells size=\"");
+    wb_int(w, m->nt);
+    wb_str(w, "\">\n");
+    for (int32_t t = 0; t < m->nt; t++) {
+        const int32_t *v = m->tets + 4 * (size_t)t;
+        wb_str(w, "      <tetrahedron index=\"");
+        wb_int(w, t);
+        for (int k = 0; k < 4; k++) {
+            static const char *const vk[4] = {"\" v0=\"", "\" v1=\"", "\" v2=\"",
+                                              "\" v3=\""};
+            wb_str(w, vk[k]);
+            wb_int(w, v[k]);
+        }
+        wb_str(w, "\" />\n");
+    }
+    wb_str(w, "    </cells>\n  </mesh>\n</dolfin>\n");
+}
+
+/* ------------------------------------------------------------------------ */
+/* Abaqus / CalculiX .inp                                                    */
+
+enum { INP_SETS = 1024 };
+
+typedef struct {
+    vec xyz, tags, off; /* double x3, int64, uint64 x3 (when recording) */
+    vec at;             /* uint64: byte offset of each node's line (errors) */
+    vec tets, reg;      /* int32 x4, int32 */
+    tagmap tm;
+    int64_t tm_n; /* nodes in tm; -1 when not built */
+    const char *set[INP_SETS];
+    size_t setl[INP_SETS];
+    int nset;
+    int64_t skipped;
+    char skipped_types[64];
+} inp;
+
+static void inp_free(inp *a)
+{
+    vec_free(&a->at);
+    vec_free(&a->xyz);
+    vec_free(&a->tags);
+    vec_free(&a->off);
+    vec_free(&a->tets);
+    vec_free(&a->reg);
+    tagmap_free(&a->tm);
+}
+
+/* Whitespace within a line (a token ends there, as for the splicer). */
+static int is_blank(char c)
+{
+    return c != '\n' && is_space((unsigned char)c);
+}
+
+/* The next comma-separated field of [*p, eol) as [t, te); 0 if none left. */
+static int inp_field(const char **p, const char *eol, const char **t, const char **te)
+{
+    const char *q = *p;
+
+    while (q < eol && is_blank(*q))
+        q++;
+    if (q >= eol)
+        return 0;
+    *t = q;
+    while (q < eol && *q != ',' && !is_blank(*q))
+        q++;
+    *te = q;
+    while (q < eol && is_blank(*q))
+        q++;
+    if (q < eol && *q == ',')
+        q++;
+    *p = q;
+    return 1;
+}
+
+/* Value of parameter key (case-insensitive) of a keyword line [p, eol). */
+static int inp_param(const char *p, const char *eol, const char *key, const char **v,
+                     const char **ve)
+{
+    size_t kl = strlen(key);
+
+    while (p < eol) {
+        const char *f = p, *fe = memchr(p, ',', (size_t)(eol - p)), *eq;
+        if (!fe)
+            fe = eol;
+        p = fe < eol ? fe + 1 : eol;
+        while (f < fe && is_blank(*f))
+            f++;
+        eq = memchr(f, '=', (size_t)(fe - f));
+        if (!eq)
+            continue;
+        {
+            const char *ke = eq;
+            while (ke > f && is_blank(ke[-1]))
+                ke--;
+            if ((size_t)(ke - f) != kl || strncasecmp(f, key, kl) != 0)
+                continue;
+        }
+        *v = eq + 1;
+        *ve = fe;
+        while (*v < *ve && is_blank(**v))
+            (*v)++;
+        while (*ve > *v && is_blank((*ve)[-1]))
+            (*ve)--;
+        return 1;
+    }
+    return 0;
+}
+
+/* Element type [t, te): 1 linear tet, 2 second-order tet, 0 other. */
+static int inp_tet_type(const char *t, const char *te)
+{
+    size_t n = (size_t)(te - t);
+
+    if (n >= 1 && (*t == 'D' || *t == 'd')) { /* DC3D4: heat transfer */
+        t++;
+        n--;
+    }
+    if (n < 4 || strncasecmp(t, "C3D", 3) != 0)
+        return 0;
+    if (t[3] == '4' && (n == 4 || !(t[4] >= '0' && t[4] <= '9')))
+        return 1;
+    if (n >= 5 && t[3] == '1' && t[4] == '0')
+        return 2;
+    return 0;
+}
+
+enum { INP_SKIP, INP_NODE, INP_TET, INP_OTHER };
+
+static qdc_status inp_node(txt *s, const char *p, const char *eol, inp *a, srcrec *rec,
+                           qdc_error *err)
+{
+    const char *t, *te;
+    int64_t id;
+    double x[3];
+    uint64_t off[3];
+    qdc_status st;
+
+    inp_field(&p, eol, &t, &te);
+    st = int_at(s, t, te, "*NODE: node number", 1, INT32_MAX, &id, err);
+    for (int k = 0; k < 3 && st == QDC_OK; k++) {
+        if (!inp_field(&p, eol, &t, &te) || t == te)
+            return fail_txt(err, QDC_EPARSE, s, p,
+                            "*NODE: node %lld has %d coordinates (3 needed)",
+                            (long long)id, k);
+        st = num_at(s, t, te, "*NODE: coordinate", &x[k], err);
+        off[k] = (uint64_t)(t - s->base);
+    }
+    if (st != QDC_OK)
+        return st;
+    if ((int64_t)a->tags.n >= MESH_MAX_VERTICES)
+        return fail_txt(err, QDC_ETOOBIG, s, s->bol, "more than %d nodes",
+                        MESH_MAX_VERTICES);
+    if (vec_grow(&a->xyz, 3) != 0 || vec_grow(&a->tags, 1) != 0 ||
+        vec_grow(&a->at, 1) != 0 || (rec && vec_grow(&a->off, 3) != 0))
+        return qdc_fail(err, QDC_ENOMEM, "out of memory for the nodes");
+    memcpy((double *)a->xyz.a + a->xyz.n, x, sizeof x);
+    a->xyz.n += 3;
+    ((int64_t *)a->tags.a)[a->tags.n++] = id;
+    ((uint64_t *)a->at.a)[a->at.n++] = (uint64_t)(s->bol - s->base);
+    if (rec) {
+        memcpy((uint64_t *)a->off.a + a->off.n, off, sizeof off);
+        a->off.n += 3;
+    }
+    return QDC_OK;
+}
+
+/* The node map, rebuilt when nodes were added; a node number defined twice
+ * is an error at its second definition. */
+static qdc_status inp_map(const txt *s, inp *a, qdc_error *err)
+{
+    int64_t dup;
+    qdc_status st;
+
+    if (a->tm_n == (int64_t)a->tags.n)
+        return QDC_OK;
+    tagmap_free(&a->tm);
+    st = tagmap_build(&a->tm, a->tags.a, (int64_t)a->tags.n, &dup, err);
+    if (st == QDC_OK && dup >= 0) {
+        txt e = txt_init(s->base, (size_t)(s->end - s->base), 0);
+        adv(&e, s->base + ((uint64_t *)a->at.a)[dup]);
+        fail_txt(err, QDC_EPARSE, &e, e.p, "*NODE: node %lld defined twice",
+                 (long long)((int64_t *)a->tags.a)[dup]);
+        set_index(err, "vertex", dup);
+        return QDC_EPARSE;
+    }
+    a->tm_n = (int64_t)a->tags.n;
+    return st;
+}
+
+/* One C3D4 element: "id, n1, n2, n3, n4" (continued on the next line after a
+ * trailing comma); *pp and *peol move with it. */
+static qdc_status inp_tet(txt *s, const char **pp, const char **peol, inp *a, int32_t reg,
+                          qdc_error *err)
+{
+    const char *p = *pp, *eol = *peol, *t = p, *te;
+    int64_t v[5];
+    int32_t idx[4];
+    qdc_status st = QDC_OK;
+
+    st = inp_map(s, a, err); /* nodes may have been added since the last element */
+    if (st != QDC_OK)
+        return st;
+    for (int k = 0; k < 5 && st == QDC_OK; k++) {
+        while (!inp_field(&p, eol, &t, &te)) {
+            /* continued after a trailing comma */
+            const char *q = eol;
+            while (q > s->p && is_blank(q[-1]))
+                q--;
+            if (q == s->p || q[-1] != ',' || eol >= s->end)
+                return fail_txt(err, QDC_EPARSE, s, eol,
+                                "*ELEMENT: a C3D4 element needs 5 numbers, got %d", k);
+            adv(s, eol + 1);
+            p = s->p;
+            eol = memchr(p, '\n', (size_t)(s->end - p));
+            if (!eol)
+                eol = s->end;
+        }
+        st = int_at(s, t, te, k ? "*ELEMENT: node" : "*ELEMENT: element number", 1,
+                    INT64_MAX, &v[k], err);
+        if (st == QDC_OK && k) {
+            int64_t i = tagmap_find(&a->tm, v[k]);
+            if (i < 0) {
+                fail_txt(err, QDC_EPARSE, s, t,
+                         "*ELEMENT: element %lld: unknown node %lld", (long long)v[0],
+                         (long long)v[k]);
+                set_index(err, "tet", (int64_t)a->reg.n);
+                return QDC_EPARSE;
+            }
+            idx[k - 1] = (int32_t)i;
+        }
+    }
+    if (st != QDC_OK)
+        return st;
+    if ((int64_t)a->reg.n >= MESH_MAX_TETS)
+        return fail_txt(err, QDC_ETOOBIG, s, s->bol, "more than %d tets", MESH_MAX_TETS);
+    if (vec_grow(&a->tets, 4) != 0 || vec_grow(&a->reg, 1) != 0)
+        return qdc_fail(err, QDC_ENOMEM, "out of memory for the tets");
+    memcpy((int32_t *)a->tets.a + a->tets.n, idx, sizeof idx);
+    a->tets.n += 4;
+    ((int32_t *)a->reg.a)[a->reg.n++] = reg;
+    *pp = p;
+    *peol = eol;
+    return QDC_OK;
+}
+
+/* The region of an ELSET name: its 1-based position among those seen. */
+static qdc_status inp_set(txt *s, inp *a, const char *v, const char *ve, int32_t *reg,
+                          qdc_error *err)
+{
+    for (int i = 0; i < a->nset; i++)
+        if (a->setl[i] == (size_t)(ve - v) &&
+            strncasecmp(a->set[i], v, a->setl[i]) == 0) {
+            *reg = i + 1;
+            return QDC_OK;
+        }
+    if (a->nset == INP_SETS)
+        return fail_txt(err, QDC_ETOOBIG, s, v, "more than %d element sets of tets",
+                        INP_SETS);
+    a->set[a->nset] = v;
+    a->setl[a->nset++] = (size_t)(ve - v);
+    *reg = a->nset;
+    return QDC_OK;
+}
+
+/* Remember an element type skipped, for the note: printable ASCII, the
+ * first few, then "...". */
+static void skipped_type(inp *a, const char *v, const char *ve)
+{
+    char *b = a->skipped_types;
+    size_t n = strlen(b), cap = sizeof a->skipped_types, vl = (size_t)(ve - v);
+
+    if (n >= 3 && strcmp(b + n - 3, "...") == 0)
+        return;
+    for (const char *w = b; *w;) { /* already listed? */
+        size_t l = strcspn(w, ",");
+        if (l == vl && strncmp(w, v, vl) == 0)
+            return;
+        w += l;
+        if (*w == ',')
+            w += 2; /* ", " */
+    }
+    if (n + 2 + vl + 4 >= cap) {
+        if (n + 4 < cap)
+            memcpy(b + n, "...", 4);
+        return;
+    }
+    if (n) {
+        memcpy(b + n, ", ", 2);
+        n += 2;
+    }
+    for (size_t i = 0; i < vl; i++)
+        b[n++] = v[i] >= 0x20 && v[i] < 0x7f ? v[i] : '?';
+    b[n] = '\0';
+}
+
+static qdc_status inp_keyword(txt *s, const char *p, const char *eol, inp *a, int *mode,
+                              int32_t *reg, qdc_error *err)
+{
+    const char *k = p + 1, *ke, *v, *ve;
+
+    for (ke = k; ke < eol && *ke != ','; ke++)
+        ;
+    while (ke > k && is_blank(ke[-1]))
+        ke--;
+    *mode = INP_SKIP;
+    if (word_is(k, (size_t)(ke - k), "NODE")) {
+        *mode = INP_NODE;
+    } else if (word_is(k, (size_t)(ke - k), "ELEMENT")) {
+        int tt;
+        if (!inp_param(ke, eol, "TYPE", &v, &ve))
+            return fail_txt(err, QDC_EPARSE, s, p, "*ELEMENT without TYPE=");
+        tt = inp_tet_type(v, ve);
+        if (tt == 2)
+            return fail_txt(err, QDC_EFORMAT, s, v,
+                            "*ELEMENT TYPE=%.*s: second-order tetrahedra are not "
+                            "supported (C3D4 only)",
+                            (int)(ve - v > 16 ? 16 : ve - v), v);
+        if (tt == 1) {
+            *mode = INP_TET;
+            *reg = 0;
+            if (inp_param(ke, eol, "ELSET", &v, &ve))
+                return inp_set(s, a, v, ve, reg, err);
+        } else {
+            *mode = INP_OTHER;
+            skipped_type(a, v, ve);
+        }
+    } else if (word_is(k, (size_t)(ke - k), "INCLUDE")) {
+        return fail_txt(err, QDC_EFORMAT, s, p,
+                        "*INCLUDE is not supported (a single self-contained file)");
+    }
+    return QDC_OK;
+}
+
+qdc_status meshio_abaqus_read(const char *buf, size_t len, const meshio_options *o,
+                              srcrec *rec, mesh_t **out, qdc_error *err)
+{
+    txt s = txt_init(buf, len, 0);
+    inp a;
+    int mode = INP_SKIP, any_kw = 0;
+    int32_t reg = 0;
+    qdc_status st = QDC_OK;
+    parsed pm;
+
+    memset(&a, 0, sizeof a);
+    a.xyz.size = sizeof(double);
+    a.tags.size = a.off.size = a.at.size = sizeof(int64_t);
+    a.tets.size = a.reg.size = sizeof(int32_t);
+    a.tm_n = -1;
+    while (s.p < s.end && st == QDC_OK) {
+        const char *eol = memchr(s.p, '\n', (size_t)(s.end - s.p)), *p = s.p;
+        if (!eol)
+            eol = s.end;
+        while (p < eol && is_blank(*p))
+            p++;
+        if (p == eol || (eol - p >= 2 && p[0] == '*' && p[1] == '*')) {
+            /* blank line or comment */
+        } else if (*p == '*') {
+            any_kw = 1;
+            st = inp_keyword(&s, p, eol, &a, &mode, &reg, err);
+        } else if (!any_kw) {
+            st = fail_txt(err, QDC_EFORMAT, &s, p,
+                          "not an Abaqus input file: data before the first *keyword");
+        } else if (mode == INP_NODE) {
+            st = inp_node(&s, p, eol, &a, rec, err);
+        } else if (mode == INP_TET) {
+            st = inp_tet(&s, &p, &eol, &a, reg, err);
+        } else if (mode == INP_OTHER) {
+            a.skipped++;
+        }
+        if (st == QDC_OK)
+            adv(&s, eol < s.end ? eol + 1 : s.end);
+    }
+    if (st == QDC_OK && !any_kw)
+        st = fail_txt(err, QDC_EFORMAT, &s, s.p, "not an Abaqus input file: no *keyword");
+    if (st == QDC_OK)
+        st = inp_map(&s, &a, err); /* nodes after the last element */
+    if (st == QDC_OK && rec) {
+        rec->fmt = MESHIO_ABAQUS;
+        rec->kind = SRC_TEXT3;
+        rec->nv = (int64_t)a.tags.n;
+        rec->off = a.off.a;
+        a.off.a = NULL;
+        if (!rec->off)
+            rec->off = qdc_malloc(sizeof(uint64_t));
+        if (!rec->off)
+            st = qdc_fail(err, QDC_ENOMEM, "out of memory");
+    }
+    if (st == QDC_OK) {
+        parsed_init(&pm);
+        pm.nv = (int64_t)a.tags.n;
+        pm.xyz = a.xyz.a;
+        pm.nt = (int64_t)a.reg.n;
+        pm.tets = a.tets.a;
+        pm.region = a.nset ? a.reg.a : NULL;
+        st = parsed_mesh(&pm, out, err);
+        if (a.skipped)
+            note(o,
+                 "abaqus: skipped %lld elements of other types (%s): only C3D4 is read",
+                 (long long)a.skipped, a.skipped_types);
+    }
+    inp_free(&a);
+    return st;
+}
+
+/* ------------------------------------------------------------------------ */
+/* Netgen .vol                                                               */
+
+typedef struct {
+    vec tets, reg, tris, ref; /* int32: 1-based points until checked */
+    vec at_tet, at_tri;       /* uint64: byte offset of each element (errors) */
+    int64_t skipped;
+} vol;
+
+static void vol_free(vol *g)
+{
+    vec_free(&g->at_tet);
+    vec_free(&g->at_tri);
+    vec_free(&g->tets);
+    vec_free(&g->reg);
+    vec_free(&g->tris);
+    vec_free(&g->ref);
+}
+
+/* volumeelements: "matnr np p1 .. pnp" */
+static qdc_status vol_volume(txt *s, vol *g, qdc_error *err)
+{
+    int64_t n, mat = 0, np = 0, v = 0;
+    qdc_status st = txt_count(s, "volumeelements", 6, MESH_MAX_TETS, &n, err);
+
+    if (st == QDC_OK &&
+        (vec_grow(&g->tets, 4 * (size_t)n) != 0 || vec_grow(&g->reg, (size_t)n) != 0 ||
+         vec_grow(&g->at_tet, (size_t)n) != 0))
+        return qdc_fail(err, QDC_ENOMEM, "out of memory for %lld tets", (long long)n);
+    for (int64_t i = 0; i < n && st == QDC_OK; i++) {
+        const char *at;
+        skip_ws(s);
+        ((uint64_t *)g->at_tet.a)[g->at_tet.n] = (uint64_t)(s->p - s->base);
+        st = txt_int(s, "volumeelements: material", INT32_MIN, INT32_MAX, &mat, err);
+        skip_ws(s);
+        at = s->p;
+        if (st == QDC_OK)
+            st = txt_int(s, "volumeelements: point count", 1, 64, &np, err);
+        if (st == QDC_OK && np == 10)
+            return fail_txt(err, QDC_EFORMAT, s, at,
+                            "volumeelements: second-order tetrahedra (10 points) are not "
+                            "supported");
+        for (int64_t k = 0; k < np && st == QDC_OK; k++) {
+            st = txt_int(s, "volumeelements: point", 1, INT32_MAX, &v, err);
+            if (st == QDC_OK && np == 4)
+                ((int32_t *)g->tets.a)[g->tets.n + (size_t)k] = (int32_t)v;
+        }
+        if (st != QDC_OK)
+            set_index(err, "tet", i);
+        else if (np == 4) {
+            g->at_tet.n++;
+            g->tets.n += 4;
+            ((int32_t *)g->reg.a)[g->reg.n++] = (int32_t)mat;
+        } else {
+            g->skipped++;
+        }
+    }
+    return st;
+}
+
+/* surfaceelements[gi|uv]: "surfnr bcnr domin domout np p1 .. pnp" (+ np
+ * geometry ints for gi, np u v pairs for uv). */
+static qdc_status vol_surface(txt *s, vol *g, int kind, qdc_error *err)
+{
+    int64_t n, v = 0, bc = 0, np = 0;
+    double x;
+    qdc_status st = txt_count(s, "surfaceelements", 8, INT32_MAX / 3, &n, err);
+
+    if (st == QDC_OK &&
+        (vec_grow(&g->tris, 3 * (size_t)n) != 0 || vec_grow(&g->ref, (size_t)n) != 0 ||
+         vec_grow(&g->at_tri, (size_t)n) != 0))
+        return qdc_fail(err, QDC_ENOMEM, "out of memory for %lld triangles",
+                        (long long)n);
+    for (int64_t i = 0; i < n && st == QDC_OK; i++) {
+        skip_ws(s);
+        ((uint64_t *)g->at_tri.a)[g->at_tri.n] = (uint64_t)(s->p - s->base);
+        for (int k = 0; k < 4 && st == QDC_OK; k++) {
+            st = txt_int(s, "surfaceelements: number", INT32_MIN, INT32_MAX, &v, err);
+            if (k == 1)
+                bc = v;
+        }
+        if (st == QDC_OK)
+            st = txt_int(s, "surfaceelements: point count", 1, 64, &np, err);
+        for (int64_t k = 0; k < np && st == QDC_OK; k++) {
+            st = txt_int(s, "surfaceelements: point", 1, INT32_MAX, &v, err);
+            if (st == QDC_OK && np == 3)
+                ((int32_t *)g->tris.a)[g->tris.n + (size_t)k] = (int32_t)v;
+        }
+        for (int64_t k = 0; k < (kind == 1 ? np : 0) && st == QDC_OK; k++)
+            st = txt_int(s, "surfaceelementsgi: geometry info", INT64_MIN, INT64_MAX, &v,
+                         err);
+        for (int64_t k = 0; k < (kind == 2 ? 2 * np : 0) && st == QDC_OK; k++)
+            st = txt_real(s, "surfaceelementsuv: parameter", &x, err);
+        if (st == QDC_OK && np == 3) {
+            g->at_tri.n++;
+            g->tris.n += 3;
+            ((int32_t *)g->ref.a)[g->ref.n++] = (int32_t)bc;
+        }
+    }
+    return st;
+}
+
+/* 1-based points idx[n] to 0-based, each checked against nv; an error at
+ * the element's own line (at[]: byte offsets of the elements). */
+static qdc_status vol_check(const txt *s, const uint64_t *at, int32_t *idx, size_t n,
+                            int k, int64_t nv, const char *what, qdc_error *err)
+{
+    for (size_t i = 0; i < n; i++) {
+        if (idx[i] < 1 || idx[i] > nv) {
+            txt e = txt_init(s->base, (size_t)(s->end - s->base), 1);
+            adv(&e, s->base + at[i / (size_t)k]);
+            fail_txt(err, QDC_EPARSE, &e, e.p,
+                     "%s: element %zu: point %d out of range [1, %lld]", what,
+                     i / (size_t)k + 1, (int)idx[i], (long long)nv);
+            set_index(err, k == 4 ? "tet" : "triangle", (int64_t)(i / (size_t)k));
+            return QDC_EPARSE;
+        }
+        idx[i]--;
+    }
+    return QDC_OK;
+}
+
+qdc_status meshio_netgen_read(const char *buf, size_t len, const meshio_options *o,
+                              srcrec *rec, mesh_t **out, qdc_error *err)
+{
+    txt s = txt_init(buf, len, 1);
+    vol g;
+    parsed pm;
+    int64_t dim;
+    const char *t, *te;
+    qdc_status st = QDC_OK;
+
+    memset(&g, 0, sizeof g);
+    g.tets.size = g.reg.size = g.tris.size = g.ref.size = sizeof(int32_t);
+    g.at_tet.size = g.at_tri.size = sizeof(uint64_t);
+    parsed_init(&pm);
+    skip_ws(&s);
+    t = s.p;
+    te = tok_end(&s, t);
+    if (word_is(t, (size_t)(te - t), "mesh2d"))
+        return fail_txt(err, QDC_EFORMAT, &s, t,
+                        "Netgen: 2D meshes (mesh2d) are not supported");
+    if (!word_is(t, (size_t)(te - t), "mesh3d"))
+        return fail_txt(err, QDC_EFORMAT, &s, t, "not a Netgen mesh: no mesh3d");
+    s.p = te;
+    while (st == QDC_OK) {
+        size_t n;
+        skip_ws(&s);
+        if (s.p == s.end)
+            break;
+        t = s.p;
+        te = tok_end(&s, t);
+        n = (size_t)(te - t);
+        s.p = te;
+        if (word_is(t, n, "endmesh")) {
+            break;
+        } else if (word_is(t, n, "dimension")) {
+            st = txt_int(&s, "dimension", 3, 3, &dim, err);
+        } else if (word_is(t, n, "volumeelements")) {
+            st = vol_volume(&s, &g, err);
+        } else if (word_is(t, n, "surfaceelements") ||
+                   word_is(t, n, "surfaceelementsgi") ||
+                   word_is(t, n, "surfaceelementsuv")) {
+            if (g.ref.n)
+                st = fail_txt(err, QDC_EPARSE, &s, t, "a second surfaceelements section");
+            if (st == QDC_OK)
+                st = vol_surface(&s, &g, n == 15 ? 0 : (t[16] == 'i') ? 1 : 2, err);
+        } else if (word_is(t, n, "points")) {
+            int64_t nv;
+            if (pm.nv >= 0)
+                st = fail_txt(err, QDC_EPARSE, &s, t, "a second points section");
+            if (st == QDC_OK)
+                st = txt_count(&s, "points", 3, MESH_MAX_VERTICES, &nv, err);
+            if (st == QDC_OK) {
+                pm.nv = nv;
+                pm.xyz = qdc_mallocn(3 * (size_t)nv + 1, sizeof(double));
+                if (!pm.xyz)
+                    st = qdc_fail(err, QDC_ENOMEM, "out of memory for %lld points",
+                                  (long long)nv);
+            }
+            if (st == QDC_OK && rec) {
+                rec->fmt = MESHIO_NETGEN;
+                rec->kind = SRC_TEXT;
+                rec->hash = 1;
+                st = srcrec_alloc(rec, nv, err);
+            }
+            for (int64_t i = 0; i < nv && st == QDC_OK; i++) {
+                if (rec) {
+                    skip_ws(&s);
+                    rec->off[i] = (uint64_t)(s.p - s.base);
+                }
+                for (int a = 0; a < 3 && st == QDC_OK; a++)
+                    st = txt_real(&s, "points: coordinate", &pm.xyz[3 * i + a], err);
+                if (st != QDC_OK)
+                    set_index(err, "vertex", i);
+            }
+        } else if (word_is(t, n, "materials") || word_is(t, n, "bcnames") ||
+                   word_is(t, n, "cd2names") || word_is(t, n, "cd3names")) {
+            /* "number name" pairs: a name may be any word, "points" too */
+            int64_t c;
+            st = txt_count(&s, "names", 2, INT32_MAX, &c, err);
+            for (int64_t i = 0; i < 2 * c && st == QDC_OK; i++) {
+                skip_ws(&s);
+                s.p = tok_end(&s, s.p);
+            }
+        }
+        /* anything else (edge segments, face colours, geometry): skipped a
+         * token at a time, kept by a spliced write */
+    }
+    if (st == QDC_OK && pm.nv < 0)
+        st = fail_txt(err, QDC_EPARSE, &s, s.p, "Netgen: no points section");
+    if (st == QDC_OK)
+        st = vol_check(&s, g.at_tet.a, g.tets.a, g.tets.n, 4, pm.nv, "volumeelements",
+                       err);
+    if (st == QDC_OK)
+        st = vol_check(&s, g.at_tri.a, g.tris.a, g.tris.n, 3, pm.nv, "surfaceelements",
+                       err);
+    if (st == QDC_OK) {
+        pm.nt = (int64_t)g.reg.n;
+        pm.tets = g.tets.a;
+        pm.region = g.reg.a;
+        pm.ntri = (int64_t)g.ref.n;
+        pm.tris = g.tris.a;
+        pm.tri_ref = g.ref.a;
+        st = parsed_mesh(&pm, out, err);
+        pm.tets = pm.region = pm.tris = pm.tri_ref = NULL;
+        if (g.skipped)
+            note(o, "netgen: skipped %lld volume elements that are not tetrahedra",
+                 (long long)g.skipped);
+    }
+    parsed_free(&pm);
+    vol_free(&g);
+    return st;
+}

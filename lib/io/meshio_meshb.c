@@ -1,0 +1,359 @@
+/* meshio_meshb.c - Medit binary .meshb (libMeshb's GMF binary files, mmg's
+ * native format), versions 1 to 4, either byte order.
+ *
+ * Layout: an int32 code 1 (its byte order is the file's), an int32 version
+ * (1: float32 reals, int32 integers and positions; 2: float64 reals; 3: also
+ * 64-bit positions; 4: also 64-bit integers and counts), then keywords: an
+ * int32 code, the position of the next keyword, a count and the records.
+ * Dimension (3) holds one int32; End (54) ends the file. Vertices, Triangles,
+ * Tetrahedra and RequiredVertices are read (as the ASCII Medit reader reads
+ * them: refs, regions, fixed vertices); every other keyword is skipped
+ * through its next-keyword position, and kept byte for byte by a spliced
+ * write, which overwrites the coordinates in their own width and byte order
+ * (version 1: float32). qdc's own writer writes version 2, little-endian. */
+#include "io/meshio.h"
+#include "io/meshio_scan.h"
+
+enum {
+    GMF_DIMENSION = 3,
+    GMF_VERTICES = 4,
+    GMF_TRIANGLES = 6,
+    GMF_TETRAHEDRA = 8,
+    GMF_REQUIRED_VERTICES = 15,
+    GMF_END = 54
+};
+
+typedef struct {
+    const unsigned char *b;
+    size_t len, p;
+    int big, rsz, isz, psz; /* byte order; sizes of reals, integers, positions */
+} gmf;
+
+static uint64_t gmf_word(const gmf *g, size_t at, int n)
+{
+    uint64_t v = 0;
+
+    for (int k = 0; k < n; k++)
+        v |= (uint64_t)g->b[at + (size_t)k] << (8 * (g->big ? n - 1 - k : k));
+    return v;
+}
+
+static qdc_status gmf_need(const gmf *g, uint64_t n, const char *what, qdc_error *err)
+{
+    if (n > g->len - g->p)
+        return fail_bin(err, QDC_EPARSE, (int64_t)g->p,
+                        "meshb: %s needs %llu bytes, %zu left (truncated?)", what,
+                        (unsigned long long)n, g->len - g->p);
+    return QDC_OK;
+}
+
+/* A signed integer of n bytes at the cursor (n checked by the caller). */
+static int64_t gmf_int(gmf *g, int n)
+{
+    uint64_t u = gmf_word(g, g->p, n);
+
+    g->p += (size_t)n;
+    return n == 4 ? (int64_t)(int32_t)(uint32_t)u : (int64_t)u;
+}
+
+static double gmf_real(gmf *g)
+{
+    uint64_t u = gmf_word(g, g->p, g->rsz);
+    double x;
+
+    g->p += (size_t)g->rsz;
+    if (g->rsz == 4) {
+        float f;
+        uint32_t u32 = (uint32_t)u;
+        memcpy(&f, &u32, 4);
+        return f;
+    }
+    memcpy(&x, &u, 8);
+    return x;
+}
+
+/* A count of records of `rec` bytes each, checked against the bytes left. */
+static qdc_status gmf_count(gmf *g, const char *what, uint64_t rec, int64_t max,
+                            int64_t *n, qdc_error *err)
+{
+    size_t at = g->p;
+    qdc_status st = gmf_need(g, (uint64_t)g->isz, what, err);
+
+    if (st != QDC_OK)
+        return st;
+    *n = gmf_int(g, g->isz);
+    if (*n < 0 || (uint64_t)*n > (g->len - g->p) / rec)
+        return fail_bin(err, QDC_EPARSE, (int64_t)at,
+                        "meshb: %s: count %lld does not fit in the %zu bytes left "
+                        "(truncated?)",
+                        what, (long long)*n, g->len - g->p);
+    if (*n > max)
+        return fail_bin(err, QDC_ETOOBIG, (int64_t)at,
+                        "meshb: %s: count %lld exceeds the limit %lld", what,
+                        (long long)*n, (long long)max);
+    return QDC_OK;
+}
+
+/* k vertex numbers and a ref per record; 1-based numbers checked later. */
+static qdc_status gmf_elems(gmf *g, const char *what, int k, int64_t max, int64_t *n,
+                            int32_t **idx, int32_t **ref, qdc_error *err)
+{
+    qdc_status st;
+
+    if (*idx)
+        return fail_bin(err, QDC_EPARSE, (int64_t)g->p, "meshb: a second %s keyword",
+                        what);
+    st = gmf_count(g, what, (uint64_t)(k + 1) * (uint64_t)g->isz, max, n, err);
+    if (st != QDC_OK)
+        return st;
+    *idx = qdc_mallocn((size_t)*n * (size_t)k + 1, sizeof(int32_t));
+    *ref = qdc_mallocn((size_t)*n + 1, sizeof(int32_t));
+    if (!*idx || !*ref)
+        return qdc_fail(err, QDC_ENOMEM, "out of memory for %lld %s", (long long)*n,
+                        what);
+    for (int64_t i = 0; i < *n; i++) {
+        for (int j = 0; j < k; j++) {
+            int64_t v = gmf_int(g, g->isz);
+            (*idx)[i * k + j] = v < 1 || v > INT32_MAX ? 0 : (int32_t)v; /* 0: bad */
+        }
+        (*ref)[i] = (int32_t)gmf_int(g, g->isz);
+    }
+    return QDC_OK;
+}
+
+/* 1-based idx[n] to 0-based within nv; at: the keyword's offset (errors). */
+static qdc_status gmf_check(int32_t *idx, int64_t n, int64_t nv, const char *what,
+                            size_t at, qdc_error *err)
+{
+    for (int64_t i = 0; i < n; i++) {
+        if (idx[i] < 1 || idx[i] > nv) {
+            fail_bin(err, QDC_EPARSE, (int64_t)at,
+                     "meshb: %s: entry %lld: vertex number out of range [1, %lld]", what,
+                     (long long)i, (long long)nv);
+            set_index(err, what, i);
+            return QDC_EPARSE;
+        }
+        idx[i]--;
+    }
+    return QDC_OK;
+}
+
+qdc_status meshio_meshb_read(const char *buf, size_t len, const meshio_options *o,
+                             srcrec *rec, mesh_t **out, qdc_error *err)
+{
+    gmf g = {(const unsigned char *)buf, len, 0, 0, 0, 0, 0};
+    parsed pm;
+    int32_t *fix = NULL;
+    size_t at_tet = 0, at_tri = 0, at_fix = 0;
+    int64_t ver, code;
+    qdc_status st;
+
+    (void)o; /* nothing to note: what is skipped is kept by a spliced write */
+    parsed_init(&pm);
+    if (len < 8)
+        return fail_bin(err, QDC_EPARSE, 0, "meshb: %zu bytes, too short for a header",
+                        len);
+    code = (int64_t)gmf_word(&g, 0, 4);
+    if (code != 1) {
+        g.big = 1;
+        if (gmf_word(&g, 0, 4) != 1)
+            return fail_bin(err, QDC_EFORMAT, 0,
+                            "not a Medit binary file: first word %lld (1 expected)",
+                            (long long)code);
+    }
+    ver = (int64_t)gmf_word(&g, 4, 4);
+    if (ver < 1 || ver > 4)
+        return fail_bin(err, QDC_EFORMAT, 4, "meshb: version %lld not supported (1 to 4)",
+                        (long long)ver);
+    g.rsz = ver == 1 ? 4 : 8;
+    g.isz = ver == 4 ? 8 : 4;
+    g.psz = ver >= 3 ? 8 : 4;
+    g.p = 8;
+    st = QDC_OK;
+    while (st == QDC_OK) {
+        size_t at = g.p;
+        int64_t kw, next;
+        if (g.p == len)
+            break; /* no End keyword: the file ends here anyway */
+        st = gmf_need(&g, 4, "keyword", err);
+        if (st != QDC_OK)
+            break;
+        kw = gmf_int(&g, 4);
+        if (kw == GMF_END)
+            break;
+        st = gmf_need(&g, (uint64_t)g.psz, "keyword position", err);
+        if (st != QDC_OK)
+            break;
+        next = gmf_int(&g, g.psz);
+        if (kw == GMF_DIMENSION) {
+            int64_t dim;
+            st = gmf_need(&g, 4, "Dimension", err);
+            if (st == QDC_OK && (dim = gmf_int(&g, 4)) != 3)
+                st = fail_bin(err, QDC_EFORMAT, (int64_t)at,
+                              "meshb: Dimension %lld (3D meshes only)", (long long)dim);
+        } else if (kw == GMF_VERTICES) {
+            int64_t n;
+            if (pm.xyz)
+                st = fail_bin(err, QDC_EPARSE, (int64_t)at, "meshb: a second Vertices");
+            if (st == QDC_OK)
+                st = gmf_count(&g, "Vertices", 3 * (uint64_t)g.rsz + (uint64_t)g.isz,
+                               MESH_MAX_VERTICES, &n, err);
+            if (st == QDC_OK) {
+                pm.nv = n;
+                pm.xyz = qdc_mallocn(3 * (size_t)n + 1, sizeof(double));
+                pm.vref = qdc_mallocn((size_t)n + 1, sizeof(int32_t));
+                if (!pm.xyz || !pm.vref)
+                    st = qdc_fail(err, QDC_ENOMEM, "out of memory for %lld vertices",
+                                  (long long)n);
+            }
+            if (st == QDC_OK && rec) {
+                rec->fmt = MESHIO_MESHB;
+                rec->kind = SRC_BIN;
+                rec->width = g.rsz;
+                rec->big = g.big;
+                st = srcrec_alloc(rec, n, err);
+            }
+            for (int64_t i = 0; i < pm.nv && st == QDC_OK; i++) {
+                size_t vat = g.p;
+                if (rec)
+                    rec->off[i] = (uint64_t)g.p;
+                for (int a = 0; a < 3; a++)
+                    pm.xyz[3 * i + a] = gmf_real(&g);
+                pm.vref[i] = (int32_t)gmf_int(&g, g.isz);
+                if (!isfinite(pm.xyz[3 * i]) || !isfinite(pm.xyz[3 * i + 1]) ||
+                    !isfinite(pm.xyz[3 * i + 2])) {
+                    st = fail_bin(
+                        err, QDC_EPARSE, (int64_t)vat,
+                        "meshb: vertex %lld: a coordinate is not finite (NaN/Inf)",
+                        (long long)i + 1);
+                    set_index(err, "vertex", i);
+                }
+            }
+        } else if (kw == GMF_TETRAHEDRA) {
+            at_tet = at;
+            st = gmf_elems(&g, "Tetrahedra", 4, MESH_MAX_TETS, &pm.nt, &pm.tets,
+                           &pm.region, err);
+        } else if (kw == GMF_TRIANGLES) {
+            at_tri = at;
+            st = gmf_elems(&g, "Triangles", 3, INT32_MAX / 3, &pm.ntri, &pm.tris,
+                           &pm.tri_ref, err);
+        } else if (kw == GMF_REQUIRED_VERTICES) {
+            int64_t n;
+            at_fix = at;
+            if (fix)
+                st = fail_bin(err, QDC_EPARSE, (int64_t)at,
+                              "meshb: a second RequiredVertices");
+            if (st == QDC_OK)
+                st = gmf_count(&g, "RequiredVertices", (uint64_t)g.isz, INT32_MAX, &n,
+                               err);
+            if (st == QDC_OK && !(fix = qdc_mallocn((size_t)n + 1, sizeof(int32_t))))
+                st = qdc_fail(err, QDC_ENOMEM, "out of memory");
+            for (int64_t i = 0; i < n && st == QDC_OK; i++) {
+                int64_t v = gmf_int(&g, g.isz);
+                fix[i] = v < 1 || v > INT32_MAX ? 0 : (int32_t)v;
+            }
+            if (st == QDC_OK)
+                pm.nfix = n;
+        } else {
+            /* another keyword: skipped through its next-keyword position */
+            if (next == 0) {
+                if (kw < 0 || kw > 200)
+                    st = fail_bin(err, QDC_EPARSE, (int64_t)at,
+                                  "meshb: unknown keyword %lld", (long long)kw);
+                break; /* the last keyword */
+            }
+            if (next <= (int64_t)g.p || (uint64_t)next > len)
+                st = fail_bin(err, QDC_EPARSE, (int64_t)at,
+                              "meshb: keyword %lld: next position %lld out of range",
+                              (long long)kw, (long long)next);
+            else
+                g.p = (size_t)next;
+        }
+    }
+    if (st == QDC_OK && !pm.xyz)
+        st = fail_bin(err, QDC_EPARSE, (int64_t)g.p, "meshb: no Vertices");
+    if (st == QDC_OK && pm.tets)
+        st = gmf_check(pm.tets, 4 * pm.nt, pm.nv, "Tetrahedra", at_tet, err);
+    if (st == QDC_OK && pm.tris)
+        st = gmf_check(pm.tris, 3 * pm.ntri, pm.nv, "Triangles", at_tri, err);
+    if (st == QDC_OK && fix)
+        st = gmf_check(fix, pm.nfix, pm.nv, "RequiredVertices", at_fix, err);
+    if (st == QDC_OK) {
+        pm.fix = fix;
+        fix = NULL;
+        st = parsed_mesh(&pm, out, err);
+    }
+    qdc_free(fix);
+    parsed_free(&pm);
+    return st;
+}
+
+static void put32(wbuf *w, int64_t v)
+{
+    unsigned char b[4];
+
+    put_le32(b, (uint32_t)(int32_t)v);
+    wb_put(w, b, 4);
+}
+
+/* Version 2, little-endian: Dimension, Vertices, Triangles, Tetrahedra,
+ * RequiredVertices (the fixed vertices), End. */
+void meshio_meshb_write(const mesh_t *m, wbuf *w)
+{
+    int64_t pos = 8, nfix = 0;
+    int with_fix = m->fixed != NULL; /* even with none set: read back the same */
+
+    for (int32_t i = 0; m->fixed && i < m->nv; i++)
+        nfix += m->fixed[i] != 0;
+    put32(w, 1);
+    put32(w, 2);
+    pos += 12;
+    put32(w, GMF_DIMENSION);
+    put32(w, pos);
+    put32(w, 3);
+    pos += 12 + 28 * (int64_t)m->nv;
+    put32(w, GMF_VERTICES);
+    put32(w, pos);
+    put32(w, m->nv);
+    for (int32_t i = 0; i < m->nv; i++) {
+        unsigned char b[24];
+        for (int a = 0; a < 3; a++) {
+            uint64_t u;
+            memcpy(&u, &m->xyz[3 * (size_t)i + (size_t)a], 8);
+            put_le64(b + 8 * a, u);
+        }
+        wb_put(w, b, 24);
+        put32(w, m->vref ? m->vref[i] : 0);
+    }
+    if (m->ntri) {
+        pos += 12 + 16 * (int64_t)m->ntri;
+        put32(w, GMF_TRIANGLES);
+        put32(w, pos);
+        put32(w, m->ntri);
+        for (int32_t t = 0; t < m->ntri; t++) {
+            for (int k = 0; k < 3; k++)
+                put32(w, (int64_t)m->tris[3 * (size_t)t + (size_t)k] + 1);
+            put32(w, m->tri_ref ? m->tri_ref[t] : 0);
+        }
+    }
+    pos += 12 + 20 * (int64_t)m->nt;
+    put32(w, GMF_TETRAHEDRA);
+    put32(w, pos);
+    put32(w, m->nt);
+    for (int32_t t = 0; t < m->nt; t++) {
+        for (int k = 0; k < 4; k++)
+            put32(w, (int64_t)m->tets[4 * (size_t)t + (size_t)k] + 1);
+        put32(w, m->region ? m->region[t] : 0);
+    }
+    if (with_fix) {
+        pos += 12 + 4 * nfix;
+        put32(w, GMF_REQUIRED_VERTICES);
+        put32(w, pos);
+        put32(w, nfix);
+        for (int32_t i = 0; i < m->nv; i++)
+            if (m->fixed[i])
+                put32(w, (int64_t)i + 1);
+    }
+    put32(w, GMF_END);
+    put32(w, 0);
+}
