@@ -92,6 +92,13 @@ $(B)/tests/%: tests/unit/%.c tests/unit/testlib.h $(B)/libqdc.a
 	@mkdir -p $(dir $@)
 	$(CC) $(CPPFLAGS) -Itests/unit $(CFLAGS) -o $@ $< $(B)/libqdc.a $(LIB_LIBS) $(LDFLAGS)
 
+# The daemon's pure parsers and router, linked alone (no libmicrohttpd).
+HTTP_PURE_OBJ := $(B)/server/route.o $(B)/server/parse.o
+$(B)/tests/test_http: tests/unit/test_http.c tests/unit/testlib.h $(HTTP_PURE_OBJ) $(B)/libqdc.a
+	@mkdir -p $(dir $@)
+	$(CC) $(CPPFLAGS) -Itests/unit -Iserver $(CFLAGS) -o $@ $< $(HTTP_PURE_OBJ) $(B)/libqdc.a \
+	    $(LIB_LIBS) $(LDFLAGS)
+
 # The whole suite: release build, sanitizer build, unit + end-to-end + daemon tests.
 # The last line is "N passed, N failed".
 test: deps

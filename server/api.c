@@ -10,7 +10,9 @@
 #include "api.h"
 
 #include "job.h"
+#include "parse.h"
 #include "qdc.h"
+#include "route.h"
 #include "shared.h"
 #include "ui.h"
 
@@ -27,105 +29,11 @@
 #include <sys/random.h>
 #include <unistd.h>
 
-enum {
-    R_NONE = 0,
-    R_JOBS,
-    R_JOB,
-    R_PROGRESS,
-    R_EVENTS,
-    R_RESULT,
-    R_REPORT,
-    R_INPUT,   /* the job's input mesh: served like R_RESULT */
-    R_OPTIONS, /* the option table */
-    R_CANCEL,
-    R_LIVEZ,
-    R_READYZ,
-    R_METRICS,
-    R_PROBLEM,
-    R_UI, /* the web console (ui.c) */
-};
-
 #define MEDIA_QMESH "application/vnd.qdc.mesh"
 
 static const char *const no_headers[] = {NULL};
 
 /* ------------------------------------------------------------------ routing -- */
-
-static int is_job_id(const char *s, size_t n)
-{
-    if (n != JOB_ID_LEN)
-        return 0;
-    for (size_t i = 0; i < n; i++)
-        if (!isxdigit((unsigned char)s[i]) || isupper((unsigned char)s[i]))
-            return 0;
-    return 1;
-}
-
-/* Route of url; id copied for job routes. -1: a job route with an id that
- * cannot exist (answered 404 like an unknown id). */
-static int route_of(const char *url, char *id)
-{
-    static const struct {
-        const char *path;
-        int route;
-    } fixed[] = {{"/livez", R_LIVEZ},  {"/readyz", R_READYZ}, {"/metrics", R_METRICS},
-                 {"/v1/jobs", R_JOBS}, {"/v1/jobs/", R_JOBS}, {"/v1/options", R_OPTIONS}};
-    static const struct {
-        const char *suffix;
-        int route;
-    } sub[] = {{"", R_JOB},           {"/progress", R_PROGRESS}, {"/events", R_EVENTS},
-               {"/result", R_RESULT}, {"/report", R_REPORT},     {":cancel", R_CANCEL},
-               {"/input", R_INPUT}};
-
-    if (ui_asset_of(url))
-        return R_UI;
-    for (size_t i = 0; i < sizeof fixed / sizeof fixed[0]; i++)
-        if (!strcmp(url, fixed[i].path))
-            return fixed[i].route;
-    if (!strncmp(url, "/problems/", 10) && url[10] && strlen(url + 10) <= JOB_ID_LEN &&
-        strspn(url + 10, "abcdefghijklmnopqrstuvwxyz-") == strlen(url + 10)) {
-        snprintf(id, JOB_ID_LEN + 1, "%.32s", url + 10);
-        return R_PROBLEM;
-    }
-    if (strncmp(url, "/v1/jobs/", 9))
-        return R_NONE;
-    const char *p = url + 9;
-    size_t n = strcspn(p, "/:");
-    for (size_t i = 0; i < sizeof sub / sizeof sub[0]; i++) {
-        if (!strcmp(p + n, sub[i].suffix)) {
-            if (!is_job_id(p, n))
-                return -1;
-            memcpy(id, p, n);
-            id[n] = 0;
-            return sub[i].route;
-        }
-    }
-    return R_NONE;
-}
-
-static const char *allowed(int route)
-{
-    switch (route) {
-    case R_JOBS:
-        return "GET, POST";
-    case R_JOB:
-        return "GET, DELETE";
-    case R_CANCEL:
-        return "POST";
-    default:
-        return "GET";
-    }
-}
-
-static int method_ok(int route, const char *m)
-{
-    const char *a = allowed(route);
-    size_t n = strlen(m);
-    for (const char *p = a; (p = strstr(p, m)); p += n)
-        if ((p == a || p[-1] == ' ') && (p[n] == 0 || p[n] == ','))
-            return 1;
-    return !strcmp(m, "HEAD") && strstr(a, "GET");
-}
 
 /* ------------------------------------------------------------------- access -- */
 
@@ -1200,17 +1108,6 @@ static void collect(req *r, const job_rec *j, long after, int sse, sbuf *out, in
     }
 }
 
-static int parse_long(const char *s, long lo, long hi, long *out)
-{
-    char *end;
-    errno = 0;
-    long v = strtol(s, &end, 10);
-    if (!*s || *end || errno || v < lo || v > hi)
-        return -1;
-    *out = v;
-    return 0;
-}
-
 static enum MHD_Result do_progress(struct MHD_Connection *c, req *r)
 {
     qdcd *q = r->q;
@@ -1423,26 +1320,6 @@ static int not_servable(struct MHD_Connection *c, req *r, const job_rec *j,
     return 0;
 }
 
-/* Does If-None-Match match etag (quoted)? Weak comparison (RFC 9110 13.1.2). */
-int etag_matches(const char *inm, const char *etag)
-{
-    size_t n = strlen(etag);
-    if (!inm)
-        return 0;
-    while (*inm) {
-        while (*inm == ' ' || *inm == ',')
-            inm++;
-        if (*inm == '*')
-            return 1;
-        if (!strncmp(inm, "W/", 2))
-            inm += 2;
-        if (!strncmp(inm, etag, n) && (inm[n] == 0 || inm[n] == ',' || inm[n] == ' '))
-            return 1;
-        inm += strcspn(inm, ",");
-    }
-    return 0;
-}
-
 /* The offered list for a 400/406 about the result's format. */
 static void offered(sbuf *x)
 {
@@ -1491,33 +1368,8 @@ static int result_format(struct MHD_Connection *c, req *r, meshio_format *out,
         *out = MESHIO_QMESH;
         return 0;
     }
-    for (const char *p = acc; *p;) {
-        char t[200], base[100];
-        size_t n = strcspn(p, ",");
-        snprintf(t, sizeof t, "%.*s", (int)(n < sizeof t - 1 ? n : sizeof t - 1), p);
-        p += n + (p[n] == ',');
-        const char *e = t + strspn(t, " \t");
-        snprintf(base, sizeof base, "%s", e);
-        base[strcspn(base, "; \t")] = 0;
-        int q0 = 0;
-        for (const char *sc = strchr(e, ';'); sc; sc = strchr(sc + 1, ';')) {
-            const char *pv = sc + 1 + strspn(sc + 1, " \t");
-            if ((pv[0] == 'q' || pv[0] == 'Q') && pv[1] == '=')
-                q0 = strtod(pv + 2, NULL) <= 0;
-        }
-        if (q0)
-            continue; /* q=0: "not acceptable" */
-        if (!strcmp(base, "*/*") || !strcasecmp(base, "application/*"))
-            k = MESHIO_QMESH;
-        else if (!strcasecmp(base, "model/*") || !strcasecmp(base, "text/plain"))
-            k = MESHIO_MEDIT;
-        else
-            k = meshio_format_from_media_type(e);
-        if (k != MESHIO_AUTO && k != MESHIO_TETGEN) {
-            *out = k;
-            return 0;
-        }
-    }
+    if (!parse_accept(acc, out))
+        return 0;
     offered(&x);
     snprintf(d, sizeof d,
              "no offered type matches Accept: %.150s (or name one with ?format=)", acc);
@@ -1941,7 +1793,7 @@ enum MHD_Result api_begin(struct MHD_Connection *c, req *r, const char *url,
     int framing[2] = {0, 0};
 
     r->conn = c;
-    r->route = route_of(url, r->id);
+    r->route = ui_asset_of(url) ? R_UI : route_match(url, r->id);
     /* Two Content-Lengths, or one with a Transfer-Encoding, can frame the
      * body two ways (request smuggling behind a proxy): refuse, and close. */
     MHD_get_connection_values(c, MHD_HEADER_KIND, count_framing, framing);
@@ -1960,7 +1812,7 @@ enum MHD_Result api_begin(struct MHD_Connection *c, req *r, const char *url,
      * ones. */
     r->close_after = r->route == R_PROGRESS || r->route == R_EVENTS ||
                      (r->route == R_JOBS && !strcmp(method, "POST"));
-    if (r->route == -1)
+    if (r->route == R_BAD_ID)
         return http_problem(c, r, 404, "not-found", "no such job",
                             "job ids are 32 lower-case hex digits", NULL, NULL);
     if (r->route == R_NONE) {
@@ -1968,14 +1820,13 @@ enum MHD_Result api_begin(struct MHD_Connection *c, req *r, const char *url,
         snprintf(d, sizeof d, "no resource at '%.200s'", url);
         return http_problem(c, r, 404, "not-found", "not found", d, NULL, NULL);
     }
-    if (!method_ok(r->route, method)) {
-        const char *const h[] = {MHD_HTTP_HEADER_ALLOW, allowed(r->route), NULL};
+    const route_desc *rd = route_desc_of(r->route);
+    if (!route_method_ok(r->route, method)) {
+        const char *const h[] = {MHD_HTTP_HEADER_ALLOW, rd->allow, NULL};
         return http_problem(c, r, 405, "method-not-allowed", "method not allowed",
                             "see the Allow header", NULL, h);
     }
-    if (((r->route >= R_JOBS && r->route <= R_CANCEL) ||
-         ((r->route == R_METRICS || r->route == R_READYZ) &&
-          !r->q->cfg.public_metrics)) &&
+    if ((rd->auth == AUTH_TOKEN || (rd->auth == AUTH_OPS && !r->q->cfg.public_metrics)) &&
         !authenticate(c, r)) {
         static const char *const h[] = {MHD_HTTP_HEADER_WWW_AUTHENTICATE,
                                         "Bearer realm=\"qdcd\"", NULL};
