@@ -3,7 +3,11 @@
 #include "parse.h"
 #include "route.h"
 #include "store.h"
+#include "testio.h"
 #include "testlib.h"
+
+/* the fuzz target itself, replayed on its seeds and crashes below */
+#include "../fuzz/fuzz_http.c"
 
 #include <limits.h>
 #include <string.h>
@@ -205,5 +209,19 @@ TEST(accept_negotiation)
     ASSERT_EQ_INT(parse_accept(big, &f), -1);
 }
 
+static int replay_http(const char *buf, size_t len)
+{
+    return LLVMFuzzerTestOneInput((const uint8_t *)buf, len); /* aborts on a bug */
+}
+
+TEST(fuzz_replay)
+{
+    int n, bad = replay_fuzz("http", replay_http, &n);
+
+    printf("  # %d fuzz inputs replayed\n", n);
+    ASSERT_TRUE(n > 0);
+    ASSERT_EQ_INT(bad, 0);
+}
+
 TEST_MAIN("http", T(router_paths), T(router_methods_exact), T(router_table_is_consistent),
-          T(job_ids), T(query_integers), T(etags), T(accept_negotiation))
+          T(job_ids), T(query_integers), T(etags), T(accept_negotiation), T(fuzz_replay))
