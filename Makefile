@@ -93,7 +93,7 @@ $(B)/tests/%: tests/unit/%.c tests/unit/testlib.h $(B)/libqdc.a
 	$(CC) $(CPPFLAGS) -Itests/unit $(CFLAGS) -o $@ $< $(B)/libqdc.a $(LIB_LIBS) $(LDFLAGS)
 
 # The daemon's pure parsers and router, linked alone (no libmicrohttpd).
-HTTP_PURE_OBJ := $(B)/server/route.o $(B)/server/parse.o
+HTTP_PURE_OBJ := $(B)/server/route.o $(B)/server/parse.o $(B)/server/problem.o $(B)/server/util.o
 $(B)/tests/test_http: tests/unit/test_http.c tests/unit/testlib.h tests/unit/testio.h tests/fuzz/fuzz_http.c $(HTTP_PURE_OBJ) $(B)/libqdc.a
 	@mkdir -p $(dir $@)
 	$(CC) $(CPPFLAGS) -Itests/unit -Iserver $(CFLAGS) -o $@ $< $(HTTP_PURE_OBJ) $(B)/libqdc.a \

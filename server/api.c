@@ -11,6 +11,7 @@
 
 #include "job.h"
 #include "parse.h"
+#include "problem.h"
 #include "qdc.h"
 #include "route.h"
 #include "shared.h"
@@ -1842,34 +1843,15 @@ enum MHD_Result api_begin(struct MHD_Connection *c, req *r, const char *url,
  * /problems/<slug>, a URI this daemon serves. */
 static enum MHD_Result do_problem_page(struct MHD_Connection *c, req *r, const char *url)
 {
-    static const struct {
-        const char *slug, *text;
-    } pages[] = {
-        {"invalid-option",
-         "An optimizer option has a value outside its range; the detail "
-         "names the valid values (GET the option table with `qdc options`)."},
-        {"invalid-mesh",
-         "The mesh failed validation: the detail names the vertex or tet."},
-        {"too-big", "The body or the mesh exceeds the server's limits (413)."},
-        {"queue-full",
-         "Too many queued jobs; retry after the Retry-After seconds (429)."},
-        {"unauthorized", "Send Authorization: Bearer <token> (401)."},
-        {"ambiguous-framing", "The request had two Content-Length headers, or one with "
-                              "Transfer-Encoding (400)."},
-        {"attempts-exhausted", "The daemon died while running the job on each attempt; "
-                               "it is not retried."},
-        {"io",
-         "The server could not read or write its data (507 when the disk is full)."},
-    };
     const char *slug = url + 10;
     sbuf b = {0};
     enum MHD_Result ret;
     const char *text = "A problem qdcd reports; the response's title and detail describe "
                        "the occurrence.";
 
-    for (size_t i = 0; i < sizeof pages / sizeof pages[0]; i++)
-        if (!strcmp(slug, pages[i].slug))
-            text = pages[i].text;
+    const problem_type *t = problem_type_of(slug);
+    if (t && t->page)
+        text = t->page;
     sb_printf(&b,
               "qdcd problem type: %s\n\n%s\n\nSee proto/openapi.yaml of the qdc "
               "repository for the whole API.\n",

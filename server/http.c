@@ -6,6 +6,7 @@
 #include "http.h"
 
 #include "api.h"
+#include "problem.h"
 
 #include <arpa/inet.h>
 #include <errno.h>
@@ -142,13 +143,8 @@ enum MHD_Result http_problem(struct MHD_Connection *c, req *r, unsigned status,
     sbuf b = {0};
     enum MHD_Result ret;
 
-    sb_printf(&b, "{\"type\":\"/problems/%s\",\"title\":", slug);
-    sb_json_str(&b, title);
-    sb_printf(&b, ",\"status\":%u,\"detail\":", status);
-    sb_json_str(&b, detail);
-    if (extra && *extra)
-        sb_printf(&b, ",%s", extra);
-    sb_puts(&b, "}\n");
+    problem_json(&b, (int)status, slug, title, detail, extra);
+    sb_puts(&b, "\n");
     if (b.oom)
         ret = http_reply(c, r, 503, "text/plain", "out of memory\n", 14, NULL);
     else

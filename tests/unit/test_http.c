@@ -1,6 +1,7 @@
 /* test_http.c - the daemon's pure HTTP parsers: the router (server/route.c),
  * job ids, query integers, If-None-Match and Accept (server/parse.c). */
 #include "parse.h"
+#include "problem.h"
 #include "route.h"
 #include "store.h"
 #include "testio.h"
@@ -214,6 +215,48 @@ static int replay_http(const char *buf, size_t len)
     return LLVMFuzzerTestOneInput((const uint8_t *)buf, len); /* aborts on a bug */
 }
 
+TEST(problem_table)
+{
+    size_t n;
+    const problem_type *t = problem_types(&n);
+    ASSERT_TRUE(n >= 20);
+    for (size_t i = 0; i < n; i++) {
+        /* slugs are unique, [a-z-], routable as /problems/<slug> */
+        char url[80], id[JOB_ID_LEN + 1];
+        ASSERT_TRUE(problem_type_of(t[i].slug) == &t[i]);
+        ASSERT_TRUE(t[i].status >= 400 && t[i].status < 600);
+        ASSERT_TRUE(t[i].title && *t[i].title);
+        snprintf(url, sizeof url, "/problems/%s", t[i].slug);
+        ASSERT_EQ_INT(route_match(url, id), R_PROBLEM);
+    }
+    ASSERT_TRUE(problem_type_of("no-such-type") == NULL);
+    ASSERT_TRUE(problem_type_of(NULL) == NULL);
+}
+
+TEST(problem_bodies)
+{
+    sbuf b = {0};
+    problem_json(&b, 404, "not-found", NULL, "no \"x\"\n", NULL);
+    ASSERT_TRUE(!b.oom);
+    ASSERT_TRUE(!strcmp(b.buf,
+                        "{\"type\":\"/problems/not-found\",\"title\":\"not found\","
+                        "\"status\":404,\"detail\":\"no \\\"x\\\"\\u000a\"}"));
+    sb_free(&b);
+    problem_json(&b, 507, "io", "insufficient storage", "d", "\"index\":3");
+    ASSERT_TRUE(!strcmp(b.buf, "{\"type\":\"/problems/io\",\"title\":\"insufficient "
+                               "storage\",\"status\":507,\"detail\":\"d\",\"index\":3}"));
+    sb_free(&b);
+    char e[512], small[40];
+    problem_attempts(e, sizeof e, 3, "the daemon");
+    ASSERT_TRUE(!strcmp(e,
+                        "{\"type\":\"/problems/attempts-exhausted\",\"title\":\"job "
+                        "crashed the daemon\",\"status\":500,\"detail\":\"the daemon "
+                        "died while running this job on each of its 3 attempt(s); it is "
+                        "not retried\",\"attempts\":3}"));
+    problem_attempts(small, sizeof small, 3, "a daemon");
+    ASSERT_TRUE(!strcmp(small, "")); /* never a cut, invalid JSON text */
+}
+
 TEST(fuzz_replay)
 {
     int n, bad = replay_fuzz("http", replay_http, &n);
@@ -224,4 +267,5 @@ TEST(fuzz_replay)
 }
 
 TEST_MAIN("http", T(router_paths), T(router_methods_exact), T(router_table_is_consistent),
-          T(job_ids), T(query_integers), T(etags), T(accept_negotiation), T(fuzz_replay))
+          T(job_ids), T(query_integers), T(etags), T(accept_negotiation),
+          T(problem_table), T(problem_bodies), T(fuzz_replay))
