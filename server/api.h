@@ -15,6 +15,8 @@ enum MHD_Result api_dispatch(struct MHD_Connection *c, req *r, const char *url,
                              const char *method);
 /* Release what the request still holds (temp upload file). */
 void api_req_done(req *r);
+/* The four above, for http_start. */
+extern const http_handlers api_handlers;
 
 /* The intake thread: parses, validates and commits complete uploads while
  * their connections are suspended, so the HTTP thread never waits on a parse
