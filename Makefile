@@ -92,6 +92,13 @@ $(B)/tests/%: tests/unit/%.c tests/unit/testlib.h $(B)/libqdc.a
 	@mkdir -p $(dir $@)
 	$(CC) $(CPPFLAGS) -Itests/unit $(CFLAGS) -o $@ $< $(B)/libqdc.a $(LIB_LIBS) $(LDFLAGS)
 
+# The daemon's pure parsers and router, linked alone (no libmicrohttpd).
+HTTP_PURE_OBJ := $(B)/server/route.o $(B)/server/parse.o $(B)/server/problem.o $(B)/server/util.o
+$(B)/tests/test_http: tests/unit/test_http.c tests/unit/testlib.h tests/unit/testio.h tests/fuzz/fuzz_http.c $(HTTP_PURE_OBJ) $(B)/libqdc.a
+	@mkdir -p $(dir $@)
+	$(CC) $(CPPFLAGS) -Itests/unit -Iserver $(CFLAGS) -o $@ $< $(HTTP_PURE_OBJ) $(B)/libqdc.a \
+	    $(LIB_LIBS) $(LDFLAGS)
+
 # The whole suite: release build, sanitizer build, unit + end-to-end + daemon tests.
 # The last line is "N passed, N failed".
 test: deps
@@ -152,13 +159,13 @@ format-check:
 # crashes land in tests/fuzz/crashes/NAME, which `make test` replays (unit tests).
 FUZZ_SECONDS ?= 60
 FUZZ_LIB := lib/core/base.c lib/core/mesh.c $(wildcard lib/io/meshio*.c) lib/io/gz.c lib/io/splice.c \
-    lib/io/surface.c
+    lib/io/surface.c server/parse.c server/route.c
 fuzz:
 	@mkdir -p build/fuzz
 	@set -e; for src in $(wildcard tests/fuzz/fuzz_*.c); do \
 	    name=$$(basename $$src .c); name=$${name#fuzz_}; \
 	    echo "# fuzz $$name ($(FUZZ_SECONDS) s)"; \
-	    clang -g -O1 -fsanitize=fuzzer,address,undefined $(CPPFLAGS) $$src $(FUZZ_LIB) \
+	    clang -g -O1 -fsanitize=fuzzer,address,undefined $(CPPFLAGS) -Iserver $$src $(FUZZ_LIB) \
 	        -lz -lm -o build/fuzz/fuzz_$$name; \
 	    mkdir -p build/fuzz/corpus/$$name tests/fuzz/crashes/$$name; \
 	    build/fuzz/fuzz_$$name -max_total_time=$(FUZZ_SECONDS) -max_len=8192 \

@@ -9,8 +9,13 @@
 #define _GNU_SOURCE
 #include "api.h"
 
+#include "handlers.h"
 #include "job.h"
+#include "ops.h"
+#include "parse.h"
+#include "problem.h"
 #include "qdc.h"
+#include "route.h"
 #include "shared.h"
 #include "ui.h"
 
@@ -27,105 +32,11 @@
 #include <sys/random.h>
 #include <unistd.h>
 
-enum {
-    R_NONE = 0,
-    R_JOBS,
-    R_JOB,
-    R_PROGRESS,
-    R_EVENTS,
-    R_RESULT,
-    R_REPORT,
-    R_INPUT,   /* the job's input mesh: served like R_RESULT */
-    R_OPTIONS, /* the option table */
-    R_CANCEL,
-    R_LIVEZ,
-    R_READYZ,
-    R_METRICS,
-    R_PROBLEM,
-    R_UI, /* the web console (ui.c) */
-};
-
 #define MEDIA_QMESH "application/vnd.qdc.mesh"
 
 static const char *const no_headers[] = {NULL};
 
 /* ------------------------------------------------------------------ routing -- */
-
-static int is_job_id(const char *s, size_t n)
-{
-    if (n != JOB_ID_LEN)
-        return 0;
-    for (size_t i = 0; i < n; i++)
-        if (!isxdigit((unsigned char)s[i]) || isupper((unsigned char)s[i]))
-            return 0;
-    return 1;
-}
-
-/* Route of url; id copied for job routes. -1: a job route with an id that
- * cannot exist (answered 404 like an unknown id). */
-static int route_of(const char *url, char *id)
-{
-    static const struct {
-        const char *path;
-        int route;
-    } fixed[] = {{"/livez", R_LIVEZ},  {"/readyz", R_READYZ}, {"/metrics", R_METRICS},
-                 {"/v1/jobs", R_JOBS}, {"/v1/jobs/", R_JOBS}, {"/v1/options", R_OPTIONS}};
-    static const struct {
-        const char *suffix;
-        int route;
-    } sub[] = {{"", R_JOB},           {"/progress", R_PROGRESS}, {"/events", R_EVENTS},
-               {"/result", R_RESULT}, {"/report", R_REPORT},     {":cancel", R_CANCEL},
-               {"/input", R_INPUT}};
-
-    if (ui_asset_of(url))
-        return R_UI;
-    for (size_t i = 0; i < sizeof fixed / sizeof fixed[0]; i++)
-        if (!strcmp(url, fixed[i].path))
-            return fixed[i].route;
-    if (!strncmp(url, "/problems/", 10) && url[10] && strlen(url + 10) <= JOB_ID_LEN &&
-        strspn(url + 10, "abcdefghijklmnopqrstuvwxyz-") == strlen(url + 10)) {
-        snprintf(id, JOB_ID_LEN + 1, "%.32s", url + 10);
-        return R_PROBLEM;
-    }
-    if (strncmp(url, "/v1/jobs/", 9))
-        return R_NONE;
-    const char *p = url + 9;
-    size_t n = strcspn(p, "/:");
-    for (size_t i = 0; i < sizeof sub / sizeof sub[0]; i++) {
-        if (!strcmp(p + n, sub[i].suffix)) {
-            if (!is_job_id(p, n))
-                return -1;
-            memcpy(id, p, n);
-            id[n] = 0;
-            return sub[i].route;
-        }
-    }
-    return R_NONE;
-}
-
-static const char *allowed(int route)
-{
-    switch (route) {
-    case R_JOBS:
-        return "GET, POST";
-    case R_JOB:
-        return "GET, DELETE";
-    case R_CANCEL:
-        return "POST";
-    default:
-        return "GET";
-    }
-}
-
-static int method_ok(int route, const char *m)
-{
-    const char *a = allowed(route);
-    size_t n = strlen(m);
-    for (const char *p = a; (p = strstr(p, m)); p += n)
-        if ((p == a || p[-1] == ' ') && (p[n] == 0 || p[n] == ','))
-            return 1;
-    return !strcmp(m, "HEAD") && strstr(a, "GET");
-}
 
 /* ------------------------------------------------------------------- access -- */
 
@@ -160,15 +71,14 @@ static int authenticate(struct MHD_Connection *c, req *r)
 /* The job of the route, if it exists and belongs to the caller; else a 404. */
 /* The job store did not answer (a database that went away, SQLite busy or
  * out of space): a passing condition, 503 with a Retry-After. */
-static enum MHD_Result store_unavailable(struct MHD_Connection *c, req *r,
-                                         const char *what)
+enum MHD_Result store_unavailable(struct MHD_Connection *c, req *r, const char *what)
 {
     static const char *const h[] = {MHD_HTTP_HEADER_RETRY_AFTER, "5", NULL};
     return http_problem(c, r, 503, "store-unavailable", "job store unavailable", what,
                         NULL, h);
 }
 
-static int load_job(struct MHD_Connection *c, req *r, job_rec *j, enum MHD_Result *ret)
+int load_job(struct MHD_Connection *c, req *r, job_rec *j, enum MHD_Result *ret)
 {
     qdc_status st = r->q->store->ops->get(r->q->store, r->id, j);
     if (st == QDC_OK && !strcmp(j->owner, r->owner))
@@ -185,7 +95,7 @@ static int load_job(struct MHD_Connection *c, req *r, job_rec *j, enum MHD_Resul
 
 /* ------------------------------------------------------------------ job JSON -- */
 
-static void job_json(req *r, const job_rec *j, sbuf *b)
+void job_json(req *r, const job_rec *j, sbuf *b)
 {
     sbuf last = {0};
     int cnt = 0, done;
@@ -254,8 +164,8 @@ static void job_json(req *r, const job_rec *j, sbuf *b)
     sb_puts(b, "}}");
 }
 
-static enum MHD_Result reply_job(struct MHD_Connection *c, req *r, unsigned status,
-                                 const job_rec *j, const char *const *headers)
+enum MHD_Result reply_job(struct MHD_Connection *c, req *r, unsigned status,
+                          const job_rec *j, const char *const *headers)
 {
     sbuf b = {0};
     job_json(r, j, &b);
@@ -1081,295 +991,6 @@ static enum MHD_Result finish_upload(struct MHD_Connection *c, req *r)
     return offq_push(&intake, c, r);
 }
 
-/* ----------------------------------------------------------------- progress -- */
-
-/* Records of a finished run from DATA/jobs/ID/progress.jsonl (line k = seq k),
- * as a JSON list body (sse = 0) or as SSE events (sse = 1). */
-static void file_records(req *r, const char *id, long after, int sse, sbuf *out,
-                         int *count, long *last)
-{
-    char path[4300];
-    size_t len = 0;
-    char *buf;
-    long seq = 0;
-
-    *count = 0;
-    *last = -1;
-    job_path(r->q, id, "progress.jsonl", path, sizeof path);
-    buf = file_read_all(path, &len);
-    if (!buf)
-        return;
-    for (char *p = buf; p < buf + len; seq++) {
-        char *nl = memchr(p, '\n', (size_t)(buf + len - p));
-        size_t n = nl ? (size_t)(nl - p) : (size_t)(buf + len - p);
-        if (!nl && n == 0)
-            break;
-        if (!nl) /* torn last line of a crashed run: not a record */
-            break;
-        if (seq > after) {
-            if (sse) {
-                sb_printf(out, "id: %ld\nevent: progress\ndata: ", seq);
-                sb_add(out, p, n);
-                sb_puts(out, "\n\n");
-            } else {
-                if (*count)
-                    sb_puts(out, ",");
-                sb_add(out, p, n);
-            }
-            (*count)++;
-        }
-        *last = seq;
-        p += n + 1;
-    }
-    free(buf);
-}
-
-/* store_record_fn target: frames records like file_records. */
-typedef struct {
-    sbuf *out;
-    int sse, *count;
-    long *last;
-} rec_sink;
-
-static void sink_record(void *ctx, long seq, const char *json, size_t len)
-{
-    rec_sink *k = ctx;
-    if (k->sse) {
-        sb_printf(k->out, "id: %ld\nevent: progress\ndata: ", seq);
-        sb_add(k->out, json, len);
-        sb_puts(k->out, "\n\n");
-    } else {
-        if (*k->count)
-            sb_puts(k->out, ",");
-        sb_add(k->out, json, len);
-    }
-    (*k->count)++;
-    *k->last = seq;
-}
-
-/* Records after `after` from memory (a run of this process), else from the
- * store (shared: any state, the run may be on another node) or, for a
- * finished run, from the file. */
-static void collect(req *r, const job_rec *j, long after, int sse, sbuf *out, int *count,
-                    long *last, int *done)
-{
-    int chan_done = 0;
-    if (!sse) {
-        if (poll_read(r->q->hub, j->id, after, out, count, last, &chan_done)) {
-            *done = chan_done || job_state_done(j->state);
-            return;
-        }
-    } else {
-        sbuf tmp = {0};
-        /* SSE needs one event per record: read the list, then frame it. */
-        if (poll_read(r->q->hub, j->id, after, &tmp, count, last, &chan_done)) {
-            long seq = *last - *count + 1;
-            char *p = tmp.buf;
-            for (int i = 0; i < *count; i++, seq++) {
-                /* records are objects joined by ',' at depth 0 */
-                int depth = 0, instr = 0;
-                char *q = p;
-                for (; *q; q++) {
-                    if (instr) {
-                        if (*q == '\\' && q[1])
-                            q++;
-                        else if (*q == '"')
-                            instr = 0;
-                    } else if (*q == '"') {
-                        instr = 1;
-                    } else if (*q == '{') {
-                        depth++;
-                    } else if (*q == '}' && --depth == 0) {
-                        q++;
-                        break;
-                    }
-                }
-                sb_printf(out, "id: %ld\nevent: progress\ndata: ", seq);
-                sb_add(out, p, (size_t)(q - p));
-                sb_puts(out, "\n\n");
-                p = *q == ',' ? q + 1 : q;
-            }
-            sb_free(&tmp);
-            *done = chan_done || job_state_done(j->state);
-            return;
-        }
-        sb_free(&tmp);
-    }
-    *count = 0;
-    *last = -1;
-    *done = job_state_done(j->state);
-    if (shared_on(r->q)) {
-        rec_sink k = {out, sse, count, last};
-        r->q->store->ops->progress_read(r->q->store, j->id, after, sink_record, &k);
-        if (!*count)
-            *last = after;
-    } else if (*done) {
-        file_records(r, j->id, after, sse, out, count, last);
-    }
-}
-
-static int parse_long(const char *s, long lo, long hi, long *out)
-{
-    char *end;
-    errno = 0;
-    long v = strtol(s, &end, 10);
-    if (!*s || *end || errno || v < lo || v > hi)
-        return -1;
-    *out = v;
-    return 0;
-}
-
-static enum MHD_Result do_progress(struct MHD_Connection *c, req *r)
-{
-    qdcd *q = r->q;
-    job_rec j;
-    enum MHD_Result ret;
-    sbuf recs = {0}, b = {0};
-    int count, done;
-    long last;
-
-    if (r->w.gone) /* resumed because the client hung up: close, answer nothing */
-        return MHD_NO;
-    if (!load_job(c, r, &j, &ret))
-        return ret;
-    if (!r->wait_set) {
-        const char *a = MHD_lookup_connection_value(c, MHD_GET_ARGUMENT_KIND, "after");
-        const char *w = MHD_lookup_connection_value(c, MHD_GET_ARGUMENT_KIND, "wait");
-        double wait = 0;
-        if (a && parse_long(a, -1, LONG_MAX - 1, &r->after))
-            return http_problem(c, r, 400, "invalid-parameter", "invalid parameter",
-                                "'after' must be an integer >= -1 (a record seq)",
-                                "\"parameter\":\"after\"", NULL);
-        if (w) {
-            char *end;
-            wait = strtod(w, &end);
-            if (!*w || *end || !(wait >= 0 && wait <= 3600)) {
-                char d[160];
-                snprintf(d, sizeof d,
-                         "'wait' must be a number of seconds in [0, 3600] (the server "
-                         "waits at most %g)",
-                         q->cfg.wait_cap);
-                return http_problem(c, r, 400, "invalid-parameter", "invalid parameter",
-                                    d, "\"parameter\":\"wait\"", NULL);
-            }
-        }
-        if (wait > q->cfg.wait_cap)
-            wait = q->cfg.wait_cap;
-        r->deadline = r->t0 + wait;
-        r->wait_set = 1;
-    }
-    for (int tries = 0;; tries++) {
-        /* before the read: a kick from another node after it refuses the park */
-        unsigned long gen = poll_kick_gen(q->hub);
-        recs.len = 0;
-        collect(r, &j, r->after, 0, &recs, &count, &last, &done);
-        if (count || done || tries || mono_now() >= r->deadline ||
-            poll_shutting_down(q->hub))
-            break;
-        if (poll_park_since(q->hub, j.id, r->after, &r->w, c, r->deadline, gen)) {
-            r->parked_ever = 1;
-            sb_free(&recs);
-            return MHD_YES;
-        }
-        /* Something arrived between the read and the park: read again. */
-        if (q->store->ops->get(q->store, j.id, &j) != QDC_OK)
-            break;
-    }
-    sb_printf(&b,
-              "{\"id\":\"%s\",\"state\":\"%s\",\"done\":%s,\"after\":%ld,"
-              "\"next_after\":%ld,\"count\":%d,\"records\":[",
-              j.id, job_state_name(j.state), done ? "true" : "false", r->after,
-              count ? last : r->after, count);
-    if (recs.len)
-        sb_add(&b, recs.buf, recs.len);
-    sb_puts(&b, "]}\n");
-    ret = http_reply_json(c, r, 200, &b, no_headers);
-    sb_free(&b);
-    sb_free(&recs);
-    return ret;
-}
-
-/* SSE body: MHD pulls; with nothing to send the connection parks from here. */
-static ssize_t sse_reader(void *cls, uint64_t pos, char *buf, size_t max)
-{
-    req *r = cls;
-    qdcd *q = r->q;
-    job_rec j;
-    int count, done;
-    long last;
-
-    (void)pos;
-    if (r->w.gone) /* resumed because the client hung up */
-        return MHD_CONTENT_READER_END_WITH_ERROR;
-    for (;;) {
-        if (r->sse_off < r->sse.len) {
-            size_t n = r->sse.len - r->sse_off;
-            if (n > max)
-                n = max;
-            memcpy(buf, r->sse.buf + r->sse_off, n);
-            r->sse_off += n;
-            return (ssize_t)n;
-        }
-        r->sse.len = 0;
-        r->sse_off = 0;
-        if (r->sse_end)
-            return MHD_CONTENT_READER_END_OF_STREAM;
-        unsigned long gen = poll_kick_gen(q->hub); /* before the reads, as do_progress */
-        if (q->store->ops->get(q->store, r->id, &j) != QDC_OK) {
-            sb_puts(&r->sse, "event: end\ndata: {\"state\":\"deleted\"}\n\n");
-            r->sse_end = 1;
-            continue;
-        }
-        collect(r, &j, r->after, 1, &r->sse, &count, &last, &done);
-        if (r->sse.oom)
-            return MHD_CONTENT_READER_END_WITH_ERROR;
-        if (count) {
-            r->after = last;
-            continue;
-        }
-        if (done || poll_shutting_down(q->hub)) {
-            sb_printf(
-                &r->sse,
-                "event: end\ndata: {\"id\":\"%s\",\"state\":\"%s\",\"done\":%s}\n\n",
-                j.id, job_state_name(j.state), done ? "true" : "false");
-            r->sse_end = 1;
-            continue;
-        }
-        if (r->deadline > 0 && mono_now() >= r->deadline) {
-            sb_puts(&r->sse, ": keep-alive\n\n");
-            r->deadline = 0;
-            continue;
-        }
-        r->deadline = mono_now() + q->cfg.sse_keepalive;
-        if (poll_park_since(q->hub, j.id, r->after, &r->w, r->conn, r->deadline, gen))
-            return 0; /* resumed by a record, the end, the keep-alive or shutdown */
-    }
-}
-
-static enum MHD_Result do_events(struct MHD_Connection *c, req *r)
-{
-    job_rec j;
-    enum MHD_Result ret;
-    const char *a;
-    struct MHD_Response *resp;
-
-    if (!load_job(c, r, &j, &ret))
-        return ret;
-    a = MHD_lookup_connection_value(c, MHD_HEADER_KIND, "Last-Event-ID");
-    if (!a)
-        a = MHD_lookup_connection_value(c, MHD_GET_ARGUMENT_KIND, "after");
-    if (a && parse_long(a, -1, LONG_MAX - 1, &r->after))
-        return http_problem(c, r, 400, "invalid-parameter", "invalid parameter",
-                            "Last-Event-ID / 'after' must be an integer >= -1",
-                            "\"parameter\":\"after\"", NULL);
-    r->parked_ever = 1; /* a stream: its duration is not a latency */
-    resp =
-        MHD_create_response_from_callback(MHD_SIZE_UNKNOWN, 16384, sse_reader, r, NULL);
-    static const char *const h[] = {MHD_HTTP_HEADER_CONTENT_TYPE, "text/event-stream",
-                                    MHD_HTTP_HEADER_CACHE_CONTROL, "no-store", NULL};
-    return http_reply_response(c, r, 200, resp, h);
-}
-
 /* ------------------------------------------------------------ result/report -- */
 
 /* The input mesh of a job as the optimizer read it: the upload, or TetGen's
@@ -1431,26 +1052,6 @@ static int not_servable(struct MHD_Connection *c, req *r, const job_rec *j,
     return 0;
 }
 
-/* Does If-None-Match match etag (quoted)? Weak comparison (RFC 9110 13.1.2). */
-int etag_matches(const char *inm, const char *etag)
-{
-    size_t n = strlen(etag);
-    if (!inm)
-        return 0;
-    while (*inm) {
-        while (*inm == ' ' || *inm == ',')
-            inm++;
-        if (*inm == '*')
-            return 1;
-        if (!strncmp(inm, "W/", 2))
-            inm += 2;
-        if (!strncmp(inm, etag, n) && (inm[n] == 0 || inm[n] == ',' || inm[n] == ' '))
-            return 1;
-        inm += strcspn(inm, ",");
-    }
-    return 0;
-}
-
 /* The offered list for a 400/406 about the result's format. */
 static void offered(sbuf *x)
 {
@@ -1499,33 +1100,8 @@ static int result_format(struct MHD_Connection *c, req *r, meshio_format *out,
         *out = MESHIO_QMESH;
         return 0;
     }
-    for (const char *p = acc; *p;) {
-        char t[200], base[100];
-        size_t n = strcspn(p, ",");
-        snprintf(t, sizeof t, "%.*s", (int)(n < sizeof t - 1 ? n : sizeof t - 1), p);
-        p += n + (p[n] == ',');
-        const char *e = t + strspn(t, " \t");
-        snprintf(base, sizeof base, "%s", e);
-        base[strcspn(base, "; \t")] = 0;
-        int q0 = 0;
-        for (const char *sc = strchr(e, ';'); sc; sc = strchr(sc + 1, ';')) {
-            const char *pv = sc + 1 + strspn(sc + 1, " \t");
-            if ((pv[0] == 'q' || pv[0] == 'Q') && pv[1] == '=')
-                q0 = strtod(pv + 2, NULL) <= 0;
-        }
-        if (q0)
-            continue; /* q=0: "not acceptable" */
-        if (!strcmp(base, "*/*") || !strcasecmp(base, "application/*"))
-            k = MESHIO_QMESH;
-        else if (!strcasecmp(base, "model/*") || !strcasecmp(base, "text/plain"))
-            k = MESHIO_MEDIT;
-        else
-            k = meshio_format_from_media_type(e);
-        if (offerable(k)) {
-            *out = k;
-            return 0;
-        }
-    }
+    if (!parse_accept(acc, out))
+        return 0;
     offered(&x);
     snprintf(d, sizeof d,
              "no offered type matches Accept: %.150s (or name one with ?format=)", acc);
@@ -1727,208 +1303,6 @@ static enum MHD_Result do_report(struct MHD_Connection *c, req *r)
     return http_reply_file(c, r, 200, path, "application/json", no_headers);
 }
 
-/* ------------------------------------------------------ cancel/delete/list -- */
-
-static enum MHD_Result do_cancel(struct MHD_Connection *c, req *r)
-{
-    qdcd *q = r->q;
-    job_rec j;
-    enum MHD_Result ret;
-    int now_done = 0;
-
-    if (!load_job(c, r, &j, &ret))
-        return ret;
-    if (!job_state_done(j.state)) {
-        if (q->store->ops->cancel(q->store, j.id, &now_done) != QDC_OK)
-            return store_unavailable(c, r, "the cancellation could not be recorded");
-        if (now_done) {
-            atomic_fetch_add(&q->m.finished[JOB_CANCELLED], 1);
-            poll_end(q->hub, j.id);
-        } else {
-            job_pool_cancel(q->pool, j.id);
-        }
-        if (q->store->ops->get(q->store, j.id, &j) != QDC_OK)
-            return http_problem(c, r, 404, "not-found", "no such job",
-                                "the job was deleted", NULL, NULL);
-    }
-    return reply_job(c, r, 200, &j, no_headers);
-}
-
-static enum MHD_Result do_delete(struct MHD_Connection *c, req *r)
-{
-    qdcd *q = r->q;
-    job_rec j;
-    enum MHD_Result ret;
-    char dir[4200];
-    int now_done;
-
-    if (!load_job(c, r, &j, &ret))
-        return ret;
-    int running_here = 0;
-    if (j.state == JOB_RUNNING)
-        q->store->ops->cancel(q->store, j.id, &now_done);
-    if (q->store->ops->remove(q->store, j.id) != QDC_OK)
-        return store_unavailable(c, r, "the job could not be deleted");
-    /* Whatever state was read above: a worker may have claimed the job since
-     * (a DELETE right after the 202). The row is gone first, so a worker that
-     * registers after this cancel finds it gone (job.c) and does not run it. */
-    running_here = job_pool_cancel(q->pool, j.id);
-    poll_drop(q->hub, j.id);
-    /* A running job's worker removes the directory when it stops (and also
-     * when it finished just before the row went away). */
-    if (!running_here) {
-        job_path(q, j.id, NULL, dir, sizeof dir);
-        dir_remove(dir);
-    }
-    return http_reply(c, r, 204, NULL, "", 0, no_headers);
-}
-
-static enum MHD_Result do_list(struct MHD_Connection *c, req *r)
-{
-    const char *ps = MHD_lookup_connection_value(c, MHD_GET_ARGUMENT_KIND, "page_size");
-    const char *pt = MHD_lookup_connection_value(c, MHD_GET_ARGUMENT_KIND, "page_token");
-    long size = 50, after = 0;
-    job_rec *rows;
-    int n = 0;
-    sbuf b = {0};
-    enum MHD_Result ret;
-
-    if (ps && parse_long(ps, 1, 1000, &size))
-        return http_problem(c, r, 400, "invalid-parameter", "invalid parameter",
-                            "'page_size' must be an integer in [1, 1000]",
-                            "\"parameter\":\"page_size\"", NULL);
-    if (pt && *pt && parse_long(pt, 0, LONG_MAX, &after))
-        return http_problem(c, r, 400, "invalid-parameter", "invalid parameter",
-                            "'page_token' is not a token this server issued",
-                            "\"parameter\":\"page_token\"", NULL);
-    rows = malloc((size_t)size * sizeof *rows);
-    if (!rows)
-        return http_problem(c, r, 503, "out-of-memory", "out of memory",
-                            "try a smaller page", NULL, NULL);
-    if (r->q->store->ops->list(r->q->store, r->owner, after, (int)size, rows, &n) !=
-        QDC_OK) {
-        free(rows);
-        return store_unavailable(c, r, "cannot list jobs");
-    }
-    sb_puts(&b, "{\"jobs\":[");
-    for (int i = 0; i < n; i++) {
-        if (i)
-            sb_puts(&b, ",");
-        job_json(r, &rows[i], &b);
-    }
-    sb_puts(&b, "]");
-    if (n == size)
-        sb_printf(&b, ",\"next_page_token\":\"%lld\"", (long long)rows[n - 1].seq);
-    sb_puts(&b, "}\n");
-    free(rows);
-    ret = http_reply_json(c, r, 200, &b, no_headers);
-    sb_free(&b);
-    return ret;
-}
-
-/* ------------------------------------------------------------ health, metrics -- */
-
-static enum MHD_Result do_metrics(struct MHD_Connection *c, req *r)
-{
-    qdcd *q = r->q;
-    job_counts cnt;
-    sbuf b = {0};
-    enum MHD_Result ret;
-    long long cum = 0;
-
-    memset(&cnt, 0, sizeof cnt);
-    q->store->ops->counts(q->store, &cnt);
-    sb_puts(&b, "# HELP qdcd_jobs Jobs in the store by state.\n# TYPE qdcd_jobs gauge\n");
-    for (int s = 0; s < JOB_STATE_COUNT; s++)
-        sb_printf(&b, "qdcd_jobs{state=\"%s\"} %lld\n", job_state_name((job_state)s),
-                  (long long)cnt.by_state[s]);
-    sb_printf(&b,
-              "# HELP qdcd_queue_depth Jobs waiting for a worker.\n"
-              "# TYPE qdcd_queue_depth gauge\nqdcd_queue_depth %lld\n",
-              (long long)cnt.by_state[JOB_QUEUED]);
-    sb_printf(&b,
-              "# HELP qdcd_workers Worker threads.\n# TYPE qdcd_workers gauge\n"
-              "qdcd_workers %d\n",
-              q->cfg.workers);
-    sb_printf(&b,
-              "# HELP qdcd_workers_busy Workers running a job.\n"
-              "# TYPE qdcd_workers_busy gauge\nqdcd_workers_busy %d\n",
-              job_pool_busy(q->pool));
-    sb_printf(&b,
-              "# HELP qdcd_parked_connections Long-polls and event streams waiting.\n"
-              "# TYPE qdcd_parked_connections gauge\nqdcd_parked_connections %d\n",
-              poll_parked_count(q->hub));
-    sb_printf(&b,
-              "# HELP qdcd_parked_hangups_total Parked connections dropped because "
-              "their client had closed them.\n"
-              "# TYPE qdcd_parked_hangups_total counter\nqdcd_parked_hangups_total %ld\n",
-              poll_gone_count(q->hub));
-    sb_printf(&b,
-              "# HELP qdcd_iterations_total Progress records published.\n"
-              "# TYPE qdcd_iterations_total counter\nqdcd_iterations_total %lld\n",
-              (long long)atomic_load(&q->m.iterations));
-    sb_printf(&b,
-              "# HELP qdcd_upload_bytes_total Request body bytes received on uploads.\n"
-              "# TYPE qdcd_upload_bytes_total counter\nqdcd_upload_bytes_total %lld\n",
-              (long long)atomic_load(&q->m.upload_bytes));
-    sb_printf(
-        &b,
-        "# HELP qdcd_jobs_submitted_total Jobs accepted.\n"
-        "# TYPE qdcd_jobs_submitted_total counter\nqdcd_jobs_submitted_total %lld\n",
-        (long long)atomic_load(&q->m.submitted));
-    sb_printf(&b,
-              "# HELP qdcd_jobs_rejected_total Submissions refused (4xx).\n"
-              "# TYPE qdcd_jobs_rejected_total counter\nqdcd_jobs_rejected_total %lld\n",
-              (long long)atomic_load(&q->m.rejected));
-    sb_puts(&b, "# HELP qdcd_jobs_finished_total Runs ended by this process, by state.\n"
-                "# TYPE qdcd_jobs_finished_total counter\n");
-    for (int s = JOB_SUCCEEDED; s < JOB_STATE_COUNT; s++)
-        sb_printf(&b, "qdcd_jobs_finished_total{state=\"%s\"} %lld\n",
-                  job_state_name((job_state)s),
-                  (long long)atomic_load(&q->m.finished[s]));
-    sb_puts(&b, "# HELP qdcd_http_responses_total Responses by status class.\n"
-                "# TYPE qdcd_http_responses_total counter\n");
-    for (int k = 1; k < 6; k++)
-        sb_printf(&b, "qdcd_http_responses_total{code=\"%dxx\"} %lld\n", k,
-                  (long long)atomic_load(&q->m.http_by_class[k]));
-    sb_puts(&b, "# HELP qdcd_http_request_duration_seconds Time from request to response "
-                "(long-polls and streams excluded).\n"
-                "# TYPE qdcd_http_request_duration_seconds histogram\n");
-    for (int k = 0; k <= LAT_BUCKETS; k++) {
-        cum += atomic_load(&q->m.lat_count[k]);
-        if (k < LAT_BUCKETS)
-            sb_printf(&b, "qdcd_http_request_duration_seconds_bucket{le=\"%g\"} %lld\n",
-                      lat_bounds[k], cum);
-        else
-            sb_printf(&b, "qdcd_http_request_duration_seconds_bucket{le=\"+Inf\"} %lld\n",
-                      cum);
-    }
-    sb_printf(&b,
-              "qdcd_http_request_duration_seconds_sum %.6f\n"
-              "qdcd_http_request_duration_seconds_count %lld\n",
-              (double)atomic_load(&q->m.lat_sum_us) * 1e-6, cum);
-    ret = http_reply(c, r, 200, "text/plain; version=0.0.4", b.buf ? b.buf : "",
-                     b.buf ? b.len : 0, no_headers);
-    sb_free(&b);
-    return ret;
-}
-
-static enum MHD_Result do_readyz(struct MHD_Connection *c, req *r)
-{
-    job_counts cnt;
-    char body[160];
-
-    if (poll_shutting_down(r->q->hub) || r->q->stop)
-        return http_reply(c, r, 503, "application/json", "{\"status\":\"stopping\"}\n",
-                          22, no_headers);
-    if (r->q->store->ops->counts(r->q->store, &cnt) != QDC_OK)
-        return http_reply(c, r, 503, "application/json", "{\"status\":\"store\"}\n", 19,
-                          no_headers);
-    snprintf(body, sizeof body, "{\"status\":\"ready\",\"queued\":%lld,\"workers\":%d}\n",
-             (long long)cnt.by_state[JOB_QUEUED], r->q->cfg.workers);
-    return http_reply(c, r, 200, "application/json", body, strlen(body), no_headers);
-}
-
 /* ---------------------------------------------------------------- dispatch -- */
 
 /* Content-Length and Transfer-Encoding headers of a request, counted. */
@@ -1951,7 +1325,7 @@ enum MHD_Result api_begin(struct MHD_Connection *c, req *r, const char *url,
     int framing[2] = {0, 0};
 
     r->conn = c;
-    r->route = route_of(url, r->id);
+    r->route = ui_asset_of(url) ? R_UI : route_match(url, r->id);
     /* Two Content-Lengths, or one with a Transfer-Encoding, can frame the
      * body two ways (request smuggling behind a proxy): refuse, and close. */
     MHD_get_connection_values(c, MHD_HEADER_KIND, count_framing, framing);
@@ -1970,7 +1344,7 @@ enum MHD_Result api_begin(struct MHD_Connection *c, req *r, const char *url,
      * ones. */
     r->close_after = r->route == R_PROGRESS || r->route == R_EVENTS ||
                      (r->route == R_JOBS && !strcmp(method, "POST"));
-    if (r->route == -1)
+    if (r->route == R_BAD_ID)
         return http_problem(c, r, 404, "not-found", "no such job",
                             "job ids are 32 lower-case hex digits", NULL, NULL);
     if (r->route == R_NONE) {
@@ -1978,14 +1352,13 @@ enum MHD_Result api_begin(struct MHD_Connection *c, req *r, const char *url,
         snprintf(d, sizeof d, "no resource at '%.200s'", url);
         return http_problem(c, r, 404, "not-found", "not found", d, NULL, NULL);
     }
-    if (!method_ok(r->route, method)) {
-        const char *const h[] = {MHD_HTTP_HEADER_ALLOW, allowed(r->route), NULL};
+    const route_desc *rd = route_desc_of(r->route);
+    if (!route_method_ok(r->route, method)) {
+        const char *const h[] = {MHD_HTTP_HEADER_ALLOW, rd->allow, NULL};
         return http_problem(c, r, 405, "method-not-allowed", "method not allowed",
                             "see the Allow header", NULL, h);
     }
-    if (((r->route >= R_JOBS && r->route <= R_CANCEL) ||
-         ((r->route == R_METRICS || r->route == R_READYZ) &&
-          !r->q->cfg.public_metrics)) &&
+    if ((rd->auth == AUTH_TOKEN || (rd->auth == AUTH_OPS && !r->q->cfg.public_metrics)) &&
         !authenticate(c, r)) {
         static const char *const h[] = {MHD_HTTP_HEADER_WWW_AUTHENTICATE,
                                         "Bearer realm=\"qdcd\"", NULL};
@@ -2001,34 +1374,15 @@ enum MHD_Result api_begin(struct MHD_Connection *c, req *r, const char *url,
  * /problems/<slug>, a URI this daemon serves. */
 static enum MHD_Result do_problem_page(struct MHD_Connection *c, req *r, const char *url)
 {
-    static const struct {
-        const char *slug, *text;
-    } pages[] = {
-        {"invalid-option",
-         "An optimizer option has a value outside its range; the detail "
-         "names the valid values (GET the option table with `qdc options`)."},
-        {"invalid-mesh",
-         "The mesh failed validation: the detail names the vertex or tet."},
-        {"too-big", "The body or the mesh exceeds the server's limits (413)."},
-        {"queue-full",
-         "Too many queued jobs; retry after the Retry-After seconds (429)."},
-        {"unauthorized", "Send Authorization: Bearer <token> (401)."},
-        {"ambiguous-framing", "The request had two Content-Length headers, or one with "
-                              "Transfer-Encoding (400)."},
-        {"attempts-exhausted", "The daemon died while running the job on each attempt; "
-                               "it is not retried."},
-        {"io",
-         "The server could not read or write its data (507 when the disk is full)."},
-    };
     const char *slug = url + 10;
     sbuf b = {0};
     enum MHD_Result ret;
     const char *text = "A problem qdcd reports; the response's title and detail describe "
                        "the occurrence.";
 
-    for (size_t i = 0; i < sizeof pages / sizeof pages[0]; i++)
-        if (!strcmp(slug, pages[i].slug))
-            text = pages[i].text;
+    const problem_type *t = problem_type_of(slug);
+    if (t && t->page)
+        text = t->page;
     sb_printf(&b,
               "qdcd problem type: %s\n\n%s\n\nSee proto/openapi.yaml of the qdc "
               "repository for the whole API.\n",
@@ -2083,9 +1437,9 @@ enum MHD_Result api_dispatch(struct MHD_Connection *c, req *r, const char *url,
         return http_reply(c, r, 200, "application/json", "{\"status\":\"ok\"}\n", 16,
                           no_headers);
     case R_READYZ:
-        return do_readyz(c, r);
+        return ops_readyz(c, r);
     case R_METRICS:
-        return do_metrics(c, r);
+        return ops_metrics(c, r);
     case R_PROBLEM:
         return do_problem_page(c, r, url);
     case R_UI:
@@ -2095,3 +1449,5 @@ enum MHD_Result api_dispatch(struct MHD_Connection *c, req *r, const char *url,
                             NULL);
     }
 }
+
+const http_handlers api_handlers = {api_begin, api_body, api_dispatch, api_req_done};

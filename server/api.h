@@ -13,11 +13,10 @@ void api_body(req *r, const char *data, size_t len);
 /* Body complete (or resumed after parking): answer or park. */
 enum MHD_Result api_dispatch(struct MHD_Connection *c, req *r, const char *url,
                              const char *method);
-/* Does an If-None-Match header value match etag (quoted, strong)? Weak
- * comparison (RFC 9110 13.1.2); NULL matches nothing. */
-int etag_matches(const char *inm, const char *etag);
 /* Release what the request still holds (temp upload file). */
 void api_req_done(req *r);
+/* The four above, for http_start. */
+extern const http_handlers api_handlers;
 
 /* The intake thread: parses, validates and commits complete uploads while
  * their connections are suspended, so the HTTP thread never waits on a parse

@@ -5,7 +5,7 @@
 #define _GNU_SOURCE
 #include "http.h"
 
-#include "api.h"
+#include "problem.h"
 
 #include <arpa/inet.h>
 #include <errno.h>
@@ -19,6 +19,9 @@
 
 const double lat_bounds[LAT_BUCKETS] = {0.0005, 0.001, 0.0025, 0.005, 0.01, 0.025,
                                         0.05,   0.1,   0.25,   0.5,   1.0,  5.0};
+
+/* Set once by http_start, before the MHD thread starts; read only after. */
+static const http_handlers *handlers;
 
 static req *req_new(qdcd *q)
 {
@@ -44,17 +47,17 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *c, const cha
         if (!r)
             return MHD_NO;
         *req_cls = r; /* freed in the completion hook */
-        return api_begin(c, r, url, method);
+        return handlers->begin(c, r, url, method);
     }
     if (*len) { /* body chunk; capped, 413 at the end */
         if (!r->replied)
-            api_body(r, data, *len);
+            handlers->body(r, data, *len);
         *len = 0;
         return MHD_YES;
     }
     if (r->replied)
         return MHD_YES;
-    return api_dispatch(c, r, url, method);
+    return handlers->dispatch(c, r, url, method);
 }
 
 static void on_completed(void *cls, struct MHD_Connection *c, void **req_cls,
@@ -79,7 +82,7 @@ static void on_completed(void *cls, struct MHD_Connection *c, void **req_cls,
         atomic_fetch_add(&q->m.lat_count[b], 1);
         atomic_fetch_add(&q->m.lat_sum_us, (long long)(dt * 1e6));
     }
-    api_req_done(r);
+    handlers->done(r);
     sb_free(&r->sse);
     free(r);
     *req_cls = NULL;
@@ -142,13 +145,8 @@ enum MHD_Result http_problem(struct MHD_Connection *c, req *r, unsigned status,
     sbuf b = {0};
     enum MHD_Result ret;
 
-    sb_printf(&b, "{\"type\":\"/problems/%s\",\"title\":", slug);
-    sb_json_str(&b, title);
-    sb_printf(&b, ",\"status\":%u,\"detail\":", status);
-    sb_json_str(&b, detail);
-    if (extra && *extra)
-        sb_printf(&b, ",%s", extra);
-    sb_puts(&b, "}\n");
+    problem_json(&b, (int)status, slug, title, detail, extra);
+    sb_puts(&b, "\n");
     if (b.oom)
         ret = http_reply(c, r, 503, "text/plain", "out of memory\n", 14, NULL);
     else
@@ -192,7 +190,7 @@ static void log_mhd(void *cls, const char *fmt, va_list ap)
     vfprintf(stderr, fmt, ap);
 }
 
-qdc_status http_start(qdcd *q, qdc_error *err)
+qdc_status http_start(qdcd *q, const http_handlers *h, qdc_error *err)
 {
     struct addrinfo hints = {0}, *ai = NULL;
     char port[16];
@@ -201,6 +199,7 @@ qdc_status http_start(qdcd *q, qdc_error *err)
     const union MHD_DaemonInfo *info;
     int rc;
 
+    handlers = h;
     hints.ai_family = AF_UNSPEC;
     hints.ai_socktype = SOCK_STREAM;
     hints.ai_flags = AI_PASSIVE | AI_NUMERICSERV;

@@ -51,7 +51,22 @@ typedef struct req {
     int sse_end; /* 1: end event queued, 2: stream over */
 } req;
 
-qdc_status http_start(qdcd *q, qdc_error *err);
+/* What the layer above answers requests with (api.c's api_handlers): http.c
+ * calls these and knows nothing else of the endpoints. */
+typedef struct http_handlers {
+    /* First call (headers only): may answer at once. */
+    enum MHD_Result (*begin)(struct MHD_Connection *c, req *r, const char *url,
+                             const char *method);
+    /* One chunk of the request body. */
+    void (*body)(req *r, const char *data, size_t len);
+    /* Body complete (or resumed after parking): answer or park. */
+    enum MHD_Result (*dispatch)(struct MHD_Connection *c, req *r, const char *url,
+                                const char *method);
+    /* The request is over: release what it still holds. */
+    void (*done)(req *r);
+} http_handlers;
+
+qdc_status http_start(qdcd *q, const http_handlers *h, qdc_error *err);
 /* Stop accepting new connections (shutdown, step 1). */
 void http_quiesce(qdcd *q);
 void http_stop(qdcd *q);

@@ -9,6 +9,7 @@
  * the row is marked done. */
 #define _GNU_SOURCE
 #include "job.h"
+#include "problem.h"
 
 #include "child.h"
 #include "qdc.h"
@@ -337,11 +338,7 @@ static void problem(job_rec *j, int status, const char *slug, const char *title,
                     const char *detail)
 {
     sbuf b = {0};
-    sb_printf(&b, "{\"type\":\"/problems/%s\",\"title\":", slug);
-    sb_json_str(&b, title);
-    sb_printf(&b, ",\"status\":%d,\"detail\":", status);
-    sb_json_str(&b, detail);
-    sb_puts(&b, "}");
+    problem_json(&b, status, slug, title, detail, NULL);
     snprintf(j->error, sizeof j->error, "%s", b.oom ? "" : b.buf);
     sb_free(&b);
 }

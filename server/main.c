@@ -557,7 +557,7 @@ int main(int argc, char **argv)
         fprintf(stderr, "qdcd: cannot start the intake thread\n");
         goto out;
     }
-    if (http_start(q, &err) != QDC_OK) {
+    if (http_start(q, &api_handlers, &err) != QDC_OK) {
         fprintf(stderr, "qdcd: %s\n", err.msg);
         goto out;
     }

@@ -5,6 +5,7 @@
  * HTTP thread, which under WAL never waits for the writer's fsync. */
 #define _GNU_SOURCE
 #include "store.h"
+#include "problem.h"
 #include "util.h"
 
 #include <pthread.h>
@@ -426,12 +427,7 @@ static qdc_status sq_recover(job_store *s_, int max_attempts, double retention,
     char err[512];
     qdc_status rc;
 
-    snprintf(err, sizeof err,
-             "{\"type\":\"/problems/attempts-exhausted\",\"title\":\"job "
-             "crashed the daemon\",\"status\":500,\"detail\":\"the daemon died while "
-             "running this job on each of its %d attempt(s); it is not retried\","
-             "\"attempts\":%d}",
-             max_attempts, max_attempts);
+    problem_attempts(err, sizeof err, max_attempts, "the daemon");
     rc = write1(s, failed,
                 "UPDATE jobs SET state = 3, finished = ?, expires = ?, error = ?,"
                 " lease_owner = '', lease_until = 0 WHERE state = 1 AND attempts >= ?",

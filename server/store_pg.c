@@ -22,6 +22,7 @@
  * more, so a restarted database costs one failed call, not a dead node.
  * Every call is a single statement (autocommit) unless it says otherwise. */
 #define _GNU_SOURCE
+#include "problem.h"
 #include "store.h"
 #include "util.h"
 
@@ -532,12 +533,7 @@ static qdc_status pg_recover(job_store *s_, int max_attempts, double retention,
     double now = wall_now();
     qdc_status st;
 
-    snprintf(
-        err, sizeof err,
-        "{\"type\":\"/problems/attempts-exhausted\",\"title\":\"job crashed the daemon\","
-        "\"status\":500,\"detail\":\"a daemon died while running this job on each of "
-        "its %d attempt(s); it is not retried\",\"attempts\":%d}",
-        max_attempts, max_attempts);
+    problem_attempts(err, sizeof err, max_attempts, "a daemon");
     s->max_attempts = max_attempts;
     p_dbl(&p, now);
     p_dbl(&p, now + retention);

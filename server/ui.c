@@ -6,7 +6,7 @@
  * by its ETag (no-cache), so a new qdcd build is picked up at the next load. */
 #include "ui.h"
 
-#include "api.h"
+#include "parse.h"
 
 #include <string.h>
 
