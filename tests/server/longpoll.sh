@@ -18,7 +18,10 @@ $PY "$ROOT/tests/server/pollers.py" "$URL" "$id" 200 "$QPID" > "$TMP/res.json" 2
 R=$TMP/res.json
 jcheck "$R" '.complete == 200 and .errors == 0 and .last > .start + 3' "200 long-polls" \
     "200 long-polls: all got every record $(jf "$R" '"\(.start + 1)..\(.last)"') in order ($(jf "$R" .requests) round trips)"
-jcheck "$R" '.parked_max >= 150' "parked" \
+# most of them at once (how many exactly depends on how fast the other 199
+# come back between two records: 114-200 seen on a loaded 2-core machine);
+# that none needs a thread is the next check
+jcheck "$R" '.parked_max >= 100' "parked" \
     "they were parked together: up to $(jf "$R" .parked_max) suspended connections at once"
 jcheck "$R" '.threads_max <= .threads_before' "thread count" \
     "thread count flat: $(jf "$R" .threads_before) before, at most $(jf "$R" .threads_max) with 200 waiting"
