@@ -81,17 +81,6 @@ start_qdcd "$TMP/d" --workers 2 || { fail "start" "$(tail -3 "$TMP/d.log")"; exi
 NV=$(awk '/^Vertices/ { getline; print; exit }' "$TMP/in.mesh")
 NT=$(awk '/^Tetrahedra/ { getline; print; exit }' "$TMP/in.mesh")
 
-# wait_done ID: the final state (jobs here take well under a second)
-wait_done() {
-    _i=0
-    while [ $_i -lt 300 ]; do
-        curl -s "$URL/v1/jobs/$1" > "$TMP/job.$1"
-        [ "$(jf "$TMP/job.$1" .done)" = true ] && { jf "$TMP/job.$1" .state; return; }
-        sleep 0.1
-        _i=$((_i + 1))
-    done
-    echo timeout
-}
 
 # Uploads: each format by its Content-Type (qmesh also by ?format= and sniffed).
 ids=

@@ -92,17 +92,6 @@ else
     fail "/v1/options" "status $code $(head -c 300 "$TMP/opts")"
 fi
 
-# wait_done ID: the final state
-wait_done() {
-    _i=0
-    while [ $_i -lt 600 ]; do
-        curl -s "$URL/v1/jobs/$1" > "$TMP/job.$1"
-        [ "$(jf "$TMP/job.$1" .done)" = true ] && { jf "$TMP/job.$1" .state; return; }
-        sleep 0.1
-        _i=$((_i + 1))
-    done
-    echo timeout
-}
 ext_of() { case $1 in medit) echo mesh ;; gmsh*) echo msh ;; vtk*) echo vtk ;; vtu*) echo vtu ;; *) echo "$1" ;; esac; }
 # the input (sample cube) and what qdc quality says of it, without the file name
 "$BIN/qdc" quality "$SAMPLE" 2>&1 | sed 1s/^[^:]*:// > "$TMP/q.in"
