@@ -7,6 +7,10 @@ Classes (each as a Medit .mesh, valid unless named tangled):
         analytic surface plus random interior points, Delaunay-tetrahedralized
         (scipy), tets outside the shape dropped; 40-55% boundary vertices.
         bone: a thin bent capsule, aspect ratio about 12.
+  ball-scan, bone-scan   the same, but the surface points spaced like the
+        vertices of a scanned surface mesh (Poisson-disk thinned, no two closer
+        than about 0.6 of their mean spacing): the surface itself is fair,
+        the tets Delaunay makes across it are not
   cube-lowq        the same in the unit cube (only when asked for with --only):
                    the benchmark's scale series
   graded-box       Gmsh, a box refined toward one corner (size field), so
@@ -143,12 +147,33 @@ SHAPES = {
 }
 
 
-def lowq(shape, ntets, rng):
+def spaced(p, n, rng):
+    """About n of the points p, no two closer than ~0.6 of their mean spacing
+    (greedy Poisson-disk thinning in random order)."""
+    from scipy.spatial import cKDTree
+
+    p = p[rng.permutation(len(p))]
+    tree = cKDTree(p)
+    d, _ = tree.query(p, k=2)
+    # Poisson points: mean nearest distance 0.5/sqrt(density), so the spacing
+    # of n points over the same area is 2 * mean * sqrt(len(p) / n)
+    r = 0.6 * 2.0 * d[:, 1].mean() * np.sqrt(len(p) / n)
+    keep = np.zeros(len(p), bool)
+    taken = np.zeros(len(p), bool)
+    for i in range(len(p)):
+        if taken[i]:
+            continue
+        keep[i] = True
+        taken[tree.query_ball_point(p[i], r)] = True
+    return p[keep]
+
+
+def lowq(shape, ntets, rng, scan=False):
     """Surface points and random interior points, Delaunay; tets inside kept."""
     surf, inside, (lo, hi) = SHAPES[shape]
     nv = max(200, ntets // 6)
     nsurf = int(0.5 * nv)
-    ps = surf(nsurf, rng)
+    ps = spaced(surf(4 * nsurf, rng), nsurf, rng) if scan else surf(nsurf, rng)
     lo, hi = np.array(lo, float), np.array(hi, float)
     pi = []
     need = nv - nsurf
@@ -273,14 +298,15 @@ def main():
     only = set(a.only.split(",")) - {""}
     n = int(a.tets)
     made = []
-    for shape in ("ball", "bone", "torus", "cube"):
-        name = shape + "-lowq"
-        if (only or shape == "cube") and name not in only and name + "-tangled" not in only:
+    for shape, cls in (("ball", "lowq"), ("bone", "lowq"), ("torus", "lowq"), ("cube", "lowq"),
+                       ("ball", "scan"), ("bone", "scan")):
+        name = shape + "-" + cls
+        if (only or shape == "cube" or cls == "scan") and name not in only and name + "-tangled" not in only:
             continue
         if Delaunay is None:
             sys.exit("corpus.py: scipy is missing (apt-get install python3-scipy)")
         rng = np.random.default_rng(a.seed)
-        x, t = lowq(shape, n, rng)
+        x, t = lowq(shape, n, rng, scan=cls == "scan")
         write_medit(os.path.join(a.outdir, name + ".mesh"), x, t)
         write_medit(os.path.join(a.outdir, name + "-tangled.mesh"), tangle(x, t, rng), t)
         made += [name, name + "-tangled"]

@@ -387,6 +387,56 @@ static void apply_flip(int32_t nt, int32_t *tets, const uint8_t *flip)
         }
 }
 
+/* Put tet tt (with nb, its neighbour across the face opposite each corner)
+ * in its canonical vertex order: swapped first if flip (then it is positive
+ * under the orientation), then the even permutation that brings its smallest
+ * vertex to corner 0 and the smallest of the others to corner 1. Every vertex
+ * order of one tet with one orientation ends the same, so the optimizer's
+ * arithmetic, and its result, do not depend on how the file lists the tets
+ * (DOLFIN sorts them, GetFEM mixes orders). Returns where each input corner
+ * went: 2 bits per corner. */
+static uint8_t canon_tet(int32_t *tt, int32_t *nb, int flip)
+{
+    int pos[4] = {0, 1, 2, 3}; /* pos[c]: input corner c is now at pos[c] */
+    int32_t v[4], n[4];
+    uint8_t code = 0;
+
+#define SWAP_AT(i, j)                                                                    \
+    do {                                                                                 \
+        int32_t x_ = v[i], y_ = n[i];                                                    \
+        v[i] = v[j], n[i] = n[j], v[j] = x_, n[j] = y_;                                  \
+        for (int c_ = 0; c_ < 4; c_++)                                                   \
+            pos[c_] = pos[c_] == (i) ? (j) : pos[c_] == (j) ? (i) : pos[c_];             \
+    } while (0)
+    memcpy(v, tt, sizeof v);
+    memcpy(n, nb, sizeof n);
+    if (flip)
+        SWAP_AT(0, 1);
+    {
+        int k = 0;
+        for (int i = 1; i < 4; i++)
+            k = v[i] < v[k] ? i : k;
+        if (k != 0) { /* a double transposition keeps the orientation */
+            int l = k == 1 ? 2 : 1, r = 6 - k - l;
+            SWAP_AT(0, k);
+            SWAP_AT(l, r);
+        }
+        k = 1;
+        for (int i = 2; i < 4; i++)
+            k = v[i] < v[k] ? i : k;
+        for (; k > 1; k--) { /* a 3-cycle of corners 1..3 keeps it too */
+            SWAP_AT(1, 2);
+            SWAP_AT(2, 3);
+        }
+    }
+#undef SWAP_AT
+    memcpy(tt, v, sizeof v);
+    memcpy(nb, n, sizeof n);
+    for (int c = 0; c < 4; c++)
+        code |= (uint8_t)(pos[c] << (2 * c));
+    return code;
+}
+
 static qdc_status validate_basic(const mesh_t *m, mesh_check *c, qdc_error *err);
 
 qdc_status mesh_orient(const mesh_t *m, uint8_t *flip, mesh_orientation *o,
@@ -678,20 +728,17 @@ qdc_status mesh_topo_build(const mesh_t *m, mesh_topo **out, qdc_error *err)
     st = orient_tets(m, nbr, flip, &tp->orientation, err);
     if (st != QDC_OK)
         goto fail;
-    apply_flip(m->nt, tp->tets, flip);
-    /* Swapping vertices 0 and 1 of a tet swaps its faces 0 and 1 (the face
-     * opposite a vertex goes with it): renumber nbr to the flipped tets. */
-    for (int32_t t = 0; t < m->nt; t++) {
-        int32_t *nb = nbr + 4 * (size_t)t;
-        if (flip[t]) {
-            int32_t x = nb[0];
-            nb[0] = nb[1];
-            nb[1] = x;
+    /* flip[] becomes each tet's permutation code (canon_tet) */
+    for (int32_t t = 0; t < m->nt; t++)
+        flip[t] = canon_tet(tp->tets + 4 * (size_t)t, nbr + 4 * (size_t)t, flip[t]);
+    /* a face's position in its tet moved with the vertex opposite it:
+     * renumber the neighbours' references */
+    for (int32_t t = 0; t < m->nt; t++)
+        for (int f = 0; f < 4; f++) {
+            int32_t *nb = nbr + 4 * (size_t)t + f;
+            if (*nb >= 0)
+                *nb = (*nb & ~3) | ((flip[*nb >> 2] >> (2 * (*nb & 3))) & 3);
         }
-        for (int f = 0; f < 4; f++)
-            if (nb[f] >= 0 && flip[nb[f] >> 2] && (nb[f] & 3) < 2)
-                nb[f] ^= 1;
-    }
     tp->flipped = tp->orientation.flipped > 0;
     qdc_free(flip);
     flip = NULL;

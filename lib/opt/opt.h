@@ -77,8 +77,9 @@ typedef struct {
                            * a valid iterate) raises the mean ratio by less; default
                            * 2e-3, 0 = never (docs/defaults.md) */
     double eps_rel;       /* Escobar epsilon relative to a regular tet, default 1e-3 */
-    double finish_frac;   /* fraction of worst tets in the finishing pass, default 0.2 */
-    int finish_sweeps;    /* broad sweeps, default 3 */
+    double finish_frac;   /* fraction of worst tets in the finishing pass, default 1 */
+    int finish_sweeps;    /* broad sweeps at most, default 12 */
+    double finish_gain;   /* ... ending when one raises the mean by less, default 2e-4 */
     int angle_polish;     /* after the finishing pass: max-min of the dihedral sines
                            * on the worst tets' vertices (finish.h), default 1 */
     double feature_angle; /* degrees, for slide, default 30 */

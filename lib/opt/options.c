@@ -42,6 +42,8 @@ static const opt_desc table[] = {
      "broad finishing sweeps"},
     {"finish_frac", OPT_T_REAL, OFF(finish_frac), 0, 1, 0, NULL, 0,
      "share of worst tets visited per sweep"},
+    {"finish_gain", OPT_T_REAL, OFF(finish_gain), 0, 1, 0, NULL, 0,
+     "broad sweeps end when one gains less mean ratio (0: all of them)"},
     {"angle_polish", OPT_T_BOOL, OFF(angle_polish), 0, 1, 0, NULL, 0,
      "then raise the smallest dihedral angles"},
     {"max_iter", OPT_T_INT, OFF(max_iter), 0, 10000, 0, NULL, 0, "global iterations"},
@@ -101,6 +103,16 @@ void opt_range_text(const opt_desc *d, char *buf, size_t n)
         break;
     default:
         snprintf(buf, n, "%c%.17g, %.17g]", d->lo_open ? '(' : '[', d->lo, d->hi);
+    }
+}
+
+/* The shortest "%g" text of v that reads back as v (0.2, not 0.20000000000000001). */
+static void shortest(char *buf, size_t n, const char *prefix, double v)
+{
+    for (int prec = 6; prec <= 17; prec++) {
+        snprintf(buf, n, "%s%.*g", prefix, prec, v);
+        if (strtod(buf + strlen(prefix), NULL) == v)
+            return;
     }
 }
 
@@ -193,15 +205,15 @@ void opt_value_text(const opt_desc *d, const opt_options *o, char *buf, size_t n
         break;
     case OPT_T_HAUSD:
         if (o->hausd > 0)
-            snprintf(buf, n, "%.17g", o->hausd);
+            shortest(buf, n, "", o->hausd);
         else if (o->hausd_rel > 0)
-            snprintf(buf, n, "rel:%.17g", o->hausd_rel);
+            shortest(buf, n, "rel:", o->hausd_rel);
         else if (o->hausd_rel == OPT_HAUSD_AUTO)
             snprintf(buf, n, "auto");
         else
             snprintf(buf, n, "none");
         break;
     default:
-        snprintf(buf, n, "%.17g", *(const double *)f);
+        shortest(buf, n, "", *(const double *)f);
     }
 }

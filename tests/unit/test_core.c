@@ -1,4 +1,5 @@
 /* test_core.c - analytic checks of metrics, QDC encoding and the linear solvers. */
+#include "core/tet.h"
 #include "geom/metric.h"
 #include "opt/encode.h"
 #include "opt/solve.h"
@@ -373,6 +374,44 @@ TEST(topology_of_grid)
     mesh_free(m);
 }
 
+TEST(topology_does_not_depend_on_vertex_order)
+{
+    /* every one of the 24 orders of each tet (odd ones flip it; the
+     * connectivity's orientation puts it back): the same canonical tets,
+     * boundary faces and neighbours, so the optimizer sees one mesh */
+    int n = 3;
+    mesh_t *m = tm_grid(n, 0), *p = tm_grid(n, 0);
+    mesh_topo *a = NULL, *b = NULL;
+    static const int perm[24][4] = {
+        {0, 1, 2, 3}, {0, 1, 3, 2}, {0, 2, 1, 3}, {0, 2, 3, 1}, {0, 3, 1, 2},
+        {0, 3, 2, 1}, {1, 0, 2, 3}, {1, 0, 3, 2}, {1, 2, 0, 3}, {1, 2, 3, 0},
+        {1, 3, 0, 2}, {1, 3, 2, 0}, {2, 0, 1, 3}, {2, 0, 3, 1}, {2, 1, 0, 3},
+        {2, 1, 3, 0}, {2, 3, 0, 1}, {2, 3, 1, 0}, {3, 0, 1, 2}, {3, 0, 2, 1},
+        {3, 1, 0, 2}, {3, 1, 2, 0}, {3, 2, 0, 1}, {3, 2, 1, 0}};
+    for (int32_t t = 0; t < p->nt; t++)
+        for (int c = 0; c < 4; c++)
+            p->tets[4 * (size_t)t + c] = m->tets[4 * (size_t)t + perm[t % 24][c]];
+    ASSERT_OK(mesh_topo_build(m, &a, NULL));
+    ASSERT_OK(mesh_topo_build(p, &b, NULL));
+    ASSERT_TRUE(b->flipped);
+    ASSERT_EQ_INT(b->orientation.inverted, 0);
+    ASSERT_TRUE(memcmp(a->tets, b->tets, 16 * (size_t)m->nt) == 0);
+    ASSERT_EQ_INT(a->nbf, b->nbf);
+    ASSERT_TRUE(memcmp(a->bfaces, b->bfaces, 12 * (size_t)a->nbf) == 0);
+    ASSERT_TRUE(memcmp(a->vt_idx, b->vt_idx, 16 * (size_t)m->nt) == 0);
+    /* canonical: the smallest vertex first, then the smallest of the others,
+     * and every tet positive */
+    for (int32_t t = 0; t < m->nt; t++) {
+        const int32_t *tt = b->tets + 4 * (size_t)t;
+        ASSERT_TRUE(tt[0] < tt[1] && tt[1] < tt[2] && tt[1] < tt[3]);
+        ASSERT_TRUE(geom_tet_vol6(m->xyz, tt) > 0);
+    }
+    mesh_topo_free(a);
+    mesh_topo_free(b);
+    mesh_free(m);
+    mesh_free(p);
+}
+
 TEST(validation_errors)
 {
     mesh_t *m = tm_grid(2, 0);
@@ -452,4 +491,5 @@ TEST_MAIN("core", T(hessian_matches_finite_differences_of_the_gradient),
           T(h_is_continuous_and_regularizes), T(alpha_closed_form_matches_search),
           T(gradient_matches_finite_differences), T(qdc_of_symmetric_star),
           T(optavg_weights_sum_to_one_on_random_mesh),
-          T(cholmod_and_pcg_agree_with_dense), T(topology_of_grid), T(validation_errors))
+          T(cholmod_and_pcg_agree_with_dense), T(topology_of_grid),
+          T(topology_does_not_depend_on_vertex_order), T(validation_errors))
