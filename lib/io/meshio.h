@@ -23,7 +23,9 @@ typedef enum {
     /* Gmsh .msh: tetrahedra (type 4) with their physical tag as region, triangles
      * (type 2) kept with theirs as tri_ref; physical tag 0 means none, and a file
      * without physical groups but with several volume entities gets the entity
-     * tags as regions. Other element types are skipped with a note. Reading
+     * tags as regions. Other element types are skipped with a note. Both
+     * vertices of every $Periodic node pair are held (m->fixed, with a note),
+     * so a pair never moves apart; tags of no node are ignored. Reading
      * accepts 4.1 ASCII/binary, 4.0 ASCII and 2.x ASCII/binary whichever Gmsh
      * variant is named. */
     MESHIO_GMSH41,     /* MSH 4.1 ASCII, model/vnd.gmsh, .msh */

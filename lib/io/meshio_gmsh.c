@@ -62,7 +62,9 @@ typedef struct {
     vec ent[2];  /* int64 entity keys of dimensions 2 and 3 (4.1) */
     elems el[2]; /* 0 triangles, 1 tets */
     skipped sk;
-    srcrec *rec; /* where the coordinates are, or NULL */
+    vec per;        /* int64 node tags of the $Periodic pairs, both sides */
+    int64_t nlinks; /* $Periodic links read */
+    srcrec *rec;    /* where the coordinates are, or NULL */
 } gmsh;
 
 static const char *const elem_names[2] = {"triangle", "tet"};
@@ -72,6 +74,7 @@ static void gmsh_free(gmsh *g)
     qdc_free(g->xyz);
     qdc_free(g->tags);
     tagmap_free(&g->tm);
+    vec_free(&g->per);
     for (int k = 0; k < 2; k++) {
         vec_free(&g->ent[k]);
         vec_free(&g->el[k].idx);
@@ -843,8 +846,68 @@ static qdc_status elements22_bin(gmsh *g, qdc_error *err)
     return st == QDC_OK ? want_end(g, "Elements", err) : st;
 }
 
+/* 4.0 and 2.x: an optional "Affine" line of 16 values after the link header. */
+static qdc_status affine_line(gmsh *g, qdc_error *err)
+{
+    txt *s = &g->s;
+    double x;
+    qdc_status st = QDC_OK;
+
+    skip_ws(s);
+    if ((size_t)(s->end - s->p) < 6 || memcmp(s->p, "Affine", 6) != 0)
+        return QDC_OK;
+    s->p += 6;
+    for (int j = 0; j < 16 && st == QDC_OK; j++)
+        st = txt_real(s, "$Periodic: affine value", &x, err);
+    return st;
+}
+
+/* $Periodic: links "dim tag master-tag", their affine transform (4.1: a
+ * count and values; 4.0, 2.x: an optional "Affine" line) and node pairs
+ * "tag master-tag". The tags of both nodes of every pair are kept: those
+ * vertices are held (gmsh_mesh), so a pair never moves apart. 4.1 binary
+ * files write it in binary, 2.2 binary files in ASCII. */
+static qdc_status periodic(gmsh *g, qdc_error *err)
+{
+    int bin = g->binary;
+    int64_t nl, v, na, np;
+    double x;
+    qdc_status st;
+
+    g->binary = bin && g->ver == 41;
+    st = g_count(g, "$Periodic: link count", 4, 12 + 2 * (uint64_t)g->dsize, INT32_MAX,
+                 &nl, err);
+    for (int64_t l = 0; l < nl && st == QDC_OK; l++) {
+        for (int j = 0; j < 3 && st == QDC_OK; j++)
+            st = g_i32(g, j ? "$Periodic: entity tag" : "$Periodic: entity dimension",
+                       j ? INT32_MIN : 0, j ? INT32_MAX : 3, &v, err);
+        if (st == QDC_OK && g->ver == 41)
+            st = g_count(g, "$Periodic: affine value count", 1, 8, 16, &na, err);
+        for (int64_t j = 0; g->ver == 41 && j < na && st == QDC_OK; j++)
+            st = g_real(g, "$Periodic: affine value", &x, err);
+        if (st == QDC_OK && g->ver != 41)
+            st = affine_line(g, err);
+        if (st == QDC_OK)
+            st = g_count(g, "$Periodic: node pair count", 2, 2 * (uint64_t)g->dsize,
+                         INT32_MAX, &np, err);
+        if (st == QDC_OK && vec_grow(&g->per, 2 * (size_t)np) != 0)
+            st = qdc_fail(err, QDC_ENOMEM, "out of memory for %lld periodic pairs",
+                          (long long)np);
+        for (int64_t j = 0; j < 2 * np && st == QDC_OK; j++)
+            st = g_int(g, "$Periodic: node tag", 1, INT64_MAX,
+                       &((int64_t *)g->per.a)[g->per.n++], err);
+    }
+    g->nlinks += nl;
+    g->binary = bin;
+    return st == QDC_OK ? want_end(g, "Periodic", err) : st;
+}
+
 static qdc_status gmsh_section(gmsh *g, const char *name, size_t nlen, qdc_error *err)
 {
+    if (word_is(name, nlen, "Periodic")) {
+        end_of_line(g);
+        return periodic(g, err);
+    }
     if (word_is(name, nlen, "Entities") && g->ver >= 40) {
         end_of_line(g);
         return entities(g, err);
@@ -872,6 +935,38 @@ static qdc_status gmsh_section(gmsh *g, const char *name, size_t nlen, qdc_error
     return skip_section(g, name, nlen, err);
 }
 
+/* The vertices of the $Periodic pairs, held (pm->fix). A tag of no node
+ * (a node of an entity the file does not hold) needs nothing. */
+static qdc_status periodic_held(gmsh *g, parsed *pm, qdc_error *err)
+{
+    const int64_t *tag = g->per.a;
+
+    if (!g->nlinks)
+        return QDC_OK;
+    pm->fix = qdc_mallocn(g->per.n + 1, sizeof(int32_t));
+    if (!pm->fix)
+        return qdc_fail(err, QDC_ENOMEM, "out of memory for the periodic nodes");
+    pm->nfix = 0;
+    for (size_t i = 0; i < g->per.n; i++) {
+        int64_t v = tagmap_find(&g->tm, tag[i]);
+        if (v >= 0)
+            pm->fix[pm->nfix++] = (int32_t)v;
+    }
+    return QDC_OK;
+}
+
+static void periodic_note(const gmsh *g, const meshio_options *o, const mesh_t *m)
+{
+    int64_t n = 0;
+
+    for (int32_t v = 0; v < m->nv; v++)
+        n += m->fixed[v] != 0;
+    note(o,
+         "gmsh: $Periodic: %lld links, %lld node pairs: their %lld vertices are held "
+         "fixed (a pair never moves apart)",
+         (long long)g->nlinks, (long long)(g->per.n / 2), (long long)n);
+}
+
 static qdc_status gmsh_mesh(gmsh *g, const meshio_options *o, mesh_t **out,
                             qdc_error *err)
 {
@@ -892,9 +987,14 @@ static qdc_status gmsh_mesh(gmsh *g, const meshio_options *o, mesh_t **out,
     pm.ntri = (int64_t)g->el[0].phys.n;
     pm.tris = g->el[0].idx.a;
     pm.tri_ref = pm.ntri ? reg[0] : NULL;
-    st = parsed_mesh(&pm, out, err);
+    st = periodic_held(g, &pm, err);
+    if (st == QDC_OK)
+        st = parsed_mesh(&pm, out, err);
+    if (st == QDC_OK && pm.nfix > 0)
+        periodic_note(g, o, *out);
     qdc_free(reg[0]);
     qdc_free(reg[1]);
+    qdc_free(pm.fix);
     skip_note(o, &g->sk, "gmsh", "elements");
     return st;
 }
@@ -909,6 +1009,7 @@ qdc_status meshio_gmsh_read(const char *buf, size_t len, const meshio_options *o
 
     memset(&g, 0, sizeof g);
     g.rec = rec;
+    g.per.size = sizeof(int64_t);
     for (int k = 0; k < 2; k++) {
         g.ent[k].size = sizeof(int64_t);
         g.el[k].idx.size = g.el[k].phys.size = g.el[k].ent.size = sizeof(int32_t);
