@@ -138,11 +138,15 @@ qdc_status meshio_save(const char *path, meshio_format fmt, const mesh_t *m,
  * (checked by a hash; the fixed flags are not part of it). Text numbers are
  * printed with %.17g (an unmoved coordinate keeps its original text); binary
  * values are overwritten in their own width and byte order: float32 stays
- * float32. VTU Points under zlib or base64 are re-encoded the same way
- * (zlib blocks of the same size), and the offset="" of the appended arrays
- * after them shifted by the change in size. Spliced: Medit .mesh, TetGen
- * .node/.ele, Gmsh MSH 2.x ASCII/binary, 4.0 ASCII and 4.1 ASCII/binary, legacy VTK ASCII
- * and binary, VTU ascii, base64, appended raw/base64, zlib-compressed or not. */
+ * float32. Values derived from the coordinates are recomputed: Gmsh 4.x
+ * $Entities bounding boxes (each bound shifted by how far the bound of the
+ * entity's nodes, closure included, moved) and VTU Points RangeMin/RangeMax
+ * (the range of the point norms); unchanged ones keep their bytes. VTU Points under zlib
+ * or base64 are re-encoded the same way (zlib blocks of the same size), and the offset=""
+ * of the appended arrays after them shifted by the change in size. Spliced: Medit .mesh,
+ * TetGen .node/.ele, Gmsh MSH 2.x ASCII/binary, 4.0 ASCII and 4.1 ASCII/binary, legacy
+ * VTK ASCII and binary, VTU ascii, base64, appended raw/base64, zlib-compressed or not.
+ */
 
 /* The format of the file m's source holds, or MESHIO_AUTO if none is kept. */
 meshio_format meshio_source_format(const mesh_t *m);

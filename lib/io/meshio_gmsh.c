@@ -353,24 +353,102 @@ static qdc_status mesh_format(gmsh *g, qdc_error *err)
     return want_end(g, "MeshFormat", err);
 }
 
-/* $Entities (4.1): keep the first physical tag of each surface and volume. */
+/* Where the next value starts (the derived values of a spliced write). */
+static uint64_t val_at(gmsh *g)
+{
+    if (!g->binary)
+        skip_ws(&g->s);
+    return (uint64_t)(g->s.p - g->s.base);
+}
+
+/* With a record: entity (d, tag) of $Entities, whose nval box values come
+ * next, for the spliced write to recompute them. */
+static qdc_status dv_entity(gmsh *g, int d, int64_t tag, int nval, qdc_error *err)
+{
+    derived *dv = &g->rec->dv;
+    dv_ent *e;
+
+    if (vec_grow(&dv->ent, 1) != 0)
+        return qdc_fail(err, QDC_ENOMEM, "out of memory for the entities");
+    dv->kind = DV_BOXES;
+    dv->bin = g->binary;
+    e = (dv_ent *)dv->ent.a + dv->ent.n++;
+    e->dim = d;
+    e->nval = nval;
+    e->tag = tag;
+    e->val = (int64_t)dv->off.n;
+    e->bnd = (int64_t)dv->bnd.n;
+    e->nbnd = 0;
+    return QDC_OK;
+}
+
+/* One bounding box value (recorded with a record). */
+static qdc_status entity_box(gmsh *g, qdc_error *err)
+{
+    uint64_t at = val_at(g);
+    double x;
+    qdc_status st = g_real(g, "$Entities: bounding box", &x, err);
+
+    if (st == QDC_OK && g->rec)
+        st = dv_value(&g->rec->dv, at, x, err);
+    return st;
+}
+
+/* One bounding entity tag (kept with a record). */
+static qdc_status entity_bound(gmsh *g, qdc_error *err)
+{
+    int64_t v;
+    qdc_status st = g_i32(g, "$Entities: bounding entity", INT32_MIN, INT32_MAX, &v, err);
+    derived *dv = g->rec ? &g->rec->dv : NULL;
+
+    if (st != QDC_OK || !dv)
+        return st;
+    if (vec_grow(&dv->bnd, 1) != 0)
+        return qdc_fail(err, QDC_ENOMEM, "out of memory for the entities");
+    ((int64_t *)dv->bnd.a)[dv->bnd.n++] = v;
+    ((dv_ent *)dv->ent.a)[dv->ent.n - 1].nbnd++;
+    return QDC_OK;
+}
+
+/* With a record: the vertices [first, first + c) of node block (dim, tag). */
+static qdc_status dv_block(gmsh *g, int64_t dim, int64_t tag, int64_t first, int64_t c,
+                           qdc_error *err)
+{
+    vec *b;
+
+    if (!g->rec)
+        return QDC_OK;
+    b = &g->rec->dv.blk;
+    if (vec_grow(b, 4) != 0)
+        return qdc_fail(err, QDC_ENOMEM, "out of memory for the node blocks");
+    ((int64_t *)b->a)[b->n++] = dim;
+    ((int64_t *)b->a)[b->n++] = tag;
+    ((int64_t *)b->a)[b->n++] = first;
+    ((int64_t *)b->a)[b->n++] = c;
+    return QDC_OK;
+}
+
+/* $Entities (4.x): keep the first physical tag of each surface and volume;
+ * with a record, where the bounding boxes are and what bounds what. */
 static qdc_status entities(gmsh *g, qdc_error *err)
 {
     int64_t n[4], v, np, nb, tag, phys;
-    double x;
     qdc_status st = QDC_OK;
 
     for (int d = 0; d < 4 && st == QDC_OK; d++)
         st = g_count(g, "$Entities: count", 1, 4, INT32_MAX, &n[d], err);
     for (int d = 0; d < 4 && st == QDC_OK; d++) {
         vec *ev = d >= 2 ? &g->ent[d - 2] : NULL;
+        int nval = d || g->ver == 40 ? 6 : 3;
         if (ev && vec_grow(ev, (size_t)n[d]) != 0)
             return qdc_fail(err, QDC_ENOMEM, "out of memory for %lld entities",
                             (long long)n[d]);
         for (int64_t i = 0; i < n[d] && st == QDC_OK; i++) {
             st = g_i32(g, "$Entities: tag", INT32_MIN, INT32_MAX, &tag, err);
-            for (int j = 0; j < (d || g->ver == 40 ? 6 : 3) && st == QDC_OK; j++)
-                st = g_real(g, "$Entities: bounding box", &x, err);
+            if (st == QDC_OK && g->rec)
+                st = dv_entity(g, d, tag, nval, err);
+            for (int j = 0; j < nval && st == QDC_OK; j++)
+                st = entity_box(g, err);
             if (st == QDC_OK)
                 st = g_count(g, "$Entities: physical tag count", 1, 4, INT32_MAX, &np,
                              err);
@@ -384,8 +462,7 @@ static qdc_status entities(gmsh *g, qdc_error *err)
                 st = g_count(g, "$Entities: bounding entity count", 1, 4, INT32_MAX, &nb,
                              err);
             for (int64_t j = 0; j < (d ? nb : 0) && st == QDC_OK; j++)
-                st =
-                    g_i32(g, "$Entities: bounding entity", INT32_MIN, INT32_MAX, &v, err);
+                st = entity_bound(g, err);
             if (st == QDC_OK && ev)
                 ((int64_t *)ev->a)[ev->n++] = tag * (INT64_C(1) << 32) + (uint32_t)phys;
         }
@@ -485,6 +562,8 @@ static qdc_status nodes41(gmsh *g, qdc_error *err)
             st = qdc_fail(err, QDC_EPARSE,
                           "$Nodes: more nodes in the blocks than the %lld announced",
                           (long long)total);
+        if (st == QDC_OK)
+            st = dv_block(g, dim, v, i, c, err);
         for (int64_t j = 0; j < c && st == QDC_OK; j++)
             st = g_int(g, "$Nodes: node tag", 1, INT32_MAX, &g->tags[i + j], err);
         for (int64_t j = 0; j < c && st == QDC_OK; j++) {
@@ -531,6 +610,8 @@ static qdc_status nodes40(gmsh *g, qdc_error *err)
             st = fail_txt(err, QDC_EPARSE, &g->s, g->s.p,
                           "$Nodes: more nodes in the blocks than the %lld announced",
                           (long long)total);
+        if (st == QDC_OK)
+            st = dv_block(g, dim, v, i, c, err);
         for (int64_t j = 0; j < c && st == QDC_OK; j++) {
             double x;
             st = g_int(g, "$Nodes: node tag", 1, INT32_MAX, &g->tags[i + j], err);
@@ -1034,6 +1115,8 @@ qdc_status meshio_gmsh_read(const char *buf, size_t len, const meshio_options *o
     }
     if (st == QDC_OK && !g.have_nodes)
         st = fail_txt(err, QDC_EPARSE, &g.s, g.s.p, "no $Nodes section");
+    if (st == QDC_OK && rec && rec->dv.kind == DV_BOXES)
+        st = dv_finish(&rec->dv, g.xyz, g.nv, err);
     if (st == QDC_OK)
         st = gmsh_mesh(&g, o, out, err);
     gmsh_free(&g);
