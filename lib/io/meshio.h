@@ -25,7 +25,9 @@ typedef enum {
      * without physical groups but with several volume entities gets the entity
      * tags as regions. Other element types are skipped with a note. Both
      * vertices of every $Periodic node pair are held (m->fixed, with a note),
-     * so a pair never moves apart; tags of no node are ignored. Reading
+     * so a pair never moves apart; tags of no node are ignored. Higher-order
+     * tetrahedra (types 11, 29-31) are refused (QDC_EFORMAT), as are VTK
+     * types 24 and 71, Medit TetrahedraP2 and 10-node TetGen tets. Reading
      * accepts 4.1 ASCII/binary, 4.0 ASCII and 2.x ASCII/binary whichever Gmsh
      * variant is named. */
     MESHIO_GMSH41,     /* MSH 4.1 ASCII, model/vnd.gmsh, .msh */

@@ -732,6 +732,28 @@ static qdc_status elem_nodes(gmsh *g, int k, int32_t phys, int32_t ent, qdc_erro
     return QDC_OK;
 }
 
+/* Higher-order tetrahedra (Gmsh types 11, 29, 30, 31: 10, 20, 35, 56 nodes)
+ * would be broken by moving their corners alone: refused, naming the type.
+ * at: where the type is. */
+static qdc_status ho_tet(gmsh *g, const char *at, int64_t type, qdc_error *err)
+{
+    static const char *const order[] = {"second", "third", "fourth", "fifth"};
+    int o = type == 11 ? 0 : type >= 29 && type <= 31 ? (int)type - 28 : -1;
+
+    if (o < 0)
+        return QDC_OK;
+    if (g->binary)
+        return fail_bin(err, QDC_EFORMAT, at - g->s.base,
+                        "$Elements: %s-order tetrahedra (Gmsh element type %lld, %lld "
+                        "nodes) are not supported: qdc optimizes linear tetrahedra "
+                        "(type 4)",
+                        order[o], (long long)type, (long long)type_nodes(type));
+    return fail_txt(err, QDC_EFORMAT, &g->s, at,
+                    "$Elements: %s-order tetrahedra (Gmsh element type %lld, %lld nodes) "
+                    "are not supported: qdc optimizes linear tetrahedra (type 4)",
+                    order[o], (long long)type, (long long)type_nodes(type));
+}
+
 /* Skip the rest of an ASCII line (an element of a type we don't read). */
 static void skip_line(txt *s)
 {
@@ -758,9 +780,13 @@ static qdc_status elements41(gmsh *g, qdc_error *err)
         st = g_i32(g, "$Elements: entity dimension", 0, 3, &dim, err);
         if (st == QDC_OK)
             st = g_i32(g, "$Elements: entity tag", INT32_MIN, INT32_MAX, &etag, err);
+        if (!g->binary)
+            skip_ws(&g->s);
         at = g->s.p;
         if (st == QDC_OK)
             st = g_i32(g, "$Elements: element type", INT32_MIN, INT32_MAX, &type, err);
+        if (st == QDC_OK)
+            st = ho_tet(g, at, type, err);
         if (st != QDC_OK)
             break;
         nn = type_nodes(type);
@@ -804,9 +830,14 @@ static qdc_status elements22(gmsh *g, qdc_error *err)
 
     for (int64_t i = 0; i < total && st == QDC_OK; i++) {
         int k;
+        const char *at;
         st = txt_int(s, "$Elements: element tag", 0, INT64_MAX, &v, err);
+        skip_ws(s);
+        at = s->p;
         if (st == QDC_OK)
             st = txt_int(s, "$Elements: element type", INT32_MIN, INT32_MAX, &type, err);
+        if (st == QDC_OK)
+            st = ho_tet(g, at, type, err);
         if (st != QDC_OK)
             break;
         k = type == 4 ? 1 : type == 2 ? 0 : -1;
@@ -844,10 +875,15 @@ static qdc_status elements40(gmsh *g, qdc_error *err)
     for (int64_t b = 0; b < nblk && st == QDC_OK; b++) {
         int k;
         st = g_i32(g, "$Elements: entity tag", INT32_MIN, INT32_MAX, &etag, err);
+        const char *at;
         if (st == QDC_OK)
             st = g_i32(g, "$Elements: entity dimension", 0, 3, &dim, err);
+        skip_ws(&g->s);
+        at = g->s.p;
         if (st == QDC_OK)
             st = g_i32(g, "$Elements: element type", INT32_MIN, INT32_MAX, &type, err);
+        if (st == QDC_OK)
+            st = ho_tet(g, at, type, err);
         if (st == QDC_OK)
             st = g_count(g, "$Elements: elements in block", 2, 0, INT64_MAX, &c, err);
         if (st != QDC_OK)
@@ -888,6 +924,8 @@ static qdc_status elements22_bin(gmsh *g, qdc_error *err)
         int64_t nn;
         int k;
         st = g_i32(g, "$Elements: element type", INT32_MIN, INT32_MAX, &type, err);
+        if (st == QDC_OK)
+            st = ho_tet(g, at, type, err);
         if (st == QDC_OK)
             st = g_i32(g, "$Elements: elements in group", 1, total - done, &cnt, err);
         if (st == QDC_OK)

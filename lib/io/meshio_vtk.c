@@ -166,6 +166,17 @@ static qdc_status cells_mesh(cells *c, const char *fmtname, const meshio_options
                     goto bad_list;
             }
             type = is_int32(t) ? (int64_t)t : -1;
+            if (type == 24 || type == 71) { /* corners alone would break them */
+                st = qdc_fail(err, QDC_EFORMAT,
+                              "%s: cell %lld is a %s tetrahedron (VTK cell type %lld, "
+                              "%lld points): not supported, qdc optimizes linear "
+                              "tetrahedra (type 10)",
+                              fmtname, (long long)i,
+                              type == 24 ? "second-order" : "Lagrange", (long long)type,
+                              (long long)k);
+                set_index(err, "cell", i);
+                break;
+            }
             if (!((type == 10 && k == 4) || (type == 5 && k == 3))) {
                 if (pass == 0)
                     skip_count(&sk, type, 1);
