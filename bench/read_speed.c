@@ -33,8 +33,8 @@ int main(int argc, char **argv)
             continue;
         }
         f = meshio_format_from_name(argv[i]);
-        if (f == MESHIO_AUTO || f == MESHIO_GMSH41 || f == MESHIO_VTK || f == MESHIO_VTU ||
-            f == MESHIO_MEDIT)
+        if (f == MESHIO_AUTO || f == MESHIO_GMSH41 || f == MESHIO_VTK ||
+            f == MESHIO_VTU || f == MESHIO_MEDIT)
             f = meshio_sniff(buf, len); /* the variant inside */
         for (int rep = 0; rep < 3; rep++) {
             mesh_t *m = NULL;
