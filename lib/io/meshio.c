@@ -595,6 +595,10 @@ static qdc_status medit_keyword(txt *s, const char *kw, size_t kl, medit_state *
     if (word_is(kw, kl, "Triangles"))
         return medit_elem_section(s, "Triangles", 3, INT32_MAX / 3, pm, &pm->ntri,
                                   &pm->tris, &pm->tri_ref, &ms->tri_at, err);
+    if (word_is(kw, kl, "TetrahedraP2"))
+        return fail_txt(err, QDC_EFORMAT, s, kw,
+                        "TetrahedraP2: second-order tetrahedra (10 vertices) are not "
+                        "supported: qdc optimizes linear Tetrahedra");
     if (word_is(kw, kl, "RequiredVertices")) {
         return medit_elem_section(s, "RequiredVertices", 1, INT32_MAX, pm, &pm->nfix,
                                   &pm->fix, NULL, &ms->fix_at, err);
@@ -731,7 +735,11 @@ static qdc_status tetgen_ele(txt *s, parsed *pm, int64_t base, qdc_error *err)
     char q[32];
     qdc_status st;
 
+    txt head;
+
     st = txt_count(s, ".ele", 1, MESH_MAX_TETS, &pm->nt, err);
+    skip_ws(s);
+    head = *s;
     if (st == QDC_OK)
         st = txt_int(s, ".ele: nodes per tet", 4, 10, &npt, err);
     if (st == QDC_OK && npt != 4 && npt != 10)
@@ -773,7 +781,12 @@ static qdc_status tetgen_ele(txt *s, parsed *pm, int64_t base, qdc_error *err)
             return st;
         }
     }
-    return txt_done(s, "the tets", err);
+    st = txt_done(s, "the tets", err);
+    if (st == QDC_OK && npt == 10) /* tetgen -o2: corners alone would break them */
+        st = fail_txt(err, QDC_EFORMAT, &head, head.p,
+                      ".ele: second-order tetrahedra (10 nodes per tet) are not "
+                      "supported: qdc optimizes linear tetrahedra (4 nodes)");
+    return st;
 }
 
 /* TetGen from its two buffers; with rec, the .node's vertex offsets. */

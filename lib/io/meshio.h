@@ -23,7 +23,11 @@ typedef enum {
     /* Gmsh .msh: tetrahedra (type 4) with their physical tag as region, triangles
      * (type 2) kept with theirs as tri_ref; physical tag 0 means none, and a file
      * without physical groups but with several volume entities gets the entity
-     * tags as regions. Other element types are skipped with a note. Reading
+     * tags as regions. Other element types are skipped with a note. Both
+     * vertices of every $Periodic node pair are held (m->fixed, with a note),
+     * so a pair never moves apart; tags of no node are ignored. Higher-order
+     * tetrahedra (types 11, 29-31) are refused (QDC_EFORMAT), as are VTK
+     * types 24 and 71, Medit TetrahedraP2 and 10-node TetGen tets. Reading
      * accepts 4.1 ASCII/binary, 4.0 ASCII and 2.x ASCII/binary whichever Gmsh
      * variant is named. */
     MESHIO_GMSH41,     /* MSH 4.1 ASCII, model/vnd.gmsh, .msh */
@@ -136,11 +140,15 @@ qdc_status meshio_save(const char *path, meshio_format fmt, const mesh_t *m,
  * (checked by a hash; the fixed flags are not part of it). Text numbers are
  * printed with %.17g (an unmoved coordinate keeps its original text); binary
  * values are overwritten in their own width and byte order: float32 stays
- * float32. VTU Points under zlib or base64 are re-encoded the same way
- * (zlib blocks of the same size), and the offset="" of the appended arrays
- * after them shifted by the change in size. Spliced: Medit .mesh, TetGen
- * .node/.ele, Gmsh MSH 2.x ASCII/binary, 4.0 ASCII and 4.1 ASCII/binary, legacy VTK ASCII
- * and binary, VTU ascii, base64, appended raw/base64, zlib-compressed or not. */
+ * float32. Values derived from the coordinates are recomputed: Gmsh 4.x
+ * $Entities bounding boxes (each bound shifted by how far the bound of the
+ * entity's nodes, closure included, moved) and VTU Points RangeMin/RangeMax
+ * (the range of the point norms); unchanged ones keep their bytes. VTU Points under zlib
+ * or base64 are re-encoded the same way (zlib blocks of the same size), and the offset=""
+ * of the appended arrays after them shifted by the change in size. Spliced: Medit .mesh,
+ * TetGen .node/.ele, Gmsh MSH 2.x ASCII/binary, 4.0 ASCII and 4.1 ASCII/binary, legacy
+ * VTK ASCII and binary, VTU ascii, base64, appended raw/base64, zlib-compressed or not.
+ */
 
 /* The format of the file m's source holds, or MESHIO_AUTO if none is kept. */
 meshio_format meshio_source_format(const mesh_t *m);

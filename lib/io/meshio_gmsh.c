@@ -62,7 +62,9 @@ typedef struct {
     vec ent[2];  /* int64 entity keys of dimensions 2 and 3 (4.1) */
     elems el[2]; /* 0 triangles, 1 tets */
     skipped sk;
-    srcrec *rec; /* where the coordinates are, or NULL */
+    vec per;        /* int64 node tags of the $Periodic pairs, both sides */
+    int64_t nlinks; /* $Periodic links read */
+    srcrec *rec;    /* where the coordinates are, or NULL */
 } gmsh;
 
 static const char *const elem_names[2] = {"triangle", "tet"};
@@ -72,6 +74,7 @@ static void gmsh_free(gmsh *g)
     qdc_free(g->xyz);
     qdc_free(g->tags);
     tagmap_free(&g->tm);
+    vec_free(&g->per);
     for (int k = 0; k < 2; k++) {
         vec_free(&g->ent[k]);
         vec_free(&g->el[k].idx);
@@ -350,24 +353,102 @@ static qdc_status mesh_format(gmsh *g, qdc_error *err)
     return want_end(g, "MeshFormat", err);
 }
 
-/* $Entities (4.1): keep the first physical tag of each surface and volume. */
+/* Where the next value starts (the derived values of a spliced write). */
+static uint64_t val_at(gmsh *g)
+{
+    if (!g->binary)
+        skip_ws(&g->s);
+    return (uint64_t)(g->s.p - g->s.base);
+}
+
+/* With a record: entity (d, tag) of $Entities, whose nval box values come
+ * next, for the spliced write to recompute them. */
+static qdc_status dv_entity(gmsh *g, int d, int64_t tag, int nval, qdc_error *err)
+{
+    derived *dv = &g->rec->dv;
+    dv_ent *e;
+
+    if (vec_grow(&dv->ent, 1) != 0)
+        return qdc_fail(err, QDC_ENOMEM, "out of memory for the entities");
+    dv->kind = DV_BOXES;
+    dv->bin = g->binary;
+    e = (dv_ent *)dv->ent.a + dv->ent.n++;
+    e->dim = d;
+    e->nval = nval;
+    e->tag = tag;
+    e->val = (int64_t)dv->off.n;
+    e->bnd = (int64_t)dv->bnd.n;
+    e->nbnd = 0;
+    return QDC_OK;
+}
+
+/* One bounding box value (recorded with a record). */
+static qdc_status entity_box(gmsh *g, qdc_error *err)
+{
+    uint64_t at = val_at(g);
+    double x;
+    qdc_status st = g_real(g, "$Entities: bounding box", &x, err);
+
+    if (st == QDC_OK && g->rec)
+        st = dv_value(&g->rec->dv, at, x, err);
+    return st;
+}
+
+/* One bounding entity tag (kept with a record). */
+static qdc_status entity_bound(gmsh *g, qdc_error *err)
+{
+    int64_t v;
+    qdc_status st = g_i32(g, "$Entities: bounding entity", INT32_MIN, INT32_MAX, &v, err);
+    derived *dv = g->rec ? &g->rec->dv : NULL;
+
+    if (st != QDC_OK || !dv)
+        return st;
+    if (vec_grow(&dv->bnd, 1) != 0)
+        return qdc_fail(err, QDC_ENOMEM, "out of memory for the entities");
+    ((int64_t *)dv->bnd.a)[dv->bnd.n++] = v;
+    ((dv_ent *)dv->ent.a)[dv->ent.n - 1].nbnd++;
+    return QDC_OK;
+}
+
+/* With a record: the vertices [first, first + c) of node block (dim, tag). */
+static qdc_status dv_block(gmsh *g, int64_t dim, int64_t tag, int64_t first, int64_t c,
+                           qdc_error *err)
+{
+    vec *b;
+
+    if (!g->rec)
+        return QDC_OK;
+    b = &g->rec->dv.blk;
+    if (vec_grow(b, 4) != 0)
+        return qdc_fail(err, QDC_ENOMEM, "out of memory for the node blocks");
+    ((int64_t *)b->a)[b->n++] = dim;
+    ((int64_t *)b->a)[b->n++] = tag;
+    ((int64_t *)b->a)[b->n++] = first;
+    ((int64_t *)b->a)[b->n++] = c;
+    return QDC_OK;
+}
+
+/* $Entities (4.x): keep the first physical tag of each surface and volume;
+ * with a record, where the bounding boxes are and what bounds what. */
 static qdc_status entities(gmsh *g, qdc_error *err)
 {
     int64_t n[4], v, np, nb, tag, phys;
-    double x;
     qdc_status st = QDC_OK;
 
     for (int d = 0; d < 4 && st == QDC_OK; d++)
         st = g_count(g, "$Entities: count", 1, 4, INT32_MAX, &n[d], err);
     for (int d = 0; d < 4 && st == QDC_OK; d++) {
         vec *ev = d >= 2 ? &g->ent[d - 2] : NULL;
+        int nval = d || g->ver == 40 ? 6 : 3;
         if (ev && vec_grow(ev, (size_t)n[d]) != 0)
             return qdc_fail(err, QDC_ENOMEM, "out of memory for %lld entities",
                             (long long)n[d]);
         for (int64_t i = 0; i < n[d] && st == QDC_OK; i++) {
             st = g_i32(g, "$Entities: tag", INT32_MIN, INT32_MAX, &tag, err);
-            for (int j = 0; j < (d || g->ver == 40 ? 6 : 3) && st == QDC_OK; j++)
-                st = g_real(g, "$Entities: bounding box", &x, err);
+            if (st == QDC_OK && g->rec)
+                st = dv_entity(g, d, tag, nval, err);
+            for (int j = 0; j < nval && st == QDC_OK; j++)
+                st = entity_box(g, err);
             if (st == QDC_OK)
                 st = g_count(g, "$Entities: physical tag count", 1, 4, INT32_MAX, &np,
                              err);
@@ -381,8 +462,7 @@ static qdc_status entities(gmsh *g, qdc_error *err)
                 st = g_count(g, "$Entities: bounding entity count", 1, 4, INT32_MAX, &nb,
                              err);
             for (int64_t j = 0; j < (d ? nb : 0) && st == QDC_OK; j++)
-                st =
-                    g_i32(g, "$Entities: bounding entity", INT32_MIN, INT32_MAX, &v, err);
+                st = entity_bound(g, err);
             if (st == QDC_OK && ev)
                 ((int64_t *)ev->a)[ev->n++] = tag * (INT64_C(1) << 32) + (uint32_t)phys;
         }
@@ -482,6 +562,8 @@ static qdc_status nodes41(gmsh *g, qdc_error *err)
             st = qdc_fail(err, QDC_EPARSE,
                           "$Nodes: more nodes in the blocks than the %lld announced",
                           (long long)total);
+        if (st == QDC_OK)
+            st = dv_block(g, dim, v, i, c, err);
         for (int64_t j = 0; j < c && st == QDC_OK; j++)
             st = g_int(g, "$Nodes: node tag", 1, INT32_MAX, &g->tags[i + j], err);
         for (int64_t j = 0; j < c && st == QDC_OK; j++) {
@@ -528,6 +610,8 @@ static qdc_status nodes40(gmsh *g, qdc_error *err)
             st = fail_txt(err, QDC_EPARSE, &g->s, g->s.p,
                           "$Nodes: more nodes in the blocks than the %lld announced",
                           (long long)total);
+        if (st == QDC_OK)
+            st = dv_block(g, dim, v, i, c, err);
         for (int64_t j = 0; j < c && st == QDC_OK; j++) {
             double x;
             st = g_int(g, "$Nodes: node tag", 1, INT32_MAX, &g->tags[i + j], err);
@@ -648,6 +732,28 @@ static qdc_status elem_nodes(gmsh *g, int k, int32_t phys, int32_t ent, qdc_erro
     return QDC_OK;
 }
 
+/* Higher-order tetrahedra (Gmsh types 11, 29, 30, 31: 10, 20, 35, 56 nodes)
+ * would be broken by moving their corners alone: refused, naming the type.
+ * at: where the type is. */
+static qdc_status ho_tet(gmsh *g, const char *at, int64_t type, qdc_error *err)
+{
+    static const char *const order[] = {"second", "third", "fourth", "fifth"};
+    int o = type == 11 ? 0 : type >= 29 && type <= 31 ? (int)type - 28 : -1;
+
+    if (o < 0)
+        return QDC_OK;
+    if (g->binary)
+        return fail_bin(err, QDC_EFORMAT, at - g->s.base,
+                        "$Elements: %s-order tetrahedra (Gmsh element type %lld, %lld "
+                        "nodes) are not supported: qdc optimizes linear tetrahedra "
+                        "(type 4)",
+                        order[o], (long long)type, (long long)type_nodes(type));
+    return fail_txt(err, QDC_EFORMAT, &g->s, at,
+                    "$Elements: %s-order tetrahedra (Gmsh element type %lld, %lld nodes) "
+                    "are not supported: qdc optimizes linear tetrahedra (type 4)",
+                    order[o], (long long)type, (long long)type_nodes(type));
+}
+
 /* Skip the rest of an ASCII line (an element of a type we don't read). */
 static void skip_line(txt *s)
 {
@@ -674,9 +780,13 @@ static qdc_status elements41(gmsh *g, qdc_error *err)
         st = g_i32(g, "$Elements: entity dimension", 0, 3, &dim, err);
         if (st == QDC_OK)
             st = g_i32(g, "$Elements: entity tag", INT32_MIN, INT32_MAX, &etag, err);
+        if (!g->binary)
+            skip_ws(&g->s);
         at = g->s.p;
         if (st == QDC_OK)
             st = g_i32(g, "$Elements: element type", INT32_MIN, INT32_MAX, &type, err);
+        if (st == QDC_OK)
+            st = ho_tet(g, at, type, err);
         if (st != QDC_OK)
             break;
         nn = type_nodes(type);
@@ -720,9 +830,14 @@ static qdc_status elements22(gmsh *g, qdc_error *err)
 
     for (int64_t i = 0; i < total && st == QDC_OK; i++) {
         int k;
+        const char *at;
         st = txt_int(s, "$Elements: element tag", 0, INT64_MAX, &v, err);
+        skip_ws(s);
+        at = s->p;
         if (st == QDC_OK)
             st = txt_int(s, "$Elements: element type", INT32_MIN, INT32_MAX, &type, err);
+        if (st == QDC_OK)
+            st = ho_tet(g, at, type, err);
         if (st != QDC_OK)
             break;
         k = type == 4 ? 1 : type == 2 ? 0 : -1;
@@ -760,10 +875,15 @@ static qdc_status elements40(gmsh *g, qdc_error *err)
     for (int64_t b = 0; b < nblk && st == QDC_OK; b++) {
         int k;
         st = g_i32(g, "$Elements: entity tag", INT32_MIN, INT32_MAX, &etag, err);
+        const char *at;
         if (st == QDC_OK)
             st = g_i32(g, "$Elements: entity dimension", 0, 3, &dim, err);
+        skip_ws(&g->s);
+        at = g->s.p;
         if (st == QDC_OK)
             st = g_i32(g, "$Elements: element type", INT32_MIN, INT32_MAX, &type, err);
+        if (st == QDC_OK)
+            st = ho_tet(g, at, type, err);
         if (st == QDC_OK)
             st = g_count(g, "$Elements: elements in block", 2, 0, INT64_MAX, &c, err);
         if (st != QDC_OK)
@@ -805,6 +925,8 @@ static qdc_status elements22_bin(gmsh *g, qdc_error *err)
         int k;
         st = g_i32(g, "$Elements: element type", INT32_MIN, INT32_MAX, &type, err);
         if (st == QDC_OK)
+            st = ho_tet(g, at, type, err);
+        if (st == QDC_OK)
             st = g_i32(g, "$Elements: elements in group", 1, total - done, &cnt, err);
         if (st == QDC_OK)
             st = g_i32(g, "$Elements: tag count", 0, 1000, &ntags, err);
@@ -843,8 +965,68 @@ static qdc_status elements22_bin(gmsh *g, qdc_error *err)
     return st == QDC_OK ? want_end(g, "Elements", err) : st;
 }
 
+/* 4.0 and 2.x: an optional "Affine" line of 16 values after the link header. */
+static qdc_status affine_line(gmsh *g, qdc_error *err)
+{
+    txt *s = &g->s;
+    double x;
+    qdc_status st = QDC_OK;
+
+    skip_ws(s);
+    if ((size_t)(s->end - s->p) < 6 || memcmp(s->p, "Affine", 6) != 0)
+        return QDC_OK;
+    s->p += 6;
+    for (int j = 0; j < 16 && st == QDC_OK; j++)
+        st = txt_real(s, "$Periodic: affine value", &x, err);
+    return st;
+}
+
+/* $Periodic: links "dim tag master-tag", their affine transform (4.1: a
+ * count and values; 4.0, 2.x: an optional "Affine" line) and node pairs
+ * "tag master-tag". The tags of both nodes of every pair are kept: those
+ * vertices are held (gmsh_mesh), so a pair never moves apart. 4.1 binary
+ * files write it in binary, 2.2 binary files in ASCII. */
+static qdc_status periodic(gmsh *g, qdc_error *err)
+{
+    int bin = g->binary;
+    int64_t nl, v, na, np;
+    double x;
+    qdc_status st;
+
+    g->binary = bin && g->ver == 41;
+    st = g_count(g, "$Periodic: link count", 4, 12 + 2 * (uint64_t)g->dsize, INT32_MAX,
+                 &nl, err);
+    for (int64_t l = 0; l < nl && st == QDC_OK; l++) {
+        for (int j = 0; j < 3 && st == QDC_OK; j++)
+            st = g_i32(g, j ? "$Periodic: entity tag" : "$Periodic: entity dimension",
+                       j ? INT32_MIN : 0, j ? INT32_MAX : 3, &v, err);
+        if (st == QDC_OK && g->ver == 41)
+            st = g_count(g, "$Periodic: affine value count", 1, 8, 16, &na, err);
+        for (int64_t j = 0; g->ver == 41 && j < na && st == QDC_OK; j++)
+            st = g_real(g, "$Periodic: affine value", &x, err);
+        if (st == QDC_OK && g->ver != 41)
+            st = affine_line(g, err);
+        if (st == QDC_OK)
+            st = g_count(g, "$Periodic: node pair count", 2, 2 * (uint64_t)g->dsize,
+                         INT32_MAX, &np, err);
+        if (st == QDC_OK && vec_grow(&g->per, 2 * (size_t)np) != 0)
+            st = qdc_fail(err, QDC_ENOMEM, "out of memory for %lld periodic pairs",
+                          (long long)np);
+        for (int64_t j = 0; j < 2 * np && st == QDC_OK; j++)
+            st = g_int(g, "$Periodic: node tag", 1, INT64_MAX,
+                       &((int64_t *)g->per.a)[g->per.n++], err);
+    }
+    g->nlinks += nl;
+    g->binary = bin;
+    return st == QDC_OK ? want_end(g, "Periodic", err) : st;
+}
+
 static qdc_status gmsh_section(gmsh *g, const char *name, size_t nlen, qdc_error *err)
 {
+    if (word_is(name, nlen, "Periodic")) {
+        end_of_line(g);
+        return periodic(g, err);
+    }
     if (word_is(name, nlen, "Entities") && g->ver >= 40) {
         end_of_line(g);
         return entities(g, err);
@@ -872,6 +1054,38 @@ static qdc_status gmsh_section(gmsh *g, const char *name, size_t nlen, qdc_error
     return skip_section(g, name, nlen, err);
 }
 
+/* The vertices of the $Periodic pairs, held (pm->fix). A tag of no node
+ * (a node of an entity the file does not hold) needs nothing. */
+static qdc_status periodic_held(gmsh *g, parsed *pm, qdc_error *err)
+{
+    const int64_t *tag = g->per.a;
+
+    if (!g->nlinks)
+        return QDC_OK;
+    pm->fix = qdc_mallocn(g->per.n + 1, sizeof(int32_t));
+    if (!pm->fix)
+        return qdc_fail(err, QDC_ENOMEM, "out of memory for the periodic nodes");
+    pm->nfix = 0;
+    for (size_t i = 0; i < g->per.n; i++) {
+        int64_t v = tagmap_find(&g->tm, tag[i]);
+        if (v >= 0)
+            pm->fix[pm->nfix++] = (int32_t)v;
+    }
+    return QDC_OK;
+}
+
+static void periodic_note(const gmsh *g, const meshio_options *o, const mesh_t *m)
+{
+    int64_t n = 0;
+
+    for (int32_t v = 0; v < m->nv; v++)
+        n += m->fixed[v] != 0;
+    note(o,
+         "gmsh: $Periodic: %lld links, %lld node pairs: their %lld vertices are held "
+         "fixed (a pair never moves apart)",
+         (long long)g->nlinks, (long long)(g->per.n / 2), (long long)n);
+}
+
 static qdc_status gmsh_mesh(gmsh *g, const meshio_options *o, mesh_t **out,
                             qdc_error *err)
 {
@@ -892,9 +1106,14 @@ static qdc_status gmsh_mesh(gmsh *g, const meshio_options *o, mesh_t **out,
     pm.ntri = (int64_t)g->el[0].phys.n;
     pm.tris = g->el[0].idx.a;
     pm.tri_ref = pm.ntri ? reg[0] : NULL;
-    st = parsed_mesh(&pm, out, err);
+    st = periodic_held(g, &pm, err);
+    if (st == QDC_OK)
+        st = parsed_mesh(&pm, out, err);
+    if (st == QDC_OK && pm.nfix > 0)
+        periodic_note(g, o, *out);
     qdc_free(reg[0]);
     qdc_free(reg[1]);
+    qdc_free(pm.fix);
     skip_note(o, &g->sk, "gmsh", "elements");
     return st;
 }
@@ -909,6 +1128,7 @@ qdc_status meshio_gmsh_read(const char *buf, size_t len, const meshio_options *o
 
     memset(&g, 0, sizeof g);
     g.rec = rec;
+    g.per.size = sizeof(int64_t);
     for (int k = 0; k < 2; k++) {
         g.ent[k].size = sizeof(int64_t);
         g.el[k].idx.size = g.el[k].phys.size = g.el[k].ent.size = sizeof(int32_t);
@@ -933,6 +1153,8 @@ qdc_status meshio_gmsh_read(const char *buf, size_t len, const meshio_options *o
     }
     if (st == QDC_OK && !g.have_nodes)
         st = fail_txt(err, QDC_EPARSE, &g.s, g.s.p, "no $Nodes section");
+    if (st == QDC_OK && rec && rec->dv.kind == DV_BOXES)
+        st = dv_finish(&rec->dv, g.xyz, g.nv, err);
     if (st == QDC_OK)
         st = gmsh_mesh(&g, o, out, err);
     gmsh_free(&g);

@@ -20,6 +20,7 @@ enum {
     GMF_TRIANGLES = 6,
     GMF_TETRAHEDRA = 8,
     GMF_REQUIRED_VERTICES = 15,
+    GMF_TETRAHEDRA_P2 = 30,
     GMF_END = 54
 };
 
@@ -237,6 +238,10 @@ qdc_status meshio_meshb_read(const char *buf, size_t len, const meshio_options *
             at_tri = at;
             st = gmf_elems(&g, "Triangles", 3, INT32_MAX / 3, &pm.ntri, &pm.tris,
                            &pm.tri_ref, err);
+        } else if (kw == GMF_TETRAHEDRA_P2) { /* corners alone would break them */
+            st = fail_bin(err, QDC_EFORMAT, (int64_t)at,
+                          "meshb: TetrahedraP2: second-order tetrahedra (10 vertices) "
+                          "are not supported: qdc optimizes linear Tetrahedra");
         } else if (kw == GMF_REQUIRED_VERTICES) {
             int64_t n;
             at_fix = at;

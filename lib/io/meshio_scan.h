@@ -799,6 +799,65 @@ enum {
     SRC_BLOCK     /* VTU base64 or zlib Points: bytes [blk_a, blk_b) re-encoded */
 };
 
+/* Values in the file that are derived from the coordinates, recomputed by a
+ * spliced write (splice.c): Gmsh 4.x $Entities bounding boxes (DV_BOXES),
+ * VTU Points RangeMin/RangeMax, the range of the point norms (DV_NORMS). */
+enum { DV_NONE = 0, DV_BOXES, DV_NORMS };
+
+typedef struct {
+    int32_t dim, nval; /* nval: 3 (a 4.1 point: its coordinates) or 6 */
+    int64_t tag, val;  /* val: index of its first value */
+    int64_t bnd, nbnd; /* its bounding entities: bnd.a[bnd .. bnd + nbnd) */
+} dv_ent;
+
+typedef struct {
+    int kind, bin;      /* bin: float64 little-endian values, else text tokens */
+    vec off;            /* uint64: byte offset of each value, increasing */
+    vec file;           /* double: each value as in the file */
+    vec ref;            /* double: each computed from the coordinates read (dv_finish) */
+    vec ent;            /* DV_BOXES: dv_ent per $Entities entity */
+    vec bnd;            /* int64: bounding entity tags, then (dv_finish) indices */
+    vec blk;            /* int64 quadruples: $Nodes block dim, tag (then: entity
+                           index), first vertex, count */
+    int64_t imin, imax; /* DV_NORMS: value index of RangeMin, RangeMax or -1 */
+} derived;
+
+static inline void dv_init(derived *d)
+{
+    memset(d, 0, sizeof *d);
+    d->off.size = d->bnd.size = d->blk.size = sizeof(int64_t);
+    d->file.size = d->ref.size = sizeof(double);
+    d->ent.size = sizeof(dv_ent);
+    d->imin = d->imax = -1;
+}
+
+static inline void dv_free(derived *d)
+{
+    vec_free(&d->off);
+    vec_free(&d->file);
+    vec_free(&d->ref);
+    vec_free(&d->ent);
+    vec_free(&d->bnd);
+    vec_free(&d->blk);
+    dv_init(d);
+}
+
+/* One more value at byte offset off, as read (file). QDC_ENOMEM. */
+static inline qdc_status dv_value(derived *d, uint64_t off, double file, qdc_error *err)
+{
+    if (vec_grow(&d->off, 1) != 0 || vec_grow(&d->file, 1) != 0)
+        return qdc_fail(err, QDC_ENOMEM, "out of memory");
+    ((uint64_t *)d->off.a)[d->off.n++] = off;
+    ((double *)d->file.a)[d->file.n++] = file;
+    return QDC_OK;
+}
+
+/* Check and resolve what the reader recorded and compute the values from
+ * the coordinates read; what does not hold together (offsets out of order,
+ * a tag of no entity) is dropped: the file's values are then kept as read.
+ * QDC_ENOMEM only. */
+qdc_status dv_finish(derived *d, const double *xyz, int64_t nv, qdc_error *err);
+
 typedef struct {
     int kind;
     meshio_format fmt; /* the file's own variant (version, encoding) */
@@ -816,12 +875,14 @@ typedef struct {
     uint64_t app_off; /* the Points' offset="" */
     vec appoff;       /* uint64 triples: [start, end) of each appended DataArray's
                          offset value in the file, and the value */
+    derived dv;       /* values derived from the coordinates */
 } srcrec;
 
 static inline void srcrec_init(srcrec *r)
 {
     memset(r, 0, sizeof *r);
     r->appoff.size = sizeof(uint64_t);
+    dv_init(&r->dv);
 }
 
 static inline void srcrec_free(srcrec *r)
@@ -829,6 +890,7 @@ static inline void srcrec_free(srcrec *r)
     qdc_free(r->off);
     r->off = NULL;
     vec_free(&r->appoff);
+    dv_free(&r->dv);
 }
 
 /* Room for nv vertex offsets; QDC_ENOMEM. */

@@ -166,6 +166,17 @@ static qdc_status cells_mesh(cells *c, const char *fmtname, const meshio_options
                     goto bad_list;
             }
             type = is_int32(t) ? (int64_t)t : -1;
+            if (type == 24 || type == 71) { /* corners alone would break them */
+                st = qdc_fail(err, QDC_EFORMAT,
+                              "%s: cell %lld is a %s tetrahedron (VTK cell type %lld, "
+                              "%lld points): not supported, qdc optimizes linear "
+                              "tetrahedra (type 10)",
+                              fmtname, (long long)i,
+                              type == 24 ? "second-order" : "Lagrange", (long long)type,
+                              (long long)k);
+                set_index(err, "cell", i);
+                break;
+            }
             if (!((type == 10 && k == 4) || (type == 5 && k == 3))) {
                 if (pass == 0)
                     skip_count(&sk, type, 1);
@@ -1351,6 +1362,44 @@ static qdc_status vtu_array(vtu *x, const xtag *t, int64_t n, vtype vt, int fini
 
 enum { SEC_NONE, SEC_POINTS, SEC_CELLS, SEC_CELLDATA, SEC_POINTDATA };
 
+/* With a record: the Points' RangeMin and RangeMax (VTK: the range of the
+ * point norms), for a spliced write to recompute them. */
+static qdc_status vtu_note_range(vtu *x, const xtag *t, qdc_error *err)
+{
+    static const char *const keys[2] = {"RangeMin", "RangeMax"};
+    derived *d = &x->rec->dv;
+    qdc_status st = QDC_OK;
+
+    for (int k = 0; k < 2 && st == QDC_OK; k++) {
+        const char *v, *ve;
+        double val;
+        if (!tag_attr(t, keys[k], &v, &ve))
+            continue;
+        while (v < ve && is_space((unsigned char)*v))
+            v++;
+        while (ve > v && is_space((unsigned char)ve[-1]))
+            ve--;
+        if (parse_double(v, ve, &val) != 0 || !isfinite(val))
+            continue;
+        *(k ? &d->imax : &d->imin) = (int64_t)d->off.n;
+        st = dv_value(d, (uint64_t)(v - x->s.base), val, err);
+    }
+    if (st == QDC_OK && d->off.n == 2 &&
+        ((uint64_t *)d->off.a)[0] > ((uint64_t *)d->off.a)[1]) {
+        uint64_t o = ((uint64_t *)d->off.a)[0];
+        double f = ((double *)d->file.a)[0];
+        ((uint64_t *)d->off.a)[0] = ((uint64_t *)d->off.a)[1];
+        ((double *)d->file.a)[0] = ((double *)d->file.a)[1];
+        ((uint64_t *)d->off.a)[1] = o;
+        ((double *)d->file.a)[1] = f;
+        d->imin = 1 - d->imin;
+        d->imax = 1 - d->imax;
+    }
+    if (d->off.n)
+        d->kind = DV_NORMS;
+    return st;
+}
+
 static qdc_status vtu_dataarray(vtu *x, const xtag *t, int sec, double **offs_end,
                                 qdc_error *err)
 {
@@ -1375,6 +1424,11 @@ static qdc_status vtu_dataarray(vtu *x, const xtag *t, int sec, double **offs_en
         if (ncomp != 3)
             return fail_txt(err, QDC_EPARSE, &x->s, t->name,
                             "VTU: Points need 3 components");
+        if (x->rec && !x->c.xyz) {
+            st = vtu_note_range(x, t, err);
+            if (st != QDC_OK)
+                return st;
+        }
         dst = &x->c.xyz;
         n = 3 * x->c.nv;
     } else if (sec == SEC_CELLS) {
@@ -1674,6 +1728,8 @@ qdc_status meshio_vtu_read(const char *buf, size_t len, const meshio_options *o,
     }
     if (st == QDC_OK && rec && rec->appended && rec->kind != SRC_NONE)
         check_app_overlap(&x);
+    if (st == QDC_OK && rec && rec->dv.kind == DV_NORMS)
+        st = dv_finish(&rec->dv, x.c.xyz, x.c.nv, err);
     if (st == QDC_OK)
         st = cells_mesh(&x.c, "vtu", o, out, err);
     qdc_free(offs_end);

@@ -167,6 +167,226 @@ int meshio_splices(const mesh_t *m, meshio_format fmt, const char **why)
     return splice_ok(m, fmt, why);
 }
 
+/* ---- values derived from the coordinates ---- */
+
+static int cmp_key(const void *a, const void *b)
+{
+    const int64_t *x = a, *y = b;
+
+    return (x[0] > y[0]) - (x[0] < y[0]);
+}
+
+static int64_t ent_key(int64_t dim, int64_t tag)
+{
+    return dim * (INT64_C(1) << 34) + tag + (INT64_C(1) << 32);
+}
+
+/* Entity index of (dim, tag) in the sorted (key, index) pairs; -1 if none. */
+static int64_t find_ent(const int64_t *keys, size_t n, int64_t dim, int64_t tag)
+{
+    int64_t k[2] = {ent_key(dim, tag < 0 ? -tag : tag), 0};
+    const int64_t *p = bsearch(k, keys, n, 2 * sizeof(int64_t), cmp_key);
+
+    return p ? p[1] : -1;
+}
+
+/* Bounding entities and node blocks to entity indices; 0, or -1 if a tag
+ * names no entity or a block lies outside the vertices. */
+static int dv_resolve(derived *d, int64_t nv, int64_t *keys)
+{
+    dv_ent *e = d->ent.a;
+    int64_t *bnd = d->bnd.a, *blk = d->blk.a;
+
+    for (size_t i = 0; i < d->ent.n; i++) {
+        keys[2 * i] = ent_key(e[i].dim, e[i].tag < 0 ? -e[i].tag : e[i].tag);
+        keys[2 * i + 1] = (int64_t)i;
+    }
+    qsort(keys, d->ent.n, 2 * sizeof(int64_t), cmp_key);
+    for (size_t i = 0; i < d->ent.n; i++) {
+        for (int64_t j = e[i].bnd; j < e[i].bnd + e[i].nbnd; j++) {
+            if (e[i].dim < 1 || j < 0 || (size_t)j >= d->bnd.n)
+                return -1;
+            bnd[j] = find_ent(keys, d->ent.n, e[i].dim - 1, bnd[j]);
+            if (bnd[j] < 0)
+                return -1;
+        }
+    }
+    for (size_t i = 0; i + 4 <= d->blk.n; i += 4) {
+        blk[i + 1] = find_ent(keys, d->ent.n, blk[i], blk[i + 1]);
+        if (blk[i + 1] < 0 || blk[i + 2] < 0 || blk[i + 3] < 0 || blk[i + 2] > nv ||
+            blk[i + 3] > nv - blk[i + 2])
+            return -1;
+    }
+    return 0;
+}
+
+static void box_add(double *b, const double *p)
+{
+    for (int a = 0; a < 3; a++) {
+        b[a] = p[a] < b[a] ? p[a] : b[a];
+        b[3 + a] = p[a] > b[3 + a] ? p[a] : b[3 + a];
+    }
+}
+
+/* The derived values at coordinates xyz into out[] (NaN: none, keep the
+ * file's); box: 6 doubles per entity, scratch. */
+static void dv_compute(const derived *d, const double *xyz, int64_t nv, double *out,
+                       double *box)
+{
+    const dv_ent *e = d->ent.a;
+    const int64_t *bnd = d->bnd.a, *blk = d->blk.a;
+
+    for (size_t i = 0; i < d->off.n; i++)
+        out[i] = NAN;
+    if (d->kind == DV_NORMS) {
+        double lo = INFINITY, hi = -INFINITY;
+        for (int64_t v = 0; v < nv; v++) {
+            const double *p = xyz + 3 * v;
+            double r = sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
+            lo = r < lo ? r : lo;
+            hi = r > hi ? r : hi;
+        }
+        if (nv && d->imin >= 0)
+            out[d->imin] = lo;
+        if (nv && d->imax >= 0)
+            out[d->imax] = hi;
+        return;
+    }
+    for (size_t i = 0; i < d->ent.n; i++)
+        for (int a = 0; a < 3; a++) {
+            box[6 * i + (size_t)a] = INFINITY;
+            box[6 * i + 3 + (size_t)a] = -INFINITY;
+        }
+    for (size_t i = 0; i + 4 <= d->blk.n; i += 4)
+        for (int64_t v = blk[i + 2]; v < blk[i + 2] + blk[i + 3]; v++)
+            box_add(box + 6 * blk[i + 1], xyz + 3 * v);
+    for (int dim = 1; dim <= 3; dim++) /* closures: a volume holds its surfaces... */
+        for (size_t i = 0; i < d->ent.n; i++)
+            for (int64_t j = 0; e[i].dim == dim && j < e[i].nbnd; j++) {
+                const double *b = box + 6 * bnd[e[i].bnd + j];
+                if (b[0] <= b[3]) {
+                    box_add(box + 6 * i, b);
+                    box_add(box + 6 * i, b + 3);
+                }
+            }
+    for (size_t i = 0; i < d->ent.n; i++) {
+        const double *b = box + 6 * i;
+        for (int32_t k = 0; b[0] <= b[3] && k < e[i].nval; k++)
+            out[e[i].val + k] = b[k];
+    }
+}
+
+qdc_status dv_finish(derived *d, const double *xyz, int64_t nv, qdc_error *err)
+{
+    const uint64_t *off = d->off.a;
+    const dv_ent *e = d->ent.a;
+    int64_t *keys;
+    double *box;
+    int ok = d->kind != DV_NONE && d->off.n == d->file.n && d->off.n > 0;
+
+    for (size_t i = 1; ok && i < d->off.n; i++)
+        ok = off[i] > off[i - 1];
+    for (size_t i = 0; ok && d->kind == DV_BOXES && i < d->ent.n; i++)
+        ok = e[i].val >= 0 && e[i].nval >= 0 && e[i].nval <= 6 &&
+             (size_t)e[i].val + (size_t)e[i].nval <= d->off.n;
+    if (!ok) {
+        dv_free(d);
+        return QDC_OK;
+    }
+    keys = qdc_mallocn(2 * d->ent.n + 2, sizeof(int64_t));
+    box = qdc_mallocn(6 * d->ent.n + 6, sizeof(double));
+    if (!keys || !box || vec_grow(&d->ref, d->off.n) != 0) {
+        qdc_free(keys);
+        qdc_free(box);
+        return qdc_fail(err, QDC_ENOMEM, "out of memory for the derived values");
+    }
+    if (d->kind == DV_BOXES && dv_resolve(d, nv, keys) != 0) {
+        dv_free(d);
+    } else {
+        dv_compute(d, xyz, nv, d->ref.a, box);
+        d->ref.n = d->off.n;
+    }
+    qdc_free(keys);
+    qdc_free(box);
+    return QDC_OK;
+}
+
+/* What a spliced write puts in place of the derived values: vals[i] NaN
+ * keeps value i as in the file. */
+typedef struct {
+    const source *s;
+    double *vals;
+    size_t i, n;
+} edits;
+
+static qdc_status edits_init(edits *ed, const source *s, const double *xyz,
+                             qdc_error *err)
+{
+    const derived *d = &s->r.dv;
+    double *box = NULL;
+
+    memset(ed, 0, sizeof *ed);
+    ed->s = s;
+    if (d->kind == DV_NONE || d->ref.n != d->off.n)
+        return QDC_OK;
+    ed->vals = qdc_mallocn(d->off.n + 1, sizeof(double));
+    box = qdc_mallocn(6 * d->ent.n + 6, sizeof(double));
+    if (!ed->vals || !box) {
+        qdc_free(box);
+        qdc_free(ed->vals);
+        ed->vals = NULL;
+        return qdc_fail(err, QDC_ENOMEM, "out of memory for the derived values");
+    }
+    dv_compute(d, xyz, s->nv, ed->vals, box);
+    qdc_free(box);
+    for (size_t i = 0; i < d->off.n; i++) {
+        double now = ed->vals[i], ref = ((const double *)d->ref.a)[i];
+        double file = ((const double *)d->file.a)[i];
+        if (isnan(now) || isnan(ref) || now == ref)
+            ed->vals[i] = NAN;
+        else if (d->kind == DV_BOXES) /* shifted as far as the nodes' bound moved */
+            ed->vals[i] = file + (now - ref);
+    }
+    ed->n = d->off.n;
+    return QDC_OK;
+}
+
+/* The source's bytes [from, to) with the derived values in that range replaced. */
+static qdc_status put_src(edits *ed, wbuf *w, size_t from, size_t to, qdc_error *err)
+{
+    const source *s = ed->s;
+    const uint64_t *off = s->r.dv.off.a;
+
+    for (; ed->i < ed->n && off[ed->i] < to; ed->i++) {
+        size_t p = (size_t)off[ed->i], te = p;
+        double x = ed->vals[ed->i];
+        if (s->r.dv.bin) {
+            te = p + 8;
+        } else {
+            while (te < s->len && !is_space((unsigned char)s->buf[te]) &&
+                   s->buf[te] != '"' && s->buf[te] != '\'' && s->buf[te] != '<')
+                te++;
+        }
+        if (p < from || te > to || te == p)
+            return qdc_fail(err, QDC_EINTERNAL, "source: derived value at byte %zu", p);
+        wb_put(w, s->buf + from, p - from);
+        if (isnan(x)) {
+            wb_put(w, s->buf + p, te - p);
+        } else if (s->r.dv.bin) {
+            unsigned char b[8];
+            uint64_t u;
+            memcpy(&u, &x, 8);
+            put_le64(b, u);
+            wb_put(w, b, 8);
+        } else {
+            wb_real(w, x);
+        }
+        from = te;
+    }
+    wb_put(w, s->buf + from, to - from);
+    return QDC_OK;
+}
+
 /* ---- text ---- */
 
 static size_t skip_sep(const source *s, size_t p)
@@ -207,9 +427,11 @@ static void put_number(wbuf *w, const char *t, const char *te, double x)
         wb_real(w, x);
 }
 
-static qdc_status splice_text(const source *s, const double *xyz, wbuf *w, qdc_error *err)
+static qdc_status splice_text(const source *s, const double *xyz, edits *ed, wbuf *w,
+                              qdc_error *err)
 {
     size_t pos = 0;
+    qdc_status st = QDC_OK;
 
     for (int32_t v = 0; v < s->nv; v++) {
         size_t p = s->r.off[v];
@@ -225,20 +447,22 @@ static qdc_status splice_text(const source *s, const double *xyz, wbuf *w, qdc_e
                 return qdc_fail(err, QDC_EINTERNAL,
                                 "source: no coordinate of vertex %d at byte %zu", (int)v,
                                 p);
-            wb_put(w, s->buf + pos, p - pos);
+            st = put_src(ed, w, pos, p, err);
+            if (st != QDC_OK)
+                return st;
             put_number(w, s->buf + p, s->buf + te, xyz[3 * (size_t)v + (size_t)a]);
             pos = p = te;
         }
     }
-    wb_put(w, s->buf + pos, s->len - pos);
-    return QDC_OK;
+    return put_src(ed, w, pos, s->len, err);
 }
 
 /* Coordinates one by one (SRC_TEXT3). */
-static qdc_status splice_text3(const source *s, const double *xyz, wbuf *w,
+static qdc_status splice_text3(const source *s, const double *xyz, edits *ed, wbuf *w,
                                qdc_error *err)
 {
     size_t pos = 0;
+    qdc_status st;
 
     for (size_t i = 0; i < 3 * (size_t)s->nv; i++) {
         size_t p = s->r.off[i], te = p;
@@ -253,12 +477,13 @@ static qdc_status splice_text3(const source *s, const double *xyz, wbuf *w,
                             "source: coordinate %zu of vertex %zu at byte %zu is out of "
                             "order or empty",
                             i % 3, i / 3, p);
-        wb_put(w, s->buf + pos, p - pos);
+        st = put_src(ed, w, pos, p, err);
+        if (st != QDC_OK)
+            return st;
         put_number(w, s->buf + p, s->buf + te, xyz[i]);
         pos = te;
     }
-    wb_put(w, s->buf + pos, s->len - pos);
-    return QDC_OK;
+    return put_src(ed, w, pos, s->len, err);
 }
 
 /* ---- binary ---- */
@@ -280,10 +505,12 @@ static void encode_value(unsigned char *b, double x, int width, int big)
         b[big ? width - 1 - j : j] = (unsigned char)(u >> (8 * j));
 }
 
-static qdc_status splice_bin(const source *s, const double *xyz, wbuf *w, qdc_error *err)
+static qdc_status splice_bin(const source *s, const double *xyz, edits *ed, wbuf *w,
+                             qdc_error *err)
 {
     size_t pos = 0, vb = 3 * (size_t)s->r.width;
     unsigned char b[24];
+    qdc_status st;
 
     for (int32_t v = 0; v < s->nv; v++) {
         size_t p = s->r.off[v];
@@ -294,12 +521,13 @@ static qdc_status splice_bin(const source *s, const double *xyz, wbuf *w, qdc_er
         for (int a = 0; a < 3; a++)
             encode_value(b + a * s->r.width, xyz[3 * (size_t)v + (size_t)a], s->r.width,
                          s->r.big);
-        wb_put(w, s->buf + pos, p - pos);
+        st = put_src(ed, w, pos, p, err);
+        if (st != QDC_OK)
+            return st;
         wb_put(w, b, vb);
         pos = p + vb;
     }
-    wb_put(w, s->buf + pos, s->len - pos);
-    return QDC_OK;
+    return put_src(ed, w, pos, s->len, err);
 }
 
 /* ---- VTU blocks ---- */
@@ -413,7 +641,7 @@ static qdc_status encode_block(const source *s, const double *xyz, char **out, s
     return st;
 }
 
-static qdc_status splice_block(const source *s, const double *xyz, wbuf *w,
+static qdc_status splice_block(const source *s, const double *xyz, edits *ed, wbuf *w,
                                qdc_error *err)
 {
     const srcrec *r = &s->r;
@@ -436,20 +664,28 @@ static qdc_status splice_block(const source *s, const double *xyz, wbuf *w,
             qdc_free(blk);
             return qdc_fail(err, QDC_EINTERNAL, "source: appended offsets out of order");
         }
-        wb_put(w, s->buf + pos, (size_t)(ao[i] - pos));
+        st = put_src(ed, w, pos, (size_t)ao[i], err);
+        if (st != QDC_OK) {
+            qdc_free(blk);
+            return st;
+        }
         wb_int(w, (int64_t)ao[i + 2] + delta);
         pos = (size_t)ao[i + 1];
     }
-    wb_put(w, s->buf + pos, (size_t)r->blk_a - pos);
-    wb_put(w, blk, n);
-    wb_put(w, s->buf + r->blk_b, s->len - (size_t)r->blk_b);
+    st = put_src(ed, w, pos, (size_t)r->blk_a, err);
+    if (st == QDC_OK) {
+        wb_put(w, blk, n);
+        st = put_src(ed, w, (size_t)r->blk_b, s->len, err);
+    }
     qdc_free(blk);
-    return QDC_OK;
+    return st;
 }
 
 qdc_status splice_write(const mesh_t *m, int part, wbuf *w, qdc_error *err)
 {
     const source *s = (const source *)m->source;
+    edits ed;
+    qdc_status st;
 
     if (part == 1) {
         if (!s->ele)
@@ -461,16 +697,25 @@ qdc_status splice_write(const mesh_t *m, int part, wbuf *w, qdc_error *err)
         wb_put(w, s->buf, s->len); /* nothing moved (a base64 or zlib block as is) */
         return QDC_OK;
     }
+    st = edits_init(&ed, s, m->xyz, err);
+    if (st != QDC_OK)
+        return st;
     switch (s->r.kind) {
     case SRC_TEXT:
-        return splice_text(s, m->xyz, w, err);
+        st = splice_text(s, m->xyz, &ed, w, err);
+        break;
     case SRC_BIN:
-        return splice_bin(s, m->xyz, w, err);
+        st = splice_bin(s, m->xyz, &ed, w, err);
+        break;
     case SRC_TEXT3:
-        return splice_text3(s, m->xyz, w, err);
+        st = splice_text3(s, m->xyz, &ed, w, err);
+        break;
     case SRC_BLOCK:
-        return splice_block(s, m->xyz, w, err);
+        st = splice_block(s, m->xyz, &ed, w, err);
+        break;
     default:
-        return qdc_fail(err, QDC_EINTERNAL, "source: nothing recorded");
+        st = qdc_fail(err, QDC_EINTERNAL, "source: nothing recorded");
     }
+    qdc_free(ed.vals);
+    return st;
 }

@@ -7,7 +7,8 @@ Finds the coordinate fields of both files with its own small parsers (Medit
 DOLFIN XML, Medit binary, Abaqus .inp, Netgen .vol, legacy VTK
 ASCII/binary, VTU ascii/base64/appended, zlib or not), masks them and compares
 what is left byte for byte (for VTU, the offset="" of appended arrays may
-differ too). Then, with meshio: both files read with the same cells, cell,
+differ too; Gmsh 4.x $Entities bounding boxes and VTU Points
+RangeMin/RangeMax are checked to be recomputed from the new coordinates). Then, with meshio: both files read with the same cells, cell,
 point and field data, OUT's coordinates are the numbers in its coordinate
 fields, some of them changed, and, given REF (the same optimization written
 as Medit by qdc), equal to REF's (rounded to float32 if the file stores
@@ -38,6 +39,83 @@ class Fields:
         self.ranges = []  # (start, end) of each masked field, in order
         self.coords = []  # (start, end, kind) of each coordinate: 'text', '<f8', '>f4'...
         self.width = 8
+        # values derived from the coordinates, recomputed by a spliced write:
+        self.derived = []  # (start, end, kind) of each
+        self.entities = []  # Gmsh 4.x: (dim, tag, first value, count, bounding tags)
+        self.blocks = []  # Gmsh 4.x: (dim, tag, node count) of each $Nodes block
+        self.ranges_at = None  # VTU: value index of RangeMin, RangeMax (or None)
+
+
+def gmsh_entities(b, f, ver, binary, dsize):
+    """$Entities of MSH 4.x: where the bounding boxes are, what bounds what."""
+    if b.find(b"\n$Entities") < 0:
+        return
+    at = b.index(b"\n$Entities") + len(b"\n$Entities")
+    at = b.index(b"\n", at) + 1
+    sz = "<Q" if dsize == b"8" else "<I"
+    ds = struct.calcsize(sz)
+    if binary:
+        def size():
+            nonlocal at
+            at += ds
+            return struct.unpack_from(sz, b, at - ds)[0]
+
+        def i32():
+            nonlocal at
+            at += 4
+            return struct.unpack_from("<i", b, at - 4)[0]
+
+        def real():
+            nonlocal at
+            at += 8
+            return (at - 8, at, "<f8")
+    else:
+        it = tokens(b, at, False)
+
+        def size():
+            return int(b[slice(*next(it))])
+        i32 = size
+
+        def real():
+            s, e = next(it)
+            return (s, e, "text")
+    counts = [size() for _ in range(4)]
+    for dim in range(4):
+        for _ in range(counts[dim]):
+            tag = i32()
+            nval = 6 if dim or ver in (b"4", b"4.0") else 3
+            first = len(f.derived)
+            f.derived += [real() for _ in range(nval)]
+            for _ in range(size()):
+                i32()
+            bounds = [abs(i32()) for _ in range(size())] if dim else []
+            f.entities.append((dim, tag, first, nval, bounds))
+
+
+def entity_boxes(f, xyz):
+    """Each entity's box over the nodes of its blocks and its closure."""
+    box, at = {}, 0
+    for dim, tag, c in f.blocks:
+        if c:
+            p = xyz[at:at + c]
+            lo, hi = p.min(axis=0), p.max(axis=0)
+            if (dim, tag) in box:
+                lo = np.minimum(lo, box[dim, tag][0])
+                hi = np.maximum(hi, box[dim, tag][1])
+            box[dim, tag] = (lo, hi)
+        at += c
+    for d in (1, 2, 3):
+        for dim, tag, _, _, bounds in f.entities:
+            if dim != d:
+                continue
+            for bt in bounds:
+                if (d - 1, bt) in box:
+                    lo, hi = box[d - 1, bt]
+                    if (d, tag) in box:
+                        lo = np.minimum(lo, box[d, tag][0])
+                        hi = np.maximum(hi, box[d, tag][1])
+                    box[d, tag] = (lo, hi)
+    return box
 
 
 def medit(b):
@@ -83,12 +161,15 @@ def gmsh(b):
                 f.coords.append((at + 4 + 8 * k, at + 12 + 8 * k, "<f8"))
             at += 28
         return f
+    if ver.startswith(b"4"):
+        gmsh_entities(b, f, ver, ftype == b"1", dsize)
     if ver in (b"4", b"4.0"):
         it = tokens(b, at, False)
         nblk = int(b[slice(*next(it))])
         next(it)
         for _ in range(nblk):
-            _, dim, par, c = (int(b[slice(*next(it))]) for _ in range(4))
+            tag, dim, par, c = (int(b[slice(*next(it))]) for _ in range(4))
+            f.blocks.append((dim, tag, c))
             for _ in range(c):
                 for k in range(4 + par * dim):
                     s, e = next(it)
@@ -110,7 +191,8 @@ def gmsh(b):
         for _ in range(3):
             next(it)
         for _ in range(nblk):
-            dim, _, par, c = (int(b[slice(*next(it))]) for _ in range(4))
+            dim, tag, par, c = (int(b[slice(*next(it))]) for _ in range(4))
+            f.blocks.append((dim, tag, c))
             for _ in range(c):
                 next(it)
             for _ in range(c):
@@ -124,8 +206,9 @@ def gmsh(b):
     nblk = struct.unpack_from(sz, b, at)[0]
     at += 4 * ds
     for _ in range(nblk):
-        dim, _, par = struct.unpack_from("<3i", b, at)
+        dim, tag, par = struct.unpack_from("<3i", b, at)
         c = struct.unpack_from(sz, b, at + 12)[0]
+        f.blocks.append((dim, tag, c))
         at += 12 + ds + c * ds
         for _ in range(c):
             for k in range(3):
@@ -235,6 +318,16 @@ def vtu(b):
     f.width = w
     kind = (">f%d" if big else "<f%d") % w
     fmt = attr(t, b"format") or b"ascii"
+    at = {}
+    for key in (b"RangeMin", b"RangeMax"):
+        m = re.search(rb"\s" + key + rb'\s*=\s*"\s*([^"\s]+)\s*"', t)
+        if m:
+            at[key] = (tag.start() + m.start(1), tag.start() + m.end(1), "text")
+    if at:
+        order = sorted(at, key=lambda k: at[k][0])
+        f.derived = [at[k] for k in order]
+        f.ranges_at = tuple(order.index(k) if k in at else None
+                            for k in (b"RangeMin", b"RangeMax"))
     # every appended offset="" may shift
     for m in re.finditer(rb"<DataArray[^>]*>", b[:app if app >= 0 else len(b)]):
         if attr(m.group(0), b"format") == b"appended":
@@ -319,7 +412,7 @@ def fields(path, b):
 
 def masked(b, f):
     """The bytes between the masked fields."""
-    spans = sorted([(s, e) for s, e, _ in f.coords] + f.ranges)
+    spans = sorted([(s, e) for s, e, _ in f.coords + f.derived] + f.ranges)
     out, pos = [], 0
     for s, e in spans:
         assert s >= pos, "overlapping fields"
@@ -327,6 +420,40 @@ def masked(b, f):
         pos = e
     out.append(b[pos:])
     return out
+
+
+def derived_values(b, f):
+    return np.array([float(b[s:e]) if k == "text" else np.frombuffer(b[s:e], k)[0]
+                     for s, e, k in f.derived], dtype=float)
+
+
+def check_derived(fi, fo, di, do, xi, xo):
+    """(ok, message): the derived values of OUT are those of IN where the
+    coordinates they come from did not change, else recomputed: Gmsh
+    bounding boxes shifted as far as their nodes' bounds moved, VTU
+    RangeMin/RangeMax the range of the point norms."""
+    want = di.copy()
+    if fi.entities:
+        bi, bo = entity_boxes(fi, xi), entity_boxes(fo, xo)
+        for dim, tag, first, nval, _ in fi.entities:
+            if (dim, tag) not in bi:
+                continue
+            old = np.concatenate(bi[dim, tag])[:nval]
+            new = np.concatenate(bo[dim, tag])[:nval]
+            for k in range(nval):
+                if new[k] != old[k]:
+                    want[first + k] = di[first + k] + (new[k] - old[k])
+        what = "%d $Entities bounding box values" % len(di)
+    else:
+        ni, no = np.linalg.norm(xi, axis=1), np.linalg.norm(xo, axis=1)
+        for k, (a, c) in zip(fi.ranges_at, ((ni.min(), no.min()), (ni.max(), no.max()))):
+            if k is not None and a != c:
+                want[k] = c
+        what = "RangeMin/RangeMax"
+    err = np.abs(want - do).max() if len(do) else 0.0
+    changed = int(np.sum(di != do))
+    return (len(di) == len(do) and err <= 1e-12 * max(1.0, np.abs(want).max()),
+            "%s recomputed (%d changed, max error %.1e)" % (what, changed, err))
 
 
 def values(b, f):
@@ -379,6 +506,10 @@ def main():
     vi, vo = values(bi, fi), values(bo, fo)
     check(len(vi) == len(vo) and np.any(vi != vo),
           "%s: %d of %d coordinates changed" % (outp, int(np.sum(vi != vo)) if len(vi) == len(vo) else -1, len(vo)))
+    if fi.derived:
+        ok, msg = check_derived(fi, fo, derived_values(bi, fi), derived_values(bo, fo),
+                                vi.reshape(-1, 3), vo.reshape(-1, 3))
+        check(ok, "%s: %s" % (outp, msg))
     a, c = meshio_read(inp), meshio_read(outp)
     pts = c.points.astype(float).ravel()
     check(np.array_equal(pts, vo), "%s: meshio reads the coordinates in the fields" % outp)

@@ -608,6 +608,72 @@ TEST(gmsh_errors_say_where)
         QDC_EFORMAT);
 }
 
+static void note_periodic(void *ctx, int level, const char *msg)
+{
+    (void)level;
+    if (strstr(msg, "$Periodic: 2 links, 2 node pairs: their 3 vertices are held fixed"))
+        (*(int *)ctx)++;
+}
+
+TEST(gmsh_periodic_held)
+{
+    /* one tet and a spare node; two links: a 4.1 one with its transform and
+     * one without, node 2 in both, node 99 unknown (no vertex needs it) */
+    const char *head41 = "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n"
+                         "$Nodes\n1 5 1 5\n3 1 0 5\n1\n2\n3\n4\n5\n"
+                         "0 0 0\n1 0 0\n0 1 0\n0 0 1\n1 1 1\n$EndNodes\n"
+                         "$Elements\n1 1 1 1\n3 1 4 1\n1 1 2 3 4\n$EndElements\n";
+    const char *per41 = "$Periodic\n2\n0 2 1\n16 1 0 0 1 0 1 0 0 0 0 1 0 0 0 0 1\n1\n"
+                        "2 1\n0 3 4\n0\n1\n99 2\n$EndPeriodic\n";
+    const char *per22 = "$Periodic\n2\n0 2 1\nAffine 1 0 0 1 0 1 0 0 0 0 1 0 0 0 0 1\n"
+                        "1\n2 1\n0 3 4\n1\n99 2\n$EndPeriodic\n";
+    const char *head22 = "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n5\n1 0 0 0\n"
+                         "2 1 0 0\n3 0 1 0\n4 0 0 1\n5 1 1 1\n$EndNodes\n"
+                         "$Elements\n1\n1 4 2 0 1 1 2 3 4\n$EndElements\n";
+    char buf[1024];
+    mesh_t *m;
+    qdc_error err;
+    int notes = 0;
+    meshio_options o = {note_periodic, &notes, 0};
+
+    snprintf(buf, sizeof buf, "%s%s", head41, per41);
+    ASSERT_OK(meshio_read_ex(buf, strlen(buf), MESHIO_AUTO, &o, &m, &err));
+    ASSERT_TRUE(m->fixed != NULL);
+    ASSERT_EQ_INT(m->fixed[0] + m->fixed[1] + m->fixed[2] + m->fixed[3] + m->fixed[4], 2);
+    ASSERT_TRUE(m->fixed[0] && m->fixed[1]);
+    ASSERT_EQ_INT(notes, 0); /* 3 links' wording differs: counted below */
+    mesh_free(m);
+    snprintf(buf, sizeof buf, "%s%s", head22, per22);
+    ASSERT_OK(meshio_read_ex(buf, strlen(buf), MESHIO_AUTO, &o, &m, &err));
+    ASSERT_TRUE(m->fixed && m->fixed[0] && m->fixed[1] && !m->fixed[2] && !m->fixed[4]);
+    mesh_free(m);
+    /* the same pairs before $Nodes (tags resolved at the end) */
+    snprintf(buf, sizeof buf, "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n%s%s", per22,
+             head22 + strlen("$MeshFormat\n2.2 0 8\n$EndMeshFormat\n"));
+    ASSERT_OK(meshio_read_ex(buf, strlen(buf), MESHIO_AUTO, &o, &m, &err));
+    ASSERT_TRUE(m->fixed && m->fixed[0] && m->fixed[1] && !m->fixed[3]);
+    mesh_free(m);
+    /* a 4.1 link whose node pairs hold vertices 1, 2 and 4: the note */
+    snprintf(buf, sizeof buf,
+             "%s$Periodic\n2\n0 2 1\n0\n1\n2 1\n0 3 4\n0\n1\n4 2\n"
+             "$EndPeriodic\n",
+             head41);
+    ASSERT_OK(meshio_read_ex(buf, strlen(buf), MESHIO_AUTO, &o, &m, &err));
+    ASSERT_EQ_INT(notes, 1);
+    mesh_free(m);
+    /* errors: a node tag 0, a pair cut short, too many affine values */
+    snprintf(buf, sizeof buf, "%s$Periodic\n1\n0 2 1\n0\n1\n0 1\n$EndPeriodic\n", head41);
+    ASSERT_EQ_INT(read_str(buf, MESHIO_AUTO, &m, &err), QDC_EPARSE);
+    ASSERT_TRUE(strstr(err.msg, "$Periodic: node tag"));
+    ASSERT_EQ_INT(err.line, 28);
+    snprintf(buf, sizeof buf, "%s$Periodic\n1\n0 2 1\n0\n1\n2\n$EndPeriodic\n", head41);
+    ASSERT_TRUE(read_str(buf, MESHIO_AUTO, &m, &err) != QDC_OK);
+    ASSERT_TRUE(strstr(err.msg, "$Periodic"));
+    snprintf(buf, sizeof buf, "%s$Periodic\n1\n0 2 1\n17 1\n0\n$EndPeriodic\n", head41);
+    ASSERT_TRUE(read_str(buf, MESHIO_AUTO, &m, &err) != QDC_OK);
+    ASSERT_TRUE(strstr(err.msg, "$Periodic: affine value count"));
+}
+
 TEST(vtk51_layout_and_field_data)
 {
     const char *vtk =
@@ -892,6 +958,6 @@ TEST_MAIN("formats", T(roundtrip_all_tags), T(roundtrip_no_tags), T(roundtrip_em
           T(roundtrip_files), T(gmsh41_tags_out_of_order_and_skipped_types),
           T(gmsh_entity_tags_without_physicals), T(gmsh22_binary_and_40),
           T(dolfin_abaqus_netgen), T(meshb_versions_and_byte_order),
-          T(gmsh_errors_say_where), T(vtk51_layout_and_field_data), T(vtu_inline_base64),
-          T(names_sniffing_media_types), T(dev_speed_ascii),
+          T(gmsh_errors_say_where), T(gmsh_periodic_held), T(vtk51_layout_and_field_data),
+          T(vtu_inline_base64), T(names_sniffing_media_types), T(dev_speed_ascii),
           T(gmsh41_binary_1m_tets_speed), T(new_formats_1m_tets_speed), T(fuzz_replay))

@@ -42,6 +42,28 @@ gmsh -3 -nt 1 box_sphere.geo -format msh40 -o gmsh40.msh > /dev/null
 gmsh -3 -nt 1 box_sphere.geo -format vtk -o gmsh.vtk > /dev/null
 gmsh -3 -nt 1 box_sphere.geo -format mesh -o gmsh.mesh > /dev/null
 
+# Periodic: a unit box whose faces x = 1 and y = 1 are translated copies of
+# x = 0 and y = 0 ($Periodic: the surfaces, their curves and points, with
+# node pairs and the affine transform), in every MSH version Gmsh writes
+# (4.0 binary it does not write).
+cat > periodic.geo <<'EOF'
+SetFactory("OpenCASCADE");
+Box(1) = {0, 0, 0, 1, 1, 1};
+Periodic Surface{2} = {1} Translate{1, 0, 0};
+Periodic Surface{4} = {3} Translate{0, 1, 0};
+Physical Volume("bulk") = {1};
+Physical Surface("left") = {1};
+Physical Surface("right") = {2};
+Mesh.CharacteristicLengthMax = 0.3;
+Mesh.MaxNumThreads3D = 1;
+Mesh.RandomSeed = 1;
+EOF
+for v in msh41 msh40 msh22; do
+    gmsh -3 -nt 1 periodic.geo -format $v -o "periodic${v#msh}.msh" 2>&1 | grep -v ANN > /dev/null
+done
+gmsh -3 -nt 1 periodic.geo -format msh41 -bin -o periodic41_bin.msh 2>&1 | grep -v ANN > /dev/null
+gmsh -3 -nt 1 periodic.geo -format msh22 -bin -o periodic22_bin.msh 2>&1 | grep -v ANN > /dev/null
+
 # meshio: the Gmsh mesh with a point array and cell arrays of several types.
 /usr/bin/python3 - <<'EOF'
 import zlib, struct
@@ -174,7 +196,8 @@ mv box.1.ele tetgen.ele
 
 for f in gmsh41.msh gmsh41_bin.msh gmsh22.msh gmsh22_bin.msh gmsh40.msh gmsh.vtk gmsh.mesh meshio_zlib.vtu \
     meshio_ascii.vtu meshio_bin.vtk meshio_ascii.vtk vtk_appended_zlib.vtu tetgen.node \
-    tetgen.ele dolfin.xml meshio.inp calculix.inp meshio.vol meshio.meshb; do
+    tetgen.ele dolfin.xml meshio.inp calculix.inp meshio.vol meshio.meshb periodic41.msh \
+    periodic41_bin.msh periodic40.msh periodic22.msh periodic22_bin.msh; do
     gzip -n -9 -c "$f" > "$here/$f.gz"
 done
 ls -l "$here"
