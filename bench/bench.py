@@ -38,9 +38,14 @@ LIMIT = 600  # seconds, per command
 SAMPLES = 50000
 
 QUICK = ['bunny_low_10k', 'bunny_tangled-low_10k', 'bracket_h0.1_noisy']
-# generated meshes (scripts/corpus.py cube-lowq): (tets asked for, classes, large?)
-GEN = [('100000', ['lowq', 'tangled'], False),
-       ('1100000', ['lowq'], True)]
+# generated meshes (scripts/corpus.py SHAPE-lowq / SHAPE-scan): (tets asked for, shape,
+# classes, large?). The same shape at ~100k and ~1M tets gives the quality-at-scale
+# comparison; ball and bone are surface-heavy (about half the vertices on the boundary).
+GEN = [('100000', 'cube', ['lowq', 'tangled'], False),
+       ('100000', 'ball', ['lowq'], False),
+       ('100000', 'bone', ['scan'], False),
+       ('1100000', 'cube', ['lowq'], True),
+       ('1000000', 'ball', ['lowq'], True)]
 
 TOOLS = ['qdc', 'qdc-lsq', 'qdc-fixed', 'gmsh-relocate3d', 'gmsh-default']
 PEER = 'gmsh-relocate3d'
@@ -95,19 +100,20 @@ def prepare_meshes(a):
         sel.append((name, dst))
     if not a.quick:
         gdir = os.path.join(OUT, 'gen')
-        for h, classes, large in GEN:
+        for h, shape, classes, large in GEN:
             if large and a.no_large:
                 continue
             gd = os.path.join(gdir, h)
-            want = [os.path.join(gd, 'cube-%s%s.mesh' % ('lowq', '' if c == 'lowq' else '-' + c))
+            base = shape + ('-scan' if classes == ['scan'] else '-lowq')
+            want = [os.path.join(gd, base + ('' if c in ('lowq', 'scan') else '-' + c) + '.mesh')
                     for c in classes]
-            if a.only and not any(re.search(a.only, 'cube_%s_%s' % (h, c)) for c in classes):
+            if a.only and not any(re.search(a.only, '%s_%s_%s' % (shape, h, c)) for c in classes):
                 continue
             if not all(os.path.exists(w) for w in want):
-                log('generating cube meshes,', h, 'tets (once; reused from', gd + ')')
+                log('generating', base, 'meshes,', h, 'tets (once; reused from', gd + ')')
                 subprocess.run(['timeout', str(LIMIT), PY, CORPUS, gd, '--tets', h,
-                                '--only', 'cube-lowq'], check=True, stdout=subprocess.DEVNULL)
-            sel += [('cube_%s_%s' % (h, c), w) for c, w in zip(classes, want)]
+                                '--only', base], check=True, stdout=subprocess.DEVNULL)
+            sel += [('%s_%s_%s' % (shape, h, c), w) for c, w in zip(classes, want)]
     if a.only:
         sel = [s for s in sel if re.search(a.only, s[0])]
     return sel
