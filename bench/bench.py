@@ -397,7 +397,43 @@ def summary(rows, inputs):
         lines.append('| %s | %d%s | %s | %s | %s | %d |' % (
             LABEL[tool], n, ' (+%d not ok)' % failed if failed else '', gm(w), gm(o),
             '%+.3f' % (sum(d) / len(d)) if d else '—', flagged))
-    return '\n'.join(lines)
+    return '\n'.join(lines) + scale_fit(rows)
+
+
+def scale_fit(rows):
+    """Cost of one global iteration (weights + assembly + solve + line search,
+    from qdc's report) against the tet count: least-squares fit of
+    log(seconds) = a + b log(tets) over the meshes of 10k tets and more; b = 1
+    is linear. Empty when fewer than 3 meshes qualify."""
+    out = []
+    for tool in TOOLS:
+        pts = []
+        for r in rows:
+            sec, it = r.get('seconds') or {}, r.get('iterations')
+            nt = (r.get('quality') or {}).get('n_tets')
+            if r['tool'] != tool or r['status'] != 'ok' or not it or not nt or nt < 10000:
+                continue
+            t = sum(sec.get(k) or 0.0 for k in ('weights', 'assembly', 'solve', 'linesearch'))
+            if t > 0:
+                pts.append((nt, t / it))
+        if len(pts) < 3:
+            continue
+        xs = [math.log(n) for n, _ in pts]
+        ys = [math.log(t) for _, t in pts]
+        mx, my = sum(xs) / len(xs), sum(ys) / len(ys)
+        sxx = sum((x - mx) ** 2 for x in xs)
+        if sxx <= 0:
+            continue
+        b = sum((x - mx) * (y - my) for x, y in zip(xs, ys)) / sxx
+        per = sorted(t / n * 1e6 for n, t in pts)
+        out.append('| %s | %d | %.2f | %.2f | %d–%d |' % (
+            LABEL[tool], len(pts), b, per[len(per) // 2], min(n for n, _ in pts),
+            max(n for n, _ in pts)))
+    if not out:
+        return ''
+    return ('\n\nOne global iteration against the tet count (fit of log seconds on log tets; '
+            '1.00 = linear):\n\n| tool | meshes | exponent | median µs per tet per '
+            'iteration | tets |\n|---|---|---|---|---|\n' + '\n'.join(out))
 
 
 def snapshot_qdc():
