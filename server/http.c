@@ -30,8 +30,6 @@ static req *req_new(qdcd *q)
         return NULL;
     r->q = q;
     r->t0 = mono_now();
-    r->fd = -1;
-    r->after = -1;
     return r;
 }
 
@@ -83,7 +81,6 @@ static void on_completed(void *cls, struct MHD_Connection *c, void **req_cls,
         atomic_fetch_add(&q->m.lat_sum_us, (long long)(dt * 1e6));
     }
     handlers->done(r);
-    sb_free(&r->sse);
     free(r);
     *req_cls = NULL;
 }
