@@ -589,7 +589,13 @@ static void run_job(worker *w, job_rec *j)
             st = qdc_fail(&err, QDC_EIO, "cannot read the job's input file");
             goto failed;
         }
-        st = meshio_read(buf, len, meshio_format_from_name(j->format), &m, &err);
+        /* A Medit upload keeps its file: result.mesh is then written as it,
+         * with only the coordinates replaced (as `qdc optimize` writes OUT in
+         * IN's format); the conversion thread does the same for the other
+         * formats (result.c). */
+        meshio_format fin = meshio_format_from_name(j->format);
+        meshio_options mo = {NULL, NULL, fin == MESHIO_MEDIT ? 1 : -1};
+        st = meshio_read_ex(buf, len, fin, &mo, &m, &err);
         free(buf);
         buf = NULL;
         if (st != QDC_OK)

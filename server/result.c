@@ -230,6 +230,57 @@ static enum MHD_Result serve_result(struct MHD_Connection *c, req *r, meshio_for
         meshio_media_type(f) ? meshio_media_type(f) : "application/octet-stream", h);
 }
 
+/* Whether a result is written from the job's upload: a mesh upload (a
+ * surface's result is TetGen's mesh, result.qmesh alone). */
+static int from_upload(const req *r, const job_rec *j)
+{
+    return r->route == R_RESULT && !job_is_surface(j->format);
+}
+
+/* The mesh to write for r. The input: its file, read with its source kept
+ * (the input in its own format is the upload itself). A result: the upload
+ * with the result's coordinates put in, so that every format holds what the
+ * CLI's output holds (the boundary triangles and their refs too, which
+ * result.qmesh does not keep); asked in the upload's own format (its
+ * variant: MSH 4.1 ASCII, VTU appended...), the upload is read with its
+ * source kept and the library writes it back as the uploaded file with only
+ * the coordinates replaced, the way `qdc optimize` writes OUT in IN's
+ * format: tags, names, arrays and comments survive. */
+static qdc_status convert_source(req *r, const job_rec *j, mesh_t **out, qdc_error *e)
+{
+    char src[4300];
+    meshio_format sf = input_source(r, j, src, sizeof src);
+    meshio_options keep = {NULL, NULL, sf == r->res_fmt ? 1 : -1};
+    mesh_t *res = NULL, *in = NULL;
+    qdc_status st;
+
+    *out = NULL;
+    if (r->route == R_INPUT)
+        return meshio_load(src, sf, out, e);
+    if (from_upload(r, j)) {
+        st = meshio_load_ex(src, sf, &keep, &in, e);
+        if (st != QDC_OK)
+            return st;
+    }
+    job_path(r->q, j->id, "result.qmesh", src, sizeof src);
+    st = meshio_load(src, MESHIO_QMESH, &res, e);
+    if (st == QDC_OK && in && (in->nv != res->nv || in->nt != res->nt))
+        st = qdc_fail(e, QDC_EINTERNAL, "the result does not match its input");
+    if (st == QDC_OK && in) {
+        memcpy(in->xyz, res->xyz, 3 * sizeof(double) * (size_t)in->nv);
+        mesh_free(res);
+        res = in;
+        in = NULL;
+    }
+    mesh_free(in);
+    if (st != QDC_OK) {
+        mesh_free(res);
+        res = NULL;
+    }
+    *out = res;
+    return st;
+}
+
 /* Converter thread: write the result in r->res_fmt from result.qmesh (or the
  * input from its file), hash it, serve it. One thread, so two requests never
  * write the same file. */
@@ -237,7 +288,7 @@ static enum MHD_Result process_convert(struct MHD_Connection *c, req *r)
 {
     job_rec j;
     enum MHD_Result ret;
-    char path[4300], src[4300], side[4400], hex[65], d[400];
+    char path[4300], side[4400], hex[65], d[400];
     mesh_t *m = NULL;
     qdc_error e;
     qdc_status st;
@@ -261,19 +312,16 @@ static enum MHD_Result process_convert(struct MHD_Connection *c, req *r)
         hex[0] = 0;
         if (shared_fetch(r->q, j.id,
                          r->route == R_INPUT ? job_input_name(j.format) : "result.qmesh",
-                         NULL) == QDC_EIO)
+                         NULL) == QDC_EIO ||
+            (from_upload(r, &j) &&
+             shared_fetch(r->q, j.id, job_input_name(j.format), NULL) == QDC_EIO))
             return store_unavailable(c, r, "the result could not be read");
     }
     if (hex[0]) /* written for a request queued before this one */
         return serve_result(c, r, r->res_fmt, path, hex);
     qdc_error_clear(&e);
-    meshio_format sf = MESHIO_QMESH;
-    if (r->route == R_INPUT)
-        sf = input_source(r, &j, src, sizeof src);
-    else
-        job_path(r->q, j.id, "result.qmesh", src, sizeof src);
     double t0 = mono_now();
-    st = meshio_load(src, sf, &m, &e);
+    st = convert_source(r, &j, &m, &e);
     if (st == QDC_OK)
         st = meshio_save(path, r->res_fmt, m, &e);
     mesh_free(m);
