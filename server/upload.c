@@ -200,33 +200,24 @@ static enum MHD_Result queue_full_reply(struct MHD_Connection *c, req *r,
                         "the queue is full; retry later", extra, h);
 }
 
-enum MHD_Result upload_begin(struct MHD_Connection *c, req *r)
+/* The query's options checked against the library's table (and TetGen's two)
+ * into u->options, the canonical JSON; 0, or -1 with the 400 reason in why. */
+static int upload_options(struct MHD_Connection *c, qdcd *q, upload *u, char *why,
+                          size_t cap)
 {
-    qdcd *q = r->q;
-    const char *cl, *ik;
-    char tmpl[4200];
     opt_scan s;
-    job_counts cnt;
-    int64_t limit;
-    upload *u;
+    sbuf oj = {0};
 
-    r->upload = 1;
-    u = r->up = calloc(1, sizeof *u);
-    if (!u)
-        return http_problem(c, r, 503, "out-of-memory", "out of memory",
-                            "the upload could not be started", NULL, NULL);
-    u->fd = -1;
-    /* Options are checked before any byte of the body is read. */
     memset(&s, 0, sizeof s);
     opt_defaults(&s.o);
     s.cap = q->cfg.job_time_limit;
     s.o.time_limit = s.cap;
     s.tq = s.tv = -1;
     MHD_get_connection_values_n(c, MHD_GET_ARGUMENT_KIND, scan_option, &s);
-    if (s.bad)
-        return http_problem(c, r, 400, "invalid-option", "invalid option", s.why, NULL,
-                            NULL);
-    sbuf oj = {0};
+    if (s.bad) {
+        snprintf(why, cap, "%s", s.why);
+        return -1;
+    }
     job_opt_json(&s.o, &oj);
     if (oj.len && (s.tq >= 0 || s.tv >= 0)) {
         oj.len--; /* the closing brace */
@@ -239,48 +230,76 @@ enum MHD_Result upload_begin(struct MHD_Connection *c, req *r)
     }
     snprintf(u->options, sizeof u->options, "%s", oj.buf && !oj.oom ? oj.buf : "{}");
     sb_free(&oj);
-    {
-        char why[200];
-        if (upload_format(c, u, why, sizeof why))
-            return unsupported(c, r, why);
+    return 0;
+}
+
+/* An Idempotency-Key: kept, and the request's fingerprint begun (options,
+ * ?format=; the body follows). 0, or -1 when the key is not valid. */
+static int upload_idem(struct MHD_Connection *c, upload *u)
+{
+    const char *ik = MHD_lookup_connection_value(c, MHD_HEADER_KIND, "Idempotency-Key");
+    size_t n;
+    int ok;
+
+    if (!ik)
+        return 0;
+    n = strlen(ik);
+    ok = n > 0 && n < sizeof u->idem;
+    for (size_t i = 0; ok && i < n; i++)
+        ok = ik[i] > 32 && ik[i] < 127;
+    if (!ok)
+        return -1;
+    memcpy(u->idem, ik, n + 1);
+    u->hashing = 1;
+    sha256_init(&u->hash);
+    sha256_update(&u->hash, u->options, strlen(u->options));
+    if (MHD_lookup_connection_value(c, MHD_GET_ARGUMENT_KIND, "format")) {
+        /* ?format= changes what the body means; a Content-Type does not count
+         * (a retry may send the same bytes under another type). */
+        const char *fn = upload_format_name(u);
+        sha256_update(&u->hash, "\nformat=", 8);
+        sha256_update(&u->hash, fn, strlen(fn));
     }
+    return 0;
+}
+
+enum MHD_Result upload_begin(struct MHD_Connection *c, req *r)
+{
+    qdcd *q = r->q;
+    const char *cl;
+    char tmpl[4200], why[200];
+    job_counts cnt;
+    job_rec prev;
+    int64_t limit;
+    upload *u;
+
+    r->upload = 1;
+    u = r->up = calloc(1, sizeof *u);
+    if (!u)
+        return http_problem(c, r, 503, "out-of-memory", "out of memory",
+                            "the upload could not be started", NULL, NULL);
+    u->fd = -1;
+    /* Options are checked before any byte of the body is read. */
+    if (upload_options(c, q, u, why, sizeof why))
+        return http_problem(c, r, 400, "invalid-option", "invalid option", why, NULL,
+                            NULL);
+    if (upload_format(c, u, why, sizeof why))
+        return unsupported(c, r, why);
     if (u->tetgen_opts && u->fmt != MESHIO_AUTO)
         return http_problem(c, r, 400, "invalid-option", "invalid option",
                             "tetgen_quality and max_volume apply to surface uploads only",
                             NULL, NULL);
-
-    ik = MHD_lookup_connection_value(c, MHD_HEADER_KIND, "Idempotency-Key");
-    if (ik) {
-        size_t n = strlen(ik);
-        int ok = n > 0 && n < sizeof u->idem;
-        for (size_t i = 0; ok && i < n; i++)
-            ok = ik[i] > 32 && ik[i] < 127;
-        if (!ok)
-            return http_problem(
-                c, r, 400, "invalid-idempotency-key", "invalid Idempotency-Key",
-                "the key must be 1 to 128 visible ASCII characters", NULL, NULL);
-        memcpy(u->idem, ik, n + 1);
-        u->hashing = 1;
-        sha256_init(&u->hash);
-        sha256_update(&u->hash, u->options, strlen(u->options));
-        if (MHD_lookup_connection_value(c, MHD_GET_ARGUMENT_KIND, "format")) {
-            /* ?format= changes what the body means; a Content-Type does not
-             * count (a retry may send the same bytes under another type). */
-            const char *fn = upload_format_name(u);
-            sha256_update(&u->hash, "\nformat=", 8);
-            sha256_update(&u->hash, fn, strlen(fn));
-        }
-    }
-
+    if (upload_idem(c, u))
+        return http_problem(
+            c, r, 400, "invalid-idempotency-key", "invalid Idempotency-Key",
+            "the key must be 1 to 128 visible ASCII characters", NULL, NULL);
     /* A replay of an accepted request is answered even when the queue is full.
      * Checked here so that a refused body is not uploaded, and again at commit
      * (uploads that were in flight together). */
-    job_rec prev;
-    if (!u->idem[0] ||
-        q->store->ops->find_idem(q->store, r->owner, u->idem, &prev) != QDC_OK) {
-        if (queue_full(q, &cnt))
-            return queue_full_reply(c, r, &cnt);
-    }
+    if ((!u->idem[0] ||
+         q->store->ops->find_idem(q->store, r->owner, u->idem, &prev) != QDC_OK) &&
+        queue_full(q, &cnt))
+        return queue_full_reply(c, r, &cnt);
 
     limit = u->fmt == MESHIO_JSON && q->cfg.max_json < q->cfg.max_body ? q->cfg.max_json
                                                                        : q->cfg.max_body;
@@ -290,7 +309,6 @@ enum MHD_Result upload_begin(struct MHD_Connection *c, req *r)
         u->body_len = strtoll(cl, NULL, 10);
         return upload_finish(c, r);
     }
-
     snprintf(tmpl, sizeof tmpl, "%s/tmp/upload-XXXXXX", q->cfg.data);
     u->fd = mkostemp(tmpl, O_CLOEXEC);
     if (u->fd < 0 && disk_full(errno))
@@ -581,20 +599,94 @@ static int check_upload(struct MHD_Connection *c, req *r, const char *buf, size_
     return 0;
 }
 
+/* Map the body, settle its format (sniffed when nothing named it), parse
+ * and validate it (check_upload): 0, or 1 with the answer in *ret. */
+static int inspect_upload(struct MHD_Connection *c, req *r, job_rec *j,
+                          enum MHD_Result *ret, double *t_parse, double *t_valid)
+{
+    upload *u = r->up;
+    size_t len = (size_t)u->body_len;
+    char *buf = mmap(NULL, len, PROT_READ, MAP_PRIVATE, u->fd, 0);
+    int bad = 1;
+
+    if (buf == MAP_FAILED) {
+        *ret = http_problem(c, r, 500, "io", "i/o error", "cannot map the upload", NULL,
+                            NULL);
+        return 1;
+    }
+    if (u->sniff) {
+        u->fmt = meshio_sniff(buf, len);
+        if (u->fmt == MESHIO_AUTO)
+            u->sfmt = surface_sniff(buf, len);
+    }
+    if (u->fmt == MESHIO_AUTO && u->sfmt == SURFACE_AUTO)
+        *ret = unsupported(c, r,
+                           "the body is not a mesh or surface this server recognises; "
+                           "set Content-Type to one of the accepted types");
+    else if (u->sniff && u->fmt == MESHIO_JSON && u->body_len > r->q->cfg.max_json)
+        *ret = too_big(c, r, 1);
+    else if (u->tetgen_opts && u->sfmt == SURFACE_AUTO)
+        *ret = http_problem(c, r, 400, "invalid-option", "invalid option",
+                            "tetgen_quality and max_volume apply to surface uploads only",
+                            NULL, NULL);
+    else
+        bad = 0;
+    if (!bad) {
+        *t_parse = mono_now();
+        bad = check_upload(c, r, buf, len, j, ret, t_valid);
+    }
+    munmap(buf, len);
+    return bad;
+}
+
+/* The job recorded: the queue checked again (exactly: the intake thread
+ * commits one upload at a time), the input committed, the row inserted
+ * (with the input, in a shared store). 0, or 1 with the answer in *ret:
+ * 429, 507, 503, or the replay of a concurrent request with the same key. */
+static int create_job(struct MHD_Connection *c, req *r, job_rec *j, enum MHD_Result *ret)
+{
+    qdcd *q = r->q;
+    char d[400];
+    job_rec old;
+    job_counts cnt;
+    int dup = 0;
+    qdc_status st;
+
+    if (queue_full(q, &cnt)) {
+        *ret = queue_full_reply(c, r, &cnt);
+        return 1;
+    }
+    if (commit_input(r, j->id, j->format)) {
+        *ret = storage_full(c, r, "the mesh could not be stored durably");
+        return 1;
+    }
+    if (shared_on(q)) {
+        job_path(q, j->id, job_input_name(j->format), d, sizeof d);
+        st = q->store->ops->create_with_input(q->store, j, job_input_name(j->format), d,
+                                              &dup, &old);
+    } else {
+        st = q->store->ops->create(q->store, j, &dup, &old);
+    }
+    if (st != QDC_OK || dup) {
+        job_path(q, j->id, NULL, d, sizeof d);
+        dir_remove(d);
+        /* dup: a concurrent request with the same key won */
+        *ret = st != QDC_OK ? store_unavailable(c, r, "the job could not be recorded")
+                            : idem_replay(c, r, &old, j->body_hash);
+        return 1;
+    }
+    return 0;
+}
+
 /* Runs on the intake thread; the connection is suspended meanwhile, and
  * MHD_queue_response is allowed on a suspended connection. */
 static enum MHD_Result process_upload(struct MHD_Connection *c, req *r)
 {
     upload *u = r->up;
     qdcd *q = r->q;
-    char d[400];
-    char *buf = NULL;
-    size_t len = (size_t)u->body_len;
     enum MHD_Result ret;
     job_rec j, old;
-    int dup = 0, bad;
-    double t_parse, t_valid;
-    qdc_status st_create;
+    double t_parse = 0, t_valid = 0, t_commit;
 
     memset(&j, 0, sizeof j);
     if (u->hashing) {
@@ -604,38 +696,8 @@ static enum MHD_Result process_upload(struct MHD_Connection *c, req *r)
         if (q->store->ops->find_idem(q->store, r->owner, u->idem, &old) == QDC_OK)
             return idem_replay(c, r, &old, j.body_hash);
     }
-    buf = mmap(NULL, len, PROT_READ, MAP_PRIVATE, u->fd, 0);
-    if (buf == MAP_FAILED)
-        return http_problem(c, r, 500, "io", "i/o error", "cannot map the upload", NULL,
-                            NULL);
-    if (u->sniff) {
-        u->fmt = meshio_sniff(buf, len);
-        if (u->fmt == MESHIO_AUTO)
-            u->sfmt = surface_sniff(buf, len);
-        if (u->fmt == MESHIO_AUTO && u->sfmt == SURFACE_AUTO) {
-            munmap(buf, len);
-            return unsupported(
-                c, r,
-                "the body is not a mesh or surface this server recognises; "
-                "set Content-Type to one of the accepted types");
-        }
-        if (u->fmt == MESHIO_JSON && u->body_len > q->cfg.max_json) {
-            munmap(buf, len);
-            return too_big(c, r, 1);
-        }
-    }
-    if (u->tetgen_opts && u->sfmt == SURFACE_AUTO) {
-        munmap(buf, len);
-        return http_problem(c, r, 400, "invalid-option", "invalid option",
-                            "tetgen_quality and max_volume apply to surface uploads only",
-                            NULL, NULL);
-    }
-    t_parse = mono_now();
-    bad = check_upload(c, r, buf, len, &j, &ret, &t_valid);
-    munmap(buf, len);
-    if (bad)
+    if (inspect_upload(c, r, &j, &ret, &t_parse, &t_valid))
         return ret;
-
     new_id(j.id);
     snprintf(j.owner, sizeof j.owner, "%s", r->owner);
     snprintf(j.idem_key, sizeof j.idem_key, "%s", u->idem);
@@ -643,33 +705,9 @@ static enum MHD_Result process_upload(struct MHD_Connection *c, req *r)
     j.in_bytes = u->body_len;
     snprintf(j.options, sizeof j.options, "%s", u->options);
     j.created = wall_now();
-
-    /* the intake thread commits one upload at a time, so this check is exact */
-    {
-        job_counts cnt;
-        if (queue_full(q, &cnt))
-            return queue_full_reply(c, r, &cnt);
-    }
-    double t_commit = mono_now();
-    if (commit_input(r, j.id, j.format))
-        return storage_full(c, r, "the mesh could not be stored durably");
-    if (shared_on(q)) {
-        job_path(q, j.id, job_input_name(j.format), d, sizeof d);
-        st_create = q->store->ops->create_with_input(
-            q->store, &j, job_input_name(j.format), d, &dup, &old);
-    } else {
-        st_create = q->store->ops->create(q->store, &j, &dup, &old);
-    }
-    if (st_create != QDC_OK) {
-        job_path(q, j.id, NULL, d, sizeof d);
-        dir_remove(d);
-        return store_unavailable(c, r, "the job could not be recorded");
-    }
-    if (dup) { /* a concurrent request with the same key won */
-        job_path(q, j.id, NULL, d, sizeof d);
-        dir_remove(d);
-        return idem_replay(c, r, &old, j.body_hash);
-    }
+    t_commit = mono_now();
+    if (create_job(c, r, &j, &ret))
+        return ret;
     atomic_fetch_add(&q->m.submitted, 1);
     job_pool_notify(q->pool);
     if (q->cfg.verbose)
@@ -684,8 +722,7 @@ static enum MHD_Result process_upload(struct MHD_Connection *c, req *r)
     job_rec now;
     if (q->store->ops->get(q->store, j.id, &now) != QDC_OK)
         now = j;
-    ret = reply_job(c, r, 202, &now, h);
-    return ret;
+    return reply_job(c, r, 202, &now, h);
 }
 
 /* Body complete (HTTP thread): refuse what needs no parsing, hand the rest
