@@ -797,6 +797,27 @@ out:
     return rc;
 }
 
+/* `qdc quality` as text: counts, mean ratio, dihedral angles, the other
+ * measures, and the boundary error against ref (be) when given. */
+static void quality_print(const char *in, const report_quality *q, const char *ref,
+                          const bderr_result *be)
+{
+    printf("%s: %d vertices, %d tets, %d inverted, %d degenerate\n", in, (int)q->nv,
+           (int)q->nt, (int)q->n_inverted, (int)q->n_degenerate);
+    printf("mean ratio: mean %.4f std %.4f min %+.4f\n", q->q_mean, q->q_std, q->q_min);
+    printf("dihedral: min %.2f max %.2f deg; tets with min < 5/15/30/40: %d/%d/%d/%d; "
+           "max > 175/165/150/140: %d/%d/%d/%d\n",
+           q->dih_min, q->dih_max, (int)q->n_dmin_lt[0], (int)q->n_dmin_lt[1],
+           (int)q->n_dmin_lt[2], (int)q->n_dmin_lt[3], (int)q->n_dmax_gt[0],
+           (int)q->n_dmax_gt[1], (int)q->n_dmax_gt[2], (int)q->n_dmax_gt[3]);
+    printf("volume-length: mean %.4f min %+.4f; condition number: mean %.4f max %.4g\n",
+           q->vl_mean, q->vl_min, q->cn_mean, q->cn_max);
+    if (ref)
+        printf("boundary error vs %s: Hausdorff %.6g (%.3g%% of diagonal), mean %.3g, "
+               "RMS %.3g\n",
+               ref, be->hausdorff, 100 * be->hausdorff_rel, be->mean, be->rms);
+}
+
 int cli_quality(int argc, char **argv)
 {
     const char *in = NULL, *ref = NULL;
@@ -856,23 +877,7 @@ int cli_quality(int argc, char **argv)
         st = report_write_json(&rep, report_file_writer, stdout, &err);
         rc = st == QDC_OK ? CLI_OK : CLI_EOUTPUT;
     } else {
-        printf("%s: %d vertices, %d tets, %d inverted, %d degenerate\n", in, (int)q.nv,
-               (int)q.nt, (int)q.n_inverted, (int)q.n_degenerate);
-        printf("mean ratio: mean %.4f std %.4f min %+.4f\n", q.q_mean, q.q_std, q.q_min);
-        printf(
-            "dihedral: min %.2f max %.2f deg; tets with min < 5/15/30/40: %d/%d/%d/%d; "
-            "max > 175/165/150/140: %d/%d/%d/%d\n",
-            q.dih_min, q.dih_max, (int)q.n_dmin_lt[0], (int)q.n_dmin_lt[1],
-            (int)q.n_dmin_lt[2], (int)q.n_dmin_lt[3], (int)q.n_dmax_gt[0],
-            (int)q.n_dmax_gt[1], (int)q.n_dmax_gt[2], (int)q.n_dmax_gt[3]);
-        printf(
-            "volume-length: mean %.4f min %+.4f; condition number: mean %.4f max %.4g\n",
-            q.vl_mean, q.vl_min, q.cn_mean, q.cn_max);
-        if (ref)
-            printf(
-                "boundary error vs %s: Hausdorff %.6g (%.3g%% of diagonal), mean %.3g, "
-                "RMS %.3g\n",
-                ref, be.hausdorff, 100 * be.hausdorff_rel, be.mean, be.rms);
+        quality_print(in, &q, ref, &be);
     }
 out:
     mesh_free(m);
