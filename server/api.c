@@ -64,8 +64,7 @@ static int authenticate(struct MHD_Connection *c, req *r)
 enum MHD_Result store_unavailable(struct MHD_Connection *c, req *r, const char *what)
 {
     static const char *const h[] = {MHD_HTTP_HEADER_RETRY_AFTER, "5", NULL};
-    return http_problem(c, r, 503, "store-unavailable", "job store unavailable", what,
-                        NULL, h);
+    return http_problem(c, r, 503, "store-unavailable", NULL, what, NULL, h);
 }
 
 int load_job(struct MHD_Connection *c, req *r, job_rec *j, enum MHD_Result *ret)
@@ -249,7 +248,7 @@ enum MHD_Result api_begin(struct MHD_Connection *c, req *r, const char *url,
     MHD_get_connection_values(c, MHD_HEADER_KIND, count_framing, framing);
     if (framing[0] > 1 || (framing[0] && framing[1])) {
         r->close_after = 1;
-        return http_problem(c, r, 400, "ambiguous-framing", "ambiguous request framing",
+        return http_problem(c, r, 400, "ambiguous-framing", NULL,
                             "send one Content-Length, or Transfer-Encoding without it",
                             NULL, NULL);
     }
@@ -268,19 +267,19 @@ enum MHD_Result api_begin(struct MHD_Connection *c, req *r, const char *url,
     if (r->route == R_NONE) {
         char d[300];
         snprintf(d, sizeof d, "no resource at '%.200s'", url);
-        return http_problem(c, r, 404, "not-found", "not found", d, NULL, NULL);
+        return http_problem(c, r, 404, "not-found", NULL, d, NULL, NULL);
     }
     const route_desc *rd = route_desc_of(r->route);
     if (!route_method_ok(r->route, method)) {
         const char *const h[] = {MHD_HTTP_HEADER_ALLOW, rd->allow, NULL};
-        return http_problem(c, r, 405, "method-not-allowed", "method not allowed",
-                            "see the Allow header", NULL, h);
+        return http_problem(c, r, 405, "method-not-allowed", NULL, "see the Allow header",
+                            NULL, h);
     }
     if ((rd->auth == AUTH_TOKEN || (rd->auth == AUTH_OPS && !r->q->cfg.public_metrics)) &&
         !authenticate(c, r)) {
         static const char *const h[] = {MHD_HTTP_HEADER_WWW_AUTHENTICATE,
                                         "Bearer realm=\"qdcd\"", NULL};
-        return http_problem(c, r, 401, "unauthorized", "unauthorized",
+        return http_problem(c, r, 401, "unauthorized", NULL,
                             "send Authorization: Bearer <token>", NULL, h);
     }
     if (r->route == R_JOBS && !strcmp(method, "POST"))
@@ -363,8 +362,7 @@ enum MHD_Result api_dispatch(struct MHD_Connection *c, req *r, const char *url,
     case R_UI:
         return ui_serve(c, r, url);
     default:
-        return http_problem(c, r, 404, "not-found", "not found", "no such resource", NULL,
-                            NULL);
+        return http_problem(c, r, 404, "not-found", NULL, "no such resource", NULL, NULL);
     }
 }
 

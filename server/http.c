@@ -129,7 +129,7 @@ enum MHD_Result http_reply_json(struct MHD_Connection *c, req *r, unsigned statu
                                 const sbuf *body, const char *const *headers)
 {
     if (body->oom)
-        return http_problem(c, r, 503, "out-of-memory", "out of memory",
+        return http_problem(c, r, 503, "out-of-memory", NULL,
                             "the reply did not fit in memory", NULL, NULL);
     return http_reply(c, r, status, "application/json", body->buf ? body->buf : "{}",
                       body->buf ? body->len : 2, headers);
@@ -163,8 +163,8 @@ enum MHD_Result http_reply_file(struct MHD_Connection *c, req *r, unsigned statu
     if (fd < 0 || fstat(fd, &sb)) {
         if (fd >= 0)
             close(fd);
-        return http_problem(c, r, 500, "io", "i/o error",
-                            "a stored file could not be read", NULL, NULL);
+        return http_problem(c, r, 500, "io", NULL, "a stored file could not be read",
+                            NULL, NULL);
     }
     resp = MHD_create_response_from_fd((uint64_t)sb.st_size, fd); /* owns fd */
     if (!resp) {

@@ -464,13 +464,13 @@ static int tetra_outcome(const qdcd *q, job_rec *j, const child_result *cr,
     if (cr->timed_out) {
         snprintf(detail, sizeof detail,
                  "TetGen did not finish within the job's time limit (%g s)", budget);
-        problem(j, 422, "tetgen", "the surface could not be tetrahedralized", detail);
+        problem(j, 422, "tetgen", NULL, detail);
         return 1;
     }
     if (cr->signal) {
         snprintf(detail, sizeof detail, "TetGen crashed (signal %d) on this surface",
                  cr->signal);
-        problem(j, 422, "tetgen", "the surface could not be tetrahedralized", detail);
+        problem(j, 422, "tetgen", NULL, detail);
         return 1;
     }
     if (!cr->code)
@@ -485,7 +485,7 @@ static int tetra_outcome(const qdcd *q, job_rec *j, const child_result *cr,
     if (cr->code == 2 || cr->code == 3) {
         snprintf(detail, sizeof detail, "%s",
                  *m ? m : "TetGen could not tetrahedralize this surface");
-        problem(j, 422, "tetgen", "the surface could not be tetrahedralized", detail);
+        problem(j, 422, "tetgen", NULL, detail);
     } else {
         snprintf(detail, sizeof detail, "qdc tetra exited with status %d: %s", cr->code,
                  *m ? m : "no message");
@@ -726,7 +726,7 @@ static run_step run_conclude(run_state *s)
         snprintf(detail, sizeof detail,
                  "the optimizer failed (%s); the input is unchanged",
                  s->res.stop_reason[0] ? s->res.stop_reason : "no detail");
-        problem(j, 500, "optimizer-failed", "optimization failed", detail);
+        problem(j, 500, "optimizer-failed", NULL, detail);
         j->state = JOB_FAILED;
         snprintf(j->stop_reason, sizeof j->stop_reason, "%s", s->res.stop_reason);
         return RUN_DONE;
@@ -784,7 +784,7 @@ static void run_job(worker *w, job_rec *j)
     if (k == RUN_ERROR) {
         snprintf(detail, sizeof detail, "%s: %s", qdc_status_str(s.st), s.err.msg);
         problem(j, qdc_status_http(s.st) >= 500 ? qdc_status_http(s.st) : 422,
-                "job-failed", "the job failed", detail);
+                "job-failed", NULL, detail);
     }
     if (k == RUN_ERROR || k == RUN_FAILED)
         j->state = JOB_FAILED;

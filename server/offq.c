@@ -51,7 +51,7 @@ enum MHD_Result offq_push(offq *o, struct MHD_Connection *c, req *r)
     if (o->stop) {
         pthread_mutex_unlock(&o->lock);
         static const char *const h[] = {MHD_HTTP_HEADER_RETRY_AFTER, "5", NULL};
-        return http_problem(c, r, 503, "shutting-down", "shutting down",
+        return http_problem(c, r, 503, "shutting-down", NULL,
                             "the server is stopping; retry later", NULL, h);
     }
     r->off_next = NULL;

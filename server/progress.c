@@ -35,7 +35,7 @@ static watch *watch_of(struct MHD_Connection *c, req *r, enum MHD_Result *ret)
         return r->watch;
     r->watch = calloc(1, sizeof *r->watch);
     if (!r->watch) {
-        *ret = http_problem(c, r, 503, "out-of-memory", "out of memory",
+        *ret = http_problem(c, r, 503, "out-of-memory", NULL,
                             "the request could not be served", NULL, NULL);
         return NULL;
     }
@@ -200,7 +200,7 @@ enum MHD_Result do_progress(struct MHD_Connection *c, req *r)
         const char *w = MHD_lookup_connection_value(c, MHD_GET_ARGUMENT_KIND, "wait");
         double wait = 0;
         if (a && parse_long(a, -1, LONG_MAX - 1, &wt->after))
-            return http_problem(c, r, 400, "invalid-parameter", "invalid parameter",
+            return http_problem(c, r, 400, "invalid-parameter", NULL,
                                 "'after' must be an integer >= -1 (a record seq)",
                                 "\"parameter\":\"after\"", NULL);
         if (w) {
@@ -212,8 +212,8 @@ enum MHD_Result do_progress(struct MHD_Connection *c, req *r)
                          "'wait' must be a number of seconds in [0, 3600] (the server "
                          "waits at most %g)",
                          q->cfg.wait_cap);
-                return http_problem(c, r, 400, "invalid-parameter", "invalid parameter",
-                                    d, "\"parameter\":\"wait\"", NULL);
+                return http_problem(c, r, 400, "invalid-parameter", NULL, d,
+                                    "\"parameter\":\"wait\"", NULL);
             }
         }
         if (wait > q->cfg.wait_cap)
@@ -324,7 +324,7 @@ enum MHD_Result do_events(struct MHD_Connection *c, req *r)
     if (!a)
         a = MHD_lookup_connection_value(c, MHD_GET_ARGUMENT_KIND, "after");
     if (a && parse_long(a, -1, LONG_MAX - 1, &wt->after))
-        return http_problem(c, r, 400, "invalid-parameter", "invalid parameter",
+        return http_problem(c, r, 400, "invalid-parameter", NULL,
                             "Last-Event-ID / 'after' must be an integer >= -1",
                             "\"parameter\":\"after\"", NULL);
     r->parked_ever = 1; /* a stream: its duration is not a latency */

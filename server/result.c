@@ -75,8 +75,7 @@ static int not_servable(struct MHD_Connection *c, req *r, const job_rec *j,
         snprintf(d, sizeof d, "job %s is %s; poll /v1/jobs/%s/progress", j->id,
                  job_state_name(j->state), j->id);
         snprintf(extra, sizeof extra, "\"state\":\"%s\"", job_state_name(j->state));
-        *ret =
-            http_problem(c, r, 409, "not-ready", "the job has not finished", d, extra, h);
+        *ret = http_problem(c, r, 409, "not-ready", NULL, d, extra, h);
         return 1;
     }
     if (j->state != JOB_SUCCEEDED && r->route != R_INPUT) {
@@ -84,15 +83,14 @@ static int not_servable(struct MHD_Connection *c, req *r, const job_rec *j,
                  job_state_name(j->state));
         snprintf(extra, sizeof extra, "\"state\":\"%s\"%s%s", job_state_name(j->state),
                  j->error[0] ? ",\"error\":" : "", j->error);
-        *ret =
-            http_problem(c, r, 409, "no-result", "the job has no result", d, extra, NULL);
+        *ret = http_problem(c, r, 409, "no-result", NULL, d, extra, NULL);
         return 1;
     }
     if (gone) {
         snprintf(d, sizeof d, "the %s of job %s expired and was deleted",
                  r->route == R_INPUT ? "input" : "result", j->id);
         snprintf(extra, sizeof extra, "\"expired\":%.3f", j->expires);
-        *ret = http_problem(c, r, 410, "gone", "result expired", d, extra, NULL);
+        *ret = http_problem(c, r, 410, "gone", NULL, d, extra, NULL);
         return 1;
     }
     return 0;
@@ -145,8 +143,8 @@ static int result_format(struct MHD_Connection *c, req *r, meshio_format *out,
         offered(&x);
         snprintf(d, sizeof d,
                  "'format' must name one of the offered formats, not '%.60s'", f);
-        *ret = http_problem(c, r, 400, "invalid-parameter", "invalid parameter", d,
-                            x.oom ? NULL : x.buf, NULL);
+        *ret = http_problem(c, r, 400, "invalid-parameter", NULL, d, x.oom ? NULL : x.buf,
+                            NULL);
         sb_free(&x);
         return -1;
     }
@@ -159,8 +157,7 @@ static int result_format(struct MHD_Connection *c, req *r, meshio_format *out,
     offered(&x);
     snprintf(d, sizeof d,
              "no offered type matches Accept: %.150s (or name one with ?format=)", acc);
-    *ret = http_problem(c, r, 406, "not-acceptable", "not acceptable", d,
-                        x.oom ? NULL : x.buf, NULL);
+    *ret = http_problem(c, r, 406, "not-acceptable", NULL, d, x.oom ? NULL : x.buf, NULL);
     sb_free(&x);
     return -1;
 }
@@ -343,7 +340,7 @@ static enum MHD_Result process_convert(struct MHD_Connection *c, req *r)
             fprintf(stderr, "qdcd: job %s: %s: %s\n", j.id, d, e.msg);
         if (full)
             return storage_full(c, r, d);
-        return http_problem(c, r, 500, "io", "i/o error", d, NULL, NULL);
+        return http_problem(c, r, 500, "io", NULL, d, NULL, NULL);
     }
     /* Deleted (or purged) while converting: the directory may have been
      * emptied before our file landed in it; remove what is left. */

@@ -116,8 +116,8 @@ static enum MHD_Result unsupported(struct MHD_Connection *c, req *r, const char 
                 "\"formats\":[");
     format_names(&x, 1);
     sb_puts(&x, "]");
-    ret = http_problem(c, r, 415, "unsupported-media-type", "unsupported media type",
-                       detail, x.oom ? NULL : x.buf, NULL);
+    ret = http_problem(c, r, 415, "unsupported-media-type", NULL, detail,
+                       x.oom ? NULL : x.buf, NULL);
     sb_free(&x);
     return ret;
 }
@@ -196,8 +196,8 @@ static enum MHD_Result queue_full_reply(struct MHD_Connection *c, req *r,
     char extra[96];
     snprintf(extra, sizeof extra, "\"queued\":%lld,\"max_queued\":%d",
              (long long)cnt->by_state[JOB_QUEUED], r->q->cfg.max_queued);
-    return http_problem(c, r, 429, "queue-full", "too many queued jobs",
-                        "the queue is full; retry later", extra, h);
+    return http_problem(c, r, 429, "queue-full", NULL, "the queue is full; retry later",
+                        extra, h);
 }
 
 /* The query's options checked against the library's table (and TetGen's two)
@@ -276,23 +276,22 @@ enum MHD_Result upload_begin(struct MHD_Connection *c, req *r)
     r->upload = 1;
     u = r->up = calloc(1, sizeof *u);
     if (!u)
-        return http_problem(c, r, 503, "out-of-memory", "out of memory",
+        return http_problem(c, r, 503, "out-of-memory", NULL,
                             "the upload could not be started", NULL, NULL);
     u->fd = -1;
     /* Options are checked before any byte of the body is read. */
     if (upload_options(c, q, u, why, sizeof why))
-        return http_problem(c, r, 400, "invalid-option", "invalid option", why, NULL,
-                            NULL);
+        return http_problem(c, r, 400, "invalid-option", NULL, why, NULL, NULL);
     if (upload_format(c, u, why, sizeof why))
         return unsupported(c, r, why);
     if (u->tetgen_opts && u->fmt != MESHIO_AUTO)
-        return http_problem(c, r, 400, "invalid-option", "invalid option",
+        return http_problem(c, r, 400, "invalid-option", NULL,
                             "tetgen_quality and max_volume apply to surface uploads only",
                             NULL, NULL);
     if (upload_idem(c, u))
-        return http_problem(
-            c, r, 400, "invalid-idempotency-key", "invalid Idempotency-Key",
-            "the key must be 1 to 128 visible ASCII characters", NULL, NULL);
+        return http_problem(c, r, 400, "invalid-idempotency-key", NULL,
+                            "the key must be 1 to 128 visible ASCII characters", NULL,
+                            NULL);
     /* A replay of an accepted request is answered even when the queue is full.
      * Checked here so that a refused body is not uploaded, and again at commit
      * (uploads that were in flight together). */
@@ -314,8 +313,8 @@ enum MHD_Result upload_begin(struct MHD_Connection *c, req *r)
     if (u->fd < 0 && disk_full(errno))
         return storage_full(c, r, "the upload could not be stored");
     if (u->fd < 0)
-        return http_problem(c, r, 500, "io", "i/o error", "cannot create an upload file",
-                            NULL, NULL);
+        return http_problem(c, r, 500, "io", NULL, "cannot create an upload file", NULL,
+                            NULL);
     snprintf(u->tmp, sizeof u->tmp, "%s", tmpl);
     return MHD_YES;
 }
@@ -467,8 +466,7 @@ static enum MHD_Result idem_replay(struct MHD_Connection *c, req *r, const job_r
 
     if (strcmp(old->body_hash, body_hash)) {
         snprintf(extra, sizeof extra, "\"job\":\"%s\"", old->id);
-        return http_problem(c, r, 422, "idempotency-key-reused",
-                            "Idempotency-Key reused with a different request",
+        return http_problem(c, r, 422, "idempotency-key-reused", NULL,
                             "this key was already used for a different body or options",
                             extra, NULL);
     }
@@ -496,7 +494,7 @@ static enum MHD_Result too_big(struct MHD_Connection *c, req *r, int json)
         snprintf(d, sizeof d, "request bodies are limited to %lld bytes", (long long)lim);
     snprintf(extra, sizeof extra, "\"max_bytes\":%lld%s", (long long)lim,
              json ? ",\"use\":\"" MEDIA_QMESH "\"" : "");
-    return http_problem(c, r, 413, "too-big", "request body too large", d, extra, NULL);
+    return http_problem(c, r, 413, "too-big", NULL, d, extra, NULL);
 }
 
 /* meshio_options.log target: notes about the upload (skipped element types),
@@ -610,8 +608,7 @@ static int inspect_upload(struct MHD_Connection *c, req *r, job_rec *j,
     int bad = 1;
 
     if (buf == MAP_FAILED) {
-        *ret = http_problem(c, r, 500, "io", "i/o error", "cannot map the upload", NULL,
-                            NULL);
+        *ret = http_problem(c, r, 500, "io", NULL, "cannot map the upload", NULL, NULL);
         return 1;
     }
     if (u->sniff) {
@@ -626,7 +623,7 @@ static int inspect_upload(struct MHD_Connection *c, req *r, job_rec *j,
     else if (u->sniff && u->fmt == MESHIO_JSON && u->body_len > r->q->cfg.max_json)
         *ret = too_big(c, r, 1);
     else if (u->tetgen_opts && u->sfmt == SURFACE_AUTO)
-        *ret = http_problem(c, r, 400, "invalid-option", "invalid option",
+        *ret = http_problem(c, r, 400, "invalid-option", NULL,
                             "tetgen_quality and max_volume apply to surface uploads only",
                             NULL, NULL);
     else
@@ -738,7 +735,7 @@ enum MHD_Result upload_finish(struct MHD_Connection *c, req *r)
     if (u->io_err || u->fd < 0)
         return storage_full(c, r, "the upload could not be stored");
     if (u->body_len == 0)
-        return http_problem(c, r, 400, "empty-body", "empty request body",
+        return http_problem(c, r, 400, "empty-body", NULL,
                             "POST /v1/jobs needs a mesh in the body", NULL, NULL);
 
     return offq_push(&intake, c, r);
