@@ -31,7 +31,8 @@ struct upload {
     int fd;         /* the body's temporary file in DATA/tmp, or -1 */
     char tmp[4200]; /* its path; "" once renamed or removed */
     int64_t body_len;
-    int too_big, io_err;
+    int too_big;
+    int io_err;          /* errno of a failed write of the body, or 0 */
     int hashing;         /* an Idempotency-Key was given: fingerprint the request */
     sha256_ctx hash;     /* options, ?format=, body */
     meshio_format fmt;   /* a mesh upload's format, or MESHIO_AUTO */
@@ -341,7 +342,7 @@ void upload_body(req *r, const char *data, size_t len)
         if (n < 0 && errno == EINTR)
             continue;
         if (n <= 0) {
-            u->io_err = 1;
+            u->io_err = n < 0 ? errno : EIO;
             return;
         }
         data += n;
@@ -438,7 +439,8 @@ static void new_id(char out[JOB_ID_LEN + 1])
 }
 
 /* Make the upload the job's input: fsync, rename into DATA/jobs/ID, fsync dirs.
- * Shared (PostgreSQL): the database keeps it durably; here it is a cache. */
+ * Shared (PostgreSQL): the database keeps it durably; here it is a cache.
+ * 0, or the errno of what failed (the job's directory is then removed). */
 static int commit_input(req *r, const char *id, const char *format)
 {
     upload *u = r->up;
@@ -447,14 +449,23 @@ static int commit_input(req *r, const char *id, const char *format)
 
     job_path(r->q, id, NULL, dir, sizeof dir);
     job_path(r->q, id, job_input_name(format), path, sizeof path);
-    if (dir_ensure(dir) || (durable && fsync(u->fd)) || rename(u->tmp, path)) {
+    if (dir_ensure(dir) || (durable && fsync(u->fd)) || rename(u->tmp, path) ||
+        (u->tmp[0] = 0, durable && (fsync_parent(path) || fsync_parent(dir)))) {
+        int e = errno ? errno : EIO;
         dir_remove(dir);
-        return -1;
+        return e;
     }
-    u->tmp[0] = 0;
-    if (durable && (fsync_parent(path) || fsync_parent(dir)))
-        return -1;
     return 0;
+}
+
+/* The upload could not be stored (errno e): 507 when the disk is full, a
+ * passing condition; else 500. */
+static enum MHD_Result store_failed(struct MHD_Connection *c, req *r, int e,
+                                    const char *what)
+{
+    if (disk_full(e))
+        return storage_full(c, r, what);
+    return http_problem(c, r, 500, "io", NULL, what, NULL, NULL);
 }
 
 /* Answer a request whose Idempotency-Key was used before: the same job when
@@ -653,8 +664,9 @@ static int create_job(struct MHD_Connection *c, req *r, job_rec *j, enum MHD_Res
         *ret = queue_full_reply(c, r, &cnt);
         return 1;
     }
-    if (commit_input(r, j->id, j->format)) {
-        *ret = storage_full(c, r, "the mesh could not be stored durably");
+    int e = commit_input(r, j->id, j->format);
+    if (e) {
+        *ret = store_failed(c, r, e, "the mesh could not be stored durably");
         return 1;
     }
     if (shared_on(q)) {
@@ -733,7 +745,8 @@ enum MHD_Result upload_finish(struct MHD_Connection *c, req *r)
     if (u->too_big)
         return too_big(c, r, u->fmt == MESHIO_JSON);
     if (u->io_err || u->fd < 0)
-        return storage_full(c, r, "the upload could not be stored");
+        return store_failed(c, r, u->fd < 0 ? ENOSPC : u->io_err,
+                            "the upload could not be stored");
     if (u->body_len == 0)
         return http_problem(c, r, 400, "empty-body", NULL,
                             "POST /v1/jobs needs a mesh in the body", NULL, NULL);
