@@ -2,10 +2,10 @@
 # splice.sh - a result asked in the upload's own format is the uploaded file
 # with only the coordinates replaced, as `qdc optimize IN OUT` writes OUT in
 # IN's format: files written by other tools (tests/data/real: MSH 4.1 with
-# $PhysicalNames, point and line elements; VTU with point and cell arrays,
-# zlib-compressed; Medit with Edges and vertex refs) come back from qdcd
-# byte for byte as the CLI writes them, with the same strong ETag on every
-# request; the same result in another format is written by qdc's own writer;
+# $PhysicalNames, point and line elements, ASCII and binary; VTU with point
+# and cell arrays, zlib-compressed inline and appended; Medit with Edges and
+# vertex refs) come back from qdcd byte for byte as the CLI writes them,
+# with the same strong ETag on every request; the same result in another format is written by qdc's own writer;
 # GET /input in the upload's format is the upload itself. With a PostgreSQL
 # store, a node that did not receive the upload reads the input from the
 # database and answers the same bytes.
@@ -18,7 +18,9 @@ trap 'if [ -n "$QPID" ]; then kill -9 $QPID 2>/dev/null; fi; for p in $PIDS; do 
 
 # name  file in tests/data/real  ?format= of the upload's own variant  text only that file has
 CASES="gmsh41:gmsh41.msh:gmsh:\$PhysicalNames
+gmsh41bin:gmsh41_bin.msh:gmsh-bin:\$PhysicalNames
 vtu:meshio_zlib.vtu:vtu:temperature
+vtuapp:vtk_appended_zlib.vtu:vtu:RangeMin
 medit:gmsh.mesh:medit:Edges"
 
 for c in $CASES; do
@@ -56,7 +58,7 @@ for c in $CASES; do
     c1=$(req GET "/v1/jobs/$id/result?format=$fmt" "$TMP/$n.d.$ext")
     etag=$(hdr "$TMP/$n.d.$ext" ETag)
     if [ "$got" = "$fmt" ] && [ "$c1" = 200 ] && cmp -s "$TMP/$n.d.$ext" "$TMP/$n.cli.$ext" &&
-        ! cmp -s "$TMP/$n.d.$ext" "$TMP/$n.$ext" && grep -q "$mark" "$TMP/$n.d.$ext"; then
+        ! cmp -s "$TMP/$n.d.$ext" "$TMP/$n.$ext" && grep -aq "$mark" "$TMP/$n.d.$ext"; then
         pass "splice: $n: /result?format=$fmt is the CLI's output byte for byte ($(wc -c < "$TMP/$n.d.$ext") bytes, '$mark' kept, coordinates moved)"
     else
         fail "splice: $n: /result?format=$fmt" "sniffed '$got', status $c1, $(cmp "$TMP/$n.d.$ext" "$TMP/$n.cli.$ext" 2>&1 | head -1)"
