@@ -127,9 +127,13 @@ test-container: deps
 	@sh tests/container/image.sh
 
 # Every allocation of the library failing in turn: clean errors, no leaks.
+# Then transient I/O faults in the daemon (short writes, ENOSPC, EIO, fsync
+# failures on uploads, the job store, results and conversions).
 fault:
 	$(MAKE) FAULT=1 $(UNIT_BIN:build/rel/%=build/fault/%)
 	@for t in build/fault/tests/test_*; do ASAN_OPTIONS=detect_leaks=1 $$t || exit 1; done
+	$(MAKE) -j$$(nproc) all
+	@out=$$(sh tests/faults/io.sh); echo "$$out"; ! echo "$$out" | grep -q '^FAIL'
 
 # Builds only what it serves (in parallel), so a fresh clone answers quickly.
 run: deps

@@ -1,4 +1,5 @@
-/* api.h - the endpoints : routing, JSON <-> library. */
+/* api.h - the endpoints as http.c sees them: four handlers (api.c routes
+ * each request to the file of its resource) and their threads. */
 #ifndef QDCD_API_H
 #define QDCD_API_H
 
@@ -13,14 +14,17 @@ void api_body(req *r, const char *data, size_t len);
 /* Body complete (or resumed after parking): answer or park. */
 enum MHD_Result api_dispatch(struct MHD_Connection *c, req *r, const char *url,
                              const char *method);
-/* Release what the request still holds (temp upload file). */
+/* Release what the request still holds (each handler's own state: an
+ * upload's temporary file, a reader's watch). */
 void api_req_done(req *r);
 /* The four above, for http_start. */
 extern const http_handlers api_handlers;
 
-/* The intake thread: parses, validates and commits complete uploads while
- * their connections are suspended, so the HTTP thread never waits on a parse
- * or an fsync. api_stop finishes what is queued (answering each) first. */
+/* The intake thread (upload.c: parses, validates and commits complete
+ * uploads) and the conversion thread (result.c), serving requests whose
+ * connections are suspended, so the HTTP thread never waits on a parse, a
+ * conversion or an fsync. api_stop finishes what is queued (answering each)
+ * first. */
 int api_start(qdcd *q);
 void api_stop(void);
 

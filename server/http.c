@@ -30,8 +30,6 @@ static req *req_new(qdcd *q)
         return NULL;
     r->q = q;
     r->t0 = mono_now();
-    r->fd = -1;
-    r->after = -1;
     return r;
 }
 
@@ -83,7 +81,6 @@ static void on_completed(void *cls, struct MHD_Connection *c, void **req_cls,
         atomic_fetch_add(&q->m.lat_sum_us, (long long)(dt * 1e6));
     }
     handlers->done(r);
-    sb_free(&r->sse);
     free(r);
     *req_cls = NULL;
 }
@@ -132,7 +129,7 @@ enum MHD_Result http_reply_json(struct MHD_Connection *c, req *r, unsigned statu
                                 const sbuf *body, const char *const *headers)
 {
     if (body->oom)
-        return http_problem(c, r, 503, "out-of-memory", "out of memory",
+        return http_problem(c, r, 503, "out-of-memory", NULL,
                             "the reply did not fit in memory", NULL, NULL);
     return http_reply(c, r, status, "application/json", body->buf ? body->buf : "{}",
                       body->buf ? body->len : 2, headers);
@@ -166,8 +163,8 @@ enum MHD_Result http_reply_file(struct MHD_Connection *c, req *r, unsigned statu
     if (fd < 0 || fstat(fd, &sb)) {
         if (fd >= 0)
             close(fd);
-        return http_problem(c, r, 500, "io", "i/o error",
-                            "a stored file could not be read", NULL, NULL);
+        return http_problem(c, r, 500, "io", NULL, "a stored file could not be read",
+                            NULL, NULL);
     }
     resp = MHD_create_response_from_fd((uint64_t)sb.st_size, fd); /* owns fd */
     if (!resp) {

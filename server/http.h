@@ -11,44 +11,31 @@
 
 #include <microhttpd.h>
 
+struct upload;
+struct watch;
+
 /* Per-request state, created at the first call of the access handler and
- * freed in the completion hook. */
+ * freed in the completion hook: what every request needs; a handler that
+ * keeps more (an upload, a long-poll or stream) hangs its own struct here
+ * and frees it in its done hook. */
 typedef struct req {
     qdcd *q;
     struct MHD_Connection *conn;
     double t0;
-    int status;  /* status queued, for metrics (0 = none yet) */
-    int replied; /* a response is queued: ignore the rest */
-    int parked_ever;
+    int status;      /* status queued, for metrics (0 = none yet) */
+    int replied;     /* a response is queued: ignore the rest */
+    int parked_ever; /* suspended at some point: not counted as a latency */
     int upload;      /* POST /v1/jobs: a 4xx counts as a rejected submission */
     int close_after; /* the reply says Connection: close (http_reply_response) */
     int route;
     char id[JOB_ID_LEN + 1];
     char owner[65];
-    /* POST /v1/jobs upload */
-    int fd;
-    char tmp[4200];
-    int64_t body_len;
-    int too_big, io_err, hashing;
-    sha256_ctx hash;
-    meshio_format fmt;   /* a mesh upload's format, or MESHIO_AUTO */
-    surface_format sfmt; /* a surface upload's format (tetrahedralized), or AUTO */
-    int sniff;           /* format from the content (text/plain, octet-stream, none) */
-    int tetgen_opts;     /* tetgen_quality or max_volume given: surfaces only */
-    char idem[129];
-    char options[1024];
-    struct req *intake_next; /* queued for the intake or the convert thread */
-    int intake_done;         /* that thread has handled this request */
-    /* GET /result */
-    meshio_format res_fmt;
-    /* long-poll and SSE */
-    poll_waiter w;
-    double deadline;
-    long after;
-    int wait_set;
-    sbuf sse;
-    size_t sse_off;
-    int sse_end; /* 1: end event queued, 2: stream over */
+    /* handed to a thread of its own (offq.h) with the connection suspended */
+    struct req *off_next;
+    int off_done;          /* that thread has handled this request */
+    meshio_format res_fmt; /* the format a conversion is to write (result.c) */
+    struct upload *up;     /* POST /v1/jobs (upload.c) */
+    struct watch *watch;   /* /progress, /events (progress.c) */
 } req;
 
 /* What the layer above answers requests with (api.c's api_handlers): http.c

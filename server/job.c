@@ -411,101 +411,100 @@ static qdc_status save_outputs(qdcd *q, job_rec *j, const mesh_t *out, const mes
     return st;
 }
 
-/* A surface job's mesh: `qdc tetra` turns DATA/jobs/ID/input.EXT into
- * tetra.qmesh in a child process (libtet can crash on some surfaces and
- * prints to stdout; both stay in the child and its tetgen.log). TetGen's time
- * comes out of the job's budget. Returns 0 with *out set, 1 when the job
- * failed (j->error set), 2 when it was cancelled or handed back (w->cancel). */
-static int tetrahedralize(worker *w, job_rec *j, opt_options *opts, mesh_t **out)
+/* The command line of `qdc tetra` for job j (argv: 16 slots; num: the text
+ * of its numbers). */
+static void tetra_argv(const qdcd *q, const job_rec *j, char *in, char *res,
+                       char *argv[16], char num[4][40])
 {
-    qdcd *q = w->pool->q;
-    char in[4200], res[4200], log[4200], qs[40], vs[40], ts[40], ms[40], msg[400],
-        detail[600];
-    char *argv[16];
+    double tq, tv;
     int k = 0;
-    double tq, tv, budget;
-    child_result cr;
-    qdc_error err;
-    qdc_status st;
-    char *buf;
-    size_t len = 0;
 
-    qdc_error_clear(&err);
-    job_path(q, j->id, job_input_name(j->format), in, sizeof in);
-    job_path(q, j->id, "tetra.qmesh", res, sizeof res);
-    job_path(q, j->id, "tetgen.log", log, sizeof log);
     job_tetra_opts(j->options, &tq, &tv);
-    argv[k++] = q->cfg.qdc_path;
+    argv[k++] = (char *)q->cfg.qdc_path;
     argv[k++] = "tetra";
     argv[k++] = in;
     argv[k++] = res;
     argv[k++] = "--die-with-parent"; /* no orphan TetGen after a daemon crash */
     if (tq >= 0) {
-        snprintf(qs, sizeof qs, "%.17g", tq);
+        snprintf(num[0], 40, "%.17g", tq);
         argv[k++] = "--tetgen-quality";
-        argv[k++] = qs;
+        argv[k++] = num[0];
     }
     if (tv >= 0) {
-        snprintf(vs, sizeof vs, "%.17g", tv);
+        snprintf(num[1], 40, "%.17g", tv);
         argv[k++] = "--max-volume";
-        argv[k++] = vs;
+        argv[k++] = num[1];
     }
     /* refused at once when the volume bound alone exceeds the tet limit, and
      * TetGen bounded in memory (it grows ~70 MB/s on a tiny max_volume) */
-    snprintf(ts, sizeof ts, "%lld", (long long)q->cfg.max_tets);
+    snprintf(num[2], 40, "%lld", (long long)q->cfg.max_tets);
     argv[k++] = "--max-tets";
-    argv[k++] = ts;
-    snprintf(ms, sizeof ms, "%lld", (long long)q->cfg.child_memory);
+    argv[k++] = num[2];
+    snprintf(num[3], 40, "%lld", (long long)q->cfg.child_memory);
     argv[k++] = "--max-memory";
-    argv[k++] = ms;
+    argv[k++] = num[3];
     argv[k] = NULL;
-    budget = opts->time_limit > 0 ? opts->time_limit : q->cfg.job_time_limit;
-    child_run(argv, log, mono_now() + budget, &w->cancel, &cr);
-    if (q->cfg.verbose)
-        fprintf(stderr, "qdcd: job %s: qdc tetra %s after %.3f s (exit %d, signal %d)\n",
-                j->id, cr.exited && !cr.code ? "succeeded" : "failed", cr.seconds,
-                cr.exited ? cr.code : -1, cr.signal);
-    if (!cr.spawned) {
+}
+
+/* What the child's end means for the job: 0 it made a mesh, 1 the job failed
+ * (j->error set), 2 it was cancelled. */
+static int tetra_outcome(const qdcd *q, job_rec *j, const child_result *cr,
+                         const char *in, const char *log, double budget)
+{
+    char msg[400], detail[600];
+
+    if (!cr->spawned) {
         snprintf(detail, sizeof detail, "cannot run %.400s: %s", q->cfg.qdc_path,
-                 strerror(cr.errno_spawn));
+                 strerror(cr->errno_spawn));
         problem(j, 500, "internal", "the surface could not be tetrahedralized", detail);
         return 1;
     }
-    if (cr.cancelled)
+    if (cr->cancelled)
         return 2;
-    if (cr.timed_out) {
+    if (cr->timed_out) {
         snprintf(detail, sizeof detail,
                  "TetGen did not finish within the job's time limit (%g s)", budget);
-        problem(j, 422, "tetgen", "the surface could not be tetrahedralized", detail);
+        problem(j, 422, "tetgen", NULL, detail);
         return 1;
     }
-    if (cr.signal) {
+    if (cr->signal) {
         snprintf(detail, sizeof detail, "TetGen crashed (signal %d) on this surface",
-                 cr.signal);
-        problem(j, 422, "tetgen", "the surface could not be tetrahedralized", detail);
+                 cr->signal);
+        problem(j, 422, "tetgen", NULL, detail);
         return 1;
     }
-    if (cr.code) {
-        /* "qdc: DATA/jobs/ID/input.stl:3:1: message": the client knows its
-         * file as the upload, not by our path. */
-        child_last_line(log, "qdc: ", msg, sizeof msg);
-        const char *m = msg;
-        size_t n = strlen(in);
-        if (!strncmp(m, in, n) && (m[n] == ':' || m[n] == 0))
-            m += n + (m[n] == ':') + (m[n] == ':' && m[n + 1] == ' ');
-        if (cr.code == 2 || cr.code == 3) {
-            snprintf(detail, sizeof detail, "%s",
-                     *m ? m : "TetGen could not tetrahedralize this surface");
-            problem(j, 422, "tetgen", "the surface could not be tetrahedralized", detail);
-        } else {
-            snprintf(detail, sizeof detail, "qdc tetra exited with status %d: %s",
-                     cr.code, *m ? m : "no message");
-            problem(j, 500, "internal", "the surface could not be tetrahedralized",
-                    detail);
-        }
-        return 1;
+    if (!cr->code)
+        return 0;
+    /* "qdc: DATA/jobs/ID/input.stl:3:1: message": the client knows its file as
+     * the upload, not by our path. */
+    child_last_line(log, "qdc: ", msg, sizeof msg);
+    const char *m = msg;
+    size_t n = strlen(in);
+    if (!strncmp(m, in, n) && (m[n] == ':' || m[n] == 0))
+        m += n + (m[n] == ':') + (m[n] == ':' && m[n + 1] == ' ');
+    if (cr->code == 2 || cr->code == 3) {
+        snprintf(detail, sizeof detail, "%s",
+                 *m ? m : "TetGen could not tetrahedralize this surface");
+        problem(j, 422, "tetgen", NULL, detail);
+    } else {
+        snprintf(detail, sizeof detail, "qdc tetra exited with status %d: %s", cr->code,
+                 *m ? m : "no message");
+        problem(j, 500, "internal", "the surface could not be tetrahedralized", detail);
     }
-    buf = file_read_all(res, &len);
+    return 1;
+}
+
+/* TetGen's mesh (res) read, within the server's limits and valid: 0 with
+ * *out, or 1 with j->error set. */
+static int tetra_read(const qdcd *q, job_rec *j, const char *res, mesh_t **out)
+{
+    char detail[600];
+    size_t len = 0;
+    char *buf = file_read_all(res, &len);
+    qdc_error err;
+    qdc_status st;
+
+    qdc_error_clear(&err);
     st = buf ? meshio_read(buf, len, MESHIO_QMESH, out, &err)
              : qdc_fail(&err, QDC_EIO, "qdc tetra left no mesh");
     free(buf);
@@ -518,15 +517,43 @@ static int tetrahedralize(worker *w, job_rec *j, opt_options *opts, mesh_t **out
                       (long long)q->cfg.max_tets);
     if (st == QDC_OK)
         st = mesh_validate(*out, NULL, &err);
-    if (st != QDC_OK) {
-        mesh_free(*out);
-        *out = NULL;
-        snprintf(detail, sizeof detail, "%s: %s", qdc_status_str(st), err.msg);
-        problem(j, st == QDC_ETOOBIG ? 413 : 500,
-                st == QDC_ETOOBIG ? "too-big" : "internal",
-                "the surface could not be tetrahedralized", detail);
-        return 1;
-    }
+    if (st == QDC_OK)
+        return 0;
+    mesh_free(*out);
+    *out = NULL;
+    snprintf(detail, sizeof detail, "%s: %s", qdc_status_str(st), err.msg);
+    problem(j, st == QDC_ETOOBIG ? 413 : 500, st == QDC_ETOOBIG ? "too-big" : "internal",
+            "the surface could not be tetrahedralized", detail);
+    return 1;
+}
+
+/* A surface job's mesh: `qdc tetra` turns DATA/jobs/ID/input.EXT into
+ * tetra.qmesh in a child process (libtet can crash on some surfaces and
+ * prints to stdout; both stay in the child and its tetgen.log). TetGen's time
+ * comes out of the job's budget. Returns 0 with *out set, 1 when the job
+ * failed (j->error set), 2 when it was cancelled or handed back (w->cancel). */
+static int tetrahedralize(worker *w, job_rec *j, opt_options *opts, mesh_t **out)
+{
+    qdcd *q = w->pool->q;
+    char in[4200], res[4200], log[4200], num[4][40];
+    char *argv[16];
+    double budget;
+    child_result cr;
+    int t;
+
+    job_path(q, j->id, job_input_name(j->format), in, sizeof in);
+    job_path(q, j->id, "tetra.qmesh", res, sizeof res);
+    job_path(q, j->id, "tetgen.log", log, sizeof log);
+    tetra_argv(q, j, in, res, argv, num);
+    budget = opts->time_limit > 0 ? opts->time_limit : q->cfg.job_time_limit;
+    child_run(argv, log, mono_now() + budget, &w->cancel, &cr);
+    if (q->cfg.verbose)
+        fprintf(stderr, "qdcd: job %s: qdc tetra %s after %.3f s (exit %d, signal %d)\n",
+                j->id, cr.exited && !cr.code ? "succeeded" : "failed", cr.seconds,
+                cr.exited ? cr.code : -1, cr.signal);
+    t = tetra_outcome(q, j, &cr, in, log, budget);
+    if (t || (t = tetra_read(q, j, res, out)) != 0)
+        return t;
     /* kept as the job's input mesh (GET /v1/jobs/{id}/input) */
     job_path(q, j->id, JOB_INPUT_TETS, in, sizeof in);
     if (rename(res, in))
@@ -537,164 +564,236 @@ static int tetrahedralize(worker *w, job_rec *j, opt_options *opts, mesh_t **out
     return 0;
 }
 
-static void run_job(worker *w, job_rec *j)
-{
-    qdcd *q = w->pool->q;
-    char path[4200], detail[512];
-    char *buf = NULL;
-    size_t len = 0;
-    mesh_t *m = NULL, *ref = NULL;
+/* One run of a job: what its steps share. */
+typedef struct {
+    worker *w;
+    qdcd *q;
+    job_rec *j;
+    run_ctx ctx; /* the progress callback's */
+    mesh_t *m, *ref;
     opt_options opts;
     opt_result res;
     report_quality before;
     qdc_error err;
-    qdc_status st;
-    run_ctx r = {w, q, j->id, NULL, mono_now(), mono_now(), 0, ""};
-    int release;
+    qdc_status st; /* of the step that failed (RUN_ERROR) */
+} run_state;
 
-    memset(&res, 0, sizeof res);
-    qdc_error_clear(&err);
-    poll_begin(q->hub, j->id);
-    job_path(q, j->id, "progress.jsonl", path, sizeof path);
-    r.progress = shared_on(q) ? NULL : fopen(path, "w"); /* shared: in the store */
-    if (shared_on(q)) {
-        /* the input, from the database unless this node received it */
-        st = shared_fetch(q, j->id, job_input_name(j->format), NULL);
-        if (st == QDC_EINVAL) {
-            st = qdc_fail(&err, QDC_EIO, "the job's input is missing from the store");
-            goto failed;
-        }
-        if (st != QDC_OK) {
-            fprintf(stderr, "qdcd: job %s: cannot fetch its input: back to the queue\n",
-                    j->id);
-            (void)retry_store(q, "give back", j->id, store_release_once, w, j, 60.0);
-            poll_drop(q->hub, j->id);
-            goto released;
-        }
-    }
+/* What a step of a run leads to. */
+typedef enum {
+    RUN_ON,       /* on to the next step */
+    RUN_ERROR,    /* s->st and s->err say why: the job fails */
+    RUN_FAILED,   /* the job failed, j->error says why */
+    RUN_STOPPED,  /* cancelled, or to be handed back (w->cancel) */
+    RUN_DONE,     /* the job ended (j->state set): record it */
+    RUN_RELEASED, /* handed back to the queue: nothing to record */
+} run_step;
 
-    job_opt_from_json(&opts, j->options, q->cfg.job_time_limit);
-    if (job_is_surface(j->format)) {
-        int t = tetrahedralize(w, j, &opts, &m);
-        if (t == 1) {
-            j->state = JOB_FAILED;
-            goto finish;
-        }
-        if (t == 2)
-            goto stopped;
-    } else {
-        job_path(q, j->id, job_input_name(j->format), path, sizeof path);
-        buf = file_read_all(path, &len);
-        if (!buf) {
-            st = qdc_fail(&err, QDC_EIO, "cannot read the job's input file");
-            goto failed;
-        }
-        st = meshio_read(buf, len, meshio_format_from_name(j->format), &m, &err);
-        free(buf);
-        buf = NULL;
-        if (st != QDC_OK)
-            goto failed;
+/* Shared store: the input, from the database unless this node received it. */
+static run_step run_fetch(run_state *s)
+{
+    if (!shared_on(s->q))
+        return RUN_ON;
+    s->st = shared_fetch(s->q, s->j->id, job_input_name(s->j->format), NULL);
+    if (s->st == QDC_EINVAL) {
+        s->st = qdc_fail(&s->err, QDC_EIO, "the job's input is missing from the store");
+        return RUN_ERROR;
     }
-    ref = mesh_dup(m);
-    if (!ref) {
-        st = qdc_fail(&err, QDC_ENOMEM, "out of memory");
-        goto failed;
+    if (s->st != QDC_OK) {
+        fprintf(stderr, "qdcd: job %s: cannot fetch its input: back to the queue\n",
+                s->j->id);
+        (void)retry_store(s->q, "give back", s->j->id, store_release_once, s->w, s->j,
+                          60.0);
+        poll_drop(s->q->hub, s->j->id);
+        return RUN_RELEASED;
     }
-    st = report_quality_compute(m, &before, &err);
-    if (st != QDC_OK)
-        goto failed;
+    return RUN_ON;
+}
+
+/* The job's options and its mesh: the upload, or TetGen's mesh of a surface. */
+static run_step run_load(run_state *s)
+{
+    char path[4200];
+    size_t len = 0;
+    char *buf;
+
+    job_opt_from_json(&s->opts, s->j->options, s->q->cfg.job_time_limit);
+    if (job_is_surface(s->j->format)) {
+        int t = tetrahedralize(s->w, s->j, &s->opts, &s->m);
+        return t == 1 ? RUN_FAILED : t == 2 ? RUN_STOPPED : RUN_ON;
+    }
+    job_path(s->q, s->j->id, job_input_name(s->j->format), path, sizeof path);
+    buf = file_read_all(path, &len);
+    if (!buf) {
+        s->st = qdc_fail(&s->err, QDC_EIO, "cannot read the job's input file");
+        return RUN_ERROR;
+    }
+    /* A Medit upload keeps its file: result.mesh is then written as it, with
+     * only the coordinates replaced (as `qdc optimize` writes OUT in IN's
+     * format); the conversion thread does the same for the other formats
+     * (result.c). */
+    meshio_format fin = meshio_format_from_name(s->j->format);
+    meshio_options mo = {NULL, NULL, fin == MESHIO_MEDIT ? 1 : -1};
+    s->st = meshio_read_ex(buf, len, fin, &mo, &s->m, &s->err);
+    free(buf);
+    return s->st == QDC_OK ? RUN_ON : RUN_ERROR;
+}
+
+/* The mesh as it came (boundary reference, quality before), then opt_run. */
+static run_step run_optimize(run_state *s)
+{
+    s->ref = mesh_dup(s->m);
+    if (!s->ref) {
+        s->st = qdc_fail(&s->err, QDC_ENOMEM, "out of memory");
+        return RUN_ERROR;
+    }
+    s->st = report_quality_compute(s->m, &s->before, &s->err);
+    if (s->st != QDC_OK)
+        return RUN_ERROR;
     /* Workers already run side by side: split the cores instead of letting
      * every job's OpenMP team take them all. */
     long ncpu = sysconf(_SC_NPROCESSORS_ONLN);
-    opts.threads = ncpu > q->cfg.workers ? (int)(ncpu / q->cfg.workers) : 1;
-    opts.cancel = &w->cancel;
-    opts.progress = on_progress;
-    opts.progress_ctx = &r;
-    st = opt_run(m, &opts, &res, &err);
-    if (st != QDC_OK)
-        goto failed;
+    s->opts.threads = ncpu > s->q->cfg.workers ? (int)(ncpu / s->q->cfg.workers) : 1;
+    s->opts.cancel = &s->w->cancel;
+    s->opts.progress = on_progress;
+    s->opts.progress_ctx = &s->ctx;
+    s->st = opt_run(s->m, &s->opts, &s->res, &s->err);
+    return s->st == QDC_OK ? RUN_ON : RUN_ERROR;
+}
 
-stopped:
+/* Results, report and etags written. A full disk (or an I/O error) is a
+ * passing condition: the result is in memory, so writing it is tried again
+ * with a growing pause (up to 10 min); then the job goes back to the queue
+ * rather than failing an accepted job for good. */
+static run_step run_save(run_state *s)
+{
+    worker *w = s->w;
+
+    s->st =
+        save_outputs(s->q, s->j, s->m, s->ref, &s->opts, &s->res, &s->before, &s->err);
+    for (double pause = 0.5, t0 = mono_now();
+         s->st == QDC_EIO && mono_now() - t0 < 600.0 && !atomic_load(&w->cancel) &&
+         !w->pool->stopping;
+         pause = pause * 2 > 10.0 ? 10.0 : pause * 2) {
+        if (pause == 0.5)
+            fprintf(stderr, "qdcd: job %s: cannot write its results (%s); trying again\n",
+                    s->j->id, s->err.msg);
+        struct timespec ts = {(time_t)pause, (long)((pause - (time_t)pause) * 1e9)};
+        nanosleep(&ts, NULL);
+        qdc_error_clear(&s->err);
+        s->st = save_outputs(s->q, s->j, s->m, s->ref, &s->opts, &s->res, &s->before,
+                             &s->err);
+    }
+    if (s->st == QDC_EIO) {
+        fprintf(stderr,
+                "qdcd: job %s: still cannot write its results: back to the queue\n",
+                s->j->id);
+        (void)retry_store(s->q, "give back", s->j->id, store_release_once, w, s->j, 60.0);
+        poll_drop(s->q->hub, s->j->id);
+        return RUN_RELEASED;
+    }
+    if (s->st != QDC_OK)
+        return RUN_ERROR;
+    s->j->state = JOB_SUCCEEDED;
+    snprintf(s->j->stop_reason, sizeof s->j->stop_reason, "%s", s->res.stop_reason);
+    return RUN_DONE;
+}
+
+/* After the run (or a stop before it): handed back at shutdown, cancelled,
+ * failed in the optimizer, or its results saved. */
+static run_step run_conclude(run_state *s)
+{
+    worker *w = s->w;
+    job_rec *j = s->j;
+    char detail[512];
+    int release;
+
     pthread_mutex_lock(&w->pool->lock);
     release = w->release;
     pthread_mutex_unlock(&w->pool->lock);
     if (release) {
-        /* Back to the queue: this run's records are not the job's history. */
-        /* at shutdown: briefly (an expired lease is reclaimed anyway) */
-        (void)retry_store(q, "give back", j->id, store_release_once, w, j, 5.0);
-        poll_drop(q->hub, j->id);
-        goto released;
+        /* Back to the queue: this run's records are not the job's history.
+         * At shutdown: briefly (an expired lease is reclaimed anyway). */
+        (void)retry_store(s->q, "give back", j->id, store_release_once, w, j, 5.0);
+        poll_drop(s->q->hub, j->id);
+        return RUN_RELEASED;
     }
     if (atomic_load(&w->cancel)) {
         j->state = JOB_CANCELLED;
         snprintf(j->stop_reason, sizeof j->stop_reason, "cancelled");
-    } else if (res.outcome == OPT_FAILED) {
+        return RUN_DONE;
+    }
+    if (s->res.outcome == OPT_FAILED) {
         snprintf(detail, sizeof detail,
                  "the optimizer failed (%s); the input is unchanged",
-                 res.stop_reason[0] ? res.stop_reason : "no detail");
-        problem(j, 500, "optimizer-failed", "optimization failed", detail);
+                 s->res.stop_reason[0] ? s->res.stop_reason : "no detail");
+        problem(j, 500, "optimizer-failed", NULL, detail);
         j->state = JOB_FAILED;
-        snprintf(j->stop_reason, sizeof j->stop_reason, "%s", res.stop_reason);
-    } else {
-        st = save_outputs(q, j, m, ref, &opts, &res, &before, &err);
-        /* A full disk (or an I/O error) is a passing condition: the result is
-         * in memory, so writing it is tried again with a growing pause (up to
-         * 10 min); then the job goes back to the queue rather than failing
-         * an accepted job for good. */
-        for (double pause = 0.5, t0 = mono_now();
-             st == QDC_EIO && mono_now() - t0 < 600.0 && !atomic_load(&w->cancel) &&
-             !w->pool->stopping;
-             pause = pause * 2 > 10.0 ? 10.0 : pause * 2) {
-            if (pause == 0.5)
-                fprintf(stderr,
-                        "qdcd: job %s: cannot write its results (%s); trying again\n",
-                        j->id, err.msg);
-            struct timespec ts = {(time_t)pause, (long)((pause - (time_t)pause) * 1e9)};
-            nanosleep(&ts, NULL);
-            qdc_error_clear(&err);
-            st = save_outputs(q, j, m, ref, &opts, &res, &before, &err);
-        }
-        if (st == QDC_EIO) {
-            fprintf(stderr,
-                    "qdcd: job %s: still cannot write its results: back to the queue\n",
-                    j->id);
-            (void)retry_store(q, "give back", j->id, store_release_once, w, j, 60.0);
-            poll_drop(q->hub, j->id);
-            goto released;
-        }
-        if (st != QDC_OK)
-            goto failed;
-        j->state = JOB_SUCCEEDED;
-        snprintf(j->stop_reason, sizeof j->stop_reason, "%s", res.stop_reason);
+        snprintf(j->stop_reason, sizeof j->stop_reason, "%s", s->res.stop_reason);
+        return RUN_DONE;
     }
-    goto finish;
+    return run_save(s);
+}
 
-failed:
-    snprintf(detail, sizeof detail, "%s: %s", qdc_status_str(st), err.msg);
-    problem(j, qdc_status_http(st) >= 500 ? qdc_status_http(st) : 422, "job-failed",
-            "the job failed", detail);
-    j->state = JOB_FAILED;
-finish:
-    if (r.progress)
-        fsync(fileno(r.progress));
+/* The end of the run recorded in the row (and the progress file synced). */
+static void run_record(run_state *s)
+{
+    qdcd *q = s->q;
+    job_rec *j = s->j, chk;
+    char path[4200];
+
+    if (s->ctx.progress)
+        fsync(fileno(s->ctx.progress));
     j->finished = wall_now();
     j->expires = j->finished + q->cfg.retention;
-    j->iterations = r.iterations;
-    snprintf(j->last_progress, sizeof j->last_progress, "%s", r.last);
-    record_end(q, w, j);
+    j->iterations = s->ctx.iterations;
+    snprintf(j->last_progress, sizeof j->last_progress, "%s", s->ctx.last);
+    record_end(q, s->w, j);
     atomic_fetch_add(&q->m.finished[j->state], 1);
     /* Deleted while running: nothing refers to the files any more. */
-    job_rec chk;
     if (q->store->ops->get(q->store, j->id, &chk) == QDC_EINVAL) {
         job_path(q, j->id, NULL, path, sizeof path);
         dir_remove(path);
     }
     poll_end(q->hub, j->id);
-released:
-    if (r.progress)
-        fclose(r.progress);
-    mesh_free(m);
-    mesh_free(ref);
+}
+
+static void run_job(worker *w, job_rec *j)
+{
+    qdcd *q = w->pool->q;
+    char path[4200], detail[512];
+    run_state s;
+    run_step k;
+
+    memset(&s, 0, sizeof s);
+    s.w = w;
+    s.q = q;
+    s.j = j;
+    s.ctx = (run_ctx){w, q, j->id, NULL, mono_now(), mono_now(), 0, ""};
+    qdc_error_clear(&s.err);
+    poll_begin(q->hub, j->id);
+    job_path(q, j->id, "progress.jsonl", path, sizeof path);
+    s.ctx.progress = shared_on(q) ? NULL : fopen(path, "w"); /* shared: in the store */
+
+    k = run_fetch(&s);
+    if (k == RUN_ON)
+        k = run_load(&s);
+    if (k == RUN_ON)
+        k = run_optimize(&s);
+    if (k == RUN_ON || k == RUN_STOPPED)
+        k = run_conclude(&s);
+    if (k == RUN_ERROR) {
+        snprintf(detail, sizeof detail, "%s: %s", qdc_status_str(s.st), s.err.msg);
+        problem(j, qdc_status_http(s.st) >= 500 ? qdc_status_http(s.st) : 422,
+                "job-failed", NULL, detail);
+    }
+    if (k == RUN_ERROR || k == RUN_FAILED)
+        j->state = JOB_FAILED;
+    if (k != RUN_RELEASED)
+        run_record(&s);
+    if (s.ctx.progress)
+        fclose(s.ctx.progress);
+    mesh_free(s.m);
+    mesh_free(s.ref);
 }
 
 static void *worker_main(void *arg)

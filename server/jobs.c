@@ -83,17 +83,17 @@ enum MHD_Result do_list(struct MHD_Connection *c, req *r)
     enum MHD_Result ret;
 
     if (ps && parse_long(ps, 1, 1000, &size))
-        return http_problem(c, r, 400, "invalid-parameter", "invalid parameter",
+        return http_problem(c, r, 400, "invalid-parameter", NULL,
                             "'page_size' must be an integer in [1, 1000]",
                             "\"parameter\":\"page_size\"", NULL);
     if (pt && *pt && parse_long(pt, 0, LONG_MAX, &after))
-        return http_problem(c, r, 400, "invalid-parameter", "invalid parameter",
+        return http_problem(c, r, 400, "invalid-parameter", NULL,
                             "'page_token' is not a token this server issued",
                             "\"parameter\":\"page_token\"", NULL);
     rows = malloc((size_t)size * sizeof *rows);
     if (!rows)
-        return http_problem(c, r, 503, "out-of-memory", "out of memory",
-                            "try a smaller page", NULL, NULL);
+        return http_problem(c, r, 503, "out-of-memory", NULL, "try a smaller page", NULL,
+                            NULL);
     if (r->q->store->ops->list(r->q->store, r->owner, after, (int)size, rows, &n) !=
         QDC_OK) {
         free(rows);

@@ -441,15 +441,10 @@ static int remove_orphans(qdcd *q)
     return n;
 }
 
-int main(int argc, char **argv)
+/* The configuration from the command line and what follows from it; 0, or
+ * the exit status (2: bad usage, message said). */
+static int configure(qdcd *q, int argc, char **argv)
 {
-    qdcd *q = &g;
-    qdc_error err;
-    sigset_t stopset;
-    const struct timespec tick = {0, 100 * 1000 * 1000};
-    int requeued = 0, failed = 0, rc = 1;
-    char host[64];
-
     defaults(&q->cfg);
     if (parse_args(argc, argv, &q->cfg))
         return 2;
@@ -476,10 +471,20 @@ int main(int argc, char **argv)
                 q->cfg.host);
         return 2;
     }
+    return 0;
+}
+
+/* The data directory made ready and, without a shared store, locked for
+ * this process (one daemon per directory); the instance name. 0 or -1
+ * (message said). */
+static int claim_data_dir(qdcd *q)
+{
+    char host[64];
+
     if (prepare_data_dir(q, store_pg_uri(q->cfg.store))) {
         fprintf(stderr, "qdcd: cannot use data directory %s: %s\n", q->cfg.data,
                 strerror(errno));
-        return 1;
+        return -1;
     }
     if (!store_pg_uri(q->cfg.store)) {
         long holder = 0;
@@ -489,12 +494,12 @@ int main(int argc, char **argv)
                     "qdcd: data directory %s is in use by another qdcd (pid %ld); one "
                     "daemon per directory (several nodes share a PostgreSQL store)\n",
                     q->cfg.data, holder);
-            return 1;
+            return -1;
         }
         if (lk < 0) {
             fprintf(stderr, "qdcd: cannot lock data directory %s: %s\n", q->cfg.data,
                     strerror(errno));
-            return 1;
+            return -1;
         }
         /* lk stays open (and locked) until the process ends */
     }
@@ -502,29 +507,27 @@ int main(int argc, char **argv)
     host[sizeof host - 1] = 0;
     snprintf(q->instance, sizeof q->instance, "%.24s:%ld:%lx", host, (long)getpid(),
              (unsigned long)wall_now());
+    return 0;
+}
 
-    /* SIGTERM and SIGINT are blocked in every thread and taken synchronously
-     * by the main loop (sigtimedwait), so no handler ever runs. A handler
-     * would not be safe anyway: METIS (inside CHOLMOD, on worker threads)
-     * swaps in its own SIGTERM handler that longjmps into the worker's stack
-     * and, with two jobs analysing at once, can leave it installed. */
-    sigemptyset(&stopset);
-    sigaddset(&stopset, SIGTERM);
-    sigaddset(&stopset, SIGINT);
-    pthread_sigmask(SIG_BLOCK, &stopset, NULL);
-    signal(SIGPIPE, SIG_IGN);
+/* Open the job store and recover what a crash left: running jobs re-queued
+ * (or failed), job directories without a row removed. 0 or -1. */
+static int open_store(qdcd *q)
+{
+    qdc_error err;
+    int requeued = 0, failed = 0;
 
     qdc_error_clear(&err);
     if (store_pg_uri(q->cfg.store)
             ? store_pg_open(q->cfg.store, &q->store, &err) != QDC_OK
             : store_sqlite_open(q->cfg.data, &q->store, &err) != QDC_OK) {
         fprintf(stderr, "qdcd: %s\n", err.msg);
-        return 1;
+        return -1;
     }
     if (q->store->ops->recover(q->store, q->cfg.max_attempts, q->cfg.retention, &requeued,
                                &failed) != QDC_OK) {
         fprintf(stderr, "qdcd: cannot recover the job store\n");
-        goto out;
+        return -1;
     }
     if (requeued || failed)
         fprintf(stderr,
@@ -539,27 +542,37 @@ int main(int argc, char **argv)
     } else {
         shared_sweep(q, 60); /* cached files of jobs deleted or expired meanwhile */
     }
+    return 0;
+}
+
+/* The threads, in the order they depend on each other: poll timer, workers,
+ * database listener, intake and conversion, then HTTP. 0 or -1. */
+static int start_services(qdcd *q)
+{
+    qdc_error err;
+
+    qdc_error_clear(&err);
     q->hub = poll_new();
     if (!q->hub || poll_start(q->hub)) {
         fprintf(stderr, "qdcd: cannot start the poll timer\n");
-        goto out;
+        return -1;
     }
     q->pool = job_pool_start(q);
     if (!q->pool) {
         fprintf(stderr, "qdcd: cannot start workers\n");
-        goto out;
+        return -1;
     }
     if (shared_listen_start(q)) {
         fprintf(stderr, "qdcd: cannot start the database listener\n");
-        goto out;
+        return -1;
     }
     if (api_start(q)) {
         fprintf(stderr, "qdcd: cannot start the intake thread\n");
-        goto out;
+        return -1;
     }
     if (http_start(q, &api_handlers, &err) != QDC_OK) {
         fprintf(stderr, "qdcd: %s\n", err.msg);
-        goto out;
+        return -1;
     }
     if (q->cfg.port_file[0]) {
         char buf[16];
@@ -571,8 +584,17 @@ int main(int argc, char **argv)
             strchr(q->cfg.host, ':') ? "[" : "", q->cfg.host,
             strchr(q->cfg.host, ':') ? "]" : "", q->cfg.port, q->cfg.data, q->cfg.workers,
             q->ntokens ? ", tokens on" : "");
+    return 0;
+}
 
+/* The main loop until SIGTERM or SIGINT: expired jobs purged every second;
+ * with a shared store, jobs of a node that died recovered every 2 s and the
+ * cache swept every minute. */
+static void serve(qdcd *q, const sigset_t *stopset)
+{
+    const struct timespec tick = {0, 100 * 1000 * 1000};
     double next_purge = 0, next_sweep = mono_now() + 60, next_recover = mono_now() + 2;
+
     while (!q->stop) {
         if (mono_now() >= next_purge) {
             purge_expired(q);
@@ -596,11 +618,16 @@ int main(int argc, char **argv)
             shared_sweep(q, 60);
             next_sweep = mono_now() + 60;
         }
-        int sig = sigtimedwait(&stopset, NULL, &tick);
+        int sig = sigtimedwait(stopset, NULL, &tick);
         if (sig == SIGTERM || sig == SIGINT)
             q->stop = 1;
     }
+}
 
+/* Graceful shutdown: stop accepting, answer parked clients and queued
+ * uploads, give running jobs --shutdown-grace, let the last answers go out. */
+static void drain(qdcd *q)
+{
     fprintf(stderr, "qdcd: shutting down\n");
     http_quiesce(q);
     poll_shutdown(q->hub);
@@ -619,8 +646,12 @@ int main(int argc, char **argv)
         poll_shutdown(q->hub); /* anything that parked meanwhile */
         usleep(20 * 1000);
     }
-    rc = 0;
-out:
+}
+
+/* Whatever was started, stopped and freed (each step copes with a part
+ * that never started). */
+static void teardown(qdcd *q)
+{
     if (q->hub)
         poll_shutdown(q->hub);
     api_stop();
@@ -632,6 +663,37 @@ out:
     if (q->store)
         q->store->ops->close(q->store);
     free(q->tokens);
+}
+
+int main(int argc, char **argv)
+{
+    qdcd *q = &g;
+    sigset_t stopset;
+    int rc;
+
+    rc = configure(q, argc, argv);
+    if (rc)
+        return rc;
+    if (claim_data_dir(q))
+        return 1;
+    /* SIGTERM and SIGINT are blocked in every thread and taken synchronously
+     * by the main loop (sigtimedwait), so no handler ever runs. A handler
+     * would not be safe anyway: METIS (inside CHOLMOD, on worker threads)
+     * swaps in its own SIGTERM handler that longjmps into the worker's stack
+     * and, with two jobs analysing at once, can leave it installed. */
+    sigemptyset(&stopset);
+    sigaddset(&stopset, SIGTERM);
+    sigaddset(&stopset, SIGINT);
+    pthread_sigmask(SIG_BLOCK, &stopset, NULL);
+    signal(SIGPIPE, SIG_IGN);
+
+    rc = 1;
+    if (open_store(q) == 0 && start_services(q) == 0) {
+        serve(q, &stopset);
+        drain(q);
+        rc = 0;
+    }
+    teardown(q);
     if (!rc)
         fprintf(stderr, "qdcd: stopped\n");
     return rc;

@@ -17,6 +17,41 @@
 
 static const char *const no_headers[] = {NULL};
 
+/* A reader's state, made at its first call and freed with the request. */
+struct watch {
+    poll_waiter w; /* linked to the job's channel while parked */
+    double deadline;
+    long after;   /* the last record seq the client has */
+    int wait_set; /* ?after= and ?wait= read (a resumed long-poll) */
+    sbuf sse;     /* SSE: events not yet sent */
+    size_t sse_off;
+    int sse_end; /* 1: end event queued, 2: stream over */
+};
+
+/* r's watch, made on first use; NULL (503 answered in *ret) without memory. */
+static watch *watch_of(struct MHD_Connection *c, req *r, enum MHD_Result *ret)
+{
+    if (r->watch)
+        return r->watch;
+    r->watch = calloc(1, sizeof *r->watch);
+    if (!r->watch) {
+        *ret = http_problem(c, r, 503, "out-of-memory", NULL,
+                            "the request could not be served", NULL, NULL);
+        return NULL;
+    }
+    r->watch->after = -1;
+    return r->watch;
+}
+
+void watch_done(req *r)
+{
+    if (!r->watch)
+        return;
+    sb_free(&r->watch->sse);
+    free(r->watch);
+    r->watch = NULL;
+}
+
 /* ----------------------------------------------------------------- progress -- */
 
 /* Records of a finished run from DATA/jobs/ID/progress.jsonl (line k = seq k),
@@ -152,17 +187,20 @@ enum MHD_Result do_progress(struct MHD_Connection *c, req *r)
     sbuf recs = {0}, b = {0};
     int count, done;
     long last;
+    watch *wt = watch_of(c, r, &ret);
 
-    if (r->w.gone) /* resumed because the client hung up: close, answer nothing */
+    if (!wt)
+        return ret;
+    if (wt->w.gone) /* resumed because the client hung up: close, answer nothing */
         return MHD_NO;
     if (!load_job(c, r, &j, &ret))
         return ret;
-    if (!r->wait_set) {
+    if (!wt->wait_set) {
         const char *a = MHD_lookup_connection_value(c, MHD_GET_ARGUMENT_KIND, "after");
         const char *w = MHD_lookup_connection_value(c, MHD_GET_ARGUMENT_KIND, "wait");
         double wait = 0;
-        if (a && parse_long(a, -1, LONG_MAX - 1, &r->after))
-            return http_problem(c, r, 400, "invalid-parameter", "invalid parameter",
+        if (a && parse_long(a, -1, LONG_MAX - 1, &wt->after))
+            return http_problem(c, r, 400, "invalid-parameter", NULL,
                                 "'after' must be an integer >= -1 (a record seq)",
                                 "\"parameter\":\"after\"", NULL);
         if (w) {
@@ -174,24 +212,24 @@ enum MHD_Result do_progress(struct MHD_Connection *c, req *r)
                          "'wait' must be a number of seconds in [0, 3600] (the server "
                          "waits at most %g)",
                          q->cfg.wait_cap);
-                return http_problem(c, r, 400, "invalid-parameter", "invalid parameter",
-                                    d, "\"parameter\":\"wait\"", NULL);
+                return http_problem(c, r, 400, "invalid-parameter", NULL, d,
+                                    "\"parameter\":\"wait\"", NULL);
             }
         }
         if (wait > q->cfg.wait_cap)
             wait = q->cfg.wait_cap;
-        r->deadline = r->t0 + wait;
-        r->wait_set = 1;
+        wt->deadline = r->t0 + wait;
+        wt->wait_set = 1;
     }
     for (int tries = 0;; tries++) {
         /* before the read: a kick from another node after it refuses the park */
         unsigned long gen = poll_kick_gen(q->hub);
         recs.len = 0;
-        collect(r, &j, r->after, 0, &recs, &count, &last, &done);
-        if (count || done || tries || mono_now() >= r->deadline ||
+        collect(r, &j, wt->after, 0, &recs, &count, &last, &done);
+        if (count || done || tries || mono_now() >= wt->deadline ||
             poll_shutting_down(q->hub))
             break;
-        if (poll_park_since(q->hub, j.id, r->after, &r->w, c, r->deadline, gen)) {
+        if (poll_park_since(q->hub, j.id, wt->after, &wt->w, c, wt->deadline, gen)) {
             r->parked_ever = 1;
             sb_free(&recs);
             return MHD_YES;
@@ -203,8 +241,8 @@ enum MHD_Result do_progress(struct MHD_Connection *c, req *r)
     sb_printf(&b,
               "{\"id\":\"%s\",\"state\":\"%s\",\"done\":%s,\"after\":%ld,"
               "\"next_after\":%ld,\"count\":%d,\"records\":[",
-              j.id, job_state_name(j.state), done ? "true" : "false", r->after,
-              count ? last : r->after, count);
+              j.id, job_state_name(j.state), done ? "true" : "false", wt->after,
+              count ? last : wt->after, count);
     if (recs.len)
         sb_add(&b, recs.buf, recs.len);
     sb_puts(&b, "]}\n");
@@ -218,55 +256,56 @@ enum MHD_Result do_progress(struct MHD_Connection *c, req *r)
 static ssize_t sse_reader(void *cls, uint64_t pos, char *buf, size_t max)
 {
     req *r = cls;
+    watch *wt = r->watch;
     qdcd *q = r->q;
     job_rec j;
     int count, done;
     long last;
 
     (void)pos;
-    if (r->w.gone) /* resumed because the client hung up */
+    if (wt->w.gone) /* resumed because the client hung up */
         return MHD_CONTENT_READER_END_WITH_ERROR;
     for (;;) {
-        if (r->sse_off < r->sse.len) {
-            size_t n = r->sse.len - r->sse_off;
+        if (wt->sse_off < wt->sse.len) {
+            size_t n = wt->sse.len - wt->sse_off;
             if (n > max)
                 n = max;
-            memcpy(buf, r->sse.buf + r->sse_off, n);
-            r->sse_off += n;
+            memcpy(buf, wt->sse.buf + wt->sse_off, n);
+            wt->sse_off += n;
             return (ssize_t)n;
         }
-        r->sse.len = 0;
-        r->sse_off = 0;
-        if (r->sse_end)
+        wt->sse.len = 0;
+        wt->sse_off = 0;
+        if (wt->sse_end)
             return MHD_CONTENT_READER_END_OF_STREAM;
         unsigned long gen = poll_kick_gen(q->hub); /* before the reads, as do_progress */
         if (q->store->ops->get(q->store, r->id, &j) != QDC_OK) {
-            sb_puts(&r->sse, "event: end\ndata: {\"state\":\"deleted\"}\n\n");
-            r->sse_end = 1;
+            sb_puts(&wt->sse, "event: end\ndata: {\"state\":\"deleted\"}\n\n");
+            wt->sse_end = 1;
             continue;
         }
-        collect(r, &j, r->after, 1, &r->sse, &count, &last, &done);
-        if (r->sse.oom)
+        collect(r, &j, wt->after, 1, &wt->sse, &count, &last, &done);
+        if (wt->sse.oom)
             return MHD_CONTENT_READER_END_WITH_ERROR;
         if (count) {
-            r->after = last;
+            wt->after = last;
             continue;
         }
         if (done || poll_shutting_down(q->hub)) {
             sb_printf(
-                &r->sse,
+                &wt->sse,
                 "event: end\ndata: {\"id\":\"%s\",\"state\":\"%s\",\"done\":%s}\n\n",
                 j.id, job_state_name(j.state), done ? "true" : "false");
-            r->sse_end = 1;
+            wt->sse_end = 1;
             continue;
         }
-        if (r->deadline > 0 && mono_now() >= r->deadline) {
-            sb_puts(&r->sse, ": keep-alive\n\n");
-            r->deadline = 0;
+        if (wt->deadline > 0 && mono_now() >= wt->deadline) {
+            sb_puts(&wt->sse, ": keep-alive\n\n");
+            wt->deadline = 0;
             continue;
         }
-        r->deadline = mono_now() + q->cfg.sse_keepalive;
-        if (poll_park_since(q->hub, j.id, r->after, &r->w, r->conn, r->deadline, gen))
+        wt->deadline = mono_now() + q->cfg.sse_keepalive;
+        if (poll_park_since(q->hub, j.id, wt->after, &wt->w, r->conn, wt->deadline, gen))
             return 0; /* resumed by a record, the end, the keep-alive or shutdown */
     }
 }
@@ -277,14 +316,15 @@ enum MHD_Result do_events(struct MHD_Connection *c, req *r)
     enum MHD_Result ret;
     const char *a;
     struct MHD_Response *resp;
+    watch *wt = watch_of(c, r, &ret);
 
-    if (!load_job(c, r, &j, &ret))
+    if (!wt || !load_job(c, r, &j, &ret))
         return ret;
     a = MHD_lookup_connection_value(c, MHD_HEADER_KIND, "Last-Event-ID");
     if (!a)
         a = MHD_lookup_connection_value(c, MHD_GET_ARGUMENT_KIND, "after");
-    if (a && parse_long(a, -1, LONG_MAX - 1, &r->after))
-        return http_problem(c, r, 400, "invalid-parameter", "invalid parameter",
+    if (a && parse_long(a, -1, LONG_MAX - 1, &wt->after))
+        return http_problem(c, r, 400, "invalid-parameter", NULL,
                             "Last-Event-ID / 'after' must be an integer >= -1",
                             "\"parameter\":\"after\"", NULL);
     r->parked_ever = 1; /* a stream: its duration is not a latency */

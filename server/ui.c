@@ -56,8 +56,7 @@ enum MHD_Result ui_serve(struct MHD_Connection *c, req *r, const char *url)
     struct MHD_Response *resp;
 
     if (!a)
-        return http_problem(c, r, 404, "not-found", "not found", "no such page", NULL,
-                            NULL);
+        return http_problem(c, r, 404, "not-found", NULL, "no such page", NULL, NULL);
     const char *const h[] = {MHD_HTTP_HEADER_ETAG,
                              a->etag,
                              MHD_HTTP_HEADER_CACHE_CONTROL,

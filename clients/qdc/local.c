@@ -418,173 +418,227 @@ static int positional(const char *a, const char **in, const char **out)
     return 0;
 }
 
-int cli_optimize(int argc, char **argv)
-{
-    opt_options o;
-    opt_result res;
-    progress_state ps = {0, 0, 0};
-    const char *in = NULL, *out = NULL, *report_path = NULL, *fix_path = NULL;
-    meshio_format fin = MESHIO_AUTO, fout = MESHIO_AUTO;
-    surface_format sin = SURFACE_AUTO;
+/* What `qdc optimize` was asked to do. */
+typedef struct {
+    const char *in, *out, *report_path, *fix_path;
+    meshio_format fin, fout;
+    surface_format sin;
     tetra_options to;
-    int tetgen_opts = 0, reorient = 0, keep = 1;
-    mesh_t *m = NULL, *orig = NULL;
-    qdc_error err;
-    qdc_status st;
-    int rc = CLI_OK;
-    struct sigaction sa;
+    int tetgen_opts, reorient, keep;
+    opt_options o;
+    progress_state ps;
+} optimize_args;
 
-    opt_defaults(&o);
-    tetra_defaults(&to);
+/* One --NAME VALUE of `qdc optimize`: the library's option table first,
+ * then the CLI's own. CLI_OK, or CLI_EUSAGE with the message said. */
+static int optimize_option(optimize_args *x, const char *a, const char *v)
+{
+    qdc_error err;
+    int bad = 0;
+
     qdc_error_clear(&err);
+    if (opt_find(a + 2)) {
+        /* the library's option table: its names, ranges and messages */
+        if (opt_set(&x->o, a + 2, v, &err) != QDC_OK) {
+            fprintf(stderr, "qdc: %s\n", err.msg);
+            return CLI_EUSAGE;
+        }
+    } else if (!strcmp(a, "--tetgen-quality") || !strcmp(a, "--max-volume")) {
+        bad = tetgen_opt(a, v, &x->to);
+        x->tetgen_opts = 1;
+    } else if (!strcmp(a, "--in-format") || !strcmp(a, "--format")) {
+        x->fin = meshio_format_from_name(v);
+        x->sin = x->fin == MESHIO_AUTO ? surface_format_from_name(v) : SURFACE_AUTO;
+        bad = x->fin == MESHIO_AUTO && x->sin == SURFACE_AUTO;
+        if (!strcmp(a, "--format") && !bad)
+            bad = (x->fout = x->fin) == MESHIO_AUTO;
+    } else if (!strcmp(a, "--out-format"))
+        bad = (x->fout = meshio_format_from_name(v)) == MESHIO_AUTO;
+    else if (!strcmp(a, "--report"))
+        x->report_path = v;
+    else if (!strcmp(a, "--fix"))
+        x->fix_path = v;
+    else if (!strcmp(a, "--reorient"))
+        bad = on_off(v, &x->reorient);
+    else {
+        fprintf(stderr, "qdc: unknown option %s (see qdc optimize --help)\n", a);
+        return CLI_EUSAGE;
+    }
+    if (bad) {
+        fprintf(stderr, "qdc: bad value '%s' for %s\n", v, a);
+        return CLI_EUSAGE;
+    }
+    return CLI_OK;
+}
+
+/* The command line into x: -1 to go on, else the exit status (--help
+ * printed, or the usage error said). */
+static int optimize_parse(int argc, char **argv, optimize_args *x)
+{
+    memset(x, 0, sizeof *x);
+    x->keep = 1;
+    opt_defaults(&x->o);
+    tetra_defaults(&x->to);
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
-        int bad = 0;
         if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
             optimize_usage(stdout);
             return CLI_OK;
         } else if (!strcmp(a, "--quiet") || !strcmp(a, "-q")) {
-            ps.quiet = 1;
-            continue;
+            x->ps.quiet = 1;
         } else if (!strcmp(a, "--no-keep-source")) {
-            keep = 0;
-            continue;
+            x->keep = 0;
         } else if (a[0] == '-' && a[1] == '-') {
             if (!v) {
                 fprintf(stderr, "qdc: %s needs a value\n", a);
                 return CLI_EUSAGE;
             }
             i++;
-            if (opt_find(a + 2)) {
-                /* the library's option table: its names, ranges and messages */
-                if (opt_set(&o, a + 2, v, &err) != QDC_OK) {
-                    fprintf(stderr, "qdc: %s\n", err.msg);
-                    return CLI_EUSAGE;
-                }
-            } else if (!strcmp(a, "--tetgen-quality") || !strcmp(a, "--max-volume")) {
-                bad = tetgen_opt(a, v, &to);
-                tetgen_opts = 1;
-            } else if (!strcmp(a, "--in-format") || !strcmp(a, "--format")) {
-                fin = meshio_format_from_name(v);
-                sin = fin == MESHIO_AUTO ? surface_format_from_name(v) : SURFACE_AUTO;
-                bad = fin == MESHIO_AUTO && sin == SURFACE_AUTO;
-                if (!strcmp(a, "--format") && !bad)
-                    bad = (fout = fin) == MESHIO_AUTO;
-            } else if (!strcmp(a, "--out-format"))
-                bad = (fout = meshio_format_from_name(v)) == MESHIO_AUTO;
-            else if (!strcmp(a, "--report"))
-                report_path = v;
-            else if (!strcmp(a, "--fix"))
-                fix_path = v;
-            else if (!strcmp(a, "--reorient"))
-                bad = on_off(v, &reorient);
-            else {
-                fprintf(stderr, "qdc: unknown option %s (see qdc optimize --help)\n", a);
-                return CLI_EUSAGE;
-            }
-            if (bad) {
-                fprintf(stderr, "qdc: bad value '%s' for %s\n", v, a);
-                return CLI_EUSAGE;
-            }
-        } else if (positional(a, &in, &out)) {
+            int rc = optimize_option(x, a, v);
+            if (rc != CLI_OK)
+                return rc;
+        } else if (positional(a, &x->in, &x->out)) {
             return CLI_EUSAGE;
         }
     }
-    if (!in || !out) {
+    if (!x->in || !x->out) {
         optimize_usage(stderr);
         return CLI_EUSAGE;
     }
-    ps.tty = isatty(STDERR_FILENO);
-    o.progress = on_progress;
-    o.progress_ctx = &ps;
-    o.log = on_log;
-    o.log_ctx = &ps;
-    o.cancel = &cancel_flag;
-    memset(&sa, 0, sizeof sa);
-    sa.sa_handler = on_signal;
-    sigaction(SIGINT, &sa, NULL);
-    sigaction(SIGTERM, &sa, NULL);
+    return -1;
+}
 
-    st = load_input(in, fin, sin, tetgen_opts ? &to : NULL, &ps, keep, &m, &err);
-    if (st == QDC_OK)
-        st = mesh_validate(m, NULL, &err);
-    if (st != QDC_OK) {
-        cli_error(in, &err, st);
-        rc = st == QDC_ENOMEM ? CLI_EOPT : CLI_EINPUT;
-        goto out;
-    }
-    if (fix_path) {
-        rc = load_fix(fix_path, m);
-        if (rc != CLI_OK)
-            goto out;
-    }
-    orig = report_path ? mesh_dup(m) : NULL;
-    if (report_path && !orig) {
-        fprintf(stderr, "qdc: out of memory\n");
-        rc = CLI_EOPT;
-        goto out;
-    }
-    st = opt_run(m, &o, &res, &err);
-    if (ps.tty && ps.last_len)
-        fputc('\n', stderr);
-    if (st != QDC_OK) {
-        cli_error(in, &err, st);
-        rc = st == QDC_EMESH || st == QDC_EINVAL ? CLI_EINPUT : CLI_EOPT;
-        goto out;
-    }
-    if (reorient) {
+/* OUT written: with --reorient every tet in the order that is positive
+ * under the mesh's orientation, spliced when OUT is in IN's format. */
+static int optimize_write(const optimize_args *x, mesh_t *m)
+{
+    qdc_error err;
+    qdc_status st;
+
+    qdc_error_clear(&err);
+    if (x->reorient) {
         mesh_orientation mo;
         st = mesh_reorient(m, &mo, &err);
         if (st != QDC_OK) {
-            cli_error(in, &err, st);
-            rc = CLI_EOPT;
-            goto out;
+            cli_error(x->in, &err, st);
+            return CLI_EOPT;
         }
-        if (!ps.quiet && mo.flipped)
+        if (!x->ps.quiet && mo.flipped)
             fprintf(stderr,
                     "qdc: note: %d of %d tets written in the other vertex order "
                     "(--reorient): positive under the mesh's orientation\n",
                     (int)mo.flipped, (int)m->nt);
     }
-    source_note(m, out, fout, ps.quiet);
-    st = meshio_save(out, fout, m, &err);
+    source_note(m, x->out, x->fout, x->ps.quiet);
+    st = meshio_save(x->out, x->fout, m, &err);
     if (st != QDC_OK) {
-        cli_error(out, &err, st);
-        rc = CLI_EOUTPUT;
+        cli_error(x->out, &err, st);
+        return CLI_EOUTPUT;
+    }
+    return CLI_OK;
+}
+
+/* The two summary lines: quality before and after, where the time went. */
+static void optimize_summary(const optimize_args *x, const opt_result *res)
+{
+    if (x->ps.quiet)
+        return;
+    fprintf(stderr,
+            "qdc: %s -> %s: mean ratio %.4f -> %.4f, min %+.4f -> %+.4f, inverted %d "
+            "-> %d, "
+            "dihedral %.2f..%.2f -> %.2f..%.2f (%s, %d iterations, %s, %.2fs)\n",
+            x->in, x->out, res->before.q_mean, res->after.q_mean, res->before.q_min,
+            res->after.q_min, (int)res->before.n_inverted, (int)res->after.n_inverted,
+            res->before.dih_min, res->before.dih_max, res->after.dih_min,
+            res->after.dih_max, res->stop_reason, res->iterations,
+            opt_solver_name(res->solver), res->t_total);
+    fprintf(stderr,
+            "qdc: seconds: setup %.2f, weights %.2f, assembly %.2f, solve %.2f, "
+            "line search %.2f, harmonic %.2f, finish %.2f\n",
+            res->t_setup, res->t_weights, res->t_assembly, res->t_solve,
+            res->t_linesearch, res->t_harmonic, res->t_finish);
+}
+
+/* --report FILE.json: quality of the input (orig) and of the result (m), the
+ * boundary error between them, the run. */
+static int optimize_report(const optimize_args *x, const mesh_t *orig, const mesh_t *m,
+                           const opt_result *res)
+{
+    report_quality qb, qa;
+    bderr_result be;
+    report_t r = {&qb, &qa, res, &x->o, &be};
+    qdc_error err;
+    qdc_status st;
+
+    qdc_error_clear(&err);
+    st = report_quality_compute(orig, &qb, &err);
+    if (st == QDC_OK)
+        st = report_quality_compute(m, &qa, &err);
+    if (st == QDC_OK)
+        st = bderr_meshes(m, orig, 200000, &be, &err);
+    if (st != QDC_OK) {
+        cli_error(x->report_path, &err, st);
+        return CLI_EOUTPUT;
+    }
+    return write_report(x->report_path, &r);
+}
+
+int cli_optimize(int argc, char **argv)
+{
+    optimize_args x;
+    opt_result res;
+    mesh_t *m = NULL, *orig = NULL;
+    qdc_error err;
+    qdc_status st;
+    int rc = optimize_parse(argc, argv, &x);
+    struct sigaction sa;
+
+    if (rc >= 0)
+        return rc;
+    rc = CLI_OK;
+    qdc_error_clear(&err);
+    x.ps.tty = isatty(STDERR_FILENO);
+    x.o.progress = on_progress;
+    x.o.progress_ctx = &x.ps;
+    x.o.log = on_log;
+    x.o.log_ctx = &x.ps;
+    x.o.cancel = &cancel_flag;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_signal;
+    sigaction(SIGINT, &sa, NULL);
+    sigaction(SIGTERM, &sa, NULL);
+
+    st = load_input(x.in, x.fin, x.sin, x.tetgen_opts ? &x.to : NULL, &x.ps, x.keep, &m,
+                    &err);
+    if (st == QDC_OK)
+        st = mesh_validate(m, NULL, &err);
+    if (st != QDC_OK) {
+        cli_error(x.in, &err, st);
+        rc = st == QDC_ENOMEM ? CLI_EOPT : CLI_EINPUT;
         goto out;
     }
-    if (!ps.quiet)
-        fprintf(stderr,
-                "qdc: %s -> %s: mean ratio %.4f -> %.4f, min %+.4f -> %+.4f, inverted %d "
-                "-> %d, "
-                "dihedral %.2f..%.2f -> %.2f..%.2f (%s, %d iterations, %s, %.2fs)\n",
-                in, out, res.before.q_mean, res.after.q_mean, res.before.q_min,
-                res.after.q_min, (int)res.before.n_inverted, (int)res.after.n_inverted,
-                res.before.dih_min, res.before.dih_max, res.after.dih_min,
-                res.after.dih_max, res.stop_reason, res.iterations,
-                opt_solver_name(res.solver), res.t_total);
-    if (!ps.quiet)
-        fprintf(stderr,
-                "qdc: seconds: setup %.2f, weights %.2f, assembly %.2f, solve %.2f, "
-                "line search %.2f, harmonic %.2f, finish %.2f\n",
-                res.t_setup, res.t_weights, res.t_assembly, res.t_solve, res.t_linesearch,
-                res.t_harmonic, res.t_finish);
-    if (report_path) {
-        report_quality qb, qa;
-        bderr_result be;
-        report_t r = {&qb, &qa, &res, &o, &be};
-        st = report_quality_compute(orig, &qb, &err);
-        if (st == QDC_OK)
-            st = report_quality_compute(m, &qa, &err);
-        if (st == QDC_OK)
-            st = bderr_meshes(m, orig, 200000, &be, &err);
-        if (st != QDC_OK) {
-            cli_error(report_path, &err, st);
-            rc = CLI_EOUTPUT;
-            goto out;
-        }
-        rc = write_report(report_path, &r);
+    if (x.fix_path && (rc = load_fix(x.fix_path, m)) != CLI_OK)
+        goto out;
+    orig = x.report_path ? mesh_dup(m) : NULL;
+    if (x.report_path && !orig) {
+        fprintf(stderr, "qdc: out of memory\n");
+        rc = CLI_EOPT;
+        goto out;
     }
+    st = opt_run(m, &x.o, &res, &err);
+    if (x.ps.tty && x.ps.last_len)
+        fputc('\n', stderr);
+    if (st != QDC_OK) {
+        cli_error(x.in, &err, st);
+        rc = st == QDC_EMESH || st == QDC_EINVAL ? CLI_EINPUT : CLI_EOPT;
+        goto out;
+    }
+    rc = optimize_write(&x, m);
+    if (rc != CLI_OK)
+        goto out;
+    optimize_summary(&x, &res);
+    if (x.report_path)
+        rc = optimize_report(&x, orig, m, &res);
     if (rc == CLI_OK && interrupted)
         rc = CLI_EINTR;
 out:
@@ -593,38 +647,35 @@ out:
     return rc;
 }
 
-/* qdc tetra IN OUT: a closed surface tetrahedralized with TetGen, no
- * optimization. qdcd runs it in a child process for surface uploads, so
- * exit codes are part of its contract: 2 bad surface, 3 TetGen failed, with
- * one "qdc: " line on stderr saying why. */
-int cli_tetra(int argc, char **argv)
-{
-    const char *in = NULL, *out = NULL;
-    tetra_options to;
-    surface_t *s = NULL;
-    mesh_t *m = NULL;
-    qdc_error err;
-    qdc_status st;
-    int rc = CLI_OK;
-    long long max_tets = 0, max_memory = 0;
-    static const char use[] =
-        "usage: qdc tetra IN OUT [--tetgen-quality Q] [--max-volume V] [--max-tets N]\n"
-        "                 [--max-memory BYTES]\n"
-        "  IN: closed triangle surface (.stl .off .obj .poly .smesh); OUT: any mesh "
-        "format\n"
-        "  --max-tets N: refuse at once when the volume bound alone makes more tets\n"
-        "  (the enclosed volume / V); --max-memory: address-space limit of the run\n"
-        "  exit 0 ok, 1 usage, 2 bad surface, 3 TetGen failed, 4 OUT not written\n";
+static const char tetra_use[] =
+    "usage: qdc tetra IN OUT [--tetgen-quality Q] [--max-volume V] [--max-tets N]\n"
+    "                 [--max-memory BYTES]\n"
+    "  IN: closed triangle surface (.stl .off .obj .poly .smesh); OUT: any mesh "
+    "format\n"
+    "  --max-tets N: refuse at once when the volume bound alone makes more tets\n"
+    "  (the enclosed volume / V); --max-memory: address-space limit of the run\n"
+    "  exit 0 ok, 1 usage, 2 bad surface, 3 TetGen failed, 4 OUT not written\n";
 
-    tetra_defaults(&to);
-    qdc_error_clear(&err);
+/* What `qdc tetra` was asked to do. */
+typedef struct {
+    const char *in, *out;
+    tetra_options to;
+    long long max_tets, max_memory;
+} tetra_args;
+
+/* The command line into x: -1 to go on, else the exit status (--help
+ * printed, the usage error said, or the parent already gone). */
+static int tetra_parse(int argc, char **argv, tetra_args *x)
+{
+    memset(x, 0, sizeof *x);
+    tetra_defaults(&x->to);
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
         if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
-            fputs(use, stdout);
+            fputs(tetra_use, stdout);
             return CLI_OK;
         } else if (!strcmp(a, "--tetgen-quality") || !strcmp(a, "--max-volume")) {
-            if (i + 1 >= argc || tetgen_opt(a, argv[i + 1], &to)) {
+            if (i + 1 >= argc || tetgen_opt(a, argv[i + 1], &x->to)) {
                 fprintf(stderr, "qdc: bad value for %s\n", a);
                 return CLI_EUSAGE;
             }
@@ -636,7 +687,7 @@ int cli_tetra(int argc, char **argv)
                 fprintf(stderr, "qdc: bad value for %s\n", a);
                 return CLI_EUSAGE;
             }
-            *(!strcmp(a, "--max-tets") ? &max_tets : &max_memory) = v;
+            *(!strcmp(a, "--max-tets") ? &x->max_tets : &x->max_memory) = v;
             i++;
         } else if (!strcmp(a, "--die-with-parent")) {
             /* qdcd's child: end with the worker that waits for us. */
@@ -646,76 +697,125 @@ int cli_tetra(int argc, char **argv)
                 return CLI_EOPT;
 #endif
         } else if (a[0] == '-' && a[1]) {
-            fprintf(stderr, "qdc: tetra: unknown option %s\n%s", a, use);
+            fprintf(stderr, "qdc: tetra: unknown option %s\n%s", a, tetra_use);
             return CLI_EUSAGE;
-        } else if (positional(a, &in, &out)) {
+        } else if (positional(a, &x->in, &x->out)) {
             return CLI_EUSAGE;
         }
     }
-    if (!in || !out) {
-        fputs(use, stderr);
+    if (!x->in || !x->out) {
+        fputs(tetra_use, stderr);
         return CLI_EUSAGE;
     }
-    if (max_memory > 0) {
+    return -1;
+}
+
+/* --max-tets with --max-volume: the enclosed volume (divergence theorem over
+ * the closed surface) over the volume bound is a floor of TetGen's tet
+ * count. 0, or -1 (message said) when that floor exceeds the limit. */
+static int tetra_volume_bound(const tetra_args *x, const surface_t *s)
+{
+    double vol = 0;
+
+    if (x->max_tets <= 0 || x->to.max_volume <= 0)
+        return 0;
+    for (int32_t t = 0; t < s->ntri; t++) {
+        const double *a = s->xyz + 3 * (size_t)s->tris[3 * (size_t)t];
+        const double *b = s->xyz + 3 * (size_t)s->tris[3 * (size_t)t + 1];
+        const double *c = s->xyz + 3 * (size_t)s->tris[3 * (size_t)t + 2];
+        vol += a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) +
+               a[2] * (b[0] * c[1] - b[1] * c[0]);
+    }
+    vol = fabs(vol) / 6.0;
+    if (vol / x->to.max_volume <= (double)x->max_tets)
+        return 0;
+    fprintf(stderr,
+            "qdc: %s: the volume bound %g would make at least %.3g tets (enclosed "
+            "volume %g / %g), more than the %lld allowed: raise max_volume\n",
+            x->in, x->to.max_volume, vol / x->to.max_volume, vol, x->to.max_volume,
+            x->max_tets);
+    return -1;
+}
+
+/* qdc tetra IN OUT: a closed surface tetrahedralized with TetGen, no
+ * optimization. qdcd runs it in a child process for surface uploads, so
+ * exit codes are part of its contract: 2 bad surface, 3 TetGen failed, with
+ * one "qdc: " line on stderr saying why. */
+int cli_tetra(int argc, char **argv)
+{
+    tetra_args x;
+    surface_t *s = NULL;
+    mesh_t *m = NULL;
+    qdc_error err;
+    qdc_status st;
+    int rc = tetra_parse(argc, argv, &x);
+
+    if (rc >= 0)
+        return rc;
+    rc = CLI_OK;
+    qdc_error_clear(&err);
+    if (x.max_memory > 0) {
         /* TetGen asked for 1e-9 volumes grows by ~70 MB/s: bound the process so
          * that it fails with out-of-memory instead of eating the machine */
-        struct rlimit rl = {(rlim_t)max_memory, (rlim_t)max_memory};
+        struct rlimit rl = {(rlim_t)x.max_memory, (rlim_t)x.max_memory};
         if (setrlimit(RLIMIT_AS, &rl)) {
             fprintf(stderr, "qdc: cannot limit memory: %s\n", strerror(errno));
             return CLI_EOPT;
         }
     }
-    st = surface_load(in, SURFACE_AUTO, &s, &err);
+    st = surface_load(x.in, SURFACE_AUTO, &s, &err);
     if (st == QDC_OK)
         st = surface_check(s, &err);
-    if (st == QDC_OK && max_tets > 0 && to.max_volume > 0) {
-        /* The enclosed volume (divergence theorem over the closed surface)
-         * over the volume bound is a floor of TetGen's tet count. */
-        double vol = 0;
-        for (int32_t t = 0; t < s->ntri; t++) {
-            const double *a = s->xyz + 3 * (size_t)s->tris[3 * (size_t)t];
-            const double *b = s->xyz + 3 * (size_t)s->tris[3 * (size_t)t + 1];
-            const double *c = s->xyz + 3 * (size_t)s->tris[3 * (size_t)t + 2];
-            vol += a[0] * (b[1] * c[2] - b[2] * c[1]) -
-                   a[1] * (b[0] * c[2] - b[2] * c[0]) +
-                   a[2] * (b[0] * c[1] - b[1] * c[0]);
-        }
-        vol = fabs(vol) / 6.0;
-        if (vol / to.max_volume > (double)max_tets) {
-            fprintf(
-                stderr,
-                "qdc: %s: the volume bound %g would make at least %.3g tets (enclosed "
-                "volume %g / %g), more than the %lld allowed: raise max_volume\n",
-                in, to.max_volume, vol / to.max_volume, vol, to.max_volume, max_tets);
-            surface_free(s);
-            return CLI_EINPUT;
-        }
+    if (st == QDC_OK && tetra_volume_bound(&x, s)) {
+        surface_free(s);
+        return CLI_EINPUT;
     }
     if (st == QDC_OK)
-        st = tetra_from_surface_t(s, &to, &m, &err);
-    if (st == QDC_ENOMEM && max_memory > 0)
+        st = tetra_from_surface_t(s, &x.to, &m, &err);
+    if (st == QDC_ENOMEM && x.max_memory > 0)
         fprintf(stderr,
                 "qdc: %s: TetGen ran out of its %lld-byte memory limit (raise "
                 "max_volume, or the daemon's --child-memory)\n",
-                in, max_memory);
+                x.in, x.max_memory);
     if (st != QDC_OK) {
-        cli_error(in, &err, st);
+        cli_error(x.in, &err, st);
         rc = st == QDC_ETETGEN || st == QDC_ENOMEM || st == QDC_EINTERNAL ? CLI_EOPT
                                                                           : CLI_EINPUT;
         goto out;
     }
-    st = meshio_save(out, MESHIO_AUTO, m, &err);
+    st = meshio_save(x.out, MESHIO_AUTO, m, &err);
     if (st != QDC_OK) {
-        cli_error(out, &err, st);
+        cli_error(x.out, &err, st);
         rc = CLI_EOUTPUT;
         goto out;
     }
-    fprintf(stderr, "qdc: %s -> %s: %d vertices, %d tets\n", in, out, (int)m->nv,
+    fprintf(stderr, "qdc: %s -> %s: %d vertices, %d tets\n", x.in, x.out, (int)m->nv,
             (int)m->nt);
 out:
     surface_free(s);
     mesh_free(m);
     return rc;
+}
+
+/* `qdc quality` as text: counts, mean ratio, dihedral angles, the other
+ * measures, and the boundary error against ref (be) when given. */
+static void quality_print(const char *in, const report_quality *q, const char *ref,
+                          const bderr_result *be)
+{
+    printf("%s: %d vertices, %d tets, %d inverted, %d degenerate\n", in, (int)q->nv,
+           (int)q->nt, (int)q->n_inverted, (int)q->n_degenerate);
+    printf("mean ratio: mean %.4f std %.4f min %+.4f\n", q->q_mean, q->q_std, q->q_min);
+    printf("dihedral: min %.2f max %.2f deg; tets with min < 5/15/30/40: %d/%d/%d/%d; "
+           "max > 175/165/150/140: %d/%d/%d/%d\n",
+           q->dih_min, q->dih_max, (int)q->n_dmin_lt[0], (int)q->n_dmin_lt[1],
+           (int)q->n_dmin_lt[2], (int)q->n_dmin_lt[3], (int)q->n_dmax_gt[0],
+           (int)q->n_dmax_gt[1], (int)q->n_dmax_gt[2], (int)q->n_dmax_gt[3]);
+    printf("volume-length: mean %.4f min %+.4f; condition number: mean %.4f max %.4g\n",
+           q->vl_mean, q->vl_min, q->cn_mean, q->cn_max);
+    if (ref)
+        printf("boundary error vs %s: Hausdorff %.6g (%.3g%% of diagonal), mean %.3g, "
+               "RMS %.3g\n",
+               ref, be->hausdorff, 100 * be->hausdorff_rel, be->mean, be->rms);
 }
 
 int cli_quality(int argc, char **argv)
@@ -777,23 +877,7 @@ int cli_quality(int argc, char **argv)
         st = report_write_json(&rep, report_file_writer, stdout, &err);
         rc = st == QDC_OK ? CLI_OK : CLI_EOUTPUT;
     } else {
-        printf("%s: %d vertices, %d tets, %d inverted, %d degenerate\n", in, (int)q.nv,
-               (int)q.nt, (int)q.n_inverted, (int)q.n_degenerate);
-        printf("mean ratio: mean %.4f std %.4f min %+.4f\n", q.q_mean, q.q_std, q.q_min);
-        printf(
-            "dihedral: min %.2f max %.2f deg; tets with min < 5/15/30/40: %d/%d/%d/%d; "
-            "max > 175/165/150/140: %d/%d/%d/%d\n",
-            q.dih_min, q.dih_max, (int)q.n_dmin_lt[0], (int)q.n_dmin_lt[1],
-            (int)q.n_dmin_lt[2], (int)q.n_dmin_lt[3], (int)q.n_dmax_gt[0],
-            (int)q.n_dmax_gt[1], (int)q.n_dmax_gt[2], (int)q.n_dmax_gt[3]);
-        printf(
-            "volume-length: mean %.4f min %+.4f; condition number: mean %.4f max %.4g\n",
-            q.vl_mean, q.vl_min, q.cn_mean, q.cn_max);
-        if (ref)
-            printf(
-                "boundary error vs %s: Hausdorff %.6g (%.3g%% of diagonal), mean %.3g, "
-                "RMS %.3g\n",
-                ref, be.hausdorff, 100 * be.hausdorff_rel, be.mean, be.rms);
+        quality_print(in, &q, ref, &be);
     }
 out:
     mesh_free(m);

@@ -345,6 +345,65 @@ static double jitter(void)
     return 0.75 + 0.5 * ((double)rand() / RAND_MAX);
 }
 
+/* The request's header list: hdrs, then the token's Authorization. 0, or -1
+ * without memory (nothing left allocated). */
+static int http_headers(const remote *rm, const char *const *hdrs,
+                        struct curl_slist **out)
+{
+    struct curl_slist *h = NULL, *t;
+    char auth[1100];
+    int bad_list = 0;
+
+    for (int i = 0; hdrs && hdrs[i]; i++) {
+        t = curl_slist_append(h, hdrs[i]);
+        bad_list |= !t;
+        h = t ? t : h;
+    }
+    if (rm->token && *rm->token) {
+        snprintf(auth, sizeof auth, "Authorization: Bearer %s", rm->token);
+        t = curl_slist_append(h, auth);
+        bad_list |= !t;
+        h = t ? t : h;
+    }
+    if (bad_list) {
+        curl_slist_free_all(h);
+        return -1;
+    }
+    *out = h;
+    return 0;
+}
+
+/* The curl handle set up for one attempt. */
+static void http_setup(remote *rm, const char *url, const char *method,
+                       struct curl_slist *h, const char *body, size_t body_len,
+                       long timeout, reply *r)
+{
+    curl_easy_reset(rm->curl);
+    curl_easy_setopt(rm->curl, CURLOPT_URL, url);
+    curl_easy_setopt(rm->curl, CURLOPT_NOSIGNAL, 1L);
+    curl_easy_setopt(rm->curl, CURLOPT_USERAGENT, "qdc/1");
+    curl_easy_setopt(rm->curl, CURLOPT_CONNECTTIMEOUT, 10L);
+    /* Fail on silence rather than on total time: uploads may be long. */
+    curl_easy_setopt(rm->curl, CURLOPT_LOW_SPEED_LIMIT, 1L);
+    curl_easy_setopt(rm->curl, CURLOPT_LOW_SPEED_TIME, timeout);
+    curl_easy_setopt(rm->curl, CURLOPT_HTTPHEADER, h);
+    curl_easy_setopt(rm->curl, CURLOPT_WRITEFUNCTION, on_body);
+    curl_easy_setopt(rm->curl, CURLOPT_WRITEDATA, r);
+    curl_easy_setopt(rm->curl, CURLOPT_HEADERFUNCTION, on_header);
+    curl_easy_setopt(rm->curl, CURLOPT_HEADERDATA, r);
+    curl_easy_setopt(rm->curl, CURLOPT_ERRORBUFFER, r->cerr);
+    curl_easy_setopt(rm->curl, CURLOPT_NOPROGRESS, 0L);
+    curl_easy_setopt(rm->curl, CURLOPT_XFERINFOFUNCTION, on_xfer);
+    if (!strcmp(method, "POST")) {
+        curl_easy_setopt(rm->curl, CURLOPT_POST, 1L);
+        curl_easy_setopt(rm->curl, CURLOPT_POSTFIELDS, body ? body : "");
+        curl_easy_setopt(rm->curl, CURLOPT_POSTFIELDSIZE_LARGE,
+                         (curl_off_t)(body ? body_len : 0));
+    } else if (strcmp(method, "GET")) {
+        curl_easy_setopt(rm->curl, CURLOPT_CUSTOMREQUEST, method);
+    }
+}
+
 /* One HTTP exchange with retries. body may be NULL (no request body); timeout
  * is the longest silence accepted from the server, in seconds. Returns 0 when
  * an answer that is final for the caller arrived (r->status set), -1 when the
@@ -352,59 +411,23 @@ static double jitter(void)
 static int http(remote *rm, const char *method, const char *path, const char *const *hdrs,
                 const char *body, size_t body_len, long timeout, reply *r)
 {
-    char url[4096], auth[1100];
+    char url[4096];
     double backoff = 0.5;
 
     snprintf(url, sizeof url, "%s%s", rm->server, path);
     for (int attempt = 0;; attempt++) {
-        struct curl_slist *h = NULL, *t;
+        struct curl_slist *h = NULL;
         CURLcode cc;
-        int bad_list = 0;
 
         rb_free(&r->body);
         r->status = 0;
         r->ctype[0] = r->location[0] = r->cerr[0] = 0;
         r->retry_after = -1;
-        for (int i = 0; hdrs && hdrs[i]; i++) {
-            t = curl_slist_append(h, hdrs[i]);
-            bad_list |= !t;
-            h = t ? t : h;
-        }
-        if (rm->token && *rm->token) {
-            snprintf(auth, sizeof auth, "Authorization: Bearer %s", rm->token);
-            t = curl_slist_append(h, auth);
-            bad_list |= !t;
-            h = t ? t : h;
-        }
-        if (bad_list) {
-            curl_slist_free_all(h);
+        if (http_headers(rm, hdrs, &h)) {
             snprintf(r->cerr, sizeof r->cerr, "out of memory");
             return -1;
         }
-        curl_easy_reset(rm->curl);
-        curl_easy_setopt(rm->curl, CURLOPT_URL, url);
-        curl_easy_setopt(rm->curl, CURLOPT_NOSIGNAL, 1L);
-        curl_easy_setopt(rm->curl, CURLOPT_USERAGENT, "qdc/1");
-        curl_easy_setopt(rm->curl, CURLOPT_CONNECTTIMEOUT, 10L);
-        /* Fail on silence rather than on total time: uploads may be long. */
-        curl_easy_setopt(rm->curl, CURLOPT_LOW_SPEED_LIMIT, 1L);
-        curl_easy_setopt(rm->curl, CURLOPT_LOW_SPEED_TIME, timeout);
-        curl_easy_setopt(rm->curl, CURLOPT_HTTPHEADER, h);
-        curl_easy_setopt(rm->curl, CURLOPT_WRITEFUNCTION, on_body);
-        curl_easy_setopt(rm->curl, CURLOPT_WRITEDATA, r);
-        curl_easy_setopt(rm->curl, CURLOPT_HEADERFUNCTION, on_header);
-        curl_easy_setopt(rm->curl, CURLOPT_HEADERDATA, r);
-        curl_easy_setopt(rm->curl, CURLOPT_ERRORBUFFER, r->cerr);
-        curl_easy_setopt(rm->curl, CURLOPT_NOPROGRESS, 0L);
-        curl_easy_setopt(rm->curl, CURLOPT_XFERINFOFUNCTION, on_xfer);
-        if (!strcmp(method, "POST")) {
-            curl_easy_setopt(rm->curl, CURLOPT_POST, 1L);
-            curl_easy_setopt(rm->curl, CURLOPT_POSTFIELDS, body ? body : "");
-            curl_easy_setopt(rm->curl, CURLOPT_POSTFIELDSIZE_LARGE,
-                             (curl_off_t)(body ? body_len : 0));
-        } else if (strcmp(method, "GET")) {
-            curl_easy_setopt(rm->curl, CURLOPT_CUSTOMREQUEST, method);
-        }
+        http_setup(rm, url, method, h, body, body_len, timeout, r);
         cc = curl_easy_perform(rm->curl);
         curl_slist_free_all(h);
         if (interrupted)

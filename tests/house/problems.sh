@@ -1,8 +1,10 @@
 #!/bin/sh
 # tests/house/problems.sh - one problem+json table: every problem type the
 # daemon names (http_problem(...), a job's problem(...), the slugs of
-# status_slug) is an entry of server/problem.c, and no other file writes a
-# "/problems/" type by hand.
+# status_slug) is an entry of server/problem.c, no other file writes a
+# "/problems/" type by hand, and each title is written once: no two types
+# share a title, and a reply gives its own title only when it says more than
+# the table's (else NULL, the table's).
 ROOT=${ROOT:-$(cd "$(dirname "$0")/../.." && pwd)}
 cd "$ROOT" || exit 1
 fail=0
@@ -16,7 +18,7 @@ fi
 used=$(for f in server/*.c; do tr '\n' ' ' <"$f" |
     grep -o '\(http_problem\|problem\)([^";]*"[a-z-]*"' | sed 's/.*"\([a-z-]*\)"$/\1/'
 done
-sed -n '/^static const char \*status_slug/,/^}/s/.*return "\([a-z-]*\)";.*/\1/p' server/api.c)
+sed -n '/^static const char \*status_slug/,/^}/s/.*return "\([a-z-]*\)";.*/\1/p' server/*.c)
 n=0
 for s in $(echo "$used" | sort -u); do
     n=$((n + 1))
@@ -34,5 +36,27 @@ if [ -n "$hand" ]; then
     echo "FAIL - problems: problem bodies built by hand in: $hand"
     fail=1
 fi
-[ $fail = 0 ] && echo "ok - problems: the $n problem types in use are all in the one table"
+if ! grep -q '^static const char \*status_slug' server/*.c; then
+    echo "FAIL - problems: status_slug not found in server/*.c (the scan is broken)"
+    fail=1
+fi
+# Titles: "slug<TAB>title" of the table, then of every call with a literal title.
+titles=$(tr '\n' ' ' < server/problem.c | grep -o '{"[a-z-]*", [0-9][0-9][0-9], *"[^"]*"' |
+    sed 's/{"\([a-z-]*\)", [0-9]*, *"\([^"]*\)"/\1\t\2/')
+same=$(echo "$titles" | cut -f2 | sort | uniq -d)
+if [ -n "$same" ]; then
+    echo "FAIL - problems: types of server/problem.c share a title: $same"
+    fail=1
+fi
+twice=$(for f in server/*.c; do tr '\n' ' ' < "$f" |
+    grep -o '\(http_problem\|problem\)([^";]*"[a-z-]*", *"[^"]*"' |
+    sed 's/.*"\([a-z-]*\)", *"\([^"]*\)"$/\1\t\2/' | sed "s|^|$f\t|"
+done | while IFS="$(printf '\t')" read -r f slug title; do
+    echo "$titles" | grep -qxF "$slug	$title" && echo "$f: $slug '$title'"
+done)
+if [ -n "$twice" ]; then
+    echo "FAIL - problems: the table's title written again (pass NULL): $twice"
+    fail=1
+fi
+[ $fail = 0 ] && echo "ok - problems: the $n problem types in use are all in the one table, each title written once ($(echo "$titles" | wc -l) types)"
 exit $fail

@@ -1,0 +1,755 @@
+/* upload.c - POST /v1/jobs. Options, format, Idempotency-Key, the queue limit
+ * and the size cap are checked at the first call (headers only), so a refused
+ * body is not read. The body is streamed to a temporary file in DATA/tmp;
+ * once complete, the intake thread maps it, parses and validates it with
+ * libqdc (never with jansson), fsyncs and renames it into DATA/jobs/ID and
+ * commits the row before the 202. With a PostgreSQL store (shared.h) the input
+ * is stored in the database in the transaction that inserts the row. The
+ * upload's state is this file's (struct upload, r->up): other requests do not
+ * carry it. */
+#define _GNU_SOURCE
+#include "handlers.h"
+
+#include "job.h"
+#include "offq.h"
+#include "qdc.h"
+#include "shared.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+#include <sys/mman.h>
+#include <sys/random.h>
+#include <unistd.h>
+
+#define MEDIA_QMESH "application/vnd.qdc.mesh"
+
+struct upload {
+    int fd;         /* the body's temporary file in DATA/tmp, or -1 */
+    char tmp[4200]; /* its path; "" once renamed or removed */
+    int64_t body_len;
+    int too_big;
+    int io_err;          /* errno of a failed write of the body, or 0 */
+    int hashing;         /* an Idempotency-Key was given: fingerprint the request */
+    sha256_ctx hash;     /* options, ?format=, body */
+    meshio_format fmt;   /* a mesh upload's format, or MESHIO_AUTO */
+    surface_format sfmt; /* a surface upload's format (tetrahedralized), or AUTO */
+    int sniff;           /* format from the content (text/plain, octet-stream, none) */
+    int tetgen_opts;     /* tetgen_quality or max_volume given: surfaces only */
+    char idem[129];
+    char options[1024]; /* canonical options JSON */
+};
+
+static enum MHD_Result process_upload(struct MHD_Connection *c, req *r);
+
+/* The intake thread: uploads are parsed and committed one at a time, which
+ * also makes the queue limit exact. */
+static offq intake = OFFQ_INIT(process_upload);
+
+int upload_start(void)
+{
+    return offq_start(&intake);
+}
+
+void upload_stop(void)
+{
+    offq_stop(&intake);
+}
+
+typedef struct {
+    opt_options o;
+    double cap;
+    double tq, tv; /* tetgen_quality, max_volume; -1 when not given */
+    char why[200];
+    int bad;
+} opt_scan;
+
+static enum MHD_Result scan_option(void *cls, enum MHD_ValueKind kind, const char *key,
+                                   size_t key_size, const char *val, size_t val_size)
+{
+    opt_scan *s = cls;
+    (void)kind;
+    if (s->bad)
+        return MHD_NO;
+    if (!val)
+        val = "";
+    /* a %00 in the query would cut the value short: max_iter=5%00abc is not 5 */
+    if (strlen(key) != key_size || strlen(val) != val_size) {
+        snprintf(s->why, sizeof s->why, "option '%.40s': the value has a NUL byte (%%00)",
+                 key);
+        s->bad = 1;
+        return MHD_NO;
+    }
+    if (!strcmp(key, "format"))
+        return MHD_YES; /* the body's format: upload_format */
+    if (!strcmp(key, "tetgen_quality") || !strcmp(key, "max_volume")) {
+        /* Surface uploads: TetGen's -q radius-edge bound (>= 1, 0 = no
+         * refinement) and -a volume bound (0 = none), as `qdc tetra`. */
+        char *end;
+        double v = strtod(val, &end);
+        int q = !strcmp(key, "tetgen_quality");
+        if (!*val || *end || !(v >= 0 && v <= 1e300) || (q && v > 0 && v < 1)) {
+            snprintf(s->why, sizeof s->why, "option '%s': '%.40s' is not %s", key, val,
+                     q ? "0 or a number >= 1" : "a number >= 0");
+            s->bad = 1;
+            return MHD_NO;
+        }
+        *(q ? &s->tq : &s->tv) = v;
+        return MHD_YES;
+    }
+    if (job_opt_set(&s->o, key, val, s->cap, s->why, sizeof s->why))
+        s->bad = 1;
+    return s->bad ? MHD_NO : MHD_YES;
+}
+
+/* 415 for an upload: what was sent (detail) and everything accepted. */
+static enum MHD_Result unsupported(struct MHD_Connection *c, req *r, const char *detail)
+{
+    sbuf x = {0};
+    enum MHD_Result ret;
+
+    sb_puts(&x, "\"accepted\":[");
+    media_list(&x, 1);
+    sb_puts(&x, "],\"sniffed\":[\"application/octet-stream\",\"text/plain\"],"
+                "\"formats\":[");
+    format_names(&x, 1);
+    sb_puts(&x, "]");
+    ret = http_problem(c, r, 415, "unsupported-media-type", NULL, detail,
+                       x.oom ? NULL : x.buf, NULL);
+    sb_free(&x);
+    return ret;
+}
+
+/* Name of the upload's format ("gmsh-bin", "stl"), "unknown" before sniffing. */
+static const char *upload_format_name(const upload *u)
+{
+    if (u->sfmt != SURFACE_AUTO)
+        return surface_format_name(u->sfmt);
+    return u->fmt != MESHIO_AUTO ? meshio_format_name(u->fmt) : "unknown";
+}
+
+/* The body's format: ?format= (a name), else Content-Type; sniffed from the
+ * content later when neither says (no type, octet-stream, text/plain, or
+ * form-urlencoded, which curl --data-binary sends without -H). 0, or -1 when
+ * the request gets a 415 (detail in why). */
+static int upload_format(struct MHD_Connection *c, upload *u, char *why, size_t cap)
+{
+    const char *fq = MHD_lookup_connection_value(c, MHD_GET_ARGUMENT_KIND, "format");
+    const char *ct =
+        MHD_lookup_connection_value(c, MHD_HEADER_KIND, MHD_HTTP_HEADER_CONTENT_TYPE);
+    char ctype[128];
+
+    u->fmt = MESHIO_AUTO;
+    u->sfmt = SURFACE_AUTO;
+    if (fq) {
+        u->fmt = strchr(fq, '/') ? meshio_format_from_media_type(fq)
+                                 : meshio_format_from_name(fq);
+        if (u->fmt == MESHIO_AUTO)
+            u->sfmt = strchr(fq, '/') ? surface_format_from_media_type(fq)
+                                      : surface_format_from_name(fq);
+        if (u->fmt == MESHIO_TETGEN) {
+            snprintf(why, cap,
+                     "TetGen .node/.ele is two files; upload one of the "
+                     "accepted formats instead");
+            return -1;
+        }
+        if (u->fmt == MESHIO_AUTO && u->sfmt == SURFACE_AUTO) {
+            snprintf(why, cap, "format '%.60s' is not one this server reads", fq);
+            return -1;
+        }
+        return 0;
+    }
+    snprintf(ctype, sizeof ctype, "%s", ct ? ct : "");
+    ctype[strcspn(ctype, "; \t")] = 0;
+    if (!ctype[0] || !strcasecmp(ctype, "text/plain") ||
+        !strcasecmp(ctype, "application/octet-stream") ||
+        !strcasecmp(ctype, "application/x-www-form-urlencoded")) {
+        u->sniff = 1;
+        return 0;
+    }
+    u->fmt = meshio_format_from_media_type(ct);
+    if (u->fmt == MESHIO_AUTO)
+        u->sfmt = surface_format_from_media_type(ct);
+    if (u->fmt == MESHIO_AUTO && u->sfmt == SURFACE_AUTO) {
+        snprintf(why, cap,
+                 "media type '%.100s' is not a mesh or surface type this "
+                 "server reads",
+                 ctype);
+        return -1;
+    }
+    return 0;
+}
+
+/* max_queued reached? (cnt receives the counts) */
+static int queue_full(qdcd *q, job_counts *cnt)
+{
+    return q->store->ops->counts(q->store, cnt) == QDC_OK &&
+           cnt->by_state[JOB_QUEUED] >= q->cfg.max_queued;
+}
+
+static enum MHD_Result queue_full_reply(struct MHD_Connection *c, req *r,
+                                        const job_counts *cnt)
+{
+    static const char *const h[] = {MHD_HTTP_HEADER_RETRY_AFTER, "5", NULL};
+    char extra[96];
+    snprintf(extra, sizeof extra, "\"queued\":%lld,\"max_queued\":%d",
+             (long long)cnt->by_state[JOB_QUEUED], r->q->cfg.max_queued);
+    return http_problem(c, r, 429, "queue-full", NULL, "the queue is full; retry later",
+                        extra, h);
+}
+
+/* The query's options checked against the library's table (and TetGen's two)
+ * into u->options, the canonical JSON; 0, or -1 with the 400 reason in why. */
+static int upload_options(struct MHD_Connection *c, qdcd *q, upload *u, char *why,
+                          size_t cap)
+{
+    opt_scan s;
+    sbuf oj = {0};
+
+    memset(&s, 0, sizeof s);
+    opt_defaults(&s.o);
+    s.cap = q->cfg.job_time_limit;
+    s.o.time_limit = s.cap;
+    s.tq = s.tv = -1;
+    MHD_get_connection_values_n(c, MHD_GET_ARGUMENT_KIND, scan_option, &s);
+    if (s.bad) {
+        snprintf(why, cap, "%s", s.why);
+        return -1;
+    }
+    job_opt_json(&s.o, &oj);
+    if (oj.len && (s.tq >= 0 || s.tv >= 0)) {
+        oj.len--; /* the closing brace */
+        if (s.tq >= 0)
+            sb_printf(&oj, ",\"tetgen_quality\":%.17g", s.tq);
+        if (s.tv >= 0)
+            sb_printf(&oj, ",\"max_volume\":%.17g", s.tv);
+        sb_puts(&oj, "}");
+        u->tetgen_opts = 1;
+    }
+    snprintf(u->options, sizeof u->options, "%s", oj.buf && !oj.oom ? oj.buf : "{}");
+    sb_free(&oj);
+    return 0;
+}
+
+/* An Idempotency-Key: kept, and the request's fingerprint begun (options,
+ * ?format=; the body follows). 0, or -1 when the key is not valid. */
+static int upload_idem(struct MHD_Connection *c, upload *u)
+{
+    const char *ik = MHD_lookup_connection_value(c, MHD_HEADER_KIND, "Idempotency-Key");
+    size_t n;
+    int ok;
+
+    if (!ik)
+        return 0;
+    n = strlen(ik);
+    ok = n > 0 && n < sizeof u->idem;
+    for (size_t i = 0; ok && i < n; i++)
+        ok = ik[i] > 32 && ik[i] < 127;
+    if (!ok)
+        return -1;
+    memcpy(u->idem, ik, n + 1);
+    u->hashing = 1;
+    sha256_init(&u->hash);
+    sha256_update(&u->hash, u->options, strlen(u->options));
+    if (MHD_lookup_connection_value(c, MHD_GET_ARGUMENT_KIND, "format")) {
+        /* ?format= changes what the body means; a Content-Type does not count
+         * (a retry may send the same bytes under another type). */
+        const char *fn = upload_format_name(u);
+        sha256_update(&u->hash, "\nformat=", 8);
+        sha256_update(&u->hash, fn, strlen(fn));
+    }
+    return 0;
+}
+
+enum MHD_Result upload_begin(struct MHD_Connection *c, req *r)
+{
+    qdcd *q = r->q;
+    const char *cl;
+    char tmpl[4200], why[200];
+    job_counts cnt;
+    job_rec prev;
+    int64_t limit;
+    upload *u;
+
+    r->upload = 1;
+    u = r->up = calloc(1, sizeof *u);
+    if (!u)
+        return http_problem(c, r, 503, "out-of-memory", NULL,
+                            "the upload could not be started", NULL, NULL);
+    u->fd = -1;
+    /* Options are checked before any byte of the body is read. */
+    if (upload_options(c, q, u, why, sizeof why))
+        return http_problem(c, r, 400, "invalid-option", NULL, why, NULL, NULL);
+    if (upload_format(c, u, why, sizeof why))
+        return unsupported(c, r, why);
+    if (u->tetgen_opts && u->fmt != MESHIO_AUTO)
+        return http_problem(c, r, 400, "invalid-option", NULL,
+                            "tetgen_quality and max_volume apply to surface uploads only",
+                            NULL, NULL);
+    if (upload_idem(c, u))
+        return http_problem(c, r, 400, "invalid-idempotency-key", NULL,
+                            "the key must be 1 to 128 visible ASCII characters", NULL,
+                            NULL);
+    /* A replay of an accepted request is answered even when the queue is full.
+     * Checked here so that a refused body is not uploaded, and again at commit
+     * (uploads that were in flight together). */
+    if ((!u->idem[0] ||
+         q->store->ops->find_idem(q->store, r->owner, u->idem, &prev) != QDC_OK) &&
+        queue_full(q, &cnt))
+        return queue_full_reply(c, r, &cnt);
+
+    limit = u->fmt == MESHIO_JSON && q->cfg.max_json < q->cfg.max_body ? q->cfg.max_json
+                                                                       : q->cfg.max_body;
+    cl = MHD_lookup_connection_value(c, MHD_HEADER_KIND, MHD_HTTP_HEADER_CONTENT_LENGTH);
+    if (cl && strtoll(cl, NULL, 10) > limit) {
+        u->too_big = 1;
+        u->body_len = strtoll(cl, NULL, 10);
+        return upload_finish(c, r);
+    }
+    snprintf(tmpl, sizeof tmpl, "%s/tmp/upload-XXXXXX", q->cfg.data);
+    u->fd = mkostemp(tmpl, O_CLOEXEC);
+    if (u->fd < 0 && disk_full(errno))
+        return storage_full(c, r, "the upload could not be stored");
+    if (u->fd < 0)
+        return http_problem(c, r, 500, "io", NULL, "cannot create an upload file", NULL,
+                            NULL);
+    snprintf(u->tmp, sizeof u->tmp, "%s", tmpl);
+    return MHD_YES;
+}
+
+void upload_body(req *r, const char *data, size_t len)
+{
+    qdcd *q = r->q;
+    upload *u = r->up;
+    int64_t limit = u->fmt == MESHIO_JSON && q->cfg.max_json < q->cfg.max_body
+                        ? q->cfg.max_json
+                        : q->cfg.max_body;
+
+    u->body_len += (int64_t)len;
+    if (u->fd < 0 || u->too_big || u->io_err)
+        return;
+    if (u->body_len > limit) {
+        u->too_big = 1; /* keep reading (and dropping) so the 413 can be sent */
+        return;
+    }
+    if (u->hashing)
+        sha256_update(&u->hash, data, len);
+    while (len) {
+        ssize_t n = write(u->fd, data, len);
+        if (n < 0 && errno == EINTR)
+            continue;
+        if (n <= 0) {
+            u->io_err = n < 0 ? errno : EIO;
+            return;
+        }
+        data += n;
+        len -= (size_t)n;
+    }
+}
+
+void upload_done(req *r)
+{
+    upload *u = r->up;
+
+    if (!u)
+        return;
+    if (u->fd >= 0)
+        close(u->fd);
+    if (u->tmp[0])
+        unlink(u->tmp);
+    free(u);
+    r->up = NULL;
+}
+
+static const char *status_slug(qdc_status st)
+{
+    switch (st) {
+    case QDC_EPARSE:
+        return "malformed-mesh";
+    case QDC_ETOOBIG:
+        return "too-big";
+    case QDC_EMESH:
+        return "invalid-mesh";
+    case QDC_EFORMAT:
+        return "unsupported-media-type";
+    case QDC_ENOMEM:
+        return "out-of-memory";
+    case QDC_EINVAL:
+        return "invalid-argument";
+    default:
+        return "internal";
+    }
+}
+
+/* A problem for a mesh the library refused, with where it went wrong. */
+static enum MHD_Result mesh_problem(struct MHD_Connection *c, req *r, qdc_status st,
+                                    const qdc_error *e)
+{
+    upload *u = r->up;
+    sbuf x = {0};
+    unsigned status = (unsigned)qdc_status_http(st);
+    enum MHD_Result ret;
+
+    /* The request is at fault for any parse or validation error, whatever
+     * the library's table says for unexpected codes. */
+    if (status >= 500 && st != QDC_ENOMEM)
+        status = 422;
+    sb_printf(&x, "\"format\":\"%s\"", upload_format_name(u));
+    if (e->line >= 0)
+        sb_printf(&x, ",\"line\":%lld", (long long)e->line);
+    if (e->col >= 0)
+        sb_printf(&x, ",\"column\":%lld", (long long)e->col);
+    if (e->offset >= 0)
+        sb_printf(&x, ",\"offset\":%lld", (long long)e->offset);
+    if (e->index >= 0)
+        sb_printf(&x, ",\"index\":%lld", (long long)e->index);
+    if (e->kind[0]) {
+        sb_puts(&x, ",\"kind\":");
+        sb_json_str(&x, e->kind);
+    }
+    ret = http_problem(
+        c, r, status,
+        st == QDC_EMESH && u->sfmt != SURFACE_AUTO ? "invalid-surface" : status_slug(st),
+        st == QDC_EMESH && u->sfmt != SURFACE_AUTO ? "the surface cannot bound a volume"
+                                                   : qdc_status_str(st),
+        e->msg[0] ? e->msg : qdc_status_str(st), x.buf, NULL);
+    sb_free(&x);
+    return ret;
+}
+
+static void new_id(char out[JOB_ID_LEN + 1])
+{
+    unsigned char b[JOB_ID_LEN / 2];
+    static const char hx[] = "0123456789abcdef";
+    size_t got = 0;
+
+    while (got < sizeof b) {
+        ssize_t n = getrandom(b + got, sizeof b - got, 0);
+        if (n > 0)
+            got += (size_t)n;
+    }
+    for (size_t i = 0; i < sizeof b; i++) {
+        out[2 * i] = hx[b[i] >> 4];
+        out[2 * i + 1] = hx[b[i] & 15];
+    }
+    out[JOB_ID_LEN] = 0;
+}
+
+/* Make the upload the job's input: fsync, rename into DATA/jobs/ID, fsync dirs.
+ * Shared (PostgreSQL): the database keeps it durably; here it is a cache.
+ * 0, or the errno of what failed (the job's directory is then removed). */
+static int commit_input(req *r, const char *id, const char *format)
+{
+    upload *u = r->up;
+    char dir[4200], path[4300];
+    int durable = !shared_on(r->q);
+
+    job_path(r->q, id, NULL, dir, sizeof dir);
+    job_path(r->q, id, job_input_name(format), path, sizeof path);
+    if (dir_ensure(dir) || (durable && fsync(u->fd)) || rename(u->tmp, path) ||
+        (u->tmp[0] = 0, durable && (fsync_parent(path) || fsync_parent(dir)))) {
+        int e = errno ? errno : EIO;
+        dir_remove(dir);
+        return e;
+    }
+    return 0;
+}
+
+/* The upload could not be stored (errno e): 507 when the disk is full, a
+ * passing condition; else 500. */
+static enum MHD_Result store_failed(struct MHD_Connection *c, req *r, int e,
+                                    const char *what)
+{
+    if (disk_full(e))
+        return storage_full(c, r, what);
+    return http_problem(c, r, 500, "io", NULL, what, NULL, NULL);
+}
+
+/* Answer a request whose Idempotency-Key was used before: the same job when
+ * the fingerprint (options + body) matches, else 422. */
+static enum MHD_Result idem_replay(struct MHD_Connection *c, req *r, const job_rec *old,
+                                   const char *body_hash)
+{
+    char loc[80], extra[80];
+
+    if (strcmp(old->body_hash, body_hash)) {
+        snprintf(extra, sizeof extra, "\"job\":\"%s\"", old->id);
+        return http_problem(c, r, 422, "idempotency-key-reused", NULL,
+                            "this key was already used for a different body or options",
+                            extra, NULL);
+    }
+    snprintf(loc, sizeof loc, "/v1/jobs/%s", old->id);
+    const char *const h[] = {MHD_HTTP_HEADER_LOCATION, loc, "Idempotent-Replayed", "true",
+                             NULL};
+    return reply_job(c, r, 202, old, h);
+}
+
+/* 413 for a body over its cap: JSON meshes have their own (--max-json). */
+static enum MHD_Result too_big(struct MHD_Connection *c, req *r, int json)
+{
+    qdcd *q = r->q;
+    char d[400], extra[200];
+    int64_t lim;
+
+    json = json && q->cfg.max_json < q->cfg.max_body;
+    lim = json ? q->cfg.max_json : q->cfg.max_body;
+    if (json)
+        snprintf(d, sizeof d,
+                 "JSON mesh bodies are limited to %lld bytes; send larger meshes as "
+                 "%s (proto/mesh-binary.md)",
+                 (long long)lim, MEDIA_QMESH);
+    else
+        snprintf(d, sizeof d, "request bodies are limited to %lld bytes", (long long)lim);
+    snprintf(extra, sizeof extra, "\"max_bytes\":%lld%s", (long long)lim,
+             json ? ",\"use\":\"" MEDIA_QMESH "\"" : "");
+    return http_problem(c, r, 413, "too-big", NULL, d, extra, NULL);
+}
+
+/* meshio_options.log target: notes about the upload (skipped element types),
+ * one per line, kept with the job. */
+static void collect_note(void *ctx, int level, const char *msg)
+{
+    sbuf *b = ctx;
+    (void)level;
+    if (b->len + strlen(msg) + 2 > sizeof((job_rec *)0)->notes)
+        return; /* the first few say enough */
+    sb_printf(b, "%s%s", b->len ? "\n" : "", msg);
+}
+
+/* The sizes of an upload over the server's limits: 413. */
+static enum MHD_Result over_limits(struct MHD_Connection *c, req *r, int64_t nv,
+                                   int64_t nt)
+{
+    upload *u = r->up;
+    qdcd *q = r->q;
+    char d[400], extra[200];
+
+    snprintf(d, sizeof d,
+             "the %s has %lld vertices and %lld tets; this server accepts %lld and %lld "
+             "at most",
+             u->sfmt != SURFACE_AUTO ? "surface" : "mesh", (long long)nv, (long long)nt,
+             (long long)q->cfg.max_vertices, (long long)q->cfg.max_tets);
+    snprintf(extra, sizeof extra,
+             "\"vertices\":%lld,\"tets\":%lld,\"max_vertices\":%lld,\"max_tets\":%lld",
+             (long long)nv, (long long)nt, (long long)q->cfg.max_vertices,
+             (long long)q->cfg.max_tets);
+    return http_problem(c, r, 413, "too-big", "mesh exceeds server limits", d, extra,
+                        NULL);
+}
+
+/* Parse and validate the upload (buf, len) into j's sizes and notes, or
+ * answer with the problem (returns 1 then, *ret set). A surface is checked
+ * (closed, manifold, oriented) but tetrahedralized later, by the worker. */
+static int check_upload(struct MHD_Connection *c, req *r, const char *buf, size_t len,
+                        job_rec *j, enum MHD_Result *ret, double *t_valid)
+{
+    upload *u = r->up;
+    qdcd *q = r->q;
+    qdc_error e;
+    qdc_status st;
+
+    qdc_error_clear(&e);
+    *t_valid = mono_now();
+    if (u->sfmt != SURFACE_AUTO) {
+        surface_t *sf = NULL;
+        st = surface_read(buf, len, u->sfmt, &sf, &e);
+        if (st == QDC_OK && sf->nv > q->cfg.max_vertices) {
+            *ret = over_limits(c, r, sf->nv, 0);
+            surface_free(sf);
+            return 1;
+        }
+        *t_valid = mono_now();
+        if (st == QDC_OK)
+            st = surface_check(sf, &e);
+        if (st == QDC_OK) {
+            j->nv = sf->nv;
+            j->nt = 0; /* known once TetGen ran */
+            snprintf(j->notes, sizeof j->notes,
+                     "surface of %d triangles: tetrahedralized with TetGen before the "
+                     "optimization",
+                     sf->ntri);
+        }
+        surface_free(sf);
+        if (st != QDC_OK) {
+            *ret = mesh_problem(c, r, st, &e);
+            return 1;
+        }
+        return 0;
+    }
+
+    mesh_t *m = NULL;
+    sbuf notes = {0};
+    meshio_options mo = {collect_note, &notes, 0};
+    st = meshio_read_ex(buf, len, u->fmt, &mo, &m, &e);
+    if (st == QDC_OK && (m->nv > q->cfg.max_vertices || m->nt > q->cfg.max_tets)) {
+        *ret = over_limits(c, r, m->nv, m->nt);
+        mesh_free(m);
+        sb_free(&notes);
+        return 1;
+    }
+    *t_valid = mono_now();
+    if (st == QDC_OK)
+        st = mesh_validate(m, NULL, &e);
+    if (st == QDC_OK) {
+        j->nv = m->nv;
+        j->nt = m->nt;
+        snprintf(j->notes, sizeof j->notes, "%s",
+                 notes.buf && !notes.oom ? notes.buf : "");
+    }
+    mesh_free(m);
+    sb_free(&notes);
+    if (st != QDC_OK) {
+        *ret = mesh_problem(c, r, st, &e);
+        return 1;
+    }
+    return 0;
+}
+
+/* Map the body, settle its format (sniffed when nothing named it), parse
+ * and validate it (check_upload): 0, or 1 with the answer in *ret. */
+static int inspect_upload(struct MHD_Connection *c, req *r, job_rec *j,
+                          enum MHD_Result *ret, double *t_parse, double *t_valid)
+{
+    upload *u = r->up;
+    size_t len = (size_t)u->body_len;
+    char *buf = mmap(NULL, len, PROT_READ, MAP_PRIVATE, u->fd, 0);
+    int bad = 1;
+
+    if (buf == MAP_FAILED) {
+        *ret = http_problem(c, r, 500, "io", NULL, "cannot map the upload", NULL, NULL);
+        return 1;
+    }
+    if (u->sniff) {
+        u->fmt = meshio_sniff(buf, len);
+        if (u->fmt == MESHIO_AUTO)
+            u->sfmt = surface_sniff(buf, len);
+    }
+    if (u->fmt == MESHIO_AUTO && u->sfmt == SURFACE_AUTO)
+        *ret = unsupported(c, r,
+                           "the body is not a mesh or surface this server recognises; "
+                           "set Content-Type to one of the accepted types");
+    else if (u->sniff && u->fmt == MESHIO_JSON && u->body_len > r->q->cfg.max_json)
+        *ret = too_big(c, r, 1);
+    else if (u->tetgen_opts && u->sfmt == SURFACE_AUTO)
+        *ret = http_problem(c, r, 400, "invalid-option", NULL,
+                            "tetgen_quality and max_volume apply to surface uploads only",
+                            NULL, NULL);
+    else
+        bad = 0;
+    if (!bad) {
+        *t_parse = mono_now();
+        bad = check_upload(c, r, buf, len, j, ret, t_valid);
+    }
+    munmap(buf, len);
+    return bad;
+}
+
+/* The job recorded: the queue checked again (exactly: the intake thread
+ * commits one upload at a time), the input committed, the row inserted
+ * (with the input, in a shared store). 0, or 1 with the answer in *ret:
+ * 429, 507, 503, or the replay of a concurrent request with the same key. */
+static int create_job(struct MHD_Connection *c, req *r, job_rec *j, enum MHD_Result *ret)
+{
+    qdcd *q = r->q;
+    char d[400];
+    job_rec old;
+    job_counts cnt;
+    int dup = 0;
+    qdc_status st;
+
+    if (queue_full(q, &cnt)) {
+        *ret = queue_full_reply(c, r, &cnt);
+        return 1;
+    }
+    int e = commit_input(r, j->id, j->format);
+    if (e) {
+        *ret = store_failed(c, r, e, "the mesh could not be stored durably");
+        return 1;
+    }
+    if (shared_on(q)) {
+        job_path(q, j->id, job_input_name(j->format), d, sizeof d);
+        st = q->store->ops->create_with_input(q->store, j, job_input_name(j->format), d,
+                                              &dup, &old);
+    } else {
+        st = q->store->ops->create(q->store, j, &dup, &old);
+    }
+    if (st != QDC_OK || dup) {
+        job_path(q, j->id, NULL, d, sizeof d);
+        dir_remove(d);
+        /* dup: a concurrent request with the same key won */
+        *ret = st != QDC_OK ? store_unavailable(c, r, "the job could not be recorded")
+                            : idem_replay(c, r, &old, j->body_hash);
+        return 1;
+    }
+    return 0;
+}
+
+/* Runs on the intake thread; the connection is suspended meanwhile, and
+ * MHD_queue_response is allowed on a suspended connection. */
+static enum MHD_Result process_upload(struct MHD_Connection *c, req *r)
+{
+    upload *u = r->up;
+    qdcd *q = r->q;
+    enum MHD_Result ret;
+    job_rec j, old;
+    double t_parse = 0, t_valid = 0, t_commit;
+
+    memset(&j, 0, sizeof j);
+    if (u->hashing) {
+        uint8_t dig[32];
+        sha256_final(&u->hash, dig);
+        sha256_to_hex(dig, j.body_hash);
+        if (q->store->ops->find_idem(q->store, r->owner, u->idem, &old) == QDC_OK)
+            return idem_replay(c, r, &old, j.body_hash);
+    }
+    if (inspect_upload(c, r, &j, &ret, &t_parse, &t_valid))
+        return ret;
+    new_id(j.id);
+    snprintf(j.owner, sizeof j.owner, "%s", r->owner);
+    snprintf(j.idem_key, sizeof j.idem_key, "%s", u->idem);
+    snprintf(j.format, sizeof j.format, "%s", upload_format_name(u));
+    j.in_bytes = u->body_len;
+    snprintf(j.options, sizeof j.options, "%s", u->options);
+    j.created = wall_now();
+    t_commit = mono_now();
+    if (create_job(c, r, &j, &ret))
+        return ret;
+    atomic_fetch_add(&q->m.submitted, 1);
+    job_pool_notify(q->pool);
+    if (q->cfg.verbose)
+        fprintf(stderr,
+                "qdcd: job %s queued (%s, %lld tets; body %.3f s after the headers, "
+                "parse %.3f s, validate %.3f s, commit %.3f s)\n",
+                j.id, j.format, (long long)j.nt, t_parse - r->t0, t_valid - t_parse,
+                t_commit - t_valid, mono_now() - t_commit);
+    char loc[80];
+    snprintf(loc, sizeof loc, "/v1/jobs/%s", j.id);
+    const char *const h[] = {MHD_HTTP_HEADER_LOCATION, loc, NULL};
+    job_rec now;
+    if (q->store->ops->get(q->store, j.id, &now) != QDC_OK)
+        now = j;
+    return reply_job(c, r, 202, &now, h);
+}
+
+/* Body complete (HTTP thread): refuse what needs no parsing, hand the rest
+ * to the intake thread with the connection suspended. */
+enum MHD_Result upload_finish(struct MHD_Connection *c, req *r)
+{
+    upload *u = r->up;
+
+    if (r->off_done || !u) /* resumed without a reply: queueing it failed */
+        return MHD_NO;
+    if (u->too_big)
+        return too_big(c, r, u->fmt == MESHIO_JSON);
+    if (u->io_err || u->fd < 0)
+        return store_failed(c, r, u->fd < 0 ? ENOSPC : u->io_err,
+                            "the upload could not be stored");
+    if (u->body_len == 0)
+        return http_problem(c, r, 400, "empty-body", NULL,
+                            "POST /v1/jobs needs a mesh in the body", NULL, NULL);
+
+    return offq_push(&intake, c, r);
+}

@@ -1,0 +1,137 @@
+#!/bin/sh
+# splice.sh - a result asked in the upload's own format is the uploaded file
+# with only the coordinates replaced, as `qdc optimize IN OUT` writes OUT in
+# IN's format: files written by other tools (tests/data/real: MSH 4.1 with
+# $PhysicalNames, point and line elements, ASCII and binary; VTU with point
+# and cell arrays, zlib-compressed inline and appended; Medit with Edges and
+# vertex refs) come back from qdcd byte for byte as the CLI writes them,
+# with the same strong ETag on every request; the same result in another format is written by qdc's own writer;
+# GET /input in the upload's format is the upload itself. With a PostgreSQL
+# store, a node that did not receive the upload reads the input from the
+# database and answers the same bytes.
+. "$(dirname "$0")/../lib.sh"
+. "$(dirname "$0")/daemon.inc"
+
+REAL=$ROOT/tests/data/real
+PIDS=
+trap 'if [ -n "$QPID" ]; then kill -9 $QPID 2>/dev/null; fi; for p in $PIDS; do kill -9 $p 2>/dev/null; done; [ -n "${PGDIR:-}" ] && pg_cleanup; rm -rf "$TMP"' EXIT
+
+# name  file in tests/data/real  ?format= of the upload's own variant  text only that file has
+CASES="gmsh41:gmsh41.msh:gmsh:\$PhysicalNames
+gmsh41bin:gmsh41_bin.msh:gmsh-bin:\$PhysicalNames
+vtu:meshio_zlib.vtu:vtu:temperature
+vtuapp:vtk_appended_zlib.vtu:vtu:RangeMin
+medit:gmsh.mesh:medit:Edges"
+
+for c in $CASES; do
+    f=$(echo "$c" | cut -d: -f2)
+    if [ ! -f "$REAL/$f.gz" ]; then
+        echo "ok - splice: $f # SKIP tests/data/real/$f.gz is missing"
+        continue
+    fi
+    n=$(echo "$c" | cut -d: -f1)
+    ext=${f##*.}
+    gzip -dc "$REAL/$f.gz" > "$TMP/$n.$ext"
+    # the CLI's output: OUT in IN's format
+    "$BIN/qdc" optimize "$TMP/$n.$ext" "$TMP/$n.cli.$ext" --quiet 2> "$TMP/$n.cli.err" ||
+        fail "splice: $n: qdc optimize" "$(cat "$TMP/$n.cli.err")"
+done
+
+start_qdcd "$TMP/d" --workers 1 || { fail "splice: qdcd starts" "$(tail -3 "$TMP/d.log")"; exit 1; }
+
+for c in $CASES; do
+    n=$(echo "$c" | cut -d: -f1)
+    fmt=$(echo "$c" | cut -d: -f3)
+    mark=$(echo "$c" | cut -d: -f4)
+    ext=$(echo "$c" | cut -d: -f2)
+    ext=${ext##*.}
+    [ -f "$TMP/$n.cli.$ext" ] || continue
+    code=$(submit "$TMP/$n.$ext" application/octet-stream "" "$TMP/$n.job")
+    id=$(jf "$TMP/$n.job" .id)
+    st=$(wait_done "$id")
+    if [ "$code" != 202 ] || [ "$st" != succeeded ]; then
+        fail "splice: $n: job" "submit $code, state $st: $(head -c 300 "$TMP/$n.job")"
+        continue
+    fi
+    echo "$n $id" >> "$TMP/ids"
+    got=$(jf "$TMP/job.$id" .mesh.format)
+    c1=$(req GET "/v1/jobs/$id/result?format=$fmt" "$TMP/$n.d.$ext")
+    etag=$(hdr "$TMP/$n.d.$ext" ETag)
+    if [ "$got" = "$fmt" ] && [ "$c1" = 200 ] && cmp -s "$TMP/$n.d.$ext" "$TMP/$n.cli.$ext" &&
+        ! cmp -s "$TMP/$n.d.$ext" "$TMP/$n.$ext" && grep -aq "$mark" "$TMP/$n.d.$ext"; then
+        pass "splice: $n: /result?format=$fmt is the CLI's output byte for byte ($(wc -c < "$TMP/$n.d.$ext") bytes, '$mark' kept, coordinates moved)"
+    else
+        fail "splice: $n: /result?format=$fmt" "sniffed '$got', status $c1, $(cmp "$TMP/$n.d.$ext" "$TMP/$n.cli.$ext" 2>&1 | head -1)"
+    fi
+    # the ETag is the file's SHA-256; asked again (by Accept this time) the
+    # same file and ETag, and If-None-Match gives a 304
+    c2=$(req GET "/v1/jobs/$id/result?format=$fmt" "$TMP/$n.d2")
+    c3=$(req GET "/v1/jobs/$id/result?format=$fmt" "$TMP/$n.d3" -H "If-None-Match: $etag")
+    if [ "$etag" = "\"$(sha256sum < "$TMP/$n.d.$ext" | cut -c1-64)\"" ] && [ "$c2" = 200 ] &&
+        cmp -s "$TMP/$n.d2" "$TMP/$n.d.$ext" && [ "$(hdr "$TMP/$n.d2" ETag)" = "$etag" ] &&
+        [ "$c3" = 304 ]; then
+        pass "splice: $n: ETag is the spliced file's SHA-256, the same on a second request, 304 on If-None-Match"
+    else
+        fail "splice: $n: ETag" "etag $etag, second $c2 $(hdr "$TMP/$n.d2" ETag), conditional $c3"
+    fi
+    # /input in the upload's own format: the upload itself
+    c4=$(req GET "/v1/jobs/$id/input?format=$fmt" "$TMP/$n.in")
+    if [ "$c4" = 200 ] && cmp -s "$TMP/$n.in" "$TMP/$n.$ext"; then
+        pass "splice: $n: /input?format=$fmt is the upload byte for byte"
+    else
+        fail "splice: $n: /input" "status $c4, $(cmp "$TMP/$n.in" "$TMP/$n.$ext" 2>&1 | head -1)"
+    fi
+done
+
+# Another format: qdc's own writer, the same coordinates (the CLI writes the
+# same file when asked for that format); the upload's extra data is gone.
+if grep -q '^gmsh41 ' "$TMP/ids" 2> /dev/null; then
+    id=$(awk '$1 == "gmsh41" {print $2}' "$TMP/ids")
+    c1=$(req GET "/v1/jobs/$id/result?format=vtu" "$TMP/g.vtu")
+    "$BIN/qdc" optimize "$TMP/gmsh41.msh" "$TMP/g.cli.vtu" --quiet 2> /dev/null
+    if [ "$c1" = 200 ] && cmp -s "$TMP/g.vtu" "$TMP/g.cli.vtu" && ! grep -q PhysicalNames "$TMP/g.vtu"; then
+        pass "splice: gmsh41 upload, /result?format=vtu: qdc's own VTU writer, as the CLI's gmsh41 -> vtu"
+    else
+        fail "splice: gmsh41 -> vtu" "status $c1, $(cmp "$TMP/g.vtu" "$TMP/g.cli.vtu" 2>&1 | head -1)"
+    fi
+fi
+stop_qdcd
+
+# PostgreSQL: the upload sent to node a, the result asked from node b (its own
+# --data, so the input and result.qmesh come from the database).
+. "$(dirname "$0")/pg.inc"
+QDCD=${QDCD:-$BIN/qdcd}
+QM=application/octet-stream
+if ! pg_available; then
+    echo "ok - splice: pg: the result spliced on another node # SKIP no PostgreSQL server binaries (apt-get install postgresql) or not root"
+    exit $((NFAIL > 0))
+fi
+pg_start || { fail "splice: pg: start PostgreSQL" "$(tail -3 "$PGDIR/initdb.log" "$PGDIR/log" 2> /dev/null | tr '\n' ' ')"; exit 1; }
+node a "$TMP/pa" --workers 1 || { fail "splice: pg: node a" "$(tail -3 "$TMP/a.log")"; exit 1; }
+for n in gmsh41 vtu; do
+    ext=msh
+    [ $n = vtu ] && ext=vtu
+    [ -f "$TMP/$n.cli.$ext" ] || continue
+    c=$(post "$URL_a" "$TMP/$n.$ext" "" "$TMP/p$n.job")
+    id=$(jf "$TMP/p$n.job" .id)
+    echo "$n $ext $id $c $(wait_done "$URL_a" "$id")" >> "$TMP/pids"
+done
+# node b starts once the jobs are over: it neither received nor ran them
+node b "$TMP/pb" --workers 1 || { fail "splice: pg: node b" "$(tail -3 "$TMP/b.log")"; exit 1; }
+while read -r n ext id c st; do
+    fmt=gmsh
+    [ $n = vtu ] && fmt=vtu
+    had=$(ls "$TMP/pb/jobs/$id" 2> /dev/null | tr '\n' ' ')
+    cb=$(curl -s -o "$TMP/p$n.b.$ext" -w '%{http_code}' "$URL_b/v1/jobs/$id/result?format=$fmt")
+    ca=$(curl -s -o "$TMP/p$n.a.$ext" -w '%{http_code}' "$URL_a/v1/jobs/$id/result?format=$fmt")
+    if [ "$c" = 202 ] && [ "$st" = succeeded ] && [ "$cb" = 200 ] && [ "$ca" = 200 ] &&
+        [ -z "$had" ] && [ -f "$TMP/pb/jobs/$id/$(ls "$TMP/pa/jobs/$id" | grep '^input')" ] &&
+        cmp -s "$TMP/p$n.b.$ext" "$TMP/$n.cli.$ext" && cmp -s "$TMP/p$n.a.$ext" "$TMP/$n.cli.$ext"; then
+        pass "splice: pg: $n: node b (input fetched from the database) and node a answer the CLI's bytes"
+    else
+        fail "splice: pg: $n" "submit $c, state $st, b $cb (cache before: '$had'), a $ca, $(cmp "$TMP/p$n.b.$ext" "$TMP/$n.cli.$ext" 2>&1 | head -1)"
+    fi
+done < "$TMP/pids"
+stop "$PID_b"
+stop "$PID_a"
+exit $((NFAIL > 0))
