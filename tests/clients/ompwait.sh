@@ -1,12 +1,15 @@
 #!/bin/sh
-# ompwait.sh - qdc's OpenMP threads sleep while they wait (OMP_WAIT_POLICY=PASSIVE)
-# unless the user chose a policy: the running process's environment is read
-# from /proc while it optimizes a 100k-tet mesh.
+# ompwait.sh - the OpenMP threads of qdc and qdcd sleep while they wait
+# (OMP_WAIT_POLICY=PASSIVE) unless the user chose a policy: the running
+# process's environment is read from /proc (qdc while it optimizes a 100k-tet
+# mesh, qdcd once it answers).
 . "$(dirname "$0")/../lib.sh"
+. "$ROOT/tests/server/daemon.inc"
 
 if [ ! -r /proc/self/environ ]; then
     echo "ok - ompwait: passive by default # SKIP no /proc"
     echo "ok - ompwait: the user's policy kept # SKIP no /proc"
+    echo "ok - ompwait: qdcd passive by default # SKIP no /proc"
     exit 0
 fi
 M=$(devmesh bunny_low_100k)
@@ -38,4 +41,16 @@ case $res in
 "active rc=0") pass "ompwait: the user's policy kept" ;;
 *) fail "ompwait: the user's policy kept" "saw $res" ;;
 esac
+unset OMP_WAIT_POLICY
+if start_qdcd "$TMP/d" --workers 1; then
+    seen=$(tr '\0' '\n' < /proc/$QPID/environ | sed -n 's/^OMP_WAIT_POLICY=//p')
+    if [ "$seen" = PASSIVE ]; then
+        pass "ompwait: qdcd passive by default"
+    else
+        fail "ompwait: qdcd passive by default" "saw '${seen:-unset}'"
+    fi
+    stop_qdcd
+else
+    fail "ompwait: qdcd passive by default" "qdcd did not start: $(tail -2 "$TMP/d.log")"
+fi
 [ "$NFAIL" = 0 ]
