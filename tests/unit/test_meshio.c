@@ -370,7 +370,9 @@ TEST(allocation_failures)
     qdc_error err;
 
     ASSERT_TRUE(m);
-    for (int f = MESHIO_MEDIT; f < MESHIO_FORMAT_COUNT; f++) {
+    /* the formats qdc writes itself (Abaqus and Netgen are written only spliced:
+     * meshio_write refuses them with EINVAL before it allocates anything) */
+    for (int f = MESHIO_MEDIT; f < MESHIO_ABAQUS; f++) {
         sink s = {0};
         qdc_status st;
         if (f == MESHIO_TETGEN)
