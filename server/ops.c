@@ -52,6 +52,17 @@ enum MHD_Result ops_metrics(struct MHD_Connection *c, req *r)
               "# HELP qdcd_upload_bytes_total Request body bytes received on uploads.\n"
               "# TYPE qdcd_upload_bytes_total counter\nqdcd_upload_bytes_total %lld\n",
               (long long)atomic_load(&q->m.upload_bytes));
+    if (q->cfg.cache_max)
+        sb_printf(
+            &b,
+            "# HELP qdcd_cache_bytes Bytes of job files in this node's cache at "
+            "its last scan (--cache-max %lld).\n"
+            "# TYPE qdcd_cache_bytes gauge\nqdcd_cache_bytes %lld\n"
+            "# HELP qdcd_cache_evicted_total Cached files evicted, least recently "
+            "used first.\n"
+            "# TYPE qdcd_cache_evicted_total counter\nqdcd_cache_evicted_total %lld\n",
+            (long long)q->cfg.cache_max, (long long)atomic_load(&q->m.cache_bytes),
+            (long long)atomic_load(&q->m.cache_evicted));
     sb_printf(
         &b,
         "# HELP qdcd_jobs_submitted_total Jobs accepted.\n"
