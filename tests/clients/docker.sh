@@ -12,13 +12,15 @@ CF=$ROOT/docker/compose.single.yaml
 
 # 1. linter
 if command -v npx > /dev/null 2>&1; then
-    out=$(cd "$ROOT" && timeout 180 npx --yes dockerfile-utils lint docker/Dockerfile 2>&1)
-    rc=$?
-    if [ $rc = 0 ]; then
-        pass "dockerfile-utils lint: no problem"
-    else
-        fail "dockerfile-utils lint" "rc $rc: $(printf '%s' "$out" | grep -v 'npm warn' | head -8 | tr '\n' ' ')"
-    fi
+    for df in Dockerfile postgres.Dockerfile haproxy.Dockerfile; do
+        out=$(cd "$ROOT" && timeout 180 npx --yes dockerfile-utils lint "docker/$df" 2>&1)
+        rc=$?
+        if [ $rc = 0 ]; then
+            pass "dockerfile-utils lint docker/$df: no problem"
+        else
+            fail "dockerfile-utils lint docker/$df" "rc $rc: $(printf '%s' "$out" | grep -v 'npm warn' | head -8 | tr '\n' ' ')"
+        fi
+    done
 else
     echo "ok - dockerfile-utils lint # SKIP no npx here (apt-get install npm)"
 fi
