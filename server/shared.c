@@ -152,7 +152,7 @@ typedef struct {
     double atime;
     int64_t size;
     char id[JOB_ID_LEN + 1];
-    char path[4400];
+    char name[31]; /* input.EXT, result.EXT, input-as.EXT, report.json */
 } cache_file;
 
 static int by_atime(const void *a, const void *b)
@@ -202,7 +202,7 @@ int shared_trim(qdcd *q, int64_t cap, double min_age, int64_t *bytes)
                 lstat(p, &sb) || !S_ISREG(sb.st_mode))
                 continue;
             total += (int64_t)sb.st_size;
-            if (running || !evictable(f->d_name))
+            if (running || !evictable(f->d_name) || strlen(f->d_name) >= sizeof c->name)
                 continue;
             if (nc == capc) {
                 size_t nn = capc ? 2 * capc : 256;
@@ -215,7 +215,7 @@ int shared_trim(qdcd *q, int64_t cap, double min_age, int64_t *bytes)
             c[nc].atime = (double)sb.st_atim.tv_sec + 1e-9 * (double)sb.st_atim.tv_nsec;
             c[nc].size = (int64_t)sb.st_size;
             memcpy(c[nc].id, e->d_name, JOB_ID_LEN + 1);
-            memcpy(c[nc].path, p, sizeof p);
+            memcpy(c[nc].name, f->d_name, strlen(f->d_name) + 1); /* < sizeof name */
             nc++;
         }
         closedir(jd);
@@ -226,16 +226,17 @@ int shared_trim(qdcd *q, int64_t cap, double min_age, int64_t *bytes)
         qsort(c, nc, sizeof *c, by_atime);
         for (size_t i = 0; i < nc && total > cap; i++) {
             char side[4500];
-            snprintf(side, sizeof side, "%s.etag", c[i].path);
+            job_path(q, c[i].id, c[i].name, p, sizeof p);
+            snprintf(side, sizeof side, "%s.etag", p);
             pthread_mutex_lock(&q->cache_lock);
             /* used since the scan (shared_use), or by a job this node started
              * meanwhile: keep it */
-            if (lstat(c[i].path, &sb) == 0 &&
+            if (lstat(p, &sb) == 0 &&
                 (double)sb.st_atim.tv_sec + 1e-9 * (double)sb.st_atim.tv_nsec <
                     now - min_age &&
                 !job_pool_has(q->pool, c[i].id)) {
                 int64_t s = file_size(side);
-                if (unlink(c[i].path) == 0) {
+                if (unlink(p) == 0) {
                     total -= c[i].size;
                     evicted++;
                     if (s && unlink(side) == 0)
