@@ -29,6 +29,7 @@ cleanup() {
     rm -rf "$TMP"
 }
 trap cleanup EXIT
+trap 'exit 1' INT TERM HUP PIPE # so that cleanup runs then too
 if build_image "$IMG" "$TMP/ctx/docker/Dockerfile" "$TMP/ctx"; then
     pass "container: image $IMG built in $BUILD_S s ($BUILD_MB MB; layers of an unchanged tree come from the cache)"
 else

@@ -20,13 +20,16 @@
 #    again by another replica after the lease), and every request sent
 #    through the port meanwhile is answered (the balancer sends around the
 #    dead replica);
+#  - PostgreSQL stopped: the balancer soon has no ready replica and answers 503
+#    with Retry-After and a problem+json itself; PostgreSQL started again:
+#    the replicas reconnect, the port is ready again and takes a job;
 #  - SIGTERM (`podman stop`) ends the replicas, the balancer and PostgreSQL
 #    cleanly (exit 0).
 # Without a working engine, or not as root, every check is reported as a skip.
 . "$(dirname "$0")/../lib.sh"
 . "$(dirname "$0")/engine.inc"
 
-CHECKS="replicas: images|replicas: start|replicas: jobs through one port|replicas: replica killed mid-job|replicas: SIGTERM stop"
+CHECKS="replicas: images|replicas: start|replicas: jobs through one port|replicas: database restart|replicas: replica killed mid-job|replicas: SIGTERM stop"
 engine_or_skip "$CHECKS"
 $PY -c 'import yaml' 2> /dev/null || skip_checks "$CHECKS" "no PyYAML (apt-get install python3-yaml)"
 
@@ -38,6 +41,7 @@ cleanup() {
     rm -rf "$TMP"
 }
 trap cleanup EXIT
+trap 'exit 1' INT TERM HUP PIPE # so that cleanup runs then too
 
 # 1. images: the qdcd image from the repository, the others from docker/
 base_image || { fail "replicas: base image" "$(tail -3 "$TMP/base.log" | tr '\n' ' ')"; exit 1; }
@@ -171,7 +175,43 @@ else
     fail "replicas: jobs through one port" "codes $codes,$bad; other answers:$NON200; runs:$spread"
 fi
 
-# 4. kill -9 of the replica running a long job
+# 4. the database away and back, behind the balancer
+"$ENGINE" stop -t 30 "$P-postgres" > /dev/null 2>&1
+t0=$(date +%s%N)
+i=0
+c=
+while [ $i -lt 100 ]; do
+    c=$(curl -s -m 5 -D "$TMP/h503" -o "$TMP/b503" -w '%{http_code}' "$URL/v1/jobs/$(echo $ids | cut -d' ' -f1)")
+    # first the replicas' own 503 (store-unavailable), then, once the checks
+    # have taken every replica out, the balancer's
+    [ "$c" = 503 ] && grep -qi '^retry-after: 5' "$TMP/h503" && [ "$(jq -r .status "$TMP/b503" 2> /dev/null)" = 503 ] &&
+        jq -r .detail "$TMP/b503" | grep -q 'no qdcd node is ready' && break
+    sleep 0.2
+    i=$((i + 1))
+done
+gone=$((($(date +%s%N) - t0) / 1000000))
+t0=$(date +%s%N)
+"$ENGINE" start "$P-postgres" > /dev/null 2>&1
+i=0
+while [ $i -lt 150 ] && [ "$(curl -s -m 2 -o /dev/null -w '%{http_code}' "$URL/readyz")" != 200 ]; do
+    sleep 0.2
+    i=$((i + 1))
+done
+back=$((($(date +%s%N) - t0) / 1000000))
+code=$(post "$TMP/cube.qmesh" "max_iter=5" "$TMP/jdb")
+NON200=
+st=$(wait_done "$(jq -r .id "$TMP/jdb")")
+alive=
+for s in qdcd1 qdcd2 qdcd3; do
+    [ "$("$ENGINE" inspect "$P-$s" --format '{{.State.Running}}')" = true ] && alive="$alive $s"
+done
+if [ "$c" = 503 ] && [ "$code" = 202 ] && [ "$st" = succeeded ] && [ "$alive" = " qdcd1 qdcd2 qdcd3" ]; then
+    pass "replicas: database restart: PostgreSQL stopped -> within $gone ms the balancer answers 503 itself, Retry-After: 5, problem+json ($(jq -c .type "$TMP/b503")); started again -> ready through the port in $back ms (podman start included), a new job succeeded; no replica died"
+else
+    fail "replicas: database restart" "while down: $c $(head -c 200 "$TMP/b503"); after: ready in $back ms, POST $code, job $st, running:$alive"
+fi
+
+# 5. kill -9 of the replica running a long job
 gzip -dc "$DEV/bunny_low_10k.mesh.gz" > "$TMP/bunny.mesh"
 $MT qmesh "$TMP/bunny.mesh" "$TMP/bunny.qmesh" || { fail "replicas: bunny" "meshtool"; exit 1; }
 post "$TMP/bunny.qmesh" "max_iter=300&finish=0&tol_move=0&mode=literal" "$TMP/jl" > /dev/null
@@ -209,7 +249,7 @@ qdcd1 | qdcd2 | qdcd3)
     ;;
 esac
 
-# 5. SIGTERM: replicas, then the balancer, then the database (compose down's order)
+# 6. SIGTERM: replicas, then the balancer, then the database (compose down's order)
 res=
 ok=1
 for s in qdcd1 qdcd2 qdcd3 lb postgres; do
