@@ -18,6 +18,8 @@ CFG=${QDC_HAPROXY_CFG:-/tmp/qdc-haproxy.cfg}
     cat << CFG
 global
     maxconn 4096
+    # soft stop (SIGUSR1): running requests may finish, for at most 65 s
+    hard-stop-after 65s
 
 resolvers dns
     parse-resolv-conf

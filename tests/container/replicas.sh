@@ -23,8 +23,8 @@
 #  - PostgreSQL stopped: the balancer soon has no ready replica and answers 503
 #    with Retry-After and a problem+json itself; PostgreSQL started again:
 #    the replicas reconnect, the port is ready again and takes a job;
-#  - SIGTERM (`podman stop`) ends the replicas, the balancer and PostgreSQL
-#    cleanly (exit 0).
+#  - `podman stop` ends the replicas (SIGTERM), the balancer (SIGUSR1) and
+#    PostgreSQL (SIGINT), compose.yaml's stop signals, cleanly (exit 0).
 # Without a working engine, or not as root, every check is reported as a skip.
 . "$(dirname "$0")/../lib.sh"
 . "$(dirname "$0")/engine.inc"
@@ -262,7 +262,7 @@ for s in qdcd1 qdcd2 qdcd3 lb postgres; do
     [ "$rc" = 0 ] && [ $ms -lt 15000 ] || ok=
 done
 if [ -n "$ok" ]; then
-    pass "replicas: SIGTERM stop: every container exited 0 (exit/time:$res)"
+    pass "replicas: SIGTERM stop: every container exited 0 on its stop signal (replicas SIGTERM, lb SIGUSR1, postgres SIGINT; exit/time:$res)"
 else
     fail "replicas: SIGTERM stop" "exit/time:$res; $(logs qdcd1)"
 fi
