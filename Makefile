@@ -121,10 +121,11 @@ test-load: deps
 	$(MAKE) -j$$(nproc) all
 	QDC_LOAD_SECONDS=600 sh tests/faults/load.sh
 
-# The image built and run by a container engine (Podman here; skipped without one).
+# The images built and run by a container engine (Podman here; skipped without
+# one): one qdcd on a volume, and compose.yaml's 3 replicas on PostgreSQL.
 test-container: deps
 	$(MAKE) -j$$(nproc) all
-	@sh tests/container/image.sh
+	@for t in tests/container/*.sh; do sh "$$t"; done
 
 # Every allocation of the library failing in turn: clean errors, no leaks.
 # Then transient I/O faults in the daemon (short writes, ENOSPC, EIO, fsync

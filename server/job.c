@@ -921,6 +921,18 @@ int job_pool_cancel(job_pool *p, const char *id)
     return hit;
 }
 
+int job_pool_has(job_pool *p, const char *id)
+{
+    int hit = 0;
+    if (!p)
+        return 0;
+    pthread_mutex_lock(&p->lock);
+    for (int i = 0; i < p->n && !hit; i++)
+        hit = !strcmp(p->w[i].job, id);
+    pthread_mutex_unlock(&p->lock);
+    return hit;
+}
+
 int job_pool_busy(job_pool *p)
 {
     int n = 0;

@@ -16,6 +16,8 @@ job_pool *job_pool_start(qdcd *q);
 void job_pool_notify(job_pool *p);
 /* Ask the worker running id (if any here) to stop; returns 1 if it was running. */
 int job_pool_cancel(job_pool *p, const char *id);
+/* 1 if a worker of this pool is running job id */
+int job_pool_has(job_pool *p, const char *id);
 /* Stop claiming; wait up to grace seconds for running jobs, then stop them and
  * give their leases back (they run again at the next start); join; free. */
 void job_pool_stop(job_pool *p, double grace);

@@ -40,6 +40,10 @@ static void usage(FILE *f)
         "                            postgresql://USER@HOST:PORT/DB (jobs and their\n"
         "                            files in the database: nodes share nothing else;\n"
         "                            --data is this node's cache and scratch space)\n"
+        "  --cache-max BYTES         PostgreSQL store: cap of this node's cache of job\n"
+        "                            files in --data; the least recently used are\n"
+        "                            evicted (fetched again when needed; default 0:\n"
+        "                            no cap)\n"
         "  --workers N               optimizer threads (default: number of cores)\n"
         "  --tokens FILE             bearer tokens, one SHA-256 hex hash per line\n"
         "                            (make one with --hash-token); each job is visible\n"
@@ -219,6 +223,7 @@ static const cli_opt cli_opts[] = {
     {"shutdown-grace", 'd', CFG(grace), 0, 86400, 10},
     {"bderr-samples", 'l', CFG(bderr_samples), 0, 1e8, 20000},
     {"child-memory", 'l', CFG(child_memory), 1 << 26, 9.2e18, 0},
+    {"cache-max", 'l', CFG(cache_max), 0, 9.2e18, 0},
 };
 #define N_CLI (sizeof cli_opts / sizeof cli_opts[0])
 
@@ -303,6 +308,11 @@ static int parse_args(int argc, char **argv, qdcd_config *c)
                 "qdcd: --store takes sqlite:DIR or postgresql://USER@HOST:PORT/DB, "
                 "not '%s'\n",
                 c->store);
+        return -1;
+    }
+    if (c->cache_max && !store_pg_uri(c->store)) {
+        fprintf(stderr, "qdcd: --cache-max needs a PostgreSQL --store (with SQLite the "
+                        "files in --data are the only copy)\n");
         return -1;
     }
     return 0;
@@ -446,6 +456,7 @@ static int remove_orphans(qdcd *q)
 static int configure(qdcd *q, int argc, char **argv)
 {
     defaults(&q->cfg);
+    pthread_mutex_init(&q->cache_lock, NULL);
     if (parse_args(argc, argv, &q->cfg))
         return 2;
     if (!q->cfg.child_memory) {
@@ -587,13 +598,32 @@ static int start_services(qdcd *q)
     return 0;
 }
 
+/* --cache-max (PostgreSQL store): the least recently used cached files out,
+ * every 2 s. */
+static void trim_cache(qdcd *q, double *next)
+{
+    int64_t bytes = 0;
+    int n;
+
+    if (!shared_on(q) || !q->cfg.cache_max || mono_now() < *next)
+        return;
+    n = shared_trim(q, q->cfg.cache_max, SHARED_CACHE_MIN_AGE, &bytes);
+    atomic_store(&q->m.cache_bytes, bytes);
+    atomic_fetch_add(&q->m.cache_evicted, n);
+    if (n && q->cfg.verbose)
+        fprintf(stderr, "qdcd: cache: %d file(s) evicted, %lld bytes left\n", n,
+                (long long)bytes);
+    *next = mono_now() + 2;
+}
+
 /* The main loop until SIGTERM or SIGINT: expired jobs purged every second;
- * with a shared store, jobs of a node that died recovered every 2 s and the
- * cache swept every minute. */
+ * with a shared store, jobs of a node that died recovered every 2 s, the
+ * cache swept every minute and kept under --cache-max. */
 static void serve(qdcd *q, const sigset_t *stopset)
 {
     const struct timespec tick = {0, 100 * 1000 * 1000};
-    double next_purge = 0, next_sweep = mono_now() + 60, next_recover = mono_now() + 2;
+    double next_purge = 0, next_sweep = mono_now() + 60, next_recover = mono_now() + 2,
+           next_trim = mono_now() + 1;
 
     while (!q->stop) {
         if (mono_now() >= next_purge) {
@@ -618,6 +648,7 @@ static void serve(qdcd *q, const sigset_t *stopset)
             shared_sweep(q, 60);
             next_sweep = mono_now() + 60;
         }
+        trim_cache(q, &next_trim);
         int sig = sigtimedwait(stopset, NULL, &tick);
         if (sig == SIGTERM || sig == SIGINT)
             q->stop = 1;

@@ -68,6 +68,14 @@ enum MHD_Result ops_metrics(struct MHD_Connection *c, req *r)
     metric(&b, "qdcd_upload_bytes_total", "counter",
            "Request body bytes received on uploads.",
            (long long)atomic_load(&q->m.upload_bytes));
+    if (q->cfg.cache_max) { /* --cache-max */
+        metric(&b, "qdcd_cache_bytes", "gauge",
+               "Bytes of job files in this node's cache at its last scan.",
+               (long long)atomic_load(&q->m.cache_bytes));
+        metric(&b, "qdcd_cache_evicted_total", "counter",
+               "Cached files evicted, least recently used first.",
+               (long long)atomic_load(&q->m.cache_evicted));
+    }
     metric(&b, "qdcd_jobs_submitted_total", "counter", "Jobs accepted.",
            (long long)atomic_load(&q->m.submitted));
     metric(&b, "qdcd_jobs_rejected_total", "counter", "Submissions refused (4xx).",

@@ -58,8 +58,8 @@ static int not_servable(struct MHD_Connection *c, req *r, const job_rec *j,
 
     if (r->route == R_INPUT && !(job_state_done(j->state) && gone)) {
         input_source(r, j, src, sizeof src);
-        if (access(src, R_OK) != 0 && shared_on(r->q) && !job_is_surface(j->format))
-            (void)shared_fetch(r->q, j->id, job_input_name(j->format), NULL);
+        if (shared_on(r->q) && !job_is_surface(j->format))
+            (void)shared_fetch(r->q, j->id, job_input_name(j->format), NULL); /* or use */
         if (access(src, R_OK) == 0)
             return 0;
         if (job_state_done(j->state)) { /* a surface TetGen could not mesh */
@@ -294,7 +294,7 @@ static enum MHD_Result process_convert(struct MHD_Connection *c, req *r)
         return ret;
     result_file(r, &j, r->res_fmt, path, sizeof path, hex);
     snprintf(side, sizeof side, "%s.etag", path);
-    if (shared_on(r->q) && access(path, R_OK) != 0) {
+    if (shared_on(r->q) && shared_use(r->q, path) != 0) {
         /* not in this node's cache: the stored file (the worker's formats,
          * or a conversion another node stored), with the same ETag */
         char sha[65] = "";
@@ -378,7 +378,7 @@ enum MHD_Result do_result(struct MHD_Connection *c, req *r)
         return ret;
     result_file(r, &j, f, path, sizeof path, hex);
     /* shared: a file missing from this node's cache is fetched off-thread */
-    if (hex[0] && (!shared_on(r->q) || access(path, R_OK) == 0))
+    if (hex[0] && (!shared_on(r->q) || shared_use(r->q, path) == 0))
         return serve_result(c, r, f, path, hex);
     r->res_fmt = f;
     return offq_push(&convert, c, r);

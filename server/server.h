@@ -5,6 +5,7 @@
 #include "poll.h"
 #include "store.h"
 
+#include <pthread.h>
 #include <signal.h>
 #include <stdatomic.h>
 #include <stdint.h>
@@ -37,6 +38,8 @@ typedef struct {
     double lease;           /* --lease S */
     double grace;           /* --shutdown-grace S */
     int64_t bderr_samples;  /* --bderr-samples N: random samples per side */
+    int64_t cache_max;      /* --cache-max BYTES: node-local cache cap (PostgreSQL
+                             * store), 0 = none */
     int verbose;
 } qdcd_config;
 
@@ -53,6 +56,8 @@ typedef struct {
     atomic_llong submitted;
     atomic_llong rejected;
     atomic_llong finished[JOB_STATE_COUNT];
+    atomic_llong cache_bytes;   /* DATA/jobs at the last cache scan (--cache-max) */
+    atomic_llong cache_evicted; /* files evicted from it */
 } qdcd_metrics;
 
 struct job_pool;
@@ -69,6 +74,8 @@ typedef struct qdcd {
     char instance[48]; /* this process: lease owner prefix */
     qdcd_metrics m;
     volatile sig_atomic_t stop;
+    /* orders cache readers (shared_use) against eviction (shared_trim) */
+    pthread_mutex_t cache_lock;
 } qdcd;
 
 /* DATA/jobs/ID[/NAME] */

@@ -27,4 +27,19 @@ void shared_listen_stop(qdcd *q);
  * row). Returns how many. */
 int shared_sweep(qdcd *q, double min_age);
 
+/* The node-local cache's size cap (--cache-max). Its clock is each cached
+ * file's atime, set by shared_use whenever the file is about to be read
+ * (relatime and noatime mounts do not matter: it is set explicitly). */
+#define SHARED_CACHE_MIN_AGE 10.0 /* seconds: a file used since is never evicted */
+/* 0 (and marks the file as used now) if path is in the cache, else -1. A reader
+ * calls it before it opens a cached file: the file then stays for at least
+ * SHARED_CACHE_MIN_AGE seconds. */
+int shared_use(qdcd *q, const char *path);
+/* Evict the least recently used cached files until DATA/jobs holds at most
+ * cap bytes: only files the database also has (inputs, results in every
+ * format with their .etag, reports), never those of a job running on this
+ * node, nor files used in the last min_age seconds. *bytes: the size after.
+ * Returns the number of files evicted. */
+int shared_trim(qdcd *q, int64_t cap, double min_age, int64_t *bytes);
+
 #endif

@@ -455,6 +455,8 @@ static int commit_input(req *r, const char *id, const char *format)
         dir_remove(dir);
         return e;
     }
+    if (!durable) /* the cache's clock: used now, not when the upload began */
+        (void)shared_use(r->q, path);
     return 0;
 }
 

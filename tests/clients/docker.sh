@@ -8,22 +8,25 @@
 . "$(dirname "$0")/../lib.sh"
 DF=$ROOT/docker/Dockerfile
 EP=$ROOT/docker/entrypoint.sh
-CF=$ROOT/docker/compose.yaml
+CF=$ROOT/docker/compose.single.yaml
 
 # 1. linter
 if command -v npx > /dev/null 2>&1; then
-    out=$(cd "$ROOT" && timeout 180 npx --yes dockerfile-utils lint docker/Dockerfile 2>&1)
-    rc=$?
-    if [ $rc = 0 ]; then
-        pass "dockerfile-utils lint: no problem"
-    else
-        fail "dockerfile-utils lint" "rc $rc: $(printf '%s' "$out" | grep -v 'npm warn' | head -8 | tr '\n' ' ')"
-    fi
+    for df in Dockerfile postgres.Dockerfile haproxy.Dockerfile; do
+        out=$(cd "$ROOT" && timeout 180 npx --yes dockerfile-utils lint "docker/$df" 2>&1)
+        rc=$?
+        if [ $rc = 0 ]; then
+            pass "dockerfile-utils lint docker/$df: no problem"
+        else
+            fail "dockerfile-utils lint docker/$df" "rc $rc: $(printf '%s' "$out" | grep -v 'npm warn' | head -8 | tr '\n' ' ')"
+        fi
+    done
 else
     echo "ok - dockerfile-utils lint # SKIP no npx here (apt-get install npm)"
 fi
 if command -v shellcheck > /dev/null 2>&1; then
-    check "shellcheck docker/entrypoint.sh clients/batch/qdc-batch.sh" shellcheck -s sh "$EP" "$ROOT/clients/batch/qdc-batch.sh"
+    check "shellcheck docker/*entrypoint.sh clients/batch/qdc-batch.sh" shellcheck -s sh "$EP" \
+        "$ROOT/docker/postgres-entrypoint.sh" "$ROOT/docker/haproxy-entrypoint.sh" "$ROOT/clients/batch/qdc-batch.sh"
 fi
 
 # 2. structure
@@ -45,6 +48,61 @@ grep -q "^ *- qdc-data:$vol$" "$CF" && grep -q '^  qdc-data:' "$CF" || bad="$bad
 grep -q 'dockerfile: docker/Dockerfile' "$CF" && grep -q '"127.0.0.1:8080:8080"' "$CF" || bad="$bad compose-build-ports"
 [ -z "$bad" ] && pass "Dockerfile/compose structure: 2 bookworm-slim stages, deps.sh, USER numeric, VOLUME $vol = --data, HEALTHCHECK /livez, named volume" ||
     fail "Dockerfile structure" "missing:$bad"
+
+# 2b. docker/compose.yaml: PostgreSQL and 3 qdcd replicas on it behind one
+# published (loopback) port; every image built here from debian:bookworm-slim
+if out=$($PY - "$ROOT/docker/compose.yaml" << 'PYEOF' 2>&1
+import os, re, sys
+import yaml
+path = sys.argv[1]
+d = yaml.safe_load(open(path))
+svc = d["services"]
+bad = []
+qdcd = [n for n, s in svc.items() if "--store" in s.get("command", [])]
+uris = [s["command"][s["command"].index("--store") + 1] for s in (svc[n] for n in qdcd)]
+if len(qdcd) != 3 or not all(u.startswith("postgresql://") for u in uris) or len(set(uris)) != 1:
+    bad.append("3 replicas on one postgresql:// store: %s" % uris)
+for n in qdcd:
+    c = svc[n]["command"]
+    if "--cache-max" not in c or "--data" not in c:
+        bad.append(n + ": --data and --cache-max")
+    vols = [v.split(":")[0] for v in svc[n].get("volumes", [])]
+    if len(vols) != 1:
+        bad.append(n + ": one volume of its own")
+cache_vols = [svc[n]["volumes"][0].split(":")[0] for n in qdcd]
+if len(set(cache_vols)) != 3:
+    bad.append("each replica its own cache volume")
+pub = {n: s["ports"] for n, s in svc.items() if s.get("ports")}
+if len(pub) != 1 or not all(p.startswith("127.0.0.1:") for ps in pub.values() for p in ps):
+    bad.append("one service publishes one loopback port: %s" % pub)
+lb = list(pub)[0] if pub else None
+if lb and sorted(h.split(":")[0] for h in svc[lb]["environment"]["QDC_BACKENDS"].split()) != sorted(qdcd):
+    bad.append("the balancer's backends are the replicas")
+for n, s in svc.items():
+    b = s.get("build")
+    if not b:
+        bad.append(n + ": built here")
+        continue
+    df = os.path.normpath(os.path.join(os.path.dirname(path), b["context"], b["dockerfile"]))
+    stages = set()
+    for line in open(df):
+        m = re.match(r"FROM\s+(\S+)(?:\s+AS\s+(\S+))?", line)
+        if m:
+            if m.group(1) != "debian:bookworm-slim" and m.group(1) not in stages:
+                bad.append(n + ": FROM " + m.group(1))
+            if m.group(2):
+                stages.add(m.group(2))
+pg = [n for n, s in svc.items() if "postgres" in s["build"]["dockerfile"]]
+if not pg or any(svc[n].get("depends_on", {}).get(pg[0], {}).get("condition") != "service_healthy" for n in qdcd):
+    bad.append("replicas wait for a healthy postgres")
+print("; ".join(bad))
+sys.exit(1 if bad else 0)
+PYEOF
+); then
+    pass "compose.yaml: postgres + 3 replicas ($(grep -c '^  qdcd[0-9]:' "$ROOT/docker/compose.yaml") services on one postgresql:// store, own cache volumes, --cache-max) behind one loopback port, every image from debian:bookworm-slim"
+else
+    fail "compose.yaml structure" "$out"
+fi
 
 # 3. the build stage on exactly what it copies (COPY lines of the build stage)
 mkdir -p "$TMP/ctx"

@@ -6,58 +6,32 @@
 # and a second container on the same volume that still has the job and its
 # result. Without a working engine every check is reported as a skip.
 . "$(dirname "$0")/../lib.sh"
+. "$(dirname "$0")/engine.inc"
 
-skip_all() {
-    for n in "base image" "image build" "job in a container" "SIGTERM stop" \
-        "restart on the same volume"; do
-        echo "ok - container: $n # SKIP $1"
-    done
-    exit 0
-}
-
-# Podman with the project's settings (runc, cgroupfs: see docker/containers.conf).
-export CONTAINERS_CONF="$ROOT/docker/containers.conf"
-ENGINE=
-if command -v podman > /dev/null 2>&1 && podman info > /dev/null 2>&1; then
-    ENGINE=podman
-elif command -v docker > /dev/null 2>&1 && docker info > /dev/null 2>&1; then
-    ENGINE=docker
-fi
-[ -n "$ENGINE" ] || skip_all "no container engine"
-# Podman runs health checks through systemd timers, which a CI machine may lack.
-NOHC=
-[ "$ENGINE" = podman ] && NOHC=--no-healthcheck
-[ "$(id -u)" = 0 ] || skip_all "not root (the engine runs rootful here)"
+engine_or_skip "container: base image|container: image build|container: job in a container|container: SIGTERM stop|container: restart on the same volume"
 
 # 1. base image (debootstrap into the local store; kept between runs)
-if ! "$ENGINE" image inspect docker.io/library/debian:bookworm-slim > /dev/null 2>&1; then
-    command -v debootstrap > /dev/null 2>&1 || skip_all "no debootstrap for the base image"
-fi
-if sh "$ROOT/docker/base-image.sh" "$ENGINE" 2> "$TMP/base.log"; then
+if base_image; then
     pass "container: base image debian:bookworm-slim in the local store ($ENGINE)"
 else
     fail "container: base image" "$(tail -3 "$TMP/base.log" | tr '\n' ' ')"
     exit 1
 fi
 
-# 2. the image, from the repository as it is (a context of tracked files only)
-IMG=localhost/qdc-test:$$
-git -C "$ROOT" ls-files -co --exclude-standard > "$TMP/files"
-mkdir -p "$TMP/ctx"
-(cd "$ROOT" && tar -cf - -T "$TMP/files") | tar -C "$TMP/ctx" -xf -
+# 2. the image, from the repository as it is (a context of tracked files only),
+# under a tag kept between runs (engine.inc: the layer cache makes a rebuild of
+# an unchanged tree quick, and tests/container/replicas.sh reuses it)
+IMG=$IMG_QDC
+repo_context "$TMP/ctx"
 cleanup() {
     "$ENGINE" rm -f qdc-test-a-$$ qdc-test-b-$$ > /dev/null 2>&1
-    "$ENGINE" rmi -f "$IMG" > /dev/null 2>&1
     "$ENGINE" volume rm -f qdc-test-vol-$$ > /dev/null 2>&1
     rm -rf "$TMP"
 }
 trap cleanup EXIT
-set -- build --network host -f docker/Dockerfile -t "$IMG" .
-[ "$ENGINE" = podman ] && set -- build --pull=never --format docker --network host -f docker/Dockerfile -t "$IMG" .
-t0=$(date +%s)
-if (cd "$TMP/ctx" && "$ENGINE" "$@") > "$TMP/build.log" 2>&1; then
-    size=$("$ENGINE" image inspect "$IMG" --format '{{.Size}}' 2> /dev/null)
-    pass "container: image built in $(($(date +%s) - t0)) s ($((${size:-0} / 1048576)) MB)"
+trap 'exit 1' INT TERM HUP PIPE # so that cleanup runs then too
+if build_image "$IMG" "$TMP/ctx/docker/Dockerfile" "$TMP/ctx"; then
+    pass "container: image $IMG built in $BUILD_S s ($BUILD_MB MB; layers of an unchanged tree come from the cache)"
 else
     fail "container: image build" "$(tail -5 "$TMP/build.log" | tr '\n' ' ')"
     exit 1
