@@ -707,8 +707,14 @@ int main(int argc, char **argv)
      * measured 0.8 CPU s sleeping against 2.4-3.1 spinning on 2 busy cores).
      * libgomp reads the policy before main: set it and start again, once,
      * unless the operator chose one. */
-    if (!getenv("OMP_WAIT_POLICY") && setenv("OMP_WAIT_POLICY", "PASSIVE", 1) == 0)
-        execv("/proc/self/exe", argv);
+    if (!getenv("OMP_WAIT_POLICY") && setenv("OMP_WAIT_POLICY", "PASSIVE", 1) == 0) {
+        char self[4096]; /* its own path, so that ps and /proc/PID/comm say qdcd */
+        ssize_t n = readlink("/proc/self/exe", self, sizeof self - 1);
+        if (n > 0) {
+            self[n] = 0;
+            execv(self, argv);
+        }
+    }
     rc = configure(q, argc, argv);
     if (rc)
         return rc;

@@ -43,9 +43,16 @@ static void usage(FILE *f)
  * itself again (once: the variable is then set). If that fails, it goes on. */
 static void wait_passive(char **argv)
 {
+    char self[4096]; /* its own path, so that ps and /proc/PID/comm say qdc */
+    ssize_t n;
+
     if (getenv("OMP_WAIT_POLICY") || setenv("OMP_WAIT_POLICY", "PASSIVE", 1) != 0)
         return;
-    execv("/proc/self/exe", argv);
+    n = readlink("/proc/self/exe", self, sizeof self - 1);
+    if (n > 0) {
+        self[n] = 0;
+        execv(self, argv);
+    }
 }
 
 int main(int argc, char **argv)

@@ -44,10 +44,11 @@ esac
 unset OMP_WAIT_POLICY
 if start_qdcd "$TMP/d" --workers 1; then
     seen=$(tr '\0' '\n' < /proc/$QPID/environ | sed -n 's/^OMP_WAIT_POLICY=//p')
-    if [ "$seen" = PASSIVE ]; then
+    comm=$(cat /proc/$QPID/comm)
+    if [ "$seen" = PASSIVE ] && [ "$comm" = qdcd ]; then
         pass "ompwait: qdcd passive by default"
     else
-        fail "ompwait: qdcd passive by default" "saw '${seen:-unset}'"
+        fail "ompwait: qdcd passive by default" "saw '${seen:-unset}', comm '$comm'"
     fi
     stop_qdcd
 else
