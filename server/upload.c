@@ -28,8 +28,9 @@
 #define MEDIA_QMESH "application/vnd.qdc.mesh"
 
 struct upload {
-    int fd;         /* the body's temporary file in DATA/tmp, or -1 */
-    char tmp[4200]; /* its path; "" once renamed or removed */
+    int fd;          /* the body's temporary file in DATA/tmp, or -1 */
+    char tmp[4200];  /* its path; "" once renamed or removed */
+    char mtmp[4300]; /* the parsed mesh (JOB_INTAKE_QMESH) beside it, or "" */
     int64_t body_len;
     int too_big;
     int io_err;          /* errno of a failed write of the body, or 0 */
@@ -360,6 +361,8 @@ void upload_done(req *r)
         close(u->fd);
     if (u->tmp[0])
         unlink(u->tmp);
+    if (u->mtmp[0])
+        unlink(u->mtmp);
     free(u);
     r->up = NULL;
 }
@@ -457,6 +460,15 @@ static int commit_input(req *r, const char *id, const char *format)
     }
     if (!durable) /* the cache's clock: used now, not when the upload began */
         (void)shared_use(r->q, path);
+    /* The parsed mesh for the worker: an optimization, not the job's record
+     * (the worker parses the input without it), so it is not fsynced into the
+     * directory; meshio_save synced its content before naming it. */
+    if (u->mtmp[0]) {
+        job_path(r->q, id, JOB_INTAKE_QMESH, path, sizeof path);
+        if (rename(u->mtmp, path))
+            unlink(u->mtmp);
+        u->mtmp[0] = 0;
+    }
     return 0;
 }
 
@@ -542,6 +554,27 @@ static enum MHD_Result over_limits(struct MHD_Connection *c, req *r, int64_t nv,
                         NULL);
 }
 
+/* The validated mesh kept for the worker as the binary format beside the
+ * upload's temporary file (commit_input moves it into the job's directory),
+ * when it holds all the worker uses of the input (job_intake_keeps). A
+ * failure only costs the worker a parse. */
+static void keep_mesh(req *r, const mesh_t *m)
+{
+    upload *u = r->up;
+    qdc_error e;
+
+    if (!job_intake_keeps(m, u->fmt))
+        return;
+    snprintf(u->mtmp, sizeof u->mtmp, "%s.qmesh", u->tmp);
+    qdc_error_clear(&e);
+    if (meshio_save(u->mtmp, MESHIO_QMESH, m, &e) != QDC_OK) {
+        if (r->q->cfg.verbose)
+            fprintf(stderr, "qdcd: the parsed upload was not kept: %s\n", e.msg);
+        unlink(u->mtmp);
+        u->mtmp[0] = 0;
+    }
+}
+
 /* Parse and validate the upload (buf, len) into j's sizes and notes, or
  * answer with the problem (returns 1 then, *ret set). A surface is checked
  * (closed, manifold, oriented) but tetrahedralized later, by the worker. */
@@ -600,6 +633,7 @@ static int check_upload(struct MHD_Connection *c, req *r, const char *buf, size_
         j->nt = m->nt;
         snprintf(j->notes, sizeof j->notes, "%s",
                  notes.buf && !notes.oom ? notes.buf : "");
+        keep_mesh(r, m);
     }
     mesh_free(m);
     sb_free(&notes);
