@@ -838,8 +838,12 @@ static void run_job(worker *w, job_rec *j)
     }
     if (k == RUN_ERROR || k == RUN_FAILED)
         j->state = JOB_FAILED;
-    if (k != RUN_RELEASED)
+    if (k != RUN_RELEASED) {
         run_record(&s);
+        /* read once: a job handed back keeps it for its next run */
+        job_path(q, j->id, JOB_INTAKE_QMESH, path, sizeof path);
+        unlink(path);
+    }
     if (s.ctx.progress)
         fclose(s.ctx.progress);
     mesh_free(s.m);

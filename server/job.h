@@ -42,7 +42,8 @@ void job_opt_table_json(sbuf *out);
 #define JOB_INPUT_TETS "input-tets.qmesh"
 /* The upload as the intake parsed it (the library's binary mesh), for the
  * worker: written when it holds all the worker uses of the input
- * (job_intake_keeps); a job without it is parsed from its input. */
+ * (job_intake_keeps); a job without it is parsed from its input. Removed
+ * when the job ends. */
 #define JOB_INTAKE_QMESH "intake.qmesh"
 /* Input file name of a job for its format name ("input.qmesh", "input.stl"...). */
 const char *job_input_name(const char *format);

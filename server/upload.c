@@ -31,6 +31,7 @@ struct upload {
     int fd;          /* the body's temporary file in DATA/tmp, or -1 */
     char tmp[4200];  /* its path; "" once renamed or removed */
     char mtmp[4300]; /* the parsed mesh (JOB_INTAKE_QMESH) beside it, or "" */
+    double keep_s;   /* seconds spent writing it */
     int64_t body_len;
     int too_big;
     int io_err;          /* errno of a failed write of the body, or 0 */
@@ -563,6 +564,8 @@ static void keep_mesh(req *r, const mesh_t *m)
     upload *u = r->up;
     qdc_error e;
 
+    double t0 = mono_now();
+
     if (!job_intake_keeps(m, u->fmt))
         return;
     snprintf(u->mtmp, sizeof u->mtmp, "%s.qmesh", u->tmp);
@@ -573,6 +576,7 @@ static void keep_mesh(req *r, const mesh_t *m)
         unlink(u->mtmp);
         u->mtmp[0] = 0;
     }
+    u->keep_s = mono_now() - t0;
 }
 
 /* Parse and validate the upload (buf, len) into j's sizes and notes, or
@@ -758,9 +762,9 @@ static enum MHD_Result process_upload(struct MHD_Connection *c, req *r)
     if (q->cfg.verbose)
         fprintf(stderr,
                 "qdcd: job %s queued (%s, %lld tets; body %.3f s after the headers, "
-                "parse %.3f s, validate %.3f s, commit %.3f s)\n",
+                "parse %.3f s, validate %.3f s, keep %.3f s, commit %.3f s)\n",
                 j.id, j.format, (long long)j.nt, t_parse - r->t0, t_valid - t_parse,
-                t_commit - t_valid, mono_now() - t_commit);
+                t_commit - t_valid - u->keep_s, u->keep_s, mono_now() - t_commit);
     char loc[80];
     snprintf(loc, sizeof loc, "/v1/jobs/%s", j.id);
     const char *const h[] = {MHD_HTTP_HEADER_LOCATION, loc, NULL};

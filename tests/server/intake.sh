@@ -5,6 +5,7 @@
 #  - Gmsh 4.1 ASCII, VTU and JSON uploads (the JSON with fixed vertices: a
 #    Gmsh periodic mesh's held pairs) get intake.qmesh, the worker says it read
 #    it, and result.qmesh is byte for byte `qdc optimize` of the same file;
+#    intake.qmesh is removed when the job ends;
 #  - a Medit upload gets none (its result.mesh is spliced from the file);
 #  - the same uploads with intake.qmesh deleted, or overwritten with garbage,
 #    while queued behind a long job: the worker parses the input and the three
@@ -65,10 +66,10 @@ for c in $CASES; do
         continue
     fi
     c1=$(req GET "/v1/jobs/$id/result?format=qmesh" "$TMP/$n.d.qmesh")
-    if [ -s "$D/jobs/$id/intake.qmesh" ] &&
+    if [ ! -e "$D/jobs/$id/intake.qmesh" ] &&
         grep -q "job $id: input read from intake.qmesh" "$D.log" &&
         [ "$c1" = 200 ] && cmp -s "$TMP/$n.d.qmesh" "$TMP/$n.cli.qmesh"; then
-        pass "intake: $n: the worker read intake.qmesh ($(wc -c < "$D/jobs/$id/intake.qmesh") bytes); result.qmesh is qdc optimize's, byte for byte"
+        pass "intake: $n: the worker read intake.qmesh (removed when the job ended); result.qmesh is qdc optimize's, byte for byte"
     else
         fail "intake: $n: worker read intake.qmesh, result as the CLI's" "file $(ls "$D/jobs/$id" | tr '\n' ' '); GET $c1; log: $(grep "job $id" "$D.log" | tail -3)"
     fi
@@ -104,7 +105,7 @@ for c in $CASES; do
     q=$D/jobs/$id/intake.qmesh
     st=$(curl -s "$URL/v1/jobs/$id" | jq -r .state)
     if [ "$code" = 202 ] && [ "$st" = queued ] && [ -s "$q" ]; then
-        pass "intake: $n: queued with intake.qmesh"
+        pass "intake: $n: queued with intake.qmesh ($(wc -c < "$q") bytes)"
     else
         fail "intake: $n: queued with intake.qmesh" "submit $code, state $st, files $(ls "$D/jobs/$id" | tr '\n' ' ')"
     fi
