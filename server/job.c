@@ -1,5 +1,6 @@
 /* job.c - the worker pool. A worker claims a job (lease), runs opt_run on its
- * input with a progress callback that publishes every record to the poll hub
+ * input (the mesh the intake parsed, intake.qmesh, when it kept one; else the
+ * upload parsed) with a progress callback that publishes every record to the poll hub
  * and appends it to DATA/jobs/ID/progress.jsonl, then writes the result in the
  * three formats plus report.json (each written, fsynced and renamed) and only
  * then marks the row done: a crash at any point leaves a running row that the

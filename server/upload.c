@@ -2,11 +2,12 @@
  * and the size cap are checked at the first call (headers only), so a refused
  * body is not read. The body is streamed to a temporary file in DATA/tmp;
  * once complete, the intake thread maps it, parses and validates it with
- * libqdc (never with jansson), fsyncs and renames it into DATA/jobs/ID and
- * commits the row before the 202. With a PostgreSQL store (shared.h) the input
- * is stored in the database in the transaction that inserts the row. The
- * upload's state is this file's (struct upload, r->up): other requests do not
- * carry it. */
+ * libqdc (never with jansson), keeps the parsed mesh for the worker
+ * (JOB_INTAKE_QMESH, when it holds all the worker needs), fsyncs and renames
+ * the upload into DATA/jobs/ID and commits the row before the 202. With a PostgreSQL
+ * store (shared.h) the input is stored in the database in the transaction that inserts
+ * the row. The upload's state is this file's (struct upload, r->up): other requests do
+ * not carry it. */
 #define _GNU_SOURCE
 #include "handlers.h"
 
