@@ -1,5 +1,6 @@
 /* job.c - the worker pool. A worker claims a job (lease), runs opt_run on its
- * input with a progress callback that publishes every record to the poll hub
+ * input (the mesh the intake parsed, intake.qmesh, when it kept one; else the
+ * upload parsed) with a progress callback that publishes every record to the poll hub
  * and appends it to DATA/jobs/ID/progress.jsonl, then writes the result in the
  * three formats plus report.json (each written, fsynced and renamed) and only
  * then marks the row done: a crash at any point leaves a running row that the
@@ -78,6 +79,12 @@ const char *job_input_name(const char *format)
 int job_is_surface(const char *format)
 {
     return surface_format_from_name(format) != SURFACE_AUTO;
+}
+
+int job_intake_keeps(const mesh_t *m, meshio_format fmt)
+{
+    return fmt != MESHIO_QMESH && fmt != MESHIO_MEDIT && !m->vref && m->ntri == 0 &&
+           !m->source;
 }
 
 /* ---------------------------------------------------------------- options -- */
@@ -609,6 +616,40 @@ static run_step run_fetch(run_state *s)
     return RUN_ON;
 }
 
+/* The mesh the intake parsed (JOB_INTAKE_QMESH), when it wrote one: 0 with
+ * s->m set, -1 to parse the input (no such file: a Medit upload, one with
+ * boundary triangles or vertex refs, a job accepted by an older qdcd or by
+ * another node of a shared store; or a file that does not read back). */
+static int read_intake(run_state *s, meshio_format fin)
+{
+    char path[4200];
+    size_t len = 0;
+    char *buf;
+    qdc_error e;
+    mesh_t *m = NULL;
+
+    if (fin == MESHIO_QMESH || fin == MESHIO_MEDIT)
+        return -1;
+    job_path(s->q, s->j->id, JOB_INTAKE_QMESH, path, sizeof path);
+    buf = file_read_all(path, &len);
+    if (!buf)
+        return -1;
+    qdc_error_clear(&e);
+    qdc_status st = meshio_read(buf, len, MESHIO_QMESH, &m, &e);
+    free(buf);
+    if (st == QDC_OK && (m->nv != s->j->nv || m->nt != s->j->nt))
+        st = qdc_fail(&e, QDC_EINTERNAL, "%d vertices and %d tets, not the job's", m->nv,
+                      m->nt);
+    if (st != QDC_OK) {
+        fprintf(stderr, "qdcd: job %s: %s unusable (%s): parsing the input\n", s->j->id,
+                JOB_INTAKE_QMESH, e.msg);
+        mesh_free(m);
+        return -1;
+    }
+    s->m = m;
+    return 0;
+}
+
 /* The job's options and its mesh: the upload, or TetGen's mesh of a surface. */
 static run_step run_load(run_state *s)
 {
@@ -621,6 +662,14 @@ static run_step run_load(run_state *s)
         int t = tetrahedralize(s->w, s->j, &s->opts, &s->m);
         return t == 1 ? RUN_FAILED : t == 2 ? RUN_STOPPED : RUN_ON;
     }
+    meshio_format fin = meshio_format_from_name(s->j->format);
+    double t0 = mono_now();
+    if (read_intake(s, fin) == 0) {
+        if (s->q->cfg.verbose)
+            fprintf(stderr, "qdcd: job %s: input read from %s in %.3f s\n", s->j->id,
+                    JOB_INTAKE_QMESH, mono_now() - t0);
+        return RUN_ON;
+    }
     job_path(s->q, s->j->id, job_input_name(s->j->format), path, sizeof path);
     buf = file_read_all(path, &len);
     if (!buf) {
@@ -631,10 +680,12 @@ static run_step run_load(run_state *s)
      * only the coordinates replaced (as `qdc optimize` writes OUT in IN's
      * format); the conversion thread does the same for the other formats
      * (result.c). */
-    meshio_format fin = meshio_format_from_name(s->j->format);
     meshio_options mo = {NULL, NULL, fin == MESHIO_MEDIT ? 1 : -1};
     s->st = meshio_read_ex(buf, len, fin, &mo, &s->m, &s->err);
     free(buf);
+    if (s->st == QDC_OK && s->q->cfg.verbose)
+        fprintf(stderr, "qdcd: job %s: input parsed from %s in %.3f s\n", s->j->id,
+                job_input_name(s->j->format), mono_now() - t0);
     return s->st == QDC_OK ? RUN_ON : RUN_ERROR;
 }
 
@@ -788,8 +839,12 @@ static void run_job(worker *w, job_rec *j)
     }
     if (k == RUN_ERROR || k == RUN_FAILED)
         j->state = JOB_FAILED;
-    if (k != RUN_RELEASED)
+    if (k != RUN_RELEASED) {
         run_record(&s);
+        /* read once: a job handed back keeps it for its next run */
+        job_path(q, j->id, JOB_INTAKE_QMESH, path, sizeof path);
+        unlink(path);
+    }
     if (s.ctx.progress)
         fclose(s.ctx.progress);
     mesh_free(s.m);

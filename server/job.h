@@ -40,10 +40,22 @@ void job_opt_table_json(sbuf *out);
 /* A surface job's tet mesh (TetGen's), kept beside its input once the worker
  * has read it: the mesh the optimizer started from. */
 #define JOB_INPUT_TETS "input-tets.qmesh"
+/* The upload as the intake parsed it (the library's binary mesh), for the
+ * worker: written when it holds all the worker uses of the input
+ * (job_intake_keeps); a job without it is parsed from its input. Removed
+ * when the job ends. */
+#define JOB_INTAKE_QMESH "intake.qmesh"
 /* Input file name of a job for its format name ("input.qmesh", "input.stl"...). */
 const char *job_input_name(const char *format);
 /* Is format (a job's) a surface format, tetrahedralized by the worker? */
 int job_is_surface(const char *format);
+/* Whether JOB_INTAKE_QMESH can stand for an upload in format fmt parsed as m:
+ * the binary mesh keeps coordinates, tets, regions and fixed flags (Gmsh
+ * periodic pairs, held vertices) but no per-vertex refs, no boundary
+ * triangles and no source file, which the worker writes into result.mesh
+ * (a Medit upload's is spliced from its source); such uploads are parsed
+ * again by the worker. An upload already in the binary format is its own. */
+int job_intake_keeps(const mesh_t *m, meshio_format fmt);
 /* The TetGen options stored in a surface job's options JSON ("tetgen_quality",
  * "max_volume"); -1 for each one not given. */
 void job_tetra_opts(const char *json, double *quality, double *max_volume);

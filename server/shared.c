@@ -135,9 +135,12 @@ int shared_use(qdcd *q, const char *path)
 }
 
 /* Cached files the database also has, so evicting one only costs a fetch:
- * input.EXT, input-as.EXT, result.EXT (and their .etag), report.json. Not
- * input-tets.qmesh (TetGen's mesh of a surface: only on its worker's node),
- * nor files being written (.tmp). */
+ * input.EXT, input-as.EXT, result.EXT (and their .etag), report.json; and
+ * intake.qmesh, which only the node that accepted the upload has but whose
+ * loss only costs a parse (a worker of another node parses the input; the
+ * file would stay here until the job is deleted). Not input-tets.qmesh
+ * (TetGen's mesh of a surface: only on its worker's node), nor files being
+ * written (.tmp). */
 static int evictable(const char *name)
 {
     size_t n = strlen(name);
@@ -145,7 +148,8 @@ static int evictable(const char *name)
         (n >= 5 && !strcmp(name + n - 5, ".etag")))
         return 0;
     return !strncmp(name, "input.", 6) || !strncmp(name, "input-as.", 9) ||
-           !strncmp(name, "result.", 7) || !strcmp(name, "report.json");
+           !strncmp(name, "result.", 7) || !strcmp(name, "report.json") ||
+           !strcmp(name, JOB_INTAKE_QMESH);
 }
 
 typedef struct {

@@ -2,11 +2,12 @@
  * and the size cap are checked at the first call (headers only), so a refused
  * body is not read. The body is streamed to a temporary file in DATA/tmp;
  * once complete, the intake thread maps it, parses and validates it with
- * libqdc (never with jansson), fsyncs and renames it into DATA/jobs/ID and
- * commits the row before the 202. With a PostgreSQL store (shared.h) the input
- * is stored in the database in the transaction that inserts the row. The
- * upload's state is this file's (struct upload, r->up): other requests do not
- * carry it. */
+ * libqdc (never with jansson), keeps the parsed mesh for the worker
+ * (JOB_INTAKE_QMESH, when it holds all the worker needs), fsyncs and renames
+ * the upload into DATA/jobs/ID and commits the row before the 202. With a PostgreSQL
+ * store (shared.h) the input is stored in the database in the transaction that inserts
+ * the row. The upload's state is this file's (struct upload, r->up): other requests do
+ * not carry it. */
 #define _GNU_SOURCE
 #include "handlers.h"
 
@@ -28,8 +29,10 @@
 #define MEDIA_QMESH "application/vnd.qdc.mesh"
 
 struct upload {
-    int fd;         /* the body's temporary file in DATA/tmp, or -1 */
-    char tmp[4200]; /* its path; "" once renamed or removed */
+    int fd;          /* the body's temporary file in DATA/tmp, or -1 */
+    char tmp[4200];  /* its path; "" once renamed or removed */
+    char mtmp[4300]; /* the parsed mesh (JOB_INTAKE_QMESH) beside it, or "" */
+    double keep_s;   /* seconds spent writing it */
     int64_t body_len;
     int too_big;
     int io_err;          /* errno of a failed write of the body, or 0 */
@@ -360,6 +363,8 @@ void upload_done(req *r)
         close(u->fd);
     if (u->tmp[0])
         unlink(u->tmp);
+    if (u->mtmp[0])
+        unlink(u->mtmp);
     free(u);
     r->up = NULL;
 }
@@ -457,6 +462,15 @@ static int commit_input(req *r, const char *id, const char *format)
     }
     if (!durable) /* the cache's clock: used now, not when the upload began */
         (void)shared_use(r->q, path);
+    /* The parsed mesh for the worker: an optimization, not the job's record
+     * (the worker parses the input without it), so it is not fsynced into the
+     * directory; meshio_save synced its content before naming it. */
+    if (u->mtmp[0]) {
+        job_path(r->q, id, JOB_INTAKE_QMESH, path, sizeof path);
+        if (rename(u->mtmp, path))
+            unlink(u->mtmp);
+        u->mtmp[0] = 0;
+    }
     return 0;
 }
 
@@ -542,6 +556,30 @@ static enum MHD_Result over_limits(struct MHD_Connection *c, req *r, int64_t nv,
                         NULL);
 }
 
+/* The validated mesh kept for the worker as the binary format beside the
+ * upload's temporary file (commit_input moves it into the job's directory),
+ * when it holds all the worker uses of the input (job_intake_keeps). A
+ * failure only costs the worker a parse. */
+static void keep_mesh(req *r, const mesh_t *m)
+{
+    upload *u = r->up;
+    qdc_error e;
+
+    double t0 = mono_now();
+
+    if (!job_intake_keeps(m, u->fmt))
+        return;
+    snprintf(u->mtmp, sizeof u->mtmp, "%s.qmesh", u->tmp);
+    qdc_error_clear(&e);
+    if (meshio_save(u->mtmp, MESHIO_QMESH, m, &e) != QDC_OK) {
+        if (r->q->cfg.verbose)
+            fprintf(stderr, "qdcd: the parsed upload was not kept: %s\n", e.msg);
+        unlink(u->mtmp);
+        u->mtmp[0] = 0;
+    }
+    u->keep_s = mono_now() - t0;
+}
+
 /* Parse and validate the upload (buf, len) into j's sizes and notes, or
  * answer with the problem (returns 1 then, *ret set). A surface is checked
  * (closed, manifold, oriented) but tetrahedralized later, by the worker. */
@@ -600,6 +638,7 @@ static int check_upload(struct MHD_Connection *c, req *r, const char *buf, size_
         j->nt = m->nt;
         snprintf(j->notes, sizeof j->notes, "%s",
                  notes.buf && !notes.oom ? notes.buf : "");
+        keep_mesh(r, m);
     }
     mesh_free(m);
     sb_free(&notes);
@@ -724,9 +763,9 @@ static enum MHD_Result process_upload(struct MHD_Connection *c, req *r)
     if (q->cfg.verbose)
         fprintf(stderr,
                 "qdcd: job %s queued (%s, %lld tets; body %.3f s after the headers, "
-                "parse %.3f s, validate %.3f s, commit %.3f s)\n",
+                "parse %.3f s, validate %.3f s, keep %.3f s, commit %.3f s)\n",
                 j.id, j.format, (long long)j.nt, t_parse - r->t0, t_valid - t_parse,
-                t_commit - t_valid, mono_now() - t_commit);
+                t_commit - t_valid - u->keep_s, u->keep_s, mono_now() - t_commit);
     char loc[80];
     snprintf(loc, sizeof loc, "/v1/jobs/%s", j.id);
     const char *const h[] = {MHD_HTTP_HEADER_LOCATION, loc, NULL};
