@@ -1195,6 +1195,7 @@ static qdc_status global_phase(ctx_t *c, opt_result *res, opt_progress *r, int *
     const opt_options *o = c->o;
     int total_iters = o->max_iter + (o->harmonic ? o->pre_iters : 0);
     double q_prev = c->input.q_mean;
+    int32_t inv_prev[2] = {c->input.n_inverted, c->input.n_inverted};
 
     for (int it = 1; !*stop && it <= total_iters; it++) {
         int stepped = 0, pre = o->harmonic && it <= o->pre_iters;
@@ -1237,7 +1238,8 @@ static qdc_status global_phase(ctx_t *c, opt_result *res, opt_progress *r, int *
         } else if (r->max_move < o->tol_move && !pre) {
             set_stop(res, OPT_STOP_CONVERGED);
             break;
-        } else if (!pre && o->stall > 0 && it >= 3 && r->n_inverted == 0 &&
+        } else if (!pre && o->stall > 0 && it >= 3 &&
+                   (r->n_inverted == 0 || r->n_inverted >= inv_prev[0]) &&
                    o->mode != OPT_MODE_LITERAL && r->q_mean - q_prev < o->stall) {
             /* the global phase has done its work (docs/defaults.md: at 800k
              * tets iterations 5..10 added 0.0009 of final mean ratio for 60%
@@ -1249,6 +1251,8 @@ static qdc_status global_phase(ctx_t *c, opt_result *res, opt_progress *r, int *
             break;
         }
         q_prev = r->q_mean;
+        inv_prev[0] = inv_prev[1];
+        inv_prev[1] = r->n_inverted;
     }
     return QDC_OK;
 }
