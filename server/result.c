@@ -205,18 +205,30 @@ static void result_file(req *r, const job_rec *j, meshio_format f, char *path, s
     free(b);
 }
 
-static enum MHD_Result serve_result(struct MHD_Connection *c, req *r, meshio_format f,
-                                    const char *path, const char *hex)
+static enum MHD_Result serve_result(struct MHD_Connection *c, req *r, const job_rec *j,
+                                    meshio_format f, const char *path, const char *hex)
 {
-    char etag[80];
+    char etag[80], note[300] = "";
+    meshio_format sf = meshio_format_from_name(j->format);
 
     snprintf(etag, sizeof etag, "\"%s\"", hex);
+    /* a result in another format than the upload's: say what it cannot hold
+     * (the CLI says the same in a note line) */
+    if (r->route == R_RESULT && !job_is_surface(j->format) && sf != f)
+        snprintf(note, sizeof note,
+                 "written by qdc's %s writer, not the uploaded %s file with new "
+                 "coordinates: only vertices, tets, triangles and their region tags "
+                 "are kept",
+                 meshio_format_name(f) ? meshio_format_name(f) : "?",
+                 meshio_format_name(sf) ? meshio_format_name(sf) : "?");
     const char *const h[] = {MHD_HTTP_HEADER_ETAG,
                              etag,
                              MHD_HTTP_HEADER_VARY,
                              "Accept",
                              MHD_HTTP_HEADER_CACHE_CONTROL,
                              "private, max-age=3600",
+                             note[0] ? "Qdc-Note" : NULL,
+                             note,
                              NULL};
     if (etag_matches(MHD_lookup_connection_value(c, MHD_HEADER_KIND,
                                                  MHD_HTTP_HEADER_IF_NONE_MATCH),
@@ -305,7 +317,7 @@ static enum MHD_Result process_convert(struct MHD_Connection *c, req *r)
             file_write_atomic(side, sha, 64) == 0)
             snprintf(hex, sizeof hex, "%s", sha);
         if (fs == QDC_OK && hex[0])
-            return serve_result(c, r, r->res_fmt, path, hex);
+            return serve_result(c, r, &j, r->res_fmt, path, hex);
         hex[0] = 0;
         if (shared_fetch(r->q, j.id,
                          r->route == R_INPUT ? job_input_name(j.format) : "result.qmesh",
@@ -315,7 +327,7 @@ static enum MHD_Result process_convert(struct MHD_Connection *c, req *r)
             return store_unavailable(c, r, "the result could not be read");
     }
     if (hex[0]) /* written for a request queued before this one */
-        return serve_result(c, r, r->res_fmt, path, hex);
+        return serve_result(c, r, &j, r->res_fmt, path, hex);
     qdc_error_clear(&e);
     double t0 = mono_now();
     st = convert_source(r, &j, &m, &e);
@@ -358,7 +370,7 @@ static enum MHD_Result process_convert(struct MHD_Connection *c, req *r)
      * converting again gives the same bytes) */
     if (shared_on(r->q))
         (void)shared_put(r->q, j.id, strrchr(path, '/') + 1, hex, NULL);
-    return serve_result(c, r, r->res_fmt, path, hex);
+    return serve_result(c, r, &j, r->res_fmt, path, hex);
 }
 
 enum MHD_Result do_result(struct MHD_Connection *c, req *r)
@@ -379,7 +391,7 @@ enum MHD_Result do_result(struct MHD_Connection *c, req *r)
     result_file(r, &j, f, path, sizeof path, hex);
     /* shared: a file missing from this node's cache is fetched off-thread */
     if (hex[0] && (!shared_on(r->q) || shared_use(r->q, path) == 0))
-        return serve_result(c, r, f, path, hex);
+        return serve_result(c, r, &j, f, path, hex);
     r->res_fmt = f;
     return offq_push(&convert, c, r);
 }

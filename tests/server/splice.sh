@@ -89,11 +89,24 @@ if grep -q '^gmsh41 ' "$TMP/ids" 2> /dev/null; then
     id=$(awk '$1 == "gmsh41" {print $2}' "$TMP/ids")
     c1=$(req GET "/v1/jobs/$id/result?format=vtu" "$TMP/g.vtu")
     "$BIN/qdc" optimize "$TMP/gmsh41.msh" "$TMP/g.cli.vtu" --quiet 2> /dev/null
+    note=$(hdr "$TMP/g.vtu" Qdc-Note)
     if [ "$c1" = 200 ] && cmp -s "$TMP/g.vtu" "$TMP/g.cli.vtu" && ! grep -q PhysicalNames "$TMP/g.vtu"; then
         pass "splice: gmsh41 upload, /result?format=vtu: qdc's own VTU writer, as the CLI's gmsh41 -> vtu"
     else
         fail "splice: gmsh41 -> vtu" "status $c1, $(cmp "$TMP/g.vtu" "$TMP/g.cli.vtu" 2>&1 | head -1)"
     fi
+    # the conversion says what it could not keep; the spliced result says nothing
+    same=$(hdr "$TMP/gmsh41.d2" Qdc-Note)
+    case $note in
+    *"vtu writer"*"only vertices, tets, triangles and their region tags are kept")
+        if [ -z "$same" ]; then
+            pass "splice: gmsh41 -> vtu carries Qdc-Note: $note; the spliced gmsh41 result none"
+        else
+            fail "splice: Qdc-Note" "the spliced result has one: $same"
+        fi
+        ;;
+    *) fail "splice: Qdc-Note" "the vtu conversion's note: '$note'" ;;
+    esac
 fi
 stop_qdcd
 
