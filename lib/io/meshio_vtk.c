@@ -49,47 +49,107 @@ static int vtype_of(const char *w, size_t n, vtype *t)
     return -1;
 }
 
-/* n values of type t from bytes b (big-endian if big) into out. */
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_BIG_ENDIAN__
+enum { HOST_BIG = 1 };
+#else
+enum { HOST_BIG = 0 };
+#endif
+
+/* Unaligned loads of 2, 4 and 8 bytes, byte-swapped if swap. */
+static inline uint16_t ld16(const unsigned char *b, int swap)
+{
+    uint16_t u;
+
+    memcpy(&u, b, 2);
+    return swap ? __builtin_bswap16(u) : u;
+}
+
+static inline uint32_t ld32(const unsigned char *b, int swap)
+{
+    uint32_t u;
+
+    memcpy(&u, b, 4);
+    return swap ? __builtin_bswap32(u) : u;
+}
+
+static inline uint64_t ld64(const unsigned char *b, int swap)
+{
+    uint64_t u;
+
+    memcpy(&u, b, 8);
+    return swap ? __builtin_bswap64(u) : u;
+}
+
+static inline double f32_of(uint32_t u)
+{
+    float f;
+
+    memcpy(&f, &u, 4);
+    return f;
+}
+
+static inline double f64_of(uint64_t u)
+{
+    double d;
+
+    memcpy(&d, &u, 8);
+    return d;
+}
+
+/* One loop per type and byte order, so each is a plain (vectorizable) load,
+ * swap and convert. */
+#define DECODE(EXPR)                                                                     \
+    do {                                                                                 \
+        for (int64_t i = 0; i < n; i++)                                                  \
+            out[i] = (EXPR);                                                             \
+    } while (0)
+
+static inline __attribute__((always_inline)) void
+decode_swap(const unsigned char *b, int64_t n, vtype t, int swap, double *out)
+{
+    switch (t) {
+    case T_I8:
+        DECODE((int8_t)b[i]);
+        break;
+    case T_U8:
+        DECODE(b[i]);
+        break;
+    case T_I16:
+        DECODE((int16_t)ld16(b + 2 * i, swap));
+        break;
+    case T_U16:
+        DECODE(ld16(b + 2 * i, swap));
+        break;
+    case T_I32:
+        DECODE((int32_t)ld32(b + 4 * i, swap));
+        break;
+    case T_U32:
+        DECODE(ld32(b + 4 * i, swap));
+        break;
+    case T_I64:
+        DECODE((double)(int64_t)ld64(b + 8 * i, swap));
+        break;
+    case T_U64:
+        DECODE((double)ld64(b + 8 * i, swap));
+        break;
+    case T_F32:
+        DECODE(f32_of(ld32(b + 4 * i, swap)));
+        break;
+    case T_F64:
+        DECODE(f64_of(ld64(b + 8 * i, swap)));
+        break;
+    }
+}
+
+/* n values of type t from bytes b (big-endian if big) into out. The swap
+ * flag is a constant in each call so the compiler keeps two loops. */
 static void decode_values(const unsigned char *b, int64_t n, vtype t, int big,
                           double *out)
 {
-    int sz = vsize[t];
-
-    for (int64_t i = 0; i < n; i++, b += sz) {
-        unsigned char q[8];
-        uint64_t u = 0;
-        for (int j = 0; j < sz; j++)
-            q[j] = b[big ? sz - 1 - j : j];
-        for (int j = sz - 1; j >= 0; j--)
-            u = u << 8 | q[j];
-        switch (t) {
-        case T_I8:
-            out[i] = (int8_t)u;
-            break;
-        case T_I16:
-            out[i] = (int16_t)u;
-            break;
-        case T_I32:
-            out[i] = (int32_t)u;
-            break;
-        case T_I64:
-            out[i] = (double)(int64_t)u;
-            break;
-        case T_F32: {
-            uint32_t u32 = (uint32_t)u;
-            float f;
-            memcpy(&f, &u32, 4);
-            out[i] = f;
-            break;
-        }
-        case T_F64:
-            memcpy(&out[i], &u, 8);
-            break;
-        default: /* unsigned */
-            out[i] = (double)u;
-            break;
-        }
-    }
+    if (big != HOST_BIG)
+        decode_swap(b, n, t, 1, out);
+    else
+        decode_swap(b, n, t, 0, out);
 }
 
 /* ------------------------------------------------------------------------ */
@@ -130,9 +190,167 @@ static int region_prio(const char *name, size_t n)
     return PRIO_NONE;
 }
 
-static int is_int32(double x)
+/* x is an integer in [lo, hi], bounds within int32 (NaN is not). */
+static inline int int_in(double x, double lo, double hi)
 {
-    return x == floor(x) && x >= INT32_MIN && x <= INT32_MAX;
+    return x >= lo && x <= hi && (double)(int32_t)x == x;
+}
+
+static inline int is_int32(double x)
+{
+    return int_in(x, INT32_MIN, INT32_MAX);
+}
+
+/* 1 if every a[i] is an integer in [lo, hi]. */
+static int all_in(const double *a, int64_t n, double lo, double hi)
+{
+    for (int64_t i = 0; i < n; i++)
+        if (!int_in(a[i], lo, hi))
+            return 0;
+    return 1;
+}
+
+/* Where cell i's points are: conn[*a .. *a + *k). The legacy list (no
+ * offsets) is walked with *pos. -1 if the list ends inside a cell. */
+static int cell_span(const cells *c, int64_t i, int64_t *pos, int64_t *a, int64_t *k)
+{
+    double kd;
+
+    if (c->offs) {
+        *a = (int64_t)c->offs[i];
+        *k = (int64_t)c->offs[i + 1] - *a;
+        return 0;
+    }
+    if (*pos >= c->nconn)
+        return -1;
+    kd = c->conn[*pos];
+    if (kd == 4) /* the common sizes as constants: the next cell's position */
+        *k = 4;  /* is predicted, not waited for */
+    else if (kd == 3)
+        *k = 3;
+    else if (is_int32(kd) && kd >= 0)
+        *k = (int64_t)kd;
+    else
+        return -1;
+    *a = *pos + 1;
+    *pos = *a + *k;
+    return *pos > c->nconn ? -1 : 0;
+}
+
+/* Cell i (a tet or triangle of k points at conn[a]): every point index in
+ * range. */
+static qdc_status check_points(const cells *c, const char *fmtname, int64_t i, int64_t a,
+                               int64_t k, qdc_error *err)
+{
+    for (int64_t j = 0; j < k; j++) {
+        double v = c->conn[a + j];
+        if (!int_in(v, 0, (double)c->nv - 1)) {
+            qdc_fail(err, QDC_EPARSE,
+                     "%s: cell %lld: point index %.17g out of range [0, %lld]", fmtname,
+                     (long long)i, v, (long long)c->nv - 1);
+            set_index(err, "cell", i);
+            return QDC_EPARSE;
+        }
+    }
+    return QDC_OK;
+}
+
+/* One walk over the cells: without fill, every check and the counts of
+ * tets and triangles (*nt, *ntri) and skipped types (sk); with fill (arrays
+ * sized by the first walk), their points and regions. Point indices and
+ * regions are checked for the whole array at once; only if that fails, per
+ * cell (so the error names the first bad cell as before). */
+static qdc_status cells_walk(const cells *c, const char *fmtname, parsed *fill,
+                             skipped *sk, int64_t *nt, int64_t *ntri, qdc_error *err)
+{
+    int64_t pos = 0, n4 = 0, n3 = 0;
+    int idx_ok = fill || all_in(c->conn, c->nconn, 0, (double)c->nv - 1);
+    int reg_ok = fill || !c->creg || all_in(c->creg, c->nc, INT32_MIN, INT32_MAX);
+
+    for (int64_t i = 0; i < c->nc; i++) {
+        int64_t a, k, type;
+        if (cell_span(c, i, &pos, &a, &k) != 0)
+            return qdc_fail(err, QDC_EPARSE,
+                            "%s: CELLS list ends inside a cell (wrong counts)", fmtname);
+        type = is_int32(c->types[i]) ? (int64_t)c->types[i] : -1;
+        if (type == 24 || type == 71) { /* corners alone would break them */
+            qdc_fail(
+                err, QDC_EFORMAT,
+                "%s: cell %lld is a %s tetrahedron (VTK cell type %lld, %lld points): "
+                "not supported, qdc optimizes linear tetrahedra (type 10)",
+                fmtname, (long long)i, type == 24 ? "second-order" : "Lagrange",
+                (long long)type, (long long)k);
+            set_index(err, "cell", i);
+            return QDC_EFORMAT;
+        }
+        if (!((type == 10 && k == 4) || (type == 5 && k == 3))) {
+            if (!fill)
+                skip_count(sk, type, 1);
+            continue;
+        }
+        if (!idx_ok && check_points(c, fmtname, i, a, k, err) != QDC_OK)
+            return QDC_EPARSE;
+        if (!reg_ok && !is_int32(c->creg[i])) {
+            qdc_fail(err, QDC_EPARSE, "%s: cell %lld: region %.17g is not an int32",
+                     fmtname, (long long)i, c->creg[i]);
+            set_index(err, "cell", i);
+            return QDC_EPARSE;
+        }
+        if (fill) {
+            int32_t *dst = k == 4 ? fill->tets + 4 * n4 : fill->tris + 3 * n3;
+            for (int64_t j = 0; j < k; j++)
+                dst[j] = (int32_t)c->conn[a + j];
+            if (c->creg)
+                *(k == 4 ? &fill->region[n4] : &fill->tri_ref[n3]) = (int32_t)c->creg[i];
+        }
+        if (k == 4)
+            n4++;
+        else
+            n3++;
+    }
+    *nt = n4;
+    *ntri = n3;
+    return QDC_OK;
+}
+
+/* Arrays for nt tets and ntri triangles (and their regions). */
+static qdc_status cells_alloc(const cells *c, parsed *pm, int64_t nt, int64_t ntri,
+                              const char *fmtname, qdc_error *err)
+{
+    if (nt > MESH_MAX_TETS || ntri > INT32_MAX / 3)
+        return qdc_fail(err, QDC_ETOOBIG, "%s: %lld tets exceed the limit", fmtname,
+                        (long long)nt);
+    pm->tets = qdc_mallocn((size_t)nt * 4 + 1, sizeof(int32_t));
+    pm->tris = qdc_mallocn((size_t)ntri * 3 + 1, sizeof(int32_t));
+    if (c->creg) {
+        pm->region = qdc_mallocn((size_t)nt + 1, sizeof(int32_t));
+        pm->tri_ref = qdc_mallocn((size_t)ntri + 1, sizeof(int32_t));
+    }
+    if (!pm->tets || !pm->tris || (c->creg && (!pm->region || !pm->tri_ref)))
+        return qdc_fail(err, QDC_ENOMEM, "out of memory for %lld cells",
+                        (long long)c->nc);
+    return QDC_OK;
+}
+
+/* The point array medit:ref, if any, as vertex refs. */
+static qdc_status cells_vref(const cells *c, const char *fmtname, parsed *pm,
+                             qdc_error *err)
+{
+    if (!c->vref)
+        return QDC_OK;
+    for (int64_t i = 0; i < c->nv; i++)
+        if (!is_int32(c->vref[i])) {
+            qdc_fail(err, QDC_EPARSE, "%s: point %lld: medit:ref %.17g is not an int32",
+                     fmtname, (long long)i, c->vref[i]);
+            set_index(err, "vertex", i);
+            return QDC_EPARSE;
+        }
+    pm->vref = qdc_mallocn((size_t)c->nv + 1, sizeof(int32_t));
+    if (!pm->vref)
+        return qdc_fail(err, QDC_ENOMEM, "out of memory");
+    for (int64_t i = 0; i < c->nv; i++)
+        pm->vref[i] = (int32_t)c->vref[i];
+    return QDC_OK;
 }
 
 static qdc_status cells_mesh(cells *c, const char *fmtname, const meshio_options *o,
@@ -140,108 +358,20 @@ static qdc_status cells_mesh(cells *c, const char *fmtname, const meshio_options
 {
     parsed pm;
     skipped sk;
-    int64_t pos = 0, nt = 0, ntri = 0;
-    qdc_status st = QDC_OK;
+    int64_t nt = 0, ntri = 0;
+    qdc_status st;
 
     memset(&sk, 0, sizeof sk);
     parsed_init(&pm);
     if (!c->types && c->nc)
         return qdc_fail(err, QDC_EPARSE, "%s: no cell types", fmtname);
-    /* pass 0 counts and checks, pass 1 fills */
-    for (int pass = 0; pass < 2 && st == QDC_OK; pass++) {
-        pos = nt = ntri = 0;
-        for (int64_t i = 0; i < c->nc; i++) {
-            int64_t a, k, type;
-            double t = c->types[i];
-            if (c->offs) {
-                a = (int64_t)c->offs[i];
-                k = (int64_t)c->offs[i + 1] - a;
-            } else {
-                if (pos >= c->nconn || !is_int32(c->conn[pos]) || c->conn[pos] < 0)
-                    goto bad_list;
-                k = (int64_t)c->conn[pos];
-                a = pos + 1;
-                pos = a + k;
-                if (pos > c->nconn)
-                    goto bad_list;
-            }
-            type = is_int32(t) ? (int64_t)t : -1;
-            if (type == 24 || type == 71) { /* corners alone would break them */
-                st = qdc_fail(err, QDC_EFORMAT,
-                              "%s: cell %lld is a %s tetrahedron (VTK cell type %lld, "
-                              "%lld points): not supported, qdc optimizes linear "
-                              "tetrahedra (type 10)",
-                              fmtname, (long long)i,
-                              type == 24 ? "second-order" : "Lagrange", (long long)type,
-                              (long long)k);
-                set_index(err, "cell", i);
-                break;
-            }
-            if (!((type == 10 && k == 4) || (type == 5 && k == 3))) {
-                if (pass == 0)
-                    skip_count(&sk, type, 1);
-                continue;
-            }
-            for (int64_t j = 0; j < k; j++) {
-                double v = c->conn[a + j];
-                if (pass == 0 && !(v == floor(v) && v >= 0 && v < (double)c->nv)) {
-                    st = qdc_fail(
-                        err, QDC_EPARSE,
-                        "%s: cell %lld: point index %.17g out of range [0, %lld]",
-                        fmtname, (long long)i, v, (long long)c->nv - 1);
-                    set_index(err, "cell", i);
-                    break;
-                }
-                if (pass == 1)
-                    (k == 4 ? pm.tets + 4 * nt : pm.tris + 3 * ntri)[j] = (int32_t)v;
-            }
-            if (st != QDC_OK)
-                break;
-            if (pass == 0 && c->creg && !is_int32(c->creg[i])) {
-                st = qdc_fail(err, QDC_EPARSE,
-                              "%s: cell %lld: region %.17g is not an int32", fmtname,
-                              (long long)i, c->creg[i]);
-                set_index(err, "cell", i);
-                break;
-            }
-            if (pass == 1 && c->creg)
-                *(k == 4 ? &pm.region[nt] : &pm.tri_ref[ntri]) = (int32_t)c->creg[i];
-            if (k == 4)
-                nt++;
-            else
-                ntri++;
-        }
-        if (st != QDC_OK || pass == 1)
-            break;
-        if (nt > MESH_MAX_TETS || ntri > INT32_MAX / 3) {
-            st = qdc_fail(err, QDC_ETOOBIG, "%s: %lld tets exceed the limit", fmtname,
-                          (long long)nt);
-            break;
-        }
-        pm.tets = qdc_mallocn((size_t)nt * 4 + 1, sizeof(int32_t));
-        pm.tris = qdc_mallocn((size_t)ntri * 3 + 1, sizeof(int32_t));
-        if (c->creg) {
-            pm.region = qdc_mallocn((size_t)nt + 1, sizeof(int32_t));
-            pm.tri_ref = qdc_mallocn((size_t)ntri + 1, sizeof(int32_t));
-        }
-        if (!pm.tets || !pm.tris || (c->creg && (!pm.region || !pm.tri_ref)))
-            st = qdc_fail(err, QDC_ENOMEM, "out of memory for %lld cells",
-                          (long long)c->nc);
-    }
-    for (int64_t i = 0; st == QDC_OK && c->vref && i < c->nv; i++)
-        if (!is_int32(c->vref[i])) {
-            st = qdc_fail(err, QDC_EPARSE,
-                          "%s: point %lld: medit:ref %.17g is not an int32", fmtname,
-                          (long long)i, c->vref[i]);
-            set_index(err, "vertex", i);
-        }
-    if (st == QDC_OK && c->vref) {
-        pm.vref = qdc_mallocn((size_t)c->nv + 1, sizeof(int32_t));
-        if (!pm.vref)
-            st = qdc_fail(err, QDC_ENOMEM, "out of memory");
-        for (int64_t i = 0; st == QDC_OK && i < c->nv; i++)
-            pm.vref[i] = (int32_t)c->vref[i];
-    }
+    st = cells_walk(c, fmtname, NULL, &sk, &nt, &ntri, err);
+    if (st == QDC_OK)
+        st = cells_alloc(c, &pm, nt, ntri, fmtname, err);
+    if (st == QDC_OK)
+        st = cells_walk(c, fmtname, &pm, NULL, &nt, &ntri, err);
+    if (st == QDC_OK)
+        st = cells_vref(c, fmtname, &pm, err);
     if (st == QDC_OK) {
         pm.nv = c->nv;
         pm.xyz = c->xyz;
@@ -258,10 +388,6 @@ static qdc_status cells_mesh(cells *c, const char *fmtname, const meshio_options
     if (st == QDC_OK)
         skip_note(o, &sk, fmtname, "cells");
     return st;
-bad_list:
-    parsed_free(&pm);
-    return qdc_fail(err, QDC_EPARSE, "%s: CELLS list ends inside a cell (wrong counts)",
-                    fmtname);
 }
 
 /* Offsets of the 5.1 / XML layout: nc+1 non-decreasing integers within
@@ -271,7 +397,7 @@ static qdc_status check_offsets(const double *offs, int64_t nc, int64_t nconn,
 {
     for (int64_t i = 0; i <= nc; i++) {
         double o = offs[i];
-        if (!(o == floor(o) && o >= 0 && o <= (double)nconn &&
+        if (!(o >= 0 && o <= (double)nconn && (double)(int64_t)o == o &&
               (i == 0 || o >= offs[i - 1]))) {
             qdc_fail(err, QDC_EPARSE,
                      "%s: cell offset %lld (%.17g) is not within [%s, %lld]", fmtname,
@@ -1488,7 +1614,7 @@ static qdc_status vtu_dataarray(vtu *x, const xtag *t, int sec, double **offs_en
             x->c.creg_prio = prio;
         if (dst == offs_end) {
             for (int64_t i = 0; i < n; i++)
-                if (!(a[i] == floor(a[i]) && a[i] >= 0 && a[i] <= 4e18 &&
+                if (!(a[i] >= 0 && a[i] <= 4e18 && (double)(int64_t)a[i] == a[i] &&
                       (i == 0 || a[i] >= a[i - 1])))
                     return fail_txt(err, QDC_EPARSE, &x->s, t->name,
                                     "VTU: offsets not increasing from 0");
