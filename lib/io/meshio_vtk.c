@@ -1420,8 +1420,10 @@ static qdc_status vtu_array(vtu *x, const xtag *t, int64_t n, vtype vt, int fini
     int appended;
     qdc_status st;
 
-    if (!tag_attr(t, "format", &fv, &fe))
-        fv = fe = "ascii";
+    if (!tag_attr(t, "format", &fv, &fe)) { /* absent: ascii */
+        fv = "ascii";
+        fe = fv + 5;
+    }
     if (rec) {
         rec->width = vsize[vt];
         rec->big = x->big;

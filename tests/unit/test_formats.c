@@ -766,6 +766,20 @@ TEST(vtu_inline_base64)
     ASSERT_TRUE(strstr(doc, "format=\"binary\""));
     memcpy(strstr(doc, "format=\"binary\""), "format=\"bonary\"", 15);
     ASSERT_EQ_INT(read_str(doc, MESHIO_VTU, &m, &err), QDC_EFORMAT);
+    /* no format attribute: ascii (it was refused as format "" at a position
+     * outside the input) */
+    ASSERT_OK(read_str("<VTKFile type=\"UnstructuredGrid\"><UnstructuredGrid><Piece "
+                       "NumberOfPoints=\"4\" NumberOfCells=\"1\"><Points><DataArray "
+                       "type=\"Float64\" NumberOfComponents=\"3\">0 0 0 1 0 0 0 1 0 0 0 "
+                       "1</DataArray></Points><Cells><DataArray type=\"Int32\" "
+                       "Name=\"connectivity\">0 1 2 3</DataArray><DataArray "
+                       "type=\"Int32\" Name=\"offsets\">4</DataArray><DataArray "
+                       "type=\"UInt8\" Name=\"types\">10</DataArray></Cells></Piece>"
+                       "</UnstructuredGrid></VTKFile>\n",
+                       MESHIO_VTU, &m, &err));
+    ASSERT_EQ_INT(m->nt, 1);
+    ASSERT_NEAR(m->xyz[11], 1, 0);
+    mesh_free(m);
 }
 
 /* ---- names ---- */
