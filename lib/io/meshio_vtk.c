@@ -603,15 +603,254 @@ static qdc_status vtk_attr_array(vtk *v, const char *name, size_t nlen, int64_t 
     return QDC_OK;
 }
 
+static qdc_status vtk_points(vtk *v, const char *w, qdc_error *err)
+{
+    vtype t;
+    qdc_status st;
+
+    if (v->c.xyz)
+        return fail_txt(err, QDC_EPARSE, &v->s, w, "duplicate POINTS");
+    st = vtk_count(v, "POINTS", 3, MESH_MAX_VERTICES, &v->c.nv, err);
+    if (st == QDC_OK)
+        st = vtk_type(v, "POINTS", &t, err);
+    if (st == QDC_OK && !(v->c.xyz = alloc_values(3 * v->c.nv, err)))
+        st = QDC_ENOMEM;
+    if (st == QDC_OK && v->rec) {
+        srcrec *r = v->rec;
+        r->fmt = v->binary ? MESHIO_VTK : MESHIO_VTK_ASCII;
+        r->kind = v->binary ? SRC_BIN : SRC_TEXT;
+        r->width = vsize[t];
+        r->big = 1;
+        if (t != T_F32 && t != T_F64)
+            srcrec_refuse(r, "POINTS of an integer type");
+        st = srcrec_alloc(r, v->c.nv, err);
+        v->voff = r->off;
+    }
+    if (st == QDC_OK)
+        st = vtk_values(v, "POINTS: coordinate", 3 * v->c.nv, t, 1, v->c.xyz, err);
+    v->voff = NULL;
+    return st;
+}
+
+/* The 5.1 layout after "CELLS c c2": OFFSETS (c values) and the
+ * CONNECTIVITY keyword line; *t the connectivity's type. */
+static qdc_status vtk_offsets51(vtk *v, const char *w, int64_t c, vtype *t,
+                                qdc_error *err)
+{
+    txt *s = &v->s;
+    const char *tw;
+    size_t tn;
+    char q[32];
+    qdc_status st;
+
+    if (c < 1)
+        return fail_txt(err, QDC_EPARSE, s, w,
+                        "CELLS: 5.1 layout needs n+1 >= 1 offsets");
+    v->c.nc = c - 1;
+    st = vtk_type(v, "OFFSETS", t, err);
+    if (st == QDC_OK)
+        st = vtk_fits(v, "OFFSETS", c, *t, err);
+    if (st == QDC_OK && !(v->c.offs = alloc_values(c, err)))
+        st = QDC_ENOMEM;
+    if (st == QDC_OK)
+        st = vtk_values(v, "OFFSETS", c, *t, 1, v->c.offs, err);
+    if (st != QDC_OK)
+        return st;
+    next_word(v, &tw, &tn);
+    if (!word_is(tw, tn, "CONNECTIVITY"))
+        return fail_txt(err, QDC_EPARSE, s, tw, "expected CONNECTIVITY, got %s",
+                        quote_tok(q, s, tw, tw + tn));
+    return vtk_type(v, "CONNECTIVITY", t, err);
+}
+
+/* CELLS: the legacy list (count, then the points, per cell) or the 5.1
+ * OFFSETS and CONNECTIVITY arrays. */
+static qdc_status vtk_cells(vtk *v, const char *w, qdc_error *err)
+{
+    int64_t c, c2;
+    vtype t = T_I32;
+    qdc_status st;
+
+    if (v->c.types || v->c.conn)
+        return fail_txt(err, QDC_EPARSE, &v->s, w, "CELLS after CELL_TYPES or twice");
+    st = vtk_count(v, "CELLS", 1, INT64_MAX, &c, err);
+    if (st == QDC_OK)
+        st = vtk_count(v, "CELLS: size", 1, INT64_MAX, &c2, err);
+    if (st != QDC_OK)
+        return st;
+    v->c.nconn = c2;
+    if (next_is(v, "OFFSETS"))
+        st = vtk_offsets51(v, w, c, &t, err);
+    else
+        v->c.nc = c;
+    if (st == QDC_OK)
+        st = vtk_fits(v, "CELLS", v->c.nconn, t, err);
+    if (st == QDC_OK && !(v->c.conn = alloc_values(v->c.nconn, err)))
+        st = QDC_ENOMEM;
+    if (st == QDC_OK)
+        st = vtk_values(v, "CELLS", v->c.nconn, t, 1, v->c.conn, err);
+    if (st == QDC_OK && v->c.offs)
+        st = check_offsets(v->c.offs, v->c.nc, v->c.nconn, "vtk", err);
+    return st;
+}
+
+static qdc_status vtk_cell_types(vtk *v, const char *w, qdc_error *err)
+{
+    txt *s = &v->s;
+    int64_t c;
+    qdc_status st;
+
+    if (!v->c.conn)
+        return fail_txt(err, QDC_EPARSE, s, w, "CELL_TYPES before CELLS");
+    if (v->c.types)
+        return fail_txt(err, QDC_EPARSE, s, w, "duplicate CELL_TYPES");
+    st = vtk_count(v, "CELL_TYPES", 1, INT64_MAX, &c, err);
+    if (st == QDC_OK && c != v->c.nc)
+        st = fail_txt(err, QDC_EPARSE, s, s->p, "CELL_TYPES %lld for %lld CELLS",
+                      (long long)c, (long long)v->c.nc);
+    if (st == QDC_OK)
+        st = vtk_fits(v, "CELL_TYPES", c, T_I32, err);
+    if (st == QDC_OK && !(v->c.types = alloc_values(c, err)))
+        st = QDC_ENOMEM;
+    return st == QDC_OK ? vtk_values(v, "CELL_TYPES", c, T_I32, 1, v->c.types, err) : st;
+}
+
+/* CELL_DATA or POINT_DATA (cell): the attribute arrays that follow. */
+static qdc_status vtk_attr_set(vtk *v, int cell, qdc_error *err)
+{
+    int64_t c;
+    qdc_status st =
+        vtk_count(v, cell ? "CELL_DATA" : "POINT_DATA", 1, INT64_MAX, &c, err);
+
+    if (st == QDC_OK && c != (cell ? v->c.nc : v->c.nv))
+        st = fail_txt(err, QDC_EPARSE, &v->s, v->s.p, "%s %lld for %lld %s",
+                      cell ? "CELL_DATA" : "POINT_DATA", (long long)c,
+                      (long long)(cell ? v->c.nc : v->c.nv), cell ? "cells" : "points");
+    v->attr = cell ? 1 : 2;
+    v->attr_n = c;
+    return st;
+}
+
+/* METADATA: skipped up to an empty line. */
+static void vtk_metadata(vtk *v)
+{
+    txt *s = &v->s;
+
+    for (;;) {
+        const char *p = s->p;
+        while (p < s->end && *p != '\n')
+            p++;
+        if (p == s->end) {
+            s->p = p;
+            return;
+        }
+        s->p = p + 1;
+        s->line++;
+        s->bol = s->p;
+        p = s->p;
+        while (p < s->end && (*p == ' ' || *p == '\t' || *p == '\r'))
+            p++;
+        if (p == s->end || *p == '\n')
+            return;
+    }
+}
+
+/* SCALARS name type [components] [LOOKUP_TABLE name]. */
+static qdc_status vtk_scalars(vtk *v, qdc_error *err)
+{
+    txt *s = &v->s;
+    const char *name, *tw, *save;
+    size_t nl, tn;
+    int64_t k = 1;
+    vtype t;
+    qdc_status st;
+
+    next_word(v, &name, &nl);
+    st = vtk_type(v, "SCALARS", &t, err);
+    /* optional component count on the same line */
+    while (s->p < s->end && (*s->p == ' ' || *s->p == '\t' || *s->p == '\r'))
+        s->p++;
+    if (st == QDC_OK && s->p < s->end && *s->p != '\n')
+        st = txt_int(s, "SCALARS: components", 1, 4, &k, err);
+    save = s->p;
+    next_word(v, &tw, &tn);
+    if (word_is(tw, tn, "LOOKUP_TABLE"))
+        next_word(v, &tw, &tn);
+    else
+        s->p = save;
+    return st == QDC_OK ? vtk_attr_array(v, name, nl, k, t, err) : st;
+}
+
+/* FIELD name count, then per array: name components tuples type, values. */
+static qdc_status vtk_field(vtk *v, qdc_error *err)
+{
+    txt *s = &v->s;
+    int save_attr = v->attr;
+    int64_t save_n = v->attr_n, c = 0, c2 = 0, k = 0;
+    const char *name;
+    size_t nl;
+    vtype t;
+    qdc_status st;
+
+    next_word(v, &name, &nl);
+    st = txt_int(s, "FIELD: array count", 0, 1 << 20, &c, err);
+    for (int64_t i = 0; i < c && st == QDC_OK; i++) {
+        next_word(v, &name, &nl);
+        if (word_is(name, nl, "NULL") || !nl)
+            continue;
+        st = txt_int(s, "FIELD: components", 0, 1 << 20, &k, err);
+        if (st == QDC_OK)
+            st = vtk_count(v, "FIELD: tuples", 1, INT64_MAX, &c2, err);
+        if (st == QDC_OK)
+            st = vtk_type(v, "FIELD", &t, err);
+        if (st != QDC_OK)
+            break;
+        /* a field array only counts as a region if it spans the attribute set */
+        if (!save_attr || c2 != save_n)
+            v->attr = 0;
+        v->attr_n = c2;
+        st = vtk_attr_array(v, name, nl, k, t, err);
+        v->attr = save_attr;
+        v->attr_n = save_n;
+    }
+    return st;
+}
+
+/* VECTORS, NORMALS, TENSORS, TEXTURE_COORDINATES and LOOKUP_TABLE: arrays
+ * that are never ours, checked and passed over. */
+static qdc_status vtk_other_attr(vtk *v, const char *w, size_t n, qdc_error *err)
+{
+    const char *name;
+    size_t nl;
+    int64_t k = 0, c = 0;
+    vtype t;
+    qdc_status st;
+
+    next_word(v, &name, &nl);
+    if (word_is(w, n, "TEXTURE_COORDINATES")) {
+        st = txt_int(&v->s, "TEXTURE_COORDINATES: dimension", 1, 3, &k, err);
+        if (st == QDC_OK)
+            st = vtk_type(v, "TEXTURE_COORDINATES", &t, err);
+        return st == QDC_OK ? vtk_attr_array(v, "", 0, k, t, err) : st;
+    }
+    if (word_is(w, n, "LOOKUP_TABLE")) {
+        st = vtk_count(v, "LOOKUP_TABLE", 4, INT64_MAX, &c, err);
+        return st == QDC_OK ? vtk_values(v, "LOOKUP_TABLE", 4 * c,
+                                         v->binary ? T_U8 : T_F64, 0, NULL, err)
+                            : st;
+    }
+    st = vtk_type(v, "VECTORS", &t, err);
+    return st == QDC_OK
+               ? vtk_attr_array(v, "", 0, word_is(w, n, "TENSORS") ? 9 : 3, t, err)
+               : st;
+}
+
 static qdc_status vtk_keyword(vtk *v, const char *w, size_t n, qdc_error *err)
 {
     txt *s = &v->s;
-    const char *name, *tw;
-    size_t nl, tn;
-    int64_t c, c2, k;
-    vtype t;
+    const char *tw;
+    size_t tn;
     char q[32];
-    qdc_status st;
 
     if (word_is(w, n, "DATASET")) {
         next_word(v, &tw, &tn);
@@ -621,188 +860,29 @@ static qdc_status vtk_keyword(vtk *v, const char *w, size_t n, qdc_error *err)
                             quote_tok(q, s, tw, tw + tn));
         return QDC_OK;
     }
-    if (word_is(w, n, "POINTS")) {
-        if (v->c.xyz)
-            return fail_txt(err, QDC_EPARSE, s, w, "duplicate POINTS");
-        st = vtk_count(v, "POINTS", 3, MESH_MAX_VERTICES, &v->c.nv, err);
-        if (st == QDC_OK)
-            st = vtk_type(v, "POINTS", &t, err);
-        if (st == QDC_OK && !(v->c.xyz = alloc_values(3 * v->c.nv, err)))
-            st = QDC_ENOMEM;
-        if (st == QDC_OK && v->rec) {
-            srcrec *r = v->rec;
-            r->fmt = v->binary ? MESHIO_VTK : MESHIO_VTK_ASCII;
-            r->kind = v->binary ? SRC_BIN : SRC_TEXT;
-            r->width = vsize[t];
-            r->big = 1;
-            if (t != T_F32 && t != T_F64)
-                srcrec_refuse(r, "POINTS of an integer type");
-            st = srcrec_alloc(r, v->c.nv, err);
-            v->voff = r->off;
-        }
-        if (st == QDC_OK)
-            st = vtk_values(v, "POINTS: coordinate", 3 * v->c.nv, t, 1, v->c.xyz, err);
-        v->voff = NULL;
-        return st;
-    }
-    if (word_is(w, n, "CELLS")) {
-        if (v->c.types || v->c.conn)
-            return fail_txt(err, QDC_EPARSE, s, w, "CELLS after CELL_TYPES or twice");
-        st = vtk_count(v, "CELLS", 1, INT64_MAX, &c, err);
-        if (st == QDC_OK)
-            st = vtk_count(v, "CELLS: size", 1, INT64_MAX, &c2, err);
-        if (st != QDC_OK)
-            return st;
-        if (next_is(v, "OFFSETS")) { /* 5.1 */
-            if (c < 1)
-                return fail_txt(err, QDC_EPARSE, s, w,
-                                "CELLS: 5.1 layout needs n+1 >= 1 offsets");
-            v->c.nc = c - 1;
-            st = vtk_type(v, "OFFSETS", &t, err);
-            if (st == QDC_OK)
-                st = vtk_fits(v, "OFFSETS", c, t, err);
-            if (st == QDC_OK && !(v->c.offs = alloc_values(c, err)))
-                st = QDC_ENOMEM;
-            if (st == QDC_OK)
-                st = vtk_values(v, "OFFSETS", c, t, 1, v->c.offs, err);
-            next_word(v, &tw, &tn);
-            if (st == QDC_OK && !word_is(tw, tn, "CONNECTIVITY"))
-                st = fail_txt(err, QDC_EPARSE, s, tw, "expected CONNECTIVITY, got %s",
-                              quote_tok(q, s, tw, tw + tn));
-            if (st == QDC_OK)
-                st = vtk_type(v, "CONNECTIVITY", &t, err);
-            v->c.nconn = c2;
-        } else {
-            v->c.nc = c;
-            v->c.nconn = c2;
-            t = T_I32;
-        }
-        if (st == QDC_OK)
-            st = vtk_fits(v, "CELLS", v->c.nconn, t, err);
-        if (st == QDC_OK && !(v->c.conn = alloc_values(v->c.nconn, err)))
-            st = QDC_ENOMEM;
-        if (st == QDC_OK)
-            st = vtk_values(v, "CELLS", v->c.nconn, t, 1, v->c.conn, err);
-        if (st == QDC_OK && v->c.offs)
-            st = check_offsets(v->c.offs, v->c.nc, v->c.nconn, "vtk", err);
-        return st;
-    }
-    if (word_is(w, n, "CELL_TYPES")) {
-        if (!v->c.conn)
-            return fail_txt(err, QDC_EPARSE, s, w, "CELL_TYPES before CELLS");
-        if (v->c.types)
-            return fail_txt(err, QDC_EPARSE, s, w, "duplicate CELL_TYPES");
-        st = vtk_count(v, "CELL_TYPES", 1, INT64_MAX, &c, err);
-        if (st == QDC_OK && c != v->c.nc)
-            st = fail_txt(err, QDC_EPARSE, s, s->p, "CELL_TYPES %lld for %lld CELLS",
-                          (long long)c, (long long)v->c.nc);
-        t = T_I32;
-        if (st == QDC_OK)
-            st = vtk_fits(v, "CELL_TYPES", c, t, err);
-        if (st == QDC_OK && !(v->c.types = alloc_values(c, err)))
-            st = QDC_ENOMEM;
-        return st == QDC_OK ? vtk_values(v, "CELL_TYPES", c, t, 1, v->c.types, err) : st;
-    }
-    if (word_is(w, n, "CELL_DATA") || word_is(w, n, "POINT_DATA")) {
-        int cell = word_is(w, n, "CELL_DATA");
-        st = vtk_count(v, cell ? "CELL_DATA" : "POINT_DATA", 1, INT64_MAX, &c, err);
-        if (st == QDC_OK && c != (cell ? v->c.nc : v->c.nv))
-            st = fail_txt(err, QDC_EPARSE, s, s->p, "%s %lld for %lld %s",
-                          cell ? "CELL_DATA" : "POINT_DATA", (long long)c,
-                          (long long)(cell ? v->c.nc : v->c.nv),
-                          cell ? "cells" : "points");
-        v->attr = cell ? 1 : 2;
-        v->attr_n = c;
-        return st;
-    }
+    if (word_is(w, n, "POINTS"))
+        return vtk_points(v, w, err);
+    if (word_is(w, n, "CELLS"))
+        return vtk_cells(v, w, err);
+    if (word_is(w, n, "CELL_TYPES"))
+        return vtk_cell_types(v, w, err);
+    if (word_is(w, n, "CELL_DATA") || word_is(w, n, "POINT_DATA"))
+        return vtk_attr_set(v, word_is(w, n, "CELL_DATA"), err);
     if (word_is(w, n, "METADATA")) { /* up to an empty line */
-        for (;;) {
-            const char *p = s->p;
-            while (p < s->end && *p != '\n')
-                p++;
-            if (p == s->end) {
-                s->p = p;
-                return QDC_OK;
-            }
-            s->p = p + 1;
-            s->line++;
-            s->bol = s->p;
-            p = s->p;
-            while (p < s->end && (*p == ' ' || *p == '\t' || *p == '\r'))
-                p++;
-            if (p == s->end || *p == '\n')
-                return QDC_OK;
-        }
+        vtk_metadata(v);
+        return QDC_OK;
     }
     if (!v->attr && !word_is(w, n, "FIELD"))
         return fail_txt(err, QDC_EPARSE, s, w, "unexpected %s",
                         quote_tok(q, s, w, w + n));
-    if (word_is(w, n, "SCALARS")) {
-        const char *save;
-        next_word(v, &name, &nl);
-        st = vtk_type(v, "SCALARS", &t, err);
-        k = 1;
-        /* optional component count on the same line */
-        while (s->p < s->end && (*s->p == ' ' || *s->p == '\t' || *s->p == '\r'))
-            s->p++;
-        if (st == QDC_OK && s->p < s->end && *s->p != '\n')
-            st = txt_int(s, "SCALARS: components", 1, 4, &k, err);
-        save = s->p;
-        next_word(v, &tw, &tn);
-        if (word_is(tw, tn, "LOOKUP_TABLE"))
-            next_word(v, &tw, &tn);
-        else
-            s->p = save;
-        return st == QDC_OK ? vtk_attr_array(v, name, nl, k, t, err) : st;
-    }
+    if (word_is(w, n, "SCALARS"))
+        return vtk_scalars(v, err);
     if (word_is(w, n, "VECTORS") || word_is(w, n, "NORMALS") ||
-        word_is(w, n, "TENSORS")) {
-        next_word(v, &name, &nl);
-        st = vtk_type(v, "VECTORS", &t, err);
-        return st == QDC_OK
-                   ? vtk_attr_array(v, "", 0, word_is(w, n, "TENSORS") ? 9 : 3, t, err)
-                   : st;
-    }
-    if (word_is(w, n, "TEXTURE_COORDINATES")) {
-        next_word(v, &name, &nl);
-        st = txt_int(s, "TEXTURE_COORDINATES: dimension", 1, 3, &k, err);
-        if (st == QDC_OK)
-            st = vtk_type(v, "TEXTURE_COORDINATES", &t, err);
-        return st == QDC_OK ? vtk_attr_array(v, "", 0, k, t, err) : st;
-    }
-    if (word_is(w, n, "LOOKUP_TABLE")) {
-        next_word(v, &name, &nl);
-        st = vtk_count(v, "LOOKUP_TABLE", 4, INT64_MAX, &c, err);
-        return st == QDC_OK ? vtk_values(v, "LOOKUP_TABLE", 4 * c,
-                                         v->binary ? T_U8 : T_F64, 0, NULL, err)
-                            : st;
-    }
-    if (word_is(w, n, "FIELD")) {
-        int save_attr = v->attr;
-        int64_t save_n = v->attr_n;
-        next_word(v, &name, &nl);
-        st = txt_int(s, "FIELD: array count", 0, 1 << 20, &c, err);
-        for (int64_t i = 0; i < c && st == QDC_OK; i++) {
-            next_word(v, &name, &nl);
-            if (word_is(name, nl, "NULL") || !nl)
-                continue;
-            st = txt_int(s, "FIELD: components", 0, 1 << 20, &k, err);
-            if (st == QDC_OK)
-                st = vtk_count(v, "FIELD: tuples", 1, INT64_MAX, &c2, err);
-            if (st == QDC_OK)
-                st = vtk_type(v, "FIELD", &t, err);
-            if (st != QDC_OK)
-                break;
-            /* a field array only counts as a region if it spans the attribute set */
-            if (!save_attr || c2 != save_n)
-                v->attr = 0;
-            v->attr_n = c2;
-            st = vtk_attr_array(v, name, nl, k, t, err);
-            v->attr = save_attr;
-            v->attr_n = save_n;
-        }
-        return st;
-    }
+        word_is(w, n, "TENSORS") || word_is(w, n, "TEXTURE_COORDINATES") ||
+        word_is(w, n, "LOOKUP_TABLE"))
+        return vtk_other_attr(v, w, n, err);
+    if (word_is(w, n, "FIELD"))
+        return vtk_field(v, err);
     return fail_txt(err, QDC_EPARSE, s, w, "unsupported keyword %s",
                     quote_tok(q, s, w, w + n));
 }
@@ -1266,6 +1346,99 @@ static int is_b64(unsigned char c)
     return b64_val(c) >= 0 || c == '=';
 }
 
+/* Appended raw data at p (header words, then the data, as is or in zlib
+ * blocks): exactly `want` bytes at *data (into the input, or *tmp). */
+static qdc_status vtu_raw(vtu *x, const char *p, size_t want, srcrec *rec,
+                          const unsigned char **data, unsigned char **tmp, qdc_error *err)
+{
+    const unsigned char *h = (const unsigned char *)p;
+    size_t hsz = x->hdr8 ? 8 : 4, hn = x->zlib ? 3 * hsz : hsz, used = 0;
+    size_t left = (size_t)(x->s.end - p);
+    int64_t at = p - x->s.base;
+    uint64_t nb;
+    qdc_status st;
+
+    if (left < hn)
+        return fail_bin(err, QDC_EPARSE, at, "VTU: appended block header truncated");
+    if (!x->zlib) {
+        uint64_t nbytes = hdr_word(x, h, 0);
+        if (nbytes != want || left - hn < want)
+            return fail_bin(
+                err, QDC_EPARSE, at,
+                "VTU: appended block of %llu bytes for %zu expected (%zu left)",
+                (unsigned long long)nbytes, want, left - hn);
+        *data = h + hn;
+        if (!rec)
+            return QDC_OK;
+        rec->kind = SRC_BIN; /* in place: offsets per vertex */
+        rec->blk_b = (uint64_t)at + hn + want;
+        st = srcrec_alloc(rec, rec->nv, err);
+        for (int64_t v = 0; st == QDC_OK && v < rec->nv; v++)
+            rec->off[v] =
+                (uint64_t)(at + (int64_t)hn) + (uint64_t)v * 3 * (uint64_t)rec->width;
+        return st;
+    }
+    nb = hdr_word(x, h, 0);
+    if (nb > (left - hn) / hsz)
+        return fail_bin(err, QDC_EPARSE, at,
+                        "VTU: zlib header of %llu blocks does not fit",
+                        (unsigned long long)nb);
+    hn += (size_t)nb * hsz;
+    *tmp = qdc_malloc(want + 1);
+    if (!*tmp)
+        return qdc_fail(err, QDC_ENOMEM, "out of memory for a VTU array");
+    st = vtu_inflate(x, h, h + hn, left - hn, *tmp, want, &used, at, err);
+    if (st != QDC_OK)
+        return st;
+    *data = *tmp;
+    if (rec) {
+        for (int k = 0; k < 3; k++)
+            rec->zhdr[k] = hdr_word(x, h, (size_t)k);
+        rec->blk_b = (uint64_t)at + hn + used;
+    }
+    return QDC_OK;
+}
+
+/* Base64 zlib data at p: the header (block count, sizes), then the blocks,
+ * decoded and inflated into *tmp (want bytes). *hn: the header's bytes,
+ * *endp where the base64 text stopped. */
+static qdc_status vtu_b64_zlib(vtu *x, const char *p, size_t want, srcrec *rec,
+                               unsigned char **tmp, size_t *hn, const char **endp,
+                               qdc_error *err)
+{
+    size_t hsz = x->hdr8 ? 8 : 4, left = (size_t)(x->s.end - p), used = 0;
+    int64_t at = p - x->s.base;
+    unsigned char *z = NULL; /* the header and blocks decoded */
+    uint64_t nb, sum = 0;
+    qdc_status st = b64_take(x, p, *hn, &z, endp, err);
+
+    nb = st == QDC_OK ? hdr_word(x, z, 0) : 0;
+    if (st == QDC_OK && nb > left / hsz)
+        st = fail_bin(err, QDC_EPARSE, at, "VTU: zlib header of %llu blocks does not fit",
+                      (unsigned long long)nb);
+    if (st == QDC_OK) {
+        *hn += (size_t)nb * hsz;
+        st = b64_take(x, p, *hn, &z, endp, err);
+    }
+    for (uint64_t k = 0; st == QDC_OK && k < nb && sum <= left; k++)
+        sum += hdr_word(x, z, 3 + k) > left ? UINT64_MAX / 2 : hdr_word(x, z, 3 + k);
+    if (st == QDC_OK && sum > left)
+        st = fail_bin(err, QDC_EPARSE, at,
+                      "VTU: zlib blocks of %llu bytes cannot fit in the input",
+                      (unsigned long long)sum);
+    if (st == QDC_OK)
+        st = b64_take(x, p, *hn + (size_t)sum, &z, endp, err);
+    if (st == QDC_OK && !(*tmp = qdc_malloc(want + 1)))
+        st = qdc_fail(err, QDC_ENOMEM, "out of memory for a VTU array");
+    if (st == QDC_OK)
+        st = vtu_inflate(x, z, z + *hn, (size_t)sum, *tmp, want, &used, at, err);
+    if (st == QDC_OK && rec)
+        for (int k = 0; k < 3; k++)
+            rec->zhdr[k] = hdr_word(x, z, (size_t)k);
+    qdc_free(z);
+    return st;
+}
+
 /* The bytes of a binary (base64) or appended DataArray, decoded and
  * decompressed: exactly `want` bytes at *data, which points into the input
  * or into *tmp (the caller frees it). rec (Points only): where they are. */
@@ -1274,10 +1447,9 @@ static qdc_status vtu_bytes(vtu *x, const xtag *t, int appended, size_t want, sr
                             qdc_error *err)
 {
     txt *s = &x->s;
-    size_t hsz = x->hdr8 ? 8 : 4, hn = x->zlib ? 3 * hsz : hsz, used = 0;
+    size_t hsz = x->hdr8 ? 8 : 4, hn = x->zlib ? 3 * hsz : hsz;
     int b64 = !appended || x->app_base64;
     const char *p, *endp = NULL;
-    unsigned char *z = NULL; /* base64 with zlib: the header and blocks decoded */
     int64_t off = 0, at;
     qdc_status st;
 
@@ -1304,52 +1476,8 @@ static qdc_status vtu_bytes(vtu *x, const xtag *t, int appended, size_t want, sr
         rec->appended = appended;
         rec->app_off = (uint64_t)off;
     }
-    if (!b64) { /* raw: header words, then the data */
-        const unsigned char *h = (const unsigned char *)p;
-        size_t left = (size_t)(s->end - p);
-        if (left < hn)
-            return fail_bin(err, QDC_EPARSE, at, "VTU: appended block header truncated");
-        if (!x->zlib) {
-            uint64_t nbytes = hdr_word(x, h, 0);
-            if (nbytes != want || left - hn < want)
-                return fail_bin(
-                    err, QDC_EPARSE, at,
-                    "VTU: appended block of %llu bytes for %zu expected (%zu left)",
-                    (unsigned long long)nbytes, want, left - hn);
-            *data = h + hn;
-            if (rec) { /* in place: offsets per vertex */
-                rec->kind = SRC_BIN;
-                rec->blk_b = (uint64_t)at + hn + want;
-                st = srcrec_alloc(rec, rec->nv, err);
-                for (int64_t v = 0; st == QDC_OK && v < rec->nv; v++)
-                    rec->off[v] = (uint64_t)(at + (int64_t)hn) +
-                                  (uint64_t)v * 3 * (uint64_t)rec->width;
-                return st;
-            }
-            return QDC_OK;
-        }
-        {
-            uint64_t nb = hdr_word(x, h, 0);
-            if (nb > (left - hn) / hsz)
-                return fail_bin(err, QDC_EPARSE, at,
-                                "VTU: zlib header of %llu blocks does not fit",
-                                (unsigned long long)nb);
-            hn += (size_t)nb * hsz;
-            *tmp = qdc_malloc(want + 1);
-            if (!*tmp)
-                return qdc_fail(err, QDC_ENOMEM, "out of memory for a VTU array");
-            st = vtu_inflate(x, h, h + hn, left - hn, *tmp, want, &used, at, err);
-            if (st != QDC_OK)
-                return st;
-            *data = *tmp;
-            if (rec) {
-                for (int k = 0; k < 3; k++)
-                    rec->zhdr[k] = hdr_word(x, h, (size_t)k);
-                rec->blk_b = (uint64_t)at + hn + used;
-            }
-            return QDC_OK;
-        }
-    }
+    if (!b64)
+        return vtu_raw(x, p, want, rec, data, tmp, err);
     /* base64: header and data decoded as one stream: VTK and meshio encode
      * the two separately (each padded), others together; both decode alike */
     if (!x->zlib) {
@@ -1362,34 +1490,7 @@ static qdc_status vtu_bytes(vtu *x, const xtag *t, int appended, size_t want, sr
             return st;
         *data = *tmp + hn;
     } else {
-        uint64_t nb, sum = 0;
-        st = b64_take(x, p, hn, &z, &endp, err);
-        nb = st == QDC_OK ? hdr_word(x, z, 0) : 0;
-        if (st == QDC_OK && nb > (size_t)(s->end - p) / hsz)
-            st = fail_bin(err, QDC_EPARSE, at,
-                          "VTU: zlib header of %llu blocks does not fit",
-                          (unsigned long long)nb);
-        if (st == QDC_OK) {
-            hn += (size_t)nb * hsz;
-            st = b64_take(x, p, hn, &z, &endp, err);
-        }
-        for (uint64_t k = 0; st == QDC_OK && k < nb && sum <= (size_t)(s->end - p); k++)
-            sum += hdr_word(x, z, 3 + k) > (size_t)(s->end - p) ? UINT64_MAX / 2
-                                                                : hdr_word(x, z, 3 + k);
-        if (st == QDC_OK && sum > (size_t)(s->end - p))
-            st = fail_bin(err, QDC_EPARSE, at,
-                          "VTU: zlib blocks of %llu bytes cannot fit in the input",
-                          (unsigned long long)sum);
-        if (st == QDC_OK)
-            st = b64_take(x, p, hn + (size_t)sum, &z, &endp, err);
-        if (st == QDC_OK && !(*tmp = qdc_malloc(want + 1)))
-            st = qdc_fail(err, QDC_ENOMEM, "out of memory for a VTU array");
-        if (st == QDC_OK)
-            st = vtu_inflate(x, z, z + hn, (size_t)sum, *tmp, want, &used, at, err);
-        if (st == QDC_OK && rec)
-            for (int k = 0; k < 3; k++)
-                rec->zhdr[k] = hdr_word(x, z, (size_t)k);
-        qdc_free(z);
+        st = vtu_b64_zlib(x, p, want, rec, tmp, &hn, &endp, err);
         if (st != QDC_OK)
             return st;
         *data = *tmp;
@@ -1528,14 +1629,86 @@ static qdc_status vtu_note_range(vtu *x, const xtag *t, qdc_error *err)
     return st;
 }
 
+/* Which of our arrays (*dst, NULL if none) a DataArray named [nv, ne) with
+ * ncomp components in section sec is, and its value count *n (-1: the
+ * connectivity, sized by the offsets); *prio its region priority. */
+static qdc_status vtu_target(vtu *x, const xtag *t, int sec, const char *nv,
+                             const char *ne, int64_t ncomp, double **offs_end,
+                             double ***dst, int64_t *n, int *prio, qdc_error *err)
+{
+    size_t l = (size_t)(ne - nv);
+
+    *dst = NULL;
+    *prio = PRIO_NONE;
+    if (sec == SEC_POINTS) {
+        if (ncomp != 3)
+            return fail_txt(err, QDC_EPARSE, &x->s, t->name,
+                            "VTU: Points need 3 components");
+        *dst = &x->c.xyz;
+        *n = 3 * x->c.nv;
+        return x->rec && !x->c.xyz ? vtu_note_range(x, t, err) : QDC_OK;
+    }
+    if (sec == SEC_CELLS) {
+        if (l == 12 && memcmp(nv, "connectivity", 12) == 0)
+            *dst = &x->c.conn;
+        else if (l == 7 && memcmp(nv, "offsets", 7) == 0)
+            *dst = offs_end;
+        else if (l == 5 && memcmp(nv, "types", 5) == 0)
+            *dst = &x->c.types;
+        *n = *dst == &x->c.conn ? -1 : x->c.nc;
+    } else if (sec == SEC_CELLDATA) {
+        *prio = ncomp == 1 ? region_prio(nv, l) : PRIO_NONE;
+        if (*prio < x->c.creg_prio)
+            *dst = &x->c.creg;
+        *n = ncomp * x->c.nc;
+    } else {
+        if (ncomp == 1 && region_prio(nv, l) == 2)
+            *dst = &x->c.vref;
+        *n = ncomp * x->c.nv;
+    }
+    return QDC_OK;
+}
+
+/* The n values of DataArray t (type vt) into a new *dst (replacing a region
+ * array of lower priority); offsets checked to increase from 0. */
+static qdc_status vtu_store(vtu *x, const xtag *t, double **dst, int64_t n, vtype vt,
+                            int prio, double **offs_end, qdc_error *err)
+{
+    double *a = alloc_values(n, err);
+    qdc_status st;
+
+    if (!a)
+        return QDC_ENOMEM;
+    if (dst == &x->c.xyz && x->rec && vt != T_F32 && vt != T_F64)
+        srcrec_refuse(x->rec, "VTU Points of an integer type");
+    st = vtu_array(x, t, n, vt, 1, a,
+                   dst == &x->c.xyz && x->rec && !x->rec->why ? x->rec : NULL, err);
+    if (st != QDC_OK) {
+        qdc_free(a);
+        return st;
+    }
+    qdc_free(*dst);
+    *dst = a;
+    if (dst == &x->c.creg)
+        x->c.creg_prio = prio;
+    if (dst == offs_end) {
+        for (int64_t i = 0; i < n; i++)
+            if (!(a[i] >= 0 && a[i] <= 4e18 && (double)(int64_t)a[i] == a[i] &&
+                  (i == 0 || a[i] >= a[i - 1])))
+                return fail_txt(err, QDC_EPARSE, &x->s, t->name,
+                                "VTU: offsets not increasing from 0");
+    }
+    return QDC_OK;
+}
+
 static qdc_status vtu_dataarray(vtu *x, const xtag *t, int sec, double **offs_end,
                                 qdc_error *err)
 {
     const char *nv, *ne, *tv, *te;
-    int64_t ncomp = 1, n;
+    int64_t ncomp = 1, n = 0;
     vtype vt;
-    double **dst = NULL;
-    int prio = PRIO_NONE;
+    double **dst;
+    int prio;
     qdc_status st;
 
     if (!tag_attr(t, "type", &tv, &te) || vtype_of(tv, (size_t)(te - tv), &vt) != 0)
@@ -1548,36 +1721,9 @@ static qdc_status vtu_dataarray(vtu *x, const xtag *t, int sec, double **offs_en
         if (st != QDC_OK)
             return st;
     }
-    if (sec == SEC_POINTS) {
-        if (ncomp != 3)
-            return fail_txt(err, QDC_EPARSE, &x->s, t->name,
-                            "VTU: Points need 3 components");
-        if (x->rec && !x->c.xyz) {
-            st = vtu_note_range(x, t, err);
-            if (st != QDC_OK)
-                return st;
-        }
-        dst = &x->c.xyz;
-        n = 3 * x->c.nv;
-    } else if (sec == SEC_CELLS) {
-        size_t l = (size_t)(ne - nv);
-        if (l == 12 && memcmp(nv, "connectivity", 12) == 0)
-            dst = &x->c.conn;
-        else if (l == 7 && memcmp(nv, "offsets", 7) == 0)
-            dst = offs_end;
-        else if (l == 5 && memcmp(nv, "types", 5) == 0)
-            dst = &x->c.types;
-        n = dst == &x->c.conn ? -1 : x->c.nc;
-    } else if (sec == SEC_CELLDATA) {
-        prio = ncomp == 1 ? region_prio(nv, (size_t)(ne - nv)) : PRIO_NONE;
-        if (prio < x->c.creg_prio)
-            dst = &x->c.creg;
-        n = ncomp * x->c.nc;
-    } else {
-        if (ncomp == 1 && region_prio(nv, (size_t)(ne - nv)) == 2)
-            dst = &x->c.vref;
-        n = ncomp * x->c.nv;
-    }
+    st = vtu_target(x, t, sec, nv, ne, ncomp, offs_end, &dst, &n, &prio, err);
+    if (st != QDC_OK)
+        return st;
     if (n < 0) { /* connectivity: its size is the last offset */
         if (!*offs_end) {
             if (x->conn_tag.name)
@@ -1598,31 +1744,7 @@ static qdc_status vtu_dataarray(vtu *x, const xtag *t, int sec, double **offs_en
                         "VTU: %lld values cannot fit in the input", (long long)n);
     if (!dst) /* not ours: its text or base64 is passed over with the tags */
         return QDC_OK;
-    {
-        double *a = alloc_values(n, err);
-        if (!a)
-            return QDC_ENOMEM;
-        if (dst == &x->c.xyz && x->rec && vt != T_F32 && vt != T_F64)
-            srcrec_refuse(x->rec, "VTU Points of an integer type");
-        st = vtu_array(x, t, n, vt, 1, a,
-                       dst == &x->c.xyz && x->rec && !x->rec->why ? x->rec : NULL, err);
-        if (st != QDC_OK) {
-            qdc_free(a);
-            return st;
-        }
-        qdc_free(*dst);
-        *dst = a;
-        if (dst == &x->c.creg)
-            x->c.creg_prio = prio;
-        if (dst == offs_end) {
-            for (int64_t i = 0; i < n; i++)
-                if (!(a[i] >= 0 && a[i] <= 4e18 && (double)(int64_t)a[i] == a[i] &&
-                      (i == 0 || a[i] >= a[i - 1])))
-                    return fail_txt(err, QDC_EPARSE, &x->s, t->name,
-                                    "VTU: offsets not increasing from 0");
-        }
-        return QDC_OK;
-    }
+    return vtu_store(x, t, dst, n, vt, prio, offs_end, err);
 }
 
 /* With a record: where an appended DataArray's offset="" value is, and the
@@ -1759,14 +1881,121 @@ static qdc_status find_appended(vtu *x, qdc_error *err)
     return QDC_OK;
 }
 
+/* <VTKFile>: the type, compressor, byte order and header size. */
+static qdc_status vtu_file_tag(vtu *x, const xtag *t, qdc_error *err)
+{
+    const char *cv, *ce;
+
+    if (!attr_is(t, "type", "UnstructuredGrid"))
+        return fail_txt(err, QDC_EFORMAT, &x->s, t->name,
+                        "VTU: only type=\"UnstructuredGrid\" is supported");
+    if (tag_attr(t, "compressor", &cv, &ce) && ce > cv) {
+        x->zlib = (size_t)(ce - cv) == 21 && memcmp(cv, "vtkZLibDataCompressor", 21) == 0;
+        if (!x->zlib)
+            return fail_txt(err, QDC_EFORMAT, &x->s, cv,
+                            "VTU: compressor \"%.*s\" not supported (only "
+                            "vtkZLibDataCompressor)",
+                            (int)(ce - cv > 32 ? 32 : ce - cv), cv);
+    }
+    x->big = attr_is(t, "byte_order", "BigEndian");
+    x->hdr8 = attr_is(t, "header_type", "UInt64");
+    return QDC_OK;
+}
+
+/* The section a <Points>, <Cells>, <CellData> or <PointData> tag opens (or
+ * closes: SEC_NONE); -1 for other tags. */
+static int vtu_section(const xtag *t)
+{
+    if (!word_is(t->name, t->nlen, "Points") && !word_is(t->name, t->nlen, "Cells") &&
+        !word_is(t->name, t->nlen, "CellData") && !word_is(t->name, t->nlen, "PointData"))
+        return -1;
+    return t->closing || t->empty                  ? SEC_NONE
+           : word_is(t->name, t->nlen, "Points")   ? SEC_POINTS
+           : word_is(t->name, t->nlen, "Cells")    ? SEC_CELLS
+           : word_is(t->name, t->nlen, "CellData") ? SEC_CELLDATA
+                                                   : SEC_POINTDATA;
+}
+
+/* The tags up to <AppendedData> or the end: the arrays into x->c, the
+ * offsets (ends of the cells) into *offs_end. */
+static qdc_status vtu_tags(vtu *x, double **offs_end, qdc_error *err)
+{
+    xtag t;
+    int sec = SEC_NONE, seen_file = 0, seen_piece = 0;
+    qdc_status st = QDC_OK;
+
+    while (st == QDC_OK) {
+        st = next_tag(x, &t, err);
+        if (st != QDC_OK || !t.name || (x->appended && x->s.p >= x->appended))
+            break;
+        if (word_is(t.name, t.nlen, "VTKFile") && !t.closing) {
+            st = vtu_file_tag(x, &t, err);
+            seen_file = 1;
+        } else if (word_is(t.name, t.nlen, "Piece") && !t.closing) {
+            if (seen_piece)
+                st =
+                    fail_txt(err, QDC_EFORMAT, &x->s, t.name, "VTU: more than one Piece");
+            if (st == QDC_OK)
+                st = attr_int(x, &t, "NumberOfPoints", 0, MESH_MAX_VERTICES, &x->c.nv,
+                              err);
+            if (st == QDC_OK)
+                st = attr_int(x, &t, "NumberOfCells", 0, INT64_MAX / 16, &x->c.nc, err);
+            seen_piece = 1;
+        } else if (vtu_section(&t) >= 0) {
+            sec = vtu_section(&t);
+        } else if (word_is(t.name, t.nlen, "DataArray") && !t.closing &&
+                   (st = vtu_note_offset(x, &t, err)) != QDC_OK) {
+            break;
+        } else if (word_is(t.name, t.nlen, "DataArray") && !t.closing &&
+                   sec != SEC_NONE) {
+            if (!seen_piece)
+                st = fail_txt(err, QDC_EPARSE, &x->s, t.name,
+                              "VTU: DataArray outside a Piece");
+            else
+                st = vtu_dataarray(x, &t, sec, offs_end, err);
+        } else if (word_is(t.name, t.nlen, "AppendedData")) {
+            break;
+        }
+    }
+    if (st == QDC_OK && !seen_file)
+        st = fail_txt(err, QDC_EPARSE, &x->s, x->s.p, "VTU: no VTKFile element");
+    if (st == QDC_OK && (!seen_piece || !x->c.xyz))
+        st = fail_txt(err, QDC_EPARSE, &x->s, x->s.p, "VTU: no Piece with Points");
+    return st;
+}
+
+/* After the tags: the connectivity if it came before the offsets, then the
+ * nc + 1 offsets from the ends of the cells, checked. */
+static qdc_status vtu_cells(vtu *x, double **offs_end, qdc_error *err)
+{
+    qdc_status st = QDC_OK;
+
+    if (x->conn_tag.name && *offs_end) { /* VTK writes it before offsets */
+        txt here = x->s;
+        x->s = x->conn_at;
+        st = vtu_dataarray(x, &x->conn_tag, SEC_CELLS, offs_end, err);
+        if (st == QDC_OK)
+            x->s = here;
+    }
+    if (st == QDC_OK && x->c.nc && (!*offs_end || !x->c.conn || !x->c.types))
+        st = fail_txt(err, QDC_EPARSE, &x->s, x->s.p,
+                      "VTU: Cells need connectivity, offsets and types");
+    if (st != QDC_OK)
+        return st;
+    x->c.offs = alloc_values(x->c.nc + 1, err);
+    if (!x->c.offs)
+        return QDC_ENOMEM;
+    x->c.offs[0] = 0;
+    for (int64_t i = 0; i < x->c.nc; i++)
+        x->c.offs[i + 1] = (*offs_end)[i];
+    return check_offsets(x->c.offs, x->c.nc, x->c.nconn, "vtu", err);
+}
+
 qdc_status meshio_vtu_read(const char *buf, size_t len, const meshio_options *o,
                            srcrec *rec, mesh_t **out, qdc_error *err)
 {
     vtu x;
-    xtag t;
-    int sec = SEC_NONE, seen_file = 0, seen_piece = 0;
     double *offs_end = NULL; /* XML offsets: the end of each cell */
-    const char *cv, *ce;
     qdc_status st;
 
     memset(&x, 0, sizeof x);
@@ -1777,83 +2006,10 @@ qdc_status meshio_vtu_read(const char *buf, size_t len, const meshio_options *o,
     x.s = txt_init(buf, len, 0);
     x.b = (const unsigned char *)buf;
     st = find_appended(&x, err);
-    while (st == QDC_OK) {
-        st = next_tag(&x, &t, err);
-        if (st != QDC_OK || !t.name || (x.appended && x.s.p >= x.appended))
-            break;
-        if (word_is(t.name, t.nlen, "VTKFile") && !t.closing) {
-            if (!attr_is(&t, "type", "UnstructuredGrid"))
-                st = fail_txt(err, QDC_EFORMAT, &x.s, t.name,
-                              "VTU: only type=\"UnstructuredGrid\" is supported");
-            else if (tag_attr(&t, "compressor", &cv, &ce) && ce > cv) {
-                x.zlib = (size_t)(ce - cv) == 21 &&
-                         memcmp(cv, "vtkZLibDataCompressor", 21) == 0;
-                if (!x.zlib)
-                    st = fail_txt(err, QDC_EFORMAT, &x.s, cv,
-                                  "VTU: compressor \"%.*s\" not supported (only "
-                                  "vtkZLibDataCompressor)",
-                                  (int)(ce - cv > 32 ? 32 : ce - cv), cv);
-            }
-            x.big = attr_is(&t, "byte_order", "BigEndian");
-            x.hdr8 = attr_is(&t, "header_type", "UInt64");
-            seen_file = 1;
-        } else if (word_is(t.name, t.nlen, "Piece") && !t.closing) {
-            if (seen_piece)
-                st = fail_txt(err, QDC_EFORMAT, &x.s, t.name, "VTU: more than one Piece");
-            if (st == QDC_OK)
-                st = attr_int(&x, &t, "NumberOfPoints", 0, MESH_MAX_VERTICES, &x.c.nv,
-                              err);
-            if (st == QDC_OK)
-                st = attr_int(&x, &t, "NumberOfCells", 0, INT64_MAX / 16, &x.c.nc, err);
-            seen_piece = 1;
-        } else if (word_is(t.name, t.nlen, "Points") ||
-                   word_is(t.name, t.nlen, "Cells") ||
-                   word_is(t.name, t.nlen, "CellData") ||
-                   word_is(t.name, t.nlen, "PointData")) {
-            sec = t.closing || t.empty                  ? SEC_NONE
-                  : word_is(t.name, t.nlen, "Points")   ? SEC_POINTS
-                  : word_is(t.name, t.nlen, "Cells")    ? SEC_CELLS
-                  : word_is(t.name, t.nlen, "CellData") ? SEC_CELLDATA
-                                                        : SEC_POINTDATA;
-        } else if (word_is(t.name, t.nlen, "DataArray") && !t.closing &&
-                   (st = vtu_note_offset(&x, &t, err)) != QDC_OK) {
-            break;
-        } else if (word_is(t.name, t.nlen, "DataArray") && !t.closing &&
-                   sec != SEC_NONE) {
-            if (!seen_piece)
-                st = fail_txt(err, QDC_EPARSE, &x.s, t.name,
-                              "VTU: DataArray outside a Piece");
-            else
-                st = vtu_dataarray(&x, &t, sec, &offs_end, err);
-        } else if (word_is(t.name, t.nlen, "AppendedData")) {
-            break;
-        }
-    }
-    if (st == QDC_OK && !seen_file)
-        st = fail_txt(err, QDC_EPARSE, &x.s, x.s.p, "VTU: no VTKFile element");
-    if (st == QDC_OK && (!seen_piece || !x.c.xyz))
-        st = fail_txt(err, QDC_EPARSE, &x.s, x.s.p, "VTU: no Piece with Points");
-    if (st == QDC_OK && x.conn_tag.name && offs_end) { /* VTK writes it before offsets */
-        txt here = x.s;
-        x.s = x.conn_at;
-        st = vtu_dataarray(&x, &x.conn_tag, SEC_CELLS, &offs_end, err);
-        if (st == QDC_OK)
-            x.s = here;
-    }
-    if (st == QDC_OK && x.c.nc && (!offs_end || !x.c.conn || !x.c.types))
-        st = fail_txt(err, QDC_EPARSE, &x.s, x.s.p,
-                      "VTU: Cells need connectivity, offsets and types");
-    if (st == QDC_OK) {
-        x.c.offs = alloc_values(x.c.nc + 1, err);
-        if (!x.c.offs)
-            st = QDC_ENOMEM;
-        else {
-            x.c.offs[0] = 0;
-            for (int64_t i = 0; i < x.c.nc; i++)
-                x.c.offs[i + 1] = offs_end[i];
-            st = check_offsets(x.c.offs, x.c.nc, x.c.nconn, "vtu", err);
-        }
-    }
+    if (st == QDC_OK)
+        st = vtu_tags(&x, &offs_end, err);
+    if (st == QDC_OK)
+        st = vtu_cells(&x, &offs_end, err);
     if (st == QDC_OK && rec && rec->appended && rec->kind != SRC_NONE)
         check_app_overlap(&x);
     if (st == QDC_OK && rec && rec->dv.kind == DV_NORMS)
