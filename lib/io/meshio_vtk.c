@@ -1577,13 +1577,17 @@ static qdc_status vtu_array(vtu *x, const xtag *t, int64_t n, vtype vt, int fini
     st = vtu_bytes(x, t, appended, want, rec, &data, &tmp, err);
     if (st == QDC_OK && out) {
         decode_values(data, n, vt, x->big, out);
-        for (int64_t i = 0; finite && i < n && st == QDC_OK; i++)
-            if (!isfinite(out[i]))
+        for (int64_t i = 0; finite && i < n && st == QDC_OK; i++) {
+            if (isfinite(out[i]))
+                continue;
+            if (appended && !x->app_base64 && !x->zlib) /* raw: the value's bytes */
                 st = fail_bin(err, QDC_EPARSE,
-                              appended && !x->app_base64 && !x->zlib
-                                  ? (const char *)data - s->base + i * vsize[vt]
-                                  : -1,
+                              (const char *)data - s->base + i * vsize[vt],
                               "VTU: value %lld is not finite (NaN/Inf)", (long long)i);
+            else /* base64 or zlib: the DataArray's tag */
+                st = fail_txt(err, QDC_EPARSE, s, t->name,
+                              "VTU: value %lld is not finite (NaN/Inf)", (long long)i);
+        }
     }
     qdc_free(tmp);
     return st;
