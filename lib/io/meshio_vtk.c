@@ -381,8 +381,8 @@ static qdc_status cells_mesh(cells *c, const char *fmtname, const meshio_options
             qdc_free(pm.tri_ref);
             pm.tri_ref = NULL;
         }
-        st = parsed_mesh(&pm, out, err);
-        pm.xyz = NULL; /* owned by c */
+        c->xyz = NULL; /* moves into the mesh */
+        st = parsed_mesh_move(&pm, out, err);
     }
     parsed_free(&pm);
     if (st == QDC_OK)
