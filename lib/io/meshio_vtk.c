@@ -1508,6 +1508,50 @@ static qdc_status vtu_bytes(vtu *x, const xtag *t, int appended, size_t want, sr
     return QDC_OK;
 }
 
+/* The n values of an ascii DataArray into out (NULL: skip); finite: NaN
+ * and infinities are errors. rec (Points only): where each vertex starts. */
+static qdc_status vtu_ascii(vtu *x, const xtag *t, int64_t n, int finite, double *out,
+                            srcrec *rec, qdc_error *err)
+{
+    txt *s = &x->s;
+    qdc_status st;
+
+    if (t->empty && n)
+        return fail_txt(err, QDC_EPARSE, s, t->name, "VTU: empty ascii DataArray");
+    if (rec) {
+        rec->fmt = MESHIO_VTU_ASCII;
+        rec->kind = SRC_TEXT;
+        rec->lt = 1;
+        st = srcrec_alloc(rec, n / 3, err);
+        if (st != QDC_OK)
+            return st;
+    }
+    for (int64_t i = 0; i < n; i++) {
+        double y;
+        const char *te, *lim = data_end(x, s->p);
+        char q[32];
+        skip_ws(s);
+        if (rec && i % 3 == 0)
+            rec->off[i / 3] = (uint64_t)(s->p - s->base);
+        for (te = s->p; te < lim && !is_space((unsigned char)*te) && *te != '<'; te++)
+            ;
+        if (finite)
+            st = tok_real(s, s->p, te, "DataArray", &y, err);
+        else
+            st = s->p < te && parse_double(s->p, te, &y) == 0
+                     ? QDC_OK
+                     : fail_txt(err, QDC_EPARSE, s, s->p,
+                                "DataArray: expected a number, got %s",
+                                quote_tok(q, s, s->p, te));
+        if (st != QDC_OK)
+            return st;
+        s->p = te;
+        if (out)
+            out[i] = y;
+    }
+    return QDC_OK;
+}
+
 /* The data of one DataArray with n values of type t into out (NULL: skip).
  * rec (Points only): where the coordinates are. */
 static qdc_status vtu_array(vtu *x, const xtag *t, int64_t n, vtype vt, int finite,
@@ -1530,42 +1574,8 @@ static qdc_status vtu_array(vtu *x, const xtag *t, int64_t n, vtype vt, int fini
         rec->big = x->big;
         rec->nv = n / 3;
     }
-    if ((size_t)(fe - fv) == 5 && memcmp(fv, "ascii", 5) == 0) {
-        if (t->empty && n)
-            return fail_txt(err, QDC_EPARSE, s, t->name, "VTU: empty ascii DataArray");
-        if (rec) {
-            rec->fmt = MESHIO_VTU_ASCII;
-            rec->kind = SRC_TEXT;
-            rec->lt = 1;
-            st = srcrec_alloc(rec, n / 3, err);
-            if (st != QDC_OK)
-                return st;
-        }
-        for (int64_t i = 0; i < n; i++) {
-            double y;
-            const char *te, *lim = data_end(x, s->p);
-            char q[32];
-            skip_ws(s);
-            if (rec && i % 3 == 0)
-                rec->off[i / 3] = (uint64_t)(s->p - s->base);
-            for (te = s->p; te < lim && !is_space((unsigned char)*te) && *te != '<'; te++)
-                ;
-            if (finite)
-                st = tok_real(s, s->p, te, "DataArray", &y, err);
-            else
-                st = s->p < te && parse_double(s->p, te, &y) == 0
-                         ? QDC_OK
-                         : fail_txt(err, QDC_EPARSE, s, s->p,
-                                    "DataArray: expected a number, got %s",
-                                    quote_tok(q, s, s->p, te));
-            if (st != QDC_OK)
-                return st;
-            s->p = te;
-            if (out)
-                out[i] = y;
-        }
-        return QDC_OK;
-    }
+    if ((size_t)(fe - fv) == 5 && memcmp(fv, "ascii", 5) == 0)
+        return vtu_ascii(x, t, n, finite, out, rec, err);
     if ((size_t)(fe - fv) == 6 && memcmp(fv, "binary", 6) == 0)
         appended = 0;
     else if ((size_t)(fe - fv) == 8 && memcmp(fv, "appended", 8) == 0)
