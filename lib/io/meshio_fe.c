@@ -109,10 +109,11 @@ static int xml_name_char(unsigned char c)
     return is_word(c) || c == ':' || c == '-' || c == '.';
 }
 
-/* The next tag (comments, <?...?> and <!...> skipped); *eof at the end. */
-static qdc_status xml_tag(txt *s, xtag *t, int *eof, qdc_error *err)
+/* Up to the '<' of the next tag (comments, <?...?> and <!...> skipped);
+ * *eof at the end. */
+static qdc_status xml_skip(txt *s, int *eof, qdc_error *err)
 {
-    const char *p, *e = s->end;
+    const char *e = s->end;
 
     *eof = 0;
     for (;;) {
@@ -138,8 +139,60 @@ static qdc_status xml_tag(txt *s, xtag *t, int *eof, qdc_error *err)
             adv(s, close + 1);
             continue;
         }
-        break;
+        return QDC_OK;
     }
+}
+
+/* One attribute name="value" at *pp (the first XML_ATTRS kept in t). */
+static qdc_status xml_attr_one(txt *s, xtag *t, const char **pp, qdc_error *err)
+{
+    const char *p = *pp, *e = s->end, *n = p, *q;
+    size_t nl;
+
+    while (p < e && xml_name_char((unsigned char)*p))
+        p++;
+    nl = (size_t)(p - n);
+    while (p < e && is_space((unsigned char)*p))
+        p++;
+    if (!nl || p >= e || *p != '=') {
+        adv(s, p < e ? p : e);
+        return fail_txt(err, QDC_EPARSE, s, p < e ? p : e,
+                        "<%.*s: expected attribute=\"value\"",
+                        (int)(t->nlen > 32 ? 32 : t->nlen), t->name);
+    }
+    p++;
+    while (p < e && is_space((unsigned char)*p))
+        p++;
+    if (p >= e || (*p != '"' && *p != '\'')) {
+        adv(s, p < e ? p : e);
+        return fail_txt(
+            err, QDC_EPARSE, s, p < e ? p : e, "<%.*s %.*s=: expected a quoted value",
+            (int)(t->nlen > 32 ? 32 : t->nlen), t->name, (int)(nl > 32 ? 32 : nl), n);
+    }
+    q = memchr(p + 1, *p, (size_t)(e - p - 1));
+    if (!q) {
+        adv(s, p);
+        return fail_txt(err, QDC_EPARSE, s, p, "unterminated attribute value");
+    }
+    if (t->na < XML_ATTRS) {
+        xattr *a = &t->a[t->na++];
+        a->n = n;
+        a->nl = nl;
+        a->v = p + 1;
+        a->vl = (size_t)(q - p - 1);
+    }
+    *pp = q + 1;
+    return QDC_OK;
+}
+
+/* The next tag (comments, <?...?> and <!...> skipped); *eof at the end. */
+static qdc_status xml_tag(txt *s, xtag *t, int *eof, qdc_error *err)
+{
+    const char *p, *e = s->end;
+    qdc_status st = xml_skip(s, eof, err);
+
+    if (st != QDC_OK || *eof)
+        return st;
     memset(t, 0, sizeof *t);
     t->at = s->p;
     t->line = s->line;
@@ -156,8 +209,6 @@ static qdc_status xml_tag(txt *s, xtag *t, int *eof, qdc_error *err)
     if (!t->nlen)
         return fail_txt(err, QDC_EPARSE, s, t->at, "expected a tag name after '<'");
     for (;;) {
-        const char *n, *q;
-        size_t nl;
         while (p < e && is_space((unsigned char)*p))
             p++;
         if (p >= e)
@@ -172,40 +223,9 @@ static qdc_status xml_tag(txt *s, xtag *t, int *eof, qdc_error *err)
             p += 2;
             break;
         }
-        n = p;
-        while (p < e && xml_name_char((unsigned char)*p))
-            p++;
-        nl = (size_t)(p - n);
-        while (p < e && is_space((unsigned char)*p))
-            p++;
-        if (!nl || p >= e || *p != '=') {
-            adv(s, p < e ? p : e);
-            return fail_txt(err, QDC_EPARSE, s, p < e ? p : e,
-                            "<%.*s: expected attribute=\"value\"",
-                            (int)(t->nlen > 32 ? 32 : t->nlen), t->name);
-        }
-        p++;
-        while (p < e && is_space((unsigned char)*p))
-            p++;
-        if (p >= e || (*p != '"' && *p != '\'')) {
-            adv(s, p < e ? p : e);
-            return fail_txt(
-                err, QDC_EPARSE, s, p < e ? p : e, "<%.*s %.*s=: expected a quoted value",
-                (int)(t->nlen > 32 ? 32 : t->nlen), t->name, (int)(nl > 32 ? 32 : nl), n);
-        }
-        q = memchr(p + 1, *p, (size_t)(e - p - 1));
-        if (!q) {
-            adv(s, p);
-            return fail_txt(err, QDC_EPARSE, s, p, "unterminated attribute value");
-        }
-        if (t->na < XML_ATTRS) {
-            xattr *a = &t->a[t->na++];
-            a->n = n;
-            a->nl = nl;
-            a->v = p + 1;
-            a->vl = (size_t)(q - p - 1);
-        }
-        p = q + 1;
+        st = xml_attr_one(s, t, &p, err);
+        if (st != QDC_OK)
+            return st;
     }
     adv(s, p);
     return QDC_OK;
@@ -418,6 +438,70 @@ static qdc_status dolfin_tet(txt *s, const xtag *t, dolfin *d, qdc_error *err)
     return QDC_OK;
 }
 
+/* A closing tag: </mesh>, or </vertices> and </cells> with their counts. */
+static qdc_status dolfin_close(txt *s, const xtag *t, dolfin *d, qdc_error *err)
+{
+    txt e = at_line(s, t->line, t->bol);
+
+    if (tag_is(t, "mesh"))
+        d->in_mesh = 0;
+    else if (d->in_mesh && tag_is(t, "vertices") && d->got_v != d->nvd)
+        return fail_txt(err, QDC_EPARSE, &e, t->at,
+                        "DOLFIN: %lld <vertex> elements, <vertices size=\"%lld\">",
+                        (long long)d->got_v, (long long)d->nvd);
+    else if (d->in_mesh && tag_is(t, "cells") && d->got_t != d->ntd)
+        return fail_txt(err, QDC_EPARSE, &e, t->at,
+                        "DOLFIN: %lld <tetrahedron> elements, <cells size=\"%lld\">",
+                        (long long)d->got_t, (long long)d->ntd);
+    return QDC_OK;
+}
+
+/* An opening tag inside <dolfin>; *nskip counts cells that are not
+ * tetrahedra. */
+static qdc_status dolfin_open(txt *s, const xtag *t, dolfin *d, srcrec *rec,
+                              int64_t *nskip, qdc_error *err)
+{
+    if (tag_is(t, "mesh")) {
+        if (d->nvd >= 0) {
+            txt e = at_line(s, t->line, t->bol);
+            return fail_txt(err, QDC_EPARSE, &e, t->at, "DOLFIN: a second <mesh>");
+        }
+        d->in_mesh = 1;
+        return dolfin_mesh(s, t, err);
+    }
+    if (!d->in_mesh)
+        return QDC_OK; /* mesh functions, data: kept by a spliced write */
+    if (tag_is(t, "vertices"))
+        return dolfin_vertices(s, t, d, rec, err);
+    if (tag_is(t, "vertex"))
+        return dolfin_vertex(s, t, d, rec, err);
+    if (tag_is(t, "cells"))
+        return dolfin_cells(s, t, d, err);
+    if (tag_is(t, "tetrahedron"))
+        return dolfin_tet(s, t, d, err);
+    if (d->ntd >= 0 && !tag_is(t, "domains"))
+        (*nskip)++;
+    return QDC_OK;
+}
+
+/* After the last tag: a root, a mesh, and the counts its sizes said. */
+static qdc_status dolfin_counts(txt *s, const dolfin *d, int root, qdc_error *err)
+{
+    if (!root)
+        return fail_txt(err, QDC_EFORMAT, s, s->p, "not a DOLFIN XML file: no <dolfin>");
+    if (d->nvd < 0)
+        return fail_txt(err, QDC_EPARSE, s, s->p, "DOLFIN: no <mesh> with <vertices>");
+    if (d->got_v != d->nvd)
+        return fail_txt(err, QDC_EPARSE, s, s->p,
+                        "DOLFIN: %lld <vertex> elements, <vertices size=\"%lld\">",
+                        (long long)d->got_v, (long long)d->nvd);
+    if (d->ntd >= 0 && d->got_t != d->ntd)
+        return fail_txt(err, QDC_EPARSE, s, s->p,
+                        "DOLFIN: %lld <tetrahedron> elements, <cells size=\"%lld\">",
+                        (long long)d->got_t, (long long)d->ntd);
+    return QDC_OK;
+}
+
 qdc_status meshio_dolfin_read(const char *buf, size_t len, const meshio_options *o,
                               srcrec *rec, mesh_t **out, qdc_error *err)
 {
@@ -444,57 +528,14 @@ qdc_status meshio_dolfin_read(const char *buf, size_t len, const meshio_options 
                               (int)(t.nlen > 24 ? 24 : t.nlen), t.name);
             }
             root = 1;
-            continue;
-        }
-        if (t.close) {
-            txt e = at_line(&s, t.line, t.bol);
-            if (tag_is(&t, "mesh"))
-                d.in_mesh = 0;
-            else if (d.in_mesh && tag_is(&t, "vertices") && d.got_v != d.nvd)
-                st = fail_txt(err, QDC_EPARSE, &e, t.at,
-                              "DOLFIN: %lld <vertex> elements, <vertices size=\"%lld\">",
-                              (long long)d.got_v, (long long)d.nvd);
-            else if (d.in_mesh && tag_is(&t, "cells") && d.got_t != d.ntd)
-                st =
-                    fail_txt(err, QDC_EPARSE, &e, t.at,
-                             "DOLFIN: %lld <tetrahedron> elements, <cells size=\"%lld\">",
-                             (long long)d.got_t, (long long)d.ntd);
-            continue;
-        }
-        if (tag_is(&t, "mesh")) {
-            if (d.nvd >= 0) {
-                txt e = at_line(&s, t.line, t.bol);
-                st = fail_txt(err, QDC_EPARSE, &e, t.at, "DOLFIN: a second <mesh>");
-            } else {
-                d.in_mesh = 1;
-                st = dolfin_mesh(&s, &t, err);
-            }
-        } else if (!d.in_mesh) {
-            continue; /* mesh functions, data: kept by a spliced write */
-        } else if (tag_is(&t, "vertices")) {
-            st = dolfin_vertices(&s, &t, &d, rec, err);
-        } else if (tag_is(&t, "vertex")) {
-            st = dolfin_vertex(&s, &t, &d, rec, err);
-        } else if (tag_is(&t, "cells")) {
-            st = dolfin_cells(&s, &t, &d, err);
-        } else if (tag_is(&t, "tetrahedron")) {
-            st = dolfin_tet(&s, &t, &d, err);
-        } else if (d.ntd >= 0 && !tag_is(&t, "domains")) {
-            skipped_cells++;
+        } else if (t.close) {
+            st = dolfin_close(&s, &t, &d, err);
+        } else {
+            st = dolfin_open(&s, &t, &d, rec, &skipped_cells, err);
         }
     }
-    if (st == QDC_OK && !root)
-        st = fail_txt(err, QDC_EFORMAT, &s, s.p, "not a DOLFIN XML file: no <dolfin>");
-    if (st == QDC_OK && d.nvd < 0)
-        st = fail_txt(err, QDC_EPARSE, &s, s.p, "DOLFIN: no <mesh> with <vertices>");
-    if (st == QDC_OK && d.got_v != d.nvd)
-        st = fail_txt(err, QDC_EPARSE, &s, s.p,
-                      "DOLFIN: %lld <vertex> elements, <vertices size=\"%lld\">",
-                      (long long)d.got_v, (long long)d.nvd);
-    if (st == QDC_OK && d.ntd >= 0 && d.got_t != d.ntd)
-        st = fail_txt(err, QDC_EPARSE, &s, s.p,
-                      "DOLFIN: %lld <tetrahedron> elements, <cells size=\"%lld\">",
-                      (long long)d.got_t, (long long)d.ntd);
+    if (st == QDC_OK)
+        st = dolfin_counts(&s, &d, root, err);
     if (st == QDC_OK && rec && !d.ordered)
         srcrec_refuse(rec, "the vertices are not in index order with x, y, z attributes");
     if (st == QDC_OK) {
@@ -1056,15 +1097,95 @@ static qdc_status vol_check(const txt *s, const uint64_t *at, int32_t *idx, size
     return QDC_OK;
 }
 
+/* points (the keyword at t): the count and the coordinates. */
+static qdc_status vol_points(txt *s, const char *t, parsed *pm, srcrec *rec,
+                             qdc_error *err)
+{
+    int64_t nv;
+    qdc_status st;
+
+    if (pm->nv >= 0)
+        return fail_txt(err, QDC_EPARSE, s, t, "a second points section");
+    st = txt_count(s, "points", 3, MESH_MAX_VERTICES, &nv, err);
+    if (st != QDC_OK)
+        return st;
+    pm->nv = nv;
+    pm->xyz = qdc_mallocn(3 * (size_t)nv + 1, sizeof(double));
+    if (!pm->xyz)
+        return qdc_fail(err, QDC_ENOMEM, "out of memory for %lld points", (long long)nv);
+    if (rec) {
+        rec->fmt = MESHIO_NETGEN;
+        rec->kind = SRC_TEXT;
+        rec->hash = 1;
+        st = srcrec_alloc(rec, nv, err);
+    }
+    for (int64_t i = 0; i < nv && st == QDC_OK; i++) {
+        if (rec) {
+            skip_ws(s);
+            rec->off[i] = (uint64_t)(s->p - s->base);
+        }
+        for (int a = 0; a < 3 && st == QDC_OK; a++)
+            st = txt_real(s, "points: coordinate", &pm->xyz[3 * i + a], err);
+        if (st != QDC_OK)
+            set_index(err, "vertex", i);
+    }
+    return st;
+}
+
+/* The sections up to endmesh or the end of the file. Anything not read
+ * (edge segments, face colours, geometry) is skipped a token at a time and
+ * kept by a spliced write. */
+static qdc_status vol_sections(txt *s, vol *g, parsed *pm, srcrec *rec, qdc_error *err)
+{
+    const char *t, *te;
+    int64_t dim, c;
+    qdc_status st = QDC_OK;
+
+    while (st == QDC_OK) {
+        size_t n;
+        skip_ws(s);
+        if (s->p == s->end)
+            break;
+        t = s->p;
+        te = tok_end(s, t);
+        n = (size_t)(te - t);
+        s->p = te;
+        if (word_is(t, n, "endmesh")) {
+            break;
+        } else if (word_is(t, n, "dimension")) {
+            st = txt_int(s, "dimension", 3, 3, &dim, err);
+        } else if (word_is(t, n, "volumeelements")) {
+            st = vol_volume(s, g, err);
+        } else if (word_is(t, n, "surfaceelements") ||
+                   word_is(t, n, "surfaceelementsgi") ||
+                   word_is(t, n, "surfaceelementsuv")) {
+            if (g->ref.n)
+                st = fail_txt(err, QDC_EPARSE, s, t, "a second surfaceelements section");
+            if (st == QDC_OK)
+                st = vol_surface(s, g, n == 15 ? 0 : (t[16] == 'i') ? 1 : 2, err);
+        } else if (word_is(t, n, "points")) {
+            st = vol_points(s, t, pm, rec, err);
+        } else if (word_is(t, n, "materials") || word_is(t, n, "bcnames") ||
+                   word_is(t, n, "cd2names") || word_is(t, n, "cd3names")) {
+            /* "number name" pairs: a name may be any word, "points" too */
+            st = txt_count(s, "names", 2, INT32_MAX, &c, err);
+            for (int64_t i = 0; i < 2 * c && st == QDC_OK; i++) {
+                skip_ws(s);
+                s->p = tok_end(s, s->p);
+            }
+        }
+    }
+    return st;
+}
+
 qdc_status meshio_netgen_read(const char *buf, size_t len, const meshio_options *o,
                               srcrec *rec, mesh_t **out, qdc_error *err)
 {
     txt s = txt_init(buf, len, 1);
     vol g;
     parsed pm;
-    int64_t dim;
     const char *t, *te;
-    qdc_status st = QDC_OK;
+    qdc_status st;
 
     memset(&g, 0, sizeof g);
     g.tets.size = g.reg.size = g.tris.size = g.ref.size = sizeof(int32_t);
@@ -1079,70 +1200,7 @@ qdc_status meshio_netgen_read(const char *buf, size_t len, const meshio_options 
     if (!word_is(t, (size_t)(te - t), "mesh3d"))
         return fail_txt(err, QDC_EFORMAT, &s, t, "not a Netgen mesh: no mesh3d");
     s.p = te;
-    while (st == QDC_OK) {
-        size_t n;
-        skip_ws(&s);
-        if (s.p == s.end)
-            break;
-        t = s.p;
-        te = tok_end(&s, t);
-        n = (size_t)(te - t);
-        s.p = te;
-        if (word_is(t, n, "endmesh")) {
-            break;
-        } else if (word_is(t, n, "dimension")) {
-            st = txt_int(&s, "dimension", 3, 3, &dim, err);
-        } else if (word_is(t, n, "volumeelements")) {
-            st = vol_volume(&s, &g, err);
-        } else if (word_is(t, n, "surfaceelements") ||
-                   word_is(t, n, "surfaceelementsgi") ||
-                   word_is(t, n, "surfaceelementsuv")) {
-            if (g.ref.n)
-                st = fail_txt(err, QDC_EPARSE, &s, t, "a second surfaceelements section");
-            if (st == QDC_OK)
-                st = vol_surface(&s, &g, n == 15 ? 0 : (t[16] == 'i') ? 1 : 2, err);
-        } else if (word_is(t, n, "points")) {
-            int64_t nv;
-            if (pm.nv >= 0)
-                st = fail_txt(err, QDC_EPARSE, &s, t, "a second points section");
-            if (st == QDC_OK)
-                st = txt_count(&s, "points", 3, MESH_MAX_VERTICES, &nv, err);
-            if (st == QDC_OK) {
-                pm.nv = nv;
-                pm.xyz = qdc_mallocn(3 * (size_t)nv + 1, sizeof(double));
-                if (!pm.xyz)
-                    st = qdc_fail(err, QDC_ENOMEM, "out of memory for %lld points",
-                                  (long long)nv);
-            }
-            if (st == QDC_OK && rec) {
-                rec->fmt = MESHIO_NETGEN;
-                rec->kind = SRC_TEXT;
-                rec->hash = 1;
-                st = srcrec_alloc(rec, nv, err);
-            }
-            for (int64_t i = 0; i < nv && st == QDC_OK; i++) {
-                if (rec) {
-                    skip_ws(&s);
-                    rec->off[i] = (uint64_t)(s.p - s.base);
-                }
-                for (int a = 0; a < 3 && st == QDC_OK; a++)
-                    st = txt_real(&s, "points: coordinate", &pm.xyz[3 * i + a], err);
-                if (st != QDC_OK)
-                    set_index(err, "vertex", i);
-            }
-        } else if (word_is(t, n, "materials") || word_is(t, n, "bcnames") ||
-                   word_is(t, n, "cd2names") || word_is(t, n, "cd3names")) {
-            /* "number name" pairs: a name may be any word, "points" too */
-            int64_t c;
-            st = txt_count(&s, "names", 2, INT32_MAX, &c, err);
-            for (int64_t i = 0; i < 2 * c && st == QDC_OK; i++) {
-                skip_ws(&s);
-                s.p = tok_end(&s, s.p);
-            }
-        }
-        /* anything else (edge segments, face colours, geometry): skipped a
-         * token at a time, kept by a spliced write */
-    }
+    st = vol_sections(&s, &g, &pm, rec, err);
     if (st == QDC_OK && pm.nv < 0)
         st = fail_txt(err, QDC_EPARSE, &s, s.p, "Netgen: no points section");
     if (st == QDC_OK)

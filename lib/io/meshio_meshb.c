@@ -139,157 +139,208 @@ static qdc_status gmf_check(int32_t *idx, int64_t n, int64_t nv, const char *wha
     return QDC_OK;
 }
 
-qdc_status meshio_meshb_read(const char *buf, size_t len, const meshio_options *o,
-                             srcrec *rec, mesh_t **out, qdc_error *err)
-{
-    gmf g = {(const unsigned char *)buf, len, 0, 0, 0, 0, 0};
+/* What the keywords gave, and where (errors found after the last one). */
+typedef struct {
     parsed pm;
-    int32_t *fix = NULL;
-    size_t at_tet = 0, at_tri = 0, at_fix = 0;
-    int64_t ver, code;
-    qdc_status st;
+    int32_t *fix;
+    size_t at_tet, at_tri, at_fix;
+} gmf_mesh;
 
-    (void)o; /* nothing to note: what is skipped is kept by a spliced write */
-    parsed_init(&pm);
-    if (len < 8)
+/* The header: byte order from the code word, sizes from the version. */
+static qdc_status gmf_header(gmf *g, qdc_error *err)
+{
+    int64_t ver, code;
+
+    if (g->len < 8)
         return fail_bin(err, QDC_EPARSE, 0, "meshb: %zu bytes, too short for a header",
-                        len);
-    code = (int64_t)gmf_word(&g, 0, 4);
+                        g->len);
+    code = (int64_t)gmf_word(g, 0, 4);
     if (code != 1) {
-        g.big = 1;
-        if (gmf_word(&g, 0, 4) != 1)
+        g->big = 1;
+        if (gmf_word(g, 0, 4) != 1)
             return fail_bin(err, QDC_EFORMAT, 0,
                             "not a Medit binary file: first word %lld (1 expected)",
                             (long long)code);
     }
-    ver = (int64_t)gmf_word(&g, 4, 4);
+    ver = (int64_t)gmf_word(g, 4, 4);
     if (ver < 1 || ver > 4)
         return fail_bin(err, QDC_EFORMAT, 4, "meshb: version %lld not supported (1 to 4)",
                         (long long)ver);
-    g.rsz = ver == 1 ? 4 : 8;
-    g.isz = ver == 4 ? 8 : 4;
-    g.psz = ver >= 3 ? 8 : 4;
-    g.p = 8;
-    st = QDC_OK;
-    while (st == QDC_OK) {
-        size_t at = g.p;
-        int64_t kw, next;
-        if (g.p == len)
-            break; /* no End keyword: the file ends here anyway */
-        st = gmf_need(&g, 4, "keyword", err);
-        if (st != QDC_OK)
-            break;
-        kw = gmf_int(&g, 4);
-        if (kw == GMF_END)
-            break;
-        st = gmf_need(&g, (uint64_t)g.psz, "keyword position", err);
-        if (st != QDC_OK)
-            break;
-        next = gmf_int(&g, g.psz);
-        if (kw == GMF_DIMENSION) {
-            int64_t dim;
-            st = gmf_need(&g, 4, "Dimension", err);
-            if (st == QDC_OK && (dim = gmf_int(&g, 4)) != 3)
-                st = fail_bin(err, QDC_EFORMAT, (int64_t)at,
-                              "meshb: Dimension %lld (3D meshes only)", (long long)dim);
-        } else if (kw == GMF_VERTICES) {
-            int64_t n;
-            if (pm.xyz)
-                st = fail_bin(err, QDC_EPARSE, (int64_t)at, "meshb: a second Vertices");
-            if (st == QDC_OK)
-                st = gmf_count(&g, "Vertices", 3 * (uint64_t)g.rsz + (uint64_t)g.isz,
-                               MESH_MAX_VERTICES, &n, err);
-            if (st == QDC_OK) {
-                pm.nv = n;
-                pm.xyz = qdc_mallocn(3 * (size_t)n + 1, sizeof(double));
-                pm.vref = qdc_mallocn((size_t)n + 1, sizeof(int32_t));
-                if (!pm.xyz || !pm.vref)
-                    st = qdc_fail(err, QDC_ENOMEM, "out of memory for %lld vertices",
-                                  (long long)n);
-            }
-            if (st == QDC_OK && rec) {
-                rec->fmt = MESHIO_MESHB;
-                rec->kind = SRC_BIN;
-                rec->width = g.rsz;
-                rec->big = g.big;
-                st = srcrec_alloc(rec, n, err);
-            }
-            for (int64_t i = 0; i < pm.nv && st == QDC_OK; i++) {
-                size_t vat = g.p;
-                if (rec)
-                    rec->off[i] = (uint64_t)g.p;
-                for (int a = 0; a < 3; a++)
-                    pm.xyz[3 * i + a] = gmf_real(&g);
-                pm.vref[i] = (int32_t)gmf_int(&g, g.isz);
-                if (!isfinite(pm.xyz[3 * i]) || !isfinite(pm.xyz[3 * i + 1]) ||
-                    !isfinite(pm.xyz[3 * i + 2])) {
-                    st = fail_bin(
-                        err, QDC_EPARSE, (int64_t)vat,
-                        "meshb: vertex %lld: a coordinate is not finite (NaN/Inf)",
-                        (long long)i + 1);
-                    set_index(err, "vertex", i);
-                }
-            }
-        } else if (kw == GMF_TETRAHEDRA) {
-            at_tet = at;
-            st = gmf_elems(&g, "Tetrahedra", 4, MESH_MAX_TETS, &pm.nt, &pm.tets,
-                           &pm.region, err);
-        } else if (kw == GMF_TRIANGLES) {
-            at_tri = at;
-            st = gmf_elems(&g, "Triangles", 3, INT32_MAX / 3, &pm.ntri, &pm.tris,
-                           &pm.tri_ref, err);
-        } else if (kw == GMF_TETRAHEDRA_P2) { /* corners alone would break them */
-            st = fail_bin(err, QDC_EFORMAT, (int64_t)at,
-                          "meshb: TetrahedraP2: second-order tetrahedra (10 vertices) "
-                          "are not supported: qdc optimizes linear Tetrahedra");
-        } else if (kw == GMF_REQUIRED_VERTICES) {
-            int64_t n;
-            at_fix = at;
-            if (fix)
-                st = fail_bin(err, QDC_EPARSE, (int64_t)at,
-                              "meshb: a second RequiredVertices");
-            if (st == QDC_OK)
-                st = gmf_count(&g, "RequiredVertices", (uint64_t)g.isz, INT32_MAX, &n,
-                               err);
-            if (st == QDC_OK && !(fix = qdc_mallocn((size_t)n + 1, sizeof(int32_t))))
-                st = qdc_fail(err, QDC_ENOMEM, "out of memory");
-            for (int64_t i = 0; i < n && st == QDC_OK; i++) {
-                int64_t v = gmf_int(&g, g.isz);
-                fix[i] = v < 1 || v > INT32_MAX ? 0 : (int32_t)v;
-            }
-            if (st == QDC_OK)
-                pm.nfix = n;
-        } else {
-            /* another keyword: skipped through its next-keyword position */
-            if (next == 0) {
-                if (kw < 0 || kw > 200)
-                    st = fail_bin(err, QDC_EPARSE, (int64_t)at,
-                                  "meshb: unknown keyword %lld", (long long)kw);
-                break; /* the last keyword */
-            }
-            if (next <= (int64_t)g.p || (uint64_t)next > len)
-                st = fail_bin(err, QDC_EPARSE, (int64_t)at,
-                              "meshb: keyword %lld: next position %lld out of range",
-                              (long long)kw, (long long)next);
-            else
-                g.p = (size_t)next;
+    g->rsz = ver == 1 ? 4 : 8;
+    g->isz = ver == 4 ? 8 : 4;
+    g->psz = ver >= 3 ? 8 : 4;
+    g->p = 8;
+    return QDC_OK;
+}
+
+/* Vertices (keyword at `at`): coordinates and refs; rec: where each is. */
+static qdc_status gmf_vertices(gmf *g, parsed *pm, srcrec *rec, size_t at, qdc_error *err)
+{
+    int64_t n;
+    qdc_status st = QDC_OK;
+
+    if (pm->xyz)
+        return fail_bin(err, QDC_EPARSE, (int64_t)at, "meshb: a second Vertices");
+    st = gmf_count(g, "Vertices", 3 * (uint64_t)g->rsz + (uint64_t)g->isz,
+                   MESH_MAX_VERTICES, &n, err);
+    if (st != QDC_OK)
+        return st;
+    pm->nv = n;
+    pm->xyz = qdc_mallocn(3 * (size_t)n + 1, sizeof(double));
+    pm->vref = qdc_mallocn((size_t)n + 1, sizeof(int32_t));
+    if (!pm->xyz || !pm->vref)
+        return qdc_fail(err, QDC_ENOMEM, "out of memory for %lld vertices", (long long)n);
+    if (rec) {
+        rec->fmt = MESHIO_MESHB;
+        rec->kind = SRC_BIN;
+        rec->width = g->rsz;
+        rec->big = g->big;
+        st = srcrec_alloc(rec, n, err);
+    }
+    for (int64_t i = 0; i < pm->nv && st == QDC_OK; i++) {
+        size_t vat = g->p;
+        if (rec)
+            rec->off[i] = (uint64_t)g->p;
+        for (int a = 0; a < 3; a++)
+            pm->xyz[3 * i + a] = gmf_real(g);
+        pm->vref[i] = (int32_t)gmf_int(g, g->isz);
+        if (!isfinite(pm->xyz[3 * i]) || !isfinite(pm->xyz[3 * i + 1]) ||
+            !isfinite(pm->xyz[3 * i + 2])) {
+            st = fail_bin(err, QDC_EPARSE, (int64_t)vat,
+                          "meshb: vertex %lld: a coordinate is not finite (NaN/Inf)",
+                          (long long)i + 1);
+            set_index(err, "vertex", i);
         }
     }
-    if (st == QDC_OK && !pm.xyz)
-        st = fail_bin(err, QDC_EPARSE, (int64_t)g.p, "meshb: no Vertices");
-    if (st == QDC_OK && pm.tets)
-        st = gmf_check(pm.tets, 4 * pm.nt, pm.nv, "Tetrahedra", at_tet, err);
-    if (st == QDC_OK && pm.tris)
-        st = gmf_check(pm.tris, 3 * pm.ntri, pm.nv, "Triangles", at_tri, err);
-    if (st == QDC_OK && fix)
-        st = gmf_check(fix, pm.nfix, pm.nv, "RequiredVertices", at_fix, err);
-    if (st == QDC_OK) {
-        pm.fix = fix;
-        fix = NULL;
-        st = parsed_mesh(&pm, out, err);
+    return st;
+}
+
+/* RequiredVertices (keyword at `at`): 1-based numbers, checked later. */
+static qdc_status gmf_required(gmf *g, gmf_mesh *gm, size_t at, qdc_error *err)
+{
+    int64_t n;
+    qdc_status st;
+
+    gm->at_fix = at;
+    if (gm->fix)
+        return fail_bin(err, QDC_EPARSE, (int64_t)at, "meshb: a second RequiredVertices");
+    st = gmf_count(g, "RequiredVertices", (uint64_t)g->isz, INT32_MAX, &n, err);
+    if (st != QDC_OK)
+        return st;
+    if (!(gm->fix = qdc_mallocn((size_t)n + 1, sizeof(int32_t))))
+        return qdc_fail(err, QDC_ENOMEM, "out of memory");
+    for (int64_t i = 0; i < n; i++) {
+        int64_t v = gmf_int(g, g->isz);
+        gm->fix[i] = v < 1 || v > INT32_MAX ? 0 : (int32_t)v;
     }
-    qdc_free(fix);
-    parsed_free(&pm);
+    gm->pm.nfix = n;
+    return QDC_OK;
+}
+
+/* Keyword kw at `at` whose next keyword is at `next`; *last when it ends
+ * the file. */
+static qdc_status gmf_keyword(gmf *g, gmf_mesh *gm, int64_t kw, int64_t next, size_t at,
+                              srcrec *rec, int *last, qdc_error *err)
+{
+    parsed *pm = &gm->pm;
+    int64_t dim;
+    qdc_status st;
+
+    switch (kw) {
+    case GMF_DIMENSION:
+        st = gmf_need(g, 4, "Dimension", err);
+        if (st == QDC_OK && (dim = gmf_int(g, 4)) != 3)
+            st = fail_bin(err, QDC_EFORMAT, (int64_t)at,
+                          "meshb: Dimension %lld (3D meshes only)", (long long)dim);
+        return st;
+    case GMF_VERTICES:
+        return gmf_vertices(g, pm, rec, at, err);
+    case GMF_TETRAHEDRA:
+        gm->at_tet = at;
+        return gmf_elems(g, "Tetrahedra", 4, MESH_MAX_TETS, &pm->nt, &pm->tets,
+                         &pm->region, err);
+    case GMF_TRIANGLES:
+        gm->at_tri = at;
+        return gmf_elems(g, "Triangles", 3, INT32_MAX / 3, &pm->ntri, &pm->tris,
+                         &pm->tri_ref, err);
+    case GMF_TETRAHEDRA_P2: /* corners alone would break them */
+        return fail_bin(err, QDC_EFORMAT, (int64_t)at,
+                        "meshb: TetrahedraP2: second-order tetrahedra (10 vertices) "
+                        "are not supported: qdc optimizes linear Tetrahedra");
+    case GMF_REQUIRED_VERTICES:
+        return gmf_required(g, gm, at, err);
+    default: /* skipped through its next-keyword position */
+        if (next == 0) {
+            *last = 1;
+            return kw < 0 || kw > 200
+                       ? fail_bin(err, QDC_EPARSE, (int64_t)at,
+                                  "meshb: unknown keyword %lld", (long long)kw)
+                       : QDC_OK;
+        }
+        if (next <= (int64_t)g->p || (uint64_t)next > g->len)
+            return fail_bin(err, QDC_EPARSE, (int64_t)at,
+                            "meshb: keyword %lld: next position %lld out of range",
+                            (long long)kw, (long long)next);
+        g->p = (size_t)next;
+        return QDC_OK;
+    }
+}
+
+/* The keywords up to End, the last keyword or the end of the file. */
+static qdc_status gmf_keywords(gmf *g, gmf_mesh *gm, srcrec *rec, qdc_error *err)
+{
+    int last = 0;
+    qdc_status st = QDC_OK;
+
+    while (st == QDC_OK && !last) {
+        size_t at = g->p;
+        int64_t kw, next;
+        if (g->p == g->len)
+            break; /* no End keyword: the file ends here anyway */
+        st = gmf_need(g, 4, "keyword", err);
+        if (st != QDC_OK)
+            break;
+        kw = gmf_int(g, 4);
+        if (kw == GMF_END)
+            break;
+        st = gmf_need(g, (uint64_t)g->psz, "keyword position", err);
+        if (st != QDC_OK)
+            break;
+        next = gmf_int(g, g->psz);
+        st = gmf_keyword(g, gm, kw, next, at, rec, &last, err);
+    }
+    return st;
+}
+
+qdc_status meshio_meshb_read(const char *buf, size_t len, const meshio_options *o,
+                             srcrec *rec, mesh_t **out, qdc_error *err)
+{
+    gmf g = {(const unsigned char *)buf, len, 0, 0, 0, 0, 0};
+    gmf_mesh gm;
+    parsed *pm = &gm.pm;
+    qdc_status st;
+
+    (void)o; /* nothing to note: what is skipped is kept by a spliced write */
+    memset(&gm, 0, sizeof gm);
+    parsed_init(pm);
+    st = gmf_header(&g, err);
+    if (st == QDC_OK)
+        st = gmf_keywords(&g, &gm, rec, err);
+    if (st == QDC_OK && !pm->xyz)
+        st = fail_bin(err, QDC_EPARSE, (int64_t)g.p, "meshb: no Vertices");
+    if (st == QDC_OK && pm->tets)
+        st = gmf_check(pm->tets, 4 * pm->nt, pm->nv, "Tetrahedra", gm.at_tet, err);
+    if (st == QDC_OK && pm->tris)
+        st = gmf_check(pm->tris, 3 * pm->ntri, pm->nv, "Triangles", gm.at_tri, err);
+    if (st == QDC_OK && gm.fix)
+        st = gmf_check(gm.fix, pm->nfix, pm->nv, "RequiredVertices", gm.at_fix, err);
+    if (st == QDC_OK) {
+        pm->fix = gm.fix;
+        gm.fix = NULL;
+        st = parsed_mesh(pm, out, err);
+    }
+    qdc_free(gm.fix);
+    parsed_free(pm);
     return st;
 }
 

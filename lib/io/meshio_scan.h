@@ -499,6 +499,46 @@ static inline qdc_status parsed_mesh(const parsed *pm, mesh_t **out, qdc_error *
     return QDC_OK;
 }
 
+/* parsed_mesh without the copies: xyz, tets, region, vref, tris and tri_ref
+ * move into the mesh (pm's pointers are NULL afterwards, also on failure,
+ * when they are freed). Each must come from qdc_malloc* and hold at least
+ * what the mesh needs; xyz and tets must not be NULL. */
+static inline qdc_status parsed_mesh_move(parsed *pm, mesh_t **out, qdc_error *err)
+{
+    mesh_t *m = qdc_calloc(1, sizeof *m);
+    int64_t nt = pm->nt < 0 ? 0 : pm->nt;
+
+    if (m && pm->nfix >= 0 && !(m->fixed = qdc_calloc((size_t)pm->nv, 1))) {
+        qdc_free(m);
+        m = NULL;
+    }
+    if (!m) {
+        parsed_free(pm);
+        return qdc_fail(err, QDC_ENOMEM, "out of memory for a mesh of %lld vertices",
+                        (long long)pm->nv);
+    }
+    m->nv = (int32_t)pm->nv;
+    m->nt = (int32_t)nt;
+    m->xyz = pm->xyz;
+    m->tets = pm->tets;
+    m->region = pm->region;
+    m->vref = pm->vref;
+    for (int64_t i = 0; i < pm->nfix; i++)
+        m->fixed[pm->fix[i]] = 1;
+    if (pm->ntri > 0) {
+        m->ntri = (int32_t)pm->ntri;
+        m->tris = pm->tris;
+        m->tri_ref = pm->tri_ref;
+    } else {
+        qdc_free(pm->tris);
+        qdc_free(pm->tri_ref);
+    }
+    pm->xyz = NULL;
+    pm->tets = pm->region = pm->vref = pm->tris = pm->tri_ref = NULL;
+    *out = m;
+    return QDC_OK;
+}
+
 /* Index of the first entry of idx[n] outside [0, nv), or -1. */
 static inline int64_t first_bad_index(const int32_t *idx, int64_t n, int64_t nv)
 {

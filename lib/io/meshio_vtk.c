@@ -49,47 +49,107 @@ static int vtype_of(const char *w, size_t n, vtype *t)
     return -1;
 }
 
-/* n values of type t from bytes b (big-endian if big) into out. */
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_BIG_ENDIAN__
+enum { HOST_BIG = 1 };
+#else
+enum { HOST_BIG = 0 };
+#endif
+
+/* Unaligned loads of 2, 4 and 8 bytes, byte-swapped if swap. */
+static inline uint16_t ld16(const unsigned char *b, int swap)
+{
+    uint16_t u;
+
+    memcpy(&u, b, 2);
+    return swap ? __builtin_bswap16(u) : u;
+}
+
+static inline uint32_t ld32(const unsigned char *b, int swap)
+{
+    uint32_t u;
+
+    memcpy(&u, b, 4);
+    return swap ? __builtin_bswap32(u) : u;
+}
+
+static inline uint64_t ld64(const unsigned char *b, int swap)
+{
+    uint64_t u;
+
+    memcpy(&u, b, 8);
+    return swap ? __builtin_bswap64(u) : u;
+}
+
+static inline double f32_of(uint32_t u)
+{
+    float f;
+
+    memcpy(&f, &u, 4);
+    return f;
+}
+
+static inline double f64_of(uint64_t u)
+{
+    double d;
+
+    memcpy(&d, &u, 8);
+    return d;
+}
+
+/* One loop per type and byte order, so each is a plain (vectorizable) load,
+ * swap and convert. */
+#define DECODE(EXPR)                                                                     \
+    do {                                                                                 \
+        for (int64_t i = 0; i < n; i++)                                                  \
+            out[i] = (EXPR);                                                             \
+    } while (0)
+
+static inline __attribute__((always_inline)) void
+decode_swap(const unsigned char *b, int64_t n, vtype t, int swap, double *out)
+{
+    switch (t) {
+    case T_I8:
+        DECODE((int8_t)b[i]);
+        break;
+    case T_U8:
+        DECODE(b[i]);
+        break;
+    case T_I16:
+        DECODE((int16_t)ld16(b + 2 * i, swap));
+        break;
+    case T_U16:
+        DECODE(ld16(b + 2 * i, swap));
+        break;
+    case T_I32:
+        DECODE((int32_t)ld32(b + 4 * i, swap));
+        break;
+    case T_U32:
+        DECODE(ld32(b + 4 * i, swap));
+        break;
+    case T_I64:
+        DECODE((double)(int64_t)ld64(b + 8 * i, swap));
+        break;
+    case T_U64:
+        DECODE((double)ld64(b + 8 * i, swap));
+        break;
+    case T_F32:
+        DECODE(f32_of(ld32(b + 4 * i, swap)));
+        break;
+    case T_F64:
+        DECODE(f64_of(ld64(b + 8 * i, swap)));
+        break;
+    }
+}
+
+/* n values of type t from bytes b (big-endian if big) into out. The swap
+ * flag is a constant in each call so the compiler keeps two loops. */
 static void decode_values(const unsigned char *b, int64_t n, vtype t, int big,
                           double *out)
 {
-    int sz = vsize[t];
-
-    for (int64_t i = 0; i < n; i++, b += sz) {
-        unsigned char q[8];
-        uint64_t u = 0;
-        for (int j = 0; j < sz; j++)
-            q[j] = b[big ? sz - 1 - j : j];
-        for (int j = sz - 1; j >= 0; j--)
-            u = u << 8 | q[j];
-        switch (t) {
-        case T_I8:
-            out[i] = (int8_t)u;
-            break;
-        case T_I16:
-            out[i] = (int16_t)u;
-            break;
-        case T_I32:
-            out[i] = (int32_t)u;
-            break;
-        case T_I64:
-            out[i] = (double)(int64_t)u;
-            break;
-        case T_F32: {
-            uint32_t u32 = (uint32_t)u;
-            float f;
-            memcpy(&f, &u32, 4);
-            out[i] = f;
-            break;
-        }
-        case T_F64:
-            memcpy(&out[i], &u, 8);
-            break;
-        default: /* unsigned */
-            out[i] = (double)u;
-            break;
-        }
-    }
+    if (big != HOST_BIG)
+        decode_swap(b, n, t, 1, out);
+    else
+        decode_swap(b, n, t, 0, out);
 }
 
 /* ------------------------------------------------------------------------ */
@@ -130,9 +190,167 @@ static int region_prio(const char *name, size_t n)
     return PRIO_NONE;
 }
 
-static int is_int32(double x)
+/* x is an integer in [lo, hi], bounds within int32 (NaN is not). */
+static inline int int_in(double x, double lo, double hi)
 {
-    return x == floor(x) && x >= INT32_MIN && x <= INT32_MAX;
+    return x >= lo && x <= hi && (double)(int32_t)x == x;
+}
+
+static inline int is_int32(double x)
+{
+    return int_in(x, INT32_MIN, INT32_MAX);
+}
+
+/* 1 if every a[i] is an integer in [lo, hi]. */
+static int all_in(const double *a, int64_t n, double lo, double hi)
+{
+    for (int64_t i = 0; i < n; i++)
+        if (!int_in(a[i], lo, hi))
+            return 0;
+    return 1;
+}
+
+/* Where cell i's points are: conn[*a .. *a + *k). The legacy list (no
+ * offsets) is walked with *pos. -1 if the list ends inside a cell. */
+static int cell_span(const cells *c, int64_t i, int64_t *pos, int64_t *a, int64_t *k)
+{
+    double kd;
+
+    if (c->offs) {
+        *a = (int64_t)c->offs[i];
+        *k = (int64_t)c->offs[i + 1] - *a;
+        return 0;
+    }
+    if (*pos >= c->nconn)
+        return -1;
+    kd = c->conn[*pos];
+    if (kd == 4) /* the common sizes as constants: the next cell's position */
+        *k = 4;  /* is predicted, not waited for */
+    else if (kd == 3)
+        *k = 3;
+    else if (is_int32(kd) && kd >= 0)
+        *k = (int64_t)kd;
+    else
+        return -1;
+    *a = *pos + 1;
+    *pos = *a + *k;
+    return *pos > c->nconn ? -1 : 0;
+}
+
+/* Cell i (a tet or triangle of k points at conn[a]): every point index in
+ * range. */
+static qdc_status check_points(const cells *c, const char *fmtname, int64_t i, int64_t a,
+                               int64_t k, qdc_error *err)
+{
+    for (int64_t j = 0; j < k; j++) {
+        double v = c->conn[a + j];
+        if (!int_in(v, 0, (double)c->nv - 1)) {
+            qdc_fail(err, QDC_EPARSE,
+                     "%s: cell %lld: point index %.17g out of range [0, %lld]", fmtname,
+                     (long long)i, v, (long long)c->nv - 1);
+            set_index(err, "cell", i);
+            return QDC_EPARSE;
+        }
+    }
+    return QDC_OK;
+}
+
+/* One walk over the cells: without fill, every check and the counts of
+ * tets and triangles (*nt, *ntri) and skipped types (sk); with fill (arrays
+ * sized by the first walk), their points and regions. Point indices and
+ * regions are checked for the whole array at once; only if that fails, per
+ * cell (so the error names the first bad cell as before). */
+static qdc_status cells_walk(const cells *c, const char *fmtname, parsed *fill,
+                             skipped *sk, int64_t *nt, int64_t *ntri, qdc_error *err)
+{
+    int64_t pos = 0, n4 = 0, n3 = 0;
+    int idx_ok = fill || all_in(c->conn, c->nconn, 0, (double)c->nv - 1);
+    int reg_ok = fill || !c->creg || all_in(c->creg, c->nc, INT32_MIN, INT32_MAX);
+
+    for (int64_t i = 0; i < c->nc; i++) {
+        int64_t a, k, type;
+        if (cell_span(c, i, &pos, &a, &k) != 0)
+            return qdc_fail(err, QDC_EPARSE,
+                            "%s: CELLS list ends inside a cell (wrong counts)", fmtname);
+        type = is_int32(c->types[i]) ? (int64_t)c->types[i] : -1;
+        if (type == 24 || type == 71) { /* corners alone would break them */
+            qdc_fail(
+                err, QDC_EFORMAT,
+                "%s: cell %lld is a %s tetrahedron (VTK cell type %lld, %lld points): "
+                "not supported, qdc optimizes linear tetrahedra (type 10)",
+                fmtname, (long long)i, type == 24 ? "second-order" : "Lagrange",
+                (long long)type, (long long)k);
+            set_index(err, "cell", i);
+            return QDC_EFORMAT;
+        }
+        if (!((type == 10 && k == 4) || (type == 5 && k == 3))) {
+            if (!fill)
+                skip_count(sk, type, 1);
+            continue;
+        }
+        if (!idx_ok && check_points(c, fmtname, i, a, k, err) != QDC_OK)
+            return QDC_EPARSE;
+        if (!reg_ok && !is_int32(c->creg[i])) {
+            qdc_fail(err, QDC_EPARSE, "%s: cell %lld: region %.17g is not an int32",
+                     fmtname, (long long)i, c->creg[i]);
+            set_index(err, "cell", i);
+            return QDC_EPARSE;
+        }
+        if (fill) {
+            int32_t *dst = k == 4 ? fill->tets + 4 * n4 : fill->tris + 3 * n3;
+            for (int64_t j = 0; j < k; j++)
+                dst[j] = (int32_t)c->conn[a + j];
+            if (c->creg)
+                *(k == 4 ? &fill->region[n4] : &fill->tri_ref[n3]) = (int32_t)c->creg[i];
+        }
+        if (k == 4)
+            n4++;
+        else
+            n3++;
+    }
+    *nt = n4;
+    *ntri = n3;
+    return QDC_OK;
+}
+
+/* Arrays for nt tets and ntri triangles (and their regions). */
+static qdc_status cells_alloc(const cells *c, parsed *pm, int64_t nt, int64_t ntri,
+                              const char *fmtname, qdc_error *err)
+{
+    if (nt > MESH_MAX_TETS || ntri > INT32_MAX / 3)
+        return qdc_fail(err, QDC_ETOOBIG, "%s: %lld tets exceed the limit", fmtname,
+                        (long long)nt);
+    pm->tets = qdc_mallocn((size_t)nt * 4 + 1, sizeof(int32_t));
+    pm->tris = qdc_mallocn((size_t)ntri * 3 + 1, sizeof(int32_t));
+    if (c->creg) {
+        pm->region = qdc_mallocn((size_t)nt + 1, sizeof(int32_t));
+        pm->tri_ref = qdc_mallocn((size_t)ntri + 1, sizeof(int32_t));
+    }
+    if (!pm->tets || !pm->tris || (c->creg && (!pm->region || !pm->tri_ref)))
+        return qdc_fail(err, QDC_ENOMEM, "out of memory for %lld cells",
+                        (long long)c->nc);
+    return QDC_OK;
+}
+
+/* The point array medit:ref, if any, as vertex refs. */
+static qdc_status cells_vref(const cells *c, const char *fmtname, parsed *pm,
+                             qdc_error *err)
+{
+    if (!c->vref)
+        return QDC_OK;
+    for (int64_t i = 0; i < c->nv; i++)
+        if (!is_int32(c->vref[i])) {
+            qdc_fail(err, QDC_EPARSE, "%s: point %lld: medit:ref %.17g is not an int32",
+                     fmtname, (long long)i, c->vref[i]);
+            set_index(err, "vertex", i);
+            return QDC_EPARSE;
+        }
+    pm->vref = qdc_mallocn((size_t)c->nv + 1, sizeof(int32_t));
+    if (!pm->vref)
+        return qdc_fail(err, QDC_ENOMEM, "out of memory");
+    for (int64_t i = 0; i < c->nv; i++)
+        pm->vref[i] = (int32_t)c->vref[i];
+    return QDC_OK;
 }
 
 static qdc_status cells_mesh(cells *c, const char *fmtname, const meshio_options *o,
@@ -140,108 +358,20 @@ static qdc_status cells_mesh(cells *c, const char *fmtname, const meshio_options
 {
     parsed pm;
     skipped sk;
-    int64_t pos = 0, nt = 0, ntri = 0;
-    qdc_status st = QDC_OK;
+    int64_t nt = 0, ntri = 0;
+    qdc_status st;
 
     memset(&sk, 0, sizeof sk);
     parsed_init(&pm);
     if (!c->types && c->nc)
         return qdc_fail(err, QDC_EPARSE, "%s: no cell types", fmtname);
-    /* pass 0 counts and checks, pass 1 fills */
-    for (int pass = 0; pass < 2 && st == QDC_OK; pass++) {
-        pos = nt = ntri = 0;
-        for (int64_t i = 0; i < c->nc; i++) {
-            int64_t a, k, type;
-            double t = c->types[i];
-            if (c->offs) {
-                a = (int64_t)c->offs[i];
-                k = (int64_t)c->offs[i + 1] - a;
-            } else {
-                if (pos >= c->nconn || !is_int32(c->conn[pos]) || c->conn[pos] < 0)
-                    goto bad_list;
-                k = (int64_t)c->conn[pos];
-                a = pos + 1;
-                pos = a + k;
-                if (pos > c->nconn)
-                    goto bad_list;
-            }
-            type = is_int32(t) ? (int64_t)t : -1;
-            if (type == 24 || type == 71) { /* corners alone would break them */
-                st = qdc_fail(err, QDC_EFORMAT,
-                              "%s: cell %lld is a %s tetrahedron (VTK cell type %lld, "
-                              "%lld points): not supported, qdc optimizes linear "
-                              "tetrahedra (type 10)",
-                              fmtname, (long long)i,
-                              type == 24 ? "second-order" : "Lagrange", (long long)type,
-                              (long long)k);
-                set_index(err, "cell", i);
-                break;
-            }
-            if (!((type == 10 && k == 4) || (type == 5 && k == 3))) {
-                if (pass == 0)
-                    skip_count(&sk, type, 1);
-                continue;
-            }
-            for (int64_t j = 0; j < k; j++) {
-                double v = c->conn[a + j];
-                if (pass == 0 && !(v == floor(v) && v >= 0 && v < (double)c->nv)) {
-                    st = qdc_fail(
-                        err, QDC_EPARSE,
-                        "%s: cell %lld: point index %.17g out of range [0, %lld]",
-                        fmtname, (long long)i, v, (long long)c->nv - 1);
-                    set_index(err, "cell", i);
-                    break;
-                }
-                if (pass == 1)
-                    (k == 4 ? pm.tets + 4 * nt : pm.tris + 3 * ntri)[j] = (int32_t)v;
-            }
-            if (st != QDC_OK)
-                break;
-            if (pass == 0 && c->creg && !is_int32(c->creg[i])) {
-                st = qdc_fail(err, QDC_EPARSE,
-                              "%s: cell %lld: region %.17g is not an int32", fmtname,
-                              (long long)i, c->creg[i]);
-                set_index(err, "cell", i);
-                break;
-            }
-            if (pass == 1 && c->creg)
-                *(k == 4 ? &pm.region[nt] : &pm.tri_ref[ntri]) = (int32_t)c->creg[i];
-            if (k == 4)
-                nt++;
-            else
-                ntri++;
-        }
-        if (st != QDC_OK || pass == 1)
-            break;
-        if (nt > MESH_MAX_TETS || ntri > INT32_MAX / 3) {
-            st = qdc_fail(err, QDC_ETOOBIG, "%s: %lld tets exceed the limit", fmtname,
-                          (long long)nt);
-            break;
-        }
-        pm.tets = qdc_mallocn((size_t)nt * 4 + 1, sizeof(int32_t));
-        pm.tris = qdc_mallocn((size_t)ntri * 3 + 1, sizeof(int32_t));
-        if (c->creg) {
-            pm.region = qdc_mallocn((size_t)nt + 1, sizeof(int32_t));
-            pm.tri_ref = qdc_mallocn((size_t)ntri + 1, sizeof(int32_t));
-        }
-        if (!pm.tets || !pm.tris || (c->creg && (!pm.region || !pm.tri_ref)))
-            st = qdc_fail(err, QDC_ENOMEM, "out of memory for %lld cells",
-                          (long long)c->nc);
-    }
-    for (int64_t i = 0; st == QDC_OK && c->vref && i < c->nv; i++)
-        if (!is_int32(c->vref[i])) {
-            st = qdc_fail(err, QDC_EPARSE,
-                          "%s: point %lld: medit:ref %.17g is not an int32", fmtname,
-                          (long long)i, c->vref[i]);
-            set_index(err, "vertex", i);
-        }
-    if (st == QDC_OK && c->vref) {
-        pm.vref = qdc_mallocn((size_t)c->nv + 1, sizeof(int32_t));
-        if (!pm.vref)
-            st = qdc_fail(err, QDC_ENOMEM, "out of memory");
-        for (int64_t i = 0; st == QDC_OK && i < c->nv; i++)
-            pm.vref[i] = (int32_t)c->vref[i];
-    }
+    st = cells_walk(c, fmtname, NULL, &sk, &nt, &ntri, err);
+    if (st == QDC_OK)
+        st = cells_alloc(c, &pm, nt, ntri, fmtname, err);
+    if (st == QDC_OK)
+        st = cells_walk(c, fmtname, &pm, NULL, &nt, &ntri, err);
+    if (st == QDC_OK)
+        st = cells_vref(c, fmtname, &pm, err);
     if (st == QDC_OK) {
         pm.nv = c->nv;
         pm.xyz = c->xyz;
@@ -251,17 +381,13 @@ static qdc_status cells_mesh(cells *c, const char *fmtname, const meshio_options
             qdc_free(pm.tri_ref);
             pm.tri_ref = NULL;
         }
-        st = parsed_mesh(&pm, out, err);
-        pm.xyz = NULL; /* owned by c */
+        c->xyz = NULL; /* moves into the mesh */
+        st = parsed_mesh_move(&pm, out, err);
     }
     parsed_free(&pm);
     if (st == QDC_OK)
         skip_note(o, &sk, fmtname, "cells");
     return st;
-bad_list:
-    parsed_free(&pm);
-    return qdc_fail(err, QDC_EPARSE, "%s: CELLS list ends inside a cell (wrong counts)",
-                    fmtname);
 }
 
 /* Offsets of the 5.1 / XML layout: nc+1 non-decreasing integers within
@@ -271,7 +397,7 @@ static qdc_status check_offsets(const double *offs, int64_t nc, int64_t nconn,
 {
     for (int64_t i = 0; i <= nc; i++) {
         double o = offs[i];
-        if (!(o == floor(o) && o >= 0 && o <= (double)nconn &&
+        if (!(o >= 0 && o <= (double)nconn && (double)(int64_t)o == o &&
               (i == 0 || o >= offs[i - 1]))) {
             qdc_fail(err, QDC_EPARSE,
                      "%s: cell offset %lld (%.17g) is not within [%s, %lld]", fmtname,
@@ -477,15 +603,254 @@ static qdc_status vtk_attr_array(vtk *v, const char *name, size_t nlen, int64_t 
     return QDC_OK;
 }
 
+static qdc_status vtk_points(vtk *v, const char *w, qdc_error *err)
+{
+    vtype t;
+    qdc_status st;
+
+    if (v->c.xyz)
+        return fail_txt(err, QDC_EPARSE, &v->s, w, "duplicate POINTS");
+    st = vtk_count(v, "POINTS", 3, MESH_MAX_VERTICES, &v->c.nv, err);
+    if (st == QDC_OK)
+        st = vtk_type(v, "POINTS", &t, err);
+    if (st == QDC_OK && !(v->c.xyz = alloc_values(3 * v->c.nv, err)))
+        st = QDC_ENOMEM;
+    if (st == QDC_OK && v->rec) {
+        srcrec *r = v->rec;
+        r->fmt = v->binary ? MESHIO_VTK : MESHIO_VTK_ASCII;
+        r->kind = v->binary ? SRC_BIN : SRC_TEXT;
+        r->width = vsize[t];
+        r->big = 1;
+        if (t != T_F32 && t != T_F64)
+            srcrec_refuse(r, "POINTS of an integer type");
+        st = srcrec_alloc(r, v->c.nv, err);
+        v->voff = r->off;
+    }
+    if (st == QDC_OK)
+        st = vtk_values(v, "POINTS: coordinate", 3 * v->c.nv, t, 1, v->c.xyz, err);
+    v->voff = NULL;
+    return st;
+}
+
+/* The 5.1 layout after "CELLS c c2": OFFSETS (c values) and the
+ * CONNECTIVITY keyword line; *t the connectivity's type. */
+static qdc_status vtk_offsets51(vtk *v, const char *w, int64_t c, vtype *t,
+                                qdc_error *err)
+{
+    txt *s = &v->s;
+    const char *tw;
+    size_t tn;
+    char q[32];
+    qdc_status st;
+
+    if (c < 1)
+        return fail_txt(err, QDC_EPARSE, s, w,
+                        "CELLS: 5.1 layout needs n+1 >= 1 offsets");
+    v->c.nc = c - 1;
+    st = vtk_type(v, "OFFSETS", t, err);
+    if (st == QDC_OK)
+        st = vtk_fits(v, "OFFSETS", c, *t, err);
+    if (st == QDC_OK && !(v->c.offs = alloc_values(c, err)))
+        st = QDC_ENOMEM;
+    if (st == QDC_OK)
+        st = vtk_values(v, "OFFSETS", c, *t, 1, v->c.offs, err);
+    if (st != QDC_OK)
+        return st;
+    next_word(v, &tw, &tn);
+    if (!word_is(tw, tn, "CONNECTIVITY"))
+        return fail_txt(err, QDC_EPARSE, s, tw, "expected CONNECTIVITY, got %s",
+                        quote_tok(q, s, tw, tw + tn));
+    return vtk_type(v, "CONNECTIVITY", t, err);
+}
+
+/* CELLS: the legacy list (count, then the points, per cell) or the 5.1
+ * OFFSETS and CONNECTIVITY arrays. */
+static qdc_status vtk_cells(vtk *v, const char *w, qdc_error *err)
+{
+    int64_t c, c2;
+    vtype t = T_I32;
+    qdc_status st;
+
+    if (v->c.types || v->c.conn)
+        return fail_txt(err, QDC_EPARSE, &v->s, w, "CELLS after CELL_TYPES or twice");
+    st = vtk_count(v, "CELLS", 1, INT64_MAX, &c, err);
+    if (st == QDC_OK)
+        st = vtk_count(v, "CELLS: size", 1, INT64_MAX, &c2, err);
+    if (st != QDC_OK)
+        return st;
+    v->c.nconn = c2;
+    if (next_is(v, "OFFSETS"))
+        st = vtk_offsets51(v, w, c, &t, err);
+    else
+        v->c.nc = c;
+    if (st == QDC_OK)
+        st = vtk_fits(v, "CELLS", v->c.nconn, t, err);
+    if (st == QDC_OK && !(v->c.conn = alloc_values(v->c.nconn, err)))
+        st = QDC_ENOMEM;
+    if (st == QDC_OK)
+        st = vtk_values(v, "CELLS", v->c.nconn, t, 1, v->c.conn, err);
+    if (st == QDC_OK && v->c.offs)
+        st = check_offsets(v->c.offs, v->c.nc, v->c.nconn, "vtk", err);
+    return st;
+}
+
+static qdc_status vtk_cell_types(vtk *v, const char *w, qdc_error *err)
+{
+    txt *s = &v->s;
+    int64_t c;
+    qdc_status st;
+
+    if (!v->c.conn)
+        return fail_txt(err, QDC_EPARSE, s, w, "CELL_TYPES before CELLS");
+    if (v->c.types)
+        return fail_txt(err, QDC_EPARSE, s, w, "duplicate CELL_TYPES");
+    st = vtk_count(v, "CELL_TYPES", 1, INT64_MAX, &c, err);
+    if (st == QDC_OK && c != v->c.nc)
+        st = fail_txt(err, QDC_EPARSE, s, s->p, "CELL_TYPES %lld for %lld CELLS",
+                      (long long)c, (long long)v->c.nc);
+    if (st == QDC_OK)
+        st = vtk_fits(v, "CELL_TYPES", c, T_I32, err);
+    if (st == QDC_OK && !(v->c.types = alloc_values(c, err)))
+        st = QDC_ENOMEM;
+    return st == QDC_OK ? vtk_values(v, "CELL_TYPES", c, T_I32, 1, v->c.types, err) : st;
+}
+
+/* CELL_DATA or POINT_DATA (cell): the attribute arrays that follow. */
+static qdc_status vtk_attr_set(vtk *v, int cell, qdc_error *err)
+{
+    int64_t c;
+    qdc_status st =
+        vtk_count(v, cell ? "CELL_DATA" : "POINT_DATA", 1, INT64_MAX, &c, err);
+
+    if (st == QDC_OK && c != (cell ? v->c.nc : v->c.nv))
+        st = fail_txt(err, QDC_EPARSE, &v->s, v->s.p, "%s %lld for %lld %s",
+                      cell ? "CELL_DATA" : "POINT_DATA", (long long)c,
+                      (long long)(cell ? v->c.nc : v->c.nv), cell ? "cells" : "points");
+    v->attr = cell ? 1 : 2;
+    v->attr_n = c;
+    return st;
+}
+
+/* METADATA: skipped up to an empty line. */
+static void vtk_metadata(vtk *v)
+{
+    txt *s = &v->s;
+
+    for (;;) {
+        const char *p = s->p;
+        while (p < s->end && *p != '\n')
+            p++;
+        if (p == s->end) {
+            s->p = p;
+            return;
+        }
+        s->p = p + 1;
+        s->line++;
+        s->bol = s->p;
+        p = s->p;
+        while (p < s->end && (*p == ' ' || *p == '\t' || *p == '\r'))
+            p++;
+        if (p == s->end || *p == '\n')
+            return;
+    }
+}
+
+/* SCALARS name type [components] [LOOKUP_TABLE name]. */
+static qdc_status vtk_scalars(vtk *v, qdc_error *err)
+{
+    txt *s = &v->s;
+    const char *name, *tw, *save;
+    size_t nl, tn;
+    int64_t k = 1;
+    vtype t;
+    qdc_status st;
+
+    next_word(v, &name, &nl);
+    st = vtk_type(v, "SCALARS", &t, err);
+    /* optional component count on the same line */
+    while (s->p < s->end && (*s->p == ' ' || *s->p == '\t' || *s->p == '\r'))
+        s->p++;
+    if (st == QDC_OK && s->p < s->end && *s->p != '\n')
+        st = txt_int(s, "SCALARS: components", 1, 4, &k, err);
+    save = s->p;
+    next_word(v, &tw, &tn);
+    if (word_is(tw, tn, "LOOKUP_TABLE"))
+        next_word(v, &tw, &tn);
+    else
+        s->p = save;
+    return st == QDC_OK ? vtk_attr_array(v, name, nl, k, t, err) : st;
+}
+
+/* FIELD name count, then per array: name components tuples type, values. */
+static qdc_status vtk_field(vtk *v, qdc_error *err)
+{
+    txt *s = &v->s;
+    int save_attr = v->attr;
+    int64_t save_n = v->attr_n, c = 0, c2 = 0, k = 0;
+    const char *name;
+    size_t nl;
+    vtype t;
+    qdc_status st;
+
+    next_word(v, &name, &nl);
+    st = txt_int(s, "FIELD: array count", 0, 1 << 20, &c, err);
+    for (int64_t i = 0; i < c && st == QDC_OK; i++) {
+        next_word(v, &name, &nl);
+        if (word_is(name, nl, "NULL") || !nl)
+            continue;
+        st = txt_int(s, "FIELD: components", 0, 1 << 20, &k, err);
+        if (st == QDC_OK)
+            st = vtk_count(v, "FIELD: tuples", 1, INT64_MAX, &c2, err);
+        if (st == QDC_OK)
+            st = vtk_type(v, "FIELD", &t, err);
+        if (st != QDC_OK)
+            break;
+        /* a field array only counts as a region if it spans the attribute set */
+        if (!save_attr || c2 != save_n)
+            v->attr = 0;
+        v->attr_n = c2;
+        st = vtk_attr_array(v, name, nl, k, t, err);
+        v->attr = save_attr;
+        v->attr_n = save_n;
+    }
+    return st;
+}
+
+/* VECTORS, NORMALS, TENSORS, TEXTURE_COORDINATES and LOOKUP_TABLE: arrays
+ * that are never ours, checked and passed over. */
+static qdc_status vtk_other_attr(vtk *v, const char *w, size_t n, qdc_error *err)
+{
+    const char *name;
+    size_t nl;
+    int64_t k = 0, c = 0;
+    vtype t;
+    qdc_status st;
+
+    next_word(v, &name, &nl);
+    if (word_is(w, n, "TEXTURE_COORDINATES")) {
+        st = txt_int(&v->s, "TEXTURE_COORDINATES: dimension", 1, 3, &k, err);
+        if (st == QDC_OK)
+            st = vtk_type(v, "TEXTURE_COORDINATES", &t, err);
+        return st == QDC_OK ? vtk_attr_array(v, "", 0, k, t, err) : st;
+    }
+    if (word_is(w, n, "LOOKUP_TABLE")) {
+        st = vtk_count(v, "LOOKUP_TABLE", 4, INT64_MAX, &c, err);
+        return st == QDC_OK ? vtk_values(v, "LOOKUP_TABLE", 4 * c,
+                                         v->binary ? T_U8 : T_F64, 0, NULL, err)
+                            : st;
+    }
+    st = vtk_type(v, "VECTORS", &t, err);
+    return st == QDC_OK
+               ? vtk_attr_array(v, "", 0, word_is(w, n, "TENSORS") ? 9 : 3, t, err)
+               : st;
+}
+
 static qdc_status vtk_keyword(vtk *v, const char *w, size_t n, qdc_error *err)
 {
     txt *s = &v->s;
-    const char *name, *tw;
-    size_t nl, tn;
-    int64_t c, c2, k;
-    vtype t;
+    const char *tw;
+    size_t tn;
     char q[32];
-    qdc_status st;
 
     if (word_is(w, n, "DATASET")) {
         next_word(v, &tw, &tn);
@@ -495,188 +860,29 @@ static qdc_status vtk_keyword(vtk *v, const char *w, size_t n, qdc_error *err)
                             quote_tok(q, s, tw, tw + tn));
         return QDC_OK;
     }
-    if (word_is(w, n, "POINTS")) {
-        if (v->c.xyz)
-            return fail_txt(err, QDC_EPARSE, s, w, "duplicate POINTS");
-        st = vtk_count(v, "POINTS", 3, MESH_MAX_VERTICES, &v->c.nv, err);
-        if (st == QDC_OK)
-            st = vtk_type(v, "POINTS", &t, err);
-        if (st == QDC_OK && !(v->c.xyz = alloc_values(3 * v->c.nv, err)))
-            st = QDC_ENOMEM;
-        if (st == QDC_OK && v->rec) {
-            srcrec *r = v->rec;
-            r->fmt = v->binary ? MESHIO_VTK : MESHIO_VTK_ASCII;
-            r->kind = v->binary ? SRC_BIN : SRC_TEXT;
-            r->width = vsize[t];
-            r->big = 1;
-            if (t != T_F32 && t != T_F64)
-                srcrec_refuse(r, "POINTS of an integer type");
-            st = srcrec_alloc(r, v->c.nv, err);
-            v->voff = r->off;
-        }
-        if (st == QDC_OK)
-            st = vtk_values(v, "POINTS: coordinate", 3 * v->c.nv, t, 1, v->c.xyz, err);
-        v->voff = NULL;
-        return st;
-    }
-    if (word_is(w, n, "CELLS")) {
-        if (v->c.types || v->c.conn)
-            return fail_txt(err, QDC_EPARSE, s, w, "CELLS after CELL_TYPES or twice");
-        st = vtk_count(v, "CELLS", 1, INT64_MAX, &c, err);
-        if (st == QDC_OK)
-            st = vtk_count(v, "CELLS: size", 1, INT64_MAX, &c2, err);
-        if (st != QDC_OK)
-            return st;
-        if (next_is(v, "OFFSETS")) { /* 5.1 */
-            if (c < 1)
-                return fail_txt(err, QDC_EPARSE, s, w,
-                                "CELLS: 5.1 layout needs n+1 >= 1 offsets");
-            v->c.nc = c - 1;
-            st = vtk_type(v, "OFFSETS", &t, err);
-            if (st == QDC_OK)
-                st = vtk_fits(v, "OFFSETS", c, t, err);
-            if (st == QDC_OK && !(v->c.offs = alloc_values(c, err)))
-                st = QDC_ENOMEM;
-            if (st == QDC_OK)
-                st = vtk_values(v, "OFFSETS", c, t, 1, v->c.offs, err);
-            next_word(v, &tw, &tn);
-            if (st == QDC_OK && !word_is(tw, tn, "CONNECTIVITY"))
-                st = fail_txt(err, QDC_EPARSE, s, tw, "expected CONNECTIVITY, got %s",
-                              quote_tok(q, s, tw, tw + tn));
-            if (st == QDC_OK)
-                st = vtk_type(v, "CONNECTIVITY", &t, err);
-            v->c.nconn = c2;
-        } else {
-            v->c.nc = c;
-            v->c.nconn = c2;
-            t = T_I32;
-        }
-        if (st == QDC_OK)
-            st = vtk_fits(v, "CELLS", v->c.nconn, t, err);
-        if (st == QDC_OK && !(v->c.conn = alloc_values(v->c.nconn, err)))
-            st = QDC_ENOMEM;
-        if (st == QDC_OK)
-            st = vtk_values(v, "CELLS", v->c.nconn, t, 1, v->c.conn, err);
-        if (st == QDC_OK && v->c.offs)
-            st = check_offsets(v->c.offs, v->c.nc, v->c.nconn, "vtk", err);
-        return st;
-    }
-    if (word_is(w, n, "CELL_TYPES")) {
-        if (!v->c.conn)
-            return fail_txt(err, QDC_EPARSE, s, w, "CELL_TYPES before CELLS");
-        if (v->c.types)
-            return fail_txt(err, QDC_EPARSE, s, w, "duplicate CELL_TYPES");
-        st = vtk_count(v, "CELL_TYPES", 1, INT64_MAX, &c, err);
-        if (st == QDC_OK && c != v->c.nc)
-            st = fail_txt(err, QDC_EPARSE, s, s->p, "CELL_TYPES %lld for %lld CELLS",
-                          (long long)c, (long long)v->c.nc);
-        t = T_I32;
-        if (st == QDC_OK)
-            st = vtk_fits(v, "CELL_TYPES", c, t, err);
-        if (st == QDC_OK && !(v->c.types = alloc_values(c, err)))
-            st = QDC_ENOMEM;
-        return st == QDC_OK ? vtk_values(v, "CELL_TYPES", c, t, 1, v->c.types, err) : st;
-    }
-    if (word_is(w, n, "CELL_DATA") || word_is(w, n, "POINT_DATA")) {
-        int cell = word_is(w, n, "CELL_DATA");
-        st = vtk_count(v, cell ? "CELL_DATA" : "POINT_DATA", 1, INT64_MAX, &c, err);
-        if (st == QDC_OK && c != (cell ? v->c.nc : v->c.nv))
-            st = fail_txt(err, QDC_EPARSE, s, s->p, "%s %lld for %lld %s",
-                          cell ? "CELL_DATA" : "POINT_DATA", (long long)c,
-                          (long long)(cell ? v->c.nc : v->c.nv),
-                          cell ? "cells" : "points");
-        v->attr = cell ? 1 : 2;
-        v->attr_n = c;
-        return st;
-    }
+    if (word_is(w, n, "POINTS"))
+        return vtk_points(v, w, err);
+    if (word_is(w, n, "CELLS"))
+        return vtk_cells(v, w, err);
+    if (word_is(w, n, "CELL_TYPES"))
+        return vtk_cell_types(v, w, err);
+    if (word_is(w, n, "CELL_DATA") || word_is(w, n, "POINT_DATA"))
+        return vtk_attr_set(v, word_is(w, n, "CELL_DATA"), err);
     if (word_is(w, n, "METADATA")) { /* up to an empty line */
-        for (;;) {
-            const char *p = s->p;
-            while (p < s->end && *p != '\n')
-                p++;
-            if (p == s->end) {
-                s->p = p;
-                return QDC_OK;
-            }
-            s->p = p + 1;
-            s->line++;
-            s->bol = s->p;
-            p = s->p;
-            while (p < s->end && (*p == ' ' || *p == '\t' || *p == '\r'))
-                p++;
-            if (p == s->end || *p == '\n')
-                return QDC_OK;
-        }
+        vtk_metadata(v);
+        return QDC_OK;
     }
     if (!v->attr && !word_is(w, n, "FIELD"))
         return fail_txt(err, QDC_EPARSE, s, w, "unexpected %s",
                         quote_tok(q, s, w, w + n));
-    if (word_is(w, n, "SCALARS")) {
-        const char *save;
-        next_word(v, &name, &nl);
-        st = vtk_type(v, "SCALARS", &t, err);
-        k = 1;
-        /* optional component count on the same line */
-        while (s->p < s->end && (*s->p == ' ' || *s->p == '\t' || *s->p == '\r'))
-            s->p++;
-        if (st == QDC_OK && s->p < s->end && *s->p != '\n')
-            st = txt_int(s, "SCALARS: components", 1, 4, &k, err);
-        save = s->p;
-        next_word(v, &tw, &tn);
-        if (word_is(tw, tn, "LOOKUP_TABLE"))
-            next_word(v, &tw, &tn);
-        else
-            s->p = save;
-        return st == QDC_OK ? vtk_attr_array(v, name, nl, k, t, err) : st;
-    }
+    if (word_is(w, n, "SCALARS"))
+        return vtk_scalars(v, err);
     if (word_is(w, n, "VECTORS") || word_is(w, n, "NORMALS") ||
-        word_is(w, n, "TENSORS")) {
-        next_word(v, &name, &nl);
-        st = vtk_type(v, "VECTORS", &t, err);
-        return st == QDC_OK
-                   ? vtk_attr_array(v, "", 0, word_is(w, n, "TENSORS") ? 9 : 3, t, err)
-                   : st;
-    }
-    if (word_is(w, n, "TEXTURE_COORDINATES")) {
-        next_word(v, &name, &nl);
-        st = txt_int(s, "TEXTURE_COORDINATES: dimension", 1, 3, &k, err);
-        if (st == QDC_OK)
-            st = vtk_type(v, "TEXTURE_COORDINATES", &t, err);
-        return st == QDC_OK ? vtk_attr_array(v, "", 0, k, t, err) : st;
-    }
-    if (word_is(w, n, "LOOKUP_TABLE")) {
-        next_word(v, &name, &nl);
-        st = vtk_count(v, "LOOKUP_TABLE", 4, INT64_MAX, &c, err);
-        return st == QDC_OK ? vtk_values(v, "LOOKUP_TABLE", 4 * c,
-                                         v->binary ? T_U8 : T_F64, 0, NULL, err)
-                            : st;
-    }
-    if (word_is(w, n, "FIELD")) {
-        int save_attr = v->attr;
-        int64_t save_n = v->attr_n;
-        next_word(v, &name, &nl);
-        st = txt_int(s, "FIELD: array count", 0, 1 << 20, &c, err);
-        for (int64_t i = 0; i < c && st == QDC_OK; i++) {
-            next_word(v, &name, &nl);
-            if (word_is(name, nl, "NULL") || !nl)
-                continue;
-            st = txt_int(s, "FIELD: components", 0, 1 << 20, &k, err);
-            if (st == QDC_OK)
-                st = vtk_count(v, "FIELD: tuples", 1, INT64_MAX, &c2, err);
-            if (st == QDC_OK)
-                st = vtk_type(v, "FIELD", &t, err);
-            if (st != QDC_OK)
-                break;
-            /* a field array only counts as a region if it spans the attribute set */
-            if (!save_attr || c2 != save_n)
-                v->attr = 0;
-            v->attr_n = c2;
-            st = vtk_attr_array(v, name, nl, k, t, err);
-            v->attr = save_attr;
-            v->attr_n = save_n;
-        }
-        return st;
-    }
+        word_is(w, n, "TENSORS") || word_is(w, n, "TEXTURE_COORDINATES") ||
+        word_is(w, n, "LOOKUP_TABLE"))
+        return vtk_other_attr(v, w, n, err);
+    if (word_is(w, n, "FIELD"))
+        return vtk_field(v, err);
     return fail_txt(err, QDC_EPARSE, s, w, "unsupported keyword %s",
                     quote_tok(q, s, w, w + n));
 }
@@ -1140,6 +1346,99 @@ static int is_b64(unsigned char c)
     return b64_val(c) >= 0 || c == '=';
 }
 
+/* Appended raw data at p (header words, then the data, as is or in zlib
+ * blocks): exactly `want` bytes at *data (into the input, or *tmp). */
+static qdc_status vtu_raw(vtu *x, const char *p, size_t want, srcrec *rec,
+                          const unsigned char **data, unsigned char **tmp, qdc_error *err)
+{
+    const unsigned char *h = (const unsigned char *)p;
+    size_t hsz = x->hdr8 ? 8 : 4, hn = x->zlib ? 3 * hsz : hsz, used = 0;
+    size_t left = (size_t)(x->s.end - p);
+    int64_t at = p - x->s.base;
+    uint64_t nb;
+    qdc_status st;
+
+    if (left < hn)
+        return fail_bin(err, QDC_EPARSE, at, "VTU: appended block header truncated");
+    if (!x->zlib) {
+        uint64_t nbytes = hdr_word(x, h, 0);
+        if (nbytes != want || left - hn < want)
+            return fail_bin(
+                err, QDC_EPARSE, at,
+                "VTU: appended block of %llu bytes for %zu expected (%zu left)",
+                (unsigned long long)nbytes, want, left - hn);
+        *data = h + hn;
+        if (!rec)
+            return QDC_OK;
+        rec->kind = SRC_BIN; /* in place: offsets per vertex */
+        rec->blk_b = (uint64_t)at + hn + want;
+        st = srcrec_alloc(rec, rec->nv, err);
+        for (int64_t v = 0; st == QDC_OK && v < rec->nv; v++)
+            rec->off[v] =
+                (uint64_t)(at + (int64_t)hn) + (uint64_t)v * 3 * (uint64_t)rec->width;
+        return st;
+    }
+    nb = hdr_word(x, h, 0);
+    if (nb > (left - hn) / hsz)
+        return fail_bin(err, QDC_EPARSE, at,
+                        "VTU: zlib header of %llu blocks does not fit",
+                        (unsigned long long)nb);
+    hn += (size_t)nb * hsz;
+    *tmp = qdc_malloc(want + 1);
+    if (!*tmp)
+        return qdc_fail(err, QDC_ENOMEM, "out of memory for a VTU array");
+    st = vtu_inflate(x, h, h + hn, left - hn, *tmp, want, &used, at, err);
+    if (st != QDC_OK)
+        return st;
+    *data = *tmp;
+    if (rec) {
+        for (int k = 0; k < 3; k++)
+            rec->zhdr[k] = hdr_word(x, h, (size_t)k);
+        rec->blk_b = (uint64_t)at + hn + used;
+    }
+    return QDC_OK;
+}
+
+/* Base64 zlib data at p: the header (block count, sizes), then the blocks,
+ * decoded and inflated into *tmp (want bytes). *hn: the header's bytes,
+ * *endp where the base64 text stopped. */
+static qdc_status vtu_b64_zlib(vtu *x, const char *p, size_t want, srcrec *rec,
+                               unsigned char **tmp, size_t *hn, const char **endp,
+                               qdc_error *err)
+{
+    size_t hsz = x->hdr8 ? 8 : 4, left = (size_t)(x->s.end - p), used = 0;
+    int64_t at = p - x->s.base;
+    unsigned char *z = NULL; /* the header and blocks decoded */
+    uint64_t nb, sum = 0;
+    qdc_status st = b64_take(x, p, *hn, &z, endp, err);
+
+    nb = st == QDC_OK ? hdr_word(x, z, 0) : 0;
+    if (st == QDC_OK && nb > left / hsz)
+        st = fail_bin(err, QDC_EPARSE, at, "VTU: zlib header of %llu blocks does not fit",
+                      (unsigned long long)nb);
+    if (st == QDC_OK) {
+        *hn += (size_t)nb * hsz;
+        st = b64_take(x, p, *hn, &z, endp, err);
+    }
+    for (uint64_t k = 0; st == QDC_OK && k < nb && sum <= left; k++)
+        sum += hdr_word(x, z, 3 + k) > left ? UINT64_MAX / 2 : hdr_word(x, z, 3 + k);
+    if (st == QDC_OK && sum > left)
+        st = fail_bin(err, QDC_EPARSE, at,
+                      "VTU: zlib blocks of %llu bytes cannot fit in the input",
+                      (unsigned long long)sum);
+    if (st == QDC_OK)
+        st = b64_take(x, p, *hn + (size_t)sum, &z, endp, err);
+    if (st == QDC_OK && !(*tmp = qdc_malloc(want + 1)))
+        st = qdc_fail(err, QDC_ENOMEM, "out of memory for a VTU array");
+    if (st == QDC_OK)
+        st = vtu_inflate(x, z, z + *hn, (size_t)sum, *tmp, want, &used, at, err);
+    if (st == QDC_OK && rec)
+        for (int k = 0; k < 3; k++)
+            rec->zhdr[k] = hdr_word(x, z, (size_t)k);
+    qdc_free(z);
+    return st;
+}
+
 /* The bytes of a binary (base64) or appended DataArray, decoded and
  * decompressed: exactly `want` bytes at *data, which points into the input
  * or into *tmp (the caller frees it). rec (Points only): where they are. */
@@ -1148,10 +1447,9 @@ static qdc_status vtu_bytes(vtu *x, const xtag *t, int appended, size_t want, sr
                             qdc_error *err)
 {
     txt *s = &x->s;
-    size_t hsz = x->hdr8 ? 8 : 4, hn = x->zlib ? 3 * hsz : hsz, used = 0;
+    size_t hsz = x->hdr8 ? 8 : 4, hn = x->zlib ? 3 * hsz : hsz;
     int b64 = !appended || x->app_base64;
     const char *p, *endp = NULL;
-    unsigned char *z = NULL; /* base64 with zlib: the header and blocks decoded */
     int64_t off = 0, at;
     qdc_status st;
 
@@ -1178,52 +1476,8 @@ static qdc_status vtu_bytes(vtu *x, const xtag *t, int appended, size_t want, sr
         rec->appended = appended;
         rec->app_off = (uint64_t)off;
     }
-    if (!b64) { /* raw: header words, then the data */
-        const unsigned char *h = (const unsigned char *)p;
-        size_t left = (size_t)(s->end - p);
-        if (left < hn)
-            return fail_bin(err, QDC_EPARSE, at, "VTU: appended block header truncated");
-        if (!x->zlib) {
-            uint64_t nbytes = hdr_word(x, h, 0);
-            if (nbytes != want || left - hn < want)
-                return fail_bin(
-                    err, QDC_EPARSE, at,
-                    "VTU: appended block of %llu bytes for %zu expected (%zu left)",
-                    (unsigned long long)nbytes, want, left - hn);
-            *data = h + hn;
-            if (rec) { /* in place: offsets per vertex */
-                rec->kind = SRC_BIN;
-                rec->blk_b = (uint64_t)at + hn + want;
-                st = srcrec_alloc(rec, rec->nv, err);
-                for (int64_t v = 0; st == QDC_OK && v < rec->nv; v++)
-                    rec->off[v] = (uint64_t)(at + (int64_t)hn) +
-                                  (uint64_t)v * 3 * (uint64_t)rec->width;
-                return st;
-            }
-            return QDC_OK;
-        }
-        {
-            uint64_t nb = hdr_word(x, h, 0);
-            if (nb > (left - hn) / hsz)
-                return fail_bin(err, QDC_EPARSE, at,
-                                "VTU: zlib header of %llu blocks does not fit",
-                                (unsigned long long)nb);
-            hn += (size_t)nb * hsz;
-            *tmp = qdc_malloc(want + 1);
-            if (!*tmp)
-                return qdc_fail(err, QDC_ENOMEM, "out of memory for a VTU array");
-            st = vtu_inflate(x, h, h + hn, left - hn, *tmp, want, &used, at, err);
-            if (st != QDC_OK)
-                return st;
-            *data = *tmp;
-            if (rec) {
-                for (int k = 0; k < 3; k++)
-                    rec->zhdr[k] = hdr_word(x, h, (size_t)k);
-                rec->blk_b = (uint64_t)at + hn + used;
-            }
-            return QDC_OK;
-        }
-    }
+    if (!b64)
+        return vtu_raw(x, p, want, rec, data, tmp, err);
     /* base64: header and data decoded as one stream: VTK and meshio encode
      * the two separately (each padded), others together; both decode alike */
     if (!x->zlib) {
@@ -1236,34 +1490,7 @@ static qdc_status vtu_bytes(vtu *x, const xtag *t, int appended, size_t want, sr
             return st;
         *data = *tmp + hn;
     } else {
-        uint64_t nb, sum = 0;
-        st = b64_take(x, p, hn, &z, &endp, err);
-        nb = st == QDC_OK ? hdr_word(x, z, 0) : 0;
-        if (st == QDC_OK && nb > (size_t)(s->end - p) / hsz)
-            st = fail_bin(err, QDC_EPARSE, at,
-                          "VTU: zlib header of %llu blocks does not fit",
-                          (unsigned long long)nb);
-        if (st == QDC_OK) {
-            hn += (size_t)nb * hsz;
-            st = b64_take(x, p, hn, &z, &endp, err);
-        }
-        for (uint64_t k = 0; st == QDC_OK && k < nb && sum <= (size_t)(s->end - p); k++)
-            sum += hdr_word(x, z, 3 + k) > (size_t)(s->end - p) ? UINT64_MAX / 2
-                                                                : hdr_word(x, z, 3 + k);
-        if (st == QDC_OK && sum > (size_t)(s->end - p))
-            st = fail_bin(err, QDC_EPARSE, at,
-                          "VTU: zlib blocks of %llu bytes cannot fit in the input",
-                          (unsigned long long)sum);
-        if (st == QDC_OK)
-            st = b64_take(x, p, hn + (size_t)sum, &z, &endp, err);
-        if (st == QDC_OK && !(*tmp = qdc_malloc(want + 1)))
-            st = qdc_fail(err, QDC_ENOMEM, "out of memory for a VTU array");
-        if (st == QDC_OK)
-            st = vtu_inflate(x, z, z + hn, (size_t)sum, *tmp, want, &used, at, err);
-        if (st == QDC_OK && rec)
-            for (int k = 0; k < 3; k++)
-                rec->zhdr[k] = hdr_word(x, z, (size_t)k);
-        qdc_free(z);
+        st = vtu_b64_zlib(x, p, want, rec, tmp, &hn, &endp, err);
         if (st != QDC_OK)
             return st;
         *data = *tmp;
@@ -1281,6 +1508,50 @@ static qdc_status vtu_bytes(vtu *x, const xtag *t, int appended, size_t want, sr
     return QDC_OK;
 }
 
+/* The n values of an ascii DataArray into out (NULL: skip); finite: NaN
+ * and infinities are errors. rec (Points only): where each vertex starts. */
+static qdc_status vtu_ascii(vtu *x, const xtag *t, int64_t n, int finite, double *out,
+                            srcrec *rec, qdc_error *err)
+{
+    txt *s = &x->s;
+    qdc_status st;
+
+    if (t->empty && n)
+        return fail_txt(err, QDC_EPARSE, s, t->name, "VTU: empty ascii DataArray");
+    if (rec) {
+        rec->fmt = MESHIO_VTU_ASCII;
+        rec->kind = SRC_TEXT;
+        rec->lt = 1;
+        st = srcrec_alloc(rec, n / 3, err);
+        if (st != QDC_OK)
+            return st;
+    }
+    for (int64_t i = 0; i < n; i++) {
+        double y;
+        const char *te, *lim = data_end(x, s->p);
+        char q[32];
+        skip_ws(s);
+        if (rec && i % 3 == 0)
+            rec->off[i / 3] = (uint64_t)(s->p - s->base);
+        for (te = s->p; te < lim && !is_space((unsigned char)*te) && *te != '<'; te++)
+            ;
+        if (finite)
+            st = tok_real(s, s->p, te, "DataArray", &y, err);
+        else
+            st = s->p < te && parse_double(s->p, te, &y) == 0
+                     ? QDC_OK
+                     : fail_txt(err, QDC_EPARSE, s, s->p,
+                                "DataArray: expected a number, got %s",
+                                quote_tok(q, s, s->p, te));
+        if (st != QDC_OK)
+            return st;
+        s->p = te;
+        if (out)
+            out[i] = y;
+    }
+    return QDC_OK;
+}
+
 /* The data of one DataArray with n values of type t into out (NULL: skip).
  * rec (Points only): where the coordinates are. */
 static qdc_status vtu_array(vtu *x, const xtag *t, int64_t n, vtype vt, int finite,
@@ -1294,49 +1565,17 @@ static qdc_status vtu_array(vtu *x, const xtag *t, int64_t n, vtype vt, int fini
     int appended;
     qdc_status st;
 
-    if (!tag_attr(t, "format", &fv, &fe))
-        fv = fe = "ascii";
+    if (!tag_attr(t, "format", &fv, &fe)) { /* absent: ascii */
+        fv = "ascii";
+        fe = fv + 5;
+    }
     if (rec) {
         rec->width = vsize[vt];
         rec->big = x->big;
         rec->nv = n / 3;
     }
-    if ((size_t)(fe - fv) == 5 && memcmp(fv, "ascii", 5) == 0) {
-        if (t->empty && n)
-            return fail_txt(err, QDC_EPARSE, s, t->name, "VTU: empty ascii DataArray");
-        if (rec) {
-            rec->fmt = MESHIO_VTU_ASCII;
-            rec->kind = SRC_TEXT;
-            rec->lt = 1;
-            st = srcrec_alloc(rec, n / 3, err);
-            if (st != QDC_OK)
-                return st;
-        }
-        for (int64_t i = 0; i < n; i++) {
-            double y;
-            const char *te, *lim = data_end(x, s->p);
-            char q[32];
-            skip_ws(s);
-            if (rec && i % 3 == 0)
-                rec->off[i / 3] = (uint64_t)(s->p - s->base);
-            for (te = s->p; te < lim && !is_space((unsigned char)*te) && *te != '<'; te++)
-                ;
-            if (finite)
-                st = tok_real(s, s->p, te, "DataArray", &y, err);
-            else
-                st = s->p < te && parse_double(s->p, te, &y) == 0
-                         ? QDC_OK
-                         : fail_txt(err, QDC_EPARSE, s, s->p,
-                                    "DataArray: expected a number, got %s",
-                                    quote_tok(q, s, s->p, te));
-            if (st != QDC_OK)
-                return st;
-            s->p = te;
-            if (out)
-                out[i] = y;
-        }
-        return QDC_OK;
-    }
+    if ((size_t)(fe - fv) == 5 && memcmp(fv, "ascii", 5) == 0)
+        return vtu_ascii(x, t, n, finite, out, rec, err);
     if ((size_t)(fe - fv) == 6 && memcmp(fv, "binary", 6) == 0)
         appended = 0;
     else if ((size_t)(fe - fv) == 8 && memcmp(fv, "appended", 8) == 0)
@@ -1348,13 +1587,17 @@ static qdc_status vtu_array(vtu *x, const xtag *t, int64_t n, vtype vt, int fini
     st = vtu_bytes(x, t, appended, want, rec, &data, &tmp, err);
     if (st == QDC_OK && out) {
         decode_values(data, n, vt, x->big, out);
-        for (int64_t i = 0; finite && i < n && st == QDC_OK; i++)
-            if (!isfinite(out[i]))
+        for (int64_t i = 0; finite && i < n && st == QDC_OK; i++) {
+            if (isfinite(out[i]))
+                continue;
+            if (appended && !x->app_base64 && !x->zlib) /* raw: the value's bytes */
                 st = fail_bin(err, QDC_EPARSE,
-                              appended && !x->app_base64 && !x->zlib
-                                  ? (const char *)data - s->base + i * vsize[vt]
-                                  : -1,
+                              (const char *)data - s->base + i * vsize[vt],
                               "VTU: value %lld is not finite (NaN/Inf)", (long long)i);
+            else /* base64 or zlib: the DataArray's tag */
+                st = fail_txt(err, QDC_EPARSE, s, t->name,
+                              "VTU: value %lld is not finite (NaN/Inf)", (long long)i);
+        }
     }
     qdc_free(tmp);
     return st;
@@ -1400,14 +1643,86 @@ static qdc_status vtu_note_range(vtu *x, const xtag *t, qdc_error *err)
     return st;
 }
 
+/* Which of our arrays (*dst, NULL if none) a DataArray named [nv, ne) with
+ * ncomp components in section sec is, and its value count *n (-1: the
+ * connectivity, sized by the offsets); *prio its region priority. */
+static qdc_status vtu_target(vtu *x, const xtag *t, int sec, const char *nv,
+                             const char *ne, int64_t ncomp, double **offs_end,
+                             double ***dst, int64_t *n, int *prio, qdc_error *err)
+{
+    size_t l = (size_t)(ne - nv);
+
+    *dst = NULL;
+    *prio = PRIO_NONE;
+    if (sec == SEC_POINTS) {
+        if (ncomp != 3)
+            return fail_txt(err, QDC_EPARSE, &x->s, t->name,
+                            "VTU: Points need 3 components");
+        *dst = &x->c.xyz;
+        *n = 3 * x->c.nv;
+        return x->rec && !x->c.xyz ? vtu_note_range(x, t, err) : QDC_OK;
+    }
+    if (sec == SEC_CELLS) {
+        if (l == 12 && memcmp(nv, "connectivity", 12) == 0)
+            *dst = &x->c.conn;
+        else if (l == 7 && memcmp(nv, "offsets", 7) == 0)
+            *dst = offs_end;
+        else if (l == 5 && memcmp(nv, "types", 5) == 0)
+            *dst = &x->c.types;
+        *n = *dst == &x->c.conn ? -1 : x->c.nc;
+    } else if (sec == SEC_CELLDATA) {
+        *prio = ncomp == 1 ? region_prio(nv, l) : PRIO_NONE;
+        if (*prio < x->c.creg_prio)
+            *dst = &x->c.creg;
+        *n = ncomp * x->c.nc;
+    } else {
+        if (ncomp == 1 && region_prio(nv, l) == 2)
+            *dst = &x->c.vref;
+        *n = ncomp * x->c.nv;
+    }
+    return QDC_OK;
+}
+
+/* The n values of DataArray t (type vt) into a new *dst (replacing a region
+ * array of lower priority); offsets checked to increase from 0. */
+static qdc_status vtu_store(vtu *x, const xtag *t, double **dst, int64_t n, vtype vt,
+                            int prio, double **offs_end, qdc_error *err)
+{
+    double *a = alloc_values(n, err);
+    qdc_status st;
+
+    if (!a)
+        return QDC_ENOMEM;
+    if (dst == &x->c.xyz && x->rec && vt != T_F32 && vt != T_F64)
+        srcrec_refuse(x->rec, "VTU Points of an integer type");
+    st = vtu_array(x, t, n, vt, 1, a,
+                   dst == &x->c.xyz && x->rec && !x->rec->why ? x->rec : NULL, err);
+    if (st != QDC_OK) {
+        qdc_free(a);
+        return st;
+    }
+    qdc_free(*dst);
+    *dst = a;
+    if (dst == &x->c.creg)
+        x->c.creg_prio = prio;
+    if (dst == offs_end) {
+        for (int64_t i = 0; i < n; i++)
+            if (!(a[i] >= 0 && a[i] <= 4e18 && (double)(int64_t)a[i] == a[i] &&
+                  (i == 0 || a[i] >= a[i - 1])))
+                return fail_txt(err, QDC_EPARSE, &x->s, t->name,
+                                "VTU: offsets not increasing from 0");
+    }
+    return QDC_OK;
+}
+
 static qdc_status vtu_dataarray(vtu *x, const xtag *t, int sec, double **offs_end,
                                 qdc_error *err)
 {
     const char *nv, *ne, *tv, *te;
-    int64_t ncomp = 1, n;
+    int64_t ncomp = 1, n = 0;
     vtype vt;
-    double **dst = NULL;
-    int prio = PRIO_NONE;
+    double **dst;
+    int prio;
     qdc_status st;
 
     if (!tag_attr(t, "type", &tv, &te) || vtype_of(tv, (size_t)(te - tv), &vt) != 0)
@@ -1420,36 +1735,9 @@ static qdc_status vtu_dataarray(vtu *x, const xtag *t, int sec, double **offs_en
         if (st != QDC_OK)
             return st;
     }
-    if (sec == SEC_POINTS) {
-        if (ncomp != 3)
-            return fail_txt(err, QDC_EPARSE, &x->s, t->name,
-                            "VTU: Points need 3 components");
-        if (x->rec && !x->c.xyz) {
-            st = vtu_note_range(x, t, err);
-            if (st != QDC_OK)
-                return st;
-        }
-        dst = &x->c.xyz;
-        n = 3 * x->c.nv;
-    } else if (sec == SEC_CELLS) {
-        size_t l = (size_t)(ne - nv);
-        if (l == 12 && memcmp(nv, "connectivity", 12) == 0)
-            dst = &x->c.conn;
-        else if (l == 7 && memcmp(nv, "offsets", 7) == 0)
-            dst = offs_end;
-        else if (l == 5 && memcmp(nv, "types", 5) == 0)
-            dst = &x->c.types;
-        n = dst == &x->c.conn ? -1 : x->c.nc;
-    } else if (sec == SEC_CELLDATA) {
-        prio = ncomp == 1 ? region_prio(nv, (size_t)(ne - nv)) : PRIO_NONE;
-        if (prio < x->c.creg_prio)
-            dst = &x->c.creg;
-        n = ncomp * x->c.nc;
-    } else {
-        if (ncomp == 1 && region_prio(nv, (size_t)(ne - nv)) == 2)
-            dst = &x->c.vref;
-        n = ncomp * x->c.nv;
-    }
+    st = vtu_target(x, t, sec, nv, ne, ncomp, offs_end, &dst, &n, &prio, err);
+    if (st != QDC_OK)
+        return st;
     if (n < 0) { /* connectivity: its size is the last offset */
         if (!*offs_end) {
             if (x->conn_tag.name)
@@ -1470,31 +1758,7 @@ static qdc_status vtu_dataarray(vtu *x, const xtag *t, int sec, double **offs_en
                         "VTU: %lld values cannot fit in the input", (long long)n);
     if (!dst) /* not ours: its text or base64 is passed over with the tags */
         return QDC_OK;
-    {
-        double *a = alloc_values(n, err);
-        if (!a)
-            return QDC_ENOMEM;
-        if (dst == &x->c.xyz && x->rec && vt != T_F32 && vt != T_F64)
-            srcrec_refuse(x->rec, "VTU Points of an integer type");
-        st = vtu_array(x, t, n, vt, 1, a,
-                       dst == &x->c.xyz && x->rec && !x->rec->why ? x->rec : NULL, err);
-        if (st != QDC_OK) {
-            qdc_free(a);
-            return st;
-        }
-        qdc_free(*dst);
-        *dst = a;
-        if (dst == &x->c.creg)
-            x->c.creg_prio = prio;
-        if (dst == offs_end) {
-            for (int64_t i = 0; i < n; i++)
-                if (!(a[i] == floor(a[i]) && a[i] >= 0 && a[i] <= 4e18 &&
-                      (i == 0 || a[i] >= a[i - 1])))
-                    return fail_txt(err, QDC_EPARSE, &x->s, t->name,
-                                    "VTU: offsets not increasing from 0");
-        }
-        return QDC_OK;
-    }
+    return vtu_store(x, t, dst, n, vt, prio, offs_end, err);
 }
 
 /* With a record: where an appended DataArray's offset="" value is, and the
@@ -1631,14 +1895,121 @@ static qdc_status find_appended(vtu *x, qdc_error *err)
     return QDC_OK;
 }
 
+/* <VTKFile>: the type, compressor, byte order and header size. */
+static qdc_status vtu_file_tag(vtu *x, const xtag *t, qdc_error *err)
+{
+    const char *cv, *ce;
+
+    if (!attr_is(t, "type", "UnstructuredGrid"))
+        return fail_txt(err, QDC_EFORMAT, &x->s, t->name,
+                        "VTU: only type=\"UnstructuredGrid\" is supported");
+    if (tag_attr(t, "compressor", &cv, &ce) && ce > cv) {
+        x->zlib = (size_t)(ce - cv) == 21 && memcmp(cv, "vtkZLibDataCompressor", 21) == 0;
+        if (!x->zlib)
+            return fail_txt(err, QDC_EFORMAT, &x->s, cv,
+                            "VTU: compressor \"%.*s\" not supported (only "
+                            "vtkZLibDataCompressor)",
+                            (int)(ce - cv > 32 ? 32 : ce - cv), cv);
+    }
+    x->big = attr_is(t, "byte_order", "BigEndian");
+    x->hdr8 = attr_is(t, "header_type", "UInt64");
+    return QDC_OK;
+}
+
+/* The section a <Points>, <Cells>, <CellData> or <PointData> tag opens (or
+ * closes: SEC_NONE); -1 for other tags. */
+static int vtu_section(const xtag *t)
+{
+    if (!word_is(t->name, t->nlen, "Points") && !word_is(t->name, t->nlen, "Cells") &&
+        !word_is(t->name, t->nlen, "CellData") && !word_is(t->name, t->nlen, "PointData"))
+        return -1;
+    return t->closing || t->empty                  ? SEC_NONE
+           : word_is(t->name, t->nlen, "Points")   ? SEC_POINTS
+           : word_is(t->name, t->nlen, "Cells")    ? SEC_CELLS
+           : word_is(t->name, t->nlen, "CellData") ? SEC_CELLDATA
+                                                   : SEC_POINTDATA;
+}
+
+/* The tags up to <AppendedData> or the end: the arrays into x->c, the
+ * offsets (ends of the cells) into *offs_end. */
+static qdc_status vtu_tags(vtu *x, double **offs_end, qdc_error *err)
+{
+    xtag t;
+    int sec = SEC_NONE, seen_file = 0, seen_piece = 0;
+    qdc_status st = QDC_OK;
+
+    while (st == QDC_OK) {
+        st = next_tag(x, &t, err);
+        if (st != QDC_OK || !t.name || (x->appended && x->s.p >= x->appended))
+            break;
+        if (word_is(t.name, t.nlen, "VTKFile") && !t.closing) {
+            st = vtu_file_tag(x, &t, err);
+            seen_file = 1;
+        } else if (word_is(t.name, t.nlen, "Piece") && !t.closing) {
+            if (seen_piece)
+                st =
+                    fail_txt(err, QDC_EFORMAT, &x->s, t.name, "VTU: more than one Piece");
+            if (st == QDC_OK)
+                st = attr_int(x, &t, "NumberOfPoints", 0, MESH_MAX_VERTICES, &x->c.nv,
+                              err);
+            if (st == QDC_OK)
+                st = attr_int(x, &t, "NumberOfCells", 0, INT64_MAX / 16, &x->c.nc, err);
+            seen_piece = 1;
+        } else if (vtu_section(&t) >= 0) {
+            sec = vtu_section(&t);
+        } else if (word_is(t.name, t.nlen, "DataArray") && !t.closing &&
+                   (st = vtu_note_offset(x, &t, err)) != QDC_OK) {
+            break;
+        } else if (word_is(t.name, t.nlen, "DataArray") && !t.closing &&
+                   sec != SEC_NONE) {
+            if (!seen_piece)
+                st = fail_txt(err, QDC_EPARSE, &x->s, t.name,
+                              "VTU: DataArray outside a Piece");
+            else
+                st = vtu_dataarray(x, &t, sec, offs_end, err);
+        } else if (word_is(t.name, t.nlen, "AppendedData")) {
+            break;
+        }
+    }
+    if (st == QDC_OK && !seen_file)
+        st = fail_txt(err, QDC_EPARSE, &x->s, x->s.p, "VTU: no VTKFile element");
+    if (st == QDC_OK && (!seen_piece || !x->c.xyz))
+        st = fail_txt(err, QDC_EPARSE, &x->s, x->s.p, "VTU: no Piece with Points");
+    return st;
+}
+
+/* After the tags: the connectivity if it came before the offsets, then the
+ * nc + 1 offsets from the ends of the cells, checked. */
+static qdc_status vtu_cells(vtu *x, double **offs_end, qdc_error *err)
+{
+    qdc_status st = QDC_OK;
+
+    if (x->conn_tag.name && *offs_end) { /* VTK writes it before offsets */
+        txt here = x->s;
+        x->s = x->conn_at;
+        st = vtu_dataarray(x, &x->conn_tag, SEC_CELLS, offs_end, err);
+        if (st == QDC_OK)
+            x->s = here;
+    }
+    if (st == QDC_OK && x->c.nc && (!*offs_end || !x->c.conn || !x->c.types))
+        st = fail_txt(err, QDC_EPARSE, &x->s, x->s.p,
+                      "VTU: Cells need connectivity, offsets and types");
+    if (st != QDC_OK)
+        return st;
+    x->c.offs = alloc_values(x->c.nc + 1, err);
+    if (!x->c.offs)
+        return QDC_ENOMEM;
+    x->c.offs[0] = 0;
+    for (int64_t i = 0; i < x->c.nc; i++)
+        x->c.offs[i + 1] = (*offs_end)[i];
+    return check_offsets(x->c.offs, x->c.nc, x->c.nconn, "vtu", err);
+}
+
 qdc_status meshio_vtu_read(const char *buf, size_t len, const meshio_options *o,
                            srcrec *rec, mesh_t **out, qdc_error *err)
 {
     vtu x;
-    xtag t;
-    int sec = SEC_NONE, seen_file = 0, seen_piece = 0;
     double *offs_end = NULL; /* XML offsets: the end of each cell */
-    const char *cv, *ce;
     qdc_status st;
 
     memset(&x, 0, sizeof x);
@@ -1649,83 +2020,10 @@ qdc_status meshio_vtu_read(const char *buf, size_t len, const meshio_options *o,
     x.s = txt_init(buf, len, 0);
     x.b = (const unsigned char *)buf;
     st = find_appended(&x, err);
-    while (st == QDC_OK) {
-        st = next_tag(&x, &t, err);
-        if (st != QDC_OK || !t.name || (x.appended && x.s.p >= x.appended))
-            break;
-        if (word_is(t.name, t.nlen, "VTKFile") && !t.closing) {
-            if (!attr_is(&t, "type", "UnstructuredGrid"))
-                st = fail_txt(err, QDC_EFORMAT, &x.s, t.name,
-                              "VTU: only type=\"UnstructuredGrid\" is supported");
-            else if (tag_attr(&t, "compressor", &cv, &ce) && ce > cv) {
-                x.zlib = (size_t)(ce - cv) == 21 &&
-                         memcmp(cv, "vtkZLibDataCompressor", 21) == 0;
-                if (!x.zlib)
-                    st = fail_txt(err, QDC_EFORMAT, &x.s, cv,
-                                  "VTU: compressor \"%.*s\" not supported (only "
-                                  "vtkZLibDataCompressor)",
-                                  (int)(ce - cv > 32 ? 32 : ce - cv), cv);
-            }
-            x.big = attr_is(&t, "byte_order", "BigEndian");
-            x.hdr8 = attr_is(&t, "header_type", "UInt64");
-            seen_file = 1;
-        } else if (word_is(t.name, t.nlen, "Piece") && !t.closing) {
-            if (seen_piece)
-                st = fail_txt(err, QDC_EFORMAT, &x.s, t.name, "VTU: more than one Piece");
-            if (st == QDC_OK)
-                st = attr_int(&x, &t, "NumberOfPoints", 0, MESH_MAX_VERTICES, &x.c.nv,
-                              err);
-            if (st == QDC_OK)
-                st = attr_int(&x, &t, "NumberOfCells", 0, INT64_MAX / 16, &x.c.nc, err);
-            seen_piece = 1;
-        } else if (word_is(t.name, t.nlen, "Points") ||
-                   word_is(t.name, t.nlen, "Cells") ||
-                   word_is(t.name, t.nlen, "CellData") ||
-                   word_is(t.name, t.nlen, "PointData")) {
-            sec = t.closing || t.empty                  ? SEC_NONE
-                  : word_is(t.name, t.nlen, "Points")   ? SEC_POINTS
-                  : word_is(t.name, t.nlen, "Cells")    ? SEC_CELLS
-                  : word_is(t.name, t.nlen, "CellData") ? SEC_CELLDATA
-                                                        : SEC_POINTDATA;
-        } else if (word_is(t.name, t.nlen, "DataArray") && !t.closing &&
-                   (st = vtu_note_offset(&x, &t, err)) != QDC_OK) {
-            break;
-        } else if (word_is(t.name, t.nlen, "DataArray") && !t.closing &&
-                   sec != SEC_NONE) {
-            if (!seen_piece)
-                st = fail_txt(err, QDC_EPARSE, &x.s, t.name,
-                              "VTU: DataArray outside a Piece");
-            else
-                st = vtu_dataarray(&x, &t, sec, &offs_end, err);
-        } else if (word_is(t.name, t.nlen, "AppendedData")) {
-            break;
-        }
-    }
-    if (st == QDC_OK && !seen_file)
-        st = fail_txt(err, QDC_EPARSE, &x.s, x.s.p, "VTU: no VTKFile element");
-    if (st == QDC_OK && (!seen_piece || !x.c.xyz))
-        st = fail_txt(err, QDC_EPARSE, &x.s, x.s.p, "VTU: no Piece with Points");
-    if (st == QDC_OK && x.conn_tag.name && offs_end) { /* VTK writes it before offsets */
-        txt here = x.s;
-        x.s = x.conn_at;
-        st = vtu_dataarray(&x, &x.conn_tag, SEC_CELLS, &offs_end, err);
-        if (st == QDC_OK)
-            x.s = here;
-    }
-    if (st == QDC_OK && x.c.nc && (!offs_end || !x.c.conn || !x.c.types))
-        st = fail_txt(err, QDC_EPARSE, &x.s, x.s.p,
-                      "VTU: Cells need connectivity, offsets and types");
-    if (st == QDC_OK) {
-        x.c.offs = alloc_values(x.c.nc + 1, err);
-        if (!x.c.offs)
-            st = QDC_ENOMEM;
-        else {
-            x.c.offs[0] = 0;
-            for (int64_t i = 0; i < x.c.nc; i++)
-                x.c.offs[i + 1] = offs_end[i];
-            st = check_offsets(x.c.offs, x.c.nc, x.c.nconn, "vtu", err);
-        }
-    }
+    if (st == QDC_OK)
+        st = vtu_tags(&x, &offs_end, err);
+    if (st == QDC_OK)
+        st = vtu_cells(&x, &offs_end, err);
     if (st == QDC_OK && rec && rec->appended && rec->kind != SRC_NONE)
         check_app_overlap(&x);
     if (st == QDC_OK && rec && rec->dv.kind == DV_NORMS)

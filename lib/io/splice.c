@@ -555,6 +555,71 @@ static void put_word(unsigned char *p, uint64_t v, int hsz, int big)
         p[big ? hsz - 1 - j : j] = (unsigned char)(v >> (8 * j));
 }
 
+/* raw (raw_n bytes) in zlib blocks of the source's block size: the header
+ * words (*hdr, *hn bytes) and the compressed blocks (*data, *dn bytes). */
+static qdc_status block_zlib(const srcrec *r, const unsigned char *raw, size_t raw_n,
+                             unsigned char **hdr, size_t *hn, unsigned char **data,
+                             size_t *dn, qdc_error *err)
+{
+    int hsz = r->hdr8 ? 8 : 4;
+    size_t bs = (size_t)r->zhdr[1], nb = (size_t)r->zhdr[0];
+    qdc_status st = QDC_OK;
+
+    if (bs == 0 || nb == 0 || nb > (raw_n + bs - 1) / bs + 1 ||
+        (nb - 1) * bs >= raw_n + (raw_n == 0))
+        return qdc_fail(err, QDC_EINTERNAL, "source: zlib header does not fit");
+    *hn = (3 + nb) * (size_t)hsz;
+    *hdr = qdc_malloc(*hn);
+    *data = qdc_malloc(nb * compressBound((uLong)bs) + 1);
+    if (!*hdr || !*data)
+        return qdc_fail(err, QDC_ENOMEM, "out of memory for the Points block");
+    for (size_t k = 0; k < 3; k++)
+        put_word(*hdr + k * (size_t)hsz, r->zhdr[k], hsz, r->big);
+    for (size_t k = 0; k < nb && st == QDC_OK; k++) {
+        size_t a = k * bs, len = k + 1 < nb ? bs : raw_n - a;
+        uLongf cn = compressBound((uLong)bs);
+        if (compress2(*data + *dn, &cn, raw + a, (uLong)len, Z_DEFAULT_COMPRESSION) !=
+            Z_OK)
+            st = qdc_fail(err, QDC_EINTERNAL, "zlib: cannot compress the Points");
+        put_word(*hdr + (3 + k) * (size_t)hsz, cn, hsz, r->big);
+        *dn += cn;
+    }
+    return st;
+}
+
+/* The block as the file holds it: header and data as they are, or in
+ * base64 (the two encoded together, or each on its own). */
+static qdc_status block_text(const srcrec *r, const unsigned char *hdr, size_t hn,
+                             const unsigned char *data, size_t dn, char **out, size_t *n,
+                             qdc_error *err)
+{
+    size_t cap = r->b64 ? 4 * ((hn + 2) / 3 + (dn + 2) / 3 + 1) : hn + dn;
+    char *o = qdc_malloc(cap + 1), *e;
+
+    if (!o)
+        return qdc_fail(err, QDC_ENOMEM, "out of memory for the Points block");
+    if (!r->b64) {
+        memcpy(o, hdr, hn);
+        memcpy(o + hn, data, dn);
+        e = o + hn + dn;
+    } else if (r->b64_sep) {
+        e = b64_encode(data, dn, b64_encode(hdr, hn, o));
+    } else {
+        unsigned char *j = qdc_malloc(hn + dn + 1);
+        if (!j) {
+            qdc_free(o);
+            return qdc_fail(err, QDC_ENOMEM, "out of memory for the Points block");
+        }
+        memcpy(j, hdr, hn);
+        memcpy(j + hn, data, dn);
+        e = b64_encode(j, hn + dn, o);
+        qdc_free(j);
+    }
+    *out = o;
+    *n = (size_t)(e - o);
+    return QDC_OK;
+}
+
 /* The new encoded Points block: header and (compressed) data, base64 if the
  * file had it. *out (qdc_free) of *n bytes. */
 static qdc_status encode_block(const source *s, const double *xyz, char **out, size_t *n,
@@ -562,7 +627,7 @@ static qdc_status encode_block(const source *s, const double *xyz, char **out, s
 {
     const srcrec *r = &s->r;
     int hsz = r->hdr8 ? 8 : 4;
-    size_t raw_n = 3 * (size_t)s->nv * (size_t)r->width, hn, dn = 0, nb = 1;
+    size_t raw_n = 3 * (size_t)s->nv * (size_t)r->width, hn = 0, dn = 0;
     unsigned char *raw = qdc_malloc(raw_n + 1), *hdr = NULL, *data = NULL;
     qdc_status st = QDC_OK;
 
@@ -572,29 +637,7 @@ static qdc_status encode_block(const source *s, const double *xyz, char **out, s
     for (size_t i = 0; i < 3 * (size_t)s->nv; i++)
         encode_value(raw + i * (size_t)r->width, xyz[i], r->width, r->big);
     if (r->zlib) {
-        size_t bs = (size_t)r->zhdr[1];
-        nb = (size_t)r->zhdr[0];
-        if (bs == 0 || nb == 0 || nb > (raw_n + bs - 1) / bs + 1 ||
-            (nb - 1) * bs >= raw_n + (raw_n == 0)) {
-            qdc_free(raw);
-            return qdc_fail(err, QDC_EINTERNAL, "source: zlib header does not fit");
-        }
-        hn = (3 + nb) * (size_t)hsz;
-        hdr = qdc_malloc(hn);
-        data = qdc_malloc(nb * compressBound((uLong)bs) + 1);
-        if (!hdr || !data)
-            st = qdc_fail(err, QDC_ENOMEM, "out of memory for the Points block");
-        for (size_t k = 0; k < 3 && st == QDC_OK; k++)
-            put_word(hdr + k * (size_t)hsz, r->zhdr[k], hsz, r->big);
-        for (size_t k = 0; k < nb && st == QDC_OK; k++) {
-            size_t a = k * bs, len = k + 1 < nb ? bs : raw_n - a;
-            uLongf cn = compressBound((uLong)bs);
-            if (compress2(data + dn, &cn, raw + a, (uLong)len, Z_DEFAULT_COMPRESSION) !=
-                Z_OK)
-                st = qdc_fail(err, QDC_EINTERNAL, "zlib: cannot compress the Points");
-            put_word(hdr + (3 + k) * (size_t)hsz, cn, hsz, r->big);
-            dn += cn;
-        }
+        st = block_zlib(r, raw, raw_n, &hdr, &hn, &data, &dn, err);
     } else {
         hn = (size_t)hsz;
         hdr = qdc_malloc(hn);
@@ -606,35 +649,8 @@ static qdc_status encode_block(const source *s, const double *xyz, char **out, s
         raw = NULL;
         dn = raw_n;
     }
-    if (st == QDC_OK) {
-        size_t cap = r->b64 ? 4 * ((hn + 2) / 3 + (dn + 2) / 3 + 1) : hn + dn;
-        char *o = qdc_malloc(cap + 1), *e;
-        if (!o) {
-            st = qdc_fail(err, QDC_ENOMEM, "out of memory for the Points block");
-        } else if (!r->b64) {
-            memcpy(o, hdr, hn);
-            memcpy(o + hn, data, dn);
-            e = o + hn + dn;
-        } else if (r->b64_sep) {
-            e = b64_encode(data, dn, b64_encode(hdr, hn, o));
-        } else {
-            unsigned char *j = qdc_malloc(hn + dn + 1);
-            if (j) {
-                memcpy(j, hdr, hn);
-                memcpy(j + hn, data, dn);
-                e = b64_encode(j, hn + dn, o);
-                qdc_free(j);
-            } else {
-                qdc_free(o);
-                o = NULL;
-                st = qdc_fail(err, QDC_ENOMEM, "out of memory for the Points block");
-            }
-        }
-        if (o) {
-            *out = o;
-            *n = (size_t)(e - o);
-        }
-    }
+    if (st == QDC_OK)
+        st = block_text(r, hdr, hn, data, dn, out, n, err);
     qdc_free(raw);
     qdc_free(hdr);
     qdc_free(data);

@@ -375,13 +375,18 @@ TEST(allocation_failures)
     for (int f = MESHIO_MEDIT; f < MESHIO_ABAQUS; f++) {
         sink s = {0};
         qdc_status st;
+        int other = f == MESHIO_ABAQUS || f == MESHIO_NETGEN; /* no writer */
         if (f == MESHIO_TETGEN)
             continue;
-        qdc_fault_set(1);
-        ASSERT_EQ_INT(meshio_write(m, (meshio_format)f, sink_write, &s, &err),
-                      QDC_ENOMEM);
-        qdc_fault_set(0);
-        ASSERT_OK(meshio_write(m, (meshio_format)f, sink_write, &s, &err));
+        if (other) {
+            write_other(m, (meshio_format)f, &s);
+        } else {
+            qdc_fault_set(1);
+            ASSERT_EQ_INT(meshio_write(m, (meshio_format)f, sink_write, &s, &err),
+                          QDC_ENOMEM);
+            qdc_fault_set(0);
+            ASSERT_OK(meshio_write(m, (meshio_format)f, sink_write, &s, &err));
+        }
         for (long n = 1;; n++) {
             qdc_fault_set(n);
             st = meshio_read(s.b, s.n, (meshio_format)f, &b, &err);
@@ -391,7 +396,11 @@ TEST(allocation_failures)
             ASSERT_EQ_INT(st, QDC_ENOMEM);
             ASSERT_TRUE(b == NULL);
         }
-        ASSERT_TRUE(same_mesh(m, b, 0));
+        if (other) /* Netgen's %22.16f rounds the coordinates */
+            ASSERT_TRUE(b->nv == m->nv && b->nt == m->nt &&
+                        same_bytes(b->tets, m->tets, 16 * (size_t)m->nt));
+        else
+            ASSERT_TRUE(same_mesh(m, b, 0));
         mesh_free(b);
         /* with the source kept, then a spliced write of moved coordinates */
         for (long n = 1;; n++) {

@@ -219,6 +219,41 @@ static inline double read_1m_tets(meshio_format f)
     return t;
 }
 
+/* Abaqus and Netgen have no writer of qdc's own (they are written only
+ * spliced): m as meshio lays them out (Netgen's materials: m->region). */
+static inline void write_other(const mesh_t *m, meshio_format f, sink *s)
+{
+    char line[1100]; /* three %22.16f of up to 1e308 */
+    int n;
+
+#define OUT(...)                                                                         \
+    (n = snprintf(line, sizeof line, __VA_ARGS__),                                       \
+     sink_write(s, line, n < (int)sizeof line ? (size_t)n : sizeof line - 1))
+    if (f == MESHIO_ABAQUS) {
+        OUT("*HEADING\nAbaqus DataFile Version 6.14\n*NODE\n");
+        for (int32_t i = 0; i < m->nv; i++)
+            OUT("%d, %.16e, %.16e, %.16e\n", i + 1, m->xyz[3 * i], m->xyz[3 * i + 1],
+                m->xyz[3 * i + 2]);
+        OUT("*ELEMENT, TYPE=C3D4, ELSET=all\n");
+        for (int32_t t = 0; t < m->nt; t++)
+            OUT("%d, %d, %d, %d, %d\n", t + 1, m->tets[4 * t] + 1, m->tets[4 * t + 1] + 1,
+                m->tets[4 * t + 2] + 1, m->tets[4 * t + 3] + 1);
+    } else {
+        OUT("mesh3d\ndimension\n3\ngeomtype\n0\n\nsurfaceelements\n0\n\nvolumeelements\n%"
+            "d\n",
+            m->nt);
+        for (int32_t t = 0; t < m->nt; t++)
+            OUT("%d 4 %d %d %d %d\n", m->region[t], m->tets[4 * t] + 1,
+                m->tets[4 * t + 1] + 1, m->tets[4 * t + 2] + 1, m->tets[4 * t + 3] + 1);
+        OUT("\npoints\n%d\n", m->nv);
+        for (int32_t i = 0; i < m->nv; i++)
+            OUT("%22.16f %22.16f %22.16f\n", m->xyz[3 * i], m->xyz[3 * i + 1],
+                m->xyz[3 * i + 2]);
+        OUT("endmesh\n");
+    }
+#undef OUT
+}
+
 static inline char *read_file(const char *path, size_t *len)
 {
     char *buf;
