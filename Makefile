@@ -88,7 +88,7 @@ $(B)/qdc: $(CLI_OBJ) $(B)/libqdc.a
 $(B)/qdcd: $(SRV_OBJ) $(B)/libqdc.a
 	$(CC) $(LDFLAGS) -o $@ $(SRV_OBJ) $(B)/libqdc.a $(SRV_LIBS) $(LIB_LIBS)
 
-$(B)/tests/%: tests/unit/%.c tests/unit/testlib.h $(B)/libqdc.a
+$(B)/tests/%: tests/unit/%.c $(wildcard tests/unit/*.h) $(B)/libqdc.a
 	@mkdir -p $(dir $@)
 	$(CC) $(CPPFLAGS) -Itests/unit $(CFLAGS) -o $@ $< $(B)/libqdc.a $(LIB_LIBS) $(LDFLAGS)
 
