@@ -484,7 +484,7 @@ def write_results(path, info, tab, summ, rows):
                                        (info['qdc_binary_sha256'] or '?')[:12]))
         f.write('- peers: Gmsh %s (Debian python3-gmsh), `General.NumThreads` default\n' % gv)
         f.write('- quality: `/usr/bin/python3 %s OUT --orig IN --samples %d` for every '
-                'row\n' % (QUALITY, SAMPLES))
+                'row\n' % (os.path.relpath(QUALITY, ROOT), SAMPLES))
         if info.get('table_regenerated'):
             f.write('- table regenerated from the raw JSON (nothing re-measured): %s\n'
                     % info['table_regenerated'])
