@@ -16,12 +16,10 @@ PIDS=
 trap 'for p in $PIDS; do kill -9 $p 2>/dev/null; done; pg_cleanup; rm -rf "$TMP"' EXIT
 
 if ! pg_available; then
-    for n in "one node" "restart" "schema" "two nodes" "idempotency" "node killed" "database restart"; do
-        echo "ok - pg: $n # SKIP no PostgreSQL server binaries (apt-get install postgresql) or not root"
-    done
+    pg_skip pg "one node|restart|schema|two nodes|idempotency|node killed|database restart"
     exit 0
 fi
-pg_start || { fail "pg: start PostgreSQL" "$(tail -3 "$PGDIR/initdb.log" "$PGDIR/log" 2> /dev/null | tr '\n' ' ')"; exit 1; }
+pg_started pg || exit 1
 
 $MT qmesh "$ROOT/tests/data/sample/cube.mesh" "$TMP/cube.qmesh" || { fail "pg: sample" "meshtool"; exit 1; }
 

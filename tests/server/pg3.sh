@@ -26,12 +26,10 @@ trap 'for p in $PIDS; do kill -9 $p 2>/dev/null; done; pg_cleanup; rm -rf "$TMP"
 
 CHECKS="round-robin|wake-up|events|live progress|progress|report|results|cache emptied|delete|node killed|attempts exhausted|idempotency|database restart|rolling restart"
 if ! pg_available; then
-    echo "$CHECKS" | tr '|' '\n' | while read -r n; do
-        echo "ok - pg3: $n # SKIP no PostgreSQL server binaries (apt-get install postgresql) or not root"
-    done
+    pg_skip pg3 "$CHECKS"
     exit 0
 fi
-pg_start || { fail "pg3: start PostgreSQL" "$(tail -3 "$PGDIR/initdb.log" "$PGDIR/log" 2> /dev/null | tr '\n' ' ')"; exit 1; }
+pg_started pg3 || exit 1
 
 NODEOPTS="--workers 1 --lease 3 --shutdown-grace 1 --max-attempts 2"
 for n in a b c; do

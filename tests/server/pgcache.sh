@@ -21,9 +21,7 @@ trap 'for p in $PIDS; do kill -9 $p 2>/dev/null; done; pg_cleanup; rm -rf "$TMP"
 
 CHECKS="sqlite refused|over the cap|lru eviction|running job kept|refetch|settles under the cap"
 if ! pg_available; then
-    echo "$CHECKS" | tr '|' '\n' | while read -r n; do
-        echo "ok - pgcache: $n # SKIP no PostgreSQL server binaries (apt-get install postgresql) or not root"
-    done
+    pg_skip pgcache "$CHECKS"
     exit 0
 fi
 
@@ -36,7 +34,7 @@ else
     fail "pgcache: sqlite refused" "rc $rc: $(head -2 "$TMP/sq.log")"
 fi
 
-pg_start || { fail "pgcache: start PostgreSQL" "$(tail -3 "$PGDIR/initdb.log" "$PGDIR/log" 2> /dev/null | tr '\n' ' ')"; exit 1; }
+pg_started pgcache || exit 1
 $MT qmesh "$ROOT/tests/data/sample/cube.mesh" "$TMP/cube.qmesh" || { fail "pgcache: sample" "meshtool"; exit 1; }
 gzip -dc "$DEV/bunny_low_10k.mesh.gz" > "$TMP/bunny.mesh"
 $MT qmesh "$TMP/bunny.mesh" "$TMP/bunny.qmesh" || { fail "pgcache: bunny" "meshtool"; exit 1; }

@@ -116,10 +116,10 @@ stop_qdcd
 QDCD=${QDCD:-$BIN/qdcd}
 QM=application/octet-stream
 if ! pg_available; then
-    echo "ok - splice: pg: the result spliced on another node # SKIP no PostgreSQL server binaries (apt-get install postgresql) or not root"
+    pg_skip splice "pg: the result spliced on another node"
     exit $((NFAIL > 0))
 fi
-pg_start || { fail "splice: pg: start PostgreSQL" "$(tail -3 "$PGDIR/initdb.log" "$PGDIR/log" 2> /dev/null | tr '\n' ' ')"; exit 1; }
+pg_started "splice: pg" || exit 1
 node a "$TMP/pa" --workers 1 || { fail "splice: pg: node a" "$(tail -3 "$TMP/a.log")"; exit 1; }
 for n in gmsh41 vtu; do
     ext=msh
