@@ -214,7 +214,7 @@ double metric_qt_grad(opt_metric m, const double *p12, int a, double delta, doub
 
 double metric_qt_hess_face(opt_metric m, const double *pa, const double *f0,
                            const double *f1, const double *f2, double delta, double g[3],
-                           double H[6], double *vol)
+                           double H[6], double vl[2])
 {
     /* q = c A^al h(s)^-be with A = l2sum, s = cv V; ln q is a sum of simple
      * terms: grad q = q u, u = al dA/A - be h' cv dV/h, and
@@ -235,10 +235,11 @@ double metric_qt_hess_face(opt_metric m, const double *pa, const double *f0,
         dA[k] = 2.0 * (d0[k] + d1[k] + d2[k]);
     }
     V = dot3(dV, d0);
-    *vol = V;
     A = dot3(d0, d0) + dot3(d1, d1) + dot3(d2, d2) + dot3(e1, e1) + dot3(e2, e2) +
         (e2[0] - e1[0]) * (e2[0] - e1[0]) + (e2[1] - e1[1]) * (e2[1] - e1[1]) +
         (e2[2] - e1[2]) * (e2[2] - e1[2]);
+    vl[0] = V;
+    vl[1] = A;
     if (m == OPT_METRIC_MIVL) {
         al = 1.5;
         be = 1.0;
@@ -301,13 +302,13 @@ double metric_qt_hess(opt_metric m, const double *p12, int a, double delta, doub
                       double H[6], metric_parts *pt_out)
 {
     const double *p = p12;
-    double vol, q;
+    double vl[2], q;
 
     if (m == OPT_METRIC_MICN)
         return NAN;
     q = metric_qt_hess_face(m, p + 3 * a, p + 3 * tet_face_of[a][0],
                             p + 3 * tet_face_of[a][1], p + 3 * tet_face_of[a][2], delta,
-                            g, H, &vol);
+                            g, H, vl);
     if (pt_out)
         metric_parts_for(m, p12, p12 + 3, p12 + 6, p12 + 9, pt_out);
     return q;

@@ -51,12 +51,12 @@ double metric_qt_hess(opt_metric m, const double *p12, int a, double delta, doub
                       double H[6], metric_parts *pt);
 /* The same with corner a at pa and the opposite face (f0, f1, f2) ordered as
  * tet_face_of (core/tet.h) orders it for a (so that the tet is positive
- * when pa is on the inner side); *vol receives the signed volume. g NULL:
- * the value only (H unused). Without copying the tet: for the finishing
- * pass's inner loop. */
+ * when pa is on the inner side); vl receives the signed volume and the sum of
+ * the squared edge lengths. g NULL: the value only (H unused). Without
+ * copying the tet: for the finishing pass's inner loop. */
 double metric_qt_hess_face(opt_metric m, const double *pa, const double *f0,
                            const double *f1, const double *f2, double delta, double g[3],
-                           double H[6], double *vol);
+                           double H[6], double vl[2]);
 
 /* Smallest and largest of the 6 dihedral angles (degrees), as metric_dihedrals
  * but with 2 acos instead of 6. */

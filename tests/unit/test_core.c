@@ -1,4 +1,5 @@
 /* test_core.c - analytic checks of metrics, QDC encoding and the linear solvers. */
+#include "core/order.h"
 #include "core/tet.h"
 #include "geom/metric.h"
 #include "opt/encode.h"
@@ -412,6 +413,76 @@ TEST(topology_does_not_depend_on_vertex_order)
     mesh_free(p);
 }
 
+/* The corners of a 2x2x2 grid, numbered at random: the Morton curve puts
+ * (i, j, k) at i + 2 j + 4 k (x in the lowest bit); tets come by their lowest
+ * new vertex; the renumbered copy holds the same tets and coordinates. */
+TEST(spatial_order_is_the_morton_curve)
+{
+    mesh_t *m = tm_grid(1, MESH_WITH_REGION | MESH_WITH_FIXED), *p;
+    static const int32_t shuffle[8] = {5, 2, 7, 0, 3, 6, 1, 4};
+    mesh_order o;
+    double *xyz = malloc(24 * sizeof(double));
+    int32_t *tets = malloc(24 * sizeof(int32_t));
+    int32_t seen[8] = {0}, tseen[6] = {0}, lo_prev = -1;
+
+    ASSERT_TRUE(xyz && tets);
+    memcpy(xyz, m->xyz, 24 * sizeof(double));
+    memcpy(tets, m->tets, 24 * sizeof(int32_t));
+    for (int32_t v = 0; v < 8; v++)
+        memcpy(m->xyz + 3 * shuffle[v], xyz + 3 * v, 3 * sizeof(double));
+    for (int32_t i = 0; i < 24; i++)
+        m->tets[i] = shuffle[tets[i]];
+    for (int32_t t = 0; t < 6; t++)
+        m->region[t] = 10 + t;
+    m->fixed[shuffle[7]] = 1;
+    ASSERT_OK(mesh_order_build(m, &o));
+    for (int32_t v = 0; v < 8; v++) {
+        const double *x = m->xyz + 3 * v;
+        ASSERT_EQ_INT(o.vnew[v], (int)(x[0] + 2 * x[1] + 4 * x[2]));
+        seen[o.vnew[v]]++;
+    }
+    for (int32_t t = 0; t < 6; t++)
+        tseen[o.told[t]]++;
+    for (int i = 0; i < 8; i++)
+        ASSERT_EQ_INT(seen[i], 1);
+    for (int i = 0; i < 6; i++)
+        ASSERT_EQ_INT(tseen[i], 1);
+    p = mesh_order_apply(m, &o);
+    ASSERT_TRUE(p != NULL);
+    ASSERT_EQ_INT(p->fixed[7], 1); /* the corner (1, 1, 1) */
+    for (int32_t t = 0; t < 6; t++) {
+        int32_t s = o.told[t], lo = 8;
+        for (int a = 0; a < 4; a++) {
+            int32_t w = p->tets[4 * t + a];
+            ASSERT_EQ_INT(w, o.vnew[m->tets[4 * s + a]]);
+            ASSERT_TRUE(memcmp(p->xyz + 3 * w, m->xyz + 3 * m->tets[4 * s + a],
+                               3 * sizeof(double)) == 0);
+            lo = w < lo ? w : lo;
+        }
+        ASSERT_TRUE(lo >= lo_prev);
+        lo_prev = lo;
+        ASSERT_EQ_INT(p->region[t], m->region[s]);
+    }
+    /* back into the caller's numbering */
+    for (int i = 0; i < 24; i++)
+        p->xyz[i] += 1.0;
+    memcpy(xyz, m->xyz, 24 * sizeof(double));
+    mesh_order_restore_xyz(&o, p, m);
+    for (int i = 0; i < 24; i++)
+        ASSERT_NEAR(m->xyz[i], xyz[i] + 1.0, 0.0);
+    /* an index out of range is refused, a non-finite coordinate is not a crash */
+    m->xyz[4] = NAN;
+    mesh_order_free(&o);
+    ASSERT_OK(mesh_order_build(m, &o));
+    mesh_order_free(&o);
+    m->tets[5] = 8;
+    ASSERT_EQ_INT(mesh_order_build(m, &o), QDC_EINVAL);
+    mesh_free(p);
+    mesh_free(m);
+    free(xyz);
+    free(tets);
+}
+
 TEST(validation_errors)
 {
     mesh_t *m = tm_grid(2, 0);
@@ -492,4 +563,5 @@ TEST_MAIN("core", T(hessian_matches_finite_differences_of_the_gradient),
           T(gradient_matches_finite_differences), T(qdc_of_symmetric_star),
           T(optavg_weights_sum_to_one_on_random_mesh),
           T(cholmod_and_pcg_agree_with_dense), T(topology_of_grid),
-          T(topology_does_not_depend_on_vertex_order), T(validation_errors))
+          T(topology_does_not_depend_on_vertex_order),
+          T(spatial_order_is_the_morton_curve), T(validation_errors))

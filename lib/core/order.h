@@ -1,0 +1,29 @@
+/* order.h - a spatial numbering of a mesh's vertices and tets, for memory
+ * locality: vertices along a Morton (Z-order) curve through the bounding box,
+ * tets by their lowest new vertex number. A mesh whose vertices come in
+ * random order (points of a Delaunay tetrahedralization, say) touches memory
+ * at random in every per-vertex and per-tet loop; renumbered, neighbours sit
+ * next to each other. Thread-safe, no global state. */
+#ifndef QDC_ORDER_H
+#define QDC_ORDER_H
+
+#include "core/mesh.h"
+
+typedef struct {
+    int32_t nv, nt;
+    int32_t *vnew; /* nv: old vertex number -> new */
+    int32_t *told; /* nt: new tet number -> old */
+} mesh_order;
+
+/* The order of m (its coordinates need not be finite: a non-finite one counts
+ * as the box's low corner). QDC_ENOMEM, or QDC_EINVAL for an index out of range. */
+qdc_status mesh_order_build(const mesh_t *m, mesh_order *o);
+/* A copy of m's coordinates, tets, regions and fixed flags in the new
+ * numbering (vertex refs, triangles and the source are not copied); NULL if
+ * out of memory. */
+mesh_t *mesh_order_apply(const mesh_t *m, const mesh_order *o);
+/* Coordinates of the renumbered copy pm back into m's numbering. */
+void mesh_order_restore_xyz(const mesh_order *o, const mesh_t *pm, mesh_t *m);
+void mesh_order_free(mesh_order *o);
+
+#endif
