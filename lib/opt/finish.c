@@ -280,8 +280,10 @@ static int try_steps(const mesh_topo *tp, const slide_ctx *sl, const double *x, 
                      double f0, const star_info *s0, double g1[3], double H1[6],
                      double y[3], double *f1, star_info *s1)
 {
-    for (int h = 0; h < FINISH_HALVINGS; h++) {
-        trial_point(sl, v, x + 3 * (size_t)v, d, ldexp(1.0, -h), y);
+    double sc = 1.0;
+
+    for (int h = 0; h < FINISH_HALVINGS; h++, sc *= 0.5) {
+        trial_point(sl, v, x + 3 * (size_t)v, d, sc, y);
         *f1 = star_hess(tp, x, v, y, m, delta, qfloor, s1, g1, H1);
         if (step_ok(tp, x, v, y, f0, *f1, s0, s1, sl != NULL, qfloor))
             return 1;
