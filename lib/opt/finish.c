@@ -13,6 +13,11 @@
  * measured on 8 dev meshes, mean ratio 0.7729 against 0.7733 with up to 8
  * steps, for 30% less work. */
 #define FINISH_HALVINGS 12
+/* The normalized-gradient descent (boundary vertices in slide mode) halves
+ * its step at most 6 times a try: 12 cost 12% more of the pass on an 800k-tet
+ * ball for the same result (mean ratio 0.6807; bones of 100k tets within
+ * 0.0002), the tries past 6 being steps of under 1/1000 of an edge. */
+#define RELAX_HALVINGS 6
 
 typedef struct {
     double q;
@@ -123,7 +128,6 @@ static double star_eval(const mesh_topo *tp, const double *x, int32_t v, const d
 typedef struct {
     int32_t bad; /* star tets that are not positive */
     int32_t low; /* star tets under the mean-ratio floor it was given (0 if none) */
-    double qmax; /* the largest q~ of the star */
 } star_info;
 
 /* Local objective of vertex v placed at y with its gradient and Hessian
@@ -137,7 +141,6 @@ static double star_hess(const mesh_topo *tp, const double *x, int32_t v, const d
     double f = 0.0;
 
     si->bad = si->low = 0;
-    si->qmax = 0.0;
     if (g) {
         memset(H, 0, 6 * sizeof(double));
         g[0] = g[1] = g[2] = 0.0;
@@ -156,7 +159,6 @@ static double star_hess(const mesh_topo *tp, const double *x, int32_t v, const d
             si->low += !(15552.0 * vl[0] * vl[0] >= fa * fa * fa) || !(vl[0] > 0.0);
         }
         f += q;
-        si->qmax = q > si->qmax ? q : si->qmax;
         if (!g || !isfinite(q))
             continue;
         for (int c = 0; c < 3; c++)
@@ -233,9 +235,9 @@ static int newton_dir(const double H[6], const double g[3], double d[3])
 }
 
 /* Broad sweeps (one step per visit) over-relax the Newton step, as SOR does
- * Gauss-Seidel: measured on an 800k-tet ball, 1.3 reaches in 4 sweeps (0.6814
- * mean ratio) what the plain step reaches in 6 (0.6813); 1.6 overshoots and
- * takes more sweeps. */
+ * Gauss-Seidel: measured on an 800k-tet ball, the pass 2.3 s against 2.5 s and
+ * mean ratio 0.6807 against 0.6805 with the plain step (bones of 100k tets:
+ * +0.0002); 1.6 overshoots and takes more sweeps. */
 #define FINISH_OMEGA 1.3
 static void shape_step(double d[3], int inner, double lbar)
 {
@@ -250,13 +252,13 @@ static void shape_step(double d[3], int inner, double lbar)
             d[c] *= 0.3 * lbar / dn;
 }
 
-/* A trial y of v is taken when the star's sum drops, no star tet inverts,
- * (sliding) the worst star tet does not get worse, and the floor holds. */
+/* A trial y of v is taken when the star's sum drops, no star tet inverts and
+ * the floor holds. */
 static int step_ok(const mesh_topo *tp, const double *x, int32_t v, const double *y,
                    double f0, double f1, const star_info *s0, const star_info *s1,
-                   int sliding, double qfloor)
+                   double qfloor)
 {
-    return f1 < f0 && s1->bad <= s0->bad && (!sliding || s1->qmax <= s0->qmax) &&
+    return f1 < f0 && s1->bad <= s0->bad &&
            (s1->low == 0 || keeps_floor(tp, x, v, y, qfloor));
 }
 
@@ -273,19 +275,21 @@ static void trial_point(const slide_ctx *sl, int32_t v, const double *xv,
     }
 }
 
-/* Trials y = xv + d, xv + d/2, ... (put back on v's surface if sl) until one
- * is taken (step_ok); 1 then, with its value *f1, *s1 and (if g1) derivatives. */
-static int try_steps(const mesh_topo *tp, const slide_ctx *sl, const double *x, int32_t v,
-                     const double d[3], opt_metric m, double delta, double qfloor,
-                     double f0, const star_info *s0, double g1[3], double H1[6],
-                     double y[3], double *f1, star_info *s1)
+/* Trials y = xv + d, xv + d/2, ... until one is taken (step_ok); 1 then,
+ * with its value *f1, *s1 and (if g1) derivatives. */
+static int try_steps(const mesh_topo *tp, const double *x, int32_t v, const double d[3],
+                     opt_metric m, double delta, double qfloor, double f0,
+                     const star_info *s0, double g1[3], double H1[6], double y[3],
+                     double *f1, star_info *s1)
 {
+    const double *xv = x + 3 * (size_t)v;
     double sc = 1.0;
 
     for (int h = 0; h < FINISH_HALVINGS; h++, sc *= 0.5) {
-        trial_point(sl, v, x + 3 * (size_t)v, d, sc, y);
+        for (int c = 0; c < 3; c++)
+            y[c] = xv[c] + sc * d[c];
         *f1 = star_hess(tp, x, v, y, m, delta, qfloor, s1, g1, H1);
-        if (step_ok(tp, x, v, y, f0, *f1, s0, s1, sl != NULL, qfloor))
+        if (step_ok(tp, x, v, y, f0, *f1, s0, s1, qfloor))
             return 1;
     }
     return 0;
@@ -321,8 +325,8 @@ static int32_t newton_vertex(const mesh_topo *tp, double *x, int32_t v, opt_metr
         /* a trial is evaluated with its derivatives (the full step is nearly
          * always taken, and they serve the next iteration), except in the last
          * iteration */
-        if (!try_steps(tp, NULL, x, v, d, m, delta, qfloor, f0, &s0,
-                       it + 1 < inner ? g1 : NULL, H1, y, &f1, &s1))
+        if (!try_steps(tp, x, v, d, m, delta, qfloor, f0, &s0, it + 1 < inner ? g1 : NULL,
+                       H1, y, &f1, &s1))
             break;
         memcpy(xv, y, sizeof y);
         moves++;
@@ -338,76 +342,8 @@ static int32_t newton_vertex(const mesh_topo *tp, double *x, int32_t v, opt_metr
     return moves;
 }
 
-/* Newton direction of a sliding vertex within its tangent space T (a plane or
- * a line; all of space for a vertex that may leave the surface): the P that
- * projects onto T is read off slide_tangent, and (P H P + I - P) d = -P g
- * has its solution in T, positive definite when H is on T. 0 if it is not. */
-static int tangent_newton_dir(const slide_ctx *sl, int32_t v, const double H[6],
-                              const double g[3], double d[3])
-{
-    static const int up[3][3] = {{0, 1, 2}, {1, 3, 4}, {2, 4, 5}};
-    double P[3][3], PH[3][3], M[6], pg[3];
-
-    for (int j = 0; j < 3; j++) {
-        double e[3] = {0, 0, 0}, col[3];
-        e[j] = 1.0;
-        slide_tangent(sl, v, e, col);
-        for (int i = 0; i < 3; i++)
-            P[i][j] = col[i];
-    }
-    slide_tangent(sl, v, g, pg);
-    for (int i = 0; i < 3; i++)
-        for (int j = 0; j < 3; j++) {
-            PH[i][j] = 0.0;
-            for (int k = 0; k < 3; k++)
-                PH[i][j] += P[i][k] * H[up[k][j]];
-        }
-    for (int i = 0; i < 3; i++)
-        for (int j = i; j < 3; j++) {
-            double a = (i == j) - P[i][j];
-            for (int k = 0; k < 3; k++)
-                a += PH[i][k] * P[k][j];
-            M[up[i][j]] = a;
-        }
-    return newton_dir(M, pg, d);
-}
-
-/* Damped Newton of a sliding vertex in its tangent space, put back on its
- * surface or line after each step; the step is taken when the local objective
- * drops, no star tet inverts and the worst star tet does not get worse (as
- * relax_vertex asks). Returns -1 where H is not positive definite on the
- * tangent space (the caller falls back to relax_vertex). */
-static int32_t slide_newton_vertex(const mesh_topo *tp, const slide_ctx *sl, double *x,
-                                   int32_t v, opt_metric m, double delta, double lbar,
-                                   double rtol, int inner, double qfloor)
-{
-    double *xv = x + 3 * (size_t)v;
-    int32_t moves = 0;
-
-    for (int it = 0; it < inner; it++) {
-        double g[3], H[6], d[3], y[3], f0, f1 = 0;
-        star_info s0, s1;
-        f0 = star_hess(tp, x, v, xv, m, delta, 0.0, &s0, g, H);
-        if (!isfinite(f0))
-            break;
-        if (!tangent_newton_dir(sl, v, H, g, d))
-            return it == 0 ? -1 : moves;
-        if (!(-0.5 * (g[0] * d[0] + g[1] * d[1] + g[2] * d[2]) > 1e-13 * f0))
-            break;
-        shape_step(d, inner, lbar);
-        if (!try_steps(tp, sl, x, v, d, m, delta, qfloor, f0, &s0, NULL, NULL, y, &f1,
-                       &s1))
-            break;
-        memcpy(xv, y, sizeof y);
-        moves++;
-        if (f0 - f1 < rtol * f0)
-            break;
-    }
-    return moves;
-}
-
 /* Adaptive normalized-gradient descent of one vertex (docs/method.md §5a): step along
- * -g/|g|, start 0.05 mean edge, x1.6 after a success (cap 0.3), halve up to 12
+ * -g/|g|, start 0.05 mean edge, x1.6 after a success (cap 0.3), halve up to 6
  * times until the local objective decreases without inverting a star tet. */
 static int32_t relax_vertex(const mesh_topo *tp, const slide_ctx *sl, double *x,
                             int32_t v, opt_metric m, double delta, double lbar,
@@ -432,7 +368,7 @@ static int32_t relax_vertex(const mesh_topo *tp, const slide_ctx *sl, double *x,
         gn = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
         if (!(gn > 0.0) || !isfinite(gn))
             break;
-        for (int h = 0; h < FINISH_HALVINGS; h++) {
+        for (int h = 0; h < RELAX_HALVINGS; h++) {
             trial_point(sliding ? sl : NULL, v, xv, g, -s / gn, y);
             f1 = star_eval(tp, x, v, y, m, delta, &bad1, &w1, NULL);
             /* The sum must drop and the inverted count must not grow. A sliding
@@ -458,22 +394,27 @@ static int32_t relax_vertex(const mesh_topo *tp, const slide_ctx *sl, double *x,
     return moves;
 }
 
-/* One finishing visit of v: Newton where the metric has a Hessian (in the
- * tangent space for a sliding vertex), else the normalized-gradient descent.
- * Broad sweeps (rtol > 0) take one Newton step. */
+/* One finishing visit of v: Newton where the metric has a Hessian, else (and
+ * for a sliding vertex) the normalized-gradient descent. Broad sweeps
+ * (rtol > 0) take one Newton step. A sliding vertex's Newton step in its
+ * tangent space ((P H P + I - P) d = -P g, projected back) was tried on
+ * 2026-11-25: better on an 800k-tet ball (mean ratio 0.6815 against 0.6807,
+ * smallest dihedral 6.26 against 5.04 degrees, the pass 1.7 s against 2.3 s)
+ * and on other tools' files (+0.0395 against +0.0388), but worse on the thin
+ * bones of scripts/corpus.py at 100k tets (bone-lowq 0.5706 against 0.5804,
+ * bone-scan 0.5940 against 0.6122: where a star's sum is ruled by slivers no
+ * move opens, the Newton step trades the good tets for them). */
 static int32_t visit_vertex(const mesh_topo *tp, const slide_ctx *sl, double *x,
                             int32_t v, opt_metric m, double delta, double lbar,
                             double rtol, double qfloor)
 {
     int inner = rtol > 0.0 ? 1 : FINISH_INNER;
-    int32_t mv;
 
     if (m == OPT_METRIC_MICN)
         return relax_vertex(tp, sl, x, v, m, delta, lbar, rtol, qfloor);
     if (!(sl && slide_kind(sl, v) != SLIDE_INTERIOR))
         return newton_vertex(tp, x, v, m, delta, lbar, rtol, inner, qfloor);
-    mv = slide_newton_vertex(tp, sl, x, v, m, delta, lbar, rtol, inner, qfloor);
-    return mv >= 0 ? mv : relax_vertex(tp, sl, x, v, m, delta, lbar, rtol, qfloor);
+    return relax_vertex(tp, sl, x, v, m, delta, lbar, rtol, qfloor);
 }
 
 #define COLOUR_SHARED 64 /* the class of vertices that found no free colour */
