@@ -18,6 +18,11 @@
  * ball for the same result (mean ratio 0.6807; bones of 100k tets within
  * 0.0002), the tries past 6 being steps of under 1/1000 of an edge. */
 #define RELAX_HALVINGS 6
+/* ... and takes at most 2 steps a visit in the broad sweeps, as the interior
+ * vertices take one Newton step (the sweeps do the rest): on the 800k-tet ball
+ * the pass 2.15 -> 1.90 s, mean ratio the same (0.6807), smallest dihedral
+ * 5.0 -> 5.6 degrees; the files of other tools +0.0386 against +0.0388. */
+#define RELAX_BROAD 2
 
 typedef struct {
     double q;
@@ -344,7 +349,8 @@ static int32_t newton_vertex(const mesh_topo *tp, double *x, int32_t v, opt_metr
 
 /* Adaptive normalized-gradient descent of one vertex (docs/method.md §5a): step along
  * -g/|g|, start 0.05 mean edge, x1.6 after a success (cap 0.3), halve up to 6
- * times until the local objective decreases without inverting a star tet. */
+ * times until the local objective decreases without inverting a star tet; 2
+ * steps in a broad sweep (rtol > 0), up to 8 in a polish sweep. */
 static int32_t relax_vertex(const mesh_topo *tp, const slide_ctx *sl, double *x,
                             int32_t v, opt_metric m, double delta, double lbar,
                             double rtol, double qfloor)
@@ -353,7 +359,7 @@ static int32_t relax_vertex(const mesh_topo *tp, const slide_ctx *sl, double *x,
     double s = 0.05 * lbar, *xv = x + 3 * (size_t)v;
     int32_t moves = 0;
 
-    for (int it = 0; it < FINISH_INNER; it++) {
+    for (int it = 0; it < (rtol > 0.0 ? RELAX_BROAD : FINISH_INNER); it++) {
         double g[3], gn, y[3], f0, f1, w0, w1;
         int32_t bad0, bad1;
         int ok = 0;
