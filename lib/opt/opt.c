@@ -1332,12 +1332,10 @@ static void hold_back_best(ctx_t *c, opt_result *res)
  * freely (slide_release). In slide mode *squashed (if not NULL) receives the
  * corners of the ears this run squashed (see squashed_ears), and *stuck (if
  * not NULL) the boundary vertices around tets left inverted (stuck_boundary);
- * else NULL. xstart (may be NULL): coordinates (mesh units) to start the
- * finishing pass from, without global iterations; m->xyz stays the input the
- * result is measured against and the surfaces slide on. */
+ * else NULL. */
 static qdc_status run_once(mesh_t *m, const opt_options *opts, const uint8_t *pins,
                            const uint8_t *loose, uint8_t **squashed, uint8_t **stuck,
-                           const double *xstart, opt_result *res_out, qdc_error *err)
+                           opt_result *res_out, qdc_error *err)
 {
     opt_options o;
     opt_result res;
@@ -1365,21 +1363,12 @@ static qdc_status run_once(mesh_t *m, const opt_options *opts, const uint8_t *pi
     saved_threads = omp_get_max_threads();
     if (o.threads > 0)
         omp_set_num_threads(o.threads);
-    if (xstart) {
-        o.max_iter = 0;
-        o.harmonic = 0;
-    }
     st = run_setup(&c, m, &o, pins, loose, &tp, &res, &r, err);
     if (st != QDC_OK)
         goto out;
     if (report(&c, &r)) {
         stop = 1;
         set_stop(&res, OPT_STOP_CANCELLED);
-    }
-    if (xstart) {
-        for (size_t i = 0; i < 3 * (size_t)c.nv; i++)
-            c.x[i] = (xstart[i] - c.center[i % 3]) / c.scale;
-        c.eta_delta = evaluate(&c, c.x, &r, c.eta);
     }
     st = global_phase(&c, &res, &r, &stop, err);
     if (st != QDC_OK)
@@ -1453,8 +1442,7 @@ static int rerun_report(void *ctx, const opt_progress *p)
 /* run_once again after the run prev, its progress records numbered on. */
 static qdc_status run_again(mesh_t *m, const opt_options *opts, const opt_result *prev,
                             const uint8_t *pins, const uint8_t *loose, uint8_t **squashed,
-                            uint8_t **stuck, const double *xstart, opt_result *r,
-                            qdc_error *err)
+                            uint8_t **stuck, opt_result *r, qdc_error *err)
 {
     opt_options o2 = *opts;
     /* the last record's number: global iterations plus finishing sweeps */
@@ -1465,7 +1453,7 @@ static qdc_status run_again(mesh_t *m, const opt_options *opts, const opt_result
         o2.progress = rerun_report;
         o2.progress_ctx = &rp;
     }
-    return run_once(m, &o2, pins, loose, squashed, stuck, xstart, r, err);
+    return run_once(m, &o2, pins, loose, squashed, stuck, r, err);
 }
 
 /* After a rerun r with coordinates x: best and xbest become r's if better;
@@ -1491,10 +1479,12 @@ static void keep_better(opt_result *best, opt_result *r, double *xbest, const do
     }
 }
 
-/* The stuck rerun: first the finishing pass alone from the best result with
- * the stuck vertices free (measured on a 4M-tet cube with one flat inverted
- * boundary tet: the whole run again took 57 s, this 13 s, same result), and
- * only if tets stay inverted the whole run again from the input. */
+/* The stuck rerun: the whole run again from the input with the stuck
+ * vertices free, kept if better. (Measured and dropped on 2026-11-25: the
+ * finishing pass alone, from the first run's result or its last global
+ * iterate, with those vertices free: on a 4M-tet cube with one flat inverted
+ * boundary tet it fixed the tet once and failed twice, which then cost the
+ * whole run on top; the global phase is what moves the freed vertices.) */
 static qdc_status free_stuck(mesh_t *m, const opt_options *opts, opt_result *best,
                              const uint8_t *pins, const uint8_t *loose, const double *xin,
                              double *xbest, qdc_error *err)
@@ -1506,33 +1496,19 @@ static qdc_status free_stuck(mesh_t *m, const opt_options *opts, opt_result *bes
 
     for (int32_t v = 0; v < m->nv; v++)
         nfree += loose[v];
-    for (int pass = 0; pass < 2 && best->after.n_inverted > 0; pass++) {
-        if (opts->log) {
-            char msg[200];
-            snprintf(msg, sizeof msg,
-                     "%d tets left inverted by sliding: %s with %d boundary vertices "
-                     "around them free",
-                     (int)best->after.n_inverted,
-                     pass == 0 ? "the finishing pass again" : "the whole run again",
-                     (int)nfree);
-            opts->log(opts->log_ctx, 0, msg);
-        }
-        memcpy(m->xyz, xin, n3 * sizeof(double));
-        st = run_again(m, opts, best, pins, loose, NULL, NULL, pass == 0 ? xbest : NULL,
-                       &r, err);
-        if (st != QDC_OK)
-            return st;
-        if (pass == 0) { /* what the global phase did is the first run's */
-            r.iterations = best->iterations;
-            r.stop = best->stop;
-            memcpy(r.stop_reason, best->stop_reason, sizeof r.stop_reason);
-            r.before_finish = best->before_finish;
-            r.max_inverted_global = best->max_inverted_global;
-            r.folded_global = best->folded_global;
-        }
-        keep_better(best, &r, xbest, m->xyz, n3);
+    if (opts->log) {
+        char msg[200];
+        snprintf(msg, sizeof msg,
+                 "%d tets left inverted by sliding: again with %d boundary vertices "
+                 "around them free",
+                 (int)best->after.n_inverted, (int)nfree);
+        opts->log(opts->log_ctx, 0, msg);
     }
-    return QDC_OK;
+    memcpy(m->xyz, xin, n3 * sizeof(double));
+    st = run_again(m, opts, best, pins, loose, NULL, NULL, &r, err);
+    if (st == QDC_OK)
+        keep_better(best, &r, xbest, m->xyz, n3);
+    return st;
 }
 
 /* opt_run in the mesh's own numbering. */
@@ -1553,7 +1529,7 @@ static qdc_status run_numbered(mesh_t *m, const opt_options *opts, opt_result *r
         opts = &dflt;
     }
     if (opts->boundary != OPT_BOUNDARY_SLIDE)
-        return run_once(m, opts, NULL, NULL, NULL, NULL, NULL, res_out, err);
+        return run_once(m, opts, NULL, NULL, NULL, NULL, res_out, err);
     xin = qdc_mallocn(n3 + 1, sizeof(double));
     xbest = qdc_mallocn(n3 + 1, sizeof(double));
     pins = qdc_calloc(n3 / 3 + 1, 1);
@@ -1564,7 +1540,7 @@ static qdc_status run_numbered(mesh_t *m, const opt_options *opts, opt_result *r
         goto out;
     }
     memcpy(xin, m->xyz, n3 * sizeof(double));
-    st = run_once(m, opts, NULL, NULL, &sq, &stk, NULL, &best, err);
+    st = run_once(m, opts, NULL, NULL, &sq, &stk, &best, err);
     if (st != QDC_OK) {
         if (res_out)
             *res_out = best;
@@ -1601,8 +1577,7 @@ static qdc_status run_numbered(mesh_t *m, const opt_options *opts, opt_result *r
                 (int)held);
             opts->log(opts->log_ctx, 0, msg);
         }
-        st =
-            run_again(m, opts, &best, pins, loose, &sq, stk ? NULL : &stk, NULL, &r, err);
+        st = run_again(m, opts, &best, pins, loose, &sq, stk ? NULL : &stk, &r, err);
         if (st != QDC_OK)
             break;
         keep_better(&best, &r, xbest, m->xyz, n3);
