@@ -232,11 +232,20 @@ def run_case(a, name, src, tool, q_in):
         if os.path.exists(f):
             os.remove(f)
     cmd = command(tool, gmsh_input(name, src) if tool.startswith('gmsh') else src, dst, base)
-    subprocess.run([PY, os.path.join(HERE, 'measure.py'), base + '.time.json', str(LIMIT),
-                    '--'] + cmd, check=True)
-    t = load(base + '.time.json')
+    runs = []
+    for _ in range(max(1, a.repeat)):
+        subprocess.run([PY, os.path.join(HERE, 'measure.py'), base + '.time.json',
+                        str(LIMIT), '--'] + cmd, check=True)
+        t = load(base + '.time.json')
+        runs.append(t)
+        if t['rc'] != 0 or t['timed_out']:
+            break
+    # the median of the runs (wall and CPU each), the largest peak
+    med = lambda k: sorted(r[k] for r in runs)[len(runs) // 2]
     row = {'mesh': name, 'tool': tool, 'cmd': ' '.join(shlex.quote(c) for c in cmd),
-           'wall': t['wall'], 'cpu': t['cpu'], 'maxrss_mb': t['maxrss_mb'], 'rc': t['rc']}
+           'wall': med('wall'), 'cpu': med('cpu'),
+           'maxrss_mb': max(r['maxrss_mb'] for r in runs), 'rc': t['rc'],
+           'runs': len(runs), 'walls': [r['wall'] for r in runs]}
     if t['timed_out']:
         row['status'] = 'timeout'
     elif t['rc'] != 0:
@@ -517,8 +526,12 @@ def write_results(path, info, tab, summ, rows):
                     'other builds and tests were running on the same %d cores). Wall '
                     'times are noisy; compare CPU seconds and ratios within a mesh, and '
                     'do not read small differences.\n' % info['nproc'])
-        f.write('\nColumns are explained in [README.md](README.md). One run per case; '
-                'raw JSON in `bench/out/runs/` (not committed).\n\n')
+        nrun = max((r.get('runs') or 1) for r in rows) if rows else 1
+        f.write('\nColumns are explained in [README.md](README.md). %s; raw JSON in '
+                '`bench/out/runs/` (not committed).\n\n' % (
+                    'One run per case' if nrun == 1 else
+                    '%d runs per case, one tool after the other; wall and CPU are the '
+                    'medians' % nrun))
         f.write('## Summary\n\n' + summ + '\n\n## Per mesh\n\n' + tab + '\n')
 
 
@@ -528,6 +541,8 @@ def main():
                     help='3 small dev meshes, no generated meshes, no Gmsh default optimizer')
     ap.add_argument('--no-large', action='store_true', help='skip the ~1M-tet mesh')
     ap.add_argument('--only', metavar='REGEX', help='only meshes whose name matches')
+    ap.add_argument('--repeat', type=int, default=1, metavar='N',
+                    help='run each case N times; wall and CPU are the medians')
     ap.add_argument('--tools', nargs='+', choices=TOOLS, help='subset of tools')
     ap.add_argument('--resume', action='store_true',
                     help='reuse finished cases from bench/out/runs (split a long run)')
