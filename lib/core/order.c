@@ -51,25 +51,15 @@ static int radix_sort(keyed *a, int32_t n)
     return 1;
 }
 
-static void bounding_box(const mesh_t *m, double lo[3], double *scale)
+/* Keys scale the bounding box's largest extent to 21 bits (0 for a box
+ * without a finite positive extent: every key 0). */
+static double key_scale(const mesh_t *m, double lo[3])
 {
-    double hi[3] = {-INFINITY, -INFINITY, -INFINITY}, ext = 0.0;
+    double hi[3], ext;
 
-    lo[0] = lo[1] = lo[2] = INFINITY;
-    for (int32_t v = 0; v < m->nv; v++)
-        for (int c = 0; c < 3; c++) {
-            double x = m->xyz[3 * (size_t)v + c];
-            if (!isfinite(x))
-                continue;
-            lo[c] = x < lo[c] ? x : lo[c];
-            hi[c] = x > hi[c] ? x : hi[c];
-        }
-    for (int c = 0; c < 3; c++) {
-        if (!(hi[c] >= lo[c]))
-            lo[c] = hi[c] = 0.0;
-        ext = hi[c] - lo[c] > ext ? hi[c] - lo[c] : ext;
-    }
-    *scale = ext > 0.0 ? ((double)(1 << MORTON_BITS) - 1.0) / ext : 0.0;
+    mesh_bbox(m, lo, hi);
+    ext = fmax(hi[0] - lo[0], fmax(hi[1] - lo[1], hi[2] - lo[2]));
+    return ext > 0.0 && isfinite(ext) ? ((double)(1 << MORTON_BITS) - 1.0) / ext : 0.0;
 }
 
 static uint64_t morton_key(const double *p, const double lo[3], double scale)
@@ -132,7 +122,7 @@ qdc_status mesh_order_build(const mesh_t *m, mesh_order *o)
     }
     o->nv = m->nv;
     o->nt = m->nt;
-    bounding_box(m, lo, &scale);
+    scale = key_scale(m, lo);
     for (int32_t v = 0; v < m->nv; v++) {
         k[v].key = morton_key(m->xyz + 3 * (size_t)v, lo, scale);
         k[v].id = v;

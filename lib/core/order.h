@@ -15,8 +15,9 @@ typedef struct {
     int32_t *told; /* nt: new tet number -> old */
 } mesh_order;
 
-/* The order of m (its coordinates need not be finite: a non-finite one counts
- * as the box's low corner). QDC_ENOMEM, or QDC_EINVAL for an index out of range. */
+/* The order of m (its coordinates need not be finite: a non-finite one puts
+ * keys at 0, an order still valid). QDC_ENOMEM, or QDC_EINVAL for an index out
+ * of range. */
 qdc_status mesh_order_build(const mesh_t *m, mesh_order *o);
 /* A copy of m's coordinates, tets, regions and fixed flags in the new
  * numbering (vertex refs, triangles and the source are not copied); NULL if

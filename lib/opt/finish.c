@@ -291,8 +291,7 @@ static int try_steps(const mesh_topo *tp, const double *x, int32_t v, const doub
     double sc = 1.0;
 
     for (int h = 0; h < FINISH_HALVINGS; h++, sc *= 0.5) {
-        for (int c = 0; c < 3; c++)
-            y[c] = xv[c] + sc * d[c];
+        trial_point(NULL, v, xv, d, sc, y);
         *f1 = star_hess(tp, x, v, y, m, delta, qfloor, s1, g1, H1);
         if (step_ok(tp, x, v, y, f0, *f1, s0, s1, qfloor))
             return 1;
