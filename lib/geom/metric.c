@@ -324,6 +324,15 @@ double metric_mean_ratio(const metric_parts *p)
     return p->vol < 0 ? -r : (p->vol > 0 ? r : 0.0);
 }
 
+double metric_mean_ratio_cubed(const metric_parts *p)
+{
+    double a = p->l2sum;
+
+    if (!(a > 0.0))
+        return 0.0;
+    return 15552.0 * p->vol * fabs(p->vol) / (a * a * a);
+}
+
 double metric_vol_length(const metric_parts *p)
 {
     double l = sqrt(p->l2sum / 6.0);
@@ -417,12 +426,12 @@ int metric_dihedrals(const double *p0, const double *p1, const double *p2,
     return degenerate;
 }
 
-void metric_dihedral_sines(const double *p0, const double *p1, const double *p2,
-                           const double *p3, double s[6])
+double metric_dihedral_sines_eta3(const double *p0, const double *p1, const double *p2,
+                                  const double *p3, double s[6])
 {
     static const int ends[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
     const double *p[4] = {p0, p1, p2, p3};
-    double g[4][3], len[4], il[4], ad[3], det;
+    double g[4][3], len[4], il[4], ad[3], det, l2sum = 0.0;
 
     face_area_vectors(p0, p1, p2, p3, g, len);
     sub3(p3, p0, ad);
@@ -432,10 +441,21 @@ void metric_dihedral_sines(const double *p0, const double *p1, const double *p2,
     for (int e = 0; e < 6; e++) {
         int k = dihedral_opp[e][0], l = dihedral_opp[e][1];
         double d[3];
+        double l2;
         sub3(p[ends[e][1]], p[ends[e][0]], d);
+        l2 = dot3(d, d);
+        l2sum += l2;
         /* sin = 3 V l / (2 A_k A_l) with |g| = 2 A; 0 on a degenerate face */
-        s[e] = det * sqrt(dot3(d, d)) * il[k] * il[l];
+        s[e] = det * sqrt(l2) * il[k] * il[l];
     }
+    /* metric_mean_ratio_cubed with V = det / 6 */
+    return l2sum > 0.0 ? 432.0 * det * fabs(det) / (l2sum * l2sum * l2sum) : 0.0;
+}
+
+void metric_dihedral_sines(const double *p0, const double *p1, const double *p2,
+                           const double *p3, double s[6])
+{
+    (void)metric_dihedral_sines_eta3(p0, p1, p2, p3, s);
 }
 
 double metric_alpha_opt(opt_metric m, const double *f0, const double *f1,

@@ -69,6 +69,10 @@ void metric_dihedral_cos_range(const double *p0, const double *p1, const double 
 
 /* Signed mean ratio 12 (3|V|)^(2/3) / l2sum in [-1, 1]. */
 double metric_mean_ratio(const metric_parts *p);
+/* The cube of the signed mean ratio, 15552 V|V| / l2sum^3: the same order as
+ * metric_mean_ratio (the cube is increasing), for comparisons without a cube
+ * root (q < f exactly when q^3 < f^3). */
+double metric_mean_ratio_cubed(const metric_parts *p);
 /* Volume-length 6 sqrt2 V / l_rms^3 (signed). */
 double metric_vol_length(const metric_parts *p);
 
@@ -83,6 +87,10 @@ int metric_dihedrals(const double *p0, const double *p1, const double *p2,
  * Freitag's worst-angle measure (small and large angles both score low). */
 void metric_dihedral_sines(const double *p0, const double *p1, const double *p2,
                            const double *p3, double s[6]);
+/* The same, returning the cube of the signed mean ratio (as
+ * metric_mean_ratio_cubed) from the volume and edges the sines need. */
+double metric_dihedral_sines_eta3(const double *p0, const double *p1, const double *p2,
+                                  const double *p3, double s[6]);
 
 /* Eq. 8 in closed form (docs/method.md §3): the distance alpha* along the unit inward
  * normal from the barycentre of face (f0, f1, f2) that minimizes q~ (delta = 0). */

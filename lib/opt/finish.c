@@ -174,9 +174,10 @@ static double star_hess(const mesh_topo *tp, const double *x, int32_t v, const d
     return f;
 }
 
-/* Smallest mean ratio over the star of v placed at y. */
-static double star_min_eta(const mesh_topo *tp, const double *x, int32_t v,
-                           const double *y)
+/* Cube of the smallest mean ratio over the star of v placed at y (no cube
+ * root: compared with cubed floors). */
+static double star_min_eta3(const mesh_topo *tp, const double *x, int32_t v,
+                            const double *y)
 {
     double e = INFINITY;
 
@@ -188,7 +189,7 @@ static double star_min_eta(const mesh_topo *tp, const double *x, int32_t v,
         for (int b = 0; b < 4; b++)
             p[b] = b == a ? y : x + 3 * (size_t)tp->tets[4 * (size_t)t + b];
         metric_parts_for(OPT_METRIC_MIVL, p[0], p[1], p[2], p[3], &pt);
-        q = metric_mean_ratio(&pt);
+        q = metric_mean_ratio_cubed(&pt);
         e = q < e ? q : e;
     }
     return e;
@@ -206,8 +207,9 @@ static int keeps_floor(const mesh_topo *tp, const double *x, int32_t v, const do
 
     if (!(qfloor > 0.0))
         return 1;
-    e1 = star_min_eta(tp, x, v, y);
-    return e1 >= qfloor || e1 >= star_min_eta(tp, x, v, x + 3 * (size_t)v);
+    e1 = star_min_eta3(tp, x, v, y);
+    return e1 >= qfloor * qfloor * qfloor ||
+           e1 >= star_min_eta3(tp, x, v, x + 3 * (size_t)v);
 }
 
 /* Solve H d = -g for a symmetric positive definite 3x3 H (upper triangle);
@@ -600,8 +602,9 @@ static int star_tet(const mesh_topo *tp, const double *x, int32_t k, const doubl
     return a;
 }
 
-/* Smallest dihedral sine of v's star with v at y, the smallest mean ratio
- * (*qmin) and, if act, the active functions (at most DIH_MAXACT, the smallest). */
+/* Smallest dihedral sine of v's star with v at y, the cube of the smallest
+ * mean ratio (*qmin) and, if act, the active functions (at most DIH_MAXACT, the
+ * smallest). */
 static double star_sines(const mesh_topo *tp, const double *x, int32_t v, const double *y,
                          double level, int *nbelow, double *qmin, dih_fn *act, int *nact)
 {
@@ -611,14 +614,12 @@ static double star_sines(const mesh_topo *tp, const double *x, int32_t v, const 
 
     for (int pass = 0; pass < (act ? 2 : 1); pass++)
         for (int32_t k = tp->vt_ptr[v]; k < tp->vt_ptr[v + 1]; k++) {
-            double p[4][3], s[6];
+            double p[4][3], s[6], q3;
             star_tet(tp, x, k, y, p);
-            metric_dihedral_sines(p[0], p[1], p[2], p[3], s);
+            q3 = metric_dihedral_sines_eta3(p[0], p[1], p[2], p[3], s);
             if (pass == 0) {
-                metric_parts pt;
                 double tmin = INFINITY;
-                metric_parts_of(p[0], p[1], p[2], p[3], &pt);
-                q = fmin(q, metric_mean_ratio(&pt));
+                q = fmin(q, q3);
                 for (int e = 0; e < 6; e++)
                     tmin = fmin(tmin, s[e]);
                 smin = fmin(smin, tmin);
@@ -735,6 +736,7 @@ static int32_t dihedral_vertex(const mesh_topo *tp, const slide_ctx *sl, double 
 {
     int sliding = sl && slide_kind(sl, v) != SLIDE_INTERIOR;
     double *xv = x + 3 * (size_t)v, s = 0.02 * lbar, h = 1e-6 * lbar;
+    const double qf3 = qfloor * qfloor * qfloor; /* star_sines gives cubes */
     int32_t moves = 0;
 
     for (int it = 0; it < DIH_INNER; it++) {
@@ -760,7 +762,7 @@ static int32_t dihedral_vertex(const mesh_topo *tp, const slide_ctx *sl, double 
             f1 = star_sines(tp, x, v, y, target, &nb1, &q1, NULL, NULL);
             /* no more star tets in the worst set (a stricter rule, no tet of the
              * set getting worse, stalls: sphere_h0.1_good 13.1 against 16.0 degrees) */
-            if (f1 > f0 && nb1 <= nb0 && q1 >= q0 && q1 >= qfloor) {
+            if (f1 > f0 && nb1 <= nb0 && q1 >= q0 && q1 >= qf3) {
                 ok = 1;
                 break;
             }

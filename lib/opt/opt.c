@@ -556,23 +556,25 @@ static void clamp_boundary(const ctx_t *c, double *y)
  * c->x can still leave a neighbour tet folded by its other corners, which are
  * then held in the next round; with every vertex held the trial is c->x,
  * which folds nothing, so the rounds end. */
-/* Mean ratio of tet tt at y (signed; MIVL's parts need no adjugate). */
-static double tet_eta(const double *y, const int32_t *tt)
+/* The cube of tet tt's mean ratio at y (signed; MIVL's parts need no
+ * adjugate): compared with a cubed floor, no cube root per tet. */
+static double tet_eta3(const double *y, const int32_t *tt)
 {
     metric_parts pt;
     metric_parts_for(OPT_METRIC_MIVL, y + 3 * (size_t)tt[0], y + 3 * (size_t)tt[1],
                      y + 3 * (size_t)tt[2], y + 3 * (size_t)tt[3], &pt);
-    return metric_mean_ratio(&pt);
+    return metric_mean_ratio_cubed(&pt);
 }
 
 /* Whether a trial spoils tet tt: it folds a tet valid at x or, on a valid
- * mesh, takes a tet below the worst mean ratio qfloor at x (the worst tet
- * of the mesh never gets worse, so the global phase's work is kept). */
-static int spoils(const ctx_t *c, const double *y, const int32_t *tt, double qfloor)
+ * mesh, takes a tet below the worst mean ratio at x, whose cube is qfloor3
+ * (the worst tet of the mesh never gets worse, so the global phase's work is
+ * kept). */
+static int spoils(const ctx_t *c, const double *y, const int32_t *tt, double qfloor3)
 {
     if (geom_tet_inverted(geom_tet_vol6(y, tt)))
         return !geom_tet_inverted(geom_tet_vol6(c->x, tt));
-    return qfloor > 0 && tet_eta(y, tt) < qfloor;
+    return qfloor3 > 0 && tet_eta3(y, tt) < qfloor3;
 }
 
 /* c->trial of vertex v: its share vfac[v] of the step s, then onto its
@@ -607,7 +609,7 @@ static void mark_corners(ctx_t *c, const int32_t *tt)
     }
 }
 
-static void feasible_trial(ctx_t *c, double s, int32_t ninv_x, double qfloor)
+static void feasible_trial(ctx_t *c, double s, int32_t ninv_x, double qfloor3)
 {
     const mesh_topo *tp = c->tp;
     int32_t nv = c->nv, folds = 0, ninv = 0;
@@ -625,7 +627,7 @@ static void feasible_trial(ctx_t *c, double s, int32_t ninv_x, double qfloor)
 #pragma omp parallel for reduction(+ : folds, ninv) schedule(static)
     for (int32_t t = 0; t < tp->nt; t++) {
         const int32_t *tt = tp->tets + 4 * (size_t)t;
-        int bad = spoils(c, c->trial, tt, qfloor);
+        int bad = spoils(c, c->trial, tt, qfloor3);
         ninv += geom_tet_inverted(geom_tet_vol6(c->trial, tt));
         folds += bad;
         if (bad)
@@ -667,7 +669,7 @@ static void feasible_trial(ctx_t *c, double s, int32_t ninv_x, double qfloor)
             int32_t v = c->vlist[i];
             for (int32_t k = tp->vt_ptr[v]; k < tp->vt_ptr[v + 1]; k++) {
                 const int32_t *tt = tp->tets + 4 * (size_t)(tp->vt_idx[k] >> 2);
-                if (spoils(c, c->trial, tt, qfloor)) {
+                if (spoils(c, c->trial, tt, qfloor3)) {
                     mark_corners(c, tt);
                     again = 1;
                 }
@@ -753,15 +755,16 @@ static qdc_status iterate(ctx_t *c, opt_result *res, opt_progress *r, int *stepp
          * and never raises the inverted count of a tangled one. */
         int h;
         int32_t ninv_x = 0;
-        double qfloor = INFINITY;
-        (void)count_folds(tp, c->x, c->x, &ninv_x);
-#pragma omp parallel for reduction(min : qfloor) schedule(static)
+        double qfloor3 = INFINITY;
+#pragma omp parallel for reduction(min : qfloor3) reduction(+ : ninv_x) schedule(static)
         for (int32_t e = 0; e < tp->nt; e++) {
-            double q = tet_eta(c->x, tp->tets + 4 * (size_t)e);
-            qfloor = q < qfloor ? q : qfloor;
+            const int32_t *tt = tp->tets + 4 * (size_t)e;
+            double q = tet_eta3(c->x, tt);
+            qfloor3 = q < qfloor3 ? q : qfloor3;
+            ninv_x += geom_tet_inverted(geom_tet_vol6(c->x, tt));
         }
         for (h = 0; h <= o->ls_halvings; h++) {
-            feasible_trial(c, step, ninv_x, qfloor);
+            feasible_trial(c, step, ninv_x, qfloor3);
             if (encode_objective(tp, c->trial, o->metric, delta, NULL, NULL) <= f0)
                 break;
             step *= 0.5;
@@ -1065,7 +1068,7 @@ static int32_t hold_back(ctx_t *c)
             metric_dihedral_cos_range(y + 3 * (size_t)tt[0], y + 3 * (size_t)tt[1],
                                       y + 3 * (size_t)tt[2], y + 3 * (size_t)tt[3], &lo,
                                       &hi);
-            if (hi > cmax0 || tet_eta(y, tt) < qmin0)
+            if (hi > cmax0 || tet_eta3(y, tt) < qmin0 * qmin0 * qmin0)
                 mark_corners(c, tt);
         }
         for (int32_t v = 0; v < c->nv; v++) {

@@ -555,8 +555,43 @@ TEST(dihedral_sines_are_the_sines_of_the_angles)
     }
 }
 
+TEST(cubed_mean_ratio_orders_like_the_mean_ratio)
+{
+    /* corner tet (0, e1, e2, e3): V = 1/6, l2sum = 3 + 3 * 2 = 9, so
+     * eta = 12 (9 / 36)^(1/3) / 9 and eta^3 = 15552 / 36 / 729 = 16 / 27 */
+    double c[4][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}}, s[6], s2[6];
+    double t[4][3] = {{0, 0, 0}, {1, 0.1, 0}, {0.2, 0.7, 0.1}, {0.3, 0.2, 0.4}};
+    metric_parts p;
+    metric_parts_of(c[0], c[1], c[2], c[3], &p);
+    ASSERT_NEAR(metric_mean_ratio_cubed(&p), 16.0 / 27.0, 1e-14);
+    ASSERT_NEAR(metric_mean_ratio(&p), cbrt(16.0 / 27.0), 1e-14);
+    ASSERT_NEAR(metric_dihedral_sines_eta3(c[0], c[1], c[2], c[3], s), 16.0 / 27.0,
+                1e-14);
+    metric_dihedral_sines(c[0], c[1], c[2], c[3], s2);
+    for (int e = 0; e < 6; e++)
+        ASSERT_NEAR(s[e], s2[e], 0.0);
+    /* regular: 1; the mirror image: -1 (signed like the mean ratio) */
+    metric_parts_of(REG[0], REG[1], REG[2], REG[3], &p);
+    ASSERT_NEAR(metric_mean_ratio_cubed(&p), 1.0, 1e-12);
+    ASSERT_NEAR(metric_dihedral_sines_eta3(REG[0], REG[2], REG[1], REG[3], s), -1.0,
+                1e-12);
+    /* a generic tet and its mirror: the cube of the signed mean ratio */
+    metric_parts_of(t[0], t[1], t[2], t[3], &p);
+    ASSERT_NEAR(metric_mean_ratio_cubed(&p), pow(metric_mean_ratio(&p), 3.0), 1e-14);
+    ASSERT_NEAR(metric_dihedral_sines_eta3(t[0], t[1], t[2], t[3], s),
+                pow(metric_mean_ratio(&p), 3.0), 1e-14);
+    metric_parts_of(t[0], t[2], t[1], t[3], &p);
+    ASSERT_NEAR(metric_dihedral_sines_eta3(t[0], t[2], t[1], t[3], s),
+                -pow(-metric_mean_ratio(&p), 3.0), 1e-14);
+    /* degenerate (all four points on a plane): 0 */
+    c[3][2] = 0.0;
+    metric_parts_of(c[0], c[1], c[2], c[3], &p);
+    ASSERT_NEAR(metric_mean_ratio_cubed(&p), 0.0, 0.0);
+}
+
 TEST_MAIN("core", T(hessian_matches_finite_differences_of_the_gradient),
-          T(dihedral_sines_are_the_sines_of_the_angles), T(regular_tet_metrics_are_one),
+          T(dihedral_sines_are_the_sines_of_the_angles),
+          T(cubed_mean_ratio_orders_like_the_mean_ratio), T(regular_tet_metrics_are_one),
           T(scaled_regular_tet_is_still_one), T(mivl_is_mimr_to_three_halves),
           T(inverted_tet_negative_mean_ratio_and_infinite_qt),
           T(h_is_continuous_and_regularizes), T(alpha_closed_form_matches_search),
