@@ -1411,6 +1411,13 @@ static qdc_status run_once(mesh_t *m, const opt_options *opts, const uint8_t *pi
             for (int k = 0; k < 3; k++)
                 m->xyz[3 * (size_t)v + k] =
                     c.xbest[3 * (size_t)v + k] * c.scale + c.center[k];
+    /* counted again on the coordinates the caller gets: mapping back rounds,
+     * and a tet of near-zero volume can change sign (measured on a tangled
+     * thin bone of 94k tets: one tet positive here, -1e-19 in the file) */
+    if (c.best_it > 0) {
+        int32_t n = mesh_count_inverted(tp, m->xyz);
+        c.best.n_inverted = n > c.best.n_inverted ? n : c.best.n_inverted;
+    }
     res.after = c.best;
     res.best_iteration = c.best_it;
     res.last_record = c.last_record;
