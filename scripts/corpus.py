@@ -185,7 +185,15 @@ def lowq(shape, ntets, rng, scan=False):
     x = np.vstack([ps, np.vstack(pi)])
     # the cube's faces hold thousands of coplanar points, on which Qhull's exact
     # merging takes minutes at 1M tets; joggled input (QJ) takes seconds, and the
-    # flat tets it leaves on the faces are dropped below
+    # flat tets it leaves on the faces are dropped below. The ball's surface
+    # points are all cospherical, which Qhull merges too: at 5M tets that ran
+    # for more than 15 minutes. Qhull's own joggle triangulates points that are
+    # not the ones returned, and some tets come out inverted against their
+    # neighbours in the returned ones (575 at 5M); so above 2M tets the ball's
+    # points are moved by 1e-7 of the box first and the mesh keeps them (smaller
+    # meshes stay as they were generated before)
+    if shape == "ball" and ntets > 2000000:
+        x = x + rng.uniform(-1e-7, 1e-7, x.shape) * (hi - lo)
     t = Delaunay(x, qhull_options="QJ Qbb" if shape == "cube" else None).simplices
     c = x[t].mean(axis=1)
     t = t[inside(c)]
