@@ -448,8 +448,10 @@ double metric_dihedral_sines_eta3(const double *p0, const double *p1, const doub
         /* sin = 3 V l / (2 A_k A_l) with |g| = 2 A; 0 on a degenerate face */
         s[e] = det * sqrt(l2) * il[k] * il[l];
     }
-    /* metric_mean_ratio_cubed with V = det / 6 */
-    return l2sum > 0.0 ? 432.0 * det * fabs(det) / (l2sum * l2sum * l2sum) : 0.0;
+    {
+        metric_parts pt = {.vol = det / 6.0, .l2sum = l2sum};
+        return metric_mean_ratio_cubed(&pt);
+    }
 }
 
 void metric_dihedral_sines(const double *p0, const double *p1, const double *p2,

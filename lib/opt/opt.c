@@ -919,6 +919,7 @@ static qdc_status angle_pass(ctx_t *c, const uint8_t *movable, const slide_ctx *
     for (int s = 0; s < ANGLE_SWEEPS; s++) {
         finish_stats fs;
         qdc_status st;
+        int floor_up;
         if (should_stop(c, res))
             break;
         st = finish_dihedral_sweep(c->tp, movable, sl, c->x, c->lbar, 0.01, base.q_min,
@@ -936,13 +937,11 @@ static qdc_status angle_pass(ctx_t *c, const uint8_t *movable, const slide_ctx *
         kept = 1;
         moves += fs.n_moves;
         visits += fs.n_verts;
-        if (fs.n_moves == 0 || !(fs.floor_after > fs.floor_before * (1 + 1e-3) ||
-                                 fs.score_after > fs.score_before * (1 + 1e-3)))
+        floor_up = fs.floor_after > fs.floor_before * (1 + 1e-3);
+        if (fs.n_moves == 0 ||
+            !(floor_up || fs.score_after > fs.score_before * (1 + 1e-3)))
             break;
-        slow = fs.floor_after > fs.floor_before * (1 + 1e-3) ||
-                       fs.score_after > fs.score_before * 1.01
-                   ? 0
-                   : slow + 1;
+        slow = floor_up || fs.score_after > fs.score_before * 1.01 ? 0 : slow + 1;
         if (slow >= ANGLE_SLOW)
             break;
     }
