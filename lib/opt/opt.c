@@ -660,11 +660,17 @@ static void feasible_trial(ctx_t *c, double s, int32_t ninv_x, double qfloor3)
             memcpy(c->trial, c->x, 3 * (size_t)nv * sizeof(double));
             return;
         }
+        /* in parallel: a vertex writes only its own trial position, and the
+         * marks are a set (measured on a thin bone of 100k tets, where half
+         * the vertices are held in the first round, the serial rounds took
+         * 40 ms of each iteration's 50 ms of line search) */
+#pragma omp parallel for schedule(dynamic, 256)
         for (int32_t i = 0; i < n; i++) {
             int32_t v = c->vlist[i];
             c->vfac[v] = round < 6 && c->vfac[v] > 0.0 ? 0.5 * c->vfac[v] : 0.0;
             place_vertex(c, v, s);
         }
+#pragma omp parallel for reduction(| : again) schedule(dynamic, 256)
         for (int32_t i = 0; i < n; i++) {
             int32_t v = c->vlist[i];
             for (int32_t k = tp->vt_ptr[v]; k < tp->vt_ptr[v + 1]; k++) {
