@@ -213,38 +213,51 @@ typedef struct {
     int depth;
 } bvh_builder;
 
-static int32_t bvh_build_node(bvh_builder *bb, int32_t lo, int32_t hi, int depth)
+/* The box of a leaf: its triangles' corners (coordinates are finite). */
+static void leaf_box(const bvh_builder *bb, bvh_node *nd, int32_t lo, int32_t hi)
 {
-    bvh_node *nd;
-    int32_t self = bb->b->nnode++, mid;
-    double clo[3] = {INFINITY, INFINITY, INFINITY},
-           chi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    int axis = 0;
-
-    nd = &bb->b->nodes[self];
     for (int d = 0; d < 3; d++) {
         nd->lo[d] = INFINITY;
         nd->hi[d] = -INFINITY;
     }
     for (int32_t i = lo; i < hi; i++) {
         const int32_t *t = bb->tris + 3 * (size_t)bb->ix[i];
-        const double *c = bb->cen + 3 * (size_t)bb->ix[i];
-        for (int d = 0; d < 3; d++) {
-            for (int v = 0; v < 3; v++) {
+        for (int v = 0; v < 3; v++)
+            for (int d = 0; d < 3; d++) {
                 double x = bb->xyz[3 * (size_t)t[v] + d];
-                nd->lo[d] = fmin(nd->lo[d], x);
-                nd->hi[d] = fmax(nd->hi[d], x);
+                nd->lo[d] = x < nd->lo[d] ? x : nd->lo[d];
+                nd->hi[d] = x > nd->hi[d] ? x : nd->hi[d];
             }
-            clo[d] = fmin(clo[d], c[d]);
-            chi[d] = fmax(chi[d], c[d]);
-        }
     }
+}
+
+/* Node of ix[lo..hi): split at the median centroid along the centroids'
+ * longest extent; an inner node's box is the union of its children's (each
+ * level used to rescan every corner of its triangles with fmin/fmax: 1.6 s of
+ * setup on a 4M-tet ball). */
+static int32_t bvh_build_node(bvh_builder *bb, int32_t lo, int32_t hi, int depth)
+{
+    bvh_node *nd;
+    int32_t self = bb->b->nnode++, mid, r;
+    double clo[3] = {INFINITY, INFINITY, INFINITY},
+           chi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    int axis = 0;
+
     if (depth > bb->depth)
         bb->depth = depth;
     if (hi - lo <= BVH_LEAF) {
+        nd = &bb->b->nodes[self];
+        leaf_box(bb, nd, lo, hi);
         nd->a = lo;
         nd->n = hi - lo;
         return self;
+    }
+    for (int32_t i = lo; i < hi; i++) {
+        const double *c = bb->cen + 3 * (size_t)bb->ix[i];
+        for (int d = 0; d < 3; d++) {
+            clo[d] = c[d] < clo[d] ? c[d] : clo[d];
+            chi[d] = c[d] > chi[d] ? c[d] : chi[d];
+        }
     }
     for (int d = 1; d < 3; d++)
         if (chi[d] - clo[d] > chi[axis] - clo[axis])
@@ -254,9 +267,15 @@ static int32_t bvh_build_node(bvh_builder *bb, int32_t lo, int32_t hi, int depth
     mid = lo + (hi - lo) / 2;
     select_kth(bb->ix, bb->key, lo, hi, mid);
     bvh_build_node(bb, lo, mid, depth + 1);
+    r = bvh_build_node(bb, mid, hi, depth + 1);
     nd = &bb->b->nodes[self];
-    nd->a = bvh_build_node(bb, mid, hi, depth + 1);
+    nd->a = r;
     nd->n = 0;
+    for (int d = 0; d < 3; d++) {
+        const bvh_node *L = &bb->b->nodes[self + 1], *R = &bb->b->nodes[r];
+        nd->lo[d] = L->lo[d] < R->lo[d] ? L->lo[d] : R->lo[d];
+        nd->hi[d] = L->hi[d] > R->hi[d] ? L->hi[d] : R->hi[d];
+    }
     return self;
 }
 
