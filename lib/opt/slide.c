@@ -32,14 +32,52 @@ typedef struct {
     int32_t f;    /* face index: 0..nbf-1 boundary, nbf.. interface */
 } edge_rec;
 
-static int edge_cmp(const void *x, const void *y)
+static int edge_less(const edge_rec *p, const edge_rec *q)
 {
-    const edge_rec *p = x, *q = y;
     if (p->a != q->a)
-        return p->a < q->a ? -1 : 1;
+        return p->a < q->a;
     if (p->b != q->b)
-        return p->b < q->b ? -1 : 1;
-    return (p->f > q->f) - (p->f < q->f);
+        return p->b < q->b;
+    return p->f < q->f;
+}
+
+/* e[0..ne) sorted by (a, b, f), a in [0, nv): a counting sort by a, then
+ * each small bucket insertion-sorted (qsort took 0.25 s of setup on a
+ * surface of 833k triangles). 0 if out of memory. */
+static int sort_edges(edge_rec *e, size_t ne, int32_t nv)
+{
+    size_t *start = qdc_calloc((size_t)nv + 2, sizeof(size_t));
+    edge_rec *tmp = qdc_mallocn(ne + 1, sizeof *tmp);
+
+    if (!start || !tmp) {
+        qdc_free(start);
+        qdc_free(tmp);
+        return 0;
+    }
+    for (size_t i = 0; i < ne; i++)
+        start[e[i].a + 2]++;
+    for (int32_t v = 0; v < nv; v++)
+        start[v + 2] += start[v + 1];
+    for (size_t i = 0; i < ne; i++)
+        tmp[start[e[i].a + 1]++] = e[i];
+    /* now bucket v is tmp[start[v] .. start[v + 1]) */
+    for (int32_t v = 0; v < nv; v++) {
+        edge_rec *b = tmp + start[v];
+        size_t n = start[v + 1] - start[v];
+        for (size_t i = 1; i < n; i++) {
+            edge_rec key = b[i];
+            size_t j = i;
+            while (j > 0 && edge_less(&key, &b[j - 1])) {
+                b[j] = b[j - 1];
+                j--;
+            }
+            b[j] = key;
+        }
+    }
+    memcpy(e, tmp, ne * sizeof *e);
+    qdc_free(start);
+    qdc_free(tmp);
+    return 1;
 }
 
 static void face_normal(const double *x, const int32_t *f, double n[3])
@@ -84,9 +122,9 @@ static qdc_status find_features(slide_ctx *s, const mesh_topo *tp, const double 
             r->b = a < b ? b : a;
             r->f = f;
         }
-    qsort(e, ne, sizeof *e, edge_cmp);
     pairs = qdc_mallocn(ne + 1, 2 * sizeof(int32_t));
-    if (!pairs) {
+    if (!pairs || !sort_edges(e, ne, tp->nv)) {
+        qdc_free(pairs);
         qdc_free(e);
         return QDC_ENOMEM;
     }
