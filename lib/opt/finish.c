@@ -529,43 +529,55 @@ qdc_status finish_sweep(const mesh_topo *tp, const uint8_t *movable, const slide
                         double *x, opt_metric m, const double *eta, double delta,
                         double lbar, double frac, double rtol, finish_stats *st)
 {
-    double *sorted = qdc_mallocn((size_t)tp->nt, sizeof(double));
     double *vworst = qdc_mallocn((size_t)tp->nv, sizeof(double));
     vq_pair *list = NULL;
     int32_t n = 0, k;
     double thresh, qfloor;
 
     memset(st, 0, sizeof *st);
-    if (!sorted || !vworst) {
-        qdc_free(sorted);
-        qdc_free(vworst);
+    if (!vworst)
         return QDC_ENOMEM;
-    }
-    memcpy(sorted, eta, (size_t)tp->nt * sizeof(double));
     k = (int32_t)(frac * tp->nt);
     if (k < 1)
         k = 1;
     if (k > tp->nt)
         k = tp->nt;
-    thresh = kth_smallest(sorted, tp->nt, k - 1);
-    qfloor = kth_smallest(sorted, tp->nt, 0); /* > 0 only on a valid mesh */
-    st->delta = delta;
-    for (int32_t v = 0; v < tp->nv; v++)
-        vworst[v] = 2.0;
+    /* the smallest and (broad sweeps: every tet) the largest by one parallel
+     * scan, the k-th smallest by quickselect only when it is needed (the
+     * serial selects and copy cost 0.1 s a sweep at 4M tets) */
+    qfloor = INFINITY; /* > 0 only on a valid mesh */
+    thresh = -INFINITY;
+#pragma omp parallel for reduction(min : qfloor) reduction(max : thresh) schedule(static)
     for (int32_t t = 0; t < tp->nt; t++) {
-        if (!(eta[t] <= thresh || eta[t] <= 0.0))
-            continue;
-        for (int a = 0; a < 4; a++) {
-            int32_t v = tp->tets[4 * (size_t)t + a];
-            if (eta[t] < vworst[v])
-                vworst[v] = eta[t];
+        qfloor = eta[t] < qfloor ? eta[t] : qfloor;
+        thresh = eta[t] > thresh ? eta[t] : thresh;
+    }
+    if (k < tp->nt) {
+        double *sorted = qdc_mallocn((size_t)tp->nt, sizeof(double));
+        if (!sorted) {
+            qdc_free(vworst);
+            return QDC_ENOMEM;
         }
+        memcpy(sorted, eta, (size_t)tp->nt * sizeof(double));
+        thresh = kth_smallest(sorted, tp->nt, k - 1);
+        qdc_free(sorted);
+    }
+    st->delta = delta;
+    /* each vertex's worst listed tet (in parallel, per vertex: a min) */
+#pragma omp parallel for schedule(static)
+    for (int32_t v = 0; v < tp->nv; v++) {
+        double w = 2.0;
+        for (int32_t kk = tp->vt_ptr[v]; kk < tp->vt_ptr[v + 1]; kk++) {
+            double e = eta[tp->vt_idx[kk] >> 2];
+            if ((e <= thresh || e <= 0.0) && e < w)
+                w = e;
+        }
+        vworst[v] = w;
     }
     for (int32_t v = 0; v < tp->nv; v++)
         n += movable[v] && vworst[v] < 2.0;
     list = qdc_mallocn((size_t)n + 1, sizeof *list);
     if (!list) {
-        qdc_free(sorted);
         qdc_free(vworst);
         return QDC_ENOMEM;
     }
@@ -586,7 +598,6 @@ qdc_status finish_sweep(const mesh_topo *tp, const uint8_t *movable, const slide
         qdc_free(colour);
         if (ncol < 0) {
             qdc_free(list);
-            qdc_free(sorted);
             qdc_free(vworst);
             return QDC_ENOMEM;
         }
@@ -601,7 +612,6 @@ qdc_status finish_sweep(const mesh_topo *tp, const uint8_t *movable, const slide
     }
     st->n_verts = n;
     qdc_free(list);
-    qdc_free(sorted);
     qdc_free(vworst);
     return QDC_OK;
 }

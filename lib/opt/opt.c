@@ -721,19 +721,23 @@ static qdc_status iterate(ctx_t *c, opt_result *res, opt_progress *r, int *stepp
     } else {
         mu = o->mu * c->mu_factor;
     }
-    /* b = Q_F^T W (d - Q x_L) + bw2 x0 + mu x_k: locked vertices move to the right */
+    /* b = Q_F^T W (d - Q x_L) + bw2 x0 + mu x_k: locked vertices move to the right
+     * (the per-vertex loops of the iteration run in parallel: each entry alone) */
+#pragma omp parallel for schedule(static)
     for (int32_t v = 0; v < c->nv; v++) {
         for (int k = 0; k < 3; k++)
             c->tmp[3 * (size_t)v + k] = c->locked[v] ? c->x[3 * (size_t)v + k] : 0.0;
         c->dg[v] = c->bw2[v] + mu;
     }
     solve_q_mul(tp, c->qval, c->tmp, c->trial);
+#pragma omp parallel for schedule(static)
     for (int32_t v = 0; v < c->nv; v++)
         for (int k = 0; k < 3; k++) {
             size_t q = 3 * (size_t)v + k;
             c->trial[q] = c->wq2[v] * (c->d[q] - c->trial[q]);
         }
     solve_qt_mul(c->sol, c->qval, c->trial, c->rhs);
+#pragma omp parallel for schedule(static)
     for (int32_t v = 0; v < c->nv; v++)
         for (int k = 0; k < 3; k++) {
             size_t q = 3 * (size_t)v + k;
@@ -746,9 +750,14 @@ static qdc_status iterate(ctx_t *c, opt_result *res, opt_progress *r, int *stepp
     res->t_solve += qdc_now() - t;
     if (st != QDC_OK)
         return st;
-    for (size_t q = 0; q < n3; q++)
-        if (!isfinite(c->xn[q]))
+    {
+        int finite = 1;
+#pragma omp parallel for reduction(&& : finite) schedule(static)
+        for (size_t q = 0; q < n3; q++)
+            finite = finite && isfinite(c->xn[q]);
+        if (!finite)
             return qdc_fail(err, QDC_ESOLVE, "linear solve returned a non-finite value");
+    }
     t = qdc_now();
     if (!literal) {
         /* Not in the paper (docs/method.md §5): backtrack on sum q~ with delta frozen;
@@ -790,6 +799,7 @@ static qdc_status iterate(ctx_t *c, opt_result *res, opt_progress *r, int *stepp
         int32_t ninv_t;
         folded = step > 0.0 ? count_folds(tp, c->x, c->trial, &ninv_t) : 0;
     }
+#pragma omp parallel for reduction(max : move) schedule(static)
     for (int32_t v = 0; v < c->nv; v++) {
         double dd = 0;
         for (int k = 0; k < 3; k++) {
