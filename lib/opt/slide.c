@@ -364,18 +364,16 @@ static qdc_status star_faces(slide_ctx *s, const mesh_topo *tp)
     return QDC_OK;
 }
 
-/* Closest point to p on the input faces around surface vertex v, if it lies
- * inside v's star (not on its outer edges, where a face beyond may be
- * closer). That is the closest point of v's own part of the surface; the
- * whole-surface search gives the same point unless another part of the
- * surface (across a thin wall) is closer still, which a vertex sliding on its
- * own side should ignore anyway. 0 if the search is needed. */
-static int project_star(const slide_ctx *s, int32_t v, const double p[3], double out[3])
+/* Closest point out to p on the input faces around surface vertex c; *edge
+ * receives 1 when it lies on the star's outer edge (where a face beyond may
+ * be closer) and *next the end of that edge nearer to it. 0 if c has no faces. */
+static int star_closest(const slide_ctx *s, int32_t c, const double p[3], double out[3],
+                        int *edge, int32_t *next)
 {
     double best = INFINITY, cp[3];
     int32_t bi = -1;
 
-    for (int32_t k = s->sf_ptr[v]; k < s->sf_ptr[v + 1]; k++) {
+    for (int32_t k = s->sf_ptr[c]; k < s->sf_ptr[c + 1]; k++) {
         const int32_t *t = s->sf_tri + 3 * (size_t)k;
         double d =
             bderr_point_triangle(p, s->x0 + 3 * (size_t)t[0], s->x0 + 3 * (size_t)t[1],
@@ -389,30 +387,67 @@ static int project_star(const slide_ctx *s, int32_t v, const double p[3], double
     if (bi < 0)
         return 0;
     {
-        /* on the edge opposite v (where the next face begins)? */
+        /* on the edge opposite c (where the next face begins)? */
         const int32_t *t = s->sf_tri + 3 * (size_t)bi;
         const double *a = NULL, *b = NULL;
+        int32_t ia = -1, ib = -1;
         double e[3], w[3], ee, tt, dd = 0;
-        for (int c = 0; c < 3; c++)
-            if (t[c] == v) {
-                a = s->x0 + 3 * (size_t)t[(c + 1) % 3];
-                b = s->x0 + 3 * (size_t)t[(c + 2) % 3];
+        for (int k = 0; k < 3; k++)
+            if (t[k] == c) {
+                ia = t[(k + 1) % 3];
+                ib = t[(k + 2) % 3];
+                a = s->x0 + 3 * (size_t)ia;
+                b = s->x0 + 3 * (size_t)ib;
             }
         if (!a)
             return 0;
-        for (int c = 0; c < 3; c++) {
-            e[c] = b[c] - a[c];
-            w[c] = out[c] - a[c];
+        for (int k = 0; k < 3; k++) {
+            e[k] = b[k] - a[k];
+            w[k] = out[k] - a[k];
         }
         ee = e[0] * e[0] + e[1] * e[1] + e[2] * e[2];
         tt = ee > 0 ? (w[0] * e[0] + w[1] * e[1] + w[2] * e[2]) / ee : 0;
         tt = tt < 0 ? 0 : tt > 1 ? 1 : tt;
-        for (int c = 0; c < 3; c++) {
-            double r = w[c] - tt * e[c];
+        for (int k = 0; k < 3; k++) {
+            double r = w[k] - tt * e[k];
             dd += r * r;
         }
-        return dd > 1e-24 * ee;
+        *edge = !(dd > 1e-24 * ee);
+        *next = tt < 0.5 ? ia : ib;
+        return 1;
     }
+}
+
+/* Steps of the walk in project_star before the whole-surface search. */
+#define PROJ_WALK 4
+
+/* Closest point to p on the input faces around surface vertex v, if it lies
+ * inside v's star (not on its outer edges, where a face beyond may be
+ * closer). That is the closest point of v's own part of the surface; the
+ * whole-surface search gives the same point unless another part of the
+ * surface (across a thin wall) is closer still, which a vertex sliding on its
+ * own side should ignore anyway. A point on the star's outer edge walks on to
+ * the star of that edge's nearer end (same surface), up to PROJ_WALK stars:
+ * measured on an 800k-tet ball, 4% of the projections left v's star and took
+ * the whole-surface search, a third of the projection time. 0 if the search
+ * is needed. */
+static int project_star(const slide_ctx *s, int32_t v, const double p[3], double out[3])
+{
+    int32_t c = v;
+
+    for (int step = 0; step < PROJ_WALK; step++) {
+        int edge = 0;
+        int32_t next = -1;
+        if (!star_closest(s, c, p, out, &edge, &next))
+            return 0;
+        if (!edge)
+            return 1;
+        if (next < 0 || s->kind[next] != SLIDE_SURFACE ||
+            s->on_iface[next] != s->on_iface[v])
+            return 0;
+        c = next;
+    }
+    return 0;
 }
 
 qdc_status slide_new(const mesh_topo *tp, const double *x0, double feature_angle,
