@@ -2,9 +2,15 @@
 #define _GNU_SOURCE
 #include "offq.h"
 
+#include <omp.h>
+
 static void *offq_main(void *arg)
 {
     offq *o = arg;
+    /* The library calls made here (parsing and checking an upload,
+     * converting a result) stay on this thread: an OpenMP team would keep
+     * its threads for the life of the process (nthreads-var is per thread) */
+    omp_set_num_threads(1);
     pthread_mutex_lock(&o->lock);
     for (;;) {
         while (!o->head && !o->stop)

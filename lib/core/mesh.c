@@ -679,7 +679,10 @@ static int ring_of(const mesh_topo *tp, int32_t v, int32_t *mark, int32_t *buf)
 static qdc_status build_adjacency(mesh_topo *tp)
 {
     int32_t nv = tp->nv, maxdeg = 0;
-    int nth = omp_get_max_threads() > 0 ? omp_get_max_threads() : 1;
+    /* at most 8 marker arrays (nv each) however many threads the caller allows */
+    int nth = omp_get_max_threads() < 1   ? 1
+              : omp_get_max_threads() > 8 ? 8
+                                          : omp_get_max_threads();
     int32_t *cnt = qdc_calloc((size_t)nv + 1, sizeof(int32_t)), *mark, *buf;
     size_t bufn;
 
