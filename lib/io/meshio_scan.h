@@ -14,6 +14,7 @@
 #include "core/base.h"
 #include "core/mesh.h"
 #include "io/meshio.h"
+#include "io/numfmt.h"
 
 #include <math.h>
 #include <stdarg.h>
@@ -622,11 +623,12 @@ static inline void wb_int(wbuf *w, int64_t v)
     wb_put(w, tmp + n, sizeof tmp - (size_t)n);
 }
 
+/* x as %.17g writes it (numfmt.h: 5x faster than snprintf, the same text) */
 static inline void wb_real(wbuf *w, double x)
 {
     if (WB_CAP - w->n < 32)
         wb_flush(w);
-    w->n += (size_t)snprintf(w->b + w->n, 32, "%.17g", x);
+    w->n += (size_t)numfmt_g17(x, w->b + w->n);
 }
 
 /* Values separated by sep, ended by end. */
