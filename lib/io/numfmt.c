@@ -152,3 +152,49 @@ int numfmt_g17(double x, char *out)
     out[n] = '\0';
     return n;
 }
+
+/* Q 2^e2 (plus a nonzero fraction of Q's last unit if sticky) to the nearest
+ * double, ties to even. Q > 0. */
+static double round_to_double(u128 Q, int sticky, int e2)
+{
+    uint64_t hi = (uint64_t)(Q >> 64);
+    int L = hi ? 128 - __builtin_clzll(hi) : 64 - __builtin_clzll((uint64_t)Q);
+    uint64_t top;
+
+    if (L <= 53 && !sticky)
+        return ldexp((double)(uint64_t)Q, e2);
+    if (L <= 53) { /* cannot happen with the shifts of numfmt_decimal */
+        int sh = 54 - L;
+        Q <<= sh;
+        e2 -= sh;
+        L = 54;
+    }
+    {
+        int sh = L - 53;
+        u128 rest = Q & (((u128)1 << sh) - 1), half = (u128)1 << (sh - 1);
+        int up;
+        top = (uint64_t)(Q >> sh);
+        up = rest > half || (rest == half && (sticky || (top & 1)));
+        top += (uint64_t)up; /* 2^53 at most: still exact */
+        return ldexp((double)top, e2 + sh);
+    }
+}
+
+int numfmt_decimal(uint64_t m, int e10, double *out)
+{
+    if (m == 0 || e10 < -P5_MAX || e10 > P5_MAX)
+        return 0;
+    if (e10 >= 0) { /* m 5^e 2^e: below 2^127 */
+        *out = round_to_double((u128)m * pow5[e10], 0, e10);
+        return 1;
+    }
+    {
+        /* m / (5^k 2^k): m shifted to the top of 127 bits, divided by 5^k
+         * (< 2^63): a quotient of 64 bits or more and its remainder */
+        int k = -e10, j = 127 - (64 - __builtin_clzll(m));
+        u128 num = (u128)m << j, d = pow5[k];
+        u128 Q = num / d, R = num - Q * d;
+        *out = round_to_double(Q, R != 0, -j - k);
+        return 1;
+    }
+}

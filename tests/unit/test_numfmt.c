@@ -1,6 +1,6 @@
 /* test_numfmt.c - numfmt_g17 (io/numfmt.h) against the C library's own
  * printf("%.17g") on doubles of every kind, rounding ties included, and the
- * text read back as the same double. */
+ * text read back as the same double; numfmt_decimal against strtod. */
 #include "io/numfmt.h"
 #include "testlib.h"
 
@@ -30,7 +30,7 @@ TEST(matches_printf_on_random_doubles)
 {
     char got[64], want[64];
 
-    for (long i = 0; i < 2000000; i++) {
+    for (long i = 0; i < 1000000; i++) {
         double x;
         uint64_t u = rnd();
         switch (i % 4) {
@@ -93,4 +93,41 @@ TEST(ties_round_to_even_and_edges)
     ASSERT_TRUE(got[strlen(got) - 1] == '8');
 }
 
-TEST_MAIN("numfmt", T(matches_printf_on_random_doubles), T(ties_round_to_even_and_edges))
+/* numfmt_decimal(m, e) is strtod("<m>e<e>"): random 1-19 digit mantissas
+ * over the exponents it takes, and mantissas near halfway between doubles */
+TEST(decimal_matches_strtod)
+{
+    char buf[64];
+
+    for (long i = 0; i < 1000000; i++) {
+        uint64_t m = rnd() % 10000000000000000000ULL;
+        int e = (int)(rnd() % 55) - 27;
+        double got = 0, want;
+        if (i % 3 == 1)
+            m >>= rnd() % 60; /* shorter mantissas too */
+        if (i % 3 == 2) {     /* 2 x the midpoint of two doubles, as an integer */
+            double x = ldexp((double)((rnd() >> 11) | 1), -(int)(rnd() % 12));
+            m = (uint64_t)(2 * x) + 1;
+            e = 0;
+        }
+        if (m == 0)
+            continue;
+        snprintf(buf, sizeof buf, "%llue%d", (unsigned long long)m, e);
+        want = strtod(buf, NULL);
+        ASSERT_TRUE(numfmt_decimal(m, e, &got) == 1);
+        if (memcmp(&got, &want, sizeof got)) {
+            printf("  %s: got %a, strtod %a\n", buf, got, want);
+            ASSERT_TRUE(0);
+        }
+    }
+    /* out of its range: left to strtod */
+    {
+        double x;
+        ASSERT_TRUE(numfmt_decimal(1, 28, &x) == 0);
+        ASSERT_TRUE(numfmt_decimal(1, -28, &x) == 0);
+        ASSERT_TRUE(numfmt_decimal(0, 0, &x) == 0);
+    }
+}
+
+TEST_MAIN("numfmt", T(matches_printf_on_random_doubles), T(ties_round_to_even_and_edges),
+          T(decimal_matches_strtod))
