@@ -23,6 +23,15 @@ double encode_min_arg(const mesh_topo *tp, const double *x, opt_metric m);
  * and d_i = sum_t c_ti alpha*_t n_ti (3 per vertex), so (Qx - d)_i = v_i - u_i. */
 void encode_optavg(const mesh_topo *tp, const double *x, opt_metric m, const double *qt,
                    double *qval, double *d);
+/* The same with the slots of each star entry's face vertices from
+ * encode_face_slots (NULL: found by search, as encode_optavg does). */
+void encode_optavg_slots(const mesh_topo *tp, const double *x, opt_metric m,
+                         const double *qt, const uint8_t *fslot, double *qval, double *d);
+/* For star entry k of vertex i (vt_idx[k]) and its face's vertex f (0..2),
+ * fslot[3k + f] = slot - adj_ptr[i], or 255 when that is 255 or more (then
+ * searched): 12 bytes per tet, the pattern never changes. NULL if out of
+ * memory. Free with qdc_free. */
+uint8_t *encode_face_slots(const mesh_topo *tp);
 
 /* Paper Eq. 6-7: w_ij = sum_{t in T(i)} qt_t^2 / max(|v_j - p_ti|^2, floor), rows
  * normalized, Q = I - W, d = 0. */

@@ -160,6 +160,7 @@ typedef struct {
     double *bw2;     /* squared boundary row weights (0: no row) */
     double *dg;      /* bw2 + mu */
     double *qt, *qval, *d;
+    uint8_t *fslot; /* encode_face_slots (NULL: searched) */
     double *eta; /* nt: mean ratio per tet at the x of the last evaluate() that asked */
     double eta_delta;   /* and the delta of that x */
     double mu_factor;   /* omega_B^2 once harmonic guidance is on and mu_scaled */
@@ -393,6 +394,8 @@ static qdc_status ctx_init(ctx_t *c, const mesh_t *m, const mesh_topo *tp,
     c->qt = qdc_mallocn((size_t)m->nt, sizeof(double));
     c->eta = qdc_mallocn((size_t)m->nt, sizeof(double));
     c->qval = qdc_mallocn((size_t)tp->adj_ptr[tp->nv], sizeof(double));
+    if (o->weights != OPT_WEIGHTS_PAPER && o->mode != OPT_MODE_LITERAL)
+        c->fslot = encode_face_slots(tp); /* optional: NULL is a slower search */
     if (!c->x || !c->x0 || !c->xn || !c->xbest || !c->trial || !c->tmp || !c->rhs ||
         !c->d || !c->locked || !c->vfac || !c->vmark || !c->vlist || !c->wq2 || !c->bw2 ||
         !c->dg || !c->qt || !c->eta || !c->qval)
@@ -471,6 +474,7 @@ static void ctx_free(ctx_t *c)
     qdc_free(c->qt);
     qdc_free(c->eta);
     qdc_free(c->qval);
+    qdc_free(c->fslot);
 }
 
 /* Harmonic guidance (Eq. 10): QDC rows weighted omega_1 h_i, boundary rows
@@ -706,7 +710,7 @@ static qdc_status iterate(ctx_t *c, opt_result *res, opt_progress *r, int *stepp
     if (literal || o->weights == OPT_WEIGHTS_PAPER)
         encode_paper(tp, c->x, o->metric, c->qt, c->qval, c->d);
     else
-        encode_optavg(tp, c->x, o->metric, c->qt, c->qval, c->d);
+        encode_optavg_slots(tp, c->x, o->metric, c->qt, c->fslot, c->qval, c->d);
     res->t_weights += qdc_now() - t;
     t = qdc_now();
     if (literal) {

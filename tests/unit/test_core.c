@@ -241,6 +241,29 @@ TEST(optavg_weights_sum_to_one_on_random_mesh)
         }
         ASSERT_NEAR(sum, 0.0, 1e-13);
     }
+    /* the precomputed slots name the entries the search finds: every slot of
+     * each star entry's face is that face vertex's, and the rows come out
+     * bit for bit the same */
+    {
+        uint8_t *fs = encode_face_slots(tp);
+        double *qv2 = malloc(sizeof(double) * (size_t)tp->adj_ptr[m->nv]);
+        double *d2 = malloc(sizeof(double) * 3 * (size_t)m->nv);
+        ASSERT_TRUE(fs && qv2 && d2);
+        for (int32_t i = 0; i < m->nv; i++)
+            for (int32_t k = tp->vt_ptr[i]; k < tp->vt_ptr[i + 1]; k++)
+                for (int f = 0; f < 3; f++) {
+                    int32_t t = tp->vt_idx[k] >> 2, a = tp->vt_idx[k] & 3;
+                    int32_t j = tp->tets[4 * (size_t)t + tet_face_of[a][f]];
+                    ASSERT_TRUE(fs[3 * (size_t)k + f] < 255);
+                    ASSERT_EQ_INT(tp->adj_idx[tp->adj_ptr[i] + fs[3 * (size_t)k + f]], j);
+                }
+        encode_optavg_slots(tp, m->xyz, OPT_METRIC_MIVL, qt, fs, qv2, d2);
+        ASSERT_TRUE(!memcmp(qv2, qval, sizeof(double) * (size_t)tp->adj_ptr[m->nv]));
+        ASSERT_TRUE(!memcmp(d2, d, sizeof(double) * 3 * (size_t)m->nv));
+        qdc_free(fs);
+        free(qv2);
+        free(d2);
+    }
     free(qt);
     free(qval);
     free(d);
