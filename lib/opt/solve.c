@@ -287,14 +287,24 @@ qdc_status solve_new(const mesh_topo *tp, const uint8_t *locked, opt_solver want
         st = QDC_ENOMEM;
         goto fail;
     }
+    /* the pattern is symmetric with ascending columns: taking the rows in
+     * order, row j's entries are met in order too, so a cursor per row finds
+     * each (j, i) (a binary search per entry took 0.25 s at 4M tets); fidx
+     * serves as the cursors and is set after */
+    for (int32_t v = 0; v < tp->nv; v++)
+        s->fidx[v] = tp->adj_ptr[v];
+    for (int32_t i = 0; i < tp->nv; i++)
+        for (int32_t k = tp->adj_ptr[i]; k < tp->adj_ptr[i + 1]; k++) {
+            int32_t j = tp->adj_idx[k], c = s->fidx[j];
+            s->tslot[k] = c < tp->adj_ptr[j + 1] && tp->adj_idx[c] == i
+                              ? s->fidx[j]++
+                              : encode_slot(tp, j, i);
+        }
     for (int32_t v = 0; v < tp->nv; v++) {
         s->fidx[v] = locked[v] ? -1 : s->nfree;
         if (!locked[v])
             s->fvert[s->nfree++] = v;
     }
-    for (int32_t i = 0; i < tp->nv; i++)
-        for (int32_t k = tp->adj_ptr[i]; k < tp->adj_ptr[i + 1]; k++)
-            s->tslot[k] = encode_slot(tp, tp->adj_idx[k], i);
     s->kind = OPT_SOLVER_PCG;
     if (s->nfree > 0 && (want == OPT_SOLVER_CHOLMOD ||
                          (want == OPT_SOLVER_AUTO && s->nfree <= SOLVE_ANALYSE_MAX))) {
