@@ -2,6 +2,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include "core/base.h"
 
+#include <omp.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -126,6 +127,13 @@ void *qdc_realloc(void *p, size_t size)
 void qdc_free(void *p)
 {
     free(p);
+}
+
+int qdc_threads_upto(int cap)
+{
+    int n = omp_get_max_threads();
+
+    return n < 1 ? 1 : n > cap ? cap : n;
 }
 
 double qdc_now(void)

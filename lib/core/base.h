@@ -76,6 +76,10 @@ long qdc_fault_count(void); /* allocations made since the last qdc_fault_set */
 /* Monotonic wall clock in seconds. */
 double qdc_now(void);
 
+/* The caller's OpenMP thread count, at most cap: the team size of a loop that
+ * gives each thread its own scratch array of the mesh's size. */
+int qdc_threads_upto(int cap);
+
 /* Streaming output used by every writer (mesh formats, reports): returns 0 on
  * success, non-zero to abort the write (the writer then returns QDC_EIO). */
 typedef int (*qdc_write_fn)(void *ctx, const void *data, size_t len);

@@ -680,9 +680,7 @@ static qdc_status build_adjacency(mesh_topo *tp)
 {
     int32_t nv = tp->nv, maxdeg = 0;
     /* at most 8 marker arrays (nv each) however many threads the caller allows */
-    int nth = omp_get_max_threads() < 1   ? 1
-              : omp_get_max_threads() > 8 ? 8
-                                          : omp_get_max_threads();
+    int nth = qdc_threads_upto(8);
     int32_t *cnt = qdc_calloc((size_t)nv + 1, sizeof(int32_t)), *mark, *buf;
     size_t bufn;
 
@@ -784,15 +782,14 @@ qdc_status mesh_topo_build(const mesh_t *m, mesh_topo **out, qdc_error *err)
     st = orient_tets(m, nbr, flip, &tp->orientation, err);
     if (st != QDC_OK)
         goto fail;
+#pragma omp parallel for schedule(static)
+    for (int32_t t = 0; t < m->nt; t++) /* each tet alone: in parallel */
         /* flip[] becomes each tet's permutation code (canon_tet) */
-        /* (each tet alone: in parallel) */
+        flip[t] = canon_tet(tp->tets + 4 * (size_t)t, nbr + 4 * (size_t)t, flip[t]);
 #pragma omp parallel for schedule(static)
     for (int32_t t = 0; t < m->nt; t++)
-        flip[t] = canon_tet(tp->tets + 4 * (size_t)t, nbr + 4 * (size_t)t, flip[t]);
         /* a face's position in its tet moved with the vertex opposite it:
          * renumber the neighbours' references */
-#pragma omp parallel for schedule(static)
-    for (int32_t t = 0; t < m->nt; t++)
         for (int f = 0; f < 4; f++) {
             int32_t *nb = nbr + 4 * (size_t)t + f;
             if (*nb >= 0)

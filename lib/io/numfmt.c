@@ -154,21 +154,16 @@ int numfmt_g17(double x, char *out)
 }
 
 /* Q 2^e2 (plus a nonzero fraction of Q's last unit if sticky) to the nearest
- * double, ties to even. Q > 0. */
+ * double, ties to even. Q > 0; sticky only with Q of 54 bits or more (the
+ * quotient of numfmt_decimal has 64). */
 static double round_to_double(u128 Q, int sticky, int e2)
 {
     uint64_t hi = (uint64_t)(Q >> 64);
     int L = hi ? 128 - __builtin_clzll(hi) : 64 - __builtin_clzll((uint64_t)Q);
     uint64_t top;
 
-    if (L <= 53 && !sticky)
+    if (L <= 53)
         return ldexp((double)(uint64_t)Q, e2);
-    if (L <= 53) { /* cannot happen with the shifts of numfmt_decimal */
-        int sh = 54 - L;
-        Q <<= sh;
-        e2 -= sh;
-        L = 54;
-    }
     {
         int sh = L - 53;
         u128 rest = Q & (((u128)1 << sh) - 1), half = (u128)1 << (sh - 1);

@@ -123,9 +123,7 @@ static void face_target(const mesh_topo *tp, const double *x, opt_metric m, int3
 
 uint8_t *encode_face_slots(const mesh_topo *tp)
 {
-    int nth = omp_get_max_threads() < 1   ? 1
-              : omp_get_max_threads() > 8 ? 8
-                                          : omp_get_max_threads();
+    int nth = qdc_threads_upto(8);
     uint8_t *fs = qdc_mallocn(12 * (size_t)tp->nt + 1, 1);
     /* per thread, each vertex's offset in the row being filled (a row's
      * entries are written before they are read, so no clearing) */
@@ -156,15 +154,9 @@ uint8_t *encode_face_slots(const mesh_topo *tp)
     return fs;
 }
 
-void encode_optavg(const mesh_topo *tp, const double *x, opt_metric m, const double *qt,
-                   double *qval, double *d)
-{
-    encode_optavg_slots(tp, x, m, qt, NULL, qval, d);
-}
-
 /* (the search for each face vertex's slot was 3% of a 4M-tet run) */
-void encode_optavg_slots(const mesh_topo *tp, const double *x, opt_metric m,
-                         const double *qt, const uint8_t *fslot, double *qval, double *d)
+void encode_optavg(const mesh_topo *tp, const double *x, opt_metric m, const double *qt,
+                   const uint8_t *fslot, double *qval, double *d)
 {
 #pragma omp parallel for schedule(dynamic, 256)
     for (int32_t i = 0; i < tp->nv; i++) {

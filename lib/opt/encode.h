@@ -20,13 +20,11 @@ double encode_min_arg(const mesh_topo *tp, const double *x, opt_metric m);
 
 /* Optimal-position averaging (docs/method.md §4, default): row i of Q is
  * v_i - sum_t c_ti bary(face opposite i in t), c_ti = qt_t / sum_{s in T(i)} qt_s,
- * and d_i = sum_t c_ti alpha*_t n_ti (3 per vertex), so (Qx - d)_i = v_i - u_i. */
+ * and d_i = sum_t c_ti alpha*_t n_ti (3 per vertex), so (Qx - d)_i = v_i - u_i.
+ * fslot: the slots of each star entry's face vertices from encode_face_slots,
+ * or NULL (then each is found by search). */
 void encode_optavg(const mesh_topo *tp, const double *x, opt_metric m, const double *qt,
-                   double *qval, double *d);
-/* The same with the slots of each star entry's face vertices from
- * encode_face_slots (NULL: found by search, as encode_optavg does). */
-void encode_optavg_slots(const mesh_topo *tp, const double *x, opt_metric m,
-                         const double *qt, const uint8_t *fslot, double *qval, double *d);
+                   const uint8_t *fslot, double *qval, double *d);
 /* For star entry k of vertex i (vt_idx[k]) and its face's vertex f (0..2),
  * fslot[3k + f] = slot - adj_ptr[i], or 255 when that is 255 or more (then
  * searched): 12 bytes per tet, the pattern never changes. NULL if out of

@@ -232,17 +232,20 @@ static double star_min_eta3(const mesh_topo *tp, const double *x, int32_t v,
  * mean ratio qfloor (> 0), unless that star was already below it and its
  * worst does not drop: else a sweep that raises the mean lowers the worst
  * tet, and the whole pass is thrown away by the best-iterate rule (measured
- * on a thin surface-heavy bone: the pass took the worst tet from 6e-4 to 0). */
+ * on a thin surface-heavy bone: the pass took the worst tet from 6e-4 to 0).
+ * In cubes: e1, e0 the star's smallest mean ratio cubed after and before. */
+static int floor_kept(double qfloor, double e1, double e0)
+{
+    return !(qfloor > 0.0) || e1 >= qfloor * qfloor * qfloor || e1 >= e0;
+}
+
 static int keeps_floor(const mesh_topo *tp, const double *x, int32_t v, const double *y,
                        double qfloor)
 {
-    double e1;
-
     if (!(qfloor > 0.0))
         return 1;
-    e1 = star_min_eta3(tp, x, v, y);
-    return e1 >= qfloor * qfloor * qfloor ||
-           e1 >= star_min_eta3(tp, x, v, x + 3 * (size_t)v);
+    return floor_kept(qfloor, star_min_eta3(tp, x, v, y),
+                      star_min_eta3(tp, x, v, x + 3 * (size_t)v));
 }
 
 /* Solve H d = -g for a symmetric positive definite 3x3 H (upper triangle);
@@ -391,8 +394,6 @@ static int32_t relax_vertex(const mesh_topo *tp, const slide_ctx *sl, double *x,
 {
     int sliding = sl && slide_kind(sl, v) != SLIDE_INTERIOR;
     double s = 0.05 * lbar, *xv = x + 3 * (size_t)v;
-    /* keeps_floor's test, from the cubes star_eval finds anyway */
-    double qf3 = qfloor > 0.0 ? qfloor * qfloor * qfloor : 0.0;
     int32_t moves = 0;
 
     for (int it = 0; it < (rtol > 0.0 ? RELAX_BROAD : FINISH_INNER); it++) {
@@ -421,8 +422,8 @@ static int32_t relax_vertex(const mesh_topo *tp, const slide_ctx *sl, double *x,
              * 100k tets), so they are cut short at the first tet above it. */
             f1 = star_eval(tp, x, v, y, m, delta, sliding ? s0.qmax : INFINITY, s0.kmax,
                            qfloor > 0.0, &s1, NULL);
-            if (f1 < f0 && s1.bad <= s0.bad &&
-                (!(qfloor > 0.0) || s1.emin3 >= qf3 || s1.emin3 >= s0.emin3)) {
+            /* keeps_floor's test, on the cubes star_eval found */
+            if (f1 < f0 && s1.bad <= s0.bad && floor_kept(qfloor, s1.emin3, s0.emin3)) {
                 ok = 1;
                 break;
             }

@@ -710,7 +710,7 @@ static qdc_status iterate(ctx_t *c, opt_result *res, opt_progress *r, int *stepp
     if (literal || o->weights == OPT_WEIGHTS_PAPER)
         encode_paper(tp, c->x, o->metric, c->qt, c->qval, c->d);
     else
-        encode_optavg_slots(tp, c->x, o->metric, c->qt, c->fslot, c->qval, c->d);
+        encode_optavg(tp, c->x, o->metric, c->qt, c->fslot, c->qval, c->d);
     res->t_weights += qdc_now() - t;
     t = qdc_now();
     if (literal) {

@@ -73,25 +73,34 @@ void solve_q_mul(const mesh_topo *tp, const double *qval, const double *v, doubl
 }
 
 /* (Q^T u)_j = sum_i Q_ij u_i; the pattern is symmetric, so row j's slots name
- * the i's and tslot finds Q_ij: a gather, safe to run in parallel. */
-void solve_qt_mul(const solve_ctx *s, const double *qval, const double *u, double *y)
+ * the i's and tslot finds Q_ij: a gather, safe to run in parallel. With dg
+ * (the CG's A v in the same pass): y_j = (Q^T u)_j + dg_j v_j on free
+ * vertices, 0 on locked ones. */
+static void qt_mul_plus(const solve_ctx *s, const double *qval, const double *u,
+                        const double *dg, const double *v, double *y)
 {
     const mesh_topo *tp = s->tp;
 
 #pragma omp parallel for schedule(static)
     for (int32_t j = 0; j < tp->nv; j++) {
-        double a0 = 0, a1 = 0, a2 = 0;
+        double a[3] = {0, 0, 0};
         for (int32_t k = tp->adj_ptr[j]; k < tp->adj_ptr[j + 1]; k++) {
             const double *ui = u + 3 * (size_t)tp->adj_idx[k];
             double q = qval[s->tslot[k]];
-            a0 += q * ui[0];
-            a1 += q * ui[1];
-            a2 += q * ui[2];
+            a[0] += q * ui[0];
+            a[1] += q * ui[1];
+            a[2] += q * ui[2];
         }
-        y[3 * (size_t)j] = a0;
-        y[3 * (size_t)j + 1] = a1;
-        y[3 * (size_t)j + 2] = a2;
+        for (int c = 0; c < 3; c++)
+            y[3 * (size_t)j + c] = !dg            ? a[c]
+                                   : s->locked[j] ? 0.0
+                                                  : a[c] + dg[j] * v[3 * (size_t)j + c];
     }
+}
+
+void solve_qt_mul(const solve_ctx *s, const double *qval, const double *u, double *y)
+{
+    qt_mul_plus(s, qval, u, NULL, NULL, y);
 }
 
 static int cmp_i64(const void *a, const void *b)
@@ -409,24 +418,8 @@ static qdc_status solve_direct(solve_ctx *s, const double *qval, const double *w
 static void apply_a(solve_ctx *s, const double *qval, const double *w2, const double *dg,
                     const double *v, double *y)
 {
-    const mesh_topo *tp = s->tp;
-    const double *u = s->u;
-
-    q_mul_scaled(tp, qval, v, w2, s->u);
-#pragma omp parallel for schedule(static)
-    for (int32_t j = 0; j < tp->nv; j++) {
-        double a[3] = {0, 0, 0};
-        for (int32_t k = tp->adj_ptr[j]; k < tp->adj_ptr[j + 1]; k++) {
-            const double *ui = u + 3 * (size_t)tp->adj_idx[k];
-            double q = qval[s->tslot[k]];
-            a[0] += q * ui[0];
-            a[1] += q * ui[1];
-            a[2] += q * ui[2];
-        }
-        for (int c = 0; c < 3; c++)
-            y[3 * (size_t)j + c] =
-                s->locked[j] ? 0.0 : a[c] + dg[j] * v[3 * (size_t)j + c];
-    }
+    q_mul_scaled(s->tp, qval, v, w2, s->u);
+    qt_mul_plus(s, qval, s->u, dg, v, y);
 }
 
 /* The CG's vector loops run in parallel over fixed vertex ranges whose
@@ -466,9 +459,9 @@ static qdc_status solve_pcg(solve_ctx *s, const double *qval, const double *w2,
 
     if (!xs)
         return QDC_ENOMEM;
-        /* Jacobi preconditioner: diag(A)_j = sum_i w_i Q_ij^2 + dg_j */
 #pragma omp parallel for schedule(static)
     for (int32_t j = 0; j < nv; j++) {
+        /* Jacobi preconditioner: diag(A)_j = sum_i w_i Q_ij^2 + dg_j */
         double a = dg[j];
         for (int32_t k = tp->adj_ptr[j]; k < tp->adj_ptr[j + 1]; k++) {
             double q = qval[s->tslot[k]];

@@ -196,7 +196,7 @@ TEST(qdc_of_symmetric_star)
     ASSERT_EQ_INT(tp->nbf, 4);
     qval = calloc((size_t)tp->adj_ptr[5], sizeof(double));
     encode_objective(tp, m->xyz, OPT_METRIC_MIVL, 0, qt, NULL);
-    encode_optavg(tp, m->xyz, OPT_METRIC_MIVL, qt, qval, d);
+    encode_optavg(tp, m->xyz, OPT_METRIC_MIVL, qt, NULL, qval, d);
     /* centre row: 1 on the diagonal, -1/4 on each corner (3 faces x 1/4 x 1/3) */
     for (int32_t s = tp->adj_ptr[4]; s < tp->adj_ptr[5]; s++)
         ASSERT_NEAR(qval[s], tp->adj_idx[s] == 4 ? 1.0 : -0.25, 1e-14);
@@ -231,7 +231,7 @@ TEST(optavg_weights_sum_to_one_on_random_mesh)
     qval = malloc(sizeof(double) * (size_t)tp->adj_ptr[m->nv]);
     d = malloc(sizeof(double) * 3 * (size_t)m->nv);
     encode_objective(tp, m->xyz, OPT_METRIC_MIVL, 0, qt, NULL);
-    encode_optavg(tp, m->xyz, OPT_METRIC_MIVL, qt, qval, d);
+    encode_optavg(tp, m->xyz, OPT_METRIC_MIVL, qt, NULL, qval, d);
     for (int32_t i = 0; i < m->nv; i++) {
         double sum = 0;
         for (int32_t s = tp->adj_ptr[i]; s < tp->adj_ptr[i + 1]; s++) {
@@ -257,7 +257,7 @@ TEST(optavg_weights_sum_to_one_on_random_mesh)
                     ASSERT_TRUE(fs[3 * (size_t)k + f] < 255);
                     ASSERT_EQ_INT(tp->adj_idx[tp->adj_ptr[i] + fs[3 * (size_t)k + f]], j);
                 }
-        encode_optavg_slots(tp, m->xyz, OPT_METRIC_MIVL, qt, fs, qv2, d2);
+        encode_optavg(tp, m->xyz, OPT_METRIC_MIVL, qt, fs, qv2, d2);
         ASSERT_TRUE(!memcmp(qv2, qval, sizeof(double) * (size_t)tp->adj_ptr[m->nv]));
         ASSERT_TRUE(!memcmp(d2, d, sizeof(double) * 3 * (size_t)m->nv));
         qdc_free(fs);
@@ -338,7 +338,7 @@ TEST(cholmod_and_pcg_agree_with_dense)
     xp = calloc(3 * (size_t)nv, sizeof(double));
     locked = calloc((size_t)nv, 1);
     encode_objective(tp, m->xyz, OPT_METRIC_MIVL, 0, qt, NULL);
-    encode_optavg(tp, m->xyz, OPT_METRIC_MIVL, qt, qval, d);
+    encode_optavg(tp, m->xyz, OPT_METRIC_MIVL, qt, NULL, qval, d);
     for (int32_t i = 0; i < nv; i++) {
         w2[i] = 1.0 + 0.5 * tm_rand(&seed);
         dg[i] = 1.0 + ((tp->vflag[i] & MESH_V_BOUNDARY) ? 1.0 : 0.0);
