@@ -516,8 +516,19 @@ static int32_t colour_classes(const mesh_topo *tp, vq_pair *list, int32_t n,
             return -1;
         }
         memcpy(pos, cnt, ((size_t)ncol + 1) * sizeof(int32_t));
+        /* an independent class in vertex order: the order of its visits
+         * changes nothing, and vertex order is memory order (the vertices
+         * follow a space-filling curve): a broad sweep of a 5M-tet mesh took
+         * 4.0 s with each class worst first. The shared class, swept in
+         * order, stays worst first. */
+        for (int32_t v = 0; v < tp->nv; v++)
+            if (colour[v] >= 0 && colour[v] < COLOUR_SHARED) {
+                tmp[pos[colour[v]]].q = 0.0;
+                tmp[pos[colour[v]]++].v = v;
+            }
         for (int32_t i = 0; i < n; i++)
-            tmp[pos[colour[list[i].v]]++] = list[i];
+            if (colour[list[i].v] == COLOUR_SHARED)
+                tmp[pos[COLOUR_SHARED]++] = list[i];
         qdc_free(pos);
     }
     memcpy(list, tmp, (size_t)n * sizeof *list);
