@@ -1678,6 +1678,21 @@ qdc_status meshio_slurp(const char *path, char **buf, size_t *len, qdc_error *er
     return QDC_OK;
 }
 
+qdc_status meshio_slurp_plain(const char *path, char **buf, size_t *len, qdc_error *err)
+{
+    char *plain = NULL;
+    size_t plen = 0;
+    qdc_status st = meshio_slurp(path, buf, len, err);
+
+    if (st != QDC_OK || !gz_is_gzip(*buf, *len))
+        return st;
+    st = gz_inflate(*buf, *len, &plain, &plen, err);
+    qdc_free(*buf);
+    *buf = plain;
+    *len = st == QDC_OK ? plen : 0;
+    return st;
+}
+
 /* path with its extension replaced by ext (".node"); a new string. */
 static char *with_ext(const char *path, const char *ext)
 {
@@ -1770,6 +1785,13 @@ qdc_status meshio_load_ex(const char *path, meshio_format fmt, const meshio_opti
     st = meshio_slurp(path, &buf, &len, err);
     if (st == QDC_OK)
         st = read_buf(buf, len, 1, fmt, o, keep, out, err); /* takes buf */
+    if (st == QDC_OK && keep) {
+        st = splice_set_path(*out, path, err);
+        if (st != QDC_OK) {
+            mesh_free(*out);
+            *out = NULL;
+        }
+    }
     return st;
 }
 

@@ -158,13 +158,24 @@ int meshio_splices(const mesh_t *m, meshio_format fmt, const char **why);
 /* The format meshio_save(path, fmt, m) writes: fmt, else the source's own
  * variant if the extension names its family, else by extension; AUTO if none. */
 meshio_format meshio_save_format(const char *path, meshio_format fmt, const mesh_t *m);
-/* Bytes held by m's source (0 if none); *float32 set if its coordinates are
+/* Bytes held by m's source in memory (0 if none); *float32 set if its coordinates are
  * stored as float32 (may be NULL). */
 size_t meshio_source_bytes(const mesh_t *m, int *float32);
 /* Forget m's source (frees it). */
 void meshio_drop_source(mesh_t *m);
+/* A source read from a file by meshio_load* (not TetGen's two files) can be
+ * parked while the mesh is optimized: its bytes are freed (a hash kept) and
+ * meshio_unpark_source reads the file again, gunzipped if it is compressed,
+ * and takes it back only if it is byte for byte the same (QDC_EIO "changed
+ * since it was read" otherwise; the mesh then does not splice). Parking
+ * returns 1 if it freed the bytes, 0 if there was nothing to park. While
+ * parked, the mesh does not splice. */
+int meshio_park_source(mesh_t *m);
+qdc_status meshio_unpark_source(mesh_t *m, qdc_error *err);
 
 /* Read a whole file into a new buffer (free with qdc_free). */
 qdc_status meshio_slurp(const char *path, char **buf, size_t *len, qdc_error *err);
+/* meshio_slurp, and the contents decompressed if the file is gzip. */
+qdc_status meshio_slurp_plain(const char *path, char **buf, size_t *len, qdc_error *err);
 
 #endif

@@ -972,6 +972,8 @@ qdc_status splice_attach(mesh_t *m, srcrec *r, char *buf, size_t len, int own,
  * (same variant, connectivity and tags unchanged since reading); else 0 and
  * *why (static). */
 int splice_ok(const mesh_t *m, meshio_format fmt, const char **why);
+/* The file m's source was read from (kept for meshio_unpark_source). */
+qdc_status splice_set_path(mesh_t *m, const char *path, qdc_error *err);
 /* Write the source with m's coordinates; part 1 = TetGen's .ele. */
 qdc_status splice_write(const mesh_t *m, int part, wbuf *w, qdc_error *err);
 

@@ -26,6 +26,8 @@ typedef struct {
     int32_t nv;
     uint64_t hash;     /* mesh_hash at reading */
     uint64_t xyz_hash; /* of the coordinates as read: unchanged, the file is copied */
+    char *path;        /* the file buf was read from (NULL: a buffer) */
+    uint64_t buf_hash; /* of buf, while it is parked (buf NULL) */
 } source;
 
 static void source_release(mesh_source *ms)
@@ -35,6 +37,7 @@ static void source_release(mesh_source *ms)
     srcrec_free(&s->r);
     qdc_free(s->buf);
     qdc_free(s->ele);
+    qdc_free(s->path);
     qdc_free(s);
 }
 
@@ -131,7 +134,7 @@ size_t meshio_source_bytes(const mesh_t *m, int *float32)
             s && (s->r.kind == SRC_BIN || s->r.kind == SRC_BLOCK) && s->r.width == 4;
     if (!s)
         return 0;
-    return sizeof *s + s->len + s->ele_len +
+    return sizeof *s + (s->buf ? s->len : 0) + s->ele_len +
            (s->r.off ? (s->r.kind == SRC_TEXT3 ? 24 : 8) * (size_t)s->r.nv : 0) +
            s->r.appoff.n * sizeof(uint64_t);
 }
@@ -151,6 +154,8 @@ int splice_ok(const mesh_t *m, meshio_format fmt, const char **why)
 
     if (!s)
         w = "no source file kept";
+    else if (!s->buf)
+        w = "the input file is not in memory (meshio_unpark_source)";
     else if (fmt != s->r.fmt)
         w = "another format, version or encoding than the input's";
     else if (s->r.kind == SRC_NONE)
@@ -165,6 +170,53 @@ int splice_ok(const mesh_t *m, meshio_format fmt, const char **why)
 int meshio_splices(const mesh_t *m, meshio_format fmt, const char **why)
 {
     return splice_ok(m, fmt, why);
+}
+
+qdc_status splice_set_path(mesh_t *m, const char *path, qdc_error *err)
+{
+    source *s = m ? (source *)m->source : NULL;
+    size_t n = path ? strlen(path) : 0;
+
+    if (!s || !path)
+        return QDC_OK;
+    qdc_free(s->path);
+    s->path = qdc_malloc(n + 1);
+    if (!s->path)
+        return qdc_fail(err, QDC_ENOMEM, "out of memory for the source's path");
+    memcpy(s->path, path, n + 1);
+    return QDC_OK;
+}
+
+int meshio_park_source(mesh_t *m)
+{
+    source *s = m ? (source *)m->source : NULL;
+
+    if (!s || !s->path || !s->buf || s->ele)
+        return 0;
+    s->buf_hash = hash_bytes(0, s->buf, s->len);
+    qdc_free(s->buf);
+    s->buf = NULL;
+    return 1;
+}
+
+qdc_status meshio_unpark_source(mesh_t *m, qdc_error *err)
+{
+    source *s = m ? (source *)m->source : NULL;
+    char *buf = NULL;
+    size_t len = 0;
+    qdc_status st;
+
+    if (!s || s->buf)
+        return QDC_OK;
+    st = meshio_slurp_plain(s->path, &buf, &len, err);
+    if (st != QDC_OK)
+        return st;
+    if (len != s->len || hash_bytes(0, buf, len) != s->buf_hash) {
+        qdc_free(buf);
+        return qdc_fail(err, QDC_EIO, "%s: changed since it was read", s->path);
+    }
+    s->buf = buf;
+    return QDC_OK;
 }
 
 /* ---- values derived from the coordinates ---- */

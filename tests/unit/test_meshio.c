@@ -563,6 +563,84 @@ TEST(splice_tetgen_files)
     ASSERT_EQ_INT(system(path), 0);
 }
 
+/* A parked source is freed during a run and read again for the write: the
+ * same spliced file as without parking, gzip or not; a file that changed in
+ * between is refused and the mesh then does not splice. */
+TEST(splice_parked_source)
+{
+    const char *text =
+        "MeshVersionFormatted 2\n# kept comment\nDimension 3\nVertices\n4\n"
+        "0 0 0 7\n1 0 0 8\n0 1 0 9\n0 0 1 10\nTetrahedra\n1\n1 2 3 4 3\nEnd\n";
+    char dir[] = "/tmp/qdc_test_park_XXXXXX", in[256], gz[300], a[256], b[256], cmd[600];
+    meshio_options keep = {NULL, NULL, 1};
+    const char *why = NULL;
+    mesh_t *m = NULL, *r = NULL;
+    char *fa, *fb;
+    size_t na, nb, held;
+    qdc_error err;
+    FILE *f;
+
+    ASSERT_TRUE(mkdtemp(dir));
+    snprintf(in, sizeof in, "%s/in.mesh", dir);
+    snprintf(a, sizeof a, "%s/a.mesh", dir);
+    snprintf(b, sizeof b, "%s/b.mesh", dir);
+    ASSERT_TRUE((f = fopen(in, "w")) && fputs(text, f) >= 0 && fclose(f) == 0);
+    for (int zipped = 0; zipped < 2; zipped++) {
+        const char *src = zipped ? gz : in;
+        if (zipped) {
+            snprintf(gz, sizeof gz, "%s.gz", in);
+            snprintf(cmd, sizeof cmd, "gzip -c '%s' > '%s'", in, gz);
+            ASSERT_EQ_INT(system(cmd), 0);
+        }
+        /* the reference: the source kept all along */
+        ASSERT_OK(meshio_load_ex(src, MESHIO_AUTO, &keep, &r, &err));
+        r->xyz[3] = 0.5;
+        ASSERT_OK(meshio_save(a, MESHIO_MEDIT, r, &err));
+        mesh_free(r);
+        ASSERT_OK(meshio_load_ex(src, MESHIO_AUTO, &keep, &m, &err));
+        held = meshio_source_bytes(m, NULL);
+        ASSERT_EQ_INT(meshio_park_source(m), 1);
+        ASSERT_EQ_INT(meshio_park_source(m), 0);
+        ASSERT_TRUE(meshio_source_bytes(m, NULL) + strlen(text) == held);
+        ASSERT_EQ_INT(meshio_splices(m, MESHIO_MEDIT, &why), 0);
+        ASSERT_TRUE(why && strstr(why, "not in memory"));
+        m->xyz[3] = 0.5;
+        ASSERT_OK(meshio_unpark_source(m, &err));
+        ASSERT_EQ_INT(meshio_splices(m, MESHIO_MEDIT, NULL), 1);
+        ASSERT_OK(meshio_save(b, MESHIO_MEDIT, m, &err));
+        fa = read_file(a, &na);
+        fb = read_file(b, &nb);
+        ASSERT_TRUE(fa && fb && na == nb && memcmp(fa, fb, na) == 0);
+        ASSERT_TRUE(strstr(fb, "# kept comment") && strstr(fb, "0.5 0 0 8"));
+        qdc_free(fa);
+        qdc_free(fb);
+        mesh_free(m);
+    }
+    /* changed while parked: same length, one byte other */
+    ASSERT_OK(meshio_load_ex(in, MESHIO_AUTO, &keep, &m, &err));
+    ASSERT_EQ_INT(meshio_park_source(m), 1);
+    ASSERT_TRUE((f = fopen(in, "r+")) && fseek(f, 25, SEEK_SET) == 0 &&
+                fputc('K', f) == 'K' && fclose(f) == 0);
+    ASSERT_EQ_INT(meshio_unpark_source(m, &err), QDC_EIO);
+    ASSERT_TRUE(strstr(err.msg, "changed since it was read") != NULL);
+    ASSERT_EQ_INT(meshio_splices(m, MESHIO_MEDIT, NULL), 0);
+    mesh_free(m);
+    /* gone while parked */
+    ASSERT_OK(meshio_load_ex(in, MESHIO_AUTO, &keep, &m, &err));
+    ASSERT_EQ_INT(meshio_park_source(m), 1);
+    ASSERT_EQ_INT(remove(in), 0);
+    ASSERT_EQ_INT(meshio_unpark_source(m, &err), QDC_EIO);
+    mesh_free(m);
+    /* a mesh read from a buffer has nothing to park */
+    ASSERT_OK(meshio_read_ex(text, strlen(text), MESHIO_AUTO, &keep, &m, &err));
+    ASSERT_EQ_INT(meshio_park_source(m), 0);
+    ASSERT_OK(meshio_unpark_source(m, &err));
+    ASSERT_EQ_INT(meshio_splices(m, MESHIO_MEDIT, NULL), 1);
+    mesh_free(m);
+    snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
+    ASSERT_EQ_INT(system(cmd), 0);
+}
+
 /* ---- corpus and fuzz replay ---- */
 
 TEST(malformed_corpus)
@@ -591,4 +669,4 @@ TEST_MAIN("meshio", T(roundtrip_medit), T(roundtrip_qmesh), T(roundtrip_json),
           T(tetgen_read), T(huge_counts_fail_fast), T(formats_and_sniffing), T(dev_cube),
           T(dev_speed), T(qmesh_1m_tets_speed), T(allocation_failures),
           T(splice_equals_writer), T(splice_save_format), T(splice_tetgen_files),
-          T(malformed_corpus), T(fuzz_replay))
+          T(splice_parked_source), T(malformed_corpus), T(fuzz_replay))
