@@ -13,6 +13,8 @@ typedef struct {
     int32_t nv, nt;
     int32_t *vnew; /* nv: old vertex number -> new */
     int32_t *told; /* nt: new tet number -> old */
+    int32_t *vold; /* nv: new vertex number -> old (mesh_order_take) */
+    uint8_t *done; /* nt: scratch of mesh_order_give_back (mesh_order_take) */
 } mesh_order;
 
 /* The order of m (its coordinates need not be finite: a non-finite one puts
@@ -23,6 +25,16 @@ qdc_status mesh_order_build(const mesh_t *m, mesh_order *o);
  * numbering (vertex refs, triangles and the source are not copied); NULL if
  * out of memory. */
 mesh_t *mesh_order_apply(const mesh_t *m, const mesh_order *o);
+/* mesh_order_apply, moving m's tets and regions instead of copying them:
+ * m holds NULL in their place until mesh_order_give_back (its coordinates,
+ * fixed flags, refs, triangles and source stay), so that a run on the copy
+ * holds the connectivity once (20 bytes a tet). NULL if out of memory (m
+ * then unchanged). */
+mesh_t *mesh_order_take(mesh_t *m, mesh_order *o);
+/* The tets and regions of pm (from mesh_order_take, unchanged since) back to
+ * m, in m's numbering and order as they were; in place, allocating nothing,
+ * so it cannot fail. pm is left without them. */
+void mesh_order_give_back(mesh_order *o, mesh_t *pm, mesh_t *m);
 /* Coordinates of the renumbered copy pm back into m's numbering. */
 void mesh_order_restore_xyz(const mesh_order *o, const mesh_t *pm, mesh_t *m);
 void mesh_order_free(mesh_order *o);

@@ -1672,7 +1672,7 @@ qdc_status opt_run(mesh_t *m, const opt_options *opts, opt_result *res, qdc_erro
     st = mesh_order_build(m, &ord);
     if (st == QDC_EINVAL)
         return run_numbered(m, opts, res, err);
-    pm = st == QDC_OK ? mesh_order_apply(m, &ord) : NULL;
+    pm = st == QDC_OK ? mesh_order_take(m, &ord) : NULL;
     if (!pm) {
         mesh_order_free(&ord);
         if (res)
@@ -1680,6 +1680,7 @@ qdc_status opt_run(mesh_t *m, const opt_options *opts, opt_result *res, qdc_erro
         return qdc_fail(err, QDC_ENOMEM, "out of memory");
     }
     st = run_numbered(pm, opts, res, err);
+    mesh_order_give_back(&ord, pm, m);
     if (st == QDC_OK)
         mesh_order_restore_xyz(&ord, pm, m);
     mesh_free(pm);

@@ -153,6 +153,9 @@ typedef struct {
 
 /* Optimize m in place (coordinates only; tets, regions, fixed flags untouched).
  * On OPT_FAILED (and on any status other than QDC_OK) m is unchanged.
+ * During the run m->tets and m->region are lent to the run's renumbered copy
+ * (NULL meanwhile: m must not be read from another thread); they come back
+ * with the same contents, possibly at other addresses.
  * The returned mesh never has more inverted tets nor a lower minimum mean ratio
  * than the input. res may be NULL. */
 qdc_status opt_run(mesh_t *m, const opt_options *o, opt_result *res, qdc_error *err);

@@ -493,6 +493,25 @@ TEST(spatial_order_is_the_morton_curve)
     mesh_order_restore_xyz(&o, p, m);
     for (int i = 0; i < 24; i++)
         ASSERT_NEAR(m->xyz[i], xyz[i] + 1.0, 0.0);
+    /* the same copy with the connectivity moved, and back as it was */
+    {
+        mesh_t *q;
+        int32_t tets0[24], region0[6];
+        memcpy(tets0, m->tets, sizeof tets0);
+        memcpy(region0, m->region, sizeof region0);
+        q = mesh_order_take(m, &o);
+        ASSERT_TRUE(q != NULL);
+        ASSERT_TRUE(m->tets == NULL && m->region == NULL);
+        ASSERT_TRUE(memcmp(q->tets, p->tets, sizeof tets0) == 0);
+        ASSERT_TRUE(memcmp(q->region, p->region, sizeof region0) == 0);
+        for (int32_t v = 0; v < 8; v++)
+            ASSERT_EQ_INT(o.vold[o.vnew[v]], v);
+        mesh_order_give_back(&o, q, m);
+        ASSERT_TRUE(q->tets == NULL && q->region == NULL);
+        ASSERT_TRUE(memcmp(m->tets, tets0, sizeof tets0) == 0);
+        ASSERT_TRUE(memcmp(m->region, region0, sizeof region0) == 0);
+        mesh_free(q);
+    }
     /* an index out of range is refused, a non-finite coordinate is not a crash */
     m->xyz[4] = NAN;
     mesh_order_free(&o);

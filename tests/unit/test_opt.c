@@ -331,6 +331,9 @@ TEST(allocation_failures_are_clean)
         qdc_fault_set(0);
         if (st == QDC_ENOMEM)
             ASSERT_TRUE(memcmp(m->xyz, orig->xyz, 24 * (size_t)m->nv) == 0);
+        /* the connectivity lent to the run comes back as it was, also when
+         * there is no memory left to give it back by (in place, then) */
+        ASSERT_TRUE(memcmp(m->tets, orig->tets, 16 * (size_t)m->nt) == 0);
     }
     ASSERT_OK(st);
     ASSERT_TRUE(k > 10);
