@@ -170,9 +170,11 @@ typedef struct {
 struct bderr_bvh {
     int32_t ntri, nnode;
     bvh_node *nodes;
-    double *tri; /* 9 coordinates per triangle, in leaf order */
-    int32_t *id; /* caller's index of each triangle, in leaf order */
-    int32_t *at; /* leaf position of each caller's triangle (id's inverse) */
+    const double *xyz; /* the caller's coordinates (bderr.h) */
+    int32_t *tv;       /* 3 vertex indices per triangle, in leaf order (a copy of the
+                        * corners was 72 bytes a triangle: 150 MB on a 5M-tet ball) */
+    int32_t *id;       /* caller's index of each triangle, in leaf order */
+    int32_t *at;       /* leaf position of each caller's triangle (id's inverse) */
 };
 
 /* Reorder ix[lo, hi) so ix[k] has the k-th smallest key and no smaller key
@@ -316,13 +318,14 @@ qdc_status bderr_bvh_build(const double *xyz, int32_t nv, const int32_t *tris,
         return qdc_fail(err, QDC_ENOMEM, "out of memory for a BVH");
     b->ntri = ntri;
     b->nodes = qdc_mallocn(2 * (size_t)ntri + 1, sizeof *b->nodes);
-    b->tri = qdc_mallocn(9 * (size_t)ntri, sizeof(double));
+    b->xyz = xyz;
+    b->tv = qdc_mallocn(3 * (size_t)ntri + 1, sizeof(int32_t));
     b->id = qdc_mallocn((size_t)ntri + 1, sizeof(int32_t));
     b->at = qdc_mallocn((size_t)ntri + 1, sizeof(int32_t));
     cen = qdc_mallocn(3 * (size_t)ntri, sizeof(double));
     memset(&bb, 0, sizeof bb);
     bb.key = qdc_mallocn((size_t)ntri, sizeof(double));
-    if (!b->nodes || !b->tri || !b->id || !b->at || !cen || !bb.key) {
+    if (!b->nodes || !b->tv || !b->id || !b->at || !cen || !bb.key) {
         st = qdc_fail(err, QDC_ENOMEM, "out of memory for a BVH of %d triangles", ntri);
         goto out;
     }
@@ -351,8 +354,7 @@ qdc_status bderr_bvh_build(const double *xyz, int32_t nv, const int32_t *tris,
     for (int32_t i = 0; i < ntri; i++) {
         b->at[b->id[i]] = i;
         for (int v = 0; v < 3; v++)
-            memcpy(b->tri + 9 * (size_t)i + 3 * v,
-                   xyz + 3 * (size_t)tris[3 * (size_t)b->id[i] + v], 3 * sizeof(double));
+            b->tv[3 * (size_t)i + v] = tris[3 * (size_t)b->id[i] + v];
     }
 out:
     qdc_free(cen);
@@ -370,10 +372,19 @@ void bderr_bvh_free(bderr_bvh *b)
     if (!b)
         return;
     qdc_free(b->nodes);
-    qdc_free(b->tri);
+    qdc_free(b->tv);
     qdc_free(b->id);
     qdc_free(b->at);
     qdc_free(b);
+}
+
+/* closest_on_triangle for the triangle at leaf position i. */
+static double leaf_closest(const bderr_bvh *b, int32_t i, const double p[3], double q[3])
+{
+    const int32_t *t = b->tv + 3 * (size_t)i;
+
+    return closest_on_triangle(p, b->xyz + 3 * (size_t)t[0], b->xyz + 3 * (size_t)t[1],
+                               b->xyz + 3 * (size_t)t[2], q);
 }
 
 /* Squared distance from p to the box of nd (0 inside). */
@@ -411,8 +422,7 @@ double bderr_bvh_closest_near(const bderr_bvh *b, const double p[3], int32_t nea
     if (near >= 0 && near < b->ntri) {
         /* a bound to start from: the search then skips every box farther
          * than this triangle (a sliding vertex stays near its own faces) */
-        const double *t = b->tri + 9 * (size_t)b->at[near];
-        best = closest_on_triangle(p, t, t + 3, t + 6, bq);
+        best = leaf_closest(b, b->at[near], p, bq);
         bt = best == best ? b->at[near] : -1;
         if (bt < 0)
             best = INFINITY;
@@ -429,8 +439,7 @@ double bderr_bvh_closest_near(const bderr_bvh *b, const double p[3], int32_t nea
         nd = &b->nodes[stack[sp]];
         if (nd->n > 0) {
             for (int32_t i = nd->a; i < nd->a + nd->n; i++) {
-                const double *t = b->tri + 9 * (size_t)i;
-                double d = closest_on_triangle(p, t, t + 3, t + 6, q);
+                double d = leaf_closest(b, i, p, q);
                 if (d < best) {
                     best = d;
                     bt = i;

@@ -10,7 +10,8 @@
 #include "core/mesh.h"
 
 /* A BVH over triangles (xyz: 3 doubles per vertex, tris: 3 indices per triangle).
- * The BVH copies what it needs; it keeps no pointer to the caller's arrays. */
+ * It copies the triangles' indices but reads the coordinates from xyz, which
+ * must stay, unchanged, as long as the BVH does. */
 typedef struct bderr_bvh bderr_bvh;
 
 qdc_status bderr_bvh_build(const double *xyz, int32_t nv, const int32_t *tris,
