@@ -213,28 +213,36 @@ static void permute_to(char *a, size_t sz, int32_t n, const int32_t *to, uint8_t
     }
 }
 
+/* Records of w int32 each in a (n of them), moved so that the one at i goes
+ * to to[i] and each value v becomes map[v] (if map): scattered into a new
+ * array where there is memory for one (independent stores, 4x faster than
+ * following the cycles, whose every step waits for the previous one's cache
+ * miss), else in place. Returns the array that holds them. */
+static int32_t *put_back(int32_t *a, int w, int32_t n, const int32_t *to,
+                         const int32_t *map, uint8_t *done)
+{
+    int32_t *b = qdc_mallocn((size_t)w * (size_t)n + 1, sizeof(int32_t));
+
+    if (b) {
+        for (int32_t i = 0; i < n; i++)
+            for (int k = 0; k < w; k++) {
+                int32_t v = a[(size_t)w * i + k];
+                b[(size_t)w * to[i] + k] = map ? map[v] : v;
+            }
+        qdc_free(a);
+        return b;
+    }
+    permute_to((char *)a, 4 * (size_t)w, n, to, done);
+    for (size_t i = 0; map && i < (size_t)w * n; i++)
+        a[i] = map[a[i]];
+    return a;
+}
+
 void mesh_order_give_back(mesh_order *o, mesh_t *pm, mesh_t *m)
 {
-    /* scattered into a new array where there is memory for one (independent
-     * stores: 4x faster than following the cycles, whose every step waits for
-     * the previous one's cache miss), else in place */
-    int32_t *t2 = qdc_mallocn(4 * (size_t)pm->nt + 1, sizeof(int32_t));
-
-    if (t2) {
-        for (int32_t t = 0; t < pm->nt; t++)
-            for (int a = 0; a < 4; a++)
-                t2[4 * (size_t)o->told[t] + a] = o->vold[pm->tets[4 * (size_t)t + a]];
-        qdc_free(pm->tets);
-        pm->tets = t2;
-    } else {
-        permute_to((char *)pm->tets, 16, pm->nt, o->told, o->done);
-        for (size_t i = 0; i < 4 * (size_t)pm->nt; i++)
-            pm->tets[i] = o->vold[pm->tets[i]];
-    }
-    if (pm->region)
-        permute_to((char *)pm->region, 4, pm->nt, o->told, o->done);
-    m->tets = pm->tets;
-    m->region = pm->region;
+    m->tets = put_back(pm->tets, 4, pm->nt, o->told, o->vold, o->done);
+    m->region =
+        pm->region ? put_back(pm->region, 1, pm->nt, o->told, NULL, o->done) : NULL;
     pm->tets = NULL;
     pm->region = NULL;
 }
