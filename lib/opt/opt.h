@@ -74,8 +74,9 @@ typedef struct {
                     * open question), default 0 */
     double tol_move;      /* stop when max move < tol_move * mean edge, default 1e-3 */
     double stall;         /* stop the global phase when an iteration (the 3rd or later, on
-                           * a valid iterate) raises the mean ratio by less; default
-                           * 2e-3, 0 = never (docs/defaults.md) */
+                           * a valid iterate) raises the mean ratio by less, or the next
+                           * one is predicted to; default 2e-3, 0 = never
+                           * (docs/defaults.md) */
     double eps_rel;       /* Escobar epsilon relative to a regular tet, default 1e-3 */
     double finish_frac;   /* fraction of worst tets in the finishing pass, default 1 */
     int finish_sweeps;    /* broad sweeps at most, default 12 */

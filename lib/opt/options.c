@@ -53,7 +53,8 @@ static const opt_desc table[] = {
     {"mu_scaled", OPT_T_BOOL, OFF(mu_scaled), 0, 1, 0, NULL, 0,
      "with harmonic guidance, scale mu by omega_B^2"},
     {"stall", OPT_T_REAL, OFF(stall), 0, 1, 0, NULL, 0,
-     "global phase done when an iteration gains less mean ratio (0: never)"},
+     "global phase done when an iteration gains less mean ratio, or the next is "
+     "predicted to (0: never)"},
     {"tol_move", OPT_T_REAL, OFF(tol_move), 0, 1, 0, NULL, 0,
      "stop when the largest move < this x mean edge"},
     {"eps_rel", OPT_T_REAL, OFF(eps_rel), 0, 1, 1, NULL, 0,
