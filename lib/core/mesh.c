@@ -242,37 +242,59 @@ static int match_bucket(face_rec *b, int n, const int32_t *tets, int32_t *nbr,
 static qdc_status match_faces(int32_t nv, int32_t nt, const int32_t *tets, int32_t *nbr,
                               qdc_error *err)
 {
-    int32_t *start = qdc_calloc((size_t)nv + 2, sizeof(int32_t));
+    /* faces bucketed by their lowest vertex: a counting sort, each of nth
+     * ranges of tets counted and placed by its own thread (a range's records
+     * follow the previous range's in every bucket: the serial order) */
+    int nth = qdc_threads_upto(8);
+    size_t w = (size_t)nv + 1;
+    int32_t *start = qdc_calloc(w + 1, sizeof(int32_t));
+    int32_t *cnt = qdc_calloc((size_t)nth * w, sizeof(int32_t));
     face_rec *rec = qdc_mallocn((size_t)nt * 4 + 1, sizeof *rec);
     qdc_status st = QDC_OK;
 
-    if (!start || !rec) {
+    if (!start || !cnt || !rec) {
         qdc_free(start);
+        qdc_free(cnt);
         qdc_free(rec);
         return QDC_ENOMEM;
     }
     for (int pass = 0; pass < 2; pass++) {
-        for (int32_t t = 0; t < nt; t++) {
-            const int32_t *tt = tets + 4 * (size_t)t;
-            for (int f = 0; f < 4; f++) {
-                int32_t x = tt[tet_face_of[f][0]], y = tt[tet_face_of[f][1]];
-                int32_t z = tt[tet_face_of[f][2]];
-                int32_t lo = x < y ? (x < z ? x : z) : (y < z ? y : z);
-                if (pass == 0) {
-                    start[lo + 2]++;
-                } else {
-                    int32_t hi = x > y ? (x > z ? x : z) : (y > z ? y : z);
-                    face_rec *r = rec + start[lo + 1]++;
-                    r->b = x + y + z - lo - hi;
-                    r->c = hi;
-                    r->id = 4 * t + f;
+#pragma omp parallel for schedule(static, 1) num_threads(nth)
+        for (int i = 0; i < nth; i++) {
+            int32_t *c = cnt + (size_t)i * w;
+            for (int32_t t = (int32_t)((int64_t)nt * i / nth);
+                 t < (int32_t)((int64_t)nt * (i + 1) / nth); t++) {
+                const int32_t *tt = tets + 4 * (size_t)t;
+                for (int f = 0; f < 4; f++) {
+                    int32_t x = tt[tet_face_of[f][0]], y = tt[tet_face_of[f][1]];
+                    int32_t z = tt[tet_face_of[f][2]];
+                    int32_t lo = x < y ? (x < z ? x : z) : (y < z ? y : z);
+                    if (pass == 0) {
+                        c[lo]++;
+                    } else {
+                        int32_t hi = x > y ? (x > z ? x : z) : (y > z ? y : z);
+                        face_rec *r = rec + c[lo]++;
+                        r->b = x + y + z - lo - hi;
+                        r->c = hi;
+                        r->id = 4 * t + f;
+                    }
                 }
             }
         }
-        if (pass == 0)
-            for (int32_t v = 0; v < nv; v++)
-                start[v + 2] += start[v + 1];
+        if (pass == 0) {
+            int32_t run = 0;
+            for (int32_t v = 0; v < nv; v++) {
+                start[v] = run;
+                for (int i = 0; i < nth; i++) {
+                    int32_t k = cnt[(size_t)i * w + v];
+                    cnt[(size_t)i * w + v] = run;
+                    run += k;
+                }
+            }
+            start[nv] = run;
+        }
     }
+    qdc_free(cnt);
     /* now bucket v is rec[start[v] .. start[v + 1]); the buckets are
      * independent (in parallel: 1.0 s at 4M tets serially), and the
      * error reported is the first bad bucket's, as a serial pass finds it */
@@ -328,6 +350,37 @@ static int faces_opposite(const int32_t *tt, int f, const int32_t *tu, int g)
     int k = b[0] == a0 ? 0 : b[1] == a0 ? 1 : 2;
 
     return b[(k + 1) % 3] != a1;
+}
+
+/* orient_tets' answer, in parallel, for the common mesh: every pair of
+ * face neighbours oriented alike as written and every tet of one sign (all
+ * positive, or all negative: then all flipped). 1 if so (flip and o set; the
+ * components are not counted: o->components 0), 0 if the walk is needed. The
+ * serial walk was 0.9 s of a 5M-tet run's setup. */
+static int orient_uniform(const mesh_t *m, const int32_t *nbr, uint8_t *flip,
+                          mesh_orientation *o)
+{
+    int32_t nt = m->nt, unlike = 0, npos = 0, nneg = 0;
+
+#pragma omp parallel for reduction(+ : unlike, npos, nneg) schedule(static)
+    for (int32_t t = 0; t < nt; t++) {
+        const int32_t *tt = m->tets + 4 * (size_t)t;
+        double d = tet_det(m->xyz, tt);
+        npos += d > 0;
+        nneg += d < 0;
+        for (int f = 0; f < 4; f++) {
+            int32_t other = nbr[4 * (size_t)t + f];
+            if (other > 4 * t + f &&
+                !faces_opposite(tt, f, m->tets + 4 * (size_t)(other >> 2), other & 3))
+                unlike++;
+        }
+    }
+    if (unlike || npos + nneg != nt || (npos && nneg))
+        return 0;
+    memset(o, 0, sizeof *o);
+    memset(flip, nneg > 0, (size_t)nt);
+    o->flipped = nneg;
+    return 1;
 }
 
 /* docs/method.md §1: the orientation comes from the connectivity. Walk each
@@ -779,7 +832,8 @@ qdc_status mesh_topo_build(const mesh_t *m, mesh_topo **out, qdc_error *err)
         st = QDC_ENOMEM;
         goto fail;
     }
-    st = orient_tets(m, nbr, flip, &tp->orientation, err);
+    if (!orient_uniform(m, nbr, flip, &tp->orientation))
+        st = orient_tets(m, nbr, flip, &tp->orientation, err);
     if (st != QDC_OK)
         goto fail;
 #pragma omp parallel for schedule(static)

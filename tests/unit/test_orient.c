@@ -227,7 +227,40 @@ TEST(non_orientable_connectivity_is_an_error)
     mesh_free(m);
 }
 
+/* mesh_topo_build takes a shortcut when every neighbour pair is oriented
+ * alike and every tet has one sign: the same flips and inverted count as the
+ * walk (mesh_orient), on meshes that take it and on meshes that do not. */
+TEST(topo_shortcut_agrees_with_the_walk)
+{
+    for (int c = 0; c < 5; c++) {
+        mesh_t *m = tm_grid(3, 0);
+        uint8_t *flip = calloc((size_t)m->nt, 1);
+        mesh_orientation o;
+        mesh_topo *tp = NULL;
+        tm_perturb(m, 3, 0.2, 5);
+        if (c == 1 || c == 4) /* every tet written negative */
+            for (int32_t t = 0; t < m->nt; t++)
+                swap01(m->tets + 4 * (size_t)t);
+        if (c == 2) /* DOLFIN's order: mixed signs */
+            sort_tets(m);
+        if (c == 3 || c == 4) /* a tangle: two signs */
+            m->xyz[3 * 21] += 0.9;
+        ASSERT_OK(mesh_orient(m, flip, &o, NULL));
+        ASSERT_OK(mesh_topo_build(m, &tp, NULL));
+        ASSERT_EQ_INT(tp->orientation.flipped, o.flipped);
+        ASSERT_EQ_INT(mesh_count_inverted(tp, m->xyz), o.inverted);
+        if (c == 1)
+            ASSERT_EQ_INT(o.flipped, m->nt);
+        if (c >= 3)
+            ASSERT_TRUE(o.inverted > 0);
+        mesh_topo_free(tp);
+        free(flip);
+        mesh_free(m);
+    }
+}
+
 TEST_MAIN("orient", T(two_tets_either_vertex_order), T(dolfin_sorted_grid_is_valid),
           T(all_inverted_components_each_flip_whole),
           T(tangled_component_keeps_its_majority),
-          T(non_orientable_connectivity_is_an_error))
+          T(non_orientable_connectivity_is_an_error),
+          T(topo_shortcut_agrees_with_the_walk))
