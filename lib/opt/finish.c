@@ -464,12 +464,16 @@ static int32_t visit_vertex(const mesh_topo *tp, const slide_ctx *sl, double *x,
 }
 
 #define COLOUR_SHARED 64 /* the class of vertices that found no free colour */
+#define COLOUR_NONE                                                                      \
+    255 /* not in the list: a byte a vertex keeps the scratch in                         \
+         * cache (int32 colours: the colouring was 10% of a                              \
+         * broad sweep at 800k tets) */
 
 /* Greedy colouring of the visit list (worst first): no two vertices of a class
  * share an edge, hence no tet, so a class can move in parallel. colour[] is
  * scratch of nv entries; returns the number of classes and fills start[]. */
 static int32_t colour_classes(const mesh_topo *tp, vq_pair *list, int32_t n,
-                              int32_t *colour, int32_t **start_out)
+                              uint8_t *colour, int32_t **start_out)
 {
     int32_t ncol = 0, *cnt, *start;
     uint64_t used;
@@ -478,14 +482,13 @@ static int32_t colour_classes(const mesh_topo *tp, vq_pair *list, int32_t n,
     /* every vertex, not only the listed ones: a stale entry of a neighbour
      * outside the list would block colours at random and make the result
      * depend on the heap's contents (found by the angle-polish unit test) */
-    for (int32_t v = 0; v < tp->nv; v++)
-        colour[v] = -1;
+    memset(colour, COLOUR_NONE, (size_t)tp->nv);
     for (int32_t i = 0; i < n; i++) {
         int32_t v = list[i].v, c = 0;
         used = 0;
         for (int32_t k = tp->adj_ptr[v]; k < tp->adj_ptr[v + 1]; k++) {
             int32_t u = tp->adj_idx[k];
-            if (u != v && colour[u] >= 0 && colour[u] < 64)
+            if (u != v && colour[u] < 64)
                 used |= 1ULL << colour[u];
         }
         while (c < 64 && (used >> c & 1))
@@ -522,7 +525,7 @@ static int32_t colour_classes(const mesh_topo *tp, vq_pair *list, int32_t n,
          * 4.0 s with each class worst first. The shared class, swept in
          * order, stays worst first. */
         for (int32_t v = 0; v < tp->nv; v++)
-            if (colour[v] >= 0 && colour[v] < COLOUR_SHARED) {
+            if (colour[v] < COLOUR_SHARED) {
                 tmp[pos[colour[v]]].q = 0.0;
                 tmp[pos[colour[v]]++].v = v;
             }
@@ -604,7 +607,7 @@ qdc_status finish_sweep(const mesh_topo *tp, const uint8_t *movable, const slide
      * vertices of a class at once (independent stars) */
     {
         int32_t *start = NULL, ncol = -1;
-        int32_t *colour = qdc_mallocn((size_t)tp->nv, sizeof(int32_t));
+        uint8_t *colour = qdc_mallocn((size_t)tp->nv + 1, 1);
         if (colour && vq_sort(list, n))
             ncol = colour_classes(tp, list, n, colour, &start);
         qdc_free(colour);
@@ -875,7 +878,7 @@ qdc_status finish_dihedral_sweep(const mesh_topo *tp, const uint8_t *movable,
 {
     double *sorted = qdc_mallocn((size_t)tp->nt, sizeof(double));
     double *vworst = qdc_mallocn((size_t)tp->nv, sizeof(double));
-    int32_t *colour = qdc_mallocn((size_t)tp->nv, sizeof(int32_t));
+    uint8_t *colour = qdc_mallocn((size_t)tp->nv + 1, 1);
     int32_t *start = NULL, n = 0, k, ncol;
     vq_pair *list = NULL;
     double thresh, dummy;
