@@ -75,30 +75,54 @@ static uint64_t morton_key(const double *p, const double lo[3], double scale)
     return key;
 }
 
-/* Tets by their lowest new vertex number (a counting sort, stable). */
+/* Tets by their lowest new vertex number (a counting sort, stable): each of
+ * nth ranges of tets counted and placed by its own thread, a range's tets
+ * after the previous range's in every bucket (the serial order). */
 static qdc_status order_tets(const mesh_t *m, mesh_order *o)
 {
-    int32_t *start = qdc_calloc((size_t)m->nv + 1, sizeof(int32_t));
+    int nth = qdc_threads_upto(8);
+    size_t w = (size_t)m->nv + 1;
+    int32_t *cnt = qdc_calloc((size_t)nth * w, sizeof(int32_t));
+    int32_t *key = qdc_mallocn((size_t)m->nt + 1, sizeof(int32_t));
 
-    if (!start)
+    if (!cnt || !key) {
+        qdc_free(cnt);
+        qdc_free(key);
         return QDC_ENOMEM;
-    for (int pass = 0; pass < 2; pass++) {
-        for (int32_t t = 0; t < m->nt; t++) {
-            int32_t lo = m->nv;
-            for (int a = 0; a < 4; a++) {
-                int32_t w = o->vnew[m->tets[4 * (size_t)t + a]];
-                lo = w < lo ? w : lo;
-            }
-            if (pass == 0)
-                start[lo + 1]++;
-            else
-                o->told[start[lo]++] = t;
-        }
-        if (pass == 0)
-            for (int32_t v = 0; v < m->nv; v++)
-                start[v + 1] += start[v];
     }
-    qdc_free(start);
+#pragma omp parallel for schedule(static)
+    for (int32_t t = 0; t < m->nt; t++) {
+        int32_t lo = m->nv;
+        for (int a = 0; a < 4; a++) {
+            int32_t x = o->vnew[m->tets[4 * (size_t)t + a]];
+            lo = x < lo ? x : lo;
+        }
+        key[t] = lo;
+    }
+    for (int pass = 0; pass < 2; pass++) {
+#pragma omp parallel for schedule(static, 1) num_threads(nth)
+        for (int i = 0; i < nth; i++) {
+            int32_t *c = cnt + (size_t)i * w;
+            for (int32_t t = (int32_t)((int64_t)m->nt * i / nth);
+                 t < (int32_t)((int64_t)m->nt * (i + 1) / nth); t++) {
+                if (pass == 0)
+                    c[key[t]]++;
+                else
+                    o->told[c[key[t]]++] = t;
+            }
+        }
+        if (pass == 0) {
+            int32_t run = 0;
+            for (int32_t v = 0; v < m->nv; v++)
+                for (int i = 0; i < nth; i++) {
+                    int32_t k = cnt[(size_t)i * w + v];
+                    cnt[(size_t)i * w + v] = run;
+                    run += k;
+                }
+        }
+    }
+    qdc_free(cnt);
+    qdc_free(key);
     return QDC_OK;
 }
 
@@ -107,11 +131,15 @@ qdc_status mesh_order_build(const mesh_t *m, mesh_order *o)
     keyed *k;
     double lo[3], scale;
     qdc_status st;
+    int bad = 0;
 
     memset(o, 0, sizeof *o);
-    for (size_t i = 0; i < 4 * (size_t)m->nt; i++)
-        if (m->tets[i] < 0 || m->tets[i] >= m->nv)
-            return QDC_EINVAL;
+#pragma omp parallel for reduction(| : bad) schedule(static)
+    for (int32_t t = 0; t < m->nt; t++)
+        for (int a = 0; a < 4; a++)
+            bad |= m->tets[4 * (size_t)t + a] < 0 || m->tets[4 * (size_t)t + a] >= m->nv;
+    if (bad)
+        return QDC_EINVAL;
     k = qdc_mallocn((size_t)m->nv + 1, sizeof *k);
     o->vnew = qdc_mallocn((size_t)m->nv + 1, sizeof(int32_t));
     o->told = qdc_mallocn((size_t)m->nt + 1, sizeof(int32_t));
@@ -123,6 +151,7 @@ qdc_status mesh_order_build(const mesh_t *m, mesh_order *o)
     o->nv = m->nv;
     o->nt = m->nt;
     scale = key_scale(m, lo);
+#pragma omp parallel for schedule(static)
     for (int32_t v = 0; v < m->nv; v++) {
         k[v].key = morton_key(m->xyz + 3 * (size_t)v, lo, scale);
         k[v].id = v;
@@ -149,12 +178,14 @@ mesh_t *mesh_order_apply(const mesh_t *m, const mesh_order *o)
 
     if (!p)
         return NULL;
+#pragma omp parallel for schedule(static)
     for (int32_t v = 0; v < m->nv; v++) {
         memcpy(p->xyz + 3 * (size_t)o->vnew[v], m->xyz + 3 * (size_t)v,
                3 * sizeof(double));
         if (m->fixed)
             p->fixed[o->vnew[v]] = m->fixed[v];
     }
+#pragma omp parallel for schedule(static)
     for (int32_t t = 0; t < m->nt; t++) {
         int32_t s = o->told[t];
         for (int a = 0; a < 4; a++)
