@@ -136,6 +136,23 @@ int qdc_threads_upto(int cap)
     return n < 1 ? 1 : n > cap ? cap : n;
 }
 
+void qdc_count_places(int32_t *cnt, int nth, size_t w, int32_t n, int32_t *start)
+{
+    int32_t run = 0;
+
+    for (int32_t b = 0; b < n; b++) {
+        if (start)
+            start[b] = run;
+        for (int i = 0; i < nth; i++) {
+            int32_t k = cnt[(size_t)i * w + b];
+            cnt[(size_t)i * w + b] = run;
+            run += k;
+        }
+    }
+    if (start)
+        start[n] = run;
+}
+
 double qdc_now(void)
 {
     struct timespec ts;

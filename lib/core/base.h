@@ -80,6 +80,13 @@ double qdc_now(void);
  * gives each thread its own scratch array of the mesh's size. */
 int qdc_threads_upto(int cap);
 
+/* A counting sort's counts made by nth threads over consecutive ranges of the
+ * items (cnt: nth rows of w entries, bucket b of thread i at cnt[i * w + b])
+ * into each thread's first place in each of the n buckets: bucket by bucket,
+ * thread by thread, so the placed items keep their serial order. start (n + 1
+ * entries, may be NULL) receives each bucket's first place and the total. */
+void qdc_count_places(int32_t *cnt, int nth, size_t w, int32_t n, int32_t *start);
+
 /* Streaming output used by every writer (mesh formats, reports): returns 0 on
  * success, non-zero to abort the write (the writer then returns QDC_EIO). */
 typedef int (*qdc_write_fn)(void *ctx, const void *data, size_t len);

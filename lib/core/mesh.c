@@ -281,18 +281,8 @@ static qdc_status match_faces(int32_t nv, int32_t nt, const int32_t *tets, int32
                 }
             }
         }
-        if (pass == 0) {
-            int32_t run = 0;
-            for (int32_t v = 0; v < nv; v++) {
-                start[v] = run;
-                for (int i = 0; i < nth; i++) {
-                    int32_t k = cnt[(size_t)i * w + v];
-                    cnt[(size_t)i * w + v] = run;
-                    run += k;
-                }
-            }
-            start[nv] = run;
-        }
+        if (pass == 0)
+            qdc_count_places(cnt, nth, w, nv, start);
     }
     qdc_free(cnt);
     /* now bucket v is rec[start[v] .. start[v + 1]); the buckets are

@@ -111,15 +111,8 @@ static qdc_status order_tets(const mesh_t *m, mesh_order *o)
                     o->told[c[key[t]]++] = t;
             }
         }
-        if (pass == 0) {
-            int32_t run = 0;
-            for (int32_t v = 0; v < m->nv; v++)
-                for (int i = 0; i < nth; i++) {
-                    int32_t k = cnt[(size_t)i * w + v];
-                    cnt[(size_t)i * w + v] = run;
-                    run += k;
-                }
-        }
+        if (pass == 0)
+            qdc_count_places(cnt, nth, w, m->nv, NULL);
     }
     qdc_free(cnt);
     qdc_free(key);
