@@ -404,11 +404,9 @@ static qdc_status medit_vertices(txt *s, int64_t c, double *xyz, int32_t *vref,
             if (st != QDC_OK)
                 goto fail;
         }
-        if (!txt_uint_fast(s, 0, INT32_MAX, &ref)) {
-            st = txt_int(s, "Vertices: ref", INT32_MIN, INT32_MAX, &ref, err);
-            if (st != QDC_OK)
-                goto fail;
-        }
+        st = txt_int(s, "Vertices: ref", INT32_MIN, INT32_MAX, &ref, err);
+        if (st != QDC_OK)
+            goto fail;
         vref[i] = (int32_t)ref;
     }
     return QDC_OK;
@@ -441,20 +439,16 @@ static qdc_status medit_elems(txt *s, const char *sect, int64_t c, int k, int64_
     snprintf(what, sizeof what, "%s: vertex index", sect);
     for (i = 0; i < c; i++) {
         for (int j = 0; j < k; j++) {
-            if (!txt_uint_fast(s, 1, hi, &v)) {
-                st = txt_int(s, what, 1, hi, &v, err);
-                if (st != QDC_OK)
-                    goto fail;
-            }
+            st = txt_int(s, what, 1, hi, &v, err);
+            if (st != QDC_OK)
+                goto fail;
             idx[k * i + j] = (int32_t)(v - 1);
         }
         if (!ref)
             continue;
-        if (!txt_uint_fast(s, 0, INT32_MAX, &v)) {
-            st = txt_int(s, "ref", INT32_MIN, INT32_MAX, &v, err);
-            if (st != QDC_OK)
-                goto fail;
-        }
+        st = txt_int(s, "ref", INT32_MIN, INT32_MAX, &v, err);
+        if (st != QDC_OK)
+            goto fail;
         ref[i] = (int32_t)v;
     }
     return QDC_OK;
