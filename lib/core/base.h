@@ -73,6 +73,14 @@ void qdc_fault_set(long fail_after);
 long qdc_fault_count(void); /* allocations made since the last qdc_fault_set */
 #endif
 
+/* A hint to fetch the cache line of p ahead of a read (none where the
+ * compiler has no such builtin). */
+#if defined(__GNUC__)
+#define QDC_PREFETCH(p) __builtin_prefetch(p)
+#else
+#define QDC_PREFETCH(p) ((void)(p))
+#endif
+
 /* Monotonic wall clock in seconds. */
 double qdc_now(void);
 
