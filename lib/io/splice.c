@@ -479,34 +479,85 @@ static void put_number(wbuf *w, const char *t, const char *te, double x)
         wb_real(w, x);
 }
 
+/* The text of one coordinate for splice_text: its token [t, te) in the
+ * source, and n bytes of new text in txt (n = 0: the token reads as the
+ * value and is copied; te == t: no token there). */
+typedef struct {
+    size_t t, te;
+    int n;
+    char txt[36];
+} coord_text;
+
+/* Vertices formatted at once (in parallel) before they are written in order:
+ * formatting the coordinates was most of the write of an optimized mesh (5M
+ * tets: 1.9 s of 2.1). */
+#define SPLICE_BLOCK 8192
+
+/* The tokens of vertex v's coordinates and their new text, into c[0..3). */
+static void coord_texts(const source *s, const double *xyz, int32_t v, coord_text *c)
+{
+    size_t p = s->r.off[v];
+
+    for (int a = 0; a < 3; a++) {
+        double x = xyz[3 * (size_t)v + (size_t)a], old;
+        c[a].t = c[a].te = p;
+        c[a].n = 0;
+        if (p >= s->len)
+            continue;
+        if (a)
+            p = skip_sep(s, p);
+        c[a].t = p;
+        c[a].te = p = token_end(s, p);
+        if (c[a].te == c[a].t)
+            return;
+        if (!(parse_double(s->buf + c[a].t, s->buf + c[a].te, &old) == 0 &&
+              memcmp(&old, &x, sizeof x) == 0))
+            c[a].n = numfmt_g17(x, c[a].txt);
+    }
+}
+
 static qdc_status splice_text(const source *s, const double *xyz, edits *ed, wbuf *w,
                               qdc_error *err)
 {
     size_t pos = 0;
     qdc_status st = QDC_OK;
+    coord_text *ct = qdc_mallocn(3 * (size_t)SPLICE_BLOCK, sizeof *ct);
 
-    for (int32_t v = 0; v < s->nv; v++) {
-        size_t p = s->r.off[v];
-        if (p < pos || p >= s->len)
-            return qdc_fail(err, QDC_EINTERNAL,
-                            "source: vertex %d at byte %zu is out of order", (int)v, p);
-        for (int a = 0; a < 3; a++) {
-            size_t te;
-            if (a)
-                p = skip_sep(s, p);
-            te = token_end(s, p);
-            if (te == p)
-                return qdc_fail(err, QDC_EINTERNAL,
-                                "source: no coordinate of vertex %d at byte %zu", (int)v,
-                                p);
-            st = put_src(ed, w, pos, p, err);
-            if (st != QDC_OK)
-                return st;
-            put_number(w, s->buf + p, s->buf + te, xyz[3 * (size_t)v + (size_t)a]);
-            pos = p = te;
+    if (!ct)
+        return qdc_fail(err, QDC_ENOMEM, "out of memory");
+    for (int32_t v0 = 0; v0 < s->nv && st == QDC_OK; v0 += SPLICE_BLOCK) {
+        int32_t v1 = s->nv - v0 > SPLICE_BLOCK ? v0 + SPLICE_BLOCK : s->nv;
+#pragma omp parallel for schedule(static) if (v1 - v0 > 1024)
+        for (int32_t v = v0; v < v1; v++)
+            coord_texts(s, xyz, v, ct + 3 * (size_t)(v - v0));
+        for (int32_t v = v0; v < v1 && st == QDC_OK; v++) {
+            const coord_text *c = ct + 3 * (size_t)(v - v0);
+            size_t p = s->r.off[v];
+            if (p < pos || p >= s->len) {
+                st = qdc_fail(err, QDC_EINTERNAL,
+                              "source: vertex %d at byte %zu is out of order", (int)v, p);
+                break;
+            }
+            for (int a = 0; a < 3; a++) {
+                if (c[a].te == c[a].t) {
+                    st = qdc_fail(err, QDC_EINTERNAL,
+                                  "source: no coordinate of vertex %d at byte %zu",
+                                  (int)v, c[a].t);
+                    break;
+                }
+                st = put_src(ed, w, pos, c[a].t, err);
+                if (st != QDC_OK)
+                    break;
+                if (c[a].n > 0)
+                    wb_put(w, c[a].txt, (size_t)c[a].n);
+                else
+                    wb_put(w, s->buf + c[a].t, c[a].te - c[a].t);
+                pos = c[a].te;
+            }
         }
     }
-    return put_src(ed, w, pos, s->len, err);
+    qdc_free(ct);
+    return st == QDC_OK ? put_src(ed, w, pos, s->len, err) : st;
 }
 
 /* Coordinates one by one (SRC_TEXT3). */
