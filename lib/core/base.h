@@ -81,6 +81,13 @@ long qdc_fault_count(void); /* allocations made since the last qdc_fault_set */
 #define QDC_PREFETCH(p) ((void)(p))
 #endif
 
+/* The first item of part p of n items cut into parts nearly equal parts (p =
+ * parts: n): the fixed ranges that parallel loops give their threads. */
+static inline int32_t qdc_part(int32_t n, int p, int parts)
+{
+    return (int32_t)((int64_t)n * p / parts);
+}
+
 /* Monotonic wall clock in seconds. */
 double qdc_now(void);
 

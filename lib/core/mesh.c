@@ -262,8 +262,7 @@ static qdc_status match_faces(int32_t nv, int32_t nt, const int32_t *tets, int32
 #pragma omp parallel for schedule(static, 1) num_threads(nth)
         for (int i = 0; i < nth; i++) {
             int32_t *c = cnt + (size_t)i * w;
-            for (int32_t t = (int32_t)((int64_t)nt * i / nth);
-                 t < (int32_t)((int64_t)nt * (i + 1) / nth); t++) {
+            for (int32_t t = qdc_part(nt, i, nth); t < qdc_part(nt, i + 1, nth); t++) {
                 const int32_t *tt = tets + 4 * (size_t)t;
                 for (int f = 0; f < 4; f++) {
                     int32_t x = tt[tet_face_of[f][0]], y = tt[tet_face_of[f][1]];
@@ -785,6 +784,67 @@ static qdc_status build_adjacency(mesh_topo *tp)
     return QDC_OK;
 }
 
+/* The boundary faces (no neighbour) and the interfaces between regions (each
+ * once, from the tet of lower index) into tp, in tet order, and their vertices'
+ * flags. 64 ranges of tets, each counted, then written, by one thread
+ * (serial, the two passes took 0.22 s of setup at 5M tets). */
+#define FACE_RANGES 64
+static qdc_status collect_faces(const mesh_t *m, mesh_topo *tp, const int32_t *nbr)
+{
+    int32_t cnt[2 * FACE_RANGES] = {0};
+
+    for (int pass = 0; pass < 2; pass++) {
+#pragma omp parallel for schedule(static)
+        for (int r = 0; r < FACE_RANGES; r++) {
+            int32_t t0 = qdc_part(m->nt, r, FACE_RANGES),
+                    t1 = qdc_part(m->nt, r + 1, FACE_RANGES);
+            int32_t nb = pass ? cnt[2 * r] : 0, ni = pass ? cnt[2 * r + 1] : 0;
+            for (int32_t t = t0; t < t1; t++)
+                for (int f = 0; f < 4; f++) {
+                    int32_t o = nbr[4 * (size_t)t + f];
+                    int is_b = o < 0;
+                    int is_i = !is_b && m->region && o > 4 * t &&
+                               m->region[t] != m->region[o >> 2];
+                    if (!is_b && !is_i)
+                        continue;
+                    if (pass == 1) {
+                        int32_t *dst = is_b ? tp->bfaces + 3 * (size_t)nb
+                                            : tp->ifaces + 3 * (size_t)ni;
+                        for (int k = 0; k < 3; k++)
+                            dst[k] = tp->tets[4 * (size_t)t + tet_face_of[f][k]];
+                    }
+                    nb += is_b;
+                    ni += is_i;
+                }
+            if (pass == 0) {
+                cnt[2 * r] = nb;
+                cnt[2 * r + 1] = ni;
+            }
+        }
+        if (pass == 0) {
+            int32_t nb = 0, ni = 0;
+            for (int r = 0; r < FACE_RANGES; r++) { /* counts into first places */
+                int32_t b = cnt[2 * r], n = cnt[2 * r + 1];
+                cnt[2 * r] = nb;
+                cnt[2 * r + 1] = ni;
+                nb += b;
+                ni += n;
+            }
+            tp->nbf = nb;
+            tp->nif = ni;
+            tp->bfaces = qdc_mallocn((size_t)nb * 3 + 1, sizeof(int32_t));
+            tp->ifaces = qdc_mallocn((size_t)ni * 3 + 1, sizeof(int32_t));
+            if (!tp->bfaces || !tp->ifaces)
+                return QDC_ENOMEM;
+        }
+    }
+    for (size_t i = 0; i < 3 * (size_t)tp->nbf; i++)
+        tp->vflag[tp->bfaces[i]] |= MESH_V_BOUNDARY;
+    for (size_t i = 0; i < 3 * (size_t)tp->nif; i++)
+        tp->vflag[tp->ifaces[i]] |= MESH_V_INTERFACE;
+    return QDC_OK;
+}
+
 qdc_status mesh_topo_build(const mesh_t *m, mesh_topo **out, qdc_error *err)
 {
     mesh_topo *tp;
@@ -848,38 +908,9 @@ qdc_status mesh_topo_build(const mesh_t *m, mesh_topo **out, qdc_error *err)
     st = build_adjacency(tp);
     if (st != QDC_OK)
         goto fail;
-    for (int pass = 0; pass < 2; pass++) {
-        int32_t nb = 0, ni = 0;
-        for (int32_t t = 0; t < m->nt; t++)
-            for (int f = 0; f < 4; f++) {
-                int32_t o = nbr[4 * (size_t)t + f];
-                int is_b = o < 0;
-                int is_i =
-                    !is_b && m->region && o > 4 * t && m->region[t] != m->region[o >> 2];
-                if (!is_b && !is_i)
-                    continue;
-                if (pass == 1) {
-                    int32_t *dst =
-                        is_b ? tp->bfaces + 3 * (size_t)nb : tp->ifaces + 3 * (size_t)ni;
-                    for (int k = 0; k < 3; k++) {
-                        dst[k] = tp->tets[4 * (size_t)t + tet_face_of[f][k]];
-                        tp->vflag[dst[k]] |= is_b ? MESH_V_BOUNDARY : MESH_V_INTERFACE;
-                    }
-                }
-                nb += is_b;
-                ni += is_i;
-            }
-        if (pass == 0) {
-            tp->nbf = nb;
-            tp->nif = ni;
-            tp->bfaces = qdc_mallocn((size_t)nb * 3 + 1, sizeof(int32_t));
-            tp->ifaces = qdc_mallocn((size_t)ni * 3 + 1, sizeof(int32_t));
-            if (!tp->bfaces || !tp->ifaces) {
-                st = QDC_ENOMEM;
-                goto fail;
-            }
-        }
-    }
+    st = collect_faces(m, tp, nbr);
+    if (st != QDC_OK)
+        goto fail;
     for (int32_t v = 0; v < m->nv; v++) {
         if (m->fixed && m->fixed[v])
             tp->vflag[v] |= MESH_V_FIXED;

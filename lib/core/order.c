@@ -103,8 +103,8 @@ static qdc_status order_tets(const mesh_t *m, mesh_order *o)
 #pragma omp parallel for schedule(static, 1) num_threads(nth)
         for (int i = 0; i < nth; i++) {
             int32_t *c = cnt + (size_t)i * w;
-            for (int32_t t = (int32_t)((int64_t)m->nt * i / nth);
-                 t < (int32_t)((int64_t)m->nt * (i + 1) / nth); t++) {
+            for (int32_t t = qdc_part(m->nt, i, nth); t < qdc_part(m->nt, i + 1, nth);
+                 t++) {
                 if (pass == 0)
                     c[key[t]]++;
                 else

@@ -28,8 +28,8 @@ double encode_objective(const mesh_topo *tp, const double *x, opt_metric m, doub
 
 #pragma omp parallel for schedule(static)
     for (int c = 0; c < ENCODE_CHUNKS; c++) {
-        int32_t t0 = (int32_t)((int64_t)tp->nt * c / ENCODE_CHUNKS);
-        int32_t t1 = (int32_t)((int64_t)tp->nt * (c + 1) / ENCODE_CHUNKS);
+        int32_t t0 = qdc_part(tp->nt, c, ENCODE_CHUNKS);
+        int32_t t1 = qdc_part(tp->nt, c + 1, ENCODE_CHUNKS);
         double s = 0.0;
         int32_t b = 0;
         for (int32_t t = t0; t < t1; t++) {

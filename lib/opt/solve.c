@@ -437,8 +437,8 @@ static void apply_a(solve_ctx *s, const double *qval, const double *w2, const do
 
 static void cg_range(int32_t nv, int ch, int32_t *i0, int32_t *i1)
 {
-    *i0 = (int32_t)((int64_t)nv * ch / CG_CHUNKS);
-    *i1 = (int32_t)((int64_t)nv * (ch + 1) / CG_CHUNKS);
+    *i0 = qdc_part(nv, ch, CG_CHUNKS);
+    *i1 = qdc_part(nv, ch + 1, CG_CHUNKS);
 }
 
 /* sums[k] = the per-range partials part[.][k] added in range order */
