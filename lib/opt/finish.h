@@ -47,4 +47,16 @@ qdc_status finish_dihedral_sweep(const mesh_topo *tp, const uint8_t *movable,
                                  double qfloor, double *smin, int smin_valid,
                                  finish_stats *st);
 
+/* Joint moves of the worst tets' corners (after the sweeps of
+ * finish_dihedral_sweep have balanced single vertices): for each of the 32
+ * tets of smallest dihedral sine, worst first, the max-min ascent of its
+ * movable corners together over the union of their stars, under the same rules
+ * (the smallest sine rises, no more tets under the 32nd smallest sine, none
+ * under qfloor). smin as in finish_dihedral_sweep; score: the mean of the 32
+ * smallest sines. */
+qdc_status finish_dihedral_patches(const mesh_topo *tp, const uint8_t *movable,
+                                   const slide_ctx *sl, double *x, double lbar,
+                                   double qfloor, double *smin, int smin_valid,
+                                   finish_stats *st);
+
 #endif
