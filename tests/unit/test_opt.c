@@ -412,6 +412,63 @@ TEST(angle_sweep_raises_the_smallest_angle_within_its_rules)
     mesh_free(m);
 }
 
+/* After single-vertex sweeps stop raising the smallest sine, the joint moves
+ * of the worst tets' corners raise it further, under the same rules. */
+TEST(joint_moves_lift_what_single_vertices_leave)
+{
+    int n = 6;
+    mesh_t *m = tm_grid(n, 0);
+    mesh_topo *tp = NULL;
+    uint8_t *movable;
+    double *x0, *smin, s0, q0, s1, q1, s2, q2;
+    finish_stats fs;
+    int sweeps = 0;
+    tm_perturb(m, n, 0.3, 7);
+    ASSERT_OK(mesh_topo_build(m, &tp, NULL));
+    movable = calloc((size_t)m->nv, 1);
+    x0 = malloc(3 * (size_t)m->nv * sizeof(double));
+    smin = malloc((size_t)m->nt * sizeof(double));
+    ASSERT_TRUE(movable && x0 && smin);
+    for (int32_t v = 0; v < m->nv; v++)
+        movable[v] = !(tp->vflag[v] & MESH_V_BOUNDARY);
+    worst_of(m, &s0, &q0);
+    ASSERT_TRUE(s0 > 0.0);
+    do { /* single vertices until the smallest sine stays */
+        ASSERT_OK(finish_dihedral_sweep(tp, movable, NULL, m->xyz, 1.0 / n, 0.05, q0,
+                                        smin, sweeps > 0, &fs));
+    } while (fs.floor_after > fs.floor_before && ++sweeps < 50);
+    worst_of(m, &s1, &q1);
+    memcpy(x0, m->xyz, 3 * (size_t)m->nv * sizeof(double));
+    ASSERT_OK(
+        finish_dihedral_patches(tp, movable, NULL, m->xyz, 1.0 / n, q0, smin, 0, &fs));
+    worst_of(m, &s2, &q2);
+    printf("  # smallest dihedral sine %.4f, single vertices %.4f, joint moves %.4f\n",
+           s0, s1, s2);
+    ASSERT_NEAR(fs.floor_before, s1, 1e-12);
+    ASSERT_NEAR(fs.floor_after, s2, 1e-12);
+    ASSERT_TRUE(fs.n_moves > 0);
+    ASSERT_TRUE(s2 > s1);  /* what the sweeps could not lift */
+    ASSERT_TRUE(q2 >= q0); /* the mean-ratio floor holds */
+    for (int32_t v = 0; v < m->nv; v++)
+        if (!movable[v])
+            for (int c = 0; c < 3; c++)
+                ASSERT_TRUE(m->xyz[3 * v + c] == x0[3 * v + c]);
+    for (int32_t t = 0; t < m->nt; t++) { /* smin holds the sines at the new x */
+        double sn[6], lo = INFINITY;
+        const int32_t *tt = m->tets + 4 * (size_t)t;
+        metric_dihedral_sines(m->xyz + 3 * tt[0], m->xyz + 3 * tt[1], m->xyz + 3 * tt[2],
+                              m->xyz + 3 * tt[3], sn);
+        for (int e = 0; e < 6; e++)
+            lo = fmin(lo, sn[e]);
+        ASSERT_NEAR(smin[t], lo, 1e-15);
+    }
+    free(smin);
+    free(movable);
+    free(x0);
+    mesh_topo_free(tp);
+    mesh_free(m);
+}
+
 TEST(angle_polish_option_keeps_every_guarantee)
 {
     int n = 6;
@@ -440,6 +497,7 @@ TEST(angle_polish_option_keeps_every_guarantee)
 
 TEST_MAIN("opt", T(result_does_not_depend_on_vertex_numbering),
           T(angle_sweep_raises_the_smallest_angle_within_its_rules),
+          T(joint_moves_lift_what_single_vertices_leave),
           T(angle_polish_option_keeps_every_guarantee), T(improves_perturbed_grid),
           T(untangles_inverted_grid), T(never_worse_than_input),
           T(literal_mode_is_safe_and_reported),
