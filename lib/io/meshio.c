@@ -388,12 +388,137 @@ static const struct {
     {"TangentAtEdges", 3},
 };
 
+/* ---- large sections in parallel ----
+ * A section of c entries laid out one per line (as writers do) is cut into
+ * PAR_RUNS runs of whole lines, each read by one thread with the serial
+ * reader's own token functions. A run must hold exactly as many entries as
+ * lines and end where its last line does: then, by induction from the first,
+ * every run starts on an entry, and the values are those one serial pass
+ * reads. Anything else (several entries on a line, a comment line, an entry
+ * over two lines, a bad token) leaves the section to the serial pass, which
+ * reads the same values or reports the error with its line. */
+#define PAR_MIN_ENTRIES 50000
+#define PAR_RUNS 64
+
+typedef struct {
+    const char *at[PAR_RUNS + 1];
+} line_runs;
+
+/* The runs of the c lines from the next token; 0 if fewer lines end. */
+static int line_runs_of(txt *s, int64_t c, line_runs *lr)
+{
+    const char *p;
+    int64_t i = 0;
+
+    skip_ws(s);
+    p = lr->at[0] = s->p;
+    for (int r = 1; r <= PAR_RUNS; r++) {
+        for (; i < c * r / PAR_RUNS; i++) {
+            const char *nl = memchr(p, '\n', (size_t)(s->end - p));
+            if (!nl)
+                return 0;
+            p = nl + 1;
+        }
+        lr->at[r] = p;
+    }
+    return 1;
+}
+
+/* The reader of run r: s's state over the run's bytes. */
+static txt run_txt(const txt *s, const line_runs *lr, int r)
+{
+    txt t = *s;
+
+    t.p = t.bol = lr->at[r];
+    t.end = lr->at[r + 1];
+    return t;
+}
+
+/* 1 if a run's reader stopped where the run ends. */
+static int run_ends(txt *t)
+{
+    skip_ws(t);
+    return t->p == t->end;
+}
+
+/* s past the c lines of the runs (read in parallel). */
+static void runs_read(txt *s, const line_runs *lr, int64_t c)
+{
+    s->p = s->bol = lr->at[PAR_RUNS];
+    s->line += c;
+}
+
+/* medit_vertices in parallel; 0: read the section serially. */
+static int medit_vertices_par(txt *s, int64_t c, double *xyz, int32_t *vref,
+                              uint64_t *off)
+{
+    line_runs lr;
+    int ok = 1;
+
+    if (c < PAR_MIN_ENTRIES || !line_runs_of(s, c, &lr))
+        return 0;
+#pragma omp parallel for schedule(dynamic, 1) reduction(&& : ok)
+    for (int r = 0; r < PAR_RUNS; r++) {
+        txt t = run_txt(s, &lr, r);
+        for (int64_t i = c * r / PAR_RUNS; ok && i < c * (r + 1) / PAR_RUNS; i++) {
+            int64_t ref;
+            if (off) {
+                skip_ws(&t);
+                off[i] = (uint64_t)(t.p - t.base);
+            }
+            for (int j = 0; j < 3 && ok; j++)
+                ok = txt_real(&t, "", &xyz[3 * i + j], NULL) == QDC_OK;
+            ok = ok && txt_int(&t, "", INT32_MIN, INT32_MAX, &ref, NULL) == QDC_OK;
+            if (ok)
+                vref[i] = (int32_t)ref;
+        }
+        ok = ok && run_ends(&t);
+    }
+    if (ok)
+        runs_read(s, &lr, c);
+    return ok;
+}
+
+/* medit_elems in parallel; 0: read the section serially. */
+static int medit_elems_par(txt *s, int64_t c, int k, int64_t hi, int32_t *idx,
+                           int32_t *ref)
+{
+    line_runs lr;
+    int ok = 1;
+
+    if (c < PAR_MIN_ENTRIES || !line_runs_of(s, c, &lr))
+        return 0;
+#pragma omp parallel for schedule(dynamic, 1) reduction(&& : ok)
+    for (int r = 0; r < PAR_RUNS; r++) {
+        txt t = run_txt(s, &lr, r);
+        for (int64_t i = c * r / PAR_RUNS; ok && i < c * (r + 1) / PAR_RUNS; i++) {
+            int64_t v;
+            for (int j = 0; j < k && ok; j++) {
+                ok = txt_int(&t, "", 1, hi, &v, NULL) == QDC_OK;
+                if (ok)
+                    idx[k * i + j] = (int32_t)(v - 1);
+            }
+            if (ok && ref) {
+                ok = txt_int(&t, "", INT32_MIN, INT32_MAX, &v, NULL) == QDC_OK;
+                if (ok)
+                    ref[i] = (int32_t)v;
+            }
+        }
+        ok = ok && run_ends(&t);
+    }
+    if (ok)
+        runs_read(s, &lr, c);
+    return ok;
+}
+
 static qdc_status medit_vertices(txt *s, int64_t c, double *xyz, int32_t *vref,
                                  uint64_t *off, qdc_error *err)
 {
     qdc_status st = QDC_OK;
     int64_t i, ref;
 
+    if (medit_vertices_par(s, c, xyz, vref, off))
+        return QDC_OK;
     for (i = 0; i < c; i++) {
         if (off) {
             skip_ws(s);
@@ -436,6 +561,8 @@ static qdc_status medit_elems(txt *s, const char *sect, int64_t c, int k, int64_
     qdc_status st = QDC_OK;
     int64_t i, v, hi = nv >= 0 ? nv : INT32_MAX;
 
+    if (medit_elems_par(s, c, k, hi, idx, ref))
+        return QDC_OK;
     snprintf(what, sizeof what, "%s: vertex index", sect);
     for (i = 0; i < c; i++) {
         for (int j = 0; j < k; j++) {

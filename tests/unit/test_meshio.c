@@ -174,6 +174,76 @@ TEST(medit_error_position)
     ASSERT_TRUE(strstr(err.msg, "Tetrahedra: vertex index 7 out of range [1, 2]"));
 }
 
+/* A Medit text of nv vertices and nt tets, one entry per line, with values
+ * known from the index; `odd` changes the layout at entry nv / 2 and nt / 2
+ * (1: a comment line among the vertices and two tets on one line; 2: a bad
+ * coordinate at vertex 40000). */
+static char *big_medit(int32_t nv, int32_t nt, int odd)
+{
+    size_t cap = 64 + (size_t)nv * 64 + (size_t)nt * 64, n = 0;
+    char *b = malloc(cap);
+
+    if (!b)
+        return NULL;
+    n += (size_t)snprintf(b + n, cap - n,
+                          "MeshVersionFormatted 2\nDimension 3\nVertices\n%d\n", (int)nv);
+    for (int32_t i = 0; i < nv; i++) {
+        if (odd == 1 && i == nv / 2)
+            n += (size_t)snprintf(b + n, cap - n, "# a comment line\n");
+        n += (size_t)snprintf(b + n, cap - n, "%.17g %d %.17g %d\n",
+                              odd == 2 && i == 40000 ? 0.0 : i * 0.5 + 0.25, -(int)i,
+                              i / 8.0, (int)(i % 7));
+        if (odd == 2 && i == 40000)
+            memcpy(b + n - 12, "1.0x", 4); /* the last coordinate becomes bad */
+    }
+    n += (size_t)snprintf(b + n, cap - n, "Tetrahedra\n%d\n", (int)nt);
+    for (int32_t i = 0; i < nt; i++)
+        n += (size_t)snprintf(b + n, cap - n, "%d %d %d %d %d%s", (int)(i % nv + 1),
+                              (int)((i + 1) % nv + 1), (int)((i + 2) % nv + 1),
+                              (int)((i + 3) % nv + 1), (int)(i % 5),
+                              odd == 1 && i == nt / 2 ? " " : "\n");
+    snprintf(b + n, cap - n, "End\n");
+    return b;
+}
+
+/* Sections of 50,000 entries and more are read in parallel runs of lines
+ * (meshio.c); every layout the serial reader accepts gives the same values,
+ * and errors keep their line and entry. */
+TEST(medit_large_sections)
+{
+    const int32_t nv = 60000, nt = 120001;
+    for (int odd = 0; odd < 3; odd++) {
+        char *text = big_medit(nv, nt, odd);
+        mesh_t *m = NULL;
+        qdc_error err;
+        ASSERT_TRUE(text != NULL);
+        if (odd == 2) {
+            ASSERT_EQ_INT(read_str(text, MESHIO_MEDIT, &m, &err), QDC_EPARSE);
+            ASSERT_TRUE(m == NULL);
+            ASSERT_EQ_INT(err.line, 5 + 40000);
+            ASSERT_EQ_INT(err.index, 40000);
+            ASSERT_TRUE(strcmp(err.kind, "vertex") == 0);
+            free(text);
+            continue;
+        }
+        ASSERT_OK(read_str(text, MESHIO_MEDIT, &m, &err));
+        ASSERT_EQ_INT(m->nv, nv);
+        ASSERT_EQ_INT(m->nt, nt);
+        for (int32_t i = 0; i < nv; i++) {
+            ASSERT_TRUE(m->xyz[3 * i] == i * 0.5 + 0.25 && m->xyz[3 * i + 1] == -i &&
+                        m->xyz[3 * i + 2] == i / 8.0);
+            ASSERT_EQ_INT(m->vref[i], i % 7);
+        }
+        for (int32_t i = 0; i < nt; i++) {
+            for (int j = 0; j < 4; j++)
+                ASSERT_EQ_INT(m->tets[4 * i + j], (i + j) % nv);
+            ASSERT_EQ_INT(m->region[i], i % 5);
+        }
+        mesh_free(m);
+        free(text);
+    }
+}
+
 TEST(medit_deferred_error_position)
 {
     const char *text = "Tetrahedra\n2\n1 2 3 4 0\n1 2 3\n 5 0\nVertices\n4\n"
@@ -662,8 +732,8 @@ TEST(fuzz_replay)
     ASSERT_EQ_INT(bad, 0);
 }
 
-TEST_MAIN("meshio", T(roundtrip_medit), T(roundtrip_qmesh), T(roundtrip_json),
-          T(roundtrip_empty), T(roundtrip_files), T(save_bad_dir),
+TEST_MAIN("meshio", T(roundtrip_medit), T(medit_large_sections), T(roundtrip_qmesh),
+          T(roundtrip_json), T(roundtrip_empty), T(roundtrip_files), T(save_bad_dir),
           T(write_failure_is_eio), T(medit_features), T(medit_error_position),
           T(medit_deferred_error_position), T(json_features), T(json_not_nul_terminated),
           T(tetgen_read), T(huge_counts_fail_fast), T(formats_and_sniffing), T(dev_cube),
