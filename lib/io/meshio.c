@@ -424,33 +424,12 @@ static int line_runs_of(txt *s, int64_t c, line_runs *lr)
     return 1;
 }
 
-/* The reader of run r: s's state over the run's bytes. */
-static txt run_txt(const txt *s, const line_runs *lr, int r)
-{
-    txt t = *s;
+/* Entry i of a section, read by t; 1 if it reads. */
+typedef int (*entry_fn)(txt *t, int64_t i, void *ctx);
 
-    t.p = t.bol = lr->at[r];
-    t.end = lr->at[r + 1];
-    return t;
-}
-
-/* 1 if a run's reader stopped where the run ends. */
-static int run_ends(txt *t)
-{
-    skip_ws(t);
-    return t->p == t->end;
-}
-
-/* s past the c lines of the runs (read in parallel). */
-static void runs_read(txt *s, const line_runs *lr, int64_t c)
-{
-    s->p = s->bol = lr->at[PAR_RUNS];
-    s->line += c;
-}
-
-/* medit_vertices in parallel; 0: read the section serially. */
-static int medit_vertices_par(txt *s, int64_t c, double *xyz, int32_t *vref,
-                              uint64_t *off)
+/* The c entries of a section in parallel runs of lines; 0: read them
+ * serially. */
+static int read_runs(txt *s, int64_t c, entry_fn fn, void *ctx)
 {
     line_runs lr;
     int ok = 1;
@@ -459,56 +438,67 @@ static int medit_vertices_par(txt *s, int64_t c, double *xyz, int32_t *vref,
         return 0;
 #pragma omp parallel for schedule(dynamic, 1) reduction(&& : ok)
     for (int r = 0; r < PAR_RUNS; r++) {
-        txt t = run_txt(s, &lr, r);
-        for (int64_t i = c * r / PAR_RUNS; ok && i < c * (r + 1) / PAR_RUNS; i++) {
-            int64_t ref;
-            if (off) {
-                skip_ws(&t);
-                off[i] = (uint64_t)(t.p - t.base);
-            }
-            for (int j = 0; j < 3 && ok; j++)
-                ok = txt_real(&t, "", &xyz[3 * i + j], NULL) == QDC_OK;
-            ok = ok && txt_int(&t, "", INT32_MIN, INT32_MAX, &ref, NULL) == QDC_OK;
-            if (ok)
-                vref[i] = (int32_t)ref;
-        }
-        ok = ok && run_ends(&t);
+        txt t = *s; /* s's state over the run's bytes */
+        t.p = t.bol = lr.at[r];
+        t.end = lr.at[r + 1];
+        for (int64_t i = c * r / PAR_RUNS; ok && i < c * (r + 1) / PAR_RUNS; i++)
+            ok = fn(&t, i, ctx);
+        skip_ws(&t);
+        ok = ok && t.p == t.end; /* the run ends with its last line */
     }
-    if (ok)
-        runs_read(s, &lr, c);
+    if (ok) {
+        s->p = s->bol = lr.at[PAR_RUNS];
+        s->line += c;
+    }
     return ok;
 }
 
-/* medit_elems in parallel; 0: read the section serially. */
-static int medit_elems_par(txt *s, int64_t c, int k, int64_t hi, int32_t *idx,
-                           int32_t *ref)
-{
-    line_runs lr;
-    int ok = 1;
+typedef struct {
+    double *xyz;
+    int32_t *vref;
+    uint64_t *off;
+} vertex_out;
 
-    if (c < PAR_MIN_ENTRIES || !line_runs_of(s, c, &lr))
-        return 0;
-#pragma omp parallel for schedule(dynamic, 1) reduction(&& : ok)
-    for (int r = 0; r < PAR_RUNS; r++) {
-        txt t = run_txt(s, &lr, r);
-        for (int64_t i = c * r / PAR_RUNS; ok && i < c * (r + 1) / PAR_RUNS; i++) {
-            int64_t v;
-            for (int j = 0; j < k && ok; j++) {
-                ok = txt_int(&t, "", 1, hi, &v, NULL) == QDC_OK;
-                if (ok)
-                    idx[k * i + j] = (int32_t)(v - 1);
-            }
-            if (ok && ref) {
-                ok = txt_int(&t, "", INT32_MIN, INT32_MAX, &v, NULL) == QDC_OK;
-                if (ok)
-                    ref[i] = (int32_t)v;
-            }
-        }
-        ok = ok && run_ends(&t);
+static int vertex_entry(txt *t, int64_t i, void *ctx)
+{
+    vertex_out *o = ctx;
+    int64_t ref;
+
+    if (o->off) {
+        skip_ws(t);
+        o->off[i] = (uint64_t)(t->p - t->base);
     }
-    if (ok)
-        runs_read(s, &lr, c);
-    return ok;
+    for (int j = 0; j < 3; j++)
+        if (txt_real(t, "", &o->xyz[3 * i + j], NULL) != QDC_OK)
+            return 0;
+    if (txt_int(t, "", INT32_MIN, INT32_MAX, &ref, NULL) != QDC_OK)
+        return 0;
+    o->vref[i] = (int32_t)ref;
+    return 1;
+}
+
+typedef struct {
+    int k;
+    int64_t hi;
+    int32_t *idx, *ref;
+} elem_out;
+
+static int elem_entry(txt *t, int64_t i, void *ctx)
+{
+    elem_out *o = ctx;
+    int64_t v;
+
+    for (int j = 0; j < o->k; j++) {
+        if (txt_int(t, "", 1, o->hi, &v, NULL) != QDC_OK)
+            return 0;
+        o->idx[o->k * i + j] = (int32_t)(v - 1);
+    }
+    if (!o->ref)
+        return 1;
+    if (txt_int(t, "", INT32_MIN, INT32_MAX, &v, NULL) != QDC_OK)
+        return 0;
+    o->ref[i] = (int32_t)v;
+    return 1;
 }
 
 static qdc_status medit_vertices(txt *s, int64_t c, double *xyz, int32_t *vref,
@@ -516,8 +506,9 @@ static qdc_status medit_vertices(txt *s, int64_t c, double *xyz, int32_t *vref,
 {
     qdc_status st = QDC_OK;
     int64_t i, ref;
+    vertex_out vo = {xyz, vref, off};
 
-    if (medit_vertices_par(s, c, xyz, vref, off))
+    if (read_runs(s, c, vertex_entry, &vo))
         return QDC_OK;
     for (i = 0; i < c; i++) {
         if (off) {
@@ -560,8 +551,9 @@ static qdc_status medit_elems(txt *s, const char *sect, int64_t c, int k, int64_
     char what[48];
     qdc_status st = QDC_OK;
     int64_t i, v, hi = nv >= 0 ? nv : INT32_MAX;
+    elem_out eo = {k, hi, idx, ref};
 
-    if (medit_elems_par(s, c, k, hi, idx, ref))
+    if (read_runs(s, c, elem_entry, &eo))
         return QDC_OK;
     snprintf(what, sizeof what, "%s: vertex index", sect);
     for (i = 0; i < c; i++) {
