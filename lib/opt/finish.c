@@ -1091,7 +1091,8 @@ out:
 #define PATCH_INNER 20 /* ascent steps per tet */
 
 typedef struct {
-    int nv; /* movable corners */
+    int eta; /* the functions: 0 the tets' dihedral sines, 1 their mean ratios cubed */
+    int nv;  /* movable corners */
     int32_t v[4];
     double y[4][3]; /* their positions */
     int32_t nt;     /* tets of their stars */
@@ -1112,39 +1113,56 @@ static void patch_tet(const mesh_topo *tp, const double *x, const patch_t *pc,
     }
 }
 
-/* Smallest sine over the patch's tets with its corners at y; the smallest
- * mean ratio cubed (*qmin), the tets below level (*nbelow) and, if act, the
- * active functions (k: position in pc->t). */
-static double patch_sines(const mesh_topo *tp, const double *x, const patch_t *pc,
-                          const double (*y)[3], double level, int *nbelow, double *qmin,
-                          dih_fn *act, int *nact)
+/* The functions of tet i of the patch with its corners at y into f[] (6
+ * sines, or the mean ratio cubed once); returns how many, and its mean ratio
+ * cubed in *q3. */
+static int patch_fns(const mesh_topo *tp, const double *x, const patch_t *pc,
+                     const double (*y)[3], int32_t i, double f[6], double *q3)
 {
-    double smin = INFINITY, q = INFINITY, sv[PATCH_MAXT][6], av[PATCH_ACT];
-    int below = 0, n = 0;
+    double p[4][3];
+
+    patch_tet(tp, x, pc, y, pc->t[i], p);
+    *q3 = metric_dihedral_sines_eta3(p[0], p[1], p[2], p[3], f);
+    if (!pc->eta)
+        return 6;
+    f[0] = *q3;
+    return 1;
+}
+
+/* Smallest function value over the patch's tets with its corners at y; the
+ * smallest mean ratio cubed (*qmin), the tets with a value below level
+ * (*nbelow) and, if act, the active functions (within DIH_ACTIVE of the
+ * smallest, or 1% of it for mean ratios; k: position in pc->t). */
+static double patch_values(const mesh_topo *tp, const double *x, const patch_t *pc,
+                           const double (*y)[3], double level, int *nbelow, double *qmin,
+                           dih_fn *act, int *nact)
+{
+    double fmin_ = INFINITY, q = INFINITY, fv[PATCH_MAXT][6], av[PATCH_ACT], tol;
+    int below = 0, n = 0, nf = 6;
 
     for (int32_t i = 0; i < pc->nt; i++) {
-        double p[4][3], tmin = INFINITY;
-        patch_tet(tp, x, pc, y, pc->t[i], p);
-        q = fmin(q, metric_dihedral_sines_eta3(p[0], p[1], p[2], p[3], sv[i]));
-        for (int e = 0; e < 6; e++)
-            tmin = fmin(tmin, sv[i][e]);
-        smin = fmin(smin, tmin);
+        double tmin = INFINITY, q3;
+        nf = patch_fns(tp, x, pc, y, i, fv[i], &q3);
+        q = fmin(q, q3);
+        for (int e = 0; e < nf; e++)
+            tmin = fmin(tmin, fv[i][e]);
+        fmin_ = fmin(fmin_, tmin);
         below += tmin < level;
     }
-    /* the smallest PATCH_ACT within DIH_ACTIVE of the minimum, sorted */
+    tol = pc->eta ? 0.01 * fabs(fmin_) : DIH_ACTIVE;
+    /* the smallest PATCH_ACT active functions, sorted */
     for (int32_t i = 0; act && i < pc->nt; i++)
-        for (int e = 0; e < 6; e++) {
+        for (int e = 0; e < nf; e++) {
             int j;
-            if (!(sv[i][e] <= smin + DIH_ACTIVE) ||
-                (n == PATCH_ACT && sv[i][e] >= av[n - 1]))
+            if (!(fv[i][e] <= fmin_ + tol) || (n == PATCH_ACT && fv[i][e] >= av[n - 1]))
                 continue;
             j = n < PATCH_ACT ? n++ : n - 1;
-            while (j > 0 && av[j - 1] > sv[i][e]) {
+            while (j > 0 && av[j - 1] > fv[i][e]) {
                 av[j] = av[j - 1];
                 act[j] = act[j - 1];
                 j--;
             }
-            av[j] = sv[i][e];
+            av[j] = fv[i][e];
             act[j].k = i;
             act[j].e = e;
         }
@@ -1152,7 +1170,7 @@ static double patch_sines(const mesh_topo *tp, const double *x, const patch_t *p
         *nact = n;
     *nbelow = below;
     *qmin = q;
-    return smin;
+    return fmin_;
 }
 
 /* Euclidean projection of l[0..m) onto the unit simplex. */
@@ -1253,9 +1271,10 @@ static int patch_of(const mesh_topo *tp, const uint8_t *movable, const double *x
 }
 
 /* Max-min ascent of a patch's corners together (dihedral_vertex's rules over
- * the union of their stars); the moves are written to x. */
-static int32_t dihedral_patch(const mesh_topo *tp, const slide_ctx *sl, double *x,
-                              patch_t *pc, double lbar, double qfloor, double level)
+ * the union of their stars; for mean ratios, without the floor); the moves are
+ * written to x. */
+static int32_t patch_ascent(const mesh_topo *tp, const slide_ctx *sl, double *x,
+                            patch_t *pc, double lbar, double qfloor, double level)
 {
     const double qf3 = qfloor * qfloor * qfloor, h = 1e-6 * lbar;
     double s = 0.02 * lbar;
@@ -1266,8 +1285,8 @@ static int32_t dihedral_patch(const mesh_topo *tp, const slide_ctx *sl, double *
         dih_fn act[PATCH_ACT];
         double g[PATCH_ACT][12], d[12], dn = 0.0, y[4][3], q0, q1, f0, f1 = 0.0;
         int nact = 0, ok = 0, nb0, nb1;
-        f0 = patch_sines(tp, x, pc, (const double(*)[3])pc->y, level, &nb0, &q0, act,
-                         &nact);
+        f0 = patch_values(tp, x, pc, (const double(*)[3])pc->y, level, &nb0, &q0, act,
+                          &nact);
         if (!(f0 > 0.0) || nact == 0)
             break;
         for (int i = 0; i < nact; i++) {
@@ -1281,15 +1300,13 @@ static int32_t dihedral_patch(const mesh_topo *tp, const slide_ctx *sl, double *
                 if (!in)
                     continue;
                 for (int c = 0; c < 3; c++) {
-                    double yy[4][3], p[4][3], sp[6], sm[6];
+                    double yy[4][3], fp[6], fm[6], q3;
                     memcpy(yy, pc->y, sizeof yy);
                     yy[j][c] += h;
-                    patch_tet(tp, x, pc, (const double(*)[3])yy, t, p);
-                    metric_dihedral_sines(p[0], p[1], p[2], p[3], sp);
+                    patch_fns(tp, x, pc, (const double(*)[3])yy, act[i].k, fp, &q3);
                     yy[j][c] -= 2.0 * h;
-                    patch_tet(tp, x, pc, (const double(*)[3])yy, t, p);
-                    metric_dihedral_sines(p[0], p[1], p[2], p[3], sm);
-                    gj[c] = (sp[act[i].e] - sm[act[i].e]) / (2.0 * h);
+                    patch_fns(tp, x, pc, (const double(*)[3])yy, act[i].k, fm, &q3);
+                    gj[c] = (fp[act[i].e] - fm[act[i].e]) / (2.0 * h);
                 }
                 if (sl && slide_kind(sl, pc->v[j]) != SLIDE_INTERIOR) {
                     double gt[3];
@@ -1309,9 +1326,9 @@ static int32_t dihedral_patch(const mesh_topo *tp, const slide_ctx *sl, double *
                 trial_point(sliding ? sl : NULL, pc->v[j], pc->y[j], d + 3 * j, s / dn,
                             y[j]);
             }
-            f1 = patch_sines(tp, x, pc, (const double(*)[3])y, level, &nb1, &q1, NULL,
-                             NULL);
-            if (f1 > f0 && nb1 <= nb0 && q1 >= qf3) {
+            f1 = patch_values(tp, x, pc, (const double(*)[3])y, level, &nb1, &q1, NULL,
+                              NULL);
+            if (f1 > f0 && nb1 <= nb0 && (pc->eta || q1 >= qf3)) {
                 ok = 1;
                 break;
             }
@@ -1322,7 +1339,7 @@ static int32_t dihedral_patch(const mesh_topo *tp, const slide_ctx *sl, double *
         memcpy(pc->y, y, sizeof y);
         moves++;
         s = fmin(s * 1.6, 0.1 * lbar);
-        if (f1 - f0 < 1e-6)
+        if (f1 - f0 < (pc->eta ? 1e-5 * f0 : 1e-6))
             break;
     }
     for (int j = 0; moves && j < pc->nv; j++)
@@ -1387,36 +1404,59 @@ static double mean_s(const st_pair *p, int32_t n)
     return n > 0 ? s / n : 0.0;
 }
 
-qdc_status finish_dihedral_patches(const mesh_topo *tp, const uint8_t *movable,
-                                   const slide_ctx *sl, double *x, double lbar,
-                                   double qfloor, double *smin, int smin_valid,
-                                   finish_stats *st)
+/* The mean ratio of tet t at x, as the driver's scans compute it. */
+static double tet_eta(const mesh_topo *tp, const double *x, int32_t t)
+{
+    const int32_t *tt = tp->tets + 4 * (size_t)t;
+    metric_parts pt;
+
+    metric_parts_for(OPT_METRIC_MIVL, x + 3 * (size_t)tt[0], x + 3 * (size_t)tt[1],
+                     x + 3 * (size_t)tt[2], x + 3 * (size_t)tt[3], &pt);
+    return metric_mean_ratio(&pt);
+}
+
+qdc_status finish_patches(const mesh_topo *tp, const uint8_t *movable,
+                          const slide_ctx *sl, double *x, double lbar,
+                          finish_patch_kind kind, double qfloor, double *val,
+                          int val_valid, finish_stats *st)
 {
     st_pair worst[PATCH_TETS];
     patch_t *pc = qdc_malloc(sizeof *pc);
+    int eta = kind == FINISH_PATCH_MEAN_RATIO;
+    double level;
     int32_t n;
 
     memset(st, 0, sizeof *st);
     if (!pc)
         return QDC_ENOMEM;
-    if (!smin_valid)
-        fresh_sines(tp, x, smin);
-    n = worst_tets(smin, tp->nt, worst);
+    if (!val_valid && eta) {
+#pragma omp parallel for schedule(static)
+        for (int32_t t = 0; t < tp->nt; t++)
+            val[t] = tet_eta(tp, x, t);
+    } else if (!val_valid) {
+        fresh_sines(tp, x, val);
+    }
+    n = worst_tets(val, tp->nt, worst);
     st->floor_before = n > 0 ? worst[0].s : INFINITY;
     st->score_before = mean_s(worst, n);
+    level = n > 0 ? worst[n - 1].s : 0.0;
+    if (eta) /* the ascent compares mean ratios cubed */
+        level = level * level * level;
     /* worst first, one patch after the other (they share vertices); the
-     * sines of a moved patch's tets are brought up to date */
+     * values of a moved patch's tets are brought up to date */
     for (int32_t i = 0; i < n; i++) {
         int32_t moves;
         if (!patch_of(tp, movable, x, worst[i].t, pc))
             continue;
+        pc->eta = eta;
         st->n_verts += pc->nv;
-        moves = dihedral_patch(tp, sl, x, pc, lbar, qfloor, worst[n - 1].s);
+        moves = patch_ascent(tp, sl, x, pc, lbar, qfloor, level);
         st->n_moves += moves;
         for (int32_t j = 0; moves && j < pc->nt; j++)
-            smin[pc->t[j]] = tet_min_sine(tp, x, pc->t[j]);
+            val[pc->t[j]] =
+                eta ? tet_eta(tp, x, pc->t[j]) : tet_min_sine(tp, x, pc->t[j]);
     }
-    n = worst_tets(smin, tp->nt, worst);
+    n = worst_tets(val, tp->nt, worst);
     st->floor_after = n > 0 ? worst[0].s : INFINITY;
     st->score_after = mean_s(worst, n);
     qdc_free(pc);

@@ -47,16 +47,21 @@ qdc_status finish_dihedral_sweep(const mesh_topo *tp, const uint8_t *movable,
                                  double qfloor, double *smin, int smin_valid,
                                  finish_stats *st);
 
-/* Joint moves of the worst tets' corners (after the sweeps of
- * finish_dihedral_sweep have balanced single vertices): for each of the 32
- * tets of smallest dihedral sine, worst first, the max-min ascent of its
- * movable corners together over the union of their stars, under the same rules
- * (the smallest sine rises, no more tets under the 32nd smallest sine, none
- * under qfloor). smin as in finish_dihedral_sweep; score: the mean of the 32
- * smallest sines. */
-qdc_status finish_dihedral_patches(const mesh_topo *tp, const uint8_t *movable,
-                                   const slide_ctx *sl, double *x, double lbar,
-                                   double qfloor, double *smin, int smin_valid,
-                                   finish_stats *st);
+/* Joint moves of the worst tets' corners (after single-vertex sweeps have
+ * balanced neighbouring tets): for each of the 32 worst tets, worst first, the
+ * max-min ascent of its movable corners together over the union of their
+ * stars. FINISH_PATCH_ANGLES: the tets' dihedral sines, under
+ * finish_dihedral_sweep's rules (the smallest sine rises, no more tets under
+ * the 32nd smallest sine, none under qfloor); val: each tet's smallest sine.
+ * FINISH_PATCH_MEAN_RATIO: the tets' mean ratios (no floor; qfloor unused);
+ * val: each tet's mean ratio. val is read if val_valid, else computed, and
+ * kept up to date; floor: the smallest value, score: the mean of the 32
+ * smallest. */
+typedef enum { FINISH_PATCH_ANGLES, FINISH_PATCH_MEAN_RATIO } finish_patch_kind;
+
+qdc_status finish_patches(const mesh_topo *tp, const uint8_t *movable,
+                          const slide_ctx *sl, double *x, double lbar,
+                          finish_patch_kind kind, double qfloor, double *val,
+                          int val_valid, finish_stats *st);
 
 #endif

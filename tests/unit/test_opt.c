@@ -345,103 +345,137 @@ TEST(allocation_failures_are_clean)
 #endif
 }
 
+/* smallest dihedral sine and mean ratio of tet t */
+static void tet_values(const mesh_t *m, int32_t t, double *smin, double *eta)
+{
+    const int32_t *tt = m->tets + 4 * (size_t)t;
+    double sn[6];
+    metric_parts pt;
+
+    metric_dihedral_sines(m->xyz + 3 * tt[0], m->xyz + 3 * tt[1], m->xyz + 3 * tt[2],
+                          m->xyz + 3 * tt[3], sn);
+    metric_parts_of(m->xyz + 3 * tt[0], m->xyz + 3 * tt[1], m->xyz + 3 * tt[2],
+                    m->xyz + 3 * tt[3], &pt);
+    *smin = INFINITY;
+    for (int e = 0; e < 6; e++)
+        *smin = fmin(*smin, sn[e]);
+    *eta = metric_mean_ratio(&pt);
+}
+
 /* smallest dihedral sine and smallest mean ratio of the mesh */
 static void worst_of(const mesh_t *m, double *smin, double *qmin)
 {
     *smin = *qmin = INFINITY;
     for (int32_t t = 0; t < m->nt; t++) {
-        const int32_t *tt = m->tets + 4 * (size_t)t;
-        double sn[6];
-        metric_parts pt;
-        metric_dihedral_sines(m->xyz + 3 * tt[0], m->xyz + 3 * tt[1], m->xyz + 3 * tt[2],
-                              m->xyz + 3 * tt[3], sn);
-        metric_parts_of(m->xyz + 3 * tt[0], m->xyz + 3 * tt[1], m->xyz + 3 * tt[2],
-                        m->xyz + 3 * tt[3], &pt);
-        for (int e = 0; e < 6; e++)
-            *smin = fmin(*smin, sn[e]);
-        *qmin = fmin(*qmin, metric_mean_ratio(&pt));
+        double s, q;
+        tet_values(m, t, &s, &q);
+        *smin = fmin(*smin, s);
+        *qmin = fmin(*qmin, q);
     }
+}
+
+/* A perturbed grid of n^3 cubes for the finishing functions: its topology,
+ * its interior vertices movable, a copy of its coordinates, a value per tet. */
+typedef struct {
+    int n;
+    mesh_t *m;
+    mesh_topo *tp;
+    uint8_t *movable;
+    double *x0, *val;
+} grid_case;
+
+static int grid_case_new(grid_case *g, int n, double amp, unsigned seed)
+{
+    g->n = n;
+    g->m = tm_grid(n, 0);
+    g->tp = NULL;
+    tm_perturb(g->m, n, amp, seed);
+    if (mesh_topo_build(g->m, &g->tp, NULL) != QDC_OK)
+        return 0;
+    g->movable = calloc((size_t)g->m->nv, 1);
+    g->x0 = malloc(3 * (size_t)g->m->nv * sizeof(double));
+    g->val = malloc((size_t)g->m->nt * sizeof(double));
+    if (!g->movable || !g->x0 || !g->val)
+        return 0;
+    for (int32_t v = 0; v < g->m->nv; v++)
+        g->movable[v] = !(g->tp->vflag[v] & MESH_V_BOUNDARY);
+    memcpy(g->x0, g->m->xyz, 3 * (size_t)g->m->nv * sizeof(double));
+    return 1;
+}
+
+static void grid_case_free(grid_case *g)
+{
+    free(g->val);
+    free(g->movable);
+    free(g->x0);
+    mesh_topo_free(g->tp);
+    mesh_free(g->m);
+}
+
+/* 1 if no vertex that may not move has moved since x0 was taken. */
+static int fixed_kept(const grid_case *g)
+{
+    for (int32_t v = 0; v < g->m->nv; v++)
+        if (!g->movable[v] &&
+            memcmp(g->m->xyz + 3 * v, g->x0 + 3 * v, 3 * sizeof(double)))
+            return 0;
+    return 1;
+}
+
+/* 1 if val holds each tet's smallest dihedral sine (sines) or mean ratio. */
+static int values_current(const grid_case *g, int sines)
+{
+    for (int32_t t = 0; t < g->m->nt; t++) {
+        double s, q;
+        tet_values(g->m, t, &s, &q);
+        if (fabs(g->val[t] - (sines ? s : q)) > 1e-14)
+            return 0;
+    }
+    return 1;
 }
 
 TEST(angle_sweep_raises_the_smallest_angle_within_its_rules)
 {
-    int n = 5;
-    mesh_t *m = tm_grid(n, 0);
-    mesh_topo *tp = NULL;
-    uint8_t *movable;
-    double *x0, *smin, s0, q0, s1, q1;
+    grid_case g;
+    double s0, q0, s1, q1;
     finish_stats fs;
-    int32_t locked = 1 + (n + 1) * (1 + (n + 1) * 1); /* interior vertex (1,1,1) */
-    tm_perturb(m, n, 0.3, 7);
-    ASSERT_OK(mesh_topo_build(m, &tp, NULL));
-    movable = calloc((size_t)m->nv, 1);
-    x0 = malloc(3 * (size_t)m->nv * sizeof(double));
-    ASSERT_TRUE(movable && x0);
-    memcpy(x0, m->xyz, 3 * (size_t)m->nv * sizeof(double));
-    for (int32_t v = 0; v < m->nv; v++)
-        movable[v] = !(tp->vflag[v] & MESH_V_BOUNDARY) && v != locked;
-    worst_of(m, &s0, &q0);
+    ASSERT_TRUE(grid_case_new(&g, 5, 0.3, 7));
+    g.movable[1 + 6 * (1 + 6 * 1)] = 0; /* interior vertex (1,1,1) locked */
+    worst_of(g.m, &s0, &q0);
     ASSERT_TRUE(s0 > 0.0);
-    smin = malloc((size_t)m->nt * sizeof(double));
-    ASSERT_TRUE(smin);
-    ASSERT_OK(finish_dihedral_sweep(tp, movable, NULL, m->xyz, 1.0 / n, 0.05, q0, smin, 0,
-                                    &fs));
-    worst_of(m, &s1, &q1);
+    ASSERT_OK(finish_dihedral_sweep(g.tp, g.movable, NULL, g.m->xyz, 1.0 / g.n, 0.05, q0,
+                                    g.val, 0, &fs));
+    worst_of(g.m, &s1, &q1);
     ASSERT_TRUE(fs.n_moves > 0);
     ASSERT_NEAR(fs.floor_before, s0, 1e-12);
     ASSERT_NEAR(fs.floor_after, s1, 1e-12);
     ASSERT_TRUE(s1 > s0);  /* the smallest sine rose */
     ASSERT_TRUE(q1 >= q0); /* no tet fell below the mean-ratio floor */
-    for (int32_t v = 0; v < m->nv; v++)
-        if (!movable[v])
-            for (int c = 0; c < 3; c++)
-                ASSERT_TRUE(m->xyz[3 * v + c] == x0[3 * v + c]);
-    for (int32_t t = 0; t < m->nt; t++) { /* smin holds the sines at the new x */
-        double sn[6], lo = INFINITY;
-        const int32_t *tt = m->tets + 4 * (size_t)t;
-        metric_dihedral_sines(m->xyz + 3 * tt[0], m->xyz + 3 * tt[1], m->xyz + 3 * tt[2],
-                              m->xyz + 3 * tt[3], sn);
-        for (int e = 0; e < 6; e++)
-            lo = fmin(lo, sn[e]);
-        ASSERT_NEAR(smin[t], lo, 1e-15);
-    }
-    free(smin);
-    free(movable);
-    free(x0);
-    mesh_topo_free(tp);
-    mesh_free(m);
+    ASSERT_TRUE(fixed_kept(&g));
+    ASSERT_TRUE(values_current(&g, 1)); /* the sines at the new x */
+    grid_case_free(&g);
 }
 
 /* After single-vertex sweeps stop raising the smallest sine, the joint moves
  * of the worst tets' corners raise it further, under the same rules. */
 TEST(joint_moves_lift_what_single_vertices_leave)
 {
-    int n = 6;
-    mesh_t *m = tm_grid(n, 0);
-    mesh_topo *tp = NULL;
-    uint8_t *movable;
-    double *x0, *smin, s0, q0, s1, q1, s2, q2;
+    grid_case g;
+    double s0, q0, s1, q1, s2, q2;
     finish_stats fs;
     int sweeps = 0;
-    tm_perturb(m, n, 0.3, 7);
-    ASSERT_OK(mesh_topo_build(m, &tp, NULL));
-    movable = calloc((size_t)m->nv, 1);
-    x0 = malloc(3 * (size_t)m->nv * sizeof(double));
-    smin = malloc((size_t)m->nt * sizeof(double));
-    ASSERT_TRUE(movable && x0 && smin);
-    for (int32_t v = 0; v < m->nv; v++)
-        movable[v] = !(tp->vflag[v] & MESH_V_BOUNDARY);
-    worst_of(m, &s0, &q0);
+    ASSERT_TRUE(grid_case_new(&g, 6, 0.3, 7));
+    worst_of(g.m, &s0, &q0);
     ASSERT_TRUE(s0 > 0.0);
     do { /* single vertices until the smallest sine stays */
-        ASSERT_OK(finish_dihedral_sweep(tp, movable, NULL, m->xyz, 1.0 / n, 0.05, q0,
-                                        smin, sweeps > 0, &fs));
+        ASSERT_OK(finish_dihedral_sweep(g.tp, g.movable, NULL, g.m->xyz, 1.0 / g.n, 0.05,
+                                        q0, g.val, sweeps > 0, &fs));
     } while (fs.floor_after > fs.floor_before && ++sweeps < 50);
-    worst_of(m, &s1, &q1);
-    memcpy(x0, m->xyz, 3 * (size_t)m->nv * sizeof(double));
-    ASSERT_OK(
-        finish_dihedral_patches(tp, movable, NULL, m->xyz, 1.0 / n, q0, smin, 0, &fs));
-    worst_of(m, &s2, &q2);
+    worst_of(g.m, &s1, &q1);
+    memcpy(g.x0, g.m->xyz, 3 * (size_t)g.m->nv * sizeof(double));
+    ASSERT_OK(finish_patches(g.tp, g.movable, NULL, g.m->xyz, 1.0 / g.n,
+                             FINISH_PATCH_ANGLES, q0, g.val, 0, &fs));
+    worst_of(g.m, &s2, &q2);
     printf("  # smallest dihedral sine %.4f, single vertices %.4f, joint moves %.4f\n",
            s0, s1, s2);
     ASSERT_NEAR(fs.floor_before, s1, 1e-12);
@@ -449,24 +483,32 @@ TEST(joint_moves_lift_what_single_vertices_leave)
     ASSERT_TRUE(fs.n_moves > 0);
     ASSERT_TRUE(s2 > s1);  /* what the sweeps could not lift */
     ASSERT_TRUE(q2 >= q0); /* the mean-ratio floor holds */
-    for (int32_t v = 0; v < m->nv; v++)
-        if (!movable[v])
-            for (int c = 0; c < 3; c++)
-                ASSERT_TRUE(m->xyz[3 * v + c] == x0[3 * v + c]);
-    for (int32_t t = 0; t < m->nt; t++) { /* smin holds the sines at the new x */
-        double sn[6], lo = INFINITY;
-        const int32_t *tt = m->tets + 4 * (size_t)t;
-        metric_dihedral_sines(m->xyz + 3 * tt[0], m->xyz + 3 * tt[1], m->xyz + 3 * tt[2],
-                              m->xyz + 3 * tt[3], sn);
-        for (int e = 0; e < 6; e++)
-            lo = fmin(lo, sn[e]);
-        ASSERT_NEAR(smin[t], lo, 1e-15);
-    }
-    free(smin);
-    free(movable);
-    free(x0);
-    mesh_topo_free(tp);
-    mesh_free(m);
+    ASSERT_TRUE(fixed_kept(&g));
+    ASSERT_TRUE(values_current(&g, 1));
+    grid_case_free(&g);
+}
+
+/* The same joint moves on the tets' mean ratios lift the worst of them; the
+ * values kept up to date are the mean ratios at the new x. */
+TEST(joint_moves_lift_the_worst_mean_ratio)
+{
+    grid_case g;
+    double s0, q0, s1, q1;
+    finish_stats fs;
+    ASSERT_TRUE(grid_case_new(&g, 6, 0.3, 7));
+    worst_of(g.m, &s0, &q0);
+    ASSERT_OK(finish_patches(g.tp, g.movable, NULL, g.m->xyz, 1.0 / g.n,
+                             FINISH_PATCH_MEAN_RATIO, 0.0, g.val, 0, &fs));
+    worst_of(g.m, &s1, &q1);
+    printf("  # worst mean ratio %.4f -> %.4f\n", q0, q1);
+    ASSERT_NEAR(fs.floor_before, q0, 1e-12);
+    ASSERT_NEAR(fs.floor_after, q1, 1e-12);
+    ASSERT_TRUE(fs.n_moves > 0);
+    ASSERT_TRUE(q1 > q0);
+    ASSERT_TRUE(s1 > 0.0); /* nothing inverted */
+    ASSERT_TRUE(fixed_kept(&g));
+    ASSERT_TRUE(values_current(&g, 0));
+    grid_case_free(&g);
 }
 
 TEST(angle_polish_option_keeps_every_guarantee)
@@ -498,6 +540,7 @@ TEST(angle_polish_option_keeps_every_guarantee)
 TEST_MAIN("opt", T(result_does_not_depend_on_vertex_numbering),
           T(angle_sweep_raises_the_smallest_angle_within_its_rules),
           T(joint_moves_lift_what_single_vertices_leave),
+          T(joint_moves_lift_the_worst_mean_ratio),
           T(angle_polish_option_keeps_every_guarantee), T(improves_perturbed_grid),
           T(untangles_inverted_grid), T(never_worse_than_input),
           T(literal_mode_is_safe_and_reported),
