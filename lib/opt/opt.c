@@ -170,9 +170,7 @@ typedef struct {
     double t0;
     opt_progress input, best;
     int best_it;
-    int last_record;    /* number of the last progress record */
-    double angle_floor; /* the worst mean ratio before the finishing pass's joint
-                         * moves (0: none): the angle pass's floor */
+    int last_record; /* number of the last progress record */
 } ctx_t;
 
 static void logf_(const ctx_t *c, int level, const char *fmt, ...)
@@ -835,7 +833,6 @@ static void pass_record(ctx_t *c, opt_progress *r, int *next, const char *phase)
     r->phase = phase;
 }
 
-#define FINISH_PATCH_ROUNDS 1
 /* The finishing pass (docs/method.md §5a) from c->x: regular sweeps over the worst
  * finish_frac of tets, then polish sweeps over the worst 1% while the worst tet
  * still improves (measured on the dev corpus: it keeps rising for a few more
@@ -905,31 +902,6 @@ static qdc_status finish_pass(ctx_t *c, const uint8_t *movable, int x_evaluated,
         }
         keep = cur;
     }
-    /* then the worst tets' corners together (finish.h), while that lifts the
-     * worst mean ratio */
-    c->angle_floor = keep.q_min;
-    for (int round = 0; round < FINISH_PATCH_ROUNDS && swept; round++) {
-        finish_stats fs;
-        qdc_status st;
-        if (should_stop(c, res))
-            break;
-        memcpy(c->x, c->trial, n3 * sizeof(double));
-        st = finish_patches(c->tp, movable, c->sl, c->x, c->lbar, FINISH_PATCH_MEAN_RATIO,
-                            0.0, c->eta, round > 0, &fs);
-        if (st != QDC_OK)
-            return st;
-        (void)scan_light(c, c->x, c->eta, &cur);
-        if (!better(&cur, &keep))
-            break;
-        memcpy(c->trial, c->x, n3 * sizeof(double));
-        moves += fs.n_moves;
-        visits += fs.n_verts;
-        if (cur.q_min < keep.q_min * (1 + 1e-3)) {
-            keep = cur;
-            break;
-        }
-        keep = cur;
-    }
     if (!swept)
         return QDC_OK;
     pass_record(c, r, next, "finish");
@@ -940,10 +912,12 @@ static qdc_status finish_pass(ctx_t *c, const uint8_t *movable, int x_evaluated,
     return QDC_OK;
 }
 
-/* Worst-angle polish (finish.h) from the best iterate: sweeps over the worst
- * 1% of tets by dihedral sine while their mean sine rises by 0.1%. The worst
- * mean ratio may not fall below the best iterate's (the floor of every move)
- * and the smallest sine cannot drop, so a sweep that raises the score is kept. */
+/* Worst-angle polish (finish.h) from the best iterate: a round of joint moves
+ * on the worst mean ratios, sweeps over the worst 1% of tets by dihedral sine
+ * while their mean sine rises by 0.1%, then rounds of joint moves on the
+ * sines. The worst mean ratio may not fall below the best iterate's (the floor
+ * of every move) and the smallest sine cannot drop, so a sweep that raises the
+ * score is kept. */
 #define ANGLE_SWEEPS 12
 /* ... and ends after ANGLE_SLOW sweeps in a row that leave the smallest sine
  * where it was and raise that mean by less than 1%: measured on the thin bones
@@ -960,21 +934,39 @@ static qdc_status angle_pass(ctx_t *c, const uint8_t *movable, const slide_ctx *
      * holds the last accepted sweep */
     double *smin = c->eta;
     const opt_progress base = c->best;
-    const double qfl =
-        c->angle_floor > 0.0 ? fmin(base.q_min, c->angle_floor) : base.q_min;
     size_t n3 = 3 * (size_t)c->nv;
     int kept = 0, slow = 0, smin_ok = 0; /* smin is of c->trial */
     double moves = 0, visits = 0;
 
     memcpy(c->x, c->xbest, n3 * sizeof(double));
+    /* first one round of joint moves of the worst tets' corners on their mean
+     * ratios (finish.h), kept if the worst tet improves: the angle moves then
+     * start from it, with the floor of the best iterate */
+    if (!should_stop(c, res)) {
+        finish_stats fs;
+        opt_progress cur;
+        qdc_status st = finish_patches(c->tp, movable, sl, c->x, c->lbar,
+                                       FINISH_PATCH_MEAN_RATIO, 0.0, c->eta, 0, &fs);
+        if (st != QDC_OK)
+            return st;
+        (void)scan_light(c, c->x, c->eta, &cur);
+        if (better(&cur, &base)) {
+            memcpy(c->trial, c->x, n3 * sizeof(double));
+            kept = 1;
+            moves += fs.n_moves;
+            visits += fs.n_verts;
+        } else {
+            memcpy(c->x, c->xbest, n3 * sizeof(double));
+        }
+    }
     for (int s = 0; s < ANGLE_SWEEPS; s++) {
         finish_stats fs;
         qdc_status st;
         int floor_up;
         if (should_stop(c, res))
             break;
-        st = finish_dihedral_sweep(c->tp, movable, sl, c->x, c->lbar, 0.01, qfl, smin,
-                                   s > 0, &fs);
+        st = finish_dihedral_sweep(c->tp, movable, sl, c->x, c->lbar, 0.01, base.q_min,
+                                   smin, s > 0, &fs);
         if (st != QDC_OK)
             return st;
         /* the floor keeps q_min and positivity keeps the inverted count; a
@@ -1005,8 +997,8 @@ static qdc_status angle_pass(ctx_t *c, const uint8_t *movable, const slide_ctx *
         if (should_stop(c, res))
             break;
         memcpy(c->x, kept ? c->trial : c->xbest, n3 * sizeof(double));
-        st = finish_patches(c->tp, movable, sl, c->x, c->lbar, FINISH_PATCH_ANGLES, qfl,
-                            smin, round > 0 || smin_ok, &fs);
+        st = finish_patches(c->tp, movable, sl, c->x, c->lbar, FINISH_PATCH_ANGLES,
+                            base.q_min, smin, round > 0 || smin_ok, &fs);
         if (st != QDC_OK)
             return st;
         if (!(fs.floor_after > fs.floor_before))
@@ -1023,7 +1015,7 @@ static qdc_status angle_pass(ctx_t *c, const uint8_t *movable, const slide_ctx *
     /* one record for the pass (a record costs a sweep's worth of work) */
     pass_record(c, r, next, "angles");
     r->step = visits > 0 ? moves / visits : 0;
-    if (eligible(c, r) && r->n_inverted <= base.n_inverted && r->q_min >= qfl) {
+    if (eligible(c, r) && r->n_inverted <= base.n_inverted && r->q_min >= base.q_min) {
         c->best = *r;
         c->best_it = r->iteration;
         memcpy(c->xbest, c->x, n3 * sizeof(double));
