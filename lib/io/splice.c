@@ -468,15 +468,27 @@ static size_t token_end(const source *s, size_t p)
     return p;
 }
 
-/* x in place of the token [t, te): the token itself if it reads as x. */
-static void put_number(wbuf *w, const char *t, const char *te, double x)
+/* The text of x in place of the token [t, te) into out (36 bytes): its
+ * length, or 0 if the token itself reads as x (and is kept). */
+static int number_text(const char *t, const char *te, double x, char *out)
 {
     double old;
 
     if (parse_double(t, te, &old) == 0 && memcmp(&old, &x, sizeof x) == 0)
-        wb_put(w, t, (size_t)(te - t));
+        return 0;
+    return numfmt_g17(x, out);
+}
+
+/* x in place of the token [t, te): the token itself if it reads as x. */
+static void put_number(wbuf *w, const char *t, const char *te, double x)
+{
+    char buf[36];
+    int n = number_text(t, te, x, buf);
+
+    if (n > 0)
+        wb_put(w, buf, (size_t)n);
     else
-        wb_real(w, x);
+        wb_put(w, t, (size_t)(te - t));
 }
 
 /* The text of one coordinate for splice_text: its token [t, te) in the
@@ -499,7 +511,6 @@ static void coord_texts(const source *s, const double *xyz, int32_t v, coord_tex
     size_t p = s->r.off[v];
 
     for (int a = 0; a < 3; a++) {
-        double x = xyz[3 * (size_t)v + (size_t)a], old;
         c[a].t = c[a].te = p;
         c[a].n = 0;
         if (p >= s->len)
@@ -510,9 +521,8 @@ static void coord_texts(const source *s, const double *xyz, int32_t v, coord_tex
         c[a].te = p = token_end(s, p);
         if (c[a].te == c[a].t)
             return;
-        if (!(parse_double(s->buf + c[a].t, s->buf + c[a].te, &old) == 0 &&
-              memcmp(&old, &x, sizeof x) == 0))
-            c[a].n = numfmt_g17(x, c[a].txt);
+        c[a].n = number_text(s->buf + c[a].t, s->buf + c[a].te,
+                             xyz[3 * (size_t)v + (size_t)a], c[a].txt);
     }
 }
 

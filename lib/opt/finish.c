@@ -765,6 +765,26 @@ typedef struct {
     int e;     /* edge 0..5 */
 } dih_fn;
 
+/* Function (k, e) of value f into the active list act[0..*n) (values av[],
+ * sorted, at most cap: a larger value than the last of a full list stays out). */
+static void act_insert(dih_fn *act, double *av, int *n, int cap, double f, int32_t k,
+                       int e)
+{
+    int i;
+
+    if (*n == cap && f >= av[*n - 1])
+        return;
+    i = *n < cap ? (*n)++ : *n - 1;
+    while (i > 0 && av[i - 1] > f) {
+        av[i] = av[i - 1];
+        act[i] = act[i - 1];
+        i--;
+    }
+    av[i] = f;
+    act[i].k = k;
+    act[i].e = e;
+}
+
 /* Corners of star tet k of v with v placed at y; returns v's corner index. */
 static int star_tet(const mesh_topo *tp, const double *x, int32_t k, const double *y,
                     double p[4][3])
@@ -802,23 +822,9 @@ static double star_sines(const mesh_topo *tp, const double *x, int32_t v, const 
                 below += tmin < level;
                 continue;
             }
-            for (int e = 0; e < 6; e++) {
-                int i;
-                if (!(s[e] <= smin + DIH_ACTIVE))
-                    continue;
-                /* insertion into the sorted, capped active list */
-                if (n == DIH_MAXACT && s[e] >= av[n - 1])
-                    continue;
-                i = n < DIH_MAXACT ? n++ : n - 1;
-                while (i > 0 && av[i - 1] > s[e]) {
-                    av[i] = av[i - 1];
-                    act[i] = act[i - 1];
-                    i--;
-                }
-                av[i] = s[e];
-                act[i].k = k;
-                act[i].e = e;
-            }
+            for (int e = 0; e < 6; e++)
+                if (s[e] <= smin + DIH_ACTIVE)
+                    act_insert(act, av, &n, DIH_MAXACT, s[e], k, e);
         }
     if (nact)
         *nact = n;
@@ -1131,20 +1137,19 @@ static int patch_fns(const mesh_topo *tp, const double *x, const patch_t *pc,
 }
 
 /* Smallest function value over the patch's tets with its corners at y; the
- * smallest mean ratio cubed (*qmin), the tets with a value below level
- * (*nbelow) and, if act, the active functions (within DIH_ACTIVE of the
- * smallest, or 1% of it for mean ratios; k: position in pc->t). */
+ * tets with a value below level (*nbelow) and the active functions (within
+ * DIH_ACTIVE of the smallest, or 1% of it for mean ratios; k: position in
+ * pc->t). */
 static double patch_values(const mesh_topo *tp, const double *x, const patch_t *pc,
-                           const double (*y)[3], double level, int *nbelow, double *qmin,
-                           dih_fn *act, int *nact)
+                           const double (*y)[3], double level, int *nbelow, dih_fn *act,
+                           int *nact)
 {
-    double fmin_ = INFINITY, q = INFINITY, fv[PATCH_MAXT][6], av[PATCH_ACT], tol;
+    double fmin_ = INFINITY, fv[PATCH_MAXT][6], av[PATCH_ACT], tol;
     int below = 0, n = 0, nf = 6;
 
     for (int32_t i = 0; i < pc->nt; i++) {
         double tmin = INFINITY, q3;
         nf = patch_fns(tp, x, pc, y, i, fv[i], &q3);
-        q = fmin(q, q3);
         for (int e = 0; e < nf; e++)
             tmin = fmin(tmin, fv[i][e]);
         fmin_ = fmin(fmin_, tmin);
@@ -1152,25 +1157,12 @@ static double patch_values(const mesh_topo *tp, const double *x, const patch_t *
     }
     tol = pc->eta ? 0.01 * fabs(fmin_) : DIH_ACTIVE;
     /* the smallest PATCH_ACT active functions, sorted */
-    for (int32_t i = 0; act && i < pc->nt; i++)
-        for (int e = 0; e < nf; e++) {
-            int j;
-            if (!(fv[i][e] <= fmin_ + tol) || (n == PATCH_ACT && fv[i][e] >= av[n - 1]))
-                continue;
-            j = n < PATCH_ACT ? n++ : n - 1;
-            while (j > 0 && av[j - 1] > fv[i][e]) {
-                av[j] = av[j - 1];
-                act[j] = act[j - 1];
-                j--;
-            }
-            av[j] = fv[i][e];
-            act[j].k = i;
-            act[j].e = e;
-        }
-    if (nact)
-        *nact = n;
+    for (int32_t i = 0; i < pc->nt; i++)
+        for (int e = 0; e < nf; e++)
+            if (fv[i][e] <= fmin_ + tol)
+                act_insert(act, av, &n, PATCH_ACT, fv[i][e], i, e);
+    *nact = n;
     *nbelow = below;
-    *qmin = q;
     return fmin_;
 }
 
@@ -1327,10 +1319,9 @@ static int32_t patch_ascent(const mesh_topo *tp, const slide_ctx *sl, double *x,
 
     for (int it = 0; it < PATCH_INNER; it++) {
         dih_fn act[PATCH_ACT];
-        double g[PATCH_ACT][12], d[12], dn = 0.0, y[4][3], q0, f0, f1 = 0.0;
+        double g[PATCH_ACT][12], d[12], dn = 0.0, y[4][3], f0, f1 = 0.0;
         int nact = 0, ok = 0, nb0;
-        f0 = patch_values(tp, x, pc, (const double(*)[3])pc->y, level, &nb0, &q0, act,
-                          &nact);
+        f0 = patch_values(tp, x, pc, (const double(*)[3])pc->y, level, &nb0, act, &nact);
         if (!(f0 > 0.0) || nact == 0)
             break;
         for (int i = 0; i < nact; i++) {
@@ -1390,38 +1381,34 @@ static int32_t patch_ascent(const mesh_topo *tp, const slide_ctx *sl, double *x,
     return moves;
 }
 
-typedef struct {
-    double s;
-    int32_t t;
-} st_pair;
-
-static int st_cmp(const void *a, const void *b)
+/* (value, tet) pairs by value, ties by tet. */
+static int vq_cmp(const void *a, const void *b)
 {
-    const st_pair *p = a, *q = b;
-    return p->s < q->s ? -1 : p->s > q->s ? 1 : (p->t > q->t) - (p->t < q->t);
+    const vq_pair *p = a, *q = b;
+    return p->q < q->q ? -1 : p->q > q->q ? 1 : (p->v > q->v) - (p->v < q->v);
 }
 
 /* The PATCH_TETS tets of smallest smin (fewer if the mesh has fewer), sorted,
  * ties by index: each of 16 ranges of tets keeps its own smallest, in
  * parallel, then the 16 lists are sorted together. Returns how many. */
 #define WORST_RANGES 16
-static int32_t worst_tets(const double *smin, int32_t nt, st_pair *out)
+static int32_t worst_tets(const double *smin, int32_t nt, vq_pair *out)
 {
-    st_pair cand[WORST_RANGES][PATCH_TETS], all[WORST_RANGES * PATCH_TETS];
+    vq_pair cand[WORST_RANGES][PATCH_TETS], all[WORST_RANGES * PATCH_TETS];
     int32_t nc[WORST_RANGES], n = 0;
 
 #pragma omp parallel for schedule(static)
     for (int r = 0; r < WORST_RANGES; r++) {
-        st_pair *c = cand[r];
+        vq_pair *c = cand[r];
         int32_t m = 0;
         for (int32_t t = qdc_part(nt, r, WORST_RANGES);
              t < qdc_part(nt, r + 1, WORST_RANGES); t++) {
-            st_pair p = {smin[t], t};
+            vq_pair p = {smin[t], t};
             int32_t j;
-            if (m == PATCH_TETS && !(p.s < c[m - 1].s))
+            if (m == PATCH_TETS && !(p.q < c[m - 1].q))
                 continue; /* t is larger than the last: ties keep the lower index */
             j = m < PATCH_TETS ? m++ : m - 1;
-            while (j > 0 && st_cmp(&c[j - 1], &p) > 0) {
+            while (j > 0 && vq_cmp(&c[j - 1], &p) > 0) {
                 c[j] = c[j - 1];
                 j--;
             }
@@ -1432,18 +1419,18 @@ static int32_t worst_tets(const double *smin, int32_t nt, st_pair *out)
     for (int r = 0; r < WORST_RANGES; r++)
         for (int32_t j = 0; j < nc[r]; j++)
             all[n++] = cand[r][j];
-    qsort(all, (size_t)n, sizeof *all, st_cmp);
+    qsort(all, (size_t)n, sizeof *all, vq_cmp);
     n = n < PATCH_TETS ? n : PATCH_TETS;
     memcpy(out, all, (size_t)n * sizeof *out);
     return n;
 }
 
-static double mean_s(const st_pair *p, int32_t n)
+static double mean_q(const vq_pair *p, int32_t n)
 {
     double s = 0.0;
 
     for (int32_t i = 0; i < n; i++)
-        s += p[i].s;
+        s += p[i].q;
     return n > 0 ? s / n : 0.0;
 }
 
@@ -1463,7 +1450,7 @@ qdc_status finish_patches(const mesh_topo *tp, const uint8_t *movable,
                           finish_patch_kind kind, double qfloor, double *val,
                           int val_valid, finish_stats *st)
 {
-    st_pair worst[PATCH_TETS];
+    vq_pair worst[PATCH_TETS];
     patch_t *pc = qdc_malloc(sizeof *pc);
     int eta = kind == FINISH_PATCH_MEAN_RATIO;
     double level;
@@ -1480,16 +1467,16 @@ qdc_status finish_patches(const mesh_topo *tp, const uint8_t *movable,
         fresh_sines(tp, x, val);
     }
     n = worst_tets(val, tp->nt, worst);
-    st->floor_before = n > 0 ? worst[0].s : INFINITY;
-    st->score_before = mean_s(worst, n);
-    level = n > 0 ? worst[n - 1].s : 0.0;
+    st->floor_before = n > 0 ? worst[0].q : INFINITY;
+    st->score_before = mean_q(worst, n);
+    level = n > 0 ? worst[n - 1].q : 0.0;
     if (eta) /* the ascent compares mean ratios cubed */
         level = level * level * level;
     /* worst first, one patch after the other (they share vertices); the
      * values of a moved patch's tets are brought up to date */
     for (int32_t i = 0; i < n; i++) {
         int32_t moves;
-        if (!patch_of(tp, movable, x, worst[i].t, pc))
+        if (!patch_of(tp, movable, x, worst[i].v, pc))
             continue;
         pc->eta = eta;
         st->n_verts += pc->nv;
@@ -1500,8 +1487,8 @@ qdc_status finish_patches(const mesh_topo *tp, const uint8_t *movable,
                 eta ? tet_eta(tp, x, pc->t[j]) : tet_min_sine(tp, x, pc->t[j]);
     }
     n = worst_tets(val, tp->nt, worst);
-    st->floor_after = n > 0 ? worst[0].s : INFINITY;
-    st->score_after = mean_s(worst, n);
+    st->floor_after = n > 0 ? worst[0].q : INFINITY;
+    st->score_after = mean_q(worst, n);
     qdc_free(pc);
     return QDC_OK;
 }
