@@ -46,6 +46,10 @@ qdc_status finish_dihedral_sweep(const mesh_topo *tp, const uint8_t *movable,
                                  const slide_ctx *sl, double *x, double lbar, double frac,
                                  double qfloor, double *smin, int smin_valid,
                                  finish_stats *st);
+/* Stars whose smallest sine is under this (sin 1 degree) are "deep": there
+ * the sweep's vertices also try pattern moves and may lower the star's
+ * smallest mean ratio down to qfloor (finish.c). */
+#define FINISH_DEEP_SINE 0.017452
 
 /* Joint moves of the worst tets' corners (after single-vertex sweeps have
  * balanced neighbouring tets): for each of the 32 worst tets, worst first, the

@@ -456,6 +456,40 @@ TEST(angle_sweep_raises_the_smallest_angle_within_its_rules)
     grid_case_free(&g);
 }
 
+/* Deep stars (smallest sine under FINISH_DEEP_SINE) also take pattern moves
+ * and may lower their smallest mean ratio down to the floor: on a grid whose
+ * worst tet is under 3 degrees, sweeps until the smallest sine stays lift it
+ * well above the start and keep every rule (the mean-ratio floor, positive
+ * tets, fixed vertices, the sines returned at the new x). */
+TEST(deep_stars_lift_under_the_same_rules)
+{
+    grid_case g;
+    double s0 = 1.0, q0 = 0.0, s1, q1;
+    finish_stats fs;
+    int sweeps = 0;
+    unsigned seed;
+    for (seed = 1; seed < 200; seed++) { /* the first valid grid with a deep tet */
+        ASSERT_TRUE(grid_case_new(&g, 5, 0.45, seed));
+        worst_of(g.m, &s0, &q0);
+        if (s0 > 0.0 && s0 < 0.5 * FINISH_DEEP_SINE)
+            break;
+        grid_case_free(&g);
+    }
+    ASSERT_TRUE(seed < 200);
+    do {
+        ASSERT_OK(finish_dihedral_sweep(g.tp, g.movable, NULL, g.m->xyz, 1.0 / g.n, 0.05,
+                                        q0, g.val, sweeps > 0, &fs));
+    } while (fs.floor_after > fs.floor_before && ++sweeps < 200);
+    worst_of(g.m, &s1, &q1);
+    printf("  # seed %u: smallest dihedral sine %.4f -> %.4f after %d sweeps\n", seed, s0,
+           s1, sweeps);
+    ASSERT_TRUE(s1 > 2.0 * s0); /* well above the start */
+    ASSERT_TRUE(q1 >= q0);      /* the mean-ratio floor holds */
+    ASSERT_TRUE(fixed_kept(&g));
+    ASSERT_TRUE(values_current(&g, 1));
+    grid_case_free(&g);
+}
+
 /* After single-vertex sweeps stop raising the smallest sine, the joint moves
  * of the worst tets' corners raise it further, under the same rules. */
 TEST(joint_moves_lift_what_single_vertices_leave)
@@ -539,6 +573,7 @@ TEST(angle_polish_option_keeps_every_guarantee)
 
 TEST_MAIN("opt", T(result_does_not_depend_on_vertex_numbering),
           T(angle_sweep_raises_the_smallest_angle_within_its_rules),
+          T(deep_stars_lift_under_the_same_rules),
           T(joint_moves_lift_what_single_vertices_leave),
           T(joint_moves_lift_the_worst_mean_ratio),
           T(angle_polish_option_keeps_every_guarantee), T(improves_perturbed_grid),
