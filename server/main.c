@@ -696,18 +696,37 @@ static void teardown(qdcd *q)
     free(q->tokens);
 }
 
+/* A stop signal that reached a thread other than the main one (a thread
+ * started before main() blocked the signals, see main) is passed on to the
+ * main thread, where it waits blocked for sigtimedwait. */
+static pthread_t main_thread;
+static void forward_stop(int sig)
+{
+    pthread_kill(main_thread, sig);
+}
+
 int main(int argc, char **argv)
 {
     qdcd *q = &g;
     sigset_t stopset;
-    int rc;
+    struct sigaction sa;
+    int rc, reexec = 0;
 
     /* The workers' OpenMP threads must sleep, not spin, while they wait: they
      * share the cores with the HTTP threads and the other jobs (the qdc CLI
      * measured 0.8 CPU s sleeping against 2.4-3.1 spinning on 2 busy cores).
      * libgomp reads the policy before main: set it and start again, once,
      * unless the operator chose one. */
-    if (!getenv("OMP_WAIT_POLICY") && setenv("OMP_WAIT_POLICY", "PASSIVE", 1) == 0) {
+    if (!getenv("OMP_WAIT_POLICY") && setenv("OMP_WAIT_POLICY", "PASSIVE", 1) == 0)
+        reexec = 1;
+    /* OpenBLAS (CHOLMOD's BLAS) starts its thread pool before main, with no
+     * signal blocked: a SIGTERM the kernel handed to one of those threads
+     * while the main loop was busy killed the daemon without its drain (exit
+     * 143, seen once in tests/server/longpoll.sh on a loaded machine). One
+     * BLAS thread per job starts none, and the jobs run side by side anyway. */
+    if (!getenv("OPENBLAS_NUM_THREADS") && setenv("OPENBLAS_NUM_THREADS", "1", 1) == 0)
+        reexec = 1;
+    if (reexec) {
         char self[4096]; /* its own path, so that ps and /proc/PID/comm say qdcd */
         ssize_t n = readlink("/proc/self/exe", self, sizeof self - 1);
         if (n > 0) {
@@ -715,6 +734,14 @@ int main(int argc, char **argv)
             execv(self, argv);
         }
     }
+    /* and where the operator set more BLAS threads (or another library
+     * started threads early), the signal is forwarded to the main thread */
+    main_thread = pthread_self();
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = forward_stop;
+    sigemptyset(&sa.sa_mask);
+    sigaction(SIGTERM, &sa, NULL);
+    sigaction(SIGINT, &sa, NULL);
     rc = configure(q, argc, argv);
     if (rc)
         return rc;
