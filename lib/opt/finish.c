@@ -915,25 +915,25 @@ static int min_norm_point(double g[][3], int n, double d[3])
  * smallest sine rises, no more tets under the level (a stricter rule, no tet
  * of the set getting worse, stalls: sphere_h0.1_good 13.1 against 16.0
  * degrees), no tet under the floor, and the star's smallest mean ratio does
- * not drop unless the star's smallest sine is under relax or deep. */
+ * not drop unless the star's smallest sine is under relax. */
 static int sine_move_ok(double f0, int nb0, double q0, double f1, int nb1, double q1,
                         double relax, double qf3)
 {
-    return f1 > f0 && nb1 <= nb0 && (q1 >= q0 || f0 < relax || f0 < FINISH_DEEP_SINE) &&
-           q1 >= qf3;
+    return f1 > f0 && nb1 <= nb0 && (q1 >= q0 || f0 < relax) && q1 >= qf3;
 }
 
 /* Pattern moves (pattern_move): PATTERN_RAND hashed directions besides the
  * axes (measured on bone-scan, scripts/corpus.py at 100k tets, with stars
- * deep under 3 degrees: 8 such directions lifted its smallest angle to 0.21
- * degrees, 2 to 0.18, none 0.12; the run 1.02, 0.95 and 0.89 s) */
+ * deep under 3 degrees and free to lower their smallest mean ratio: 8 such
+ * directions lifted its smallest angle to 0.21 degrees, 2 to 0.18, none
+ * 0.12; the run 1.02, 0.95 and 0.89 s) */
 #define PATTERN_RAND 2
 /* ... for the stars whose smallest sine is within PATTERN_BAND of the mesh's
  * (and deep): all deep stars gave the same smallest angles on the thin bones
  * at twice the time of the run (bone-scan, 100k tets: 1.9 against 0.9 s).
  * Deep was first under 3 degrees: on the 5M-tet ball (scripts/corpus.py),
  * whose worst angles sit near 3 degrees, that ended at 2.38 against 2.78
- * degrees and 46 s against 39 s; under 1 degree, 3.06 degrees in 39 s */
+ * degrees and 46 s against 39 s (docs/method.md, section 5a) */
 #define PATTERN_BAND 2.0
 static uint64_t mix64(uint64_t z)
 {

@@ -46,9 +46,8 @@ qdc_status finish_dihedral_sweep(const mesh_topo *tp, const uint8_t *movable,
                                  const slide_ctx *sl, double *x, double lbar, double frac,
                                  double qfloor, double *smin, int smin_valid,
                                  finish_stats *st);
-/* Stars whose smallest sine is under this (sin 1 degree) are "deep": there
- * the sweep's vertices also try pattern moves and may lower the star's
- * smallest mean ratio down to qfloor (finish.c). */
+/* Stars whose smallest sine is under this (sin 1 degree) are "deep": where
+ * the ascent of their vertex stops, it also tries pattern moves (finish.c). */
 #define FINISH_DEEP_SINE 0.017452
 
 /* Joint moves of the worst tets' corners (after single-vertex sweeps have

@@ -6,7 +6,7 @@
 # and the finishing pass; in clusters their smallest sines balance each other
 # so that no steepest-ascent direction of one vertex lifts them, and only the
 # pattern moves of the angle sweep do (without them the run ends at 0.38
-# degrees on this mesh, with them above 0.7). Checked by the independent
+# degrees on this mesh, with them near 0.7). Checked by the independent
 # evaluator (tests/tools/evaluate.py): the smallest dihedral at least 0.6
 # degrees and above the input's, no tet inverted, the worst mean ratio not
 # below the input's, every boundary vertex within the default allowance

@@ -456,11 +456,10 @@ TEST(angle_sweep_raises_the_smallest_angle_within_its_rules)
     grid_case_free(&g);
 }
 
-/* Deep stars (smallest sine under FINISH_DEEP_SINE) also take pattern moves
- * and may lower their smallest mean ratio down to the floor: on a grid whose
- * worst tet is under 3 degrees, sweeps until the smallest sine stays lift it
- * well above the start and keep every rule (the mean-ratio floor, positive
- * tets, fixed vertices, the sines returned at the new x). */
+/* Deep stars (smallest sine under FINISH_DEEP_SINE) also take pattern moves:
+ * on a grid whose worst tet is under half a degree, sweeps until the smallest
+ * sine stays lift it well above the start and keep every rule (the mean-ratio
+ * floor, positive tets, fixed vertices, the sines returned at the new x). */
 TEST(deep_stars_lift_under_the_same_rules)
 {
     grid_case g;
