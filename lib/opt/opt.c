@@ -41,7 +41,7 @@ void opt_defaults(opt_options *o)
     o->stall = 2e-3;
     o->eps_rel = 1e-3;
     o->finish_frac = 1.0;
-    o->finish_sweeps = 12;
+    o->finish_sweeps = 32;
     o->finish_gain = 5e-4;
     o->angle_polish = 1;
     o->feature_angle = 30.0;

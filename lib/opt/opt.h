@@ -79,7 +79,7 @@ typedef struct {
                            * (docs/defaults.md) */
     double eps_rel;       /* Escobar epsilon relative to a regular tet, default 1e-3 */
     double finish_frac;   /* fraction of worst tets in the finishing pass, default 1 */
-    int finish_sweeps;    /* broad sweeps at most, default 12 */
+    int finish_sweeps;    /* broad sweeps at most, default 32 */
     double finish_gain;   /* ... ending when one raises the mean by less, default 5e-4 */
     int angle_polish;     /* after the finishing pass: max-min of the dihedral sines
                            * on the worst tets' vertices (finish.h), default 1 */
