@@ -61,9 +61,26 @@ write(tmp + "/up.mesh", reg + [0, 0, 0.25], [[0, 1, 2, 3]])
 r = ev.evaluate(tmp + "/up.mesh", tmp + "/reg.mesh", samples=20000)
 check("hausdorff", r["boundary_hausdorff"], 0.25, 1e-9)
 check("same connectivity", r["same_connectivity"], True)
+# a surface against itself is at distance 0, also where long thin triangles
+# (a fan from one corner of the unit square to its diagonal) meet small ones
+# (a fine grid over the other half): the nearest centroids of a point near the
+# diagonal are then all the grid's, not its fan triangle's
+n = 40
+pts = [(i / n, j / n, 0.0) for j in range(n + 1) for i in range(n + 1)]
+vid = lambda i, j: j * (n + 1) + i
+tri = [(vid(0, 0), vid(k, n - k), vid(k + 1, n - k - 1)) for k in range(n)]
+for j in range(n):
+    for i in range(n):
+        if i + j >= n:
+            tri.append((vid(i, j), vid(i + 1, j), vid(i, j + 1)))
+        if i + j + 1 >= n:
+            tri.append((vid(i + 1, j), vid(i + 1, j + 1), vid(i, j + 1)))
+pts, tri = np.array(pts), np.array(tri)
+h, m = ev.one_sided(pts, tri, pts, tri, 20000, np.random.default_rng(3))
+check("graded surface against itself", h, 0.0, 1e-12)
 print("; ".join(bad) if bad else "all")
 PYEOF
 )
-[ "$out" = all ] && pass "evaluate: regular, corner and folded tets, orientation from the mesh, Hausdorff of a shift" ||
+[ "$out" = all ] && pass "evaluate: regular, corner and folded tets, orientation from the mesh, Hausdorff of a shift and of a graded surface against itself" ||
     fail "evaluate" "$out"
 exit 0
