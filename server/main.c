@@ -723,7 +723,8 @@ int main(int argc, char **argv)
      * signal blocked: a SIGTERM the kernel handed to one of those threads
      * while the main loop was busy killed the daemon without its drain (exit
      * 143, seen once in tests/server/longpoll.sh on a loaded machine). One
-     * BLAS thread per job starts none, and the jobs run side by side anyway. */
+     * BLAS thread per job starts none, and the jobs run side by side anyway;
+     * the qdc CLI runs one too, so that both give the same bytes. */
     if (!getenv("OPENBLAS_NUM_THREADS") && setenv("OPENBLAS_NUM_THREADS", "1", 1) == 0)
         reexec = 1;
     if (reexec) {
