@@ -891,11 +891,19 @@ TEST(new_formats_1m_tets_speed)
             write_other(m, fs[k], &s);
         else
             ASSERT_OK(meshio_write(m, fs[k], sink_write, &s, &err));
-        for (int rep = 0; rep < 2; rep++) {
+            /* the best of 5 reads: the machine is shared (best of 2 once read
+             * gmsh22-bin at 175 MB/s in a fresh-clone CI); one in the sanitizer
+             * build, which asserts no rate */
+#if defined(__SANITIZE_ADDRESS__)
+        const int reps = 1;
+#else
+        const int reps = 5;
+#endif
+        for (int rep = 0; rep < reps; rep++) {
             double t0 = now();
             ASSERT_OK(meshio_read(s.b, s.n, fs[k], &b, &err));
             best = fmin(best, now() - t0);
-            if (rep < 1)
+            if (rep < reps - 1)
                 mesh_free(b);
         }
         rate = s.n / 1e6 / best;
