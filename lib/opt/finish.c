@@ -961,16 +961,15 @@ static void pattern_dir(int32_t v, int it, int k, double d[3])
  * direction) while a longer move still lifts them all. Directions: the 3
  * axes both ways and PATTERN_RAND more from a hash of the vertex and the
  * ascent step (runs repeat); steps 0.2, 0.05, 0.0125 mean edge, the largest
- * that lifts the star first, the best direction of it. 1 if v moved. */
+ * that lifts the star first, the best direction of it. f0, nb0, q0: the
+ * star at v's position, as the ascent found it (star_sines). 1 if v moved. */
 static int pattern_move(const mesh_topo *tp, const slide_ctx *sl, double *x, int32_t v,
                         int sliding, double lbar, double target, double relax, double qf3,
-                        int it)
+                        int it, double f0, int nb0, double q0)
 {
-    double *xv = x + 3 * (size_t)v, best[3], q0, f0, fb;
-    int nb0, found = 0;
+    double *xv = x + 3 * (size_t)v, best[3], fb = f0;
+    int found = 0;
 
-    f0 = star_sines(tp, x, v, xv, target, &nb0, &q0, NULL, NULL);
-    fb = f0;
     for (double sc = 0.2 * lbar; sc > 0.01 * lbar && !found; sc *= 0.25)
         for (int k = 0; k < 6 + PATTERN_RAND; k++) {
             double d[3], y[3], q1, f1, dn;
@@ -1032,8 +1031,8 @@ static int32_t dihedral_vertex(const mesh_topo *tp, const slide_ctx *sl, double 
             }
         }
         if (!ok) {
-            if (f0 < pattern &&
-                pattern_move(tp, sl, x, v, sliding, lbar, target, relax, qf3, it)) {
+            if (f0 < pattern && pattern_move(tp, sl, x, v, sliding, lbar, target, relax,
+                                             qf3, it, f0, nb0, q0)) {
                 moves++;
                 s = 0.02 * lbar;
                 continue;

@@ -51,10 +51,9 @@ if [ -z "$t" ]; then
     stop_qdcd
     exit 0
 fi
-for sig in 15; do
-    "$PY" -c 'import ctypes, sys; sys.exit(ctypes.CDLL(None).syscall(234, int(sys.argv[1]), int(sys.argv[2]), int(sys.argv[3])) != 0)' \
-        "$QPID" "$t" "$sig" || fail "tgkill" "could not signal thread $t"
-done
+# tgkill (syscall 234 on x86-64) with SIGTERM (15)
+"$PY" -c 'import ctypes, sys; sys.exit(ctypes.CDLL(None).syscall(234, int(sys.argv[1]), int(sys.argv[2]), 15) != 0)' \
+    "$QPID" "$t" || fail "tgkill" "could not signal thread $t"
 # the daemon must stop by itself (drain, exit 0), not die of the signal
 i=0
 while kill -0 "$QPID" 2> /dev/null && [ $i -lt 100 ]; do
