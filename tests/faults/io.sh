@@ -82,6 +82,9 @@ for f in "fsync qdcd.db" "eio qdcd.db"; do
     n=$(hits)
     arm off
     c2=$(up "s$1.again")
+    # the worker writes this job's states to the same store: let it finish
+    # before the next fault is armed, or the fault may land on its write
+    [ "$c2" = 202 ] && wait_done "$(jf "$TMP/s$1.again" .id)" > /dev/null
     if [ "$c" = 503 ] && problem "$TMP/s$1" 503 && [ -n "$(hdr "$TMP/s$1" Retry-After)" ] &&
         [ "$n" = 1 ] && [ "$c2" = 202 ]; then
         pass "io: job store, $1 at commit: 503 problem+json with Retry-After, then 202"
