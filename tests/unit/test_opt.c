@@ -434,6 +434,83 @@ static int values_current(const grid_case *g, int sines)
     return 1;
 }
 
+/* Sum of q~ (MIVL, delta 0) and smallest mean ratio over the star of v. */
+static double star_sum(const mesh_topo *tp, const double *x, int32_t v, double *qmin)
+{
+    double f = 0.0;
+    *qmin = INFINITY;
+    for (int32_t k = tp->vt_ptr[v]; k < tp->vt_ptr[v + 1]; k++) {
+        const int32_t *tt = tp->tets + 4 * (size_t)(tp->vt_idx[k] >> 2);
+        metric_parts pt;
+        metric_parts_for(OPT_METRIC_MIVL, x + 3 * tt[0], x + 3 * tt[1], x + 3 * tt[2],
+                         x + 3 * tt[3], &pt);
+        f += metric_qt(OPT_METRIC_MIVL, &pt, 0.0);
+        *qmin = fmin(*qmin, metric_mean_ratio(&pt));
+    }
+    return f;
+}
+
+/* In a broad sweep, a vertex sliding on a planar face whose star's smallest
+ * mean ratio is at least 0.2 takes a Newton step in the face's plane: one
+ * visit moves it further than the descent's two steps can (0.05 + 0.08 of
+ * the mean edge), its star's sum drops. A star under 0.2 (the vertex above
+ * it pushed down to a twentieth of the layer) takes the descent: it moves at
+ * most those two steps, and its sum does not rise. Either way the vertex stays
+ * on the plane. */
+TEST(sliding_vertex_takes_a_tangent_newton_step_in_a_good_star)
+{
+    const int n = 4;
+    const double h = 1.0 / n;
+    for (int c = 0; c < 2; c++) {
+        mesh_t *m = tm_grid(n, 0);
+        mesh_topo *tp = NULL;
+        slide_ctx *sl = NULL;
+        int32_t v = 2 + (n + 1) * 2; /* (1/2, 1/2, 0): inside the face z = 0 */
+        uint8_t *movable = calloc((size_t)m->nv, 1);
+        double *eta = malloc((size_t)m->nt * sizeof(double));
+        double p0[3], f0, f1, q0, q1, move = 0.0;
+        finish_stats fs;
+        ASSERT_TRUE(m && movable && eta);
+        ASSERT_OK(mesh_topo_build(m, &tp, NULL));
+        ASSERT_OK(slide_new(tp, m->xyz, 30.0, &sl, NULL));
+        ASSERT_EQ_INT(slide_kind(sl, v), SLIDE_SURFACE);
+        movable[v] = 1;
+        if (c == 1) /* the vertex above v, fixed */
+            m->xyz[3 * (v + (n + 1) * (n + 1)) + 2] = 0.05 * h;
+        m->xyz[3 * v] += 0.25 * h;
+        m->xyz[3 * v + 1] += 0.1 * h;
+        memcpy(p0, m->xyz + 3 * v, sizeof p0);
+        for (int32_t t = 0; t < m->nt; t++) {
+            double smin;
+            tet_values(m, t, &smin, &eta[t]);
+            ASSERT_TRUE(eta[t] > 0.0);
+        }
+        f0 = star_sum(tp, m->xyz, v, &q0);
+        ASSERT_TRUE(c == 0 ? q0 >= 0.2 : q0 < 0.2);
+        ASSERT_OK(finish_sweep(tp, movable, sl, m->xyz, OPT_METRIC_MIVL, eta, 0.0, h, 1.0,
+                               1e-3, &fs));
+        f1 = star_sum(tp, m->xyz, v, &q1);
+        for (int k = 0; k < 3; k++)
+            move += (m->xyz[3 * v + k] - p0[k]) * (m->xyz[3 * v + k] - p0[k]);
+        move = sqrt(move);
+        printf("  # star's worst %.3f -> %.3f, moved %.3f of an edge\n", q0, q1,
+               move / h);
+        ASSERT_TRUE(m->xyz[3 * v + 2] == 0.0); /* on the plane */
+        if (c == 0) {
+            ASSERT_TRUE(f1 < f0);
+            ASSERT_TRUE(move > 0.15 * h);
+        } else {
+            ASSERT_TRUE(f1 <= f0);
+            ASSERT_TRUE(move <= 0.13 * h + 1e-12);
+        }
+        slide_free(sl);
+        mesh_topo_free(tp);
+        free(eta);
+        free(movable);
+        mesh_free(m);
+    }
+}
+
 TEST(angle_sweep_raises_the_smallest_angle_within_its_rules)
 {
     grid_case g;
@@ -571,6 +648,7 @@ TEST(angle_polish_option_keeps_every_guarantee)
 }
 
 TEST_MAIN("opt", T(result_does_not_depend_on_vertex_numbering),
+          T(sliding_vertex_takes_a_tangent_newton_step_in_a_good_star),
           T(angle_sweep_raises_the_smallest_angle_within_its_rules),
           T(deep_stars_lift_under_the_same_rules),
           T(joint_moves_lift_what_single_vertices_leave),
