@@ -262,10 +262,10 @@ typedef struct {
 
 /* Local objective of vertex v placed at y with its gradient and Hessian
  * (upper triangle; both skipped if g is NULL); NAN if the metric has no
- * Hessian. If so, it also receives star_eval's worst tet and smallest mean
- * ratio cubed (not bad: si has the count). A tet is under the floor qfloor > 0 when its
- * mean ratio 12 (9 V^2)^(1/3) / A is, tested as 15552 V^2 < (qfloor A)^3 (no cube root).
- */
+ * Hessian. so, if not NULL, receives what star_eval finds of the star (its
+ * worst tet and smallest mean ratio cubed; the inverted count is si's). A tet
+ * is under the floor qfloor > 0 when its mean ratio 12 (9 V^2)^(1/3) / A is,
+ * tested as 15552 V^2 < (qfloor A)^3 (no cube root). */
 static double star_hess(const mesh_topo *tp, const double *x, int32_t v, const double *y,
                         opt_metric m, double delta, double qfloor, star_info *si,
                         double g[3], double H[6], star_out *so)
