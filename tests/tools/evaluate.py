@@ -25,6 +25,7 @@ of the component's tets have (as qdc does), so meshes written with their tets
 in any vertex order are judged by their geometry.
 """
 import argparse
+import itertools
 import json
 import sys
 
@@ -218,8 +219,6 @@ def one_sided(x_from, tri_from, x_to, tri_to, n, rng, k=8, chunk=40000):
     that a few long thin triangles do not widen every search; the nearest
     centroids alone miss the triangle under a point when long thin triangles
     surround it (a low-quality surface: up to 1% of the diagonal too much)."""
-    import itertools
-
     from scipy.spatial import cKDTree
 
     p = sample_tris(x_from, tri_from, n, rng)
