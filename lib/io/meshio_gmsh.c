@@ -761,10 +761,57 @@ static void skip_line(txt *s)
         s->p++;
 }
 
+/* Binary, a block of cnt elements of kind k whose bytes are all there: each
+ * an element tag, ntags tags (2.2: physical, elementary, ...) and 3 + k node
+ * tags, all words of w bytes (4 or 8). The records are read and stored while
+ * the element tag is not negative and every node tag is known (phys and ent:
+ * the block's, when the record has no tags); returns how many, and leaves the
+ * scanner at the first one not read, for the checked path to read again and
+ * say what is wrong with it. A 1M-tet file reads in half the time it takes
+ * with the checked reads alone. */
+static int64_t elems_bin_fast(gmsh *g, int k, int64_t cnt, int64_t ntags, int w,
+                              int32_t phys0, int32_t ent0)
+{
+    elems *e = &g->el[k];
+    const int nn = 3 + k;
+    const size_t rec = (size_t)w * (size_t)(1 + ntags + nn);
+    const unsigned char *p = g->b + boff(g);
+    int32_t *idx = (int32_t *)e->idx.a + e->idx.n;
+    int32_t *phys = (int32_t *)e->phys.a + e->phys.n;
+    int32_t *ent = (int32_t *)e->ent.a + e->ent.n;
+    int64_t j;
+
+    for (j = 0; j < cnt; j++, p += rec) {
+        const unsigned char *q = p + (size_t)w * (size_t)(1 + ntags);
+        int32_t ix[4];
+        int a;
+        if (w == 8 && (int64_t)get_le64(p) < 0)
+            break;
+        for (a = 0; a < nn; a++) {
+            int64_t t = w == 4 ? (int64_t)(int32_t)get_le32(q + 4 * a)
+                               : (int64_t)get_le64(q + 8 * a);
+            int64_t i = tagmap_find(&g->tm, t);
+            if (i < 0)
+                break;
+            ix[a] = (int32_t)i;
+        }
+        if (a < nn)
+            break;
+        memcpy(idx + (size_t)j * (size_t)nn, ix, sizeof(int32_t) * (size_t)nn);
+        phys[j] = ntags > 0 ? (int32_t)get_le32(p + 4) : phys0;
+        ent[j] = ntags > 1 ? (int32_t)get_le32(p + 8) : ent0;
+    }
+    e->idx.n += (size_t)j * (size_t)nn;
+    e->phys.n += (size_t)j;
+    e->ent.n += (size_t)j;
+    g->s.p += (size_t)j * rec;
+    return j;
+}
+
 /* $Elements (4.1): blocks of one type on one entity. */
 static qdc_status elements41(gmsh *g, qdc_error *err)
 {
-    int64_t nblk, total, v, dim, etag, type, c;
+    int64_t nblk, total, v, dim, etag, type, c, j;
     int32_t phys;
     qdc_status st;
 
@@ -803,7 +850,7 @@ static qdc_status elements41(gmsh *g, qdc_error *err)
             if (g->binary) {
                 g->s.p += (size_t)c * (size_t)(nn + 1) * (size_t)g->dsize;
             } else {
-                for (int64_t j = 0; j < c; j++) {
+                for (j = 0; j < c; j++) {
                     skip_ws(&g->s);
                     skip_line(&g->s);
                 }
@@ -811,8 +858,11 @@ static qdc_status elements41(gmsh *g, qdc_error *err)
             continue;
         }
         st = elems_grow(g, k, c, err);
+        if (st != QDC_OK)
+            break;
         phys = entity_phys(g, k, etag);
-        for (int64_t j = 0; j < c && st == QDC_OK; j++) {
+        j = g->binary ? elems_bin_fast(g, k, c, 0, g->dsize, phys, (int32_t)etag) : 0;
+        for (; j < c && st == QDC_OK; j++) {
             st = g_int(g, "$Elements: element tag", 0, INT64_MAX, &v, err);
             if (st == QDC_OK)
                 st = elem_nodes(g, k, phys, (int32_t)etag, err);
@@ -910,45 +960,6 @@ static qdc_status elements40(gmsh *g, qdc_error *err)
 /* $Elements (2.2 binary): "n" on its own line, then groups of one type: an
  * int32 header "type count ntags", then count records of int32 "tag tags...
  * nodes...". */
-/* Binary 2.2, a group of cnt elements of kind k with ntags tags each, whose
- * bytes are all there: the records read and stored while every node tag is
- * known (an element's other fields take any value); returns how many, and
- * leaves the scanner at the first one not read. Reading a 1M-tet file takes
- * half the time it took with elements22_bin()'s checked reads alone. */
-static int64_t elems22_bin_fast(gmsh *g, int k, int64_t cnt, int64_t ntags)
-{
-    elems *e = &g->el[k];
-    const int nn = 3 + k;
-    const size_t rec = 4 * (size_t)(1 + ntags + nn);
-    const unsigned char *p = g->b + boff(g);
-    int32_t *idx = (int32_t *)e->idx.a + e->idx.n;
-    int32_t *phys = (int32_t *)e->phys.a + e->phys.n;
-    int32_t *ent = (int32_t *)e->ent.a + e->ent.n;
-    int64_t j;
-
-    for (j = 0; j < cnt; j++, p += rec) {
-        const unsigned char *q = p + 4 * (1 + ntags);
-        int32_t ix[4];
-        int a;
-        for (a = 0; a < nn; a++) {
-            int64_t i = tagmap_find(&g->tm, (int32_t)get_le32(q + 4 * a));
-            if (i < 0)
-                break;
-            ix[a] = (int32_t)i;
-        }
-        if (a < nn)
-            break;
-        memcpy(idx + (size_t)j * (size_t)nn, ix, sizeof(int32_t) * (size_t)nn);
-        phys[j] = ntags > 0 ? (int32_t)get_le32(p + 4) : 0;
-        ent[j] = ntags > 1 ? (int32_t)get_le32(p + 8) : 0;
-    }
-    e->idx.n += (size_t)j * (size_t)nn;
-    e->phys.n += (size_t)j;
-    e->ent.n += (size_t)j;
-    g->s.p += (size_t)j * rec;
-    return j;
-}
-
 static qdc_status elements22_bin(gmsh *g, qdc_error *err)
 {
     txt *s = &g->s;
@@ -992,7 +1003,7 @@ static qdc_status elements22_bin(gmsh *g, qdc_error *err)
         /* the group's bytes are there (bin_need above): whole records are read
          * here, and the first one that is not right is read again below, which
          * says what is wrong with it */
-        j = elems22_bin_fast(g, k, cnt, ntags);
+        j = elems_bin_fast(g, k, cnt, ntags, 4, 0, 0);
         for (; j < cnt && st == QDC_OK; j++) {
             st = g_i32(g, "$Elements: element tag", INT32_MIN, INT32_MAX, &v, err);
             phys = ent = 0;

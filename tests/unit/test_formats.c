@@ -608,6 +608,56 @@ TEST(gmsh_errors_say_where)
         QDC_EFORMAT);
 }
 
+/* Binary element records are read in bulk while they are right; a record
+ * that is not (here the last tet's, after 161 good ones in its block) is
+ * reported as by the checked reads: what, and the byte offset of the value. */
+TEST(gmsh_binary_bad_record_after_good_ones)
+{
+    static const struct {
+        meshio_format f;
+        int w;
+    } fs[] = {{MESHIO_GMSH41_BIN, 8}, {MESHIO_GMSH22_BIN, 4}};
+    mesh_t *m = make_mesh(40, 162, 0), *b;
+    qdc_error err;
+
+    ASSERT_TRUE(m);
+    for (int32_t t = 0; t < m->nt; t++)
+        m->region[t] = 1;
+    for (size_t k = 0; k < sizeof fs / sizeof fs[0]; k++) {
+        sink s = {0};
+        char *end;
+        size_t last;
+        char v[8];
+        ASSERT_OK(meshio_write(m, fs[k].f, sink_write, &s, &err));
+        ASSERT_OK(meshio_read(s.b, s.n, fs[k].f, &b, &err));
+        ASSERT_TRUE(same_mesh(m, b, K_REGION));
+        mesh_free(b);
+        /* the last node tag of the last tet ends where $EndElements starts */
+        end = NULL;
+        for (size_t i = 0; i + 13 <= s.n && !end; i++)
+            if (!memcmp(s.b + i, "\n$EndElements", 13))
+                end = s.b + i;
+        ASSERT_TRUE(end);
+        last = (size_t)(end - s.b) - (size_t)fs[k].w;
+        memcpy(v, s.b + last, (size_t)fs[k].w);
+        memset(s.b + last, 0, (size_t)fs[k].w);
+        s.b[last] = 0x63; /* node tag 99 */
+        ASSERT_EQ_INT(meshio_read(s.b, s.n, fs[k].f, &b, &err), QDC_EPARSE);
+        ASSERT_TRUE(strstr(err.msg, "$Elements: tet: unknown node tag 99"));
+        ASSERT_EQ_INT(err.offset, (int64_t)last);
+        memcpy(s.b + last, v, (size_t)fs[k].w);
+        if (fs[k].w == 8) { /* 4.1: the element tag, a size_t, above INT64_MAX */
+            size_t tag = last - 4 * 8;
+            memset(s.b + tag, 0xff, 8);
+            ASSERT_EQ_INT(meshio_read(s.b, s.n, fs[k].f, &b, &err), QDC_EPARSE);
+            ASSERT_TRUE(strstr(err.msg, "$Elements: element tag"));
+            ASSERT_EQ_INT(err.offset, (int64_t)tag);
+        }
+        free(s.b);
+    }
+    mesh_free(m);
+}
+
 static void note_periodic(void *ctx, int level, const char *msg)
 {
     (void)level;
@@ -946,6 +996,7 @@ TEST_MAIN("formats", T(roundtrip_all_tags), T(roundtrip_no_tags), T(roundtrip_em
           T(roundtrip_files), T(gmsh41_tags_out_of_order_and_skipped_types),
           T(gmsh_entity_tags_without_physicals), T(gmsh22_binary_and_40),
           T(dolfin_abaqus_netgen), T(meshb_versions_and_byte_order),
-          T(gmsh_errors_say_where), T(gmsh_periodic_held), T(vtk51_layout_and_field_data),
-          T(vtu_inline_base64), T(names_sniffing_media_types), T(dev_speed_ascii),
+          T(gmsh_errors_say_where), T(gmsh_binary_bad_record_after_good_ones),
+          T(gmsh_periodic_held), T(vtk51_layout_and_field_data), T(vtu_inline_base64),
+          T(names_sniffing_media_types), T(dev_speed_ascii),
           T(gmsh41_binary_1m_tets_speed), T(new_formats_1m_tets_speed), T(fuzz_replay))
