@@ -10,6 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/resource.h>
+#include <sys/stat.h>
 #include <unistd.h>
 #ifdef __linux__
 #include <sys/prctl.h>
@@ -208,6 +209,8 @@ static int positional(const char *a, const char **in, const char **out);
 static qdc_status load_input(const char *path, meshio_format fin, surface_format sin,
                              const tetra_options *to, progress_state *ps, int keep,
                              mesh_t **m, qdc_error *err);
+static qdc_status save_mesh(const char *out, meshio_format fout, const mesh_t *m,
+                            qdc_error *err);
 
 /* qdc convert IN OUT: read, then write (spliced when OUT is in IN's format). */
 int cli_convert(int argc, char **argv)
@@ -262,7 +265,7 @@ int cli_convert(int argc, char **argv)
         goto out;
     }
     source_note(m, out, fout, ps.quiet);
-    st = meshio_save(out, fout, m, &err);
+    st = save_mesh(out, fout, m, &err);
     if (st != QDC_OK) {
         cli_error(out, &err, st);
         rc = CLI_EOUTPUT;
@@ -357,6 +360,40 @@ static int write_report(const char *path, const report_t *r)
  * named by --in-format or the extension, else a file no mesh reader claims
  * whose content looks like a surface. to (NULL: defaults) only applies to
  * surfaces; giving it for a mesh is an error. */
+/* "-" is standard input; a pipe, a device or /dev/stdin is read once (its
+ * format told by --in-format, its name, or its contents). */
+static int is_stream(const char *path)
+{
+    struct stat sb;
+
+    return !strcmp(path, "-") ||
+           (stat(path, &sb) == 0 && !S_ISREG(sb.st_mode) && !S_ISDIR(sb.st_mode));
+}
+
+static const char *sys_path(const char *path)
+{
+    return strcmp(path, "-") ? path : "/dev/stdin";
+}
+
+/* A tet mesh from path (any format qdc reads; a stream read once). */
+static qdc_status load_mesh(const char *path, meshio_format fin, const meshio_options *mo,
+                            mesh_t **m, qdc_error *err)
+{
+    char *buf = NULL;
+    size_t len = 0;
+    qdc_status st;
+
+    if (!is_stream(path))
+        return meshio_load_ex(path, fin, mo, m, err);
+    st = meshio_slurp_plain(sys_path(path), &buf, &len, err);
+    if (st == QDC_OK)
+        st = meshio_read_ex(buf, len,
+                            fin != MESHIO_AUTO ? fin : meshio_format_from_name(path), mo,
+                            m, err);
+    qdc_free(buf);
+    return st;
+}
+
 static qdc_status load_input(const char *path, meshio_format fin, surface_format sin,
                              const tetra_options *to, progress_state *ps, int keep,
                              mesh_t **m, qdc_error *err)
@@ -364,30 +401,76 @@ static qdc_status load_input(const char *path, meshio_format fin, surface_format
     meshio_options mo = {on_log, ps, keep ? 1 : -1};
     char *buf = NULL;
     size_t len = 0;
+    int stream = is_stream(path);
     qdc_status st;
 
     if (fin == MESHIO_AUTO && sin == SURFACE_AUTO &&
         meshio_format_from_name(path) == MESHIO_AUTO) {
         sin = surface_format_from_name(path);
-        if (sin == SURFACE_AUTO && meshio_slurp(path, &buf, &len, err) == QDC_OK &&
-            meshio_sniff(buf, len) == MESHIO_AUTO)
-            sin = surface_sniff(buf, len);
-        qdc_free(buf);
-        buf = NULL;
+        if (sin == SURFACE_AUTO) {
+            st = stream ? meshio_slurp_plain(sys_path(path), &buf, &len, err)
+                        : meshio_slurp(path, &buf, &len, err);
+            if (st == QDC_OK && meshio_sniff(buf, len) == MESHIO_AUTO)
+                sin = surface_sniff(buf, len);
+        }
+        if (!stream) {
+            qdc_free(buf);
+            buf = NULL;
+        }
     }
     if (sin == SURFACE_AUTO) {
-        if (to)
+        if (to) {
+            qdc_free(buf);
             return qdc_fail(
                 err, QDC_EINVAL,
                 "--tetgen-quality and --max-volume apply to surface input only");
-        return meshio_load_ex(path, fin, &mo, m, err);
+        }
+        if (!buf)
+            return load_mesh(path, fin, &mo, m, err);
+        st = meshio_read_ex(buf, len, fin, &mo, m, err); /* a stream, read above */
+        qdc_free(buf);
+        return st;
     }
-    st = meshio_slurp(path, &buf, &len, err);
+    if (!buf)
+        st = stream ? meshio_slurp_plain(sys_path(path), &buf, &len, err)
+                    : meshio_slurp(path, &buf, &len, err);
+    else
+        st = QDC_OK;
     if (st == QDC_OK)
         st = tetra_from_buffer(buf, len, sin, to, m, err);
     qdc_free(buf);
     if (st == QDC_OK)
         on_log(ps, 0, "tetrahedralized the surface with TetGen");
+    return st;
+}
+
+static int stdout_write(void *ctx, const void *data, size_t len)
+{
+    (void)ctx;
+    return fwrite(data, 1, len, stdout) == len ? 0 : -1;
+}
+
+/* m written to out: a file (meshio_save), or standard output for "-", in
+ * fout, else the input's format, else Medit. */
+static qdc_status save_mesh(const char *out, meshio_format fout, const mesh_t *m,
+                            qdc_error *err)
+{
+    meshio_format f;
+    qdc_status st;
+
+    if (strcmp(out, "-"))
+        return meshio_save(out, fout, m, err);
+    f = meshio_save_format(out, fout, m);
+    if (f == MESHIO_AUTO) /* not read from a mesh file (a surface) */
+        f = MESHIO_MEDIT;
+    if (f == MESHIO_TETGEN)
+        return qdc_fail(err, QDC_EINVAL,
+                        "TetGen's format is two files (.node and .ele): give their name, "
+                        "or another --out-format");
+    st = meshio_write(m, f, stdout_write, NULL, err);
+    if (fflush(stdout) != 0 && st == QDC_OK)
+        st = qdc_fail(err, QDC_EIO, "cannot write to standard output: %s",
+                      strerror(errno));
     return st;
 }
 
@@ -543,7 +626,7 @@ static int optimize_write(const optimize_args *x, mesh_t *m)
                     (int)mo.flipped, (int)m->nt);
     }
     source_note(m, x->out, x->fout, x->ps.quiet);
-    st = meshio_save(x->out, x->fout, m, &err);
+    st = save_mesh(x->out, x->fout, m, &err);
     if (st != QDC_OK) {
         cli_error(x->out, &err, st);
         return CLI_EOUTPUT;
@@ -668,9 +751,10 @@ out:
 
 static const char tetra_use[] =
     "usage: qdc tetra IN OUT [--tetgen-quality Q] [--max-volume V] [--max-tets N]\n"
-    "                 [--max-memory BYTES]\n"
+    "                 [--max-memory BYTES] [--out-format F] [--quiet]\n"
     "  IN: closed triangle surface (.stl .off .obj .poly .smesh); OUT: any mesh "
     "format\n"
+    "  (by its extension or --out-format; '-': standard input or output)\n"
     "  --max-tets N: refuse at once when the volume bound alone makes more tets\n"
     "  (the enclosed volume / V); --max-memory: address-space limit of the run\n"
     "  exit 0 ok, 1 usage, 2 bad surface, 3 TetGen failed, 4 OUT not written\n";
@@ -680,6 +764,8 @@ typedef struct {
     const char *in, *out;
     tetra_options to;
     long long max_tets, max_memory;
+    meshio_format fout;
+    int quiet;
 } tetra_args;
 
 /* The command line into x: -1 to go on, else the exit status (--help
@@ -708,6 +794,14 @@ static int tetra_parse(int argc, char **argv, tetra_args *x)
             }
             *(!strcmp(a, "--max-tets") ? &x->max_tets : &x->max_memory) = v;
             i++;
+        } else if (!strcmp(a, "--out-format") && i + 1 < argc) {
+            x->fout = meshio_format_from_name(argv[++i]);
+            if (x->fout == MESHIO_AUTO) {
+                fprintf(stderr, "qdc: bad value '%s' for --out-format\n", argv[i]);
+                return CLI_EUSAGE;
+            }
+        } else if (!strcmp(a, "--quiet") || !strcmp(a, "-q")) {
+            x->quiet = 1;
         } else if (!strcmp(a, "--die-with-parent")) {
             /* qdcd's child: end with the worker that waits for us. */
 #ifdef __linux__
@@ -782,7 +876,7 @@ int cli_tetra(int argc, char **argv)
             return CLI_EOPT;
         }
     }
-    st = surface_load(x.in, SURFACE_AUTO, &s, &err);
+    st = surface_load(sys_path(x.in), SURFACE_AUTO, &s, &err);
     if (st == QDC_OK)
         st = surface_check(s, &err);
     if (st == QDC_OK && tetra_volume_bound(&x, s)) {
@@ -802,14 +896,15 @@ int cli_tetra(int argc, char **argv)
                                                                           : CLI_EINPUT;
         goto out;
     }
-    st = meshio_save(x.out, MESHIO_AUTO, m, &err);
+    st = save_mesh(x.out, x.fout, m, &err);
     if (st != QDC_OK) {
         cli_error(x.out, &err, st);
         rc = CLI_EOUTPUT;
         goto out;
     }
-    fprintf(stderr, "qdc: %s -> %s: %d vertices, %d tets\n", x.in, x.out, (int)m->nv,
-            (int)m->nt);
+    if (!x.quiet)
+        fprintf(stderr, "qdc: %s -> %s: %d vertices, %d tets\n", x.in, x.out, (int)m->nv,
+                (int)m->nt);
 out:
     surface_free(s);
     mesh_free(m);
@@ -858,7 +953,7 @@ int cli_quality(int argc, char **argv)
         else if (!strcmp(argv[i], "-h") || !strcmp(argv[i], "--help")) {
             puts("usage: qdc quality IN [--ref ORIG] [--json]");
             return CLI_OK;
-        } else if (argv[i][0] != '-' && !in)
+        } else if ((argv[i][0] != '-' || !argv[i][1]) && !in)
             in = argv[i];
         else {
             fprintf(stderr, "qdc: quality: unexpected argument '%s'\n", argv[i]);
@@ -869,7 +964,7 @@ int cli_quality(int argc, char **argv)
         fputs("usage: qdc quality IN [--ref ORIG] [--json]\n", stderr);
         return CLI_EUSAGE;
     }
-    st = meshio_load_ex(in, MESHIO_AUTO, &nokeep, &m, &err);
+    st = load_mesh(in, MESHIO_AUTO, &nokeep, &m, &err);
     if (st == QDC_OK)
         st = report_quality_compute(m, &q, &err);
     if (st != QDC_OK) {
@@ -878,7 +973,7 @@ int cli_quality(int argc, char **argv)
         goto out;
     }
     if (ref) {
-        st = meshio_load_ex(ref, MESHIO_AUTO, &nokeep, &r, &err);
+        st = load_mesh(ref, MESHIO_AUTO, &nokeep, &r, &err);
         if (st != QDC_OK) {
             cli_error(ref, &err, st);
             rc = CLI_EINPUT;

@@ -22,6 +22,8 @@ static void usage(FILE *f)
         "                              valid values, defaults, help)\n"
         "  tetra SURFACE OUT [--tetgen-quality Q] [--max-volume V]   tetrahedralize\n"
         "                              a closed surface with TetGen (no optimization)\n"
+        "  IN or OUT '-': standard input or output (the input's format unless\n"
+        "  --out-format says another)\n"
         "\n"
         "Remote commands (qdcd at --server URL or $QDC_SERVER; token $QDC_TOKEN):\n"
         "  submit IN [--wait] [-o OUT] [--report R.json] [options]   new job; prints its "

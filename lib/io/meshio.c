@@ -1990,21 +1990,93 @@ static void sync_dir(const char *path)
     }
 }
 
-static qdc_status save_atomic(const char *path, meshio_format fmt, int part,
-                              const mesh_t *m, qdc_error *err)
+/* 1 if the directory holding path is in /proc's file system (/proc/self/fd,
+ * which /dev/fd names): its entries are a process's descriptors. */
+static int in_proc(const char *path)
 {
-    char *tmp = qdc_malloc(strlen(path) + 12);
-    qdc_status st;
-    int fd;
+    const char *slash = strrchr(path, '/');
+    struct stat d, p;
+    char *dir;
+    int r;
 
-    if (!tmp)
-        return qdc_fail(err, QDC_ENOMEM, "out of memory");
-    fd = open_tmp(path, tmp);
-    if (fd < 0) {
-        st = fail_errno(err, "cannot create a temporary file for", path, errno);
-        qdc_free(tmp);
-        return st;
+    if (!slash)
+        return 0;
+    dir = qdc_malloc((size_t)(slash - path) + 2);
+    if (!dir)
+        return 0;
+    memcpy(dir, path, (size_t)(slash - path) + 1);
+    dir[slash - path + (slash == path)] = '\0';
+    r = stat(dir, &d) == 0 && stat("/proc", &p) == 0 && d.st_dev == p.st_dev;
+    qdc_free(dir);
+    return r;
+}
+
+/* Where a file written to path goes. 0: through a temporary file renamed onto
+ * *target (qdc_malloc'd): path itself, or the regular file its symbolic links
+ * lead to, so that the links stay links. 1: straight into path: a device, a
+ * pipe, a process's descriptor (/dev/stdout, /dev/fd/N, /proc/self/fd/N:
+ * renaming onto it would replace the link with a file, and a rename of the
+ * file it names would leave the descriptor on the old one), or a link to
+ * nothing yet. -1: out of memory. */
+static int save_route(const char *path, char **target)
+{
+    char *cur = qdc_malloc(strlen(path) + 1);
+
+    *target = NULL;
+    if (!cur)
+        return -1;
+    strcpy(cur, path);
+    for (int hops = 0; hops < 40; hops++) {
+        struct stat sb;
+        char link[4096];
+        ssize_t n;
+        const char *slash;
+        char *next;
+        size_t dn;
+        if (lstat(cur, &sb) != 0) {
+            if (hops == 0) { /* a new file */
+                *target = cur;
+                return 0;
+            }
+            break; /* a link to nothing: open() creates what it names */
+        }
+        if (!S_ISLNK(sb.st_mode)) {
+            if (!S_ISREG(sb.st_mode))
+                break;
+            *target = cur;
+            return 0;
+        }
+        if (in_proc(cur))
+            break;
+        n = readlink(cur, link, sizeof link - 1);
+        if (n <= 0)
+            break;
+        link[n] = '\0';
+        slash = strrchr(cur, '/');
+        dn = link[0] == '/' || !slash ? 0 : (size_t)(slash - cur) + 1;
+        next = qdc_malloc(dn + (size_t)n + 1);
+        if (!next) {
+            qdc_free(cur);
+            return -1;
+        }
+        memcpy(next, cur, dn);
+        memcpy(next + dn, link, (size_t)n + 1);
+        qdc_free(cur);
+        cur = next;
+        if (!strncmp(cur, "/proc/", 6) || !strcmp(cur, "/proc"))
+            break;
     }
+    qdc_free(cur);
+    return 1;
+}
+
+/* m in fmt into fd, gzip-compressed when path ends in .gz; where is the file
+ * written, for a failed write's message. */
+static qdc_status write_fd(int fd, const char *path, const char *where, meshio_format fmt,
+                           int part, const mesh_t *m, qdc_error *err)
+{
+    qdc_status st;
+
     if (path_gz(path)) {
         gz_writer *gw = gz_writer_new(fd_write, &fd);
         st = gw ? write_fmt(m, fmt, part, gz_write, gw, err)
@@ -2014,8 +2086,55 @@ static qdc_status save_atomic(const char *path, meshio_format fmt, int part,
     } else {
         st = write_fmt(m, fmt, part, fd_write, &fd, err);
     }
-    if (st == QDC_EIO)
-        st = fail_errno(err, "cannot write", tmp, errno);
+    return st == QDC_EIO ? fail_errno(err, "cannot write", where, errno) : st;
+}
+
+/* Write straight into path (save_route() said 1). */
+static qdc_status save_direct(const char *path, meshio_format fmt, int part,
+                              const mesh_t *m, qdc_error *err)
+{
+    struct stat sb;
+    qdc_status st;
+    int fd = open(path, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+
+    if (fd < 0)
+        return fail_errno(err, "cannot open", path, errno);
+    st = write_fd(fd, path, path, fmt, part, m, err);
+    if (st == QDC_OK && fstat(fd, &sb) == 0 && S_ISREG(sb.st_mode) && fsync(fd) != 0)
+        st = fail_errno(err, "cannot fsync", path, errno);
+    if (close(fd) != 0 && st == QDC_OK)
+        st = fail_errno(err, "cannot close", path, errno);
+    return st;
+}
+
+static qdc_status save_atomic(const char *path, meshio_format fmt, int part,
+                              const mesh_t *m, qdc_error *err)
+{
+    char *tmp, *target;
+    struct stat old;
+    qdc_status st;
+    int fd, route = save_route(path, &target);
+
+    if (route < 0)
+        return qdc_fail(err, QDC_ENOMEM, "out of memory");
+    if (route > 0)
+        return save_direct(path, fmt, part, m, err);
+    path = target;
+    tmp = qdc_malloc(strlen(path) + 12);
+    if (!tmp) {
+        qdc_free(target);
+        return qdc_fail(err, QDC_ENOMEM, "out of memory");
+    }
+    fd = open_tmp(path, tmp);
+    if (fd < 0) {
+        st = fail_errno(err, "cannot create a temporary file for", path, errno);
+        qdc_free(tmp);
+        return st;
+    }
+    st = write_fd(fd, path, tmp, fmt, part, m, err);
+    /* a file replaced keeps its permissions */
+    if (st == QDC_OK && stat(path, &old) == 0 && fchmod(fd, old.st_mode & 07777) != 0)
+        st = fail_errno(err, "cannot set the permissions of", tmp, errno);
     if (st == QDC_OK && fsync(fd) != 0)
         st = fail_errno(err, "cannot fsync", tmp, errno);
     if (close(fd) != 0 && st == QDC_OK)
@@ -2027,6 +2146,7 @@ static qdc_status save_atomic(const char *path, meshio_format fmt, int part,
     else
         sync_dir(path);
     qdc_free(tmp);
+    qdc_free(target);
     return st;
 }
 
@@ -2053,8 +2173,10 @@ meshio_format meshio_save_format(const char *path, meshio_format fmt, const mesh
     const char *ext = path ? path_ext(path) : NULL;
     meshio_format src = meshio_source_format(m);
 
-    if (fmt != MESHIO_AUTO || !ext)
+    if (fmt != MESHIO_AUTO)
         return fmt;
+    if (!ext) /* /dev/stdout, a pipe, a name without one: the input's format */
+        return src;
     fmt = ext_format(ext);
     return fmt != MESHIO_AUTO && family(fmt) == family(src) ? src : fmt;
 }
@@ -2073,6 +2195,15 @@ qdc_status meshio_save(const char *path, meshio_format fmt, const mesh_t *m,
         return qdc_fail(err, QDC_EFORMAT, "cannot tell the format of %s", path);
     if (fmt != MESHIO_TETGEN)
         return save_atomic(path, fmt, 0, m, err);
+    {
+        char *target;
+        int route = save_route(path, &target);
+        qdc_free(target);
+        if (route != 0)
+            return qdc_fail(err, route < 0 ? QDC_ENOMEM : QDC_EINVAL,
+                            "TetGen's format is two files (.node and .ele): give "
+                            "their name, or another format");
+    }
     np = with_ext(path, ".node");
     ep = with_ext(path, ".ele");
     if (!np || !ep)
