@@ -780,28 +780,15 @@ static int out_format_ok(const args *a)
     return 0;
 }
 
-/* Writes len bytes to path through a temporary file and a rename; "-" is stdout. */
+/* Writes len bytes to path (meshio_save_bytes: a file atomically, a pipe or
+ * device straight into); "-" is stdout. */
 static int write_file(const char *path, const char *buf, size_t len)
 {
-    char tmp[4200];
-    FILE *f;
+    qdc_error err;
 
     if (!strcmp(path, "-"))
         return fwrite(buf, 1, len, stdout) == len && !fflush(stdout) ? 0 : -1;
-    snprintf(tmp, sizeof tmp, "%s.tmp%ld", path, (long)getpid());
-    f = fopen(tmp, "wb");
-    if (!f)
-        return -1;
-    if (fwrite(buf, 1, len, f) != len || fflush(f) || fsync(fileno(f))) {
-        fclose(f);
-        remove(tmp);
-        return -1;
-    }
-    if (fclose(f) || rename(tmp, path)) {
-        remove(tmp);
-        return -1;
-    }
-    return 0;
+    return meshio_save_bytes(path, buf, len, &err) == QDC_OK ? 0 : -1;
 }
 
 /* Downloads the result (binary) into out, converted to its extension's format,

@@ -2070,28 +2070,44 @@ static int save_route(const char *path, char **target)
     return 1;
 }
 
-/* m in fmt into fd, gzip-compressed when path ends in .gz; where is the file
- * written, for a failed write's message. */
-static qdc_status write_fd(int fd, const char *path, const char *where, meshio_format fmt,
-                           int part, const mesh_t *m, qdc_error *err)
+/* What a save writes: m in fmt (part 1: TetGen's .ele), or len bytes. */
+typedef struct {
+    const mesh_t *m;
+    meshio_format fmt;
+    int part;
+    const void *bytes;
+    size_t len;
+} payload;
+
+static qdc_status write_payload(const payload *p, qdc_write_fn fn, void *ctx,
+                                qdc_error *err)
+{
+    if (!p->bytes)
+        return write_fmt(p->m, p->fmt, p->part, fn, ctx, err);
+    return fn(ctx, p->bytes, p->len) == 0 ? QDC_OK : QDC_EIO;
+}
+
+/* p into fd, gzip-compressed when path ends in .gz; where is the file written,
+ * for a failed write's message. */
+static qdc_status write_fd(int fd, const char *path, const char *where, const payload *p,
+                           qdc_error *err)
 {
     qdc_status st;
 
     if (path_gz(path)) {
         gz_writer *gw = gz_writer_new(fd_write, &fd);
-        st = gw ? write_fmt(m, fmt, part, gz_write, gw, err)
+        st = gw ? write_payload(p, gz_write, gw, err)
                 : qdc_fail(err, QDC_ENOMEM, "out of memory");
         if (gz_writer_finish(gw) && st == QDC_OK)
             st = QDC_EIO;
     } else {
-        st = write_fmt(m, fmt, part, fd_write, &fd, err);
+        st = write_payload(p, fd_write, &fd, err);
     }
     return st == QDC_EIO ? fail_errno(err, "cannot write", where, errno) : st;
 }
 
 /* Write straight into path (save_route() said 1). */
-static qdc_status save_direct(const char *path, meshio_format fmt, int part,
-                              const mesh_t *m, qdc_error *err)
+static qdc_status save_direct(const char *path, const payload *p, qdc_error *err)
 {
     struct stat sb;
     qdc_status st;
@@ -2099,7 +2115,7 @@ static qdc_status save_direct(const char *path, meshio_format fmt, int part,
 
     if (fd < 0)
         return fail_errno(err, "cannot open", path, errno);
-    st = write_fd(fd, path, path, fmt, part, m, err);
+    st = write_fd(fd, path, path, p, err);
     if (st == QDC_OK && fstat(fd, &sb) == 0 && S_ISREG(sb.st_mode) && fsync(fd) != 0)
         st = fail_errno(err, "cannot fsync", path, errno);
     if (close(fd) != 0 && st == QDC_OK)
@@ -2107,8 +2123,7 @@ static qdc_status save_direct(const char *path, meshio_format fmt, int part,
     return st;
 }
 
-static qdc_status save_atomic(const char *path, meshio_format fmt, int part,
-                              const mesh_t *m, qdc_error *err)
+static qdc_status save_atomic(const char *path, const payload *p, qdc_error *err)
 {
     char *tmp, *target;
     struct stat old;
@@ -2118,7 +2133,7 @@ static qdc_status save_atomic(const char *path, meshio_format fmt, int part,
     if (route < 0)
         return qdc_fail(err, QDC_ENOMEM, "out of memory");
     if (route > 0)
-        return save_direct(path, fmt, part, m, err);
+        return save_direct(path, p, err);
     path = target;
     tmp = qdc_malloc(strlen(path) + 12);
     if (!tmp) {
@@ -2131,7 +2146,7 @@ static qdc_status save_atomic(const char *path, meshio_format fmt, int part,
         qdc_free(tmp);
         return st;
     }
-    st = write_fd(fd, path, tmp, fmt, part, m, err);
+    st = write_fd(fd, path, tmp, p, err);
     /* a file replaced keeps its permissions */
     if (st == QDC_OK && stat(path, &old) == 0 && fchmod(fd, old.st_mode & 07777) != 0)
         st = fail_errno(err, "cannot set the permissions of", tmp, errno);
@@ -2194,7 +2209,7 @@ qdc_status meshio_save(const char *path, meshio_format fmt, const mesh_t *m,
     if (fmt == MESHIO_AUTO)
         return qdc_fail(err, QDC_EFORMAT, "cannot tell the format of %s", path);
     if (fmt != MESHIO_TETGEN)
-        return save_atomic(path, fmt, 0, m, err);
+        return save_atomic(path, &(payload){m, fmt, 0, NULL, 0}, err);
     {
         char *target;
         int route = save_route(path, &target);
@@ -2209,10 +2224,19 @@ qdc_status meshio_save(const char *path, meshio_format fmt, const mesh_t *m,
     if (!np || !ep)
         st = qdc_fail(err, QDC_ENOMEM, "out of memory");
     else
-        st = save_atomic(np, fmt, 0, m, err);
+        st = save_atomic(np, &(payload){m, fmt, 0, NULL, 0}, err);
     if (st == QDC_OK)
-        st = save_atomic(ep, fmt, 1, m, err);
+        st = save_atomic(ep, &(payload){m, fmt, 1, NULL, 0}, err);
     qdc_free(np);
     qdc_free(ep);
     return st;
+}
+
+qdc_status meshio_save_bytes(const char *path, const void *buf, size_t len,
+                             qdc_error *err)
+{
+    qdc_error_clear(err);
+    if (!path || (!buf && len))
+        return qdc_fail(err, QDC_EINVAL, "meshio_save_bytes: NULL argument");
+    return save_atomic(path, &(payload){NULL, MESHIO_AUTO, 0, buf ? buf : "", len}, err);
 }

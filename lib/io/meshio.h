@@ -124,6 +124,12 @@ qdc_status meshio_load_ex(const char *path, meshio_format fmt, const meshio_opti
                           mesh_t **out, qdc_error *err);
 qdc_status meshio_save(const char *path, meshio_format fmt, const mesh_t *m,
                        qdc_error *err);
+/* len bytes saved to path as meshio_save saves a mesh: a file through a
+ * temporary file and a rename (its permissions kept; a symbolic link stays
+ * one, the file it names replaced), a pipe or device (/dev/stdout) straight
+ * into; gzip-compressed when path ends in .gz. */
+qdc_status meshio_save_bytes(const char *path, const void *buf, size_t len,
+                             qdc_error *err);
 
 /* Spliced writing. qdc never changes connectivity, so a mesh can be written
  * back as the very file it was read from with only the coordinates

@@ -80,6 +80,20 @@ else
 fi
 "$QDC" fetch "$id" -o "$TMP/f.node" && valid "$TMP/f.node" && pass "fetch -o .node: TetGen output valid" ||
     fail "fetch tetgen" "$(tail -2 "$TMP/q.txt")"
+# to /dev/stdout (written straight into, the link left alone) and to a link
+"$QDC" fetch "$id" -o /dev/stdout --out-format medit --report "$TMP/f2.report.json" > "$TMP/f.out.mesh"
+rc=$?
+"$QDC" fetch "$id" -o "$TMP/f2.json" --report /dev/stdout > "$TMP/f.out.report"
+rc2=$?
+ln -s f.linked.mesh "$TMP/link.mesh"
+"$QDC" fetch "$id" -o "$TMP/link.mesh"
+rc3=$?
+if [ $rc = 0 ] && valid "$TMP/f.out.mesh" && [ $rc2 = 0 ] && cmp -s "$TMP/f.out.report" "$TMP/f2.report.json" &&
+    [ -L /dev/stdout ] && [ $rc3 = 0 ] && [ -L "$TMP/link.mesh" ] && cmp -s "$TMP/f.linked.mesh" "$TMP/f.out.mesh"; then
+    pass "fetch -o /dev/stdout and --report /dev/stdout: written into the redirection, /dev/stdout still a link; -o a link: the link kept"
+else
+    fail "fetch to /dev/stdout" "rc $rc $rc2 $rc3, $(ls -l /dev/stdout "$TMP/link.mesh" 2>&1 | tr '\n' ' ')"
+fi
 
 # 4. on a terminal: one line redrawn with \r
 if script -qec "$QDC watch $id" /dev/null > "$TMP/tty.out" 2>&1 && grep -q "$(printf '\r')global" "$TMP/tty.out"; then
