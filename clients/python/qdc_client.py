@@ -28,6 +28,7 @@ import array
 import json
 import os
 import random
+import stat
 import struct
 import sys
 import time
@@ -208,6 +209,50 @@ def _is_np(x):
     return _np is not None and isinstance(x, _np.ndarray)
 
 
+def _save(path, data):
+    """data to path: a file through a temporary file and os.replace (its
+    permissions kept; a symbolic link stays one, the file it names is
+    replaced); a pipe, a device or a process's descriptor (/dev/stdout,
+    /dev/fd/N), which a replace would turn into a file, straight into."""
+    path = os.fspath(path)
+    target, direct = path, True
+    try:
+        proc = os.stat("/proc").st_dev
+    except OSError:
+        proc = None
+    for _ in range(40):
+        try:
+            st = os.lstat(target)
+        except FileNotFoundError:
+            direct = target != path  # a link to nothing: open() creates its end
+            break
+        if not stat.S_ISLNK(st.st_mode):
+            direct = not stat.S_ISREG(st.st_mode)
+            break
+        here = os.path.dirname(target) or "."
+        if proc is not None and os.stat(here).st_dev == proc:
+            break
+        link = os.readlink(target)
+        target = link if os.path.isabs(link) else os.path.join(here, link)
+        if target.startswith("/proc/"):
+            break
+    if direct:
+        with open(path, "wb") as f:
+            f.write(data)
+        return
+    tmp = "%s.tmp%d" % (target, os.getpid())
+    try:
+        with open(tmp, "wb") as f:
+            f.write(data)
+            if os.path.exists(target):
+                os.chmod(f.fileno(), stat.S_IMODE(os.stat(target).st_mode))
+        os.replace(tmp, target)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+
+
 def _job_id(job):
     jid = job["id"] if isinstance(job, dict) else str(job)
     return jid.rsplit("/", 1)[-1]
@@ -360,10 +405,7 @@ class Client:
             raise QdcError(status, _problem(data))
         if path is None:
             return Mesh.from_bytes(data)
-        tmp = "%s.tmp%d" % (os.fspath(path), os.getpid())
-        with open(tmp, "wb") as f:
-            f.write(data)
-        os.replace(tmp, path)
+        _save(path, data)
         return path
 
     def report(self, job, path=None):

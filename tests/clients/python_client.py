@@ -80,6 +80,22 @@ for ext in ("mesh", "json", "qmesh"):
     c.result(job2, p)
     ok, out = valid(p, NT)
     check("result(job, '.%s'): valid file" % ext, ok, out)
+# a descriptor's name (/dev/fd/N: /dev/stdout is one) is written into, not
+# replaced; a symbolic link stays one, the file it names replaced (mode kept)
+ref = os.path.join(TMP, "py2.mesh")
+with open(os.path.join(TMP, "fd.mesh"), "wb") as f:
+    c.result(job2, "/dev/fd/%d" % f.fileno(), "medit")
+ln, tgt = os.path.join(TMP, "ln.mesh"), os.path.join(TMP, "target.mesh")
+with open(tgt, "w") as f:
+    f.write("old")
+os.chmod(tgt, 0o600)
+os.symlink("target.mesh", ln)
+c.result(job2, ln)
+same = lambda a, b: open(a, "rb").read() == open(b, "rb").read()
+check("result(job, '/dev/fd/N'): written into the descriptor's file; result(job, link): link kept, mode 600 kept",
+      same(os.path.join(TMP, "fd.mesh"), ref) and os.path.islink(ln) and same(tgt, ref)
+      and (os.stat(tgt).st_mode & 0o777) == 0o600 and not [n for n in os.listdir(TMP) if ".tmp" in n],
+      "fd %s link %s mode %o" % (same(os.path.join(TMP, "fd.mesh"), ref), os.path.islink(ln), os.stat(tgt).st_mode & 0o777))
 
 # 4. numpy arrays, when numpy is there
 if qdc_client._np is not None:
