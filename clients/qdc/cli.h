@@ -17,6 +17,16 @@ enum {
     CLI_ENETWORK = 12   /* remote: server unreachable or 5xx after retries */
 };
 
+/* A tet mesh from path, in any format qdc reads (fin, else by the name, else
+ * by the contents); "-" is standard input, and a pipe or device is read once. */
+qdc_status cli_load_mesh(const char *path, meshio_format fin, const meshio_options *mo,
+                         mesh_t **m, qdc_error *err);
+
+/* m written to out: a file (meshio_save), or standard output for "-", in
+ * fout, else the input's format, else Medit. */
+qdc_status cli_save_mesh(const char *out, meshio_format fout, const mesh_t *m,
+                         qdc_error *err);
+
 /* One-line error in the form "qdc: FILE:LINE:COL: message". */
 void cli_error(const char *path, const qdc_error *err, qdc_status st);
 

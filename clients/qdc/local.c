@@ -209,8 +209,6 @@ static int positional(const char *a, const char **in, const char **out);
 static qdc_status load_input(const char *path, meshio_format fin, surface_format sin,
                              const tetra_options *to, progress_state *ps, int keep,
                              mesh_t **m, qdc_error *err);
-static qdc_status save_mesh(const char *out, meshio_format fout, const mesh_t *m,
-                            qdc_error *err);
 
 /* qdc convert IN OUT: read, then write (spliced when OUT is in IN's format). */
 int cli_convert(int argc, char **argv)
@@ -265,7 +263,7 @@ int cli_convert(int argc, char **argv)
         goto out;
     }
     source_note(m, out, fout, ps.quiet);
-    st = save_mesh(out, fout, m, &err);
+    st = cli_save_mesh(out, fout, m, &err);
     if (st != QDC_OK) {
         cli_error(out, &err, st);
         rc = CLI_EOUTPUT;
@@ -375,9 +373,8 @@ static const char *sys_path(const char *path)
     return strcmp(path, "-") ? path : "/dev/stdin";
 }
 
-/* A tet mesh from path (any format qdc reads; a stream read once). */
-static qdc_status load_mesh(const char *path, meshio_format fin, const meshio_options *mo,
-                            mesh_t **m, qdc_error *err)
+qdc_status cli_load_mesh(const char *path, meshio_format fin, const meshio_options *mo,
+                         mesh_t **m, qdc_error *err)
 {
     char *buf = NULL;
     size_t len = 0;
@@ -426,7 +423,7 @@ static qdc_status load_input(const char *path, meshio_format fin, surface_format
                 "--tetgen-quality and --max-volume apply to surface input only");
         }
         if (!buf)
-            return load_mesh(path, fin, &mo, m, err);
+            return cli_load_mesh(path, fin, &mo, m, err);
         st = meshio_read_ex(buf, len, fin, &mo, m, err); /* a stream, read above */
         qdc_free(buf);
         return st;
@@ -450,10 +447,8 @@ static int stdout_write(void *ctx, const void *data, size_t len)
     return fwrite(data, 1, len, stdout) == len ? 0 : -1;
 }
 
-/* m written to out: a file (meshio_save), or standard output for "-", in
- * fout, else the input's format, else Medit. */
-static qdc_status save_mesh(const char *out, meshio_format fout, const mesh_t *m,
-                            qdc_error *err)
+qdc_status cli_save_mesh(const char *out, meshio_format fout, const mesh_t *m,
+                         qdc_error *err)
 {
     meshio_format f;
     qdc_status st;
@@ -626,7 +621,7 @@ static int optimize_write(const optimize_args *x, mesh_t *m)
                     (int)mo.flipped, (int)m->nt);
     }
     source_note(m, x->out, x->fout, x->ps.quiet);
-    st = save_mesh(x->out, x->fout, m, &err);
+    st = cli_save_mesh(x->out, x->fout, m, &err);
     if (st != QDC_OK) {
         cli_error(x->out, &err, st);
         return CLI_EOUTPUT;
@@ -896,7 +891,7 @@ int cli_tetra(int argc, char **argv)
                                                                           : CLI_EINPUT;
         goto out;
     }
-    st = save_mesh(x.out, x.fout, m, &err);
+    st = cli_save_mesh(x.out, x.fout, m, &err);
     if (st != QDC_OK) {
         cli_error(x.out, &err, st);
         rc = CLI_EOUTPUT;
@@ -964,7 +959,7 @@ int cli_quality(int argc, char **argv)
         fputs("usage: qdc quality IN [--ref ORIG] [--json]\n", stderr);
         return CLI_EUSAGE;
     }
-    st = load_mesh(in, MESHIO_AUTO, &nokeep, &m, &err);
+    st = cli_load_mesh(in, MESHIO_AUTO, &nokeep, &m, &err);
     if (st == QDC_OK)
         st = report_quality_compute(m, &q, &err);
     if (st != QDC_OK) {
@@ -973,7 +968,7 @@ int cli_quality(int argc, char **argv)
         goto out;
     }
     if (ref) {
-        st = load_mesh(ref, MESHIO_AUTO, &nokeep, &r, &err);
+        st = cli_load_mesh(ref, MESHIO_AUTO, &nokeep, &r, &err);
         if (st != QDC_OK) {
             cli_error(ref, &err, st);
             rc = CLI_EINPUT;

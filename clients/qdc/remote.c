@@ -523,8 +523,9 @@ static void remote_usage(FILE *f)
         "8)\n"
         "  -q, --quiet           no progress or retry messages\n"
         "submit:\n"
-        "  IN is read in any format qdc reads and uploaded as " MEDIA_QMESH ";\n"
-        "  the job id is printed on stdout. -o or --report imply --wait.\n"
+        "  IN ('-': standard input) is read in any format qdc reads and uploaded\n"
+        "  as " MEDIA_QMESH "; the job id is printed on stdout (on stderr when -o or\n"
+        "  --report is '-', standard output). -o or --report imply --wait.\n"
         "  --idempotency-key K   key of this submission (default: a random one; reuse\n"
         "                        it to make a re-run return the same job)\n"
         "  --in-format F, --out-format F   a format name, as in qdc optimize (default:\n"
@@ -822,7 +823,7 @@ static int download(remote *rm, const char *id, const char *out, const char *out
         } else {
             st = meshio_read(r.body.buf, r.body.len, MESHIO_QMESH, &m, &err);
             if (st == QDC_OK) {
-                st = meshio_save(out, format_of(out, out_format), m, &err);
+                st = cli_save_mesh(out, format_of(out, out_format), m, &err);
                 if (st != QDC_OK) {
                     cli_error(out, &err, st);
                     rc = CLI_EOUTPUT;
@@ -927,9 +928,9 @@ static int cmd_submit(args *a)
         a->wait = 1;
     if (!out_format_ok(a))
         return CLI_EUSAGE;
-    st = meshio_load_ex(
-        in, a->in_format ? meshio_format_from_name(a->in_format) : MESHIO_AUTO, &nokeep,
-        &m, &err); /* sent as binary: the file is not kept */
+    st = cli_load_mesh(in,
+                       a->in_format ? meshio_format_from_name(a->in_format) : MESHIO_AUTO,
+                       &nokeep, &m, &err); /* sent as binary: the file is not kept */
     if (st != QDC_OK) {
         cli_error(in, &err, st);
         return CLI_EINPUT;
@@ -959,7 +960,10 @@ static int cmd_submit(args *a)
         rc = CLI_ENETWORK;
         goto out;
     }
-    printf("%s\n", id);
+    if ((a->out && !strcmp(a->out, "-")) || (a->report && !strcmp(a->report, "-")))
+        fprintf(stderr, "qdc: job %s\n", id); /* stdout carries the result */
+    else
+        printf("%s\n", id);
     fflush(stdout);
     if (!a->wait)
         goto out;

@@ -80,6 +80,16 @@ else
 fi
 "$QDC" fetch "$id" -o "$TMP/f.node" && valid "$TMP/f.node" && pass "fetch -o .node: TetGen output valid" ||
     fail "fetch tetgen" "$(tail -2 "$TMP/q.txt")"
+# a pipeline: the mesh on standard input, the result on standard output (the
+# job id then goes to stderr)
+gzip -c "$MESH" | "$QDC" submit - -o - --out-format medit --max-iter 2 -q > "$TMP/p.mesh" 2> "$TMP/p.err"
+rc=$?
+if [ $rc = 0 ] && valid "$TMP/p.mesh" && grep -q '^qdc: job [0-9a-f]\{32\}$' "$TMP/p.err" && [ ! -e ./- ]; then
+    pass "submit - -o - --out-format medit: gzip on standard input, the result on standard output, '$(cat "$TMP/p.err")' on stderr"
+else
+    fail "submit pipeline" "rc $rc: $(head -c 200 "$TMP/p.err")"
+fi
+req DELETE "/v1/jobs/$(sed -n 's/^qdc: job //p' "$TMP/p.err")" "$TMP/del" > /dev/null # the job counts below
 # to /dev/stdout (written straight into, the link left alone) and to a link
 "$QDC" fetch "$id" -o /dev/stdout --out-format medit --report "$TMP/f2.report.json" > "$TMP/f.out.mesh"
 rc=$?
