@@ -22,6 +22,11 @@ enum {
 qdc_status cli_load_mesh(const char *path, meshio_format fin, const meshio_options *mo,
                          mesh_t **m, qdc_error *err);
 
+/* cli_load_mesh, and the file's bytes (decompressed) in *raw (qdc_free), or
+ * NULL for TetGen's two files. */
+qdc_status cli_read_mesh(const char *path, meshio_format fin, const meshio_options *mo,
+                         mesh_t **m, char **raw, size_t *rawlen, qdc_error *err);
+
 /* m written to out: a file (meshio_save), or standard output for "-", in
  * fout, else the input's format, else Medit. */
 qdc_status cli_save_mesh(const char *out, meshio_format fout, const mesh_t *m,

@@ -373,21 +373,42 @@ static const char *sys_path(const char *path)
     return strcmp(path, "-") ? path : "/dev/stdin";
 }
 
-qdc_status cli_load_mesh(const char *path, meshio_format fin, const meshio_options *mo,
-                         mesh_t **m, qdc_error *err)
+qdc_status cli_read_mesh(const char *path, meshio_format fin, const meshio_options *mo,
+                         mesh_t **m, char **raw, size_t *rawlen, qdc_error *err)
 {
+    meshio_format f = fin != MESHIO_AUTO ? fin : meshio_format_from_name(path);
     char *buf = NULL;
     size_t len = 0;
     qdc_status st;
 
-    if (!is_stream(path))
-        return meshio_load_ex(path, fin, mo, m, err);
+    *raw = NULL;
+    *rawlen = 0;
+    if (!is_stream(path) &&
+        (f == MESHIO_TETGEN || (f == MESHIO_AUTO && access(path, F_OK))))
+        return meshio_load_ex(path, fin, mo, m, err); /* TetGen's two files */
     st = meshio_slurp_plain(sys_path(path), &buf, &len, err);
     if (st == QDC_OK)
-        st = meshio_read_ex(buf, len,
-                            fin != MESHIO_AUTO ? fin : meshio_format_from_name(path), mo,
-                            m, err);
-    qdc_free(buf);
+        st = meshio_read_ex(buf, len, f, mo, m, err);
+    if (st != QDC_OK) {
+        qdc_free(buf);
+        return st;
+    }
+    *raw = buf;
+    *rawlen = len;
+    return QDC_OK;
+}
+
+qdc_status cli_load_mesh(const char *path, meshio_format fin, const meshio_options *mo,
+                         mesh_t **m, qdc_error *err)
+{
+    char *raw;
+    size_t len;
+    qdc_status st;
+
+    if (!is_stream(path))
+        return meshio_load_ex(path, fin, mo, m, err);
+    st = cli_read_mesh(path, fin, mo, m, &raw, &len, err);
+    qdc_free(raw);
     return st;
 }
 

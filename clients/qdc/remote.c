@@ -1,11 +1,15 @@
 /* remote.c - `qdc submit|status|watch|fetch|cancel|jobs`: the qdcd HTTP API
  * (proto/openapi.yaml) through libcurl.
  *
- * Meshes always travel as application/vnd.qdc.mesh: the local file is read
- * with meshio whatever its format and written to the binary format in memory,
- * and results are downloaded as binary and written in the format of the -o
- * file's extension. So the server never guesses a format and the result is
- * bit-exact.
+ * The local file is read (and checked) first, whatever its format. A file in
+ * a format qdcd takes (one with a media type: Medit, Gmsh 4.1 and 2.2 ASCII,
+ * 4.1 binary, VTK, VTU, ...) goes up as it is, in its own variant, and a
+ * result asked for in that format is the upload with only the coordinates
+ * replaced; any other goes up as application/vnd.qdc.mesh, and submit -o in
+ * its format puts the result's coordinates into the file read here. Either
+ * way `qdc submit IN -o OUT` writes what `qdc optimize IN OUT` writes: names,
+ * tags, arrays and comments kept. A result in another format is asked for in
+ * it (or as the binary mesh, for TetGen's pair) and written as it comes.
  *
  * Every request is retried on 429, 5xx and network failures, waiting what the
  * server's Retry-After says, else an exponential backoff. A submit carries an
@@ -524,8 +528,10 @@ static void remote_usage(FILE *f)
         "  -q, --quiet           no progress or retry messages\n"
         "submit:\n"
         "  IN ('-': standard input) is read in any format qdc reads and uploaded\n"
-        "  as " MEDIA_QMESH "; the job id is printed on stdout (on stderr when -o or\n"
-        "  --report is '-', standard output). -o or --report imply --wait.\n"
+        "  as it is when qdcd takes its format, else as " MEDIA_QMESH ";\n"
+        "  -o OUT in IN's format is what qdc optimize IN OUT writes (names, tags\n"
+        "  and arrays kept). The job id is printed on stdout (on stderr when -o\n"
+        "  or --report is '-', standard output). -o or --report imply --wait.\n"
         "  --idempotency-key K   key of this submission (default: a random one; reuse\n"
         "                        it to make a re-run return the same job)\n"
         "  --in-format F, --out-format F   a format name, as in qdc optimize (default:\n"
@@ -792,10 +798,13 @@ static int write_file(const char *path, const char *buf, size_t len)
     return meshio_save_bytes(path, buf, len, &err) == QDC_OK ? 0 : -1;
 }
 
-/* Downloads the result (binary) into out, converted to its extension's format,
- * and the report into report; either may be NULL. */
+/* Downloads the result into out, in its extension's format or out_format,
+ * and the report into report; either may be NULL. local: the input as read
+ * with its source, when it was sent as the binary mesh (a format the server
+ * does not take): an OUT in its format is then the input with the result's
+ * coordinates put in, here. */
 static int download(remote *rm, const char *id, const char *out, const char *out_format,
-                    const char *report)
+                    const char *report, mesh_t *local)
 {
     char path[256];
     reply r = {0};
@@ -806,34 +815,62 @@ static int download(remote *rm, const char *id, const char *out, const char *out
 
     qdc_error_clear(&err);
     if (out) {
-        const char *const h[] = {"Accept: " MEDIA_QMESH, NULL};
-        snprintf(path, sizeof path, "/v1/jobs/%s/result?format=qmesh", id);
-        hr = http(rm, "GET", path, h, NULL, 0, 120, &r);
+        /* the format OUT names; its extension names a family (.msh), and
+         * then the job's own variant is asked for: in the upload's format the
+         * server writes the upload back with only the coordinates replaced
+         * (names, tags, arrays kept), as qdc optimize writes OUT */
+        meshio_format want = format_of(out, out_format);
+        int served;
+        if (!out_format) {
+            char name[40];
+            snprintf(path, sizeof path, "/v1/jobs/%s", id);
+            hr = http(rm, "GET", path, NULL, NULL, 0, 30, &r);
+            if (!hr && r.status == 200 &&
+                jstr(jbody(&r.body), "mesh.format", name, sizeof name))
+                want = meshio_format_variant(want, meshio_format_from_name(name));
+        }
+        /* a local source in OUT's format: the result's coordinates put in */
+        if (local && meshio_source_format(local) != MESHIO_AUTO &&
+            (out_format ? want == meshio_source_format(local)
+                        : meshio_format_variant(format_of(out, NULL),
+                                                meshio_source_format(local)) ==
+                              meshio_source_format(local)))
+            want = MESHIO_AUTO;
+        served = want != MESHIO_AUTO && want != MESHIO_TETGEN && meshio_media_type(want);
+        snprintf(path, sizeof path, "/v1/jobs/%s/result?format=%s", id,
+                 meshio_format_name(served ? want : MESHIO_QMESH));
+        hr = http(rm, "GET", path, NULL, NULL, 0, 120, &r);
         if (hr || r.status != 200) {
             rc = http_fail("result", hr, &r);
             goto out;
         }
-        if (format_of(out, out_format) == MESHIO_QMESH) {
-            st = meshio_read(r.body.buf, r.body.len, MESHIO_QMESH, &m, &err);
-            if (st == QDC_OK && write_file(out, r.body.buf, r.body.len)) {
-                fprintf(stderr, "qdc: %s: cannot write\n", out);
-                rc = CLI_EOUTPUT;
-                goto out;
-            }
-        } else {
-            st = meshio_read(r.body.buf, r.body.len, MESHIO_QMESH, &m, &err);
-            if (st == QDC_OK) {
-                st = cli_save_mesh(out, format_of(out, out_format), m, &err);
-                if (st != QDC_OK) {
-                    cli_error(out, &err, st);
-                    rc = CLI_EOUTPUT;
-                    goto out;
-                }
-            }
-        }
+        /* a mesh, or the server sent something else */
+        st = meshio_read(r.body.buf, r.body.len, served ? want : MESHIO_QMESH, &m, &err);
         if (st != QDC_OK) {
             cli_error("result", &err, st);
-            rc = CLI_ENETWORK; /* the server sent something that is not a mesh */
+            rc = CLI_ENETWORK;
+            goto out;
+        }
+        if (want == MESHIO_AUTO) {
+            if (m->nv != local->nv || m->nt != local->nt) {
+                fprintf(stderr,
+                        "qdc: result: %d vertices, %d tets: not the input's %d, %d\n",
+                        (int)m->nv, (int)m->nt, (int)local->nv, (int)local->nt);
+                rc = CLI_ENETWORK;
+                goto out;
+            }
+            memcpy(local->xyz, m->xyz, 3 * sizeof(double) * (size_t)m->nv);
+            mesh_free(m);
+            m = NULL;
+        }
+        if (served ? write_file(out, r.body.buf, r.body.len) != 0
+                   : (st = cli_save_mesh(out, want, want == MESHIO_AUTO ? local : m,
+                                         &err)) != QDC_OK) {
+            if (served)
+                fprintf(stderr, "qdc: %s: cannot write\n", out);
+            else
+                cli_error(out, &err, st);
+            rc = CLI_EOUTPUT;
             goto out;
         }
     }
@@ -921,25 +958,48 @@ static int cmd_submit(args *a)
     char key[200], hkey[260], path[4200], id[64] = "";
     int rc = CLI_OK, hr;
     view v = {stderr, isatty(2), 0, a->rm.quiet, ""};
-    meshio_options nokeep = {NULL, NULL, -1};
+    meshio_options keep = {NULL, NULL, 1};
+    meshio_format src;
+    char *raw = NULL, ctype[80];
+    size_t rawlen = 0;
 
     qdc_error_clear(&err);
     if (a->out || a->report)
         a->wait = 1;
     if (!out_format_ok(a))
         return CLI_EUSAGE;
-    st = cli_load_mesh(in,
+    /* read (and checked) here, so a bad file costs no job */
+    st = cli_read_mesh(in,
                        a->in_format ? meshio_format_from_name(a->in_format) : MESHIO_AUTO,
-                       &nokeep, &m, &err); /* sent as binary: the file is not kept */
+                       &keep, &m, &raw, &rawlen, &err);
     if (st != QDC_OK) {
         cli_error(in, &err, st);
         return CLI_EINPUT;
     }
-    st = meshio_write(m, MESHIO_QMESH, rb_writer, &body, &err);
-    mesh_free(m);
+    /* sent as it is when the server takes its format (the file's own variant,
+     * which it then writes back with only the coordinates replaced: names,
+     * tags and arrays come back), else as the binary mesh */
+    src = meshio_source_format(m);
+    if (raw && src != MESHIO_AUTO && src != MESHIO_TETGEN && meshio_media_type(src)) {
+        body.buf = raw;
+        body.len = rawlen;
+        raw = NULL;
+    } else {
+        src = MESHIO_QMESH;
+        st = meshio_write(m, MESHIO_QMESH, rb_writer, &body, &err);
+    }
+    qdc_free(raw);
+    /* sent as the binary mesh: kept (with its source) to write -o in its own
+     * format as qdc optimize would, the result's coordinates put in */
+    if (src != MESHIO_QMESH || !a->out || meshio_source_format(m) == MESHIO_AUTO) {
+        mesh_free(m);
+        m = NULL;
+    }
+    snprintf(ctype, sizeof ctype, "Content-Type: %s", meshio_media_type(src));
     if (st != QDC_OK || body.oom) {
         cli_error(in, &err, st != QDC_OK ? st : QDC_ENOMEM);
         rb_free(&body);
+        mesh_free(m);
         return CLI_EINPUT;
     }
     if (a->idem)
@@ -947,7 +1007,7 @@ static int cmd_submit(args *a)
     else
         random_key(key);
     snprintf(hkey, sizeof hkey, "Idempotency-Key: %s", key);
-    const char *const h[] = {"Content-Type: " MEDIA_QMESH, hkey, NULL};
+    const char *const h[] = {ctype, hkey, NULL};
     snprintf(path, sizeof path, "/v1/jobs%s", a->query.buf ? a->query.buf : "");
     hr = http(&a->rm, "POST", path, h, body.buf, body.len, 120, &r);
     rb_free(&body);
@@ -970,12 +1030,13 @@ static int cmd_submit(args *a)
     rc = await_job(&a->rm, id, &v);
     if (rc >= 0)
         goto out;
-    rc = download(&a->rm, id, a->out, a->out_format, a->report);
+    rc = download(&a->rm, id, a->out, a->out_format, a->report, m);
 out:
     if (interrupted && id[0])
         fprintf(stderr,
                 "qdc: job %s goes on on the server (qdc watch %s, qdc cancel %s)\n", id,
                 id, id);
+    mesh_free(m);
     rb_free(&r.body);
     return rc;
 }
@@ -1058,7 +1119,7 @@ static int cmd_fetch(args *a)
         if (rc >= 0)
             return rc;
     }
-    return download(&a->rm, id, a->out, a->out_format, a->report);
+    return download(&a->rm, id, a->out, a->out_format, a->report, NULL);
 }
 
 static int cmd_cancel(args *a)

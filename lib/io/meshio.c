@@ -2144,6 +2144,7 @@ static qdc_status save_atomic(const char *path, const payload *p, qdc_error *err
     if (fd < 0) {
         st = fail_errno(err, "cannot create a temporary file for", path, errno);
         qdc_free(tmp);
+        qdc_free(target);
         return st;
     }
     st = write_fd(fd, path, tmp, p, err);
@@ -2183,6 +2184,11 @@ static int family(meshio_format f)
     }
 }
 
+meshio_format meshio_format_variant(meshio_format named, meshio_format src)
+{
+    return named != MESHIO_AUTO && family(named) == family(src) ? src : named;
+}
+
 meshio_format meshio_save_format(const char *path, meshio_format fmt, const mesh_t *m)
 {
     const char *ext = path ? path_ext(path) : NULL;
@@ -2192,8 +2198,7 @@ meshio_format meshio_save_format(const char *path, meshio_format fmt, const mesh
         return fmt;
     if (!ext) /* /dev/stdout, a pipe, a name without one: the input's format */
         return src;
-    fmt = ext_format(ext);
-    return fmt != MESHIO_AUTO && family(fmt) == family(src) ? src : fmt;
+    return meshio_format_variant(ext_format(ext), src);
 }
 
 qdc_status meshio_save(const char *path, meshio_format fmt, const mesh_t *m,

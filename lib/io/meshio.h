@@ -164,6 +164,9 @@ int meshio_splices(const mesh_t *m, meshio_format fmt, const char **why);
 /* The format meshio_save(path, fmt, m) writes: fmt, else the source's own
  * variant if the extension names its family, else by extension; AUTO if none. */
 meshio_format meshio_save_format(const char *path, meshio_format fmt, const mesh_t *m);
+/* src if named is of src's family (an extension names a family: .msh is every
+ * Gmsh variant), else named. */
+meshio_format meshio_format_variant(meshio_format named, meshio_format src);
 /* Bytes held by m's source in memory (0 if none); *float32 set if its coordinates are
  * stored as float32 (may be NULL). */
 size_t meshio_source_bytes(const mesh_t *m, int *float32);

@@ -1,8 +1,10 @@
 #!/bin/sh
 # remote.sh - `qdc submit|status|watch|fetch|cancel|jobs` against a real qdcd:
-# results valid and in the -o file's format, reports present, uploads always
-# binary, progress lines (plain and on a terminal), Idempotency-Key, tokens,
-# and the exit codes 1, 2, 10, 11, 12.
+# results valid and in the -o file's format, reports present, a file sent as it
+# is when qdcd takes its format (else as the binary mesh), `submit IN -o OUT`
+# byte for byte what `qdc optimize IN OUT` writes for 13 files of
+# other tools, progress lines (plain and on a terminal), Idempotency-Key,
+# tokens, and the exit codes 1, 2, 10, 11, 12.
 . "$(dirname "$0")/../lib.sh"
 . "$ROOT/tests/server/daemon.inc"
 QDC=$BIN/qdc
@@ -164,6 +166,27 @@ else
     fail "SIGINT" "rc $rc state '$st': $(tail -2 "$TMP/int.err")"
 fi
 "$QDC" cancel "$id" > /dev/null 2>&1
+
+# 7c. files of other tools: submit -o in their own format gives what the local
+# run writes, byte for byte (names, tags, arrays, comments kept): sent as they
+# are where qdcd takes the format (it writes the upload back), else as the
+# binary mesh and the result's coordinates put into the file here
+bad=
+nraw=0
+for f in gmsh41.msh gmsh41_bin.msh gmsh22.msh gmsh22_bin.msh gmsh40.msh gmsh.mesh gmsh.vtk \
+    meshio_ascii.vtu meshio_zlib.vtu dolfin.xml calculix.inp meshio.vol meshio.meshb; do
+    gzip -dc "$ROOT/tests/data/real/$f.gz" > "$TMP/$f"
+    "$QDC" optimize "$TMP/$f" "$TMP/local.$f" --max-iter 3 --quiet || bad="$bad $f:local"
+    id=$("$QDC" submit "$TMP/$f" --max-iter 3 -q -o "$TMP/remote.$f") || bad="$bad $f:submit"
+    cmp -s "$TMP/local.$f" "$TMP/remote.$f" || bad="$bad $f:differs"
+    req GET "/v1/jobs/$id" "$TMP/job.json" > /dev/null
+    [ "$(jf "$TMP/job.json" .mesh.format)" = qmesh ] || nraw=$((nraw + 1))
+done
+if [ -z "$bad" ] && [ $nraw = 7 ]; then
+    pass "submit -o in the input's format: 13 files of other tools byte for byte as qdc optimize writes them (7 sent as they are, 6 as the binary mesh)"
+else
+    fail "submit, files of other tools" "$bad; $nraw sent as they are (want 7)"
+fi
 
 # 8. exit codes
 "$QDC" submit "$MESH" --metric nope -q 2> "$TMP/e.err"
