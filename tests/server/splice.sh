@@ -108,6 +108,23 @@ if grep -q '^gmsh41 ' "$TMP/ids" 2> /dev/null; then
     *) fail "splice: Qdc-Note" "the vtu conversion's note: '$note'" ;;
     esac
 fi
+# A binary MSH 4.1 file sent as "model/vnd.gmsh" (the family, no
+# encoding=binary): recorded as gmsh-bin, the variant its header says, so that
+# the result in it is the CLI's output (it was recorded as gmsh, and then
+# neither ?format=gmsh nor gmsh-bin kept $PhysicalNames)
+if [ -f "$TMP/gmsh41bin.cli.msh" ]; then
+    code=$(submit "$TMP/gmsh41bin.msh" model/vnd.gmsh "" "$TMP/fam.job")
+    id=$(jf "$TMP/fam.job" .id)
+    st=$(wait_done "$id")
+    got=$(jf "$TMP/job.$id" .mesh.format)
+    c1=$(req GET "/v1/jobs/$id/result?format=gmsh-bin" "$TMP/fam.msh")
+    if [ "$code" = 202 ] && [ "$st" = succeeded ] && [ "$got" = gmsh-bin ] && [ "$c1" = 200 ] &&
+        cmp -s "$TMP/fam.msh" "$TMP/gmsh41bin.cli.msh"; then
+        pass "splice: binary MSH 4.1 sent as model/vnd.gmsh: recorded as gmsh-bin, /result?format=gmsh-bin is the CLI's output"
+    else
+        fail "splice: model/vnd.gmsh binary" "submit $code, $st, recorded '$got', result $c1, $(cmp "$TMP/fam.msh" "$TMP/gmsh41bin.cli.msh" 2>&1 | head -1)"
+    fi
+fi
 stop_qdcd
 
 # PostgreSQL: the upload sent to node a, the result asked from node b (its own
