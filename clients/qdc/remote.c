@@ -531,7 +531,8 @@ static void remote_usage(FILE *f)
         "  as it is when qdcd takes its format, else as " MEDIA_QMESH ";\n"
         "  -o OUT in IN's format is what qdc optimize IN OUT writes (names, tags\n"
         "  and arrays kept). The job id is printed on stdout (on stderr when -o\n"
-        "  or --report is '-', standard output). -o or --report imply --wait.\n"
+        "  or --report is '-', standard output: in IN's format unless --out-format\n"
+        "  says another). -o or --report imply --wait.\n"
         "  --idempotency-key K   key of this submission (default: a random one; reuse\n"
         "                        it to make a re-run return the same job)\n"
         "  --in-format F, --out-format F   a format name, as in qdc optimize (default:\n"
@@ -775,10 +776,12 @@ static meshio_format format_of(const char *path, const char *forced)
     return meshio_format_from_name(forced ? forced : path);
 }
 
-/* Checked before anything is sent, so a typo does not cost a job. */
+/* Checked before anything is sent, so a typo does not cost a job. "-"
+ * (standard output) takes the job's format unless --out-format names one. */
 static int out_format_ok(const args *a)
 {
-    if (!a->out || format_of(a->out, a->out_format) != MESHIO_AUTO)
+    if (!a->out || format_of(a->out, a->out_format) != MESHIO_AUTO ||
+        (!strcmp(a->out, "-") && !a->out_format))
         return 1;
     fprintf(stderr,
             "qdc: %s: not a mesh format qdc writes (use its extension: .mesh, .node, "
@@ -818,24 +821,35 @@ static int download(remote *rm, const char *id, const char *out, const char *out
         /* the format OUT names; its extension names a family (.msh), and
          * then the job's own variant is asked for: in the upload's format the
          * server writes the upload back with only the coordinates replaced
-         * (names, tags, arrays kept), as qdc optimize writes OUT */
+         * (names, tags, arrays kept), as qdc optimize writes OUT. OUT "-"
+         * without --out-format: the job's format */
         meshio_format want = format_of(out, out_format);
+        meshio_format lsrc = local ? meshio_source_format(local) : MESHIO_AUTO;
         int served;
         if (!out_format) {
             char name[40];
+            meshio_format job = MESHIO_AUTO;
             snprintf(path, sizeof path, "/v1/jobs/%s", id);
             hr = http(rm, "GET", path, NULL, NULL, 0, 30, &r);
             if (!hr && r.status == 200 &&
                 jstr(jbody(&r.body), "mesh.format", name, sizeof name))
-                want = meshio_format_variant(want, meshio_format_from_name(name));
-        }
-        /* a local source in OUT's format: the result's coordinates put in */
-        if (local && meshio_source_format(local) != MESHIO_AUTO &&
-            (out_format ? want == meshio_source_format(local)
-                        : meshio_format_variant(format_of(out, NULL),
-                                                meshio_source_format(local)) ==
-                              meshio_source_format(local)))
+                job = meshio_format_from_name(name);
+            want = want == MESHIO_AUTO ? job : meshio_format_variant(want, job);
+            /* a local source in OUT's format (or for "-"): put the result's
+             * coordinates into it here */
+            if (lsrc != MESHIO_AUTO &&
+                (format_of(out, NULL) == MESHIO_AUTO ||
+                 meshio_format_variant(format_of(out, NULL), lsrc) == lsrc))
+                want = MESHIO_AUTO;
+        } else if (lsrc != MESHIO_AUTO && want == lsrc) {
             want = MESHIO_AUTO;
+        }
+        if (want == MESHIO_AUTO && lsrc == MESHIO_AUTO) {
+            fprintf(stderr,
+                    "qdc: %s: give --out-format (the job's format is not known)\n", out);
+            rc = CLI_EUSAGE;
+            goto out;
+        }
         served = want != MESHIO_AUTO && want != MESHIO_TETGEN && meshio_media_type(want);
         snprintf(path, sizeof path, "/v1/jobs/%s/result?format=%s", id,
                  meshio_format_name(served ? want : MESHIO_QMESH));

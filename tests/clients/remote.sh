@@ -187,6 +187,21 @@ if [ -z "$bad" ] && [ $nraw = 7 ]; then
 else
     fail "submit, files of other tools" "$bad; $nraw sent as they are (want 7)"
 fi
+# the same through standard input and output, no --out-format: the input's
+# format (a Gmsh 2.2 binary file goes up as the binary mesh and is written
+# here; Gmsh 4.1 comes back from the server); fetch -o - gives the job's
+"$QDC" submit - --max-iter 3 -q -o - < "$TMP/gmsh22_bin.msh" > "$TMP/s22.msh" 2> /dev/null
+rc=$?
+"$QDC" submit - --max-iter 3 -q -o - < "$TMP/gmsh41.msh" > "$TMP/s41.msh" 2> "$TMP/s41.err"
+rc2=$?
+"$QDC" fetch "$(sed -n 's/^qdc: job //p' "$TMP/s41.err")" -o - > "$TMP/f41.msh"
+rc3=$?
+if [ $rc$rc2$rc3 = 000 ] && cmp -s "$TMP/s22.msh" "$TMP/local.gmsh22_bin.msh" &&
+    cmp -s "$TMP/s41.msh" "$TMP/local.gmsh41.msh" && cmp -s "$TMP/f41.msh" "$TMP/local.gmsh41.msh"; then
+    pass "submit - -o - and fetch -o - (no --out-format): the input's format, byte for byte the local run's (Gmsh 2.2 binary, 4.1)"
+else
+    fail "submit/fetch -o -" "rc $rc $rc2 $rc3"
+fi
 
 # 8. exit codes
 "$QDC" submit "$MESH" --metric nope -q 2> "$TMP/e.err"
