@@ -175,6 +175,34 @@ static meshio_format sniff_vtk(const char *p, size_t n)
                                                              : MESHIO_VTK;
 }
 
+/* Where the n bytes at p first hold the k bytes of w, or NULL. */
+static const char *find_bytes(const char *p, size_t n, const char *w, size_t k)
+{
+    for (const char *e = p + n; k <= (size_t)(e - p); p++) {
+        p = memchr(p, w[0], (size_t)(e - p) - k + 1);
+        if (!p)
+            return NULL;
+        if (memcmp(p, w, k) == 0)
+            return p;
+    }
+    return NULL;
+}
+
+/* A VTU's variant, as its reader records it: VTU_ASCII when the Points
+ * DataArray is ascii, else VTU. */
+static meshio_format sniff_vtu(const char *p, size_t n)
+{
+    const char *e = p + n, *pts = find_bytes(p, n, "<Points", 7), *da, *end;
+
+    if (!pts || !(da = find_bytes(pts, (size_t)(e - pts), "<DataArray", 10)) ||
+        !(end = memchr(da, '>', (size_t)(e - da))))
+        return MESHIO_VTU;
+    return find_bytes(da, (size_t)(end - da), "format=\"ascii\"", 14) ||
+                   find_bytes(da, (size_t)(end - da), "format='ascii'", 14)
+               ? MESHIO_VTU_ASCII
+               : MESHIO_VTU;
+}
+
 /* An XML document whose first element, within 1 kB, is a VTKFile or a
  * dolfin. */
 static meshio_format sniff_xml(const char *p, size_t n)
@@ -184,7 +212,7 @@ static meshio_format sniff_xml(const char *p, size_t n)
 
     for (size_t i = 0; i + sizeof tag - 1 <= lim; i++)
         if (memcmp(p + i, tag, sizeof tag - 1) == 0)
-            return MESHIO_VTU;
+            return sniff_vtu(p + i, n - i);
     for (size_t i = 0; i + sizeof dtag - 1 <= lim; i++)
         if (memcmp(p + i, dtag, sizeof dtag - 1) == 0 &&
             (i + sizeof dtag - 1 == n || !is_word((unsigned char)p[i + sizeof dtag - 1])))

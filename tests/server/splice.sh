@@ -3,7 +3,7 @@
 # with only the coordinates replaced, as `qdc optimize IN OUT` writes OUT in
 # IN's format: files written by other tools (tests/data/real: MSH 4.1 with
 # $PhysicalNames, point and line elements, ASCII and binary; VTU with point
-# and cell arrays, zlib-compressed inline and appended; Medit with Edges and
+# and cell arrays, zlib-compressed inline and appended, and ascii; Medit with Edges and
 # vertex refs) come back from qdcd byte for byte as the CLI writes them,
 # with the same strong ETag on every request; the same result in another format is written by qdc's own writer;
 # GET /input in the upload's format is the upload itself. With a PostgreSQL
@@ -21,6 +21,7 @@ CASES="gmsh41:gmsh41.msh:gmsh:\$PhysicalNames
 gmsh41bin:gmsh41_bin.msh:gmsh-bin:\$PhysicalNames
 vtu:meshio_zlib.vtu:vtu:temperature
 vtuapp:vtk_appended_zlib.vtu:vtu:RangeMin
+vtuascii:meshio_ascii.vtu:vtu-ascii:velocity
 medit:gmsh.mesh:medit:Edges"
 
 for c in $CASES; do

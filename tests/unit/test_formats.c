@@ -865,6 +865,19 @@ TEST(names_sniffing_media_types)
     ASSERT_EQ_INT(meshio_sniff("# vtk DataFile Version 2.0\nx\nBINARY\n", 36),
                   MESHIO_VTK);
     ASSERT_EQ_INT(meshio_sniff("<?xml version=\"1.0\"?><VTKFile", 29), MESHIO_VTU);
+    { /* a VTU's variant is its Points array's (the reader's), whatever comes before */
+        static const char asc[] =
+            "<VTKFile><Piece><PointData><DataArray format=\"binary\">"
+            "</DataArray></PointData><Points><DataArray Name=\"Points\" "
+            "format=\"ascii\">0 0 0</DataArray></Points>",
+                          app[] =
+                              "<VTKFile><Piece><Points><DataArray format=\"appended\" "
+                              "offset=\"0\"/></Points><Cells><DataArray "
+                              "format=\"ascii\">";
+        ASSERT_EQ_INT(meshio_sniff(asc, sizeof asc - 1), MESHIO_VTU_ASCII);
+        ASSERT_EQ_INT(meshio_sniff(app, sizeof app - 1), MESHIO_VTU);
+        ASSERT_EQ_INT(meshio_sniff(asc, 60), MESHIO_VTU); /* cut before its Points */
+    }
     ASSERT_EQ_INT(meshio_sniff("<html>", 6), MESHIO_AUTO);
 }
 
