@@ -7,7 +7,7 @@ the binary mesh format in proto/mesh-binary.md.
 
     from qdc_client import Client
     c = Client("http://127.0.0.1:8080")           # or $QDC_SERVER, token $QDC_TOKEN
-    job = c.submit("in.mesh", {"max_iter": 20})   # a path (.mesh/.json/.qmesh) ...
+    job = c.submit("in.msh", {"max_iter": 20})   # a path (.mesh .msh .vtk .vtu .json .qmesh) ...
     job = c.submit((xyz, tets))                   # ... or arrays (lists or numpy)
     c.wait(job, on_progress=lambda r: print(r["iteration"], r["mean_ratio_min"]))
     mesh = c.result(job)                          # Mesh: .xyz, .tets, .regions, .fixed
@@ -48,12 +48,19 @@ FLAG_REGION = 1
 FLAG_FIXED = 2
 _HEADER = struct.Struct("<8sIIQQ")
 
-# file extension -> (Content-Type of an upload, ?format= of a result)
+# file extension -> (Content-Type of an upload, ?format= of a result, the
+# variants of that family: a result in the job's own one is its upload
+# written back, names, tags and arrays kept; qdcd records a Gmsh or VTK
+# upload as the variant its header says)
 _FORMATS = {
-    ".mesh": ("model/x-medit", "medit"),
-    ".json": ("application/json", "json"),
-    ".qmesh": (MEDIA_QMESH, "qmesh"),
+    ".mesh": ("model/x-medit", "medit", ("medit",)),
+    ".json": ("application/json", "json", ("json",)),
+    ".qmesh": (MEDIA_QMESH, "qmesh", ("qmesh",)),
+    ".msh": ("model/vnd.gmsh", "gmsh", ("gmsh", "gmsh-bin", "gmsh22")),
+    ".vtk": ("application/vnd.vtk", "vtk", ("vtk", "vtk-ascii")),
+    ".vtu": ("application/vnd.vtk.vtu+xml", "vtu", ("vtu", "vtu-ascii")),
 }
+_EXTS = ", ".join(sorted(_FORMATS))
 
 __all__ = ["Client", "Mesh", "QdcError", "JobFailed", "MEDIA_QMESH"]
 
@@ -325,15 +332,16 @@ class Client:
     # -- API ----------------------------------------------------------------
 
     def submit(self, mesh, options=None, idempotency_key=None):
-        """New job. mesh: a path (.mesh Medit, .json, .qmesh), a Mesh, or a
-        tuple (xyz, tets[, regions[, fixed]]) of lists or numpy arrays.
+        """New job. mesh: a path (.mesh Medit, .msh Gmsh, .vtk, .vtu, .json,
+        .qmesh; sent as it is), a Mesh, or a tuple (xyz, tets[, regions[,
+        fixed]]) of lists or numpy arrays.
         options: optimizer options, e.g. {"max_iter": 20, "boundary": "fixed"}.
         Returns the job (dict with "id", "state", ...)."""
         if isinstance(mesh, (str, os.PathLike)):
             path = os.fspath(mesh)
             ext = os.path.splitext(path)[1].lower()
             if ext not in _FORMATS:
-                raise ValueError("%s: use .mesh, .json or .qmesh (or pass arrays)" % path)
+                raise ValueError("%s: use %s (or pass arrays)" % (path, _EXTS))
             ctype = _FORMATS[ext][0]
             with open(path, "rb") as f:
                 body = f.read()
@@ -390,16 +398,21 @@ class Client:
 
     def result(self, job, path=None, fmt=None):
         """The optimized mesh. Without path: a Mesh (downloaded as binary).
-        With path: written there, format from fmt ('medit', 'json', 'qmesh')
-        or the extension; returns path."""
+        With path: written there, format from fmt ('medit', 'gmsh', 'vtu',
+        ...) or the extension (the job's own variant when the extension names
+        its family: then the upload comes back with only the coordinates
+        replaced); returns path."""
         jid = _job_id(job)
         if path is None:
             fmt = "qmesh"
         elif fmt is None:
             ext = os.path.splitext(os.fspath(path))[1].lower()
             if ext not in _FORMATS:
-                raise ValueError("%s: use .mesh, .json or .qmesh, or fmt=" % path)
+                raise ValueError("%s: use %s, or fmt=" % (path, _EXTS))
             fmt = _FORMATS[ext][1]
+            own = self.job(jid).get("mesh", {}).get("format")
+            if own in _FORMATS[ext][2]:
+                fmt = own
         status, _, data = self._request("GET", "/v1/jobs/%s/result?format=%s" % (jid, fmt))
         if status != 200:
             raise QdcError(status, _problem(data))
