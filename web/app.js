@@ -703,8 +703,14 @@ function renderDownloads(st) {
     const base = '/v1/jobs/' + st.id;
     const items = (what, tag) => FORMATS.map(([f, ext, label]) => [base + '/' + what + '?format=' + f,
         'qdc-' + short(st.id) + tag + (f.includes('-') || f === 'gmsh22' ? '-' + f : '') + '.' + ext, label, f]);
+    // the upload's own format: the uploaded file with the new coordinates,
+    // everything else it holds (names, tags, arrays) kept
+    const own = st.job.mesh.format;
     const links = (list) => list.map(([href, name, label, f]) =>
-        el('a', { class: 'button small', href, download: name, 'data-format': f, text: label, onclick: (ev) => authDownload(ev, href, name) }));
+        el('a', { class: 'button small', href, download: name, 'data-format': f,
+            text: f === own ? label + ' (as uploaded)' : label,
+            title: f === own ? 'the uploaded file with only the coordinates replaced: names, tags and arrays kept' : undefined,
+            onclick: (ev) => authDownload(ev, href, name) }));
     const res = items('result', '');
     res.push([base + '/report', 'qdc-' + short(st.id) + '-report.json', 'report (JSON)', 'report']);
     box.replaceChildren(...links(res));

@@ -271,6 +271,11 @@ try {
         const missing = offered.filter((f) => !links.includes(f));
         check(offered.length >= 10 && !missing.length, 'downloads: a link per offered format (' + offered.join(' ') + ') and the report',
             'missing ' + missing.join(' '));
+        // the upload's own format is marked: that file is the upload written back
+        const own = (await apiJSON('/v1/jobs/' + id1)).body.mesh.format;
+        const marked = await page.$$eval('#downloads a', (as) => as.filter((a) => /as uploaded/.test(a.textContent)).map((a) => a.dataset.format));
+        check(marked.length === 1 && marked[0] === own, 'downloads: the upload\'s own format (' + own + ') is the one marked "as uploaded"',
+            JSON.stringify(marked));
         const name = await download('medit', 'sample-out.mesh');
         await download('qmesh', 'sample-out.qmesh');
         pass('result downloaded through the page (' + name + ')');
