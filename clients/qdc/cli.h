@@ -22,6 +22,9 @@ enum {
 qdc_status cli_load_mesh(const char *path, meshio_format fin, const meshio_options *mo,
                          mesh_t **m, qdc_error *err);
 
+/* The file's bytes, decompressed if gzip; "-" is standard input. */
+qdc_status cli_slurp(const char *path, char **buf, size_t *len, qdc_error *err);
+
 /* cli_load_mesh, and the file's bytes (decompressed) in *raw (qdc_free), or
  * NULL for TetGen's two files. */
 qdc_status cli_read_mesh(const char *path, meshio_format fin, const meshio_options *mo,

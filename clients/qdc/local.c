@@ -373,6 +373,11 @@ static const char *sys_path(const char *path)
     return strcmp(path, "-") ? path : "/dev/stdin";
 }
 
+qdc_status cli_slurp(const char *path, char **buf, size_t *len, qdc_error *err)
+{
+    return meshio_slurp_plain(sys_path(path), buf, len, err);
+}
+
 qdc_status cli_read_mesh(const char *path, meshio_format fin, const meshio_options *mo,
                          mesh_t **m, char **raw, size_t *rawlen, qdc_error *err)
 {

@@ -528,7 +528,8 @@ static void remote_usage(FILE *f)
         "  -q, --quiet           no progress or retry messages\n"
         "submit:\n"
         "  IN ('-': standard input) is read in any format qdc reads and uploaded\n"
-        "  as it is when qdcd takes its format, else as " MEDIA_QMESH ";\n"
+        "  as it is when qdcd takes its format, else as " MEDIA_QMESH "; a closed\n"
+        "  surface (.stl .obj .off .poly .smesh) goes as it is, to be tetrahedralized.\n"
         "  -o OUT in IN's format is what qdc optimize IN OUT writes (names, tags\n"
         "  and arrays kept). The job id is printed on stdout (on stderr when -o\n"
         "  or --report is '-', standard output: in IN's format unless --out-format\n"
@@ -844,12 +845,8 @@ static int download(remote *rm, const char *id, const char *out, const char *out
         } else if (lsrc != MESHIO_AUTO && want == lsrc) {
             want = MESHIO_AUTO;
         }
-        if (want == MESHIO_AUTO && lsrc == MESHIO_AUTO) {
-            fprintf(stderr,
-                    "qdc: %s: give --out-format (the job's format is not known)\n", out);
-            rc = CLI_EUSAGE;
-            goto out;
-        }
+        if (want == MESHIO_AUTO && lsrc == MESHIO_AUTO) /* a surface's job: Medit */
+            want = MESHIO_MEDIT;
         served = want != MESHIO_AUTO && want != MESHIO_TETGEN && meshio_media_type(want);
         snprintf(path, sizeof path, "/v1/jobs/%s/result?format=%s", id,
                  meshio_format_name(served ? want : MESHIO_QMESH));
@@ -974,6 +971,7 @@ static int cmd_submit(args *a)
     view v = {stderr, isatty(2), 0, a->rm.quiet, ""};
     meshio_options keep = {NULL, NULL, 1};
     meshio_format src;
+    surface_format sf;
     char *raw = NULL, ctype[80];
     size_t rawlen = 0;
 
@@ -982,12 +980,47 @@ static int cmd_submit(args *a)
         a->wait = 1;
     if (!out_format_ok(a))
         return CLI_EUSAGE;
+    /* a closed surface (qdcd tetrahedralizes it with TetGen): sent as it is,
+     * after the checks qdcd makes */
+    sf = a->in_format ? surface_format_from_name(a->in_format)
+                      : surface_format_from_name(in);
+    if (sf == SURFACE_AUTO && !a->in_format &&
+        meshio_format_from_name(in) == MESHIO_AUTO) {
+        st = cli_slurp(in, &raw, &rawlen, &err);
+        if (st == QDC_OK && meshio_sniff(raw, rawlen) == MESHIO_AUTO)
+            sf = surface_sniff(raw, rawlen);
+        if (sf == SURFACE_AUTO && st == QDC_OK) { /* a mesh: read from these bytes */
+            st = meshio_read_ex(raw, rawlen, MESHIO_AUTO, &keep, &m, &err);
+            goto read;
+        }
+    }
+    if (sf != SURFACE_AUTO) {
+        surface_t *s = NULL;
+        st = raw ? QDC_OK : cli_slurp(in, &raw, &rawlen, &err);
+        if (st == QDC_OK)
+            st = surface_read(raw, rawlen, sf, &s, &err);
+        if (st == QDC_OK)
+            st = surface_check(s, &err);
+        surface_free(s);
+        if (st != QDC_OK) {
+            cli_error(in, &err, st);
+            qdc_free(raw);
+            return CLI_EINPUT;
+        }
+        body.buf = raw;
+        body.len = rawlen;
+        raw = NULL;
+        snprintf(ctype, sizeof ctype, "Content-Type: %s", surface_media_type(sf));
+        goto send;
+    }
     /* read (and checked) here, so a bad file costs no job */
     st = cli_read_mesh(in,
                        a->in_format ? meshio_format_from_name(a->in_format) : MESHIO_AUTO,
                        &keep, &m, &raw, &rawlen, &err);
+read:
     if (st != QDC_OK) {
         cli_error(in, &err, st);
+        qdc_free(raw);
         return CLI_EINPUT;
     }
     /* sent as it is when the server takes its format (the file's own variant,
@@ -1016,6 +1049,7 @@ static int cmd_submit(args *a)
         mesh_free(m);
         return CLI_EINPUT;
     }
+send:
     if (a->idem)
         snprintf(key, sizeof key, "%s", a->idem);
     else
