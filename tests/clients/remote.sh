@@ -205,21 +205,8 @@ fi
 
 # a closed surface goes up as it is (qdcd tetrahedralizes it; TetGen's options
 # pass through); an open one is refused here (exit 2), before any job
-printf 'OFF\n8 12 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n0 0 1\n1 0 1\n1 1 1\n0 1 1\n%s\n' \
-    '3 0 2 1
-3 0 3 2
-3 4 5 6
-3 4 6 7
-3 0 1 5
-3 0 5 4
-3 1 2 6
-3 1 6 5
-3 2 3 7
-3 2 7 6
-3 3 0 4
-3 3 4 7' > "$TMP/cube.off"
 printf 'OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n' > "$TMP/open.off"
-"$QDC" submit - --max-volume 0.01 -q -o - < "$TMP/cube.off" > "$TMP/cube.out.mesh" 2> "$TMP/cube.err"
+"$QDC" submit - --max-volume 0.01 -q -o - < "$ROOT/tests/data/sample/cube.off" > "$TMP/cube.out.mesh" 2> "$TMP/cube.err"
 rc=$?
 sid=$(sed -n 's/^qdc: job //p' "$TMP/cube.err")
 req GET "/v1/jobs/$sid" "$TMP/cube.job" > /dev/null

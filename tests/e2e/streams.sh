@@ -54,24 +54,11 @@ fi
 wait
 
 # a closed surface (OFF) on standard input: tetrahedralized by TetGen, as from a file
-printf 'OFF\n8 12 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n0 0 1\n1 0 1\n1 1 1\n0 1 1\n%s\n' \
-    '3 0 2 1
-3 0 3 2
-3 4 5 6
-3 4 6 7
-3 0 1 5
-3 0 5 4
-3 1 2 6
-3 1 6 5
-3 2 3 7
-3 2 7 6
-3 3 0 4
-3 3 4 7' > cube.off
-"$Q" tetra cube.off tf.mesh --max-volume 0.01 --quiet
-"$Q" tetra - ts.mesh --max-volume 0.01 --quiet < cube.off
-"$Q" optimize - os.mesh --max-volume 0.01 --quiet < cube.off
-"$Q" optimize cube.off of.mesh --max-volume 0.01 --quiet
-"$Q" tetra - - --max-volume 0.01 --quiet < cube.off > tp.mesh
+"$Q" tetra "$ROOT/tests/data/sample/cube.off" tf.mesh --max-volume 0.01 --quiet
+"$Q" tetra - ts.mesh --max-volume 0.01 --quiet < "$ROOT/tests/data/sample/cube.off"
+"$Q" optimize - os.mesh --max-volume 0.01 --quiet < "$ROOT/tests/data/sample/cube.off"
+"$Q" optimize "$ROOT/tests/data/sample/cube.off" of.mesh --max-volume 0.01 --quiet
+"$Q" tetra - - --max-volume 0.01 --quiet < "$ROOT/tests/data/sample/cube.off" > tp.mesh
 if [ -s tf.mesh ] && cmp -s tf.mesh ts.mesh && [ -s of.mesh ] && cmp -s of.mesh os.mesh && cmp -s tp.mesh tf.mesh; then
     pass "a closed surface on standard input: tetra and optimize give what they give from the file, tetra - - writes Medit ($(grep -A1 '^Tetrahedra' ts.mesh | tail -1) tets)"
 else
