@@ -610,6 +610,10 @@ static int optimize_parse(int argc, char **argv, optimize_args *x)
         optimize_usage(stderr);
         return CLI_EUSAGE;
     }
+    if (!strcmp(x->out, "-") && x->report_path && !strcmp(x->report_path, "-")) {
+        fputs("qdc: OUT and --report cannot both be standard output ('-')\n", stderr);
+        return CLI_EUSAGE;
+    }
     return -1;
 }
 

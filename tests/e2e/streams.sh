@@ -151,4 +151,12 @@ else
     fail "tetgen /dev/stdout" "exit $rc: $(cat err9d)"
 fi
 
+"$Q" optimize "$IN" - --report - > o.txt 2> err9e
+rc=$?
+if [ $rc = 1 ] && grep -q 'cannot both be standard output' err9e && [ ! -s o.txt ]; then
+    pass "OUT - with --report -: exit 1 (usage), nothing written"
+else
+    fail "out and report on stdout" "exit $rc: $(cat err9e)"
+fi
+
 [ "$NFAIL" = 0 ]
