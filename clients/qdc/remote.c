@@ -781,6 +781,10 @@ static meshio_format format_of(const char *path, const char *forced)
  * (standard output) takes the job's format unless --out-format names one. */
 static int out_format_ok(const args *a)
 {
+    if (a->out && a->report && !strcmp(a->out, "-") && !strcmp(a->report, "-")) {
+        fputs("qdc: -o and --report cannot both be standard output ('-')\n", stderr);
+        return 0;
+    }
     if (!a->out || format_of(a->out, a->out_format) != MESHIO_AUTO ||
         (!strcmp(a->out, "-") && !a->out_format))
         return 1;

@@ -230,6 +230,10 @@ rc=$?
 "$QDC" status 0123456789abcdef0123456789abcdef 2> "$TMP/e.err"
 rc=$?
 [ $rc = 10 ] && grep -q 404 "$TMP/e.err" && pass "unknown job: exit 10" || fail "exit 10 404" "rc $rc $(cat "$TMP/e.err")"
+"$QDC" submit "$MESH" -o - --report - > "$TMP/both.out" 2> "$TMP/e.err"
+rc=$?
+[ $rc = 1 ] && grep -q "cannot both be standard output" "$TMP/e.err" && [ ! -s "$TMP/both.out" ] &&
+    pass "-o - with --report -: exit 1 before any upload" || fail "-o - --report -" "rc $rc $(cat "$TMP/e.err")"
 printf 'MeshVersionFormatted 1\nDimension 3\nVertices\n2\n0 0 0 0\n' > "$TMP/bad.mesh"
 "$QDC" submit "$TMP/bad.mesh" 2> "$TMP/e.err"
 rc=$?
