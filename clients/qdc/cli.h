@@ -25,6 +25,11 @@ qdc_status cli_load_mesh(const char *path, meshio_format fin, const meshio_optio
 /* The file's bytes, decompressed if gzip; "-" is standard input. */
 qdc_status cli_slurp(const char *path, char **buf, size_t *len, qdc_error *err);
 
+/* A closed surface's format, by path's name, else (a name of no mesh format
+ * either) by its contents, then left in *buf (decompressed, qdc_free; NULL if
+ * not read); SURFACE_AUTO for a mesh. */
+surface_format cli_input_surface(const char *path, char **buf, size_t *len);
+
 /* cli_load_mesh, and the file's bytes (decompressed) in *raw (qdc_free), or
  * NULL for TetGen's two files. */
 qdc_status cli_read_mesh(const char *path, meshio_format fin, const meshio_options *mo,

@@ -378,6 +378,20 @@ qdc_status cli_slurp(const char *path, char **buf, size_t *len, qdc_error *err)
     return meshio_slurp_plain(sys_path(path), buf, len, err);
 }
 
+surface_format cli_input_surface(const char *path, char **buf, size_t *len)
+{
+    surface_format sf = surface_format_from_name(path);
+    qdc_error e;
+
+    *buf = NULL;
+    *len = 0;
+    if (sf == SURFACE_AUTO && meshio_format_from_name(path) == MESHIO_AUTO &&
+        cli_slurp(path, buf, len, &e) == QDC_OK &&
+        meshio_sniff(*buf, *len) == MESHIO_AUTO)
+        sf = surface_sniff(*buf, *len);
+    return sf;
+}
+
 qdc_status cli_read_mesh(const char *path, meshio_format fin, const meshio_options *mo,
                          mesh_t **m, char **raw, size_t *rawlen, qdc_error *err)
 {
@@ -391,7 +405,7 @@ qdc_status cli_read_mesh(const char *path, meshio_format fin, const meshio_optio
     if (!is_stream(path) &&
         (f == MESHIO_TETGEN || (f == MESHIO_AUTO && access(path, F_OK))))
         return meshio_load_ex(path, fin, mo, m, err); /* TetGen's two files */
-    st = meshio_slurp_plain(sys_path(path), &buf, &len, err);
+    st = cli_slurp(path, &buf, &len, err);
     if (st == QDC_OK)
         st = meshio_read_ex(buf, len, f, mo, m, err);
     if (st != QDC_OK) {
@@ -427,16 +441,9 @@ static qdc_status load_input(const char *path, meshio_format fin, surface_format
     int stream = is_stream(path);
     qdc_status st;
 
-    if (fin == MESHIO_AUTO && sin == SURFACE_AUTO &&
-        meshio_format_from_name(path) == MESHIO_AUTO) {
-        sin = surface_format_from_name(path);
-        if (sin == SURFACE_AUTO) {
-            st = stream ? meshio_slurp_plain(sys_path(path), &buf, &len, err)
-                        : meshio_slurp(path, &buf, &len, err);
-            if (st == QDC_OK && meshio_sniff(buf, len) == MESHIO_AUTO)
-                sin = surface_sniff(buf, len);
-        }
-        if (!stream) {
+    if (fin == MESHIO_AUTO && sin == SURFACE_AUTO) {
+        sin = cli_input_surface(path, &buf, &len);
+        if (!stream && sin == SURFACE_AUTO) { /* a file: read again with its source */
             qdc_free(buf);
             buf = NULL;
         }
@@ -454,11 +461,7 @@ static qdc_status load_input(const char *path, meshio_format fin, surface_format
         qdc_free(buf);
         return st;
     }
-    if (!buf)
-        st = stream ? meshio_slurp_plain(sys_path(path), &buf, &len, err)
-                    : meshio_slurp(path, &buf, &len, err);
-    else
-        st = QDC_OK;
+    st = buf ? QDC_OK : cli_slurp(path, &buf, &len, err);
     if (st == QDC_OK)
         st = tetra_from_buffer(buf, len, sin, to, m, err);
     qdc_free(buf);

@@ -828,7 +828,7 @@ static int download(remote *rm, const char *id, const char *out, const char *out
          * server writes the upload back with only the coordinates replaced
          * (names, tags, arrays kept), as qdc optimize writes OUT. OUT "-"
          * without --out-format: the job's format */
-        meshio_format want = format_of(out, out_format);
+        meshio_format want = format_of(out, out_format), want_named = want;
         meshio_format lsrc = local ? meshio_source_format(local) : MESHIO_AUTO;
         int served;
         if (!out_format) {
@@ -842,9 +842,8 @@ static int download(remote *rm, const char *id, const char *out, const char *out
             want = want == MESHIO_AUTO ? job : meshio_format_variant(want, job);
             /* a local source in OUT's format (or for "-"): put the result's
              * coordinates into it here */
-            if (lsrc != MESHIO_AUTO &&
-                (format_of(out, NULL) == MESHIO_AUTO ||
-                 meshio_format_variant(format_of(out, NULL), lsrc) == lsrc))
+            if (lsrc != MESHIO_AUTO && (want_named == MESHIO_AUTO ||
+                                        meshio_format_variant(want_named, lsrc) == lsrc))
                 want = MESHIO_AUTO;
         } else if (lsrc != MESHIO_AUTO && want == lsrc) {
             want = MESHIO_AUTO;
@@ -987,16 +986,11 @@ static int cmd_submit(args *a)
     /* a closed surface (qdcd tetrahedralizes it with TetGen): sent as it is,
      * after the checks qdcd makes */
     sf = a->in_format ? surface_format_from_name(a->in_format)
-                      : surface_format_from_name(in);
-    if (sf == SURFACE_AUTO && !a->in_format &&
-        meshio_format_from_name(in) == MESHIO_AUTO) {
-        st = cli_slurp(in, &raw, &rawlen, &err);
-        if (st == QDC_OK && meshio_sniff(raw, rawlen) == MESHIO_AUTO)
-            sf = surface_sniff(raw, rawlen);
-        if (sf == SURFACE_AUTO && st == QDC_OK) { /* a mesh: read from these bytes */
-            st = meshio_read_ex(raw, rawlen, MESHIO_AUTO, &keep, &m, &err);
-            goto read;
-        }
+                      : cli_input_surface(in, &raw, &rawlen);
+    if (sf == SURFACE_AUTO &&
+        raw) { /* a mesh, told by its contents: read from these bytes */
+        st = meshio_read_ex(raw, rawlen, MESHIO_AUTO, &keep, &m, &err);
+        goto read;
     }
     if (sf != SURFACE_AUTO) {
         surface_t *s = NULL;
