@@ -247,7 +247,7 @@ enum MHD_Result api_begin(struct MHD_Connection *c, req *r, const char *url,
      * body two ways (request smuggling behind a proxy): refuse, and close. */
     MHD_get_connection_values(c, MHD_HEADER_KIND, count_framing, framing);
     if (framing[0] > 1 || (framing[0] && framing[1])) {
-        r->close_after = 1;
+        r->close_after = r->no_hold = 1; /* its body is not read: no framing to trust */
         return http_problem(c, r, 400, "ambiguous-framing", NULL,
                             "send one Content-Length, or Transfer-Encoding without it",
                             NULL, NULL);

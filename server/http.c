@@ -14,6 +14,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -41,17 +42,29 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *c, const cha
 
     (void)ver;
     if (!r) { /* first call: headers only */
+        enum MHD_Result ret;
         r = req_new(cls);
         if (!r)
             return MHD_NO;
         *req_cls = r; /* freed in the completion hook */
-        return handlers->begin(c, r, url, method);
+        r->in_begin = 1;
+        ret = handlers->begin(c, r, url, method);
+        r->in_begin = 0;
+        return ret;
     }
     if (*len) { /* body chunk; capped, 413 at the end */
         if (!r->replied)
             handlers->body(r, data, *len);
         *len = 0;
         return MHD_YES;
+    }
+    if (r->held) { /* the body is read: now the refusal */
+        struct MHD_Response *resp = r->held;
+        enum MHD_Result ret;
+        r->held = NULL;
+        ret = MHD_queue_response(c, r->held_status, resp);
+        MHD_destroy_response(resp);
+        return ret;
     }
     if (r->replied)
         return MHD_YES;
@@ -68,6 +81,8 @@ static void on_completed(void *cls, struct MHD_Connection *c, void **req_cls,
     (void)toe;
     if (!r)
         return;
+    if (r->held)
+        MHD_destroy_response(r->held);
     if (r->status >= 100 && r->status < 600)
         atomic_fetch_add(&q->m.http_by_class[r->status / 100], 1);
     if (r->upload && r->status >= 400 && r->status < 500)
@@ -85,6 +100,37 @@ static void on_completed(void *cls, struct MHD_Connection *c, void **req_cls,
     *req_cls = NULL;
 }
 
+/* Is a refusal decided from the headers better sent once the body is read?
+ * libmicrohttpd sends an early reply and then closes the connection with the
+ * body still arriving; the kernel answers the unread bytes with a reset, which
+ * can reach the client before it reads the reply: it then sees "connection
+ * reset" instead of the 429 with its Retry-After (and retries at once, body
+ * and all), or instead of the 401/415 that says what is wrong. A client that
+ * asked "Expect: 100-continue" has sent no body and gets the reply at once;
+ * so does one whose declared body is over the upload cap (--max-body), which
+ * is not read for a refusal. Any other body is read and dropped first. */
+static int hold_reply(struct MHD_Connection *c, req *r)
+{
+    const char *cl, *te, *ex;
+    long long n;
+    char *end;
+
+    if (!r->in_begin || r->no_hold)
+        return 0;
+    ex = MHD_lookup_connection_value(c, MHD_HEADER_KIND, MHD_HTTP_HEADER_EXPECT);
+    if (ex && !strcasecmp(ex, "100-continue"))
+        return 0;
+    cl = MHD_lookup_connection_value(c, MHD_HEADER_KIND, MHD_HTTP_HEADER_CONTENT_LENGTH);
+    te = MHD_lookup_connection_value(c, MHD_HEADER_KIND,
+                                     MHD_HTTP_HEADER_TRANSFER_ENCODING);
+    /* chunked: dropped as it comes, as an oversized one is (upload.c) */
+    if (!cl)
+        return te != NULL;
+    errno = 0;
+    n = strtoll(cl, &end, 10);
+    return !errno && end != cl && n > 0 && n <= r->q->cfg.max_body;
+}
+
 enum MHD_Result http_reply_response(struct MHD_Connection *c, req *r, unsigned status,
                                     struct MHD_Response *resp, const char *const *headers)
 {
@@ -98,6 +144,13 @@ enum MHD_Result http_reply_response(struct MHD_Connection *c, req *r, unsigned s
     if (r->close_after &&
         MHD_add_response_header(resp, MHD_HTTP_HEADER_CONNECTION, "close") != MHD_YES)
         goto out;
+    if (hold_reply(c, r)) {
+        r->held = resp;
+        r->held_status = status;
+        r->status = (int)status;
+        r->replied = 1;
+        return MHD_YES;
+    }
     ret = MHD_queue_response(c, status, resp);
     if (ret == MHD_YES) {
         r->status = (int)status;

@@ -27,6 +27,11 @@ typedef struct req {
     int parked_ever; /* suspended at some point: not counted as a latency */
     int upload;      /* POST /v1/jobs: a 4xx counts as a rejected submission */
     int close_after; /* the reply says Connection: close (http_reply_response) */
+    int in_begin;    /* inside the first call (headers only) */
+    int no_hold;     /* a refusal at the first call is sent at once (see http.c) */
+    /* A refusal decided at the first call, held until the body is read */
+    struct MHD_Response *held;
+    unsigned held_status;
     int route;
     char id[JOB_ID_LEN + 1];
     char owner[65];
