@@ -22,13 +22,15 @@ typedef struct req {
     qdcd *q;
     struct MHD_Connection *conn;
     double t0;
-    int status;      /* status queued, for metrics (0 = none yet) */
-    int replied;     /* a response is queued: ignore the rest */
-    int parked_ever; /* suspended at some point: not counted as a latency */
-    int upload;      /* POST /v1/jobs: a 4xx counts as a rejected submission */
-    int close_after; /* the reply says Connection: close (http_reply_response) */
-    int in_begin;    /* inside the first call (headers only) */
-    int no_hold;     /* a refusal at the first call is sent at once (see http.c) */
+    int status;          /* status queued, for metrics (0 = none yet) */
+    int replied;         /* a response is queued: ignore the rest */
+    int parked_ever;     /* suspended at some point: not counted as a latency */
+    int upload;          /* POST /v1/jobs: a 4xx counts as a rejected submission */
+    int close_after;     /* the reply says Connection: close (http_reply_response) */
+    int in_begin;        /* inside the first call (headers only) */
+    long long body_len;  /* Content-Length, or -1 (none, or chunked) */
+    long long body_seen; /* body bytes received so far */
+    int no_hold;         /* a refusal at the first call is sent at once (see http.c) */
     /* A refusal decided at the first call, held until the body is read */
     struct MHD_Response *held;
     unsigned held_status;

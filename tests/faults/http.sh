@@ -64,6 +64,38 @@ m=$(curl -s -o /dev/null -w '%{http_code}' "$URL/metrics")
 j=$(curl -s -o /dev/null -w '%{http_code}' "$URL/v1/jobs")
 [ "$m$j" = 200401 ] && pass "http: --public-metrics: /metrics open, /v1/jobs still needs the token" ||
     fail "http: --public-metrics" "metrics $m jobs $j"
+# Clients gone in the middle of a body, their FIN sent with their last bytes:
+# each connection (and its upload file) is closed at once, not after the idle
+# timeout (120 s): half a mesh and close, 5 kB of a refused 100 kB body and
+# close, headers alone and close; 100 of each.
+gzip -dc "$DEV/cube_h0.1_good.mesh.gz" > "$TMP/half.mesh"
+"$PY" - "$PORT" "$QPID" "$TMP/half.mesh" "$A" > "$TMP/cut" << 'PYEOF'
+import os, socket, sys, time
+port, pid, body, auth = int(sys.argv[1]), sys.argv[2], open(sys.argv[3], "rb").read(), sys.argv[4]
+fds = lambda: len(os.listdir("/proc/%s/fd" % pid))
+base = fds()
+heads = {
+    "half a mesh": (b"model/x-medit", len(body), body[:len(body) // 2]),
+    "5 kB of a refused body": (b"image/png", 100000, b"x" * 5000),
+    "headers only": (b"model/x-medit", 1000, b""),
+}
+for what, (ctype, n, part) in heads.items():
+    for _ in range(100):
+        s = socket.create_connection(("127.0.0.1", port))
+        s.sendall(b"POST /v1/jobs HTTP/1.1\r\nHost: x\r\n%s\r\nContent-Type: %s\r\n"
+                  b"Content-Length: %d\r\n\r\n" % (auth.encode(), ctype, n) + part)
+        s.close()
+        time.sleep(0.01)
+    t0 = time.time()
+    while fds() > base + 1 and time.time() - t0 < 3:
+        time.sleep(0.05)
+    print("%s: fds %d -> %d in %.1f s" % (what, base, fds(), time.time() - t0))
+PYEOF
+if [ "$(grep -c 'fds \([0-9]*\) -> \1 ' "$TMP/cut")" = 3 ] && ! grep -q 'in [2-9]\.' "$TMP/cut"; then
+    pass "http: 300 uploads cut short (FIN with the last bytes): every connection closed at once ($(tr '\n' ';' < "$TMP/cut"))"
+else
+    fail "http: uploads cut short" "$(tr '\n' ';' < "$TMP/cut")"
+fi
 stop_qdcd
 t0=$(date +%s)
 timeout 10 "$QDCD" --listen 127.0.0.1:0 --data "$TMP/d3" --tokens /dev/zero > "$TMP/z.log" 2>&1

@@ -43,8 +43,8 @@ def http(method, path, data=None, ctype=None, timeout=30):
     except urllib.error.HTTPError as e:
         return e.code, e.read()
     except (urllib.error.URLError, OSError) as e:
-        # qdcd answers a refused upload (429 with a full queue) before the
-        # body is in and closes: the client may see a broken pipe instead
+        # a connection over --max-connections is closed at once (a refused
+        # upload's reply itself waits for its body: http.c, hold_reply)
         return 0, str(e).encode()
 
 
