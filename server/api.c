@@ -204,12 +204,15 @@ void media_list(sbuf *b, int surfaces)
     }
 }
 
-/* The same as ?format= names. */
+/* The ?format= names: of every mesh format read, then with surfaces (an
+ * upload) of the surfaces; without (a result), of every mesh format written
+ * (Abaqus and Netgen only for a job uploaded in them: not listed). TetGen is
+ * two files. */
 void format_names(sbuf *b, int surfaces)
 {
     int n = 0;
     for (int f = 1; f < MESHIO_FORMAT_COUNT; f++) {
-        if (!meshio_media_type((meshio_format)f))
+        if (f == MESHIO_TETGEN || (!surfaces && !meshio_has_writer((meshio_format)f)))
             continue;
         sb_puts(b, n++ ? "," : "");
         sb_json_str(b, meshio_format_name((meshio_format)f));

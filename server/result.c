@@ -96,12 +96,14 @@ static int not_servable(struct MHD_Connection *c, req *r, const job_rec *j,
     return 0;
 }
 
-/* Whether results and inputs are served in format k: the formats with a media
- * type (TetGen is two files; Abaqus and Netgen are written only over their
- * own source file, which a result does not have). */
-static int offerable(meshio_format k)
+/* Whether a job uploaded in format own has its result and input served in
+ * format k: every format qdc writes (those without a media type by ?format=
+ * name: Gmsh 2.2 binary and 4.0, DOLFIN, Medit binary), and Abaqus and
+ * Netgen, which are written only over their own source file, for a job
+ * uploaded in them. TetGen is two files. */
+static int offerable(meshio_format k, meshio_format own)
 {
-    return k != MESHIO_AUTO && k != MESHIO_TETGEN && meshio_media_type(k) != NULL;
+    return k != MESHIO_TETGEN && (meshio_has_writer(k) || (k != MESHIO_AUTO && k == own));
 }
 
 /* The offered list for a 400/406 about the result's format. */
@@ -119,8 +121,8 @@ static void offered(sbuf *x)
  * like ";encoding=binary" and ";version=2.2" pick variants; entries with q=0
  * are skipped, other q values ignored: the client's order decides), else the
  * binary. 0, or -1 with the 400/406 answered in *ret. */
-static int result_format(struct MHD_Connection *c, req *r, meshio_format *out,
-                         enum MHD_Result *ret)
+static int result_format(struct MHD_Connection *c, req *r, const job_rec *j,
+                         meshio_format *out, enum MHD_Result *ret)
 {
     const char *f = MHD_lookup_connection_value(c, MHD_GET_ARGUMENT_KIND, "format");
     const char *acc =
@@ -135,7 +137,9 @@ static int result_format(struct MHD_Connection *c, req *r, meshio_format *out,
         else
             k = strchr(f, '/') ? meshio_format_from_media_type(f)
                                : meshio_format_from_name(f);
-        if (offerable(k)) {
+        if (offerable(k, job_is_surface(j->format)
+                             ? MESHIO_AUTO
+                             : meshio_format_from_name(j->format))) {
             *out = k;
             return 0;
         }
@@ -384,7 +388,7 @@ enum MHD_Result do_result(struct MHD_Connection *c, req *r)
         return MHD_NO;
     if (!load_job(c, r, &j, &ret))
         return ret;
-    if (result_format(c, r, &f, &ret))
+    if (result_format(c, r, &j, &f, &ret))
         return ret;
     if (not_servable(c, r, &j, &ret))
         return ret;

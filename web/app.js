@@ -445,8 +445,11 @@ const FORMATS = [
     ['qmesh', 'qmesh', 'QMESH (binary)'], ['medit', 'mesh', 'Medit'], ['json', 'json', 'JSON'],
     ['gmsh', 'msh', 'Gmsh 4.1'], ['gmsh-bin', 'msh', 'Gmsh 4.1 binary'], ['gmsh22', 'msh', 'Gmsh 2.2'],
     ['vtk', 'vtk', 'VTK legacy'], ['vtk-ascii', 'vtk', 'VTK legacy ASCII'], ['vtu', 'vtu', 'VTU'],
-    ['vtu-ascii', 'vtu', 'VTU ASCII'],
+    ['vtu-ascii', 'vtu', 'VTU ASCII'], ['gmsh22-bin', 'msh', 'Gmsh 2.2 binary'], ['gmsh40', 'msh', 'Gmsh 4.0'],
+    ['dolfin', 'xml', 'DOLFIN XML'], ['meshb', 'meshb', 'Medit binary'],
 ];
+// written only over a file of their own: offered for a job uploaded in them
+const OWN_ONLY = [['abaqus', 'inp', 'Abaqus'], ['netgen', 'vol', 'Netgen']];
 
 function stat(k, v) {
     return el('div', { class: 'stat' }, el('div', { class: 'k', text: k }), el('div', { class: 'v', text: v }));
@@ -701,11 +704,12 @@ function renderDownloads(st) {
     if (box.dataset.id === st.id) return;
     box.dataset.id = st.id;
     const base = '/v1/jobs/' + st.id;
-    const items = (what, tag) => FORMATS.map(([f, ext, label]) => [base + '/' + what + '?format=' + f,
-        'qdc-' + short(st.id) + tag + (f.includes('-') || f === 'gmsh22' ? '-' + f : '') + '.' + ext, label, f]);
     // the upload's own format: the uploaded file with the new coordinates,
     // everything else it holds (names, tags, arrays) kept
     const own = st.job.mesh.format;
+    const formats = FORMATS.concat(OWN_ONLY.filter(([f]) => f === own));
+    const items = (what, tag) => formats.map(([f, ext, label]) => [base + '/' + what + '?format=' + f,
+        'qdc-' + short(st.id) + tag + (f.includes('-') || f === 'gmsh22' || f === 'gmsh40' ? '-' + f : '') + '.' + ext, label, f]);
     const links = (list) => list.map(([href, name, label, f]) =>
         el('a', { class: 'button small', href, download: name, 'data-format': f,
             text: f === own ? label + ' (as uploaded)' : label,

@@ -277,6 +277,12 @@ const char *meshio_media_type(meshio_format f)
     return full[f];
 }
 
+int meshio_has_writer(meshio_format f)
+{
+    return f > MESHIO_AUTO && f < MESHIO_FORMAT_COUNT && f != MESHIO_ABAQUS &&
+           f != MESHIO_NETGEN;
+}
+
 /* Does the parameter list [p, e) (";a=b; c=d") hold want ("a=b")? Spaces
  * around ';' and '=' and the case are ignored, quotes around the value too. */
 static int has_param(const char *p, const char *e, const char *want)

@@ -41,7 +41,7 @@ typedef enum {
     MESHIO_VTU,       /* VTK XML .vtu, appended raw data (reads ascii/base64/raw too) */
     MESHIO_VTU_ASCII, /* VTK XML .vtu, ascii DataArrays */
     /* Formats read, and written back spliced; qdc's own writer too, but no
-     * media type (the daemon neither lists nor names them). */
+     * media type (the daemon names them: ?format=). */
     MESHIO_GMSH22_BIN, /* MSH 2.2 binary (little-endian, data size 8) */
     MESHIO_GMSH40,     /* MSH 4.0 ASCII (Gmsh 4.0; 4.0 binary is refused) */
     MESHIO_DOLFIN,     /* DOLFIN/FEniCS legacy XML .xml, celltype tetrahedron: vertices
@@ -83,6 +83,10 @@ meshio_format meshio_sniff(const char *buf, size_t len);
  * (";encoding=ascii"). TetGen (two files) and the formats after VTU_ASCII
  * have none: NULL, as for AUTO and out-of-range values. The string is static. */
 const char *meshio_media_type(meshio_format f);
+/* 1 if meshio_write writes f for any mesh (qdc has a writer of its own), 0
+ * for Abaqus and Netgen (written only over their own source: spliced), AUTO
+ * and out-of-range values. TetGen counts: meshio_save writes its two files. */
+int meshio_has_writer(meshio_format f);
 /* The format of a Content-Type or Accept entry: case-insensitive, parameters
  * after ';' honoured as above, others (charset, q) ignored; also accepts
  * application/x-gmsh, model/x-gmsh, application/x-vtk, application/x-vtu,

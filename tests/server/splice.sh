@@ -17,12 +17,20 @@ PIDS=
 trap 'if [ -n "$QPID" ]; then kill -9 $QPID 2>/dev/null; fi; for p in $PIDS; do kill -9 $p 2>/dev/null; done; [ -n "${PGDIR:-}" ] && pg_cleanup; rm -rf "$TMP"' EXIT
 
 # name  file in tests/data/real  ?format= of the upload's own variant  text only that file has
+# (the formats after medit have no media type: asked by name; Abaqus and
+# Netgen are served only to a job uploaded in them)
 CASES="gmsh41:gmsh41.msh:gmsh:\$PhysicalNames
 gmsh41bin:gmsh41_bin.msh:gmsh-bin:\$PhysicalNames
 vtu:meshio_zlib.vtu:vtu:temperature
 vtuapp:vtk_appended_zlib.vtu:vtu:RangeMin
 vtuascii:meshio_ascii.vtu:vtu-ascii:velocity
-medit:gmsh.mesh:medit:Edges"
+medit:gmsh.mesh:medit:Edges
+gmsh22bin:gmsh22_bin.msh:gmsh22-bin:\$PhysicalNames
+gmsh40:gmsh40.msh:gmsh40:\$PhysicalNames
+dolfin:dolfin.xml:dolfin:nsmap
+meshb:meshio.meshb:meshb:
+abaqus:calculix.inp:abaqus:MATERIAL
+netgen:meshio.vol:netgen:Generated"
 
 for c in $CASES; do
     f=$(echo "$c" | cut -d: -f2)
@@ -108,6 +116,20 @@ if grep -q '^gmsh41 ' "$TMP/ids" 2> /dev/null; then
         ;;
     *) fail "splice: Qdc-Note" "the vtu conversion's note: '$note'" ;;
     esac
+    # a format without a media type, by name: qdc's own writer (the CLI's
+    # gmsh41 -> meshb), served as application/octet-stream; Abaqus, which qdc
+    # writes only over an Abaqus file, is not offered for this job (400, with
+    # the formats that are)
+    c1=$(req GET "/v1/jobs/$id/result?format=meshb" "$TMP/g.meshb")
+    "$BIN/qdc" optimize "$TMP/gmsh41.msh" "$TMP/g.cli.meshb" --quiet 2> /dev/null
+    c2=$(req GET "/v1/jobs/$id/result?format=abaqus" "$TMP/g.inp")
+    if [ "$c1" = 200 ] && cmp -s "$TMP/g.meshb" "$TMP/g.cli.meshb" &&
+        [ "$(hdr "$TMP/g.meshb" Content-Type)" = application/octet-stream ] && [ "$c2" = 400 ] &&
+        jq -e '(.formats | index("meshb")) and (.formats | index("abaqus") | not)' "$TMP/g.inp" > /dev/null; then
+        pass "splice: gmsh41 upload, /result?format=meshb: qdc's Medit binary writer (octet-stream), as the CLI's; ?format=abaqus: 400, not offered for a Gmsh upload"
+    else
+        fail "splice: gmsh41 -> meshb/abaqus" "meshb $c1 $(hdr "$TMP/g.meshb" Content-Type) $(cmp "$TMP/g.meshb" "$TMP/g.cli.meshb" 2>&1 | head -1); abaqus $c2 $(head -c 300 "$TMP/g.inp")"
+    fi
 fi
 # A binary MSH 4.1 file sent as "model/vnd.gmsh" (the family, no
 # encoding=binary): recorded as gmsh-bin, the variant its header says, so that

@@ -851,6 +851,14 @@ TEST(names_sniffing_media_types)
         ASSERT_TRUE(mt != NULL);
         ASSERT_EQ_INT(meshio_format_from_media_type(mt), f);
     }
+    /* qdc writes every format but Abaqus and Netgen, which it writes only
+     * over their own source */
+    for (int f = 1; f < MESHIO_FORMAT_COUNT; f++)
+        ASSERT_EQ_INT(meshio_has_writer((meshio_format)f),
+                      f != MESHIO_ABAQUS && f != MESHIO_NETGEN);
+    ASSERT_EQ_INT(meshio_has_writer(MESHIO_AUTO), 0);
+    ASSERT_EQ_INT(meshio_has_writer(MESHIO_FORMAT_COUNT), 0);
+    ASSERT_EQ_INT(meshio_has_writer((meshio_format)-1), 0);
     ASSERT_EQ_INT(
         meshio_format_from_media_type("Model/VND.Gmsh ; charset=utf-8; Version=\"2.2\""),
         MESHIO_GMSH22);
