@@ -808,9 +808,9 @@ static int write_file(const char *path, const char *buf, size_t len)
 
 /* Downloads the result into out, in its extension's format or out_format,
  * and the report into report; either may be NULL. local: the input as read
- * with its source, when it was sent as the binary mesh (a format the server
- * does not take): an OUT in its format is then the input with the result's
- * coordinates put in, here. */
+ * with its source, when it was sent as the binary mesh (TetGen's files): an
+ * OUT in its format is then the input with the result's coordinates put in,
+ * here. */
 static int download(remote *rm, const char *id, const char *out, const char *out_format,
                     const char *report, mesh_t *local)
 {
@@ -830,10 +830,10 @@ static int download(remote *rm, const char *id, const char *out, const char *out
          * without --out-format: the job's format */
         meshio_format want = format_of(out, out_format), want_named = want;
         meshio_format lsrc = local ? meshio_source_format(local) : MESHIO_AUTO;
+        meshio_format job = MESHIO_AUTO;
         int served;
         if (!out_format) {
             char name[40];
-            meshio_format job = MESHIO_AUTO;
             snprintf(path, sizeof path, "/v1/jobs/%s", id);
             hr = http(rm, "GET", path, NULL, NULL, 0, 30, &r);
             if (!hr && r.status == 200 &&
@@ -850,7 +850,10 @@ static int download(remote *rm, const char *id, const char *out, const char *out
         }
         if (want == MESHIO_AUTO && lsrc == MESHIO_AUTO) /* a surface's job: Medit */
             want = MESHIO_MEDIT;
-        served = want != MESHIO_AUTO && want != MESHIO_TETGEN && meshio_media_type(want);
+        /* the server writes every format qdc writes, and Abaqus and Netgen
+         * for a job uploaded in them (over the upload) */
+        served = want != MESHIO_TETGEN &&
+                 (meshio_has_writer(want) || (want != MESHIO_AUTO && want == job));
         snprintf(path, sizeof path, "/v1/jobs/%s/result?format=%s", id,
                  meshio_format_name(served ? want : MESHIO_QMESH));
         hr = http(rm, "GET", path, NULL, NULL, 0, 120, &r);
@@ -1021,14 +1024,18 @@ read:
         qdc_free(raw);
         return CLI_EINPUT;
     }
-    /* sent as it is when the server takes its format (the file's own variant,
-     * which it then writes back with only the coordinates replaced: names,
-     * tags and arrays come back), else as the binary mesh */
+    /* sent as it is (the file's own variant, which the server writes back
+     * with only the coordinates replaced: names, tags and arrays come back;
+     * by its media type, or named in the query), else (TetGen's two files)
+     * as the binary mesh */
     src = meshio_source_format(m);
-    if (raw && src != MESHIO_AUTO && src != MESHIO_TETGEN && meshio_media_type(src)) {
+    if (raw && src != MESHIO_AUTO && src != MESHIO_TETGEN) {
         body.buf = raw;
         body.len = rawlen;
         raw = NULL;
+        if (!meshio_media_type(src) &&
+            query_add(&a->query, "format", meshio_format_name(src), a->rm.curl))
+            st = QDC_ENOMEM;
     } else {
         src = MESHIO_QMESH;
         st = meshio_write(m, MESHIO_QMESH, rb_writer, &body, &err);
@@ -1040,7 +1047,9 @@ read:
         mesh_free(m);
         m = NULL;
     }
-    snprintf(ctype, sizeof ctype, "Content-Type: %s", meshio_media_type(src));
+    snprintf(ctype, sizeof ctype, "Content-Type: %s",
+             meshio_media_type(src) ? meshio_media_type(src)
+                                    : "application/octet-stream");
     if (st != QDC_OK || body.oom) {
         cli_error(in, &err, st != QDC_OK ? st : QDC_ENOMEM);
         rb_free(&body);

@@ -1,7 +1,7 @@
 #!/bin/sh
 # remote.sh - `qdc submit|status|watch|fetch|cancel|jobs` against a real qdcd:
 # results valid and in the -o file's format, reports present, a file sent as it
-# is when qdcd takes its format (else as the binary mesh), `submit IN -o OUT`
+# is (TetGen's two files as the binary mesh), `submit IN -o OUT`
 # byte for byte what `qdc optimize IN OUT` writes for 13 files of
 # other tools, progress lines (plain and on a terminal), Idempotency-Key,
 # tokens, and the exit codes 1, 2, 10, 11, 12.
@@ -169,8 +169,8 @@ fi
 
 # 7c. files of other tools: submit -o in their own format gives what the local
 # run writes, byte for byte (names, tags, arrays, comments kept): sent as they
-# are where qdcd takes the format (it writes the upload back), else as the
-# binary mesh and the result's coordinates put into the file here
+# are (by media type, or by name: Gmsh 2.2 binary and 4.0, DOLFIN, Abaqus,
+# Netgen, Medit binary), and qdcd writes the upload back
 bad=
 nraw=0
 for f in gmsh41.msh gmsh41_bin.msh gmsh22.msh gmsh22_bin.msh gmsh40.msh gmsh.mesh gmsh.vtk \
@@ -182,14 +182,14 @@ for f in gmsh41.msh gmsh41_bin.msh gmsh22.msh gmsh22_bin.msh gmsh40.msh gmsh.mes
     req GET "/v1/jobs/$id" "$TMP/job.json" > /dev/null
     [ "$(jf "$TMP/job.json" .mesh.format)" = qmesh ] || nraw=$((nraw + 1))
 done
-if [ -z "$bad" ] && [ $nraw = 7 ]; then
-    pass "submit -o in the input's format: 13 files of other tools byte for byte as qdc optimize writes them (7 sent as they are, 6 as the binary mesh)"
+if [ -z "$bad" ] && [ $nraw = 13 ]; then
+    pass "submit -o in the input's format: 13 files of other tools byte for byte as qdc optimize writes them, each sent as it is"
 else
-    fail "submit, files of other tools" "$bad; $nraw sent as they are (want 7)"
+    fail "submit, files of other tools" "$bad; $nraw sent as they are (want 13)"
 fi
 # the same through standard input and output, no --out-format: the input's
-# format (a Gmsh 2.2 binary file goes up as the binary mesh and is written
-# here; Gmsh 4.1 comes back from the server); fetch -o - gives the job's
+# format (Gmsh 2.2 binary, named in the query, and 4.1 come back from the
+# server, written over the upload); fetch -o - gives the job's
 "$QDC" submit - --max-iter 3 -q -o - < "$TMP/gmsh22_bin.msh" > "$TMP/s22.msh" 2> /dev/null
 rc=$?
 "$QDC" submit - --max-iter 3 -q -o - < "$TMP/gmsh41.msh" > "$TMP/s41.msh" 2> "$TMP/s41.err"
