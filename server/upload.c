@@ -669,14 +669,12 @@ static int inspect_upload(struct MHD_Connection *c, req *r, job_rec *j,
             u->sfmt = surface_sniff(buf, len);
     } else if (u->fmt != MESHIO_AUTO) {
         /* a Gmsh or VTK body named by its family ("model/vnd.gmsh" for a
-         * binary MSH 4.1 file) is recorded as the variant its header says,
-         * so that a result asked for in it is the upload written back (the
-         * readers take every variant; the writers write the one named) */
+         * binary MSH 4.1 or 2.2 file, or MSH 4.0) is recorded as the variant
+         * its header says, so that a result asked for in it is the upload
+         * written back (the readers take every variant; the writers write
+         * the one named) */
         meshio_format v = meshio_sniff(buf, len);
-        if ((v == MESHIO_GMSH41 || v == MESHIO_GMSH41_BIN || v == MESHIO_GMSH22 ||
-             v == MESHIO_VTK || v == MESHIO_VTK_ASCII || v == MESHIO_VTU ||
-             v == MESHIO_VTU_ASCII) &&
-            meshio_format_variant(u->fmt, v) == v)
+        if (v != MESHIO_AUTO && meshio_format_variant(u->fmt, v) == v)
             u->fmt = v;
     }
     if (u->fmt == MESHIO_AUTO && u->sfmt == SURFACE_AUTO)

@@ -7,7 +7,8 @@ the binary mesh format in proto/mesh-binary.md.
 
     from qdc_client import Client
     c = Client("http://127.0.0.1:8080")           # or $QDC_SERVER, token $QDC_TOKEN
-    job = c.submit("in.msh", {"max_iter": 20})   # a path (.mesh .msh .vtk .vtu .json .qmesh) ...
+    job = c.submit("in.msh", {"max_iter": 20})   # a path (.mesh .msh .vtk .vtu .json .qmesh
+                                                  # .meshb .xml .inp .vol) ...
     job = c.submit((xyz, tets))                   # ... or arrays (lists or numpy)
     c.wait(job, on_progress=lambda r: print(r["iteration"], r["mean_ratio_min"]))
     mesh = c.result(job)                          # Mesh: .xyz, .tets, .regions, .fixed
@@ -48,17 +49,22 @@ FLAG_REGION = 1
 FLAG_FIXED = 2
 _HEADER = struct.Struct("<8sIIQQ")
 
-# file extension -> (Content-Type of an upload, ?format= of a result, the
-# variants of that family: a result in the job's own one is its upload
-# written back, names, tags and arrays kept; qdcd records a Gmsh or VTK
-# upload as the variant its header says)
+# file extension -> (Content-Type of an upload, None for a format without
+# one: named with ?format= then; ?format= of a result; the variants of that
+# family: a result in the job's own one is its upload written back, names,
+# tags and arrays kept; qdcd records a Gmsh or VTK upload as the variant its
+# header says)
 _FORMATS = {
     ".mesh": ("model/x-medit", "medit", ("medit",)),
     ".json": ("application/json", "json", ("json",)),
     ".qmesh": (MEDIA_QMESH, "qmesh", ("qmesh",)),
-    ".msh": ("model/vnd.gmsh", "gmsh", ("gmsh", "gmsh-bin", "gmsh22")),
+    ".msh": ("model/vnd.gmsh", "gmsh", ("gmsh", "gmsh-bin", "gmsh22", "gmsh22-bin", "gmsh40")),
     ".vtk": ("application/vnd.vtk", "vtk", ("vtk", "vtk-ascii")),
     ".vtu": ("application/vnd.vtk.vtu+xml", "vtu", ("vtu", "vtu-ascii")),
+    ".meshb": (None, "meshb", ("meshb",)),
+    ".xml": (None, "dolfin", ("dolfin",)),
+    ".inp": (None, "abaqus", ("abaqus",)),
+    ".vol": (None, "netgen", ("netgen",)),
 }
 _EXTS = ", ".join(sorted(_FORMATS))
 
@@ -333,8 +339,9 @@ class Client:
 
     def submit(self, mesh, options=None, idempotency_key=None):
         """New job. mesh: a path (.mesh Medit, .msh Gmsh, .vtk, .vtu, .json,
-        .qmesh; sent as it is), a Mesh, or a tuple (xyz, tets[, regions[,
-        fixed]]) of lists or numpy arrays.
+        .qmesh, .meshb Medit binary, .xml DOLFIN, .inp Abaqus, .vol Netgen;
+        sent as it is), a Mesh, or a tuple (xyz, tets[, regions[, fixed]]) of
+        lists or numpy arrays.
         options: optimizer options, e.g. {"max_iter": 20, "boundary": "fixed"}.
         Returns the job (dict with "id", "state", ...)."""
         if isinstance(mesh, (str, os.PathLike)):
@@ -342,18 +349,20 @@ class Client:
             ext = os.path.splitext(path)[1].lower()
             if ext not in _FORMATS:
                 raise ValueError("%s: use %s (or pass arrays)" % (path, _EXTS))
-            ctype = _FORMATS[ext][0]
+            ctype, named = _FORMATS[ext][0], None
+            if ctype is None:  # no media type: named in the query
+                ctype, named = "application/octet-stream", _FORMATS[ext][1]
             with open(path, "rb") as f:
                 body = f.read()
         else:
             if not isinstance(mesh, Mesh):
                 mesh = Mesh(*mesh)
-            ctype, body = MEDIA_QMESH, mesh.to_bytes()
-        query = ""
-        if options:
-            query = "?" + urllib.parse.urlencode(
-                {k: (("on" if v else "off") if isinstance(v, bool) else v)
-                 for k, v in options.items()})
+            ctype, named, body = MEDIA_QMESH, None, mesh.to_bytes()
+        params = {k: (("on" if v else "off") if isinstance(v, bool) else v)
+                  for k, v in (options or {}).items()}
+        if named:
+            params["format"] = named
+        query = "?" + urllib.parse.urlencode(params) if params else ""
         key = idempotency_key or uuid.uuid4().hex
         return self._json("POST", "/v1/jobs" + query, body,
                           {"Content-Type": ctype, "Idempotency-Key": key}, ok=(202,))

@@ -100,9 +100,11 @@ check("result(job, '/dev/fd/N'): written into the descriptor's file; result(job,
       "fd %s link %s mode %o" % (same(os.path.join(TMP, "fd.mesh"), ref), os.path.islink(ln), os.stat(tgt).st_mode & 0o777))
 
 # files of other tools (Gmsh 4.1 binary with $PhysicalNames, ascii VTU with
-# arrays) sent as they are: the result in their format is what `qdc optimize`
-# writes, byte for byte
-for name in ("gmsh41_bin.msh", "meshio_ascii.vtu"):
+# arrays, Gmsh 2.2 binary, and formats without a media type, named in the
+# query: Abaqus with its materials, Netgen, Medit binary, DOLFIN) sent as they
+# are: the result in their format is what `qdc optimize` writes, byte for byte
+for name in ("gmsh41_bin.msh", "meshio_ascii.vtu", "gmsh22_bin.msh", "calculix.inp",
+             "meshio.vol", "meshio.meshb", "dolfin.xml"):
     src = os.path.join(TMP, name)
     with gzip.open(os.path.join(ROOT, "tests", "data", "real", name + ".gz")) as g, open(src, "wb") as f:
         f.write(g.read())
