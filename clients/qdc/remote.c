@@ -980,6 +980,7 @@ static int cmd_submit(args *a)
     surface_format sf;
     char *raw = NULL, ctype[80];
     size_t rawlen = 0;
+    const char *out_format = a->out_format;
 
     qdc_error_clear(&err);
     if (a->out || a->report)
@@ -1041,6 +1042,11 @@ read:
         st = meshio_write(m, MESHIO_QMESH, rb_writer, &body, &err);
     }
     qdc_free(raw);
+    /* an input with no file of its own to write back (JSON, the binary mesh)
+     * goes to standard output as Medit, as qdc optimize writes it there */
+    if (!out_format && a->out && !strcmp(a->out, "-") &&
+        meshio_source_format(m) == MESHIO_AUTO)
+        out_format = "medit";
     /* sent as the binary mesh: kept (with its source) to write -o in its own
      * format as qdc optimize would, the result's coordinates put in */
     if (src != MESHIO_QMESH || !a->out || meshio_source_format(m) == MESHIO_AUTO) {
@@ -1085,7 +1091,7 @@ send:
     rc = await_job(&a->rm, id, &v);
     if (rc >= 0)
         goto out;
-    rc = download(&a->rm, id, a->out, a->out_format, a->report, m);
+    rc = download(&a->rm, id, a->out, out_format, a->report, m);
 out:
     if (interrupted && id[0])
         fprintf(stderr,

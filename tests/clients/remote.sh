@@ -202,6 +202,18 @@ if [ $rc$rc2$rc3 = 000 ] && cmp -s "$TMP/s22.msh" "$TMP/local.gmsh22_bin.msh" &&
 else
     fail "submit/fetch -o -" "rc $rc $rc2 $rc3"
 fi
+# a JSON or binary-mesh input has no file of its own to write back: -o - is
+# Medit, as the local run writes it on standard output
+bad=
+for f in json qmesh; do
+    "$QDC" convert "$ROOT/tests/data/sample/cube.mesh" "$TMP/c.$f" 2> /dev/null
+    "$QDC" optimize "$TMP/c.$f" - --max-iter 2 --quiet > "$TMP/c.$f.local" || bad="$bad $f:local"
+    "$QDC" submit "$TMP/c.$f" --max-iter 2 -q -o - > "$TMP/c.$f.remote" 2> /dev/null || bad="$bad $f:submit"
+    cmp -s "$TMP/c.$f.local" "$TMP/c.$f.remote" && head -1 "$TMP/c.$f.remote" | grep -q MeshVersionFormatted ||
+        bad="$bad $f:differs"
+done
+[ -z "$bad" ] && pass "submit IN.json|IN.qmesh -o -: Medit, byte for byte what qdc optimize IN - writes" ||
+    fail "submit json/qmesh -o -" "$bad"
 
 # a closed surface goes up as it is (qdcd tetrahedralizes it; TetGen's options
 # pass through); an open one is refused here (exit 2), before any job
