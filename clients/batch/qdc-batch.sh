@@ -6,13 +6,16 @@
 #   -t TOKEN   bearer token (default $QDC_TOKEN)
 #   -j N       jobs submitted and followed at once (default 4)
 #   -o OUTDIR  results, reports and summary.csv (default ./qdc-out; not DIR)
-#   -f FORMAT  result format: medit (.mesh), json (.json) or qmesh (.qmesh);
-#              default medit
+#   -f FORMAT  result format: same (the default: each mesh's own format, the
+#              file written back with only its coordinates replaced), or one
+#              of medit json qmesh gmsh gmsh-bin gmsh22 gmsh22-bin gmsh40 vtk
+#              vtk-ascii vtu vtu-ascii meshb dolfin
 #   -q QUERY   optimizer options as a query string, e.g. 'max_iter=20&boundary=fixed'
 #   -Q         quiet: no progress lines
 #
-# Meshes: DIR/*.mesh (Medit), *.json (JSON mesh), *.qmesh (binary), each may be
-# gzipped (.gz). Each one is submitted with an Idempotency-Key (so curl's
+# Meshes: DIR/*.mesh (Medit), *.json (JSON mesh), *.qmesh (binary), *.msh
+# (Gmsh), *.vtk, *.vtu, *.meshb (Medit binary), *.xml (DOLFIN), *.inp (Abaqus),
+# *.vol (Netgen), each may be gzipped (.gz). Each one is submitted as it is with an Idempotency-Key (so curl's
 # retries on 429/503, which honor Retry-After, never make a second job),
 # followed by long-poll (one progress line per iteration on stderr), and its
 # result and report are downloaded into OUTDIR. OUTDIR/summary.csv gets one
@@ -25,12 +28,12 @@ SERVER=${QDC_SERVER:-http://127.0.0.1:8080}
 TOKEN=${QDC_TOKEN:-}
 PAR=4
 OUT=./qdc-out
-FORMAT=medit
+FORMAT=same
 QUERY=
 QUIET=
 WAIT=30
 
-usage() { sed -n '3,13s/^# \{0,1\}//p' "$0" >&2; exit 2; }
+usage() { sed -n '3,14s/^# \{0,1\}//p' "$0" >&2; exit 2; }
 
 while getopts s:t:j:o:f:q:Qh opt; do
     case $opt in
@@ -49,11 +52,22 @@ if [ $# -ne 1 ] || [ ! -d "$1" ]; then usage; fi
 DIR=$1
 SERVER=${SERVER%/}
 case $PAR in '' | *[!0-9]* | 0) echo "qdc-batch: -j needs a positive count" >&2; exit 2 ;; esac
+# ext_of FORMAT: the file extension of a result format
+ext_of() {
+    case $1 in
+    medit) echo mesh ;;
+    gmsh*) echo msh ;;
+    vtk*) echo vtk ;;
+    vtu*) echo vtu ;;
+    dolfin) echo xml ;;
+    abaqus) echo inp ;;
+    netgen) echo vol ;;
+    *) echo "$1" ;;
+    esac
+}
 case $FORMAT in
-medit) EXT=mesh ;;
-json) EXT=json ;;
-qmesh) EXT=qmesh ;;
-*) echo "qdc-batch: -f medit|json|qmesh" >&2; exit 2 ;;
+same | medit | json | qmesh | gmsh | gmsh-bin | gmsh22 | gmsh22-bin | gmsh40 | vtk | vtk-ascii | vtu | vtu-ascii | meshb | dolfin) ;;
+*) echo "qdc-batch: -f same|medit|json|qmesh|gmsh|gmsh-bin|gmsh22|gmsh22-bin|gmsh40|vtk|vtk-ascii|vtu|vtu-ascii|meshb|dolfin" >&2; exit 2 ;;
 esac
 mkdir -p "$OUT" || exit 2
 if [ "$(cd "$DIR" && pwd -P)" = "$(cd "$OUT" && pwd -P)" ]; then
@@ -103,16 +117,28 @@ one() {
     w=$WORK/$(printf '%s' "$name" | tr -c 'A-Za-z0-9._-' _)
     body=$f
     case $name in *.gz) gzip -dc "$f" > "$w.in" || { failed "$row" "$name" "" unreadable "gzip failed"; return; }; body=$w.in ;; esac
+    # by media type, or named in the query (qdcd records a Gmsh or VTK file as
+    # the variant its header says)
+    named=
     case $base in
     *.mesh) ct=model/x-medit ;;
     *.json) ct=application/json ;;
     *.qmesh) ct=application/vnd.qdc.mesh ;;
+    *.msh) ct=model/vnd.gmsh ;;
+    *.vtk) ct=application/vnd.vtk ;;
+    *.vtu) ct=application/vnd.vtk.vtu+xml ;;
+    *.meshb) ct=application/octet-stream named=meshb ;;
+    *.xml) ct=application/octet-stream named=dolfin ;;
+    *.inp) ct=application/octet-stream named=abaqus ;;
+    *.vol) ct=application/octet-stream named=netgen ;;
     esac
+    ext=${base##*.}
     base=${base%.*}
+    q=$QUERY${named:+${QUERY:+&}format=$named}
     t0=$(date +%s)
     code=$(qcurl -o "$w.sub" -w '%{http_code}' -X POST --data-binary "@$body" \
-        -H "Content-Type: $ct" -H "Idempotency-Key: batch-$RUN-$base" \
-        "$SERVER/v1/jobs${QUERY:+?$QUERY}") || code=000
+        -H "Content-Type: $ct" -H "Idempotency-Key: batch-$RUN-$base.$ext" \
+        "$SERVER/v1/jobs${q:+?$q}") || code=000
     rm -f "$w.in"
     if [ "$code" != 202 ]; then
         why=$(field "$w.sub" detail 2> /dev/null)
@@ -121,6 +147,13 @@ one() {
         return
     fi
     id=$(field "$w.sub" id)
+    fmt=$FORMAT
+    rext=$(ext_of "$FORMAT")
+    # same: the job's own format, the upload written back
+    if [ "$FORMAT" = same ]; then
+        fmt=$(field "$w.sub" format mesh)
+        rext=$ext
+    fi
     log "$name: job $id"
     after=-1
     state=queued
@@ -148,9 +181,9 @@ one() {
         failed "$row" "$name" "$id" "$state" "$why"
         return
     fi
-    res=$OUT/$base.$EXT
+    res=$OUT/$base.$rext
     rep=$OUT/$base.report.json
-    c1=$(qcurl -o "$res" -w '%{http_code}' "$SERVER/v1/jobs/$id/result?format=$FORMAT") || c1=000
+    c1=$(qcurl -o "$res" -w '%{http_code}' "$SERVER/v1/jobs/$id/result?format=$fmt") || c1=000
     c2=$(qcurl -o "$rep" -w '%{http_code}' "$SERVER/v1/jobs/$id/report") || c2=000
     if [ "$c1" != 200 ] || [ "$c2" != 200 ]; then
         log "$name: download failed (HTTP $c1, $c2)"
@@ -197,9 +230,27 @@ while [ $i -lt "$PAR" ]; do
     i=$((i + 1))
 done
 
+# is_mesh FILE: a file of one of the formats above
+is_mesh() {
+    [ -f "$1" ] || return 1
+    case ${1%.gz} in *.mesh | *.json | *.qmesh | *.msh | *.vtk | *.vtu | *.meshb | *.xml | *.inp | *.vol) return 0 ;; esac
+    return 1
+}
+# two meshes of one name (a.msh and a.vtu, a.mesh and a.mesh.gz) would write
+# the same report (and result) in OUTDIR
+dup=$(for f in "$DIR"/*; do
+    is_mesh "$f" || continue
+    b=$(basename "${f%.gz}")
+    printf '%s\n' "${b%.*}"
+done | sort | uniq -d | head -n 1)
+if [ -n "$dup" ]; then
+    echo "qdc-batch: two meshes in $DIR are named $dup: their results would overwrite each other in $OUT; rename one" >&2
+    exit 2
+fi
+
 n=0
-for f in "$DIR"/*.mesh "$DIR"/*.json "$DIR"/*.qmesh "$DIR"/*.mesh.gz "$DIR"/*.json.gz "$DIR"/*.qmesh.gz; do
-    [ -f "$f" ] || continue
+for f in "$DIR"/*; do
+    is_mesh "$f" || continue
     n=$((n + 1))
     read -r _ <&3
     (
@@ -210,7 +261,7 @@ done
 wait
 exec 3>&-
 if [ $n -eq 0 ]; then
-    echo "qdc-batch: no mesh in $DIR (*.mesh, *.json, *.qmesh, optionally .gz)" >&2
+    echo "qdc-batch: no mesh in $DIR (*.mesh, *.json, *.qmesh, *.msh, *.vtk, *.vtu, *.meshb, *.xml, *.inp, *.vol, optionally .gz)" >&2
     exit 1
 fi
 

@@ -2,7 +2,9 @@
 # batch.sh - clients/batch/qdc-batch.sh over a folder of 5 dev meshes (gzipped
 # and plain), 3 at a time: every result valid, every report present, the
 # summary CSV complete; the same with sed instead of jq; a bad mesh gives a
-# "rejected" row and exit 1.
+# "rejected" row and exit 1; nine files of other tools come back in their own
+# format byte for byte as qdc optimize writes them; two meshes of one name are
+# refused.
 . "$(dirname "$0")/../lib.sh"
 . "$ROOT/tests/server/daemon.inc"
 BATCH=$ROOT/clients/batch/qdc-batch.sh
@@ -69,5 +71,32 @@ else
 fi
 sh "$BATCH" -s "$URL" -o "$TMP/in" "$TMP/in" 2> /dev/null
 [ $? = 2 ] && pass "batch: OUTDIR = DIR refused (exit 2)" || fail "batch outdir" "not refused"
+
+# files of other tools, each sent as it is (by media type, or named in the
+# query): with the default -f same, each result is the file written back
+# with only its coordinates replaced, byte for byte what qdc optimize writes
+mkdir -p "$TMP/real"
+bad=
+n=0
+REALS="gmsh41.msh gmsh22_bin.msh gmsh40.msh gmsh.vtk meshio_zlib.vtu meshio.meshb dolfin.xml calculix.inp netgen.vol"
+for f in $REALS; do
+    cp "$ROOT/tests/data/real/$(echo "$f" | sed 's/^netgen.vol$/meshio.vol/').gz" "$TMP/real/$f.gz"
+    gzip -dc "$TMP/real/$f.gz" > "$TMP/src.$f"
+    "$BIN/qdc" optimize "$TMP/src.$f" "$TMP/local.$f" --max-iter 2 --quiet || bad="$bad $f:local"
+    n=$((n + 1))
+done
+sh "$BATCH" -s "$URL" -Q -q 'max_iter=2' -o "$TMP/out4" "$TMP/real" 2> "$TMP/batch4.err"
+rc=$?
+for f in $REALS; do
+    cmp -s "$TMP/out4/$f" "$TMP/local.$f" || bad="$bad $f"
+done
+[ $rc = 0 ] && [ -z "$bad" ] && pass "batch: $n files of other tools (Gmsh 4.1, 2.2 binary, 4.0, VTK, VTU, Medit binary, DOLFIN, Abaqus, Netgen; gzipped) come back in their own format, byte for byte as qdc optimize writes them" ||
+    fail "batch other tools" "rc $rc, differ:$bad $(tail -2 "$TMP/batch4.err")"
+cp "$ROOT/tests/data/real/gmsh.mesh.gz" "$TMP/real/gmsh41.mesh.gz"
+sh "$BATCH" -s "$URL" -Q -o "$TMP/out5" "$TMP/real" 2> "$TMP/batch5.err"
+rc=$?
+[ $rc = 2 ] && grep -q 'named gmsh41' "$TMP/batch5.err" && [ ! -e "$TMP/out5/summary.csv" ] &&
+    pass "batch: two meshes of one name (gmsh41.msh.gz, gmsh41.mesh.gz) refused before any job (exit 2): $(cat "$TMP/batch5.err")" ||
+    fail "batch name clash" "rc $rc $(cat "$TMP/batch5.err")"
 stop_qdcd
 exit 0
