@@ -96,6 +96,12 @@ static int not_servable(struct MHD_Connection *c, req *r, const job_rec *j,
     return 0;
 }
 
+/* The mesh format of a job's upload; AUTO for a surface. */
+static meshio_format upload_mesh_format(const job_rec *j)
+{
+    return job_is_surface(j->format) ? MESHIO_AUTO : meshio_format_from_name(j->format);
+}
+
 /* Whether a job uploaded in format own has its result and input served in
  * format k: every format qdc writes (those without a media type by ?format=
  * name: Gmsh 2.2 binary and 4.0, DOLFIN, Medit binary), and Abaqus and
@@ -137,9 +143,7 @@ static int result_format(struct MHD_Connection *c, req *r, const job_rec *j,
         else
             k = strchr(f, '/') ? meshio_format_from_media_type(f)
                                : meshio_format_from_name(f);
-        if (offerable(k, job_is_surface(j->format)
-                             ? MESHIO_AUTO
-                             : meshio_format_from_name(j->format))) {
+        if (offerable(k, upload_mesh_format(j))) {
             *out = k;
             return 0;
         }
@@ -213,12 +217,12 @@ static enum MHD_Result serve_result(struct MHD_Connection *c, req *r, const job_
                                     meshio_format f, const char *path, const char *hex)
 {
     char etag[80], note[300] = "";
-    meshio_format sf = meshio_format_from_name(j->format);
+    meshio_format sf = upload_mesh_format(j);
 
     snprintf(etag, sizeof etag, "\"%s\"", hex);
     /* a result in another format than the upload's: say what it cannot hold
      * (the CLI says the same in a note line) */
-    if (r->route == R_RESULT && !job_is_surface(j->format) && sf != f)
+    if (r->route == R_RESULT && sf != MESHIO_AUTO && sf != f)
         snprintf(note, sizeof note,
                  "written by qdc's %s writer, not the uploaded %s file with new "
                  "coordinates: only vertices, tets, triangles and their region tags "

@@ -270,7 +270,6 @@ static int upload_idem(struct MHD_Connection *c, upload *u)
 enum MHD_Result upload_begin(struct MHD_Connection *c, req *r)
 {
     qdcd *q = r->q;
-    const char *cl;
     char tmpl[4200], why[200];
     job_counts cnt;
     job_rec prev;
@@ -306,10 +305,9 @@ enum MHD_Result upload_begin(struct MHD_Connection *c, req *r)
 
     limit = u->fmt == MESHIO_JSON && q->cfg.max_json < q->cfg.max_body ? q->cfg.max_json
                                                                        : q->cfg.max_body;
-    cl = MHD_lookup_connection_value(c, MHD_HEADER_KIND, MHD_HTTP_HEADER_CONTENT_LENGTH);
-    if (cl && strtoll(cl, NULL, 10) > limit) {
+    if (r->body_len > limit) { /* the declared Content-Length (http.c) */
         u->too_big = 1;
-        u->body_len = strtoll(cl, NULL, 10);
+        u->body_len = r->body_len;
         return upload_finish(c, r);
     }
     snprintf(tmpl, sizeof tmpl, "%s/tmp/upload-XXXXXX", q->cfg.data);

@@ -708,8 +708,10 @@ function renderDownloads(st) {
     // everything else it holds (names, tags, arrays) kept
     const own = st.job.mesh.format;
     const formats = FORMATS.concat(OWN_ONLY.filter(([f]) => f === own));
+    // a format that shares its extension with an earlier one is named in the file name
+    const first = (ext) => formats.find(([, e]) => e === ext)[0];
     const items = (what, tag) => formats.map(([f, ext, label]) => [base + '/' + what + '?format=' + f,
-        'qdc-' + short(st.id) + tag + (f.includes('-') || f === 'gmsh22' || f === 'gmsh40' ? '-' + f : '') + '.' + ext, label, f]);
+        'qdc-' + short(st.id) + tag + (first(ext) !== f ? '-' + f : '') + '.' + ext, label, f]);
     const links = (list) => list.map(([href, name, label, f]) =>
         el('a', { class: 'button small', href, download: name, 'data-format': f,
             text: f === own ? label + ' (as uploaded)' : label,

@@ -1,15 +1,15 @@
 /* remote.c - `qdc submit|status|watch|fetch|cancel|jobs`: the qdcd HTTP API
  * (proto/openapi.yaml) through libcurl.
  *
- * The local file is read (and checked) first, whatever its format. A file in
- * a format qdcd takes (one with a media type: Medit, Gmsh 4.1 and 2.2 ASCII,
- * 4.1 binary, VTK, VTU, ...) goes up as it is, in its own variant, and a
- * result asked for in that format is the upload with only the coordinates
- * replaced; any other goes up as application/vnd.qdc.mesh, and submit -o in
- * its format puts the result's coordinates into the file read here. Either
- * way `qdc submit IN -o OUT` writes what `qdc optimize IN OUT` writes: names,
- * tags, arrays and comments kept. A result in another format is asked for in
- * it (or as the binary mesh, for TetGen's pair) and written as it comes.
+ * The local file is read (and checked) first, whatever its format, and goes
+ * up as it is, in its own variant (by its media type, or named in the query
+ * when it has none): a result asked for in that format is the upload with
+ * only the coordinates replaced. TetGen's two files go up as
+ * application/vnd.qdc.mesh, and submit -o in their format puts the result's
+ * coordinates into the files read here. Either way `qdc submit IN -o OUT`
+ * writes what `qdc optimize IN OUT` writes: names, tags, arrays and comments
+ * kept. A result in another format is asked for in it (or as the binary
+ * mesh, for TetGen's pair) and written as it comes.
  *
  * Every request is retried on 429, 5xx and network failures, waiting what the
  * server's Retry-After says, else an exponential backoff. A submit carries an
@@ -528,7 +528,7 @@ static void remote_usage(FILE *f)
         "  -q, --quiet           no progress or retry messages\n"
         "submit:\n"
         "  IN ('-': standard input) is read in any format qdc reads and uploaded\n"
-        "  as it is when qdcd takes its format, else as " MEDIA_QMESH "; a closed\n"
+        "  as it is (TetGen's .node/.ele as " MEDIA_QMESH "); a closed\n"
         "  surface (.stl .obj .off .poly .smesh) goes as it is, to be tetrahedralized.\n"
         "  -o OUT in IN's format is what qdc optimize IN OUT writes (names, tags\n"
         "  and arrays kept). The job id is printed on stdout (on stderr when -o\n"
@@ -976,7 +976,7 @@ static int cmd_submit(args *a)
     int rc = CLI_OK, hr;
     view v = {stderr, isatty(2), 0, a->rm.quiet, ""};
     meshio_options keep = {NULL, NULL, 1};
-    meshio_format src;
+    meshio_format src, own; /* sent as; the input's own format (AUTO: none kept) */
     surface_format sf;
     char *raw = NULL, ctype[80];
     size_t rawlen = 0;
@@ -991,11 +991,6 @@ static int cmd_submit(args *a)
      * after the checks qdcd makes */
     sf = a->in_format ? surface_format_from_name(a->in_format)
                       : cli_input_surface(in, &raw, &rawlen);
-    if (sf == SURFACE_AUTO &&
-        raw) { /* a mesh, told by its contents: read from these bytes */
-        st = meshio_read_ex(raw, rawlen, MESHIO_AUTO, &keep, &m, &err);
-        goto read;
-    }
     if (sf != SURFACE_AUTO) {
         surface_t *s = NULL;
         st = raw ? QDC_OK : cli_slurp(in, &raw, &rawlen, &err);
@@ -1015,11 +1010,12 @@ static int cmd_submit(args *a)
         snprintf(ctype, sizeof ctype, "Content-Type: %s", surface_media_type(sf));
         goto send;
     }
-    /* read (and checked) here, so a bad file costs no job */
-    st = cli_read_mesh(in,
-                       a->in_format ? meshio_format_from_name(a->in_format) : MESHIO_AUTO,
-                       &keep, &m, &raw, &rawlen, &err);
-read:
+    /* read (and checked) here, so a bad file costs no job; a mesh told by its
+     * contents is read from the bytes already read */
+    st = raw ? meshio_read_ex(raw, rawlen, MESHIO_AUTO, &keep, &m, &err)
+             : cli_read_mesh(
+                   in, a->in_format ? meshio_format_from_name(a->in_format) : MESHIO_AUTO,
+                   &keep, &m, &raw, &rawlen, &err);
     if (st != QDC_OK) {
         cli_error(in, &err, st);
         qdc_free(raw);
@@ -1029,7 +1025,7 @@ read:
      * with only the coordinates replaced: names, tags and arrays come back;
      * by its media type, or named in the query), else (TetGen's two files)
      * as the binary mesh */
-    src = meshio_source_format(m);
+    own = src = meshio_source_format(m);
     if (raw && src != MESHIO_AUTO && src != MESHIO_TETGEN) {
         body.buf = raw;
         body.len = rawlen;
@@ -1044,12 +1040,11 @@ read:
     qdc_free(raw);
     /* an input with no file of its own to write back (JSON, the binary mesh)
      * goes to standard output as Medit, as qdc optimize writes it there */
-    if (!out_format && a->out && !strcmp(a->out, "-") &&
-        meshio_source_format(m) == MESHIO_AUTO)
+    if (!out_format && a->out && !strcmp(a->out, "-") && own == MESHIO_AUTO)
         out_format = "medit";
     /* sent as the binary mesh: kept (with its source) to write -o in its own
      * format as qdc optimize would, the result's coordinates put in */
-    if (src != MESHIO_QMESH || !a->out || meshio_source_format(m) == MESHIO_AUTO) {
+    if (src != MESHIO_QMESH || !a->out || own == MESHIO_AUTO) {
         mesh_free(m);
         m = NULL;
     }
