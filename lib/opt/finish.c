@@ -403,14 +403,50 @@ static void shape_step(double d[3], int inner, double lbar)
             d[c] *= 0.3 * lbar / dn;
 }
 
+/* 1 if v placed at y folds a star tet that is positive at x and whose face
+ * opposite v has its three corners on the boundary (a vertex pushed out
+ * through the surface, or a flat tet along it folded by a sliding corner).
+ * A move that keeps the star's inverted count may trade an inverted tet for
+ * a valid one, which untangling needs; at the surface of a thin tangled mesh
+ * no later move undid some of those trades, and a rerun that forbids them
+ * (keep_surface, see finish_sweep) untangles it. */
+static int folds_at_surface(const mesh_topo *tp, const double *x, int32_t v,
+                            const double *y)
+{
+    for (int32_t k = tp->vt_ptr[v]; k < tp->vt_ptr[v + 1]; k++) {
+        int32_t t = tp->vt_idx[k] >> 2, a = tp->vt_idx[k] & 3;
+        const int32_t *tt = tp->tets + 4 * (size_t)t;
+        uint8_t f = MESH_V_BOUNDARY;
+        double p[4][3], u[3], w[3], z[3];
+        for (int b = 0; b < 4; b++)
+            if (b != a)
+                f &= tp->vflag[tt[b]];
+        if (!f || geom_tet_inverted(geom_tet_vol6(x, tt)))
+            continue;
+        for (int b = 0; b < 4; b++)
+            memcpy(p[b], b == a ? y : x + 3 * (size_t)tt[b], sizeof p[b]);
+        for (int c = 0; c < 3; c++) {
+            u[c] = p[1][c] - p[0][c];
+            w[c] = p[2][c] - p[0][c];
+            z[c] = p[3][c] - p[0][c];
+        }
+        if (geom_tet_inverted(u[0] * (w[1] * z[2] - w[2] * z[1]) -
+                              u[1] * (w[0] * z[2] - w[2] * z[0]) +
+                              u[2] * (w[0] * z[1] - w[1] * z[0])))
+            return 1;
+    }
+    return 0;
+}
+
 /* A trial y of v is taken when the star's sum drops, no star tet inverts and
- * the floor holds. */
+ * the floor holds (and with ks, keep_surface, nothing folds at the surface). */
 static int step_ok(const mesh_topo *tp, const double *x, int32_t v, const double *y,
                    double f0, double f1, const star_info *s0, const star_info *s1,
-                   double qfloor)
+                   double qfloor, int ks)
 {
     return f1 < f0 && s1->bad <= s0->bad &&
-           (s1->low == 0 || keeps_floor(tp, x, v, y, qfloor));
+           (s1->low == 0 || keeps_floor(tp, x, v, y, qfloor)) &&
+           (!ks || s1->bad == 0 || !folds_at_surface(tp, x, v, y));
 }
 
 /* y = xv + t dir, put back on v's surface or line if sl (a sliding vertex). */
@@ -431,7 +467,7 @@ static void trial_point(const slide_ctx *sl, int32_t v, const double *xv,
 static int try_steps(const mesh_topo *tp, const double *x, int32_t v, const double d[3],
                      opt_metric m, double delta, double qfloor, double f0,
                      const star_info *s0, double g1[3], double H1[6], double y[3],
-                     double *f1, star_info *s1)
+                     double *f1, star_info *s1, int ks)
 {
     const double *xv = x + 3 * (size_t)v;
     double sc = 1.0;
@@ -439,7 +475,7 @@ static int try_steps(const mesh_topo *tp, const double *x, int32_t v, const doub
     for (int h = 0; h < FINISH_HALVINGS; h++, sc *= 0.5) {
         trial_point(NULL, v, xv, d, sc, y);
         *f1 = star_hess(tp, x, v, y, m, delta, qfloor, s1, g1, H1, NULL);
-        if (step_ok(tp, x, v, y, f0, *f1, s0, s1, qfloor))
+        if (step_ok(tp, x, v, y, f0, *f1, s0, s1, qfloor, ks))
             return 1;
     }
     return 0;
@@ -450,7 +486,7 @@ static int try_steps(const mesh_topo *tp, const double *x, int32_t v, const doub
  * where the Hessian is not positive definite, the normalized gradient step. */
 static int32_t newton_vertex(const mesh_topo *tp, double *x, int32_t v, opt_metric m,
                              double delta, double lbar, double rtol, int inner,
-                             double qfloor)
+                             double qfloor, int ks)
 {
     double *xv = x + 3 * (size_t)v, g[3], H[6], f0;
     int32_t moves = 0;
@@ -476,7 +512,7 @@ static int32_t newton_vertex(const mesh_topo *tp, double *x, int32_t v, opt_metr
          * always taken, and they serve the next iteration), except in the last
          * iteration */
         if (!try_steps(tp, x, v, d, m, delta, qfloor, f0, &s0, it + 1 < inner ? g1 : NULL,
-                       H1, y, &f1, &s1))
+                       H1, y, &f1, &s1, ks))
             break;
         memcpy(xv, y, sizeof y);
         moves++;
@@ -498,7 +534,7 @@ static int32_t newton_vertex(const mesh_topo *tp, double *x, int32_t v, opt_metr
  * steps in a broad sweep (rtol > 0), up to 8 in a polish sweep. */
 static int32_t relax_vertex(const mesh_topo *tp, const slide_ctx *sl, double *x,
                             int32_t v, opt_metric m, double delta, double lbar,
-                            double rtol, double qfloor)
+                            double rtol, double qfloor, int ks)
 {
     int sliding = sl && slide_kind(sl, v) != SLIDE_INTERIOR;
     double s = 0.05 * lbar, *xv = x + 3 * (size_t)v;
@@ -531,7 +567,8 @@ static int32_t relax_vertex(const mesh_topo *tp, const slide_ctx *sl, double *x,
             f1 = star_eval(tp, x, v, y, m, delta, sliding ? s0.qmax : INFINITY, s0.kmax,
                            qfloor > 0.0, &s1, NULL);
             /* keeps_floor's test, on the cubes star_eval found */
-            if (f1 < f0 && s1.bad <= s0.bad && floor_kept(qfloor, s1.emin3, s0.emin3)) {
+            if (f1 < f0 && s1.bad <= s0.bad && floor_kept(qfloor, s1.emin3, s0.emin3) &&
+                (!ks || s1.bad == 0 || !folds_at_surface(tp, x, v, y))) {
                 ok = 1;
                 break;
             }
@@ -574,7 +611,7 @@ static int32_t relax_vertex(const mesh_topo *tp, const slide_ctx *sl, double *x,
  * decide (no Newton direction, no step taken). */
 static int32_t slide_newton(const mesh_topo *tp, const slide_ctx *sl, double *x,
                             int32_t v, opt_metric m, double delta, double lbar,
-                            double qfloor)
+                            double qfloor, int ks)
 {
     double *xv = x + 3 * (size_t)v, g[3], H[6], A[6], pg[3], d[3], y[3], col[3][3];
     star_info si;
@@ -612,7 +649,8 @@ static int32_t slide_newton(const mesh_topo *tp, const slide_ctx *sl, double *x,
         double f1;
         trial_point(sl, v, xv, d, h ? 0.5 : 1.0, y);
         f1 = star_eval(tp, x, v, y, m, delta, s0.qmax, s0.kmax, qfloor > 0.0, &s1, NULL);
-        if (f1 < f0 && s1.bad <= s0.bad && floor_kept(qfloor, s1.emin3, s0.emin3)) {
+        if (f1 < f0 && s1.bad <= s0.bad && floor_kept(qfloor, s1.emin3, s0.emin3) &&
+            (!ks || s1.bad == 0 || !folds_at_surface(tp, x, v, y))) {
             memcpy(xv, y, sizeof y);
             return 1;
         }
@@ -626,20 +664,20 @@ static int32_t slide_newton(const mesh_topo *tp, const slide_ctx *sl, double *x,
  * qstar is at least the gate), else the normalized-gradient descent. */
 static int32_t visit_vertex(const mesh_topo *tp, const slide_ctx *sl, double *x,
                             int32_t v, double qstar, opt_metric m, double delta,
-                            double lbar, double rtol, double qfloor)
+                            double lbar, double rtol, double qfloor, int ks)
 {
     int inner = rtol > 0.0 ? 1 : FINISH_INNER;
 
     if (m == OPT_METRIC_MICN)
-        return relax_vertex(tp, sl, x, v, m, delta, lbar, rtol, qfloor);
+        return relax_vertex(tp, sl, x, v, m, delta, lbar, rtol, qfloor, ks);
     if (!(sl && slide_kind(sl, v) != SLIDE_INTERIOR))
-        return newton_vertex(tp, x, v, m, delta, lbar, rtol, inner, qfloor);
+        return newton_vertex(tp, x, v, m, delta, lbar, rtol, inner, qfloor, ks);
     if (rtol > 0.0 && qstar >= SLIDE_NEWTON_GATE && slide_kind(sl, v) == SLIDE_SURFACE) {
-        int32_t n = slide_newton(tp, sl, x, v, m, delta, lbar, qfloor);
+        int32_t n = slide_newton(tp, sl, x, v, m, delta, lbar, qfloor, ks);
         if (n >= 0)
             return n;
     }
-    return relax_vertex(tp, sl, x, v, m, delta, lbar, rtol, qfloor);
+    return relax_vertex(tp, sl, x, v, m, delta, lbar, rtol, qfloor, ks);
 }
 
 #define COLOUR_SHARED 64 /* the class of vertices that found no free colour */
@@ -740,7 +778,8 @@ static int32_t colour_classes(const mesh_topo *tp, vq_pair *list, int32_t n,
 
 qdc_status finish_sweep(const mesh_topo *tp, const uint8_t *movable, const slide_ctx *sl,
                         double *x, opt_metric m, const double *eta, double delta,
-                        double lbar, double frac, double rtol, finish_stats *st)
+                        double lbar, double frac, double rtol, int keep_surface,
+                        finish_stats *st)
 {
     double *vworst = qdc_mallocn((size_t)tp->nv, sizeof(double));
     vq_pair *list = NULL;
@@ -814,7 +853,7 @@ qdc_status finish_sweep(const mesh_topo *tp, const uint8_t *movable, const slide
 #pragma omp parallel for reduction(+ : moves) schedule(dynamic, 16) if (c < COLOUR_SHARED)
             for (int32_t i = start[c]; i < start[c + 1]; i++)
                 moves += visit_vertex(tp, sl, x, list[i].v, vworst[list[i].v], m, delta,
-                                      lbar, rtol, qfloor);
+                                      lbar, rtol, qfloor, keep_surface);
             st->n_moves += moves;
         }
         qdc_free(start);

@@ -28,10 +28,14 @@ typedef struct {
  * sl (may be NULL): constraints of sliding boundary vertices (movable ones with
  * a SLIDE_SURFACE/SLIDE_LINE kind move tangentially and are projected back).
  * rtol: a vertex stops once a step lowers its local objective by less than
- * rtol times its value (0: all inner steps). */
+ * rtol times its value (0: all inner steps).
+ * keep_surface: on a tangled mesh (delta > 0) a move may trade an inverted star
+ * tet for a valid one; with keep_surface not a valid tet whose face opposite
+ * the moving vertex has three boundary corners (a fold at the surface). */
 qdc_status finish_sweep(const mesh_topo *tp, const uint8_t *movable, const slide_ctx *sl,
                         double *x, opt_metric m, const double *eta, double delta,
-                        double lbar, double frac, double rtol, finish_stats *st);
+                        double lbar, double frac, double rtol, int keep_surface,
+                        finish_stats *st);
 
 /* Worst-angle polish (beyond the paper): max-min ascent of the smallest dihedral
  * sine of each star (Freitag's non-smooth smoothing: the steepest ascent is the

@@ -488,7 +488,7 @@ TEST(sliding_vertex_takes_a_tangent_newton_step_in_a_good_star)
         f0 = star_sum(tp, m->xyz, v, &q0);
         ASSERT_TRUE(c == 0 ? q0 >= 0.2 : q0 < 0.2);
         ASSERT_OK(finish_sweep(tp, movable, sl, m->xyz, OPT_METRIC_MIVL, eta, 0.0, h, 1.0,
-                               1e-3, &fs));
+                               1e-3, 0, &fs));
         f1 = star_sum(tp, m->xyz, v, &q1);
         for (int k = 0; k < 3; k++)
             move += (m->xyz[3 * v + k] - p0[k]) * (m->xyz[3 * v + k] - p0[k]);
