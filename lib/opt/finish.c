@@ -413,29 +413,32 @@ static void shape_step(double d[3], int inner, double lbar)
 static int folds_at_surface(const mesh_topo *tp, const double *x, int32_t v,
                             const double *y)
 {
+    static const int32_t corner[4] = {0, 1, 2, 3};
+
     for (int32_t k = tp->vt_ptr[v]; k < tp->vt_ptr[v + 1]; k++) {
         int32_t t = tp->vt_idx[k] >> 2, a = tp->vt_idx[k] & 3;
         const int32_t *tt = tp->tets + 4 * (size_t)t;
         uint8_t f = MESH_V_BOUNDARY;
-        double p[4][3], u[3], w[3], z[3];
+        double p[12];
         for (int b = 0; b < 4; b++)
             if (b != a)
                 f &= tp->vflag[tt[b]];
         if (!f || geom_tet_inverted(geom_tet_vol6(x, tt)))
             continue;
         for (int b = 0; b < 4; b++)
-            memcpy(p[b], b == a ? y : x + 3 * (size_t)tt[b], sizeof p[b]);
-        for (int c = 0; c < 3; c++) {
-            u[c] = p[1][c] - p[0][c];
-            w[c] = p[2][c] - p[0][c];
-            z[c] = p[3][c] - p[0][c];
-        }
-        if (geom_tet_inverted(u[0] * (w[1] * z[2] - w[2] * z[1]) -
-                              u[1] * (w[0] * z[2] - w[2] * z[0]) +
-                              u[2] * (w[0] * z[1] - w[1] * z[0])))
+            memcpy(p + 3 * b, b == a ? y : x + 3 * (size_t)tt[b], 3 * sizeof(double));
+        if (geom_tet_inverted(geom_tet_vol6(p, corner)))
             return 1;
     }
     return 0;
+}
+
+/* The keep_surface rule of a trial y of v whose star has bad1 inverted tets
+ * (no fold without one). */
+static int surface_kept(const mesh_topo *tp, const double *x, int32_t v, const double *y,
+                        int32_t bad1, int ks)
+{
+    return !ks || bad1 == 0 || !folds_at_surface(tp, x, v, y);
 }
 
 /* A trial y of v is taken when the star's sum drops, no star tet inverts and
@@ -446,7 +449,7 @@ static int step_ok(const mesh_topo *tp, const double *x, int32_t v, const double
 {
     return f1 < f0 && s1->bad <= s0->bad &&
            (s1->low == 0 || keeps_floor(tp, x, v, y, qfloor)) &&
-           (!ks || s1->bad == 0 || !folds_at_surface(tp, x, v, y));
+           surface_kept(tp, x, v, y, s1->bad, ks);
 }
 
 /* y = xv + t dir, put back on v's surface or line if sl (a sliding vertex). */
@@ -568,7 +571,7 @@ static int32_t relax_vertex(const mesh_topo *tp, const slide_ctx *sl, double *x,
                            qfloor > 0.0, &s1, NULL);
             /* keeps_floor's test, on the cubes star_eval found */
             if (f1 < f0 && s1.bad <= s0.bad && floor_kept(qfloor, s1.emin3, s0.emin3) &&
-                (!ks || s1.bad == 0 || !folds_at_surface(tp, x, v, y))) {
+                surface_kept(tp, x, v, y, s1.bad, ks)) {
                 ok = 1;
                 break;
             }
@@ -650,7 +653,7 @@ static int32_t slide_newton(const mesh_topo *tp, const slide_ctx *sl, double *x,
         trial_point(sl, v, xv, d, h ? 0.5 : 1.0, y);
         f1 = star_eval(tp, x, v, y, m, delta, s0.qmax, s0.kmax, qfloor > 0.0, &s1, NULL);
         if (f1 < f0 && s1.bad <= s0.bad && floor_kept(qfloor, s1.emin3, s0.emin3) &&
-            (!ks || s1.bad == 0 || !folds_at_surface(tp, x, v, y))) {
+            surface_kept(tp, x, v, y, s1.bad, ks)) {
             memcpy(xv, y, sizeof y);
             return 1;
         }
