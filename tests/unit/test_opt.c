@@ -598,6 +598,25 @@ TEST(joint_moves_lift_what_single_vertices_leave)
     grid_case_free(&g);
 }
 
+/* The max-min volume untangling (Freitag & Plassmann) on a tangled grid:
+ * fewer inverted tets, the count it returns is the mesh's, the boundary
+ * untouched, every coordinate finite. */
+TEST(max_min_volume_untangles_a_grid)
+{
+    grid_case g;
+    int32_t before, after = -1;
+    ASSERT_TRUE(grid_case_new(&g, 6, 1.6, 5));
+    before = mesh_count_inverted(g.tp, g.m->xyz);
+    ASSERT_TRUE(before > 20);
+    ASSERT_OK(finish_untangle(g.tp, g.movable, g.m->xyz, 1.0 / g.n, &after));
+    printf("  # inverted tets %d -> %d\n", (int)before, (int)after);
+    ASSERT_EQ_INT(after, mesh_count_inverted(g.tp, g.m->xyz));
+    ASSERT_TRUE(after < before / 3);
+    ASSERT_TRUE(fixed_kept(&g));
+    ASSERT_TRUE(all_finite(g.m));
+    grid_case_free(&g);
+}
+
 /* The same joint moves on the tets' mean ratios lift the worst of them; the
  * values kept up to date are the mean ratios at the new x. */
 TEST(joint_moves_lift_the_worst_mean_ratio)
@@ -660,4 +679,4 @@ TEST_MAIN("opt", T(result_does_not_depend_on_vertex_numbering),
           T(regions_and_connectivity_untouched), T(cancel_from_progress_callback),
           T(cancel_flag_before_start), T(solvers_and_metrics_all_work),
           T(harmonic_guidance_runs), T(bad_options_and_bad_mesh_rejected),
-          T(allocation_failures_are_clean))
+          T(max_min_volume_untangles_a_grid), T(allocation_failures_are_clean))
