@@ -403,6 +403,29 @@ static void shape_step(double d[3], int inner, double lbar)
             d[c] *= 0.3 * lbar / dn;
 }
 
+/* 6 x the signed volume of star tet k of v with v placed at y, and (if g) its
+ * gradient with respect to y (constant: the volume is linear in y). */
+static double star_vol6(const mesh_topo *tp, const double *x, int32_t k, const double *y,
+                        double g[3])
+{
+    static const int32_t corner[4] = {0, 1, 2, 3};
+    int32_t t = tp->vt_idx[k] >> 2, a = tp->vt_idx[k] & 3;
+    const int32_t *tt = tp->tets + 4 * (size_t)t;
+    double p[12], v0;
+
+    for (int b = 0; b < 4; b++)
+        memcpy(p + 3 * b, b == a ? y : x + 3 * (size_t)tt[b], 3 * sizeof(double));
+    v0 = geom_tet_vol6(p, corner);
+    if (g)
+        for (int c = 0; c < 3; c++) {
+            double s = p[3 * a + c];
+            p[3 * a + c] = s + 1.0;
+            g[c] = geom_tet_vol6(p, corner) - v0;
+            p[3 * a + c] = s;
+        }
+    return v0;
+}
+
 /* 1 if v placed at y folds a star tet that is positive at x and whose face
  * opposite v has its three corners on the boundary (a vertex pushed out
  * through the surface, or a flat tet along it folded by a sliding corner).
@@ -413,21 +436,15 @@ static void shape_step(double d[3], int inner, double lbar)
 static int folds_at_surface(const mesh_topo *tp, const double *x, int32_t v,
                             const double *y)
 {
-    static const int32_t corner[4] = {0, 1, 2, 3};
-
     for (int32_t k = tp->vt_ptr[v]; k < tp->vt_ptr[v + 1]; k++) {
-        int32_t t = tp->vt_idx[k] >> 2, a = tp->vt_idx[k] & 3;
-        const int32_t *tt = tp->tets + 4 * (size_t)t;
+        int32_t a = tp->vt_idx[k] & 3;
+        const int32_t *tt = tp->tets + 4 * (size_t)(tp->vt_idx[k] >> 2);
         uint8_t f = MESH_V_BOUNDARY;
-        double p[12];
         for (int b = 0; b < 4; b++)
             if (b != a)
                 f &= tp->vflag[tt[b]];
-        if (!f || geom_tet_inverted(geom_tet_vol6(x, tt)))
-            continue;
-        for (int b = 0; b < 4; b++)
-            memcpy(p + 3 * b, b == a ? y : x + 3 * (size_t)tt[b], 3 * sizeof(double));
-        if (geom_tet_inverted(geom_tet_vol6(p, corner)))
+        if (f && !geom_tet_inverted(geom_tet_vol6(x, tt)) &&
+            geom_tet_inverted(star_vol6(tp, x, k, y, NULL)))
             return 1;
     }
     return 0;
@@ -1717,29 +1734,6 @@ qdc_status finish_patches(const mesh_topo *tp, const uint8_t *movable,
 #define UNTANGLE_SWEEPS 12
 #define UNTANGLE_ACT 16
 
-/* 6 x the signed volume of star tet k of v with v placed at y, and (if g) its
- * gradient with respect to y (constant: the volume is linear in y). */
-static double star_vol6(const mesh_topo *tp, const double *x, int32_t k, const double *y,
-                        double g[3])
-{
-    static const int32_t corner[4] = {0, 1, 2, 3};
-    int32_t t = tp->vt_idx[k] >> 2, a = tp->vt_idx[k] & 3;
-    const int32_t *tt = tp->tets + 4 * (size_t)t;
-    double p[12], v0;
-
-    for (int b = 0; b < 4; b++)
-        memcpy(p + 3 * b, b == a ? y : x + 3 * (size_t)tt[b], 3 * sizeof(double));
-    v0 = geom_tet_vol6(p, corner);
-    if (g)
-        for (int c = 0; c < 3; c++) {
-            double s = p[3 * a + c];
-            p[3 * a + c] = s + 1.0;
-            g[c] = geom_tet_vol6(p, corner) - v0;
-            p[3 * a + c] = s;
-        }
-    return v0;
-}
-
 /* Smallest 6 x volume over v's star with v at y, and its inverted tets. */
 static double star_min_vol6(const mesh_topo *tp, const double *x, int32_t v,
                             const double *y, int32_t *bad)
@@ -1770,14 +1764,16 @@ static int32_t untangle_vertex(const mesh_topo *tp, double *x, int32_t v, double
                                                        gmax = 0;
         int32_t nb0, nb1;
         int nact = 0;
-        f0 = star_min_vol6(tp, x, v, xv, &nb0);
-        if (!isfinite(f0))
-            break;
+        f0 = INFINITY;
+        nb0 = 0;
         for (int32_t k = tp->vt_ptr[v]; k < tp->vt_ptr[v + 1]; k++) {
-            double gk[3];
-            (void)star_vol6(tp, x, k, xv, gk);
+            double gk[3], vk = star_vol6(tp, x, k, xv, gk);
+            f0 = fmin(f0, vk);
+            nb0 += geom_tet_inverted(vk);
             gmax = fmax(gmax, sqrt(gk[0] * gk[0] + gk[1] * gk[1] + gk[2] * gk[2]));
         }
+        if (!isfinite(f0))
+            break;
         for (int32_t k = tp->vt_ptr[v]; k < tp->vt_ptr[v + 1]; k++) {
             double gk[3], vk = star_vol6(tp, x, k, xv, gk);
             if (vk - f0 > 2.0 * s * gmax)
@@ -1821,7 +1817,7 @@ qdc_status finish_untangle(const mesh_topo *tp, const uint8_t *movable, double *
                            double lbar, int32_t *n_inverted)
 {
     uint8_t *mark = qdc_calloc((size_t)tp->nv + 1, 1);
-    int32_t *list = NULL, n = 0, ninv = 0;
+    int32_t *list = NULL, n = 0;
 
     if (!mark)
         return QDC_ENOMEM;
@@ -1853,9 +1849,7 @@ qdc_status finish_untangle(const mesh_topo *tp, const uint8_t *movable, double *
         if (!moves)
             break;
     }
-    for (int32_t t = 0; t < tp->nt; t++)
-        ninv += geom_tet_inverted(geom_tet_vol6(x, tp->tets + 4 * (size_t)t));
-    *n_inverted = ninv;
+    *n_inverted = mesh_count_inverted(tp, x);
     qdc_free(list);
     qdc_free(mark);
     return QDC_OK;

@@ -1254,7 +1254,6 @@ static qdc_status run_setup(ctx_t *c, mesh_t *m, const opt_options *o,
 {
     mesh_topo *tp;
     double t0 = c->t0;
-    int keep_surface = c->keep_surface;
     qdc_status st = mesh_topo_build(m, tpp, err);
 
     if (st != QDC_OK)
@@ -1262,7 +1261,6 @@ static qdc_status run_setup(ctx_t *c, mesh_t *m, const opt_options *o,
     tp = *tpp;
     st = ctx_init(c, m, tp, o); /* clears c */
     c->t0 = t0;
-    c->keep_surface = keep_surface;
     if (st != QDC_OK)
         return st;
     for (int32_t v = 0; loose && c->sl && v < c->nv; v++)
@@ -1484,7 +1482,6 @@ static qdc_status run_once(mesh_t *m, const opt_options *opts, const uint8_t *pi
     memset(&res, 0, sizeof res);
     memset(&c, 0, sizeof c);
     c.t0 = qdc_now();
-    c.keep_surface = keep_surface;
     res.outcome = OPT_FAILED;
     if (opts)
         o = *opts;
@@ -1503,6 +1500,7 @@ static qdc_status run_once(mesh_t *m, const opt_options *opts, const uint8_t *pi
     st = run_setup(&c, m, &o, pins, loose, &tp, &res, &r, err);
     if (st != QDC_OK)
         goto out;
+    c.keep_surface = keep_surface;
     if (report(&c, &r)) {
         stop = 1;
         set_stop(&res, OPT_STOP_CANCELLED);
