@@ -1,6 +1,7 @@
 /* slide.c - sliding boundary constraints. */
 #include "opt/slide.h"
 
+#include "core/tet.h"
 #include "geom/bderr.h"
 
 #include <math.h>
@@ -195,25 +196,8 @@ static int tri_cmp(const void *x, const void *y)
 static tri_key make_key(int32_t a, int32_t b, int32_t c)
 {
     tri_key k;
-    int32_t t;
-    if (a > b) {
-        t = a;
-        a = b;
-        b = t;
-    }
-    if (b > c) {
-        t = b;
-        b = c;
-        c = t;
-    }
-    if (a > b) {
-        t = a;
-        a = b;
-        b = t;
-    }
-    k.v[0] = a;
-    k.v[1] = b;
-    k.v[2] = c;
+
+    tet_sort3(a, b, c, k.v);
     return k;
 }
 
