@@ -7,11 +7,13 @@
 #include "core/order.h"
 #include "core/tet.h"
 #include "geom/metric.h"
+#include "opt/angle.h"
 #include "opt/encode.h"
 #include "opt/finish.h"
 #include "opt/harm.h"
 #include "opt/slide.h"
 #include "opt/solve.h"
+#include "opt/untangle.h"
 
 #include <math.h>
 #include <omp.h>

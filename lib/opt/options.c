@@ -134,7 +134,6 @@ NAMER(opt_mode_name, opt_mode, mode_names)
 NAMER(opt_weights_name, opt_weights, weights_names)
 NAMER(opt_solver_name, opt_solver, solver_names)
 
-
 #define OFF(f) offsetof(opt_options, f)
 #define WORDS(w) w, (int)(sizeof w / sizeof w[0])
 
