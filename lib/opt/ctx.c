@@ -202,11 +202,29 @@ int ctx_should_stop(const ctx_t *c, opt_result *res)
     return 0;
 }
 
+/* The mean edge length of x (1 if there is no edge). */
+static double mean_edge(const mesh_topo *tp, const double *x)
+{
+    double esum = 0;
+    int64_t ecount = 0;
+
+    for (int32_t i = 0; i < tp->nv; i++)
+        for (int32_t s = tp->adj_ptr[i]; s < tp->adj_ptr[i + 1]; s++) {
+            int32_t j = tp->adj_idx[s];
+            const double *a = x + 3 * (size_t)i, *b = x + 3 * (size_t)j;
+            if (j <= i)
+                continue;
+            esum += sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) +
+                         (a[2] - b[2]) * (a[2] - b[2]));
+            ecount++;
+        }
+    return ecount ? esum / (double)ecount : 1.0;
+}
+
 qdc_status ctx_init(ctx_t *c, const mesh_t *m, const mesh_topo *tp, const opt_options *o)
 {
     size_t n3 = 3 * (size_t)m->nv;
-    double lo[3], hi[3], diag, esum = 0;
-    int64_t ecount = 0;
+    double lo[3], hi[3], diag;
 
     memset(c, 0, sizeof *c);
     c->o = o;
@@ -249,17 +267,7 @@ qdc_status ctx_init(ctx_t *c, const mesh_t *m, const mesh_topo *tp, const opt_op
                 (m->xyz[3 * (size_t)v + k] - c->center[k]) / c->scale;
     memcpy(c->x0, c->x, n3 * sizeof(double));
     memcpy(c->xbest, c->x, n3 * sizeof(double));
-    for (int32_t i = 0; i < tp->nv; i++)
-        for (int32_t s = tp->adj_ptr[i]; s < tp->adj_ptr[i + 1]; s++) {
-            int32_t j = tp->adj_idx[s];
-            const double *a = c->x + 3 * (size_t)i, *b = c->x + 3 * (size_t)j;
-            if (j <= i)
-                continue;
-            esum += sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) +
-                         (a[2] - b[2]) * (a[2] - b[2]));
-            ecount++;
-        }
-    c->lbar = ecount ? esum / (double)ecount : 1.0;
+    c->lbar = mean_edge(tp, c->x);
     c->bref = c->x0;
     c->mu_factor = 1.0;
     c->hbound = o->hausd > 0       ? o->hausd / c->scale

@@ -109,6 +109,69 @@ static qdc_status finish_pass(ctx_t *c, const uint8_t *movable, int x_evaluated,
  * lifting it from 0.069 to 0.108 degrees, 0.1 s of a 1.0 s run */
 #define ANGLE_MIN_RISE 8.7e-4
 #define ANGLE_PATCH_ROUNDS 4
+/* What the angle pass kept: whether some sweep or round was (its result in
+ * c->trial), and their moves and visited vertices. */
+typedef struct {
+    int kept;
+    double moves, visits;
+} angle_tally;
+
+/* c->x, the result of a sweep or round with stats fs, is kept. */
+static void tally_kept(ctx_t *c, angle_tally *t, const finish_stats *fs)
+{
+    memcpy(c->trial, c->x, 3 * (size_t)c->nv * sizeof(double));
+    t->kept = 1;
+    t->moves += fs->n_moves;
+    t->visits += fs->n_verts;
+}
+
+/* One round of joint moves of the worst tets' corners on their mean ratios
+ * (finish.h) from c->x, kept if the worst tet improves on base: the angle
+ * moves then start from it, with the floor of the best iterate. */
+static qdc_status mean_ratio_round(ctx_t *c, const uint8_t *movable, const slide_ctx *sl,
+                                   const opt_progress *base, angle_tally *t)
+{
+    finish_stats fs;
+    opt_progress cur;
+    qdc_status st = finish_patches(c->tp, movable, sl, c->x, c->lbar,
+                                   FINISH_PATCH_MEAN_RATIO, 0.0, c->eta, 0, &fs);
+    if (st != QDC_OK)
+        return st;
+    (void)ctx_scan_light(c, c->x, c->eta, &cur);
+    if (ctx_better(&cur, base))
+        tally_kept(c, t, &fs);
+    else
+        memcpy(c->x, c->xbest, 3 * (size_t)c->nv * sizeof(double));
+    return QDC_OK;
+}
+
+/* Rounds of joint moves of the worst tets' corners on their sines (finish.h),
+ * while that lifts the smallest sine. smin_ok: smin is of c->trial. */
+static qdc_status patch_rounds(ctx_t *c, const uint8_t *movable, const slide_ctx *sl,
+                               const opt_progress *base, double *smin, int smin_ok,
+                               opt_result *res, angle_tally *t)
+{
+    size_t n3 = 3 * (size_t)c->nv;
+
+    for (int round = 0; round < ANGLE_PATCH_ROUNDS; round++) {
+        finish_stats fs;
+        qdc_status st;
+        if (ctx_should_stop(c, res))
+            break;
+        memcpy(c->x, t->kept ? c->trial : c->xbest, n3 * sizeof(double));
+        st = finish_patches(c->tp, movable, sl, c->x, c->lbar, FINISH_PATCH_ANGLES,
+                            base->q_min, smin, round > 0 || smin_ok, &fs);
+        if (st != QDC_OK)
+            return st;
+        if (!(fs.floor_after > fs.floor_before))
+            break;
+        tally_kept(c, t, &fs);
+        if (!(fs.floor_after > fs.floor_before * (1 + 1e-3)))
+            break;
+    }
+    return QDC_OK;
+}
+
 static qdc_status angle_pass(ctx_t *c, const uint8_t *movable, const slide_ctx *sl,
                              opt_result *res, opt_progress *r, int *next)
 {
@@ -118,33 +181,18 @@ static qdc_status angle_pass(ctx_t *c, const uint8_t *movable, const slide_ctx *
     double *smin = c->eta;
     const opt_progress base = c->best;
     size_t n3 = 3 * (size_t)c->nv;
-    int kept = 0, slow = 0, smin_ok = 0; /* smin is of c->trial */
-    double moves = 0, visits = 0;
+    int slow = 0, smin_ok = 0; /* smin is of c->trial */
+    angle_tally t = {0, 0, 0};
+    qdc_status st;
 
     memcpy(c->x, c->xbest, n3 * sizeof(double));
-    /* first one round of joint moves of the worst tets' corners on their mean
-     * ratios (finish.h), kept if the worst tet improves: the angle moves then
-     * start from it, with the floor of the best iterate */
     if (!ctx_should_stop(c, res)) {
-        finish_stats fs;
-        opt_progress cur;
-        qdc_status st = finish_patches(c->tp, movable, sl, c->x, c->lbar,
-                                       FINISH_PATCH_MEAN_RATIO, 0.0, c->eta, 0, &fs);
+        st = mean_ratio_round(c, movable, sl, &base, &t);
         if (st != QDC_OK)
             return st;
-        (void)ctx_scan_light(c, c->x, c->eta, &cur);
-        if (ctx_better(&cur, &base)) {
-            memcpy(c->trial, c->x, n3 * sizeof(double));
-            kept = 1;
-            moves += fs.n_moves;
-            visits += fs.n_verts;
-        } else {
-            memcpy(c->x, c->xbest, n3 * sizeof(double));
-        }
     }
     for (int s = 0; s < ANGLE_SWEEPS; s++) {
         finish_stats fs;
-        qdc_status st;
         int floor_up;
         if (ctx_should_stop(c, res))
             break;
@@ -160,10 +208,7 @@ static qdc_status angle_pass(ctx_t *c, const uint8_t *movable, const slide_ctx *
                   (fs.floor_after >= fs.floor_before && fs.score_after > fs.score_before);
         if (!smin_ok)
             break;
-        memcpy(c->trial, c->x, n3 * sizeof(double));
-        kept = 1;
-        moves += fs.n_moves;
-        visits += fs.n_verts;
+        tally_kept(c, &t, &fs);
         floor_up = fs.floor_after > fs.floor_before * (1 + 1e-3) &&
                    fs.floor_after - fs.floor_before > ANGLE_MIN_RISE;
         if (fs.n_moves == 0 ||
@@ -173,32 +218,12 @@ static qdc_status angle_pass(ctx_t *c, const uint8_t *movable, const slide_ctx *
         if (slow >= ANGLE_SLOW)
             break;
     }
-    /* then the worst tets' corners together (finish.h), while that lifts the
-     * smallest sine */
-    for (int round = 0; round < ANGLE_PATCH_ROUNDS; round++) {
-        finish_stats fs;
-        qdc_status st;
-        if (ctx_should_stop(c, res))
-            break;
-        memcpy(c->x, kept ? c->trial : c->xbest, n3 * sizeof(double));
-        st = finish_patches(c->tp, movable, sl, c->x, c->lbar, FINISH_PATCH_ANGLES,
-                            base.q_min, smin, round > 0 || smin_ok, &fs);
-        if (st != QDC_OK)
-            return st;
-        if (!(fs.floor_after > fs.floor_before))
-            break;
-        memcpy(c->trial, c->x, n3 * sizeof(double));
-        kept = 1;
-        moves += fs.n_moves;
-        visits += fs.n_verts;
-        if (!(fs.floor_after > fs.floor_before * (1 + 1e-3)))
-            break;
-    }
-    if (!kept)
-        return QDC_OK;
+    st = patch_rounds(c, movable, sl, &base, smin, smin_ok, res, &t);
+    if (st != QDC_OK || !t.kept)
+        return st;
     /* one record for the pass (a record costs a sweep's worth of work) */
     ctx_pass_record(c, r, next, "angles");
-    r->step = visits > 0 ? moves / visits : 0;
+    r->step = t.visits > 0 ? t.moves / t.visits : 0;
     if (ctx_eligible(c, r) && r->n_inverted <= base.n_inverted &&
         r->q_min >= base.q_min) {
         c->best = *r;

@@ -211,29 +211,13 @@ static void feasible_trial(ctx_t *c, double s, int32_t ninv_x, double qfloor3)
 
 /* One iteration of Eq. 15 plus the line search. Fills r (without quality).
  * Returns QDC_OK; *stepped = 0 when no step decreased the objective. */
-static qdc_status iterate(ctx_t *c, opt_result *res, opt_progress *r, int *stepped,
-                          qdc_error *err)
+/* mu of this step: the paper as written (literal) takes
+ * mu_k = ||G^T W^2 g||^2 = ||omega_B^2 b||^2 (constant), else o->mu. */
+static double step_mu(const ctx_t *c)
 {
-    const opt_options *o = c->o;
-    const mesh_topo *tp = c->tp;
-    size_t n3 = 3 * (size_t)c->nv;
-    int literal = o->mode == OPT_MODE_LITERAL;
-    double t = qdc_now(), delta, f0, mu, step = 1.0, move = 0;
-    int cg = 0;
-    int32_t folded = 0;
-    qdc_status st;
+    double mu;
 
-    /* q~ at x_k with one global delta (docs/method.md §2) */
-    delta = metric_delta(encode_min_arg(tp, c->x, o->metric), c->eps);
-    f0 = encode_objective(tp, c->x, o->metric, delta, c->qt, NULL);
-    if (literal || o->weights == OPT_WEIGHTS_PAPER)
-        encode_paper(tp, c->x, o->metric, c->qt, c->qval, c->d);
-    else
-        encode_optavg(tp, c->x, o->metric, c->qt, c->fslot, c->qval, c->d);
-    res->t_weights += qdc_now() - t;
-    t = qdc_now();
-    if (literal) {
-        /* paper as written: mu_k = ||G^T W^2 g||^2 = ||omega_B^2 b||^2 (constant) */
+    if (c->o->mode == OPT_MODE_LITERAL) {
         mu = 0;
         for (int32_t v = 0; v < c->nv; v++)
             for (int k = 0; k < 3; k++)
@@ -242,17 +226,23 @@ static qdc_status iterate(ctx_t *c, opt_result *res, opt_progress *r, int *stepp
         if (!(mu > 0))
             mu = 1.0;
     } else {
-        mu = o->mu * c->mu_factor;
+        mu = c->o->mu * c->mu_factor;
     }
-    /* b = Q_F^T W (d - Q x_L) + bw2 x0 + mu x_k: locked vertices move to the right
-     * (the per-vertex loops of the iteration run in parallel: each entry alone) */
+    return mu;
+}
+
+/* b = Q_F^T W (d - Q x_L) + bw2 x0 + mu x_k into c->rhs, and c->dg: locked
+ * vertices move to the right (the per-vertex loops of the iteration run in
+ * parallel: each entry alone) */
+static void assemble_rhs(ctx_t *c, double mu)
+{
 #pragma omp parallel for schedule(static)
     for (int32_t v = 0; v < c->nv; v++) {
         for (int k = 0; k < 3; k++)
             c->tmp[3 * (size_t)v + k] = c->locked[v] ? c->x[3 * (size_t)v + k] : 0.0;
         c->dg[v] = c->bw2[v] + mu;
     }
-    solve_q_mul(tp, c->qval, c->tmp, c->trial);
+    solve_q_mul(c->tp, c->qval, c->tmp, c->trial);
 #pragma omp parallel for schedule(static)
     for (int32_t v = 0; v < c->nv; v++)
         for (int k = 0; k < 3; k++) {
@@ -266,62 +256,57 @@ static qdc_status iterate(ctx_t *c, opt_result *res, opt_progress *r, int *stepp
             size_t q = 3 * (size_t)v + k;
             c->rhs[q] += c->bw2[v] * c->bref[q] + mu * c->x[q];
         }
-    res->t_assembly += qdc_now() - t;
-    t = qdc_now();
-    memcpy(c->xn, c->x, n3 * sizeof(double));
-    st = solve_system(c->sol, c->qval, c->wq2, c->dg, c->rhs, c->xn, &cg, err);
-    res->t_solve += qdc_now() - t;
-    if (st != QDC_OK)
-        return st;
-    {
-        int finite = 1;
+}
+
+static int all_finite(const double *x, size_t n)
+{
+    int finite = 1;
 #pragma omp parallel for reduction(&& : finite) schedule(static)
-        for (size_t q = 0; q < n3; q++)
-            finite = finite && isfinite(c->xn[q]);
-        if (!finite)
-            return qdc_fail(err, QDC_ESOLVE, "linear solve returned a non-finite value");
-    }
-    t = qdc_now();
-    if (!literal) {
-        /* Not in the paper (docs/method.md §5): backtrack on sum q~ with delta frozen;
-         * with delta = 0 a trial that inverts a tet costs +inf. */
-        /* A step that lowers sum q~ may still fold valid tets: with delta > 0
-         * (any tet below eps, common on sliver meshes) an inverted tet costs
-         * a finite q~, and measured on 100k-1M-tet valid meshes with 40-50%
-         * boundary vertices the accepted steps folded 26-331 tets. So a trial
-         * is accepted only if it folds no valid tet while the mesh is valid,
-         * and never raises the inverted count of a tangled one. */
-        int h;
-        int32_t ninv_x = 0;
-        double qfloor3 = INFINITY;
+    for (size_t q = 0; q < n; q++)
+        finite = finite && isfinite(x[q]);
+    return finite;
+}
+
+/* Not in the paper (docs/method.md §5): backtrack on sum q~ with delta frozen;
+ * with delta = 0 a trial that inverts a tet costs +inf.
+ * A step that lowers sum q~ may still fold valid tets: with delta > 0
+ * (any tet below eps, common on sliver meshes) an inverted tet costs
+ * a finite q~, and measured on 100k-1M-tet valid meshes with 40-50%
+ * boundary vertices the accepted steps folded 26-331 tets. So a trial
+ * is accepted only if it folds no valid tet while the mesh is valid,
+ * and never raises the inverted count of a tangled one. Returns the step
+ * taken (0: none), its trial in c->trial. */
+static double line_search(ctx_t *c, double delta, double f0)
+{
+    const opt_options *o = c->o;
+    const mesh_topo *tp = c->tp;
+    double step = 1.0;
+    int h;
+    int32_t ninv_x = 0;
+    double qfloor3 = INFINITY;
 #pragma omp parallel for reduction(min : qfloor3) reduction(+ : ninv_x) schedule(static)
-        for (int32_t e = 0; e < tp->nt; e++) {
-            const int32_t *tt = tp->tets + 4 * (size_t)e;
-            double q = ctx_tet_eta3(c->x, tt);
-            qfloor3 = q < qfloor3 ? q : qfloor3;
-            ninv_x += geom_tet_inverted(geom_tet_vol6(c->x, tt));
-        }
-        for (h = 0; h <= o->ls_halvings; h++) {
-            feasible_trial(c, step, ninv_x, qfloor3);
-            if (encode_objective(tp, c->trial, o->metric, delta, NULL, NULL) < f0)
-                break;
-            step *= 0.5;
-        }
-        if (h > o->ls_halvings)
-            step = 0.0;
+    for (int32_t e = 0; e < tp->nt; e++) {
+        const int32_t *tt = tp->tets + 4 * (size_t)e;
+        double q = ctx_tet_eta3(c->x, tt);
+        qfloor3 = q < qfloor3 ? q : qfloor3;
+        ninv_x += geom_tet_inverted(geom_tet_vol6(c->x, tt));
     }
-    res->t_linesearch += qdc_now() - t;
-    if (literal) {
-        for (size_t q = 0; q < n3; q++)
-            c->trial[q] = c->xn[q];
-        project_sliding(c, c->trial);
-    } else if (step == 0.0) {
-        memcpy(c->trial, c->x, n3 * sizeof(double));
-    } /* else c->trial holds the accepted feasible trial */
-    {
-        int32_t ninv_t;
-        folded = step > 0.0 ? count_folds(tp, c->x, c->trial, &ninv_t) : 0;
+    for (h = 0; h <= o->ls_halvings; h++) {
+        feasible_trial(c, step, ninv_x, qfloor3);
+        if (encode_objective(tp, c->trial, o->metric, delta, NULL, NULL) < f0)
+            break;
+        step *= 0.5;
     }
+    if (h > o->ls_halvings)
+        step = 0.0;
+    return step;
+}
+
+/* c->x moves to c->trial if step > 0; returns the largest squared move. */
+static double apply_step(ctx_t *c, double step)
+{
+    double move = 0;
+
 #pragma omp parallel for reduction(max : move) schedule(static)
     for (int32_t v = 0; v < c->nv; v++) {
         double dd = 0;
@@ -334,6 +319,57 @@ static qdc_status iterate(ctx_t *c, opt_result *res, opt_progress *r, int *stepp
         if (dd > move)
             move = dd;
     }
+    return move;
+}
+
+static qdc_status iterate(ctx_t *c, opt_result *res, opt_progress *r, int *stepped,
+                          qdc_error *err)
+{
+    const opt_options *o = c->o;
+    const mesh_topo *tp = c->tp;
+    size_t n3 = 3 * (size_t)c->nv;
+    int literal = o->mode == OPT_MODE_LITERAL;
+    double t = qdc_now(), delta, f0, mu, step = 1.0, move;
+    int cg = 0;
+    int32_t folded = 0;
+    qdc_status st;
+
+    /* q~ at x_k with one global delta (docs/method.md §2) */
+    delta = metric_delta(encode_min_arg(tp, c->x, o->metric), c->eps);
+    f0 = encode_objective(tp, c->x, o->metric, delta, c->qt, NULL);
+    if (literal || o->weights == OPT_WEIGHTS_PAPER)
+        encode_paper(tp, c->x, o->metric, c->qt, c->qval, c->d);
+    else
+        encode_optavg(tp, c->x, o->metric, c->qt, c->fslot, c->qval, c->d);
+    res->t_weights += qdc_now() - t;
+    t = qdc_now();
+    mu = step_mu(c);
+    assemble_rhs(c, mu);
+    res->t_assembly += qdc_now() - t;
+    t = qdc_now();
+    memcpy(c->xn, c->x, n3 * sizeof(double));
+    st = solve_system(c->sol, c->qval, c->wq2, c->dg, c->rhs, c->xn, &cg, err);
+    res->t_solve += qdc_now() - t;
+    if (st != QDC_OK)
+        return st;
+    if (!all_finite(c->xn, n3))
+        return qdc_fail(err, QDC_ESOLVE, "linear solve returned a non-finite value");
+    t = qdc_now();
+    if (!literal)
+        step = line_search(c, delta, f0);
+    res->t_linesearch += qdc_now() - t;
+    if (literal) {
+        for (size_t q = 0; q < n3; q++)
+            c->trial[q] = c->xn[q];
+        project_sliding(c, c->trial);
+    } else if (step == 0.0) {
+        memcpy(c->trial, c->x, n3 * sizeof(double));
+    } /* else c->trial holds the accepted feasible trial */
+    {
+        int32_t ninv_t;
+        folded = step > 0.0 ? count_folds(tp, c->x, c->trial, &ninv_t) : 0;
+    }
+    move = apply_step(c, step);
     c->eta_delta = ctx_evaluate(c, c->x, r, c->eta);
     r->n_folded = folded;
     r->step = step;
@@ -341,6 +377,22 @@ static qdc_status iterate(ctx_t *c, opt_result *res, opt_progress *r, int *stepp
     r->cg_iters = cg;
     *stepped = step > 0.0;
     return QDC_OK;
+}
+
+/* The log line of a global phase that stalls at iteration it. */
+static void log_stall(const ctx_t *c, int it, double gain, double g_prev)
+{
+    const opt_options *o = c->o;
+
+    if (gain < o->stall)
+        ctx_log(c, 0,
+                "iteration %d raised the mean ratio by %.2g (< %g): global phase done",
+                it, gain, o->stall);
+    else
+        ctx_log(c, 0,
+                "iteration %d raised the mean ratio by %.2g, the next would by "
+                "about %.2g (< %g): global phase done",
+                it, gain, gain * gain / g_prev, o->stall);
 }
 
 /* The global iterations (Eq. 15 with the line search). *stop is set when the
@@ -407,16 +459,7 @@ qdc_status opt_global_phase(ctx_t *c, opt_result *res, opt_progress *r, int *sto
              * not run either (at 5M tets: 2 iterations of 3.6 s for 0.0022,
              * the same final mean ratio) */
             ctx_set_stop(res, OPT_STOP_CONVERGED);
-            if (gain < o->stall)
-                ctx_log(c, 0,
-                        "iteration %d raised the mean ratio by %.2g (< %g): global phase "
-                        "done",
-                        it, gain, o->stall);
-            else
-                ctx_log(c, 0,
-                        "iteration %d raised the mean ratio by %.2g, the next would by "
-                        "about %.2g (< %g): global phase done",
-                        it, gain, gain * gain / g_prev, o->stall);
+            log_stall(c, it, gain, g_prev);
             break;
         }
         g_prev = gain;

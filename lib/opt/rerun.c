@@ -105,13 +105,79 @@ static qdc_status free_stuck(mesh_t *m, const opt_options *opts, opt_result *bes
     return st;
 }
 
+/* The ear reruns: while the last run squashed ears it did not hold (*sq),
+ * again from the input xin with their corners added to pins (at most 3
+ * reruns), the best result kept in best and xbest. */
+static qdc_status hold_ears(mesh_t *m, const opt_options *opts, opt_result *best,
+                            uint8_t *pins, const uint8_t *loose, uint8_t **sq,
+                            uint8_t **stk, const double *xin, double *xbest,
+                            qdc_error *err)
+{
+    size_t n3 = 3 * (size_t)m->nv;
+    qdc_status st = QDC_OK;
+    opt_result r;
+
+    for (int round = 0; round < 3 && *sq && best->before.n_inverted > 0 &&
+                        best->outcome == OPT_CONVERGED;
+         round++) {
+        int32_t added = 0, held = 0;
+        for (int32_t v = 0; v < m->nv; v++) {
+            added += (*sq)[v] && !pins[v];
+            pins[v] |= (*sq)[v];
+            held += pins[v];
+        }
+        qdc_free(*sq);
+        *sq = NULL;
+        if (!added)
+            break;
+        memcpy(m->xyz, xin, n3 * sizeof(double));
+        if (opts->log) {
+            char msg[160];
+            snprintf(
+                msg, sizeof msg,
+                "slide squashed ears of the surface: again with their %d corners held",
+                (int)held);
+            opts->log(opts->log_ctx, 0, msg);
+        }
+        st = run_again(m, opts, best, pins, loose, sq, *stk ? NULL : stk, 0, &r, err);
+        if (st != QDC_OK)
+            break;
+        keep_better(best, &r, xbest, m->xyz, n3);
+    }
+    return st;
+}
+
+/* The rerun with no fold at the surface (keep_surface) from the input xin,
+ * pins held, kept if better. */
+static qdc_status rerun_no_fold(mesh_t *m, const opt_options *opts, opt_result *best,
+                                const uint8_t *pins, const double *xin, double *xbest,
+                                qdc_error *err)
+{
+    size_t n3 = 3 * (size_t)m->nv;
+    opt_result r;
+    qdc_status st;
+
+    if (opts->log) {
+        char msg[160];
+        snprintf(msg, sizeof msg,
+                 "%d tets left inverted: again with no fold at the surface",
+                 (int)best->after.n_inverted);
+        opts->log(opts->log_ctx, 0, msg);
+    }
+    memcpy(m->xyz, xin, n3 * sizeof(double));
+    st = run_again(m, opts, best, pins, NULL, NULL, NULL, 1, &r, err);
+    if (st == QDC_OK)
+        keep_better(best, &r, xbest, m->xyz, n3);
+    return st;
+}
+
 /* opt_run in the mesh's own numbering. */
 static qdc_status run_numbered(mesh_t *m, const opt_options *opts, opt_result *res_out,
                                qdc_error *err)
 {
     uint8_t *pins = NULL, *sq = NULL, *stk = NULL, *loose = NULL;
     double *xin = NULL, *xbest = NULL;
-    opt_result best, r;
+    opt_result best;
     opt_options dflt;
     qdc_status st;
     size_t n3 = 3 * (size_t)(m && m->nv > 0 ? m->nv : 0);
@@ -149,33 +215,7 @@ static qdc_status run_numbered(mesh_t *m, const opt_options *opts, opt_result *r
      * no result (measured 2026-11-25 on the 21 dev meshes and the 12 meshes of
      * scripts/corpus.py at 20k tets: identical quality) while taking up to 5x
      * the time (bone-lowq, 20k tets: 5.1 s against 1.05 s). */
-    for (int round = 0;
-         round < 3 && sq && best.before.n_inverted > 0 && best.outcome == OPT_CONVERGED;
-         round++) {
-        int32_t added = 0, held = 0;
-        for (int32_t v = 0; v < m->nv; v++) {
-            added += sq[v] && !pins[v];
-            pins[v] |= sq[v];
-            held += pins[v];
-        }
-        qdc_free(sq);
-        sq = NULL;
-        if (!added)
-            break;
-        memcpy(m->xyz, xin, n3 * sizeof(double));
-        if (opts->log) {
-            char msg[160];
-            snprintf(
-                msg, sizeof msg,
-                "slide squashed ears of the surface: again with their %d corners held",
-                (int)held);
-            opts->log(opts->log_ctx, 0, msg);
-        }
-        st = run_again(m, opts, &best, pins, loose, &sq, stk ? NULL : &stk, 0, &r, err);
-        if (st != QDC_OK)
-            break;
-        keep_better(&best, &r, xbest, m->xyz, n3);
-    }
+    st = hold_ears(m, opts, &best, pins, loose, &sq, &stk, xin, xbest, err);
     /* Inverted tets left where the tangle reaches the boundary: once more with
      * the boundary vertices around them free (stuck_boundary), ears held as
      * before; kept only if better (fewer inverted tets first). */
@@ -192,19 +232,8 @@ static qdc_status run_numbered(mesh_t *m, const opt_options *opts, opt_result *r
      * stuck vertices free, the 100k bone kept its inverted tet); kept only if
      * better. Not on every run: on the tangled 1M-tet ball the rule left 17
      * tets inverted where the run without it leaves none. */
-    if (st == QDC_OK && best.outcome == OPT_CONVERGED && best.after.n_inverted > 0) {
-        if (opts->log) {
-            char msg[160];
-            snprintf(msg, sizeof msg,
-                     "%d tets left inverted: again with no fold at the surface",
-                     (int)best.after.n_inverted);
-            opts->log(opts->log_ctx, 0, msg);
-        }
-        memcpy(m->xyz, xin, n3 * sizeof(double));
-        st = run_again(m, opts, &best, pins, NULL, NULL, NULL, 1, &r, err);
-        if (st == QDC_OK)
-            keep_better(&best, &r, xbest, m->xyz, n3);
-    }
+    if (st == QDC_OK && best.outcome == OPT_CONVERGED && best.after.n_inverted > 0)
+        st = rerun_no_fold(m, opts, &best, pins, xin, xbest, err);
     /* a failed rerun leaves the best result so far */
     memcpy(m->xyz, xbest, n3 * sizeof(double));
     st = QDC_OK;

@@ -169,15 +169,12 @@ qdc_status select_kth(const double *a, int32_t n, int32_t k, double lo, double h
 
 #define CLASS_RANGES 16 /* ranges of vertices placed by one thread each */
 
-/* Greedy colouring of the visit list (worst first): no two vertices of a class
- * share an edge, hence no tet, so a class can move in parallel. colour[] is
- * scratch of nv entries; returns the number of classes and fills start[]. */
-static int32_t select_colour(const mesh_topo *tp, vq_pair *list, int32_t n,
-                             uint8_t *colour, int32_t **start_out)
+/* Each listed vertex's colour (worst first): the smallest not taken by a
+ * neighbour, 64 (COLOUR_SHARED) if all are; COLOUR_NONE elsewhere. */
+static void greedy_colour(const mesh_topo *tp, const vq_pair *list, int32_t n,
+                          uint8_t *colour)
 {
-    int32_t ncol = 0, *cnt, *start, rc[CLASS_RANGES][COLOUR_SHARED + 1];
     uint64_t used;
-    vq_pair *tmp;
 
     /* every vertex, not only the listed ones: a stale entry of a neighbour
      * outside the list would block colours at random and make the result
@@ -206,6 +203,18 @@ static int32_t select_colour(const mesh_topo *tp, vq_pair *list, int32_t n,
          * is not independent and is swept in one thread (COLOUR_SHARED) */
         colour[v] = c;
     }
+}
+
+/* Greedy colouring of the visit list (worst first): no two vertices of a class
+ * share an edge, hence no tet, so a class can move in parallel. colour[] is
+ * scratch of nv entries; returns the number of classes and fills start[]. */
+static int32_t select_colour(const mesh_topo *tp, vq_pair *list, int32_t n,
+                             uint8_t *colour, int32_t **start_out)
+{
+    int32_t ncol = 0, *cnt, *start, rc[CLASS_RANGES][COLOUR_SHARED + 1];
+    vq_pair *tmp;
+
+    greedy_colour(tp, list, n, colour);
     /* the classes' places: counted per range of vertices, in parallel */
     cnt = qdc_calloc(COLOUR_SHARED + 2, sizeof(int32_t));
     tmp = qdc_mallocn((size_t)n + 1, sizeof *tmp);
