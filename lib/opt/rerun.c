@@ -8,6 +8,7 @@
 #include "opt/ctx.h"
 #include "opt/run.h"
 
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -73,6 +74,42 @@ static void keep_better(opt_result *best, opt_result *r, double *xbest, const do
     }
 }
 
+/* A rerun's log line, if the caller logs. */
+static void rerun_log(const opt_options *opts, const char *fmt, ...)
+    __attribute__((format(printf, 2, 3)));
+
+static void rerun_log(const opt_options *opts, const char *fmt, ...)
+{
+    char msg[200];
+    va_list ap;
+
+    if (!opts->log)
+        return;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    opts->log(opts->log_ctx, 0, msg);
+}
+
+/* run_again from the input coordinates xin (pins held, loose free,
+ * keep_surface as run_once takes it), its result kept in best and xbest if
+ * better. */
+static qdc_status rerun_from_input(mesh_t *m, const opt_options *opts, opt_result *best,
+                                   const uint8_t *pins, const uint8_t *loose,
+                                   int keep_surface, const double *xin, double *xbest,
+                                   qdc_error *err)
+{
+    size_t n3 = 3 * (size_t)m->nv;
+    opt_result r;
+    qdc_status st;
+
+    memcpy(m->xyz, xin, n3 * sizeof(double));
+    st = run_again(m, opts, best, pins, loose, NULL, NULL, keep_surface, &r, err);
+    if (st == QDC_OK)
+        keep_better(best, &r, xbest, m->xyz, n3);
+    return st;
+}
+
 /* The stuck rerun: the whole run again from the input with the stuck
  * vertices free, kept if better. (Measured and dropped on 2026-11-25: the
  * finishing pass alone, from the first run's result or its last global
@@ -83,26 +120,15 @@ static qdc_status free_stuck(mesh_t *m, const opt_options *opts, opt_result *bes
                              const uint8_t *pins, const uint8_t *loose, const double *xin,
                              double *xbest, qdc_error *err)
 {
-    size_t n3 = 3 * (size_t)m->nv;
     int32_t nfree = 0;
-    opt_result r;
-    qdc_status st;
 
     for (int32_t v = 0; v < m->nv; v++)
         nfree += loose[v];
-    if (opts->log) {
-        char msg[200];
-        snprintf(msg, sizeof msg,
-                 "%d tets left inverted by sliding: again with %d boundary vertices "
-                 "around them free",
-                 (int)best->after.n_inverted, (int)nfree);
-        opts->log(opts->log_ctx, 0, msg);
-    }
-    memcpy(m->xyz, xin, n3 * sizeof(double));
-    st = run_again(m, opts, best, pins, loose, NULL, NULL, 0, &r, err);
-    if (st == QDC_OK)
-        keep_better(best, &r, xbest, m->xyz, n3);
-    return st;
+    rerun_log(opts,
+              "%d tets left inverted by sliding: again with %d boundary vertices "
+              "around them free",
+              (int)best->after.n_inverted, (int)nfree);
+    return rerun_from_input(m, opts, best, pins, loose, 0, xin, xbest, err);
 }
 
 /* The ear reruns: while the last run squashed ears it did not hold (*sq),
@@ -131,14 +157,9 @@ static qdc_status hold_ears(mesh_t *m, const opt_options *opts, opt_result *best
         if (!added)
             break;
         memcpy(m->xyz, xin, n3 * sizeof(double));
-        if (opts->log) {
-            char msg[160];
-            snprintf(
-                msg, sizeof msg,
-                "slide squashed ears of the surface: again with their %d corners held",
-                (int)held);
-            opts->log(opts->log_ctx, 0, msg);
-        }
+        rerun_log(opts,
+                  "slide squashed ears of the surface: again with their %d corners held",
+                  (int)held);
         st = run_again(m, opts, best, pins, loose, sq, *stk ? NULL : stk, 0, &r, err);
         if (st != QDC_OK)
             break;
@@ -153,22 +174,9 @@ static qdc_status rerun_no_fold(mesh_t *m, const opt_options *opts, opt_result *
                                 const uint8_t *pins, const double *xin, double *xbest,
                                 qdc_error *err)
 {
-    size_t n3 = 3 * (size_t)m->nv;
-    opt_result r;
-    qdc_status st;
-
-    if (opts->log) {
-        char msg[160];
-        snprintf(msg, sizeof msg,
-                 "%d tets left inverted: again with no fold at the surface",
-                 (int)best->after.n_inverted);
-        opts->log(opts->log_ctx, 0, msg);
-    }
-    memcpy(m->xyz, xin, n3 * sizeof(double));
-    st = run_again(m, opts, best, pins, NULL, NULL, NULL, 1, &r, err);
-    if (st == QDC_OK)
-        keep_better(best, &r, xbest, m->xyz, n3);
-    return st;
+    rerun_log(opts, "%d tets left inverted: again with no fold at the surface",
+              (int)best->after.n_inverted);
+    return rerun_from_input(m, opts, best, pins, NULL, 1, xin, xbest, err);
 }
 
 /* opt_run in the mesh's own numbering. */
