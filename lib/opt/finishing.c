@@ -90,7 +90,7 @@ static qdc_status finish_pass(ctx_t *c, const uint8_t *movable, int x_evaluated,
     return QDC_OK;
 }
 
-/* Worst-angle polish (finish.h) from the best iterate: a round of joint moves
+/* Worst-angle polish (angle.h) from the best iterate: a round of joint moves
  * on the worst mean ratios, sweeps over the worst 1% of tets by dihedral sine
  * while their mean sine rises by 0.1%, then rounds of joint moves on the
  * sines. The worst mean ratio may not fall below the best iterate's (the floor
@@ -126,7 +126,7 @@ static void tally_kept(ctx_t *c, angle_tally *t, const finish_stats *fs)
 }
 
 /* One round of joint moves of the worst tets' corners on their mean ratios
- * (finish.h) from c->x, kept if the worst tet improves on base: the angle
+ * (angle.h) from c->x, kept if the worst tet improves on base: the angle
  * moves then start from it, with the floor of the best iterate. */
 static qdc_status mean_ratio_round(ctx_t *c, const uint8_t *movable, const slide_ctx *sl,
                                    const opt_progress *base, angle_tally *t)
@@ -145,7 +145,7 @@ static qdc_status mean_ratio_round(ctx_t *c, const uint8_t *movable, const slide
     return QDC_OK;
 }
 
-/* Rounds of joint moves of the worst tets' corners on their sines (finish.h),
+/* Rounds of joint moves of the worst tets' corners on their sines (angle.h),
  * while that lifts the smallest sine. smin_ok: smin is of c->trial. */
 static qdc_status patch_rounds(ctx_t *c, const uint8_t *movable, const slide_ctx *sl,
                                const opt_progress *base, double *smin, int smin_ok,
@@ -273,7 +273,7 @@ static qdc_status lsq_angle_pass(ctx_t *c, const uint8_t *movable, opt_result *r
 }
 
 /* Inverted tets the finishing pass left: the max-min volume untangling of
- * their interior vertices (finish.h) from the best iterate, kept through the
+ * their interior vertices (untangle.h) from the best iterate, kept through the
  * best-iterate rule (fewer inverted tets first). */
 static qdc_status untangle_pass(ctx_t *c, const uint8_t *movable, opt_result *res,
                                 opt_progress *r, int *next)
