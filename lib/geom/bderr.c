@@ -6,8 +6,9 @@
  * the other side through a BVH. Sample k of a side is a pure function of
  * (seed, side, k), and partial sums are formed per fixed-size chunk and added
  * in chunk order, so the result does not depend on the number of threads. */
-#include "geom/bderr.h"
+#include "core/mesh_int.h"
 #include "core/tet.h"
+#include "geom/bderr_int.h"
 
 #include <math.h>
 #include <stdlib.h>

@@ -2,7 +2,7 @@
  * time, and joint moves of the worst tets' corners (docs/method.md §5a). */
 #include "opt/angle.h"
 #include "core/tet.h"
-#include "geom/metric.h"
+#include "geom/metric_int.h"
 #include "opt/select.h"
 #include "opt/star.h"
 

@@ -4,7 +4,7 @@
 #ifndef QDC_ANGLE_H
 #define QDC_ANGLE_H
 
-#include "core/mesh.h"
+#include "core/mesh_int.h"
 #include "opt/finish.h" /* finish_stats */
 #include "opt/slide.h"
 

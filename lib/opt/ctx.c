@@ -2,9 +2,10 @@
  * (ctx.h): the quality scans, the best-iterate rule, progress records, the
  * stop tests. */
 #include "opt/ctx.h"
+#include "opt/opt_int.h"
 
 #include "core/tet.h"
-#include "geom/metric.h"
+#include "geom/metric_int.h"
 #include "opt/encode.h"
 
 #include <math.h>

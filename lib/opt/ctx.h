@@ -6,7 +6,7 @@
 #ifndef QDC_CTX_H
 #define QDC_CTX_H
 
-#include "core/mesh.h"
+#include "core/mesh_int.h"
 #include "opt/opt.h"
 #include "opt/slide.h"
 #include "opt/solve.h"

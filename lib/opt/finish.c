@@ -2,7 +2,7 @@
  * (docs/method.md §5a). */
 #include "opt/finish.h"
 #include "core/tet.h"
-#include "geom/metric.h"
+#include "geom/metric_int.h"
 #include "opt/select.h"
 #include "opt/star.h"
 

@@ -8,7 +8,7 @@
 #ifndef QDC_FINISH_H
 #define QDC_FINISH_H
 
-#include "core/mesh.h"
+#include "core/mesh_int.h"
 #include "opt/opt.h"
 #include "opt/slide.h"
 

@@ -4,7 +4,7 @@
 #include "opt/global.h"
 
 #include "core/tet.h"
-#include "geom/metric.h"
+#include "geom/metric_int.h"
 #include "opt/encode.h"
 #include "opt/harm.h"
 

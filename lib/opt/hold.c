@@ -4,7 +4,7 @@
 #include "opt/hold.h"
 
 #include "core/tet.h"
-#include "geom/metric.h"
+#include "geom/metric_int.h"
 
 #include <math.h>
 #include <omp.h>

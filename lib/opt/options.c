@@ -1,5 +1,6 @@
 /* options.c - the optimizer options: defaults, words, parsers and table (options.h). */
 #include "opt/options.h"
+#include "opt/opt_int.h"
 
 #include <ctype.h>
 #include <errno.h>

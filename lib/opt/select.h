@@ -6,7 +6,7 @@
 #ifndef QDC_SELECT_H
 #define QDC_SELECT_H
 
-#include "core/mesh.h"
+#include "core/mesh_int.h"
 
 typedef struct {
     double q;

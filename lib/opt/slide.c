@@ -2,7 +2,7 @@
 #include "opt/slide.h"
 
 #include "core/tet.h"
-#include "geom/bderr.h"
+#include "geom/bderr_int.h"
 
 #include <math.h>
 #include <stdlib.h>

@@ -5,7 +5,7 @@
 #ifndef QDC_STAR_H
 #define QDC_STAR_H
 
-#include "core/mesh.h"
+#include "core/mesh_int.h"
 #include "opt/slide.h"
 
 /* 6 x the signed volume of star tet k (position in vt_idx) of v with v placed

@@ -3,7 +3,7 @@
 #ifndef QDC_UNTANGLE_H
 #define QDC_UNTANGLE_H
 
-#include "core/mesh.h"
+#include "core/mesh_int.h"
 
 /* Untangling of what the passes leave inverted (Freitag & Plassmann's
  * max-min of volumes): sweeps over the movable interior vertices of the

@@ -5,8 +5,8 @@
 #ifndef QDC_TESTIO_H
 #define QDC_TESTIO_H
 
-#include "io/meshio.h"
-#include "io/surface.h"
+#include "core/base_int.h"
+#include "qdc.h"
 
 #include <dirent.h>
 #include <math.h>
