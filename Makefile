@@ -55,10 +55,15 @@ CLI_LIBS := -lcurl
 UNIT_C := $(wildcard tests/unit/test_*.c)
 UNIT_BIN := $(UNIT_C:tests/unit/%.c=$(B)/tests/%)
 
+# Programs that use the library as an outside program would: qdc.h alone
+# (tests/e2e/example.sh runs them).
+EX_C := $(wildcard examples/*.c)
+EX_BIN := $(EX_C:%.c=$(B)/%)
+
 PROGS := $(B)/qdc $(if $(SRV_C),$(B)/qdcd)
 
 .PHONY: all deps test test-quick test-container test-faults test-load run bench clean fuzz format format-check fault
-all: $(B)/libqdc.a $(PROGS) $(UNIT_BIN)
+all: $(B)/libqdc.a $(PROGS) $(UNIT_BIN) $(EX_BIN)
 
 deps:
 	@scripts/deps.sh
@@ -91,6 +96,10 @@ $(B)/qdcd: $(SRV_OBJ) $(B)/libqdc.a
 $(B)/tests/%: tests/unit/%.c $(wildcard tests/unit/*.h) $(B)/libqdc.a
 	@mkdir -p $(dir $@)
 	$(CC) $(CPPFLAGS) -Itests/unit $(CFLAGS) -o $@ $< $(B)/libqdc.a $(LIB_LIBS) $(LDFLAGS)
+
+$(B)/examples/%: examples/%.c lib/qdc.h $(B)/libqdc.a
+	@mkdir -p $(dir $@)
+	$(CC) $(CPPFLAGS) $(CFLAGS) -o $@ $< $(B)/libqdc.a $(LIB_LIBS) $(LDFLAGS)
 
 # The daemon's pure parsers and router, linked alone (no libmicrohttpd).
 HTTP_PURE_OBJ := $(B)/server/route.o $(B)/server/parse.o $(B)/server/problem.o $(B)/server/util.o
@@ -149,7 +158,8 @@ clean:
 	rm -rf build
 
 FORMAT_SRC = $(wildcard lib/*.h lib/*/*.c lib/*/*.h lib/*/*.cpp server/*.c server/*.h clients/qdc/*.c \
-              clients/qdc/*.h tests/unit/*.c tests/unit/*.h tests/fuzz/*.c tests/fuzz/*.h)
+              clients/qdc/*.h tests/unit/*.c tests/unit/*.h tests/fuzz/*.c tests/fuzz/*.h \
+              examples/*.c)
 format:
 	clang-format -i $(FORMAT_SRC)
 

@@ -154,8 +154,10 @@ typedef struct {
  * (NULL meanwhile: m must not be read from another thread); they come back
  * with the same contents, possibly at other addresses.
  * The returned mesh never has more inverted tets nor a lower minimum mean ratio
- * than the input. QDC_EMESH (m fails mesh_validate or cannot be oriented),
- * QDC_EINVAL (an option out of range), QDC_ENOMEM, QDC_ESOLVE. */
+ * than the input. The BLAS's thread count changes CHOLMOD's rounding, hence
+ * the bytes of the result (qdc and qdcd run with OPENBLAS_NUM_THREADS=1).
+ * QDC_EMESH (m fails mesh_validate or cannot be oriented), QDC_EINVAL (an
+ * option out of range), QDC_ENOMEM, QDC_ESOLVE. */
 qdc_status opt_run(mesh_t *m, const opt_options *o, opt_result *res, qdc_error *err);
 
 #endif
