@@ -68,15 +68,20 @@ qdc_status qdc_fail(qdc_error *err, qdc_status st, const char *fmt, ...)
 
 /* All allocation in lib/ goes through these, so that tests can fail the Nth
  * allocation (build with -DQDC_FAULT_INJECTION). Memory the library hands to
- * the caller as a plain buffer (meshio_slurp, meshio_save_bytes...) is freed
- * with qdc_free; a mesh_t the caller fills by hand after mesh_new keeps
- * arrays from qdc_malloc, since mesh_free releases them with qdc_free.
- * Each returns NULL on failure (and on overflow of n*size); qdc_free(NULL)
- * does nothing; qdc_realloc(p, size) leaves p allocated when it fails. */
+ * the caller as a plain buffer (meshio_slurp...) is freed with qdc_free; an
+ * array a caller puts into a mesh_t (m->region after mesh_new...) comes from
+ * them, since mesh_free releases it with qdc_free. */
+
+/* size bytes, uninitialized; NULL on failure. */
 void *qdc_malloc(size_t size);
-void *qdc_calloc(size_t n, size_t size);  /* zeroed */
-void *qdc_mallocn(size_t n, size_t size); /* malloc(n*size) with overflow check */
+/* n*size bytes, zeroed; NULL on failure or if n*size overflows. */
+void *qdc_calloc(size_t n, size_t size);
+/* n*size bytes, uninitialized; NULL on failure or if n*size overflows. */
+void *qdc_mallocn(size_t n, size_t size);
+/* p (from these, or NULL) resized to size bytes, its contents kept; NULL on
+ * failure, p then still allocated and the caller's. */
 void *qdc_realloc(void *p, size_t size);
+/* Free p (from these); p may be NULL. */
 void qdc_free(void *p);
 
 #ifdef QDC_FAULT_INJECTION
