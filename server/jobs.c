@@ -2,7 +2,8 @@
  * GET /v1/jobs (the caller's jobs, newest first, paged). Submission is
  * api.c's upload path; GET /v1/jobs/{id} is reply_job. */
 #define _GNU_SOURCE
-#include "handlers.h"
+#include "endpoints.h"
+#include "handler.h"
 
 #include "job.h"
 #include "parse.h"

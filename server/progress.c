@@ -3,7 +3,8 @@
  * DATA/jobs/ID/progress.jsonl (or the shared store); a waiting client is a
  * suspended connection parked on the job's channel. */
 #define _GNU_SOURCE
-#include "handlers.h"
+#include "endpoints.h"
+#include "handler.h"
 
 #include "job.h"
 #include "parse.h"
