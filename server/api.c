@@ -26,8 +26,6 @@
 
 #define MEDIA_QMESH "application/vnd.qdc.mesh"
 
-static const char *const no_headers[] = {NULL};
-
 /* ------------------------------------------------------------------- access -- */
 
 /* Owner of the request: "" without tokens, else the token's SHA-256. */
@@ -74,134 +72,94 @@ static enum MHD_Result count_framing(void *cls, enum MHD_ValueKind kind, const c
     return MHD_YES;
 }
 
-enum MHD_Result api_begin(struct MHD_Connection *c, req *r, const char *url,
-                          const char *method)
+/* The handlers of each row of the route table, in its order. */
+typedef enum MHD_Result (*route_fn)(struct MHD_Connection *c, req *r);
+#define ROW(route, method, pattern, handler, begin, auth, flags) {handler, begin},
+static const struct {
+    route_fn handler, begin;
+} route_fns[] = {ROUTE_LIST(ROW)};
+#undef ROW
+
+/* Route the request (r->route, *row: its row of the table, or -1); refuse it
+ * when framing, path, method or token say so: 1 with the answer in *ret. */
+static int refused(struct MHD_Connection *c, req *r, const char *url, const char *method,
+                   int *row, enum MHD_Result *ret)
 {
     int framing[2] = {0, 0};
 
     r->conn = c;
+    r->url = url;
     r->route = ui_asset_of(url) ? R_UI : route_match(url, r->id);
+    *row = route_row(r->route, method);
     /* Two Content-Lengths, or one with a Transfer-Encoding, can frame the
      * body two ways (request smuggling behind a proxy): refuse, and close. */
     MHD_get_connection_values(c, MHD_HEADER_KIND, count_framing, framing);
     if (framing[0] > 1 || (framing[0] && framing[1])) {
         r->close_after = r->no_hold = 1; /* its body is not read: no framing to trust */
-        return http_problem(c, r, 400, "ambiguous-framing", NULL,
+        *ret = http_problem(c, r, 400, "ambiguous-framing", NULL,
                             "send one Content-Length, or Transfer-Encoding without it",
                             NULL, NULL);
+        return 1;
     }
     /* libmicrohttpd 0.9.75 zeroes a keep-alive connection's whole memory pool
      * (MHD_OPTION_CONNECTION_MEMORY_LIMIT, 128 KiB) when it goes on to its
      * next request (MHD_pool_reset), so a long-poll parked on a reused
      * connection holds ~135 KB of touched memory instead of ~14 KB on a fresh
      * one. What follows a long-poll, a stream or an upload is usually a
-     * long-poll: those replies close the connection, so clients park on fresh
-     * ones. */
-    r->close_after = r->route == R_PROGRESS || r->route == R_EVENTS ||
-                     (r->route == R_JOBS && !strcmp(method, "POST"));
-    if (r->route == R_BAD_ID)
-        return http_problem(c, r, 404, "not-found", "no such job",
+     * long-poll: those replies close the connection (RF_CLOSE), so clients
+     * park on fresh ones. */
+    r->close_after = *row >= 0 ? (route_table[*row].flags & RF_CLOSE) != 0
+                               : route_always_closes(r->route);
+    if (r->route == R_BAD_ID) {
+        *ret = http_problem(c, r, 404, "not-found", "no such job",
                             "job ids are 32 lower-case hex digits", NULL, NULL);
+        return 1;
+    }
     if (r->route == R_NONE) {
         char d[300];
         snprintf(d, sizeof d, "no resource at '%.200s'", url);
-        return http_problem(c, r, 404, "not-found", NULL, d, NULL, NULL);
+        *ret = http_problem(c, r, 404, "not-found", NULL, d, NULL, NULL);
+        return 1;
     }
-    const route_desc *rd = route_desc_of(r->route);
-    if (!route_method_ok(r->route, method)) {
-        const char *const h[] = {MHD_HTTP_HEADER_ALLOW, rd->allow, NULL};
-        return http_problem(c, r, 405, "method-not-allowed", NULL, "see the Allow header",
+    if (*row < 0) {
+        char allow[32];
+        route_allow(r->route, allow, sizeof allow);
+        const char *const h[] = {MHD_HTTP_HEADER_ALLOW, allow, NULL};
+        *ret = http_problem(c, r, 405, "method-not-allowed", NULL, "see the Allow header",
                             NULL, h);
+        return 1;
     }
-    if ((rd->auth == AUTH_TOKEN || (rd->auth == AUTH_OPS && !r->q->cfg.public_metrics)) &&
+    int auth = route_table[*row].auth;
+    if ((auth == AUTH_TOKEN || (auth == AUTH_OPS && !r->q->cfg.public_metrics)) &&
         !authenticate(c, r)) {
         static const char *const h[] = {MHD_HTTP_HEADER_WWW_AUTHENTICATE,
                                         "Bearer realm=\"qdcd\"", NULL};
-        return http_problem(c, r, 401, "unauthorized", NULL,
+        *ret = http_problem(c, r, 401, "unauthorized", NULL,
                             "send Authorization: Bearer <token>", NULL, h);
+        return 1;
     }
-    if (r->route == R_JOBS && !strcmp(method, "POST"))
-        return upload_begin(c, r);
-    return MHD_YES;
+    return 0;
 }
 
-/* The page of a problem type: problem+json bodies name their type as
- * /problems/<slug>, a URI this daemon serves. */
-static enum MHD_Result do_problem_page(struct MHD_Connection *c, req *r, const char *url)
+enum MHD_Result api_begin(struct MHD_Connection *c, req *r, const char *url,
+                          const char *method)
 {
-    const char *slug = url + 10;
-    sbuf b = {0};
-    enum MHD_Result ret;
-    const char *text = "A problem qdcd reports; the response's title and detail describe "
-                       "the occurrence.";
+    int row;
+    enum MHD_Result ret = MHD_YES;
 
-    const problem_type *t = problem_type_of(slug);
-    if (t && t->page)
-        text = t->page;
-    sb_printf(&b,
-              "qdcd problem type: %s\n\n%s\n\nSee proto/openapi.yaml of the qdc "
-              "repository for the whole API.\n",
-              slug, text);
-    ret = http_reply(c, r, 200, "text/plain; charset=utf-8", b.buf ? b.buf : "", b.len,
-                     no_headers);
-    sb_free(&b);
-    return ret;
+    if (refused(c, r, url, method, &row, &ret) || !route_fns[row].begin)
+        return ret;
+    return route_fns[row].begin(c, r);
 }
 
 enum MHD_Result api_dispatch(struct MHD_Connection *c, req *r, const char *url,
                              const char *method)
 {
-    switch (r->route) {
-    case R_JOBS:
-        return strcmp(method, "POST") ? do_list(c, r) : upload_finish(c, r);
-    case R_JOB: {
-        job_rec j;
-        enum MHD_Result ret;
-        if (!strcmp(method, "DELETE"))
-            return do_delete(c, r);
-        if (!load_job(c, r, &j, &ret))
-            return ret;
-        return reply_job(c, r, 200, &j, no_headers);
-    }
-    case R_PROGRESS:
-        return do_progress(c, r);
-    case R_EVENTS:
-        if (!strcmp(method, "HEAD")) { /* the stream's headers, no stream */
-            job_rec j;
-            enum MHD_Result ret;
-            if (!load_job(c, r, &j, &ret))
-                return ret;
-            return http_reply(c, r, 200, "text/event-stream", "", 0, no_headers);
-        }
-        return do_events(c, r);
-    case R_RESULT:
-    case R_INPUT:
-        return do_result(c, r);
-    case R_OPTIONS: {
-        sbuf b = {0};
-        job_opt_table_json(&b);
-        enum MHD_Result ret = http_reply_json(c, r, 200, &b, no_headers);
-        sb_free(&b);
-        return ret;
-    }
-    case R_REPORT:
-        return do_report(c, r);
-    case R_CANCEL:
-        return do_cancel(c, r);
-    case R_LIVEZ:
-        return http_reply(c, r, 200, "application/json", "{\"status\":\"ok\"}\n", 16,
-                          no_headers);
-    case R_READYZ:
-        return ops_readyz(c, r);
-    case R_METRICS:
-        return ops_metrics(c, r);
-    case R_PROBLEM:
-        return do_problem_page(c, r, url);
-    case R_UI:
-        return ui_serve(c, r, url);
-    default:
+    int row = route_row(r->route, method);
+    (void)url;
+    if (row < 0)
         return http_problem(c, r, 404, "not-found", NULL, "no such resource", NULL, NULL);
-    }
+    return route_fns[row].handler(c, r);
 }
 
 /* A body chunk: only uploads keep theirs (other bodies are dropped). */

@@ -8,15 +8,19 @@
 #include "http.h"
 #include "store.h"
 
-/* POST /v1/jobs/{id}:cancel, DELETE /v1/jobs/{id}, GET /v1/jobs (jobs.c). */
+/* GET /v1/jobs/{id}, POST /v1/jobs/{id}:cancel, DELETE /v1/jobs/{id},
+ * GET /v1/jobs (jobs.c). */
+enum MHD_Result do_get(struct MHD_Connection *c, req *r);
 enum MHD_Result do_cancel(struct MHD_Connection *c, req *r);
 enum MHD_Result do_delete(struct MHD_Connection *c, req *r);
 enum MHD_Result do_list(struct MHD_Connection *c, req *r);
 
 /* GET /v1/jobs/{id}/progress: records after ?after=, long-polled with ?wait=. */
 enum MHD_Result do_progress(struct MHD_Connection *c, req *r);
-/* GET /v1/jobs/{id}/events: the records as Server-Sent Events. */
+/* GET /v1/jobs/{id}/events: the records as Server-Sent Events; HEAD: the
+ * stream's headers only. */
 enum MHD_Result do_events(struct MHD_Connection *c, req *r);
+enum MHD_Result do_events_head(struct MHD_Connection *c, req *r);
 
 /* POST /v1/jobs (upload.c): begin at the headers (options, format, limits:
  * may answer at once), body chunks, finish when the body is complete (the

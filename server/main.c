@@ -4,6 +4,7 @@
 #include "api.h"
 #include "http.h"
 #include "job.h"
+#include "route.h"
 #include "server.h"
 #include "sha256.h"
 #include "shared.h"
@@ -259,8 +260,8 @@ static int set_cli(const cli_opt *o, const char *arg, qdcd_config *c)
 
 static int parse_args(int argc, char **argv, qdcd_config *c)
 {
-    enum { O_HASH = 1000, O_INSECURE, O_PUBLIC_METRICS };
-    struct option lo[N_CLI + 6];
+    enum { O_HASH = 1000, O_INSECURE, O_PUBLIC_METRICS, O_ROUTES };
+    struct option lo[N_CLI + 7];
     int o, n = 0;
 
     for (size_t i = 0; i < N_CLI; i++)
@@ -268,6 +269,8 @@ static int parse_args(int argc, char **argv, qdcd_config *c)
     lo[n++] = (struct option){"hash-token", required_argument, NULL, O_HASH};
     lo[n++] = (struct option){"insecure", no_argument, NULL, O_INSECURE};
     lo[n++] = (struct option){"public-metrics", no_argument, NULL, O_PUBLIC_METRICS};
+    /* not in --help: the route table, for tests/server/openapi.sh */
+    lo[n++] = (struct option){"print-routes", no_argument, NULL, O_ROUTES};
     lo[n++] = (struct option){"verbose", no_argument, NULL, 'v'};
     lo[n++] = (struct option){"help", no_argument, NULL, 'h'};
     lo[n] = (struct option){NULL, 0, NULL, 0};
@@ -282,6 +285,9 @@ static int parse_args(int argc, char **argv, qdcd_config *c)
             char hex[65];
             sha256_hex(optarg, strlen(optarg), hex);
             printf("%s\n", hex);
+            exit(0);
+        } else if (o == O_ROUTES) {
+            route_print(stdout);
             exit(0);
         } else if (o == O_PUBLIC_METRICS) {
             c->public_metrics = 1;

@@ -311,6 +311,16 @@ static ssize_t sse_reader(void *cls, uint64_t pos, char *buf, size_t max)
     }
 }
 
+/* HEAD of the stream: its headers, no stream. */
+enum MHD_Result do_events_head(struct MHD_Connection *c, req *r)
+{
+    job_rec j;
+    enum MHD_Result ret;
+    if (!load_job(c, r, &j, &ret))
+        return ret;
+    return http_reply(c, r, 200, "text/event-stream", "", 0, no_headers);
+}
+
 enum MHD_Result do_events(struct MHD_Connection *c, req *r)
 {
     job_rec j;
