@@ -1,30 +1,22 @@
-/* api.c - the router. Routing happens at the first
- * call (headers only), so a request that is refused (401, 404, 405, 413, 415,
- * 429) is answered before its body is read; then each route goes to the file
- * of its resource: upload.c (POST /v1/jobs), jobs.c (list, cancel, delete),
- * progress.c (long-poll, SSE), result.c (result, input, report), ops.c
- * (metrics, readiness), ui.c (the web console). Here: authentication and
- * dispatch; what the handlers share is in handler.c, below them. */
+/* api.c - the router. Routing happens at the first call (headers only), so a
+ * request that is refused (401, 404, 405, 413, 415, 429) is answered before
+ * its body is read; then the request's row of the route table (route.h) names
+ * its handler, in the file of its resource: upload.c (POST /v1/jobs), jobs.c
+ * (a job, list, cancel, delete), progress.c (long-poll, SSE), result.c
+ * (result, input, report), ops.c (metrics, readiness, options, problem
+ * pages), ui.c (the web console). Here: framing, authentication and dispatch;
+ * what the handlers share is handler.c, below them. */
 #define _GNU_SOURCE
 #include "api.h"
 
 #include "endpoints.h"
-#include "handler.h"
-#include "job.h"
 #include "ops.h"
-#include "parse.h"
-#include "problem.h"
-#include "qdc.h"
 #include "route.h"
-#include "shared.h"
 #include "ui.h"
 
 #include <stdio.h>
-#include <stdlib.h>
 #include <string.h>
 #include <strings.h>
-
-#define MEDIA_QMESH "application/vnd.qdc.mesh"
 
 /* ------------------------------------------------------------------- access -- */
 
