@@ -1,18 +1,23 @@
 #!/bin/sh
-# tests/house/server.sh - the shape of server/ (issue 30): no two files call
-# or include each other in a loop (calls: the symbols each object of the
-# release build defines and uses, by nm; includes: the "..." includes of
-# server/*.c and *.h, a file and its header counting as one), no file over
-# 1,000 lines and no function over 80 (from its line "{" to its line "}").
+# tests/house/rooms.sh - the shape of server/ and lib/opt/ (issue 30): no two
+# files of one folder call or include each other in a loop (calls: the
+# symbols each object of the release build defines and uses, by nm; includes:
+# the "..." includes of *.c and *.h, in server/ a file and its header
+# counting as one), no file over 1,000 lines and no function over 80 (from
+# its line "{" to its line "}").
 . "$(dirname "$0")/../lib.sh"
-OBJ=$BIN/server
+rc=0
+for DIR in server lib/opt; do
+OBJ=$BIN/$DIR
 if ! ls "$OBJ"/*.o > /dev/null 2>&1 || ! command -v nm > /dev/null; then
-    echo "ok - server: call graph # SKIP no $OBJ/*.o (make all) or no nm"
+    echo "ok - $DIR: call graph # SKIP no $OBJ/*.o (make all) or no nm"
     OBJ=
 fi
-"$PY" - "$ROOT/server" "$OBJ" <<'PYEOF'
+"$PY" - "$ROOT" "$DIR" "$OBJ" <<'PYEOF' || rc=1
 import glob, os, re, subprocess, sys
-src, obj = sys.argv[1], sys.argv[2]
+root, label, obj = sys.argv[1], sys.argv[2], sys.argv[3]
+src = os.path.join(root, label)
+layer = os.path.basename(label)
 bad = 0
 
 def cycles(g):
@@ -40,18 +45,23 @@ def report(what, g, n):
     global bad
     c = cycles(g)
     for comp in c:
-        print("FAIL - server: %s in a loop: %s" % (what, " ".join(comp)))
+        print("FAIL - %s: %s in a loop: %s" % (label, what, " ".join(comp)))
         bad = 1
     if not c:
-        print("ok - server: no %s in a loop (%d files)" % (what, n))
+        print("ok - %s: no %s in a loop (%d files)" % (label, what, n))
 
+# In server/ a file and its header count as one; in lib/opt/ the public
+# opt.h is implemented by several files, so each file counts alone there.
+whole = label == "server"
+key = lambda name: name.rsplit(".", 1)[0] if whole else name
 mods = {}
 for f in glob.glob(os.path.join(src, "*.[ch]")):
-    mods.setdefault(os.path.basename(f).rsplit(".", 1)[0], []).append(f)
+    mods.setdefault(key(os.path.basename(f)), []).append(f)
 inc = {}
 for m, files in mods.items():
     for f in files:
-        for h in re.findall(r'#include "([^"/]+)\.h"', open(f).read()):
+        for h in re.findall(r'#include "(?:%s/)?([^"/]+\.h)"' % layer, open(f).read()):
+            h = key(h)
             if h in mods and h != m: inc.setdefault(m, set()).add(h)
 report("files that include each other", inc, len(mods))
 
@@ -65,17 +75,17 @@ if obj:
             if len(p) == 3 and p[1] in "TDBR": defs[p[2]] = m
             elif len(p) == 2 and p[0] == "U": uses.setdefault(m, set()).add(p[1])
     calls = {m: {defs[s] for s in us if s in defs and defs[s] != m} for m, us in uses.items()}
-    if len(defs) < 100:
-        print("FAIL - server: only %d symbols defined in %s (the scan is broken)" % (len(defs), obj))
+    if len(defs) < 30:
+        print("FAIL - %s: only %d symbols defined in %s (the scan is broken)" % (label, len(defs), obj))
         bad = 1
     report("files that call each other", calls, len(objs))
 
 longest = (0, "")
 for f in sorted(glob.glob(os.path.join(src, "*.[ch]"))):
     lines = open(f).read().split("\n")
-    name = "server/" + os.path.basename(f)
+    name = label + "/" + os.path.basename(f)
     if len(lines) - 1 > 1000:
-        print("FAIL - server: %s has %d lines (at most 1,000)" % (name, len(lines) - 1))
+        print("FAIL - " + label + ": %s has %d lines (at most 1,000)" % (name, len(lines) - 1))
         bad = 1
     start = None
     for i, l in enumerate(lines):
@@ -86,14 +96,16 @@ for f in sorted(glob.glob(os.path.join(src, "*.[ch]"))):
             where = "%s:%d %s" % (name, start, lines[start - 1].split("(")[0])
             longest = max(longest, (n, where))
             if n > 80:
-                print("FAIL - server: %s is %d lines (at most 80)" % (where, n))
+                print("FAIL - " + label + ": %s is %d lines (at most 80)" % (where, n))
                 bad = 1
             start = None
 if longest[0] < 20:
-    print("FAIL - server: no function found (the scan is broken)")
+    print("FAIL - " + label + ": no function found (the scan is broken)")
     bad = 1
 elif not bad:
-    print("ok - server: no file over 1,000 lines, no function over 80 (longest: %d, %s)"
-          % longest)
+    print("ok - %s: no file over 1,000 lines, no function over 80 (longest: %d, %s)"
+          % ((label,) + longest))
 sys.exit(bad)
 PYEOF
+done
+exit $rc
