@@ -680,7 +680,8 @@ static run_step run_load(run_state *s)
      * only the coordinates replaced (as `qdc optimize` writes OUT in IN's
      * format); the conversion thread does the same for the other formats
      * (result.c). */
-    meshio_options mo = {NULL, NULL, fin == MESHIO_MEDIT ? 1 : -1};
+    meshio_options mo = {
+        .log = NULL, .log_ctx = NULL, .source = fin == MESHIO_MEDIT ? 1 : -1};
     s->st = meshio_read_ex(buf, len, fin, &mo, &s->m, &s->err);
     free(buf);
     if (s->st == QDC_OK && s->q->cfg.verbose)

@@ -56,6 +56,10 @@ static void usage(FILE *f)
         "  --max-body BYTES          largest request body (default 1073741824)\n"
         "  --max-json BYTES          largest JSON mesh body (default 16777216); larger\n"
         "                            meshes must use application/vnd.qdc.mesh\n"
+        "  --max-ratio N             a gzip body (or the zlib arrays of a VTU body)\n"
+        "                            inflates to at most N times its size (default\n"
+        "                            100; meshes compress 2-3x); --max-body and\n"
+        "                            --max-json apply to the inflated bytes\n"
         "  --max-vertices N          largest mesh accepted (default 20000000)\n"
         "  --max-tets N              (default 100000000)\n"
         "  --max-queued N            queued jobs before 429 (default 64)\n"
@@ -209,6 +213,7 @@ static const cli_opt cli_opts[] = {
     {"workers", 'i', CFG(workers), 1, 1024, 0},
     {"max-body", 'l', CFG(max_body), 1, 9.2e18, 1073741824},
     {"max-json", 'l', CFG(max_json), 1, 9.2e18, 16777216},
+    {"max-ratio", 'i', CFG(max_ratio), 1, 1e6, 100},
     {"max-vertices", 'l', CFG(max_vertices), 1, 2e9, 2e7},
     {"max-tets", 'l', CFG(max_tets), 1, 5e8, 1e8},
     {"max-queued", 'i', CFG(max_queued), 0, 1e6, 64},

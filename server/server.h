@@ -25,6 +25,7 @@ typedef struct {
     int workers;            /* --workers N */
     int64_t max_body;       /* --max-body BYTES (any format) */
     int64_t max_json;       /* --max-json BYTES (JSON meshes) */
+    int max_ratio;          /* --max-ratio N: a gzip body inflates at most N times */
     int64_t max_vertices;   /* --max-vertices N */
     int64_t max_tets;       /* --max-tets N */
     int max_queued;         /* --max-queued N: then 429 */

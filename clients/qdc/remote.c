@@ -975,7 +975,7 @@ static int cmd_submit(args *a)
     char key[200], hkey[260], path[4200], id[64] = "";
     int rc = CLI_OK, hr;
     view v = {stderr, isatty(2), 0, a->rm.quiet, ""};
-    meshio_options keep = {NULL, NULL, 1};
+    meshio_options keep = {.log = NULL, .log_ctx = NULL, .source = 1};
     meshio_format src, own; /* sent as; the input's own format (AUTO: none kept) */
     surface_format sf;
     char *raw = NULL, ctype[80];
