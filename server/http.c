@@ -5,6 +5,7 @@
 #define _GNU_SOURCE
 #include "http.h"
 
+#include "guard.h"
 #include "problem.h"
 
 #include <arpa/inet.h>
@@ -92,7 +93,8 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *c, const cha
         if (r->body_len > 0 && peer_gone(c))
             MHD_set_connection_option(c, MHD_CONNECTION_OPTION_TIMEOUT, 1U);
         r->in_begin = 1;
-        ret = handlers->begin(c, r, url, method);
+        if (!guard_request(c, r, method, &ret))
+            ret = handlers->begin(c, r, url, method);
         r->in_begin = 0;
         return ret;
     }
@@ -184,6 +186,9 @@ enum MHD_Result http_reply_response(struct MHD_Connection *c, req *r, unsigned s
     for (int i = 0; headers && headers[i]; i += 2)
         if (MHD_add_response_header(resp, headers[i], headers[i + 1]) != MHD_YES)
             goto out;
+    /* no body of this server is to be run as another type than it says */
+    if (MHD_add_response_header(resp, "X-Content-Type-Options", "nosniff") != MHD_YES)
+        goto out;
     if (r->close_after &&
         MHD_add_response_header(resp, MHD_HTTP_HEADER_CONNECTION, "close") != MHD_YES)
         goto out;

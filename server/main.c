@@ -50,9 +50,19 @@ static void usage(FILE *f)
         "                            only to the token that created it\n"
         "  --hash-token TOKEN        print the line to put in the tokens file, exit\n"
         "  --insecure                allow a non-loopback address without --tokens\n"
+        "                            (a warning is printed: anyone who reaches the\n"
+        "                            port can submit, read and delete jobs)\n"
+        "  --allowed-hosts NAMES     Host names served besides IP addresses,\n"
+        "                            localhost and the --listen name (comma-separated;\n"
+        "                            '*' any): other names get 403 (DNS rebinding)\n"
+        "  --allowed-origins ORIGINS origins (https://ui.example) whose pages may POST\n"
+        "                            or DELETE, besides the daemon's own (comma-\n"
+        "                            separated; '*' any): others get 403\n"
         "  --public-metrics          with --tokens, serve /metrics and /readyz without "
         "a\n"
-        "                            token (they count the jobs of every owner)\n"
+        "                            token (they count the jobs of every owner)\n",
+        f);
+    fputs(
         "  --max-body BYTES          largest request body (default 1073741824)\n"
         "  --max-json BYTES          largest JSON mesh body (default 16777216); larger\n"
         "                            meshes must use application/vnd.qdc.mesh\n"
@@ -209,6 +219,8 @@ static const cli_opt cli_opts[] = {
     {"data", 's', CFG(data), 0, 0, 0},
     {"store", 's', CFG(store), 0, 0, 0},
     {"tokens", 's', CFG(tokens_file), 0, 0, 0},
+    {"allowed-hosts", 's', CFG(allowed_hosts), 0, 0, 0},
+    {"allowed-origins", 's', CFG(allowed_origins), 0, 0, 0},
     {"qdc", 's', CFG(qdc_path), 0, 0, 0},
     {"workers", 'i', CFG(workers), 1, 1024, 0},
     {"max-body", 'l', CFG(max_body), 1, 9.2e18, 1073741824},
@@ -487,6 +499,11 @@ static int configure(qdcd *q, int argc, char **argv)
                 q->cfg.host);
         return 2;
     }
+    if (!is_loopback(q->cfg.host) && !q->ntokens)
+        fprintf(stderr,
+                "qdcd: warning: listening on %s without --tokens (--insecure): anyone "
+                "who reaches the port can submit, read and delete jobs\n",
+                q->cfg.host);
     return 0;
 }
 
