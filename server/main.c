@@ -1,5 +1,6 @@
-/* main.c - qdcd: command line, start-up (data directory, store recovery,
- * workers, HTTP) and graceful shutdown on SIGTERM/SIGINT. */
+/* main.c - qdcd: command line, start-up (data directory and its lock, the
+ * port, store recovery, workers, HTTP) and graceful shutdown on
+ * SIGTERM/SIGINT. */
 #define _GNU_SOURCE
 #include "api.h"
 #include "http.h"
@@ -390,7 +391,7 @@ static void default_qdc_path(qdcd_config *c)
     snprintf(c->qdc_path, sizeof c->qdc_path, "%.4090s/qdc", slash ? exe : ".");
 }
 
-/* One qdcd per data directory (SQLite store): an exclusive lock on
+/* One qdcd per data directory: an exclusive lock on
  * DATA/qdcd.lock, held until the process ends (the kernel drops it even on
  * kill -9). A second daemon on the same directory would re-queue the first
  * one's running jobs and run them again. Returns the locked fd, -1 if another
@@ -507,34 +508,35 @@ static int configure(qdcd *q, int argc, char **argv)
     return 0;
 }
 
-/* The data directory made ready and, without a shared store, locked for
- * this process (one daemon per directory); the instance name. 0 or -1
- * (message said). */
+/* The data directory locked for this process (one daemon per directory, in
+ * every store mode: with PostgreSQL it is the node's cache and scratch
+ * space, and a second node would sweep the first one's uploads) and made
+ * ready; the instance name. 0 or -1 (message said). */
 static int claim_data_dir(qdcd *q)
 {
     char host[64];
+    long holder = 0;
+    int lk = dir_ensure(q->cfg.data) ? -2 : lock_data_dir(q->cfg.data, &holder);
 
+    if (lk == -1) {
+        fprintf(stderr,
+                "qdcd: data directory %s is in use by another qdcd (pid %ld); one "
+                "daemon per directory (nodes of a PostgreSQL store share the database, "
+                "each with its own --data)\n",
+                q->cfg.data, holder);
+        return -1;
+    }
+    if (lk < 0) {
+        fprintf(stderr, "qdcd: cannot lock data directory %s: %s\n", q->cfg.data,
+                strerror(errno));
+        return -1;
+    }
+    /* lk stays open (and locked) until the process ends; only then is the
+     * directory touched (tmp/ of a running daemon is not swept) */
     if (prepare_data_dir(q, store_pg_uri(q->cfg.store))) {
         fprintf(stderr, "qdcd: cannot use data directory %s: %s\n", q->cfg.data,
                 strerror(errno));
         return -1;
-    }
-    if (!store_pg_uri(q->cfg.store)) {
-        long holder = 0;
-        int lk = lock_data_dir(q->cfg.data, &holder);
-        if (lk == -1) {
-            fprintf(stderr,
-                    "qdcd: data directory %s is in use by another qdcd (pid %ld); one "
-                    "daemon per directory (several nodes share a PostgreSQL store)\n",
-                    q->cfg.data, holder);
-            return -1;
-        }
-        if (lk < 0) {
-            fprintf(stderr, "qdcd: cannot lock data directory %s: %s\n", q->cfg.data,
-                    strerror(errno));
-            return -1;
-        }
-        /* lk stays open (and locked) until the process ends */
     }
     gethostname(host, sizeof host);
     host[sizeof host - 1] = 0;
@@ -579,7 +581,8 @@ static int open_store(qdcd *q)
 }
 
 /* The threads, in the order they depend on each other: poll timer, workers,
- * database listener, intake and conversion, then HTTP. 0 or -1. */
+ * database listener, intake and conversion, then HTTP (on the socket bound
+ * before the store was opened). 0 or -1. */
 static int start_services(qdcd *q)
 {
     qdc_error err;
@@ -732,6 +735,7 @@ int main(int argc, char **argv)
     qdcd *q = &g;
     sigset_t stopset;
     struct sigaction sa;
+    qdc_error err;
     int rc, reexec = 0;
 
     /* The workers' OpenMP threads must sleep, not spin, while they wait: they
@@ -765,11 +769,19 @@ int main(int argc, char **argv)
     sigemptyset(&sa.sa_mask);
     sigaction(SIGTERM, &sa, NULL);
     sigaction(SIGINT, &sa, NULL);
+    q->listen_fd = -1;
     rc = configure(q, argc, argv);
     if (rc)
         return rc;
     if (claim_data_dir(q))
         return 1;
+    /* The port first: a daemon that cannot have it stops here, before the
+     * store is opened (recovery re-queues jobs) or a worker claims a job. */
+    qdc_error_clear(&err);
+    if (http_bind(q, &err) != QDC_OK) {
+        fprintf(stderr, "qdcd: %s\n", err.msg);
+        return 1;
+    }
     /* SIGTERM and SIGINT are blocked in every thread and taken synchronously
      * by the main loop (sigtimedwait), so no handler ever runs. A handler
      * would not be safe anyway: METIS (inside CHOLMOD, on worker threads)

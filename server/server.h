@@ -72,6 +72,8 @@ typedef struct qdcd {
     poll_hub *hub;
     struct job_pool *pool;
     struct MHD_Daemon *mhd;
+    int listen_fd;      /* bound by http_bind, until libmicrohttpd takes it; or -1 */
+    int listen_v6;      /* it is an IPv6 socket */
     char (*tokens)[65]; /* SHA-256 hex of each accepted bearer token */
     int ntokens;
     char instance[48]; /* this process: lease owner prefix */

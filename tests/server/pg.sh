@@ -6,6 +6,7 @@
 # --data directory (the job files are in the database too): jobs submitted to
 # either node run exactly once and are read from the other; one Idempotency-Key sent to both nodes at the same
 # moment makes one job; a node killed mid-job leaves the job to the other;
+# a node given another's --data stops at its lock;
 # the database stopped and restarted mid-run: no node dies, no job is lost.
 . "$(dirname "$0")/../lib.sh"
 . "$(dirname "$0")/pg.inc"
@@ -16,7 +17,7 @@ PIDS=
 trap 'for p in $PIDS; do kill -9 $p 2>/dev/null; done; pg_cleanup; rm -rf "$TMP"' EXIT
 
 if ! pg_available; then
-    pg_skip pg "one node|restart|schema|two nodes|idempotency|node killed|database restart"
+    pg_skip pg "one node|restart|schema|data directory lock|two nodes|idempotency|node killed|database restart"
     exit 0
 fi
 pg_started pg || exit 1
@@ -45,6 +46,14 @@ v=$(pg_sql "SELECT string_agg(version::text, ',' ORDER BY version) FROM qdc_sche
 once=$(pg_sql "SELECT COUNT(*) = COUNT(DISTINCT version) AND MIN(version) = 1 AND MAX(version) = COUNT(*) FROM qdc_schema")
 [ "$once" = t ] && pass "pg: schema created once and found again on restart (versions: $v, each once)" ||
     fail "pg: schema" "versions '$v'"
+
+# a node given node a's data directory stops at its lock: nodes share the
+# database, not --data (its cache and scratch space)
+"$QDCD" --listen 127.0.0.1:0 --data "$TMP/da" --store "$PGURI" > "$TMP/dup.log" 2>&1
+rc=$?
+[ $rc != 0 ] && grep -q "in use by another qdcd (pid $PID_a)" "$TMP/dup.log" &&
+    pass "pg: a second node on node a's --data exits $rc, naming node a's pid" ||
+    fail "pg: --data lock" "exit $rc: $(cat "$TMP/dup.log")"
 
 # 4. a second node on the same database, its own data directory: 6 jobs, round-robin
 node b "$TMP/db" --workers 1 || { fail "pg: node b starts" "$(tail -3 "$TMP/b.log")"; exit 1; }
