@@ -244,7 +244,6 @@ typedef struct {
     qdcd *q;
     const char *id;
     FILE *progress;
-    double renewed;
     double checked; /* last read of the row for a cancel from another node */
     int iterations;
     char last[768];
@@ -276,10 +275,6 @@ static int on_progress(void *ctx, const opt_progress *p)
     sb_free(&js);
     sb_free(&line);
     atomic_fetch_add(&r->q->m.iterations, 1);
-    if (mono_now() - r->renewed > r->q->cfg.lease / 4) {
-        r->q->store->ops->renew(r->q->store, r->id, r->w->name, r->q->cfg.lease);
-        r->renewed = mono_now();
-    }
     /* Several nodes on one database: a cancel or a DELETE sent to another
      * node is only in the row; read it at most twice a second. */
     if (store_pg_uri(r->q->cfg.store) && mono_now() - r->checked > 0.5) {
@@ -820,7 +815,7 @@ static void run_job(worker *w, job_rec *j)
     s.w = w;
     s.q = q;
     s.j = j;
-    s.ctx = (run_ctx){w, q, j->id, NULL, mono_now(), mono_now(), 0, ""};
+    s.ctx = (run_ctx){w, q, j->id, NULL, mono_now(), 0, ""};
     qdc_error_clear(&s.err);
     poll_begin(q->hub, j->id);
     job_path(q, j->id, "progress.jsonl", path, sizeof path);
@@ -975,6 +970,33 @@ int job_pool_cancel(job_pool *p, const char *id)
     }
     pthread_mutex_unlock(&p->lock);
     return hit;
+}
+
+void job_pool_heartbeat(job_pool *p)
+{
+    char(*ids)[JOB_ID_LEN + 1], (*names)[64];
+    int n = 0;
+
+    if (!p)
+        return;
+    ids = calloc((size_t)p->n, sizeof *ids);
+    names = calloc((size_t)p->n, sizeof *names);
+    if (ids && names) {
+        /* copied out: the store is not called with the pool locked */
+        pthread_mutex_lock(&p->lock);
+        for (int i = 0; i < p->n; i++)
+            if (p->w[i].job[0]) {
+                memcpy(ids[n], p->w[i].job, sizeof ids[n]);
+                memcpy(names[n++], p->w[i].name, sizeof names[0]);
+            }
+        pthread_mutex_unlock(&p->lock);
+    }
+    /* a job that ended meanwhile is no longer running: renewing its lease
+     * changes nothing that matters (only running rows are taken over) */
+    for (int i = 0; i < n; i++)
+        p->q->store->ops->renew(p->q->store, ids[i], names[i], p->q->cfg.lease);
+    free(ids);
+    free(names);
 }
 
 int job_pool_has(job_pool *p, const char *id)

@@ -84,7 +84,9 @@ static void usage(FILE *f)
         "                            fails (default 3)\n"
         "  --max-connections N       concurrent connections (default 4096)\n"
         "  --connection-timeout S    idle connection timeout (default 120)\n"
-        "  --lease SECONDS           job lease, renewed while running (default 60)\n"
+        "  --lease SECONDS           job lease, renewed every SECONDS/4 while the job\n"
+        "                            runs; the job of a node that died runs again on\n"
+        "                            another within about SECONDS + 4 (default 10)\n"
         "  --shutdown-grace SECONDS  on SIGTERM, wait this long for running jobs before\n"
         "                            giving them back to the queue (default 10)\n"
         "  --child-memory BYTES      address-space limit of a TetGen child (surface\n"
@@ -237,7 +239,7 @@ static const cli_opt cli_opts[] = {
     {"max-attempts", 'i', CFG(max_attempts), 1, 1000, 3},
     {"max-connections", 'i', CFG(max_connections), 1, 1e6, 4096},
     {"connection-timeout", 'i', CFG(conn_timeout), 1, 86400, 120},
-    {"lease", 'd', CFG(lease), 1, 86400, 60},
+    {"lease", 'd', CFG(lease), 1, 86400, 10},
     {"shutdown-grace", 'd', CFG(grace), 0, 86400, 10},
     {"bderr-samples", 'l', CFG(bderr_samples), 0, 1e8, 20000},
     {"child-memory", 'l', CFG(child_memory), 1 << 26, 9.2e18, 0},
@@ -641,16 +643,21 @@ static void trim_cache(qdcd *q, double *next)
     *next = mono_now() + 2;
 }
 
-/* The main loop until SIGTERM or SIGINT: expired jobs purged every second;
+/* The main loop until SIGTERM or SIGINT: the leases of running jobs renewed
+ * every --lease/4; expired jobs purged every second;
  * with a shared store, jobs of a node that died recovered every 2 s, the
  * cache swept every minute and kept under --cache-max. */
 static void serve(qdcd *q, const sigset_t *stopset)
 {
     const struct timespec tick = {0, 100 * 1000 * 1000};
     double next_purge = 0, next_sweep = mono_now() + 60, next_recover = mono_now() + 2,
-           next_trim = mono_now() + 1;
+           next_trim = mono_now() + 1, next_beat = mono_now() + q->cfg.lease / 4;
 
     while (!q->stop) {
+        if (mono_now() >= next_beat) {
+            job_pool_heartbeat(q->pool);
+            next_beat = mono_now() + q->cfg.lease / 4;
+        }
         if (mono_now() >= next_purge) {
             purge_expired(q);
             next_purge = mono_now() + 1;

@@ -17,7 +17,7 @@ PIDS=
 trap 'for p in $PIDS; do kill -9 $p 2>/dev/null; done; pg_cleanup; rm -rf "$TMP"' EXIT
 
 if ! pg_available; then
-    pg_skip pg "one node|restart|schema|data directory lock|two nodes|idempotency|node killed|database restart"
+    pg_skip pg "one node|restart|schema|data directory lock|two nodes|idempotency|node killed|takeover with the default lease|database restart"
     exit 0
 fi
 pg_started pg || exit 1
@@ -140,9 +140,39 @@ else
     fail "pg: node killed" "state $st attempts $att"
 fi
 
+# 6b. the same with the default --lease: the lease is renewed by a heartbeat
+# every lease/4, so the job runs again on the other node within 15 s
+stop "$PID_b"
+gzip -dc "$DEV/cube_h0.1_lowq.mesh.gz" > "$TMP/big.mesh"
+$MT qmesh "$TMP/big.mesh" "$TMP/big.qmesh"
+node a "$TMP/da" --workers 1 || { fail "pg: node a" "$(tail -3 "$TMP/a.log")"; exit 1; }
+post "$URL_a" "$TMP/big.qmesh" "max_iter=400&finish=0&tol_move=0&mode=literal" "$TMP/jt" > /dev/null
+idt=$(jf "$TMP/jt" .id)
+curl -s -m 60 "$URL_a/v1/jobs/$idt/progress?after=0&wait=50" > /dev/null
+node b "$TMP/db" --workers 1 || { fail "pg: node b" "$(tail -3 "$TMP/b.log")"; exit 1; }
+kill -9 "$PID_a"
+wait "$PID_a" 2> /dev/null
+t0=$(date +%s.%N)
+i=0
+while [ $i -lt 600 ] && [ "$(pg_sql "SELECT attempts FROM jobs WHERE id = '$idt'")" != 2 ]; do
+    sleep 0.1
+    i=$((i + 1))
+done
+dt=$(echo "$(date +%s.%N) $t0" | awk '{ printf "%.1f", $1 - $2 }')
+curl -s -X POST "$URL_b/v1/jobs/$idt:cancel" > /dev/null
+if [ "$(pg_sql "SELECT attempts FROM jobs WHERE id = '$idt'")" = 2 ] &&
+    [ "$(echo "$dt" | awk '{ print ($1 <= 15) }')" = 1 ]; then
+    pass "pg: default --lease (10 s, heartbeat every 2.5 s): node killed, its job running again on the other node after $dt s (<= 15)"
+else
+    fail "pg: takeover with the default lease" "after $dt s: attempts $(pg_sql "SELECT attempts FROM jobs WHERE id = '$idt'")"
+fi
+stop "$PID_b"
+node b "$TMP/db" --workers 1 --lease 2 || { fail "pg: node b" "$(tail -3 "$TMP/b.log")"; exit 1; }
+
 # 7. the database stops and comes back while a job runs: the node survives,
 # the job's end (written while the database is away) is retried until it is
 # recorded, nothing is lost
+n0=$(pg_sql "SELECT COUNT(*) FROM jobs")
 post "$URL_b" "$TMP/cube.qmesh" "max_iter=40&finish=0&tol_move=0&mode=literal" "$TMP/jd" > /dev/null
 idd=$(jf "$TMP/jd" .id)
 sleep 0.3
@@ -156,8 +186,8 @@ st=$(wait_done "$URL_b" "$idd")
 alive=no
 kill -0 "$PID_b" 2> /dev/null && alive=yes
 n=$(pg_sql "SELECT COUNT(*) FROM jobs")
-if [ "$alive" = yes ] && [ "$st" = succeeded ] && [ "$n" = 11 ] && [ "$down" = 503 ]; then
-    pass "pg: database restarted mid-run: node alive, GET while down 503 (+ Retry-After), job succeeded, all 11 jobs kept"
+if [ "$alive" = yes ] && [ "$st" = succeeded ] && [ "$n" = $((n0 + 1)) ] && [ "$down" = 503 ]; then
+    pass "pg: database restarted mid-run: node alive, GET while down 503 (+ Retry-After), job succeeded, all $n jobs kept"
 else
     fail "pg: database restart" "alive $alive state $st jobs $n (GET while down: $down) $(tail -2 "$TMP/b.log" | tr '\n' ' ')"
 fi
