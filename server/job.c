@@ -1029,9 +1029,16 @@ void job_pool_stop(job_pool *p, double grace)
     p->stopping = 1;
     pthread_cond_broadcast(&p->cond);
     pthread_mutex_unlock(&p->lock);
-    double until = mono_now() + grace;
-    while (job_pool_busy(p) && mono_now() < until)
+    double until = mono_now() + grace, beat = mono_now() + p->q->cfg.lease / 4;
+    while (job_pool_busy(p) && mono_now() < until) {
+        /* the main loop's heartbeat has stopped: the jobs finishing in
+         * their grace keep their leases from here */
+        if (mono_now() >= beat) {
+            job_pool_heartbeat(p);
+            beat = mono_now() + p->q->cfg.lease / 4;
+        }
         usleep(50 * 1000);
+    }
     pthread_mutex_lock(&p->lock);
     for (int i = 0; i < p->n; i++) {
         if (p->w[i].job[0]) {
