@@ -245,6 +245,7 @@ typedef struct {
     const char *id;
     FILE *progress;
     double checked; /* last read of the row for a cancel from another node */
+    int attempt;    /* the run's: each record says which run it belongs to */
     int iterations;
     char last[768];
 } run_ctx;
@@ -252,9 +253,16 @@ typedef struct {
 static int on_progress(void *ctx, const opt_progress *p)
 {
     run_ctx *r = ctx;
-    sbuf js = {0}, line = {0};
+    sbuf js = {0}, line = {0}, rec = {0};
 
-    report_progress_json(p, sb_writer, &js);
+    /* the run's attempt first, then the record's members: a reader that
+     * resumes across a takeover can tell the new run's records from the old */
+    report_progress_json(p, sb_writer, &rec);
+    if (!rec.oom && rec.len > 2 && rec.buf[0] == '{') {
+        sb_printf(&js, "{\"attempt\":%d,", r->attempt);
+        sb_add(&js, rec.buf + 1, rec.len - 1);
+    }
+    sb_free(&rec);
     if (!js.oom && js.len) {
         long seq = poll_publish(r->q->hub, r->id, js.buf, js.len, &line);
         if (seq >= 0) {
@@ -815,7 +823,7 @@ static void run_job(worker *w, job_rec *j)
     s.w = w;
     s.q = q;
     s.j = j;
-    s.ctx = (run_ctx){w, q, j->id, NULL, mono_now(), 0, ""};
+    s.ctx = (run_ctx){w, q, j->id, NULL, mono_now(), j->attempts, 0, ""};
     qdc_error_clear(&s.err);
     poll_begin(q->hub, j->id);
     job_path(q, j->id, "progress.jsonl", path, sizeof path);
