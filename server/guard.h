@@ -3,7 +3,8 @@
  * rebinding), and for state-changing methods an allowed Origin and no
  * Sec-Fetch-Site: cross-site (403: cross-site request forgery; a browser
  * sends a text/plain POST to any address without asking). Options:
- * --allowed-hosts, --allowed-origins (server.h). Runs on the HTTP thread. */
+ * --allowed-hosts, --allowed-origins (server.h). Called by api.c's router
+ * once the framing is checked, on the HTTP thread. */
 #ifndef QDCD_GUARD_H
 #define QDCD_GUARD_H
 

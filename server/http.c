@@ -5,7 +5,6 @@
 #define _GNU_SOURCE
 #include "http.h"
 
-#include "guard.h"
 #include "problem.h"
 
 #include <arpa/inet.h>
@@ -93,8 +92,7 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *c, const cha
         if (r->body_len > 0 && peer_gone(c))
             MHD_set_connection_option(c, MHD_CONNECTION_OPTION_TIMEOUT, 1U);
         r->in_begin = 1;
-        if (!guard_request(c, r, method, &ret))
-            ret = handlers->begin(c, r, url, method);
+        ret = handlers->begin(c, r, url, method);
         r->in_begin = 0;
         return ret;
     }
