@@ -587,10 +587,13 @@ function renderStats(st) {
 // stream by hand; reconnect after the last seq if the stream breaks.
 async function follow(st, signal) {
     let after = -1;
+    let run = 0; // the job's attempt the records so far are of
     for (let attempt = 0; !st.stopped; attempt++) {
         let ended = false;
         try {
-            const res = await api('/v1/jobs/' + st.id + '/events?after=' + after, { signal, headers: { Accept: 'text/event-stream' } });
+            // with attempt=, a job run again since (its node died) starts over
+            const q = '?after=' + after + (run ? '&attempt=' + run : '');
+            const res = await api('/v1/jobs/' + st.id + '/events' + q, { signal, headers: { Accept: 'text/event-stream' } });
             if (!res.ok) throw problem(res.status, await res.json().catch(() => null));
             const reader = res.body.getReader();
             const dec = new TextDecoder();
@@ -612,9 +615,14 @@ async function follow(st, signal) {
                         if (k === 'data') ev.data += (ev.data ? '\n' : '') + v;
                         else ev[k] = v;
                     }
-                    if (ev.event === 'progress') {
+                    if (ev.event === 'restart') { // the records start over
+                        st.recs = [];
+                        after = -1;
+                        st.redraw();
+                    } else if (ev.event === 'progress') {
                         const rec = JSON.parse(ev.data);
                         after = rec.seq;
+                        run = rec.attempt || run;
                         st.recs.push(rec);
                         st.redraw();
                         if (st.job && st.job.state === 'queued') { // it started: say so now

@@ -435,7 +435,7 @@ static qdc_status load_input(const char *path, meshio_format fin, surface_format
                              const tetra_options *to, progress_state *ps, int keep,
                              mesh_t **m, qdc_error *err)
 {
-    meshio_options mo = {on_log, ps, keep ? 1 : -1};
+    meshio_options mo = {.log = on_log, .log_ctx = ps, .source = keep ? 1 : -1};
     char *buf = NULL;
     size_t len = 0;
     int stream = is_stream(path);
@@ -965,7 +965,8 @@ int cli_quality(int argc, char **argv)
     const char *in = NULL, *ref = NULL;
     int json = 0, rc = CLI_OK;
     mesh_t *m = NULL, *r = NULL;
-    meshio_options nokeep = {NULL, NULL, -1}; /* nothing is written back */
+    meshio_options nokeep = {
+        .log = NULL, .log_ctx = NULL, .source = -1}; /* nothing is written back */
     report_quality q;
     bderr_result be;
     qdc_error err;

@@ -726,23 +726,37 @@ static void view_record(view *v, jv rec)
  * final state. Returns -1 when done, else an exit code. */
 static int follow(remote *rm, const char *id, view *v, char *state, size_t cap)
 {
-    long after = -1;
-    char path[256];
+    long after = -1, run = 0; /* run: the attempt the records so far are of */
+    char path[256], line[160];
     reply r = {0};
     int rc = -1;
 
     for (;;) {
         snprintf(path, sizeof path, "/v1/jobs/%s/progress?after=%ld&wait=%d", id, after,
                  POLL_WAIT);
+        if (run > 0) /* told if the job runs again (a node died): records start over */
+            snprintf(path + strlen(path), sizeof path - strlen(path), "&attempt=%ld",
+                     run);
         int hr = http(rm, "GET", path, NULL, NULL, 0, POLL_WAIT + 30, &r);
         if (hr || r.status != 200) {
             view_end(v);
             rc = http_fail("progress", hr, &r);
             break;
         }
-        jv b = jbody(&r.body), recs, it, rec;
-        double na = (double)after;
+        jv b = jbody(&r.body), recs, it, rec, rs;
+        double na = (double)after, at = (double)run, from = 0;
         int done = jbool(b, "done");
+        if (jget(b, "restarted", &rs) && jnum(rs, "from_attempt", &from)) {
+            double to = from + 1;
+            jnum(rs, "attempt", &to);
+            snprintf(
+                line, sizeof line,
+                "job %s runs again from the start: attempt %.0f (attempt %.0f stopped)",
+                id, to, from);
+            view_line(v, line);
+        }
+        if (jnum(b, "attempt", &at))
+            run = (long)at;
         if (jget(b, "records", &recs)) {
             it = recs;
             while (jnext(&it, &rec))
@@ -752,7 +766,6 @@ static int follow(remote *rm, const char *id, view *v, char *state, size_t cap)
         if (strcmp(state, v->state)) {
             /* On a terminal the live line shows "queued" until records come;
              * the final state gets a line of its own below the last record. */
-            char line[96];
             snprintf(line, sizeof line, "job %s %s", id, state);
             if (done)
                 view_end(v);
@@ -975,7 +988,7 @@ static int cmd_submit(args *a)
     char key[200], hkey[260], path[4200], id[64] = "";
     int rc = CLI_OK, hr;
     view v = {stderr, isatty(2), 0, a->rm.quiet, ""};
-    meshio_options keep = {NULL, NULL, 1};
+    meshio_options keep = {.log = NULL, .log_ctx = NULL, .source = 1};
     meshio_format src, own; /* sent as; the input's own format (AUTO: none kept) */
     surface_format sf;
     char *raw = NULL, ctype[80];

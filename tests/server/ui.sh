@@ -6,7 +6,9 @@
 # tests/ui/package-lock.json into build/uitest): first paint, the sample
 # submitted through the file input, the chart growing while a job runs, the
 # histograms, downloads checked with `qdc quality`, cancel/delete/filter, a
-# phone-sized layout, no console errors, and the token prompt with --tokens.
+# phone-sized layout, no console errors, and the token prompt with --tokens;
+# a page served from another origin whose script POSTs a mesh gets 403
+# (tests/ui/crossorigin.mjs).
 # Before the browser: GET /v1/options (the form's table) and GET /input (the
 # job's input mesh: every format, Accept, ETag, 404/409, a surface's TetGen
 # mesh) with curl; their token rules on the --tokens daemon. The screenshot
@@ -248,6 +250,14 @@ for f in sample-out.mesh sample-out.qmesh big-out.mesh; do
         fail "qdc quality $f" "$(head -2 "$TMP/q.txt" | tr '\n' ' ') (report: $nt tets, $mr)"
     fi
 done
+# a page on another origin cannot submit (the daemon's own, above, could)
+node "$ROOT/tests/ui/crossorigin.mjs" > "$TMP/cross.out" 2>&1
+rc=$?
+cat "$TMP/cross.out"
+if [ $rc -ne 0 ] && ! grep -q '^FAIL - ' "$TMP/cross.out"; then
+    fail "crossorigin.mjs" "exit $rc $(tail -2 "$TMP/cross.out")"
+fi
+NFAIL=$((NFAIL + $(grep -c '^FAIL - ' "$TMP/cross.out")))
 [ -n "$UI_SHOTS" ] && for s in ui-list ui-job ui-phone; do
     if [ -s "$UI_SHOTS/$s.png" ] && [ "$(head -c 8 "$UI_SHOTS/$s.png" | od -An -tx1 | tr -d ' ')" = 89504e470d0a1a0a ]; then
         pass "screenshot $UI_SHOTS/$s.png ($(wc -c < "$UI_SHOTS/$s.png") bytes)"
