@@ -12,6 +12,7 @@
 #include "opt/harm.h"
 #include "opt/slide.h"
 #include "opt/solve.h"
+#include "opt/topology.h"
 
 #include <ctype.h>
 #include <errno.h>
@@ -52,6 +53,7 @@ static const char *const boundary_names[] = {"lsq", "fixed", "slide"};
 static const char *const mode_names[] = {"safe", "literal"};
 static const char *const weights_names[] = {"optavg", "paper"};
 static const char *const solver_names[] = {"auto", "cholmod", "pcg"};
+static const char *const topology_names[] = {"none", "flips"};
 
 static qdc_status parse_word(const char *s, const char *const *names, int n, int *out)
 {
@@ -77,6 +79,7 @@ PARSER(opt_parse_boundary, opt_boundary, boundary_names)
 PARSER(opt_parse_mode, opt_mode, mode_names)
 PARSER(opt_parse_weights, opt_weights, weights_names)
 PARSER(opt_parse_solver, opt_solver, solver_names)
+PARSER(opt_parse_topology, opt_topology, topology_names)
 
 /* A finite, non-negative number filling all of s (no spaces, no trailing bytes). */
 static int parse_nonneg(const char *s, double *out)
@@ -140,6 +143,7 @@ NAMER(opt_boundary_name, opt_boundary, boundary_names)
 NAMER(opt_mode_name, opt_mode, mode_names)
 NAMER(opt_weights_name, opt_weights, weights_names)
 NAMER(opt_solver_name, opt_solver, solver_names)
+NAMER(opt_topology_name, opt_topology, topology_names)
 
 typedef struct {
     const opt_options *o;
@@ -1243,7 +1247,8 @@ static int options_valid(const opt_options *o)
            (unsigned)o->boundary <= OPT_BOUNDARY_SLIDE &&
            (unsigned)o->mode <= OPT_MODE_LITERAL &&
            (unsigned)o->weights <= OPT_WEIGHTS_PAPER &&
-           (unsigned)o->solver <= OPT_SOLVER_PCG;
+           (unsigned)o->solver <= OPT_SOLVER_PCG &&
+           (unsigned)o->topology <= OPT_TOPOLOGY_FLIPS;
 }
 
 /* The context of one run: topology, ctx, loose and pinned vertices, the
@@ -1779,6 +1784,8 @@ qdc_status opt_run(mesh_t *m, const opt_options *opts, opt_result *res, qdc_erro
     mesh_t *pm;
     qdc_status st;
 
+    if (opts && opts->topology != OPT_TOPOLOGY_NONE && m && m->nv > 0 && m->nt > 0)
+        return opt_topology_run(m, opts, res, err);
     if (!m || m->nv <= 0 || m->nt <= 0 || !m->xyz || !m->tets)
         return run_numbered(m, opts, res, err);
     st = mesh_order_build(m, &ord);

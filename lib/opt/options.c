@@ -14,6 +14,7 @@ static const char *const boundary_w[] = {"lsq", "fixed", "slide"};
 static const char *const mode_w[] = {"safe", "literal"};
 static const char *const weights_w[] = {"optavg", "paper"};
 static const char *const solver_w[] = {"auto", "cholmod", "pcg"};
+static const char *const topology_w[] = {"none", "flips"};
 
 #define OFF(f) offsetof(opt_options, f)
 #define WORDS(w) w, (int)(sizeof w / sizeof w[0])
@@ -59,6 +60,9 @@ static const opt_desc table[] = {
      "stop when the largest move < this x mean edge"},
     {"eps_rel", OPT_T_REAL, OFF(eps_rel), 0, 1, 1, NULL, 0,
      "Escobar epsilon relative to a regular tet"},
+    {"topology", OPT_T_WORD, OFF(topology), 0, 0, 0, WORDS(topology_w),
+     "none: connectivity kept; flips: the smoother alternated with edge removal and "
+     "2-3 flips (vertices, boundary triangles and region tags kept)"},
     {"time_limit", OPT_T_REAL, OFF(time_limit), 0, 1e9, 0, NULL, 0,
      "seconds, then the best mesh so far (0: none)"},
 };

@@ -24,7 +24,7 @@ struct tmesh_jent {
     int32_t v[4];
     int32_t a[4];
     int32_t tag;
-    uint8_t f, e;
+    uint8_t f, e, rev;
     double q;
     uint32_t stamp;
 };
@@ -63,6 +63,7 @@ static qdc_status grow_tets(tmesh *tm, int32_t need)
     GROW(tm->tv, 4 * (size_t)cap);
     GROW(tm->adj, 4 * (size_t)cap);
     GROW(tm->tag, cap);
+    GROW(tm->rev, cap);
     GROW(tm->fcons, cap);
     GROW(tm->econs, cap);
     GROW(tm->q, cap);
@@ -101,6 +102,7 @@ void tmesh_free(tmesh *tm)
     qdc_free(tm->tv);
     qdc_free(tm->adj);
     qdc_free(tm->tag);
+    qdc_free(tm->rev);
     qdc_free(tm->fcons);
     qdc_free(tm->econs);
     qdc_free(tm->q);
@@ -243,7 +245,8 @@ out:
 }
 
 qdc_status tmesh_new(int32_t nv, const double *xyz, int32_t nt, const int32_t *tets,
-                     const int32_t *region, tmesh **out, qdc_error *err)
+                     const int32_t *region, const uint8_t *rev, tmesh **out,
+                     qdc_error *err)
 {
     qdc_status st = QDC_OK;
     tmesh *tm;
@@ -281,6 +284,7 @@ qdc_status tmesh_new(int32_t nv, const double *xyz, int32_t nt, const int32_t *t
         }
         memcpy(tm->tv + 4 * (size_t)t, tt, 4 * sizeof *tt);
         tm->tag[t] = region ? region[t] : 0;
+        tm->rev[t] = rev ? rev[t] != 0 : 0;
         tm->stamp[t] = 1;
         continue;
     bad_tet:
@@ -334,6 +338,10 @@ qdc_status tmesh_export(const tmesh *tm, int32_t *nt, int32_t **tets, int32_t **
         if (tm->tv[4 * (size_t)t] < 0)
             continue;
         memcpy(tv + 4 * (size_t)k, tm->tv + 4 * (size_t)t, 4 * sizeof *tv);
+        if (tm->rev[t]) {
+            tv[4 * (size_t)k] = tm->tv[4 * (size_t)t + 1];
+            tv[4 * (size_t)k + 1] = tm->tv[4 * (size_t)t];
+        }
         if (rg)
             rg[k] = tm->tag[t];
         k++;
@@ -361,6 +369,7 @@ static void del_tet(tmesh *tm, int32_t t)
     j->tag = tm->tag[t];
     j->f = tm->fcons[t];
     j->e = tm->econs[t];
+    j->rev = tm->rev[t];
     j->q = tm->q[t];
     j->stamp = tm->stamp[t];
     tm->tv[4 * (size_t)t] = -1;
@@ -418,6 +427,7 @@ void tmesh_rollback(tmesh *tm)
             tm->tag[t] = j->tag;
             tm->fcons[t] = j->f;
             tm->econs[t] = j->e;
+            tm->rev[t] = j->rev;
             tm->q[t] = j->q;
             tm->stamp[t] = j->stamp;
             tm->nlive++;
@@ -452,12 +462,14 @@ qdc_status tmesh_replace(tmesh *tm, const int32_t *old, int nold,
     double qn[CAV_NEW];
     int nout = 0, ok = 1;
     int32_t tag;
+    uint8_t rev;
     qdc_status st;
 
     *applied = 0;
     if (nold < 1 || nold > CAV_OLD || nnew < 1 || nnew > CAV_NEW)
         return QDC_OK;
     tag = tm->tag[old[0]];
+    rev = tm->rev[old[0]];
     for (int o = 0; o < nold; o++)
         if (tm->tv[4 * (size_t)old[o]] < 0 || tm->tag[old[o]] != tag ||
             tm->mark[old[o]] || tm->q[old[o]] < -1.0)
@@ -534,6 +546,7 @@ qdc_status tmesh_replace(tmesh *tm, const int32_t *old, int nold,
         ids[j] = t;
         memcpy(tm->tv + 4 * (size_t)t, newt[j], 4 * sizeof(int32_t));
         tm->tag[t] = tag;
+        tm->rev[t] = rev;
         tm->q[t] = qn[j];
         tm->econs[t] = ebits[j];
         tm->fcons[t] = 0;

@@ -32,6 +32,9 @@ typedef struct tmesh {
     int32_t *tv;     /* 4*cap vertices; tv[4t] < 0 for a free slot */
     int32_t *adj;    /* 4*cap: across face i of t, 4*u + j (face j of u), or -1 */
     int32_t *tag;    /* cap region tags */
+    uint8_t *rev;    /* cap: 1 when the caller writes the tet with its first two
+                      * vertices swapped (tmesh_new's rev; new tets take the
+                      * cavity's), so that tmesh_export gives the caller's order */
     uint8_t *fcons;  /* cap: bit i set when face i is constrained */
     uint8_t *econs;  /* cap: bit e set when edge e is constrained */
     double *q;       /* cap: mean ratio of the tet (geom/metric.h) */
@@ -44,15 +47,18 @@ typedef struct tmesh {
 } tmesh;
 
 /* Build from nt positive tets (4 indices each; the caller orients them, e.g.
- * with mesh_topo's tets) over nv vertices; region may be NULL (one tag, 0).
- * Copies everything. QDC_EMESH for a face of three tets or a bad index (err->index
- * a tet), QDC_ENOMEM. Free with tmesh_free. */
+ * with mesh_orient) over nv vertices; region may be NULL (one tag, 0); rev may be
+ * NULL (all 0), else 1 for each tet the caller writes with its first two
+ * vertices swapped. Copies everything. QDC_EMESH for a face of three tets or a
+ * bad index (err->index a tet), QDC_ENOMEM. Free with tmesh_free. */
 qdc_status tmesh_new(int32_t nv, const double *xyz, int32_t nt, const int32_t *tets,
-                     const int32_t *region, tmesh **out, qdc_error *err);
+                     const int32_t *region, const uint8_t *rev, tmesh **out,
+                     qdc_error *err);
 void tmesh_free(tmesh *tm);
 
-/* The live tets in slot order: *tets (4 each) and *region (may be NULL, then not
- * written) allocated with qdc_malloc for the caller; *nt their count. */
+/* The live tets in slot order, each in the caller's vertex order (rev): *tets
+ * (4 each) and *region (may be NULL, then not written) allocated with qdc_malloc
+ * for the caller; *nt their count. */
 qdc_status tmesh_export(const tmesh *tm, int32_t *nt, int32_t **tets, int32_t **region);
 
 /* Mean ratio of the tet (a,b,c,d), or a value below -1 when it is not positive

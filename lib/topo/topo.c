@@ -127,7 +127,7 @@ static int best_flip(const tmesh *tm, int32_t t, const topo_params *p, flip_cand
 }
 
 qdc_status topo_improve(tmesh *tm, const topo_params *p, topo_stats *st,
-                        const volatile int *cancel)
+                        const atomic_int *cancel)
 {
     qdc_status s = QDC_OK;
     heap h = {0};
@@ -149,7 +149,7 @@ qdc_status topo_improve(tmesh *tm, const topo_params *p, topo_stats *st,
             flip_cand c;
             int32_t ids[2 * FLIP_MAXRING];
             int applied = 0;
-            if (cancel && *cancel) {
+            if (cancel && atomic_load(cancel)) {
                 s = QDC_ECANCEL;
                 break;
             }
@@ -185,12 +185,12 @@ qdc_status topo_improve(tmesh *tm, const topo_params *p, topo_stats *st,
 
 qdc_status topo_flip_arrays(int32_t nv, const double *xyz, int32_t nt,
                             const int32_t *tets, const int32_t *region,
-                            const topo_params *p, const volatile int *cancel,
-                            int32_t *nt_out, int32_t **tets_out, int32_t **region_out,
-                            topo_stats *st, qdc_error *err)
+                            const uint8_t *rev, const topo_params *p,
+                            const atomic_int *cancel, int32_t *nt_out, int32_t **tets_out,
+                            int32_t **region_out, topo_stats *st, qdc_error *err)
 {
     tmesh *tm = NULL;
-    qdc_status s = tmesh_new(nv, xyz, nt, tets, region, &tm, err);
+    qdc_status s = tmesh_new(nv, xyz, nt, tets, region, rev, &tm, err);
 
     if (s == QDC_OK)
         s = topo_improve(tm, p, st, cancel);

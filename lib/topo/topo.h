@@ -13,6 +13,8 @@
 #include "topo/flip.h"
 #include "topo/tmesh.h"
 
+#include <stdatomic.h>
+
 typedef struct {
     int maxring;     /* largest edge ring removed (3..FLIP_MAXRING) */
     double qgoal;    /* tets with a mean ratio below this are queued */
@@ -38,16 +40,16 @@ void topo_params_default(topo_params *p);
  * between operations: QDC_ECANCEL then, the mesh valid as it stands. st may be
  * NULL. QDC_ENOMEM. */
 qdc_status topo_improve(tmesh *tm, const topo_params *p, topo_stats *st,
-                        const volatile int *cancel);
+                        const atomic_int *cancel);
 
 /* The whole round trip on arrays: build a tmesh from nt positive tets (4 each,
- * region may be NULL), improve it, and hand back the live tets in *tets_out (and
- * their tags in *region_out when region is not NULL), allocated with qdc_malloc
- * for the caller, *nt_out their count. The vertices are not changed. */
+ * region and rev may be NULL; as tmesh_new), improve it, and hand back the live tets in
+ * *tets_out (and their tags in *region_out when region is not NULL), allocated with
+ * qdc_malloc for the caller, *nt_out their count. The vertices are not changed. */
 qdc_status topo_flip_arrays(int32_t nv, const double *xyz, int32_t nt,
                             const int32_t *tets, const int32_t *region,
-                            const topo_params *p, const volatile int *cancel,
-                            int32_t *nt_out, int32_t **tets_out, int32_t **region_out,
-                            topo_stats *st, qdc_error *err);
+                            const uint8_t *rev, const topo_params *p,
+                            const atomic_int *cancel, int32_t *nt_out, int32_t **tets_out,
+                            int32_t **region_out, topo_stats *st, qdc_error *err);
 
 #endif

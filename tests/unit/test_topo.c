@@ -81,7 +81,7 @@ static tmesh *ring_mesh(int n, double za, double zb, const int32_t *tags)
         tv[4 * k + 2] = 2 + k;
         tv[4 * k + 3] = 2 + (k + 1) % n;
     }
-    if (tmesh_new(n + 2, x, n, tv, tags, &tm, NULL) != QDC_OK)
+    if (tmesh_new(n + 2, x, n, tv, tags, NULL, &tm, NULL) != QDC_OK)
         return NULL;
     return tm;
 }
@@ -115,7 +115,7 @@ TEST(edge_removal_3_2_keeps_volume)
     flip_cand c;
     int applied = 0, e01 = 0;
 
-    ASSERT_OK(tmesh_new(5, x, 3, tv, NULL, &tm, NULL));
+    ASSERT_OK(tmesh_new(5, x, 3, tv, NULL, NULL, &tm, NULL));
     ASSERT_TRUE(consistent(tm));
     ASSERT_NEAR(total_vol6(tm), 4.5, 0);
     ASSERT_EQ_INT(tm->econs[0] >> e01 & 1, 0); /* the axis is inside */
@@ -180,7 +180,7 @@ TEST(flip_2_3)
     flip_cand c;
     int applied = 0, f = 3; /* face opposite vertex 3 of tet 0 */
 
-    ASSERT_OK(tmesh_new(5, x, 2, tv, NULL, &tm, NULL));
+    ASSERT_OK(tmesh_new(5, x, 2, tv, NULL, NULL, &tm, NULL));
     ASSERT_TRUE(consistent(tm));
     ASSERT_EQ_INT(tm->adj[4 * 0 + f] / 4, 1);
     ASSERT_EQ_INT(flip_23_eval(tm, 0, f, 0.0, -INFINITY, &c), 1);
@@ -200,11 +200,42 @@ TEST(flip_2_3)
     }
     /* the same face between two tags is an interface: refused */
     tmesh_free(tm);
-    ASSERT_OK(tmesh_new(5, x, 2, tv, (const int32_t[2]){1, 2}, &tm, NULL));
+    ASSERT_OK(tmesh_new(5, x, 2, tv, (const int32_t[2]){1, 2}, NULL, &tm, NULL));
     ASSERT_EQ_INT(tm->fcons[0] >> f & 1, 1);
     ASSERT_EQ_INT(flip_23_eval(tm, 0, f, 0.0, -INFINITY, &c), 0);
     /* a boundary face is refused */
     ASSERT_EQ_INT(flip_23_eval(tm, 0, 0, 0.0, -INFINITY, &c), 0);
+    tmesh_free(tm);
+}
+
+/* Tets the caller writes in the other vertex order come back so, and the tets
+ * that replace them follow the cavity's convention. */
+TEST(export_keeps_the_callers_vertex_order)
+{
+    double x[5 * 3] = {0, 0, -1, 0, 0, 1, 1, 0, 0, -0.5, 0.75, 0, -0.5, -0.75, 0};
+    int32_t tv[12] = {0, 1, 2, 3, 0, 1, 3, 4, 0, 1, 4, 2}, nt, *out = NULL;
+    const uint8_t rev[3] = {1, 1, 1};
+    tmesh *tm = NULL;
+    flip_cand c;
+    int applied = 0;
+
+    ASSERT_OK(tmesh_new(5, x, 3, tv, NULL, rev, &tm, NULL));
+    ASSERT_OK(tmesh_export(tm, &nt, &out, NULL));
+    ASSERT_EQ_INT(nt, 3);
+    for (int t = 0; t < 3; t++) {
+        ASSERT_EQ_INT(out[4 * t], tv[4 * t + 1]);
+        ASSERT_EQ_INT(out[4 * t + 1], tv[4 * t]);
+    }
+    qdc_free(out);
+    ASSERT_EQ_INT(flip_edge_eval(tm, 0, 0, 10, 0.0, -INFINITY, &c), 1);
+    ASSERT_OK(tmesh_replace(tm, c.old, c.nold, (const int32_t(*)[4])c.newt, c.nnew, NULL,
+                            &applied));
+    tmesh_commit(tm);
+    ASSERT_OK(tmesh_export(tm, &nt, &out, NULL));
+    ASSERT_EQ_INT(nt, 2);
+    for (int t = 0; t < 2; t++)
+        ASSERT_NEAR(geom_tet_vol6(x, out + 4 * t), -2.25, 0);
+    qdc_free(out);
     tmesh_free(tm);
 }
 
@@ -422,7 +453,7 @@ TEST(random_flips_keep_invariants)
 
     ASSERT_TRUE(m);
     tm_perturb(m, n, 0.25, 7);
-    ASSERT_OK(tmesh_new(m->nv, m->xyz, m->nt, m->tets, m->region, &tm, NULL));
+    ASSERT_OK(tmesh_new(m->nv, m->xyz, m->nt, m->tets, m->region, NULL, &tm, NULL));
     ASSERT_TRUE(consistent(tm));
     f0 = cons_faces(tm, &nf0);
     ASSERT_TRUE(f0);
@@ -479,8 +510,8 @@ TEST(driver_is_deterministic)
     tm_perturb(m, n, 0.3, 3);
     topo_params_default(&p);
     for (int r = 0; r < 2; r++)
-        ASSERT_OK(topo_flip_arrays(m->nv, m->xyz, m->nt, m->tets, m->region, &p, NULL,
-                                   &nt[r], &tv[r], &rg[r], &st, NULL));
+        ASSERT_OK(topo_flip_arrays(m->nv, m->xyz, m->nt, m->tets, m->region, NULL, &p,
+                                   NULL, &nt[r], &tv[r], &rg[r], &st, NULL));
     ASSERT_TRUE(st.edge_removals + st.flips23 > 0);
     ASSERT_EQ_INT(st.nt_out, nt[0]);
     ASSERT_EQ_INT(nt[0], nt[1]);
@@ -494,7 +525,8 @@ TEST(driver_is_deterministic)
 }
 
 TEST_MAIN("topo", T(orient3d_exact_near_coplanar), T(edge_removal_3_2_keeps_volume),
-          T(edge_removal_rings_3_to_8), T(flip_2_3), T(mixed_tag_shell_blocks_removal),
+          T(edge_removal_rings_3_to_8), T(flip_2_3),
+          T(export_keeps_the_callers_vertex_order), T(mixed_tag_shell_blocks_removal),
           T(non_convex_ring_refused), T(four_boundary_corner_floor),
           T(rollback_restores_exactly), T(random_flips_keep_invariants),
           T(driver_is_deterministic))

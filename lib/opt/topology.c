@@ -1,0 +1,201 @@
+/* topology.c - --topology flips: the smoother and the flips of lib/topo
+ * alternated (opt/topology.h). */
+#include "opt/topology.h"
+
+#include "core/tet.h"
+#include "geom/metric.h"
+#include "topo/topo.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+/* Rounds of flips, each followed by smoothing: Stellar stops after three rounds
+ * without gain; here a round without a flip, or whose smoothing gains less than
+ * TOPO_GAIN in mean ratio with no rise of the minimum, ends the run. */
+enum { TOPO_ROUNDS = 4 };
+#define TOPO_GAIN 1e-4
+
+/* One round of flips on m: the tets oriented from the connectivity (mesh_orient:
+ * tets written in the other order are flipped for lib/topo and written back so),
+ * improved, and m's tets and regions replaced when a flip was made. */
+static qdc_status flip_round(mesh_t *m, const opt_options *o, topo_stats *ts,
+                             qdc_error *err)
+{
+    uint8_t *flip = qdc_malloc((size_t)m->nt);
+    int32_t *tv = qdc_mallocn(4 * (size_t)m->nt, sizeof *tv), *tets = NULL,
+            *region = NULL;
+    int32_t nt = 0;
+    mesh_orientation mo;
+    topo_params p;
+    qdc_status st;
+
+    memset(ts, 0, sizeof *ts);
+    if (!flip || !tv) {
+        st = qdc_fail(err, QDC_ENOMEM, "out of memory");
+        goto out;
+    }
+    st = mesh_orient(m, flip, &mo, err);
+    if (st != QDC_OK)
+        goto out;
+    memcpy(tv, m->tets, 4 * (size_t)m->nt * sizeof *tv);
+    for (int32_t t = 0; t < m->nt; t++)
+        if (flip[t]) {
+            tv[4 * (size_t)t] = m->tets[4 * (size_t)t + 1];
+            tv[4 * (size_t)t + 1] = m->tets[4 * (size_t)t];
+        }
+    topo_params_default(&p);
+    st = topo_flip_arrays(m->nv, m->xyz, m->nt, tv, m->region, flip, &p, o->cancel, &nt,
+                          &tets, m->region ? &region : NULL, ts, err);
+    if (st == QDC_ECANCEL)
+        st = QDC_OK; /* the mesh as the flips left it is valid */
+    if (st != QDC_OK || ts->edge_removals + ts->flips23 == 0)
+        goto out;
+    qdc_free(m->tets);
+    m->tets = tets;
+    tets = NULL;
+    if (m->region) {
+        qdc_free(m->region);
+        m->region = region;
+        region = NULL;
+    }
+    m->nt = nt;
+out:
+    qdc_free(flip);
+    qdc_free(tv);
+    qdc_free(tets);
+    qdc_free(region);
+    return st;
+}
+
+/* The record of the mesh after a round of flips (phase "topology"), each tet
+ * signed under the connectivity's orientation. */
+static qdc_status flip_record(const mesh_t *m, int iteration, double t0, opt_progress *r,
+                              qdc_error *err)
+{
+    double sum = 0.0, sq = 0.0;
+    uint8_t *flip = qdc_malloc((size_t)m->nt);
+    mesh_orientation mo;
+    qdc_status st;
+
+    memset(r, 0, sizeof *r);
+    if (!flip)
+        return qdc_fail(err, QDC_ENOMEM, "out of memory");
+    st = mesh_orient(m, flip, &mo, err);
+    if (st != QDC_OK) {
+        qdc_free(flip);
+        return st;
+    }
+    r->iteration = iteration;
+    r->phase = "topology";
+    r->q_min = INFINITY;
+    r->dih_min = 180.0;
+    r->dih_max = 0.0;
+    for (int32_t t = 0; t < m->nt; t++) {
+        const int32_t *tt = m->tets + 4 * (size_t)t;
+        int s0 = flip[t] ? 1 : 0, s1 = 1 - s0;
+        const double *p0 = m->xyz + 3 * (size_t)tt[s0], *p1 = m->xyz + 3 * (size_t)tt[s1];
+        const double *p2 = m->xyz + 3 * (size_t)tt[2], *p3 = m->xyz + 3 * (size_t)tt[3];
+        metric_parts pt;
+        double q, a0, a1;
+        metric_parts_for(OPT_METRIC_MIMR, p0, p1, p2, p3, &pt);
+        q = metric_mean_ratio(&pt);
+        sum += q;
+        sq += q * q;
+        if (q < r->q_min)
+            r->q_min = q;
+        if (geom_tet_inverted(pt.vol)) {
+            r->n_inverted++;
+            continue;
+        }
+        metric_dihedral_range(p0, p1, p2, p3, &a0, &a1);
+        if (a0 < r->dih_min)
+            r->dih_min = a0;
+        if (a1 > r->dih_max)
+            r->dih_max = a1;
+    }
+    r->q_mean = sum / m->nt;
+    r->q_std = sqrt(fmax(0.0, sq / m->nt - r->q_mean * r->q_mean));
+    r->elapsed = qdc_now() - t0;
+    qdc_free(flip);
+    return QDC_OK;
+}
+
+qdc_status opt_topology_run(mesh_t *m, const opt_options *opts, opt_result *res,
+                            qdc_error *err)
+{
+    opt_options o = *opts;
+    opt_result first, last;
+    double t0 = qdc_now();
+    int record = 0, stopped = 0;
+    qdc_status st;
+
+    o.topology = OPT_TOPOLOGY_NONE;
+    st = opt_run(m, &o, &first, err);
+    if (st != QDC_OK) {
+        if (res)
+            *res = first;
+        return st;
+    }
+    last = first;
+    first.tets_in = m->nt;
+    record = first.last_record;
+    for (int round = 0; round < TOPO_ROUNDS && !stopped; round++) {
+        topo_stats ts;
+        opt_result r;
+        opt_progress pr;
+        double left = 0.0;
+        if (last.outcome == OPT_STOPPED)
+            break; /* cancelled, out of time or the solver in trouble */
+        st = flip_round(m, &o, &ts, err);
+        if (st != QDC_OK)
+            break;
+        if (ts.edge_removals + ts.flips23 == 0)
+            break;
+        first.topo_rounds++;
+        first.topo_edge_removals += ts.edge_removals;
+        first.topo_flips23 += ts.flips23;
+        for (int n = 3; n <= FLIP_MAXRING; n++)
+            first.topo_by_ring[n] += ts.by_ring[n];
+        st = flip_record(m, ++record, t0, &pr, err);
+        if (st != QDC_OK)
+            break;
+        if (opts->progress && opts->progress(opts->progress_ctx, &pr)) {
+            last.outcome = OPT_STOPPED;
+            last.stop = OPT_STOP_CANCELLED;
+            break;
+        }
+        if (opts->time_limit > 0) {
+            left = opts->time_limit - (qdc_now() - t0);
+            if (left <= 0) {
+                last.outcome = OPT_STOPPED;
+                last.stop = OPT_STOP_TIME_LIMIT;
+                break;
+            }
+            o.time_limit = left;
+        }
+        st = opt_run(m, &o, &r, err);
+        if (st != QDC_OK)
+            break; /* m is the flipped mesh, valid */
+        record += r.last_record;
+        stopped = r.after.q_min <= last.after.q_min &&
+                  r.after.q_mean < last.after.q_mean + TOPO_GAIN;
+        last = r;
+    }
+    if (st != QDC_OK && st != QDC_ENOMEM)
+        st = QDC_OK; /* a later round's failure leaves the last valid mesh */
+    last.before = first.before;
+    last.tets_in = first.tets_in;
+    last.tets_out = m->nt;
+    last.topo_rounds = first.topo_rounds;
+    last.topo_edge_removals = first.topo_edge_removals;
+    last.topo_flips23 = first.topo_flips23;
+    memcpy(last.topo_by_ring, first.topo_by_ring, sizeof last.topo_by_ring);
+    last.iterations += first.iterations;
+    last.last_record = record;
+    last.t_total = qdc_now() - t0;
+    snprintf(last.stop_reason, sizeof last.stop_reason, "%s", opt_stop_name(last.stop));
+    if (res)
+        *res = last;
+    return st;
+}
