@@ -685,14 +685,15 @@ static void optimize_summary(const optimize_args *x, const opt_result *res)
         fprintf(stderr,
                 "qdc: topology %s: tets %d -> %d (vertices kept); %lld edges removed "
                 "(rings of 3: %lld, 4: %lld, 5: %lld, 6: %lld, 7-10: %lld), %lld 2-3 "
-                "flips, %d rounds\n",
+                "flips, %lld multi-face removals, %d rounds\n",
                 opt_topology_name(x->o.topology), (int)res->tets_in, (int)res->tets_out,
                 (long long)res->topo_edge_removals, (long long)res->topo_by_ring[3],
                 (long long)res->topo_by_ring[4], (long long)res->topo_by_ring[5],
                 (long long)res->topo_by_ring[6],
                 (long long)(res->topo_by_ring[7] + res->topo_by_ring[8] +
                             res->topo_by_ring[9] + res->topo_by_ring[10]),
-                (long long)res->topo_flips23, res->topo_rounds);
+                (long long)res->topo_flips23, (long long)res->topo_multiface,
+                res->topo_rounds);
 }
 
 /* --report FILE.json: quality of the input (orig) and of the result (m), the

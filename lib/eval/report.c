@@ -344,6 +344,7 @@ qdc_status report_write_json(const report_t *r, qdc_write_fn fn, void *ctx,
             }
             jw_close(&w, '}');
             jw_int(&w, "flips23", s->topo_flips23);
+            jw_int(&w, "multiface_removals", s->topo_multiface);
             jw_int(&w, "rounds", s->topo_rounds);
             jw_close(&w, '}');
         }

@@ -159,6 +159,7 @@ typedef struct {
     int64_t topo_edge_removals; /* --topology: edges removed (3-2, 4-4, 5-6 ... flips) */
     int64_t topo_by_ring[11];   /* of which with a ring of n tets (n = 3..10) */
     int64_t topo_flips23;       /* 2-3 face flips */
+    int64_t topo_multiface;     /* multi-face removals */
     int topo_rounds;            /* rounds of flips followed by smoothing */
     opt_stop stop;              /* why the run stopped (decides; stop_reason names it) */
     char stop_reason[64]; /* opt_stop_name(stop): "converged", "max-iter", "no-descent",

@@ -49,7 +49,7 @@ static qdc_status flip_round(mesh_t *m, const opt_options *o, topo_stats *ts,
                           &tets, m->region ? &region : NULL, ts, err);
     if (st == QDC_ECANCEL)
         st = QDC_OK; /* the mesh as the flips left it is valid */
-    if (st != QDC_OK || ts->edge_removals + ts->flips23 == 0)
+    if (st != QDC_OK || ts->edge_removals + ts->flips23 + ts->multiface == 0)
         goto out;
     qdc_free(m->tets);
     m->tets = tets;
@@ -150,11 +150,12 @@ qdc_status opt_topology_run(mesh_t *m, const opt_options *opts, opt_result *res,
         st = flip_round(m, &o, &ts, err);
         if (st != QDC_OK)
             break;
-        if (ts.edge_removals + ts.flips23 == 0)
+        if (ts.edge_removals + ts.flips23 + ts.multiface == 0)
             break;
         first.topo_rounds++;
         first.topo_edge_removals += ts.edge_removals;
         first.topo_flips23 += ts.flips23;
+        first.topo_multiface += ts.multiface;
         for (int n = 3; n <= FLIP_MAXRING; n++)
             first.topo_by_ring[n] += ts.by_ring[n];
         st = flip_record(m, ++record, t0, &pr, err);
@@ -190,6 +191,7 @@ qdc_status opt_topology_run(mesh_t *m, const opt_options *opts, opt_result *res,
     last.topo_rounds = first.topo_rounds;
     last.topo_edge_removals = first.topo_edge_removals;
     last.topo_flips23 = first.topo_flips23;
+    last.topo_multiface = first.topo_multiface;
     memcpy(last.topo_by_ring, first.topo_by_ring, sizeof last.topo_by_ring);
     last.iterations += first.iterations;
     last.last_record = record;

@@ -216,3 +216,195 @@ int flip_23_eval(const tmesh *tm, int32_t t, int f, double floor4, double margin
     finish_cand(tm, c, qsum);
     return 1;
 }
+
+/* A face of the sandwich: its tets on a's side and on b's, and its corners in
+ * the order that makes (x, y, z, b) positive. */
+typedef struct {
+    int32_t ta, tb;
+    int32_t v[3];
+} sface;
+
+/* The boundary of the disk of faces s[0..n) as a ring of vertices such that
+ * (a, b, ring[k], ring[k+1]) is positive: the directed edges of the faces that
+ * appear once, chained. Returns its length, or 0 when the boundary is not one
+ * simple cycle of n + 2 vertices (a vertex inside the disk, a pinch). */
+static int disk_ring(const sface *s, int n, int32_t *ring)
+{
+    int32_t from[3 * 2 * FLIP_MAXRING], to[3 * 2 * FLIP_MAXRING];
+    int ne = 0, len = 0;
+
+    for (int i = 0; i < n; i++)
+        for (int e = 0; e < 3; e++) {
+            int32_t x = s[i].v[e], y = s[i].v[(e + 1) % 3];
+            int inner = 0;
+            for (int j = 0; j < n && !inner; j++)
+                for (int g = 0; g < 3; g++)
+                    if (j != i && s[j].v[g] == y && s[j].v[(g + 1) % 3] == x)
+                        inner = 1;
+            if (!inner) {
+                from[ne] = x;
+                to[ne] = y;
+                ne++;
+            }
+        }
+    if (ne != n + 2 || ne > FLIP_MAXRING)
+        return 0;
+    ring[0] = from[0];
+    for (len = 1; len < ne; len++) {
+        int k = -1;
+        for (int e = 0; e < ne; e++)
+            if (from[e] == ring[len - 1])
+                k = k < 0 ? e : -2;
+        if (k < 0)
+            return 0;
+        ring[len] = to[k];
+        for (int j = 0; j < len; j++)
+            if (ring[j] == ring[len])
+                return 0;
+    }
+    /* the chain must close: the last vertex leads back to the first */
+    for (int e = 0; e < ne; e++)
+        if (from[e] == ring[ne - 1])
+            return to[e] == ring[0] ? ne : 0;
+    return 0;
+}
+
+/* The sandwich face on a's tet ta opposite a, or 0 when the tet across that
+ * face is not b's or the face is not free to go. */
+static int sandwich(const tmesh *tm, int32_t ta, int32_t a, int32_t b, int32_t tag,
+                    sface *out)
+{
+    int la = tmesh_local(tm, ta, a);
+    int32_t nb = la < 0 ? -1 : tm->adj[4 * (size_t)ta + la];
+
+    if (nb < 0 || tm->fcons[ta] >> la & 1 || tm->tag[ta] != tag || tm->q[ta] < -1.0)
+        return 0;
+    if (tm->tv[nb] != b || tm->tag[nb / 4] != tag || tm->q[nb / 4] < -1.0)
+        return 0;
+    out->ta = ta;
+    out->tb = nb / 4;
+    for (int s = 0; s < 3; s++)
+        out->v[s] = tm->tv[4 * (size_t)ta + tet_face_of[la][s]];
+    return 1;
+}
+
+/* 1 when edge (x, y) of tet t is constrained. */
+static int edge_constrained(const tmesh *tm, int32_t t, int32_t x, int32_t y)
+{
+    int lx = tmesh_local(tm, t, x), ly = tmesh_local(tm, t, y);
+
+    for (int e = 0; e < 6; e++)
+        if ((tmesh_edge[e][0] == lx && tmesh_edge[e][1] == ly) ||
+            (tmesh_edge[e][0] == ly && tmesh_edge[e][1] == lx))
+            return tm->econs[t] >> e & 1;
+    return 1;
+}
+
+/* The smallest quality of the ring's tets around ab (below -1 if one is not
+ * allowed), and their sum. */
+static double ring_quality(const tmesh *tm, int32_t a, int32_t b, const int32_t *ring,
+                           int n, double floor4, double *sum)
+{
+    double m = INFINITY;
+
+    *sum = 0.0;
+    for (int k = 0; k < n; k++) {
+        int32_t v[4] = {a, b, ring[k], ring[(k + 1) % n]};
+        double q = tmesh_quality(tm, v, floor4);
+        if (q < -1.0)
+            return q;
+        *sum += q;
+        if (q < m)
+            m = q;
+    }
+    return m;
+}
+
+int flip_multiface_eval(const tmesh *tm, int32_t t, int f, int maxring, double floor4,
+                        double margin, flip_cand *c)
+{
+    sface s[FLIP_MAXRING], best_s[FLIP_MAXRING];
+    int32_t a = tm->tv[4 * (size_t)t + f], b, ring[FLIP_MAXRING], tag = tm->tag[t];
+    int n = 1, best_n = 0, best_len = 0;
+    double best_q = -INFINITY, best_sum = 0.0;
+    int32_t best_ring[FLIP_MAXRING];
+
+    if (maxring > FLIP_MAXRING)
+        maxring = FLIP_MAXRING;
+    if (tm->adj[4 * (size_t)t + f] < 0)
+        return 0;
+    b = tm->tv[tm->adj[4 * (size_t)t + f]];
+    if (!sandwich(tm, t, a, b, tag, &s[0]))
+        return 0;
+    /* grow: each step adds the neighbouring face that makes the disk's worst
+     * new tet best; stop when no step beats the best disk so far */
+    while (n + 3 <= maxring) {
+        sface cand, pick;
+        double pick_q = -INFINITY, pick_sum = 0.0;
+        int32_t pick_ring[FLIP_MAXRING];
+        int pick_len = 0, have = 0;
+        for (int i = 0; i < n; i++)
+            for (int e = 0; e < 3; e++) {
+                int32_t x = s[i].v[e], y = s[i].v[(e + 1) % 3], z = s[i].v[(e + 2) % 3];
+                int32_t na = tm->adj[4 * (size_t)s[i].ta + tmesh_local(tm, s[i].ta, z)];
+                int32_t nbb = tm->adj[4 * (size_t)s[i].tb + tmesh_local(tm, s[i].tb, z)];
+                int dup = 0, len;
+                double q, sum;
+                if (na < 0 || nbb < 0 || edge_constrained(tm, s[i].ta, x, y))
+                    continue;
+                if (!sandwich(tm, na / 4, a, b, tag, &cand) || cand.tb != nbb / 4)
+                    continue; /* the ring of (x, y) is not (z, a, w, b) */
+                for (int j = 0; j < n; j++)
+                    dup |= s[j].ta == cand.ta;
+                if (dup)
+                    continue;
+                s[n] = cand;
+                len = disk_ring(s, n + 1, ring);
+                if (!len)
+                    continue;
+                q = ring_quality(tm, a, b, ring, len, floor4, &sum);
+                if (!have || q > pick_q || (q == pick_q && sum > pick_sum)) {
+                    pick = cand;
+                    pick_q = q;
+                    pick_sum = sum;
+                    pick_len = len;
+                    memcpy(pick_ring, ring, sizeof ring);
+                    have = 1;
+                }
+            }
+        if (!have || (best_n && !(pick_q > best_q)))
+            break;
+        s[n++] = pick;
+        if (pick_q >= -1.0 && (!best_n || pick_q > best_q)) {
+            best_q = pick_q;
+            best_sum = pick_sum;
+            best_n = n;
+            best_len = pick_len;
+            memcpy(best_s, s, sizeof s);
+            memcpy(best_ring, pick_ring, sizeof best_ring);
+        }
+    }
+    if (!best_n)
+        return 0;
+    c->kind = FLIP_MULTIFACE;
+    c->nold = 2 * best_n;
+    for (int i = 0; i < best_n; i++) {
+        c->old[2 * i] = best_s[i].ta;
+        c->old[2 * i + 1] = best_s[i].tb;
+    }
+    c->qmin_old = cavity_min(tm, c->old, c->nold);
+    if (!(best_q > c->qmin_old + margin))
+        return 0;
+    c->qmin_new = best_q;
+    c->nnew = best_len;
+    for (int k = 0; k < best_len; k++) {
+        c->newt[k][0] = a;
+        c->newt[k][1] = b;
+        c->newt[k][2] = best_ring[k];
+        c->newt[k][3] = best_ring[(k + 1) % best_len];
+    }
+    memcpy(c->key, s[0].v, sizeof c->key);
+    tmesh_sort3(c->key);
+    finish_cand(tm, c, best_sum);
+    return 1;
+}

@@ -13,17 +13,17 @@
 #include "topo/tmesh.h"
 
 enum { FLIP_MAXRING = 10 };
-enum { FLIP_EDGE = 1, FLIP_23 = 2 };
+enum { FLIP_EDGE = 1, FLIP_23 = 2, FLIP_MULTIFACE = 3 };
 
 typedef struct {
     int kind; /* FLIP_EDGE or FLIP_23 */
     int nold; /* tets removed (the ring, or the two tets of the face) */
     int nnew; /* tets made */
-    int32_t old[FLIP_MAXRING];
+    int32_t old[2 * FLIP_MAXRING];
     int32_t newt[2 * FLIP_MAXRING][4];
     double qmin_old, qmin_new; /* smallest mean ratio in the cavity before, after */
     double gain;               /* sum of (1 - q) over the old tets less over the new */
-    int32_t key[3];            /* the edge's vertices sorted (and -1), or the face's */
+    int32_t key[3]; /* the edge's vertices sorted (and -1), or the (first) face's */
 } flip_cand;
 
 /* Remove edge e (tmesh_edge) of live tet t: its ring of at most maxring
@@ -41,5 +41,18 @@ int flip_edge_eval(const tmesh *tm, int32_t t, int e, int maxring, double floor4
  * have a mean ratio above qmin_old + margin; else 0. */
 int flip_23_eval(const tmesh *tm, int32_t t, int f, double floor4, double margin,
                  flip_cand *c);
+
+/* Multi-face removal (Stellar's removemultiface, the inverse of edge removal):
+ * the faces sandwiched between the apexes a (of t, opposite face f) and b (across
+ * f), a disk of F faces whose boundary is a ring of F + 2 vertices, with the 2F
+ * tets on them, become the F + 2 tets around the new edge ab. The disk grows
+ * from face f one face at a time, each time by the face that makes the worst new
+ * tet best, up to a ring of maxring (a single face is the 2-3 flip, left to
+ * flip_23_eval). Returns 1 with *c filled for the best disk of two faces or
+ * more whose new tets all have a mean ratio above qmin_old + margin; 0 when
+ * none has, or f is constrained, on the boundary, between tags. No vertex
+ * leaves the mesh: the disk never has a vertex inside it. */
+int flip_multiface_eval(const tmesh *tm, int32_t t, int f, int maxring, double floor4,
+                        double margin, flip_cand *c);
 
 #endif

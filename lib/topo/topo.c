@@ -117,12 +117,18 @@ static int best_flip(const tmesh *tm, int32_t t, const topo_params *p, flip_cand
             *best = c;
             have = 1;
         }
-    for (int f = 0; f < 4; f++)
+    for (int f = 0; f < 4; f++) {
         if (flip_23_eval(tm, t, f, p->floor4, p->margin, &c) &&
             (!have || better(&c, best))) {
             *best = c;
             have = 1;
         }
+        if (flip_multiface_eval(tm, t, f, p->maxring, p->floor4, p->margin, &c) &&
+            (!have || better(&c, best))) {
+            *best = c;
+            have = 1;
+        }
+    }
     return have;
 }
 
@@ -168,8 +174,10 @@ qdc_status topo_improve(tmesh *tm, const topo_params *p, topo_stats *st,
             if (c.kind == FLIP_EDGE) {
                 st->edge_removals++;
                 st->by_ring[c.nold]++;
-            } else {
+            } else if (c.kind == FLIP_23) {
                 st->flips23++;
+            } else {
+                st->multiface++;
             }
             for (int j = 0; j < c.nnew && s == QDC_OK; j++)
                 if (tm->q[ids[j]] < p->qgoal)

@@ -1,5 +1,6 @@
 /* topo.h - the topology driver: the worst tets first, from a queue, each given
- * the best improving flip of its edges (edge removal) and faces (2-3 flip).
+ * the best improving flip of its edges (edge removal) and faces (2-3 flip,
+ * multi-face removal).
  * An operation is taken only when the smallest mean ratio of its cavity rises by
  * at least margin; among those of one tet, the larger gain (sum of 1 - q over the
  * old tets less over the new: the badness the cavity loses, Netgen's objective),
@@ -29,6 +30,7 @@ typedef struct {
     int64_t edge_removals;             /* edges removed */
     int64_t by_ring[FLIP_MAXRING + 1]; /* of which with a ring of n tets */
     int64_t flips23;                   /* 2-3 flips */
+    int64_t multiface;                 /* multi-face removals */
     int64_t visits;                    /* tets taken from the queue */
     int32_t nt_in, nt_out;             /* live tets before and after */
 } topo_stats;

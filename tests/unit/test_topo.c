@@ -208,6 +208,50 @@ TEST(flip_2_3)
     tmesh_free(tm);
 }
 
+/* Multi-face removal undoes an edge removal: the pentagon's bipyramid cut into
+ * 6 tets (3 faces between the apexes) goes back to the 5 tets around the axis. */
+TEST(multiface_removal_restores_the_ring)
+{
+    tmesh *tm = ring_mesh(5, -1, 1, NULL);
+    double v6 = 2.0 * 5 * sin(2 * PI / 5);
+    flip_cand c;
+    int applied = 0, found = 0;
+
+    ASSERT_TRUE(tm);
+    ASSERT_EQ_INT(flip_edge_eval(tm, 0, 0, 10, 0.0, -INFINITY, &c), 1);
+    ASSERT_OK(tmesh_replace(tm, c.old, c.nold, (const int32_t(*)[4])c.newt, c.nnew, NULL,
+                            &applied));
+    tmesh_commit(tm);
+    ASSERT_EQ_INT(tm->nlive, 6);
+    for (int32_t t = 0; t < tm->hi && !found; t++) {
+        int la = tmesh_local(tm, t, 0);
+        if (tm->tv[4 * t] < 0 || la < 0)
+            continue;
+        ASSERT_EQ_INT(flip_multiface_eval(tm, t, la, 10, 0.0, -INFINITY, &c), 1);
+        found = 1;
+    }
+    ASSERT_EQ_INT(found, 1);
+    ASSERT_EQ_INT(c.kind, FLIP_MULTIFACE);
+    ASSERT_EQ_INT(c.nold, 6);
+    ASSERT_EQ_INT(c.nnew, 5);
+    ASSERT_OK(tmesh_replace(tm, c.old, c.nold, (const int32_t(*)[4])c.newt, c.nnew, NULL,
+                            &applied));
+    ASSERT_EQ_INT(applied, 1);
+    tmesh_commit(tm);
+    ASSERT_EQ_INT(tm->nlive, 5);
+    ASSERT_TRUE(consistent(tm));
+    ASSERT_NEAR(total_vol6(tm), v6, 1e-13);
+    for (int32_t t = 0; t < tm->hi; t++) /* every tet has the axis again */
+        if (tm->tv[4 * t] >= 0)
+            ASSERT_TRUE(tmesh_local(tm, t, 0) >= 0 && tmesh_local(tm, t, 1) >= 0);
+    /* on a boundary face there is nothing across: refused */
+    for (int32_t t = 0; t < tm->hi; t++)
+        for (int f = 0; f < 4; f++)
+            if (tm->tv[4 * t] >= 0 && tm->adj[4 * t + f] < 0)
+                ASSERT_EQ_INT(flip_multiface_eval(tm, t, f, 10, 0.0, -INFINITY, &c), 0);
+    tmesh_free(tm);
+}
+
 /* Tets the caller writes in the other vertex order come back so, and the tets
  * that replace them follow the cavity's convention. */
 TEST(export_keeps_the_callers_vertex_order)
@@ -447,7 +491,7 @@ TEST(random_flips_keep_invariants)
     int32_t nf0, nf1, *f0, *f1;
     double v0[3], v1[3], q0;
     uint64_t s = 99;
-    int64_t done = 0;
+    int64_t done = 0, nmf = 0;
     topo_params p;
     topo_stats st;
 
@@ -460,13 +504,16 @@ TEST(random_flips_keep_invariants)
     tag_vols(tm, v0);
     for (int it = 0; it < 20000; it++) {
         int32_t t = (int32_t)((tm_rand(&s) + 1) * 0.5 * tm->hi) % tm->hi;
-        int which = (int)((tm_rand(&s) + 1) * 5) % 10, applied = 0;
+        int which = (int)((tm_rand(&s) + 1) * 7) % 14, applied = 0;
         flip_cand c;
         int ok;
         if (tm->tv[4 * t] < 0)
             continue;
         ok = which < 6 ? flip_edge_eval(tm, t, which, 10, 0.05, -INFINITY, &c)
-                       : flip_23_eval(tm, t, which - 6, 0.05, -INFINITY, &c);
+             : which < 10
+                 ? flip_23_eval(tm, t, which - 6, 0.05, -INFINITY, &c)
+                 : flip_multiface_eval(tm, t, which - 10, 10, 0.05, -INFINITY, &c);
+        nmf += ok && which >= 10;
         if (!ok)
             continue;
         ASSERT_OK(tmesh_replace(tm, c.old, c.nold, (const int32_t(*)[4])c.newt, c.nnew,
@@ -476,12 +523,13 @@ TEST(random_flips_keep_invariants)
         done++;
     }
     ASSERT_TRUE(done > 1000);
+    ASSERT_TRUE(nmf > 10);
     ASSERT_TRUE(consistent(tm));
     q0 = min_q(tm);
     topo_params_default(&p);
     p.qgoal = 0.9;
     ASSERT_OK(topo_improve(tm, &p, &st, NULL));
-    ASSERT_TRUE(st.edge_removals + st.flips23 > 100);
+    ASSERT_TRUE(st.edge_removals + st.flips23 + st.multiface > 100);
     ASSERT_TRUE(consistent(tm));
     ASSERT_TRUE(min_q(tm) > q0);
     f1 = cons_faces(tm, &nf1);
@@ -512,7 +560,7 @@ TEST(driver_is_deterministic)
     for (int r = 0; r < 2; r++)
         ASSERT_OK(topo_flip_arrays(m->nv, m->xyz, m->nt, m->tets, m->region, NULL, &p,
                                    NULL, &nt[r], &tv[r], &rg[r], &st, NULL));
-    ASSERT_TRUE(st.edge_removals + st.flips23 > 0);
+    ASSERT_TRUE(st.edge_removals + st.flips23 + st.multiface > 0);
     ASSERT_EQ_INT(st.nt_out, nt[0]);
     ASSERT_EQ_INT(nt[0], nt[1]);
     ASSERT_TRUE(!memcmp(tv[0], tv[1], 16 * (size_t)nt[0]));
@@ -526,6 +574,7 @@ TEST(driver_is_deterministic)
 
 TEST_MAIN("topo", T(orient3d_exact_near_coplanar), T(edge_removal_3_2_keeps_volume),
           T(edge_removal_rings_3_to_8), T(flip_2_3),
+          T(multiface_removal_restores_the_ring),
           T(export_keeps_the_callers_vertex_order), T(mixed_tag_shell_blocks_removal),
           T(non_convex_ring_refused), T(four_boundary_corner_floor),
           T(rollback_restores_exactly), T(random_flips_keep_invariants),
