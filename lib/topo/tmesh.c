@@ -138,8 +138,9 @@ static qdc_status match_faces(tmesh *tm, int32_t nt, qdc_error *err)
     int32_t nv = tm->nv;
     int32_t *ptr = qdc_calloc((size_t)nv + 1, sizeof *ptr);
     int32_t *idx = qdc_mallocn(4 * (size_t)nt, sizeof *idx);
+    int64_t *rest = qdc_mallocn(4 * (size_t)nt, sizeof *rest); /* the other two */
 
-    if (!ptr || !idx) {
+    if (!ptr || !idx || !rest) {
         st = QDC_ENOMEM;
         goto out;
     }
@@ -154,19 +155,17 @@ static qdc_status match_faces(tmesh *tm, int32_t nt, qdc_error *err)
     for (int32_t s = 0; s < 4 * nt; s++) {
         int32_t k[3];
         face_key(tm->tv + 4 * (size_t)(s / 4), s % 4, k);
+        rest[ptr[k[0]]] = (int64_t)k[1] << 32 | (uint32_t)k[2];
         idx[ptr[k[0]]++] = s;
     }
     for (int32_t v = nv; v > 0; v--)
         ptr[v] = ptr[v - 1];
     ptr[0] = 0;
     for (int32_t v = 0; v < nv; v++)
-        for (int32_t i = ptr[v]; i < ptr[v + 1]; i++) {
-            int32_t s = idx[i], ks[3];
-            face_key(tm->tv + 4 * (size_t)(s / 4), s % 4, ks);
+        for (int32_t i = ptr[v]; i < ptr[v + 1]; i++)
             for (int32_t j = i + 1; j < ptr[v + 1]; j++) {
-                int32_t r = idx[j], kr[3];
-                face_key(tm->tv + 4 * (size_t)(r / 4), r % 4, kr);
-                if (!same_key(ks, kr))
+                int32_t s = idx[i], r = idx[j];
+                if (rest[i] != rest[j])
                     continue;
                 if (tm->adj[s] >= 0 || tm->adj[r] >= 0) {
                     st = qdc_fail(err, QDC_EMESH, "a face is shared by three tets");
@@ -177,10 +176,10 @@ static qdc_status match_faces(tmesh *tm, int32_t nt, qdc_error *err)
                 tm->adj[s] = r;
                 tm->adj[r] = s;
             }
-        }
 out:
     qdc_free(ptr);
     qdc_free(idx);
+    qdc_free(rest);
     return st;
 }
 
