@@ -19,7 +19,7 @@ typedef enum { OPT_WEIGHTS_OPTAVG = 0, OPT_WEIGHTS_PAPER } opt_weights;
 typedef enum { OPT_SOLVER_AUTO = 0, OPT_SOLVER_CHOLMOD, OPT_SOLVER_PCG } opt_solver;
 /* --topology: none keeps the connectivity (every vertex and tet as given); flips
  * alternates the smoother with flips that keep the vertex set, the boundary
- * triangles and the region tags (opt/topology.h). */
+ * triangles and the region tags (opt/topology.c). */
 typedef enum { OPT_TOPOLOGY_NONE = 0, OPT_TOPOLOGY_FLIPS } opt_topology;
 
 /* Why a run stopped. */
@@ -168,7 +168,7 @@ typedef struct {
 
 /* Optimize m in place (coordinates only; tets, regions, fixed flags untouched;
  * with o->topology FLIPS, m->tets, m->region and m->nt are replaced by the
- * improved connectivity, vertices and boundary triangles kept: opt/topology.h).
+ * improved connectivity, vertices and boundary triangles kept: opt/topology.c).
  * On OPT_FAILED (and on any status other than QDC_OK) m is unchanged.
  * During the run m->tets and m->region are lent to the run's renumbered copy
  * (NULL meanwhile: m must not be read from another thread); they come back

@@ -1,9 +1,21 @@
-/* topology.c - --topology flips: the smoother and the flips of lib/topo
- * alternated (opt/topology.h). */
-#include "opt/topology.h"
+/* topology.c - opt_run (opt/opt.h): the run with its reruns (rerun.c) for
+ * --topology none; for flips, that smoother alternated with the flips of
+ * lib/topo (edge removal, 2-3 flips, multi-face removal), after Stellar's
+ * schedule (Klingner and Shewchuk 2007): smooth; then flips, worst tets first;
+ * then smooth again where the flips opened room, a few rounds while the
+ * quality rises. The vertex set never changes (point data stays valid);
+ * boundary triangles and region tags come back as sets exactly as they went
+ * in; new tets are written in the vertex order convention of the tets they
+ * replace. m's coordinates, tets, regions and tet count are replaced by the
+ * result; res->tets_in/out and the topo_* counts filled, res->before the
+ * input's record, res->after the result's. The top of the run: it calls only
+ * the files below it. */
+#include "opt/opt.h"
 
+#include "core/mesh.h"
 #include "core/tet.h"
 #include "geom/metric.h"
+#include "opt/run.h"
 #include "topo/topo.h"
 
 #include <math.h>
@@ -124,8 +136,8 @@ static qdc_status flip_record(const mesh_t *m, int iteration, double t0, opt_pro
     return QDC_OK;
 }
 
-qdc_status opt_topology_run(mesh_t *m, const opt_options *opts, opt_result *res,
-                            qdc_error *err)
+static qdc_status topology_run(mesh_t *m, const opt_options *opts, opt_result *res,
+                               qdc_error *err)
 {
     opt_options o = *opts;
     opt_result first, last;
@@ -134,7 +146,7 @@ qdc_status opt_topology_run(mesh_t *m, const opt_options *opts, opt_result *res,
     qdc_status st;
 
     o.topology = OPT_TOPOLOGY_NONE;
-    st = opt_run(m, &o, &first, err);
+    st = opt_run_smooth(m, &o, &first, err);
     if (st != QDC_OK) {
         if (res)
             *res = first;
@@ -178,7 +190,7 @@ qdc_status opt_topology_run(mesh_t *m, const opt_options *opts, opt_result *res,
             }
             o.time_limit = left;
         }
-        st = opt_run(m, &o, &r, err);
+        st = opt_run_smooth(m, &o, &r, err);
         if (st != QDC_OK)
             break; /* m is the flipped mesh, valid */
         record += r.last_record;
@@ -203,4 +215,12 @@ qdc_status opt_topology_run(mesh_t *m, const opt_options *opts, opt_result *res,
     if (res)
         *res = last;
     return st;
+}
+
+qdc_status opt_run(mesh_t *m, const opt_options *opts, opt_result *res, qdc_error *err)
+{
+    if (opts && opts->topology != OPT_TOPOLOGY_NONE && m && m->nv > 0 && m->nt > 0 &&
+        m->xyz && m->tets)
+        return topology_run(m, opts, res, err);
+    return opt_run_smooth(m, opts, res, err);
 }

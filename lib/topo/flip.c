@@ -209,10 +209,7 @@ int flip_23_eval(const tmesh *tm, int32_t t, int f, double floor4, double margin
         }
     }
     c->nnew = 3;
-    c->key[0] = f0;
-    c->key[1] = f1;
-    c->key[2] = f2;
-    tmesh_sort3(c->key);
+    tet_sort3(f0, f1, f2, c->key);
     finish_cand(tm, c, qsum);
     return 1;
 }
@@ -403,8 +400,7 @@ int flip_multiface_eval(const tmesh *tm, int32_t t, int f, int maxring, double f
         c->newt[k][2] = best_ring[k];
         c->newt[k][3] = best_ring[(k + 1) % best_len];
     }
-    memcpy(c->key, s[0].v, sizeof c->key);
-    tmesh_sort3(c->key);
+    tet_sort3(s[0].v[0], s[0].v[1], s[0].v[2], c->key);
     finish_cand(tm, c, best_sum);
     return 1;
 }

@@ -32,9 +32,7 @@ struct tmesh_jent {
 /* The sorted vertices of face i of the tet with vertices v. */
 static void face_key(const int32_t *v, int i, int32_t k[3])
 {
-    for (int s = 0; s < 3; s++)
-        k[s] = v[tet_face_of[i][s]];
-    tmesh_sort3(k);
+    tet_sort3(v[tet_face_of[i][0]], v[tet_face_of[i][1]], v[tet_face_of[i][2]], k);
 }
 
 static int same_key(const int32_t a[3], const int32_t b[3])

@@ -96,25 +96,4 @@ static inline int tmesh_local(const tmesh *tm, int32_t t, int32_t v)
     return tt[0] == v ? 0 : tt[1] == v ? 1 : tt[2] == v ? 2 : tt[3] == v ? 3 : -1;
 }
 
-/* Sort three vertex ids ascending: the key of a face. */
-static inline void tmesh_sort3(int32_t k[3])
-{
-    int32_t x;
-    if (k[0] > k[1]) {
-        x = k[0];
-        k[0] = k[1];
-        k[1] = x;
-    }
-    if (k[1] > k[2]) {
-        x = k[1];
-        k[1] = k[2];
-        k[2] = x;
-    }
-    if (k[0] > k[1]) {
-        x = k[0];
-        k[0] = k[1];
-        k[1] = x;
-    }
-}
-
 #endif

@@ -443,15 +443,9 @@ static int32_t *cons_faces(const tmesh *tm, int32_t *n)
             int32_t nb = tm->adj[4 * t + i], v[3];
             if (!(tm->fcons[t] >> i & 1))
                 continue;
-            for (int s = 0; s < 3; s++)
-                v[s] = tm->tv[4 * t + tet_face_of[i][s]];
-            for (int x = 0; x < 3; x++)
-                for (int y = 0; y < 2; y++)
-                    if (v[y] > v[y + 1]) {
-                        int32_t w = v[y];
-                        v[y] = v[y + 1];
-                        v[y + 1] = w;
-                    }
+            tet_sort3(tm->tv[4 * t + tet_face_of[i][0]],
+                      tm->tv[4 * t + tet_face_of[i][1]],
+                      tm->tv[4 * t + tet_face_of[i][2]], v);
             memcpy(r + 5 * k, v, sizeof v);
             r[5 * k + 3] = tm->tag[t];
             r[5 * k + 4] = nb < 0 ? -1 : tm->tag[nb / 4];
