@@ -28,8 +28,9 @@ int job_opt_set(opt_options *o, const char *key, const char *val, double cap_tim
     if (o->topology != OPT_TOPOLOGY_NONE) {
         o->topology = OPT_TOPOLOGY_NONE;
         snprintf(why, why_cap,
-                 "topology: qdcd serves none only (its results keep the upload's tets); "
-                 "use `qdc optimize --topology flips`");
+                 "option topology: qdcd serves none only (a result is the upload with "
+                 "new coordinates: it cannot hold new tets); `qdc optimize --topology "
+                 "flips` runs it");
         return -1;
     }
     if (cap_time > 0 && (o->time_limit <= 0 || o->time_limit > cap_time))

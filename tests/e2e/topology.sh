@@ -79,7 +79,8 @@ for n in $names; do
     in=$TMP/c/$n.mesh
     ok=1
     for mode in none flips; do
-        if ! "$BIN/qdc" optimize --quiet --topology $mode "$in" "$TMP/$mode.mesh" 2> "$TMP/err"; then
+        if ! "$BIN/qdc" optimize --quiet --topology $mode "$in" "$TMP/$mode.mesh" \
+            --report "$TMP/$mode.json" 2> "$TMP/err"; then
             fail "topology: $n" "$mode: exit $?: $(tail -2 "$TMP/err")"
             ok=0
         fi
@@ -90,6 +91,24 @@ for n in $names; do
         fail "topology: $n: connectivity" "$*"
     else
         pass "topology: $n: vertices, boundary and interface triangles, regions kept ($2 -> $3 tets)"
+    fi
+    # the report counts the tets in and out and the operations done
+    r=$("$PY" - "$TMP/flips.json" "$TMP/none.json" "$2" "$3" << 'PY'
+import json, sys
+f, n = json.load(open(sys.argv[1])), json.load(open(sys.argv[2]))
+t = f["run"].get("topology", {})
+ops = t.get("edge_removals", 0) + t.get("flips23", 0) + t.get("multiface_removals", 0)
+ok = (t.get("tets_in") == int(sys.argv[3]) and t.get("tets_out") == int(sys.argv[4])
+      and ops > 0 and sum(t["edge_removals_by_ring"].values()) == t["edge_removals"]
+      and f["options"]["topology"] == "flips"
+      and "topology" not in n["run"] and "topology" not in n["options"])
+print("ok" if ok else "bad: %s" % t)
+PY
+)
+    if [ "$r" = ok ]; then
+        pass "topology: $n: the report counts tets in and out and the flips"
+    else
+        fail "topology: $n: report" "$r"
     fi
     q() { "$PY" "$QUALITY" "$1" | "$PY" -c 'import json, sys
 d = json.load(sys.stdin); print(d["n_inverted"], "%.4f" % d["eta_mean"], "%.3f" % d["dihedral_min"])'; }
