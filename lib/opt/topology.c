@@ -136,6 +136,40 @@ static qdc_status flip_record(const mesh_t *m, int iteration, double t0, opt_pro
     return QDC_OK;
 }
 
+/* The seconds and iterations of run r added to those of acc. */
+static void add_run(opt_result *acc, const opt_result *r)
+{
+    acc->iterations += r->iterations;
+    acc->t_setup += r->t_setup;
+    acc->t_weights += r->t_weights;
+    acc->t_assembly += r->t_assembly;
+    acc->t_solve += r->t_solve;
+    acc->t_linesearch += r->t_linesearch;
+    acc->t_harmonic += r->t_harmonic;
+    acc->t_finish += r->t_finish;
+}
+
+/* Progress of a round's smoothing: numbered after the records so far; its
+ * input record is left out (the "topology" record just sent holds it). */
+typedef struct {
+    opt_progress_fn fn;
+    void *ctx;
+    int offset;
+    double t_offset;
+} round_progress;
+
+static int round_report(void *ctx, const opt_progress *p)
+{
+    const round_progress *rp = ctx;
+    opt_progress q = *p;
+
+    if (p->iteration == 0)
+        return 0;
+    q.iteration += rp->offset;
+    q.elapsed += rp->t_offset;
+    return rp->fn(rp->ctx, &q);
+}
+
 static qdc_status topology_run(mesh_t *m, const opt_options *opts, opt_result *res,
                                qdc_error *err)
 {
@@ -143,6 +177,7 @@ static qdc_status topology_run(mesh_t *m, const opt_options *opts, opt_result *r
     opt_result first, last;
     double t0 = qdc_now();
     int record = 0, stopped = 0;
+    round_progress rp = {opts->progress, opts->progress_ctx, 0, 0.0};
     qdc_status st;
 
     o.topology = OPT_TOPOLOGY_NONE;
@@ -190,10 +225,17 @@ static qdc_status topology_run(mesh_t *m, const opt_options *opts, opt_result *r
             }
             o.time_limit = left;
         }
+        if (opts->progress) {
+            rp.offset = record;
+            rp.t_offset = qdc_now() - t0;
+            o.progress = round_report;
+            o.progress_ctx = &rp;
+        }
         st = opt_run_smooth(m, &o, &r, err);
         if (st != QDC_OK)
             break; /* m is the flipped mesh, valid */
         record += r.last_record;
+        add_run(&first, &r);
         stopped = r.after.q_min <= last.after.q_min &&
                   r.after.q_mean < last.after.q_mean + TOPO_GAIN;
         last = r;
@@ -208,7 +250,14 @@ static qdc_status topology_run(mesh_t *m, const opt_options *opts, opt_result *r
     last.topo_flips23 = first.topo_flips23;
     last.topo_multiface = first.topo_multiface;
     memcpy(last.topo_by_ring, first.topo_by_ring, sizeof last.topo_by_ring);
-    last.iterations += first.iterations;
+    last.iterations = first.iterations;
+    last.t_setup = first.t_setup;
+    last.t_weights = first.t_weights;
+    last.t_assembly = first.t_assembly;
+    last.t_solve = first.t_solve;
+    last.t_linesearch = first.t_linesearch;
+    last.t_harmonic = first.t_harmonic;
+    last.t_finish = first.t_finish;
     last.last_record = record;
     last.t_total = qdc_now() - t0;
     snprintf(last.stop_reason, sizeof last.stop_reason, "%s", opt_stop_name(last.stop));
