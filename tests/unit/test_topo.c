@@ -1,6 +1,7 @@
 /* test_topo.c - the topology layer: exact orientation, the mutable mesh and its
  * journal, edge removal, the 2-3 flip, their constraints, and the driver. */
 #include "core/tet.h"
+#include "opt/opt.h"
 #include "testlib.h"
 #include "testmesh.h"
 #include "topo/exact.h"
@@ -566,10 +567,114 @@ TEST(driver_is_deterministic)
     mesh_free(m);
 }
 
+static int cmp3(const void *x, const void *y)
+{
+    const int32_t *a = x, *b = y;
+    for (int s = 0; s < 3; s++)
+        if (a[s] != b[s])
+            return a[s] < b[s] ? -1 : 1;
+    return 0;
+}
+
+/* n faces (3 each) as sorted keys in sorted order, in a new array. */
+static int32_t *face_set(const int32_t *f, int32_t n)
+{
+    int32_t *r = malloc(12 * (size_t)n + 12);
+    if (!r)
+        return NULL;
+    for (int32_t i = 0; i < n; i++)
+        tet_sort3(f[3 * i], f[3 * i + 1], f[3 * i + 2], r + 3 * i);
+    qsort(r, (size_t)n, 12, cmp3);
+    return r;
+}
+
+/* opt_run with --topology flips on a perturbed two-region grid whose vertices
+ * are all fixed (so that only the flips can improve it): other tets, the same
+ * boundary and interface triangles (as sets), no tet inverted, the counts in the
+ * result, and a higher mean ratio than --topology none. */
+TEST(opt_run_flips_keeps_the_model)
+{
+    const int n = 6;
+    mesh_t *m = tm_grid(n, MESH_WITH_REGION | MESH_WITH_FIXED), *m0;
+    mesh_topo *t0 = NULL, *t1 = NULL;
+    opt_options o;
+    opt_result r0, r1;
+    int32_t *b0, *b1, *i0, *i1;
+
+    ASSERT_TRUE(m);
+    tm_perturb(m, n, 0.25, 11);
+    memset(m->fixed, 1, (size_t)m->nv);
+    m0 = mesh_dup(m);
+    ASSERT_TRUE(m0);
+    ASSERT_OK(mesh_topo_build(m, &t0, NULL));
+    ASSERT_EQ_INT(mesh_count_inverted(t0, m->xyz), 0);
+    opt_defaults(&o);
+    o.threads = 1;
+    ASSERT_OK(opt_run(m0, &o, &r0, NULL));
+    ASSERT_EQ_INT(m0->nt, m->nt);
+    ASSERT_EQ_INT(r0.tets_in, 0); /* none: nothing counted */
+    o.topology = OPT_TOPOLOGY_FLIPS;
+    ASSERT_OK(opt_run(m, &o, &r1, NULL));
+    ASSERT_EQ_INT(r1.tets_in, t0->nt);
+    ASSERT_EQ_INT(r1.tets_out, m->nt);
+    ASSERT_TRUE(r1.topo_edge_removals + r1.topo_flips23 + r1.topo_multiface > 0);
+    ASSERT_TRUE(r1.topo_rounds >= 1);
+    ASSERT_OK(mesh_topo_build(m, &t1, NULL));
+    ASSERT_EQ_INT(mesh_count_inverted(t1, m->xyz), 0);
+    ASSERT_EQ_INT(t1->nbf, t0->nbf);
+    ASSERT_EQ_INT(t1->nif, t0->nif);
+    b0 = face_set(t0->bfaces, t0->nbf);
+    b1 = face_set(t1->bfaces, t1->nbf);
+    i0 = face_set(t0->ifaces, t0->nif);
+    i1 = face_set(t1->ifaces, t1->nif);
+    ASSERT_TRUE(b0 && b1 && i0 && i1);
+    ASSERT_TRUE(!memcmp(b0, b1, 12 * (size_t)t0->nbf));
+    ASSERT_TRUE(!memcmp(i0, i1, 12 * (size_t)t0->nif));
+    ASSERT_TRUE(r1.after.q_mean > r0.after.q_mean);
+    ASSERT_TRUE(r1.after.q_min >= r0.after.q_min);
+    free(b0);
+    free(b1);
+    free(i0);
+    free(i1);
+    mesh_topo_free(t0);
+    mesh_topo_free(t1);
+    mesh_free(m0);
+    mesh_free(m);
+}
+
+/* Inverted input tets (all vertices fixed, so nothing untangles them) are left
+ * as they are: no cavity holds one, and no new tet is inverted. */
+TEST(opt_run_flips_leaves_inverted_input_alone)
+{
+    const int n = 6;
+    mesh_t *m = tm_grid(n, MESH_WITH_REGION | MESH_WITH_FIXED);
+    mesh_topo *t0 = NULL, *t1 = NULL;
+    opt_options o;
+    opt_result r;
+    int32_t inv0;
+
+    ASSERT_TRUE(m);
+    tm_perturb(m, n, 0.35, 11);
+    memset(m->fixed, 1, (size_t)m->nv);
+    ASSERT_OK(mesh_topo_build(m, &t0, NULL));
+    inv0 = mesh_count_inverted(t0, m->xyz);
+    ASSERT_TRUE(inv0 > 0);
+    opt_defaults(&o);
+    o.topology = OPT_TOPOLOGY_FLIPS;
+    ASSERT_OK(opt_run(m, &o, &r, NULL));
+    ASSERT_TRUE(r.topo_edge_removals + r.topo_flips23 + r.topo_multiface > 0);
+    ASSERT_OK(mesh_topo_build(m, &t1, NULL));
+    ASSERT_EQ_INT(mesh_count_inverted(t1, m->xyz), inv0);
+    mesh_topo_free(t0);
+    mesh_topo_free(t1);
+    mesh_free(m);
+}
+
 TEST_MAIN("topo", T(orient3d_exact_near_coplanar), T(edge_removal_3_2_keeps_volume),
           T(edge_removal_rings_3_to_8), T(flip_2_3),
           T(multiface_removal_restores_the_ring),
           T(export_keeps_the_callers_vertex_order), T(mixed_tag_shell_blocks_removal),
           T(non_convex_ring_refused), T(four_boundary_corner_floor),
           T(rollback_restores_exactly), T(random_flips_keep_invariants),
-          T(driver_is_deterministic))
+          T(driver_is_deterministic), T(opt_run_flips_keeps_the_model),
+          T(opt_run_flips_leaves_inverted_input_alone))
