@@ -240,8 +240,22 @@ static qdc_status topology_run(mesh_t *m, const opt_options *opts, opt_result *r
                   r.after.q_mean < last.after.q_mean + TOPO_GAIN;
         last = r;
     }
-    if (st != QDC_OK && st != QDC_ENOMEM)
-        st = QDC_OK; /* a later round's failure leaves the last valid mesh */
+    if (st != QDC_OK) {
+        /* m is the valid mesh of the round before (flip_round replaces the
+         * tets only when it succeeds, a failed smoothing leaves m as it was):
+         * returned as a stopped run, as opt_run does for solver trouble */
+        if (opts->log) {
+            char msg[400];
+            snprintf(msg, sizeof msg,
+                     "topology: a round failed (%s%s%.200s): the mesh of "
+                     "the round before is returned",
+                     qdc_status_str(st), err && err->msg[0] ? ": " : "",
+                     err ? err->msg : "");
+            opts->log(opts->log_ctx, 1, msg);
+        }
+        last.outcome = OPT_STOPPED;
+        st = QDC_OK;
+    }
     last.before = first.before;
     last.tets_in = first.tets_in;
     last.tets_out = m->nt;

@@ -670,6 +670,60 @@ TEST(opt_run_flips_leaves_inverted_input_alone)
     mesh_free(m);
 }
 
+/* Every allocation of a flips run failed in turn: either the run fails with the
+ * mesh as it was, or it returns a valid mesh (a later round's failure returns
+ * the mesh of the round before, as a stopped run). */
+TEST(flips_allocation_failures_are_clean)
+{
+#ifdef QDC_FAULT_INJECTION
+    const int n = 3;
+    mesh_t *m0 = tm_grid(n, MESH_WITH_REGION | MESH_WITH_FIXED), *m;
+    opt_options o;
+    long total, failed = 0;
+
+    ASSERT_TRUE(m0);
+    tm_perturb(m0, n, 0.25, 5);
+    memset(m0->fixed, 1, (size_t)m0->nv);
+    opt_defaults(&o);
+    o.topology = OPT_TOPOLOGY_FLIPS;
+    o.threads = 1;
+    m = mesh_dup(m0);
+    ASSERT_TRUE(m);
+    qdc_fault_set(0);
+    ASSERT_OK(opt_run(m, &o, NULL, NULL));
+    total = qdc_fault_count();
+    ASSERT_TRUE(m->nt != m0->nt || memcmp(m->tets, m0->tets, 16 * (size_t)m->nt));
+    mesh_free(m);
+    for (long k = 1; k <= total; k++) {
+        mesh_topo *tp = NULL;
+        qdc_status st;
+        m = mesh_dup(m0);
+        ASSERT_TRUE(m);
+        qdc_fault_set(k);
+        st = opt_run(m, &o, NULL, NULL);
+        qdc_fault_set(0);
+        if (st != QDC_OK) {
+            ASSERT_EQ_INT(st, QDC_ENOMEM);
+            ASSERT_EQ_INT(m->nt, m0->nt);
+            ASSERT_TRUE(!memcmp(m->tets, m0->tets, 16 * (size_t)m->nt));
+            ASSERT_TRUE(!memcmp(m->xyz, m0->xyz, 24 * (size_t)m->nv));
+            failed++;
+        } else {
+            ASSERT_OK(mesh_topo_build(m, &tp, NULL));
+            ASSERT_EQ_INT(mesh_count_inverted(tp, m->xyz), 0);
+            mesh_topo_free(tp);
+        }
+        mesh_free(m);
+    }
+    ASSERT_TRUE(failed > 10);
+    printf("  # %ld allocation failure points, %ld failed the run, each clean\n", total,
+           failed);
+    mesh_free(m0);
+#else
+    SKIP("built without QDC_FAULT_INJECTION (make fault runs it)");
+#endif
+}
+
 TEST_MAIN("topo", T(orient3d_exact_near_coplanar), T(edge_removal_3_2_keeps_volume),
           T(edge_removal_rings_3_to_8), T(flip_2_3),
           T(multiface_removal_restores_the_ring),
@@ -677,4 +731,5 @@ TEST_MAIN("topo", T(orient3d_exact_near_coplanar), T(edge_removal_3_2_keeps_volu
           T(non_convex_ring_refused), T(four_boundary_corner_floor),
           T(rollback_restores_exactly), T(random_flips_keep_invariants),
           T(driver_is_deterministic), T(opt_run_flips_keeps_the_model),
-          T(opt_run_flips_leaves_inverted_input_alone))
+          T(opt_run_flips_leaves_inverted_input_alone),
+          T(flips_allocation_failures_are_clean))
