@@ -681,6 +681,19 @@ static void optimize_summary(const optimize_args *x, const opt_result *res)
             "line search %.2f, harmonic %.2f, finish %.2f\n",
             res->t_setup, res->t_weights, res->t_assembly, res->t_solve,
             res->t_linesearch, res->t_harmonic, res->t_finish);
+    if (res->tets_in > 0)
+        fprintf(stderr,
+                "qdc: topology %s: tets %d -> %d (vertices kept); %lld edges removed "
+                "(rings of 3: %lld, 4: %lld, 5: %lld, 6: %lld, 7-10: %lld), %lld 2-3 "
+                "flips, %lld multi-face removals; rounds: %d\n",
+                opt_topology_name(x->o.topology), (int)res->tets_in, (int)res->tets_out,
+                (long long)res->topo_edge_removals, (long long)res->topo_by_ring[3],
+                (long long)res->topo_by_ring[4], (long long)res->topo_by_ring[5],
+                (long long)res->topo_by_ring[6],
+                (long long)(res->topo_by_ring[7] + res->topo_by_ring[8] +
+                            res->topo_by_ring[9] + res->topo_by_ring[10]),
+                (long long)res->topo_flips23, (long long)res->topo_multiface,
+                res->topo_rounds);
 }
 
 /* --report FILE.json: quality of the input (orig) and of the result (m), the

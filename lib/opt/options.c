@@ -40,6 +40,7 @@ static const char *const boundary_names[] = {"lsq", "fixed", "slide"};
 static const char *const mode_names[] = {"safe", "literal"};
 static const char *const weights_names[] = {"optavg", "paper"};
 static const char *const solver_names[] = {"auto", "cholmod", "pcg"};
+static const char *const topology_names[] = {"none", "flips"};
 
 static qdc_status parse_word(const char *s, const char *const *names, int n, int *out)
 {
@@ -65,6 +66,7 @@ PARSER(opt_parse_boundary, opt_boundary, boundary_names)
 PARSER(opt_parse_mode, opt_mode, mode_names)
 PARSER(opt_parse_weights, opt_weights, weights_names)
 PARSER(opt_parse_solver, opt_solver, solver_names)
+PARSER(opt_parse_topology, opt_topology, topology_names)
 
 /* A finite number filling all of s: no leading space, nothing after it. */
 static int whole_number(const char *s, double *out)
@@ -134,6 +136,7 @@ NAMER(opt_boundary_name, opt_boundary, boundary_names)
 NAMER(opt_mode_name, opt_mode, mode_names)
 NAMER(opt_weights_name, opt_weights, weights_names)
 NAMER(opt_solver_name, opt_solver, solver_names)
+NAMER(opt_topology_name, opt_topology, topology_names)
 
 #define OFF(f) offsetof(opt_options, f)
 #define WORDS(w) w, (int)(sizeof w / sizeof w[0])
@@ -179,6 +182,9 @@ static const opt_desc table[] = {
      "stop when the largest move < this x mean edge"},
     {"eps_rel", OPT_T_REAL, OFF(eps_rel), 0, 1, 1, NULL, 0,
      "Escobar epsilon relative to a regular tet"},
+    {"topology", OPT_T_WORD, OFF(topology), 0, 0, 0, WORDS(topology_names),
+     "none: connectivity kept; flips: the smoother alternated with edge removal, 2-3 "
+     "flips and multi-face removal (vertices, boundary triangles and region tags kept)"},
     {"time_limit", OPT_T_REAL, OFF(time_limit), 0, 1e9, 0, NULL, 0,
      "seconds, then the best mesh so far (0: none)"},
 };
