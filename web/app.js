@@ -353,15 +353,20 @@ async function listJobs() {
     return all.reverse(); // newest first
 }
 
-// The input's quality is record 0 of a job's progress (fetched once per job).
-function firstRecord(j) {
+// The input's and the result's quality: a finished job's report (before and
+// after: the result may be an earlier record than the last, when a rerun was
+// not kept), else record 0 of its progress; fetched once per job and state.
+function listFigures(j) {
     const s = listState;
-    if (s.first.has(j.id) || s.firstBusy.has(j.id) || !(j.iterations > 0)) return;
-    s.firstBusy.add(j.id);
-    apiJSON('/v1/jobs/' + j.id + '/progress?after=-1')
-        .then((b) => { if (b.records.length) s.first.set(j.id, b.records[0]); })
+    const key = j.id + (j.done ? ':done' : '');
+    if (s.first.has(key) || s.firstBusy.has(key) || !(j.iterations > 0)) return;
+    s.firstBusy.add(key);
+    const got = j.done && j.links && j.links.report
+        ? apiJSON(j.links.report).then((r) => ({ in: r.before, out: r.after }))
+        : apiJSON('/v1/jobs/' + j.id + '/progress?after=-1').then((b) => (b.records.length ? { in: b.records[0] } : null));
+    got.then((f) => { if (f) s.first.set(key, f); })
         .catch(() => {})
-        .finally(() => { s.firstBusy.delete(j.id); if (view && view.name === 'list') renderJobs(); });
+        .finally(() => { s.firstBusy.delete(key); if (view && view.name === 'list') renderJobs(); });
 }
 
 // Delete asks first, in a dialog of the page (a native confirm() would stop
@@ -402,9 +407,10 @@ function renderJobs() {
     const rows = s.jobs.filter((j) => !s.filter || j.state === s.filter);
     const frag = document.createDocumentFragment();
     for (const j of rows) {
-        firstRecord(j);
-        const f = s.first.get(j.id);
-        const p = j.progress;
+        listFigures(j);
+        const fig = s.first.get(j.id + (j.done ? ':done' : '')) || s.first.get(j.id) || {};
+        const f = fig.in;
+        const p = fig.out || j.progress;
         const acts = el('td', { class: 'actions' });
         if (!j.done)
             acts.append(el('button', { type: 'button', class: 'small', text: 'Cancel', 'data-act': 'cancel', 'aria-label': 'Cancel job ' + short(j.id),

@@ -475,6 +475,17 @@ try {
         await page.waitForFunction(() => +document.getElementById('hist').dataset.drawn > 0, null, { timeout: 10000 });
         await rerunChecks(page, idR, h);
         if (env.UI_SHOTS) await page.screenshot({ path: path.join(env.UI_SHOTS, 'ui-rerun.png'), fullPage: true });
+        // the list shows the result's mean ratio (the report's after), not the last record's
+        const repR = (await apiJSON('/v1/jobs/' + idR + '/report')).body;
+        const lastR = (await apiJSON('/v1/jobs/' + idR)).body.progress;
+        await page.click('a[data-nav][href="/"]');
+        const cellR = await page.waitForFunction((id) => {
+            const td = document.querySelector('#jobs tr[data-id="' + id + '"] td:nth-child(6)');
+            return td && !/→ –/.test(td.textContent) && td.textContent;
+        }, idR, { timeout: 10000 }).then((x) => x.jsonValue()).catch(() => '');
+        check(cellR.trim() === repR.before.mean_ratio_mean.toFixed(4) + ' → ' + repR.after.mean_ratio_mean.toFixed(4),
+            'list: a job whose last record is not its result shows the report\'s figures (' + cellR.trim() + '; last record ' +
+            lastR.mean_ratio_mean.toFixed(4) + ')', cellR);
         await apiJSON('/v1/jobs/' + idR, { method: 'DELETE' });
         await page.goto(URL + '/ui/jobs/' + id4);
         await page.waitForFunction(() => +document.getElementById('hist').dataset.drawn > 0, null, { timeout: 10000 });
