@@ -1200,6 +1200,7 @@ async function load3d(st) {
     const after = worstTets(result, q, frame);
     const before = qin ? worstTets(input, qin, frame) : null;
     const model = { result, input, frame, q, qin };
+    if (input) model.moved = movedColours(surf, model);
     canvas.hidden = false;
     $('view3d-layers').hidden = false;
     $('view3d-tools').hidden = false;
@@ -1223,6 +1224,8 @@ async function load3d(st) {
         (surf.n > LOD_TRIS ? '; while turning: 1 in ' + Math.ceil(surf.n / LOD_TRIS) + ' boundary triangles at half resolution' : '; while turning: half resolution') + ')';
     status.textContent = text;
     canvas.setAttribute('aria-label', '3D view of the result: ' + text);
+    $('view3d-moved-info').textContent = model.moved ? 'boundary moved up to ' + model.moved.max.toPrecision(3) + ' (mesh units, ' +
+        (100 * model.moved.max * model.frame.sc / 2 / Math.hypot(...model.frame.half)).toPrecision(2) + '% of the diagonal)' : '';
 }
 
 function parseQmesh(buf) {
@@ -1370,13 +1373,15 @@ function surfaceTriangles(m, fr) {
     }
     const buf = new Float32Array(surf.length * 3 * FLOATS);
     const tet = new Int32Array(surf.length);
+    const vid = new Int32Array(surf.length * 3);
     let o = 0;
     surf.forEach((fidx, k) => {
         const t = fidx >> 2, f = fidx & 3;
         tet[k] = t;
-        o = putTri(buf, o, m, fr, tets[4 * t + F[f][0]], tets[4 * t + F[f][1]], tets[4 * t + F[f][2]], null);
+        for (let j = 0; j < 3; j++) vid[3 * k + j] = tets[4 * t + F[f][j]];
+        o = putTri(buf, o, m, fr, vid[3 * k], vid[3 * k + 1], vid[3 * k + 2], null);
     });
-    return { buf, tet, n: surf.length };
+    return { buf, tet, vid, n: surf.length };
 }
 
 // The worst tets by mean ratio (0.2% of them, 10 to 200), as their four faces.
@@ -1412,6 +1417,29 @@ function cutTets(model, axis, d) {
         if (lo <= d && hi >= d) list.push(t);
     }
     return Object.assign(tetFaces(m, fr, list, (t) => qcolor(q[t])), { n: list.length });
+}
+
+// The boundary coloured by how far each vertex moved from its input position
+// (blue-grey: not at all, to orange: the most any moved): a copy of the
+// surface buffer with its colours set per vertex. The largest distance in
+// mesh units too.
+function movedColours(surf, model) {
+    const { result: m, input: i0 } = model;
+    const d = new Float64Array(surf.vid.length);
+    let max = 0;
+    for (let k = 0; k < surf.vid.length; k++) {
+        const v = surf.vid[k];
+        d[k] = Math.hypot(m.xyz[3 * v] - i0.xyz[3 * v], m.xyz[3 * v + 1] - i0.xyz[3 * v + 1], m.xyz[3 * v + 2] - i0.xyz[3 * v + 2]);
+        if (d[k] > max) max = d[k];
+    }
+    const buf = surf.buf.slice();
+    for (let k = 0; k < d.length; k++) {
+        const t = max > 0 ? Math.sqrt(d[k] / max) : 0; // sqrt: small moves still show
+        buf[k * FLOATS + 6] = 0.55 + 0.43 * t;
+        buf[k * FLOATS + 7] = 0.62 - 0.1 * t;
+        buf[k * FLOATS + 8] = 0.75 - 0.65 * t;
+    }
+    return { buf, max };
 }
 
 // 4x4 column-major matrices
@@ -1485,16 +1513,29 @@ function viewer(canvas, gl, model, layers) {
     const surf = byName('surface');
     const ntri = surf.n / 3;
     const stride = Math.max(1, Math.ceil(ntri / LOD_TRIS));
-    if (stride > 1) {
+    const thinOut = () => {
+        if (stride === 1) return;
         const thin = new Float32Array(Math.ceil(ntri / stride) * 3 * FLOATS);
         let o = 0;
         for (let t = 0; t < ntri; t += stride) {
             thin.set(surf.data.subarray(t * 3 * FLOATS, (t + 1) * 3 * FLOATS), o);
             o += 3 * FLOATS;
         }
-        surf.lodLayer = { color: surf.color, blend: true };
+        if (!surf.lodLayer) surf.lodLayer = {};
         upload(surf.lodLayer, thin.subarray(0, o));
-    }
+    };
+    thinOut();
+    // the boundary plain (see-through) or coloured by how far it moved (opaque)
+    const plain = surf.data;
+    const setMoved = () => {
+        const on = $('view3d-moved').checked && model.moved;
+        upload(surf, on ? model.moved.buf : plain);
+        surf.vertexColor = !!on;
+        surf.blend = !on;
+        thinOut();
+        canvas.dataset.moved = on ? '1' : '0';
+        redraw();
+    };
     const cam = { yaw: HOME.yaw, pitch: HOME.pitch, dist: 3, target: [0, 0, 0] };
     const clip = { axis: -1, d: 0 };
     let queued = false, stopped = false, dragging = false, frames = 0, firstAt = 0;
@@ -1717,6 +1758,9 @@ function viewer(canvas, gl, model, layers) {
     $('view3d-fit').onclick = () => { fit(); redraw(); };
     $('view3d-reset').onclick = () => { cam.yaw = HOME.yaw; cam.pitch = HOME.pitch; fit(); redraw(); };
     $('view3d-clip').onchange = setClip;
+    $('view3d-moved').checked = false;
+    $('view3d-moved').disabled = !model.moved;
+    $('view3d-moved').onchange = setMoved;
     $('view3d-clip-pos').oninput = setClip;
     $('view3d-clip').value = '';
     $('view3d-clip-pos').value = '50';

@@ -190,6 +190,29 @@ export async function view3dChecks(page, id, h, URL, authH) {
     const cut2 = await page.textContent('#view3d-cut-info');
     h.check(cut2 !== cut && /tets cut by the plane y = /.test(cut2), '3D view: moving the plane cuts other tets ("' + cut2.slice(0, 50) + '…")', cut2);
     await page.selectOption('#view3d-clip', '');
+    // the boundary coloured by how far it moved: the largest move shown is at
+    // most the largest of any vertex between the input and the result meshes
+    const qm = async (what) => Buffer.from(await (await fetch(URL + '/v1/jobs/' + id + '/' + what + '?format=qmesh', { headers: authH })).arrayBuffer());
+    const [bi, bo] = [await qm('input'), await qm('result')];
+    let maxAll = 0;
+    for (let off = 32; off < 32 + 24 * Number(bo.readBigUInt64LE(16)); off += 24)
+        maxAll = Math.max(maxAll, Math.hypot(bo.readDoubleLE(off) - bi.readDoubleLE(off), bo.readDoubleLE(off + 8) - bi.readDoubleLE(off + 8),
+            bo.readDoubleLE(off + 16) - bi.readDoubleLE(off + 16)));
+    // (the worst tets hidden: they are orange and red too)
+    await page.click('#view3d-before');
+    await page.click('#view3d-after');
+    const plainPx = await view3dPixels(page);
+    await page.click('#view3d-moved');
+    await page.waitForFunction(() => document.getElementById('view3d').dataset.moved === '1', null, { timeout: 5000 }).catch(() => {});
+    const movedPx = await view3dPixels(page);
+    const info = await page.textContent('#view3d-moved-info');
+    const shown = +(/moved up to ([0-9.e+-]+)/.exec(info) || [0, NaN])[1];
+    await page.click('#view3d-moved');
+    await page.click('#view3d-before');
+    await page.click('#view3d-after');
+    h.check(shown > 0 && shown <= maxAll * 1.001 && movedPx.orange > plainPx.orange + 200,
+        '3D view: the boundary coloured by how far it moved ("' + info + '"; any vertex moved at most ' + maxAll.toPrecision(3) + '), ' +
+        movedPx.orange + ' orange px against ' + plainPx.orange, info + ' ' + JSON.stringify({ plainPx, movedPx, maxAll }));
     const alt = await page.getAttribute('#view3d', 'aria-label');
     h.check((await page.getAttribute('#view3d', 'role')) === 'img' && /^3D view of the result: [\d,]+ boundary triangles/.test(alt),
         '3D view: role img with a text alternative ("' + alt.slice(0, 70) + '…")', alt);
