@@ -62,6 +62,14 @@ void job_json(req *r, const job_rec *j, sbuf *b)
         ",\"mesh\":{\"format\":\"%s\",\"vertices\":%lld,\"tets\":%lld,\"bytes\":%lld%s}",
         j->format, (long long)j->nv, (long long)j->nt, (long long)j->in_bytes,
         job_is_surface(j->format) ? ",\"surface\":true" : "");
+    if (j->file_name[0]) {
+        sb_puts(b, ",\"file_name\":");
+        sb_json_str(b, j->file_name);
+    }
+    if (j->label[0]) {
+        sb_puts(b, ",\"label\":");
+        sb_json_str(b, j->label);
+    }
     if (j->notes[0]) {
         /* one string per line */
         sb_puts(b, ",\"notes\":[");

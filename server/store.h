@@ -52,7 +52,9 @@ typedef struct {
     char error[1024];        /* problem+json object of a failed job, "" otherwise */
     char stop_reason[64];
     char etag_qmesh[65], etag_json[65], etag_medit[65];
-    char notes[512]; /* reader notes (skipped element types...), lines, "" if none */
+    char notes[512];     /* reader notes (skipped element types...), lines, "" if none */
+    char file_name[256]; /* the upload's file name (?name=), "" if not given */
+    char label[128];     /* the submitter's label (?label=), "" if none */
 } job_rec;
 
 typedef struct {

@@ -57,6 +57,18 @@ function elapsed(j) {
 
 const short = (id) => id.slice(0, 8);
 
+// A job's name: its label, else the uploaded file's name, else its short id.
+const jobName = (j) => (j && (j.label || j.file_name)) || short(j ? j.id : '');
+
+// The stem of the uploaded file's name (bunny_low_10k.mesh.gz -> bunny_low_10k)
+// for download names, or qdc-<short id> when the upload had no name.
+function fileStem(j) {
+    let n = (j.file_name || '').replace(/^.*[\\/]/, '').replace(/\.gz$/i, '');
+    if (n.includes('.')) n = n.slice(0, n.lastIndexOf('.'));
+    n = n.replace(/[^A-Za-z0-9._+-]+/g, '_').replace(/^[._]+/, '');
+    return n || 'qdc-' + short(j.id);
+}
+
 // --------------------------------------------------------------- API access --
 // With --tokens the daemon answers 401: ask for a token once, keep it in this
 // tab's sessionStorage (never localStorage, never a cookie), retry.
@@ -292,7 +304,11 @@ async function submit(ev) {
         status.textContent = '';
         return;
     }
-    const url = '/v1/jobs' + (optionQuery() ? '?' + optionQuery() : '');
+    const q = new URLSearchParams(optionQuery());
+    q.set('name', chosen.file.name);
+    const label = $('label-input').value.trim();
+    if (label) q.set('label', label);
+    const url = '/v1/jobs?' + q.toString();
     for (;;) {
         const r = await upload(url, body, bar, status);
         if (r.status === 401) {
@@ -304,6 +320,7 @@ async function submit(ev) {
         btn.disabled = false;
         if (r.status === 202 && r.body && r.body.id) {
             status.textContent = '';
+            $('label-input').value = '';
             go('/ui/jobs/' + r.body.id);
         } else {
             status.textContent = '';
@@ -419,7 +436,8 @@ function renderJobs() {
             onclick: () => jobAction(j.id, 'delete').then(refreshList) }));
         const tets = j.mesh.tets || (j.mesh.surface ? 'surface' : 0);
         frag.append(el('tr', { 'data-id': j.id, 'data-state': j.state },
-            el('td', {}, el('a', { href: '/ui/jobs/' + j.id, 'data-nav': true, class: 'id', text: short(j.id) })),
+            el('td', { class: 'name' }, el('a', { href: '/ui/jobs/' + j.id, 'data-nav': true, class: j.label || j.file_name ? 'jobname' : 'id', text: jobName(j), title: j.id }),
+                j.label && j.file_name ? el('span', { class: 'small muted', text: ' ' + j.file_name }) : null),
             el('td', {}, el('span', { class: 'state ' + j.state, text: j.state + (j.cancel_requested && !j.done ? ' (cancelling)' : '') })),
             el('td', { class: 'num', 'data-label': 'tets', text: typeof tets === 'number' ? int(tets) : tets }),
             el('td', { class: 'num opt', text: int(j.mesh.vertices) }),
@@ -580,6 +598,9 @@ async function loadJob(st) {
 
 function renderJob(st) {
     const j = st.job;
+    $('job-name').textContent = j.label || j.file_name || '';
+    $('job-name').hidden = !(j.label || j.file_name);
+    document.title = 'qdcd · ' + jobName(j);
     $('job-state').textContent = j.state + (j.cancel_requested && !j.done ? ' (cancelling)' : '');
     $('job-state').className = 'state ' + j.state;
     $('job-cancel').hidden = j.done;
@@ -758,16 +779,16 @@ function renderDownloads(st) {
     // a format that shares its extension with an earlier one is named in the file name
     const first = (ext) => formats.find(([, e]) => e === ext)[0];
     const items = (what, tag) => formats.map(([f, ext, label]) => [base + '/' + what + '?format=' + f,
-        'qdc-' + short(st.id) + tag + (first(ext) !== f ? '-' + f : '') + '.' + ext, label, f]);
+        fileStem(st.job) + tag + (first(ext) !== f ? '-' + f : '') + '.' + ext, label, f]);
     const links = (list) => list.map(([href, name, label, f]) =>
         el('a', { class: 'button small', href, download: name, 'data-format': f,
             text: f === own ? label + ' (as uploaded)' : label,
             title: f === own ? 'the uploaded file with only the coordinates replaced: names, tags and arrays kept' : undefined,
             onclick: (ev) => authDownload(ev, href, name) }));
-    const res = items('result', '');
-    res.push([base + '/report', 'qdc-' + short(st.id) + '-report.json', 'report (JSON)', 'report']);
+    const res = items('result', '.qdc');
+    res.push([base + '/report', fileStem(st.job) + '.qdc-report.json', 'report (JSON)', 'report']);
     box.replaceChildren(...links(res));
-    $('downloads-input').replaceChildren(...links(items('input', '-input')));
+    $('downloads-input').replaceChildren(...links(items('input', '.input')));
     $('downloads-card').hidden = false;
     $('view3d-card').hidden = false;
     const nt = st.job.mesh.tets;

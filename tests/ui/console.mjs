@@ -295,8 +295,16 @@ try {
         check(marked.length === 1 && marked[0] === own, 'downloads: the upload\'s own format (' + own + ') is the one marked "as uploaded"',
             JSON.stringify(marked));
         const name = await download('medit', 'sample-out.mesh');
-        await download('qmesh', 'sample-out.qmesh');
-        pass('result downloaded through the page (' + name + ')');
+        const qname = await download('qmesh', 'sample-out.qmesh');
+        // the job keeps the upload's file name: title, header, download names
+        const j1 = (await apiJSON('/v1/jobs/' + id1)).body;
+        const title = await page.title();
+        const shownName = await page.textContent('#job-name');
+        const stem = path.basename(env.SAMPLE).replace(/\.[^.]*$/, '');
+        check(j1.file_name === path.basename(env.SAMPLE) && title.includes(j1.file_name) && shownName === j1.file_name &&
+            name === stem + '.qdc.mesh' && qname === stem + '.qdc.qmesh',
+        'names: the page sends the file\'s name (' + j1.file_name + '): page title "' + title + '", downloads ' + name + ' and ' + qname,
+        JSON.stringify({ file_name: j1.file_name, title, shownName, name, qname }));
         const tri = await page.waitForFunction(() => {
             const c = document.getElementById('view3d');
             const s = document.getElementById('view3d-status').textContent;
@@ -499,6 +507,8 @@ try {
         await page.waitForSelector(rowSel(id3) + '[data-state="running"]', { timeout: 15000 })
             .then(() => pass('list: a job submitted by another client shows up, running, within the polling interval'))
             .catch((e) => fail('list running', e.message));
+        const listName = await page.textContent(rowSel(id1) + ' td:first-child a');
+        check(listName === path.basename(env.SAMPLE), 'names: the list shows the job by its file\'s name (' + listName + ')', listName);
         const inout = await page.textContent(rowSel(id2) + ' td:nth-child(6)');
         check(/^0\.\d{4} → 0\.\d{4}$/.test(inout.trim()), 'list: mean ratio in → out shown (' + inout.trim() + ')', inout);
         await page.click('#filters button[data-state="succeeded"]');
