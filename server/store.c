@@ -34,6 +34,11 @@ int job_state_done(job_state s)
     return s == JOB_SUCCEEDED || s == JOB_FAILED || s == JOB_CANCELLED;
 }
 
+int job_has_result(const job_rec *j)
+{
+    return j->state == JOB_SUCCEEDED || (j->state == JOB_CANCELLED && j->etag_qmesh[0]);
+}
+
 static const char schema[] =
     "CREATE TABLE IF NOT EXISTS jobs("
     " seq INTEGER PRIMARY KEY AUTOINCREMENT, id TEXT UNIQUE NOT NULL,"

@@ -57,6 +57,10 @@ typedef struct {
     char label[128];     /* the submitter's label (?label=), "" if none */
 } job_rec;
 
+/* j has a result and a report: it succeeded, or it was cancelled while the
+ * optimizer ran and the best mesh so far was kept (its etags are set). */
+int job_has_result(const job_rec *j);
+
 typedef struct {
     int64_t by_state[JOB_STATE_COUNT];
 } job_counts;

@@ -427,7 +427,9 @@ function renderJobs() {
         listFigures(j);
         const fig = s.first.get(j.id + (j.done ? ':done' : '')) || s.first.get(j.id) || {};
         const f = fig.in;
-        const p = fig.out || j.progress;
+        // a finished job's result is the report's (the last record may be a rerun
+        // that was not kept): nothing shown until it is in
+        const p = fig.out || (j.done && j.links && j.links.report ? null : j.progress);
         const acts = el('td', { class: 'actions' });
         if (!j.done)
             acts.append(el('button', { type: 'button', class: 'small', text: 'Cancel', 'data-act': 'cancel', 'aria-label': 'Cancel job ' + short(j.id),

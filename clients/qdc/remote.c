@@ -1176,6 +1176,25 @@ static int cmd_watch(args *a)
     return rc >= 0 ? rc : CLI_OK;
 }
 
+/* After a download: a job cancelled while it ran has the best mesh so far as
+ * its result (qdcd keeps it, as qdc optimize does on Ctrl-C): written, said,
+ * and exit 11 as for any cancelled job. */
+static int cancelled_note(remote *rm, const char *id)
+{
+    char path[128], state[32] = "";
+    reply r = {0};
+
+    snprintf(path, sizeof path, "/v1/jobs/%s", id);
+    if (!http(rm, "GET", path, NULL, NULL, 0, 30, &r) && r.status == 200)
+        jstr(jbody(&r.body), "state", state, sizeof state);
+    rb_free(&r.body);
+    if (strcmp(state, "cancelled"))
+        return CLI_OK;
+    fprintf(stderr,
+            "qdc: job %s was cancelled: what was written is its best mesh so far\n", id);
+    return CLI_EJOB;
+}
+
 static int cmd_fetch(args *a)
 {
     char id[33];
@@ -1195,7 +1214,8 @@ static int cmd_fetch(args *a)
         if (rc >= 0)
             return rc;
     }
-    return download(&a->rm, id, a->out, a->out_format, a->report, NULL);
+    rc = download(&a->rm, id, a->out, a->out_format, a->report, NULL);
+    return rc == CLI_OK ? cancelled_note(&a->rm, id) : rc;
 }
 
 static int cmd_cancel(args *a)

@@ -489,7 +489,7 @@ try {
         await page.click('a[data-nav][href="/"]');
         const cellR = await page.waitForFunction((id) => {
             const td = document.querySelector('#jobs tr[data-id="' + id + '"] td:nth-child(6)');
-            return td && !/→ –/.test(td.textContent) && td.textContent;
+            return td && /^\d/.test(td.textContent.trim()) && !/→ –/.test(td.textContent) && td.textContent;
         }, idR, { timeout: 10000 }).then((x) => x.jsonValue()).catch(() => '');
         check(cellR.trim() === repR.before.mean_ratio_mean.toFixed(4) + ' → ' + repR.after.mean_ratio_mean.toFixed(4),
             'list: a job whose last record is not its result shows the report\'s figures (' + cellR.trim() + '; last record ' +
