@@ -438,16 +438,16 @@ function renderJobs() {
             onclick: () => jobAction(j.id, 'delete').then(refreshList) }));
         const tets = j.mesh.tets || (j.mesh.surface ? 'surface' : 0);
         frag.append(el('tr', { 'data-id': j.id, 'data-state': j.state },
-            el('td', { class: 'name' }, el('a', { href: '/ui/jobs/' + j.id, 'data-nav': true, class: j.label || j.file_name ? 'jobname' : 'id', text: jobName(j), title: j.id }),
+            el('td', { class: 'name' }, el('a', { href: '/ui/jobs/' + j.id, 'data-nav': true, class: j.label || j.file_name ? 'jobname' : 'id', text: jobName(j), title: (j.label || j.file_name ? jobName(j) + ' · ' : '') + j.id }),
                 j.label && j.file_name ? el('span', { class: 'small muted', text: ' ' + j.file_name }) : null),
             el('td', {}, el('span', { class: 'state ' + j.state, text: j.state + (j.cancel_requested && !j.done ? ' (cancelling)' : '') })),
             el('td', { class: 'num', 'data-label': 'tets', text: typeof tets === 'number' ? int(tets) : tets }),
-            el('td', { class: 'num opt', text: int(j.mesh.vertices) }),
-            el('td', { class: 'opt', text: j.mesh.format + ' · ' + bytes(j.mesh.bytes) }),
+            el('td', { class: 'num opt wide', text: int(j.mesh.vertices) }),
+            el('td', { class: 'opt mid', text: j.mesh.format + ' · ' + bytes(j.mesh.bytes) }),
             el('td', { class: 'num', 'data-label': 'mean ratio', text: (f ? fix(f.mean_ratio_mean, 4) : '–') + ' → ' + (p ? fix(p.mean_ratio_mean, 4) : '–') }),
             el('td', { class: 'num opt', text: (f ? fix(f.dihedral_min, 1) + '°' : '–') + ' → ' + (p ? fix(p.dihedral_min, 1) + '°' : '–') }),
             el('td', { class: 'num', 'data-label': 'elapsed', text: elapsed(j) }),
-            el('td', { class: 'opt', text: when(j.created) }),
+            el('td', { class: 'opt wide', text: when(j.created) }),
             acts));
     }
     tbody.replaceChildren(frag);

@@ -507,6 +507,7 @@ try {
         await page.waitForSelector(rowSel(id3) + '[data-state="running"]', { timeout: 15000 })
             .then(() => pass('list: a job submitted by another client shows up, running, within the polling interval'))
             .catch((e) => fail('list running', e.message));
+        await noColumnCut(page, 'desktop (1280 px), job list with file names', h);
         const listName = await page.textContent(rowSel(id1) + ' td:first-child a');
         check(listName === path.basename(env.SAMPLE), 'names: the list shows the job by its file\'s name (' + listName + ')', listName);
         const inout = await page.textContent(rowSel(id2) + ' td:nth-child(6)');
