@@ -54,7 +54,7 @@ typedef struct {
     int32_t n_unreferenced;     /* vertices used by no tet (kept, never moved) */
     int32_t first_unreferenced; /* -1 if none */
     int32_t n_inverted;         /* tets against the orientation of the connectivity */
-    int32_t n_degenerate;       /* tets with exactly zero volume */
+    int32_t n_degenerate;       /* flat tets (core/tet.h), either sign */
     int negative_majority;      /* 1 if most tets are written negative (vertex order) */
     int32_t n_flipped;          /* tets written in the other vertex order than their
                                  * component's orientation (DOLFIN-sorted meshes: ~half) */
@@ -121,7 +121,8 @@ typedef struct mesh_topo {
 qdc_status mesh_topo_build(const mesh_t *m, mesh_topo **out, qdc_error *err);
 void mesh_topo_free(mesh_topo *t);
 
-/* Tets of topo->tets that are not positive at coordinates xyz. */
+/* Tets of topo->tets that are inverted or degenerate at coordinates xyz
+ * (geom_tet_bad of core/tet.h: the count every pass compares). */
 int32_t mesh_count_inverted(const mesh_topo *t, const double *xyz);
 
 #endif

@@ -1,6 +1,7 @@
 /* report.c - mesh quality evaluation and the JSON report (docs/method.md §9). */
 #include "eval/report.h"
 
+#include "core/tet.h"
 #include "geom/metric.h"
 
 #include <math.h>
@@ -85,7 +86,7 @@ qdc_status report_quality_compute(const mesh_t *m, report_quality *q, qdc_error 
             q->vl_min = vl;
         if (pt.vol < 0)
             q->n_inverted++;
-        else if (pt.vol == 0)
+        else if (geom_tet_degenerate(6.0 * pt.vol, pt.l2sum))
             q->n_degenerate++;
         else {
             /* condition number ||S|| ||S^-1|| / 3 = ||S|| ||adj S|| / (3 sigma) = MICN */
