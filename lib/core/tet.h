@@ -37,6 +37,9 @@ static inline double geom_tet_vol6(const double *x, const int32_t *tt)
  * valid tets of tests/data and of scripts/corpus.py have mean ratio 2.4e-5
  * and smallest dihedral 2.3e-5 degrees). docs/method.md §1. */
 #define GEOM_FLAT_EPS 1e-9
+/* The same floor on the mean ratio cubed (15552 V^2 / l2sum^3, what the
+ * passes compare): a tet is degenerate exactly when that is <= 2 eps^2. */
+#define GEOM_FLAT_ETA3 (2.0 * GEOM_FLAT_EPS * GEOM_FLAT_EPS)
 
 /* Sum of the six squared edge lengths of tet tt. */
 static inline double geom_tet_l2sum(const double *x, const int32_t *tt)

@@ -267,7 +267,8 @@ static void write_progress_fields(jw *w, const opt_progress *p)
     jw_num(w, "mean_ratio_min", p->q_min);
     jw_num(w, "dihedral_min", p->dih_min);
     jw_num(w, "dihedral_max", p->dih_max);
-    jw_int(w, "n_inverted", p->n_inverted);
+    jw_int(w, "n_inverted", p->n_inverted - p->n_degenerate);
+    jw_int(w, "n_degenerate", p->n_degenerate);
     jw_int(w, "n_folded", p->n_folded);
     jw_num(w, "max_move", p->max_move);
     jw_num(w, "elapsed", p->elapsed);

@@ -236,7 +236,7 @@ static double star_eval(const mesh_topo *tp, const double *x, int32_t v, const d
         if (g && isfinite(q))
             for (int c = 0; c < 3; c++)
                 g[c] += gt[c];
-        bad += !(pt.vol > 0.0);
+        bad += geom_tet_bad_vl(6.0 * pt.vol, pt.l2sum);
         f += q;
         if (q > worst) {
             worst = q;
@@ -290,7 +290,7 @@ static double star_hess(const mesh_topo *tp, const double *x, int32_t v, const d
                                 x + 3 * (size_t)tt[tet_face_of[a][1]],
                                 x + 3 * (size_t)tt[tet_face_of[a][2]], delta,
                                 g ? gt : NULL, Ht, vl);
-        si->bad += !(vl[0] > 0.0);
+        si->bad += geom_tet_bad_vl(6.0 * vl[0], vl[1]);
         if (so) {
             double e =
                 vl[0] > 0.0 ? 15552.0 * vl[0] * vl[0] / (vl[1] * vl[1] * vl[1]) : 0.0;
@@ -345,6 +345,16 @@ static double star_min_eta3(const mesh_topo *tp, const double *x, int32_t v,
 static int floor_kept(double qfloor, double e1, double e0)
 {
     return !(qfloor > 0.0) || e1 >= qfloor * qfloor * qfloor || e1 >= e0;
+}
+
+/* The cubed floor of a move's star: the mean ratio floor qfloor cubed, and
+ * never a degenerate tet (core/tet.h), even where no floor is set (a tangled
+ * mesh). A move must keep the star's smallest cube strictly above it. */
+static double floor_cubed(double qfloor)
+{
+    double q3 = qfloor * qfloor * qfloor;
+
+    return q3 > GEOM_FLAT_ETA3 ? q3 : GEOM_FLAT_ETA3;
 }
 
 static int keeps_floor(const mesh_topo *tp, const double *x, int32_t v, const double *y,
@@ -403,10 +413,11 @@ static void shape_step(double d[3], int inner, double lbar)
             d[c] *= 0.3 * lbar / dn;
 }
 
-/* 6 x the signed volume of star tet k of v with v placed at y, and (if g) its
- * gradient with respect to y (constant: the volume is linear in y). */
+/* 6 x the signed volume of star tet k of v with v placed at y, (if g) its
+ * gradient with respect to y (constant: the volume is linear in y) and (if l2)
+ * the sum of its squared edge lengths. */
 static double star_vol6(const mesh_topo *tp, const double *x, int32_t k, const double *y,
-                        double g[3])
+                        double g[3], double *l2)
 {
     static const int32_t corner[4] = {0, 1, 2, 3};
     int32_t t = tp->vt_idx[k] >> 2, a = tp->vt_idx[k] & 3;
@@ -416,6 +427,8 @@ static double star_vol6(const mesh_topo *tp, const double *x, int32_t k, const d
     for (int b = 0; b < 4; b++)
         memcpy(p + 3 * b, b == a ? y : x + 3 * (size_t)tt[b], 3 * sizeof(double));
     v0 = geom_tet_vol6(p, corner);
+    if (l2)
+        *l2 = geom_tet_l2sum(p, corner);
     if (g)
         for (int c = 0; c < 3; c++) {
             double s = p[3 * a + c];
@@ -426,7 +439,7 @@ static double star_vol6(const mesh_topo *tp, const double *x, int32_t k, const d
     return v0;
 }
 
-/* 1 if v placed at y folds a star tet that is positive at x and whose face
+/* 1 if v placed at y folds (or flattens) a star tet that is usable at x and whose face
  * opposite v has its three corners on the boundary (a vertex pushed out
  * through the surface, or a flat tet along it folded by a sliding corner).
  * A move that keeps the star's inverted count may trade an inverted tet for
@@ -443,9 +456,11 @@ static int folds_at_surface(const mesh_topo *tp, const double *x, int32_t v,
         for (int b = 0; b < 4; b++)
             if (b != a)
                 f &= tp->vflag[tt[b]];
-        if (f && !geom_tet_inverted(geom_tet_vol6(x, tt)) &&
-            geom_tet_inverted(star_vol6(tp, x, k, y, NULL)))
-            return 1;
+        if (f && !geom_tet_bad(x, tt)) {
+            double l2, w = star_vol6(tp, x, k, y, NULL, &l2);
+            if (geom_tet_bad_vl(w, l2))
+                return 1;
+        }
     }
     return 0;
 }
@@ -1147,7 +1162,7 @@ static int32_t dihedral_vertex(const mesh_topo *tp, const slide_ctx *sl, double 
 {
     int sliding = sl && slide_kind(sl, v) != SLIDE_INTERIOR;
     double *xv = x + 3 * (size_t)v, s = 0.02 * lbar, h = 1e-6 * lbar;
-    const double qf3 = qfloor * qfloor * qfloor; /* star_sines gives cubes */
+    const double qf3 = floor_cubed(qfloor); /* star_sines gives cubes */
     int32_t moves = 0;
 
     for (int it = 0; it < DIH_INNER; it++) {
@@ -1547,7 +1562,7 @@ static int patch_of(const mesh_topo *tp, const uint8_t *movable, const double *x
 static int32_t patch_ascent(const mesh_topo *tp, const slide_ctx *sl, double *x,
                             patch_t *pc, double lbar, double qfloor, double level)
 {
-    const double qf3 = qfloor * qfloor * qfloor, h = 1e-6 * lbar;
+    const double qf3 = floor_cubed(qfloor), h = 1e-6 * lbar;
     double s = 0.02 * lbar;
     int32_t moves = 0;
     int dim = 3 * pc->nv;
@@ -1597,7 +1612,7 @@ static int32_t patch_ascent(const mesh_topo *tp, const slide_ctx *sl, double *x,
                             y[j]);
             }
             if (patch_trial_ok(tp, x, pc, (const double(*)[3])y, f0, nb0,
-                               pc->eta ? -INFINITY : qf3, level, act, nact, &f1)) {
+                               pc->eta ? GEOM_FLAT_ETA3 : qf3, level, act, nact, &f1)) {
                 ok = 1;
                 break;
             }
@@ -1734,7 +1749,8 @@ qdc_status finish_patches(const mesh_topo *tp, const uint8_t *movable,
 #define UNTANGLE_SWEEPS 12
 #define UNTANGLE_ACT 16
 
-/* Smallest 6 x volume over v's star with v at y, and its inverted tets. */
+/* Smallest 6 x volume over v's star with v at y, and its inverted or
+ * degenerate tets. */
 static double star_min_vol6(const mesh_topo *tp, const double *x, int32_t v,
                             const double *y, int32_t *bad)
 {
@@ -1742,8 +1758,8 @@ static double star_min_vol6(const mesh_topo *tp, const double *x, int32_t v,
 
     *bad = 0;
     for (int32_t k = tp->vt_ptr[v]; k < tp->vt_ptr[v + 1]; k++) {
-        double w = star_vol6(tp, x, k, y, NULL);
-        *bad += geom_tet_inverted(w);
+        double l2, w = star_vol6(tp, x, k, y, NULL, &l2);
+        *bad += geom_tet_bad_vl(w, l2);
         m = w < m ? w : m;
     }
     return m;
@@ -1767,15 +1783,15 @@ static int32_t untangle_vertex(const mesh_topo *tp, double *x, int32_t v, double
         f0 = INFINITY;
         nb0 = 0;
         for (int32_t k = tp->vt_ptr[v]; k < tp->vt_ptr[v + 1]; k++) {
-            double gk[3], vk = star_vol6(tp, x, k, xv, gk);
+            double gk[3], l2, vk = star_vol6(tp, x, k, xv, gk, &l2);
             f0 = fmin(f0, vk);
-            nb0 += geom_tet_inverted(vk);
+            nb0 += geom_tet_bad_vl(vk, l2);
             gmax = fmax(gmax, sqrt(gk[0] * gk[0] + gk[1] * gk[1] + gk[2] * gk[2]));
         }
         if (!isfinite(f0))
             break;
         for (int32_t k = tp->vt_ptr[v]; k < tp->vt_ptr[v + 1]; k++) {
-            double gk[3], vk = star_vol6(tp, x, k, xv, gk);
+            double gk[3], vk = star_vol6(tp, x, k, xv, gk, NULL);
             if (vk - f0 > 2.0 * s * gmax)
                 continue;
             if (nact < UNTANGLE_ACT) {
@@ -1821,9 +1837,10 @@ qdc_status finish_untangle(const mesh_topo *tp, const uint8_t *movable, double *
 
     if (!mark)
         return QDC_ENOMEM;
-    /* the interior vertices of the inverted tets and of the tets around them */
+    /* the interior vertices of the inverted (or flat) tets and of the tets
+     * around them */
     for (int32_t t = 0; t < tp->nt; t++)
-        if (geom_tet_inverted(geom_tet_vol6(x, tp->tets + 4 * (size_t)t)))
+        if (geom_tet_bad(x, tp->tets + 4 * (size_t)t))
             for (int a = 0; a < 4; a++)
                 mark[tp->tets[4 * (size_t)t + a]] = 1;
     for (int32_t v = 0; v < tp->nv; v++)

@@ -207,10 +207,10 @@ static double evaluate(const ctx_t *c, const double *x, opt_progress *r, double 
     const int fuse = m != OPT_METRIC_MICN;
     double sum = 0, sum2 = 0, qmin = INFINITY, cmax = -2, cmin = 2, amin = INFINITY,
            delta;
-    int32_t ninv = 0;
+    int32_t ninv = 0, ndeg = 0;
 
     /* fixed chunks summed in order: reports do not depend on the thread count */
-#pragma omp parallel for reduction(+ : ninv) reduction(min : qmin, cmin, amin) \
+#pragma omp parallel for reduction(+ : ninv, ndeg) reduction(min : qmin, cmin, amin) \
     reduction(max : cmax) schedule(static)
     for (int ch = 0; ch < EVAL_CHUNKS; ch++) {
         int32_t t0 = qdc_part(tp->nt, ch, EVAL_CHUNKS);
@@ -231,7 +231,8 @@ static double evaluate(const ctx_t *c, const double *x, opt_progress *r, double 
             s += eta;
             s2 += eta * eta;
             qmin = eta < qmin ? eta : qmin;
-            ninv += !(pt.vol > 0.0);
+            ninv += geom_tet_bad_vl(6.0 * pt.vol, pt.l2sum);
+            ndeg += geom_tet_degenerate(6.0 * pt.vol, pt.l2sum);
             arg = metric_arg(m, &pt); /* every metric's argument is a multiple of vol */
             amin = arg < amin ? arg : amin;
             metric_dihedral_cos_range(p0, p1, p2, p3, &lo, &hi);
@@ -254,6 +255,7 @@ static double evaluate(const ctx_t *c, const double *x, opt_progress *r, double 
     r->dih_min = acos(cmax) * (180.0 / M_PI_);
     r->dih_max = acos(cmin) * (180.0 / M_PI_);
     r->n_inverted = ninv;
+    r->n_degenerate = ndeg;
     delta = metric_delta(amin, c->eps);
     r->objective =
         fuse && delta == 0.0 ? obj : encode_objective(tp, x, m, delta, NULL, NULL);
@@ -269,9 +271,9 @@ static double scan_light(const ctx_t *c, const double *x, double *eta, opt_progr
 {
     const mesh_topo *tp = c->tp;
     double psum[EVAL_CHUNKS], sum = 0, amin = INFINITY, qmin = INFINITY;
-    int32_t ninv = 0;
+    int32_t ninv = 0, ndeg = 0;
 
-#pragma omp parallel for reduction(min : amin, qmin) reduction(+ : ninv) schedule(static)
+#pragma omp parallel for reduction(min : amin, qmin) reduction(+ : ninv, ndeg) schedule(static)
     for (int ch = 0; ch < EVAL_CHUNKS; ch++) {
         int32_t t0 = qdc_part(tp->nt, ch, EVAL_CHUNKS);
         int32_t t1 = qdc_part(tp->nt, ch + 1, EVAL_CHUNKS);
@@ -286,7 +288,8 @@ static double scan_light(const ctx_t *c, const double *x, double *eta, opt_progr
             eta[t] = metric_mean_ratio(&pt);
             sm += eta[t];
             qmin = eta[t] < qmin ? eta[t] : qmin;
-            ninv += !(pt.vol > 0.0);
+            ninv += geom_tet_bad_vl(6.0 * pt.vol, pt.l2sum);
+            ndeg += geom_tet_degenerate(6.0 * pt.vol, pt.l2sum);
             arg = metric_arg(c->o->metric, &pt);
             amin = arg < amin ? arg : amin;
         }
@@ -298,6 +301,7 @@ static double scan_light(const ctx_t *c, const double *x, double *eta, opt_progr
     r->q_mean = sum / tp->nt;
     r->q_min = qmin;
     r->n_inverted = ninv;
+    r->n_degenerate = ndeg;
     return metric_delta(amin, c->eps);
 }
 
@@ -521,8 +525,8 @@ static void project_sliding(const ctx_t *c, double *y)
     }
 }
 
-/* Tets non-positive at y (*ninv), and of those the ones positive at x (the
- * tets a move from x to y folds), in one parallel scan. */
+/* Tets inverted or flat at y (*ninv), and of those the ones usable at x (the
+ * tets a move from x to y folds or flattens), in one parallel scan. */
 static int32_t count_folds(const mesh_topo *tp, const double *x, const double *y,
                            int32_t *ninv)
 {
@@ -531,9 +535,9 @@ static int32_t count_folds(const mesh_topo *tp, const double *x, const double *y
 #pragma omp parallel for reduction(+ : folds, n) schedule(static)
     for (int32_t t = 0; t < tp->nt; t++) {
         const int32_t *tt = tp->tets + 4 * (size_t)t;
-        int bad = geom_tet_inverted(geom_tet_vol6(y, tt));
+        int bad = geom_tet_bad(y, tt);
         n += bad;
-        folds += bad && geom_tet_vol6(x, tt) > 0.0;
+        folds += bad && !geom_tet_bad(x, tt);
     }
     *ninv = n;
     return folds;
@@ -571,14 +575,14 @@ static double tet_eta3(const double *y, const int32_t *tt)
     return metric_mean_ratio_cubed(&pt);
 }
 
-/* Whether a trial spoils tet tt: it folds a tet valid at x or, on a valid
+/* Whether a trial spoils tet tt: it folds or flattens a tet usable at x or, on a valid
  * mesh, takes a tet below the worst mean ratio at x, whose cube is qfloor3
  * (the worst tet of the mesh never gets worse, so the global phase's work is
  * kept). */
 static int spoils(const ctx_t *c, const double *y, const int32_t *tt, double qfloor3)
 {
-    if (geom_tet_inverted(geom_tet_vol6(y, tt)))
-        return !geom_tet_inverted(geom_tet_vol6(c->x, tt));
+    if (geom_tet_bad(y, tt))
+        return !geom_tet_bad(c->x, tt);
     return qfloor3 > 0 && tet_eta3(y, tt) < qfloor3;
 }
 
@@ -633,7 +637,7 @@ static void feasible_trial(ctx_t *c, double s, int32_t ninv_x, double qfloor3)
     for (int32_t t = 0; t < tp->nt; t++) {
         const int32_t *tt = tp->tets + 4 * (size_t)t;
         int bad = spoils(c, c->trial, tt, qfloor3);
-        ninv += geom_tet_inverted(geom_tet_vol6(c->trial, tt));
+        ninv += geom_tet_bad(c->trial, tt);
         folds += bad;
         if (bad)
             mark_corners(c, tt);
@@ -781,7 +785,7 @@ static qdc_status iterate(ctx_t *c, opt_result *res, opt_progress *r, int *stepp
             const int32_t *tt = tp->tets + 4 * (size_t)e;
             double q = tet_eta3(c->x, tt);
             qfloor3 = q < qfloor3 ? q : qfloor3;
-            ninv_x += geom_tet_inverted(geom_tet_vol6(c->x, tt));
+            ninv_x += geom_tet_bad(c->x, tt);
         }
         for (h = 0; h <= o->ls_halvings; h++) {
             feasible_trial(c, step, ninv_x, qfloor3);
@@ -1154,7 +1158,7 @@ static int32_t hold_back(ctx_t *c)
             const int32_t *tt = tp->tets + 4 * (size_t)t;
             const double *y = c->xbest;
             double lo, hi;
-            if (geom_tet_inverted(geom_tet_vol6(y, tt))) {
+            if (geom_tet_bad(y, tt)) {
                 mark_corners(c, tt);
                 continue;
             }
@@ -1199,8 +1203,8 @@ static qdc_status stuck_boundary(const ctx_t *c, uint8_t **out)
         return QDC_ENOMEM;
     for (int32_t t = 0; t < tp->nt; t++) {
         const int32_t *tt = tp->tets + 4 * (size_t)t;
-        if (geom_tet_inverted(geom_tet_vol6(c->xbest, tt)) ||
-            geom_tet_inverted(geom_tet_vol6(c->x0, tt)))
+        if (geom_tet_bad(c->xbest, tt) ||
+            geom_tet_bad(c->x0, tt))
             for (int a = 0; a < 4; a++)
                 core[tt[a]] = 1;
     }

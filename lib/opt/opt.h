@@ -45,7 +45,9 @@ typedef struct {
                         * finish/angles: accepted moves per visited vertex */
     double q_mean, q_std, q_min; /* signed mean ratio */
     double dih_min, dih_max;     /* degrees, over non-inverted tets */
-    int32_t n_inverted;
+    int32_t n_inverted;   /* tets inverted or degenerate (core/tet.h geom_tet_bad):
+                           * the count every rule of the run compares */
+    int32_t n_degenerate; /* of those, the degenerate (flat) ones */
     int32_t n_folded; /* global: tets valid before this step and inverted after it */
     double max_move;  /* largest vertex move this iteration, in mean edge lengths */
     double elapsed;   /* seconds since opt_run started */

@@ -620,8 +620,14 @@ void slide_clamp(const double *x0, int32_t v, double r, double p[3])
 
 void slide_release(slide_ctx *s, int32_t v)
 {
-    if (s->kind[v] != SLIDE_CORNER || !s->on_iface[v])
+    if (s->kind[v] == SLIDE_CORNER && s->on_iface[v])
+        return;
+    if (s->bound > 0) { /* free in space, within the bound of its input position */
+        s->kind[v] = SLIDE_SURFACE;
+        s->flat[v] = 0;
+    } else {
         s->kind[v] = SLIDE_INTERIOR;
+    }
 }
 
 int slide_flat(const slide_ctx *s, int32_t v)
