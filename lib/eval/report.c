@@ -317,7 +317,6 @@ qdc_status report_write_json(const report_t *r, qdc_write_fn fn, void *ctx,
         jw_int(&w, "max_inverted_global", s->max_inverted_global);
         jw_int(&w, "folded_global", s->folded_global);
         jw_num(&w, "hausd_bound", s->hausd_bound);
-        jw_num(&w, "lift_bound", s->lift_bound);
         jw_int(&w, "held_back", s->held_back);
         jw_str(&w, "solver", opt_solver_name(s->solver));
         jw_num(&w, "solver_flops", s->solver_flops);

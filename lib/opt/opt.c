@@ -151,7 +151,7 @@ typedef struct {
     uint8_t *locked;  /* not an unknown of the linear system */
     double *vfac;     /* nv: share of the step each vertex takes (feasible step) */
     double hbound;    /* --hausd in normalized units (0: none) */
-    double lift;      /* slide without --hausd: off the curved surface by at most this */
+    int autob;        /* the default bound (--hausd auto under slide) */
     int rerun_stuck;  /* tets left inverted get a rerun (run_once's stuck): no angle
                        * pass on such a result, the rerun's own does it */
     int keep_surface; /* the finishing pass folds no tet at the surface (finish.h) */
@@ -318,9 +318,12 @@ static int better(const opt_progress *a, const opt_progress *b)
     return a->q_mean > b->q_mean;
 }
 
+/* ... and on a valid input, never one with a lower mean ratio either (an
+ * sfepy file's mean fell 0.7274 -> 0.7246 while its worst tet rose). */
 static int eligible(const ctx_t *c, const opt_progress *r)
 {
-    return r->n_inverted <= c->input.n_inverted && r->q_min >= c->input.q_min;
+    return r->n_inverted <= c->input.n_inverted && r->q_min >= c->input.q_min &&
+           (c->input.n_inverted > 0 || r->q_mean >= c->input.q_mean);
 }
 
 static void consider(ctx_t *c, const double *x, const opt_progress *r)
@@ -430,17 +433,18 @@ static qdc_status ctx_init(ctx_t *c, const mesh_t *m, const mesh_topo *tp,
     c->lbar = ecount ? esum / (double)ecount : 1.0;
     c->bref = c->x0;
     c->mu_factor = 1.0;
+    /* the default (auto, under slide): the Hausdorff bound OPT_HAUSD_DEFAULT */
+    c->autob = o->hausd <= 0 && o->hausd_rel == OPT_HAUSD_AUTO &&
+               o->boundary == OPT_BOUNDARY_SLIDE;
     c->hbound = o->hausd > 0       ? o->hausd / c->scale
                 : o->hausd_rel > 0 ? o->hausd_rel
+                : c->autob         ? OPT_HAUSD_DEFAULT
                                    : 0.0;
-    /* the default: slide, curved parts off the surface by at most this */
-    c->lift = o->hausd <= 0 && o->hausd_rel == OPT_HAUSD_AUTO ? OPT_HAUSD_DEFAULT : 0.0;
     if (o->boundary == OPT_BOUNDARY_SLIDE) {
         qdc_status st = slide_new(tp, c->x0, o->feature_angle, &c->sl, NULL);
         if (st != QDC_OK)
             return st;
         slide_set_bound(c->sl, c->hbound);
-        slide_set_lift(c->sl, c->lift);
         c->bref = c->x; /* rows keep a sliding vertex near where it is */
     }
     c->eps = metric_eps(o->metric, c->lbar, o->eps_rel);
@@ -645,10 +649,13 @@ static void feasible_trial(ctx_t *c, double s, int32_t ninv_x, double qfloor3)
     /* A tangled mesh untangles faster when a step may fold a few valid
      * tets while it frees more (measured on the tangled dev meshes: the
      * strict rule cost 0.008 of mean ratio on sphere and torus): the
-     * whole step is taken when the inverted count does not rise. Not
-     * while sliding: there such steps squashed smooth ears flat
-     * (bunny_tangled-low_10k: worst tet 6e-11 instead of 0.054). */
-    if (!folds || (ninv_x > 0 && ninv <= ninv_x && !c->sl)) {
+     * whole step is taken when the inverted count does not rise, under
+     * lsq only. Not while sliding: there such steps squashed smooth ears
+     * flat (bunny_tangled-low_10k: worst tet 6e-11 instead of 0.054); not
+     * with a fixed boundary, where they folded 458-2826 valid tets of the
+     * tangled dev meshes for no gain (mean ratio equal within 0.0002,
+     * none left inverted either way). */
+    if (!folds || (ninv_x > 0 && ninv <= ninv_x && c->o->boundary == OPT_BOUNDARY_LSQ)) {
         if (folds)
             memset(c->vmark, 0, (size_t)nv);
         return;
@@ -1036,6 +1043,10 @@ static qdc_status angle_pass(ctx_t *c, const uint8_t *movable, const slide_ctx *
     return QDC_OK;
 }
 
+/* lsq's angle pass without --hausd: how far a curved part's vertex may leave
+ * the input surface (of the diagonal) */
+#define LSQ_POLISH_LIFT 1e-3
+
 /* The angle pass; with lsq, boundary vertices take part too, on the input
  * surface as in slide mode (projected back onto its triangles, off a curved
  * part by at most the default allowance): the worst tets of good meshes often
@@ -1053,13 +1064,13 @@ static qdc_status lsq_angle_pass(ctx_t *c, const uint8_t *movable, opt_result *r
         return angle_pass(c, movable, c->sl, res, r, next);
     st = slide_new(c->tp, c->x0, c->o->feature_angle, &sl, NULL);
     /* without a bound, a curved part's vertices may leave the input surface
-     * by the default mode's allowance: lsq has moved the boundary already, and
-     * sliding alone cannot reopen an ear the global step flattened (measured on
+     * by LSQ_POLISH_LIFT: lsq has moved the boundary already, and sliding
+     * alone cannot reopen an ear the global step flattened (measured on
      * torus_h0.1_good: smallest dihedral 12.6 degrees sliding, 14.2 with it) */
     if (st == QDC_OK && c->hbound > 0)
         slide_set_bound(sl, c->hbound);
     else if (st == QDC_OK)
-        slide_set_lift(sl, OPT_HAUSD_DEFAULT);
+        slide_set_lift(sl, LSQ_POLISH_LIFT);
     mv = st == QDC_OK ? qdc_mallocn((size_t)c->nv, 1) : NULL;
     if (!mv) {
         slide_free(sl);
@@ -1292,7 +1303,6 @@ static qdc_status run_setup(ctx_t *c, mesh_t *m, const opt_options *o,
     c->input = c->best = *r;
     res->before = *r;
     res->hausd_bound = c->hbound * c->scale;
-    res->lift_bound = c->sl ? c->lift * c->scale : 0.0;
     set_stop(res, OPT_STOP_MAX_ITER);
     return QDC_OK;
 }
@@ -1455,6 +1465,15 @@ static void hold_back_best(ctx_t *c, opt_result *res)
     if (back <= 0)
         return;
     evaluate(c, c->xbest, &b, NULL);
+    if (c->input.n_inverted == 0 && b.q_mean < c->input.q_mean) {
+        /* what is left no longer beats the input's mean: the input it is */
+        memcpy(c->xbest, c->x0, 3 * (size_t)c->nv * sizeof(double));
+        c->best = c->input;
+        c->best_it = 0;
+        logf_(c, 0, "holding back %d vertices took the mean ratio under the input's: "
+                    "the input is returned", (int)back);
+        return;
+    }
     b.iteration = c->best.iteration;
     b.phase = c->best.phase;
     c->best = b;
@@ -1513,7 +1532,7 @@ static qdc_status run_once(mesh_t *m, const opt_options *opts, const uint8_t *pi
     if (st != QDC_OK)
         goto out;
     res.before_finish = c.best;
-    c.rerun_stuck = stuck && c.sl && c.lift > 0;
+    c.rerun_stuck = stuck && c.sl && c.autob;
     if (o.finish && !stop && o.finish_sweeps > 0) {
         st = finishing_phase(&c, &res, &r);
         if (st != QDC_OK)
@@ -1525,7 +1544,7 @@ static qdc_status run_once(mesh_t *m, const opt_options *opts, const uint8_t *pi
         if (st != QDC_OK)
             goto out;
     }
-    if (stuck && c.sl && c.lift > 0 && c.best.n_inverted > 0) {
+    if (stuck && c.sl && c.autob && c.best.n_inverted > 0) {
         st = stuck_boundary(&c, stuck);
         if (st != QDC_OK)
             goto out;

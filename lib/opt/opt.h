@@ -92,9 +92,8 @@ typedef struct {
                            * were, or slide on a planar patch or a straight edge);
                            * 0 = none or hausd_rel */
     double hausd_rel;     /* the same relative to the bounding-box diagonal, used when
-                           * hausd is 0; 0 = none; OPT_HAUSD_AUTO (default): no
-                           * Hausdorff bound, but with slide every boundary vertex
-                           * stays within OPT_HAUSD_DEFAULT of the input surface */
+                           * hausd is 0; 0 = none; OPT_HAUSD_AUTO (default): with
+                           * slide, the bound OPT_HAUSD_DEFAULT; else none */
     double time_limit;    /* seconds, 0 = none: then OPT_STOPPED with the best mesh */
     int threads;          /* OpenMP threads for this run; 0 = all cores. A server running
                            * several jobs at once should give each 1 (no oversubscription) */
@@ -114,7 +113,7 @@ void opt_defaults(opt_options *o);
  * QDC_EINVAL for anything else, a negative, NaN or infinite value. */
 qdc_status opt_parse_hausd(const char *s, opt_options *o);
 #define OPT_HAUSD_AUTO (-1.0)
-#define OPT_HAUSD_DEFAULT 1e-3 /* of the diagonal (docs/defaults.md) */
+#define OPT_HAUSD_DEFAULT 3e-3 /* of the diagonal (docs/defaults.md) */
 
 /* Parse option words ("mivl", "lsq", "safe", ...) into o; QDC_EINVAL if unknown. */
 qdc_status opt_parse_metric(const char *s, opt_metric *out);
@@ -145,8 +144,6 @@ typedef struct {
                                   * valid input: the global step folds nothing) */
     int32_t folded_global;       /* valid tets the global steps inverted, summed */
     double hausd_bound;          /* the boundary bound applied, mesh units (0: none) */
-    double lift_bound;    /* slide without --hausd: how far a boundary vertex may be
-                           * from the input surface, mesh units (0: none) */
     int32_t held_back;    /* vertices put back to their input positions so that no
                            * tet ends below the valid input's worst (opt_run) */
     opt_stop stop;        /* why the run stopped (decides; stop_reason names it) */
