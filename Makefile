@@ -57,8 +57,25 @@ UNIT_BIN := $(UNIT_C:tests/unit/%.c=$(B)/tests/%)
 
 PROGS := $(B)/qdc $(if $(SRV_C),$(B)/qdcd)
 
-.PHONY: all deps test test-quick test-container test-faults test-load run bench clean fuzz format format-check fault
-all: $(B)/libqdc.a $(PROGS) $(UNIT_BIN)
+.PHONY: all hooks deps test test-quick test-container test-faults test-load run bench clean fuzz format format-check fault
+all: $(B)/libqdc.a $(PROGS) $(UNIT_BIN) hooks
+
+# The commit-msg hook for contributors (scripts/commit-msg: subjects of at
+# most 72 characters), copied into git's hooks directory when this tree is
+# the top of a git checkout (a clone or a worktree) whose hooks directory
+# exists (git makes it in every clone). Skipped without .git (a tarball, a CI
+# export), with QDC_NO_HOOKS=1, or when another commit-msg hook is there.
+hooks:
+	@[ -z "$(QDC_NO_HOOKS)" ] || exit 0; \
+	top=$$(git rev-parse --show-toplevel 2>/dev/null) || exit 0; \
+	[ "$$top" -ef . ] || exit 0; \
+	h=$$(git rev-parse --git-path hooks 2>/dev/null) || exit 0; \
+	[ -d "$$h" ] || exit 0; \
+	if [ ! -e "$$h/commit-msg" ] || grep -q '^# scripts/commit-msg' "$$h/commit-msg"; then \
+	    cmp -s scripts/commit-msg "$$h/commit-msg" || \
+	    { cp scripts/commit-msg "$$h/commit-msg" && chmod +x "$$h/commit-msg" && \
+	      echo "installed the commit-msg hook in $$h"; }; \
+	fi
 
 deps:
 	@scripts/deps.sh

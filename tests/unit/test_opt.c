@@ -3,8 +3,10 @@
  * stops on cancel. */
 #include "eval/report.h"
 #include "geom/metric.h"
+#include "opt/angle.h"
 #include "opt/finish.h"
 #include "opt/opt.h"
+#include "opt/untangle.h"
 #include "testlib.h"
 #include "testmesh.h"
 
