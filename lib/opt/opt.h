@@ -114,6 +114,8 @@ void opt_defaults(opt_options *o);
 qdc_status opt_parse_hausd(const char *s, opt_options *o);
 #define OPT_HAUSD_AUTO (-1.0)
 #define OPT_HAUSD_DEFAULT 3e-3 /* of the diagonal (docs/defaults.md) */
+/* ... and of the vertices the default frees where tets stay inverted */
+#define OPT_HAUSD_STUCK 1e-2
 
 /* Parse option words ("mivl", "lsq", "safe", ...) into o; QDC_EINVAL if unknown. */
 qdc_status opt_parse_metric(const char *s, opt_metric *out);
@@ -156,8 +158,9 @@ typedef struct {
  * During the run m->tets and m->region are lent to the run's renumbered copy
  * (NULL meanwhile: m must not be read from another thread); they come back
  * with the same contents, possibly at other addresses.
- * The returned mesh never has more inverted tets nor a lower minimum mean ratio
- * than the input. res may be NULL. */
+ * The returned mesh never has more inverted or degenerate tets (core/tet.h)
+ * nor a lower minimum mean ratio than the input, nor, on a valid input, a lower
+ * mean ratio. res may be NULL. */
 qdc_status opt_run(mesh_t *m, const opt_options *o, opt_result *res, qdc_error *err);
 
 #endif

@@ -29,6 +29,8 @@ int32_t slide_n_feature_edges(const slide_ctx *s);
  * vertex without a bound, anywhere within the bound of its input position
  * with one (slide_set_bound first), so the bound still holds. */
 void slide_release(slide_ctx *s, int32_t v);
+/* The freed vertices' bound instead, if larger than the bound. */
+void slide_set_loose_bound(slide_ctx *s, double r);
 
 /* Whether v is on a planar patch (surface vertex) or a straight feature line
  * (line vertex) of the input: sliding it changes nothing of the shape. */

@@ -45,9 +45,11 @@ if a["mean_ratio_min"] < b["mean_ratio_min"]:
 valid = b["n_inverted"] == 0
 if valid and a["dihedral_min"] < b["dihedral_min"] - 1e-9:
     bad.append("smallest dihedral %.4f < input %.4f" % (a["dihedral_min"], b["dihedral_min"]))
+# the bound is 3e-3 of the diagonal of every vertex's bounding box: of the
+# surface's on a valid mesh, a little more on a tangled one (vertices pushed out)
 hb = r["run"]["hausd_bound"] / be["bbox_diagonal"]
-if not abs(hb - 3e-3) <= 3e-9:
-    bad.append("the report's bound is %.3g of the diagonal, not the default 3e-3" % hb)
+if not 3e-3 * (1 - 1e-6) <= hb <= (3e-3 if valid else 3.3e-3) * (1 + 1e-6):
+    bad.append("the report's bound is %.4g of the diagonal, not the default 3e-3" % hb)
 if be["hausdorff_rel"] > hb * (1 + 1e-9):
     bad.append("Hausdorff distance %.3g of the diagonal over the bound %.3g" % (be["hausdorff_rel"], hb))
 axis = len(sys.argv) > 5
