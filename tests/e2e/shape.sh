@@ -46,9 +46,11 @@ valid = b["n_inverted"] == 0
 if valid and a["dihedral_min"] < b["dihedral_min"] - 1e-9:
     bad.append("smallest dihedral %.4f < input %.4f" % (a["dihedral_min"], b["dihedral_min"]))
 # the bound is 3e-3 of the diagonal of every vertex's bounding box: of the
-# surface's on a valid mesh, a little more on a tangled one (vertices pushed out)
+# surface's on a valid mesh; on a tangled one a little more (vertices pushed
+# out), or 1e-2 when the run freed boundary vertices around tets sliding left
+# inverted (OPT_HAUSD_STUCK)
 hb = r["run"]["hausd_bound"] / be["bbox_diagonal"]
-if not 3e-3 * (1 - 1e-6) <= hb <= (3e-3 if valid else 3.3e-3) * (1 + 1e-6):
+if not 3e-3 * (1 - 1e-6) <= hb <= (3e-3 if valid else 1.1e-2) * (1 + 1e-6):
     bad.append("the report's bound is %.4g of the diagonal, not the default 3e-3" % hb)
 if be["hausdorff_rel"] > hb * (1 + 1e-9):
     bad.append("Hausdorff distance %.3g of the diagonal over the bound %.3g" % (be["hausdorff_rel"], hb))
