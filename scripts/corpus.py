@@ -24,7 +24,7 @@ Classes (each as a Medit .mesh, valid unless named tangled):
                    invert some of their tets
 
 usage: scripts/corpus.py OUTDIR [--tets N] [--only NAME,...] [--seed S]
-                         [--surface-share F]
+                         [--surface-share F] [--tangle-frac P]
    N: rough tet count of each mesh (default 20000; 1e6 for the large set)
    F: the share of the *-lowq and *-scan vertices placed on the surface
       (default 0.5). With F fixed, the surface spacing shrinks as N^(-1/2)
@@ -32,6 +32,9 @@ usage: scripts/corpus.py OUTDIR [--tets N] [--only NAME,...] [--seed S]
       about 1.5x finer against the interior, so the tets that touch it are
       worse before and after any smoothing. Lower F at the larger size keeps
       that ratio (the ball at 1.1M tets with F 0.32 has the 100k ball's)
+   P: the share of the interior vertices a *-tangled copy pushes (default
+      0.01, about 0.5% of the tets inverted; 0.05 gives the harsh tangles of
+      tests/e2e/flat.sh, about 5%)
 """
 import argparse
 import os
@@ -310,6 +313,7 @@ def main():
     ap.add_argument("--only", default="")
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--surface-share", type=float, default=0.5)
+    ap.add_argument("--tangle-frac", type=float, default=0.01)
     a = ap.parse_args()
     global np, Delaunay
     try:
@@ -322,6 +326,8 @@ def main():
         Delaunay = None
     if not 0.05 <= a.surface_share <= 0.95:
         sys.exit("corpus.py: --surface-share must be in [0.05, 0.95]")
+    if not 0.0 < a.tangle_frac <= 0.5:
+        sys.exit("corpus.py: --tangle-frac must be in (0, 0.5]")
     os.makedirs(a.outdir, exist_ok=True)
     only = set(a.only.split(",")) - {""}
     n = int(a.tets)
@@ -336,7 +342,7 @@ def main():
         rng = np.random.default_rng(a.seed)
         x, t = lowq(shape, n, rng, scan=cls == "scan", share=a.surface_share)
         write_medit(os.path.join(a.outdir, name + ".mesh"), x, t)
-        write_medit(os.path.join(a.outdir, name + "-tangled.mesh"), tangle(x, t, rng), t)
+        write_medit(os.path.join(a.outdir, name + "-tangled.mesh"), tangle(x, t, rng, a.tangle_frac), t)
         made += [name, name + "-tangled"]
     for kind in ("graded-box", "graded-layer", "part-cad", "two-region"):
         if only and kind not in only and kind + "-tangled" not in only:
@@ -344,7 +350,7 @@ def main():
         rng = np.random.default_rng(a.seed)
         x, t, reg = gmsh_sized(kind, n)
         write_medit(os.path.join(a.outdir, kind + ".mesh"), x, t, reg)
-        write_medit(os.path.join(a.outdir, kind + "-tangled.mesh"), tangle(x, t, rng), t, reg)
+        write_medit(os.path.join(a.outdir, kind + "-tangled.mesh"), tangle(x, t, rng, a.tangle_frac), t, reg)
         made += [kind, kind + "-tangled"]
     for m in made:
         print(os.path.join(a.outdir, m + ".mesh"))

@@ -57,7 +57,10 @@ static int on_progress(void *ctx, const opt_progress *p)
                  "%-6s %3d  q mean %.4f min %+.4f  dihedral %6.2f..%6.2f  inverted %d  "
                  "step %.3g  cg %d  %.1fs",
                  p->phase, p->iteration, p->q_mean, p->q_min, p->dih_min, p->dih_max,
-                 (int)p->n_inverted, p->step, p->cg_iters, p->elapsed);
+                 (int)(p->n_inverted - p->n_degenerate), p->step, p->cg_iters, p->elapsed);
+    if (p->n_degenerate > 0 && n > 0 && (size_t)n < sizeof line)
+        n += snprintf(line + n, sizeof line - (size_t)n, "  degenerate %d",
+                      (int)p->n_degenerate);
     if (ps->tty) {
         fprintf(stderr, "\r%s%*s", line, ps->last_len > n ? ps->last_len - n : 0, "");
         ps->last_len = n;
@@ -656,14 +659,20 @@ static int optimize_write(const optimize_args *x, mesh_t *m)
 /* The two summary lines: quality before and after, where the time went. */
 static void optimize_summary(const optimize_args *x, const opt_result *res)
 {
+    char deg[64] = "";
+
     if (x->ps.quiet)
         return;
+    if (res->before.n_degenerate > 0 || res->after.n_degenerate > 0)
+        snprintf(deg, sizeof deg, "degenerate %d -> %d, ", (int)res->before.n_degenerate,
+                 (int)res->after.n_degenerate);
     fprintf(stderr,
             "qdc: %s -> %s: mean ratio %.4f -> %.4f, min %+.4f -> %+.4f, inverted %d "
-            "-> %d, "
+            "-> %d, %s"
             "dihedral %.2f..%.2f -> %.2f..%.2f (%s, %d iterations, %s, %.2fs)\n",
             x->in, x->out, res->before.q_mean, res->after.q_mean, res->before.q_min,
-            res->after.q_min, (int)res->before.n_inverted, (int)res->after.n_inverted,
+            res->after.q_min, (int)(res->before.n_inverted - res->before.n_degenerate),
+            (int)(res->after.n_inverted - res->after.n_degenerate), deg,
             res->before.dih_min, res->before.dih_max, res->after.dih_min,
             res->after.dih_max, res->stop_reason, res->iterations,
             opt_solver_name(res->solver), res->t_total);

@@ -629,12 +629,12 @@ static qdc_status validate_basic(const mesh_t *m, mesh_check *c, qdc_error *err)
             etiny += em < 1e-12 * diag0;
         }
         d = tet_det(m->xyz, tt);
-        if (d > 0)
-            npos++;
-        else if (d < 0)
-            nneg++;
-        else
+        if (geom_tet_degenerate(fabs(d), geom_tet_l2sum(m->xyz, tt)))
             c->n_degenerate++;
+        else if (d > 0)
+            npos++;
+        else
+            nneg++;
     }
     if (st == QDC_OK) {
         for (int32_t v = 0; v < m->nv; v++)
@@ -948,6 +948,6 @@ int32_t mesh_count_inverted(const mesh_topo *t, const double *xyz)
     int32_t n = 0;
 
     for (int32_t i = 0; i < t->nt; i++)
-        n += geom_tet_inverted(tet_det(xyz, t->tets + 4 * (size_t)i));
+        n += geom_tet_bad(xyz, t->tets + 4 * (size_t)i);
     return n;
 }

@@ -60,7 +60,7 @@ typedef struct {
     int32_t n_unreferenced;     /* vertices used by no tet (kept, never moved) */
     int32_t first_unreferenced; /* -1 if none */
     int32_t n_inverted;         /* tets against the orientation of the connectivity */
-    int32_t n_degenerate;       /* tets with exactly zero volume */
+    int32_t n_degenerate;       /* flat tets (core/tet.h), either sign */
     int negative_majority;      /* 1 if most tets are written negative (vertex order) */
     int32_t n_flipped;          /* tets written in the other vertex order than their
                                  * component's orientation (DOLFIN-sorted meshes: ~half) */

@@ -43,7 +43,8 @@ typedef struct mesh_topo {
 qdc_status mesh_topo_build(const mesh_t *m, mesh_topo **out, qdc_error *err);
 void mesh_topo_free(mesh_topo *t);
 
-/* Tets of topo->tets that are not positive at coordinates xyz. */
+/* Tets of topo->tets that are inverted or degenerate at coordinates xyz
+ * (geom_tet_bad of core/tet.h: the count every pass compares). */
 int32_t mesh_count_inverted(const mesh_topo *t, const double *xyz);
 
 #endif

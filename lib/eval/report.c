@@ -4,6 +4,7 @@
 #include "core/mesh_int.h"
 #include "geom/metric_int.h"
 #include "opt/opt_int.h"
+#include "core/tet.h"
 
 #include <math.h>
 #include <stdarg.h>
@@ -87,7 +88,7 @@ qdc_status report_quality_compute(const mesh_t *m, report_quality *q, qdc_error 
             q->vl_min = vl;
         if (pt.vol < 0)
             q->n_inverted++;
-        else if (pt.vol == 0)
+        else if (geom_tet_degenerate(6.0 * pt.vol, pt.l2sum))
             q->n_degenerate++;
         else {
             /* condition number ||S|| ||S^-1|| / 3 = ||S|| ||adj S|| / (3 sigma) = MICN */
@@ -268,7 +269,8 @@ static void write_progress_fields(jw *w, const opt_progress *p)
     jw_num(w, "mean_ratio_min", p->q_min);
     jw_num(w, "dihedral_min", p->dih_min);
     jw_num(w, "dihedral_max", p->dih_max);
-    jw_int(w, "n_inverted", p->n_inverted);
+    jw_int(w, "n_inverted", p->n_inverted - p->n_degenerate);
+    jw_int(w, "n_degenerate", p->n_degenerate);
     jw_int(w, "n_folded", p->n_folded);
     jw_num(w, "max_move", p->max_move);
     jw_num(w, "elapsed", p->elapsed);
@@ -319,7 +321,6 @@ qdc_status report_write_json(const report_t *r, qdc_write_fn fn, void *ctx,
         jw_int(&w, "max_inverted_global", s->max_inverted_global);
         jw_int(&w, "folded_global", s->folded_global);
         jw_num(&w, "hausd_bound", s->hausd_bound);
-        jw_num(&w, "lift_bound", s->lift_bound);
         jw_int(&w, "held_back", s->held_back);
         jw_str(&w, "solver", opt_solver_name(s->solver));
         jw_num(&w, "solver_flops", s->solver_flops);

@@ -15,7 +15,7 @@
 typedef struct {
     int32_t nv, nt;
     int32_t n_inverted;          /* against the majority orientation */
-    int32_t n_degenerate;        /* zero volume */
+    int32_t n_degenerate;        /* not inverted but flat (core/tet.h) */
     double q_mean, q_std, q_min; /* signed mean ratio */
     double vl_mean, vl_min;      /* volume-length 6 sqrt2 V / l_rms^3, signed */
     double cn_mean, cn_max;  /* condition number ||S|| ||S^-1|| / 3 (>= 1), valid tets */

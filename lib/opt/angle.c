@@ -125,6 +125,16 @@ static void sine_grad(const mesh_topo *tp, const double *x, const double *y, dih
     }
 }
 
+/* The cubed floor of a move's star: the mean ratio floor qfloor cubed, and
+ * never a degenerate tet (core/tet.h), even where no floor is set (a tangled
+ * mesh): a sine can stay up while a tet flattens (a collapsing edge). */
+static double floor_cubed(double qfloor)
+{
+    double q3 = qfloor * qfloor * qfloor;
+
+    return q3 > GEOM_FLAT_ETA3 ? q3 : GEOM_FLAT_ETA3;
+}
+
 /* The rules of an angle move from a star at (f0 smallest sine, nb0 tets
  * under the level, q0 smallest mean ratio cubed) to (f1, nb1, q1): the
  * smallest sine rises, no more tets under the level (a stricter rule, no tet
@@ -215,7 +225,7 @@ static int32_t dihedral_vertex(const mesh_topo *tp, const slide_ctx *sl, double 
 {
     int sliding = sl && slide_kind(sl, v) != SLIDE_INTERIOR;
     double *xv = x + 3 * (size_t)v, s = 0.02 * lbar, h = 1e-6 * lbar;
-    const double qf3 = qfloor * qfloor * qfloor; /* star_sines gives cubes */
+    const double qf3 = floor_cubed(qfloor); /* star_sines gives cubes */
     int32_t moves = 0;
 
     for (int it = 0; it < DIH_INNER; it++) {
@@ -613,7 +623,7 @@ static int patch_of(const mesh_topo *tp, const uint8_t *movable, const double *x
 static int32_t patch_ascent(const mesh_topo *tp, const slide_ctx *sl, double *x,
                             patch_t *pc, double lbar, double qfloor, double level)
 {
-    const double qf3 = qfloor * qfloor * qfloor, h = 1e-6 * lbar;
+    const double qf3 = floor_cubed(qfloor), h = 1e-6 * lbar;
     double s = 0.02 * lbar;
     int32_t moves = 0;
     int dim = 3 * pc->nv;
@@ -663,7 +673,7 @@ static int32_t patch_ascent(const mesh_topo *tp, const slide_ctx *sl, double *x,
                                  s / dn, y[j]);
             }
             if (patch_trial_ok(tp, x, pc, (const double(*)[3])y, f0, nb0,
-                               pc->eta ? -INFINITY : qf3, level, act, nact, &f1)) {
+                               pc->eta ? GEOM_FLAT_ETA3 : qf3, level, act, nact, &f1)) {
                 ok = 1;
                 break;
             }

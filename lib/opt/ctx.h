@@ -21,7 +21,7 @@ typedef struct {
     uint8_t *locked;  /* not an unknown of the linear system */
     double *vfac;     /* nv: share of the step each vertex takes (feasible step) */
     double hbound;    /* --hausd in normalized units (0: none) */
-    double lift;      /* slide without --hausd: off the curved surface by at most this */
+    int autob;        /* the default bound (--hausd auto under slide) */
     int rerun_stuck;  /* tets left inverted get a rerun (run_once's stuck): no angle
                        * pass on such a result, the rerun's own does it */
     int keep_surface; /* the finishing pass folds no tet at the surface (finish.h) */

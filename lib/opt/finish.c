@@ -77,7 +77,7 @@ static double star_eval(const mesh_topo *tp, const double *x, int32_t v, const d
         if (g && isfinite(q))
             for (int c = 0; c < 3; c++)
                 g[c] += gt[c];
-        bad += !(pt.vol > 0.0);
+        bad += geom_tet_bad_vl(6.0 * pt.vol, pt.l2sum);
         f += q;
         if (q > worst) {
             worst = q;
@@ -131,7 +131,7 @@ static double star_hess(const mesh_topo *tp, const double *x, int32_t v, const d
                                 x + 3 * (size_t)tt[tet_face_of[a][1]],
                                 x + 3 * (size_t)tt[tet_face_of[a][2]], delta,
                                 g ? gt : NULL, Ht, vl);
-        si->bad += !(vl[0] > 0.0);
+        si->bad += geom_tet_bad_vl(6.0 * vl[0], vl[1]);
         if (so) {
             double e =
                 vl[0] > 0.0 ? 15552.0 * vl[0] * vl[0] / (vl[1] * vl[1] * vl[1]) : 0.0;
@@ -261,9 +261,11 @@ static int folds_at_surface(const mesh_topo *tp, const double *x, int32_t v,
         for (int b = 0; b < 4; b++)
             if (b != a)
                 f &= tp->vflag[tt[b]];
-        if (f && !geom_tet_inverted(geom_tet_vol6(x, tt)) &&
-            geom_tet_inverted(star_vol6(tp, x, k, y, NULL)))
-            return 1;
+        if (f && !geom_tet_bad(x, tt)) {
+            double l2, w = star_vol6(tp, x, k, y, NULL, &l2);
+            if (geom_tet_bad_vl(w, l2))
+                return 1;
+        }
     }
     return 0;
 }

@@ -3,8 +3,9 @@
  * movable vertices of the worst tets and of every inverted tet: damped Newton
  * with the analytic 3x3 Hessian for interior vertices (MIVL, MIMR), normalized
  * gradient steps for sliding vertices and MICN. A move is kept only if the
- * local objective decreases and no tet of the star becomes inverted (so the
- * number of inverted tets never grows). Thread-safe: pure over caller arrays. */
+ * local objective decreases and the star's count of inverted or degenerate
+ * tets (core/tet.h) does not rise (so the mesh's never grows). Thread-safe:
+ * pure over caller arrays. */
 #ifndef QDC_FINISH_H
 #define QDC_FINISH_H
 

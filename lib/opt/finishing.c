@@ -235,6 +235,10 @@ static qdc_status angle_pass(ctx_t *c, const uint8_t *movable, const slide_ctx *
     return QDC_OK;
 }
 
+/* lsq's angle pass without --hausd: how far a curved part's vertex may leave
+ * the input surface (of the diagonal) */
+#define LSQ_POLISH_LIFT 1e-3
+
 /* The angle pass; with lsq, boundary vertices take part too, on the input
  * surface as in slide mode (projected back onto its triangles, off a curved
  * part by at most the default allowance): the worst tets of good meshes often
@@ -252,13 +256,13 @@ static qdc_status lsq_angle_pass(ctx_t *c, const uint8_t *movable, opt_result *r
         return angle_pass(c, movable, c->sl, res, r, next);
     st = slide_new(c->tp, c->x0, c->o->feature_angle, &sl, NULL);
     /* without a bound, a curved part's vertices may leave the input surface
-     * by the default mode's allowance: lsq has moved the boundary already, and
-     * sliding alone cannot reopen an ear the global step flattened (measured on
+     * by LSQ_POLISH_LIFT: lsq has moved the boundary already, and sliding
+     * alone cannot reopen an ear the global step flattened (measured on
      * torus_h0.1_good: smallest dihedral 12.6 degrees sliding, 14.2 with it) */
     if (st == QDC_OK && c->hbound > 0)
         slide_set_bound(sl, c->hbound);
     else if (st == QDC_OK)
-        slide_set_lift(sl, OPT_HAUSD_DEFAULT);
+        slide_set_lift(sl, LSQ_POLISH_LIFT);
     mv = st == QDC_OK ? qdc_mallocn((size_t)c->nv, 1) : NULL;
     if (!mv) {
         slide_free(sl);

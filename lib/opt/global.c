@@ -57,8 +57,8 @@ static void project_sliding(const ctx_t *c, double *y)
     }
 }
 
-/* Tets non-positive at y (*ninv), and of those the ones positive at x (the
- * tets a move from x to y folds), in one parallel scan. */
+/* Tets inverted or flat at y (*ninv), and of those the ones usable at x (the
+ * tets a move from x to y folds or flattens), in one parallel scan. */
 static int32_t count_folds(const mesh_topo *tp, const double *x, const double *y,
                            int32_t *ninv)
 {
@@ -67,9 +67,9 @@ static int32_t count_folds(const mesh_topo *tp, const double *x, const double *y
 #pragma omp parallel for reduction(+ : folds, n) schedule(static)
     for (int32_t t = 0; t < tp->nt; t++) {
         const int32_t *tt = tp->tets + 4 * (size_t)t;
-        int bad = geom_tet_inverted(geom_tet_vol6(y, tt));
+        int bad = geom_tet_bad(y, tt);
         n += bad;
-        folds += bad && geom_tet_vol6(x, tt) > 0.0;
+        folds += bad && !geom_tet_bad(x, tt);
     }
     *ninv = n;
     return folds;
@@ -87,14 +87,14 @@ static void clamp_boundary(const ctx_t *c, double *y)
             slide_clamp(c->x0, v, c->hbound, y + 3 * (size_t)v);
 }
 
-/* Whether a trial spoils tet tt: it folds a tet valid at x or, on a valid
+/* Whether a trial spoils tet tt: it folds or flattens a tet usable at x or, on a valid
  * mesh, takes a tet below the worst mean ratio at x, whose cube is qfloor3
  * (the worst tet of the mesh never gets worse, so the global phase's work is
  * kept). */
 static int spoils(const ctx_t *c, const double *y, const int32_t *tt, double qfloor3)
 {
-    if (geom_tet_inverted(geom_tet_vol6(y, tt)))
-        return !geom_tet_inverted(geom_tet_vol6(c->x, tt));
+    if (geom_tet_bad(y, tt))
+        return !geom_tet_bad(c->x, tt);
     return qfloor3 > 0 && ctx_tet_eta3(y, tt) < qfloor3;
 }
 
@@ -151,7 +151,7 @@ static void feasible_trial(ctx_t *c, double s, int32_t ninv_x, double qfloor3)
     for (int32_t t = 0; t < tp->nt; t++) {
         const int32_t *tt = tp->tets + 4 * (size_t)t;
         int bad = spoils(c, c->trial, tt, qfloor3);
-        ninv += geom_tet_inverted(geom_tet_vol6(c->trial, tt));
+        ninv += geom_tet_bad(c->trial, tt);
         folds += bad;
         if (bad)
             ctx_mark_corners(c, tt);
@@ -159,10 +159,13 @@ static void feasible_trial(ctx_t *c, double s, int32_t ninv_x, double qfloor3)
     /* A tangled mesh untangles faster when a step may fold a few valid
      * tets while it frees more (measured on the tangled dev meshes: the
      * strict rule cost 0.008 of mean ratio on sphere and torus): the
-     * whole step is taken when the inverted count does not rise. Not
-     * while sliding: there such steps squashed smooth ears flat
-     * (bunny_tangled-low_10k: worst tet 6e-11 instead of 0.054). */
-    if (!folds || (ninv_x > 0 && ninv <= ninv_x && !c->sl)) {
+     * whole step is taken when the inverted count does not rise, under
+     * lsq only. Not while sliding: there such steps squashed smooth ears
+     * flat (bunny_tangled-low_10k: worst tet 6e-11 instead of 0.054); not
+     * with a fixed boundary, where they folded 458-2826 valid tets of the
+     * tangled dev meshes for no gain (mean ratio equal within 0.0002,
+     * none left inverted either way). */
+    if (!folds || (ninv_x > 0 && ninv <= ninv_x && c->o->boundary == OPT_BOUNDARY_LSQ)) {
         if (folds)
             memset(c->vmark, 0, (size_t)nv);
         return;
@@ -289,7 +292,7 @@ static double line_search(ctx_t *c, double delta, double f0)
         const int32_t *tt = tp->tets + 4 * (size_t)e;
         double q = ctx_tet_eta3(c->x, tt);
         qfloor3 = q < qfloor3 ? q : qfloor3;
-        ninv_x += geom_tet_inverted(geom_tet_vol6(c->x, tt));
+        ninv_x += geom_tet_bad(c->x, tt);
     }
     for (h = 0; h <= o->ls_halvings; h++) {
         feasible_trial(c, step, ninv_x, qfloor3);

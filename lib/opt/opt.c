@@ -41,7 +41,8 @@ static qdc_status run_setup(ctx_t *c, mesh_t *m, const opt_options *o,
                             opt_result *res, opt_progress *r, qdc_error *err)
 {
     mesh_topo *tp;
-    double t0 = c->t0;
+    double t0 = c->t0, bound;
+    int32_t nloose = 0;
     qdc_status st = mesh_topo_build(m, tpp, err);
 
     if (st != QDC_OK)
@@ -51,12 +52,23 @@ static qdc_status run_setup(ctx_t *c, mesh_t *m, const opt_options *o,
     c->t0 = t0;
     if (st != QDC_OK)
         return st;
+    bound = c->hbound;
     for (int32_t v = 0; loose && c->sl && v < c->nv; v++)
         if (loose[v] && !(tp->vflag[v] & MESH_V_FIXED)) {
             slide_release(c->sl, v);
             c->locked[v] = 0;
             c->bw2[v] = 1.0;
+            nloose++;
         }
+    /* the default's freed vertices (tets left inverted where sliding within
+     * the bound could not undo them) move within OPT_HAUSD_STUCK: at 3e-3 a
+     * tangled 100k-tet scanned bone (scripts/corpus.py --seed 8) kept 4 tets
+     * inverted, at 1e-2 1, free as far as they like 1 too; the run's bound
+     * is then that larger one */
+    if (nloose && c->autob && OPT_HAUSD_STUCK > c->hbound) {
+        slide_set_loose_bound(c->sl, OPT_HAUSD_STUCK);
+        bound = OPT_HAUSD_STUCK;
+    }
     for (int32_t v = 0; pins && v < c->nv; v++)
         if (pins[v]) {
             c->locked[v] = 1;
@@ -75,8 +87,7 @@ static qdc_status run_setup(ctx_t *c, mesh_t *m, const opt_options *o,
     r->phase = "input";
     c->input = c->best = *r;
     res->before = *r;
-    res->hausd_bound = c->hbound * c->scale;
-    res->lift_bound = c->sl ? c->lift * c->scale : 0.0;
+    res->hausd_bound = bound * c->scale;
     ctx_set_stop(res, OPT_STOP_MAX_ITER);
     return QDC_OK;
 }
@@ -90,6 +101,17 @@ static void hold_back_best(ctx_t *c, opt_result *res)
     if (back <= 0)
         return;
     ctx_evaluate(c, c->xbest, &b, NULL);
+    if (c->input.n_inverted == 0 && b.q_mean < c->input.q_mean) {
+        /* what is left no longer beats the input's mean: the input it is */
+        memcpy(c->xbest, c->x0, 3 * (size_t)c->nv * sizeof(double));
+        c->best = c->input;
+        c->best_it = 0;
+        ctx_log(c, 0,
+                "holding back %d vertices took the mean ratio under the input's: "
+                "the input is returned",
+                (int)back);
+        return;
+    }
     b.iteration = c->best.iteration;
     b.phase = c->best.phase;
     c->best = b;
@@ -107,7 +129,7 @@ static qdc_status rerun_masks(const ctx_t *c, uint8_t **squashed, uint8_t **stuc
 
     if (squashed && c->sl && c->best_it > 0 && c->input.n_inverted > 0)
         st = opt_squashed_ears(c, squashed);
-    if (st == QDC_OK && stuck && c->sl && c->lift > 0 && c->best.n_inverted > 0)
+    if (st == QDC_OK && stuck && c->sl && c->autob && c->best.n_inverted > 0)
         st = opt_stuck_boundary(c, stuck);
     return st;
 }
@@ -187,7 +209,7 @@ qdc_status opt_run_once(mesh_t *m, const opt_options *opts, const uint8_t *pins,
     if (st != QDC_OK)
         goto out;
     res.before_finish = c.best;
-    c.rerun_stuck = stuck && c.sl && c.lift > 0;
+    c.rerun_stuck = stuck && c.sl && c.autob;
     if (o.finish && !stop && o.finish_sweeps > 0) {
         st = opt_finishing_phase(&c, &res, &r);
         if (st != QDC_OK)

@@ -50,7 +50,9 @@ typedef struct {
                         * finish/angles: accepted moves per visited vertex */
     double q_mean, q_std, q_min; /* signed mean ratio */
     double dih_min, dih_max;     /* degrees, over non-inverted tets */
-    int32_t n_inverted;
+    int32_t n_inverted;   /* tets inverted or degenerate (core/tet.h geom_tet_bad):
+                           * the count every rule of the run compares */
+    int32_t n_degenerate; /* of those, the degenerate (flat) ones */
     int32_t n_folded; /* global: tets valid before this step and inverted after it */
     double max_move;  /* largest vertex move this iteration, in mean edge lengths */
     double elapsed;   /* seconds since opt_run started */
@@ -96,9 +98,8 @@ typedef struct {
                            * were, or slide on a planar patch or a straight edge);
                            * 0 = none or hausd_rel */
     double hausd_rel;     /* the same relative to the bounding-box diagonal, used when
-                           * hausd is 0; 0 = none; OPT_HAUSD_AUTO (default): no
-                           * Hausdorff bound, but with slide every boundary vertex
-                           * stays within OPT_HAUSD_DEFAULT of the input surface */
+                           * hausd is 0; 0 = none; OPT_HAUSD_AUTO (default): with
+                           * slide, the bound OPT_HAUSD_DEFAULT; else none */
     opt_topology topology; /* default NONE */
     double time_limit;     /* seconds, 0 = none: then OPT_STOPPED with the best mesh */
     int threads;           /* OpenMP threads for this run; 0 = all cores. A server running
@@ -117,7 +118,9 @@ typedef struct {
 void opt_defaults(opt_options *o);
 
 #define OPT_HAUSD_AUTO (-1.0)
-#define OPT_HAUSD_DEFAULT 1e-3 /* of the diagonal (docs/defaults.md) */
+#define OPT_HAUSD_DEFAULT 3e-3 /* of the diagonal (docs/defaults.md) */
+/* ... and of the vertices the default frees where tets stay inverted */
+#define OPT_HAUSD_STUCK 1e-2
 
 /* The word of the solver a run used (opt_result.solver): "auto", "cholmod",
  * "pcg"; a static string, "?" when out of range. */
@@ -141,8 +144,6 @@ typedef struct {
                                   * valid input: the global step folds nothing) */
     int32_t folded_global;       /* valid tets the global steps inverted, summed */
     double hausd_bound;          /* the boundary bound applied, mesh units (0: none) */
-    double lift_bound;          /* slide without --hausd: how far a boundary vertex may be
-                                 * from the input surface, mesh units (0: none) */
     int32_t held_back;          /* vertices put back to their input positions so that no
                                  * tet ends below the valid input's worst (opt_run) */
     int32_t tets_in, tets_out;  /* tets of the input and of the result (set with
@@ -168,8 +169,9 @@ typedef struct {
  * During the run m->tets and m->region are lent to the run's renumbered copy
  * (NULL meanwhile: m must not be read from another thread); they come back
  * with the same contents, possibly at other addresses.
- * The returned mesh never has more inverted tets nor a lower minimum mean ratio
- * than the input. The BLAS's thread count changes CHOLMOD's rounding, hence
+ * The returned mesh never has more inverted or degenerate tets (core/tet.h)
+ * nor a lower minimum mean ratio than the input, nor, on a valid input, a lower
+ * mean ratio. The BLAS's thread count changes CHOLMOD's rounding, hence
  * the bytes of the result (qdc and qdcd run with OPENBLAS_NUM_THREADS=1).
  * QDC_EMESH (m fails mesh_validate or cannot be oriented), QDC_EINVAL (an
  * option out of range), QDC_ENOMEM, QDC_ESOLVE. */

@@ -179,7 +179,7 @@ static const opt_desc table[] = {
      "boundary handling", OPT_G_BOUNDARY, boundary_say},
     {"hausd", OPT_T_HAUSD, OFF(hausd), 0, 0, 0, NULL, 0,
      "bound on the boundary's Hausdorff distance: H, P%, rel:F of the diagonal, none, "
-     "auto (with slide: vertices within 0.001 of the diagonal of the input surface)",
+     "auto (with slide: 0.003 of the diagonal)",
      OPT_G_BOUNDARY, NULL},
     {"feature_angle", OPT_T_REAL, OFF(feature_angle), 0, 180, 0, NULL, 0,
      "slide: sharper boundary edges are features (degrees)", OPT_G_BOUNDARY, NULL},

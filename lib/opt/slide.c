@@ -25,6 +25,8 @@ struct slide_ctx {
     bderr_bvh *outer; /* input boundary triangles */
     bderr_bvh *inter; /* input interface triangles (NULL if none) */
     double bound;     /* > 0: no vertex farther than this from its input position */
+    uint8_t *loose;   /* per vertex: freed by slide_release */
+    double loose_bound; /* > bound: the bound of the freed vertices instead */
     double lift;      /* > 0: curved-surface vertices slide, within this of the surface */
 };
 
@@ -506,9 +508,10 @@ qdc_status slide_new(const mesh_topo *tp, const double *x0, double feature_angle
     s->normal = qdc_calloc(3 * (size_t)tp->nv, sizeof(double));
     s->tangent = qdc_calloc(3 * (size_t)tp->nv, sizeof(double));
     s->flat = qdc_calloc((size_t)tp->nv, 1);
+    s->loose = qdc_calloc((size_t)tp->nv, 1);
     s->near = qdc_mallocn((size_t)tp->nv + 1, sizeof(int32_t));
     if (!s->kind || !s->on_iface || !s->x0 || !s->normal || !s->tangent || !s->flat ||
-        !s->near)
+        !s->loose || !s->near)
         goto fail;
     memcpy(s->x0, x0, 3 * (size_t)tp->nv * sizeof(double));
     st = find_features(s, tp, x0, feature_angle, deg);
@@ -551,6 +554,7 @@ void slide_free(slide_ctx *s)
     qdc_free(s->kind);
     qdc_free(s->on_iface);
     qdc_free(s->flat);
+    qdc_free(s->loose);
     qdc_free(s->near);
     qdc_free(s->sf_ptr);
     qdc_free(s->sf_tri);
@@ -619,8 +623,15 @@ void slide_clamp(const double *x0, int32_t v, double r, double p[3])
 
 void slide_release(slide_ctx *s, int32_t v)
 {
-    if (s->kind[v] != SLIDE_CORNER || !s->on_iface[v])
+    if (s->kind[v] == SLIDE_CORNER && s->on_iface[v])
+        return;
+    s->loose[v] = 1;
+    if (s->bound > 0) { /* free in space, within the bound of its input position */
+        s->kind[v] = SLIDE_SURFACE;
+        s->flat[v] = 0;
+    } else {
         s->kind[v] = SLIDE_INTERIOR;
+    }
 }
 
 int slide_flat(const slide_ctx *s, int32_t v)
@@ -665,7 +676,14 @@ void slide_project(const slide_ctx *s, int32_t v, const double p[3], double out[
     else
         slide_project_free(s, v, p, out);
     if (s->bound > 0)
-        slide_clamp(s->x0, v, s->bound, out);
+        slide_clamp(s->x0, v,
+                    s->loose[v] && s->loose_bound > s->bound ? s->loose_bound : s->bound,
+                    out);
+}
+
+void slide_set_loose_bound(slide_ctx *s, double r)
+{
+    s->loose_bound = r > 0 ? r : 0.0;
 }
 
 void slide_project_free(const slide_ctx *s, int32_t v, const double p[3], double out[3])

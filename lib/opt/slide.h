@@ -24,10 +24,13 @@ void slide_free(slide_ctx *s);
 int slide_kind(const slide_ctx *s, int32_t v);
 int32_t slide_n_feature_edges(const slide_ctx *s);
 
-/* v moves freely from now on, as an interior vertex (the default mode frees
- * the boundary vertices of tets inverted in the input: there the input
- * surface is folded and sliding on it cannot untangle). */
+/* v moves freely from now on (a run that leaves tets inverted where sliding
+ * cannot undo them frees the boundary vertices around them): as an interior
+ * vertex without a bound, anywhere within the bound of its input position
+ * with one (slide_set_bound first), so the bound still holds. */
 void slide_release(slide_ctx *s, int32_t v);
+/* The freed vertices' bound instead, if larger than the bound. */
+void slide_set_loose_bound(slide_ctx *s, double r);
 
 /* Whether v is on a planar patch (surface vertex) or a straight feature line
  * (line vertex) of the input: sliding it changes nothing of the shape. */

@@ -6,10 +6,11 @@
 #include <math.h>
 #include <string.h>
 
-/* 6 x the signed volume of star tet k of v with v placed at y, and (if g) its
- * gradient with respect to y (constant: the volume is linear in y). */
+/* 6 x the signed volume of star tet k of v with v placed at y, (if g) its
+ * gradient with respect to y (constant: the volume is linear in y) and (if l2)
+ * the sum of its squared edge lengths. */
 double star_vol6(const mesh_topo *tp, const double *x, int32_t k, const double *y,
-                 double g[3])
+                 double g[3], double *l2)
 {
     static const int32_t corner[4] = {0, 1, 2, 3};
     int32_t t = tp->vt_idx[k] >> 2, a = tp->vt_idx[k] & 3;
@@ -19,6 +20,8 @@ double star_vol6(const mesh_topo *tp, const double *x, int32_t k, const double *
     for (int b = 0; b < 4; b++)
         memcpy(p + 3 * b, b == a ? y : x + 3 * (size_t)tt[b], 3 * sizeof(double));
     v0 = geom_tet_vol6(p, corner);
+    if (l2)
+        *l2 = geom_tet_l2sum(p, corner);
     if (g)
         for (int c = 0; c < 3; c++) {
             double s = p[3 * a + c];

@@ -9,10 +9,11 @@
 #include "opt/slide.h"
 
 /* 6 x the signed volume of star tet k (position in vt_idx) of v with v placed
- * at y, and (if g) its gradient with respect to y (constant: the volume is
- * linear in y). */
+ * at y, (if g) its gradient with respect to y (constant: the volume is linear
+ * in y) and (if l2) the sum of its squared edge lengths (core/tet.h's
+ * degenerate test takes both). */
 double star_vol6(const mesh_topo *tp, const double *x, int32_t k, const double *y,
-                 double g[3]);
+                 double g[3], double *l2);
 
 /* y = xv + t dir, put back on v's surface or line if sl (a sliding vertex). */
 void star_trial_point(const slide_ctx *sl, int32_t v, const double *xv,

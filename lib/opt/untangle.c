@@ -21,8 +21,8 @@ static double star_min_vol6(const mesh_topo *tp, const double *x, int32_t v,
 
     *bad = 0;
     for (int32_t k = tp->vt_ptr[v]; k < tp->vt_ptr[v + 1]; k++) {
-        double w = star_vol6(tp, x, k, y, NULL);
-        *bad += geom_tet_inverted(w);
+        double l2, w = star_vol6(tp, x, k, y, NULL, &l2);
+        *bad += geom_tet_bad_vl(w, l2);
         m = w < m ? w : m;
     }
     return m;
@@ -46,15 +46,15 @@ static int32_t untangle_vertex(const mesh_topo *tp, double *x, int32_t v, double
         f0 = INFINITY;
         nb0 = 0;
         for (int32_t k = tp->vt_ptr[v]; k < tp->vt_ptr[v + 1]; k++) {
-            double gk[3], vk = star_vol6(tp, x, k, xv, gk);
+            double gk[3], l2, vk = star_vol6(tp, x, k, xv, gk, &l2);
             f0 = fmin(f0, vk);
-            nb0 += geom_tet_inverted(vk);
+            nb0 += geom_tet_bad_vl(vk, l2);
             gmax = fmax(gmax, sqrt(gk[0] * gk[0] + gk[1] * gk[1] + gk[2] * gk[2]));
         }
         if (!isfinite(f0))
             break;
         for (int32_t k = tp->vt_ptr[v]; k < tp->vt_ptr[v + 1]; k++) {
-            double gk[3], vk = star_vol6(tp, x, k, xv, gk);
+            double gk[3], vk = star_vol6(tp, x, k, xv, gk, NULL);
             if (vk - f0 > 2.0 * s * gmax)
                 continue;
             if (nact < UNTANGLE_ACT) {
@@ -102,7 +102,7 @@ qdc_status finish_untangle(const mesh_topo *tp, const uint8_t *movable, double *
         return QDC_ENOMEM;
     /* the interior vertices of the inverted tets and of the tets around them */
     for (int32_t t = 0; t < tp->nt; t++)
-        if (geom_tet_inverted(geom_tet_vol6(x, tp->tets + 4 * (size_t)t)))
+        if (geom_tet_bad(x, tp->tets + 4 * (size_t)t))
             for (int a = 0; a < 4; a++)
                 mark[tp->tets[4 * (size_t)t + a]] = 1;
     for (int32_t v = 0; v < tp->nv; v++)

@@ -22,6 +22,7 @@ checks = [
     ("dihedral_min", a["dihedral_min"], r["dihedral_min"], 1e-6),
     ("dihedral_max", a["dihedral_max"], r["dihedral_max"], 1e-6),
     ("inverted", a["n_inverted"], r["n_inverted"], 0),
+    ("degenerate", a["n_degenerate"], r["n_degenerate"], 0),
     ("dmin<5", a["n_dmin_lt_5"], r["n_dmin_lt_5"], 0),
     ("dmax>165", a["n_dmax_gt_165"], r["n_dmax_gt_165"], 0),
     ("vl_mean", a["volume_length_mean"], r["vlq_mean"], 1e-9),

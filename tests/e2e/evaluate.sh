@@ -56,6 +56,16 @@ for t2 in ([1, 0, 2, 4], [0, 1, 2, 4]):
     check("folded inverted %s" % t2, r["n_inverted"], 1)
     if not r["eta_min"] < 0:
         bad.append("folded eta_min %r not negative" % r["eta_min"])
+# flat: the second tet's apex at height h over the first's base plane is
+# degenerate when 6V = h <= 1e-9 l_rms^3 (lib/core/tet.h), l_rms^3 about 0.66
+# here, whatever the units (scaled by 1e6)
+for h, flat in ((0.0, 1), (1e-10, 1), (1e-8, 0)):
+    for s in (1.0, 1e6):
+        p = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0.2, 0.2, 1], [0.4, 0.4, -h]]) * s
+        write(tmp + "/flat.mesh", p, [[0, 1, 2, 3], [1, 0, 2, 4]])
+        r = ev.evaluate(tmp + "/flat.mesh")
+        check("flat h=%g x%g degenerate" % (h, s), r["n_degenerate"], flat)
+        check("flat h=%g x%g inverted" % (h, s), r["n_inverted"], 0)
 # boundary distance: the regular tet against itself moved by 0.25 along z
 write(tmp + "/up.mesh", reg + [0, 0, 0.25], [[0, 1, 2, 3]])
 r = ev.evaluate(tmp + "/up.mesh", tmp + "/reg.mesh", samples=20000)

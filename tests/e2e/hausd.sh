@@ -8,7 +8,7 @@
 # surface (boundary_error.vertex_max: vertices of planar patches and straight
 # edges slide freely on them in slide mode and in lsq's angle pass); with
 # slide, numpy checks that planar-patch vertices stay on their input plane to
-# 1e-12 of the diagonal.
+# 1e-12 of the diagonal. The default is the same kind of bound, at 3e-3.
 . "$(dirname "$0")/../lib.sh"
 if ! "$PY" -c 'import numpy, scipy, gmsh' 2> /dev/null; then
     echo "ok - hausd # SKIP python3-numpy/scipy/gmsh missing"
@@ -73,6 +73,27 @@ print(r["boundary_error"]["hausdorff_rel"], r["run"]["hausd_bound"] / r["boundar
             fi
         done
     done
+done
+# the default (--hausd auto under slide) is the same kind of bound: the
+# report's Hausdorff distance within the default 3e-3 of the diagonal, on the
+# generated meshes and on every file other tools wrote (tests/data/real)
+gzip -dc "$ROOT/tests/data/real/tetgen.node.gz" > "$TMP/tetgen.node"
+gzip -dc "$ROOT/tests/data/real/tetgen.ele.gz" > "$TMP/tetgen.ele"
+for in in "$TMP/c/part-cad.mesh" "$TMP/c/ball-lowq.mesh" "$ROOT"/tests/data/real/*.gz "$TMP/tetgen.ele"; do
+    case $in in *tetgen.*.gz) continue ;; esac
+    name=$(basename "$in")
+    if ! "$BIN/qdc" optimize "$in" "$TMP/d.${name%.gz}" --report "$TMP/d.json" --quiet 2> "$TMP/err"; then
+        fail "hausd: default on $name" "exit: $(tail -2 "$TMP/err")"
+        continue
+    fi
+    set -- $("$PY" -c 'import json, sys
+r = json.load(open(sys.argv[1])); be = r["boundary_error"]
+print(be["hausdorff_rel"], r["run"]["hausd_bound"] / be["bbox_diagonal"])' "$TMP/d.json")
+    if awk -v h="$1" -v b="$2" 'BEGIN { exit !(b > 3e-3 * (1 - 1e-6) && b < 3e-3 * (1 + 1e-6) && h <= b * (1 + 1e-9)) }'; then
+        pass "hausd: default on $name: Hausdorff $1 of the diagonal, bound $2"
+    else
+        fail "hausd: default on $name" "Hausdorff $1 of the diagonal, bound $2 (want 3e-3)"
+    fi
 done
 # an absolute bound is the same thing in the mesh's units
 in=$TMP/c/part-cad.mesh

@@ -8,7 +8,10 @@ for the boundary distance.
 
 usage: evaluate.py MESH [--orig ORIG] [--samples N]
 prints one JSON object:
-  n_verts, n_tets, n_inverted, n_degenerate, eta_mean, eta_std, eta_min
+  n_verts, n_tets, n_inverted, n_degenerate (not inverted, but 6V <= 1e-9
+  l_rms^3, as lib/core/tet.h defines it), eta_min_valid and
+  dihedral_min_valid (over the tets neither inverted nor degenerate),
+  n_zero_volume, eta_mean, eta_std, eta_min
   (signed mean ratio 12 (3|V|)^(2/3) / sum of squared edges, negative when
   inverted), vlq_mean (volume-length 6 sqrt2 V / l_rms^3), dihedral_min,
   dihedral_max (degrees), n_dmin_lt_5/15/30/40, n_dmax_gt_175/165/150/140;
@@ -83,6 +86,9 @@ def _tet_hash(tets):
     """The set of tets as a sorted array of sorted rows (for comparing)."""
     s = np.sort(np.asarray(tets), axis=1)
     return s[np.lexsort(s.T[::-1])]
+
+
+FLAT_EPS = 1e-9
 
 
 def signed_vol6(x, t):
@@ -269,11 +275,17 @@ def evaluate(path, orig=None, samples=300000, seed=1):
     vlq = np.sign(v) * 6.0 * np.sqrt(2.0) * vabs / (l2 / 6.0) ** 1.5
     ang = dihedrals(x, tp)
     amin, amax = ang.min(1), ang.max(1)
+    # degenerate (flat): not inverted, 6V <= 1e-9 l_rms^3 (lib/core/tet.h)
+    flat = (v >= 0) & (v * v <= FLAT_EPS * FLAT_EPS * (l2 / 6.0) ** 3)
+    ok = (v > 0) & ~flat
     r = {
         "n_verts": int(len(x)),
         "n_tets": int(len(t)),
-        "n_inverted": int((v <= 0).sum()),
-        "n_degenerate": int((v == 0).sum()),
+        "n_inverted": int((v < 0).sum()),
+        "n_degenerate": int(flat.sum()),
+        # over the usable tets (neither inverted nor degenerate)
+        "eta_min_valid": float(eta[ok].min()) if ok.any() else 0.0,
+        "dihedral_min_valid": float(amin[ok].min()) if ok.any() else 0.0,
         "eta_mean": float(eta.mean()),
         "eta_std": float(eta.std()),
         "eta_min": float(eta.min()),
@@ -286,7 +298,7 @@ def evaluate(path, orig=None, samples=300000, seed=1):
     for th in (175, 165, 150, 140):
         r["n_dmax_gt_%d" % th] = int((amax > th).sum())
     r["eta_p01"] = float(np.percentile(eta, 1))
-    r["n_zero_volume"] = r["n_degenerate"]
+    r["n_zero_volume"] = int((v == 0).sum())
     if orig:
         xo, to = read_any(orig)
         r["same_counts"] = bool(len(xo) == len(x) and len(to) == len(t))

@@ -633,7 +633,49 @@ TEST(cubed_mean_ratio_orders_like_the_mean_ratio)
     ASSERT_NEAR(metric_mean_ratio_cubed(&p), 0.0, 0.0);
 }
 
-TEST_MAIN("core", T(hessian_matches_finite_differences_of_the_gradient),
+/* A tet (0, e1, e2, (1/2, 1/2, h)) has 6V = h and l2sum = 5.5 + 3 h^2: flat
+ * (degenerate) exactly when h <= GEOM_FLAT_EPS ((5.5 + 3 h^2) / 6)^(3/2), at
+ * any scale and offset, and a tet at the floor has mean ratio
+ * 2 (GEOM_FLAT_EPS / 2)^(2/3) (core/tet.h). */
+TEST(flat_tets_are_degenerate_at_every_scale)
+{
+    const int32_t tt[4] = {0, 1, 2, 3};
+    const double hfloor = GEOM_FLAT_EPS * pow(5.5 / 6.0, 1.5);
+    const double hs[5] = {0.0, 0.5 * hfloor, 2.0 * hfloor, 1e-3, -1e-3};
+    const int flat[5] = {1, 1, 0, 0, 0}, inv[5] = {0, 0, 0, 0, 1};
+    const double scales[3] = {1.0, 1e6, 1e-6}, offs[3] = {0.0, 3e6, -2e-6};
+
+    for (int k = 0; k < 3; k++)
+        for (int i = 0; i < 5; i++) {
+            double b[4][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0.5, 0.5, hs[i]}}, x[12];
+            double v6, l2;
+            for (int a = 0; a < 12; a++)
+                x[a] = scales[k] * b[a / 3][a % 3] + offs[k];
+            v6 = geom_tet_vol6(x, tt);
+            l2 = geom_tet_l2sum(x, tt);
+            ASSERT_NEAR(l2, scales[k] * scales[k] * (5.5 + 3 * hs[i] * hs[i]),
+                        1e-12 * scales[k] * scales[k]);
+            ASSERT_EQ_INT(geom_tet_degenerate(v6, l2), flat[i]);
+            ASSERT_EQ_INT(geom_tet_inverted(v6), inv[i]);
+            ASSERT_EQ_INT(geom_tet_bad_vl(v6, l2), flat[i] || inv[i]);
+            ASSERT_EQ_INT(geom_tet_bad(x, tt), flat[i] || inv[i]);
+        }
+    {
+        double x[4][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0.5, 0.5, hfloor}};
+        metric_parts p;
+        metric_parts_of(x[0], x[1], x[2], x[3], &p);
+        ASSERT_NEAR(metric_mean_ratio(&p), 2.0 * pow(GEOM_FLAT_EPS / 2.0, 2.0 / 3.0),
+                    1e-9 * 2.0 * pow(GEOM_FLAT_EPS / 2.0, 2.0 / 3.0));
+    }
+    /* NaN coordinates are unusable */
+    {
+        double x[12] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, NAN};
+        ASSERT_TRUE(geom_tet_bad(x, tt));
+    }
+}
+
+TEST_MAIN("core", T(flat_tets_are_degenerate_at_every_scale),
+          T(hessian_matches_finite_differences_of_the_gradient),
           T(dihedral_sines_are_the_sines_of_the_angles),
           T(cubed_mean_ratio_orders_like_the_mean_ratio), T(regular_tet_metrics_are_one),
           T(scaled_regular_tet_is_still_one), T(mivl_is_mimr_to_three_halves),

@@ -189,7 +189,41 @@ TEST(slide_keeps_region_interfaces_and_tags)
     mesh_free(m);
 }
 
-TEST_MAIN("slide", T(cube_features_are_its_12_edges_and_8_corners),
+/* A freed vertex moves in space; with a bound it stays within the bound of
+ * its input position (the Hausdorff bound holds through a rerun that frees
+ * boundary vertices), without one it is an interior vertex. */
+TEST(freed_vertices_keep_the_bound)
+{
+    int n = 2;
+    mesh_t *m = tm_grid(n, 0);
+    mesh_topo *tp = NULL;
+    slide_ctx *s = NULL;
+    int32_t vf = 1 + 3 * 1, vc = 0; /* (0.5, 0.5, 0) on a face, (0, 0, 0) a corner */
+    double p[3] = {0.4, 0.6, 0.3}, q[3], d;
+    ASSERT_OK(mesh_topo_build(m, &tp, NULL));
+    ASSERT_OK(slide_new(tp, m->xyz, 30.0, &s, NULL));
+    slide_set_bound(s, 0.01);
+    slide_release(s, vf);
+    slide_release(s, vc);
+    ASSERT_TRUE(slide_lifts(s, vf) && slide_lifts(s, vc));
+    slide_project(s, vf, p, q);
+    d = sqrt((q[0] - 0.5) * (q[0] - 0.5) + (q[1] - 0.5) * (q[1] - 0.5) + q[2] * q[2]);
+    ASSERT_NEAR(d, 0.01, 1e-12);
+    ASSERT_TRUE(q[2] > 0.009); /* it left the plane, in the direction asked */
+    slide_project(s, vc, p, q);
+    ASSERT_NEAR(sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2]), 0.01, 1e-12);
+    slide_free(s);
+    ASSERT_OK(slide_new(tp, m->xyz, 30.0, &s, NULL));
+    slide_release(s, vf);
+    ASSERT_EQ_INT(slide_kind(s, vf), SLIDE_INTERIOR);
+    slide_project(s, vf, p, q);
+    ASSERT_NEAR(q[2], 0.3, 0.0);
+    slide_free(s);
+    mesh_topo_free(tp);
+    mesh_free(m);
+}
+
+TEST_MAIN("slide", T(freed_vertices_keep_the_bound), T(cube_features_are_its_12_edges_and_8_corners),
           T(projection_onto_face_line_and_corner), T(bvh_picks_the_closest_triangle),
           T(slide_keeps_the_cube_and_beats_fixed),
           T(slide_keeps_region_interfaces_and_tags))
