@@ -223,6 +223,23 @@ void format_names(sbuf *b, int surfaces)
     }
 }
 
+/* GET /v1/formats: the library's format table (meshio_formats_json), which
+ * the console, the Python client and the batch script read instead of a copy. */
+static enum MHD_Result do_formats(struct MHD_Connection *c, req *r)
+{
+    sbuf b = {0};
+    qdc_error e;
+    enum MHD_Result ret;
+
+    if (meshio_formats_json(sb_writer, &b, &e) != QDC_OK) {
+        sb_free(&b);
+        return http_problem(c, r, 500, "internal", NULL, e.msg, NULL, NULL);
+    }
+    ret = http_reply_json(c, r, 200, &b, no_headers);
+    sb_free(&b);
+    return ret;
+}
+
 /* ---------------------------------------------------------------- dispatch -- */
 
 /* Content-Length and Transfer-Encoding headers of a request, counted. */
@@ -349,6 +366,8 @@ enum MHD_Result api_dispatch(struct MHD_Connection *c, req *r, const char *url,
         sb_free(&b);
         return ret;
     }
+    case R_FORMATS:
+        return do_formats(c, r);
     case R_REPORT:
         return do_report(c, r);
     case R_CANCEL:

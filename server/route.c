@@ -17,6 +17,7 @@ static const route_desc table[] = {
     {"/v1/jobs", R_JOBS, GET_HEAD | M_POST, "GET, POST", AUTH_TOKEN},
     {"/v1/jobs/", R_JOBS, GET_HEAD | M_POST, "GET, POST", AUTH_TOKEN},
     {"/v1/options", R_OPTIONS, GET_HEAD, "GET", AUTH_TOKEN},
+    {"/v1/formats", R_FORMATS, GET_HEAD, "GET", AUTH_TOKEN},
     {"/problems/{slug}", R_PROBLEM, GET_HEAD, "GET", AUTH_NONE},
     {"/v1/jobs/{id}", R_JOB, GET_HEAD | M_DELETE, "GET, DELETE", AUTH_TOKEN},
     {"/v1/jobs/{id}/progress", R_PROGRESS, GET_HEAD, "GET", AUTH_TOKEN},

@@ -17,6 +17,7 @@ enum {
     R_REPORT,
     R_INPUT,   /* the job's input mesh: served like R_RESULT */
     R_OPTIONS, /* the option table */
+    R_FORMATS, /* the format table */
     R_CANCEL,
     R_LIVEZ,
     R_READYZ,

@@ -137,6 +137,31 @@ int cli_options(int argc, char **argv)
 
 /* The optimizer's options come from the library's table (lib/opt/options.h),
  * with their valid values and defaults; then the CLI's own. */
+/* The --in-format/--out-format help: the library's format table, names
+ * wrapped at 80 columns. */
+static void format_list(FILE *f)
+{
+    int col = 35;
+
+    fputs("  --in-format F, --out-format F   ", f);
+    for (int k = 1; meshio_format_name((meshio_format)k); k++) {
+        const char *n = meshio_format_name((meshio_format)k);
+        int w = (int)strlen(n) + 1;
+        if (col + w > 80) {
+            fprintf(f, "\n%29s", "");
+            col = 29;
+        }
+        fprintf(f, "%s%s", n, meshio_format_name((meshio_format)(k + 1)) ? "|" : "\n");
+        col += w;
+    }
+    fputs("                             (default: by extension, then content);\n"
+          "                             input also ",
+          f);
+    for (int k = 1; surface_format_name((surface_format)k); k++)
+        fprintf(f, "%s%s", k > 1 ? "|" : "", surface_format_name((surface_format)k));
+    fputs("\n", f);
+}
+
 static void optimize_usage(FILE *f)
 {
     size_t n;
@@ -156,31 +181,24 @@ static void optimize_usage(FILE *f)
         fprintf(f, "  %-26s %s\n  %-26s   %s; default %s\n", flag, t[i].help, "", range,
                 def);
     }
-    fputs(
-        "  --in-format F, --out-format F   "
-        "medit|tetgen|qmesh|json|gmsh|gmsh-bin|gmsh22|\n"
-        "                             gmsh22-bin|gmsh40|vtk|vtk-ascii|vtu|vtu-ascii|\n"
-        "                             dolfin|meshb|abaqus|netgen\n"
-        "                             (default: by "
-        "extension,\n"
-        "                             then content); input also stl|off|obj|poly|smesh\n"
-        "  --format F                 both of the above\n"
-        "  --tetgen-quality Q         surface input: TetGen radius-edge bound (default "
-        "2)\n"
-        "  --max-volume V             surface input: TetGen maximum tet volume\n"
-        "  --fix FILE                 vertices that must not move (0-based indices)\n"
-        "  --reorient on|off          write every tet in the vertex order that is\n"
-        "                             positive under the mesh's orientation (default "
-        "off:\n"
-        "                             tets are written in the input's vertex order)\n"
-        "  --report FILE.json         write the quality/boundary report\n"
-        "  --no-keep-source           OUT is written by qdc's writer even in the\n"
-        "                             input's format (default: the input file, read\n"
-        "                             again at the end and checked unchanged, with\n"
-        "                             only the coordinates replaced, when OUT is in\n"
-        "                             its format)\n"
-        "  --quiet                    no progress output\n",
-        f);
+    format_list(f);
+    fputs("  --format F                 both of the above\n"
+          "  --tetgen-quality Q         surface input: TetGen radius-edge bound (default "
+          "2)\n"
+          "  --max-volume V             surface input: TetGen maximum tet volume\n"
+          "  --fix FILE                 vertices that must not move (0-based indices)\n"
+          "  --reorient on|off          write every tet in the vertex order that is\n"
+          "                             positive under the mesh's orientation (default "
+          "off:\n"
+          "                             tets are written in the input's vertex order)\n"
+          "  --report FILE.json         write the quality/boundary report\n"
+          "  --no-keep-source           OUT is written by qdc's writer even in the\n"
+          "                             input's format (default: the input file, read\n"
+          "                             again at the end and checked unchanged, with\n"
+          "                             only the coordinates replaced, when OUT is in\n"
+          "                             its format)\n"
+          "  --quiet                    no progress output\n",
+          f);
 }
 
 /* Before writing m to out in fmt: say in one note line when the input's
@@ -195,7 +213,7 @@ static void source_note(const mesh_t *m, const char *out, meshio_format fmt, int
         return;
     fmt = meshio_save_format(out, fmt, m);
     meshio_source_bytes(m, &f32);
-    if (!meshio_splices(m, fmt, &why) && fmt != MESHIO_ABAQUS && fmt != MESHIO_NETGEN)
+    if (!meshio_splices(m, fmt, &why) && (fmt == MESHIO_AUTO || meshio_has_writer(fmt)))
         fprintf(stderr,
                 "qdc: note: %s: written by qdc's %s writer (%s): only vertices, tets, "
                 "triangles and their region tags are kept\n",
@@ -1025,4 +1043,20 @@ out:
     mesh_free(m);
     mesh_free(r);
     return rc;
+}
+
+int cli_formats(int argc, char **argv)
+{
+    qdc_error err;
+
+    (void)argv;
+    if (argc > 1) {
+        fprintf(stderr, "usage: qdc formats\n");
+        return CLI_EUSAGE;
+    }
+    if (meshio_formats_json(stdout_write, NULL, &err) != QDC_OK || fflush(stdout)) {
+        fprintf(stderr, "qdc: formats: %s\n", err.msg[0] ? err.msg : "write failed");
+        return CLI_EOUTPUT;
+    }
+    return 0;
 }
