@@ -709,18 +709,25 @@ static qdc_status inp_node(txt *s, const char *p, const char *eol, inp *a, srcre
     const char *t, *te;
     int64_t id;
     double x[3];
-    uint64_t off[3];
+    uint64_t off[3], end;
     qdc_status st;
 
     inp_field(&p, eol, &t, &te);
     st = int_at(s, t, te, "*NODE: node number", 1, INT32_MAX, &id, err);
-    for (int k = 0; k < 3 && st == QDC_OK; k++) {
-        if (!inp_field(&p, eol, &t, &te) || t == te)
-            return fail_txt(err, QDC_EPARSE, s, p,
-                            "*NODE: node %lld has %d coordinates (3 needed)",
-                            (long long)id, k);
+    /* A coordinate left blank or out at the end of the line is 0, as Abaqus
+     * and CalculiX read it; a spliced write puts the value there (after a
+     * comma for one left out) if the vertex moves off 0 (SRC_BLANK). */
+    end = (uint64_t)(te - s->base);
+    for (int k = 0, out = 0; k < 3 && st == QDC_OK; k++) {
+        out = out || !inp_field(&p, eol, &t, &te);
+        if (out || t == te) {
+            x[k] = 0;
+            off[k] = (out ? end | SRC_COMMA : (uint64_t)(t - s->base)) | SRC_BLANK;
+            continue;
+        }
         st = num_at(s, t, te, "*NODE: coordinate", &x[k], err);
         off[k] = (uint64_t)(t - s->base);
+        end = (uint64_t)(te - s->base);
     }
     if (st != QDC_OK)
         return st;

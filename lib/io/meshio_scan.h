@@ -881,6 +881,12 @@ enum {
                      or '<' (XML attributes, Abaqus comma lists) */
     SRC_BLOCK     /* VTU base64 or zlib Points: bytes [blk_a, blk_b) re-encoded */
 };
+/* SRC_TEXT3 offsets with SRC_BLANK: the coordinate is not in the file (a
+ * blank field, read as 0) and the offset is where its value goes if it is not
+ * 0 when written; with SRC_COMMA too, a field left out at the end of the line:
+ * ", value" goes there, after those left out before it. */
+#define SRC_BLANK (UINT64_C(1) << 63)
+#define SRC_COMMA (UINT64_C(1) << 62)
 
 /* Values in the file that are derived from the coordinates, recomputed by a
  * spliced write (splice.c): Gmsh 4.x $Entities bounding boxes (DV_BOXES),

@@ -795,6 +795,11 @@ static qdc_status vtk_field(vtk *v, qdc_error *err)
     st = txt_int(s, "FIELD: array count", 0, 1 << 20, &c, err);
     for (int64_t i = 0; i < c && st == QDC_OK; i++) {
         next_word(v, &name, &nl);
+        /* VTK 9 follows an array with its METADATA (INFORMATION keys) */
+        while (word_is(name, nl, "METADATA")) {
+            vtk_metadata(v);
+            next_word(v, &name, &nl);
+        }
         if (word_is(name, nl, "NULL") || !nl)
             continue;
         st = txt_int(s, "FIELD: components", 0, 1 << 20, &k, err);

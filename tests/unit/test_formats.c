@@ -455,8 +455,6 @@ TEST(dolfin_abaqus_netgen)
         "second-order tetrahedra");
     BAD(inp, "2, 50, 20,", "2, 50, 21,", MESHIO_ABAQUS, QDC_EPARSE, 13,
         "unknown node 21");
-    BAD(inp, "50, 1, 1, 1", "50, 1, 1   ", MESHIO_ABAQUS, QDC_EPARSE, 9,
-        "node 50 has 2 coordinates");
     BAD(inp, "0.0, 1.0, 0.0", "0.0, inf, 0.0", MESHIO_ABAQUS, QDC_EPARSE, 7,
         "not finite");
     BAD(vol, "2 4 5 2 3 4", "2 4 6 2 3 4", MESHIO_NETGEN, QDC_EPARSE, 17,
@@ -747,6 +745,64 @@ TEST(vtk51_layout_and_field_data)
     mesh_free(m);
 }
 
+/* VTK 9 follows a FIELD array with METADATA (INFORMATION keys up to an
+ * empty line): skipped, the next array read. */
+TEST(vtk9_field_metadata)
+{
+    const char *vtk =
+        "# vtk DataFile Version 5.1\nvtk output\nASCII\nDATASET UNSTRUCTURED_GRID\n"
+        "FIELD FieldData 2\nTimeValue 1 1 double\n0.5\nMETADATA\nINFORMATION 1\n"
+        "NAME L2_NORM_RANGE LOCATION vtkDataArray\nDATA 2 0.5 0.5\n\n"
+        "Cycle 1 1 int\n3\n"
+        "POINTS 4 float\n0 0 0 1 0 0 0 1 0 0 0 1\nMETADATA\nINFORMATION 0\n\n"
+        "CELLS 2 4\nOFFSETS vtktypeint64\n0 4\nCONNECTIVITY vtktypeint64\n0 1 2 3\n"
+        "CELL_TYPES 1\n10\n";
+    mesh_t *m;
+    qdc_error err;
+
+    ASSERT_OK(read_str(vtk, MESHIO_AUTO, &m, &err));
+    ASSERT_EQ_INT(m->nv, 4);
+    ASSERT_EQ_INT(m->nt, 1);
+    ASSERT_TRUE(m->xyz[11] == 1);
+    mesh_free(m);
+}
+
+/* Abaqus and CalculiX read a coordinate left out at the end of a *NODE line,
+ * or left blank, as 0; written back spliced, a moved one is put in its place
+ * and the rest of the file kept. */
+TEST(abaqus_missing_coordinates)
+{
+    const char *inp = "*NODE\n1, 0, 0, 0\n2, 1\n3, 0, 1,\n4, , , 1\n"
+                      "*ELEMENT, TYPE=C3D4, ELSET=E\n1, 1, 2, 3, 4\n";
+    static const double want[12] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1};
+    meshio_options o = {NULL, NULL, 1};
+    mesh_t *m, *b;
+    qdc_error err;
+    sink s = {0};
+
+    ASSERT_OK(meshio_read_ex(inp, strlen(inp), MESHIO_AUTO, &o, &m, &err));
+    ASSERT_EQ_INT(m->nv, 4);
+    ASSERT_TRUE(memcmp(m->xyz, want, sizeof want) == 0);
+    ASSERT_TRUE(meshio_splices(m, MESHIO_ABAQUS, NULL));
+    /* unmoved: the file as it was */
+    ASSERT_OK(meshio_write(m, MESHIO_AUTO, sink_write, &s, &err));
+    ASSERT_TRUE(s.n == strlen(inp) && memcmp(s.b, inp, s.n) == 0);
+    s.n = 0;
+    m->xyz[5] = 0.5;  /* node 2: z left out after y, also left out */
+    m->xyz[8] = 0.25; /* node 3: z blank after a trailing comma */
+    m->xyz[10] = -2;  /* node 4: y blank */
+    ASSERT_OK(meshio_write(m, MESHIO_AUTO, sink_write, &s, &err));
+    ASSERT_EQ_INT(sink_write(&s, "", 1), 0); /* a C string for strstr */
+    s.n--;
+    ASSERT_TRUE(strstr(s.b, "\n2, 1, 0, 0.5\n") != NULL);
+    ASSERT_OK(meshio_read(s.b, s.n, MESHIO_ABAQUS, &b, &err));
+    ASSERT_TRUE(memcmp(b->xyz, m->xyz, 12 * sizeof(double)) == 0);
+    ASSERT_TRUE(strstr(s.b, "*ELEMENT, TYPE=C3D4, ELSET=E\n1, 1, 2, 3, 4\n") != NULL);
+    mesh_free(b);
+    mesh_free(m);
+    free(s.b);
+}
+
 static void b64(const unsigned char *in, size_t n, char *out)
 {
     static const char al[] =
@@ -1020,4 +1076,5 @@ TEST_MAIN("formats", T(roundtrip_all_tags), T(roundtrip_no_tags), T(roundtrip_em
           T(gmsh_errors_say_where), T(gmsh_binary_bad_record_after_good_ones),
           T(gmsh_periodic_held), T(vtk51_layout_and_field_data), T(vtu_inline_base64),
           T(names_sniffing_media_types), T(dev_speed_ascii),
-          T(gmsh41_binary_1m_tets_speed), T(new_formats_1m_tets_speed), T(fuzz_replay))
+          T(gmsh41_binary_1m_tets_speed), T(new_formats_1m_tets_speed),
+          T(vtk9_field_metadata), T(abaqus_missing_coordinates), T(fuzz_replay))
