@@ -1191,10 +1191,9 @@ static qdc_status read_gmsh(const char *buf, size_t len, const meshio_options *o
     g.s = txt_init(buf, len, 0);
     g.b = (const unsigned char *)buf;
     st = next_marker(&g, &name, &nlen, err);
-    if (st == QDC_OK && word_is(name, nlen, "NOD"))
-        st = fail_txt(err, QDC_EFORMAT, &g.s, name - 1,
-                      "MSH 1 ($NOD) is not supported (4.1, 4.0, 2.2, 2.1 or 2.0)");
-    else if (st == QDC_OK && !word_is(name, nlen, "MeshFormat"))
+    if (st == QDC_OK && word_is(name, nlen, "NOD")) /* MSH 1: its own reader */
+        return fmt_msh1.read(buf, len, o, rec, out, err);
+    if (st == QDC_OK && !word_is(name, nlen, "MeshFormat"))
         st = fail_txt(err, QDC_EPARSE, &g.s, g.s.p, "expected $MeshFormat first");
     if (st == QDC_OK) {
         end_of_line(&g);
@@ -1566,16 +1565,14 @@ static qdc_status write_gmsh(const mesh_t *m, meshio_format fmt, int part, wbuf 
 }
 
 /* After "$MeshFormat": the version ("2.2", "4", "4.1") and the file type (0
- * ASCII, 1 binary). Unsupported versions go to the reader, which names them;
- * so does "$NOD" (MSH 1). */
+ * ASCII, 1 binary). Unsupported versions go to the reader, which names them
+ * ("$NOD", MSH 1, is msh1's). */
 static meshio_format sniff_gmsh(const char *buf, size_t len, size_t i)
 {
     const char *p;
     size_t n, k = 0, v, vn;
     int bin;
 
-    if (len - i >= 4 && memcmp(buf + i, "$NOD", 4) == 0)
-        return MESHIO_GMSH41;
     if (len - i < 11 || memcmp(buf + i, "$MeshFormat", 11) != 0)
         return MESHIO_AUTO;
     p = buf + i + 11;
