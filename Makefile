@@ -55,10 +55,32 @@ CLI_LIBS := -lcurl
 UNIT_C := $(wildcard tests/unit/test_*.c)
 UNIT_BIN := $(UNIT_C:tests/unit/%.c=$(B)/tests/%)
 
+# Programs that use the library as an outside program would: qdc.h alone
+# (tests/e2e/example.sh runs them).
+EX_C := $(wildcard examples/*.c)
+EX_BIN := $(EX_C:%.c=$(B)/%)
+
 PROGS := $(B)/qdc $(if $(SRV_C),$(B)/qdcd)
 
-.PHONY: all deps test test-quick test-container test-faults test-load run bench clean fuzz format format-check fault
-all: $(B)/libqdc.a $(PROGS) $(UNIT_BIN)
+.PHONY: all hooks deps test test-quick test-container test-faults test-load run bench clean fuzz format format-check fault
+all: $(B)/libqdc.a $(PROGS) $(UNIT_BIN) $(EX_BIN) hooks
+
+# The commit-msg hook for contributors (scripts/commit-msg: subjects of at
+# most 72 characters), copied into git's hooks directory when this tree is
+# the top of a git checkout (a clone or a worktree) whose hooks directory
+# exists (git makes it in every clone). Skipped without .git (a tarball, a CI
+# export), with QDC_NO_HOOKS=1, or when another commit-msg hook is there.
+hooks:
+	@[ -z "$(QDC_NO_HOOKS)" ] || exit 0; \
+	top=$$(git rev-parse --show-toplevel 2>/dev/null) || exit 0; \
+	[ "$$top" -ef . ] || exit 0; \
+	h=$$(git rev-parse --git-path hooks 2>/dev/null) || exit 0; \
+	[ -d "$$h" ] || exit 0; \
+	if [ ! -e "$$h/commit-msg" ] || grep -q '^# scripts/commit-msg' "$$h/commit-msg"; then \
+	    cmp -s scripts/commit-msg "$$h/commit-msg" || \
+	    { cp scripts/commit-msg "$$h/commit-msg" && chmod +x "$$h/commit-msg" && \
+	      echo "installed the commit-msg hook in $$h"; }; \
+	fi
 
 deps:
 	@scripts/deps.sh
@@ -91,6 +113,10 @@ $(B)/qdcd: $(SRV_OBJ) $(B)/libqdc.a
 $(B)/tests/%: tests/unit/%.c $(wildcard tests/unit/*.h) $(B)/libqdc.a
 	@mkdir -p $(dir $@)
 	$(CC) $(CPPFLAGS) -Itests/unit $(CFLAGS) -o $@ $< $(B)/libqdc.a $(LIB_LIBS) $(LDFLAGS)
+
+$(B)/examples/%: examples/%.c lib/qdc.h $(B)/libqdc.a
+	@mkdir -p $(dir $@)
+	$(CC) $(CPPFLAGS) $(CFLAGS) -o $@ $< $(B)/libqdc.a $(LIB_LIBS) $(LDFLAGS)
 
 # The daemon's pure parsers and router, linked alone (no libmicrohttpd).
 HTTP_PURE_OBJ := $(B)/server/route.o $(B)/server/parse.o $(B)/server/problem.o $(B)/server/util.o
@@ -149,7 +175,8 @@ clean:
 	rm -rf build
 
 FORMAT_SRC = $(wildcard lib/*.h lib/*/*.c lib/*/*.h lib/*/*.cpp server/*.c server/*.h clients/qdc/*.c \
-              clients/qdc/*.h tests/unit/*.c tests/unit/*.h tests/fuzz/*.c tests/fuzz/*.h)
+              clients/qdc/*.h tests/unit/*.c tests/unit/*.h tests/fuzz/*.c tests/fuzz/*.h \
+              examples/*.c)
 format:
 	clang-format -i $(FORMAT_SRC)
 

@@ -4,7 +4,7 @@
  * clock and by the thread's CPU time (steadier on a shared machine, where
  * the wall clock of the same parse varies twofold). Built and run by
  * bench/read_speed.sh. usage: read_speed FILE... */
-#include "io/meshio.h"
+#include "qdc.h"
 
 #include <stdio.h>
 #include <time.h>

@@ -1,5 +1,10 @@
 /* qdc.h - the public interface of libqdc: what the qdc CLI, the qdcd daemon
- * and other programs include. Everything else under lib/ is internal.
+ * and other programs include (examples/optimize.c: a whole program on it).
+ * The headers below are the public ones; each function in them says what it
+ * reads, writes and returns and who frees what. Every other header under
+ * lib/ (X_int.h beside a public X.h, and the internal modules' headers) is
+ * internal: tests/house/layers.sh checks that none is reachable from here
+ * (docs/architecture.md, "Public and internal headers").
  *
  * The library is in layers; a header includes only its own layer and lower ones:
  *   core/  status codes, allocation, the mesh container

@@ -35,6 +35,7 @@ typedef struct req {
     struct MHD_Response *held;
     unsigned held_status;
     int route;
+    const char *url; /* the request's path (libmicrohttpd's, valid until done) */
     char id[JOB_ID_LEN + 1];
     char owner[65];
     /* handed to a thread of its own (offq.h) with the connection suspended */

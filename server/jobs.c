@@ -1,8 +1,9 @@
-/* jobs.c - POST /v1/jobs/{id}:cancel, DELETE /v1/jobs/{id} and
- * GET /v1/jobs (the caller's jobs, newest first, paged). Submission is
- * api.c's upload path; GET /v1/jobs/{id} is reply_job. */
+/* jobs.c - GET /v1/jobs/{id}, POST /v1/jobs/{id}:cancel, DELETE
+ * /v1/jobs/{id} and GET /v1/jobs (the caller's jobs, newest first, paged).
+ * Submission is upload.c. */
 #define _GNU_SOURCE
-#include "handlers.h"
+#include "endpoints.h"
+#include "handler.h"
 
 #include "job.h"
 #include "parse.h"
@@ -17,6 +18,15 @@
 static const char *const no_headers[] = {NULL};
 
 /* ------------------------------------------------------ cancel/delete/list -- */
+
+enum MHD_Result do_get(struct MHD_Connection *c, req *r)
+{
+    job_rec j;
+    enum MHD_Result ret;
+    if (!load_job(c, r, &j, &ret))
+        return ret;
+    return reply_job(c, r, 200, &j, no_headers);
+}
 
 enum MHD_Result do_cancel(struct MHD_Connection *c, req *r)
 {

@@ -4,11 +4,11 @@
 #include "api.h"
 #include "http.h"
 #include "job.h"
+#include "route.h"
 #include "server.h"
 #include "sha256.h"
 #include "shared.h"
 
-#include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
 #include <getopt.h>
@@ -259,8 +259,8 @@ static int set_cli(const cli_opt *o, const char *arg, qdcd_config *c)
 
 static int parse_args(int argc, char **argv, qdcd_config *c)
 {
-    enum { O_HASH = 1000, O_INSECURE, O_PUBLIC_METRICS };
-    struct option lo[N_CLI + 6];
+    enum { O_HASH = 1000, O_INSECURE, O_PUBLIC_METRICS, O_ROUTES };
+    struct option lo[N_CLI + 7];
     int o, n = 0;
 
     for (size_t i = 0; i < N_CLI; i++)
@@ -268,6 +268,8 @@ static int parse_args(int argc, char **argv, qdcd_config *c)
     lo[n++] = (struct option){"hash-token", required_argument, NULL, O_HASH};
     lo[n++] = (struct option){"insecure", no_argument, NULL, O_INSECURE};
     lo[n++] = (struct option){"public-metrics", no_argument, NULL, O_PUBLIC_METRICS};
+    /* not in --help: the route table, for tests/server/openapi.sh */
+    lo[n++] = (struct option){"print-routes", no_argument, NULL, O_ROUTES};
     lo[n++] = (struct option){"verbose", no_argument, NULL, 'v'};
     lo[n++] = (struct option){"help", no_argument, NULL, 'h'};
     lo[n] = (struct option){NULL, 0, NULL, 0};
@@ -282,6 +284,9 @@ static int parse_args(int argc, char **argv, qdcd_config *c)
             char hex[65];
             sha256_hex(optarg, strlen(optarg), hex);
             printf("%s\n", hex);
+            exit(0);
+        } else if (o == O_ROUTES) {
+            route_print(stdout);
             exit(0);
         } else if (o == O_PUBLIC_METRICS) {
             c->public_metrics = 1;
@@ -422,33 +427,23 @@ static int prepare_data_dir(qdcd *q, int shared)
     return dir_ensure(p);
 }
 
+/* One job directory of remove_orphans: removed (1) when its row is gone. */
+static int remove_orphan(qdcd *q, const char *id, const char *dir, void *ctx)
+{
+    job_rec j;
+    (void)ctx;
+    if (q->store->ops->get(q->store, id, &j) != QDC_EINVAL)
+        return 0;
+    dir_remove(dir);
+    return 1;
+}
+
 /* Job directories without a row: a crash between the input's rename and its
  * INSERT, or between a DELETE's row removal and its directory removal. The
  * job was never acknowledged (or is gone): its files go. */
 static int remove_orphans(qdcd *q)
 {
-    char p[sizeof q->cfg.data + 300];
-    DIR *d;
-    struct dirent *e;
-    int n = 0;
-
-    snprintf(p, sizeof p, "%s/jobs", q->cfg.data);
-    d = opendir(p);
-    if (!d)
-        return 0;
-    while ((e = readdir(d))) {
-        job_rec j;
-        if (e->d_name[0] == '.' || strlen(e->d_name) != JOB_ID_LEN ||
-            strspn(e->d_name, "0123456789abcdef") != JOB_ID_LEN)
-            continue;
-        if (q->store->ops->get(q->store, e->d_name, &j) == QDC_EINVAL) {
-            snprintf(p, sizeof p, "%s/jobs/%.*s", q->cfg.data, JOB_ID_LEN, e->d_name);
-            dir_remove(p);
-            n++;
-        }
-    }
-    closedir(d);
-    return n;
+    return jobdir_each(q, remove_orphan, NULL);
 }
 
 /* The configuration from the command line and what follows from it; 0, or
@@ -556,6 +551,25 @@ static int open_store(qdcd *q)
     return 0;
 }
 
+/* The worker pool as shared.c sees it (the listener's news, the cache's
+ * eviction): wired here so that shared.c and job.c do not call each other. */
+static void pool_wake(void *ctx)
+{
+    job_pool_notify(((qdcd *)ctx)->pool);
+}
+
+static int pool_cancel(void *ctx, const char *id)
+{
+    return job_pool_cancel(((qdcd *)ctx)->pool, id);
+}
+
+static int pool_running(void *ctx, const char *id)
+{
+    return job_pool_has(((qdcd *)ctx)->pool, id);
+}
+
+static const shared_hooks pool_hooks = {pool_wake, pool_cancel, pool_running, &g};
+
 /* The threads, in the order they depend on each other: poll timer, workers,
  * database listener, intake and conversion, then HTTP. 0 or -1. */
 static int start_services(qdcd *q)
@@ -568,6 +582,7 @@ static int start_services(qdcd *q)
         fprintf(stderr, "qdcd: cannot start the poll timer\n");
         return -1;
     }
+    q->pool_hooks = &pool_hooks;
     q->pool = job_pool_start(q);
     if (!q->pool) {
         fprintf(stderr, "qdcd: cannot start workers\n");

@@ -1,8 +1,10 @@
-/* ops.c - the operations endpoints: GET /metrics (Prometheus text) and
- * GET /readyz. /livez is a constant reply in api.c's dispatch. */
+/* ops.c - the operations endpoints: GET /metrics (Prometheus text),
+ * GET /readyz and GET /livez; and the constant documents: GET /v1/options
+ * (the option table) and GET /problems/{type} (a problem type's page). */
 #include "ops.h"
 
 #include "job.h"
+#include "problem.h"
 
 #include <stdio.h>
 #include <string.h>
@@ -112,4 +114,57 @@ enum MHD_Result ops_readyz(struct MHD_Connection *c, req *r)
     snprintf(body, sizeof body, "{\"status\":\"ready\",\"queued\":%lld,\"workers\":%d}\n",
              (long long)cnt.by_state[JOB_QUEUED], r->q->cfg.workers);
     return http_reply(c, r, 200, "application/json", body, strlen(body), no_headers);
+}
+
+enum MHD_Result ops_livez(struct MHD_Connection *c, req *r)
+{
+    return http_reply(c, r, 200, "application/json", "{\"status\":\"ok\"}\n", 16,
+                      no_headers);
+}
+
+enum MHD_Result ops_options(struct MHD_Connection *c, req *r)
+{
+    sbuf b = {0};
+    job_opt_table_json(&b);
+    enum MHD_Result ret = http_reply_json(c, r, 200, &b, no_headers);
+    sb_free(&b);
+    return ret;
+}
+
+enum MHD_Result ops_formats(struct MHD_Connection *c, req *r)
+{
+    sbuf b = {0};
+    qdc_error e;
+    enum MHD_Result ret;
+
+    if (meshio_formats_json(sb_writer, &b, &e) != QDC_OK) {
+        sb_free(&b);
+        return http_problem(c, r, 500, "internal", NULL, e.msg, NULL, NULL);
+    }
+    ret = http_reply_json(c, r, 200, &b, no_headers);
+    sb_free(&b);
+    return ret;
+}
+
+/* problem+json bodies name their type as /problems/<slug>, a URI this daemon
+ * serves; the router copied the slug to r->id. */
+enum MHD_Result ops_problem_page(struct MHD_Connection *c, req *r)
+{
+    const char *slug = r->id;
+    sbuf b = {0};
+    enum MHD_Result ret;
+    const char *text = "A problem qdcd reports; the response's title and detail describe "
+                       "the occurrence.";
+
+    const problem_type *t = problem_type_of(slug);
+    if (t && t->page)
+        text = t->page;
+    sb_printf(&b,
+              "qdcd problem type: %s\n\n%s\n\nSee proto/openapi.yaml of the qdc "
+              "repository for the whole API.\n",
+              slug, text);
+    ret = http_reply(c, r, 200, "text/plain; charset=utf-8", b.buf ? b.buf : "", b.len,
+                     no_headers);
+    sb_free(&b);
+    return ret;
 }

@@ -3,7 +3,8 @@
  * DATA/jobs/ID/progress.jsonl (or the shared store); a waiting client is a
  * suspended connection parked on the job's channel. */
 #define _GNU_SOURCE
-#include "handlers.h"
+#include "endpoints.h"
+#include "handler.h"
 
 #include "job.h"
 #include "parse.h"
@@ -308,6 +309,16 @@ static ssize_t sse_reader(void *cls, uint64_t pos, char *buf, size_t max)
         if (poll_park_since(q->hub, j.id, wt->after, &wt->w, r->conn, wt->deadline, gen))
             return 0; /* resumed by a record, the end, the keep-alive or shutdown */
     }
+}
+
+/* HEAD of the stream: its headers, no stream. */
+enum MHD_Result do_events_head(struct MHD_Connection *c, req *r)
+{
+    job_rec j;
+    enum MHD_Result ret;
+    if (!load_job(c, r, &j, &ret))
+        return ret;
+    return http_reply(c, r, 200, "text/event-stream", "", 0, no_headers);
 }
 
 enum MHD_Result do_events(struct MHD_Connection *c, req *r)

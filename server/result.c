@@ -6,7 +6,8 @@
  * (shared.h) a file this node's cache lacks is fetched from the database,
  * and a conversion is stored there for the other nodes. */
 #define _GNU_SOURCE
-#include "handlers.h"
+#include "endpoints.h"
+#include "handler.h"
 
 #include "job.h"
 #include "offq.h"

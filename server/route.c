@@ -1,4 +1,4 @@
-/* route.c - the route table and the router (route.h). */
+/* route.c - the router: paths and methods against the route table (route.h). */
 #include "route.h"
 
 #include "parse.h"
@@ -7,28 +7,11 @@
 #include <stdio.h>
 #include <string.h>
 
-#define GET_HEAD (M_GET | M_HEAD)
-
-/* Matched in order: the fixed paths first, so "/v1/jobs/" is the collection. */
-static const route_desc table[] = {
-    {"/livez", R_LIVEZ, GET_HEAD, "GET", AUTH_NONE},
-    {"/readyz", R_READYZ, GET_HEAD, "GET", AUTH_OPS},
-    {"/metrics", R_METRICS, GET_HEAD, "GET", AUTH_OPS},
-    {"/v1/jobs", R_JOBS, GET_HEAD | M_POST, "GET, POST", AUTH_TOKEN},
-    {"/v1/jobs/", R_JOBS, GET_HEAD | M_POST, "GET, POST", AUTH_TOKEN},
-    {"/v1/options", R_OPTIONS, GET_HEAD, "GET", AUTH_TOKEN},
-    {"/v1/formats", R_FORMATS, GET_HEAD, "GET", AUTH_TOKEN},
-    {"/problems/{slug}", R_PROBLEM, GET_HEAD, "GET", AUTH_NONE},
-    {"/v1/jobs/{id}", R_JOB, GET_HEAD | M_DELETE, "GET, DELETE", AUTH_TOKEN},
-    {"/v1/jobs/{id}/progress", R_PROGRESS, GET_HEAD, "GET", AUTH_TOKEN},
-    {"/v1/jobs/{id}/events", R_EVENTS, GET_HEAD, "GET", AUTH_TOKEN},
-    {"/v1/jobs/{id}/result", R_RESULT, GET_HEAD, "GET", AUTH_TOKEN},
-    {"/v1/jobs/{id}/report", R_REPORT, GET_HEAD, "GET", AUTH_TOKEN},
-    {"/v1/jobs/{id}:cancel", R_CANCEL, M_POST, "POST", AUTH_TOKEN},
-    {"/v1/jobs/{id}/input", R_INPUT, GET_HEAD, "GET", AUTH_TOKEN},
-    {NULL, R_UI, GET_HEAD, "GET", AUTH_NONE},
-};
-#define NROUTES (sizeof table / sizeof table[0])
+#define ROW(route, method, pattern, handler, begin, auth, flags)                         \
+    {route, method, pattern, auth, flags},
+const route_desc route_table[] = {ROUTE_LIST(ROW)};
+#undef ROW
+const size_t route_count = sizeof route_table / sizeof route_table[0];
 
 unsigned route_method_bit(const char *m)
 {
@@ -67,7 +50,7 @@ static int match_one(const char *pat, const char *url, char *id)
     size_t n = strcspn(seg, "/:");
     if (strcmp(seg + n, close + 1))
         return 0;
-    if (!strncmp(open, "{slug}", 6)) {
+    if (!strncmp(open, "{type}", 6)) {
         if (!is_slug(seg, n))
             return 0;
     } else if (!parse_is_job_id(seg, n)) {
@@ -80,12 +63,12 @@ static int match_one(const char *pat, const char *url, char *id)
 
 int route_match(const char *url, char *id)
 {
-    for (size_t i = 0; i < NROUTES; i++) {
-        if (!table[i].pattern)
+    for (size_t i = 0; i < route_count; i++) {
+        if (route_table[i].flags & RF_UI)
             continue;
-        int m = match_one(table[i].pattern, url, id);
+        int m = match_one(route_table[i].pattern, url, id);
         if (m > 0)
-            return table[i].route;
+            return route_table[i].route;
         if (m < 0)
             return R_BAD_ID;
     }
@@ -94,14 +77,81 @@ int route_match(const char *url, char *id)
 
 const route_desc *route_desc_of(int route)
 {
-    for (size_t i = 0; i < NROUTES; i++)
-        if (table[i].route == route)
-            return &table[i];
+    for (size_t i = 0; i < route_count; i++)
+        if (route_table[i].route == route)
+            return &route_table[i];
     return NULL;
+}
+
+int route_row(int route, const char *method)
+{
+    unsigned bit = route_method_bit(method);
+    int get = -1;
+
+    if (bit == M_OTHER)
+        return -1;
+    for (size_t i = 0; i < route_count; i++) {
+        if (route_table[i].route != route)
+            continue;
+        if (route_table[i].method == bit)
+            return (int)i;
+        if (bit == M_HEAD && route_table[i].method == M_GET && get < 0)
+            get = (int)i;
+    }
+    return get;
 }
 
 int route_method_ok(int route, const char *method)
 {
-    const route_desc *d = route_desc_of(route);
-    return d && (d->methods & route_method_bit(method)) != 0;
+    return route_row(route, method) >= 0;
+}
+
+unsigned route_methods(int route)
+{
+    unsigned bits = 0;
+    for (size_t i = 0; i < route_count; i++)
+        if (route_table[i].route == route)
+            bits |= route_table[i].method;
+    return bits & M_GET ? bits | M_HEAD : bits;
+}
+
+int route_always_closes(int route)
+{
+    int n = 0;
+    for (size_t i = 0; i < route_count; i++) {
+        if (route_table[i].route != route)
+            continue;
+        if (!(route_table[i].flags & RF_CLOSE))
+            return 0;
+        n++;
+    }
+    return n > 0;
+}
+
+void route_allow(int route, char *out, size_t cap)
+{
+    static const struct {
+        unsigned bit;
+        const char *name;
+    } order[] = {{M_GET, "GET"}, {M_POST, "POST"}, {M_DELETE, "DELETE"}};
+    unsigned bits = route_methods(route);
+    size_t len = 0;
+
+    if (cap)
+        out[0] = 0;
+    for (size_t k = 0; k < sizeof order / sizeof order[0]; k++) {
+        if (!(bits & order[k].bit) || len >= cap)
+            continue;
+        int n = snprintf(out + len, cap - len, "%s%s", len ? ", " : "", order[k].name);
+        len += n > 0 ? (size_t)n : 0;
+    }
+}
+
+void route_print(FILE *f)
+{
+    static const char *const names[] = {"OTHER", "GET", "HEAD", "",      "POST",
+                                        "",      "",    "",     "DELETE"};
+    for (size_t i = 0; i < route_count; i++)
+        if (!(route_table[i].flags & RF_ALIAS))
+            fprintf(f, "%s %s\n", names[route_table[i].method], route_table[i].pattern);
 }

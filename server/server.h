@@ -61,6 +61,7 @@ typedef struct {
 } qdcd_metrics;
 
 struct job_pool;
+struct shared_hooks;
 struct MHD_Daemon;
 
 typedef struct qdcd {
@@ -68,6 +69,7 @@ typedef struct qdcd {
     job_store *store;
     poll_hub *hub;
     struct job_pool *pool;
+    const struct shared_hooks *pool_hooks; /* the pool for shared.c (main.c wires it) */
     struct MHD_Daemon *mhd;
     char (*tokens)[65]; /* SHA-256 hex of each accepted bearer token */
     int ntokens;
@@ -77,8 +79,5 @@ typedef struct qdcd {
     /* orders cache readers (shared_use) against eviction (shared_trim) */
     pthread_mutex_t cache_lock;
 } qdcd;
-
-/* DATA/jobs/ID[/NAME] */
-void job_path(const qdcd *q, const char *id, const char *name, char *out, size_t cap);
 
 #endif

@@ -3,7 +3,7 @@
 #define _GNU_SOURCE
 #include "shared.h"
 
-#include "job.h"
+#include "jobdir.h"
 
 #include <dirent.h>
 #include <fcntl.h>
@@ -54,21 +54,21 @@ static void on_event(void *ctx, const store_event *ev)
     switch (ev->kind) {
     case STORE_EV_RESYNC:
         poll_kick_all(q->hub);
-        job_pool_notify(q->pool);
+        q->pool_hooks->wake(q->pool_hooks->ctx);
         break;
     case STORE_EV_PROGRESS:
         poll_kick(q->hub, ev->id);
         break;
     case STORE_EV_JOB:
         if (ev->state == JOB_QUEUED) /* a new job, or one given back */
-            job_pool_notify(q->pool);
+            q->pool_hooks->wake(q->pool_hooks->ctx);
         if (ev->state < 0) { /* deleted on some node */
-            if (!job_pool_cancel(q->pool, ev->id)) {
+            if (!q->pool_hooks->cancel(q->pool_hooks->ctx, ev->id)) {
                 job_path(q, ev->id, NULL, dir, sizeof dir);
                 dir_remove(dir);
             }
         } else if (ev->cancel && ev->state == JOB_RUNNING) {
-            job_pool_cancel(q->pool, ev->id);
+            q->pool_hooks->cancel(q->pool_hooks->ctx, ev->id);
         }
         poll_kick(q->hub, ev->id);
         break;
@@ -88,36 +88,29 @@ void shared_listen_stop(qdcd *q)
         q->store->ops->listen(q->store, NULL, NULL);
 }
 
+/* One job directory of shared_sweep: removed (1) when its job is gone or
+ * purged and it is unchanged for min_age seconds (ctx: {now, min_age}). */
+static int sweep_one(qdcd *q, const char *id, const char *dir, void *ctx)
+{
+    const double *now_age = ctx;
+    struct stat sb;
+    job_rec j;
+    qdc_status st;
+
+    if (stat(dir, &sb) || now_age[0] - (double)sb.st_mtime < now_age[1])
+        return 0;
+    st = q->store->ops->get(q->store, id, &j);
+    if (st == QDC_EINVAL || (st == QDC_OK && j.purged)) {
+        dir_remove(dir);
+        return 1;
+    }
+    return 0;
+}
+
 int shared_sweep(qdcd *q, double min_age)
 {
-    char p[4400];
-    DIR *d;
-    struct dirent *e;
-    struct stat sb;
-    int n = 0;
-    double now = wall_now();
-
-    snprintf(p, sizeof p, "%s/jobs", q->cfg.data);
-    d = opendir(p);
-    if (!d)
-        return 0;
-    while ((e = readdir(d))) {
-        job_rec j;
-        qdc_status st;
-        if (e->d_name[0] == '.' || strlen(e->d_name) != JOB_ID_LEN ||
-            strspn(e->d_name, "0123456789abcdef") != JOB_ID_LEN)
-            continue;
-        snprintf(p, sizeof p, "%s/jobs/%s", q->cfg.data, e->d_name);
-        if (stat(p, &sb) || now - (double)sb.st_mtime < min_age)
-            continue;
-        st = q->store->ops->get(q->store, e->d_name, &j);
-        if (st == QDC_EINVAL || (st == QDC_OK && j.purged)) {
-            dir_remove(p);
-            n++;
-        }
-    }
-    closedir(d);
-    return n;
+    double now_age[2] = {wall_now(), min_age};
+    return jobdir_each(q, sweep_one, now_age);
 }
 
 int shared_use(qdcd *q, const char *path)
@@ -171,86 +164,99 @@ static int64_t file_size(const char *path)
     return lstat(path, &sb) == 0 && S_ISREG(sb.st_mode) ? (int64_t)sb.st_size : 0;
 }
 
-int shared_trim(qdcd *q, int64_t cap, double min_age, int64_t *bytes)
+/* What shared_trim's scan finds: every cached file's bytes, and the files it
+ * may evict. */
+typedef struct {
+    cache_file *c;
+    size_t nc, capc;
+    int64_t total;
+} cache_scan;
+
+/* One job directory of the scan (a jobdir_fn). */
+static int scan_one(qdcd *q, const char *id, const char *dir, void *ctx)
+{
+    cache_scan *cs = ctx;
+    char p[4400];
+    DIR *jd;
+    struct dirent *f;
+    struct stat sb;
+    int running;
+
+    jd = opendir(dir);
+    if (!jd)
+        return 0;
+    running = q->pool_hooks->running(q->pool_hooks->ctx, id);
+    while ((f = readdir(jd)) != NULL) {
+        if (f->d_name[0] == '.')
+            continue;
+        if ((size_t)snprintf(p, sizeof p, "%s/%s", dir, f->d_name) >= sizeof p ||
+            lstat(p, &sb) || !S_ISREG(sb.st_mode))
+            continue;
+        cs->total += (int64_t)sb.st_size;
+        if (running || !evictable(f->d_name) || strlen(f->d_name) >= sizeof cs->c->name)
+            continue;
+        if (cs->nc == cs->capc) {
+            size_t nn = cs->capc ? 2 * cs->capc : 256;
+            cache_file *g = realloc(cs->c, nn * sizeof *cs->c);
+            if (!g)
+                continue; /* counted, just not a candidate */
+            cs->c = g;
+            cs->capc = nn;
+        }
+        cache_file *c = &cs->c[cs->nc++];
+        c->atime = (double)sb.st_atim.tv_sec + 1e-9 * (double)sb.st_atim.tv_nsec;
+        c->size = (int64_t)sb.st_size;
+        memcpy(c->id, id, JOB_ID_LEN + 1);
+        memcpy(c->name, f->d_name, strlen(f->d_name) + 1); /* < sizeof name */
+    }
+    closedir(jd);
+    return 0;
+}
+
+/* Evict the scan's candidates, least recently used first, while the cache
+ * holds more than cap bytes. Returns how many files went. */
+static int evict(qdcd *q, cache_scan *cs, int64_t cap, double min_age)
 {
     char p[4400];
-    DIR *d, *jd;
-    struct dirent *e, *f;
     struct stat sb;
-    cache_file *c = NULL;
-    size_t nc = 0, capc = 0;
-    int64_t total = 0;
+    int evicted = 0;
+    double now = wall_now();
+
+    qsort(cs->c, cs->nc, sizeof *cs->c, by_atime);
+    for (size_t i = 0; i < cs->nc && cs->total > cap; i++) {
+        char side[4500];
+        const cache_file *c = &cs->c[i];
+        job_path(q, c->id, c->name, p, sizeof p);
+        snprintf(side, sizeof side, "%s.etag", p);
+        pthread_mutex_lock(&q->cache_lock);
+        /* used since the scan (shared_use), or by a job this node started
+         * meanwhile: keep it */
+        if (lstat(p, &sb) == 0 &&
+            (double)sb.st_atim.tv_sec + 1e-9 * (double)sb.st_atim.tv_nsec <
+                now - min_age &&
+            !q->pool_hooks->running(q->pool_hooks->ctx, c->id)) {
+            int64_t s = file_size(side);
+            if (unlink(p) == 0) {
+                cs->total -= c->size;
+                evicted++;
+                if (s && unlink(side) == 0)
+                    cs->total -= s;
+            }
+        }
+        pthread_mutex_unlock(&q->cache_lock);
+    }
+    return evicted;
+}
+
+int shared_trim(qdcd *q, int64_t cap, double min_age, int64_t *bytes)
+{
+    cache_scan cs = {0};
     int evicted = 0;
 
-    snprintf(p, sizeof p, "%s/jobs", q->cfg.data);
-    d = opendir(p);
-    if (!d) {
-        *bytes = 0;
-        return 0;
-    }
-    while ((e = readdir(d))) {
-        char dir[4400];
-        int running;
-        if (e->d_name[0] == '.' || strlen(e->d_name) != JOB_ID_LEN ||
-            strspn(e->d_name, "0123456789abcdef") != JOB_ID_LEN)
-            continue;
-        snprintf(dir, sizeof dir, "%s/jobs/%.32s", q->cfg.data, e->d_name);
-        jd = opendir(dir);
-        if (!jd)
-            continue;
-        running = job_pool_has(q->pool, e->d_name);
-        while ((f = readdir(jd))) {
-            if (f->d_name[0] == '.')
-                continue;
-            if ((size_t)snprintf(p, sizeof p, "%s/%s", dir, f->d_name) >= sizeof p ||
-                lstat(p, &sb) || !S_ISREG(sb.st_mode))
-                continue;
-            total += (int64_t)sb.st_size;
-            if (running || !evictable(f->d_name) || strlen(f->d_name) >= sizeof c->name)
-                continue;
-            if (nc == capc) {
-                size_t nn = capc ? 2 * capc : 256;
-                cache_file *g = realloc(c, nn * sizeof *c);
-                if (!g)
-                    continue; /* counted, just not a candidate */
-                c = g;
-                capc = nn;
-            }
-            c[nc].atime = (double)sb.st_atim.tv_sec + 1e-9 * (double)sb.st_atim.tv_nsec;
-            c[nc].size = (int64_t)sb.st_size;
-            memcpy(c[nc].id, e->d_name, JOB_ID_LEN + 1);
-            memcpy(c[nc].name, f->d_name, strlen(f->d_name) + 1); /* < sizeof name */
-            nc++;
-        }
-        closedir(jd);
-    }
-    closedir(d);
-    if (total > cap && nc) {
-        double now = wall_now();
-        qsort(c, nc, sizeof *c, by_atime);
-        for (size_t i = 0; i < nc && total > cap; i++) {
-            char side[4500];
-            job_path(q, c[i].id, c[i].name, p, sizeof p);
-            snprintf(side, sizeof side, "%s.etag", p);
-            pthread_mutex_lock(&q->cache_lock);
-            /* used since the scan (shared_use), or by a job this node started
-             * meanwhile: keep it */
-            if (lstat(p, &sb) == 0 &&
-                (double)sb.st_atim.tv_sec + 1e-9 * (double)sb.st_atim.tv_nsec <
-                    now - min_age &&
-                !job_pool_has(q->pool, c[i].id)) {
-                int64_t s = file_size(side);
-                if (unlink(p) == 0) {
-                    total -= c[i].size;
-                    evicted++;
-                    if (s && unlink(side) == 0)
-                        total -= s;
-                }
-            }
-            pthread_mutex_unlock(&q->cache_lock);
-        }
-    }
-    free(c);
-    *bytes = total;
+    jobdir_each(q, scan_one, &cs);
+    if (cs.total > cap && cs.nc)
+        evicted = evict(q, &cs, cap, min_age);
+    free(cs.c);
+    *bytes = cs.total;
     return evicted;
 }

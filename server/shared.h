@@ -11,6 +11,15 @@
 
 #include "server.h"
 
+/* The worker pool as the listener and the cache see it: main.c wires it
+ * (qdcd.pool_hooks) so that this file never calls the pool, which calls it. */
+typedef struct shared_hooks {
+    void (*wake)(void *ctx);                   /* a job was queued: wake a worker */
+    int (*cancel)(void *ctx, const char *id);  /* stop id if running here: 1 if it was */
+    int (*running)(void *ctx, const char *id); /* 1 if a worker here runs id */
+    void *ctx;
+} shared_hooks;
+
 int shared_on(const qdcd *q);
 /* DATA/jobs/ID/name, from the store unless the cache has it; its SHA-256 hex
  * (as stored with it) into sha (65 bytes) if not NULL and fetched. QDC_OK
@@ -19,7 +28,8 @@ qdc_status shared_fetch(qdcd *q, const char *id, const char *name, char *sha);
 /* DATA/jobs/ID/name into the store (worker: only while it holds the lease). */
 qdc_status shared_put(qdcd *q, const char *id, const char *name, const char *sha,
                       const char *worker);
-/* Hear the other nodes (a thread); stop before the worker pool goes away. */
+/* Hear the other nodes (a thread; q->pool_hooks set); stop before the worker
+ * pool goes away. */
 int shared_listen_start(qdcd *q);
 void shared_listen_stop(qdcd *q);
 /* Remove cached job directories whose job is gone or expired, unchanged for

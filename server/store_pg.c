@@ -20,10 +20,13 @@
  * up the claims), the progress writer and the listener have their own. A
  * broken connection is reset and the statement (or transaction) tried once
  * more, so a restarted database costs one failed call, not a dead node.
- * Every call is a single statement (autocommit) unless it says otherwise. */
+ * Every call is a single statement (autocommit) unless it says otherwise.
+ * Here: the rows, the blobs, the schema; the progress writer and the
+ * listener are store_pg_feed.c, the statement runners store_pg_sql.c
+ * (store_pg_int.h: what the three share). */
 #define _GNU_SOURCE
 #include "problem.h"
-#include "store.h"
+#include "store_pg_int.h"
 #include "util.h"
 
 #include <errno.h>
@@ -37,57 +40,6 @@
 #include <sys/stat.h>
 #include <time.h>
 #include <unistd.h>
-
-#define CHUNK ((size_t)1 << 20)  /* bytes per blob row */
-#define POOL_MAX 4               /* connections for blob transfers */
-#define PROGRESS_QUEUE_MAX 20000 /* records waiting for the database */
-
-/* A progress record waiting for the writer thread. */
-typedef struct prec {
-    struct prec *next;
-    char id[JOB_ID_LEN + 1];
-    char worker[64];
-    long seq;
-    unsigned long ticket;
-    size_t len;
-    char json[]; /* len bytes + NUL */
-} prec;
-
-typedef struct {
-    job_store base;
-    PGconn *conn;
-    pthread_mutex_t lock;
-    char uri[1024];
-    int max_attempts; /* from recover: claims leave exhausted jobs to it */
-    /* blob transfers */
-    pthread_mutex_t pool_lock;
-    pthread_cond_t pool_cond;
-    PGconn *pool[POOL_MAX];
-    int pool_busy[POOL_MAX];
-    /* progress writer */
-    pthread_mutex_t wq_lock;
-    pthread_cond_t wq_cond, wq_done;
-    prec *wq_head, *wq_tail;
-    long wq_n, wq_dropped;
-    unsigned long wq_next, wq_written; /* tickets: issued, all written up to */
-    int wq_stop, wq_running;
-    pthread_t wq_th;
-    /* listener */
-    pthread_t ln_th;
-    int ln_running;
-    volatile int ln_stop;
-    store_event_fn ln_fn;
-    void *ln_ctx;
-} pg_store;
-
-/* A connection with a bounded connect time and quiet NOTICEs ("relation
- * already exists"); the URI may set either itself. PQreset keeps both. */
-static PGconn *pg_connect(const char *uri)
-{
-    const char *const keys[] = {"connect_timeout", "options", "dbname", NULL};
-    const char *const vals[] = {"5", "-c client_min_messages=warning", uri, NULL};
-    return PQconnectdbParams(keys, vals, 1);
-}
 
 /* The schema, one entry per version; each runs once, in order, in one
  * transaction that also records the version. Append; never edit a version
@@ -152,21 +104,6 @@ static const char *const migrations[] = {
     " finished, expires, purged, iterations, last_progress, error, stop_reason,"         \
     " etag_qmesh, etag_json, etag_medit, notes"
 
-static void col_text(const PGresult *r, int row, int i, char *dst, size_t cap)
-{
-    snprintf(dst, cap, "%s", PQgetisnull(r, row, i) ? "" : PQgetvalue(r, row, i));
-}
-
-static int64_t col_i64(const PGresult *r, int row, int i)
-{
-    return PQgetisnull(r, row, i) ? 0 : strtoll(PQgetvalue(r, row, i), NULL, 10);
-}
-
-static double col_dbl(const PGresult *r, int row, int i)
-{
-    return PQgetisnull(r, row, i) ? 0.0 : strtod(PQgetvalue(r, row, i), NULL);
-}
-
 static void row_to_rec(const PGresult *r, int row, job_rec *j)
 {
     memset(j, 0, sizeof *j);
@@ -200,64 +137,6 @@ static void row_to_rec(const PGresult *r, int row, job_rec *j)
     col_text(r, row, 27, j->notes, sizeof j->notes);
 }
 
-/* Parameters are passed as text; numbers are formatted into small buffers. */
-typedef struct {
-    const char *v[16];
-    char num[16][32];
-    int n;
-} params; /* a NULL value is SQL NULL */
-
-static void p_text(params *p, const char *s)
-{
-    p->v[p->n++] = s;
-}
-
-static void p_i64(params *p, int64_t x)
-{
-    snprintf(p->num[p->n], sizeof p->num[0], "%lld", (long long)x);
-    p->v[p->n] = p->num[p->n];
-    p->n++;
-}
-
-static void p_dbl(params *p, double x)
-{
-    snprintf(p->num[p->n], sizeof p->num[0], "%.17g", x);
-    p->v[p->n] = p->num[p->n];
-    p->n++;
-}
-
-static int result_ok(const PGresult *r)
-{
-    ExecStatusType st = PQresultStatus(r);
-    return st == PGRES_COMMAND_OK || st == PGRES_TUPLES_OK;
-}
-
-/* Run sql with p on the connection (lock held). A connection found broken is
- * reset once and the statement retried: a statement that failed on a broken
- * connection never reached the server's commit, so running it again is safe.
- * NULL (logged) if it still fails. The caller PQclear()s the result. */
-static PGresult *run(pg_store *s, const char *sql, const params *p)
-{
-    for (int attempt = 0; attempt < 2; attempt++) {
-        /* without parameters: the simple protocol, which also takes a script
-         * of several statements (the migrations) */
-        PGresult *r = p ? PQexecParams(s->conn, sql, p->n, NULL, p->v, NULL, NULL, 0)
-                        : PQexec(s->conn, sql);
-        if (r && result_ok(r))
-            return r;
-        if (PQstatus(s->conn) == CONNECTION_BAD && attempt == 0) {
-            PQclear(r);
-            PQreset(s->conn);
-            continue;
-        }
-        fprintf(stderr, "qdcd: postgresql: %s",
-                r ? PQresultErrorMessage(r) : PQerrorMessage(s->conn));
-        PQclear(r);
-        return NULL;
-    }
-    return NULL;
-}
-
 /* One statement that returns at most one job row into out (if not NULL).
  * *rows gets the number of rows returned (or affected, for statements without
  * RETURNING). */
@@ -268,7 +147,7 @@ static qdc_status one(pg_store *s, const char *sql, const params *p, job_rec *ou
     qdc_status st = QDC_EIO;
 
     pthread_mutex_lock(&s->lock);
-    r = run(s, sql, p);
+    r = pg_run(s, sql, p);
     if (r) {
         int n =
             PQresultStatus(r) == PGRES_TUPLES_OK ? PQntuples(r) : atoi(PQcmdTuples(r));
@@ -378,10 +257,10 @@ static qdc_status pg_list(job_store *s_, const char *owner, int64_t after_seq, i
     p_i64(&p, after_seq);
     p_i64(&p, max);
     pthread_mutex_lock(&s->lock);
-    r = run(s,
-            "SELECT " COLS
-            " FROM jobs WHERE owner = $1 AND seq > $2 ORDER BY seq LIMIT $3",
-            &p);
+    r = pg_run(s,
+               "SELECT " COLS
+               " FROM jobs WHERE owner = $1 AND seq > $2 ORDER BY seq LIMIT $3",
+               &p);
     if (r) {
         for (int i = 0; i < PQntuples(r) && *n < max; i++)
             row_to_rec(r, i, &out[(*n)++]);
@@ -562,7 +441,7 @@ static qdc_status pg_counts(job_store *s_, job_counts *c)
 
     memset(c, 0, sizeof *c);
     pthread_mutex_lock(&s->lock);
-    r = run(s, "SELECT state, COUNT(*) FROM jobs GROUP BY state", NULL);
+    r = pg_run(s, "SELECT state, COUNT(*) FROM jobs GROUP BY state", NULL);
     if (r) {
         for (int i = 0; i < PQntuples(r); i++) {
             int64_t k = col_i64(r, i, 0);
@@ -588,7 +467,7 @@ static qdc_status pg_expired(job_store *s_, double now, char (*out)[JOB_ID_LEN +
     p_dbl(&p, now);
     p_i64(&p, max);
     pthread_mutex_lock(&s->lock);
-    r = run(
+    r = pg_run(
         s,
         "SELECT id FROM jobs WHERE state >= 2 AND purged = 0 AND expires < $1 LIMIT $2",
         &p);
@@ -616,26 +495,6 @@ static qdc_status pg_mark_purged(job_store *s_, const char *id)
 }
 
 /* ------------------------------------------------------------------ blobs -- */
-
-/* sql with p on c (any connection); NULL if it failed, with the SQLSTATE in
- * state ("" when the connection broke). Foreign-key violations (the job was
- * deleted meanwhile) are expected and not logged. */
-static PGresult *cx(PGconn *c, const char *sql, const params *p, char state[6])
-{
-    PGresult *r =
-        p ? PQexecParams(c, sql, p->n, NULL, p->v, NULL, NULL, 0) : PQexec(c, sql);
-    const char *f;
-
-    if (r && result_ok(r))
-        return r;
-    f = r ? PQresultErrorField(r, PG_DIAG_SQLSTATE) : NULL;
-    snprintf(state, 6, "%s", f ? f : "");
-    if (strcmp(state, "23503"))
-        fprintf(stderr, "qdcd: postgresql: %s",
-                r ? PQresultErrorMessage(r) : PQerrorMessage(c));
-    PQclear(r);
-    return NULL;
-}
 
 /* A pooled connection for one transfer; waits while all are in use. The
  * slot, or -1 when no connection can be made (the database is away). */
@@ -703,10 +562,10 @@ static qdc_status put_chunks(PGconn *c, const char *id, const char *name,
     p_i64(&p, size);
     p_text(&p, sha ? sha : "");
     p_i64(&p, nch);
-    r = cx(c,
-           "INSERT INTO blobs(job_id, name, size, sha256, nchunks)"
-           " VALUES($1, $2, $3, $4, $5)",
-           &p, state);
+    r = pg_cx(c,
+              "INSERT INTO blobs(job_id, name, size, sha256, nchunks)"
+              " VALUES($1, $2, $3, $4, $5)",
+              &p, state);
     if (!r) {
         st = !strcmp(state, "23503") ? QDC_EINVAL : QDC_EIO;
         goto out;
@@ -755,7 +614,7 @@ static qdc_status put_tx(PGconn *c, const char *id, const char *name, const char
     params p = {.n = 0};
     char state[6];
     qdc_status st = QDC_EIO;
-    PGresult *r = cx(c, "BEGIN", NULL, state);
+    PGresult *r = pg_cx(c, "BEGIN", NULL, state);
 
     if (!r)
         return QDC_EIO;
@@ -765,10 +624,10 @@ static qdc_status put_tx(PGconn *c, const char *id, const char *name, const char
         /* KEY SHARE: a claim by another node (FOR UPDATE SKIP LOCKED) passes
          * this row by until the results are in, progress updates do not wait */
         p_text(&p, worker);
-        r = cx(c,
-               "SELECT 1 FROM jobs WHERE id = $1 AND lease_owner = $2 AND state = 1"
-               " FOR KEY SHARE",
-               &p, state);
+        r = pg_cx(c,
+                  "SELECT 1 FROM jobs WHERE id = $1 AND lease_owner = $2 AND state = 1"
+                  " FOR KEY SHARE",
+                  &p, state);
         if (!r)
             return QDC_EIO;
         int n = PQntuples(r);
@@ -778,14 +637,14 @@ static qdc_status put_tx(PGconn *c, const char *id, const char *name, const char
         p.n = 1;
     }
     p_text(&p, name);
-    r = cx(c, "DELETE FROM blobs WHERE job_id = $1 AND name = $2", &p, state);
+    r = pg_cx(c, "DELETE FROM blobs WHERE job_id = $1 AND name = $2", &p, state);
     if (!r)
         return QDC_EIO;
     PQclear(r);
     st = put_chunks(c, id, name, path, sha);
     if (st != QDC_OK)
         return st;
-    r = cx(c, "COMMIT", NULL, state);
+    r = pg_cx(c, "COMMIT", NULL, state);
     if (!r)
         return QDC_EIO;
     PQclear(r);
@@ -823,14 +682,15 @@ static qdc_status get_tx(PGconn *c, const char *id, const char *name, const char
     PGresult *r;
 
     /* one snapshot: a blob replaced meanwhile is read whole, old or new */
-    r = cx(c, "BEGIN ISOLATION LEVEL REPEATABLE READ READ ONLY", NULL, state);
+    r = pg_cx(c, "BEGIN ISOLATION LEVEL REPEATABLE READ READ ONLY", NULL, state);
     if (!r)
         return QDC_EIO;
     PQclear(r);
     p_text(&p, id);
     p_text(&p, name);
-    r = cx(c, "SELECT size, sha256, nchunks FROM blobs WHERE job_id = $1 AND name = $2",
-           &p, state);
+    r = pg_cx(c,
+              "SELECT size, sha256, nchunks FROM blobs WHERE job_id = $1 AND name = $2",
+              &p, state);
     if (!r)
         return QDC_EIO;
     if (!PQntuples(r)) {
@@ -853,7 +713,7 @@ static qdc_status get_tx(PGconn *c, const char *id, const char *name, const char
                            2, NULL, p.v, NULL, NULL, 1) ||
         !PQsetSingleRowMode(c))
         bad = 1;
-    while ((r = PQgetResult(c))) {
+    while ((r = PQgetResult(c)) != NULL) {
         ExecStatusType es = PQresultStatus(r);
         if (es == PGRES_SINGLE_TUPLE && !bad) {
             const char *d = PQgetvalue(r, 0, 0);
@@ -877,7 +737,7 @@ static qdc_status get_tx(PGconn *c, const char *id, const char *name, const char
         }
         PQclear(r);
     }
-    r = cx(c, "COMMIT", NULL, state);
+    r = pg_cx(c, "COMMIT", NULL, state);
     PQclear(r);
     if (close(fd))
         bad = 1;
@@ -916,14 +776,14 @@ static qdc_status create_tx(PGconn *c, const job_rec *j, const char *name,
     params p = {.n = 0};
     char state[6];
     qdc_status st;
-    PGresult *r = cx(c, "BEGIN", NULL, state);
+    PGresult *r = pg_cx(c, "BEGIN", NULL, state);
 
     *inserted = 0;
     if (!r)
         return QDC_EIO;
     PQclear(r);
     create_params(j, &p);
-    r = cx(c, INSERT_JOB, &p, state);
+    r = pg_cx(c, INSERT_JOB, &p, state);
     if (!r)
         return QDC_EIO;
     *inserted = PQntuples(r) == 1;
@@ -933,7 +793,7 @@ static qdc_status create_tx(PGconn *c, const job_rec *j, const char *name,
     st = put_chunks(c, j->id, name, path, "");
     if (st != QDC_OK)
         return st;
-    r = cx(c, "COMMIT", NULL, state);
+    r = pg_cx(c, "COMMIT", NULL, state);
     if (!r) {
         *inserted = 0;
         return QDC_EIO;
@@ -963,319 +823,6 @@ static qdc_status pg_create_with_input(job_store *s_, const job_rec *j, const ch
     if (st != QDC_OK || inserted)
         return st;
     return existing_idem(s, j, dup, existing);
-}
-
-/* --------------------------------------------------------------- progress -- */
-
-/* A PostgreSQL array literal element: "..." with " and \ escaped. */
-static void arr_str(sbuf *b, const char *s, size_t n)
-{
-    sb_puts(b, b->len > 1 ? ",\"" : "\"");
-    for (size_t i = 0; i < n; i++) {
-        if (s[i] == '"' || s[i] == '\\')
-            sb_add(b, "\\", 1);
-        sb_add(b, s + i, 1);
-    }
-    sb_puts(b, "\"");
-}
-
-/* One job's consecutive records (first .. last, same worker) in one
- * statement: stored only while that worker holds the lease, and the row's
- * latest progress moves with them (any node's GET shows it). 0 when done
- * (written or refused for good), -1 when the connection failed. */
-static int write_group(PGconn *c, prec *first, prec *last)
-{
-    sbuf seqs = {0}, recs = {0};
-    params p = {.n = 0};
-    char state[6];
-    PGresult *r;
-    int rc = 0;
-
-    sb_puts(&seqs, "{");
-    sb_puts(&recs, "{");
-    for (prec *e = first;; e = e->next) {
-        sb_printf(&seqs, "%s%ld", seqs.len > 1 ? "," : "", e->seq);
-        arr_str(&recs, e->json, e->len);
-        if (e == last)
-            break;
-    }
-    sb_puts(&seqs, "}");
-    sb_puts(&recs, "}");
-    if (seqs.oom || recs.oom)
-        goto out; /* dropped */
-    p_text(&p, first->id);
-    p_text(&p, first->worker);
-    p_i64(&p, last->seq + 1);
-    /* the row keeps the last record when it fits (job_rec.last_progress) */
-    p_text(&p, last->len < sizeof((job_rec *)0)->last_progress ? last->json : NULL);
-    p_text(&p, seqs.buf);
-    p_text(&p, recs.buf);
-    r = cx(
-        c,
-        "WITH j AS (UPDATE jobs SET iterations = $3,"
-        " last_progress = COALESCE($4, last_progress)"
-        " WHERE id = $1 AND lease_owner = $2 AND state = 1 RETURNING id)"
-        " INSERT INTO progress(job_id, seq, rec)"
-        " SELECT j.id, u.seq, u.rec FROM j, unnest($5::int[], $6::text[]) AS u(seq, rec)"
-        " ON CONFLICT DO NOTHING",
-        &p, state);
-    if (r)
-        PQclear(r);
-    else if (PQstatus(c) != CONNECTION_OK)
-        rc = -1;
-out:
-    sb_free(&seqs);
-    sb_free(&recs);
-    return rc;
-}
-
-static void *writer_main(void *arg)
-{
-    pg_store *s = arg;
-    PGconn *c = NULL;
-    double pause = 0.1;
-    int failures = 0;
-
-    pthread_mutex_lock(&s->wq_lock);
-    for (;;) {
-        while (!s->wq_head && !s->wq_stop)
-            pthread_cond_wait(&s->wq_cond, &s->wq_lock);
-        if (!s->wq_head)
-            break; /* stopping, nothing left */
-        /* a batch of up to 256 records, left in the queue until written */
-        prec *head = s->wq_head, *end = head;
-        for (int k = 1; k < 256 && end->next; k++)
-            end = end->next;
-        pthread_mutex_unlock(&s->wq_lock);
-
-        int ok = 1;
-        if (!c)
-            c = pg_connect(s->uri);
-        else if (PQstatus(c) != CONNECTION_OK)
-            PQreset(c);
-        if (!c || PQstatus(c) != CONNECTION_OK)
-            ok = 0;
-        for (prec *g = head; ok;) {
-            prec *e = g;
-            while (e != end && e->next && !strcmp(e->next->id, g->id) &&
-                   !strcmp(e->next->worker, g->worker))
-                e = e->next;
-            if (write_group(c, g, e)) {
-                ok = 0;
-                break;
-            }
-            if (e == end)
-                break;
-            g = e->next;
-        }
-
-        pthread_mutex_lock(&s->wq_lock);
-        if (!ok && !(s->wq_stop && failures >= 3)) {
-            /* the database is away: keep the records, try again later */
-            if (!failures++)
-                fprintf(stderr, "qdcd: postgresql: progress records wait for the "
-                                "database\n");
-            struct timespec ts;
-            clock_gettime(CLOCK_REALTIME, &ts);
-            double t = (double)ts.tv_sec + ts.tv_nsec * 1e-9 + pause;
-            ts.tv_sec = (time_t)t;
-            ts.tv_nsec = (long)((t - (double)ts.tv_sec) * 1e9);
-            pthread_cond_timedwait(&s->wq_cond, &s->wq_lock, &ts);
-            pause = pause * 2 > 5 ? 5 : pause * 2;
-            continue;
-        }
-        if (!ok)
-            fprintf(stderr, "qdcd: postgresql: progress records dropped at shutdown\n");
-        failures = 0;
-        pause = 0.1;
-        s->wq_head = end->next;
-        if (!s->wq_head)
-            s->wq_tail = NULL;
-        end->next = NULL;
-        s->wq_written = end->ticket;
-        while (head) {
-            prec *nx = head->next;
-            free(head);
-            s->wq_n--;
-            head = nx;
-        }
-        pthread_cond_broadcast(&s->wq_done);
-    }
-    pthread_mutex_unlock(&s->wq_lock);
-    PQfinish(c);
-    return NULL;
-}
-
-static void pg_progress_add(job_store *s_, const char *id, const char *worker, long seq,
-                            const char *json, size_t len)
-{
-    pg_store *s = (pg_store *)s_;
-    prec *e = malloc(sizeof *e + len + 1);
-
-    if (!e)
-        return;
-    e->next = NULL;
-    snprintf(e->id, sizeof e->id, "%s", id);
-    snprintf(e->worker, sizeof e->worker, "%s", worker);
-    e->seq = seq;
-    e->len = len;
-    memcpy(e->json, json, len);
-    e->json[len] = 0;
-    pthread_mutex_lock(&s->wq_lock);
-    if (s->wq_n >= PROGRESS_QUEUE_MAX || s->wq_stop || !s->wq_running) {
-        if (!s->wq_dropped++)
-            fprintf(stderr, "qdcd: postgresql: too many progress records waiting for the "
-                            "database: new ones are dropped\n");
-        pthread_mutex_unlock(&s->wq_lock);
-        free(e);
-        return;
-    }
-    e->ticket = ++s->wq_next;
-    if (s->wq_tail)
-        s->wq_tail->next = e;
-    else
-        s->wq_head = e;
-    s->wq_tail = e;
-    s->wq_n++;
-    pthread_cond_signal(&s->wq_cond);
-    pthread_mutex_unlock(&s->wq_lock);
-}
-
-static qdc_status pg_progress_sync(job_store *s_, double timeout)
-{
-    pg_store *s = (pg_store *)s_;
-    struct timespec ts;
-    int ok;
-
-    clock_gettime(CLOCK_REALTIME, &ts);
-    double t = (double)ts.tv_sec + ts.tv_nsec * 1e-9 + timeout;
-    ts.tv_sec = (time_t)t;
-    ts.tv_nsec = (long)((t - (double)ts.tv_sec) * 1e9);
-    pthread_mutex_lock(&s->wq_lock);
-    unsigned long target = s->wq_next;
-    while (s->wq_written < target &&
-           pthread_cond_timedwait(&s->wq_done, &s->wq_lock, &ts) == 0)
-        ;
-    ok = s->wq_written >= target;
-    pthread_mutex_unlock(&s->wq_lock);
-    return ok ? QDC_OK : QDC_EIO;
-}
-
-static qdc_status pg_progress_read(job_store *s_, const char *id, long after,
-                                   store_record_fn fn, void *ctx)
-{
-    pg_store *s = (pg_store *)s_;
-    params p = {.n = 0};
-    PGresult *r;
-    qdc_status st = QDC_EIO;
-
-    p_text(&p, id);
-    p_i64(&p, after);
-    pthread_mutex_lock(&s->lock);
-    r = run(s,
-            "SELECT seq, rec FROM progress WHERE job_id = $1 AND seq > $2 ORDER BY seq",
-            &p);
-    pthread_mutex_unlock(&s->lock);
-    if (r) {
-        for (int i = 0; i < PQntuples(r); i++)
-            fn(ctx, (long)col_i64(r, i, 0), PQgetvalue(r, i, 1),
-               (size_t)PQgetlength(r, i, 1));
-        PQclear(r);
-        st = QDC_OK;
-    }
-    return st;
-}
-
-/* --------------------------------------------------------------- listener -- */
-
-static void nap(pg_store *s, double seconds)
-{
-    for (double t = 0; t < seconds && !s->ln_stop; t += 0.05) {
-        struct timespec ts = {0, 50 * 1000 * 1000};
-        nanosleep(&ts, NULL);
-    }
-}
-
-static void *listen_main(void *arg)
-{
-    pg_store *s = arg;
-    PGconn *c = NULL;
-    double pause = 0.1;
-
-    while (!s->ln_stop) {
-        if (!c || PQstatus(c) != CONNECTION_OK) {
-            char state[6];
-            PGresult *r = NULL;
-            if (!c)
-                c = pg_connect(s->uri);
-            else
-                PQreset(c);
-            if (c && PQstatus(c) == CONNECTION_OK)
-                r = cx(c, "LISTEN qdc_job; LISTEN qdc_progress", NULL, state);
-            if (!r) {
-                nap(s, pause);
-                pause = pause * 2 > 5 ? 5 : pause * 2;
-                continue;
-            }
-            PQclear(r);
-            pause = 0.1;
-            /* whatever was announced while nobody listened */
-            store_event ev = {.kind = STORE_EV_RESYNC};
-            s->ln_fn(s->ln_ctx, &ev);
-        }
-        struct pollfd pf = {.fd = PQsocket(c), .events = POLLIN};
-        int n = poll(&pf, 1, 200);
-        if (n < 0 && errno != EINTR) {
-            PQfinish(c);
-            c = NULL;
-            continue;
-        }
-        if (n > 0 && !PQconsumeInput(c)) {
-            PQfinish(c); /* the server went away: connect again */
-            c = NULL;
-            continue;
-        }
-        PGnotify *nt;
-        while ((nt = PQnotifies(c))) {
-            store_event ev;
-            memset(&ev, 0, sizeof ev);
-            if (!strcmp(nt->relname, "qdc_job") &&
-                sscanf(nt->extra, "%32s %d %d", ev.id, &ev.state, &ev.cancel) == 3) {
-                ev.kind = STORE_EV_JOB;
-                s->ln_fn(s->ln_ctx, &ev);
-            } else if (!strcmp(nt->relname, "qdc_progress") &&
-                       sscanf(nt->extra, "%32s %ld", ev.id, &ev.seq) == 2) {
-                ev.kind = STORE_EV_PROGRESS;
-                s->ln_fn(s->ln_ctx, &ev);
-            }
-            PQfreemem(nt);
-        }
-    }
-    PQfinish(c);
-    return NULL;
-}
-
-static qdc_status pg_listen(job_store *s_, store_event_fn fn, void *ctx)
-{
-    pg_store *s = (pg_store *)s_;
-
-    if (!fn) {
-        if (s->ln_running) {
-            s->ln_stop = 1;
-            pthread_join(s->ln_th, NULL);
-            s->ln_running = 0;
-        }
-        return QDC_OK;
-    }
-    if (s->ln_running)
-        return QDC_OK;
-    s->ln_fn = fn;
-    s->ln_ctx = ctx;
-    s->ln_stop = 0;
-    if (pthread_create(&s->ln_th, NULL, listen_main, s))
-        return QDC_EIO;
-    s->ln_running = 1;
-    return QDC_OK;
 }
 
 static void pg_close(job_store *s_)
@@ -1326,20 +873,20 @@ static qdc_status migrate(pg_store *s, qdc_error *err)
     int have = 0;
     qdc_status st = QDC_OK;
 
-    r = run(s, "BEGIN", NULL);
+    r = pg_run(s, "BEGIN", NULL);
     if (!r)
         return qdc_fail(err, QDC_EIO, "postgresql: cannot begin the schema migration");
     PQclear(r);
     /* 0x716463 = "qdc": one lock id for every qdcd on this database */
-    r = run(s, "SELECT pg_advisory_xact_lock(7431267)", NULL);
+    r = pg_run(s, "SELECT pg_advisory_xact_lock(7431267)", NULL);
     if (r) {
         PQclear(r);
-        r = run(s, "CREATE TABLE IF NOT EXISTS qdc_schema(version INTEGER NOT NULL)",
-                NULL);
+        r = pg_run(s, "CREATE TABLE IF NOT EXISTS qdc_schema(version INTEGER NOT NULL)",
+                   NULL);
     }
     if (r) {
         PQclear(r);
-        r = run(s, "SELECT COALESCE(MAX(version), 0) FROM qdc_schema", NULL);
+        r = pg_run(s, "SELECT COALESCE(MAX(version), 0) FROM qdc_schema", NULL);
     }
     if (!r) {
         st = qdc_fail(err, QDC_EIO, "postgresql: cannot read the schema version");
@@ -1356,7 +903,7 @@ static qdc_status migrate(pg_store *s, qdc_error *err)
     }
     for (int v = have; v < N_MIGRATIONS; v++) {
         params p = {.n = 0};
-        r = run(s, migrations[v], NULL);
+        r = pg_run(s, migrations[v], NULL);
         if (!r) {
             st = qdc_fail(err, QDC_EIO,
                           "postgresql: schema migration to version %d failed", v + 1);
@@ -1364,7 +911,7 @@ static qdc_status migrate(pg_store *s, qdc_error *err)
         }
         PQclear(r);
         p_i64(&p, v + 1);
-        r = run(s, "INSERT INTO qdc_schema(version) VALUES($1)", &p);
+        r = pg_run(s, "INSERT INTO qdc_schema(version) VALUES($1)", &p);
         if (!r) {
             st = qdc_fail(err, QDC_EIO, "postgresql: cannot record schema version %d",
                           v + 1);
@@ -1373,7 +920,7 @@ static qdc_status migrate(pg_store *s, qdc_error *err)
         PQclear(r);
     }
 out:
-    r = run(s, st == QDC_OK ? "COMMIT" : "ROLLBACK", NULL);
+    r = pg_run(s, st == QDC_OK ? "COMMIT" : "ROLLBACK", NULL);
     if (!r && st == QDC_OK)
         st = qdc_fail(err, QDC_EIO, "postgresql: cannot commit the schema migration");
     PQclear(r);
@@ -1418,7 +965,7 @@ qdc_status store_pg_open(const char *uri, job_store **out, qdc_error *err)
         pg_close(&s->base);
         return st;
     }
-    if (pthread_create(&s->wq_th, NULL, writer_main, s)) {
+    if (pthread_create(&s->wq_th, NULL, pg_writer_main, s)) {
         pg_close(&s->base);
         return qdc_fail(err, QDC_ENOMEM, "cannot start the progress writer");
     }

@@ -49,9 +49,9 @@ const ui_asset *ui_asset_of(const char *url)
     return by_name(url);
 }
 
-enum MHD_Result ui_serve(struct MHD_Connection *c, req *r, const char *url)
+enum MHD_Result ui_serve(struct MHD_Connection *c, req *r)
 {
-    const ui_asset *a = ui_asset_of(url);
+    const ui_asset *a = ui_asset_of(r->url);
     const char *inm;
     struct MHD_Response *resp;
 

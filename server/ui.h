@@ -21,8 +21,8 @@ extern const size_t ui_nassets;
 /* The file a GET of url serves (the page for /, /ui/ and /ui/jobs/{id}), or
  * NULL when url is not the console's. */
 const ui_asset *ui_asset_of(const char *url);
-/* Answer a GET/HEAD of a console url: 200 or 304 (If-None-Match), with
- * Cache-Control: no-cache, the ETag and a Content-Security-Policy. */
-enum MHD_Result ui_serve(struct MHD_Connection *c, req *r, const char *url);
+/* Answer a GET/HEAD of a console url (r->url): 200 or 304 (If-None-Match),
+ * with Cache-Control: no-cache, the ETag and a Content-Security-Policy. */
+enum MHD_Result ui_serve(struct MHD_Connection *c, req *r);
 
 #endif

@@ -9,7 +9,8 @@
  * the row. The upload's state is this file's (struct upload, r->up): other requests do
  * not carry it. */
 #define _GNU_SOURCE
-#include "handlers.h"
+#include "endpoints.h"
+#include "handler.h"
 
 #include "job.h"
 #include "offq.h"

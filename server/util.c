@@ -233,7 +233,7 @@ void dir_remove(const char *path)
 
     if (!d)
         return;
-    while ((e = readdir(d))) {
+    while ((e = readdir(d)) != NULL) {
         if (e->d_name[0] == '.' &&
             (!e->d_name[1] || (e->d_name[1] == '.' && !e->d_name[2])))
             continue;

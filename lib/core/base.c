@@ -1,6 +1,6 @@
 /* base.c - status strings, error detail, allocation wrappers. */
 #define _POSIX_C_SOURCE 200809L
-#include "core/base.h"
+#include "core/base_int.h"
 
 #include <omp.h>
 #include <stdarg.h>

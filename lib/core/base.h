@@ -1,6 +1,7 @@
-/* base.h - status codes, error details and allocation shared by every libqdc module.
- * Thread-safe: no global mutable state (the optional allocation fault hook is
- * per call site: see qdc_alloc_hooks). */
+/* base.h - status codes, error details, allocation and the output and log
+ * callbacks shared by every libqdc module (public: included by qdc.h; the
+ * internal helpers are in base_int.h). Thread-safe: no global mutable state
+ * (the test builds' allocation fault counter is thread-local). */
 #ifndef QDC_BASE_H
 #define QDC_BASE_H
 
@@ -45,68 +46,60 @@ typedef struct {
     char kind[16];
 } qdc_error;
 
-const char *qdc_status_str(qdc_status st);  /* "out of memory"... never NULL */
-const char *qdc_status_name(qdc_status st); /* "QDC_ENOMEM"... never NULL */
-int qdc_status_http(qdc_status st);         /* 200, 400, ... */
+/* The message of st ("out of memory"); a static string, never NULL (an
+ * unknown st gives a generic one). */
+const char *qdc_status_str(qdc_status st);
+/* The enumerator's name of st ("QDC_ENOMEM"); a static string, never NULL. */
+const char *qdc_status_name(qdc_status st);
+/* The HTTP status the daemon answers st with (200, 400, 413...; 500 when
+ * unknown). */
+int qdc_status_http(qdc_status st);
 
-/* Clear an error record (err may be NULL). */
+/* Reset *err before a call: status QDC_OK, empty texts, -1 positions.
+ * err may be NULL. */
 void qdc_error_clear(qdc_error *err);
 
-/* Fill err (may be NULL) with st and a printf-style message; returns st so
- * callers can write `return qdc_fail(err, QDC_EMESH, "...")`. */
+/* Set err's status to st and its message to the printf-style fmt (cut to fit
+ * msg); its other fields are left as they are. err may be NULL. Returns st,
+ * so that callers can write
+ * `return qdc_fail(err, QDC_EMESH, "...")`. */
 qdc_status qdc_fail(qdc_error *err, qdc_status st, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)));
 
-/* All allocation in lib/ goes through these, so tests can fail the Nth
- * allocation (build with -DQDC_FAULT_INJECTION) and jobs can be budgeted.
- * qdc_malloc/qdc_calloc return NULL on overflow of n*size too. */
+/* All allocation in lib/ goes through these, so that tests can fail the Nth
+ * allocation (build with -DQDC_FAULT_INJECTION). Memory the library hands to
+ * the caller as a plain buffer (meshio_slurp...) is freed with qdc_free; an
+ * array a caller puts into a mesh_t (m->region after mesh_new...) comes from
+ * them, since mesh_free releases it with qdc_free. */
+
+/* size bytes, uninitialized; NULL on failure. */
 void *qdc_malloc(size_t size);
+/* n*size bytes, zeroed; NULL on failure or if n*size overflows. */
 void *qdc_calloc(size_t n, size_t size);
-void *qdc_mallocn(size_t n, size_t size); /* malloc(n*size) with overflow check */
+/* n*size bytes, uninitialized; NULL on failure or if n*size overflows. */
+void *qdc_mallocn(size_t n, size_t size);
+/* p (from these, or NULL) resized to size bytes, its contents kept; NULL on
+ * failure, p then still allocated and the caller's. */
 void *qdc_realloc(void *p, size_t size);
+/* Free p (from these); p may be NULL. */
 void qdc_free(void *p);
 
 #ifdef QDC_FAULT_INJECTION
 /* Test builds only: the fail_after-th allocation from now (1 = the next one)
  * and every later one return NULL; 0 disables. Thread-local. */
 void qdc_fault_set(long fail_after);
-long qdc_fault_count(void); /* allocations made since the last qdc_fault_set */
+/* Allocations made by this thread since the last qdc_fault_set. */
+long qdc_fault_count(void);
 #endif
 
-/* A hint to fetch the cache line of p ahead of a read (none where the
- * compiler has no such builtin). */
-#if defined(__GNUC__)
-#define QDC_PREFETCH(p) __builtin_prefetch(p)
-#else
-#define QDC_PREFETCH(p) ((void)(p))
-#endif
-
-/* The first item of part p of n items cut into parts nearly equal parts (p =
- * parts: n): the fixed ranges that parallel loops give their threads. */
-static inline int32_t qdc_part(int32_t n, int p, int parts)
-{
-    return (int32_t)((int64_t)n * p / parts);
-}
-
-/* Monotonic wall clock in seconds. */
-double qdc_now(void);
-
-/* The caller's OpenMP thread count, at most cap: the team size of a loop that
- * gives each thread its own scratch array of the mesh's size. */
-int qdc_threads_upto(int cap);
-
-/* A counting sort's counts made by nth threads over consecutive ranges of the
- * items (cnt: nth rows of w entries, bucket b of thread i at cnt[i * w + b])
- * into each thread's first place in each of the n buckets: bucket by bucket,
- * thread by thread, so the placed items keep their serial order. start (n + 1
- * entries, may be NULL) receives each bucket's first place and the total. */
-void qdc_count_places(int32_t *cnt, int nth, size_t w, int32_t n, int32_t *start);
-
-/* Streaming output used by every writer (mesh formats, reports): returns 0 on
- * success, non-zero to abort the write (the writer then returns QDC_EIO). */
+/* Streaming output used by every writer (mesh formats, reports): called with
+ * consecutive pieces of the output (data is the writer's, valid only during
+ * the call); returns 0 on success, non-zero to abort the write (the writer
+ * then returns QDC_EIO). */
 typedef int (*qdc_write_fn)(void *ctx, const void *data, size_t len);
 
-/* Logging callback (the library never prints): level 0 = info, 1 = warning. */
+/* Logging callback (the library never prints): level 0 = info, 1 = warning;
+ * msg is one line without a newline, valid only during the call. */
 typedef void (*qdc_log_fn)(void *ctx, int level, const char *msg);
 
 #endif

@@ -1,5 +1,5 @@
 /* mesh.c - mesh data, validation and connectivity (docs/method.md §1). */
-#include "core/mesh.h"
+#include "core/mesh_int.h"
 #include "core/tet.h"
 
 #include <math.h>

@@ -1,4 +1,5 @@
-/* mesh.h - tetrahedral mesh data, validation and connectivity (docs/method.md §1).
+/* mesh.h - tetrahedral mesh data, validation and orientation (docs/method.md §1);
+ * public (qdc.h; the optimizer's connectivity is in mesh_int.h).
  * Indices are 0-based int32. xyz holds 3 doubles per vertex, tets 4 indices per tet.
  * A tet (a,b,c,d) is positive when det[b-a, c-a, d-a] > 0 (Shewchuk's
  * orient3d(a,b,c,d) has the opposite sign).
@@ -39,14 +40,19 @@ typedef struct mesh {
 
 enum { MESH_WITH_REGION = 1, MESH_WITH_FIXED = 2, MESH_WITH_VREF = 4 };
 
-/* Allocate a mesh with zeroed arrays; the optional arrays named by flags
- * (MESH_WITH_*). Returns NULL on allocation failure or negative counts.
- * Free with mesh_free. */
+/* A new mesh of nv vertices and nt tets, every array zeroed: xyz and tets,
+ * and the optional arrays that flags name (MESH_WITH_*; the others NULL).
+ * The caller fills the arrays and owns the mesh: mesh_free. Returns NULL on
+ * allocation failure or a negative count. */
 mesh_t *mesh_new(int32_t nv, int32_t nt, unsigned flags);
-/* Allocate m->tris (and m->tri_ref if with_ref), replacing any previous ones. */
+/* Give m new zeroed boundary triangles: m->tris (3*ntri) and, if with_ref,
+ * m->tri_ref (ntri); the previous ones are freed, m->ntri set. m keeps owning
+ * them. QDC_EINVAL (m NULL, ntri < 0) or QDC_ENOMEM (m unchanged). */
 qdc_status mesh_set_tris(mesh_t *m, int32_t ntri, int with_ref);
-/* A deep copy of the arrays; the source file (m->source) is not copied. */
+/* A deep copy of m's arrays, owned by the caller (mesh_free); the source file
+ * (m->source) is not copied. NULL if m is NULL or on allocation failure. */
 mesh_t *mesh_dup(const mesh_t *m);
+/* Free m, its arrays and its source. m may be NULL. */
 void mesh_free(mesh_t *m);
 
 /* What mesh_validate found that is not an error. */
@@ -75,53 +81,22 @@ typedef struct {
  * whose vertex order must have two vertices swapped to be positive under that
  * orientation. A tet is inverted when its geometry disagrees with it.
  * QDC_EMESH for a connectivity that cannot be oriented (a face of 3+ tets, or a
- * component whose faces contradict each other), with err->index a tet. */
+ * component whose faces contradict each other), with err->index a tet; the
+ * errors of mesh_validate's basic checks; QDC_ENOMEM. m is only read; o (not
+ * NULL) receives the counts. */
 qdc_status mesh_orient(const mesh_t *m, uint8_t *flip, mesh_orientation *o,
                        qdc_error *err);
-/* The same, and the flipped tets of m rewritten in the positive vertex order. */
+/* The same, and the flipped tets of m rewritten in place in the positive
+ * vertex order (m->tets changes; nothing else). o receives what was found.
+ * Statuses of mesh_orient, QDC_ENOMEM. */
 qdc_status mesh_reorient(mesh_t *m, mesh_orientation *o, qdc_error *err);
 
 /* Check a mesh before use. Errors (QDC_EMESH unless said): empty mesh
  * (no vertices or no tets), a coordinate that is NaN/Inf (err->index = vertex),
  * a tet index out of [0, nv) (err->index = tet), a vertex repeated inside a tet,
  * a face shared by more than two tets (non-manifold). Unreferenced vertices and
- * inverted tets are reported in *info (may be NULL), not errors. */
+ * inverted tets are reported in *info (may be NULL), not errors. m is only
+ * read. QDC_ENOMEM too. */
 qdc_status mesh_validate(const mesh_t *m, mesh_check *info, qdc_error *err);
-
-/* Axis-aligned bounding box: lo[3], hi[3]; returns the diagonal length. */
-double mesh_bbox(const mesh_t *m, double lo[3], double hi[3]);
-
-/* Vertex flags in mesh_topo.vflag */
-enum {
-    MESH_V_BOUNDARY = 1,  /* on a face of exactly one tet */
-    MESH_V_INTERFACE = 2, /* on a face between two regions */
-    MESH_V_FIXED = 4,     /* locked by the user */
-    MESH_V_UNUSED = 8     /* referenced by no tet */
-};
-
-/* Connectivity, built once per job (the optimizer never changes it). */
-typedef struct mesh_topo {
-    int32_t nv, nt;
-    int32_t *tets; /* copy of the tets, each in the vertex order that is
-                    * positive under the connectivity's orientation */
-    int flipped;   /* 1 if any of the input's tets was flipped to get there */
-    mesh_orientation orientation; /* what mesh_orient found */
-    int32_t *vt_ptr; /* nv+1: incidences of vertex v are vt_idx[vt_ptr[v]..vt_ptr[v+1]) */
-    int32_t *vt_idx; /* 4*nt entries, each 4*t + a (tet t, local vertex a) */
-    int32_t *adj_ptr; /* nv+1: CSR pattern of the 1-ring, diagonal included, */
-    int32_t *adj_idx; /*       columns sorted ascending */
-    int32_t nbf;      /* boundary faces (faces of one tet) */
-    int32_t *bfaces;  /* 3*nbf, outward for positively oriented tets */
-    int32_t nif;      /* interface faces (between tets of different regions) */
-    int32_t *ifaces;  /* 3*nif */
-    uint8_t *vflag;   /* nv MESH_V_* flags */
-    int32_t nb;       /* vertices with MESH_V_BOUNDARY */
-} mesh_topo;
-
-qdc_status mesh_topo_build(const mesh_t *m, mesh_topo **out, qdc_error *err);
-void mesh_topo_free(mesh_topo *t);
-
-/* Tets of topo->tets that are not positive at coordinates xyz. */
-int32_t mesh_count_inverted(const mesh_topo *t, const double *xyz);
 
 #endif

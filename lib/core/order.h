@@ -7,7 +7,7 @@
 #ifndef QDC_ORDER_H
 #define QDC_ORDER_H
 
-#include "core/mesh.h"
+#include "core/mesh_int.h"
 
 typedef struct {
     int32_t nv, nt;

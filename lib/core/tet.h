@@ -26,6 +26,32 @@ static inline double geom_tet_vol6(const double *x, const int32_t *tt)
     return u0 * (v1 * w2 - v2 * w1) - u1 * (v0 * w2 - v2 * w0) + u2 * (v0 * w1 - v1 * w0);
 }
 
+/* A face's three vertex indices in ascending order into s: the key under
+ * which faces are matched (the one 3-integer sort of the library). */
+static inline void tet_sort3(int32_t a, int32_t b, int32_t c, int32_t s[3])
+{
+    int32_t x;
+
+    if (a > b) {
+        x = a;
+        a = b;
+        b = x;
+    }
+    if (b > c) {
+        x = b;
+        b = c;
+        c = x;
+    }
+    if (a > b) {
+        x = a;
+        a = b;
+        b = x;
+    }
+    s[0] = a;
+    s[1] = b;
+    s[2] = c;
+}
+
 /* Inverted: not positive under the orientation its vertex order gives
  * (zero volume included: a flat tet is as unusable as a folded one).
  * Degenerate: exactly zero volume (reported apart, counted as inverted). */

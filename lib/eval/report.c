@@ -1,7 +1,9 @@
 /* report.c - mesh quality evaluation and the JSON report (docs/method.md §9). */
 #include "eval/report.h"
 
-#include "geom/metric.h"
+#include "core/mesh_int.h"
+#include "geom/metric_int.h"
+#include "opt/opt_int.h"
 
 #include <math.h>
 #include <stdarg.h>

@@ -1,7 +1,7 @@
 /* report.h - mesh quality evaluation and the JSON report (docs/method.md §9).
  * Quality convention: signed mean ratio eta = 12 (3|V|)^(2/3) / sum l^2, negative
  * for tets against the mesh's majority orientation; dihedral angles in degrees.
- * Thread-safe: no global state. */
+ * Public (qdc.h). Thread-safe: no global state. */
 #ifndef QDC_REPORT_H
 #define QDC_REPORT_H
 
@@ -28,10 +28,14 @@ typedef struct {
 extern const int report_dmin_thresholds[4]; /* 5, 15, 30, 40 */
 extern const int report_dmax_thresholds[4]; /* 175, 165, 150, 140 */
 
+/* Measure every tet of m (only read) into *q: counts, mean ratio, volume-
+ * length, condition number, dihedral angles and their histogram, each tet in
+ * the vertex order of its component's orientation (mesh_orient). QDC_EMESH
+ * (an empty mesh, a vertex index out of range), QDC_ENOMEM. */
 qdc_status report_quality_compute(const mesh_t *m, report_quality *q, qdc_error *err);
 
 /* Everything the CLI and the daemon hand back about a run. Any pointer may be NULL
- * (that section is left out). */
+ * (that section is left out); all are the caller's, only read. */
 typedef struct {
     const report_quality *before;
     const report_quality *after;
@@ -40,13 +44,16 @@ typedef struct {
     const bderr_result *boundary;
 } report_t;
 
-/* Stream the report as one JSON object. */
+/* Stream the report as one JSON object through fn(ctx, ...), reading only r
+ * and what it points to. QDC_EIO when fn fails (the output is then cut). */
 qdc_status report_write_json(const report_t *r, qdc_write_fn fn, void *ctx,
                              qdc_error *err);
-/* JSON of one progress record (one line, no newline), as the daemon streams it. */
+/* JSON of one progress record p (one line, no newline), as the daemon streams
+ * it, through fn(ctx, ...). QDC_EIO when fn fails. */
 qdc_status report_progress_json(const opt_progress *p, qdc_write_fn fn, void *ctx);
 
-/* qdc_write_fn that appends to a FILE* (ctx). */
+/* qdc_write_fn that appends to a FILE* (ctx, the caller's, left open):
+ * non-zero when fwrite writes less than len. */
 int report_file_writer(void *ctx, const void *data, size_t len);
 
 #endif

@@ -6,8 +6,9 @@
  * the other side through a BVH. Sample k of a side is a pure function of
  * (seed, side, k), and partial sums are formed per fixed-size chunk and added
  * in chunk order, so the result does not depend on the number of threads. */
-#include "geom/bderr.h"
+#include "core/mesh_int.h"
 #include "core/tet.h"
+#include "geom/bderr_int.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -819,27 +820,7 @@ static void sort_faces(face_rec *r, int64_t n)
 
 static void face_sorted(const int32_t *t, int f, int32_t s[3])
 {
-    int32_t a = t[tet_face_of[f][0]], b = t[tet_face_of[f][1]], c = t[tet_face_of[f][2]],
-            x;
-
-    if (a > b) {
-        x = a;
-        a = b;
-        b = x;
-    }
-    if (b > c) {
-        x = b;
-        b = c;
-        c = x;
-    }
-    if (a > b) {
-        x = a;
-        a = b;
-        b = x;
-    }
-    s[0] = a;
-    s[1] = b;
-    s[2] = c;
+    tet_sort3(t[tet_face_of[f][0]], t[tet_face_of[f][1]], t[tet_face_of[f][2]], s);
 }
 
 /* Faces of exactly one tet, as triangles in the tet's orientation. Faces are

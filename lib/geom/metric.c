@@ -1,6 +1,6 @@
 /* metric.c - per-tet quality metrics (paper Sec. 3.1, docs/method.md §2-§3). */
-#include "geom/metric.h"
 #include "core/tet.h"
+#include "geom/metric_int.h"
 
 #include <math.h>
 #include <string.h>

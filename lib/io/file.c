@@ -3,6 +3,7 @@
  * mesh format: the formats (meshio.c) and the splicer (splice.c) both sit
  * above it. */
 #include "io/file.h"
+#include "core/base_int.h"
 #include "io/gz.h"
 
 #include <errno.h>

@@ -12,7 +12,7 @@
 #define QDC_MESHIO_SCAN_H
 
 #include "core/base.h"
-#include "core/mesh.h"
+#include "core/mesh_int.h"
 #include "io/meshio.h"
 #include "io/numfmt.h"
 

@@ -5,7 +5,7 @@
  * err->offset (binary STL). Polygons are split into fans of triangles and
  * vertices with exactly equal coordinates are merged (STL repeats them per
  * triangle), so the result is an indexed triangle surface.
- * Thread-safe: no global state. */
+ * Public (qdc.h). Thread-safe: no global state. */
 #ifndef QDC_SURFACE_H
 #define QDC_SURFACE_H
 
@@ -35,28 +35,35 @@ typedef struct {
     double *regions;  /* 5*nregions; maxvol <= 0 means none */
 } surface_t;
 
+/* Free s and its arrays. s may be NULL. */
 void surface_free(surface_t *s);
 
-/* "stl", "off", "obj", "poly", "smesh"; NULL for AUTO or out of range. */
+/* The name of f: "stl", "off", "obj", "poly", "smesh" (static); NULL for
+ * AUTO or out of range. */
 const char *surface_format_name(surface_format f);
-/* A name, extension or file name ("stl", ".OFF", "a/b.obj"); AUTO if unknown. */
+/* The format named by s, a name, extension or file name ("stl", ".OFF",
+ * "a/b.obj"; only read); AUTO if unknown or NULL. */
 surface_format surface_format_from_name(const char *s);
-/* Binary STL (84 + 50 n bytes), "solid", "OFF", OBJ "v " lines; AUTO if unknown. */
+/* The format of the len bytes at buf (only read), from their content: binary
+ * STL (84 + 50 n bytes), "solid", "OFF", OBJ "v " lines; AUTO if unknown. */
 surface_format surface_sniff(const char *buf, size_t len);
 /* model/stl (also application/sla, model/x.stl-binary, model/x.stl-ascii),
  * model/obj (text/plain not accepted), model/x-off, application/vnd.qdc.surface+poly
  * (TetGen .poly), application/vnd.qdc.surface+smesh; parameters ignored;
  * AUTO if unknown or NULL. */
 surface_format surface_format_from_media_type(const char *content_type);
-/* The static media type of f, NULL for AUTO or out of range. */
+/* The media type of f (static), NULL for AUTO or out of range. */
 const char *surface_media_type(surface_format f);
 
-/* Parse one buffer (fmt AUTO sniffs). On success *out is new (surface_free);
+/* Parse the len bytes at buf (only read; fmt AUTO sniffs). On success *out
+ * is a new surface the caller owns (surface_free);
  * on failure NULL, err says what and where (QDC_EPARSE, QDC_ETOOBIG, QDC_ENOMEM,
  * QDC_EFORMAT when the format is unknown). */
 qdc_status surface_read(const char *buf, size_t len, surface_format fmt, surface_t **out,
                         qdc_error *err);
-/* A file: format from fmt, else the extension, else sniffing. */
+/* Read the file at path and parse it as surface_read: format from fmt, else
+ * the extension, else sniffing. *out as surface_read; QDC_EIO when the file
+ * cannot be read too. */
 qdc_status surface_load(const char *path, surface_format fmt, surface_t **out,
                         qdc_error *err);
 
@@ -65,7 +72,7 @@ qdc_status surface_load(const char *path, surface_format fmt, surface_t **out,
  * degenerate triangle (repeated vertex or zero area), an edge not shared by
  * exactly two triangles (open or non-manifold surface), or two triangles on
  * an edge with the same orientation (inconsistently oriented). Self-
- * intersections are found by TetGen. */
+ * intersections are found by TetGen. s is only read; QDC_OK when none. */
 qdc_status surface_check(const surface_t *s, qdc_error *err);
 
 #endif

@@ -3,7 +3,7 @@
 
 #include "core/tet.h"
 
-#include "geom/metric.h"
+#include "geom/metric_int.h"
 
 #include <math.h>
 #include <omp.h>

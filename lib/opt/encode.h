@@ -6,7 +6,7 @@
 #ifndef QDC_ENCODE_H
 #define QDC_ENCODE_H
 
-#include "core/mesh.h"
+#include "core/mesh_int.h"
 #include "opt/opt.h"
 
 /* Per-tet q~ at coordinates x for a given delta, their sum, and the number of

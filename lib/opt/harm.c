@@ -1,7 +1,7 @@
 /* harm.c - harmonic guidance field (paper Sec. 5.1, docs/method.md §6). */
 #include "opt/harm.h"
 
-#include "geom/bderr.h"
+#include "geom/bderr_int.h"
 #include "opt/solve.h"
 
 #include <math.h>

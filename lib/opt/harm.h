@@ -4,7 +4,7 @@
 #ifndef QDC_HARM_H
 #define QDC_HARM_H
 
-#include "core/mesh.h"
+#include "core/mesh_int.h"
 
 /* x: coordinates (3 per vertex) of the pre-optimized mesh; h_out: nv values.
  * *n_medial receives the number of medial vertices (may be NULL). */

@@ -1,5 +1,7 @@
 /* opt.h - the QDC optimizer (paper Sec. 4-6, docs/method.md §4-§6, §8): moves vertices,
- * never changes connectivity. Thread-safe: all state lives in the call. */
+ * never changes connectivity; public (qdc.h; the option words' parsers are
+ * in opt_int.h, the passes in the other headers of opt/).
+ * Thread-safe: all state lives in the call. */
 #ifndef QDC_OPT_H
 #define QDC_OPT_H
 
@@ -27,7 +29,6 @@ typedef enum {
     OPT_STOP_TIME_LIMIT,
     OPT_STOP_SOLVER
 } opt_stop;
-const char *opt_stop_name(opt_stop s);
 
 /* Outcome of a run (docs/style.md §3). */
 typedef enum {
@@ -53,8 +54,9 @@ typedef struct {
     int cg_iters;     /* PCG iterations (0 for CHOLMOD) */
 } opt_progress;
 
-/* Called after each record. Return non-zero to cancel (the run then stops
- * with OPT_STOPPED and the best mesh so far). */
+/* Called after each record, on opt_run's thread; p is valid only during the
+ * call. Return non-zero to cancel (the run then stops with OPT_STOPPED and
+ * the best mesh so far). */
 typedef int (*opt_progress_fn)(void *ctx, const opt_progress *p);
 
 typedef struct {
@@ -105,25 +107,15 @@ typedef struct {
     void *log_ctx;
 } opt_options;
 
+/* Fill *o with the defaults (docs/defaults.md; each field's comment above says
+ * its default): no callbacks, no cancel flag, all cores. */
 void opt_defaults(opt_options *o);
 
-/* --hausd: "H" (absolute, mesh units), "P%" (percent of the bounding-box
- * diagonal) or "rel:F" (fraction of it); sets o->hausd or o->hausd_rel.
- * QDC_EINVAL for anything else, a negative, NaN or infinite value. */
-qdc_status opt_parse_hausd(const char *s, opt_options *o);
 #define OPT_HAUSD_AUTO (-1.0)
 #define OPT_HAUSD_DEFAULT 1e-3 /* of the diagonal (docs/defaults.md) */
 
-/* Parse option words ("mivl", "lsq", "safe", ...) into o; QDC_EINVAL if unknown. */
-qdc_status opt_parse_metric(const char *s, opt_metric *out);
-qdc_status opt_parse_boundary(const char *s, opt_boundary *out);
-qdc_status opt_parse_mode(const char *s, opt_mode *out);
-qdc_status opt_parse_weights(const char *s, opt_weights *out);
-qdc_status opt_parse_solver(const char *s, opt_solver *out);
-const char *opt_metric_name(opt_metric m);
-const char *opt_boundary_name(opt_boundary b);
-const char *opt_mode_name(opt_mode m);
-const char *opt_weights_name(opt_weights w);
+/* The word of the solver a run used (opt_result.solver): "auto", "cholmod",
+ * "pcg"; a static string, "?" when out of range. */
 const char *opt_solver_name(opt_solver s);
 
 typedef struct {
@@ -153,12 +145,19 @@ typedef struct {
 } opt_result;
 
 /* Optimize m in place (coordinates only; tets, regions, fixed flags untouched).
+ * o may be NULL (opt_defaults); it is only read, and its callbacks are called
+ * on the calling thread. res (may be NULL) receives the outcome, timings and
+ * the first and last progress records. m stays the caller's: the run keeps
+ * no pointer to it, o or res after it returns.
  * On OPT_FAILED (and on any status other than QDC_OK) m is unchanged.
  * During the run m->tets and m->region are lent to the run's renumbered copy
  * (NULL meanwhile: m must not be read from another thread); they come back
  * with the same contents, possibly at other addresses.
  * The returned mesh never has more inverted tets nor a lower minimum mean ratio
- * than the input. res may be NULL. */
+ * than the input. The BLAS's thread count changes CHOLMOD's rounding, hence
+ * the bytes of the result (qdc and qdcd run with OPENBLAS_NUM_THREADS=1).
+ * QDC_EMESH (m fails mesh_validate or cannot be oriented), QDC_EINVAL (an
+ * option out of range), QDC_ENOMEM, QDC_ESOLVE. */
 qdc_status opt_run(mesh_t *m, const opt_options *o, opt_result *res, qdc_error *err);
 
 #endif

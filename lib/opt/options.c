@@ -1,5 +1,6 @@
-/* options.c - the table of optimizer options (options.h). */
+/* options.c - the optimizer options: defaults, words, parsers and table (options.h). */
 #include "opt/options.h"
+#include "opt/opt_int.h"
 
 #include <ctype.h>
 #include <errno.h>
@@ -9,11 +10,130 @@
 #include <stdlib.h>
 #include <string.h>
 
-static const char *const metric_w[] = {"mivl", "mimr", "micn"};
-static const char *const boundary_w[] = {"lsq", "fixed", "slide"};
-static const char *const mode_w[] = {"safe", "literal"};
-static const char *const weights_w[] = {"optavg", "paper"};
-static const char *const solver_w[] = {"auto", "cholmod", "pcg"};
+void opt_defaults(opt_options *o)
+{
+    memset(o, 0, sizeof *o);
+    o->metric = OPT_METRIC_MIVL;
+    o->boundary = OPT_BOUNDARY_SLIDE;
+    o->hausd_rel = OPT_HAUSD_AUTO;
+    o->mode = OPT_MODE_SAFE;
+    o->weights = OPT_WEIGHTS_OPTAVG;
+    o->solver = OPT_SOLVER_AUTO;
+    o->harmonic = 0;
+    o->pre_iters = 3;
+    o->finish = 1;
+    o->max_iter = 10;
+    o->ls_halvings = 10;
+    o->mu = 1.0;
+    o->tol_move = 1e-3;
+    o->stall = 2e-3;
+    o->eps_rel = 1e-3;
+    o->finish_frac = 1.0;
+    o->finish_sweeps = 32;
+    o->finish_gain = 5e-4;
+    o->angle_polish = 1;
+    o->feature_angle = 30.0;
+}
+
+static const char *const metric_names[] = {"mivl", "mimr", "micn"};
+static const char *const boundary_names[] = {"lsq", "fixed", "slide"};
+static const char *const mode_names[] = {"safe", "literal"};
+static const char *const weights_names[] = {"optavg", "paper"};
+static const char *const solver_names[] = {"auto", "cholmod", "pcg"};
+
+static qdc_status parse_word(const char *s, const char *const *names, int n, int *out)
+{
+    for (int i = 0; s && i < n; i++)
+        if (strcmp(s, names[i]) == 0) {
+            *out = i;
+            return QDC_OK;
+        }
+    return QDC_EINVAL;
+}
+
+#define PARSER(fn, type, names)                                                          \
+    qdc_status fn(const char *s, type *out)                                              \
+    {                                                                                    \
+        int v;                                                                           \
+        qdc_status st = parse_word(s, names, (int)(sizeof names / sizeof names[0]), &v); \
+        if (st == QDC_OK)                                                                \
+            *out = (type)v;                                                              \
+        return st;                                                                       \
+    }
+PARSER(opt_parse_metric, opt_metric, metric_names)
+PARSER(opt_parse_boundary, opt_boundary, boundary_names)
+PARSER(opt_parse_mode, opt_mode, mode_names)
+PARSER(opt_parse_weights, opt_weights, weights_names)
+PARSER(opt_parse_solver, opt_solver, solver_names)
+
+/* A finite number filling all of s: no leading space, nothing after it. */
+static int whole_number(const char *s, double *out)
+{
+    char *end;
+    double v;
+
+    if (!*s || isspace((unsigned char)*s))
+        return -1;
+    errno = 0;
+    v = strtod(s, &end);
+    if (end == s || *end || errno == ERANGE || !isfinite(v))
+        return -1;
+    *out = v;
+    return 0;
+}
+
+/* A finite, non-negative number filling all of s. */
+static int parse_nonneg(const char *s, double *out)
+{
+    return !s || whole_number(s, out) || *out < 0 ? -1 : 0;
+}
+
+qdc_status opt_parse_hausd(const char *s, opt_options *o)
+{
+    size_t n = s ? strlen(s) : 0;
+    double v;
+    char buf[64];
+
+    if (!n || n >= sizeof buf)
+        return QDC_EINVAL;
+    if (!strcmp(s, "auto") || !strcmp(s, "none")) {
+        o->hausd = 0;
+        o->hausd_rel = s[0] == 'a' ? OPT_HAUSD_AUTO : 0.0;
+        return QDC_OK;
+    }
+    if (!strncmp(s, "rel:", 4)) {
+        if (parse_nonneg(s + 4, &v))
+            return QDC_EINVAL;
+        o->hausd = 0;
+        o->hausd_rel = v;
+        return QDC_OK;
+    }
+    if (s[n - 1] == '%') {
+        memcpy(buf, s, n - 1);
+        buf[n - 1] = 0;
+        if (parse_nonneg(buf, &v))
+            return QDC_EINVAL;
+        o->hausd = 0;
+        o->hausd_rel = v / 100.0;
+        return QDC_OK;
+    }
+    if (parse_nonneg(s, &v))
+        return QDC_EINVAL;
+    o->hausd = v;
+    o->hausd_rel = 0;
+    return QDC_OK;
+}
+
+#define NAMER(fn, type, names)                                                           \
+    const char *fn(type v)                                                               \
+    {                                                                                    \
+        return (unsigned)v < sizeof names / sizeof names[0] ? names[v] : "?";            \
+    }
+NAMER(opt_metric_name, opt_metric, metric_names)
+NAMER(opt_boundary_name, opt_boundary, boundary_names)
+NAMER(opt_mode_name, opt_mode, mode_names)
+NAMER(opt_weights_name, opt_weights, weights_names)
+NAMER(opt_solver_name, opt_solver, solver_names)
 
 #define OFF(f) offsetof(opt_options, f)
 #define WORDS(w) w, (int)(sizeof w / sizeof w[0])
@@ -21,18 +141,18 @@ static const char *const solver_w[] = {"auto", "cholmod", "pcg"};
 /* Ranges are those opt_run accepts (run_once checks them again), so that a
  * value accepted here never fails later. */
 static const opt_desc table[] = {
-    {"metric", OPT_T_WORD, OFF(metric), 0, 0, 0, WORDS(metric_w), "quality metric"},
-    {"boundary", OPT_T_WORD, OFF(boundary), 0, 0, 0, WORDS(boundary_w),
+    {"metric", OPT_T_WORD, OFF(metric), 0, 0, 0, WORDS(metric_names), "quality metric"},
+    {"boundary", OPT_T_WORD, OFF(boundary), 0, 0, 0, WORDS(boundary_names),
      "boundary handling"},
     {"hausd", OPT_T_HAUSD, OFF(hausd), 0, 0, 0, NULL, 0,
      "bound on the boundary's Hausdorff distance: H, P%, rel:F of the diagonal, none, "
      "auto (with slide: vertices within 0.001 of the diagonal of the input surface)"},
     {"feature_angle", OPT_T_REAL, OFF(feature_angle), 0, 180, 0, NULL, 0,
      "slide: sharper boundary edges are features (degrees)"},
-    {"mode", OPT_T_WORD, OFF(mode), 0, 0, 0, WORDS(mode_w),
+    {"mode", OPT_T_WORD, OFF(mode), 0, 0, 0, WORDS(mode_names),
      "safeguarded method or the paper as written"},
-    {"weights", OPT_T_WORD, OFF(weights), 0, 0, 0, WORDS(weights_w), "QDC weights"},
-    {"solver", OPT_T_WORD, OFF(solver), 0, 0, 0, WORDS(solver_w), "linear solver"},
+    {"weights", OPT_T_WORD, OFF(weights), 0, 0, 0, WORDS(weights_names), "QDC weights"},
+    {"solver", OPT_T_WORD, OFF(solver), 0, 0, 0, WORDS(solver_names), "linear solver"},
     {"harmonic", OPT_T_BOOL, OFF(harmonic), 0, 1, 0, NULL, 0,
      "harmonic guidance, paper Sec. 5.1"},
     {"pre_iters", OPT_T_INT, OFF(pre_iters), 0, 10000, 0, NULL, 0,
@@ -115,22 +235,6 @@ static void shortest(char *buf, size_t n, const char *prefix, double v)
         if (strtod(buf + strlen(prefix), NULL) == v)
             return;
     }
-}
-
-/* A finite number filling all of s: no leading space, nothing after it. */
-static int whole_number(const char *s, double *out)
-{
-    char *end;
-    double v;
-
-    if (!*s || isspace((unsigned char)*s))
-        return -1;
-    errno = 0;
-    v = strtod(s, &end);
-    if (end == s || *end || errno == ERANGE || !isfinite(v))
-        return -1;
-    *out = v;
-    return 0;
 }
 
 qdc_status opt_set(opt_options *o, const char *key, const char *text, qdc_error *err)

@@ -3,7 +3,8 @@
  * The CLI (its flags and --help), the daemon (query parameters, refused at
  * submit time with the valid range), the stored canonical options of a job and
  * the API documentation all read this table, so an option means the same thing
- * and takes the same values everywhere. Thread-safe: the table is constant. */
+ * and takes the same values everywhere. Public (qdc.h).
+ * Thread-safe: the table is constant. */
 #ifndef QDC_OPTIONS_H
 #define QDC_OPTIONS_H
 
@@ -31,21 +32,25 @@ typedef struct {
     const char *help;
 } opt_desc;
 
-/* The table: *n entries. */
+/* The table, static and constant; *n (not NULL) receives its entry count. */
 const opt_desc *opt_table(size_t *n);
-/* The entry named key ('-' and '_' alike), or NULL. */
+/* The table's entry named key ('-' and '_' alike), or NULL if none (or key
+ * is NULL). */
 const opt_desc *opt_find(const char *key);
 
 /* Set one option from its text. The whole text must be the value: no spaces,
  * no trailing bytes, no NaN or infinity, inside the range. QDC_EINVAL with a
  * message that names the option and its valid values otherwise (an unknown key
- * too). o is unchanged on failure. */
+ * too). Reads key and text; writes only the field in o, which is unchanged on
+ * failure. */
 qdc_status opt_set(opt_options *o, const char *key, const char *text, qdc_error *err);
 
 /* The value of d's field in o as text ("mivl", "on", "10", "0.001"; hausd as
- * its absolute or "rel:" form), into buf. */
+ * its absolute or "rel:" form): written into buf (n bytes, the caller's),
+ * always NUL-terminated, cut if too short (64 bytes is enough). */
 void opt_value_text(const opt_desc *d, const opt_options *o, char *buf, size_t n);
-/* The valid values of d as text ("mivl|mimr|micn", "(0, 1e+12]", ...). */
+/* The valid values of d as text ("mivl|mimr|micn", "(0, 1e+12]", ...), into
+ * buf (n bytes, the caller's) as opt_value_text. */
 void opt_range_text(const opt_desc *d, char *buf, size_t n);
 
 #endif

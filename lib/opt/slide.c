@@ -1,7 +1,8 @@
 /* slide.c - sliding boundary constraints. */
 #include "opt/slide.h"
 
-#include "geom/bderr.h"
+#include "core/tet.h"
+#include "geom/bderr_int.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -195,25 +196,8 @@ static int tri_cmp(const void *x, const void *y)
 static tri_key make_key(int32_t a, int32_t b, int32_t c)
 {
     tri_key k;
-    int32_t t;
-    if (a > b) {
-        t = a;
-        a = b;
-        b = t;
-    }
-    if (b > c) {
-        t = b;
-        b = c;
-        c = t;
-    }
-    if (a > b) {
-        t = a;
-        a = b;
-        b = t;
-    }
-    k.v[0] = a;
-    k.v[1] = b;
-    k.v[2] = c;
+
+    tet_sort3(a, b, c, k.v);
     return k;
 }
 
@@ -450,6 +434,61 @@ static int project_star(const slide_ctx *s, int32_t v, const double p[3], double
     return 0;
 }
 
+/* Area-weighted vertex normals of the input boundary surface (and of the
+ * interfaces) into s->normal, not yet normalized. */
+static void vertex_normals(slide_ctx *s, const mesh_topo *tp, const double *x0)
+{
+    for (int32_t f = 0; f < tp->nbf; f++) {
+        double n[3];
+        face_normal(x0, tp->bfaces + 3 * (size_t)f, n);
+        for (int k = 0; k < 3; k++)
+            for (int c = 0; c < 3; c++)
+                s->normal[3 * (size_t)tp->bfaces[3 * (size_t)f + k] + c] += n[c];
+    }
+    for (int32_t f = 0; f < tp->nif; f++) {
+        double n[3];
+        face_normal(x0, tp->ifaces + 3 * (size_t)f, n);
+        for (int k = 0; k < 3; k++) {
+            int32_t v = tp->ifaces[3 * (size_t)f + k];
+            double *nv = s->normal + 3 * (size_t)v;
+            /* interface faces come with either orientation: align to the sum */
+            double sg = nv[0] * n[0] + nv[1] * n[1] + nv[2] * n[2] < 0 ? -1.0 : 1.0;
+            if (tp->vflag[v] & MESH_V_BOUNDARY)
+                continue;
+            for (int c = 0; c < 3; c++)
+                nv[c] += sg * n[c];
+        }
+    }
+}
+
+/* Each boundary and interface vertex's kind (surface, line, corner), its
+ * unit normal and, on a line, its unit tangent; deg: feature edges at each
+ * vertex. */
+static void classify(slide_ctx *s, const mesh_topo *tp, const double *x0,
+                     const int32_t *deg)
+{
+    for (int32_t v = 0; v < tp->nv; v++) {
+        uint8_t fl = tp->vflag[v];
+        if (!(fl & (MESH_V_BOUNDARY | MESH_V_INTERFACE)))
+            continue;
+        normalize(s->normal + 3 * (size_t)v);
+        if ((fl & MESH_V_FIXED) || ((fl & MESH_V_BOUNDARY) && (fl & MESH_V_INTERFACE)))
+            s->kind[v] = SLIDE_CORNER;
+        else if (deg[v] == 2) {
+            int32_t a = s->fe_nbr[s->fe_ptr[v]], b = s->fe_nbr[s->fe_ptr[v] + 1];
+            double *t = s->tangent + 3 * (size_t)v;
+            for (int c = 0; c < 3; c++)
+                t[c] = x0[3 * (size_t)b + c] - x0[3 * (size_t)a + c];
+            normalize(t);
+            s->kind[v] = SLIDE_LINE;
+        } else if (deg[v] > 0)
+            s->kind[v] = SLIDE_CORNER; /* 1 (line end) or 3+ feature edges */
+        else
+            s->kind[v] = SLIDE_SURFACE;
+        s->on_iface[v] = !(fl & MESH_V_BOUNDARY);
+    }
+}
+
 qdc_status slide_new(const mesh_topo *tp, const double *x0, double feature_angle,
                      slide_ctx **out, qdc_error *err)
 {
@@ -475,48 +514,8 @@ qdc_status slide_new(const mesh_topo *tp, const double *x0, double feature_angle
     st = find_features(s, tp, x0, feature_angle, deg);
     if (st != QDC_OK)
         goto fail;
-    /* area-weighted vertex normals of the input boundary surface */
-    for (int32_t f = 0; f < tp->nbf; f++) {
-        double n[3];
-        face_normal(x0, tp->bfaces + 3 * (size_t)f, n);
-        for (int k = 0; k < 3; k++)
-            for (int c = 0; c < 3; c++)
-                s->normal[3 * (size_t)tp->bfaces[3 * (size_t)f + k] + c] += n[c];
-    }
-    for (int32_t f = 0; f < tp->nif; f++) {
-        double n[3];
-        face_normal(x0, tp->ifaces + 3 * (size_t)f, n);
-        for (int k = 0; k < 3; k++) {
-            int32_t v = tp->ifaces[3 * (size_t)f + k];
-            double *nv = s->normal + 3 * (size_t)v;
-            /* interface faces come with either orientation: align to the sum */
-            double sg = nv[0] * n[0] + nv[1] * n[1] + nv[2] * n[2] < 0 ? -1.0 : 1.0;
-            if (tp->vflag[v] & MESH_V_BOUNDARY)
-                continue;
-            for (int c = 0; c < 3; c++)
-                nv[c] += sg * n[c];
-        }
-    }
-    for (int32_t v = 0; v < tp->nv; v++) {
-        uint8_t fl = tp->vflag[v];
-        if (!(fl & (MESH_V_BOUNDARY | MESH_V_INTERFACE)))
-            continue;
-        normalize(s->normal + 3 * (size_t)v);
-        if ((fl & MESH_V_FIXED) || ((fl & MESH_V_BOUNDARY) && (fl & MESH_V_INTERFACE)))
-            s->kind[v] = SLIDE_CORNER;
-        else if (deg[v] == 2) {
-            int32_t a = s->fe_nbr[s->fe_ptr[v]], b = s->fe_nbr[s->fe_ptr[v] + 1];
-            double *t = s->tangent + 3 * (size_t)v;
-            for (int c = 0; c < 3; c++)
-                t[c] = x0[3 * (size_t)b + c] - x0[3 * (size_t)a + c];
-            normalize(t);
-            s->kind[v] = SLIDE_LINE;
-        } else if (deg[v] > 0)
-            s->kind[v] = SLIDE_CORNER; /* 1 (line end) or 3+ feature edges */
-        else
-            s->kind[v] = SLIDE_SURFACE;
-        s->on_iface[v] = !(fl & MESH_V_BOUNDARY);
-    }
+    vertex_normals(s, tp, x0);
+    classify(s, tp, x0, deg);
     mark_flat(s, tp, x0);
     for (int32_t v = 0; v < tp->nv; v++)
         s->near[v] = -1;

@@ -9,7 +9,7 @@
 #ifndef QDC_SLIDE_H
 #define QDC_SLIDE_H
 
-#include "core/mesh.h"
+#include "core/mesh_int.h"
 
 enum { SLIDE_INTERIOR = 0, SLIDE_SURFACE, SLIDE_LINE, SLIDE_CORNER };
 

@@ -451,24 +451,15 @@ static void cg_sum(double part[][3], double sums[3])
             sums[k] += part[ch][k];
 }
 
-static qdc_status solve_pcg(solve_ctx *s, const double *qval, const double *w2,
-                            const double *dg, const double *b, double *x, int *iters,
-                            qdc_error *err)
+/* Jacobi preconditioner: diag(A)_j = sum_i w_i Q_ij^2 + dg_j, inverted into
+ * s->dinv. */
+static void cg_jacobi(solve_ctx *s, const double *qval, const double *w2,
+                      const double *dg)
 {
     const mesh_topo *tp = s->tp;
-    int32_t nv = tp->nv;
-    double rz[3], bnorm[3], rnorm[3];
-    double part_a[CG_CHUNKS][3], part_b[CG_CHUNKS][3], part_c[CG_CHUNKS][3];
-    int done[3] = {0, 0, 0}, it;
-    const double rtol = 1e-10;
-    const int max_it = 2000;
-    double *xs = qdc_mallocn(3 * (size_t)nv, sizeof(double));
 
-    if (!xs)
-        return QDC_ENOMEM;
 #pragma omp parallel for schedule(static)
-    for (int32_t j = 0; j < nv; j++) {
-        /* Jacobi preconditioner: diag(A)_j = sum_i w_i Q_ij^2 + dg_j */
+    for (int32_t j = 0; j < tp->nv; j++) {
         double a = dg[j];
         for (int32_t k = tp->adj_ptr[j]; k < tp->adj_ptr[j + 1]; k++) {
             double q = qval[s->tslot[k]];
@@ -476,6 +467,17 @@ static qdc_status solve_pcg(solve_ctx *s, const double *qval, const double *w2,
         }
         s->dinv[j] = a > 0.0 ? 1.0 / a : 1.0;
     }
+}
+
+/* The start of CG from x (locked entries 0) into xs: residual, preconditioned
+ * residual and direction, r.z, |b|^2 and |r|^2 per coordinate. */
+static void cg_start(solve_ctx *s, const double *qval, const double *w2, const double *dg,
+                     const double *b, const double *x, double *xs, double rz[3],
+                     double bnorm[3], double rnorm[3])
+{
+    int32_t nv = s->tp->nv;
+    double part_a[CG_CHUNKS][3], part_b[CG_CHUNKS][3], part_c[CG_CHUNKS][3];
+
 #pragma omp parallel for schedule(static)
     for (int32_t i = 0; i < nv; i++)
         for (int k = 0; k < 3; k++)
@@ -504,6 +506,70 @@ static qdc_status solve_pcg(solve_ctx *s, const double *qval, const double *w2,
     cg_sum(part_a, rz);
     cg_sum(part_b, bnorm);
     cg_sum(part_c, rnorm);
+}
+
+/* p.Ap per coordinate (fixed chunks summed in order). */
+static void cg_pap(const solve_ctx *s, double pap[3])
+{
+    int32_t nv = s->tp->nv;
+    double part_a[CG_CHUNKS][3];
+
+#pragma omp parallel for schedule(static)
+    for (int ch = 0; ch < CG_CHUNKS; ch++) {
+        int32_t i0, i1;
+        double a[3] = {0, 0, 0};
+        cg_range(nv, ch, &i0, &i1);
+        for (int32_t i = i0; i < i1; i++)
+            for (int k = 0; k < 3; k++)
+                a[k] += s->p[3 * (size_t)i + k] * s->ap[3 * (size_t)i + k];
+        memcpy(part_a[ch], a, sizeof a);
+    }
+    cg_sum(part_a, pap);
+}
+
+/* xs += alpha p, r -= alpha Ap, z = M^-1 r; the new r.z and |r|^2. */
+static void cg_advance(solve_ctx *s, double *xs, const double alpha[3], double rz1[3],
+                       double rnorm[3])
+{
+    int32_t nv = s->tp->nv;
+    double part_a[CG_CHUNKS][3], part_c[CG_CHUNKS][3];
+
+#pragma omp parallel for schedule(static)
+    for (int ch = 0; ch < CG_CHUNKS; ch++) {
+        int32_t i0, i1;
+        double a[3] = {0, 0, 0}, c[3] = {0, 0, 0};
+        cg_range(nv, ch, &i0, &i1);
+        for (int32_t i = i0; i < i1; i++)
+            for (int k = 0; k < 3; k++) {
+                size_t q = 3 * (size_t)i + k;
+                xs[q] += alpha[k] * s->p[q];
+                s->r[q] -= alpha[k] * s->ap[q];
+                s->z[q] = s->dinv[i] * s->r[q];
+                a[k] += s->r[q] * s->z[q];
+                c[k] += s->r[q] * s->r[q];
+            }
+        memcpy(part_a[ch], a, sizeof a);
+        memcpy(part_c[ch], c, sizeof c);
+    }
+    cg_sum(part_a, rz1);
+    cg_sum(part_c, rnorm);
+}
+
+static qdc_status solve_pcg(solve_ctx *s, const double *qval, const double *w2,
+                            const double *dg, const double *b, double *x, int *iters,
+                            qdc_error *err)
+{
+    int32_t nv = s->tp->nv;
+    double rz[3], bnorm[3], rnorm[3];
+    int done[3] = {0, 0, 0}, it;
+    const double rtol = 1e-10;
+    const int max_it = 2000;
+    double *xs = qdc_mallocn(3 * (size_t)nv, sizeof(double));
+
+    if (!xs)
+        return QDC_ENOMEM;
+    cg_jacobi(s, qval, w2, dg);
+    cg_start(s, qval, w2, dg, b, x, xs, rz, bnorm, rnorm);
     for (int k = 0; k < 3; k++) {
         bnorm[k] = sqrt(bnorm[k]);
         done[k] = sqrt(rnorm[k]) <= rtol * (bnorm[k] > 0 ? bnorm[k] : 1.0);
@@ -511,38 +577,10 @@ static qdc_status solve_pcg(solve_ctx *s, const double *qval, const double *w2,
     for (it = 0; it < max_it && !(done[0] && done[1] && done[2]); it++) {
         double pap[3], alpha[3], rz1[3], beta[3];
         apply_a(s, qval, w2, dg, s->p, s->ap);
-#pragma omp parallel for schedule(static)
-        for (int ch = 0; ch < CG_CHUNKS; ch++) {
-            int32_t i0, i1;
-            double a[3] = {0, 0, 0};
-            cg_range(nv, ch, &i0, &i1);
-            for (int32_t i = i0; i < i1; i++)
-                for (int k = 0; k < 3; k++)
-                    a[k] += s->p[3 * (size_t)i + k] * s->ap[3 * (size_t)i + k];
-            memcpy(part_a[ch], a, sizeof a);
-        }
-        cg_sum(part_a, pap);
+        cg_pap(s, pap);
         for (int k = 0; k < 3; k++)
             alpha[k] = done[k] || !(pap[k] > 0) ? 0.0 : rz[k] / pap[k];
-#pragma omp parallel for schedule(static)
-        for (int ch = 0; ch < CG_CHUNKS; ch++) {
-            int32_t i0, i1;
-            double a[3] = {0, 0, 0}, c[3] = {0, 0, 0};
-            cg_range(nv, ch, &i0, &i1);
-            for (int32_t i = i0; i < i1; i++)
-                for (int k = 0; k < 3; k++) {
-                    size_t q = 3 * (size_t)i + k;
-                    xs[q] += alpha[k] * s->p[q];
-                    s->r[q] -= alpha[k] * s->ap[q];
-                    s->z[q] = s->dinv[i] * s->r[q];
-                    a[k] += s->r[q] * s->z[q];
-                    c[k] += s->r[q] * s->r[q];
-                }
-            memcpy(part_a[ch], a, sizeof a);
-            memcpy(part_c[ch], c, sizeof c);
-        }
-        cg_sum(part_a, rz1);
-        cg_sum(part_c, rnorm);
+        cg_advance(s, xs, alpha, rz1, rnorm);
         for (int k = 0; k < 3; k++) {
             beta[k] = done[k] || !(rz[k] > 0) ? 0.0 : rz1[k] / rz[k];
             if (!done[k])

@@ -11,7 +11,7 @@
 #ifndef QDC_SOLVE_H
 #define QDC_SOLVE_H
 
-#include "core/mesh.h"
+#include "core/mesh_int.h"
 #include "opt/opt.h"
 
 typedef struct solve_ctx solve_ctx;

@@ -5,7 +5,7 @@
 #define QDC_FUZZ_COMMON_H
 
 #include "../unit/testio.h" /* sink, sink_write */
-#include "io/meshio.h"
+#include "qdc.h"
 
 #include <stdint.h>
 #include <stdlib.h>

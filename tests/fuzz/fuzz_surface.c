@@ -3,7 +3,7 @@
  * exactly on success, every index in range. TetGen is not run here.
  * Seeds: tests/fuzz/seeds/surface; crashes go to tests/fuzz/crashes/surface/,
  * which test_surface replays. */
-#include "io/surface.h"
+#include "qdc.h"
 
 #include <stdint.h>
 

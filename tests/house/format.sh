@@ -8,7 +8,8 @@ if ! command -v clang-format > /dev/null 2>&1; then
 fi
 bad=
 for f in $(git ls-files 'lib/*.c' 'lib/*.h' 'lib/*.cpp' 'server/*.c' 'server/*.h' 'clients/qdc/*.c' \
-    'clients/qdc/*.h' 'tests/unit/*.c' 'tests/unit/*.h' 'tests/fuzz/*.c' 'tests/fuzz/*.h' 2> /dev/null); do
+    'clients/qdc/*.h' 'tests/unit/*.c' 'tests/unit/*.h' 'tests/fuzz/*.c' 'tests/fuzz/*.h' \
+    'examples/*.c' 2> /dev/null); do
     clang-format --dry-run -Werror "$f" > /dev/null 2>&1 || bad="$bad $f"
 done
 [ -z "$bad" ] && pass "format: every C/C++ source as clang-format lays it out" ||

@@ -4,6 +4,11 @@
 #   a lib/ file includes only its own layer and lower ones
 #   (core < geom < io, opt < eval < qdc.h; io and opt do not include each other);
 #   server/ and clients/ include the library only through lib/qdc.h;
+#   the headers qdc.h reaches are exactly the public ones (PUBLIC below), so an
+#   internal header (X_int.h, or any lib/ header qdc.h does not reach) is never
+#   reachable through qdc.h; outside lib/ only the unit tests and the fuzz
+#   targets (tests of the library's parts) include internal headers: server/,
+#   clients/, examples/, bench/ and the other tests include qdc.h alone;
 #   no include cycle among the project's headers.
 ROOT=${ROOT:-$(cd "$(dirname "$0")/../.." && pwd)}
 cd "$ROOT" || exit 1
@@ -52,6 +57,41 @@ for f in server/*.c server/*.h clients/qdc/*.c clients/qdc/*.h; do
     done
 done
 [ $fail = 0 ] && echo "ok - layers: server/ and clients/ use the library through qdc.h only"
+
+# Public and internal headers (docs/architecture.md, "Public and internal headers").
+PUBLIC="qdc.h core/base.h core/mesh.h geom/metric.h geom/bderr.h io/meshio.h io/formats.h io/surface.h
+io/tetra.h opt/opt.h opt/options.h eval/report.h"
+reach=$(
+    todo=qdc.h seen=
+    while [ -n "$todo" ]; do
+        set -- $todo
+        h=$1
+        shift
+        todo=$*
+        case " $seen " in *" $h "*) continue ;; esac
+        seen="$seen $h"
+        todo="$todo $(sed -n 's/^[[:space:]]*#[[:space:]]*include[[:space:]]*"\([^"]*\)".*/\1/p' "lib/$h")"
+    done
+    echo $seen | tr ' ' '\n' | sort
+)
+want=$(echo $PUBLIC | tr ' ' '\n' | sort)
+extra=$(echo "$reach" | grep -vxF "$want" | tr '\n' ' ')
+missing=$(echo "$want" | grep -vxF "$reach" | tr '\n' ' ')
+if [ -z "$extra$missing" ]; then
+    echo "ok - layers: qdc.h reaches the public headers and no internal one"
+else
+    echo "FAIL - layers: qdc.h reaches internal headers [ $extra] and misses public [ $missing]"
+fi
+
+fail=0
+for f in $(git ls-files --cached --others --exclude-standard '*.c' '*.h' '*.cpp' 2> /dev/null); do
+    case $f in lib/* | tests/unit/* | tests/fuzz/*) continue ;; esac
+    for inc in $(sed -n 's/^[[:space:]]*#[[:space:]]*include[[:space:]]*"\([^"]*\)".*/\1/p' "$f"); do
+        [ "$inc" != qdc.h ] && [ -f "lib/$inc" ] &&
+            { echo "FAIL - layers: $f includes the internal lib/$inc: use qdc.h"; fail=1; }
+    done
+done
+[ $fail = 0 ] && echo "ok - layers: outside lib/, only the unit and fuzz tests include internal headers"
 
 # Include cycles: a depth-first walk over "file -> included project header".
 if python3 -c 'pass' 2>/dev/null; then

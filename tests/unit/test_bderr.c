@@ -1,7 +1,8 @@
 /* test_bderr.c - point-triangle distance, BVH queries and Hausdorff distances
  * against hand-computed and analytic values. */
-#include "geom/bderr.h"
-#include "io/meshio.h"
+#include "core/base_int.h"
+#include "geom/bderr_int.h"
+#include "qdc.h"
 #include "testlib.h"
 
 #include <stdint.h>

@@ -1,9 +1,11 @@
 /* test_core.c - analytic checks of metrics, QDC encoding and the linear solvers. */
+#include "core/mesh_int.h"
 #include "core/order.h"
 #include "core/tet.h"
-#include "geom/metric.h"
+#include "geom/metric_int.h"
 #include "opt/encode.h"
 #include "opt/solve.h"
+#include "qdc.h"
 #include "testlib.h"
 #include "testmesh.h"
 

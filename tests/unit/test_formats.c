@@ -5,7 +5,7 @@
  * tets, and a replay of the gmsh/vtk/fe fuzz seeds and crashes.
  * The malformed corpus (tests/data/meshio/gmsh_*, vtk_*, vtu_*) runs in
  * test_meshio with the rest. */
-#include "io/meshio.h"
+#include "qdc.h"
 #include "testio.h"
 #include "testlib.h"
 

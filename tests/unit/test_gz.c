@@ -2,7 +2,7 @@
  * writer and the reader, concatenated members, truncated and corrupt streams,
  * and meshio reading a gzip buffer of any format. */
 #include "io/gz.h"
-#include "io/meshio.h"
+#include "qdc.h"
 #include "testlib.h"
 #include "testmesh.h"
 

@@ -1,7 +1,7 @@
 /* test_meshio.c - mesh formats: exact round trips, the dev meshes, the
  * malformed-input corpus (tests/data/meshio/<case>/input.* + expect) and a
  * replay of the fuzz seeds and crashes through every reader. */
-#include "io/meshio.h"
+#include "qdc.h"
 #include "testio.h"
 #include "testlib.h"
 

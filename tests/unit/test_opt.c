@@ -1,10 +1,13 @@
 /* test_opt.c - behaviour of the optimizer on synthetic meshes: it improves,
  * untangles, never returns a worse mesh, respects locked vertices and tags,
  * stops on cancel. */
-#include "eval/report.h"
-#include "geom/metric.h"
+#include "core/mesh_int.h"
+#include "geom/metric_int.h"
+#include "opt/angle.h"
 #include "opt/finish.h"
-#include "opt/opt.h"
+#include "opt/opt_int.h"
+#include "opt/untangle.h"
+#include "qdc.h"
 #include "testlib.h"
 #include "testmesh.h"
 

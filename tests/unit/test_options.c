@@ -1,6 +1,6 @@
 /* test_options.c - the option table (opt/options.h): strict parsing, ranges,
  * defaults that read back as themselves, --hausd's three forms. */
-#include "opt/options.h"
+#include "qdc.h"
 #include "testlib.h"
 
 #include <string.h>

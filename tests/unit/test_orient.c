@@ -2,8 +2,8 @@
  * mesh_orient, mesh_topo_build, and the quality report that uses it): tets
  * written in either vertex order are valid when their geometry agrees with
  * their component's orientation, whatever the file's vertex order. */
-#include "core/mesh.h"
-#include "eval/report.h"
+#include "core/mesh_int.h"
+#include "qdc.h"
 #include "testlib.h"
 #include "testmesh.h"
 

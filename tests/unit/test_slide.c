@@ -1,9 +1,9 @@
 /* test_slide.c - sliding boundary: feature detection, projection, and the
  * optimizer keeping the shape, the regions and the locked vertices. */
-#include "eval/report.h"
-#include "geom/bderr.h"
-#include "opt/opt.h"
+#include "core/mesh_int.h"
+#include "geom/bderr_int.h"
 #include "opt/slide.h"
+#include "qdc.h"
 #include "testlib.h"
 #include "testmesh.h"
 

@@ -3,9 +3,7 @@
  * bridge (valid positive tets, regions, facet markers, quality and volume
  * options, self-intersections and open surfaces as clear errors, never a
  * crash), names and media types, and the surface fuzz seeds and crashes. */
-#include "core/mesh.h"
-#include "io/surface.h"
-#include "io/tetra.h"
+#include "qdc.h"
 #include "testio.h"
 #include "testlib.h"
 

@@ -5,8 +5,8 @@
 #ifndef QDC_TESTIO_H
 #define QDC_TESTIO_H
 
-#include "io/meshio.h"
-#include "io/surface.h"
+#include "core/base_int.h"
+#include "qdc.h"
 
 #include <dirent.h>
 #include <math.h>
@@ -361,7 +361,7 @@ static inline int run_corpus(const char *prefixes, int *n)
     *n = 0;
     if (!d)
         return -1;
-    while ((e = readdir(d))) {
+    while ((e = readdir(d)) != NULL) {
         int take = !prefixes;
         for (const char *p = prefixes; p && *p && !take;) {
             size_t k = strcspn(p, ",");
@@ -397,7 +397,7 @@ static inline int replay_fuzz(const char *name, int (*fn)(const char *, size_t),
                 return -1; /* crashes/ exists only when there were some */
             continue;
         }
-        while ((e = readdir(d))) {
+        while ((e = readdir(d)) != NULL) {
             size_t len;
             char *buf;
             if (e->d_name[0] == '.')

@@ -2,7 +2,7 @@
 #ifndef QDC_TESTMESH_H
 #define QDC_TESTMESH_H
 
-#include "core/mesh.h"
+#include "qdc.h"
 
 #include <stdint.h>
 

@@ -1,0 +1,40 @@
+/* bderr_int.h - the internal part of bderr.h: a BVH over triangles and exact
+ * closest-point queries (the sliding boundary mode and the Hausdorff distance).
+ * Thread-safe: no global state; a built BVH may be queried by several threads. */
+#ifndef QDC_BDERR_INT_H
+#define QDC_BDERR_INT_H
+
+#include "core/base.h"
+#include "geom/bderr.h"
+
+#include <stdint.h>
+
+/* A BVH over triangles (xyz: 3 doubles per vertex, tris: 3 indices per triangle).
+ * It copies the triangles' indices but reads the coordinates from xyz, which
+ * must stay, unchanged, as long as the BVH does. */
+typedef struct bderr_bvh bderr_bvh;
+
+qdc_status bderr_bvh_build(const double *xyz, int32_t nv, const int32_t *tris,
+                           int32_t ntri, bderr_bvh **out, qdc_error *err);
+void bderr_bvh_free(bderr_bvh *b);
+
+/* Closest point on the surface to p: distance, the point and the triangle index.
+ * cp and tri may be NULL. A BVH with no triangles returns +inf. */
+double bderr_bvh_closest(const bderr_bvh *b, const double p[3], double cp[3],
+                         int32_t *tri);
+
+/* The same, starting from the caller's triangle near (an index into the tris
+ * given to bderr_bvh_build, or -1): the same answer, found faster when p is
+ * close to that triangle. */
+double bderr_bvh_closest_near(const bderr_bvh *b, const double p[3], int32_t near,
+                              double cp[3], int32_t *tri);
+
+/* Exact closest point on triangle (a,b,c) to p (Ericson 5.1.5); returns the distance. */
+double bderr_point_triangle(const double p[3], const double a[3], const double b[3],
+                            const double c[3], double cp[3]);
+
+/* Exact closest point on segment [a, b] to p; returns the distance. */
+double bderr_point_segment(const double p[3], const double a[3], const double b[3],
+                           double cp[3]);
+
+#endif

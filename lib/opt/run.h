@@ -1,0 +1,17 @@
+/* run.h - one optimization run (opt.c), for the rerun policy (rerun.c). */
+#ifndef QDC_RUN_H
+#define QDC_RUN_H
+
+#include "opt/opt.h"
+
+/* One optimization of m (opts NULL: the defaults). pins (nv flags, may be
+ * NULL): extra vertices that keep their input position; loose (may be NULL):
+ * sliding vertices that move freely. In slide mode *squashed (if not NULL)
+ * receives the corners of the ears this run squashed, and *stuck (if not
+ * NULL) the boundary vertices around tets left inverted (hold.h); else NULL.
+ * keep_surface: the finishing sweeps fold no tet at the surface (finish.h). */
+qdc_status opt_run_once(mesh_t *m, const opt_options *opts, const uint8_t *pins,
+                        const uint8_t *loose, uint8_t **squashed, uint8_t **stuck,
+                        int keep_surface, opt_result *res_out, qdc_error *err);
+
+#endif

@@ -1,0 +1,135 @@
+/* untangle.c - max-min volume untangling of what the passes leave inverted
+ * (docs/method.md §5a). */
+#include "opt/untangle.h"
+#include "core/tet.h"
+#include "opt/star.h"
+
+#include <math.h>
+#include <string.h>
+
+/* ---- untangling by max-min volume (Freitag & Plassmann) ---- */
+
+#define UNTANGLE_INNER 40
+#define UNTANGLE_SWEEPS 12
+#define UNTANGLE_ACT 16
+
+/* Smallest 6 x volume over v's star with v at y, and its inverted tets. */
+static double star_min_vol6(const mesh_topo *tp, const double *x, int32_t v,
+                            const double *y, int32_t *bad)
+{
+    double m = INFINITY;
+
+    *bad = 0;
+    for (int32_t k = tp->vt_ptr[v]; k < tp->vt_ptr[v + 1]; k++) {
+        double w = star_vol6(tp, x, k, y, NULL);
+        *bad += geom_tet_inverted(w);
+        m = w < m ? w : m;
+    }
+    return m;
+}
+
+/* Max-min ascent of the star's signed volumes for one interior vertex (valid
+ * stars too: their tets open room for the inverted ones). The direction is
+ * the minimum-norm point of the hull of the gradients of the volumes that a
+ * step of length s could make the smallest (within s |g| of it); a step is
+ * taken when the smallest volume rises and the star gains no inverted tet. */
+static int32_t untangle_vertex(const mesh_topo *tp, double *x, int32_t v, double lbar)
+{
+    double *xv = x + 3 * (size_t)v, s = 0.1 * lbar;
+    int32_t moves = 0;
+
+    for (int it = 0; it < UNTANGLE_INNER && s > 1e-6 * lbar; it++) {
+        double g[UNTANGLE_ACT][3], d[3], dn, y[3], f0, f1 = 0.0, w[UNTANGLE_ACT],
+                                                       gmax = 0;
+        int32_t nb0, nb1;
+        int nact = 0;
+        f0 = INFINITY;
+        nb0 = 0;
+        for (int32_t k = tp->vt_ptr[v]; k < tp->vt_ptr[v + 1]; k++) {
+            double gk[3], vk = star_vol6(tp, x, k, xv, gk);
+            f0 = fmin(f0, vk);
+            nb0 += geom_tet_inverted(vk);
+            gmax = fmax(gmax, sqrt(gk[0] * gk[0] + gk[1] * gk[1] + gk[2] * gk[2]));
+        }
+        if (!isfinite(f0))
+            break;
+        for (int32_t k = tp->vt_ptr[v]; k < tp->vt_ptr[v + 1]; k++) {
+            double gk[3], vk = star_vol6(tp, x, k, xv, gk);
+            if (vk - f0 > 2.0 * s * gmax)
+                continue;
+            if (nact < UNTANGLE_ACT) {
+                memcpy(g[nact], gk, sizeof gk);
+                w[nact++] = vk;
+            } else { /* keep the UNTANGLE_ACT smallest */
+                int j = 0;
+                for (int i = 1; i < nact; i++)
+                    j = w[i] > w[j] ? i : j;
+                if (vk < w[j]) {
+                    memcpy(g[j], gk, sizeof gk);
+                    w[j] = vk;
+                }
+            }
+        }
+        if (!nact || !star_min_norm_point(g, nact, d)) {
+            s *= 0.5;
+            continue;
+        }
+        dn = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        if (!(dn > 1e-12 * gmax) || !isfinite(dn)) {
+            s *= 0.5; /* a corner at this scale: look closer */
+            continue;
+        }
+        star_trial_point(NULL, v, xv, d, s / dn, y);
+        f1 = star_min_vol6(tp, x, v, y, &nb1);
+        if (!(f1 > f0 && nb1 <= nb0)) {
+            s *= 0.5;
+            continue;
+        }
+        memcpy(xv, y, sizeof y);
+        moves++;
+        s = fmin(s * 1.5, 0.3 * lbar);
+    }
+    return moves;
+}
+
+qdc_status finish_untangle(const mesh_topo *tp, const uint8_t *movable, double *x,
+                           double lbar, int32_t *n_inverted)
+{
+    uint8_t *mark = qdc_calloc((size_t)tp->nv + 1, 1);
+    int32_t *list = NULL, n = 0;
+
+    if (!mark)
+        return QDC_ENOMEM;
+    /* the interior vertices of the inverted tets and of the tets around them */
+    for (int32_t t = 0; t < tp->nt; t++)
+        if (geom_tet_inverted(geom_tet_vol6(x, tp->tets + 4 * (size_t)t)))
+            for (int a = 0; a < 4; a++)
+                mark[tp->tets[4 * (size_t)t + a]] = 1;
+    for (int32_t v = 0; v < tp->nv; v++)
+        if (mark[v] & 1)
+            for (int32_t k = tp->vt_ptr[v]; k < tp->vt_ptr[v + 1]; k++) {
+                const int32_t *tt = tp->tets + 4 * (size_t)(tp->vt_idx[k] >> 2);
+                for (int a = 0; a < 4; a++)
+                    mark[tt[a]] |= 2;
+            }
+    list = qdc_mallocn((size_t)tp->nv + 1, sizeof *list);
+    if (!list) {
+        qdc_free(mark);
+        return QDC_ENOMEM;
+    }
+    for (int32_t v = 0; v < tp->nv; v++)
+        if (mark[v] && movable[v] &&
+            !(tp->vflag[v] & (MESH_V_BOUNDARY | MESH_V_INTERFACE)))
+            list[n++] = v;
+    for (int s = 0; s < UNTANGLE_SWEEPS; s++) {
+        int32_t moves = 0;
+        for (int32_t i = 0; i < n; i++)
+            moves += untangle_vertex(tp, x, list[i], lbar);
+        if (!moves)
+            break;
+    }
+    *n_inverted = mesh_count_inverted(tp, x);
+    qdc_free(list);
+    qdc_free(mark);
+    return QDC_OK;
+}

@@ -1,0 +1,17 @@
+/* untangle.h - max-min volume untangling (docs/method.md §5a; beyond the
+ * paper). Thread-safe: pure over caller arrays. */
+#ifndef QDC_UNTANGLE_H
+#define QDC_UNTANGLE_H
+
+#include "core/mesh_int.h"
+
+/* Untangling of what the passes leave inverted (Freitag & Plassmann's
+ * max-min of volumes): sweeps over the movable interior vertices of the
+ * inverted tets and of the tets around them, each vertex moved up the
+ * smallest signed volume of its star while its star gains no inverted tet,
+ * until a sweep moves none (at most 12). *n_inverted: the mesh's inverted
+ * tets after. */
+qdc_status finish_untangle(const mesh_topo *tp, const uint8_t *movable, double *x,
+                           double lbar, int32_t *n_inverted);
+
+#endif
