@@ -567,6 +567,27 @@ static run_step run_save(run_state *s)
     return RUN_DONE;
 }
 
+/* Cancelled while the optimizer ran: the best mesh so far is the job's result,
+ * with its report, as `qdc optimize` writes it on Ctrl-C. Not for a job
+ * deleted meanwhile (its row is gone), nor when the optimizer had not started
+ * or failed; when the files cannot be written the job ends without them. */
+static void keep_best(run_state *s)
+{
+    job_rec row;
+    qdc_error err;
+
+    if (!s->ref || s->st != QDC_OK || s->res.outcome == OPT_FAILED ||
+        s->q->store->ops->get(s->q->store, s->j->id, &row) != QDC_OK)
+        return;
+    qdc_error_clear(&err);
+    if (save_outputs(s->q, s->j, s->m, s->ref, &s->opts, &s->res, &s->before, &err) !=
+        QDC_OK) {
+        fprintf(stderr, "qdcd: job %s: cancelled; its best mesh was not kept: %s\n",
+                s->j->id, err.msg);
+        s->j->etag_qmesh[0] = s->j->etag_json[0] = s->j->etag_medit[0] = 0;
+    }
+}
+
 /* After the run (or a stop before it): handed back at shutdown, cancelled,
  * failed in the optimizer, or its results saved. */
 static run_step run_conclude(run_state *s)
@@ -589,6 +610,7 @@ static run_step run_conclude(run_state *s)
     if (atomic_load(&w->cancel)) {
         j->state = JOB_CANCELLED;
         snprintf(j->stop_reason, sizeof j->stop_reason, "cancelled");
+        keep_best(s);
         return RUN_DONE;
     }
     if (s->res.outcome == OPT_FAILED) {

@@ -79,7 +79,7 @@ static int not_servable(struct MHD_Connection *c, req *r, const job_rec *j,
         *ret = http_problem(c, r, 409, "not-ready", NULL, d, extra, h);
         return 1;
     }
-    if (j->state != JOB_SUCCEEDED && r->route != R_INPUT) {
+    if (!job_has_result(j) && r->route != R_INPUT) {
         snprintf(d, sizeof d, "job %s %s and has no result", j->id,
                  job_state_name(j->state));
         snprintf(extra, sizeof extra, "\"state\":\"%s\"%s%s", job_state_name(j->state),

@@ -45,7 +45,9 @@ struct upload {
     int sniff;           /* format from the content (text/plain, octet-stream, none) */
     int tetgen_opts;     /* tetgen_quality or max_volume given: surfaces only */
     char idem[129];
-    char options[1024]; /* canonical options JSON */
+    char options[1024];  /* canonical options JSON */
+    char file_name[256]; /* ?name=: the uploaded file's name (its last path part) */
+    char label[128];     /* ?label= */
 };
 
 static enum MHD_Result process_upload(struct MHD_Connection *c, req *r);
@@ -73,9 +75,38 @@ typedef struct {
     opt_options o;
     double cap;
     double tq, tv; /* tetgen_quality, max_volume; -1 when not given */
+    char file_name[256], label[128];
     char why[200];
     int bad;
 } opt_scan;
+
+/* ?name= (the uploaded file's name: its last path part is kept) or ?label=:
+ * text of at most 255 / 127 bytes, no control characters. */
+static enum MHD_Result scan_name(opt_scan *s, const char *key, const char *val)
+{
+    int name = !strcmp(key, "name");
+    char *dst = name ? s->file_name : s->label;
+    size_t cap = name ? sizeof s->file_name : sizeof s->label;
+    const char *p = val;
+
+    if (name)
+        for (const char *q = val; *q; q++)
+            if (*q == '/' || *q == '\\')
+                p = q + 1;
+    for (const char *q = p; *q; q++)
+        if ((unsigned char)*q < 32 || *q == 127) {
+            snprintf(s->why, sizeof s->why, "%s: a control character in the text", key);
+            s->bad = 1;
+            return MHD_NO;
+        }
+    if (strlen(p) >= cap) {
+        snprintf(s->why, sizeof s->why, "%s: longer than %zu bytes", key, cap - 1);
+        s->bad = 1;
+        return MHD_NO;
+    }
+    memcpy(dst, p, strlen(p) + 1);
+    return MHD_YES;
+}
 
 static enum MHD_Result scan_option(void *cls, enum MHD_ValueKind kind, const char *key,
                                    size_t key_size, const char *val, size_t val_size)
@@ -90,6 +121,8 @@ static enum MHD_Result scan_option(void *cls, enum MHD_ValueKind kind, const cha
         val = "";
     if (!strcmp(key, "format"))
         return MHD_YES; /* the body's format: upload_format */
+    if (!strcmp(key, "name") || !strcmp(key, "label"))
+        return scan_name(s, key, val);
     if (!strcmp(key, "tetgen_quality") || !strcmp(key, "max_volume")) {
         /* Surface uploads: TetGen's -q radius-edge bound (>= 1, 0 = no
          * refinement) and -a volume bound (0 = none), as `qdc tetra`. */
@@ -244,6 +277,8 @@ static int upload_options(struct MHD_Connection *c, qdcd *q, upload *u, char *wh
     }
     snprintf(u->options, sizeof u->options, "%s", oj.buf && !oj.oom ? oj.buf : "{}");
     sb_free(&oj);
+    memcpy(u->file_name, s.file_name, sizeof u->file_name);
+    memcpy(u->label, s.label, sizeof u->label);
     return 0;
 }
 
@@ -834,6 +869,8 @@ static enum MHD_Result process_upload(struct MHD_Connection *c, req *r)
     snprintf(j.format, sizeof j.format, "%s", upload_format_name(u));
     j.in_bytes = u->body_len;
     snprintf(j.options, sizeof j.options, "%s", u->options);
+    memcpy(j.file_name, u->file_name, sizeof j.file_name);
+    memcpy(j.label, u->label, sizeof j.label);
     j.created = wall_now();
     t_commit = mono_now();
     pthread_mutex_lock(&commit_lock);

@@ -135,54 +135,6 @@ int cli_options(int argc, char **argv)
     return CLI_OK;
 }
 
-/* The optimizer's options come from the library's table (lib/opt/options.h),
- * with their valid values and defaults; then the CLI's own. */
-static void optimize_usage(FILE *f)
-{
-    size_t n;
-    const opt_desc *t = opt_table(&n);
-    opt_options d;
-
-    opt_defaults(&d);
-    fputs("usage: qdc optimize IN OUT [options]\n", f);
-    for (size_t i = 0; i < n; i++) {
-        char flag[40], range[200], def[64];
-        size_t k;
-        snprintf(flag, sizeof flag, "--%s", t[i].name);
-        for (k = 0; flag[k]; k++)
-            flag[k] = flag[k] == '_' ? '-' : flag[k];
-        opt_range_text(&t[i], range, sizeof range);
-        opt_value_text(&t[i], &d, def, sizeof def);
-        fprintf(f, "  %-26s %s\n  %-26s   %s; default %s\n", flag, t[i].help, "", range,
-                def);
-    }
-    fputs(
-        "  --in-format F, --out-format F   "
-        "medit|tetgen|qmesh|json|gmsh|gmsh-bin|gmsh22|\n"
-        "                             gmsh22-bin|gmsh40|vtk|vtk-ascii|vtu|vtu-ascii|\n"
-        "                             dolfin|meshb|abaqus|netgen\n"
-        "                             (default: by "
-        "extension,\n"
-        "                             then content); input also stl|off|obj|poly|smesh\n"
-        "  --format F                 both of the above\n"
-        "  --tetgen-quality Q         surface input: TetGen radius-edge bound (default "
-        "2)\n"
-        "  --max-volume V             surface input: TetGen maximum tet volume\n"
-        "  --fix FILE                 vertices that must not move (0-based indices)\n"
-        "  --reorient on|off          write every tet in the vertex order that is\n"
-        "                             positive under the mesh's orientation (default "
-        "off:\n"
-        "                             tets are written in the input's vertex order)\n"
-        "  --report FILE.json         write the quality/boundary report\n"
-        "  --no-keep-source           OUT is written by qdc's writer even in the\n"
-        "                             input's format (default: the input file, read\n"
-        "                             again at the end and checked unchanged, with\n"
-        "                             only the coordinates replaced, when OUT is in\n"
-        "                             its format)\n"
-        "  --quiet                    no progress output\n",
-        f);
-}
-
 /* Before writing m to out in fmt: say in one note line when the input's
  * extra data (tags, names, arrays) cannot come along, or that float32
  * coordinates stay float32. */
@@ -209,6 +161,35 @@ static int positional(const char *a, const char **in, const char **out);
 static qdc_status load_input(const char *path, meshio_format fin, surface_format sin,
                              const tetra_options *to, progress_state *ps, int keep,
                              mesh_t **m, qdc_error *err);
+
+/* OUT named in a format qdc reads but does not write (a surface: .stl, .off,
+ * .obj, .poly, .smesh, gzipped or not): said before anything is read, and 1.
+ * --out-format or "-" decides otherwise. */
+static int read_only_out(const char *out, meshio_format fout)
+{
+    char name[4096], upper[16];
+    const char *base = strrchr(out, '/');
+    size_t n;
+    surface_format sf;
+
+    if (fout != MESHIO_AUTO || !strcmp(out, "-"))
+        return 0;
+    snprintf(name, sizeof name, "%s", base ? base + 1 : out);
+    n = strlen(name);
+    if (n > 3 && !strcmp(name + n - 3, ".gz"))
+        name[n - 3] = 0;
+    if (!strchr(name, '.') || (sf = surface_format_from_name(name)) == SURFACE_AUTO)
+        return 0;
+    snprintf(upper, sizeof upper, "%s", surface_format_name(sf));
+    for (char *c = upper; *c; c++)
+        *c = (char)(*c >= 'a' && *c <= 'z' ? *c - 'a' + 'A' : *c);
+    fprintf(stderr,
+            "qdc: %s: %s is a surface format qdc reads but does not write: name a tet "
+            "mesh (.mesh, .meshb, .msh, .vtk, .vtu, .node, .json, .qmesh, .xml) or give "
+            "--out-format; nothing was done\n",
+            out, upper);
+    return 1;
+}
 
 /* qdc convert IN OUT: read, then write (spliced when OUT is in IN's format). */
 int cli_convert(int argc, char **argv)
@@ -256,6 +237,8 @@ int cli_convert(int argc, char **argv)
               stderr);
         return CLI_EUSAGE;
     }
+    if (read_only_out(out, fout))
+        return CLI_EINPUT;
     st = load_input(in, fin, SURFACE_AUTO, NULL, &ps, keep, &m, &err);
     if (st != QDC_OK) {
         cli_error(in, &err, st);
@@ -569,7 +552,13 @@ static int optimize_option(optimize_args *x, const char *a, const char *v)
     else if (!strcmp(a, "--reorient"))
         bad = on_off(v, &x->reorient);
     else {
-        fprintf(stderr, "qdc: unknown option %s (see qdc optimize --help)\n", a);
+        char near[64];
+        if (cli_optimize_suggest(a, near, sizeof near))
+            fprintf(stderr,
+                    "qdc: unknown option %s: did you mean %s? (qdc optimize --help)\n", a,
+                    near);
+        else
+            fprintf(stderr, "qdc: unknown option %s (see qdc optimize --help)\n", a);
         return CLI_EUSAGE;
     }
     if (bad) {
@@ -590,7 +579,7 @@ static int optimize_parse(int argc, char **argv, optimize_args *x)
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
         if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
-            optimize_usage(stdout);
+            cli_optimize_usage(stdout);
             return CLI_OK;
         } else if (!strcmp(a, "--quiet") || !strcmp(a, "-q")) {
             x->ps.quiet = 1;
@@ -610,7 +599,9 @@ static int optimize_parse(int argc, char **argv, optimize_args *x)
         }
     }
     if (!x->in || !x->out) {
-        optimize_usage(stderr);
+        fputs(
+            "usage: qdc optimize IN OUT [options]   (the options: qdc optimize --help)\n",
+            stderr);
         return CLI_EUSAGE;
     }
     if (!strcmp(x->out, "-") && x->report_path && !strcmp(x->report_path, "-")) {
@@ -732,6 +723,8 @@ int cli_optimize(int argc, char **argv)
 
     if (rc >= 0)
         return rc;
+    if (read_only_out(x.out, x.fout))
+        return CLI_EINPUT;
     rc = CLI_OK;
     qdc_error_clear(&err);
     x.ps.tty = isatty(STDERR_FILENO);

@@ -505,7 +505,7 @@ typedef struct {
     remote rm;
     const char *pos[2]; /* positional arguments */
     int npos;
-    const char *out, *report, *idem, *out_format, *in_format;
+    const char *out, *report, *idem, *out_format, *in_format, *label;
     int wait, json;
     rbuf query; /* optimizer options as a query string */
 } args;
@@ -534,6 +534,9 @@ static void remote_usage(FILE *f)
         "  and arrays kept). The job id is printed on stdout (on stderr when -o\n"
         "  or --report is '-', standard output: in IN's format unless --out-format\n"
         "  says another). -o or --report imply --wait.\n"
+        "  The job keeps IN's file name (shown by qdc jobs and status, the console\n"
+        "  and its download names).\n"
+        "  --label L             a label for the job, besides the file's name\n"
         "  --idempotency-key K   key of this submission (default: a random one; reuse\n"
         "                        it to make a re-run return the same job)\n"
         "  --in-format F, --out-format F   a format name, as in qdc optimize (default:\n"
@@ -595,6 +598,8 @@ static int parse_args(int argc, char **argv, int max_pos, int allow_opt, args *a
                 retries = v;
             else if (!strcmp(s, "-o") || !strcmp(s, "--output"))
                 a->out = v;
+            else if (!strcmp(s, "--label"))
+                a->label = v;
             else if (!strcmp(s, "--report"))
                 a->report = v;
             else if (!strcmp(s, "--idempotency-key"))
@@ -1000,6 +1005,15 @@ static int cmd_submit(args *a)
         a->wait = 1;
     if (!out_format_ok(a))
         return CLI_EUSAGE;
+    /* the job keeps the file's name (its last part) and the label: the list,
+     * the console and download names show them */
+    if (strcmp(in, "-")) {
+        const char *base = strrchr(in, '/');
+        if (query_add(&a->query, "name", base ? base + 1 : in, a->rm.curl))
+            return CLI_EUSAGE;
+    }
+    if (a->label && query_add(&a->query, "label", a->label, a->rm.curl))
+        return CLI_EUSAGE;
     /* a closed surface (qdcd tetrahedralizes it with TetGen): sent as it is,
      * after the checks qdcd makes */
     sf = a->in_format ? surface_format_from_name(a->in_format)
@@ -1113,7 +1127,7 @@ out:
 /* Summary of a job object on one line. */
 static void print_job(jv j, FILE *f)
 {
-    char id[64], state[32], fmt[16];
+    char id[64], state[32], fmt[16], name[256] = "", label[128] = "";
     double nt = 0, it = 0, qm = 0, qmin = 0, inv = 0;
     int has_q;
 
@@ -1125,9 +1139,15 @@ static void print_job(jv j, FILE *f)
     has_q = jnum(j, "progress.mean_ratio_mean", &qm);
     jnum(j, "progress.mean_ratio_min", &qmin);
     jnum(j, "progress.n_inverted", &inv);
+    jstr(j, "file_name", name, sizeof name);
+    jstr(j, "label", label, sizeof label);
     fprintf(f, "%s  %-9s  %-5s %9.0f tets  %3.0f it", id, state, fmt, nt, it);
     if (has_q)
         fprintf(f, "  q mean %.4f min %+.4f  inverted %.0f", qm, qmin, inv);
+    /* the names last: the columns before them keep their places */
+    if (label[0] || name[0])
+        fprintf(f, "  %s%s%s%s", label, label[0] && name[0] ? " (" : "", name,
+                label[0] && name[0] ? ")" : "");
     fputc('\n', f);
 }
 
@@ -1169,6 +1189,25 @@ static int cmd_watch(args *a)
     return rc >= 0 ? rc : CLI_OK;
 }
 
+/* After a download: a job cancelled while it ran has the best mesh so far as
+ * its result (qdcd keeps it, as qdc optimize does on Ctrl-C): written, said,
+ * and exit 11 as for any cancelled job. */
+static int cancelled_note(remote *rm, const char *id)
+{
+    char path[128], state[32] = "";
+    reply r = {0};
+
+    snprintf(path, sizeof path, "/v1/jobs/%s", id);
+    if (!http(rm, "GET", path, NULL, NULL, 0, 30, &r) && r.status == 200)
+        jstr(jbody(&r.body), "state", state, sizeof state);
+    rb_free(&r.body);
+    if (strcmp(state, "cancelled"))
+        return CLI_OK;
+    fprintf(stderr,
+            "qdc: job %s was cancelled: what was written is its best mesh so far\n", id);
+    return CLI_EJOB;
+}
+
 static int cmd_fetch(args *a)
 {
     char id[33];
@@ -1188,7 +1227,8 @@ static int cmd_fetch(args *a)
         if (rc >= 0)
             return rc;
     }
-    return download(&a->rm, id, a->out, a->out_format, a->report, NULL);
+    rc = download(&a->rm, id, a->out, a->out_format, a->report, NULL);
+    return rc == CLI_OK ? cancelled_note(&a->rm, id) : rc;
 }
 
 static int cmd_cancel(args *a)
