@@ -21,6 +21,7 @@
 #include "core/mesh.h"
 #include "eval/report.h"
 #include "geom/bderr.h"
+#include "io/gz.h"
 #include "io/meshio.h"
 #include "io/surface.h"
 #include "io/tetra.h"

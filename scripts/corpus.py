@@ -37,12 +37,10 @@ import argparse
 import os
 import sys
 
-import numpy as np
-
-try:
-    from scipy.spatial import Delaunay
-except ImportError:  # pragma: no cover
-    Delaunay = None
+# numpy and scipy are imported by main() after the arguments are parsed, so
+# that --help prints on a machine without them
+np = None
+Delaunay = None
 
 
 def write_medit(path, x, tets, region=None):
@@ -313,6 +311,15 @@ def main():
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--surface-share", type=float, default=0.5)
     a = ap.parse_args()
+    global np, Delaunay
+    try:
+        import numpy as np
+    except ImportError:
+        sys.exit("corpus.py: numpy is missing (apt-get install python3-numpy)")
+    try:
+        from scipy.spatial import Delaunay
+    except ImportError:  # pragma: no cover
+        Delaunay = None
     if not 0.05 <= a.surface_share <= 0.95:
         sys.exit("corpus.py: --surface-share must be in [0.05, 0.95]")
     os.makedirs(a.outdir, exist_ok=True)

@@ -1,15 +1,17 @@
 /* api.c - the router. Routing happens at the first call (headers only), so a
- * request that is refused (401, 404, 405, 413, 415, 429) is answered before
+ * request that is refused (400, 401, 403, 404, 405, 413, 415, 429) is answered before
  * its body is read; then the request's row of the route table (route.h) names
  * its handler, in the file of its resource: upload.c (POST /v1/jobs), jobs.c
  * (a job, list, cancel, delete), progress.c (long-poll, SSE), result.c
  * (result, input, report), ops.c (metrics, readiness, options, problem
- * pages), ui.c (the web console). Here: framing, authentication and dispatch;
+ * pages), ui.c (the web console). Here: framing, the checks of guard.c
+ * (query values, Host, Origin), authentication and dispatch;
  * what the handlers share is handler.c, below them. */
 #define _GNU_SOURCE
 #include "api.h"
 
 #include "endpoints.h"
+#include "guard.h"
 #include "ops.h"
 #include "route.h"
 #include "ui.h"
@@ -93,6 +95,9 @@ static int refused(struct MHD_Connection *c, req *r, const char *url, const char
                             NULL, NULL);
         return 1;
     }
+    /* query values, Host, Origin: before anything of the route is done */
+    if (guard_request(c, r, method, ret))
+        return 1;
     /* libmicrohttpd 0.9.75 zeroes a keep-alive connection's whole memory pool
      * (MHD_OPTION_CONNECTION_MEMORY_LIMIT, 128 KiB) when it goes on to its
      * next request (MHD_pool_reset), so a long-poll parked on a reused

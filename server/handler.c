@@ -52,7 +52,7 @@ void job_json(req *r, const job_rec *j, sbuf *b)
         sb_printf(b, ",\"started\":%.3f", j->started);
     if (j->finished > 0)
         sb_printf(b, ",\"finished\":%.3f", j->finished);
-    if (job_state_done(j->state) && j->state != JOB_CANCELLED)
+    if (job_state_done(j->state) && (j->state != JOB_CANCELLED || job_has_result(j)))
         sb_printf(b, ",\"expires\":%.3f,\"expired\":%s", j->expires,
                   j->purged || j->expires < wall_now() ? "true" : "false");
     sb_printf(b, ",\"attempts\":%d,\"cancel_requested\":%s", j->attempts,
@@ -62,6 +62,14 @@ void job_json(req *r, const job_rec *j, sbuf *b)
         ",\"mesh\":{\"format\":\"%s\",\"vertices\":%lld,\"tets\":%lld,\"bytes\":%lld%s}",
         j->format, (long long)j->nv, (long long)j->nt, (long long)j->in_bytes,
         job_is_surface(j->format) ? ",\"surface\":true" : "");
+    if (j->file_name[0]) {
+        sb_puts(b, ",\"file_name\":");
+        sb_json_str(b, j->file_name);
+    }
+    if (j->label[0]) {
+        sb_puts(b, ",\"label\":");
+        sb_json_str(b, j->label);
+    }
     if (j->notes[0]) {
         /* one string per line */
         sb_puts(b, ",\"notes\":[");
@@ -100,7 +108,7 @@ void job_json(req *r, const job_rec *j, sbuf *b)
         ",\"links\":{\"self\":\"/v1/jobs/%s\",\"progress\":\"/v1/jobs/%s/progress\","
         "\"events\":\"/v1/jobs/%s/events\"",
         j->id, j->id, j->id);
-    if (j->state == JOB_SUCCEEDED && !j->purged && j->expires >= wall_now())
+    if (job_has_result(j) && !j->purged && j->expires >= wall_now())
         sb_printf(b,
                   ",\"result\":\"/v1/jobs/%s/result\",\"report\":\"/v1/jobs/%s/report\"",
                   j->id, j->id);

@@ -184,6 +184,9 @@ enum MHD_Result http_reply_response(struct MHD_Connection *c, req *r, unsigned s
     for (int i = 0; headers && headers[i]; i += 2)
         if (MHD_add_response_header(resp, headers[i], headers[i + 1]) != MHD_YES)
             goto out;
+    /* no body of this server is to be run as another type than it says */
+    if (MHD_add_response_header(resp, "X-Content-Type-Options", "nosniff") != MHD_YES)
+        goto out;
     if (r->close_after &&
         MHD_add_response_header(resp, MHD_HTTP_HEADER_CONNECTION, "close") != MHD_YES)
         goto out;
@@ -283,16 +286,14 @@ static void log_mhd(void *cls, const char *fmt, va_list ap)
     vfprintf(stderr, fmt, ap);
 }
 
-qdc_status http_start(qdcd *q, const http_handlers *h, qdc_error *err)
+qdc_status http_bind(qdcd *q, qdc_error *err)
 {
     struct addrinfo hints = {0}, *ai = NULL;
     char port[16];
     struct sockaddr_storage ss;
     socklen_t sl = sizeof ss;
-    const union MHD_DaemonInfo *info;
-    int rc;
+    int rc, fd, one = 1, e;
 
-    handlers = h;
     hints.ai_family = AF_UNSPEC;
     hints.ai_socktype = SOCK_STREAM;
     hints.ai_flags = AI_PASSIVE | AI_NUMERICSERV;
@@ -301,27 +302,52 @@ qdc_status http_start(qdcd *q, const http_handlers *h, qdc_error *err)
     if (rc)
         return qdc_fail(err, QDC_EINVAL, "cannot resolve %s: %s", q->cfg.host,
                         gai_strerror(rc));
-    unsigned flags = MHD_USE_EPOLL_INTERNAL_THREAD | MHD_ALLOW_SUSPEND_RESUME |
-                     MHD_USE_ERROR_LOG | MHD_USE_TURBO;
-    if (ai->ai_family == AF_INET6)
-        flags |= MHD_USE_IPv6;
-    q->mhd = MHD_start_daemon(
-        flags, 0, NULL, NULL, on_request, q, MHD_OPTION_EXTERNAL_LOGGER, log_mhd, q,
-        MHD_OPTION_SOCK_ADDR, ai->ai_addr, MHD_OPTION_CONNECTION_LIMIT,
-        (unsigned)q->cfg.max_connections, MHD_OPTION_CONNECTION_TIMEOUT,
-        (unsigned)q->cfg.conn_timeout, MHD_OPTION_CONNECTION_MEMORY_LIMIT,
-        (size_t)128 * 1024, MHD_OPTION_LISTEN_BACKLOG_SIZE, 1024U,
-        MHD_OPTION_NOTIFY_COMPLETED, on_completed, q, MHD_OPTION_END);
+    fd = socket(ai->ai_family, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
+    /* as libmicrohttpd binds: a restart finds its port in TIME_WAIT */
+    if (fd >= 0 && (setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one) ||
+                    (ai->ai_family == AF_INET6 &&
+                     setsockopt(fd, IPPROTO_IPV6, IPV6_V6ONLY, &one, sizeof one)) ||
+                    bind(fd, ai->ai_addr, ai->ai_addrlen) || listen(fd, 1024))) {
+        e = errno;
+        close(fd);
+        fd = -1;
+        errno = e;
+    }
+    q->listen_v6 = ai->ai_family == AF_INET6;
     freeaddrinfo(ai);
-    if (!q->mhd)
-        return qdc_fail(err, QDC_EIO, "cannot listen on %s:%d", q->cfg.host, q->cfg.port);
-    info = MHD_get_daemon_info(q->mhd, MHD_DAEMON_INFO_LISTEN_FD);
-    if (info && !getsockname(info->listen_fd, (struct sockaddr *)&ss, &sl)) {
+    if (fd < 0)
+        return qdc_fail(err, QDC_EIO, "cannot listen on %s%s%s:%d: %s",
+                        q->listen_v6 ? "[" : "", q->cfg.host, q->listen_v6 ? "]" : "",
+                        q->cfg.port, strerror(errno));
+    if (!getsockname(fd, (struct sockaddr *)&ss, &sl)) {
         if (ss.ss_family == AF_INET)
             q->cfg.port = ntohs(((struct sockaddr_in *)&ss)->sin_port);
         else if (ss.ss_family == AF_INET6)
             q->cfg.port = ntohs(((struct sockaddr_in6 *)&ss)->sin6_port);
     }
+    q->listen_fd = fd;
+    return QDC_OK;
+}
+
+qdc_status http_start(qdcd *q, const http_handlers *h, qdc_error *err)
+{
+    handlers = h;
+    unsigned flags = MHD_USE_EPOLL_INTERNAL_THREAD | MHD_ALLOW_SUSPEND_RESUME |
+                     MHD_USE_ERROR_LOG | MHD_USE_TURBO;
+    if (q->listen_v6)
+        flags |= MHD_USE_IPv6;
+    /* the socket http_bind bound: connections that came meanwhile wait in
+     * its backlog */
+    q->mhd = MHD_start_daemon(
+        flags, 0, NULL, NULL, on_request, q, MHD_OPTION_EXTERNAL_LOGGER, log_mhd, q,
+        MHD_OPTION_LISTEN_SOCKET, q->listen_fd, MHD_OPTION_CONNECTION_LIMIT,
+        (unsigned)q->cfg.max_connections, MHD_OPTION_CONNECTION_TIMEOUT,
+        (unsigned)q->cfg.conn_timeout, MHD_OPTION_CONNECTION_MEMORY_LIMIT,
+        (size_t)128 * 1024, MHD_OPTION_LISTEN_BACKLOG_SIZE, 1024U,
+        MHD_OPTION_NOTIFY_COMPLETED, on_completed, q, MHD_OPTION_END);
+    if (!q->mhd)
+        return qdc_fail(err, QDC_EIO, "cannot serve HTTP on port %d", q->cfg.port);
+    q->listen_fd = -1; /* libmicrohttpd's now: closed by MHD_stop_daemon */
     return QDC_OK;
 }
 
@@ -339,4 +365,7 @@ void http_stop(qdcd *q)
     if (q->mhd)
         MHD_stop_daemon(q->mhd);
     q->mhd = NULL;
+    if (q->listen_fd >= 0) /* bound, never served */
+        close(q->listen_fd);
+    q->listen_fd = -1;
 }

@@ -61,9 +61,16 @@ typedef struct http_handlers {
     void (*done)(req *r);
 } http_handlers;
 
+/* Bind and listen on --listen (q->listen_fd; q->cfg.port set to the port
+ * bound): first thing at start-up, so a daemon that cannot have its port
+ * stops before it opens the store or claims a job. QDC_EIO names the
+ * address, the port and why. */
+qdc_status http_bind(qdcd *q, qdc_error *err);
+/* Serve the bound socket with h (the libmicrohttpd daemon and its thread). */
 qdc_status http_start(qdcd *q, const http_handlers *h, qdc_error *err);
 /* Stop accepting new connections (shutdown, step 1). */
 void http_quiesce(qdcd *q);
+/* Stop serving; closes the socket (also one bound and never served). */
 void http_stop(qdcd *q);
 
 /* Headers are given as name, value, name, value, ..., NULL. Each helper

@@ -58,8 +58,8 @@ typedef struct {
     qdcd *q;
     const char *id;
     FILE *progress;
-    double renewed;
     double checked; /* last read of the row for a cancel from another node */
+    int attempt;    /* the run's: each record says which run it belongs to */
     int iterations;
     char last[768];
 } run_ctx;
@@ -67,9 +67,16 @@ typedef struct {
 static int on_progress(void *ctx, const opt_progress *p)
 {
     run_ctx *r = ctx;
-    sbuf js = {0}, line = {0};
+    sbuf js = {0}, line = {0}, rec = {0};
 
-    report_progress_json(p, sb_writer, &js);
+    /* the run's attempt first, then the record's members: a reader that
+     * resumes across a takeover can tell the new run's records from the old */
+    report_progress_json(p, sb_writer, &rec);
+    if (!rec.oom && rec.len > 2 && rec.buf[0] == '{') {
+        sb_printf(&js, "{\"attempt\":%d,", r->attempt);
+        sb_add(&js, rec.buf + 1, rec.len - 1);
+    }
+    sb_free(&rec);
     if (!js.oom && js.len) {
         long seq = poll_publish(r->q->hub, r->id, js.buf, js.len, &line);
         if (seq >= 0) {
@@ -90,10 +97,6 @@ static int on_progress(void *ctx, const opt_progress *p)
     sb_free(&js);
     sb_free(&line);
     atomic_fetch_add(&r->q->m.iterations, 1);
-    if (mono_now() - r->renewed > r->q->cfg.lease / 4) {
-        r->q->store->ops->renew(r->q->store, r->id, r->w->name, r->q->cfg.lease);
-        r->renewed = mono_now();
-    }
     /* Several nodes on one database: a cancel or a DELETE sent to another
      * node is only in the row; read it at most twice a second. */
     if (store_pg_uri(r->q->cfg.store) && mono_now() - r->checked > 0.5) {
@@ -494,7 +497,8 @@ static run_step run_load(run_state *s)
      * only the coordinates replaced (as `qdc optimize` writes OUT in IN's
      * format); the conversion thread does the same for the other formats
      * (result.c). */
-    meshio_options mo = {NULL, NULL, fin == MESHIO_MEDIT ? 1 : -1};
+    meshio_options mo = {
+        .log = NULL, .log_ctx = NULL, .source = fin == MESHIO_MEDIT ? 1 : -1};
     s->st = meshio_read_ex(buf, len, fin, &mo, &s->m, &s->err);
     free(buf);
     if (s->st == QDC_OK && s->q->cfg.verbose)
@@ -563,6 +567,27 @@ static run_step run_save(run_state *s)
     return RUN_DONE;
 }
 
+/* Cancelled while the optimizer ran: the best mesh so far is the job's result,
+ * with its report, as `qdc optimize` writes it on Ctrl-C. Not for a job
+ * deleted meanwhile (its row is gone), nor when the optimizer had not started
+ * or failed; when the files cannot be written the job ends without them. */
+static void keep_best(run_state *s)
+{
+    job_rec row;
+    qdc_error err;
+
+    if (!s->ref || s->st != QDC_OK || s->res.outcome == OPT_FAILED ||
+        s->q->store->ops->get(s->q->store, s->j->id, &row) != QDC_OK)
+        return;
+    qdc_error_clear(&err);
+    if (save_outputs(s->q, s->j, s->m, s->ref, &s->opts, &s->res, &s->before, &err) !=
+        QDC_OK) {
+        fprintf(stderr, "qdcd: job %s: cancelled; its best mesh was not kept: %s\n",
+                s->j->id, err.msg);
+        s->j->etag_qmesh[0] = s->j->etag_json[0] = s->j->etag_medit[0] = 0;
+    }
+}
+
 /* After the run (or a stop before it): handed back at shutdown, cancelled,
  * failed in the optimizer, or its results saved. */
 static run_step run_conclude(run_state *s)
@@ -585,6 +610,7 @@ static run_step run_conclude(run_state *s)
     if (atomic_load(&w->cancel)) {
         j->state = JOB_CANCELLED;
         snprintf(j->stop_reason, sizeof j->stop_reason, "cancelled");
+        keep_best(s);
         return RUN_DONE;
     }
     if (s->res.outcome == OPT_FAILED) {
@@ -633,7 +659,7 @@ static void run_job(worker *w, job_rec *j)
     s.w = w;
     s.q = q;
     s.j = j;
-    s.ctx = (run_ctx){w, q, j->id, NULL, mono_now(), mono_now(), 0, ""};
+    s.ctx = (run_ctx){w, q, j->id, NULL, mono_now(), j->attempts, 0, ""};
     qdc_error_clear(&s.err);
     poll_begin(q->hub, j->id);
     job_path(q, j->id, "progress.jsonl", path, sizeof path);
@@ -790,6 +816,33 @@ int job_pool_cancel(job_pool *p, const char *id)
     return hit;
 }
 
+void job_pool_heartbeat(job_pool *p)
+{
+    char(*ids)[JOB_ID_LEN + 1], (*names)[64];
+    int n = 0;
+
+    if (!p)
+        return;
+    ids = calloc((size_t)p->n, sizeof *ids);
+    names = calloc((size_t)p->n, sizeof *names);
+    if (ids && names) {
+        /* copied out: the store is not called with the pool locked */
+        pthread_mutex_lock(&p->lock);
+        for (int i = 0; i < p->n; i++)
+            if (p->w[i].job[0]) {
+                memcpy(ids[n], p->w[i].job, sizeof ids[n]);
+                memcpy(names[n++], p->w[i].name, sizeof names[0]);
+            }
+        pthread_mutex_unlock(&p->lock);
+    }
+    /* a job that ended meanwhile is no longer running: renewing its lease
+     * changes nothing that matters (only running rows are taken over) */
+    for (int i = 0; i < n; i++)
+        p->q->store->ops->renew(p->q->store, ids[i], names[i], p->q->cfg.lease);
+    free(ids);
+    free(names);
+}
+
 int job_pool_has(job_pool *p, const char *id)
 {
     int hit = 0;
@@ -820,9 +873,16 @@ void job_pool_stop(job_pool *p, double grace)
     p->stopping = 1;
     pthread_cond_broadcast(&p->cond);
     pthread_mutex_unlock(&p->lock);
-    double until = mono_now() + grace;
-    while (job_pool_busy(p) && mono_now() < until)
+    double until = mono_now() + grace, beat = mono_now() + p->q->cfg.lease / 4;
+    while (job_pool_busy(p) && mono_now() < until) {
+        /* the main loop's heartbeat has stopped: the jobs finishing in
+         * their grace keep their leases from here */
+        if (mono_now() >= beat) {
+            job_pool_heartbeat(p);
+            beat = mono_now() + p->q->cfg.lease / 4;
+        }
         usleep(50 * 1000);
+    }
     pthread_mutex_lock(&p->lock);
     for (int i = 0; i < p->n; i++) {
         if (p->w[i].job[0]) {

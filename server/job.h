@@ -20,6 +20,10 @@ void job_pool_notify(job_pool *p);
 int job_pool_cancel(job_pool *p, const char *id);
 /* 1 if a worker of this pool is running job id */
 int job_pool_has(job_pool *p, const char *id);
+/* Renew the lease of every job this pool runs (main loop, every --lease/4):
+ * a heartbeat of the node, whatever its jobs do meanwhile (one iteration of
+ * a large mesh, or TetGen, can outlast a lease). NULL: nothing. */
+void job_pool_heartbeat(job_pool *p);
 /* Stop claiming; wait up to grace seconds for running jobs, then stop them and
  * give their leases back (they run again at the next start); join; free. */
 void job_pool_stop(job_pool *p, double grace);

@@ -22,6 +22,17 @@ int job_opt_set(opt_options *o, const char *key, const char *val, double cap_tim
         snprintf(why, why_cap, "%.*s", (int)(why_cap > 0 ? why_cap - 1 : 0), err.msg);
         return -1;
     }
+    /* A result is the upload with the result's coordinates put in (result.c):
+     * a run that changes the tets has no such result yet, so it is refused
+     * here, at submit time, not failed later. */
+    if (o->topology != OPT_TOPOLOGY_NONE) {
+        o->topology = OPT_TOPOLOGY_NONE;
+        snprintf(why, why_cap,
+                 "option topology: qdcd serves none only (a result is the upload with "
+                 "new coordinates: it cannot hold new tets); `qdc optimize --topology "
+                 "flips` runs it");
+        return -1;
+    }
     if (cap_time > 0 && (o->time_limit <= 0 || o->time_limit > cap_time))
         o->time_limit = cap_time;
     return 0;

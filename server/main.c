@@ -1,5 +1,6 @@
-/* main.c - qdcd: command line, start-up (data directory, store recovery,
- * workers, HTTP) and graceful shutdown on SIGTERM/SIGINT. */
+/* main.c - qdcd: command line, start-up (data directory and its lock, the
+ * port, store recovery, workers, HTTP) and graceful shutdown on
+ * SIGTERM/SIGINT. */
 #define _GNU_SOURCE
 #include "api.h"
 #include "http.h"
@@ -50,12 +51,26 @@ static void usage(FILE *f)
         "                            only to the token that created it\n"
         "  --hash-token TOKEN        print the line to put in the tokens file, exit\n"
         "  --insecure                allow a non-loopback address without --tokens\n"
+        "                            (a warning is printed: anyone who reaches the\n"
+        "                            port can submit, read and delete jobs)\n"
+        "  --allowed-hosts NAMES     Host names served besides IP addresses,\n"
+        "                            localhost and the --listen name (comma-separated;\n"
+        "                            '*' any): other names get 403 (DNS rebinding)\n"
+        "  --allowed-origins ORIGINS origins (https://ui.example) whose pages may POST\n"
+        "                            or DELETE, besides the daemon's own (comma-\n"
+        "                            separated; '*' any): others get 403\n"
         "  --public-metrics          with --tokens, serve /metrics and /readyz without "
         "a\n"
-        "                            token (they count the jobs of every owner)\n"
+        "                            token (they count the jobs of every owner)\n",
+        f);
+    fputs(
         "  --max-body BYTES          largest request body (default 1073741824)\n"
         "  --max-json BYTES          largest JSON mesh body (default 16777216); larger\n"
         "                            meshes must use application/vnd.qdc.mesh\n"
+        "  --max-ratio N             a gzip body (or the zlib arrays of a VTU body)\n"
+        "                            inflates to at most N times its size (default\n"
+        "                            100; meshes compress 2-3x); --max-body and\n"
+        "                            --max-json apply to the inflated bytes\n"
         "  --max-vertices N          largest mesh accepted (default 20000000)\n"
         "  --max-tets N              (default 100000000)\n"
         "  --max-queued N            queued jobs before 429 (default 64)\n"
@@ -69,7 +84,9 @@ static void usage(FILE *f)
         "                            fails (default 3)\n"
         "  --max-connections N       concurrent connections (default 4096)\n"
         "  --connection-timeout S    idle connection timeout (default 120)\n"
-        "  --lease SECONDS           job lease, renewed while running (default 60)\n"
+        "  --lease SECONDS           job lease, renewed every SECONDS/4 while the job\n"
+        "                            runs; the job of a node that died runs again on\n"
+        "                            another within about SECONDS + 4 (default 10)\n"
         "  --shutdown-grace SECONDS  on SIGTERM, wait this long for running jobs before\n"
         "                            giving them back to the queue (default 10)\n"
         "  --child-memory BYTES      address-space limit of a TetGen child (surface\n"
@@ -205,10 +222,13 @@ static const cli_opt cli_opts[] = {
     {"data", 's', CFG(data), 0, 0, 0},
     {"store", 's', CFG(store), 0, 0, 0},
     {"tokens", 's', CFG(tokens_file), 0, 0, 0},
+    {"allowed-hosts", 's', CFG(allowed_hosts), 0, 0, 0},
+    {"allowed-origins", 's', CFG(allowed_origins), 0, 0, 0},
     {"qdc", 's', CFG(qdc_path), 0, 0, 0},
     {"workers", 'i', CFG(workers), 1, 1024, 0},
     {"max-body", 'l', CFG(max_body), 1, 9.2e18, 1073741824},
     {"max-json", 'l', CFG(max_json), 1, 9.2e18, 16777216},
+    {"max-ratio", 'i', CFG(max_ratio), 1, 1e6, 100},
     {"max-vertices", 'l', CFG(max_vertices), 1, 2e9, 2e7},
     {"max-tets", 'l', CFG(max_tets), 1, 5e8, 1e8},
     {"max-queued", 'i', CFG(max_queued), 0, 1e6, 64},
@@ -219,7 +239,7 @@ static const cli_opt cli_opts[] = {
     {"max-attempts", 'i', CFG(max_attempts), 1, 1000, 3},
     {"max-connections", 'i', CFG(max_connections), 1, 1e6, 4096},
     {"connection-timeout", 'i', CFG(conn_timeout), 1, 86400, 120},
-    {"lease", 'd', CFG(lease), 1, 86400, 60},
+    {"lease", 'd', CFG(lease), 1, 86400, 10},
     {"shutdown-grace", 'd', CFG(grace), 0, 86400, 10},
     {"bderr-samples", 'l', CFG(bderr_samples), 0, 1e8, 20000},
     {"child-memory", 'l', CFG(child_memory), 1 << 26, 9.2e18, 0},
@@ -378,7 +398,7 @@ static void default_qdc_path(qdcd_config *c)
     snprintf(c->qdc_path, sizeof c->qdc_path, "%.4090s/qdc", slash ? exe : ".");
 }
 
-/* One qdcd per data directory (SQLite store): an exclusive lock on
+/* One qdcd per data directory: an exclusive lock on
  * DATA/qdcd.lock, held until the process ends (the kernel drops it even on
  * kill -9). A second daemon on the same directory would re-queue the first
  * one's running jobs and run them again. Returns the locked fd, -1 if another
@@ -477,37 +497,43 @@ static int configure(qdcd *q, int argc, char **argv)
                 q->cfg.host);
         return 2;
     }
+    if (!is_loopback(q->cfg.host) && !q->ntokens)
+        fprintf(stderr,
+                "qdcd: warning: listening on %s without --tokens (--insecure): anyone "
+                "who reaches the port can submit, read and delete jobs\n",
+                q->cfg.host);
     return 0;
 }
 
-/* The data directory made ready and, without a shared store, locked for
- * this process (one daemon per directory); the instance name. 0 or -1
- * (message said). */
+/* The data directory locked for this process (one daemon per directory, in
+ * every store mode: with PostgreSQL it is the node's cache and scratch
+ * space, and a second node would sweep the first one's uploads) and made
+ * ready; the instance name. 0 or -1 (message said). */
 static int claim_data_dir(qdcd *q)
 {
     char host[64];
+    long holder = 0;
+    int lk = dir_ensure(q->cfg.data) ? -2 : lock_data_dir(q->cfg.data, &holder);
 
+    if (lk == -1) {
+        fprintf(stderr,
+                "qdcd: data directory %s is in use by another qdcd (pid %ld); one "
+                "daemon per directory (nodes of a PostgreSQL store share the database, "
+                "each with its own --data)\n",
+                q->cfg.data, holder);
+        return -1;
+    }
+    if (lk < 0) {
+        fprintf(stderr, "qdcd: cannot lock data directory %s: %s\n", q->cfg.data,
+                strerror(errno));
+        return -1;
+    }
+    /* lk stays open (and locked) until the process ends; only then is the
+     * directory touched (tmp/ of a running daemon is not swept) */
     if (prepare_data_dir(q, store_pg_uri(q->cfg.store))) {
         fprintf(stderr, "qdcd: cannot use data directory %s: %s\n", q->cfg.data,
                 strerror(errno));
         return -1;
-    }
-    if (!store_pg_uri(q->cfg.store)) {
-        long holder = 0;
-        int lk = lock_data_dir(q->cfg.data, &holder);
-        if (lk == -1) {
-            fprintf(stderr,
-                    "qdcd: data directory %s is in use by another qdcd (pid %ld); one "
-                    "daemon per directory (several nodes share a PostgreSQL store)\n",
-                    q->cfg.data, holder);
-            return -1;
-        }
-        if (lk < 0) {
-            fprintf(stderr, "qdcd: cannot lock data directory %s: %s\n", q->cfg.data,
-                    strerror(errno));
-            return -1;
-        }
-        /* lk stays open (and locked) until the process ends */
     }
     gethostname(host, sizeof host);
     host[sizeof host - 1] = 0;
@@ -571,7 +597,8 @@ static int pool_running(void *ctx, const char *id)
 static const shared_hooks pool_hooks = {pool_wake, pool_cancel, pool_running, &g};
 
 /* The threads, in the order they depend on each other: poll timer, workers,
- * database listener, intake and conversion, then HTTP. 0 or -1. */
+ * database listener, intake and conversion, then HTTP (on the socket bound
+ * before the store was opened). 0 or -1. */
 static int start_services(qdcd *q)
 {
     qdc_error err;
@@ -631,16 +658,21 @@ static void trim_cache(qdcd *q, double *next)
     *next = mono_now() + 2;
 }
 
-/* The main loop until SIGTERM or SIGINT: expired jobs purged every second;
+/* The main loop until SIGTERM or SIGINT: the leases of running jobs renewed
+ * every --lease/4; expired jobs purged every second;
  * with a shared store, jobs of a node that died recovered every 2 s, the
  * cache swept every minute and kept under --cache-max. */
 static void serve(qdcd *q, const sigset_t *stopset)
 {
     const struct timespec tick = {0, 100 * 1000 * 1000};
     double next_purge = 0, next_sweep = mono_now() + 60, next_recover = mono_now() + 2,
-           next_trim = mono_now() + 1;
+           next_trim = mono_now() + 1, next_beat = mono_now() + q->cfg.lease / 4;
 
     while (!q->stop) {
+        if (mono_now() >= next_beat) {
+            job_pool_heartbeat(q->pool);
+            next_beat = mono_now() + q->cfg.lease / 4;
+        }
         if (mono_now() >= next_purge) {
             purge_expired(q);
             next_purge = mono_now() + 1;
@@ -725,6 +757,7 @@ int main(int argc, char **argv)
     qdcd *q = &g;
     sigset_t stopset;
     struct sigaction sa;
+    qdc_error err;
     int rc, reexec = 0;
 
     /* The workers' OpenMP threads must sleep, not spin, while they wait: they
@@ -758,11 +791,19 @@ int main(int argc, char **argv)
     sigemptyset(&sa.sa_mask);
     sigaction(SIGTERM, &sa, NULL);
     sigaction(SIGINT, &sa, NULL);
+    q->listen_fd = -1;
     rc = configure(q, argc, argv);
     if (rc)
         return rc;
     if (claim_data_dir(q))
         return 1;
+    /* The port first: a daemon that cannot have it stops here, before the
+     * store is opened (recovery re-queues jobs) or a worker claims a job. */
+    qdc_error_clear(&err);
+    if (http_bind(q, &err) != QDC_OK) {
+        fprintf(stderr, "qdcd: %s\n", err.msg);
+        return 1;
+    }
     /* SIGTERM and SIGINT are blocked in every thread and taken synchronously
      * by the main loop (sigtimedwait), so no handler ever runs. A handler
      * would not be safe anyway: METIS (inside CHOLMOD, on worker threads)

@@ -1,4 +1,4 @@
-/* offq.c - one thread serving suspended requests in order (offq.h). */
+/* offq.c - threads serving suspended requests in order (offq.h). */
 #define _GNU_SOURCE
 #include "offq.h"
 
@@ -31,11 +31,13 @@ static void *offq_main(void *arg)
     return NULL;
 }
 
-int offq_start(offq *o)
+int offq_start(offq *o, int n)
 {
-    if (pthread_create(&o->th, NULL, offq_main, o))
-        return -1;
-    o->running = 1;
+    for (o->running = 0; o->running < n && o->running < OFFQ_MAX_THREADS; o->running++)
+        if (pthread_create(&o->th[o->running], NULL, offq_main, o)) {
+            offq_stop(o);
+            return -1;
+        }
     return 0;
 }
 
@@ -45,9 +47,10 @@ void offq_stop(offq *o)
         return;
     pthread_mutex_lock(&o->lock);
     o->stop = 1;
-    pthread_cond_signal(&o->cond);
+    pthread_cond_broadcast(&o->cond);
     pthread_mutex_unlock(&o->lock);
-    pthread_join(o->th, NULL);
+    for (int i = 0; i < o->running; i++)
+        pthread_join(o->th[i], NULL);
     o->running = 0;
 }
 

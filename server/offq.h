@@ -1,9 +1,11 @@
-/* offq.h - a thread that serves suspended requests one at a time, so the HTTP
- * thread never waits on a parse, a conversion or an fsync: the intake (parse,
- * validate and commit uploads, upload.c) and the converter (results and
- * inputs in the formats nobody wrote yet, result.c). Each request is answered
- * on that thread (MHD_queue_response is allowed on a suspended connection),
- * then resumed; the handler sees r->off_done when MHD calls it again. */
+/* offq.h - threads that serve suspended requests in their order of arrival,
+ * so the HTTP thread never waits on a parse, a conversion or an fsync: the
+ * intake (parse, validate and commit uploads, upload.c) and the converter
+ * (results and inputs in the formats nobody wrote yet, result.c). Each request
+ * is answered on one of them (MHD_queue_response is allowed on a suspended
+ * connection), then resumed; the handler sees r->off_done when MHD calls it
+ * again. With several threads, requests are served side by side: fn must be
+ * thread-safe. */
 #ifndef QDCD_OFFQ_H
 #define QDCD_OFFQ_H
 
@@ -13,24 +15,26 @@
 
 typedef enum MHD_Result (*offq_fn)(struct MHD_Connection *c, req *r);
 
+#define OFFQ_MAX_THREADS 8
+
 typedef struct offq {
     pthread_mutex_t lock;
     pthread_cond_t cond;
     req *head, *tail;
-    int stop, running;
-    pthread_t th;
+    int stop, running; /* running: threads started */
+    pthread_t th[OFFQ_MAX_THREADS];
     offq_fn fn;
 } offq;
 
 /* A static queue served by fn. */
 #define OFFQ_INIT(fn)                                                                    \
     {                                                                                    \
-        PTHREAD_MUTEX_INITIALIZER, PTHREAD_COND_INITIALIZER, NULL, NULL, 0, 0, 0, fn     \
+        PTHREAD_MUTEX_INITIALIZER, PTHREAD_COND_INITIALIZER, NULL, NULL, 0, 0, {0}, fn   \
     }
 
-/* Start the thread. 0 or -1. */
-int offq_start(offq *o);
-/* Answer what is queued, then stop the thread. */
+/* Start n threads (1..OFFQ_MAX_THREADS). 0 or -1 (none left running). */
+int offq_start(offq *o, int n);
+/* Answer what is queued, then stop the threads. */
 void offq_stop(offq *o);
 /* Hand r to o's thread with its connection suspended (HTTP thread); a 503
  * once the queue is stopping. */

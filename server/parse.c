@@ -3,6 +3,7 @@
 
 #include "store.h"
 
+#include <arpa/inet.h>
 #include <ctype.h>
 #include <errno.h>
 #include <stdio.h>
@@ -81,4 +82,79 @@ int parse_accept(const char *acc, meshio_format *out)
         }
     }
     return -1;
+}
+
+int parse_query_ok(const char *s, size_t n)
+{
+    for (size_t i = 0; i < n; i++)
+        if ((unsigned char)s[i] < 0x20 || s[i] == 0x7f)
+            return 0;
+    return 1;
+}
+
+/* Is name[0..n) an entry of the comma-separated list (spaces around entries
+ * ignored; "*" matches anything)? */
+static int in_list(const char *list, const char *name, size_t n)
+{
+    for (const char *p = list; p && *p;) {
+        size_t k = strcspn(p, ",");
+        const char *e = p + k;
+        while (p < e && (*p == ' ' || *p == '\t'))
+            p++;
+        size_t m = (size_t)(e - p);
+        while (m && (p[m - 1] == ' ' || p[m - 1] == '\t'))
+            m--;
+        if ((m == 1 && *p == '*') || (m == n && m && !strncasecmp(p, name, n)))
+            return 1;
+        p = *e ? e + 1 : e;
+    }
+    return 0;
+}
+
+int parse_host_allowed(const char *host, const char *listen_host, const char *allowed)
+{
+    char name[256];
+    size_t n;
+    struct in_addr a4;
+    struct in6_addr a6;
+
+    if (!host)
+        return 1;
+    if (host[0] == '[') { /* [v6]:port */
+        const char *close = strchr(host, ']');
+        n = close ? (size_t)(close - host - 1) : 0;
+        if (!close || n >= sizeof name || (close[1] && close[1] != ':'))
+            return 0;
+        memcpy(name, host + 1, n);
+        name[n] = 0;
+        return inet_pton(AF_INET6, name, &a6) == 1 || in_list(allowed, name, n);
+    }
+    n = strcspn(host, ":");
+    if (!n || n >= sizeof name)
+        return 0;
+    memcpy(name, host, n);
+    name[n] = 0;
+    if (n && name[n - 1] == '.') /* "localhost." is localhost */
+        name[--n] = 0;
+    if (inet_pton(AF_INET, name, &a4) == 1 || !strcasecmp(name, "localhost") ||
+        (n > 10 && !strcasecmp(name + n - 10, ".localhost")))
+        return 1;
+    if (listen_host && !strcasecmp(name, listen_host))
+        return 1;
+    return in_list(allowed, name, n);
+}
+
+int parse_origin_allowed(const char *origin, const char *host, const char *allowed)
+{
+    const char *auth = NULL;
+
+    if (!origin)
+        return 1;
+    if (in_list(allowed, origin, strlen(origin)))
+        return 1;
+    if (!strncasecmp(origin, "http://", 7))
+        auth = origin + 7;
+    else if (!strncasecmp(origin, "https://", 8))
+        auth = origin + 8;
+    return auth && host && *host && !strcasecmp(auth, host);
 }

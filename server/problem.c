@@ -24,6 +24,14 @@ static const problem_type types[] = {
      "The request had two Content-Length headers, or one with "
      "Transfer-Encoding (400)."},
     {"unauthorized", 401, "unauthorized", "Send Authorization: Bearer <token> (401)."},
+    {"host-not-allowed", 403, "unknown host name",
+     "The request's Host is not a name this server answers to (a page whose name "
+     "was pointed at this machine, DNS rebinding); the operator can allow more with "
+     "--allowed-hosts (403)."},
+    {"cross-origin", 403, "request from another origin",
+     "A POST or DELETE from a web page of another origin (Origin, or "
+     "Sec-Fetch-Site: cross-site); the operator can allow an origin with "
+     "--allowed-origins (403)."},
     {"not-found", 404, "not found", NULL},
     {"method-not-allowed", 405, "method not allowed", NULL},
     {"not-acceptable", 406, "not acceptable", NULL},

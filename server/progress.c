@@ -24,6 +24,7 @@ struct watch {
     double deadline;
     long after;   /* the last record seq the client has */
     int wait_set; /* ?after= and ?wait= read (a resumed long-poll) */
+    long from;    /* ?attempt=: the run the client's records are of, or 0 */
     sbuf sse;     /* SSE: events not yet sent */
     size_t sse_off;
     int sse_end; /* 1: end event queued, 2: stream over */
@@ -180,6 +181,31 @@ static void collect(req *r, const job_rec *j, long after, int sse, sbuf *out, in
     }
 }
 
+/* ?attempt=N: the run the client's records (up to ?after=) belong to. When
+ * the job has been run again since (a node died, the daemon restarted), those
+ * records are another run's: the reader gets this run's from the start
+ * (after -1) and is told (wt->from). 0, or 1 with a 400 in *ret. */
+static int read_attempt(struct MHD_Connection *c, req *r, watch *wt, const job_rec *j,
+                        enum MHD_Result *ret)
+{
+    const char *a = MHD_lookup_connection_value(c, MHD_GET_ARGUMENT_KIND, "attempt");
+    long n;
+
+    if (!a)
+        return 0;
+    if (parse_long(a, 1, INT_MAX, &n)) {
+        *ret = http_problem(c, r, 400, "invalid-parameter", NULL,
+                            "'attempt' must be an integer >= 1 (a run's attempt)",
+                            "\"parameter\":\"attempt\"", NULL);
+        return 1;
+    }
+    if (j->attempts > 0 && n != j->attempts) {
+        wt->from = n;
+        wt->after = -1;
+    }
+    return 0;
+}
+
 enum MHD_Result do_progress(struct MHD_Connection *c, req *r)
 {
     qdcd *q = r->q;
@@ -221,6 +247,8 @@ enum MHD_Result do_progress(struct MHD_Connection *c, req *r)
             wait = q->cfg.wait_cap;
         wt->deadline = r->t0 + wait;
         wt->wait_set = 1;
+        if (read_attempt(c, r, wt, &j, &ret))
+            return ret;
     }
     for (int tries = 0;; tries++) {
         /* before the read: a kick from another node after it refuses the park */
@@ -239,11 +267,13 @@ enum MHD_Result do_progress(struct MHD_Connection *c, req *r)
         if (q->store->ops->get(q->store, j.id, &j) != QDC_OK)
             break;
     }
-    sb_printf(&b,
-              "{\"id\":\"%s\",\"state\":\"%s\",\"done\":%s,\"after\":%ld,"
-              "\"next_after\":%ld,\"count\":%d,\"records\":[",
-              j.id, job_state_name(j.state), done ? "true" : "false", wt->after,
-              count ? last : wt->after, count);
+    sb_printf(&b, "{\"id\":\"%s\",\"state\":\"%s\",\"done\":%s,\"attempt\":%d,", j.id,
+              job_state_name(j.state), done ? "true" : "false", j.attempts);
+    if (wt->from)
+        sb_printf(&b, "\"restarted\":{\"from_attempt\":%ld,\"attempt\":%d},", wt->from,
+                  j.attempts);
+    sb_printf(&b, "\"after\":%ld,\"next_after\":%ld,\"count\":%d,\"records\":[",
+              wt->after, count ? last : wt->after, count);
     if (recs.len)
         sb_add(&b, recs.buf, recs.len);
     sb_puts(&b, "]}\n");
@@ -338,6 +368,12 @@ enum MHD_Result do_events(struct MHD_Connection *c, req *r)
         return http_problem(c, r, 400, "invalid-parameter", NULL,
                             "Last-Event-ID / 'after' must be an integer >= -1",
                             "\"parameter\":\"after\"", NULL);
+    if (read_attempt(c, r, wt, &j, &ret))
+        return ret;
+    if (wt->from) /* the stream starts over: say so first */
+        sb_printf(&wt->sse,
+                  "event: restart\ndata: {\"from_attempt\":%ld,\"attempt\":%d}\n\n",
+                  wt->from, j.attempts);
     r->parked_ever = 1; /* a stream: its duration is not a latency */
     resp =
         MHD_create_response_from_callback(MHD_SIZE_UNKNOWN, 16384, sse_reader, r, NULL);

@@ -32,7 +32,7 @@ static offq convert = OFFQ_INIT(process_convert);
 
 int result_start(void)
 {
-    return offq_start(&convert);
+    return offq_start(&convert, 1);
 }
 
 void result_stop(void)
@@ -79,7 +79,7 @@ static int not_servable(struct MHD_Connection *c, req *r, const job_rec *j,
         *ret = http_problem(c, r, 409, "not-ready", NULL, d, extra, h);
         return 1;
     }
-    if (j->state != JOB_SUCCEEDED && r->route != R_INPUT) {
+    if (!job_has_result(j) && r->route != R_INPUT) {
         snprintf(d, sizeof d, "job %s %s and has no result", j->id,
                  job_state_name(j->state));
         snprintf(extra, sizeof extra, "\"state\":\"%s\"%s%s", job_state_name(j->state),
@@ -268,7 +268,8 @@ static qdc_status convert_source(req *r, const job_rec *j, mesh_t **out, qdc_err
 {
     char src[4300];
     meshio_format sf = input_source(r, j, src, sizeof src);
-    meshio_options keep = {NULL, NULL, sf == r->res_fmt ? 1 : -1};
+    meshio_options keep = {
+        .log = NULL, .log_ctx = NULL, .source = sf == r->res_fmt ? 1 : -1};
     mesh_t *res = NULL, *in = NULL;
     qdc_status st;
 

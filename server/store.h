@@ -52,8 +52,14 @@ typedef struct {
     char error[1024];        /* problem+json object of a failed job, "" otherwise */
     char stop_reason[64];
     char etag_qmesh[65], etag_json[65], etag_medit[65];
-    char notes[512]; /* reader notes (skipped element types...), lines, "" if none */
+    char notes[512];     /* reader notes (skipped element types...), lines, "" if none */
+    char file_name[256]; /* the upload's file name (?name=), "" if not given */
+    char label[128];     /* the submitter's label (?label=), "" if none */
 } job_rec;
+
+/* j has a result and a report: it succeeded, or it was cancelled while the
+ * optimizer ran and the best mesh so far was kept (its etags are set). */
+int job_has_result(const job_rec *j);
 
 typedef struct {
     int64_t by_state[JOB_STATE_COUNT];

@@ -95,6 +95,9 @@ static const char *const migrations[] = {
     "CREATE TRIGGER progress_notify AFTER INSERT ON progress"
     " REFERENCING NEW TABLE AS new_rows FOR EACH STATEMENT"
     " EXECUTE PROCEDURE qdc_progress_notify();",
+    /* 3: the upload's file name and the submitter's label */
+    "ALTER TABLE jobs ADD COLUMN file_name TEXT NOT NULL DEFAULT '',"
+    " ADD COLUMN label TEXT NOT NULL DEFAULT '';",
 };
 #define N_MIGRATIONS ((int)(sizeof migrations / sizeof migrations[0]))
 
@@ -102,7 +105,7 @@ static const char *const migrations[] = {
     "seq, id, owner, state, cancel_requested, idem_key, body_hash, format, nv, nt,"      \
     " in_bytes, options, attempts, lease_owner, lease_until, created, started,"          \
     " finished, expires, purged, iterations, last_progress, error, stop_reason,"         \
-    " etag_qmesh, etag_json, etag_medit, notes"
+    " etag_qmesh, etag_json, etag_medit, notes, file_name, label"
 
 static void row_to_rec(const PGresult *r, int row, job_rec *j)
 {
@@ -135,6 +138,8 @@ static void row_to_rec(const PGresult *r, int row, job_rec *j)
     col_text(r, row, 25, j->etag_json, sizeof j->etag_json);
     col_text(r, row, 26, j->etag_medit, sizeof j->etag_medit);
     col_text(r, row, 27, j->notes, sizeof j->notes);
+    col_text(r, row, 28, j->file_name, sizeof j->file_name);
+    col_text(r, row, 29, j->label, sizeof j->label);
 }
 
 /* One statement that returns at most one job row into out (if not NULL).
@@ -164,8 +169,8 @@ static qdc_status one(pg_store *s, const char *sql, const params *p, job_rec *ou
 
 #define INSERT_JOB                                                                       \
     "INSERT INTO jobs(id, owner, state, idem_key, body_hash, format, nv, nt,"            \
-    " in_bytes, options, created, notes)"                                                \
-    " VALUES($1,$2,0,$3,$4,$5,$6,$7,$8,$9,$10,$11)"                                      \
+    " in_bytes, options, created, notes, file_name, label)"                              \
+    " VALUES($1,$2,0,$3,$4,$5,$6,$7,$8,$9,$10,$11,$12,$13)"                              \
     " ON CONFLICT (owner, idem_key) WHERE idem_key <> '' DO NOTHING"                     \
     " RETURNING seq"
 
@@ -183,6 +188,8 @@ static void create_params(const job_rec *j, params *p)
     p_text(p, j->options);
     p_dbl(p, j->created);
     p_text(p, j->notes);
+    p_text(p, j->file_name);
+    p_text(p, j->label);
 }
 
 /* The job that holds j's Idempotency-Key (an insert found it taken). */

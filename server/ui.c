@@ -63,8 +63,6 @@ enum MHD_Result ui_serve(struct MHD_Connection *c, req *r)
                              "no-cache",
                              "Content-Security-Policy",
                              csp,
-                             "X-Content-Type-Options",
-                             "nosniff",
                              "Referrer-Policy",
                              "no-referrer",
                              NULL};

@@ -1,7 +1,7 @@
 /* upload.c - POST /v1/jobs. Options, format, Idempotency-Key, the queue limit
  * and the size cap are checked at the first call (headers only), so a refused
  * body is not read. The body is streamed to a temporary file in DATA/tmp;
- * once complete, the intake thread maps it, parses and validates it with
+ * once complete, an intake thread maps it, parses and validates it with
  * libqdc (never with jansson), keeps the parsed mesh for the worker
  * (JOB_INTAKE_QMESH, when it holds all the worker needs), fsyncs and renames
  * the upload into DATA/jobs/ID and commits the row before the 202. With a PostgreSQL
@@ -19,6 +19,7 @@
 
 #include <errno.h>
 #include <fcntl.h>
+#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -44,18 +45,25 @@ struct upload {
     int sniff;           /* format from the content (text/plain, octet-stream, none) */
     int tetgen_opts;     /* tetgen_quality or max_volume given: surfaces only */
     char idem[129];
-    char options[1024]; /* canonical options JSON */
+    char options[1024];  /* canonical options JSON */
+    char file_name[256]; /* ?name=: the uploaded file's name (its last path part) */
+    char label[128];     /* ?label= */
 };
 
 static enum MHD_Result process_upload(struct MHD_Connection *c, req *r);
 
-/* The intake thread: uploads are parsed and committed one at a time, which
- * also makes the queue limit exact. */
+/* The intake threads: uploads are inflated, parsed and checked side by side,
+ * so a large one (or a compressed bomb, until its limit stops it) does not
+ * hold up the small ones that arrive behind it; each may take up to the
+ * body limit of memory while it is parsed. They are committed one at a time
+ * (commit_lock), which keeps the queue limit exact. */
+#define INTAKE_THREADS 4
 static offq intake = OFFQ_INIT(process_upload);
+static pthread_mutex_t commit_lock = PTHREAD_MUTEX_INITIALIZER;
 
 int upload_start(void)
 {
-    return offq_start(&intake);
+    return offq_start(&intake, INTAKE_THREADS);
 }
 
 void upload_stop(void)
@@ -67,9 +75,38 @@ typedef struct {
     opt_options o;
     double cap;
     double tq, tv; /* tetgen_quality, max_volume; -1 when not given */
+    char file_name[256], label[128];
     char why[200];
     int bad;
 } opt_scan;
+
+/* ?name= (the uploaded file's name: its last path part is kept) or ?label=:
+ * text of at most 255 / 127 bytes, no control characters. */
+static enum MHD_Result scan_name(opt_scan *s, const char *key, const char *val)
+{
+    int name = !strcmp(key, "name");
+    char *dst = name ? s->file_name : s->label;
+    size_t cap = name ? sizeof s->file_name : sizeof s->label;
+    const char *p = val;
+
+    if (name)
+        for (const char *q = val; *q; q++)
+            if (*q == '/' || *q == '\\')
+                p = q + 1;
+    for (const char *q = p; *q; q++)
+        if ((unsigned char)*q < 32 || *q == 127) {
+            snprintf(s->why, sizeof s->why, "%s: a control character in the text", key);
+            s->bad = 1;
+            return MHD_NO;
+        }
+    if (strlen(p) >= cap) {
+        snprintf(s->why, sizeof s->why, "%s: longer than %zu bytes", key, cap - 1);
+        s->bad = 1;
+        return MHD_NO;
+    }
+    memcpy(dst, p, strlen(p) + 1);
+    return MHD_YES;
+}
 
 static enum MHD_Result scan_option(void *cls, enum MHD_ValueKind kind, const char *key,
                                    size_t key_size, const char *val, size_t val_size)
@@ -78,17 +115,14 @@ static enum MHD_Result scan_option(void *cls, enum MHD_ValueKind kind, const cha
     (void)kind;
     if (s->bad)
         return MHD_NO;
+    (void)key_size;
+    (void)val_size; /* no NUL inside: guard.c refused those */
     if (!val)
         val = "";
-    /* a %00 in the query would cut the value short: max_iter=5%00abc is not 5 */
-    if (strlen(key) != key_size || strlen(val) != val_size) {
-        snprintf(s->why, sizeof s->why, "option '%.40s': the value has a NUL byte (%%00)",
-                 key);
-        s->bad = 1;
-        return MHD_NO;
-    }
     if (!strcmp(key, "format"))
         return MHD_YES; /* the body's format: upload_format */
+    if (!strcmp(key, "name") || !strcmp(key, "label"))
+        return scan_name(s, key, val);
     if (!strcmp(key, "tetgen_quality") || !strcmp(key, "max_volume")) {
         /* Surface uploads: TetGen's -q radius-edge bound (>= 1, 0 = no
          * refinement) and -a volume bound (0 = none), as `qdc tetra`. */
@@ -187,6 +221,14 @@ static int upload_format(struct MHD_Connection *c, upload *u, char *why, size_t 
     return 0;
 }
 
+/* The byte limit of an upload in format fmt: JSON meshes have their own
+ * (--max-json), which applies when it is the smaller. */
+static int64_t body_limit(const qdcd *q, meshio_format fmt, int *json)
+{
+    *json = fmt == MESHIO_JSON && q->cfg.max_json < q->cfg.max_body;
+    return *json ? q->cfg.max_json : q->cfg.max_body;
+}
+
 /* max_queued reached? (cnt receives the counts) */
 static int queue_full(qdcd *q, job_counts *cnt)
 {
@@ -235,6 +277,8 @@ static int upload_options(struct MHD_Connection *c, qdcd *q, upload *u, char *wh
     }
     snprintf(u->options, sizeof u->options, "%s", oj.buf && !oj.oom ? oj.buf : "{}");
     sb_free(&oj);
+    memcpy(u->file_name, s.file_name, sizeof u->file_name);
+    memcpy(u->label, s.label, sizeof u->label);
     return 0;
 }
 
@@ -275,6 +319,7 @@ enum MHD_Result upload_begin(struct MHD_Connection *c, req *r)
     job_counts cnt;
     job_rec prev;
     int64_t limit;
+    int json;
     upload *u;
 
     r->upload = 1;
@@ -304,8 +349,7 @@ enum MHD_Result upload_begin(struct MHD_Connection *c, req *r)
         queue_full(q, &cnt))
         return queue_full_reply(c, r, &cnt);
 
-    limit = u->fmt == MESHIO_JSON && q->cfg.max_json < q->cfg.max_body ? q->cfg.max_json
-                                                                       : q->cfg.max_body;
+    limit = body_limit(q, u->fmt, &json);
     if (r->body_len > limit) { /* the declared Content-Length (http.c) */
         u->too_big = 1;
         u->body_len = r->body_len;
@@ -326,9 +370,8 @@ void upload_body(req *r, const char *data, size_t len)
 {
     qdcd *q = r->q;
     upload *u = r->up;
-    int64_t limit = u->fmt == MESHIO_JSON && q->cfg.max_json < q->cfg.max_body
-                        ? q->cfg.max_json
-                        : q->cfg.max_body;
+    int json;
+    int64_t limit = body_limit(q, u->fmt, &json);
 
     u->body_len += (int64_t)len;
     if (u->fd < 0 || u->too_big || u->io_err)
@@ -502,24 +545,36 @@ static enum MHD_Result idem_replay(struct MHD_Connection *c, req *r, const job_r
     return reply_job(c, r, 202, old, h);
 }
 
-/* 413 for a body over its cap: JSON meshes have their own (--max-json). */
-static enum MHD_Result too_big(struct MHD_Connection *c, req *r, int json)
+/* 413 for a body over its cap, as sent or as it inflates (gz: a gzip body;
+ * ratio: stopped by --max-ratio, not the cap). The problem names the limit
+ * ("limit": the option's name). */
+static enum MHD_Result too_big(struct MHD_Connection *c, req *r, meshio_format fmt,
+                               int gz, int ratio)
 {
     qdcd *q = r->q;
-    char d[400], extra[200];
-    int64_t lim;
+    char d[400], extra[300];
+    int json;
+    int64_t lim = body_limit(q, fmt, &json);
+    const char *name = ratio ? "max-ratio" : json ? "max-json" : "max-body";
 
-    json = json && q->cfg.max_json < q->cfg.max_body;
-    lim = json ? q->cfg.max_json : q->cfg.max_body;
-    if (json)
+    if (ratio)
         snprintf(d, sizeof d,
-                 "JSON mesh bodies are limited to %lld bytes; send larger meshes as "
+                 "the gzip body inflates to more than %d times its %lld bytes "
+                 "(--max-ratio); send it uncompressed",
+                 q->cfg.max_ratio, (long long)r->up->body_len);
+    else if (json)
+        snprintf(d, sizeof d,
+                 "JSON mesh bodies are limited to %lld bytes%s; send larger meshes as "
                  "%s (proto/mesh-binary.md)",
-                 (long long)lim, MEDIA_QMESH);
+                 (long long)lim, gz ? " once inflated" : "", MEDIA_QMESH);
     else
-        snprintf(d, sizeof d, "request bodies are limited to %lld bytes", (long long)lim);
-    snprintf(extra, sizeof extra, "\"max_bytes\":%lld%s", (long long)lim,
-             json ? ",\"use\":\"" MEDIA_QMESH "\"" : "");
+        snprintf(d, sizeof d, "request bodies are limited to %lld bytes%s",
+                 (long long)lim, gz ? " once inflated" : "");
+    snprintf(extra, sizeof extra, "\"limit\":\"%s\",\"max_bytes\":%lld%s", name,
+             (long long)lim, json ? ",\"use\":\"" MEDIA_QMESH "\"" : "");
+    if (ratio)
+        snprintf(extra + strlen(extra), sizeof extra - strlen(extra), ",\"max_ratio\":%d",
+                 q->cfg.max_ratio);
     return http_problem(c, r, 413, "too-big", NULL, d, extra, NULL);
 }
 
@@ -621,7 +676,10 @@ static int check_upload(struct MHD_Connection *c, req *r, const char *buf, size_
 
     mesh_t *m = NULL;
     sbuf notes = {0};
-    meshio_options mo = {collect_note, &notes, 0};
+    meshio_options mo = {.log = collect_note, .log_ctx = &notes};
+    /* zlib arrays inside a VTU body: no more than a gzip body may inflate to */
+    mo.max_bytes = gz_budget((size_t)u->body_len, (size_t)q->cfg.max_body,
+                             (unsigned)q->cfg.max_ratio);
     st = meshio_read_ex(buf, len, u->fmt, &mo, &m, &e);
     if (st == QDC_OK && (m->nv > q->cfg.max_vertices || m->nt > q->cfg.max_tets)) {
         *ret = over_limits(c, r, m->nv, m->nt);
@@ -648,19 +706,63 @@ static int check_upload(struct MHD_Connection *c, req *r, const char *buf, size_
     return 0;
 }
 
-/* Map the body, settle its format (sniffed when nothing named it), parse
- * and validate it (check_upload): 0, or 1 with the answer in *ret. */
+/* A gzip body (any mesh format may come compressed) inflated into *plain
+ * (qdc_free), stopped as soon as it passes the limit of its format (sniffed
+ * from its first bytes when nothing named it) or --max-ratio times its size:
+ * the limits apply to what is parsed, not to what was sent. 0, or 1 with
+ * the answer (413, 400) in *ret. */
+static int inflate_upload(struct MHD_Connection *c, req *r, const char *buf, size_t len,
+                          char **plain, size_t *plen, enum MHD_Result *ret)
+{
+    upload *u = r->up;
+    qdcd *q = r->q;
+    char head[4096];
+    size_t hn = gz_head(buf, len, head, sizeof head);
+    meshio_format f = u->sniff ? meshio_sniff(head, hn) : u->fmt;
+    int json;
+    int64_t lim = body_limit(q, f, &json);
+    size_t budget = gz_budget(len, (size_t)lim, (unsigned)q->cfg.max_ratio);
+    qdc_error e;
+    qdc_status st;
+
+    qdc_error_clear(&e);
+    st = gz_inflate_max(buf, len, budget, plain, plen, &e);
+    if (st == QDC_OK && gz_is_gzip(*plain, *plen))
+        st = qdc_fail(&e, QDC_EPARSE, "gzip: compressed twice");
+    if (st == QDC_ETOOBIG)
+        *ret = too_big(c, r, f, 1, budget < (size_t)lim);
+    else if (st != QDC_OK)
+        *ret = mesh_problem(c, r, st, &e);
+    if (st != QDC_OK) {
+        qdc_free(*plain);
+        *plain = NULL;
+        return 1;
+    }
+    return 0;
+}
+
+/* Map the body, inflate it if it is gzip, settle its format (sniffed when
+ * nothing named it), parse and validate it (check_upload): 0, or 1 with the
+ * answer in *ret. */
 static int inspect_upload(struct MHD_Connection *c, req *r, job_rec *j,
                           enum MHD_Result *ret, double *t_parse, double *t_valid)
 {
     upload *u = r->up;
-    size_t len = (size_t)u->body_len;
-    char *buf = mmap(NULL, len, PROT_READ, MAP_PRIVATE, u->fd, 0);
+    size_t mlen = (size_t)u->body_len, len = mlen;
+    char *map = mmap(NULL, mlen, PROT_READ, MAP_PRIVATE, u->fd, 0), *plain = NULL;
+    const char *buf = map;
     int bad = 1;
 
-    if (buf == MAP_FAILED) {
+    if (map == MAP_FAILED) {
         *ret = http_problem(c, r, 500, "io", NULL, "cannot map the upload", NULL, NULL);
         return 1;
+    }
+    if (gz_is_gzip(map, mlen)) {
+        if (inflate_upload(c, r, map, mlen, &plain, &len, ret)) {
+            munmap(map, mlen);
+            return 1;
+        }
+        buf = plain;
     }
     if (u->sniff) {
         u->fmt = meshio_sniff(buf, len);
@@ -680,8 +782,12 @@ static int inspect_upload(struct MHD_Connection *c, req *r, job_rec *j,
         *ret = unsupported(c, r,
                            "the body is not a mesh or surface this server recognises; "
                            "set Content-Type to one of the accepted types");
-    else if (u->sniff && u->fmt == MESHIO_JSON && u->body_len > r->q->cfg.max_json)
-        *ret = too_big(c, r, 1);
+    else if (u->fmt == MESHIO_JSON && (int64_t)len > r->q->cfg.max_json)
+        *ret = too_big(c, r, MESHIO_JSON, plain != NULL, 0);
+    else if (plain && u->sfmt != SURFACE_AUTO)
+        /* the worker hands the stored upload to `qdc tetra`, which reads
+         * surfaces uncompressed */
+        *ret = unsupported(c, r, "surfaces are read uncompressed; send it without gzip");
     else if (u->tetgen_opts && u->sfmt == SURFACE_AUTO)
         *ret = http_problem(c, r, 400, "invalid-option", NULL,
                             "tetgen_quality and max_volume apply to surface uploads only",
@@ -692,12 +798,13 @@ static int inspect_upload(struct MHD_Connection *c, req *r, job_rec *j,
         *t_parse = mono_now();
         bad = check_upload(c, r, buf, len, j, ret, t_valid);
     }
-    munmap(buf, len);
+    qdc_free(plain);
+    munmap(map, mlen);
     return bad;
 }
 
-/* The job recorded: the queue checked again (exactly: the intake thread
- * commits one upload at a time), the input committed, the row inserted
+/* The job recorded: the queue checked again (exactly: the intake threads
+ * commit one upload at a time), the input committed, the row inserted
  * (with the input, in a shared store). 0, or 1 with the answer in *ret:
  * 429, 507, 503, or the replay of a concurrent request with the same key. */
 static int create_job(struct MHD_Connection *c, req *r, job_rec *j, enum MHD_Result *ret)
@@ -736,7 +843,7 @@ static int create_job(struct MHD_Connection *c, req *r, job_rec *j, enum MHD_Res
     return 0;
 }
 
-/* Runs on the intake thread; the connection is suspended meanwhile, and
+/* Runs on an intake thread; the connection is suspended meanwhile, and
  * MHD_queue_response is allowed on a suspended connection. */
 static enum MHD_Result process_upload(struct MHD_Connection *c, req *r)
 {
@@ -762,9 +869,14 @@ static enum MHD_Result process_upload(struct MHD_Connection *c, req *r)
     snprintf(j.format, sizeof j.format, "%s", upload_format_name(u));
     j.in_bytes = u->body_len;
     snprintf(j.options, sizeof j.options, "%s", u->options);
+    memcpy(j.file_name, u->file_name, sizeof j.file_name);
+    memcpy(j.label, u->label, sizeof j.label);
     j.created = wall_now();
     t_commit = mono_now();
-    if (create_job(c, r, &j, &ret))
+    pthread_mutex_lock(&commit_lock);
+    int refused = create_job(c, r, &j, &ret);
+    pthread_mutex_unlock(&commit_lock);
+    if (refused)
         return ret;
     atomic_fetch_add(&q->m.submitted, 1);
     job_pool_notify(q->pool);
@@ -784,7 +896,7 @@ static enum MHD_Result process_upload(struct MHD_Connection *c, req *r)
 }
 
 /* Body complete (HTTP thread): refuse what needs no parsing, hand the rest
- * to the intake thread with the connection suspended. */
+ * to an intake thread with the connection suspended. */
 enum MHD_Result upload_finish(struct MHD_Connection *c, req *r)
 {
     upload *u = r->up;
@@ -792,7 +904,7 @@ enum MHD_Result upload_finish(struct MHD_Connection *c, req *r)
     if (r->off_done || !u) /* resumed without a reply: queueing it failed */
         return MHD_NO;
     if (u->too_big)
-        return too_big(c, r, u->fmt == MESHIO_JSON);
+        return too_big(c, r, u->fmt, 0, 0);
     if (u->io_err || u->fd < 0)
         return store_failed(c, r, u->fd < 0 ? ENOSPC : u->io_err,
                             "the upload could not be stored");

@@ -57,6 +57,18 @@ function elapsed(j) {
 
 const short = (id) => id.slice(0, 8);
 
+// A job's name: its label, else the uploaded file's name, else its short id.
+const jobName = (j) => (j && (j.label || j.file_name)) || short(j ? j.id : '');
+
+// The stem of the uploaded file's name (bunny_low_10k.mesh.gz -> bunny_low_10k)
+// for download names, or qdc-<short id> when the upload had no name.
+function fileStem(j) {
+    let n = (j.file_name || '').replace(/^.*[\\/]/, '').replace(/\.gz$/i, '');
+    if (n.includes('.')) n = n.slice(0, n.lastIndexOf('.'));
+    n = n.replace(/[^A-Za-z0-9._+-]+/g, '_').replace(/^[._]+/, '');
+    return n || 'qdc-' + short(j.id);
+}
+
 // --------------------------------------------------------------- API access --
 // With --tokens the daemon answers 401: ask for a token once, keep it in this
 // tab's sessionStorage (never localStorage, never a cookie), retry.
@@ -148,6 +160,7 @@ function setConn(ok) {
 // ------------------------------------------------------------------- router --
 
 let view = null; // {name, id, stop()}
+let hoverState = () => null; // the job view's state, for the charts' tooltips
 
 function route() {
     if (view && view.stop) view.stop();
@@ -316,7 +329,11 @@ async function submit(ev) {
         status.textContent = '';
         return;
     }
-    const url = '/v1/jobs' + (optionQuery() ? '?' + optionQuery() : '');
+    const q = new URLSearchParams(optionQuery());
+    q.set('name', chosen.file.name);
+    const label = $('label-input').value.trim();
+    if (label) q.set('label', label);
+    const url = '/v1/jobs?' + q.toString();
     for (;;) {
         const r = await upload(url, body, bar, status);
         if (r.status === 401) {
@@ -328,6 +345,7 @@ async function submit(ev) {
         btn.disabled = false;
         if (r.status === 202 && r.body && r.body.id) {
             status.textContent = '';
+            $('label-input').value = '';
             go('/ui/jobs/' + r.body.id);
         } else {
             status.textContent = '';
@@ -377,18 +395,36 @@ async function listJobs() {
     return all.reverse(); // newest first
 }
 
-// The input's quality is record 0 of a job's progress (fetched once per job).
-function firstRecord(j) {
+// The input's and the result's quality: a finished job's report (before and
+// after: the result may be an earlier record than the last, when a rerun was
+// not kept), else record 0 of its progress; fetched once per job and state.
+function listFigures(j) {
     const s = listState;
-    if (s.first.has(j.id) || s.firstBusy.has(j.id) || !(j.iterations > 0)) return;
-    s.firstBusy.add(j.id);
-    apiJSON('/v1/jobs/' + j.id + '/progress?after=-1')
-        .then((b) => { if (b.records.length) s.first.set(j.id, b.records[0]); })
+    const key = j.id + (j.done ? ':done' : '');
+    if (s.first.has(key) || s.firstBusy.has(key) || !(j.iterations > 0)) return;
+    s.firstBusy.add(key);
+    const got = j.done && j.links && j.links.report
+        ? apiJSON(j.links.report).then((r) => ({ in: r.before, out: r.after }))
+        : apiJSON('/v1/jobs/' + j.id + '/progress?after=-1').then((b) => (b.records.length ? { in: b.records[0] } : null));
+    got.then((f) => { if (f) s.first.set(key, f); })
         .catch(() => {})
-        .finally(() => { s.firstBusy.delete(j.id); if (view && view.name === 'list') renderJobs(); });
+        .finally(() => { s.firstBusy.delete(key); if (view && view.name === 'list') renderJobs(); });
 }
 
+// Delete asks first, in a dialog of the page (a native confirm() would stop
+// the page's timers); true when the user confirmed.
+function confirmDelete(id) {
+    const d = $('confirm-dialog');
+    $('confirm-text').textContent = 'Delete job ' + short(id) + '? Its input, result and report are removed from qdcd; this cannot be undone.';
+    d.returnValue = '';
+    d.showModal();
+    d.querySelector('button[value="cancel"]').focus();
+    return new Promise((resolve) => d.addEventListener('close', () => resolve(d.returnValue === 'ok'), { once: true }));
+}
+
+// Cancel or delete (after asking); false when the user kept the job.
 async function jobAction(id, what) {
+    if (what === 'delete' && !(await confirmDelete(id))) return false;
     try {
         if (what === 'cancel') await apiJSON('/v1/jobs/' + id + ':cancel', { method: 'POST' });
         else {
@@ -398,6 +434,7 @@ async function jobAction(id, what) {
     } catch (e) {
         alertError(e);
     }
+    return true;
 }
 
 function alertError(e) {
@@ -412,26 +449,30 @@ function renderJobs() {
     const rows = s.jobs.filter((j) => !s.filter || j.state === s.filter);
     const frag = document.createDocumentFragment();
     for (const j of rows) {
-        firstRecord(j);
-        const f = s.first.get(j.id);
-        const p = j.progress;
+        listFigures(j);
+        const fig = s.first.get(j.id + (j.done ? ':done' : '')) || s.first.get(j.id) || {};
+        const f = fig.in;
+        // a finished job's result is the report's (the last record may be a rerun
+        // that was not kept): nothing shown until it is in
+        const p = fig.out || (j.done && j.links && j.links.report ? null : j.progress);
         const acts = el('td', { class: 'actions' });
         if (!j.done)
-            acts.append(el('button', { type: 'button', class: 'small', text: 'Cancel', 'data-act': 'cancel',
+            acts.append(el('button', { type: 'button', class: 'small', text: 'Cancel', 'data-act': 'cancel', 'aria-label': 'Cancel job ' + short(j.id),
                 onclick: () => jobAction(j.id, 'cancel').then(refreshList) }));
-        acts.append(el('button', { type: 'button', class: 'small danger', text: 'Delete', 'data-act': 'delete',
+        acts.append(el('button', { type: 'button', class: 'small danger', text: 'Delete', 'data-act': 'delete', 'aria-label': 'Delete job ' + short(j.id),
             onclick: () => jobAction(j.id, 'delete').then(refreshList) }));
         const tets = j.mesh.tets || (j.mesh.surface ? 'surface' : 0);
         frag.append(el('tr', { 'data-id': j.id, 'data-state': j.state },
-            el('td', {}, el('a', { href: '/ui/jobs/' + j.id, 'data-nav': true, class: 'id', text: short(j.id) })),
+            el('td', { class: 'name' }, el('a', { href: '/ui/jobs/' + j.id, 'data-nav': true, class: j.label || j.file_name ? 'jobname' : 'id', text: jobName(j), title: (j.label || j.file_name ? jobName(j) + ' · ' : '') + j.id }),
+                j.label && j.file_name ? el('span', { class: 'small muted', text: ' ' + j.file_name }) : null),
             el('td', {}, el('span', { class: 'state ' + j.state, text: j.state + (j.cancel_requested && !j.done ? ' (cancelling)' : '') })),
-            el('td', { class: 'num', text: typeof tets === 'number' ? int(tets) : tets }),
-            el('td', { class: 'num opt', text: int(j.mesh.vertices) }),
-            el('td', { class: 'opt', text: j.mesh.format + ' · ' + bytes(j.mesh.bytes) }),
-            el('td', { class: 'num', text: (f ? fix(f.mean_ratio_mean, 4) : '–') + ' → ' + (p ? fix(p.mean_ratio_mean, 4) : '–') }),
+            el('td', { class: 'num', 'data-label': 'tets', text: typeof tets === 'number' ? int(tets) : tets }),
+            el('td', { class: 'num opt wide', text: int(j.mesh.vertices) }),
+            el('td', { class: 'opt mid', text: j.mesh.format + ' · ' + bytes(j.mesh.bytes) }),
+            el('td', { class: 'num', 'data-label': 'mean ratio', text: (f ? fix(f.mean_ratio_mean, 4) : '–') + ' → ' + (p ? fix(p.mean_ratio_mean, 4) : '–') }),
             el('td', { class: 'num opt', text: (f ? fix(f.dihedral_min, 1) + '°' : '–') + ' → ' + (p ? fix(p.dihedral_min, 1) + '°' : '–') }),
-            el('td', { class: 'num', text: elapsed(j) }),
-            el('td', { class: 'opt', text: when(j.created) }),
+            el('td', { class: 'num', 'data-label': 'elapsed', text: elapsed(j) }),
+            el('td', { class: 'opt wide', text: when(j.created) }),
             acts));
     }
     tbody.replaceChildren(frag);
@@ -475,6 +516,7 @@ function stat(k, v) {
 function jobView(id) {
     const ctl = new AbortController();
     const st = { id, job: null, recs: [], report: null, stopped: false, drawQueued: false, timer: 0 };
+    st.reportDrawn = new Promise((resolve) => { st.reportDone = resolve; });
     document.title = 'qdcd · job ' + short(id);
     $('job-id').textContent = id;
     $('job-state').textContent = '';
@@ -489,16 +531,30 @@ function jobView(id) {
     $('view3d-card').hidden = true;
     $('view3d').hidden = true;
     $('view3d-layers').hidden = true;
+    $('view3d-tools').hidden = true;
+    $('view3d-pick').textContent = '';
+    $('view3d-cut-info').textContent = '';
     $('view3d-load').hidden = false;
     $('view3d-status').textContent = VIEW3D_HELP;
     $('chart').dataset.points = '0';
     $('hist').dataset.drawn = '0';
+    $('chart-notes').hidden = true;
+    $('chart-notes').dataset.key = '';
     const chartRedraw = () => {
         if (st.drawQueued) return;
         st.drawQueued = true;
         requestAnimationFrame(() => {
             st.drawQueued = false;
-            drawChart($('chart'), st.recs);
+            const notes = rerunNotes(st.recs, st.report);
+            const best = notes.find((x) => x.best);
+            st.chartGeom = drawChart($('chart'), st.recs, { log: $('chart-log').checked, best: best ? best.i : undefined });
+            $('chart').setAttribute('aria-label', chartSummary(st.recs, notes));
+            const key = notes.map((x) => x.text).join('|');
+            if ($('chart-notes').dataset.key !== key) {
+                $('chart-notes').dataset.key = key;
+                $('chart-notes').replaceChildren(...notes.map((x) => el('li', { class: x.best ? 'kept' : 'rerun', text: x.text })));
+                $('chart-notes').hidden = !notes.length;
+            }
             const last = st.recs[st.recs.length - 1];
             $('chart').dataset.points = String(st.recs.length);
             document.dispatchEvent(new CustomEvent('qdc:chart', { detail: { points: st.recs.length, seq: last ? last.seq : -1 } }));
@@ -507,10 +563,12 @@ function jobView(id) {
     };
     st.redraw = chartRedraw;
     $('job-cancel').onclick = () => jobAction(id, 'cancel').then(() => loadJob(st));
-    $('job-delete').onclick = () => jobAction(id, 'delete').then(() => go('/'));
-    const onResize = () => { chartRedraw(); if (st.report) drawHist($('hist'), st.report, $('hist-log').checked); };
+    $('job-delete').onclick = () => jobAction(id, 'delete').then((done) => { if (done) go('/'); });
+    const onResize = () => { chartRedraw(); if (st.report) st.histGeom = drawHist($('hist'), st.report, $('hist-log').checked); };
     window.addEventListener('resize', onResize);
     $('hist-log').onchange = onResize;
+    $('chart-log').onchange = chartRedraw;
+    hoverState = () => st;
     $('view3d-load').onclick = () => load3d(st);
     // the header (state, elapsed, cancel requested) every 2 s until the job ends
     const header = async () => {
@@ -559,6 +617,9 @@ async function loadJob(st) {
 
 function renderJob(st) {
     const j = st.job;
+    $('job-name').textContent = j.label || j.file_name || '';
+    $('job-name').hidden = !(j.label || j.file_name);
+    document.title = 'qdcd · ' + jobName(j);
     $('job-state').textContent = j.state + (j.cancel_requested && !j.done ? ' (cancelling)' : '');
     $('job-state').className = 'state ' + j.state;
     $('job-cancel').hidden = j.done;
@@ -587,16 +648,19 @@ function renderJob(st) {
 function renderStats(st) {
     const r = st.recs.length ? st.recs[st.recs.length - 1] : st.job && st.job.progress;
     const r0 = st.recs[0];
+    // the result's figures once the report is there (the last record may be a
+    // rerun that was not kept), the last record's before
+    const res = (st.report && st.report.after) || r;
     if (!r) {
         $('job-stats').replaceChildren(stat('state', st.job ? st.job.state : '…'));
         return;
     }
     $('job-stats').replaceChildren(
-        stat('iteration', r.iteration + ' · ' + r.phase),
-        stat('mean ratio', (r0 ? fix(r0.mean_ratio_mean, 4) + ' → ' : '') + fix(r.mean_ratio_mean, 4)),
-        stat('worst', (r0 ? sgn(r0.mean_ratio_min, 3) + ' → ' : '') + sgn(r.mean_ratio_min, 3)),
-        stat('dihedral', fix(r.dihedral_min, 1) + '°..' + fix(r.dihedral_max, 1) + '°'),
-        stat('inverted', (r0 ? int(r0.n_inverted) + ' → ' : '') + int(r.n_inverted)),
+        stat('record', (st.recs.length ? st.recs.length - 1 : r.iteration) + ' · ' + r.phase),
+        stat('mean ratio', (r0 ? fix(r0.mean_ratio_mean, 4) + ' → ' : '') + fix(res.mean_ratio_mean, 4)),
+        stat('worst', (r0 ? sgn(r0.mean_ratio_min, 3) + ' → ' : '') + sgn(res.mean_ratio_min, 3)),
+        stat('dihedral', fix(res.dihedral_min, 1) + '°..' + fix(res.dihedral_max, 1) + '°'),
+        stat('inverted', (r0 ? int(r0.n_inverted) + ' → ' : '') + int(res.n_inverted)),
         stat('run time', dur(r.elapsed)));
 }
 
@@ -604,10 +668,13 @@ function renderStats(st) {
 // stream by hand; reconnect after the last seq if the stream breaks.
 async function follow(st, signal) {
     let after = -1;
+    let run = 0; // the job's attempt the records so far are of
     for (let attempt = 0; !st.stopped; attempt++) {
         let ended = false;
         try {
-            const res = await api('/v1/jobs/' + st.id + '/events?after=' + after, { signal, headers: { Accept: 'text/event-stream' } });
+            // with attempt=, a job run again since (its node died) starts over
+            const q = '?after=' + after + (run ? '&attempt=' + run : '');
+            const res = await api('/v1/jobs/' + st.id + '/events' + q, { signal, headers: { Accept: 'text/event-stream' } });
             if (!res.ok) throw problem(res.status, await res.json().catch(() => null));
             const reader = res.body.getReader();
             const dec = new TextDecoder();
@@ -629,9 +696,14 @@ async function follow(st, signal) {
                         if (k === 'data') ev.data += (ev.data ? '\n' : '') + v;
                         else ev[k] = v;
                     }
-                    if (ev.event === 'progress') {
+                    if (ev.event === 'restart') { // the records start over
+                        st.recs = [];
+                        after = -1;
+                        st.redraw();
+                    } else if (ev.event === 'progress') {
                         const rec = JSON.parse(ev.data);
                         after = rec.seq;
+                        run = rec.attempt || run;
                         st.recs.push(rec);
                         st.redraw();
                         if (st.job && st.job.state === 'queued') { // it started: say so now
@@ -660,15 +732,19 @@ async function follow(st, signal) {
 async function loadReport(st) {
     try {
         st.report = await apiJSON('/v1/jobs/' + st.id + '/report');
+        if (!st.stopped) renderReport(st);
     } catch (e) {
-        return;
+        /* no report: the rest of the view stands */
+    } finally {
+        // one frame later, so that the report's drawing is on screen first
+        requestAnimationFrame(() => st.reportDone());
     }
-    if (st.stopped) return;
-    renderReport(st);
 }
 
 function kvTable(t, head, rows) {
-    t.replaceChildren(el('thead', {}, el('tr', {}, ...head.map((h, i) => el('th', { class: i ? 'num' : '', text: h })))),
+    // an empty first header is named for screen readers
+    const th = (h, i) => (h ? el('th', { class: i ? 'num' : '', text: h }) : el('th', {}, el('span', { class: 'vh', text: i ? 'value' : 'measure' })));
+    t.replaceChildren(el('thead', {}, el('tr', {}, ...head.map(th))),
         el('tbody', {}, ...rows.map((r) => el('tr', {}, ...r.map((c, i) => el('td', { class: i ? 'num' : '', text: c }))))));
 }
 
@@ -677,7 +753,9 @@ function renderReport(st) {
     const b = r.before || {};
     const a = r.after || {};
     $('report-card').hidden = false;
-    drawHist($('hist'), r, $('hist-log').checked);
+    st.histGeom = drawHist($('hist'), r, $('hist-log').checked);
+    $('hist').setAttribute('aria-label', histSummary(r));
+    st.redraw(); // the chart marks the record kept
     kvTable($('quality-table'), ['', 'before', 'after'], [
         ['mean ratio: mean', fix(b.mean_ratio_mean, 4), fix(a.mean_ratio_mean, 4)],
         ['mean ratio: worst', sgn(b.mean_ratio_min, 4), sgn(a.mean_ratio_min, 4)],
@@ -732,20 +810,25 @@ function renderDownloads(st) {
     // a format that shares its extension with an earlier one is named in the file name
     const first = (ext) => formats.find(([, e]) => e === ext)[0];
     const items = (what, tag) => formats.map(([f, ext, label]) => [base + '/' + what + '?format=' + f,
-        'qdc-' + short(st.id) + tag + (first(ext) !== f ? '-' + f : '') + '.' + ext, label, f]);
+        fileStem(st.job) + tag + (first(ext) !== f ? '-' + f : '') + '.' + ext, label, f]);
     const links = (list) => list.map(([href, name, label, f]) =>
         el('a', { class: 'button small', href, download: name, 'data-format': f,
             text: f === own ? label + ' (as uploaded)' : label,
             title: f === own ? 'the uploaded file with only the coordinates replaced: names, tags and arrays kept' : undefined,
             onclick: (ev) => authDownload(ev, href, name) }));
-    const res = items('result', '');
-    res.push([base + '/report', 'qdc-' + short(st.id) + '-report.json', 'report (JSON)', 'report']);
+    const res = items('result', '.qdc');
+    res.push([base + '/report', fileStem(st.job) + '.qdc-report.json', 'report (JSON)', 'report']);
     box.replaceChildren(...links(res));
-    $('downloads-input').replaceChildren(...links(items('input', '-input')));
+    $('downloads-input').replaceChildren(...links(items('input', '.input')));
     $('downloads-card').hidden = false;
     $('view3d-card').hidden = false;
     const nt = st.job.mesh.tets;
-    if (nt && nt <= AUTO_3D_TETS && !st.gl) load3d(st);
+    // after the report is drawn: the 3D view's downloads and arithmetic do
+    // not hold up the chart and the tables
+    if (nt && nt <= AUTO_3D_TETS && !st.gl && !st.gl3dAsked) {
+        st.gl3dAsked = true;
+        st.reportDrawn.then(() => { if (!st.stopped && !st.gl) load3d(st); });
+    }
     else if (nt > AUTO_3D_TETS && nt <= MAX_3D_TETS && !st.gl)
         $('view3d-status').textContent = int(nt) + ' tets: the 3D view loads the input and the result (about 2 × ' +
             Math.round((24 * st.job.mesh.vertices + 16 * nt) / 1048576) + ' MiB) and finds their boundary and worst tets when asked.';
@@ -772,8 +855,13 @@ async function authDownload(ev, href, name) {
 
 // ------------------------------------------------------------------- charts --
 
-const COLORS = ['#1f6feb', '#cf222e', '#8250df', '#bf8700', '#57606a'];
+const COLORS = ['#1f6feb', '#cf222e', '#8250df', '#9a6700', '#57606a'];
 const PHASE_FILL = { input: '#eef1f4', pre: '#fff8e1', global: '#ffffff', finish: '#eaf5ea', angles: '#f3ecfb', rerun: '#fde8e8' };
+const PHASE_NAME = {
+    input: 'the input', pre: 'pre-iterations (before the harmonic field)', global: 'global iteration',
+    finish: 'finishing sweep (worst tets, vertex by vertex)', angles: 'smallest-angle polish',
+    rerun: 'rerun: restarted from the input',
+};
 
 function setupCanvas(c) {
     const dpr = window.devicePixelRatio || 1;
@@ -800,29 +888,73 @@ function niceTicks(lo, hi, n) {
     return out;
 }
 
-// Three panels sharing the x axis (progress records in order): mean ratio
-// (mean, worst), dihedral extremes (degrees), inverted tets; phases shaded.
-function drawChart(c, recs) {
+const kfmt = (t) => (t >= 1e6 ? t / 1e6 + 'M' : t >= 1e3 ? t / 1e3 + 'k' : String(t));
+// counts on a log scale: log10(1 + n), so that 0 stays at the bottom
+const logc = (v) => Math.log10(1 + Math.max(0, v));
+const LOG_TICKS = [0, 1, 10, 100, 1e3, 1e4, 1e5, 1e6, 1e7];
+
+// The reruns of a run, in words: where each starts, what the run before it
+// left, and which record the optimizer kept (the report's best_iteration).
+function rerunNotes(recs, report) {
+    const notes = [];
+    for (let i = 1; i < recs.length; i++) {
+        if (recs[i].phase !== 'rerun') continue;
+        const prev = recs[i - 1];
+        const why = prev.n_inverted > 0
+            ? 'the run before ended with ' + int(prev.n_inverted) + ' tets inverted, so the optimizer started again from the input (' +
+                int(recs[i].n_inverted) + ' inverted) with the boundary held differently (squashed ears held, the vertices around the inverted tets free, or no fold at the surface)'
+            : 'the run before squashed ears of the surface, so the optimizer started again from the input with their corners held';
+        notes.push({ i, text: 'Record ' + i + ': restarted from the input — ' + why + '. The jump back is the input again, not a regression: the best run is kept.' });
+    }
+    // the record whose quality is the result's (the report's "best record"
+    // counts within the run it belongs to, so it is found by its figures)
+    const a = report && report.after;
+    let k = -1, dk = Infinity;
+    if (a) for (let i = 0; i < recs.length; i++) {
+        const r = recs[i];
+        if (r.n_inverted !== a.n_inverted) continue;
+        const d = Math.abs(r.mean_ratio_mean - a.mean_ratio_mean) + Math.abs(r.mean_ratio_min - a.mean_ratio_min);
+        if (d < dk) { dk = d; k = i; }
+    }
+    if (k >= 0 && dk < 1e-4) {
+        const runs = recs.slice(0, k + 1).filter((r) => r.phase === 'rerun').length;
+        notes.push({ i: k, best: true, text: 'The result is record ' + k + (notes.length ? ', in the ' + ['first', 'second', 'third', 'fourth', 'fifth'][Math.min(runs, 4)] + ' run' : '') +
+            ': mean ratio ' + fix(recs[k].mean_ratio_mean, 4) + ', worst ' + sgn(recs[k].mean_ratio_min, 3) + ', ' + int(recs[k].n_inverted) + ' inverted' +
+            (k < recs.length - 1 ? ' (the records after it did not do better)' : '') + '.' });
+    }
+    return notes;
+}
+
+// Three panels sharing the x axis (progress records in order: 0 is the input,
+// then one per global iteration, finishing sweep, polish round): mean ratio
+// (mean, worst), dihedral extremes (degrees), inverted tets (count, log scale
+// when asked); phases shaded, reruns marked and explained below the chart.
+// Returns the geometry the hover needs.
+function drawChart(c, recs, opt) {
+    opt = opt || {};
     const { g, w, h } = setupCanvas(c);
-    const L = 46, R = 12, T = 18, B = 22, gap = 14; // phase names above the panels
+    const L = 58, R = 12, T = 18, B = 36, gap = 16; // phase names above, axis title below
     const ph = h - T - B - 2 * gap;
     const panels = [
-        { top: T, h: ph * 0.42, series: [['mean_ratio_mean', 0], ['mean_ratio_min', 1]], label: 'mean ratio' },
-        { top: 0, h: ph * 0.38, series: [['dihedral_min', 2], ['dihedral_max', 3]], label: 'dihedral °', lo: 0, hi: 180 },
-        { top: 0, h: ph * 0.20, series: [['n_inverted', 4]], label: 'inverted', lo: 0 },
+        { top: T, h: ph * 0.42, series: [['mean_ratio_mean', 0], ['mean_ratio_min', 1]], label: 'mean ratio', unit: '1 = regular tet' },
+        { top: 0, h: ph * 0.36, series: [['dihedral_min', 2], ['dihedral_max', 3]], label: 'dihedral angle', unit: 'degrees', lo: 0, hi: 180 },
+        { top: 0, h: ph * 0.22, series: [['n_inverted', 4]], label: 'inverted tets', unit: opt.log ? 'count, log scale' : 'count', lo: 0, log: !!opt.log },
     ];
     panels[1].top = panels[0].top + panels[0].h + gap;
     panels[2].top = panels[1].top + panels[1].h + gap;
     const n = recs.length;
     const xmax = Math.max(1, n - 1);
     const X = (i) => L + (w - L - R) * (i / xmax);
+    const geom = { L, R, T, B, w, h, n, xmax, X, panels };
     g.lineWidth = 1;
+    c.dataset.xlabel = 'progress record (0 = the input)';
+    c.dataset.ylabels = panels.map((p) => p.label + ' (' + p.unit + ')').join('; ');
     if (!n) {
         g.fillStyle = '#5d6878';
         g.fillText('waiting for the first progress record…', L + 8, T + 20);
-        return;
+        return geom;
     }
-    // phase bands
+    // phase bands; a rerun band gets a mark and its name
     for (let i = 0; i < n;) {
         let k = i;
         while (k + 1 < n && recs[k + 1].phase === recs[i].phase) k++;
@@ -831,10 +963,27 @@ function drawChart(c, recs) {
         g.fillStyle = PHASE_FILL[recs[i].phase] || '#f6f8fa';
         g.fillRect(x0, T, Math.max(1, x1 - x0), h - T - B);
         if (x1 - x0 > 34) {
-            g.fillStyle = '#8a94a3';
+            g.fillStyle = '#5d6878';
             g.fillText(recs[i].phase, x0 + 3, T - 5);
         }
+        if (recs[i].phase === 'rerun') {
+            g.strokeStyle = '#cf222e';
+            g.setLineDash([4, 3]);
+            g.beginPath(); g.moveTo(Math.round(X(i)) + 0.5, T); g.lineTo(Math.round(X(i)) + 0.5, h - B); g.stroke();
+            g.setLineDash([]);
+            g.fillStyle = '#cf222e';
+            g.fillText('↺ from the input', Math.min(X(i) + 3, w - R - 90), T + 12);
+        }
         i = k + 1;
+    }
+    if (typeof opt.best === 'number' && opt.best >= 0 && opt.best < n) {
+        const x = Math.round(X(opt.best)) + 0.5;
+        g.strokeStyle = '#1a7f37';
+        g.setLineDash([2, 2]);
+        g.beginPath(); g.moveTo(x, T); g.lineTo(x, h - B); g.stroke();
+        g.setLineDash([]);
+        g.fillStyle = '#1a7f37';
+        g.fillText('kept', Math.min(x + 3, w - R - 26), h - B - 4);
     }
     for (const p of panels) {
         let lo = p.lo, hi = p.hi;
@@ -853,20 +1002,30 @@ function drawChart(c, recs) {
                 if (hi === undefined) hi = Math.max(mx, 1);
             }
         }
-        const Y = (v) => p.top + p.h - (p.h * (v - lo)) / (hi - lo || 1);
+        const f = p.log ? logc : (v) => v;
+        const flo = f(lo), fhi = p.log ? Math.max(logc(hi), 1) : hi;
+        const Y = (v) => p.top + p.h - (p.h * (f(v) - flo)) / (fhi - flo || 1);
+        p.Y = Y;
+        p.lo = lo;
+        p.hi = hi;
         g.strokeStyle = '#dde1e7';
         g.fillStyle = '#5d6878';
         g.textAlign = 'right';
-        const ticks = p.lo === 0 && p.hi === 180 ? [0, 45, 90, 135, 180] : niceTicks(lo, hi, p.h > 90 ? 4 : 2);
+        const ticks = p.log ? LOG_TICKS.filter((t) => t <= hi * 1.0001 || t === 0 || t === 1)
+            : p.lo === 0 && p.hi === 180 ? [0, 45, 90, 135, 180] : niceTicks(lo, hi, p.h > 90 ? 4 : 2);
         for (const t of ticks) {
-            if (t < lo - 1e-9 || t > hi + 1e-9) continue;
+            if (f(t) < flo - 1e-9 || f(t) > fhi + 1e-9) continue;
             const y = Math.round(Y(t)) + 0.5;
             g.beginPath(); g.moveTo(L, y); g.lineTo(w - R, y); g.stroke();
             // kept inside the panel: a bottom label does not run into the next panel's top one
-            g.fillText(String(t), L - 4, Math.max(p.top + 9, Math.min(p.top + p.h - 1, y + 4)));
+            g.fillText(p.log ? kfmt(t) : String(t), L - 4, Math.max(p.top + 9, Math.min(p.top + p.h - 1, y + 4)));
         }
         g.textAlign = 'left';
-        g.fillText(p.label, L + 4, p.top + 11);
+        const lab = p.label + ' (' + p.unit + ')';
+        g.fillStyle = 'rgba(255, 255, 255, 0.85)';
+        g.fillRect(L + 1, p.top + 1, g.measureText(lab).width + 7, 14);
+        g.fillStyle = '#3d4756';
+        g.fillText(lab, L + 4, p.top + 11);
         g.strokeStyle = '#b8c0cc';
         g.strokeRect(L + 0.5, p.top + 0.5, w - L - R, p.h);
         for (const [k, ci] of p.series) {
@@ -890,23 +1049,71 @@ function drawChart(c, recs) {
             g.lineWidth = 1;
         }
     }
-    // x axis: record numbers
+    // x axis: record numbers and what they are
     g.fillStyle = '#5d6878';
     g.textAlign = 'center';
     for (const t of niceTicks(0, xmax, Math.max(2, Math.floor((w - L - R) / 70)))) {
         if (t !== Math.round(t)) continue;
-        g.fillText(String(t), X(t), h - 6);
+        g.fillText(String(t), X(t), h - B + 13);
     }
+    g.fillStyle = '#3d4756';
+    const xl = c.dataset.xlabel + ': one per global iteration, finishing sweep or polish round';
+    g.fillText(g.measureText(xl).width < w - 8 ? xl : c.dataset.xlabel, Math.max(L + (w - L - R) / 2, g.measureText(c.dataset.xlabel).width / 2 + 4), h - 5);
     g.textAlign = 'left';
+    return geom;
 }
 
-// Before/after dihedral histograms (1° bins), bars side by side per bin.
+// Text for a screen reader: what the chart shows, in numbers.
+function chartSummary(recs, notes) {
+    if (!recs.length) return 'Convergence chart: no progress record yet.';
+    const a = recs[0], z = recs[recs.length - 1];
+    const phases = [];
+    for (const r of recs) if (!phases.length || phases[phases.length - 1][0] !== r.phase) phases.push([r.phase, 1]); else phases[phases.length - 1][1]++;
+    return 'Convergence chart of ' + recs.length + ' progress records (' + phases.map(([p, k]) => p + (k > 1 ? ' ×' + k : '')).join(', ') + '). ' +
+        'Mean ratio ' + fix(a.mean_ratio_mean, 4) + ' to ' + fix(z.mean_ratio_mean, 4) + '; worst ' + sgn(a.mean_ratio_min, 3) + ' to ' + sgn(z.mean_ratio_min, 3) +
+        '; dihedral angles ' + fix(a.dihedral_min, 1) + '–' + fix(a.dihedral_max, 1) + ' to ' + fix(z.dihedral_min, 1) + '–' + fix(z.dihedral_max, 1) +
+        ' degrees; inverted tets ' + int(a.n_inverted) + ' to ' + int(z.n_inverted) + '.' + (notes.length ? ' ' + notes.map((x) => x.text).join(' ') : '');
+}
+
+// The record under the pointer, in a tooltip (and a line over the canvas).
+function chartHover(c, tip, line, getState) {
+    const show = (ev) => {
+        const { geom, recs } = getState();
+        if (!geom || !recs.length) return;
+        const rect = c.getBoundingClientRect();
+        const x = ev.clientX - rect.left;
+        const i = Math.max(0, Math.min(recs.length - 1, Math.round(((x - geom.L) / (geom.w - geom.L - geom.R)) * geom.xmax)));
+        const r = recs[i];
+        tip.replaceChildren(
+            el('strong', { text: 'record ' + i }), ' · iteration ' + r.iteration + ' · ' + (PHASE_NAME[r.phase] || r.phase), el('br'),
+            'mean ratio ' + fix(r.mean_ratio_mean, 4) + ' · worst ' + sgn(r.mean_ratio_min, 4), el('br'),
+            'dihedral ' + fix(r.dihedral_min, 2) + '°..' + fix(r.dihedral_max, 2) + '° · inverted ' + int(r.n_inverted), el('br'),
+            (typeof r.step === 'number' ? 'step ' + r.step.toPrecision(3) + ' · ' : '') + 'at ' + dur(r.elapsed));
+        const px = geom.X(i);
+        line.style.left = Math.round(px) + 'px';
+        line.style.top = geom.T + 'px';
+        line.style.height = (geom.h - geom.T - geom.B) + 'px';
+        line.hidden = false;
+        tip.hidden = false;
+        tip.style.left = Math.round(px + 12 + 260 > rect.width ? px - 12 - tip.offsetWidth : px + 12) + 'px';
+        tip.style.top = Math.round(Math.max(0, Math.min(rect.height - tip.offsetHeight, ev.clientY - rect.top - 20))) + 'px';
+        c.dataset.hover = String(i);
+    };
+    const hide = () => { tip.hidden = true; line.hidden = true; delete c.dataset.hover; };
+    c.addEventListener('pointermove', show);
+    c.addEventListener('pointerdown', show);
+    c.addEventListener('pointerleave', hide);
+}
+
+// Before/after dihedral histograms (1° bins): "before" a grey filled outline,
+// "after" a blue line on top, so that each shows where the other is higher.
+// Returns the geometry the hover needs.
 function drawHist(c, r, log) {
     const { g, w, h } = setupCanvas(c);
     const hb = (r.before && r.before.dihedral_histogram) || [];
     const ha = (r.after && r.after.dihedral_histogram) || [];
-    const L = 54, R = 10, T = 10, B = 22;
-    const f = (v) => (log ? Math.log10(1 + v) : v);
+    const L = 58, R = 10, T = 10, B = 36;
+    const f = (v) => (log ? logc(v) : v);
     const mx = Math.max(1, ...hb.map(f), ...ha.map(f));
     const nb = Math.max(hb.length, ha.length, 180);
     const bw = (w - L - R) / nb;
@@ -914,41 +1121,96 @@ function drawHist(c, r, log) {
     g.strokeStyle = '#dde1e7';
     g.fillStyle = '#5d6878';
     g.textAlign = 'right';
-    const ticks = log ? [0, 1, 10, 100, 1e3, 1e4, 1e5, 1e6, 1e7].filter((v) => f(v) <= mx) : niceTicks(0, mx, 4);
+    const ticks = log ? LOG_TICKS.filter((v) => f(v) <= mx) : niceTicks(0, mx, 4);
     for (const t of ticks) {
         const y = Math.round(Y(t)) + 0.5;
         g.beginPath(); g.moveTo(L, y); g.lineTo(w - R, y); g.stroke();
-        g.fillText(t >= 1e6 ? t / 1e6 + 'M' : t >= 1e3 ? t / 1e3 + 'k' : String(t), L - 4, y + 4);
+        g.fillText(kfmt(t), L - 4, y + 4);
     }
     g.textAlign = 'center';
     for (let d = 0; d <= 180; d += 30) {
         const x = L + (w - L - R) * (d / 180);
         g.beginPath(); g.moveTo(x + 0.5, T); g.lineTo(x + 0.5, h - B); g.stroke();
-        g.fillText(d + '°', x, h - 6);
+        g.fillText(d + '°', x, h - B + 13);
     }
+    g.fillStyle = '#3d4756';
+    g.fillText('dihedral angle (degrees, 1° bins)', L + (w - L - R) / 2, h - 5);
+    g.save();
+    g.translate(12, T + (h - T - B) / 2);
+    g.rotate(-Math.PI / 2);
+    g.fillText(log ? 'angles per bin (log scale)' : 'angles per bin', 0, 0);
+    g.restore();
     g.textAlign = 'left';
-    const bar = (hist, color, off) => {
-        g.fillStyle = color;
-        for (let i = 0; i < hist.length; i++) {
-            if (!hist[i]) continue;
-            const y = Y(hist[i]);
-            g.fillRect(L + i * bw + off * bw / 2, y, Math.max(1, bw / 2), h - B - y);
+    const path = (hist) => {
+        g.beginPath();
+        g.moveTo(L, Y(0));
+        for (let i = 0; i < nb; i++) {
+            const y = Y(hist[i] || 0);
+            g.lineTo(L + i * bw, y);
+            g.lineTo(L + (i + 1) * bw, y);
         }
+        g.lineTo(L + nb * bw, Y(0));
     };
-    bar(hb, '#9aa4b2', 0);
-    bar(ha, '#1f6feb', 1);
+    path(hb);
+    g.fillStyle = 'rgba(154, 164, 178, 0.45)';
+    g.fill();
+    g.strokeStyle = '#6e7781';
+    g.lineWidth = 1.2;
+    g.stroke();
+    path(ha);
+    g.strokeStyle = '#1f6feb';
+    g.lineWidth = 2;
+    g.stroke();
+    g.lineWidth = 1;
     c.dataset.drawn = String(hb.length + ha.length);
+    c.dataset.log = log ? '1' : '0';
+    return { L, R, T, B, w, h, nb, bw, hb, ha };
+}
+
+function histSummary(r) {
+    const b = r.before || {}, a = r.after || {};
+    const low = (hist, d) => (hist || []).slice(0, d).reduce((s, v) => s + v, 0);
+    const high = (hist, d) => (hist || []).slice(d).reduce((s, v) => s + v, 0);
+    return 'Histogram of all dihedral angles (six per tet), 1 degree bins, before and after. Smallest angle ' + fix(b.dihedral_min, 2) +
+        ' to ' + fix(a.dihedral_min, 2) + ' degrees, largest ' + fix(b.dihedral_max, 2) + ' to ' + fix(a.dihedral_max, 2) + ' degrees. Angles under 10 degrees: ' +
+        int(low(b.dihedral_histogram, 10)) + ' before, ' + int(low(a.dihedral_histogram, 10)) + ' after; over 170 degrees: ' +
+        int(high(b.dihedral_histogram, 170)) + ' before, ' + int(high(a.dihedral_histogram, 170)) + ' after.';
+}
+
+function histHover(c, tip, getGeom) {
+    c.addEventListener('pointermove', (ev) => {
+        const gm = getGeom();
+        if (!gm) return;
+        const rect = c.getBoundingClientRect();
+        const x = ev.clientX - rect.left;
+        const i = Math.floor((x - gm.L) / gm.bw);
+        if (i < 0 || i >= gm.nb) { tip.hidden = true; return; }
+        tip.textContent = i + '°–' + (i + 1) + '°: ' + int(gm.hb[i] || 0) + ' angles before, ' + int(gm.ha[i] || 0) + ' after';
+        tip.hidden = false;
+        tip.style.left = Math.round(x + 12 + 240 > rect.width ? x - 12 - tip.offsetWidth : x + 12) + 'px';
+        tip.style.top = Math.round(Math.max(0, ev.clientY - rect.top - 30)) + 'px';
+        c.dataset.hover = String(i);
+    });
+    c.addEventListener('pointerleave', () => { tip.hidden = true; delete c.dataset.hover; });
 }
 
 // ------------------------------------------------------------------ 3D view --
 // The result's boundary triangles (faces of exactly one tet), the input's
 // worst tets (orange) and the result's (red) by mean ratio, in WebGL with no
-// library; two checkboxes show or hide each set. Optional: without WebGL the
-// card says so and the rest of the page is unaffected.
+// library; checkboxes show or hide each set. A clip plane (x, y or z) cuts
+// the boundary away and draws the tets it cuts, coloured by their mean ratio;
+// a click on a triangle or tet tells that tet's quality and angles. Fit and
+// Reset frame the mesh. While turning, a lighter level of detail (half the
+// resolution, at most LOD_TRIS boundary triangles) keeps the frame rate up.
+// Optional: without WebGL the card says so and the rest of the page is
+// unaffected.
 
 const MAX_3D_TETS = 3000000;
 const VIEW3D_HELP = document.getElementById('view3d-status').textContent;
 const AUTO_3D_TETS = 300000; // loaded with the page up to this size, on request above
+const LOD_TRIS = 60000; // boundary triangles drawn while turning, at most
+const MAX_CUT_TETS = 300000;
+const FLOATS = 9; // per vertex: xyz, normal, rgb
 
 async function fetchQmesh(st, what) {
     const res = await api('/v1/jobs/' + st.id + '/' + what + '?format=qmesh');
@@ -969,6 +1231,7 @@ async function load3d(st) {
     const gl = canvas.getContext('webgl', { antialias: true, preserveDrawingBuffer: true });
     if (!gl) {
         status.textContent = 'No WebGL in this browser: the 3D view is not available (everything else is).';
+        canvas.setAttribute('aria-label', status.textContent);
         return;
     }
     status.textContent = 'loading the input and the result (' + int(nt) + ' tets each)…';
@@ -981,24 +1244,40 @@ async function load3d(st) {
     if (st.stopped) return;
     const t1 = performance.now();
     const result = out.value;
+    const input = inp.status === 'fulfilled' && inp.value.nt === result.nt ? inp.value : null;
     const frame = unitFrame(result);
+    const q = qualities(result);
+    const qin = input ? qualities(input) : null;
     const surf = surfaceTriangles(result, frame);
-    const after = worstTets(result, frame);
-    const before = inp.status === 'fulfilled' && inp.value.nt ? worstTets(inp.value, frame) : null;
+    const after = worstTets(result, q, frame);
+    const before = qin ? worstTets(input, qin, frame) : null;
+    const model = { result, input, frame, q, qin };
+    if (input) model.moved = movedColours(surf, model);
     canvas.hidden = false;
     $('view3d-layers').hidden = false;
+    $('view3d-tools').hidden = false;
     $('view3d-before').disabled = !before;
-    st.gl = viewer(canvas, gl, [
-        { name: 'before', data: before ? before.buf : new Float32Array(0), color: [0.98, 0.58, 0.1, 1], box: $('view3d-before') },
-        { name: 'after', data: after.buf, color: [0.95, 0.16, 0.16, 1], box: $('view3d-after') },
-        { name: 'surface', data: surf.buf, color: [0.75, 0.82, 0.92, 0.35], blend: true },
+    const t2 = performance.now();
+    st.gl = viewer(canvas, gl, model, [
+        { name: 'before', data: before ? before.buf : new Float32Array(0), tet: before ? before.tet : new Int32Array(0), color: [0.98, 0.58, 0.1, 1], box: $('view3d-before'), clip: true },
+        { name: 'after', data: after.buf, tet: after.tet, color: [0.95, 0.16, 0.16, 1], box: $('view3d-after'), clip: true },
+        { name: 'cut', data: new Float32Array(0), tet: new Int32Array(0), vertexColor: true },
+        { name: 'surface', data: surf.buf, tet: surf.tet, color: [0.75, 0.82, 0.92, 0.35], blend: true, clip: true, lod: true },
+        { name: 'picked', data: new Float32Array(0), tet: new Int32Array(0), color: [0.2, 0.95, 1, 0.85], blend: true, onTop: true },
     ]);
     const ms = (t) => Math.round(t) + ' ms';
-    status.textContent = int(surf.n) + ' boundary triangles of the result; ' +
+    const first = st.gl.firstFrame();
+    canvas.dataset.firstFrameMs = String(Math.round(first - t0));
+    const text = int(surf.n) + ' boundary triangles of the result; ' +
         (before ? 'in orange the input\'s ' + before.n + ' worst tets (mean ratio ≤ ' + sgn(before.q, 3) + '), '
-            : 'the input is not available (' + (inp.reason && (inp.reason.message || inp.reason)) + '), ') +
-        'in red the result\'s ' + after.n + ' worst (≤ ' + sgn(after.q, 3) + '). Drag to rotate, wheel or pinch to zoom. (' +
-        ms(t1 - t0) + ' to load, ' + ms(performance.now() - t1) + ' to build)';
+            : 'the input is not available (' + (inp.reason ? inp.reason.message || inp.reason : 'another tet count') + '), ') +
+        'in red the result\'s ' + after.n + ' worst (≤ ' + sgn(after.q, 3) + '). Drag to rotate, wheel or pinch to zoom, click a triangle or tet for its quality. (' +
+        ms(t1 - t0) + ' to load, ' + ms(t2 - t1) + ' to build, first frame ' + ms(first - t0) + ' after the request' +
+        (surf.n > LOD_TRIS ? '; while turning: 1 in ' + Math.ceil(surf.n / LOD_TRIS) + ' boundary triangles at half resolution' : '; while turning: half resolution') + ')';
+    status.textContent = text;
+    canvas.setAttribute('aria-label', '3D view of the result: ' + text);
+    $('view3d-moved-info').textContent = model.moved ? 'boundary moved up to ' + model.moved.max.toPrecision(3) + ' (mesh units, ' +
+        (100 * model.moved.max * model.frame.sc / 2 / Math.hypot(...model.frame.half)).toPrecision(2) + '% of the diagonal)' : '';
 }
 
 function parseQmesh(buf) {
@@ -1028,6 +1307,39 @@ function meanRatio(x, a, b, c, d) {
     return det < 0 ? -q : q;
 }
 
+// Mean ratio of every tet. The sign is the file's vertex order; most meshes
+// are written positive, and a mesh written all negative is flipped whole
+// (qdc orients by the connectivity: the sign most tets have).
+function qualities(m) {
+    const { nt, xyz, tets } = m;
+    const q = new Float32Array(nt);
+    let neg = 0;
+    for (let t = 0; t < nt; t++) {
+        q[t] = meanRatio(xyz, tets[4 * t], tets[4 * t + 1], tets[4 * t + 2], tets[4 * t + 3]);
+        if (q[t] < 0) neg++;
+    }
+    if (neg > nt / 2) for (let t = 0; t < nt; t++) q[t] = -q[t];
+    return q;
+}
+
+// The six dihedral angles of tet t (degrees): at each edge, the angle between
+// the two other vertices seen across it.
+function dihedrals(m, t) {
+    const P = [0, 1, 2, 3].map((k) => { const v = m.tets[4 * t + k]; return [m.xyz[3 * v], m.xyz[3 * v + 1], m.xyz[3 * v + 2]]; });
+    const sub = (a, b) => [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+    const dot = (a, b) => a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    const out = [];
+    for (const [i, j, k, l] of [[0, 1, 2, 3], [0, 2, 1, 3], [0, 3, 1, 2], [1, 2, 0, 3], [1, 3, 0, 2], [2, 3, 0, 1]]) {
+        const e = sub(P[j], P[i]);
+        const ee = dot(e, e) || 1;
+        const perp = (p) => { const d = sub(p, P[i]); const s = dot(d, e) / ee; return [d[0] - s * e[0], d[1] - s * e[1], d[2] - s * e[2]]; };
+        const u = perp(P[k]), v = perp(P[l]);
+        const c = dot(u, v) / (Math.sqrt(dot(u, u) * dot(v, v)) || 1);
+        out.push((Math.acos(Math.max(-1, Math.min(1, c))) * 180) / Math.PI);
+    }
+    return out;
+}
+
 // The faces of a tet, outward for a positive one.
 const FACES = [[1, 2, 3], [0, 3, 2], [0, 1, 3], [0, 2, 1]];
 
@@ -1042,11 +1354,19 @@ function unitFrame(m) {
     }
     const ctr = [0, 1, 2].map((k) => (mn[k] + mx[k]) / 2);
     const sc = 2 / Math.max(mx[0] - mn[0], mx[1] - mn[1], mx[2] - mn[2], 1e-300);
-    return { ctr, sc };
+    return { ctr, sc, half: [0, 1, 2].map((k) => ((mx[k] - mn[k]) / 2) * sc) };
 }
 
-// Append triangle a b c of mesh m (flat normal) to out at o: 3 x (xyz, normal).
-function putTri(out, o, m, fr, a, b, c) {
+// Quality -> colour: inverted magenta, then red (0) through yellow (0.4) to
+// green (0.8 and better).
+function qcolor(q) {
+    if (q <= 0) return [0.8, 0.1, 0.8];
+    const t = Math.min(1, q / 0.8);
+    return t < 0.5 ? [0.9, 0.15 + 1.4 * t, 0.1] : [0.9 - 1.4 * (t - 0.5), 0.85 - 0.2 * (t - 0.5), 0.1 + 0.4 * (t - 0.5)];
+}
+
+// Append triangle a b c of mesh m (flat normal, colour rgb) to out at o.
+function putTri(out, o, m, fr, a, b, c, rgb) {
     const x = m.xyz, p = [];
     for (const v of [a, b, c]) p.push((x[3 * v] - fr.ctr[0]) * fr.sc, (x[3 * v + 1] - fr.ctr[1]) * fr.sc, (x[3 * v + 2] - fr.ctr[2]) * fr.sc);
     const ux = p[3] - p[0], uy = p[4] - p[1], uz = p[5] - p[2];
@@ -1057,8 +1377,21 @@ function putTri(out, o, m, fr, a, b, c) {
     for (let k = 0; k < 3; k++) {
         out[o++] = p[3 * k]; out[o++] = p[3 * k + 1]; out[o++] = p[3 * k + 2];
         out[o++] = nx; out[o++] = ny; out[o++] = nz;
+        out[o++] = rgb ? rgb[0] : 1; out[o++] = rgb ? rgb[1] : 1; out[o++] = rgb ? rgb[2] : 1;
     }
     return o;
+}
+
+// The four faces of each tet of list into a buffer (the tet of each triangle too).
+function tetFaces(m, fr, list, color) {
+    const buf = new Float32Array(list.length * 4 * 3 * FLOATS);
+    const tet = new Int32Array(list.length * 4);
+    let o = 0, k = 0;
+    for (const t of list) for (const f of FACES) {
+        o = putTri(buf, o, m, fr, m.tets[4 * t + f[0]], m.tets[4 * t + f[1]], m.tets[4 * t + f[2]], color ? color(t) : null);
+        tet[k++] = t;
+    }
+    return { buf, tet };
 }
 
 // The boundary: faces bucketed by their smallest vertex; a face seen once.
@@ -1090,27 +1423,27 @@ function surfaceTriangles(m, fr) {
             if (twin >= 0) seen[twin] = 1; else surf.push(fid[i]);
         }
     }
-    const buf = new Float32Array(surf.length * 18);
+    const buf = new Float32Array(surf.length * 3 * FLOATS);
+    const tet = new Int32Array(surf.length);
+    const vid = new Int32Array(surf.length * 3);
     let o = 0;
-    for (const fidx of surf) {
+    surf.forEach((fidx, k) => {
         const t = fidx >> 2, f = fidx & 3;
-        o = putTri(buf, o, m, fr, tets[4 * t + F[f][0]], tets[4 * t + F[f][1]], tets[4 * t + F[f][2]]);
-    }
-    return { buf, n: surf.length };
+        tet[k] = t;
+        for (let j = 0; j < 3; j++) vid[3 * k + j] = tets[4 * t + F[f][j]];
+        o = putTri(buf, o, m, fr, vid[3 * k], vid[3 * k + 1], vid[3 * k + 2], null);
+    });
+    return { buf, tet, vid, n: surf.length };
 }
 
 // The worst tets by mean ratio (0.2% of them, 10 to 200), as their four faces.
 // Candidates below a threshold taken from a 1024-bin histogram, so only a few
 // are sorted even on a million tets.
-function worstTets(m, fr) {
-    const { nt, xyz, tets } = m;
-    const q = new Float64Array(nt);
+function worstTets(m, q, fr) {
+    const nt = m.nt;
     const bins = new Int32Array(1024);
     const bin = (v) => Math.max(0, Math.min(1023, Math.floor((v + 1) * 512)));
-    for (let t = 0; t < nt; t++) {
-        q[t] = meanRatio(xyz, tets[4 * t], tets[4 * t + 1], tets[4 * t + 2], tets[4 * t + 3]);
-        bins[bin(q[t])]++;
-    }
+    for (let t = 0; t < nt; t++) bins[bin(q[t])]++;
     const n = Math.min(nt, Math.max(10, Math.min(200, Math.ceil(nt * 0.002))));
     let last = 0;
     for (let acc = 0; last < 1024 && (acc += bins[last]) < n; last++);
@@ -1118,11 +1451,47 @@ function worstTets(m, fr) {
     for (let t = 0; t < nt; t++) if (bin(q[t]) <= last) cand.push(t);
     cand.sort((i, j) => q[i] - q[j]);
     const worst = cand.slice(0, n);
-    const buf = new Float32Array(worst.length * 4 * 18);
-    let o = 0;
-    for (const t of worst) for (const f of FACES)
-        o = putTri(buf, o, m, fr, tets[4 * t + f[0]], tets[4 * t + f[1]], tets[4 * t + f[2]]);
-    return { buf, n: worst.length, q: worst.length ? q[worst[worst.length - 1]] : NaN };
+    const { buf, tet } = tetFaces(m, fr, worst, null);
+    return { buf, tet, n: worst.length, q: worst.length ? q[worst[worst.length - 1]] : NaN };
+}
+
+// The tets of m that the plane n.p = d (normalized frame) cuts, coloured by q.
+function cutTets(model, axis, d) {
+    const { result: m, frame: fr, q } = model;
+    const list = [];
+    for (let t = 0; t < m.nt && list.length < MAX_CUT_TETS; t++) {
+        let lo = Infinity, hi = -Infinity;
+        for (let k = 0; k < 4; k++) {
+            const v = (m.xyz[3 * m.tets[4 * t + k] + axis] - fr.ctr[axis]) * fr.sc;
+            if (v < lo) lo = v;
+            if (v > hi) hi = v;
+        }
+        if (lo <= d && hi >= d) list.push(t);
+    }
+    return Object.assign(tetFaces(m, fr, list, (t) => qcolor(q[t])), { n: list.length });
+}
+
+// The boundary coloured by how far each vertex moved from its input position
+// (blue-grey: not at all, to orange: the most any moved): a copy of the
+// surface buffer with its colours set per vertex. The largest distance in
+// mesh units too.
+function movedColours(surf, model) {
+    const { result: m, input: i0 } = model;
+    const d = new Float64Array(surf.vid.length);
+    let max = 0;
+    for (let k = 0; k < surf.vid.length; k++) {
+        const v = surf.vid[k];
+        d[k] = Math.hypot(m.xyz[3 * v] - i0.xyz[3 * v], m.xyz[3 * v + 1] - i0.xyz[3 * v + 1], m.xyz[3 * v + 2] - i0.xyz[3 * v + 2]);
+        if (d[k] > max) max = d[k];
+    }
+    const buf = surf.buf.slice();
+    for (let k = 0; k < d.length; k++) {
+        const t = max > 0 ? Math.sqrt(d[k] / max) : 0; // sqrt: small moves still show
+        buf[k * FLOATS + 6] = 0.55 + 0.43 * t;
+        buf[k * FLOATS + 7] = 0.62 - 0.1 * t;
+        buf[k * FLOATS + 8] = 0.75 - 0.65 * t;
+    }
+    return { buf, max };
 }
 
 // 4x4 column-major matrices
@@ -1148,13 +1517,27 @@ function rotation(yaw, pitch) {
     return mul(rx, ry);
 }
 
-// layers: [{name, data (Float32Array of xyz+normal), color [r,g,b,a], blend,
-// box (a checkbox that shows/hides it)}]; opaque layers are drawn first.
-function viewer(canvas, gl, layers) {
-    const vs = 'attribute vec3 p; attribute vec3 n; uniform mat4 mvp; uniform mat4 rot; varying vec3 vn;' +
-        'void main() { gl_Position = mvp * vec4(p, 1.0); vn = (rot * vec4(n, 0.0)).xyz; }';
-    const fs = 'precision mediump float; varying vec3 vn; uniform vec4 color;' +
-        'void main() { float l = abs(normalize(vn).z); gl_FragColor = vec4(color.rgb * (0.35 + 0.65 * l), color.a); }';
+// p (model) rotated by the column-major rotation r
+const rot3 = (r, x, y, z) => [r[0] * x + r[4] * y + r[8] * z, r[1] * x + r[5] * y + r[9] * z, r[2] * x + r[6] * y + r[10] * z];
+const rot3t = (r, x, y, z) => [r[0] * x + r[1] * y + r[2] * z, r[4] * x + r[5] * y + r[6] * z, r[8] * x + r[9] * y + r[10] * z];
+
+const FOVY = 0.8;
+const HOME = { yaw: 0.6, pitch: 0.4 };
+
+// model: {result, input, frame, q, qin}; layers: [{name, data (Float32Array
+// of FLOATS per vertex), tet (the tet of each triangle), color [r,g,b,a],
+// vertexColor, blend, clip (cut away by the clip plane), lod (thinned while
+// turning), onTop, box (a checkbox that shows/hides it)}]; opaque layers are
+// drawn first.
+function viewer(canvas, gl, model, layers) {
+    const vs = 'attribute vec3 p; attribute vec3 n; attribute vec3 c; uniform mat4 mvp; uniform mat4 rot;' +
+        'varying vec3 vn; varying vec3 vc; varying vec3 vp;' +
+        'void main() { gl_Position = mvp * vec4(p, 1.0); vn = (rot * vec4(n, 0.0)).xyz; vc = c; vp = p; }';
+    const fs = 'precision mediump float; varying vec3 vn; varying vec3 vc; varying vec3 vp;' +
+        'uniform vec4 color; uniform float useVc; uniform vec4 plane; uniform float clipOn;' +
+        'void main() { if (clipOn > 0.5 && dot(vp, plane.xyz) > plane.w) discard;' +
+        ' float l = abs(normalize(vn).z); vec3 base = useVc > 0.5 ? vc : color.rgb;' +
+        ' gl_FragColor = vec4(base * (0.35 + 0.65 * l), color.a); }';
     const sh = (type, src) => {
         const s = gl.createShader(type);
         gl.shaderSource(s, src);
@@ -1166,62 +1549,232 @@ function viewer(canvas, gl, layers) {
     gl.attachShader(prog, sh(gl.FRAGMENT_SHADER, fs));
     gl.linkProgram(prog);
     gl.useProgram(prog);
-    const P = gl.getAttribLocation(prog, 'p'), N = gl.getAttribLocation(prog, 'n');
-    const U = { mvp: gl.getUniformLocation(prog, 'mvp'), rot: gl.getUniformLocation(prog, 'rot'), color: gl.getUniformLocation(prog, 'color') };
-    const mk = (data) => { const b = gl.createBuffer(); gl.bindBuffer(gl.ARRAY_BUFFER, b); gl.bufferData(gl.ARRAY_BUFFER, data, gl.STATIC_DRAW); return { b, n: data.length / 6 }; };
-    const bufs = layers.map((l) => Object.assign(mk(l.data), l));
-    const cam = { yaw: 0.6, pitch: 0.4, dist: 3.0 };
-    let queued = false, stopped = false;
+    const A = { p: gl.getAttribLocation(prog, 'p'), n: gl.getAttribLocation(prog, 'n'), c: gl.getAttribLocation(prog, 'c') };
+    const U = {};
+    for (const k of ['mvp', 'rot', 'color', 'useVc', 'plane', 'clipOn']) U[k] = gl.getUniformLocation(prog, k);
+    const upload = (l, data) => {
+        if (!l.b) l.b = gl.createBuffer();
+        gl.bindBuffer(gl.ARRAY_BUFFER, l.b);
+        gl.bufferData(gl.ARRAY_BUFFER, data, gl.STATIC_DRAW);
+        l.data = data;
+        l.n = data.length / FLOATS;
+    };
+    const bufs = layers.map((l) => { const b = Object.assign({}, l); upload(b, l.data); return b; });
+    const byName = (n) => bufs.find((l) => l.name === n);
+    // the thinned boundary: every k-th triangle
+    const surf = byName('surface');
+    const ntri = surf.n / 3;
+    const stride = Math.max(1, Math.ceil(ntri / LOD_TRIS));
+    const thinOut = () => {
+        if (stride === 1) return;
+        const thin = new Float32Array(Math.ceil(ntri / stride) * 3 * FLOATS);
+        let o = 0;
+        for (let t = 0; t < ntri; t += stride) {
+            thin.set(surf.data.subarray(t * 3 * FLOATS, (t + 1) * 3 * FLOATS), o);
+            o += 3 * FLOATS;
+        }
+        if (!surf.lodLayer) surf.lodLayer = {};
+        upload(surf.lodLayer, thin.subarray(0, o));
+    };
+    thinOut();
+    // the boundary plain (see-through) or coloured by how far it moved (opaque)
+    const plain = surf.data;
+    const setMoved = () => {
+        const on = $('view3d-moved').checked && model.moved;
+        upload(surf, on ? model.moved.buf : plain);
+        surf.vertexColor = !!on;
+        surf.blend = !on;
+        thinOut();
+        canvas.dataset.moved = on ? '1' : '0';
+        redraw();
+    };
+    const cam = { yaw: HOME.yaw, pitch: HOME.pitch, dist: 3, target: [0, 0, 0] };
+    const clip = { axis: -1, d: 0 };
+    let queued = false, stopped = false, dragging = false, frames = 0, firstAt = 0;
+    const aspect = () => Math.max(1, canvas.clientWidth) / Math.max(1, canvas.clientHeight);
+    const rotNow = () => rotation(cam.yaw, cam.pitch);
+    // Fit: the boundary's vertices (every k-th) in view, for this rotation:
+    // a point p' (rotated, about the target) fits when |x'| <= (d - z') tan(fov_x / 2).
+    const fit = () => {
+        const d = surf.data;
+        const mn = [Infinity, Infinity, Infinity], mx = [-Infinity, -Infinity, -Infinity];
+        const step = FLOATS * Math.max(1, Math.floor(d.length / FLOATS / 200000));
+        for (let i = 0; i < d.length; i += step) for (let k = 0; k < 3; k++) {
+            if (d[i + k] < mn[k]) mn[k] = d[i + k];
+            if (d[i + k] > mx[k]) mx[k] = d[i + k];
+        }
+        if (!(mx[0] >= mn[0])) return;
+        cam.target = [0, 1, 2].map((k) => (mn[k] + mx[k]) / 2);
+        const r = rotNow();
+        const ty = Math.tan(FOVY / 2), tx = ty * aspect();
+        let need = 0.1;
+        for (let i = 0; i < d.length; i += step) {
+            const v = rot3(r, d[i] - cam.target[0], d[i + 1] - cam.target[1], d[i + 2] - cam.target[2]);
+            need = Math.max(need, v[2] + Math.abs(v[0]) / tx, v[2] + Math.abs(v[1]) / ty);
+        }
+        cam.dist = need * 1.04;
+    };
     const bind = (buf) => {
         gl.bindBuffer(gl.ARRAY_BUFFER, buf.b);
-        gl.enableVertexAttribArray(P);
-        gl.vertexAttribPointer(P, 3, gl.FLOAT, false, 24, 0);
-        gl.enableVertexAttribArray(N);
-        gl.vertexAttribPointer(N, 3, gl.FLOAT, false, 24, 12);
+        gl.enableVertexAttribArray(A.p);
+        gl.vertexAttribPointer(A.p, 3, gl.FLOAT, false, 4 * FLOATS, 0);
+        gl.enableVertexAttribArray(A.n);
+        gl.vertexAttribPointer(A.n, 3, gl.FLOAT, false, 4 * FLOATS, 12);
+        gl.enableVertexAttribArray(A.c);
+        gl.vertexAttribPointer(A.c, 3, gl.FLOAT, false, 4 * FLOATS, 24);
     };
     const draw = () => {
         queued = false;
         if (stopped) return;
         const dpr = window.devicePixelRatio || 1;
-        const w = Math.round(canvas.clientWidth * dpr), h = Math.round(canvas.clientHeight * dpr);
+        // while turning: half the resolution (a quarter of the pixels)
+        const scale = dragging ? 0.5 : 1;
+        const w = Math.max(1, Math.round(canvas.clientWidth * dpr * scale)), h = Math.max(1, Math.round(canvas.clientHeight * dpr * scale));
         if (canvas.width !== w || canvas.height !== h) { canvas.width = w; canvas.height = h; }
         gl.viewport(0, 0, w, h);
         gl.clearColor(0.063, 0.086, 0.122, 1);
         gl.clear(gl.COLOR_BUFFER_BIT | gl.DEPTH_BUFFER_BIT);
-        const rot = rotation(cam.yaw, cam.pitch);
-        const view = mul(new Float32Array([1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, -cam.dist, 1]), rot);
-        const mvp = mul(perspective(0.8, w / Math.max(1, h), 0.05, 50), view);
+        const rot = rotNow();
+        const t = cam.target;
+        const view = mul(mul(new Float32Array([1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, -cam.dist, 1]), rot),
+            new Float32Array([1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, -t[0], -t[1], -t[2], 1]));
+        const mvp = mul(perspective(FOVY, w / h, Math.max(0.01, cam.dist / 100), cam.dist * 10 + 10), view);
         gl.uniformMatrix4fv(U.mvp, false, mvp);
         gl.uniformMatrix4fv(U.rot, false, rot);
+        const pl = [0, 0, 0];
+        if (clip.axis >= 0) pl[clip.axis] = 1;
+        gl.uniform4f(U.plane, pl[0], pl[1], pl[2], clip.d);
         gl.enable(gl.DEPTH_TEST);
         const shown = bufs.filter((l) => l.n && (!l.box || l.box.checked));
         const opaque = shown.some((l) => !l.blend);
-        for (const l of shown) {
-            gl.depthMask(!l.blend);
-            if (l.blend) {
+        let drawn = 0;
+        for (const l0 of shown) {
+            const l = dragging && l0.lodLayer ? l0.lodLayer : l0;
+            gl.depthMask(!l0.blend);
+            if (l0.blend) {
                 gl.enable(gl.BLEND);
                 gl.blendFunc(gl.SRC_ALPHA, gl.ONE_MINUS_SRC_ALPHA);
             } else {
                 gl.disable(gl.BLEND);
             }
+            if (l0.onTop) gl.disable(gl.DEPTH_TEST);
             bind(l);
             // alone, the surface is drawn nearly opaque
-            gl.uniform4f(U.color, l.color[0], l.color[1], l.color[2], l.blend && !opaque ? 0.9 : l.color[3]);
+            gl.uniform4f(U.color, l0.color ? l0.color[0] : 1, l0.color ? l0.color[1] : 1, l0.color ? l0.color[2] : 1,
+                l0.vertexColor ? 1 : l0.blend && !opaque && !l0.onTop ? 0.9 : l0.color[3]);
+            gl.uniform1f(U.useVc, l0.vertexColor ? 1 : 0);
+            gl.uniform1f(U.clipOn, l0.clip && clip.axis >= 0 ? 1 : 0);
             gl.drawArrays(gl.TRIANGLES, 0, l.n);
+            drawn += l.n / 3;
+            if (l0.onTop) gl.enable(gl.DEPTH_TEST);
         }
         gl.depthMask(true);
-        canvas.dataset.layers = shown.map((l) => l.name + ':' + l.n / 3).join(' ');
-        const surf = bufs.find((l) => l.name === 'surface');
-        canvas.dataset.triangles = String(surf ? surf.n / 3 : 0);
+        frames++;
+        canvas.dataset.frames = String(frames);
+        canvas.dataset.lod = dragging ? 'drag: ' + w + 'x' + h + ' px, ' + drawn + ' triangles' : 'full: ' + w + 'x' + h + ' px, ' + drawn + ' triangles';
+        canvas.dataset.layers = shown.filter((l) => l.name !== 'picked' && l.name !== 'cut').map((l) => l.name + ':' + l.n / 3).join(' ');
+        canvas.dataset.triangles = String(ntri);
+        canvas.dataset.camera = [cam.yaw, cam.pitch, cam.dist, ...cam.target].map((v) => v.toFixed(3)).join(' ');
     };
     const redraw = () => { if (!queued) { queued = true; requestAnimationFrame(draw); } };
+    // a click: the nearest triangle under the pointer (Moller-Trumbore), of
+    // the layers shown, beyond the clip plane's cut away part
+    const pick = (cx, cy) => {
+        const rect = canvas.getBoundingClientRect();
+        const nx = ((cx - rect.left) / rect.width) * 2 - 1, ny = 1 - ((cy - rect.top) / rect.height) * 2;
+        const ty = Math.tan(FOVY / 2), tx = ty * aspect();
+        const r = rotNow();
+        const o = rot3t(r, 0, 0, cam.dist).map((v, k) => v + cam.target[k]);
+        const dir = rot3t(r, nx * tx, ny * ty, -1);
+        let best = Infinity, bestTet = -1, bestLayer = '';
+        for (const l of bufs) {
+            if (!l.n || l.name === 'picked' || (l.box && !l.box.checked)) continue;
+            const d = l.data;
+            for (let i = 0, tri = 0; i < d.length; i += 3 * FLOATS, tri++) {
+                const e1x = d[i + FLOATS] - d[i], e1y = d[i + FLOATS + 1] - d[i + 1], e1z = d[i + FLOATS + 2] - d[i + 2];
+                const e2x = d[i + 2 * FLOATS] - d[i], e2y = d[i + 2 * FLOATS + 1] - d[i + 1], e2z = d[i + 2 * FLOATS + 2] - d[i + 2];
+                const px = dir[1] * e2z - dir[2] * e2y, py = dir[2] * e2x - dir[0] * e2z, pz = dir[0] * e2y - dir[1] * e2x;
+                const det = e1x * px + e1y * py + e1z * pz;
+                if (Math.abs(det) < 1e-12) continue;
+                const inv = 1 / det;
+                const sx = o[0] - d[i], sy = o[1] - d[i + 1], sz = o[2] - d[i + 2];
+                const u = (sx * px + sy * py + sz * pz) * inv;
+                if (u < 0 || u > 1) continue;
+                const qx = sy * e1z - sz * e1y, qy = sz * e1x - sx * e1z, qz = sx * e1y - sy * e1x;
+                const v = (dir[0] * qx + dir[1] * qy + dir[2] * qz) * inv;
+                if (v < 0 || u + v > 1) continue;
+                const t = (e2x * qx + e2y * qy + e2z * qz) * inv;
+                if (t <= 0 || t >= best) continue;
+                if (l.clip && clip.axis >= 0 && o[clip.axis] + t * dir[clip.axis] > clip.d) continue;
+                best = t;
+                bestTet = l.tet[tri];
+                bestLayer = l.name;
+            }
+        }
+        return bestTet >= 0 ? { tet: bestTet, layer: bestLayer } : null;
+    };
+    const showPick = (hit) => {
+        const box = $('view3d-pick');
+        const picked = byName('picked');
+        if (!hit) {
+            upload(picked, new Float32Array(0));
+            box.textContent = 'Nothing under the pointer: click a boundary triangle or a tet.';
+            delete canvas.dataset.picked;
+        } else {
+            const t = hit.tet;
+            upload(picked, tetFaces(model.result, model.frame, [t], null).buf);
+            const ang = dihedrals(model.result, t);
+            box.textContent = 'Tet ' + t + ' (' + ({ surface: 'on the boundary', cut: 'cut by the plane', before: 'among the input\'s worst', after: 'among the result\'s worst' }[hit.layer]) +
+                '): mean ratio ' + sgn(model.q[t], 4) + (model.qin ? ' (input ' + sgn(model.qin[t], 4) + ')' : '') +
+                '; dihedral angles ' + ang.map((a) => a.toFixed(1) + '°').join(', ') + ' (smallest ' + Math.min(...ang).toFixed(2) + '°, largest ' + Math.max(...ang).toFixed(2) + '°).';
+            canvas.dataset.picked = String(t);
+        }
+        redraw();
+    };
+    const setClip = () => {
+        const axis = ['x', 'y', 'z'].indexOf($('view3d-clip').value);
+        const cut = byName('cut');
+        $('view3d-clip-pos').disabled = axis < 0;
+        clip.axis = axis;
+        if (axis < 0) {
+            upload(cut, new Float32Array(0));
+            $('view3d-cut-info').textContent = '';
+            delete canvas.dataset.cut;
+        } else {
+            const half = model.frame.half[axis];
+            clip.d = (-1 + (2 * +$('view3d-clip-pos').value) / 100) * half * 1.001;
+            const c = cutTets(model, axis, clip.d);
+            cut.tet = c.tet;
+            upload(cut, c.buf);
+            $('view3d-cut-info').textContent = int(c.n) + ' tets cut by the plane ' + 'xyz'[axis] + ' = ' +
+                (clip.d / model.frame.sc + model.frame.ctr[axis]).toPrecision(4) + (c.n >= MAX_CUT_TETS ? ' (the first ' + int(MAX_CUT_TETS) + ')' : '') +
+                ', coloured by mean ratio; the boundary beyond it is cut away.';
+            canvas.dataset.cut = String(c.n);
+        }
+        redraw();
+    };
     const ptrs = new Map();
-    let pinch = 0;
-    canvas.onpointerdown = (e) => { canvas.setPointerCapture(e.pointerId); ptrs.set(e.pointerId, [e.clientX, e.clientY]); };
-    canvas.onpointerup = canvas.onpointercancel = (e) => { ptrs.delete(e.pointerId); pinch = 0; };
+    let pinch = 0, downAt = null;
+    canvas.onpointerdown = (e) => {
+        canvas.setPointerCapture(e.pointerId);
+        ptrs.set(e.pointerId, [e.clientX, e.clientY]);
+        downAt = [e.clientX, e.clientY];
+    };
+    canvas.onpointerup = canvas.onpointercancel = (e) => {
+        ptrs.delete(e.pointerId);
+        pinch = 0;
+        if (!ptrs.size) {
+            const click = downAt && e.type === 'pointerup' && Math.hypot(e.clientX - downAt[0], e.clientY - downAt[1]) < 4;
+            downAt = null;
+            if (dragging) { dragging = false; redraw(); }
+            if (click) showPick(pick(e.clientX, e.clientY));
+        }
+    };
     canvas.onpointermove = (e) => {
         const p = ptrs.get(e.pointerId);
         if (!p) return;
+        if (!dragging && downAt && Math.hypot(e.clientX - downAt[0], e.clientY - downAt[1]) >= 4) dragging = true;
+        if (!dragging) return;
         if (ptrs.size === 1) {
             cam.yaw += (e.clientX - p[0]) * 0.01;
             cam.pitch = Math.max(-1.55, Math.min(1.55, cam.pitch + (e.clientY - p[1]) * 0.01));
@@ -1230,20 +1783,53 @@ function viewer(canvas, gl, layers) {
         if (ptrs.size === 2) {
             const [a, b] = [...ptrs.values()];
             const d = Math.hypot(a[0] - b[0], a[1] - b[1]);
-            if (pinch) cam.dist = Math.max(0.5, Math.min(20, cam.dist * pinch / d));
+            if (pinch) cam.dist = Math.max(0.05, Math.min(50, cam.dist * pinch / d));
             pinch = d;
         }
         redraw();
     };
     canvas.addEventListener('wheel', (e) => {
         e.preventDefault();
-        cam.dist = Math.max(0.5, Math.min(20, cam.dist * Math.exp(e.deltaY * 0.001)));
+        cam.dist = Math.max(0.05, Math.min(50, cam.dist * Math.exp(e.deltaY * 0.001)));
         redraw();
     }, { passive: false });
+    // keyboard: arrows turn, + and - zoom, f fits, 0 resets (the canvas takes focus)
+    canvas.tabIndex = 0;
+    canvas.onkeydown = (e) => {
+        const k = e.key;
+        if (k === 'ArrowLeft' || k === 'ArrowRight') cam.yaw += k === 'ArrowLeft' ? -0.1 : 0.1;
+        else if (k === 'ArrowUp' || k === 'ArrowDown') cam.pitch = Math.max(-1.55, Math.min(1.55, cam.pitch + (k === 'ArrowUp' ? -0.1 : 0.1)));
+        else if (k === '+' || k === '=') cam.dist /= 1.1;
+        else if (k === '-') cam.dist *= 1.1;
+        else if (k === 'f') fit();
+        else if (k === '0') { cam.yaw = HOME.yaw; cam.pitch = HOME.pitch; fit(); }
+        else return;
+        e.preventDefault();
+        redraw();
+    };
+    $('view3d-fit').onclick = () => { fit(); redraw(); };
+    $('view3d-reset').onclick = () => { cam.yaw = HOME.yaw; cam.pitch = HOME.pitch; fit(); redraw(); };
+    $('view3d-clip').onchange = setClip;
+    $('view3d-moved').checked = false;
+    $('view3d-moved').disabled = !model.moved;
+    $('view3d-moved').onchange = setMoved;
+    $('view3d-clip-pos').oninput = setClip;
+    $('view3d-clip').value = '';
+    $('view3d-clip-pos').value = '50';
+    $('view3d-pick').textContent = '';
+    $('view3d-cut-info').textContent = '';
     window.addEventListener('resize', redraw);
     for (const l of layers) if (l.box) l.box.onchange = redraw;
-    redraw();
-    return { stop: () => { stopped = true; window.removeEventListener('resize', redraw); } };
+    fit();
+    // the first frame now (not at the next animation frame), finished, so that
+    // its time can be told
+    draw();
+    gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, new Uint8Array(4));
+    firstAt = performance.now();
+    return {
+        stop: () => { stopped = true; window.removeEventListener('resize', redraw); },
+        firstFrame: () => firstAt,
+    };
 }
 
 // --------------------------------------------------------------------- init --
@@ -1263,6 +1849,11 @@ function init() {
         if (e.dataTransfer.files.length) chooseFile(e.dataTransfer.files[0]);
     });
     $('submit-form').addEventListener('submit', submit);
+    chartHover($('chart'), $('chart-tip'), $('chart-line'), () => {
+        const st = hoverState();
+        return st ? { geom: st.chartGeom, recs: st.recs } : { recs: [] };
+    });
+    histHover($('hist'), $('hist-tip'), () => { const st = hoverState(); return st && st.histGeom; });
     for (const b of $('filters').querySelectorAll('button')) {
         b.addEventListener('click', () => {
             listState.filter = b.dataset.state;

@@ -383,22 +383,31 @@ class Client:
             if not token:
                 return out
 
-    def progress(self, job, after=-1, wait=30):
-        """One long-poll: records after seq `after` (waits up to `wait` s)."""
-        return self._json("GET", "/v1/jobs/%s/progress?after=%d&wait=%g" % (_job_id(job), after, wait),
-                          timeout=wait + 30)
+    def progress(self, job, after=-1, wait=30, attempt=None):
+        """One long-poll: records after seq `after` (waits up to `wait` s).
+        attempt: the run the records up to `after` came from; if the job has
+        run again since, the reply starts over with the new run's records and
+        says "restarted"."""
+        q = "after=%d&wait=%g" % (after, wait) + ("&attempt=%d" % attempt if attempt else "")
+        return self._json("GET", "/v1/jobs/%s/progress?%s" % (_job_id(job), q), timeout=wait + 30)
 
-    def wait(self, job, on_progress=None, poll_wait=30, raise_on_failure=True):
+    def wait(self, job, on_progress=None, poll_wait=30, raise_on_failure=True, on_restart=None,
+             after=-1, attempt=None):
         """Follow the job until it ends; on_progress(record) is called once per
-        iteration record, in order. Returns the final job JSON; raises JobFailed
+        iteration record, in order. A job that runs again (its server died)
+        starts its records over: on_restart({"from_attempt": A, "attempt": B})
+        is called first. after, attempt: resume after the records already seen
+        (their seq and attempt). Returns the final job JSON; raises JobFailed
         if it failed or was cancelled (unless raise_on_failure is False)."""
-        after = -1
         while True:
-            p = self.progress(job, after, poll_wait)
+            p = self.progress(job, after, poll_wait, attempt)
+            if p.get("restarted") and on_restart:
+                on_restart(p["restarted"])
             for rec in p.get("records", []):
                 if on_progress:
                     on_progress(rec)
             after = p.get("next_after", after)
+            attempt = p.get("attempt") or attempt
             if p.get("done"):
                 break
         final = self.job(job)

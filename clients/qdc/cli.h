@@ -4,6 +4,8 @@
 
 #include "qdc.h"
 
+#include <stdio.h>
+
 /* Exit codes (documented in README.md and `qdc --help`). */
 enum {
     CLI_OK = 0,
@@ -42,6 +44,17 @@ qdc_status cli_save_mesh(const char *out, meshio_format fout, const mesh_t *m,
 
 /* One-line error in the form "qdc: FILE:LINE:COL: message". */
 void cli_error(const char *path, const qdc_error *err, qdc_status st);
+
+/* The candidate nearest to word by edit distance (insertions, deletions,
+ * substitutions, swaps of neighbours; '-' and '_' alike), or a candidate word
+ * is the start of; NULL when none is within about a third of word's length. */
+const char *cli_suggest(const char *word, const char *const *cands, size_t n);
+
+/* `qdc optimize --help` (help.c): the options in groups, each word explained. */
+void cli_optimize_usage(FILE *f);
+/* The option of `qdc optimize` nearest to a mistyped flag ("--bondary") into
+ * buf ("--boundary"): 1, or 0 when none is near. */
+int cli_optimize_suggest(const char *flag, char *buf, size_t len);
 
 int cli_optimize(int argc, char **argv);
 int cli_quality(int argc, char **argv);

@@ -135,72 +135,6 @@ int cli_options(int argc, char **argv)
     return CLI_OK;
 }
 
-/* The optimizer's options come from the library's table (lib/opt/options.h),
- * with their valid values and defaults; then the CLI's own. */
-/* The --in-format/--out-format help: the library's format table, names
- * wrapped at 80 columns. */
-static void format_list(FILE *f)
-{
-    int col = 35;
-
-    fputs("  --in-format F, --out-format F   ", f);
-    for (int k = 1; meshio_format_name((meshio_format)k); k++) {
-        const char *n = meshio_format_name((meshio_format)k);
-        int w = (int)strlen(n) + 1;
-        if (col + w > 80) {
-            fprintf(f, "\n%29s", "");
-            col = 29;
-        }
-        fprintf(f, "%s%s", n, meshio_format_name((meshio_format)(k + 1)) ? "|" : "\n");
-        col += w;
-    }
-    fputs("                             (default: by extension, then content);\n"
-          "                             input also ",
-          f);
-    for (int k = 1; surface_format_name((surface_format)k); k++)
-        fprintf(f, "%s%s", k > 1 ? "|" : "", surface_format_name((surface_format)k));
-    fputs("\n", f);
-}
-
-static void optimize_usage(FILE *f)
-{
-    size_t n;
-    const opt_desc *t = opt_table(&n);
-    opt_options d;
-
-    opt_defaults(&d);
-    fputs("usage: qdc optimize IN OUT [options]\n", f);
-    for (size_t i = 0; i < n; i++) {
-        char flag[40], range[200], def[64];
-        size_t k;
-        snprintf(flag, sizeof flag, "--%s", t[i].name);
-        for (k = 0; flag[k]; k++)
-            flag[k] = flag[k] == '_' ? '-' : flag[k];
-        opt_range_text(&t[i], range, sizeof range);
-        opt_value_text(&t[i], &d, def, sizeof def);
-        fprintf(f, "  %-26s %s\n  %-26s   %s; default %s\n", flag, t[i].help, "", range,
-                def);
-    }
-    format_list(f);
-    fputs("  --format F                 both of the above\n"
-          "  --tetgen-quality Q         surface input: TetGen radius-edge bound (default "
-          "2)\n"
-          "  --max-volume V             surface input: TetGen maximum tet volume\n"
-          "  --fix FILE                 vertices that must not move (0-based indices)\n"
-          "  --reorient on|off          write every tet in the vertex order that is\n"
-          "                             positive under the mesh's orientation (default "
-          "off:\n"
-          "                             tets are written in the input's vertex order)\n"
-          "  --report FILE.json         write the quality/boundary report\n"
-          "  --no-keep-source           OUT is written by qdc's writer even in the\n"
-          "                             input's format (default: the input file, read\n"
-          "                             again at the end and checked unchanged, with\n"
-          "                             only the coordinates replaced, when OUT is in\n"
-          "                             its format)\n"
-          "  --quiet                    no progress output\n",
-          f);
-}
-
 /* Before writing m to out in fmt: say in one note line when the input's
  * extra data (tags, names, arrays) cannot come along, or that float32
  * coordinates stay float32. */
@@ -227,6 +161,35 @@ static int positional(const char *a, const char **in, const char **out);
 static qdc_status load_input(const char *path, meshio_format fin, surface_format sin,
                              const tetra_options *to, progress_state *ps, int keep,
                              mesh_t **m, qdc_error *err);
+
+/* OUT named in a format qdc reads but does not write (a surface: .stl, .off,
+ * .obj, .poly, .smesh, gzipped or not): said before anything is read, and 1.
+ * --out-format or "-" decides otherwise. */
+static int read_only_out(const char *out, meshio_format fout)
+{
+    char name[4096], upper[16];
+    const char *base = strrchr(out, '/');
+    size_t n;
+    surface_format sf;
+
+    if (fout != MESHIO_AUTO || !strcmp(out, "-"))
+        return 0;
+    snprintf(name, sizeof name, "%s", base ? base + 1 : out);
+    n = strlen(name);
+    if (n > 3 && !strcmp(name + n - 3, ".gz"))
+        name[n - 3] = 0;
+    if (!strchr(name, '.') || (sf = surface_format_from_name(name)) == SURFACE_AUTO)
+        return 0;
+    snprintf(upper, sizeof upper, "%s", surface_format_name(sf));
+    for (char *c = upper; *c; c++)
+        *c = (char)(*c >= 'a' && *c <= 'z' ? *c - 'a' + 'A' : *c);
+    fprintf(stderr,
+            "qdc: %s: %s is a surface format qdc reads but does not write: name a tet "
+            "mesh (.mesh, .meshb, .msh, .vtk, .vtu, .node, .json, .qmesh, .xml) or give "
+            "--out-format; nothing was done\n",
+            out, upper);
+    return 1;
+}
 
 /* qdc convert IN OUT: read, then write (spliced when OUT is in IN's format). */
 int cli_convert(int argc, char **argv)
@@ -274,6 +237,8 @@ int cli_convert(int argc, char **argv)
               stderr);
         return CLI_EUSAGE;
     }
+    if (read_only_out(out, fout))
+        return CLI_EINPUT;
     st = load_input(in, fin, SURFACE_AUTO, NULL, &ps, keep, &m, &err);
     if (st != QDC_OK) {
         cli_error(in, &err, st);
@@ -453,7 +418,7 @@ static qdc_status load_input(const char *path, meshio_format fin, surface_format
                              const tetra_options *to, progress_state *ps, int keep,
                              mesh_t **m, qdc_error *err)
 {
-    meshio_options mo = {on_log, ps, keep ? 1 : -1};
+    meshio_options mo = {.log = on_log, .log_ctx = ps, .source = keep ? 1 : -1};
     char *buf = NULL;
     size_t len = 0;
     int stream = is_stream(path);
@@ -587,7 +552,13 @@ static int optimize_option(optimize_args *x, const char *a, const char *v)
     else if (!strcmp(a, "--reorient"))
         bad = on_off(v, &x->reorient);
     else {
-        fprintf(stderr, "qdc: unknown option %s (see qdc optimize --help)\n", a);
+        char near[64];
+        if (cli_optimize_suggest(a, near, sizeof near))
+            fprintf(stderr,
+                    "qdc: unknown option %s: did you mean %s? (qdc optimize --help)\n", a,
+                    near);
+        else
+            fprintf(stderr, "qdc: unknown option %s (see qdc optimize --help)\n", a);
         return CLI_EUSAGE;
     }
     if (bad) {
@@ -608,7 +579,7 @@ static int optimize_parse(int argc, char **argv, optimize_args *x)
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
         if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
-            optimize_usage(stdout);
+            cli_optimize_usage(stdout);
             return CLI_OK;
         } else if (!strcmp(a, "--quiet") || !strcmp(a, "-q")) {
             x->ps.quiet = 1;
@@ -628,7 +599,9 @@ static int optimize_parse(int argc, char **argv, optimize_args *x)
         }
     }
     if (!x->in || !x->out) {
-        optimize_usage(stderr);
+        fputs(
+            "usage: qdc optimize IN OUT [options]   (the options: qdc optimize --help)\n",
+            stderr);
         return CLI_EUSAGE;
     }
     if (!strcmp(x->out, "-") && x->report_path && !strcmp(x->report_path, "-")) {
@@ -699,6 +672,19 @@ static void optimize_summary(const optimize_args *x, const opt_result *res)
             "line search %.2f, harmonic %.2f, finish %.2f\n",
             res->t_setup, res->t_weights, res->t_assembly, res->t_solve,
             res->t_linesearch, res->t_harmonic, res->t_finish);
+    if (res->tets_in > 0)
+        fprintf(stderr,
+                "qdc: topology %s: tets %d -> %d (vertices kept); %lld edges removed "
+                "(rings of 3: %lld, 4: %lld, 5: %lld, 6: %lld, 7-10: %lld), %lld 2-3 "
+                "flips, %lld multi-face removals; rounds: %d\n",
+                opt_topology_name(x->o.topology), (int)res->tets_in, (int)res->tets_out,
+                (long long)res->topo_edge_removals, (long long)res->topo_by_ring[3],
+                (long long)res->topo_by_ring[4], (long long)res->topo_by_ring[5],
+                (long long)res->topo_by_ring[6],
+                (long long)(res->topo_by_ring[7] + res->topo_by_ring[8] +
+                            res->topo_by_ring[9] + res->topo_by_ring[10]),
+                (long long)res->topo_flips23, (long long)res->topo_multiface,
+                res->topo_rounds);
 }
 
 /* --report FILE.json: quality of the input (orig) and of the result (m), the
@@ -737,6 +723,8 @@ int cli_optimize(int argc, char **argv)
 
     if (rc >= 0)
         return rc;
+    if (read_only_out(x.out, x.fout))
+        return CLI_EINPUT;
     rc = CLI_OK;
     qdc_error_clear(&err);
     x.ps.tty = isatty(STDERR_FILENO);
@@ -983,7 +971,8 @@ int cli_quality(int argc, char **argv)
     const char *in = NULL, *ref = NULL;
     int json = 0, rc = CLI_OK;
     mesh_t *m = NULL, *r = NULL;
-    meshio_options nokeep = {NULL, NULL, -1}; /* nothing is written back */
+    meshio_options nokeep = {
+        .log = NULL, .log_ctx = NULL, .source = -1}; /* nothing is written back */
     report_quality q;
     bderr_result be;
     qdc_error err;

@@ -97,7 +97,18 @@ int main(int argc, char **argv)
         !strcmp(argv[1], "watch") || !strcmp(argv[1], "fetch") ||
         !strcmp(argv[1], "cancel") || !strcmp(argv[1], "jobs"))
         return cli_remote(argc - 1, argv + 1);
-    fprintf(stderr, "qdc: unknown command '%s'\n", argv[1]);
+    {
+        static const char *const commands[] = {
+            "optimize", "quality", "convert", "options", "tetra", "submit",
+            "status",   "watch",   "fetch",   "cancel",  "jobs",  "help"};
+        const char *near =
+            cli_suggest(argv[1], commands, sizeof commands / sizeof commands[0]);
+        if (near)
+            fprintf(stderr, "qdc: unknown command '%s': did you mean '%s'?\n", argv[1],
+                    near);
+        else
+            fprintf(stderr, "qdc: unknown command '%s'\n", argv[1]);
+    }
     usage(stderr);
     return CLI_EUSAGE;
 }

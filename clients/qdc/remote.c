@@ -505,7 +505,7 @@ typedef struct {
     remote rm;
     const char *pos[2]; /* positional arguments */
     int npos;
-    const char *out, *report, *idem, *out_format, *in_format;
+    const char *out, *report, *idem, *out_format, *in_format, *label;
     int wait, json;
     rbuf query; /* optimizer options as a query string */
 } args;
@@ -534,6 +534,9 @@ static void remote_usage(FILE *f)
         "  and arrays kept). The job id is printed on stdout (on stderr when -o\n"
         "  or --report is '-', standard output: in IN's format unless --out-format\n"
         "  says another). -o or --report imply --wait.\n"
+        "  The job keeps IN's file name (shown by qdc jobs and status, the console\n"
+        "  and its download names).\n"
+        "  --label L             a label for the job, besides the file's name\n"
         "  --idempotency-key K   key of this submission (default: a random one; reuse\n"
         "                        it to make a re-run return the same job)\n"
         "  --in-format F, --out-format F   a format name, as in qdc optimize (default:\n"
@@ -595,6 +598,8 @@ static int parse_args(int argc, char **argv, int max_pos, int allow_opt, args *a
                 retries = v;
             else if (!strcmp(s, "-o") || !strcmp(s, "--output"))
                 a->out = v;
+            else if (!strcmp(s, "--label"))
+                a->label = v;
             else if (!strcmp(s, "--report"))
                 a->report = v;
             else if (!strcmp(s, "--idempotency-key"))
@@ -726,23 +731,37 @@ static void view_record(view *v, jv rec)
  * final state. Returns -1 when done, else an exit code. */
 static int follow(remote *rm, const char *id, view *v, char *state, size_t cap)
 {
-    long after = -1;
-    char path[256];
+    long after = -1, run = 0; /* run: the attempt the records so far are of */
+    char path[256], line[160];
     reply r = {0};
     int rc = -1;
 
     for (;;) {
         snprintf(path, sizeof path, "/v1/jobs/%s/progress?after=%ld&wait=%d", id, after,
                  POLL_WAIT);
+        if (run > 0) /* told if the job runs again (a node died): records start over */
+            snprintf(path + strlen(path), sizeof path - strlen(path), "&attempt=%ld",
+                     run);
         int hr = http(rm, "GET", path, NULL, NULL, 0, POLL_WAIT + 30, &r);
         if (hr || r.status != 200) {
             view_end(v);
             rc = http_fail("progress", hr, &r);
             break;
         }
-        jv b = jbody(&r.body), recs, it, rec;
-        double na = (double)after;
+        jv b = jbody(&r.body), recs, it, rec, rs;
+        double na = (double)after, at = (double)run, from = 0;
         int done = jbool(b, "done");
+        if (jget(b, "restarted", &rs) && jnum(rs, "from_attempt", &from)) {
+            double to = from + 1;
+            jnum(rs, "attempt", &to);
+            snprintf(
+                line, sizeof line,
+                "job %s runs again from the start: attempt %.0f (attempt %.0f stopped)",
+                id, to, from);
+            view_line(v, line);
+        }
+        if (jnum(b, "attempt", &at))
+            run = (long)at;
         if (jget(b, "records", &recs)) {
             it = recs;
             while (jnext(&it, &rec))
@@ -752,7 +771,6 @@ static int follow(remote *rm, const char *id, view *v, char *state, size_t cap)
         if (strcmp(state, v->state)) {
             /* On a terminal the live line shows "queued" until records come;
              * the final state gets a line of its own below the last record. */
-            char line[96];
             snprintf(line, sizeof line, "job %s %s", id, state);
             if (done)
                 view_end(v);
@@ -975,7 +993,7 @@ static int cmd_submit(args *a)
     char key[200], hkey[260], path[4200], id[64] = "";
     int rc = CLI_OK, hr;
     view v = {stderr, isatty(2), 0, a->rm.quiet, ""};
-    meshio_options keep = {NULL, NULL, 1};
+    meshio_options keep = {.log = NULL, .log_ctx = NULL, .source = 1};
     meshio_format src, own; /* sent as; the input's own format (AUTO: none kept) */
     surface_format sf;
     char *raw = NULL, ctype[80];
@@ -986,6 +1004,15 @@ static int cmd_submit(args *a)
     if (a->out || a->report)
         a->wait = 1;
     if (!out_format_ok(a))
+        return CLI_EUSAGE;
+    /* the job keeps the file's name (its last part) and the label: the list,
+     * the console and download names show them */
+    if (strcmp(in, "-")) {
+        const char *base = strrchr(in, '/');
+        if (query_add(&a->query, "name", base ? base + 1 : in, a->rm.curl))
+            return CLI_EUSAGE;
+    }
+    if (a->label && query_add(&a->query, "label", a->label, a->rm.curl))
         return CLI_EUSAGE;
     /* a closed surface (qdcd tetrahedralizes it with TetGen): sent as it is,
      * after the checks qdcd makes */
@@ -1100,7 +1127,7 @@ out:
 /* Summary of a job object on one line. */
 static void print_job(jv j, FILE *f)
 {
-    char id[64], state[32], fmt[16];
+    char id[64], state[32], fmt[16], name[256] = "", label[128] = "";
     double nt = 0, it = 0, qm = 0, qmin = 0, inv = 0;
     int has_q;
 
@@ -1112,9 +1139,15 @@ static void print_job(jv j, FILE *f)
     has_q = jnum(j, "progress.mean_ratio_mean", &qm);
     jnum(j, "progress.mean_ratio_min", &qmin);
     jnum(j, "progress.n_inverted", &inv);
+    jstr(j, "file_name", name, sizeof name);
+    jstr(j, "label", label, sizeof label);
     fprintf(f, "%s  %-9s  %-5s %9.0f tets  %3.0f it", id, state, fmt, nt, it);
     if (has_q)
         fprintf(f, "  q mean %.4f min %+.4f  inverted %.0f", qm, qmin, inv);
+    /* the names last: the columns before them keep their places */
+    if (label[0] || name[0])
+        fprintf(f, "  %s%s%s%s", label, label[0] && name[0] ? " (" : "", name,
+                label[0] && name[0] ? ")" : "");
     fputc('\n', f);
 }
 
@@ -1156,6 +1189,25 @@ static int cmd_watch(args *a)
     return rc >= 0 ? rc : CLI_OK;
 }
 
+/* After a download: a job cancelled while it ran has the best mesh so far as
+ * its result (qdcd keeps it, as qdc optimize does on Ctrl-C): written, said,
+ * and exit 11 as for any cancelled job. */
+static int cancelled_note(remote *rm, const char *id)
+{
+    char path[128], state[32] = "";
+    reply r = {0};
+
+    snprintf(path, sizeof path, "/v1/jobs/%s", id);
+    if (!http(rm, "GET", path, NULL, NULL, 0, 30, &r) && r.status == 200)
+        jstr(jbody(&r.body), "state", state, sizeof state);
+    rb_free(&r.body);
+    if (strcmp(state, "cancelled"))
+        return CLI_OK;
+    fprintf(stderr,
+            "qdc: job %s was cancelled: what was written is its best mesh so far\n", id);
+    return CLI_EJOB;
+}
+
 static int cmd_fetch(args *a)
 {
     char id[33];
@@ -1175,7 +1227,8 @@ static int cmd_fetch(args *a)
         if (rc >= 0)
             return rc;
     }
-    return download(&a->rm, id, a->out, a->out_format, a->report, NULL);
+    rc = download(&a->rm, id, a->out, a->out_format, a->report, NULL);
+    return rc == CLI_OK ? cancelled_note(&a->rm, id) : rc;
 }
 
 static int cmd_cancel(args *a)

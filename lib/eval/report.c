@@ -304,6 +304,8 @@ qdc_status report_write_json(const report_t *r, qdc_write_fn fn, void *ctx,
         jw_int(&w, "finish", o->finish);
         jw_int(&w, "max_iter", o->max_iter);
         jw_num(&w, "mu", o->mu);
+        if (o->topology != OPT_TOPOLOGY_NONE) /* absent: the report of before */
+            jw_str(&w, "topology", opt_topology_name(o->topology));
         jw_close(&w, '}');
     }
     if (r->run) {
@@ -331,6 +333,23 @@ qdc_status report_write_json(const report_t *r, qdc_write_fn fn, void *ctx,
         jw_num(&w, "finish", s->t_finish);
         jw_num(&w, "total", s->t_total);
         jw_close(&w, '}');
+        if (s->tets_in > 0) {
+            jw_open(&w, "topology", '{');
+            jw_int(&w, "tets_in", s->tets_in);
+            jw_int(&w, "tets_out", s->tets_out);
+            jw_int(&w, "edge_removals", s->topo_edge_removals);
+            jw_open(&w, "edge_removals_by_ring", '{');
+            for (int n = 3; n <= 10; n++) {
+                char k[8];
+                snprintf(k, sizeof k, "%d", n);
+                jw_int(&w, k, s->topo_by_ring[n]);
+            }
+            jw_close(&w, '}');
+            jw_int(&w, "flips23", s->topo_flips23);
+            jw_int(&w, "multiface_removals", s->topo_multiface);
+            jw_int(&w, "rounds", s->topo_rounds);
+            jw_close(&w, '}');
+        }
         jw_open(&w, "before_finish", '{');
         write_progress_fields(&w, &s->before_finish);
         jw_close(&w, '}');

@@ -10,14 +10,58 @@ int gz_is_gzip(const char *buf, size_t len)
     return len >= 2 && (unsigned char)buf[0] == 0x1f && (unsigned char)buf[1] == 0x8b;
 }
 
+size_t gz_budget(size_t len, size_t max_out, unsigned max_ratio)
+{
+    size_t b = max_out && max_out < GZ_MAX_OUT ? max_out : GZ_MAX_OUT;
+
+    if (max_ratio && len <= b / max_ratio) {
+        size_t r = len * max_ratio;
+        r = r > GZ_RATIO_FLOOR ? r : GZ_RATIO_FLOOR;
+        b = r < b ? r : b;
+    }
+    return b;
+}
+
+size_t gz_head(const char *buf, size_t len, char *dst, size_t cap)
+{
+    z_stream z;
+    size_t n;
+    int rc;
+
+    if (!gz_is_gzip(buf, len) || !cap)
+        return 0;
+    memset(&z, 0, sizeof z);
+    if (inflateInit2(&z, 16 + MAX_WBITS) != Z_OK)
+        return 0;
+    z.next_in = (Bytef *)(uintptr_t)buf;
+    z.avail_in = len > UINT_MAX ? UINT_MAX : (uInt)len;
+    z.next_out = (Bytef *)dst;
+    z.avail_out = cap > UINT_MAX ? UINT_MAX : (uInt)cap;
+    rc = inflate(&z, Z_SYNC_FLUSH);
+    n = (size_t)((char *)z.next_out - dst);
+    inflateEnd(&z);
+    return rc == Z_OK || rc == Z_STREAM_END || rc == Z_BUF_ERROR ? n : 0;
+}
+
 qdc_status gz_inflate(const char *buf, size_t len, char **out, size_t *outlen,
                       qdc_error *err)
 {
+    return gz_inflate_max(buf, len, GZ_MAX_OUT, out, outlen, err);
+}
+
+qdc_status gz_inflate_max(const char *buf, size_t len, size_t max_out, char **out,
+                          size_t *outlen, qdc_error *err)
+{
     z_stream z;
+    size_t lim = max_out && max_out < GZ_MAX_OUT ? max_out : GZ_MAX_OUT;
     size_t cap = len < 1024 ? 4096 : len * 4, n = 0;
-    char *dst = qdc_malloc(cap + 1);
+    char *dst;
     int rc = Z_OK;
 
+    /* one byte past the limit is room enough to see that it is passed */
+    if (cap > lim + 1)
+        cap = lim + 1;
+    dst = qdc_malloc(cap + 1);
     *out = NULL;
     *outlen = 0;
     if (!dst)
@@ -29,20 +73,13 @@ qdc_status gz_inflate(const char *buf, size_t len, char **out, size_t *outlen,
         return qdc_fail(err, QDC_ENOMEM, "gzip: cannot start zlib");
     }
     z.next_in = (Bytef *)(uintptr_t)buf;
-    while (z.next_in < (const Bytef *)buf + len) {
+    for (;;) {
         size_t left = (size_t)((const Bytef *)buf + len - z.next_in);
-        z.avail_in = left > UINT_MAX ? UINT_MAX : (uInt)left;
+        if (n > lim)
+            break;
         if (n == cap) {
-            size_t ncap = cap * 2 > GZ_MAX_OUT ? GZ_MAX_OUT : cap * 2;
-            char *t;
-            if (ncap <= cap) {
-                inflateEnd(&z);
-                qdc_free(dst);
-                return qdc_fail(err, QDC_ETOOBIG,
-                                "gzip: the file inflates to more than %zu bytes",
-                                GZ_MAX_OUT);
-            }
-            t = qdc_realloc(dst, ncap + 1);
+            size_t ncap = cap * 2 > lim + 1 ? lim + 1 : cap * 2;
+            char *t = qdc_realloc(dst, ncap + 1);
             if (!t) {
                 inflateEnd(&z);
                 qdc_free(dst);
@@ -51,20 +88,29 @@ qdc_status gz_inflate(const char *buf, size_t len, char **out, size_t *outlen,
             dst = t;
             cap = ncap;
         }
+        z.avail_in = left > UINT_MAX ? UINT_MAX : (uInt)left;
         z.next_out = (Bytef *)dst + n;
         z.avail_out = cap - n > UINT_MAX ? UINT_MAX : (uInt)(cap - n);
         rc = inflate(&z, Z_NO_FLUSH);
         n = (size_t)((char *)z.next_out - dst);
         if (rc == Z_STREAM_END) {
             /* concatenated members (gzip -c a b > c) are one file */
-            if (z.next_in < (const Bytef *)buf + len && inflateReset(&z) != Z_OK)
+            if (z.next_in == (const Bytef *)buf + len || inflateReset(&z) != Z_OK)
                 break;
             continue;
         }
         if (rc != Z_OK && rc != Z_BUF_ERROR)
             break;
-        if (rc == Z_BUF_ERROR && z.avail_out != 0)
-            break; /* input ended inside a member */
+        /* output room left over: zlib wants input, and there is none */
+        if (z.avail_out != 0 &&
+            (rc == Z_BUF_ERROR || z.next_in == (const Bytef *)buf + len))
+            break;
+    }
+    if (n > lim) {
+        inflateEnd(&z);
+        qdc_free(dst);
+        return qdc_fail(err, QDC_ETOOBIG, "gzip: the data inflate to more than %zu bytes",
+                        lim);
     }
     inflateEnd(&z);
     if (rc != Z_STREAM_END) {

@@ -359,7 +359,9 @@ static qdc_status read_buf(char *buf, size_t len, int own, meshio_format fmt,
         /* a gzip-compressed file of any format: read what it holds */
         char *plain = NULL;
         size_t plen = 0;
-        st = gz_inflate(buf, len, &plain, &plen, err);
+        st = gz_inflate_max(buf, len,
+                            gz_budget(len, o ? o->max_bytes : 0, o ? o->max_ratio : 0),
+                            &plain, &plen, err);
         if (own)
             qdc_free(buf);
         if (st == QDC_OK && gz_is_gzip(plain, plen))

@@ -95,11 +95,18 @@ meshio_format meshio_format_from_media_type(const char *content_type);
 
 /* Optional reading options: notes (skipped element types...) go to log.
  * source: keep the input for a spliced write (below): 0 the default
- * (meshio_load*: yes, meshio_read*: no), 1 yes, -1 no. */
+ * (meshio_load*: yes, meshio_read*: no), 1 yes, -1 no.
+ * max_bytes, max_ratio: what compressed input may inflate to (a gzip file,
+ * the zlib arrays of a VTU file), checked while inflating (QDC_ETOOBIG):
+ * at most max_bytes (0: GZ_MAX_OUT, 4 GiB) and, with max_ratio > 0, at most
+ * max_ratio times the compressed size (gz_budget). A gzip file holding
+ * another is refused (QDC_EPARSE). */
 typedef struct {
     qdc_log_fn log;
     void *log_ctx;
     int source;
+    size_t max_bytes;
+    unsigned max_ratio;
 } meshio_options;
 
 /* Parse one buffer (not TETGEN: it needs two). fmt MESHIO_AUTO sniffs.

@@ -11,6 +11,7 @@
  * "medit:ref" (in that order of preference), vref the point array "medit:ref".
  * Legacy binary data are big-endian; XML data follow byte_order. */
 #include "io/format.h"
+#include "io/gz.h"
 
 #include <limits.h>
 #include <zlib.h>
@@ -1077,7 +1078,9 @@ typedef struct {
     int app_base64;
     int zlib; /* compressor="vtkZLibDataCompressor" */
     cells c;
-    srcrec *rec; /* where the coordinates are, or NULL */
+    srcrec *rec;     /* where the coordinates are, or NULL */
+    size_t inflated; /* bytes of zlib arrays inflated so far */
+    size_t zbudget;  /* what they may add up to (meshio_options) */
 } vtu;
 
 /* The next tag at or after s->p (comments, <? ?> and text skipped). */
@@ -1350,6 +1353,18 @@ static int is_b64(unsigned char c)
     return b64_val(c) >= 0 || c == '=';
 }
 
+/* Room for `want` more inflated bytes in the zlib budget (a 1 MB file of
+ * zlib blocks of zeros declares a GB of arrays): QDC_ETOOBIG when not. */
+static qdc_status vtu_take_budget(vtu *x, size_t want, int64_t at, qdc_error *err)
+{
+    if (want > x->zbudget - x->inflated)
+        return fail_bin(err, QDC_ETOOBIG, at,
+                        "VTU: the zlib arrays inflate to more than %zu bytes",
+                        x->zbudget);
+    x->inflated += want;
+    return QDC_OK;
+}
+
 /* Appended raw data at p (header words, then the data, as is or in zlib
  * blocks): exactly `want` bytes at *data (into the input, or *tmp). */
 static qdc_status vtu_raw(vtu *x, const char *p, size_t want, srcrec *rec,
@@ -1388,6 +1403,9 @@ static qdc_status vtu_raw(vtu *x, const char *p, size_t want, srcrec *rec,
                         "VTU: zlib header of %llu blocks does not fit",
                         (unsigned long long)nb);
     hn += (size_t)nb * hsz;
+    st = vtu_take_budget(x, want, at, err);
+    if (st != QDC_OK)
+        return st;
     *tmp = qdc_malloc(want + 1);
     if (!*tmp)
         return qdc_fail(err, QDC_ENOMEM, "out of memory for a VTU array");
@@ -1432,6 +1450,8 @@ static qdc_status vtu_b64_zlib(vtu *x, const char *p, size_t want, srcrec *rec,
                       (unsigned long long)sum);
     if (st == QDC_OK)
         st = b64_take(x, p, *hn + (size_t)sum, &z, endp, err);
+    if (st == QDC_OK)
+        st = vtu_take_budget(x, want, at, err);
     if (st == QDC_OK && !(*tmp = qdc_malloc(want + 1)))
         st = qdc_fail(err, QDC_ENOMEM, "out of memory for a VTU array");
     if (st == QDC_OK)
@@ -2023,6 +2043,7 @@ static qdc_status read_vtu(const char *buf, size_t len, const meshio_options *o,
     x.c.creg_prio = PRIO_NONE;
     x.s = txt_init(buf, len, 0);
     x.b = (const unsigned char *)buf;
+    x.zbudget = gz_budget(len, o ? o->max_bytes : 0, o ? o->max_ratio : 0);
     st = find_appended(&x, err);
     if (st == QDC_OK)
         st = vtu_tags(&x, &offs_end, err);

@@ -30,7 +30,8 @@ static int options_valid(const opt_options *o)
            (unsigned)o->boundary <= OPT_BOUNDARY_SLIDE &&
            (unsigned)o->mode <= OPT_MODE_LITERAL &&
            (unsigned)o->weights <= OPT_WEIGHTS_PAPER &&
-           (unsigned)o->solver <= OPT_SOLVER_PCG;
+           (unsigned)o->solver <= OPT_SOLVER_PCG &&
+           (unsigned)o->topology <= OPT_TOPOLOGY_FLIPS;
 }
 
 /* The context of one run: topology, ctx, loose and pinned vertices, the

@@ -19,6 +19,10 @@ typedef enum {
 typedef enum { OPT_MODE_SAFE = 0, OPT_MODE_LITERAL } opt_mode;
 typedef enum { OPT_WEIGHTS_OPTAVG = 0, OPT_WEIGHTS_PAPER } opt_weights;
 typedef enum { OPT_SOLVER_AUTO = 0, OPT_SOLVER_CHOLMOD, OPT_SOLVER_PCG } opt_solver;
+/* --topology: none keeps the connectivity (every vertex and tet as given); flips
+ * alternates the smoother with flips that keep the vertex set, the boundary
+ * triangles and the region tags (opt/topology.c). */
+typedef enum { OPT_TOPOLOGY_NONE = 0, OPT_TOPOLOGY_FLIPS } opt_topology;
 
 /* Why a run stopped. */
 typedef enum {
@@ -95,9 +99,10 @@ typedef struct {
                            * hausd is 0; 0 = none; OPT_HAUSD_AUTO (default): no
                            * Hausdorff bound, but with slide every boundary vertex
                            * stays within OPT_HAUSD_DEFAULT of the input surface */
-    double time_limit;    /* seconds, 0 = none: then OPT_STOPPED with the best mesh */
-    int threads;          /* OpenMP threads for this run; 0 = all cores. A server running
-                           * several jobs at once should give each 1 (no oversubscription) */
+    opt_topology topology; /* default NONE */
+    double time_limit;     /* seconds, 0 = none: then OPT_STOPPED with the best mesh */
+    int threads;           /* OpenMP threads for this run; 0 = all cores. A server running
+                            * several jobs at once should give each 1 (no oversubscription) */
     const atomic_int
         *cancel; /* if non-NULL and *cancel != 0: stop (checked every
                   * iteration; set from another thread or a signal handler) */
@@ -117,6 +122,7 @@ void opt_defaults(opt_options *o);
 /* The word of the solver a run used (opt_result.solver): "auto", "cholmod",
  * "pcg"; a static string, "?" when out of range. */
 const char *opt_solver_name(opt_solver s);
+const char *opt_topology_name(opt_topology t);
 
 typedef struct {
     opt_outcome outcome;
@@ -135,16 +141,25 @@ typedef struct {
                                   * valid input: the global step folds nothing) */
     int32_t folded_global;       /* valid tets the global steps inverted, summed */
     double hausd_bound;          /* the boundary bound applied, mesh units (0: none) */
-    double lift_bound;    /* slide without --hausd: how far a boundary vertex may be
-                           * from the input surface, mesh units (0: none) */
-    int32_t held_back;    /* vertices put back to their input positions so that no
-                           * tet ends below the valid input's worst (opt_run) */
-    opt_stop stop;        /* why the run stopped (decides; stop_reason names it) */
+    double lift_bound;          /* slide without --hausd: how far a boundary vertex may be
+                                 * from the input surface, mesh units (0: none) */
+    int32_t held_back;          /* vertices put back to their input positions so that no
+                                 * tet ends below the valid input's worst (opt_run) */
+    int32_t tets_in, tets_out;  /* tets of the input and of the result (set with
+                                 * --topology; 0 otherwise) */
+    int64_t topo_edge_removals; /* --topology: edges removed (3-2, 4-4, 5-6 ... flips) */
+    int64_t topo_by_ring[11];   /* of which with a ring of n tets (n = 3..10) */
+    int64_t topo_flips23;       /* 2-3 face flips */
+    int64_t topo_multiface;     /* multi-face removals */
+    int topo_rounds;            /* rounds of flips followed by smoothing */
+    opt_stop stop;              /* why the run stopped (decides; stop_reason names it) */
     char stop_reason[64]; /* opt_stop_name(stop): "converged", "max-iter", "no-descent",
                            * "cancelled", "time-limit", "solver" */
 } opt_result;
 
-/* Optimize m in place (coordinates only; tets, regions, fixed flags untouched).
+/* Optimize m in place (coordinates only; tets, regions, fixed flags untouched;
+ * with o->topology FLIPS, m->tets, m->region and m->nt are replaced by the
+ * improved connectivity, vertices and boundary triangles kept: opt/topology.c).
  * o may be NULL (opt_defaults); it is only read, and its callbacks are called
  * on the calling thread. res (may be NULL) receives the outcome, timings and
  * the first and last progress records. m stays the caller's: the run keeps

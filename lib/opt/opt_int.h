@@ -22,6 +22,7 @@ qdc_status opt_parse_boundary(const char *s, opt_boundary *out);
 qdc_status opt_parse_mode(const char *s, opt_mode *out);
 qdc_status opt_parse_weights(const char *s, opt_weights *out);
 qdc_status opt_parse_solver(const char *s, opt_solver *out);
+qdc_status opt_parse_topology(const char *s, opt_topology *out);
 const char *opt_metric_name(opt_metric m);
 const char *opt_boundary_name(opt_boundary b);
 const char *opt_mode_name(opt_mode m);

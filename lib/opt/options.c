@@ -40,6 +40,7 @@ static const char *const boundary_names[] = {"lsq", "fixed", "slide"};
 static const char *const mode_names[] = {"safe", "literal"};
 static const char *const weights_names[] = {"optavg", "paper"};
 static const char *const solver_names[] = {"auto", "cholmod", "pcg"};
+static const char *const topology_names[] = {"none", "flips"};
 
 static qdc_status parse_word(const char *s, const char *const *names, int n, int *out)
 {
@@ -65,6 +66,7 @@ PARSER(opt_parse_boundary, opt_boundary, boundary_names)
 PARSER(opt_parse_mode, opt_mode, mode_names)
 PARSER(opt_parse_weights, opt_weights, weights_names)
 PARSER(opt_parse_solver, opt_solver, solver_names)
+PARSER(opt_parse_topology, opt_topology, topology_names)
 
 /* A finite number filling all of s: no leading space, nothing after it. */
 static int whole_number(const char *s, double *out)
@@ -134,6 +136,30 @@ NAMER(opt_boundary_name, opt_boundary, boundary_names)
 NAMER(opt_mode_name, opt_mode, mode_names)
 NAMER(opt_weights_name, opt_weights, weights_names)
 NAMER(opt_solver_name, opt_solver, solver_names)
+NAMER(opt_topology_name, opt_topology, topology_names)
+
+/* In words, for --help (docs/method.md §2): each metric is 1 on a regular tet
+ * and grows without bound as a tet flattens; an inverted tet keeps a finite
+ * cost (Escobar's regularization), which is what lets the flow untangle. */
+static const char *const metric_say[] = {
+    "volume-length: the cube of the rms edge length over the volume",
+    "mean ratio: the sum of squared edge lengths over the volume to the 2/3 (1 over "
+    "the mean ratio the reports show)",
+    "condition number of the map from the regular tet (|S| |adj S| / det S)"};
+static const char *const boundary_say[] = {
+    "boundary vertices kept near their input positions in a least-squares sense "
+    "(the paper): the best quality, but the shape changes",
+    "boundary vertices do not move",
+    "boundary vertices slide on the input surface, along feature lines; corners stay"};
+static const char *const mode_say[] = {
+    "damping in normalized units and a line search (docs/method.md §5)",
+    "the paper as written: no line search; it drifts (for comparison)"};
+static const char *const weights_say[] = {
+    "rows aim at the weighted mean of the per-tet optimal positions",
+    "the paper's Eq. 6 weights"};
+static const char *const solver_say[] = {
+    "the cheaper of the two for this system", "sparse Cholesky (CHOLMOD)",
+    "matrix-free Jacobi-preconditioned conjugate gradients"};
 
 #define OFF(f) offsetof(opt_options, f)
 #define WORDS(w) w, (int)(sizeof w / sizeof w[0])
@@ -141,46 +167,61 @@ NAMER(opt_solver_name, opt_solver, solver_names)
 /* Ranges are those opt_run accepts (run_once checks them again), so that a
  * value accepted here never fails later. */
 static const opt_desc table[] = {
-    {"metric", OPT_T_WORD, OFF(metric), 0, 0, 0, WORDS(metric_names), "quality metric"},
+    {"metric", OPT_T_WORD, OFF(metric), 0, 0, 0, WORDS(metric_names),
+     "quality metric the optimizer improves (each is 1 on a regular tet, larger is "
+     "worse)",
+     OPT_G_EVERYDAY, metric_say},
     {"boundary", OPT_T_WORD, OFF(boundary), 0, 0, 0, WORDS(boundary_names),
-     "boundary handling"},
+     "boundary handling", OPT_G_BOUNDARY, boundary_say},
     {"hausd", OPT_T_HAUSD, OFF(hausd), 0, 0, 0, NULL, 0,
      "bound on the boundary's Hausdorff distance: H, P%, rel:F of the diagonal, none, "
-     "auto (with slide: vertices within 0.001 of the diagonal of the input surface)"},
+     "auto (with slide: vertices within 0.001 of the diagonal of the input surface)",
+     OPT_G_BOUNDARY, NULL},
     {"feature_angle", OPT_T_REAL, OFF(feature_angle), 0, 180, 0, NULL, 0,
-     "slide: sharper boundary edges are features (degrees)"},
+     "slide: sharper boundary edges are features (degrees)", OPT_G_BOUNDARY, NULL},
     {"mode", OPT_T_WORD, OFF(mode), 0, 0, 0, WORDS(mode_names),
-     "safeguarded method or the paper as written"},
-    {"weights", OPT_T_WORD, OFF(weights), 0, 0, 0, WORDS(weights_names), "QDC weights"},
-    {"solver", OPT_T_WORD, OFF(solver), 0, 0, 0, WORDS(solver_names), "linear solver"},
+     "safeguarded method or the paper as written", OPT_G_ADVANCED, mode_say},
+    {"weights", OPT_T_WORD, OFF(weights), 0, 0, 0, WORDS(weights_names), "QDC weights",
+     OPT_G_ADVANCED, weights_say},
+    {"solver", OPT_T_WORD, OFF(solver), 0, 0, 0, WORDS(solver_names), "linear solver",
+     OPT_G_ADVANCED, solver_say},
     {"harmonic", OPT_T_BOOL, OFF(harmonic), 0, 1, 0, NULL, 0,
-     "harmonic guidance, paper Sec. 5.1"},
+     "harmonic guidance, paper Sec. 5.1", OPT_G_ADVANCED, NULL},
     {"pre_iters", OPT_T_INT, OFF(pre_iters), 0, 10000, 0, NULL, 0,
-     "iterations before the harmonic field"},
-    {"finish", OPT_T_BOOL, OFF(finish), 0, 1, 0, NULL, 0, "worst-tet finishing pass"},
+     "iterations before the harmonic field", OPT_G_ADVANCED, NULL},
+    {"finish", OPT_T_BOOL, OFF(finish), 0, 1, 0, NULL, 0, "worst-tet finishing pass",
+     OPT_G_EVERYDAY, NULL},
     {"finish_sweeps", OPT_T_INT, OFF(finish_sweeps), 0, 1000, 0, NULL, 0,
-     "broad finishing sweeps"},
+     "broad finishing sweeps", OPT_G_ADVANCED, NULL},
     {"finish_frac", OPT_T_REAL, OFF(finish_frac), 0, 1, 0, NULL, 0,
-     "share of worst tets visited per sweep"},
+     "share of worst tets visited per sweep", OPT_G_ADVANCED, NULL},
     {"finish_gain", OPT_T_REAL, OFF(finish_gain), 0, 1, 0, NULL, 0,
-     "broad sweeps end when one gains less mean ratio (0: all of them)"},
+     "broad sweeps end when one gains less mean ratio (0: all of them)", OPT_G_ADVANCED,
+     NULL},
     {"angle_polish", OPT_T_BOOL, OFF(angle_polish), 0, 1, 0, NULL, 0,
-     "then raise the smallest dihedral angles"},
-    {"max_iter", OPT_T_INT, OFF(max_iter), 0, 10000, 0, NULL, 0, "global iterations"},
+     "then raise the smallest dihedral angles", OPT_G_EVERYDAY, NULL},
+    {"max_iter", OPT_T_INT, OFF(max_iter), 0, 10000, 0, NULL, 0, "global iterations",
+     OPT_G_EVERYDAY, NULL},
     {"ls_halvings", OPT_T_INT, OFF(ls_halvings), 0, 60, 0, NULL, 0,
-     "line search: steps 1 .. 2^-N"},
-    {"mu", OPT_T_REAL, OFF(mu), 0, 1e12, 1, NULL, 0, "damping in normalized units"},
+     "line search: steps 1 .. 2^-N", OPT_G_ADVANCED, NULL},
+    {"mu", OPT_T_REAL, OFF(mu), 0, 1e12, 1, NULL, 0, "damping in normalized units",
+     OPT_G_ADVANCED, NULL},
     {"mu_scaled", OPT_T_BOOL, OFF(mu_scaled), 0, 1, 0, NULL, 0,
-     "with harmonic guidance, scale mu by omega_B^2"},
+     "with harmonic guidance, scale mu by omega_B^2", OPT_G_ADVANCED, NULL},
     {"stall", OPT_T_REAL, OFF(stall), 0, 1, 0, NULL, 0,
      "global phase done when an iteration gains less mean ratio, or the next is "
-     "predicted to (0: never)"},
+     "predicted to (0: never)",
+     OPT_G_EVERYDAY, NULL},
     {"tol_move", OPT_T_REAL, OFF(tol_move), 0, 1, 0, NULL, 0,
-     "stop when the largest move < this x mean edge"},
+     "stop when the largest move < this x mean edge", OPT_G_ADVANCED, NULL},
     {"eps_rel", OPT_T_REAL, OFF(eps_rel), 0, 1, 1, NULL, 0,
-     "Escobar epsilon relative to a regular tet"},
+     "Escobar epsilon relative to a regular tet", OPT_G_ADVANCED, NULL},
+    {"topology", OPT_T_WORD, OFF(topology), 0, 0, 0, WORDS(topology_names),
+     "none: connectivity kept; flips: the smoother alternated with edge removal, 2-3 "
+     "flips and multi-face removal (vertices, boundary triangles and region tags kept)",
+     OPT_G_EVERYDAY, topology_say},
     {"time_limit", OPT_T_REAL, OFF(time_limit), 0, 1e9, 0, NULL, 0,
-     "seconds, then the best mesh so far (0: none)"},
+     "seconds, then the best mesh so far (0: none)", OPT_G_EVERYDAY, NULL},
 };
 #define N_TABLE (sizeof table / sizeof table[0])
 

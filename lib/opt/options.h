@@ -21,6 +21,10 @@ typedef enum {
     OPT_T_HAUSD /* opt_parse_hausd's forms (hausd / hausd_rel) */
 } opt_type;
 
+/* Where `qdc optimize --help` lists an option: what most runs may set, what
+ * says how the boundary may move, the method's own knobs. */
+typedef enum { OPT_G_EVERYDAY, OPT_G_BOUNDARY, OPT_G_ADVANCED } opt_group;
+
 typedef struct {
     const char *name; /* query parameter and JSON key; the CLI flag is --name with '-' */
     opt_type type;
@@ -30,6 +34,8 @@ typedef struct {
     const char *const *words; /* OPT_T_WORD */
     int nwords;
     const char *help;
+    opt_group group;
+    const char *const *word_help; /* OPT_T_WORD: what each word means, or NULL */
 } opt_desc;
 
 /* The table, static and constant; *n (not NULL) receives its entry count. */

@@ -1,7 +1,8 @@
 /* rerun.c - the rerun policy of slide mode (docs/method.md §5a): the whole
  * run again with squashed ears held, with stuck boundary vertices free, with
- * no fold at the surface; the best result kept. Also opt_run, which runs it
- * in the mesh's space-filling-curve numbering. */
+ * no fold at the surface; the best result kept. Also opt_run_smooth (opt_run
+ * without --topology), which runs it in the mesh's space-filling-curve
+ * numbering. */
 #include "opt/opt.h"
 
 #include "core/order.h"
@@ -261,7 +262,8 @@ out:
  * (core/order.h): measured on an 800k-tet ball whose vertices came in random
  * order, 7.7 -> 5.7 s, the global phase 40% faster. A failure that names a
  * vertex or tet is found again in the caller's numbering, for its message. */
-qdc_status opt_run(mesh_t *m, const opt_options *opts, opt_result *res, qdc_error *err)
+qdc_status opt_run_smooth(mesh_t *m, const opt_options *opts, opt_result *res,
+                          qdc_error *err)
 {
     mesh_order ord;
     mesh_t *pm;

@@ -1,4 +1,5 @@
-/* run.h - one optimization run (opt.c), for the rerun policy (rerun.c). */
+/* run.h - one optimization run (opt.c), for the rerun policy (rerun.c); the
+ * run with its reruns (rerun.c), for opt_run (topology.c). */
 #ifndef QDC_RUN_H
 #define QDC_RUN_H
 
@@ -13,5 +14,10 @@
 qdc_status opt_run_once(mesh_t *m, const opt_options *opts, const uint8_t *pins,
                         const uint8_t *loose, uint8_t **squashed, uint8_t **stuck,
                         int keep_surface, opt_result *res_out, qdc_error *err);
+
+/* opt_run with the connectivity kept (o->topology ignored): what opt_run does
+ * for --topology none, and the smoothing of each round of --topology flips. */
+qdc_status opt_run_smooth(mesh_t *m, const opt_options *opts, opt_result *res,
+                          qdc_error *err);
 
 #endif

@@ -5,7 +5,8 @@
 # port (127.0.0.1:8080 in the text becomes that port). `make run`/`make test`
 # are tested by make_run.sh and the suite itself; `docker` lines need an engine
 # (docker.sh checks the image outside one). Then every mesh the commands wrote
-# must be valid and every report readable.
+# must be valid and every report readable, and the figures the README shows
+# must be what its commands printed and wrote (tests/tools/readmefigures.py).
 . "$(dirname "$0")/../lib.sh"
 . "$ROOT/tests/server/daemon.inc"
 
@@ -54,6 +55,12 @@ awk -v tmp="$TMP" -v port="$PORT" '
 } > "$TMP/run.sh"
 timeout 300 sh "$TMP/run.sh" || fail "readme run" "the README's commands did not finish (exit $?)"
 
+# the figures shown (the README is the expectation: nothing is copied here)
+$PY "$ROOT/tests/tools/readmefigures.py" "$ROOT/README.md" "$TMP/out.log" "$W" > "$TMP/fig.out" 2>&1
+cat "$TMP/fig.out"
+grep -q '^ok - ' "$TMP/fig.out" || fail "readme figures" "$(tail -3 "$TMP/fig.out" | tr '\n' ' ')"
+NFAIL=$((NFAIL + $(grep -c '^FAIL - ' "$TMP/fig.out")))
+
 for p in "$TMP"/py.*; do
     [ -f "$p" ] || continue
     if (cd "$W" && timeout 120 $PY "$p" > "$TMP/py.out" 2>&1); then
@@ -63,19 +70,23 @@ for p in "$TMP"/py.*; do
     fi
 done
 
-# what the commands wrote
+# what the commands wrote: the sample's 750 tets, or the bunny's
+"$BIN/qdc" quality "$DEV/bunny_low_10k.mesh.gz" > "$TMP/qb" 2>&1
+nbunny=$(sed -n '1s/.* \([0-9]*\) tets.*/\1/p' "$TMP/qb")
 meshes=0
 bad=
 for f in $(cd "$W" && find . -maxdepth 2 \( -name '*.mesh' -o -name '*.qmesh' -o -name '*.json' \) ! -name '*report*' ! -path './build/*' ! -path './tests/*' | sort); do
     meshes=$((meshes + 1))
-    "$BIN/qdc" quality "$W/$f" > "$TMP/q" 2>&1 && grep -q ' 750 tets, 0 inverted' "$TMP/q" || bad="$bad $f"
+    case $f in ./bunny*) nt=$nbunny ;; *) nt=750 ;; esac
+    "$BIN/qdc" quality "$W/$f" > "$TMP/q" 2>&1 && grep -q " $nt tets, 0 inverted" "$TMP/q" || bad="$bad $f"
 done
-[ $meshes -ge 5 ] && [ -z "$bad" ] && pass "readme: the $meshes meshes the commands wrote are valid, 750 tets, none inverted" ||
+[ $meshes -ge 5 ] && [ -n "$nbunny" ] && [ -z "$bad" ] && pass "readme: the $meshes meshes the commands wrote are valid, 750 tets ($nbunny for the bunny), none inverted" ||
     fail "readme meshes" "$meshes meshes; bad:$bad"
 reports=0
 for f in $(cd "$W" && find . -maxdepth 2 -name '*report*.json' | sort); do
     reports=$((reports + 1))
-    jq -e '.after.n_tets == 750' "$W/$f" > /dev/null || bad="$bad $f"
+    case $f in ./bunny*) nt=$nbunny ;; *) nt=750 ;; esac
+    jq -e ".after.n_tets == $nt" "$W/$f" > /dev/null || bad="$bad $f"
 done
 [ $reports -ge 3 ] && [ -z "$bad" ] && pass "readme: the $reports reports the commands wrote are readable" ||
     fail "readme reports" "$reports reports; bad:$bad"

@@ -30,7 +30,7 @@ PYEOF
 c=$(submit "$ROOT/tests/data/sample/cube.mesh" model/x-medit "max_iter=2" "$TMP/j" -H "$A")
 id=$(jf "$TMP/j" .id)
 poll_all "$id" "$A" > /dev/null
-out=$(raw "HEAD /v1/jobs/$id/events HTTP/1.1\r\nHost: x\r\nAuthorization: Bearer tok\r\nConnection: close\r\n\r\n")
+out=$(raw "HEAD /v1/jobs/$id/events HTTP/1.1\r\nHost: 127.0.0.1\r\nAuthorization: Bearer tok\r\nConnection: close\r\n\r\n")
 body=$(printf '%s' "$out" | tr -d '\r' | sed '1,/^$/d')
 case $out in
 "HTTP/1.1 200"*) [ -z "$body" ] && pass "http: HEAD /v1/jobs/ID/events: 200, no body" ||
@@ -44,7 +44,7 @@ l1=$(curl -s -o /dev/null -w '%{http_code}' "$URL/livez")
 [ "$m1$r1$m2$l1" = 401401200200 ] && pass "http: with --tokens, /metrics and /readyz need a token (401 without, 200 with); /livez stays open" ||
     fail "http: metrics behind tokens" "metrics $m1 readyz $r1 with token $m2 livez $l1"
 for h in "Content-Length: 5\r\nContent-Length: 6" "Content-Length: 5\r\nTransfer-Encoding: chunked"; do
-    out=$(raw "POST /v1/jobs HTTP/1.1\r\nHost: x\r\nAuthorization: Bearer tok\r\nContent-Type: model/x-medit\r\n$h\r\n\r\nhello")
+    out=$(raw "POST /v1/jobs HTTP/1.1\r\nHost: 127.0.0.1\r\nAuthorization: Bearer tok\r\nContent-Type: model/x-medit\r\n$h\r\n\r\nhello")
     case $out in
     "HTTP/1.1 400"*) pass "http: $(printf '%s' "$h" | sed 's/\\r\\n/ + /'): 400" ;;
     *) fail "http: framing $h" "$(printf '%s' "$out" | head -1)" ;;
@@ -82,7 +82,7 @@ heads = {
 for what, (ctype, n, part) in heads.items():
     for _ in range(100):
         s = socket.create_connection(("127.0.0.1", port))
-        s.sendall(b"POST /v1/jobs HTTP/1.1\r\nHost: x\r\n%s\r\nContent-Type: %s\r\n"
+        s.sendall(b"POST /v1/jobs HTTP/1.1\r\nHost: 127.0.0.1\r\n%s\r\nContent-Type: %s\r\n"
                   b"Content-Length: %d\r\n\r\n" % (auth.encode(), ctype, n) + part)
         s.close()
         time.sleep(0.01)

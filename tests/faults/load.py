@@ -93,7 +93,7 @@ def streamer():
         jid = recent(rnd)
         if not jid:
             continue
-        req = b'GET /v1/jobs/%s/events HTTP/1.1\r\nHost: x\r\n\r\n' % jid.encode()
+        req = b'GET /v1/jobs/%s/events HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n' % jid.encode()
         try:
             raw(req, hold=rnd.choice([0, 0, 0.3, 1.0]), read=rnd.random() < 0.5)
             bump('streams')
@@ -121,15 +121,15 @@ def aborter():
         try:
             k = rnd.randrange(3)
             if k == 0:   # upload cut half-way
-                raw(b'POST /v1/jobs HTTP/1.1\r\nHost: x\r\nContent-Type: model/x-medit\r\n'
+                raw(b'POST /v1/jobs HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Type: model/x-medit\r\n'
                     b'Content-Length: %d\r\n\r\n' % len(body), body[:len(body) // 2], hold=0.1)
                 bump('aborted')
             elif k == 1:  # refused type, client gone without reading
-                raw(b'POST /v1/jobs HTTP/1.1\r\nHost: x\r\nContent-Type: image/png\r\n'
+                raw(b'POST /v1/jobs HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Type: image/png\r\n'
                     b'Content-Length: 100000\r\n\r\n', b'x' * 5000)
                 bump('refused')
             else:         # refused size
-                raw(b'POST /v1/jobs HTTP/1.1\r\nHost: x\r\nContent-Type: model/x-medit\r\n'
+                raw(b'POST /v1/jobs HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Type: model/x-medit\r\n'
                     b'Content-Length: 100000000000000\r\n\r\n', b'x' * 5000)
                 bump('refused')
         except OSError:

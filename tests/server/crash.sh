@@ -33,6 +33,27 @@ fi
 start_qdcd "$D" --workers 1 || { fail "restart" "$(tail -3 "$D.log")"; exit 1; }
 grep -q "1 job(s) re-queued" "$D.log" && pass "restart: the running job was re-queued" ||
     fail "restart recovery" "$(tail -2 "$D.log")"
+# a reader that had records of the first run resumes with after= and the
+# attempt they came from: it is told the job runs again and gets this run's
+# records from the start, each saying its attempt
+curl -s -m 60 "$URL/v1/jobs/$id/progress?after=1&attempt=1&wait=50" > "$TMP/resume"
+if jq -e '.restarted == {"from_attempt": 1, "attempt": 2} and .attempt == 2 and .after == -1 and
+    .records[0].seq == 0 and ([.records[].attempt] | all(. == 2))' "$TMP/resume" > /dev/null; then
+    pass "resume with after=1&attempt=1 after the restart: restarted from attempt 1, records of attempt 2 from seq 0"
+else
+    fail "resume across the restart" "$(head -c 300 "$TMP/resume")"
+fi
+curl -s -m 60 "$URL/v1/jobs/$id/progress?after=-1&attempt=2&wait=50" > "$TMP/same"
+jq -e 'has("restarted") | not' "$TMP/same" > /dev/null && [ "$(jf "$TMP/same" .attempt)" = 2 ] &&
+    pass "resume with the current attempt: no restart" || fail "same attempt" "$(head -c 300 "$TMP/same")"
+curl -s -N -m 5 -H "Last-Event-ID: 1" "$URL/v1/jobs/$id/events?attempt=1" > "$TMP/sse" 2> /dev/null
+if [ "$(sed -n 1p "$TMP/sse")" = "event: restart" ] &&
+    [ "$(sed -n 2p "$TMP/sse")" = 'data: {"from_attempt":1,"attempt":2}' ] &&
+    grep -q '^id: 0$' "$TMP/sse"; then
+    pass "event stream with Last-Event-ID: 1 and attempt=1: a restart event, then this run's records from id 0"
+else
+    fail "SSE across the restart" "$(head -c 300 "$TMP/sse")"
+fi
 state=$(poll_all "$id")
 req GET "/v1/jobs/$id" "$TMP/job" > /dev/null
 if [ "$state" = succeeded ] && [ "$(jf "$TMP/job" .attempts)" = 2 ] && seqs_ok "$id"; then

@@ -53,7 +53,7 @@ def reply(s):
 
 def metric(name):
     s = socket.create_connection((u.hostname, u.port))
-    s.sendall(b"GET /metrics HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n")
+    s.sendall(b"GET /metrics HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n\r\n")
     data = b""
     while True:
         chunk = s.recv(65536)
@@ -76,7 +76,7 @@ def sample(f, pick):
 
 
 def get(path):
-    return ("GET %s HTTP/1.1\r\nHost: x\r\n\r\n" % path).encode()
+    return ("GET %s HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n" % path).encode()
 
 
 out = {"rss_kb_before": sample(rss_kb, min), "threads_before": nthreads()}

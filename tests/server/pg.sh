@@ -6,6 +6,7 @@
 # --data directory (the job files are in the database too): jobs submitted to
 # either node run exactly once and are read from the other; one Idempotency-Key sent to both nodes at the same
 # moment makes one job; a node killed mid-job leaves the job to the other;
+# a node given another's --data stops at its lock;
 # the database stopped and restarted mid-run: no node dies, no job is lost.
 . "$(dirname "$0")/../lib.sh"
 . "$(dirname "$0")/pg.inc"
@@ -16,7 +17,7 @@ PIDS=
 trap 'for p in $PIDS; do kill -9 $p 2>/dev/null; done; pg_cleanup; rm -rf "$TMP"' EXIT
 
 if ! pg_available; then
-    pg_skip pg "one node|restart|schema|two nodes|idempotency|node killed|database restart"
+    pg_skip pg "one node|restart|schema|data directory lock|two nodes|idempotency|node killed|takeover with the default lease|database restart"
     exit 0
 fi
 pg_started pg || exit 1
@@ -45,6 +46,14 @@ v=$(pg_sql "SELECT string_agg(version::text, ',' ORDER BY version) FROM qdc_sche
 once=$(pg_sql "SELECT COUNT(*) = COUNT(DISTINCT version) AND MIN(version) = 1 AND MAX(version) = COUNT(*) FROM qdc_schema")
 [ "$once" = t ] && pass "pg: schema created once and found again on restart (versions: $v, each once)" ||
     fail "pg: schema" "versions '$v'"
+
+# a node given node a's data directory stops at its lock: nodes share the
+# database, not --data (its cache and scratch space)
+"$QDCD" --listen 127.0.0.1:0 --data "$TMP/da" --store "$PGURI" > "$TMP/dup.log" 2>&1
+rc=$?
+[ $rc != 0 ] && grep -q "in use by another qdcd (pid $PID_a)" "$TMP/dup.log" &&
+    pass "pg: a second node on node a's --data exits $rc, naming node a's pid" ||
+    fail "pg: --data lock" "exit $rc: $(cat "$TMP/dup.log")"
 
 # 4. a second node on the same database, its own data directory: 6 jobs, round-robin
 node b "$TMP/db" --workers 1 || { fail "pg: node b starts" "$(tail -3 "$TMP/b.log")"; exit 1; }
@@ -131,9 +140,39 @@ else
     fail "pg: node killed" "state $st attempts $att"
 fi
 
+# 6b. the same with the default --lease: the lease is renewed by a heartbeat
+# every lease/4, so the job runs again on the other node within 15 s
+stop "$PID_b"
+gzip -dc "$DEV/cube_h0.1_lowq.mesh.gz" > "$TMP/big.mesh"
+$MT qmesh "$TMP/big.mesh" "$TMP/big.qmesh"
+node a "$TMP/da" --workers 1 || { fail "pg: node a" "$(tail -3 "$TMP/a.log")"; exit 1; }
+post "$URL_a" "$TMP/big.qmesh" "max_iter=400&finish=0&tol_move=0&mode=literal" "$TMP/jt" > /dev/null
+idt=$(jf "$TMP/jt" .id)
+curl -s -m 60 "$URL_a/v1/jobs/$idt/progress?after=0&wait=50" > /dev/null
+node b "$TMP/db" --workers 1 || { fail "pg: node b" "$(tail -3 "$TMP/b.log")"; exit 1; }
+kill -9 "$PID_a"
+wait "$PID_a" 2> /dev/null
+t0=$(date +%s.%N)
+i=0
+while [ $i -lt 600 ] && [ "$(pg_sql "SELECT attempts FROM jobs WHERE id = '$idt'")" != 2 ]; do
+    sleep 0.1
+    i=$((i + 1))
+done
+dt=$(echo "$(date +%s.%N) $t0" | awk '{ printf "%.1f", $1 - $2 }')
+curl -s -X POST "$URL_b/v1/jobs/$idt:cancel" > /dev/null
+if [ "$(pg_sql "SELECT attempts FROM jobs WHERE id = '$idt'")" = 2 ] &&
+    [ "$(echo "$dt" | awk '{ print ($1 <= 15) }')" = 1 ]; then
+    pass "pg: default --lease (10 s, heartbeat every 2.5 s): node killed, its job running again on the other node after $dt s (<= 15)"
+else
+    fail "pg: takeover with the default lease" "after $dt s: attempts $(pg_sql "SELECT attempts FROM jobs WHERE id = '$idt'")"
+fi
+stop "$PID_b"
+node b "$TMP/db" --workers 1 --lease 2 || { fail "pg: node b" "$(tail -3 "$TMP/b.log")"; exit 1; }
+
 # 7. the database stops and comes back while a job runs: the node survives,
 # the job's end (written while the database is away) is retried until it is
 # recorded, nothing is lost
+n0=$(pg_sql "SELECT COUNT(*) FROM jobs")
 post "$URL_b" "$TMP/cube.qmesh" "max_iter=40&finish=0&tol_move=0&mode=literal" "$TMP/jd" > /dev/null
 idd=$(jf "$TMP/jd" .id)
 sleep 0.3
@@ -147,8 +186,8 @@ st=$(wait_done "$URL_b" "$idd")
 alive=no
 kill -0 "$PID_b" 2> /dev/null && alive=yes
 n=$(pg_sql "SELECT COUNT(*) FROM jobs")
-if [ "$alive" = yes ] && [ "$st" = succeeded ] && [ "$n" = 11 ] && [ "$down" = 503 ]; then
-    pass "pg: database restarted mid-run: node alive, GET while down 503 (+ Retry-After), job succeeded, all 11 jobs kept"
+if [ "$alive" = yes ] && [ "$st" = succeeded ] && [ "$n" = $((n0 + 1)) ] && [ "$down" = 503 ]; then
+    pass "pg: database restarted mid-run: node alive, GET while down 503 (+ Retry-After), job succeeded, all $n jobs kept"
 else
     fail "pg: database restart" "alive $alive state $st jobs $n (GET while down: $down) $(tail -2 "$TMP/b.log" | tr '\n' ' ')"
 fi

@@ -6,7 +6,12 @@
 # tests/ui/package-lock.json into build/uitest): first paint, the sample
 # submitted through the file input, the chart growing while a job runs, the
 # histograms, downloads checked with `qdc quality`, cancel/delete/filter, a
-# phone-sized layout, no console errors, and the token prompt with --tokens.
+# phone-sized layout (no table column cut), the charts' axes, tooltips, log
+# scales and rerun notes, the 3D view's fit, reset, clip plane, click-to-inspect
+# and lighter detail while turning (its first frame and frame rates measured),
+# ARIA roles and live regions, axe-core (0 serious violations), no console
+# errors, and the token prompt with --tokens; a page served from another
+# origin whose script POSTs a mesh gets 403 (tests/ui/crossorigin.mjs).
 # Before the browser: GET /v1/options (the form's table) and GET /input (the
 # job's input mesh: every format, Accept, ETag, 404/409, a surface's TetGen
 # mesh) with curl; their token rules on the --tokens daemon. The screenshot
@@ -212,7 +217,7 @@ pass "playwright-core $(node -p "require('$MODS/node_modules/playwright-core/pac
 
 mkdir -p "$TMP/out"
 export UI_MODULES="$MODS" QDC_URL="$URL" UI_OUT="$TMP/out" OPTIONS_JSON="$TMP/options.json" CHROMIUM
-export SAMPLE BIG="$DEV/bunny_low_100k.mesh.gz" SHOT="$DEV/torus_h0.1_noisy.mesh.gz"
+export SAMPLE BIG="$DEV/bunny_low_100k.mesh.gz" SHOT="$DEV/torus_h0.1_noisy.mesh.gz" TANGLED="$DEV/bunny_tangled-low_10k.mesh.gz"
 # screenshots: build/ui-shots unless UI_SHOTS names a directory (UI_SHOTS=docs
 # remakes the ones in the README)
 UI_SHOTS=${UI_SHOTS:-$ROOT/build/ui-shots}
@@ -248,6 +253,14 @@ for f in sample-out.mesh sample-out.qmesh big-out.mesh; do
         fail "qdc quality $f" "$(head -2 "$TMP/q.txt" | tr '\n' ' ') (report: $nt tets, $mr)"
     fi
 done
+# a page on another origin cannot submit (the daemon's own, above, could)
+node "$ROOT/tests/ui/crossorigin.mjs" > "$TMP/cross.out" 2>&1
+rc=$?
+cat "$TMP/cross.out"
+if [ $rc -ne 0 ] && ! grep -q '^FAIL - ' "$TMP/cross.out"; then
+    fail "crossorigin.mjs" "exit $rc $(tail -2 "$TMP/cross.out")"
+fi
+NFAIL=$((NFAIL + $(grep -c '^FAIL - ' "$TMP/cross.out")))
 [ -n "$UI_SHOTS" ] && for s in ui-list ui-job ui-phone; do
     if [ -s "$UI_SHOTS/$s.png" ] && [ "$(head -c 8 "$UI_SHOTS/$s.png" | od -An -tx1 | tr -d ' ')" = 89504e470d0a1a0a ]; then
         pass "screenshot $UI_SHOTS/$s.png ($(wc -c < "$UI_SHOTS/$s.png") bytes)"

@@ -9,12 +9,16 @@
 //   SAMPLE       tests/data/sample/cube.mesh; BIG a gzipped dev mesh (a long
 //                literal-mode run: the chart grows); SHOT a gzipped dev mesh
 //                submitted with the form untouched (the screenshots)
+//   TANGLED      a gzipped tangled dev mesh: with the finishing pass off its
+//                run starts again from the input (the chart's rerun notes)
 //   OPTIONS_JSON `qdc options` output
 //   UI_MODE=big: BIG_ID, BIG_RECORDS name a finished ~1M-tet job: time its view
 // Prints "ok - ..." / "FAIL - ..." lines like the shell suites.
 import { createRequire } from 'node:module';
 import { readFileSync, writeFileSync } from 'node:fs';
 import path from 'node:path';
+import { gunzipSync } from 'node:zlib';
+import { view3dPixels, chartChecks, view3dChecks, view3dSpeed, rerunChecks, noColumnCut, ariaChecks, axeChecks } from './views.mjs';
 
 const env = process.env;
 const require = createRequire(path.join(env.UI_MODULES, 'package.json'));
@@ -44,6 +48,7 @@ async function apiJSON(p, opts) {
     const res = await fetch(URL + p, Object.assign({ headers: authH }, opts || {}));
     return { status: res.status, body: await res.json().catch(() => null) };
 }
+const h = { pass, fail, check, apiJSON, figures };
 
 const browser = await chromium.launch({
     executablePath: env.CHROMIUM || '/usr/bin/chromium',
@@ -290,8 +295,16 @@ try {
         check(marked.length === 1 && marked[0] === own, 'downloads: the upload\'s own format (' + own + ') is the one marked "as uploaded"',
             JSON.stringify(marked));
         const name = await download('medit', 'sample-out.mesh');
-        await download('qmesh', 'sample-out.qmesh');
-        pass('result downloaded through the page (' + name + ')');
+        const qname = await download('qmesh', 'sample-out.qmesh');
+        // the job keeps the upload's file name: title, header, download names
+        const j1 = (await apiJSON('/v1/jobs/' + id1)).body;
+        const title = await page.title();
+        const shownName = await page.textContent('#job-name');
+        const stem = path.basename(env.SAMPLE).replace(/\.[^.]*$/, '');
+        check(j1.file_name === path.basename(env.SAMPLE) && title.includes(j1.file_name) && shownName === j1.file_name &&
+            name === stem + '.qdc.mesh' && qname === stem + '.qdc.qmesh',
+        'names: the page sends the file\'s name (' + j1.file_name + '): page title "' + title + '", downloads ' + name + ' and ' + qname,
+        JSON.stringify({ file_name: j1.file_name, title, shownName, name, qname }));
         const tri = await page.waitForFunction(() => {
             const c = document.getElementById('view3d');
             const s = document.getElementById('view3d-status').textContent;
@@ -395,6 +408,15 @@ try {
         await page.waitForFunction(() => +document.getElementById('view3d').dataset.triangles > 0 ||
             /not available/.test(document.getElementById('view3d-status').textContent), null, { timeout: 30000 }).catch(() => {});
         figures.view3d_status = await page.textContent('#view3d-status');
+        // the 3D view of the 100k-tet result: first frame, frames per second
+        // turning (lighter detail) and at rest, in software rendering
+        figures.view3d_100k = await view3dSpeed(page, h);
+        if (figures.view3d_100k) {
+            const v = figures.view3d_100k;
+            check(v.first_frame_ms > 0 && v.fps_turning > 0 && v.fps_full_detail > 0, '3D view of ' + j2.mesh.tets + ' tets (' + v.boundary_triangles +
+                ' boundary triangles), software rendering: first frame ' + v.first_frame_ms + ' ms after the request, ' + v.fps_turning +
+                ' frames/s turning (lighter detail), ' + v.fps_full_detail + ' frames/s turning by keys at full detail', JSON.stringify(v));
+        }
 
         // the screenshot job: a mesh with inverted tets, the form untouched
         await page.click('a[data-nav][href="/"]');
@@ -428,22 +450,7 @@ try {
         if (layers === 'none') {
             console.log('ok - 3D view of the worst tets before and after # SKIP no WebGL in this chromium');
         } else {
-            const px = () => page.evaluate(() => new Promise((res) => requestAnimationFrame(() => requestAnimationFrame(() => {
-                const c = document.getElementById('view3d');
-                const t = document.createElement('canvas');
-                t.width = c.width;
-                t.height = c.height;
-                const g = t.getContext('2d');
-                g.drawImage(c, 0, 0);
-                const d = g.getImageData(0, 0, t.width, t.height).data;
-                let orange = 0, red = 0;
-                for (let i = 0; i < d.length; i += 4) {
-                    const [R, G, B] = [d[i], d[i + 1], d[i + 2]];
-                    if (G - B > 40 && R > G) orange++;
-                    else if (R - G > 60 && Math.abs(G - B) < 25) red++;
-                }
-                res({ orange, red, layers: c.dataset.layers });
-            }))));
+            const px = () => view3dPixels(page);
             const both = await px();
             await page.click('#view3d-before');
             const noBefore = await px();
@@ -461,9 +468,35 @@ try {
                 JSON.stringify(figures.view3d_pixels));
         }
         figures.shot_view3d_status = await page.textContent('#view3d-status');
+        await chartChecks(page, id4, h);
+        await view3dChecks(page, id4, h, URL, authH);
+        await ariaChecks(page, h);
         await page.evaluate(() => document.getElementById('hist-log').click());
         await sleep(300);
         if (env.UI_SHOTS) await page.screenshot({ path: path.join(env.UI_SHOTS, 'ui-job.png'), fullPage: true });
+
+        // a run that starts again from the input: the chart says where and why
+        const idR = (await (await fetch(URL + '/v1/jobs?format=medit&finish=off', { method: 'POST',
+            body: gunzipSync(readFileSync(env.TANGLED)) })).json()).id;
+        await until(async () => (await apiJSON('/v1/jobs/' + idR)).body.done, 120000, 'the rerun job');
+        await page.goto(URL + '/ui/jobs/' + idR);
+        await page.waitForFunction(() => +document.getElementById('hist').dataset.drawn > 0, null, { timeout: 10000 });
+        await rerunChecks(page, idR, h);
+        if (env.UI_SHOTS) await page.screenshot({ path: path.join(env.UI_SHOTS, 'ui-rerun.png'), fullPage: true });
+        // the list shows the result's mean ratio (the report's after), not the last record's
+        const repR = (await apiJSON('/v1/jobs/' + idR + '/report')).body;
+        const lastR = (await apiJSON('/v1/jobs/' + idR)).body.progress;
+        await page.click('a[data-nav][href="/"]');
+        const cellR = await page.waitForFunction((id) => {
+            const td = document.querySelector('#jobs tr[data-id="' + id + '"] td:nth-child(6)');
+            return td && /^\d/.test(td.textContent.trim()) && !/→ –/.test(td.textContent) && td.textContent;
+        }, idR, { timeout: 10000 }).then((x) => x.jsonValue()).catch(() => '');
+        check(cellR.trim() === repR.before.mean_ratio_mean.toFixed(4) + ' → ' + repR.after.mean_ratio_mean.toFixed(4),
+            'list: a job whose last record is not its result shows the report\'s figures (' + cellR.trim() + '; last record ' +
+            lastR.mean_ratio_mean.toFixed(4) + ')', cellR);
+        await apiJSON('/v1/jobs/' + idR, { method: 'DELETE' });
+        await page.goto(URL + '/ui/jobs/' + id4);
+        await page.waitForFunction(() => +document.getElementById('hist').dataset.drawn > 0, null, { timeout: 10000 });
 
         // the list: filter, cancel, delete
         const id3 = (await (await fetch(URL + '/v1/jobs?max_iter=2000&mode=literal&format=medit', { method: 'POST',
@@ -474,6 +507,9 @@ try {
         await page.waitForSelector(rowSel(id3) + '[data-state="running"]', { timeout: 15000 })
             .then(() => pass('list: a job submitted by another client shows up, running, within the polling interval'))
             .catch((e) => fail('list running', e.message));
+        await noColumnCut(page, 'desktop (1280 px), job list with file names', h);
+        const listName = await page.textContent(rowSel(id1) + ' td:first-child a');
+        check(listName === path.basename(env.SAMPLE), 'names: the list shows the job by its file\'s name (' + listName + ')', listName);
         const inout = await page.textContent(rowSel(id2) + ' td:nth-child(6)');
         check(/^0\.\d{4} → 0\.\d{4}$/.test(inout.trim()), 'list: mean ratio in → out shown (' + inout.trim() + ')', inout);
         await page.click('#filters button[data-state="succeeded"]');
@@ -487,7 +523,17 @@ try {
         await page.waitForFunction(() => document.querySelectorAll('#jobs tbody tr').length === 4 &&
             [...document.querySelectorAll('#jobs tbody td:nth-child(6)')].filter((t) => /→ 0\./.test(t.textContent)).length >= 3, null, { timeout: 5000 }).catch(() => {});
         if (env.UI_SHOTS) await page.screenshot({ path: path.join(env.UI_SHOTS, 'ui-list.png') });
+        // Delete asks first: "Keep it" keeps the job, "Delete" deletes it
         await page.click(rowSel(id3) + ' button[data-act="delete"]');
+        const asked = await page.waitForSelector('#confirm-dialog[open]', { timeout: 3000 }).then(() => page.textContent('#confirm-text')).catch(() => '');
+        await page.click('#confirm-dialog button[value="cancel"]');
+        await sleep(300);
+        const kept = (await apiJSON('/v1/jobs/' + id3)).status;
+        check(asked.includes(id3.slice(0, 8)) && kept === 200 && (await page.$(rowSel(id3))) !== null,
+            'list: Delete asks first ("' + asked.slice(0, 60) + '…"); "Keep it" keeps the job', asked + ' ' + kept);
+        await page.click(rowSel(id3) + ' button[data-act="delete"]');
+        await page.waitForSelector('#confirm-dialog[open]', { timeout: 3000 });
+        await page.click('#confirm-dialog button[value="ok"]');
         await page.waitForSelector(rowSel(id3), { state: 'detached', timeout: 10000 })
             .then(() => pass('list: Delete removes the job'))
             .catch((e) => fail('delete', e.message));
@@ -502,11 +548,27 @@ try {
             [...document.querySelectorAll('body *')].filter((e) => e.getBoundingClientRect().right > window.innerWidth + 0.5)
                 .slice(0, 3).map((e) => e.tagName + '#' + e.id + '.' + e.className)]);
         check(ov[0] <= ov[1], 'phone (390 px): the job view has no horizontal overflow', ov.join(' > '));
+        await noColumnCut(page, 'phone (390 px), job view', h);
         if (env.UI_SHOTS) await page.screenshot({ path: path.join(env.UI_SHOTS, 'ui-phone.png') });
         await page.goto(URL + '/');
         await page.waitForSelector('#jobs tbody tr');
         const ov2 = await page.evaluate(() => [document.documentElement.scrollWidth, window.innerWidth]);
         check(ov2[0] <= ov2[1], 'phone (390 px): the list has no horizontal overflow', ov2.join(' > '));
+        await noColumnCut(page, 'phone (390 px), job list', h);
+        const head = await page.evaluate(() => {
+            const card = document.getElementById('jobs-card').getBoundingClientRect();
+            return [...document.querySelectorAll('#jobs-card h2, #filters button')].filter((e) => {
+                const r = e.getBoundingClientRect();
+                return r.right > card.right + 0.5 || r.left < card.left - 0.5;
+            }).map((e) => e.textContent);
+        });
+        check(!head.length, 'phone (390 px): the list\'s header (title and filters) inside its card', head.join(', '));
+        await axeChecks(browser, URL, [
+            ['job list', '/', 1280, () => document.querySelectorAll('#jobs tbody tr').length > 0],
+            ['job list', '/', 390, () => document.querySelectorAll('#jobs tbody tr').length > 0],
+            ['job view', '/ui/jobs/' + id4, 1280, () => +document.getElementById('hist').dataset.drawn > 0 && +document.getElementById('view3d').dataset.frames > 0],
+            ['job view', '/ui/jobs/' + id4, 390, () => +document.getElementById('hist').dataset.drawn > 0],
+        ], env.UI_MODULES, h);
         // a browser without WebGL: the job view works, the 3D card says why it is empty
         const ctx2 = await browser.newContext({ viewport: { width: 1280, height: 900 } });
         const nogl = await ctx2.newPage();

@@ -119,7 +119,7 @@ TEST(gmsh41_tags_out_of_order_and_skipped_types)
     mesh_t *m;
     qdc_error err;
     int notes = 0;
-    meshio_options o = {note_count, &notes, 0};
+    meshio_options o = {.log = note_count, .log_ctx = &notes, .source = 0};
 
     ASSERT_OK(meshio_read_ex(msh, strlen(msh), MESHIO_GMSH41, &o, &m, &err));
     ASSERT_EQ_INT(m->nv, 5);
@@ -248,7 +248,7 @@ TEST(gmsh22_binary_and_40)
     }
     /* spliced: only the coordinates change, in place */
     {
-        meshio_options o = {NULL, NULL, 1};
+        meshio_options o = {.log = NULL, .log_ctx = NULL, .source = 1};
         char moved[1024];
         ASSERT_OK(meshio_read_ex(doc, n, MESHIO_AUTO, &o, &m, &err));
         ASSERT_EQ_INT(meshio_source_format(m), MESHIO_GMSH22_BIN);
@@ -313,7 +313,7 @@ TEST(gmsh22_binary_and_40)
  * the coordinate's text may change, into want. */
 static int splices_to(const char *doc, meshio_format f, const char *want)
 {
-    meshio_options o = {NULL, NULL, 1};
+    meshio_options o = {.log = NULL, .log_ctx = NULL, .source = 1};
     mesh_t *m = NULL;
     qdc_error err;
     sink s = {0};
@@ -537,7 +537,7 @@ TEST(meshb_versions_and_byte_order)
 {
     unsigned char doc[512], moved[512], bad[512];
     size_t n = meshb_doc(doc, 1);
-    meshio_options o = {NULL, NULL, 1};
+    meshio_options o = {.log = NULL, .log_ctx = NULL, .source = 1};
     mesh_t *m, *b;
     qdc_error err;
     sink s = {0};
@@ -681,7 +681,7 @@ TEST(gmsh_periodic_held)
     mesh_t *m;
     qdc_error err;
     int notes = 0;
-    meshio_options o = {note_periodic, &notes, 0};
+    meshio_options o = {.log = note_periodic, .log_ctx = &notes, .source = 0};
 
     snprintf(buf, sizeof buf, "%s%s", head41, per41);
     ASSERT_OK(meshio_read_ex(buf, strlen(buf), MESHIO_AUTO, &o, &m, &err));

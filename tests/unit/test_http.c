@@ -1,5 +1,6 @@
 /* test_http.c - the daemon's pure HTTP parsers: the router (server/route.c),
- * job ids, query integers, If-None-Match and Accept (server/parse.c). */
+ * job ids, query integers, If-None-Match, Accept, query values, Host and
+ * Origin (server/parse.c). */
 #include "parse.h"
 #include "problem.h"
 #include "route.h"
@@ -266,6 +267,77 @@ TEST(fuzz_replay)
     ASSERT_EQ_INT(bad, 0);
 }
 
+TEST(query_values)
+{
+    ASSERT_TRUE(parse_query_ok("medit", 5));
+    ASSERT_TRUE(parse_query_ok("", 0));
+    ASSERT_TRUE(parse_query_ok("caf\xc3\xa9 1", 6));
+    ASSERT_TRUE(!parse_query_ok("json\0medit", 10));
+    ASSERT_TRUE(!parse_query_ok("a\nb", 3));
+    ASSERT_TRUE(!parse_query_ok("\x7f", 1));
+    ASSERT_TRUE(!parse_query_ok("tab\t", 4));
+}
+
+TEST(host_header)
+{
+    static const struct {
+        const char *host, *listen, *allowed;
+        int ok;
+    } c[] = {
+        {NULL, "127.0.0.1", "", 1}, /* HTTP/1.0 without Host */
+        {"127.0.0.1:8080", "127.0.0.1", "", 1},
+        {"10.1.2.3:80", "0.0.0.0", "", 1}, /* an address cannot be rebound */
+        {"[::1]:8080", "::1", "", 1},
+        {"[::1]", "127.0.0.1", "", 1},
+        {"localhost:8080", "127.0.0.1", "", 1},
+        {"LocalHost.:8080", "127.0.0.1", "", 1},
+        {"app.localhost:8080", "127.0.0.1", "", 1},
+        {"evil.example:8080", "127.0.0.1", "", 0},
+        {"evil.example", "127.0.0.1", "", 0},
+        {"localhost.evil.example", "127.0.0.1", "", 0},
+        {"127.0.0.1.evil.example", "127.0.0.1", "", 0},
+        {"[evil]:80", "127.0.0.1", "", 0},
+        {"[::1]x", "127.0.0.1", "", 0},
+        {"", "127.0.0.1", "", 0},
+        {":8080", "127.0.0.1", "", 0},
+        {"box.lan:8080", "box.lan", "", 1}, /* --listen box.lan:8080 */
+        {"qdc.example.com", "127.0.0.1", "a.example, qdc.example.com", 1},
+        {"QDC.example.com:443", "127.0.0.1", "qdc.example.com", 1},
+        {"x.example.com", "127.0.0.1", "example.com", 0},
+        {"anything", "127.0.0.1", "*", 1},
+    };
+    for (size_t i = 0; i < sizeof c / sizeof c[0]; i++)
+        ASSERT_EQ_INT(parse_host_allowed(c[i].host, c[i].listen, c[i].allowed), c[i].ok);
+}
+
+TEST(origin_header)
+{
+    static const struct {
+        const char *origin, *host, *allowed;
+        int ok;
+    } c[] = {
+        {NULL, "127.0.0.1:8080", "", 1}, /* not a browser */
+        {"http://127.0.0.1:8080", "127.0.0.1:8080", "", 1},
+        {"http://localhost:8080", "LOCALHOST:8080", "", 1},
+        {"https://qdc.example.com", "qdc.example.com", "", 1}, /* TLS proxy */
+        {"http://127.0.0.1:9999", "127.0.0.1:8080", "", 0},    /* another port */
+        {"http://localhost:8080", "127.0.0.1:8080", "", 0},
+        {"https://evil.example", "127.0.0.1:8080", "", 0},
+        {"null", "127.0.0.1:8080", "", 0},
+        {"ftp://127.0.0.1:8080", "127.0.0.1:8080", "", 0},
+        {"http://127.0.0.1:8080", NULL, "", 0},
+        {"https://ui.example", "10.0.0.5:8080", "https://ui.example", 1},
+        {"https://ui.example", "10.0.0.5:8080",
+         "https://other.example,https://ui.example", 1},
+        {"https://ui.example.evil", "10.0.0.5:8080", "https://ui.example", 0},
+        {"https://evil.example", "127.0.0.1:8080", "*", 1},
+    };
+    for (size_t i = 0; i < sizeof c / sizeof c[0]; i++)
+        ASSERT_EQ_INT(parse_origin_allowed(c[i].origin, c[i].host, c[i].allowed),
+                      c[i].ok);
+}
+
 TEST_MAIN("http", T(router_paths), T(router_methods_exact), T(router_table_is_consistent),
           T(job_ids), T(query_integers), T(etags), T(accept_negotiation),
-          T(problem_table), T(problem_bodies), T(fuzz_replay))
+          T(problem_table), T(problem_bodies), T(query_values), T(host_header),
+          T(origin_header), T(fuzz_replay))

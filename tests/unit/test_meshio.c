@@ -532,7 +532,7 @@ TEST(allocation_failures)
         mesh_free(b);
         /* with the source kept, then a spliced write of moved coordinates */
         for (long n = 1;; n++) {
-            meshio_options keep = {NULL, NULL, 1};
+            meshio_options keep = {.log = NULL, .log_ctx = NULL, .source = 1};
             qdc_fault_set(n);
             st = meshio_read_ex(s.b, s.n, (meshio_format)f, &keep, &b, &err);
             qdc_fault_set(0);
@@ -567,7 +567,7 @@ TEST(splice_equals_writer)
     static const meshio_format fs[] = {MESHIO_MEDIT,  MESHIO_GMSH41,   MESHIO_GMSH41_BIN,
                                        MESHIO_GMSH22, MESHIO_VTK,      MESHIO_VTK_ASCII,
                                        MESHIO_VTU,    MESHIO_VTU_ASCII};
-    meshio_options keep = {NULL, NULL, 1};
+    meshio_options keep = {.log = NULL, .log_ctx = NULL, .source = 1};
     mesh_t *m = make_mesh(300, 500, 60);
 
     ASSERT_TRUE(m);
@@ -624,7 +624,7 @@ TEST(splice_equals_writer)
 /* The format a save picks: the source's variant for its family's extension. */
 TEST(splice_save_format)
 {
-    meshio_options keep = {NULL, NULL, 1};
+    meshio_options keep = {.log = NULL, .log_ctx = NULL, .source = 1};
     mesh_t *m = make_mesh(20, 30, 4), *r = NULL;
     sink a = {0};
     qdc_error err;
@@ -702,7 +702,7 @@ TEST(splice_parked_source)
         "MeshVersionFormatted 2\n# kept comment\nDimension 3\nVertices\n4\n"
         "0 0 0 7\n1 0 0 8\n0 1 0 9\n0 0 1 10\nTetrahedra\n1\n1 2 3 4 3\nEnd\n";
     char dir[] = "/tmp/qdc_test_park_XXXXXX", in[256], gz[300], a[256], b[256], cmd[600];
-    meshio_options keep = {NULL, NULL, 1};
+    meshio_options keep = {.log = NULL, .log_ctx = NULL, .source = 1};
     const char *why = NULL;
     mesh_t *m = NULL, *r = NULL;
     char *fa, *fb;

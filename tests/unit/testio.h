@@ -426,7 +426,7 @@ static inline int replay_fuzz(const char *name, int (*fn)(const char *, size_t),
  * coordinates (rounded to float32 if the file stores float32). 0 if so. */
 static inline int splice_check(const char *buf, size_t len, meshio_format f)
 {
-    meshio_options o = {NULL, NULL, 1};
+    meshio_options o = {.log = NULL, .log_ctx = NULL, .source = 1};
     mesh_t *m = NULL, *b = NULL;
     sink s = {0}, s2 = {0};
     qdc_error err;

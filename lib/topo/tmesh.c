@@ -1,0 +1,629 @@
+/* tmesh.c - the mutable tet mesh of the topology layer: building it (face
+ * matching by lowest vertex), cavity replacement with a journal, export, check. */
+#include "topo/tmesh.h"
+
+#include "core/tet.h"
+#include "geom/metric_int.h"
+#include "topo/exact.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+const int tmesh_edge[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
+
+/* Largest cavity tmesh_replace takes: edge removal of a ring of 10 makes 16
+ * tets out of 10; multi-face removal stays below these too. */
+enum { CAV_OLD = 32, CAV_NEW = 64 };
+
+enum { J_NEW, J_DEL, J_ADJ };
+
+struct tmesh_jent {
+    int kind;
+    int32_t id;
+    int32_t v[4];
+    int32_t a[4];
+    int32_t tag;
+    uint8_t f, e, rev;
+    double q;
+    uint32_t stamp;
+};
+
+/* The sorted vertices of face i of the tet with vertices v. */
+static void face_key(const int32_t *v, int i, int32_t k[3])
+{
+    tet_sort3(v[tet_face_of[i][0]], v[tet_face_of[i][1]], v[tet_face_of[i][2]], k);
+}
+
+static int same_key(const int32_t a[3], const int32_t b[3])
+{
+    return a[0] == b[0] && a[1] == b[1] && a[2] == b[2];
+}
+
+static qdc_status grow_tets(tmesh *tm, int32_t need)
+{
+    int32_t cap;
+
+    if (need <= tm->cap)
+        return QDC_OK;
+    if (need > INT32_MAX / 4 - 1024)
+        return QDC_ENOMEM;
+    cap = need + need / 4 + 64;
+    if (cap > INT32_MAX / 4)
+        cap = INT32_MAX / 4;
+#define GROW(p, n)                                                                       \
+    do {                                                                                 \
+        void *np_ = qdc_realloc((p), (size_t)(n) * sizeof *(p));                         \
+        if (!np_)                                                                        \
+            return QDC_ENOMEM;                                                           \
+        (p) = np_;                                                                       \
+    } while (0)
+    GROW(tm->tv, 4 * (size_t)cap);
+    GROW(tm->adj, 4 * (size_t)cap);
+    GROW(tm->tag, cap);
+    GROW(tm->rev, cap);
+    GROW(tm->fcons, cap);
+    GROW(tm->econs, cap);
+    GROW(tm->q, cap);
+    GROW(tm->stamp, cap);
+    GROW(tm->freel, cap);
+    GROW(tm->mark, cap);
+#undef GROW
+    memset(tm->mark + tm->cap, 0, (size_t)(cap - tm->cap));
+    memset(tm->stamp + tm->cap, 0, (size_t)(cap - tm->cap) * sizeof *tm->stamp);
+    for (int32_t t = tm->cap; t < cap; t++)
+        tm->tv[4 * (size_t)t] = -1;
+    tm->cap = cap;
+    return QDC_OK;
+}
+
+static qdc_status grow_journal(tmesh *tm, int32_t need)
+{
+    tmesh_jent *j;
+
+    if (need <= tm->capjr)
+        return QDC_OK;
+    j = qdc_realloc(tm->jr, (size_t)need * sizeof *j);
+    if (!j)
+        return QDC_ENOMEM;
+    tm->jr = j;
+    tm->capjr = need;
+    return QDC_OK;
+}
+
+void tmesh_free(tmesh *tm)
+{
+    if (!tm)
+        return;
+    qdc_free(tm->xyz);
+    qdc_free(tm->vcons);
+    qdc_free(tm->tv);
+    qdc_free(tm->adj);
+    qdc_free(tm->tag);
+    qdc_free(tm->rev);
+    qdc_free(tm->fcons);
+    qdc_free(tm->econs);
+    qdc_free(tm->q);
+    qdc_free(tm->stamp);
+    qdc_free(tm->freel);
+    qdc_free(tm->mark);
+    qdc_free(tm->jr);
+    qdc_free(tm);
+}
+
+double tmesh_quality(const tmesh *tm, const int32_t v[4], double floor4)
+{
+    const double *p0 = tm->xyz + 3 * (size_t)v[0], *p1 = tm->xyz + 3 * (size_t)v[1];
+    const double *p2 = tm->xyz + 3 * (size_t)v[2], *p3 = tm->xyz + 3 * (size_t)v[3];
+    metric_parts pt;
+    double q;
+
+    if (exact_orient3d(p0, p1, p2, p3) <= 0)
+        return -2.0;
+    metric_parts_for(OPT_METRIC_MIMR, p0, p1, p2, p3, &pt);
+    q = metric_mean_ratio(&pt);
+    if (q < floor4 && tm->vcons[v[0]] && tm->vcons[v[1]] && tm->vcons[v[2]] &&
+        tm->vcons[v[3]])
+        return -3.0;
+    return q;
+}
+
+/* Face adjacency by matching sorted face keys among the faces whose lowest
+ * vertex is the same (a counting sort by that vertex; buckets hold ~24 faces). */
+static qdc_status match_faces(tmesh *tm, int32_t nt, qdc_error *err)
+{
+    qdc_status st = QDC_OK;
+    int32_t nv = tm->nv;
+    int32_t *ptr = qdc_calloc((size_t)nv + 1, sizeof *ptr);
+    int32_t *idx = qdc_mallocn(4 * (size_t)nt, sizeof *idx);
+    int64_t *rest = qdc_mallocn(4 * (size_t)nt, sizeof *rest); /* the other two */
+
+    if (!ptr || !idx || !rest) {
+        st = QDC_ENOMEM;
+        goto out;
+    }
+    for (int32_t s = 0; s < 4 * nt; s++) {
+        int32_t k[3];
+        face_key(tm->tv + 4 * (size_t)(s / 4), s % 4, k);
+        ptr[k[0] + 1]++;
+        tm->adj[s] = -1;
+    }
+    for (int32_t v = 0; v < nv; v++)
+        ptr[v + 1] += ptr[v];
+    for (int32_t s = 0; s < 4 * nt; s++) {
+        int32_t k[3];
+        face_key(tm->tv + 4 * (size_t)(s / 4), s % 4, k);
+        rest[ptr[k[0]]] = (int64_t)k[1] << 32 | (uint32_t)k[2];
+        idx[ptr[k[0]]++] = s;
+    }
+    for (int32_t v = nv; v > 0; v--)
+        ptr[v] = ptr[v - 1];
+    ptr[0] = 0;
+    for (int32_t v = 0; v < nv; v++)
+        for (int32_t i = ptr[v]; i < ptr[v + 1]; i++)
+            for (int32_t j = i + 1; j < ptr[v + 1]; j++) {
+                int32_t s = idx[i], r = idx[j];
+                if (rest[i] != rest[j])
+                    continue;
+                if (tm->adj[s] >= 0 || tm->adj[r] >= 0) {
+                    st = qdc_fail(err, QDC_EMESH, "a face is shared by three tets");
+                    if (err)
+                        err->index = s / 4;
+                    goto out;
+                }
+                tm->adj[s] = r;
+                tm->adj[r] = s;
+            }
+out:
+    qdc_free(ptr);
+    qdc_free(idx);
+    qdc_free(rest);
+    return st;
+}
+
+/* Edge bits: every edge of a constrained face, in every tet that has it (a
+ * tet may touch the surface by an edge alone). Edges bucketed by lower vertex. */
+static qdc_status mark_edges(tmesh *tm, int32_t nt)
+{
+    int32_t nv = tm->nv, ne = 0;
+    int32_t *ptr = qdc_calloc((size_t)nv + 1, sizeof *ptr), *hiv = NULL;
+    qdc_status st = QDC_OK;
+
+    if (!ptr)
+        return QDC_ENOMEM;
+    for (int pass = 0; pass < 2; pass++) {
+        for (int32_t t = 0; t < nt; t++)
+            for (int i = 0; i < 4; i++) {
+                if (!(tm->fcons[t] >> i & 1))
+                    continue;
+                int32_t k[3];
+                face_key(tm->tv + 4 * (size_t)t, i, k);
+                for (int s = 0; s < 3; s++) {
+                    int32_t lo = k[s == 2 ? 1 : 0], hv = k[s == 0 ? 1 : 2];
+                    if (pass == 0)
+                        ptr[lo + 1]++;
+                    else
+                        hiv[ptr[lo]++] = hv;
+                }
+            }
+        if (pass == 0) {
+            for (int32_t v = 0; v < nv; v++)
+                ptr[v + 1] += ptr[v];
+            ne = ptr[nv];
+            hiv = qdc_mallocn((size_t)ne + 1, sizeof *hiv);
+            if (!hiv) {
+                st = QDC_ENOMEM;
+                goto out;
+            }
+        }
+    }
+    /* pass 1 advanced each start to the next bucket's: shift back */
+    for (int32_t v = nv; v > 0; v--)
+        ptr[v] = ptr[v - 1];
+    ptr[0] = 0;
+    for (int32_t t = 0; t < nt; t++) {
+        const int32_t *tt = tm->tv + 4 * (size_t)t;
+        uint8_t bits = 0;
+        for (int e = 0; e < 6; e++) {
+            int32_t u = tt[tmesh_edge[e][0]], w = tt[tmesh_edge[e][1]];
+            int32_t lo = u < w ? u : w, hv = u < w ? w : u;
+            for (int32_t i = ptr[lo]; i < ptr[lo + 1]; i++)
+                if (hiv[i] == hv) {
+                    bits |= (uint8_t)(1u << e);
+                    break;
+                }
+        }
+        tm->econs[t] = bits;
+    }
+out:
+    qdc_free(ptr);
+    qdc_free(hiv);
+    return st;
+}
+
+qdc_status tmesh_new(int32_t nv, const double *xyz, int32_t nt, const int32_t *tets,
+                     const int32_t *region, const uint8_t *rev, tmesh **out,
+                     qdc_error *err)
+{
+    qdc_status st = QDC_OK;
+    tmesh *tm;
+
+    *out = NULL;
+    if (nv <= 0 || nt <= 0)
+        return qdc_fail(err, QDC_EINVAL, "empty mesh");
+    tm = qdc_calloc(1, sizeof *tm);
+    if (!tm)
+        return QDC_ENOMEM;
+    tm->nv = nv;
+    tm->xyz = qdc_mallocn(3 * (size_t)nv, sizeof *tm->xyz);
+    tm->vcons = qdc_calloc((size_t)nv, 1);
+    if (!tm->xyz || !tm->vcons) {
+        st = QDC_ENOMEM;
+        goto out;
+    }
+    memcpy(tm->xyz, xyz, 3 * (size_t)nv * sizeof *xyz);
+    st = grow_tets(tm, nt);
+    if (st != QDC_OK)
+        goto out;
+    for (int32_t t = 0; t < nt; t++) {
+        const int32_t *tt = tets + 4 * (size_t)t;
+        for (int a = 0; a < 4; a++) {
+            if (tt[a] < 0 || tt[a] >= nv) {
+                st = qdc_fail(err, QDC_EMESH, "tet %ld: vertex index out of range",
+                              (long)t);
+                goto bad_tet;
+            }
+            for (int b = 0; b < a; b++)
+                if (tt[b] == tt[a]) {
+                    st = qdc_fail(err, QDC_EMESH, "tet %ld: a repeated vertex", (long)t);
+                    goto bad_tet;
+                }
+        }
+        memcpy(tm->tv + 4 * (size_t)t, tt, 4 * sizeof *tt);
+        tm->tag[t] = region ? region[t] : 0;
+        tm->rev[t] = rev ? rev[t] != 0 : 0;
+        tm->stamp[t] = 1;
+        continue;
+    bad_tet:
+        if (err)
+            err->index = t;
+        goto out;
+    }
+    tm->hi = nt;
+    tm->nlive = nt;
+    st = match_faces(tm, nt, err);
+    if (st != QDC_OK)
+        goto out;
+    for (int32_t t = 0; t < nt; t++) {
+        uint8_t f = 0;
+        for (int i = 0; i < 4; i++) {
+            int32_t n = tm->adj[4 * (size_t)t + i];
+            if (n < 0 || tm->tag[n / 4] != tm->tag[t]) {
+                f |= (uint8_t)(1u << i);
+                for (int s = 0; s < 3; s++)
+                    tm->vcons[tm->tv[4 * (size_t)t + tet_face_of[i][s]]] = 1;
+            }
+        }
+        tm->fcons[t] = f;
+    }
+    st = mark_edges(tm, nt);
+    if (st != QDC_OK)
+        goto out;
+    for (int32_t t = 0; t < nt; t++)
+        tm->q[t] = tmesh_quality(tm, tm->tv + 4 * (size_t)t, -INFINITY);
+    *out = tm;
+    tm = NULL;
+out:
+    tmesh_free(tm);
+    return st;
+}
+
+qdc_status tmesh_export(const tmesh *tm, int32_t *nt, int32_t **tets, int32_t **region)
+{
+    int32_t *tv = qdc_mallocn(4 * (size_t)tm->nlive + 4, sizeof *tv), *rg = NULL, k = 0;
+
+    if (!tv)
+        return QDC_ENOMEM;
+    if (region) {
+        rg = qdc_mallocn((size_t)tm->nlive + 1, sizeof *rg);
+        if (!rg) {
+            qdc_free(tv);
+            return QDC_ENOMEM;
+        }
+    }
+    for (int32_t t = 0; t < tm->hi; t++) {
+        if (tm->tv[4 * (size_t)t] < 0)
+            continue;
+        memcpy(tv + 4 * (size_t)k, tm->tv + 4 * (size_t)t, 4 * sizeof *tv);
+        if (tm->rev[t]) {
+            tv[4 * (size_t)k] = tm->tv[4 * (size_t)t + 1];
+            tv[4 * (size_t)k + 1] = tm->tv[4 * (size_t)t];
+        }
+        if (rg)
+            rg[k] = tm->tag[t];
+        k++;
+    }
+    *nt = k;
+    *tets = tv;
+    if (region)
+        *region = rg;
+    return QDC_OK;
+}
+
+static tmesh_jent *jpush(tmesh *tm, int kind, int32_t id)
+{
+    tmesh_jent *j = tm->jr + tm->njr++;
+    j->kind = kind;
+    j->id = id;
+    return j;
+}
+
+static void del_tet(tmesh *tm, int32_t t)
+{
+    tmesh_jent *j = jpush(tm, J_DEL, t);
+    memcpy(j->v, tm->tv + 4 * (size_t)t, sizeof j->v);
+    memcpy(j->a, tm->adj + 4 * (size_t)t, sizeof j->a);
+    j->tag = tm->tag[t];
+    j->f = tm->fcons[t];
+    j->e = tm->econs[t];
+    j->rev = tm->rev[t];
+    j->q = tm->q[t];
+    j->stamp = tm->stamp[t];
+    tm->tv[4 * (size_t)t] = -1;
+    tm->freel[tm->nfree++] = t;
+    tm->nlive--;
+}
+
+static int32_t new_tet(tmesh *tm)
+{
+    int from_hi = tm->nfree == 0;
+    int32_t t = from_hi ? tm->hi++ : tm->freel[--tm->nfree];
+    tmesh_jent *j = jpush(tm, J_NEW, t);
+    j->a[0] = from_hi;
+    j->stamp = tm->stamp[t];
+    tm->stamp[t]++;
+    tm->nlive++;
+    return t;
+}
+
+static void set_adj(tmesh *tm, int32_t slot, int32_t val)
+{
+    tmesh_jent *j = jpush(tm, J_ADJ, slot);
+    j->a[0] = tm->adj[slot];
+    tm->adj[slot] = val;
+}
+
+void tmesh_commit(tmesh *tm)
+{
+    tm->njr = 0;
+}
+
+void tmesh_rollback(tmesh *tm)
+{
+    while (tm->njr > 0) {
+        tmesh_jent *j = tm->jr + --tm->njr;
+        int32_t t = j->id;
+        switch (j->kind) {
+        case J_ADJ:
+            tm->adj[t] = j->a[0];
+            break;
+        case J_NEW:
+            tm->tv[4 * (size_t)t] = -1;
+            tm->stamp[t] = j->stamp;
+            tm->nlive--;
+            /* back where the slot came from: hi, else the free list's top */
+            if (j->a[0])
+                tm->hi--;
+            else
+                tm->freel[tm->nfree++] = t;
+            break;
+        default: /* J_DEL: its slot is the free list's top again */
+            tm->nfree--;
+            memcpy(tm->tv + 4 * (size_t)t, j->v, sizeof j->v);
+            memcpy(tm->adj + 4 * (size_t)t, j->a, sizeof j->a);
+            tm->tag[t] = j->tag;
+            tm->fcons[t] = j->f;
+            tm->econs[t] = j->e;
+            tm->rev[t] = j->rev;
+            tm->q[t] = j->q;
+            tm->stamp[t] = j->stamp;
+            tm->nlive++;
+            break;
+        }
+    }
+}
+
+/* The constraint bit of edge (u, w) in the first of the tets old that has it, or
+ * 0 for an edge none of them has (a new edge, inside the cavity). */
+static uint8_t edge_bit(const tmesh *tm, const int32_t *old, int nold, int32_t u,
+                        int32_t w)
+{
+    for (int o = 0; o < nold; o++) {
+        const int32_t *tt = tm->tv + 4 * (size_t)old[o];
+        for (int e = 0; e < 6; e++) {
+            int32_t x = tt[tmesh_edge[e][0]], y = tt[tmesh_edge[e][1]];
+            if ((x == u && y == w) || (x == w && y == u))
+                return (uint8_t)(tm->econs[old[o]] >> e & 1);
+        }
+    }
+    return 0;
+}
+
+qdc_status tmesh_replace(tmesh *tm, const int32_t *old, int nold,
+                         const int32_t (*newt)[4], int nnew, int32_t *new_ids,
+                         int *applied)
+{
+    int32_t okey[4 * CAV_OLD][3], onb[4 * CAV_OLD], ids[CAV_NEW];
+    uint8_t obit[4 * CAV_OLD], oused[4 * CAV_OLD], ebits[CAV_NEW];
+    int16_t link[CAV_NEW][4]; /* >= 0: outer face; < 0: -1 - (4 * new tet + face) */
+    double qn[CAV_NEW];
+    int nout = 0, ok = 1;
+    int32_t tag;
+    uint8_t rev;
+    qdc_status st;
+
+    *applied = 0;
+    if (nold < 1 || nold > CAV_OLD || nnew < 1 || nnew > CAV_NEW)
+        return QDC_OK;
+    tag = tm->tag[old[0]];
+    rev = tm->rev[old[0]];
+    for (int o = 0; o < nold; o++)
+        if (tm->tv[4 * (size_t)old[o]] < 0 || tm->tag[old[o]] != tag ||
+            tm->mark[old[o]] || tm->q[old[o]] < -1.0)
+            ok = 0;
+        else
+            tm->mark[old[o]] = 1;
+    for (int j = 0; ok && j < nnew; j++) {
+        qn[j] = tmesh_quality(tm, newt[j], -INFINITY);
+        if (qn[j] < -1.0)
+            ok = 0;
+    }
+    /* the cavity's outer faces, then each new face linked to one of them or to
+     * the one other new face with its vertices */
+    for (int o = 0; ok && o < nold; o++)
+        for (int i = 0; i < 4; i++) {
+            int32_t n = tm->adj[4 * (size_t)old[o] + i];
+            if (n >= 0 && tm->mark[n / 4])
+                continue;
+            face_key(tm->tv + 4 * (size_t)old[o], i, okey[nout]);
+            onb[nout] = n;
+            obit[nout] = (uint8_t)(tm->fcons[old[o]] >> i & 1);
+            oused[nout] = 0;
+            nout++;
+        }
+    for (int j = 0; ok && j < nnew; j++)
+        for (int i = 0; ok && i < 4; i++) {
+            int32_t k[3];
+            int found = 0;
+            face_key(newt[j], i, k);
+            for (int o = 0; o < nout && !found; o++)
+                if (!oused[o] && same_key(k, okey[o])) {
+                    oused[o] = 1;
+                    link[j][i] = (int16_t)o;
+                    found = 1;
+                }
+            for (int j2 = 0; j2 < nnew && !found; j2++)
+                for (int i2 = 0; i2 < 4 && !found; i2++) {
+                    int32_t k2[3];
+                    if (j2 == j)
+                        continue;
+                    face_key(newt[j2], i2, k2);
+                    if (same_key(k, k2)) {
+                        link[j][i] = (int16_t)(-1 - (4 * j2 + i2));
+                        found = 1;
+                    }
+                }
+            if (!found)
+                ok = 0;
+        }
+    for (int o = 0; ok && o < nout; o++)
+        if (!oused[o])
+            ok = 0;
+    for (int j = 0; ok && j < nnew; j++) {
+        ebits[j] = 0;
+        for (int e = 0; e < 6; e++)
+            ebits[j] |= (uint8_t)(edge_bit(tm, old, nold, newt[j][tmesh_edge[e][0]],
+                                           newt[j][tmesh_edge[e][1]])
+                                  << e);
+    }
+    for (int o = 0; o < nold; o++)
+        tm->mark[old[o]] = 0;
+    if (!ok)
+        return QDC_OK;
+    st = grow_tets(tm, tm->hi + nnew);
+    if (st == QDC_OK)
+        st = grow_journal(tm, nold + nnew + nout + 1);
+    if (st != QDC_OK)
+        return st;
+    tm->njr = 0;
+    for (int o = 0; o < nold; o++)
+        del_tet(tm, old[o]);
+    for (int j = 0; j < nnew; j++) {
+        int32_t t = new_tet(tm);
+        ids[j] = t;
+        memcpy(tm->tv + 4 * (size_t)t, newt[j], 4 * sizeof(int32_t));
+        tm->tag[t] = tag;
+        tm->rev[t] = rev;
+        tm->q[t] = qn[j];
+        tm->econs[t] = ebits[j];
+        tm->fcons[t] = 0;
+    }
+    for (int j = 0; j < nnew; j++)
+        for (int i = 0; i < 4; i++) {
+            int32_t slot = 4 * ids[j] + i;
+            if (link[j][i] >= 0) {
+                int o = link[j][i];
+                tm->adj[slot] = onb[o];
+                tm->fcons[ids[j]] |= (uint8_t)(obit[o] << i);
+                if (onb[o] >= 0)
+                    set_adj(tm, onb[o], slot);
+            } else {
+                int r = -1 - link[j][i];
+                tm->adj[slot] = 4 * ids[r / 4] + r % 4;
+            }
+        }
+    if (new_ids)
+        memcpy(new_ids, ids, (size_t)nnew * sizeof *ids);
+    *applied = 1;
+    return QDC_OK;
+}
+
+int tmesh_check(const tmesh *tm, int32_t *ninv, char *why, size_t n)
+{
+    int32_t live = 0;
+
+    *ninv = 0;
+    for (int32_t t = 0; t < tm->hi; t++) {
+        const int32_t *tt = tm->tv + 4 * (size_t)t;
+        if (tt[0] < 0)
+            continue;
+        live++;
+        if (exact_orient3d(tm->xyz + 3 * (size_t)tt[0], tm->xyz + 3 * (size_t)tt[1],
+                           tm->xyz + 3 * (size_t)tt[2],
+                           tm->xyz + 3 * (size_t)tt[3]) <= 0) {
+            (*ninv)++;
+            if (!(tm->q[t] < -1.0)) {
+                snprintf(why, n, "tet %ld is not positive but has a quality", (long)t);
+                return -1;
+            }
+        }
+        for (int i = 0; i < 4; i++) {
+            int32_t nb = tm->adj[4 * (size_t)t + i], k[3], k2[3];
+            int want = nb < 0;
+            if (nb >= 0) {
+                const int32_t *tu = tm->tv + 4 * (size_t)(nb / 4);
+                if (tu[0] < 0 || tm->adj[nb] != 4 * t + i) {
+                    snprintf(why, n, "tet %ld face %d: neighbour not linked back",
+                             (long)t, i);
+                    return -1;
+                }
+                face_key(tt, i, k);
+                face_key(tu, nb % 4, k2);
+                if (!same_key(k, k2)) {
+                    snprintf(why, n, "tet %ld face %d: neighbour's face differs", (long)t,
+                             i);
+                    return -1;
+                }
+                want = tm->tag[nb / 4] != tm->tag[t];
+            }
+            if ((tm->fcons[t] >> i & 1) != want) {
+                snprintf(why, n, "tet %ld face %d: constraint bit wrong", (long)t, i);
+                return -1;
+            }
+            if (want) /* the edges of a constrained face are constrained */
+                for (int e = 0; e < 6; e++)
+                    if (tmesh_edge[e][0] != i && tmesh_edge[e][1] != i &&
+                        !(tm->econs[t] >> e & 1)) {
+                        snprintf(why, n, "tet %ld edge %d: constraint bit missing",
+                                 (long)t, e);
+                        return -1;
+                    }
+        }
+    }
+    if (live != tm->nlive) {
+        snprintf(why, n, "%ld live tets counted, %ld recorded", (long)live,
+                 (long)tm->nlive);
+        return -1;
+    }
+    return 0;
+}

@@ -1,0 +1,99 @@
+/* tmesh.h - a mutable tetrahedral mesh for topological operations: tets made and
+ * removed through free lists, face adjacency kept up to date, a region tag per
+ * tet, constrained faces and edges as per-tet bits, and a journal that undoes the
+ * last operation.
+ * Indices are 0-based int32; xyz holds 3 doubles per vertex. Every live tet is
+ * positive: det[b-a, c-a, d-a] > 0 (core/tet.h), checked exactly (topo/exact.h).
+ * Face i of a tet is the face opposite its local vertex i, ordered as tet_face_of
+ * orders it (core/tet.h). Edge e of a tet joins local vertices tmesh_edge[e]
+ * (01 02 03 12 13 23, the order of metric_dihedrals).
+ * Constrained: a boundary face (of one tet), a face between tets of different
+ * tags, and every edge of such a face. Operations never remove a constrained face
+ * or edge, so the boundary triangles and the interfaces stay as they are.
+ * Thread safety: a tmesh is used by one thread at a time. */
+#ifndef QDC_TMESH_H
+#define QDC_TMESH_H
+
+#include "core/base.h"
+
+#include <stdint.h>
+
+extern const int tmesh_edge[6][2];
+
+typedef struct tmesh_jent tmesh_jent; /* a journal entry (tmesh.c) */
+
+typedef struct tmesh {
+    int32_t nv;      /* vertices */
+    double *xyz;     /* 3*nv, the mesh's own copy */
+    uint8_t *vcons;  /* nv: 1 on a constrained face */
+    int32_t cap;     /* tet slots allocated */
+    int32_t hi;      /* slots [0, hi) have been used */
+    int32_t nlive;   /* live tets */
+    int32_t *tv;     /* 4*cap vertices; tv[4t] < 0 for a free slot */
+    int32_t *adj;    /* 4*cap: across face i of t, 4*u + j (face j of u), or -1 */
+    int32_t *tag;    /* cap region tags */
+    uint8_t *rev;    /* cap: 1 when the caller writes the tet with its first two
+                      * vertices swapped (tmesh_new's rev; new tets take the
+                      * cavity's), so that tmesh_export gives the caller's order */
+    uint8_t *fcons;  /* cap: bit i set when face i is constrained */
+    uint8_t *econs;  /* cap: bit e set when edge e is constrained */
+    double *q;       /* cap: mean ratio of the tet (geom/metric.h) */
+    uint32_t *stamp; /* cap: bumped each time a slot gets a new tet */
+    int32_t *freel;  /* free slots below hi, a stack */
+    int32_t nfree;
+    uint8_t *mark;  /* cap scratch flags, all 0 between calls */
+    tmesh_jent *jr; /* the journal of the operation under way */
+    int32_t njr, capjr;
+} tmesh;
+
+/* Build from nt positive tets (4 indices each; the caller orients them, e.g.
+ * with mesh_orient) over nv vertices; region may be NULL (one tag, 0); rev may be
+ * NULL (all 0), else 1 for each tet the caller writes with its first two
+ * vertices swapped. Copies everything. QDC_EMESH for a face of three tets or a
+ * bad index (err->index a tet), QDC_ENOMEM. Free with tmesh_free. */
+qdc_status tmesh_new(int32_t nv, const double *xyz, int32_t nt, const int32_t *tets,
+                     const int32_t *region, const uint8_t *rev, tmesh **out,
+                     qdc_error *err);
+void tmesh_free(tmesh *tm);
+
+/* The live tets in slot order, each in the caller's vertex order (rev): *tets
+ * (4 each) and *region (may be NULL, then not written) allocated with qdc_malloc
+ * for the caller; *nt their count. */
+qdc_status tmesh_export(const tmesh *tm, int32_t *nt, int32_t **tets, int32_t **region);
+
+/* Mean ratio of the tet (a,b,c,d), or a value below -1 when it is not positive
+ * by the exact predicate or when its four corners are all on constrained faces
+ * and its mean ratio is below floor4 (no new sliver held by the surface:
+ * Stellar's MIN4BOUNDQUAL). */
+double tmesh_quality(const tmesh *tm, const int32_t v[4], double floor4);
+
+/* Replace the live tets old[0..nold) (one tag, a connected cavity) by the nnew
+ * tets newt (positive, the same outer faces), which take that tag; new_ids (may
+ * be NULL) receives their slots. The change is journaled: tmesh_commit keeps it,
+ * tmesh_rollback undoes it. *applied is 0 (nothing changed, no journal) when a
+ * new tet is not positive, an old one is not (an inverted input tet), the tags
+ * differ, or the new tets do not close the
+ * cavity's outer faces face for face. QDC_ENOMEM. */
+qdc_status tmesh_replace(tmesh *tm, const int32_t *old, int nold,
+                         const int32_t (*newt)[4], int nnew, int32_t *new_ids,
+                         int *applied);
+void tmesh_commit(tmesh *tm);
+/* Undo the journaled operation: slots, vertices, adjacency, tags, bits, the free
+ * list and hi exactly as they were. */
+void tmesh_rollback(tmesh *tm);
+
+/* Consistency check for tests: adjacency symmetric with matching vertices, face
+ * bits as the definition above, the live count. *ninv receives the live tets
+ * that are not positive (exactly; only an input's inverted tets can be: their
+ * quality is below -1 and no operation touches them). 0 when consistent, else
+ * -1 with a reason in why (n bytes). */
+int tmesh_check(const tmesh *tm, int32_t *ninv, char *why, size_t n);
+
+/* Local index of vertex v in tet t, or -1. */
+static inline int tmesh_local(const tmesh *tm, int32_t t, int32_t v)
+{
+    const int32_t *tt = tm->tv + 4 * (int64_t)t;
+    return tt[0] == v ? 0 : tt[1] == v ? 1 : tt[2] == v ? 2 : tt[3] == v ? 3 : -1;
+}
+
+#endif

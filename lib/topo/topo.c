@@ -1,0 +1,212 @@
+/* topo.c - the topology driver: a queue of bad tets, worst first, each given its
+ * best improving flip (Stellar's topological pass, Klingner and Shewchuk 2007,
+ * with Netgen's sum-of-badness preference among improving operations). */
+#include "topo/topo.h"
+
+#include <string.h>
+
+void topo_params_default(topo_params *p)
+{
+    p->maxring = FLIP_MAXRING;
+    p->qgoal = 0.6;
+    p->margin = 1e-3;
+    p->floor4 = 0.1;
+    p->rounds = 3;
+    p->max_ops = 0;
+}
+
+typedef struct {
+    double q;
+    int32_t k[4]; /* the tet's vertices sorted: the tie-break */
+    int32_t t;
+    uint32_t stamp;
+} qent;
+
+typedef struct {
+    qent *a;
+    size_t n, cap;
+} heap;
+
+static int before(const qent *x, const qent *y)
+{
+    if (x->q != y->q)
+        return x->q < y->q;
+    for (int s = 0; s < 4; s++)
+        if (x->k[s] != y->k[s])
+            return x->k[s] < y->k[s];
+    return 0;
+}
+
+static qdc_status heap_push(heap *h, const tmesh *tm, int32_t t)
+{
+    qent e;
+    size_t i;
+
+    if (h->n == h->cap) {
+        size_t cap = h->cap ? 2 * h->cap : 1024;
+        qent *a = qdc_realloc(h->a, cap * sizeof *a);
+        if (!a)
+            return QDC_ENOMEM;
+        h->a = a;
+        h->cap = cap;
+    }
+    e.q = tm->q[t];
+    memcpy(e.k, tm->tv + 4 * (size_t)t, sizeof e.k);
+    for (int x = 1; x < 4; x++)
+        for (int y = x; y > 0 && e.k[y - 1] > e.k[y]; y--) {
+            int32_t s = e.k[y];
+            e.k[y] = e.k[y - 1];
+            e.k[y - 1] = s;
+        }
+    e.t = t;
+    e.stamp = tm->stamp[t];
+    i = h->n++;
+    while (i > 0 && before(&e, &h->a[(i - 1) / 2])) {
+        h->a[i] = h->a[(i - 1) / 2];
+        i = (i - 1) / 2;
+    }
+    h->a[i] = e;
+    return QDC_OK;
+}
+
+static qent heap_pop(heap *h)
+{
+    qent top = h->a[0], last = h->a[--h->n];
+    size_t i = 0;
+
+    for (;;) {
+        size_t c = 2 * i + 1;
+        if (c >= h->n)
+            break;
+        if (c + 1 < h->n && before(&h->a[c + 1], &h->a[c]))
+            c++;
+        if (!before(&h->a[c], &last))
+            break;
+        h->a[i] = h->a[c];
+        i = c;
+    }
+    if (h->n > 0)
+        h->a[i] = last;
+    return top;
+}
+
+/* x better than y: larger gain, larger new minimum, then kind and key. */
+static int better(const flip_cand *x, const flip_cand *y)
+{
+    if (x->gain != y->gain)
+        return x->gain > y->gain;
+    if (x->qmin_new != y->qmin_new)
+        return x->qmin_new > y->qmin_new;
+    if (x->kind != y->kind)
+        return x->kind < y->kind;
+    for (int s = 0; s < 3; s++)
+        if (x->key[s] != y->key[s])
+            return x->key[s] < y->key[s];
+    return 0;
+}
+
+/* The best improving flip of tet t's edges and faces; 1 if there is one. */
+static int best_flip(const tmesh *tm, int32_t t, const topo_params *p, flip_cand *best)
+{
+    flip_cand c;
+    int have = 0;
+
+    for (int e = 0; e < 6; e++)
+        if (flip_edge_eval(tm, t, e, p->maxring, p->floor4, p->margin, &c) &&
+            (!have || better(&c, best))) {
+            *best = c;
+            have = 1;
+        }
+    for (int f = 0; f < 4; f++) {
+        if (flip_23_eval(tm, t, f, p->floor4, p->margin, &c) &&
+            (!have || better(&c, best))) {
+            *best = c;
+            have = 1;
+        }
+        if (flip_multiface_eval(tm, t, f, p->maxring, p->floor4, p->margin, &c) &&
+            (!have || better(&c, best))) {
+            *best = c;
+            have = 1;
+        }
+    }
+    return have;
+}
+
+qdc_status topo_improve(tmesh *tm, const topo_params *p, topo_stats *st,
+                        const atomic_int *cancel)
+{
+    qdc_status s = QDC_OK;
+    heap h = {0};
+    topo_stats local;
+    int64_t ops = 0, max_ops = p->max_ops > 0 ? p->max_ops : 4 * (int64_t)tm->nlive;
+
+    if (!st)
+        st = &local;
+    memset(st, 0, sizeof *st);
+    st->nt_in = tm->nlive;
+    for (int r = 0; r < p->rounds; r++) {
+        int64_t ops_round = 0;
+        h.n = 0;
+        for (int32_t t = 0; t < tm->hi && s == QDC_OK; t++)
+            if (tm->tv[4 * (size_t)t] >= 0 && tm->q[t] < p->qgoal && tm->q[t] >= -1.0)
+                s = heap_push(&h, tm, t);
+        while (s == QDC_OK && h.n > 0 && ops < max_ops) {
+            qent e = heap_pop(&h);
+            flip_cand c;
+            int32_t ids[2 * FLIP_MAXRING];
+            int applied = 0;
+            if (cancel && atomic_load(cancel)) {
+                s = QDC_ECANCEL;
+                break;
+            }
+            if (tm->tv[4 * (size_t)e.t] < 0 || tm->stamp[e.t] != e.stamp)
+                continue; /* removed since it was queued */
+            st->visits++;
+            if (!best_flip(tm, e.t, p, &c))
+                continue;
+            s = tmesh_replace(tm, c.old, c.nold, (const int32_t(*)[4])c.newt, c.nnew, ids,
+                              &applied);
+            if (s != QDC_OK || !applied)
+                continue;
+            tmesh_commit(tm);
+            ops++;
+            ops_round++;
+            if (c.kind == FLIP_EDGE) {
+                st->edge_removals++;
+                st->by_ring[c.nold]++;
+            } else if (c.kind == FLIP_23) {
+                st->flips23++;
+            } else {
+                st->multiface++;
+            }
+            for (int j = 0; j < c.nnew && s == QDC_OK; j++)
+                if (tm->q[ids[j]] < p->qgoal)
+                    s = heap_push(&h, tm, ids[j]);
+        }
+        if (s != QDC_OK || ops_round == 0 || ops >= max_ops)
+            break;
+    }
+    qdc_free(h.a);
+    st->nt_out = tm->nlive;
+    return s;
+}
+
+qdc_status topo_flip_arrays(int32_t nv, const double *xyz, int32_t nt,
+                            const int32_t *tets, const int32_t *region,
+                            const uint8_t *rev, const topo_params *p,
+                            const atomic_int *cancel, int32_t *nt_out, int32_t **tets_out,
+                            int32_t **region_out, topo_stats *st, qdc_error *err)
+{
+    tmesh *tm = NULL;
+    qdc_status s = tmesh_new(nv, xyz, nt, tets, region, rev, &tm, err);
+
+    if (s == QDC_OK)
+        s = topo_improve(tm, p, st, cancel);
+    if (s == QDC_OK || s == QDC_ECANCEL) {
+        qdc_status s2 = tmesh_export(tm, nt_out, tets_out, region ? region_out : NULL);
+        if (s2 != QDC_OK)
+            s = s2;
+    }
+    tmesh_free(tm);
+    return s;
+}

@@ -1,0 +1,57 @@
+/* topo.h - the topology driver: the worst tets first, from a queue, each given
+ * the best improving flip of its edges (edge removal) and faces (2-3 flip,
+ * multi-face removal).
+ * An operation is taken only when the smallest mean ratio of its cavity rises by
+ * at least margin; among those of one tet, the larger gain (sum of 1 - q over the
+ * old tets less over the new: the badness the cavity loses, Netgen's objective),
+ * then the larger new minimum, then the smaller canonical vertex ids. The run is
+ * serial and ordered by (quality, sorted vertex ids), never by address or hash,
+ * so the same mesh and parameters give the same result on any thread count.
+ * Vertices never move and none is made: point data stays valid. */
+#ifndef QDC_TOPO_H
+#define QDC_TOPO_H
+
+#include "topo/flip.h"
+#include "topo/tmesh.h"
+
+#include <stdatomic.h>
+
+typedef struct {
+    int maxring;     /* largest edge ring removed (3..FLIP_MAXRING) */
+    double qgoal;    /* tets with a mean ratio below this are queued */
+    double margin;   /* the cavity's smallest mean ratio must rise by this */
+    double floor4;   /* no new tet with 4 constrained corners below this mean ratio */
+    int rounds;      /* queue rebuilt from the whole mesh at most this many times */
+    int64_t max_ops; /* operations at most (0: 4 per tet of the input) */
+} topo_params;
+
+/* What the runs did. */
+typedef struct {
+    int64_t edge_removals;             /* edges removed */
+    int64_t by_ring[FLIP_MAXRING + 1]; /* of which with a ring of n tets */
+    int64_t flips23;                   /* 2-3 flips */
+    int64_t multiface;                 /* multi-face removals */
+    int64_t visits;                    /* tets taken from the queue */
+    int32_t nt_in, nt_out;             /* live tets before and after */
+} topo_stats;
+
+/* maxring 10, qgoal 0.6, margin 1e-3, floor4 0.1, rounds 3, max_ops 0. */
+void topo_params_default(topo_params *p);
+
+/* Improve tm in place with flips (see above). cancel (may be NULL) is polled
+ * between operations: QDC_ECANCEL then, the mesh valid as it stands. st may be
+ * NULL. QDC_ENOMEM. */
+qdc_status topo_improve(tmesh *tm, const topo_params *p, topo_stats *st,
+                        const atomic_int *cancel);
+
+/* The whole round trip on arrays: build a tmesh from nt positive tets (4 each,
+ * region and rev may be NULL; as tmesh_new), improve it, and hand back the live tets in
+ * *tets_out (and their tags in *region_out when region is not NULL), allocated with
+ * qdc_malloc for the caller, *nt_out their count. The vertices are not changed. */
+qdc_status topo_flip_arrays(int32_t nv, const double *xyz, int32_t nt,
+                            const int32_t *tets, const int32_t *region,
+                            const uint8_t *rev, const topo_params *p,
+                            const atomic_int *cancel, int32_t *nt_out, int32_t **tets_out,
+                            int32_t **region_out, topo_stats *st, qdc_error *err);
+
+#endif

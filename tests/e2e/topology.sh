@@ -1,0 +1,132 @@
+#!/bin/sh
+# topology.sh - `qdc optimize --topology flips` on low-quality meshes of
+# scripts/corpus.py (the thin bone, surface-heavy, and the box with an embedded
+# ball: two regions): against `--topology none`, a higher mean ratio and
+# smallest dihedral (the independent evaluator's, tests/tools/evaluate.py), the
+# same vertices (all of them still used), the boundary triangles and the faces between regions the
+# same as sets (with the region on each side), no tet inverted, and the same bytes from two runs and from 1 and 2
+# threads. `none` still gives the input's tets.
+. "$(dirname "$0")/../lib.sh"
+
+names="bone-lowq two-region"
+if ! "$PY" -c 'import numpy, scipy' 2> /dev/null; then
+    for n in $names; do echo "ok - topology: $n # SKIP python3-numpy/python3-scipy missing"; done
+    exit 0
+fi
+if ! "$PY" "$ROOT/scripts/corpus.py" "$TMP/c" --tets 20000 --seed 3 \
+    --only bone-lowq,two-region > "$TMP/list" 2>&1; then
+    for n in $names; do fail "topology: $n" "scripts/corpus.py failed: $(tail -1 "$TMP/list")"; done
+    exit 1
+fi
+
+# compare IN NONE FLIPS: prints "ok" or what differs
+cat > "$TMP/compare.py" << 'PY'
+import sys
+import numpy as np
+
+def medit(path):
+    tok = open(path).read().split()
+    i, x, t, r = 0, None, None, None
+    while i < len(tok):
+        k = tok[i]
+        if k == "Vertices":
+            n = int(tok[i + 1])
+            a = np.array(tok[i + 2:i + 2 + 4 * n], dtype=float).reshape(n, 4)
+            x = a[:, :3]
+            i += 2 + 4 * n
+        elif k == "Tetrahedra":
+            n = int(tok[i + 1])
+            a = np.array(tok[i + 2:i + 2 + 5 * n], dtype=np.int64).reshape(n, 5)
+            t, r = a[:, :4] - 1, a[:, 4]
+            i += 2 + 5 * n
+        elif k in ("Triangles", "Edges", "Corners", "RequiredVertices", "Ridges"):
+            n = int(tok[i + 1])
+            w = {"Triangles": 4, "Edges": 3}.get(k, 1)
+            i += 2 + w * n
+        else:
+            i += 1
+    return x, t, r
+
+def faces(t, r):
+    """{sorted face: sorted tuple of the regions on its sides} of constrained faces"""
+    f = {}
+    for tt, rr in zip(t.tolist(), r.tolist()):
+        for o in range(4):
+            k = tuple(sorted(tt[:o] + tt[o + 1:]))
+            f.setdefault(k, []).append(rr)
+    return {k: tuple(sorted(v)) for k, v in f.items() if len(v) == 1 or v[0] != v[1]}
+
+xi, ti, ri = medit(sys.argv[1])
+xn, tn, rn = medit(sys.argv[2])
+xf, tf, rf = medit(sys.argv[3])
+bad = []
+if len(xf) != len(xi):
+    bad.append("vertex count %d -> %d" % (len(xi), len(xf)))
+if not np.array_equal(tn, ti):
+    bad.append("none changed the tets")
+if len(np.unique(tf)) != len(np.unique(ti)):
+    bad.append("vertices used %d -> %d" % (len(np.unique(ti)), len(np.unique(tf))))
+if faces(tf, rf) != faces(ti, ri):
+    bad.append("boundary or interface faces differ")
+if set(rf.tolist()) != set(ri.tolist()):
+    bad.append("region tags differ")
+if len(tf) == len(ti) and np.array_equal(tf, ti):
+    bad.append("flips changed no tet")
+print("; ".join(bad) if bad else "ok", len(ti), len(tf))
+PY
+
+for n in $names; do
+    in=$TMP/c/$n.mesh
+    ok=1
+    for mode in none flips; do
+        if ! "$BIN/qdc" optimize --quiet --topology $mode "$in" "$TMP/$mode.mesh" \
+            --report "$TMP/$mode.json" 2> "$TMP/err"; then
+            fail "topology: $n" "$mode: exit $?: $(tail -2 "$TMP/err")"
+            ok=0
+        fi
+    done
+    [ $ok = 1 ] || continue
+    set -- $("$PY" "$TMP/compare.py" "$in" "$TMP/none.mesh" "$TMP/flips.mesh")
+    if [ "$1" != ok ]; then
+        fail "topology: $n: connectivity" "$*"
+    else
+        pass "topology: $n: vertices, boundary and interface triangles, regions kept ($2 -> $3 tets)"
+    fi
+    # the report counts the tets in and out and the operations done
+    r=$("$PY" - "$TMP/flips.json" "$TMP/none.json" "$2" "$3" << 'PY'
+import json, sys
+f, n = json.load(open(sys.argv[1])), json.load(open(sys.argv[2]))
+t = f["run"].get("topology", {})
+ops = t.get("edge_removals", 0) + t.get("flips23", 0) + t.get("multiface_removals", 0)
+ok = (t.get("tets_in") == int(sys.argv[3]) and t.get("tets_out") == int(sys.argv[4])
+      and ops > 0 and sum(t["edge_removals_by_ring"].values()) == t["edge_removals"]
+      and f["options"]["topology"] == "flips"
+      and "topology" not in n["run"] and "topology" not in n["options"])
+print("ok" if ok else "bad: %s" % t)
+PY
+)
+    if [ "$r" = ok ]; then
+        pass "topology: $n: the report counts tets in and out and the flips"
+    else
+        fail "topology: $n: report" "$r"
+    fi
+    q() { "$PY" "$QUALITY" "$1" | "$PY" -c 'import json, sys
+d = json.load(sys.stdin); print(d["n_inverted"], "%.4f" % d["eta_mean"], "%.3f" % d["dihedral_min"])'; }
+    set -- $(q "$TMP/none.mesh")
+    nm=$2 nd=$3
+    set -- $(q "$TMP/flips.mesh")
+    if [ "$1" = 0 ] && awk -v a="$2" -v b="$nm" -v c="$3" -v d="$nd" \
+        'BEGIN { exit !(a > b && c > d) }'; then
+        pass "topology: $n: flips over none: mean ratio $nm -> $2, smallest dihedral $nd -> $3"
+    else
+        fail "topology: $n: quality" "none $nm / $nd, flips $2 / $3, $1 inverted"
+    fi
+    OMP_NUM_THREADS=1 "$BIN/qdc" optimize --quiet --topology flips "$in" "$TMP/f1.mesh" 2> /dev/null
+    OMP_NUM_THREADS=2 "$BIN/qdc" optimize --quiet --topology flips "$in" "$TMP/f2.mesh" 2> /dev/null
+    if cmp -s "$TMP/flips.mesh" "$TMP/f1.mesh" && cmp -s "$TMP/f1.mesh" "$TMP/f2.mesh"; then
+        pass "topology: $n: the same bytes from two runs, 1 and 2 threads"
+    else
+        fail "topology: $n: determinism" "outputs differ"
+    fi
+done
+exit $((NFAIL > 0))

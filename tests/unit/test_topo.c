@@ -1,0 +1,736 @@
+/* test_topo.c - the topology layer: exact orientation, the mutable mesh and its
+ * journal, edge removal, the 2-3 flip, their constraints, and the driver. */
+#include "core/mesh_int.h"
+#include "core/tet.h"
+#include "opt/opt.h"
+#include "testlib.h"
+#include "testmesh.h"
+#include "topo/exact.h"
+#include "topo/flip.h"
+#include "topo/tmesh.h"
+#include "topo/topo.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+static const double PI = 3.14159265358979323846;
+
+/* Points exactly on the plane x = y with one of them moved off it by k units in
+ * the last place of its x: the exact sign is sign(k) times the sign of the
+ * derivative along x, which a move of 1 (well conditioned) shows. */
+TEST(orient3d_exact_near_coplanar)
+{
+    uint64_t s = 12345;
+    int naive_wrong = 0, trials = 0;
+
+    for (int it = 0; it < 2000; it++) {
+        double p[4][3], ta, g;
+        for (int v = 0; v < 4; v++) {
+            double t = 0.5 + 0.5 * tm_rand(&s);
+            p[v][0] = t;
+            p[v][1] = t;
+            p[v][2] = 0.5 + 0.5 * tm_rand(&s);
+        }
+        ASSERT_EQ_INT(exact_orient3d(p[0], p[1], p[2], p[3]), 0);
+        ta = p[0][0];
+        p[0][0] = ta + 1.0;
+        g = geom_tet_vol6(&p[0][0], (const int32_t[4]){0, 1, 2, 3});
+        p[0][0] = ta;
+        if (fabs(g) < 1e-3)
+            continue;
+        for (int k = -3; k <= 3; k++) {
+            double x = ta, naive;
+            int want;
+            if (k == 0)
+                continue;
+            for (int r = 0; r < abs(k); r++)
+                x = nextafter(x, k > 0 ? 2.0 : -2.0);
+            p[0][0] = x;
+            want = (k > 0) == (g > 0) ? 1 : -1;
+            ASSERT_EQ_INT(exact_orient3d(p[0], p[1], p[2], p[3]), want);
+            naive = geom_tet_vol6(&p[0][0], (const int32_t[4]){0, 1, 2, 3});
+            naive_wrong += !(naive * want > 0);
+            trials++;
+        }
+        p[0][0] = ta;
+    }
+    ASSERT_TRUE(trials > 1000);
+    /* the case is hard: the plain determinant gets many of them wrong */
+    ASSERT_TRUE(naive_wrong > trials / 10);
+}
+
+/* a, b on the z axis; n ring points around it in z = 0 (counterclockwise from +z);
+ * the n tets (a, b, p_k, p_k+1) of one tag. */
+static tmesh *ring_mesh(int n, double za, double zb, const int32_t *tags)
+{
+    double x[3 * 12];
+    int32_t tv[4 * 10];
+    tmesh *tm = NULL;
+
+    x[0] = 0;
+    x[1] = 0;
+    x[2] = za;
+    x[3] = 0;
+    x[4] = 0;
+    x[5] = zb;
+    for (int k = 0; k < n; k++) {
+        x[3 * (2 + k)] = cos(2 * PI * k / n);
+        x[3 * (2 + k) + 1] = sin(2 * PI * k / n);
+        x[3 * (2 + k) + 2] = 0;
+        tv[4 * k] = 0;
+        tv[4 * k + 1] = 1;
+        tv[4 * k + 2] = 2 + k;
+        tv[4 * k + 3] = 2 + (k + 1) % n;
+    }
+    if (tmesh_new(n + 2, x, n, tv, tags, NULL, &tm, NULL) != QDC_OK)
+        return NULL;
+    return tm;
+}
+
+static double total_vol6(const tmesh *tm)
+{
+    double v = 0;
+    for (int32_t t = 0; t < tm->hi; t++)
+        if (tm->tv[4 * t] >= 0)
+            v += geom_tet_vol6(tm->xyz, tm->tv + 4 * t);
+    return v;
+}
+
+static int consistent(const tmesh *tm)
+{
+    char why[128];
+    int32_t ninv;
+    int r = tmesh_check(tm, &ninv, why, sizeof why);
+    if (r != 0)
+        printf("  check: %s\n", why);
+    return r == 0 && ninv == 0;
+}
+
+/* The 3-ring with exactly representable corners: the bipyramid over the
+ * triangle (1,0) (-0.5,0.75) (-0.5,-0.75) (area 9/8) of height 2, 6V = 4.5. */
+TEST(edge_removal_3_2_keeps_volume)
+{
+    double x[5 * 3] = {0, 0, -1, 0, 0, 1, 1, 0, 0, -0.5, 0.75, 0, -0.5, -0.75, 0};
+    int32_t tv[12] = {0, 1, 2, 3, 0, 1, 3, 4, 0, 1, 4, 2};
+    tmesh *tm = NULL;
+    flip_cand c;
+    int applied = 0, e01 = 0;
+
+    ASSERT_OK(tmesh_new(5, x, 3, tv, NULL, NULL, &tm, NULL));
+    ASSERT_TRUE(consistent(tm));
+    ASSERT_NEAR(total_vol6(tm), 4.5, 0);
+    ASSERT_EQ_INT(tm->econs[0] >> e01 & 1, 0); /* the axis is inside */
+    ASSERT_EQ_INT(flip_edge_eval(tm, 0, e01, 10, 0.0, -INFINITY, &c), 1);
+    ASSERT_EQ_INT(c.nold, 3);
+    ASSERT_EQ_INT(c.nnew, 2);
+    ASSERT_OK(tmesh_replace(tm, c.old, c.nold, (const int32_t(*)[4])c.newt, c.nnew, NULL,
+                            &applied));
+    ASSERT_EQ_INT(applied, 1);
+    tmesh_commit(tm);
+    ASSERT_EQ_INT(tm->nlive, 2);
+    ASSERT_TRUE(consistent(tm));
+    ASSERT_NEAR(geom_tet_vol6(x, c.newt[0]), 2.25, 0); /* each half: height 1 */
+    ASSERT_NEAR(geom_tet_vol6(x, c.newt[1]), 2.25, 0);
+    ASSERT_NEAR(total_vol6(tm), 4.5, 0);
+    /* the outer faces kept their boundary bits; the shared face is inside */
+    for (int32_t t = 0; t < tm->hi; t++)
+        if (tm->tv[4 * t] >= 0) {
+            int f = tmesh_local(tm, t, 0) >= 0 ? tmesh_local(tm, t, 0)
+                                               : tmesh_local(tm, t, 1);
+            ASSERT_EQ_INT(tm->fcons[t], 15 & ~(1 << f));
+        }
+    tmesh_free(tm);
+}
+
+/* Rings of 3..8 around the axis: 2(n-2) tets out, the volume of the
+ * bipyramid over the regular n-gon (area n/2 sin(2pi/n), height 2). */
+TEST(edge_removal_rings_3_to_8)
+{
+    for (int n = 3; n <= 8; n++) {
+        tmesh *tm = ring_mesh(n, -1, 1, NULL);
+        double v6 = 2.0 * n * sin(2 * PI / n); /* 6 * area * 2 / 3 */
+        flip_cand c;
+        int applied = 0;
+        ASSERT_TRUE(tm);
+        ASSERT_NEAR(total_vol6(tm), v6, 1e-13);
+        ASSERT_EQ_INT(flip_edge_eval(tm, 0, 0, 10, 0.0, -INFINITY, &c), 1);
+        ASSERT_EQ_INT(c.nold, n);
+        ASSERT_EQ_INT(c.nnew, 2 * (n - 2));
+        ASSERT_OK(tmesh_replace(tm, c.old, c.nold, (const int32_t(*)[4])c.newt, c.nnew,
+                                NULL, &applied));
+        ASSERT_EQ_INT(applied, 1);
+        tmesh_commit(tm);
+        ASSERT_EQ_INT(tm->nlive, 2 * (n - 2));
+        ASSERT_TRUE(consistent(tm));
+        ASSERT_NEAR(total_vol6(tm), v6, 1e-13);
+        /* a ring larger than allowed is refused */
+        tmesh_free(tm);
+        tm = ring_mesh(n, -1, 1, NULL);
+        ASSERT_EQ_INT(flip_edge_eval(tm, 0, 0, n - 1, 0.0, -INFINITY, &c), 0);
+        tmesh_free(tm);
+    }
+}
+
+/* Two tets on the triangle (0,0,0) (1,0,0) (0,1,0), apexes above and below:
+ * three tets around the new edge, volumes 1/6 (d) + 1/6 (e) in all. */
+TEST(flip_2_3)
+{
+    double x[5 * 3] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0.25, 0.25, 1, 0.25, 0.25, -1};
+    int32_t tv[8] = {0, 1, 2, 3, 0, 2, 1, 4};
+    tmesh *tm = NULL;
+    flip_cand c;
+    int applied = 0, f = 3; /* face opposite vertex 3 of tet 0 */
+
+    ASSERT_OK(tmesh_new(5, x, 2, tv, NULL, NULL, &tm, NULL));
+    ASSERT_TRUE(consistent(tm));
+    ASSERT_EQ_INT(tm->adj[4 * 0 + f] / 4, 1);
+    ASSERT_EQ_INT(flip_23_eval(tm, 0, f, 0.0, -INFINITY, &c), 1);
+    ASSERT_EQ_INT(c.nnew, 3);
+    ASSERT_OK(
+        tmesh_replace(tm, c.old, 2, (const int32_t(*)[4])c.newt, 3, NULL, &applied));
+    ASSERT_EQ_INT(applied, 1);
+    tmesh_commit(tm);
+    ASSERT_EQ_INT(tm->nlive, 3);
+    ASSERT_TRUE(consistent(tm));
+    ASSERT_NEAR(total_vol6(tm), 2.0, 1e-15);
+    for (int j = 0; j < 3; j++) { /* each holds the new edge 3-4 */
+        int has = 0;
+        for (int s = 0; s < 4; s++)
+            has += c.newt[j][s] == 3 || c.newt[j][s] == 4;
+        ASSERT_EQ_INT(has, 2);
+    }
+    /* the same face between two tags is an interface: refused */
+    tmesh_free(tm);
+    ASSERT_OK(tmesh_new(5, x, 2, tv, (const int32_t[2]){1, 2}, NULL, &tm, NULL));
+    ASSERT_EQ_INT(tm->fcons[0] >> f & 1, 1);
+    ASSERT_EQ_INT(flip_23_eval(tm, 0, f, 0.0, -INFINITY, &c), 0);
+    /* a boundary face is refused */
+    ASSERT_EQ_INT(flip_23_eval(tm, 0, 0, 0.0, -INFINITY, &c), 0);
+    tmesh_free(tm);
+}
+
+/* Multi-face removal undoes an edge removal: the pentagon's bipyramid cut into
+ * 6 tets (3 faces between the apexes) goes back to the 5 tets around the axis. */
+TEST(multiface_removal_restores_the_ring)
+{
+    tmesh *tm = ring_mesh(5, -1, 1, NULL);
+    double v6 = 2.0 * 5 * sin(2 * PI / 5);
+    flip_cand c;
+    int applied = 0, found = 0;
+
+    ASSERT_TRUE(tm);
+    ASSERT_EQ_INT(flip_edge_eval(tm, 0, 0, 10, 0.0, -INFINITY, &c), 1);
+    ASSERT_OK(tmesh_replace(tm, c.old, c.nold, (const int32_t(*)[4])c.newt, c.nnew, NULL,
+                            &applied));
+    tmesh_commit(tm);
+    ASSERT_EQ_INT(tm->nlive, 6);
+    for (int32_t t = 0; t < tm->hi && !found; t++) {
+        int la = tmesh_local(tm, t, 0);
+        if (tm->tv[4 * t] < 0 || la < 0)
+            continue;
+        ASSERT_EQ_INT(flip_multiface_eval(tm, t, la, 10, 0.0, -INFINITY, &c), 1);
+        found = 1;
+    }
+    ASSERT_EQ_INT(found, 1);
+    ASSERT_EQ_INT(c.kind, FLIP_MULTIFACE);
+    ASSERT_EQ_INT(c.nold, 6);
+    ASSERT_EQ_INT(c.nnew, 5);
+    ASSERT_OK(tmesh_replace(tm, c.old, c.nold, (const int32_t(*)[4])c.newt, c.nnew, NULL,
+                            &applied));
+    ASSERT_EQ_INT(applied, 1);
+    tmesh_commit(tm);
+    ASSERT_EQ_INT(tm->nlive, 5);
+    ASSERT_TRUE(consistent(tm));
+    ASSERT_NEAR(total_vol6(tm), v6, 1e-13);
+    for (int32_t t = 0; t < tm->hi; t++) /* every tet has the axis again */
+        if (tm->tv[4 * t] >= 0)
+            ASSERT_TRUE(tmesh_local(tm, t, 0) >= 0 && tmesh_local(tm, t, 1) >= 0);
+    /* on a boundary face there is nothing across: refused */
+    for (int32_t t = 0; t < tm->hi; t++)
+        for (int f = 0; f < 4; f++)
+            if (tm->tv[4 * t] >= 0 && tm->adj[4 * t + f] < 0)
+                ASSERT_EQ_INT(flip_multiface_eval(tm, t, f, 10, 0.0, -INFINITY, &c), 0);
+    tmesh_free(tm);
+}
+
+/* Tets the caller writes in the other vertex order come back so, and the tets
+ * that replace them follow the cavity's convention. */
+TEST(export_keeps_the_callers_vertex_order)
+{
+    double x[5 * 3] = {0, 0, -1, 0, 0, 1, 1, 0, 0, -0.5, 0.75, 0, -0.5, -0.75, 0};
+    int32_t tv[12] = {0, 1, 2, 3, 0, 1, 3, 4, 0, 1, 4, 2}, nt, *out = NULL;
+    const uint8_t rev[3] = {1, 1, 1};
+    tmesh *tm = NULL;
+    flip_cand c;
+    int applied = 0;
+
+    ASSERT_OK(tmesh_new(5, x, 3, tv, NULL, rev, &tm, NULL));
+    ASSERT_OK(tmesh_export(tm, &nt, &out, NULL));
+    ASSERT_EQ_INT(nt, 3);
+    for (int t = 0; t < 3; t++) {
+        ASSERT_EQ_INT(out[4 * t], tv[4 * t + 1]);
+        ASSERT_EQ_INT(out[4 * t + 1], tv[4 * t]);
+    }
+    qdc_free(out);
+    ASSERT_EQ_INT(flip_edge_eval(tm, 0, 0, 10, 0.0, -INFINITY, &c), 1);
+    ASSERT_OK(tmesh_replace(tm, c.old, c.nold, (const int32_t(*)[4])c.newt, c.nnew, NULL,
+                            &applied));
+    tmesh_commit(tm);
+    ASSERT_OK(tmesh_export(tm, &nt, &out, NULL));
+    ASSERT_EQ_INT(nt, 2);
+    for (int t = 0; t < 2; t++)
+        ASSERT_NEAR(geom_tet_vol6(x, out + 4 * t), -2.25, 0);
+    qdc_free(out);
+    tmesh_free(tm);
+}
+
+TEST(mixed_tag_shell_blocks_removal)
+{
+    const int32_t tags[3] = {1, 1, 2};
+    tmesh *tm = ring_mesh(3, -1, 1, tags);
+    flip_cand c;
+
+    ASSERT_TRUE(tm);
+    ASSERT_EQ_INT(tm->econs[0] & 1, 1); /* the axis is on the interface */
+    ASSERT_EQ_INT(flip_edge_eval(tm, 0, 0, 10, 0.0, -INFINITY, &c), 0);
+    tmesh_free(tm);
+    tm = ring_mesh(3, -1, 1, (const int32_t[3]){2, 2, 2});
+    ASSERT_EQ_INT(flip_edge_eval(tm, 0, 0, 10, 0.0, -INFINITY, &c), 1);
+    tmesh_free(tm);
+}
+
+/* a and b both above the ring: the three tets are valid, but the edge does not
+ * pierce the ring's triangle, so every retriangulation inverts a tet. */
+TEST(non_convex_ring_refused)
+{
+    tmesh *tm = ring_mesh(3, 1, 2, NULL);
+    flip_cand c;
+
+    ASSERT_TRUE(tm);
+    ASSERT_TRUE(consistent(tm));
+    ASSERT_EQ_INT(flip_edge_eval(tm, 0, 0, 10, 0.0, -INFINITY, &c), 0);
+    /* the same ring with the edge through it is accepted */
+    tmesh_free(tm);
+    tm = ring_mesh(3, -1, 2, NULL);
+    ASSERT_EQ_INT(flip_edge_eval(tm, 0, 0, 10, 0.0, -INFINITY, &c), 1);
+    tmesh_free(tm);
+}
+
+/* A flat bipyramid: the two new tets have all four corners on the boundary and
+ * a mean ratio under the floor, so the removal is refused with the floor. */
+TEST(four_boundary_corner_floor)
+{
+    tmesh *tm = ring_mesh(3, -0.02, 0.02, NULL);
+    flip_cand c;
+
+    ASSERT_TRUE(tm);
+    ASSERT_EQ_INT(flip_edge_eval(tm, 0, 0, 10, 0.1, -INFINITY, &c), 0);
+    ASSERT_EQ_INT(flip_edge_eval(tm, 0, 0, 10, 0.0, -INFINITY, &c), 1);
+    ASSERT_TRUE(c.qmin_new < 0.1);
+    tmesh_free(tm);
+}
+
+typedef struct {
+    int32_t hi, nlive, nfree;
+    int32_t *tv, *adj, *tag, *freel;
+    uint8_t *f, *e;
+    double *q;
+    uint32_t *stamp;
+} snap;
+
+static int snap_take(const tmesh *tm, snap *s)
+{
+    size_t n = (size_t)tm->hi;
+    s->hi = tm->hi;
+    s->nlive = tm->nlive;
+    s->nfree = tm->nfree;
+    s->tv = malloc(16 * n);
+    s->adj = malloc(16 * n);
+    s->tag = malloc(4 * n);
+    s->freel = malloc(4 * n + 4);
+    s->f = malloc(n);
+    s->e = malloc(n);
+    s->q = malloc(8 * n);
+    s->stamp = malloc(4 * n);
+    if (!s->tv || !s->adj || !s->tag || !s->freel || !s->f || !s->e || !s->q || !s->stamp)
+        return 0;
+    memcpy(s->tv, tm->tv, 16 * n);
+    memcpy(s->adj, tm->adj, 16 * n);
+    memcpy(s->tag, tm->tag, 4 * n);
+    memcpy(s->freel, tm->freel, 4 * (size_t)tm->nfree);
+    memcpy(s->f, tm->fcons, n);
+    memcpy(s->e, tm->econs, n);
+    memcpy(s->q, tm->q, 8 * n);
+    memcpy(s->stamp, tm->stamp, 4 * n);
+    return 1;
+}
+
+static int snap_same(const tmesh *tm, const snap *s)
+{
+    size_t n = (size_t)s->hi;
+    return tm->hi == s->hi && tm->nlive == s->nlive && tm->nfree == s->nfree &&
+           !memcmp(s->tv, tm->tv, 16 * n) && !memcmp(s->adj, tm->adj, 16 * n) &&
+           !memcmp(s->tag, tm->tag, 4 * n) &&
+           !memcmp(s->freel, tm->freel, 4 * (size_t)s->nfree) &&
+           !memcmp(s->f, tm->fcons, n) && !memcmp(s->e, tm->econs, n) &&
+           !memcmp(s->q, tm->q, 8 * n) && !memcmp(s->stamp, tm->stamp, 4 * n);
+}
+
+static void snap_free(snap *s)
+{
+    free(s->tv);
+    free(s->adj);
+    free(s->tag);
+    free(s->freel);
+    free(s->f);
+    free(s->e);
+    free(s->q);
+    free(s->stamp);
+}
+
+/* A 6-ring removed (slots reused and one taken from hi), then a 2-3 flip inside
+ * it (slots from the free list and from hi) rolled back: every array as it was. */
+TEST(rollback_restores_exactly)
+{
+    tmesh *tm = ring_mesh(6, -1, 1, NULL);
+    flip_cand c;
+    snap s;
+    int applied = 0, done = 0;
+
+    ASSERT_TRUE(tm);
+    ASSERT_EQ_INT(flip_edge_eval(tm, 0, 0, 10, 0.0, -INFINITY, &c), 1);
+    ASSERT_OK(tmesh_replace(tm, c.old, c.nold, (const int32_t(*)[4])c.newt, c.nnew, NULL,
+                            &applied));
+    tmesh_commit(tm);
+    ASSERT_EQ_INT(tm->nlive, 8);
+    ASSERT_TRUE(snap_take(tm, &s));
+    for (int32_t t = 0; t < tm->hi && !done; t++)
+        for (int f = 0; f < 4 && !done; f++)
+            if (tm->tv[4 * t] >= 0 && flip_23_eval(tm, t, f, 0.0, -INFINITY, &c)) {
+                ASSERT_OK(tmesh_replace(tm, c.old, 2, (const int32_t(*)[4])c.newt, 3,
+                                        NULL, &applied));
+                ASSERT_EQ_INT(applied, 1);
+                ASSERT_EQ_INT(tm->nlive, 9);
+                ASSERT_TRUE(consistent(tm));
+                ASSERT_TRUE(!snap_same(tm, &s));
+                tmesh_rollback(tm);
+                done = 1;
+            }
+    ASSERT_EQ_INT(done, 1);
+    ASSERT_TRUE(snap_same(tm, &s));
+    ASSERT_TRUE(consistent(tm));
+    snap_free(&s);
+    tmesh_free(tm);
+}
+
+/* Sorted boundary (tag -1) and interface (the two tags) faces of the live tets,
+ * as rows of 5: three vertices, the tags. */
+static int cmp5(const void *x, const void *y)
+{
+    const int32_t *a = x, *b = y;
+    for (int s = 0; s < 5; s++)
+        if (a[s] != b[s])
+            return a[s] < b[s] ? -1 : 1;
+    return 0;
+}
+
+static int32_t *cons_faces(const tmesh *tm, int32_t *n)
+{
+    int32_t *r = malloc(20 * (size_t)tm->hi * 4 + 20), k = 0;
+    if (!r)
+        return NULL;
+    for (int32_t t = 0; t < tm->hi; t++)
+        for (int i = 0; i < 4 && tm->tv[4 * t] >= 0; i++) {
+            int32_t nb = tm->adj[4 * t + i], v[3];
+            if (!(tm->fcons[t] >> i & 1))
+                continue;
+            tet_sort3(tm->tv[4 * t + tet_face_of[i][0]],
+                      tm->tv[4 * t + tet_face_of[i][1]],
+                      tm->tv[4 * t + tet_face_of[i][2]], v);
+            memcpy(r + 5 * k, v, sizeof v);
+            r[5 * k + 3] = tm->tag[t];
+            r[5 * k + 4] = nb < 0 ? -1 : tm->tag[nb / 4];
+            k++;
+        }
+    qsort(r, (size_t)k, 5 * sizeof *r, cmp5);
+    *n = k;
+    return r;
+}
+
+static void tag_vols(const tmesh *tm, double v[3])
+{
+    v[0] = v[1] = v[2] = 0;
+    for (int32_t t = 0; t < tm->hi; t++)
+        if (tm->tv[4 * t] >= 0)
+            v[tm->tag[t]] += geom_tet_vol6(tm->xyz, tm->tv + 4 * t);
+}
+
+static double min_q(const tmesh *tm)
+{
+    double m = 2;
+    for (int32_t t = 0; t < tm->hi; t++)
+        if (tm->tv[4 * t] >= 0 && tm->q[t] < m)
+            m = tm->q[t];
+    return m;
+}
+
+/* A perturbed 7^3 grid of two regions: thousands of random legal flips (any
+ * quality), then the driver; the adjacency stays consistent, the volume of
+ * each region, the boundary and interface triangles stay as they were, no tet
+ * inverts, and the driver raises the smallest mean ratio. */
+TEST(random_flips_keep_invariants)
+{
+    const int n = 7;
+    mesh_t *m = tm_grid(n, MESH_WITH_REGION);
+    tmesh *tm = NULL;
+    int32_t nf0, nf1, *f0, *f1;
+    double v0[3], v1[3], q0;
+    uint64_t s = 99;
+    int64_t done = 0, nmf = 0;
+    topo_params p;
+    topo_stats st;
+
+    ASSERT_TRUE(m);
+    tm_perturb(m, n, 0.25, 7);
+    ASSERT_OK(tmesh_new(m->nv, m->xyz, m->nt, m->tets, m->region, NULL, &tm, NULL));
+    ASSERT_TRUE(consistent(tm));
+    f0 = cons_faces(tm, &nf0);
+    ASSERT_TRUE(f0);
+    tag_vols(tm, v0);
+    for (int it = 0; it < 20000; it++) {
+        int32_t t = (int32_t)((tm_rand(&s) + 1) * 0.5 * tm->hi) % tm->hi;
+        int which = (int)((tm_rand(&s) + 1) * 7) % 14, applied = 0;
+        flip_cand c;
+        int ok;
+        if (tm->tv[4 * t] < 0)
+            continue;
+        ok = which < 6 ? flip_edge_eval(tm, t, which, 10, 0.05, -INFINITY, &c)
+             : which < 10
+                 ? flip_23_eval(tm, t, which - 6, 0.05, -INFINITY, &c)
+                 : flip_multiface_eval(tm, t, which - 10, 10, 0.05, -INFINITY, &c);
+        nmf += ok && which >= 10;
+        if (!ok)
+            continue;
+        ASSERT_OK(tmesh_replace(tm, c.old, c.nold, (const int32_t(*)[4])c.newt, c.nnew,
+                                NULL, &applied));
+        ASSERT_EQ_INT(applied, 1);
+        tmesh_commit(tm);
+        done++;
+    }
+    ASSERT_TRUE(done > 1000);
+    ASSERT_TRUE(nmf > 10);
+    ASSERT_TRUE(consistent(tm));
+    q0 = min_q(tm);
+    topo_params_default(&p);
+    p.qgoal = 0.9;
+    ASSERT_OK(topo_improve(tm, &p, &st, NULL));
+    ASSERT_TRUE(st.edge_removals + st.flips23 + st.multiface > 100);
+    ASSERT_TRUE(consistent(tm));
+    ASSERT_TRUE(min_q(tm) > q0);
+    f1 = cons_faces(tm, &nf1);
+    ASSERT_TRUE(f1);
+    ASSERT_EQ_INT(nf1, nf0);
+    ASSERT_TRUE(!memcmp(f0, f1, 20 * (size_t)nf0));
+    tag_vols(tm, v1);
+    for (int r = 1; r <= 2; r++)
+        ASSERT_NEAR(v1[r], v0[r], 1e-12 * fabs(v0[r]));
+    free(f0);
+    free(f1);
+    tmesh_free(tm);
+    mesh_free(m);
+}
+
+/* Twice the same run: the same tets in the same order. */
+TEST(driver_is_deterministic)
+{
+    const int n = 6;
+    mesh_t *m = tm_grid(n, MESH_WITH_REGION);
+    int32_t nt[2], *tv[2] = {NULL, NULL}, *rg[2] = {NULL, NULL};
+    topo_params p;
+    topo_stats st;
+
+    ASSERT_TRUE(m);
+    tm_perturb(m, n, 0.3, 3);
+    topo_params_default(&p);
+    for (int r = 0; r < 2; r++)
+        ASSERT_OK(topo_flip_arrays(m->nv, m->xyz, m->nt, m->tets, m->region, NULL, &p,
+                                   NULL, &nt[r], &tv[r], &rg[r], &st, NULL));
+    ASSERT_TRUE(st.edge_removals + st.flips23 + st.multiface > 0);
+    ASSERT_EQ_INT(st.nt_out, nt[0]);
+    ASSERT_EQ_INT(nt[0], nt[1]);
+    ASSERT_TRUE(!memcmp(tv[0], tv[1], 16 * (size_t)nt[0]));
+    ASSERT_TRUE(!memcmp(rg[0], rg[1], 4 * (size_t)nt[0]));
+    for (int r = 0; r < 2; r++) {
+        qdc_free(tv[r]);
+        qdc_free(rg[r]);
+    }
+    mesh_free(m);
+}
+
+static int cmp3(const void *x, const void *y)
+{
+    const int32_t *a = x, *b = y;
+    for (int s = 0; s < 3; s++)
+        if (a[s] != b[s])
+            return a[s] < b[s] ? -1 : 1;
+    return 0;
+}
+
+/* n faces (3 each) as sorted keys in sorted order, in a new array. */
+static int32_t *face_set(const int32_t *f, int32_t n)
+{
+    int32_t *r = malloc(12 * (size_t)n + 12);
+    if (!r)
+        return NULL;
+    for (int32_t i = 0; i < n; i++)
+        tet_sort3(f[3 * i], f[3 * i + 1], f[3 * i + 2], r + 3 * i);
+    qsort(r, (size_t)n, 12, cmp3);
+    return r;
+}
+
+/* opt_run with --topology flips on a perturbed two-region grid whose vertices
+ * are all fixed (so that only the flips can improve it): other tets, the same
+ * boundary and interface triangles (as sets), no tet inverted, the counts in the
+ * result, and a higher mean ratio than --topology none. */
+TEST(opt_run_flips_keeps_the_model)
+{
+    const int n = 6;
+    mesh_t *m = tm_grid(n, MESH_WITH_REGION | MESH_WITH_FIXED), *m0;
+    mesh_topo *t0 = NULL, *t1 = NULL;
+    opt_options o;
+    opt_result r0, r1;
+    int32_t *b0, *b1, *i0, *i1;
+
+    ASSERT_TRUE(m);
+    tm_perturb(m, n, 0.25, 11);
+    memset(m->fixed, 1, (size_t)m->nv);
+    m0 = mesh_dup(m);
+    ASSERT_TRUE(m0);
+    ASSERT_OK(mesh_topo_build(m, &t0, NULL));
+    ASSERT_EQ_INT(mesh_count_inverted(t0, m->xyz), 0);
+    opt_defaults(&o);
+    o.threads = 1;
+    ASSERT_OK(opt_run(m0, &o, &r0, NULL));
+    ASSERT_EQ_INT(m0->nt, m->nt);
+    ASSERT_EQ_INT(r0.tets_in, 0); /* none: nothing counted */
+    o.topology = OPT_TOPOLOGY_FLIPS;
+    ASSERT_OK(opt_run(m, &o, &r1, NULL));
+    ASSERT_EQ_INT(r1.tets_in, t0->nt);
+    ASSERT_EQ_INT(r1.tets_out, m->nt);
+    ASSERT_TRUE(r1.topo_edge_removals + r1.topo_flips23 + r1.topo_multiface > 0);
+    ASSERT_TRUE(r1.topo_rounds >= 1);
+    ASSERT_OK(mesh_topo_build(m, &t1, NULL));
+    ASSERT_EQ_INT(mesh_count_inverted(t1, m->xyz), 0);
+    ASSERT_EQ_INT(t1->nbf, t0->nbf);
+    ASSERT_EQ_INT(t1->nif, t0->nif);
+    b0 = face_set(t0->bfaces, t0->nbf);
+    b1 = face_set(t1->bfaces, t1->nbf);
+    i0 = face_set(t0->ifaces, t0->nif);
+    i1 = face_set(t1->ifaces, t1->nif);
+    ASSERT_TRUE(b0 && b1 && i0 && i1);
+    ASSERT_TRUE(!memcmp(b0, b1, 12 * (size_t)t0->nbf));
+    ASSERT_TRUE(!memcmp(i0, i1, 12 * (size_t)t0->nif));
+    ASSERT_TRUE(r1.after.q_mean > r0.after.q_mean);
+    ASSERT_TRUE(r1.after.q_min >= r0.after.q_min);
+    free(b0);
+    free(b1);
+    free(i0);
+    free(i1);
+    mesh_topo_free(t0);
+    mesh_topo_free(t1);
+    mesh_free(m0);
+    mesh_free(m);
+}
+
+/* Inverted input tets (all vertices fixed, so nothing untangles them) are left
+ * as they are: no cavity holds one, and no new tet is inverted. */
+TEST(opt_run_flips_leaves_inverted_input_alone)
+{
+    const int n = 6;
+    mesh_t *m = tm_grid(n, MESH_WITH_REGION | MESH_WITH_FIXED);
+    mesh_topo *t0 = NULL, *t1 = NULL;
+    opt_options o;
+    opt_result r;
+    int32_t inv0;
+
+    ASSERT_TRUE(m);
+    tm_perturb(m, n, 0.35, 11);
+    memset(m->fixed, 1, (size_t)m->nv);
+    ASSERT_OK(mesh_topo_build(m, &t0, NULL));
+    inv0 = mesh_count_inverted(t0, m->xyz);
+    ASSERT_TRUE(inv0 > 0);
+    opt_defaults(&o);
+    o.topology = OPT_TOPOLOGY_FLIPS;
+    ASSERT_OK(opt_run(m, &o, &r, NULL));
+    ASSERT_TRUE(r.topo_edge_removals + r.topo_flips23 + r.topo_multiface > 0);
+    ASSERT_OK(mesh_topo_build(m, &t1, NULL));
+    ASSERT_EQ_INT(mesh_count_inverted(t1, m->xyz), inv0);
+    mesh_topo_free(t0);
+    mesh_topo_free(t1);
+    mesh_free(m);
+}
+
+/* Every allocation of a flips run failed in turn: either the run fails with the
+ * mesh as it was, or it returns a valid mesh (a later round's failure returns
+ * the mesh of the round before, as a stopped run). */
+TEST(flips_allocation_failures_are_clean)
+{
+#ifdef QDC_FAULT_INJECTION
+    const int n = 3;
+    mesh_t *m0 = tm_grid(n, MESH_WITH_REGION | MESH_WITH_FIXED), *m;
+    opt_options o;
+    long total, failed = 0;
+
+    ASSERT_TRUE(m0);
+    tm_perturb(m0, n, 0.25, 5);
+    memset(m0->fixed, 1, (size_t)m0->nv);
+    opt_defaults(&o);
+    o.topology = OPT_TOPOLOGY_FLIPS;
+    o.threads = 1;
+    m = mesh_dup(m0);
+    ASSERT_TRUE(m);
+    qdc_fault_set(0);
+    ASSERT_OK(opt_run(m, &o, NULL, NULL));
+    total = qdc_fault_count();
+    ASSERT_TRUE(m->nt != m0->nt || memcmp(m->tets, m0->tets, 16 * (size_t)m->nt));
+    mesh_free(m);
+    for (long k = 1; k <= total; k++) {
+        mesh_topo *tp = NULL;
+        qdc_status st;
+        m = mesh_dup(m0);
+        ASSERT_TRUE(m);
+        qdc_fault_set(k);
+        st = opt_run(m, &o, NULL, NULL);
+        qdc_fault_set(0);
+        if (st != QDC_OK) {
+            ASSERT_EQ_INT(st, QDC_ENOMEM);
+            ASSERT_EQ_INT(m->nt, m0->nt);
+            ASSERT_TRUE(!memcmp(m->tets, m0->tets, 16 * (size_t)m->nt));
+            ASSERT_TRUE(!memcmp(m->xyz, m0->xyz, 24 * (size_t)m->nv));
+            failed++;
+        } else {
+            ASSERT_OK(mesh_topo_build(m, &tp, NULL));
+            ASSERT_EQ_INT(mesh_count_inverted(tp, m->xyz), 0);
+            mesh_topo_free(tp);
+        }
+        mesh_free(m);
+    }
+    ASSERT_TRUE(failed > 10);
+    printf("  # %ld allocation failure points, %ld failed the run, each clean\n", total,
+           failed);
+    mesh_free(m0);
+#else
+    SKIP("built without QDC_FAULT_INJECTION (make fault runs it)");
+#endif
+}
+
+TEST_MAIN("topo", T(orient3d_exact_near_coplanar), T(edge_removal_3_2_keeps_volume),
+          T(edge_removal_rings_3_to_8), T(flip_2_3),
+          T(multiface_removal_restores_the_ring),
+          T(export_keeps_the_callers_vertex_order), T(mixed_tag_shell_blocks_removal),
+          T(non_convex_ring_refused), T(four_boundary_corner_floor),
+          T(rollback_restores_exactly), T(random_flips_keep_invariants),
+          T(driver_is_deterministic), T(opt_run_flips_keeps_the_model),
+          T(opt_run_flips_leaves_inverted_input_alone),
+          T(flips_allocation_failures_are_clean))
