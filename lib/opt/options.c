@@ -160,6 +160,10 @@ static const char *const weights_say[] = {
 static const char *const solver_say[] = {
     "the cheaper of the two for this system", "sparse Cholesky (CHOLMOD)",
     "matrix-free Jacobi-preconditioned conjugate gradients"};
+static const char *const topology_say[] = {
+    "vertices move, the tets stay as they are (point and cell data map one to one)",
+    "tets are also flipped where that raises the worst quality around them: "
+    "vertices, boundary triangles and region tags kept, the tet count changes"};
 
 #define OFF(f) offsetof(opt_options, f)
 #define WORDS(w) w, (int)(sizeof w / sizeof w[0])
