@@ -34,7 +34,7 @@ for e in enums:
 if "  /v1/formats:" not in doc:
     bad.append("GET /v1/formats is not documented")
 for f in t["formats"]:
-    if not re.search(r"(^|[ |])%s([|\n]|$)" % re.escape(f["name"]), helptext, re.M):
+    if not re.search(r"(^|[ |])%s([|,\n]|$)" % re.escape(f["name"]), helptext, re.M):
         bad.append("qdc optimize --help does not list " + f["name"])
 if len(lines) != len(t["formats"]):
     bad.append("formats.h has %d lines, the table %d formats" % (len(lines), len(t["formats"])))

@@ -753,7 +753,7 @@ TEST(msh1)
         "$NOD\n5\n10 0 0 0\n20 1 0 0\n30 0 1 0\n40 0 0 1.0\n50 1 1 1\n$ENDNOD\n"
         "$ELM\n4\n1 15 9 1 1 10\n2 2 7 3 3 20 30 40\n"
         "3 4 1 1 4 10 20 30 40\n4 4 2 2 4 50 20 30 40\n$ENDELM\n";
-    meshio_options o = {NULL, NULL, 1};
+    meshio_options o = {.log = NULL, .log_ctx = NULL, .source = 1};
     mesh_t *m;
     qdc_error err;
     char *bad;
@@ -817,7 +817,7 @@ TEST(abaqus_missing_coordinates)
     const char *inp = "*NODE\n1, 0, 0, 0\n2, 1\n3, 0, 1,\n4, , , 1\n"
                       "*ELEMENT, TYPE=C3D4, ELSET=E\n1, 1, 2, 3, 4\n";
     static const double want[12] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1};
-    meshio_options o = {NULL, NULL, 1};
+    meshio_options o = {.log = NULL, .log_ctx = NULL, .source = 1};
     mesh_t *m, *b;
     qdc_error err;
     sink s = {0};
