@@ -186,21 +186,25 @@ format-check:
 
 -include $(shell find build -name '*.d' 2>/dev/null)
 
-# libFuzzer targets (clang, libclang-rt-14-dev): each tests/fuzz/fuzz_NAME.c is built
-# with the parsers it needs and run FUZZ_SECONDS on its seeds (tests/fuzz/seeds/NAME);
-# crashes land in tests/fuzz/crashes/NAME, which `make test` replays (unit tests).
+# libFuzzer targets (clang-14 and its libFuzzer runtime, scripts/deps.sh): each
+# tests/fuzz/fuzz_NAME.c is built with the library's io/ layer and run FUZZ_SECONDS on
+# its seeds (tests/fuzz/seeds/NAME); crashes land in tests/fuzz/crashes/NAME, which
+# `make test` replays (unit tests). FUZZ=name runs one target. A target that crashes
+# fails the run.
 FUZZ_SECONDS ?= 60
-FUZZ_LIB := lib/core/base.c lib/core/mesh.c $(wildcard lib/io/meshio*.c) lib/io/gz.c lib/io/splice.c \
-    lib/io/surface.c server/parse.c server/route.c
+FUZZ_CC ?= $(shell command -v clang-14 2>/dev/null || echo clang)
+FUZZ_LIB := lib/core/base.c lib/core/mesh.c $(wildcard lib/io/*.c) server/parse.c server/route.c
+FUZZ_SRC := $(if $(FUZZ),tests/fuzz/fuzz_$(FUZZ).c,$(wildcard tests/fuzz/fuzz_*.c))
 fuzz:
 	@mkdir -p build/fuzz
-	@set -e; for src in $(wildcard tests/fuzz/fuzz_*.c); do \
+	@set -e; for src in $(FUZZ_SRC); do \
 	    name=$$(basename $$src .c); name=$${name#fuzz_}; \
 	    echo "# fuzz $$name ($(FUZZ_SECONDS) s)"; \
-	    clang -g -O1 -fsanitize=fuzzer,address,undefined $(CPPFLAGS) -Iserver $$src $(FUZZ_LIB) \
-	        -lz -lm -o build/fuzz/fuzz_$$name; \
+	    $(FUZZ_CC) -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined \
+	        -fopenmp $(CPPFLAGS) -Iserver $$src $(FUZZ_LIB) -lz -lm -o build/fuzz/fuzz_$$name; \
 	    mkdir -p build/fuzz/corpus/$$name tests/fuzz/crashes/$$name; \
-	    build/fuzz/fuzz_$$name -max_total_time=$(FUZZ_SECONDS) -max_len=8192 \
+	    OMP_NUM_THREADS=1 build/fuzz/fuzz_$$name -max_total_time=$(FUZZ_SECONDS) -max_len=8192 \
 	        -artifact_prefix=tests/fuzz/crashes/$$name/ build/fuzz/corpus/$$name \
 	        tests/fuzz/seeds/$$name; \
+	    rmdir tests/fuzz/crashes/$$name 2>/dev/null || true; \
 	done

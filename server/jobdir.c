@@ -17,18 +17,15 @@ void job_path(const qdcd *q, const char *id, const char *name, char *out, size_t
 
 const char *job_input_name(const char *format)
 {
-    static const struct {
-        const char *format, *file;
-    } names[] = {
-        {"qmesh", "input.qmesh"},   {"json", "input.json"},   {"gmsh", "input.msh"},
-        {"gmsh-bin", "input.msh"},  {"gmsh22", "input.msh"},  {"vtk", "input.vtk"},
-        {"vtk-ascii", "input.vtk"}, {"vtu", "input.vtu"},     {"vtu-ascii", "input.vtu"},
-        {"stl", "input.stl"},       {"off", "input.off"},     {"obj", "input.obj"},
-        {"poly", "input.poly"},     {"smesh", "input.smesh"},
-    };
-    for (size_t i = 0; i < sizeof names / sizeof names[0]; i++)
-        if (!strcmp(format, names[i].format))
-            return names[i].file;
+    static const char *const surf[] = {NULL,        "input.stl",  "input.off",
+                                       "input.obj", "input.poly", "input.smesh"};
+    meshio_format_info fi;
+    surface_format sf = surface_format_from_name(format);
+
+    if (meshio_format_info_of(meshio_format_from_name(format), &fi) && fi.input)
+        return fi.input;
+    if (sf > SURFACE_AUTO && (size_t)sf < sizeof surf / sizeof surf[0] && surf[sf])
+        return surf[sf];
     return "input.mesh";
 }
 

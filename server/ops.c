@@ -131,6 +131,21 @@ enum MHD_Result ops_options(struct MHD_Connection *c, req *r)
     return ret;
 }
 
+enum MHD_Result ops_formats(struct MHD_Connection *c, req *r)
+{
+    sbuf b = {0};
+    qdc_error e;
+    enum MHD_Result ret;
+
+    if (meshio_formats_json(sb_writer, &b, &e) != QDC_OK) {
+        sb_free(&b);
+        return http_problem(c, r, 500, "internal", NULL, e.msg, NULL, NULL);
+    }
+    ret = http_reply_json(c, r, 200, &b, no_headers);
+    sb_free(&b);
+    return ret;
+}
+
 /* problem+json bodies name their type as /problems/<slug>, a URI this daemon
  * serves; the router copied the slug to r->id. */
 enum MHD_Result ops_problem_page(struct MHD_Connection *c, req *r)

@@ -24,6 +24,7 @@ enum {
     R_REPORT,
     R_INPUT,   /* the job's input mesh: served like R_RESULT */
     R_OPTIONS, /* the option table */
+    R_FORMATS, /* the format table */
     R_CANCEL,
     R_LIVEZ,
     R_READYZ,
@@ -66,6 +67,7 @@ enum {
     X(R_JOBS, M_POST, "/v1/jobs/", upload_finish, upload_begin, AUTH_TOKEN,              \
       RF_CLOSE | RF_ALIAS)                                                               \
     X(R_OPTIONS, M_GET, "/v1/options", ops_options, NULL, AUTH_TOKEN, 0)                 \
+    X(R_FORMATS, M_GET, "/v1/formats", ops_formats, NULL, AUTH_TOKEN, 0)                 \
     X(R_PROBLEM, M_GET, "/problems/{type}", ops_problem_page, NULL, AUTH_NONE, 0)        \
     X(R_JOB, M_GET, "/v1/jobs/{id}", do_get, NULL, AUTH_TOKEN, 0)                        \
     X(R_JOB, M_DELETE, "/v1/jobs/{id}", do_delete, NULL, AUTH_TOKEN, 0)                  \

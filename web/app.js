@@ -199,8 +199,25 @@ const MAIN_OPTIONS = ['metric', 'boundary', 'hausd', 'max_iter', 'stall', 'mode'
     'finish', 'angle_polish', 'tetgen_quality'];
 let OPTIONS = []; // the table's entries named in MAIN_OPTIONS, in that order
 
-const MESH_EXT = { mesh: 'medit', qmesh: 'qmesh', json: 'json', msh: 'gmsh', vtk: 'vtk', vtu: 'vtu' };
-const SURF_EXT = { stl: 'stl', obj: 'obj', off: 'off', poly: 'poly', smesh: 'smesh' };
+// The formats come from GET /v1/formats (the library's format table), so a
+// new format shows here without touching the page: the format an upload's
+// extension names (the first of its family), those a result can be written
+// in, and those written only over an upload of their own.
+let FMT = null; // {meshExt, surfExt, results, ownOnly}
+let formatsLoading = null;
+function loadFormats() {
+    if (FMT) return Promise.resolve(FMT);
+    formatsLoading = formatsLoading || apiJSON('/v1/formats').then((b) => {
+        const meshExt = {}, surfExt = {};
+        for (const f of b.formats) if (f.upload && !(f.extension in meshExt)) meshExt[f.extension] = f.name;
+        for (const f of b.surfaces) surfExt[f.extension] = f.name;
+        const item = (f) => [f.name, f.extension, shortHelp(f.about)];
+        FMT = { meshExt, surfExt, results: b.formats.filter((f) => f.result).map(item),
+            ownOnly: b.formats.filter((f) => f.upload && f.splice && !f.result).map(item) };
+        return FMT;
+    }).finally(() => { formatsLoading = null; });
+    return formatsLoading;
+}
 
 const listState = { filter: '', jobs: [], first: new Map(), firstBusy: new Set() };
 let chosen = null; // {file, name, format, surface, gz}
@@ -257,12 +274,20 @@ function surfaceOptions(on) {
 function chooseFile(file) {
     $('submit-error').hidden = true;
     if (!file) return;
+    if (!FMT) { // the table first (a file picked before it loaded)
+        loadFormats().then(() => chooseFile(file)).catch((e) => {
+            $('submit-error').textContent = 'The format table (GET /v1/formats) did not load: ' + (e.message || e);
+            $('submit-error').hidden = false;
+        });
+        return;
+    }
     let name = file.name.toLowerCase();
     const gz = name.endsWith('.gz');
     if (gz) name = name.slice(0, -3);
     const ext = name.includes('.') ? name.slice(name.lastIndexOf('.') + 1) : '';
-    const surface = ext in SURF_EXT;
-    chosen = { file, format: MESH_EXT[ext] || SURF_EXT[ext] || '', surface, gz };
+    const meshExt = FMT ? FMT.meshExt : {}, surfExt = FMT ? FMT.surfExt : {};
+    const surface = ext in surfExt;
+    chosen = { file, format: meshExt[ext] || surfExt[ext] || '', surface, gz };
     $('file-info').textContent = file.name + ' · ' + bytes(file.size) + ' · ' +
         (chosen.format ? (surface ? 'surface (' + chosen.format + '), tetrahedralized by TetGen first' : chosen.format)
             : 'format sniffed by qdcd') + (gz ? ' · gunzipped here before upload' : '');
@@ -461,6 +486,7 @@ function listView() {
     let timer = 0;
     let stopped = false;
     buildOptions();
+    loadFormats().catch(() => {}); // retried by chooseFile's next pick and the job view
     document.title = 'qdcd · jobs';
     refreshList = async () => {
         try {
@@ -482,15 +508,6 @@ function listView() {
 
 // ----------------------------------------------------------------- job view --
 
-const FORMATS = [
-    ['qmesh', 'qmesh', 'QMESH (binary)'], ['medit', 'mesh', 'Medit'], ['json', 'json', 'JSON'],
-    ['gmsh', 'msh', 'Gmsh 4.1'], ['gmsh-bin', 'msh', 'Gmsh 4.1 binary'], ['gmsh22', 'msh', 'Gmsh 2.2'],
-    ['vtk', 'vtk', 'VTK legacy'], ['vtk-ascii', 'vtk', 'VTK legacy ASCII'], ['vtu', 'vtu', 'VTU'],
-    ['vtu-ascii', 'vtu', 'VTU ASCII'], ['gmsh22-bin', 'msh', 'Gmsh 2.2 binary'], ['gmsh40', 'msh', 'Gmsh 4.0'],
-    ['dolfin', 'xml', 'DOLFIN XML'], ['meshb', 'meshb', 'Medit binary'],
-];
-// written only over a file of their own: offered for a job uploaded in them
-const OWN_ONLY = [['abaqus', 'inp', 'Abaqus'], ['netgen', 'vol', 'Netgen']];
 
 function stat(k, v) {
     return el('div', { class: 'stat' }, el('div', { class: 'k', text: k }), el('div', { class: 'v', text: v }));
@@ -778,12 +795,16 @@ function renderReport(st) {
 function renderDownloads(st) {
     const box = $('downloads');
     if (box.dataset.id === st.id) return;
+    if (!FMT) {
+        loadFormats().then(() => renderDownloads(st)).catch(() => {});
+        return;
+    }
     box.dataset.id = st.id;
     const base = '/v1/jobs/' + st.id;
     // the upload's own format: the uploaded file with the new coordinates,
     // everything else it holds (names, tags, arrays) kept
     const own = st.job.mesh.format;
-    const formats = FORMATS.concat(OWN_ONLY.filter(([f]) => f === own));
+    const formats = FMT.results.concat(FMT.ownOnly.filter(([f]) => f === own));
     // a format that shares its extension with an earlier one is named in the file name
     const first = (ext) => formats.find(([, e]) => e === ext)[0];
     const items = (what, tag) => formats.map(([f, ext, label]) => [base + '/' + what + '?format=' + f,

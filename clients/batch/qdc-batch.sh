@@ -8,14 +8,13 @@
 #   -o OUTDIR  results, reports and summary.csv (default ./qdc-out; not DIR)
 #   -f FORMAT  result format: same (the default: each mesh's own format, the
 #              file written back with only its coordinates replaced), or one
-#              of medit json qmesh gmsh gmsh-bin gmsh22 gmsh22-bin gmsh40 vtk
-#              vtk-ascii vtu vtu-ascii meshb dolfin
+#              the server writes (GET /v1/formats: "result": true)
 #   -q QUERY   optimizer options as a query string, e.g. 'max_iter=20&boundary=fixed'
 #   -Q         quiet: no progress lines
 #
-# Meshes: DIR/*.mesh (Medit), *.json (JSON mesh), *.qmesh (binary), *.msh
-# (Gmsh), *.vtk, *.vtu, *.meshb (Medit binary), *.xml (DOLFIN), *.inp (Abaqus),
-# *.vol (Netgen), each may be gzipped (.gz). Each one is submitted as it is with an Idempotency-Key (so curl's
+# Meshes: DIR/* with the extension of a format the server reads (its format
+# table, GET /v1/formats: *.mesh, *.msh, *.vtu, *.inp...), each may be gzipped
+# (.gz). Each one is submitted as it is with an Idempotency-Key (so curl's
 # retries on 429/503, which honor Retry-After, never make a second job),
 # followed by long-poll (one progress line per iteration on stderr), and its
 # result and report are downloaded into OUTDIR. OUTDIR/summary.csv gets one
@@ -33,7 +32,7 @@ QUERY=
 QUIET=
 WAIT=30
 
-usage() { sed -n '3,14s/^# \{0,1\}//p' "$0" >&2; exit 2; }
+usage() { sed -n '3,13s/^# \{0,1\}//p' "$0" >&2; exit 2; }
 
 while getopts s:t:j:o:f:q:Qh opt; do
     case $opt in
@@ -52,23 +51,6 @@ if [ $# -ne 1 ] || [ ! -d "$1" ]; then usage; fi
 DIR=$1
 SERVER=${SERVER%/}
 case $PAR in '' | *[!0-9]* | 0) echo "qdc-batch: -j needs a positive count" >&2; exit 2 ;; esac
-# ext_of FORMAT: the file extension of a result format
-ext_of() {
-    case $1 in
-    medit) echo mesh ;;
-    gmsh*) echo msh ;;
-    vtk*) echo vtk ;;
-    vtu*) echo vtu ;;
-    dolfin) echo xml ;;
-    abaqus) echo inp ;;
-    netgen) echo vol ;;
-    *) echo "$1" ;;
-    esac
-}
-case $FORMAT in
-same | medit | json | qmesh | gmsh | gmsh-bin | gmsh22 | gmsh22-bin | gmsh40 | vtk | vtk-ascii | vtu | vtu-ascii | meshb | dolfin) ;;
-*) echo "qdc-batch: -f same|medit|json|qmesh|gmsh|gmsh-bin|gmsh22|gmsh22-bin|gmsh40|vtk|vtk-ascii|vtu|vtu-ascii|meshb|dolfin" >&2; exit 2 ;;
-esac
 mkdir -p "$OUT" || exit 2
 if [ "$(cd "$DIR" && pwd -P)" = "$(cd "$OUT" && pwd -P)" ]; then
     echo "qdc-batch: OUTDIR must not be DIR (results would overwrite inputs)" >&2
@@ -108,6 +90,39 @@ field() {
 
 log() { [ -n "$QUIET" ] || printf '%s\n' "$*" >&2; }
 
+# The server's format table, one format a line: name extension media-type
+# (- for none) upload result (1/0), in the table's order.
+code=$(qcurl -o "$WORK/formats.json" -w '%{http_code}' "$SERVER/v1/formats") || code=000
+if [ "$code" != 200 ]; then
+    echo "qdc-batch: cannot read the server's formats (GET /v1/formats: HTTP $code)" >&2
+    exit 1
+fi
+if [ -n "$HAVE_JQ" ]; then
+    jq -r '.formats[] | [.name, .extension, (.media_type // "-"),
+        (if .upload then 1 else 0 end), (if .result then 1 else 0 end)] | join(" ")' \
+        "$WORK/formats.json"
+else
+    tr -d '\n' < "$WORK/formats.json" | sed 's/"surfaces":.*//; s/},{/}\
+{/g' | while IFS= read -r l; do
+        printf '%s\n' "$l" > "$WORK/f1"
+        m=$(field "$WORK/f1" media_type)
+        up=$(field "$WORK/f1" upload)
+        res=$(field "$WORK/f1" result)
+        printf '%s %s %s %s %s\n' "$(field "$WORK/f1" name)" "$(field "$WORK/f1" extension)" \
+            "$([ "$m" = null ] || [ -z "$m" ] && echo - || echo "$m")" \
+            "$([ "$up" = true ] && echo 1 || echo 0)" "$([ "$res" = true ] && echo 1 || echo 0)"
+    done
+fi > "$WORK/formats"
+# ext_of FORMAT: the file extension of a format
+ext_of() { awk -v f="$1" '$1 == f { print $2; exit }' "$WORK/formats"; }
+# upload_of EXT: the first format read from files of extension EXT, with its
+# media type: "name media" (empty if none)
+upload_of() { awk -v e="$1" '$2 == e && $4 == 1 { print $1, $3; exit }' "$WORK/formats"; }
+if [ "$FORMAT" != same ] && ! awk -v f="$FORMAT" '$1 == f && $5 == 1 { ok = 1 } END { exit !ok }' "$WORK/formats"; then
+    echo "qdc-batch: -f same|$(awk '$5 == 1 { printf "%s%s", s, $1; s = "|" }' "$WORK/formats")" >&2
+    exit 2
+fi
+
 # one FILE ROWFILE: submit, follow, download; writes the CSV row.
 one() {
     f=$1
@@ -120,17 +135,10 @@ one() {
     # by media type, or named in the query (qdcd records a Gmsh or VTK file as
     # the variant its header says)
     named=
-    case $base in
-    *.mesh) ct=model/x-medit ;;
-    *.json) ct=application/json ;;
-    *.qmesh) ct=application/vnd.qdc.mesh ;;
-    *.msh) ct=model/vnd.gmsh ;;
-    *.vtk) ct=application/vnd.vtk ;;
-    *.vtu) ct=application/vnd.vtk.vtu+xml ;;
-    *.meshb) ct=application/octet-stream named=meshb ;;
-    *.xml) ct=application/octet-stream named=dolfin ;;
-    *.inp) ct=application/octet-stream named=abaqus ;;
-    *.vol) ct=application/octet-stream named=netgen ;;
+    up=$(upload_of "${base##*.}")
+    case ${up#* } in
+    -) ct=application/octet-stream named=${up%% *} ;;
+    *) ct=${up#* } ;;
     esac
     ext=${base##*.}
     base=${base%.*}
@@ -233,8 +241,8 @@ done
 # is_mesh FILE: a file of one of the formats above
 is_mesh() {
     [ -f "$1" ] || return 1
-    case ${1%.gz} in *.mesh | *.json | *.qmesh | *.msh | *.vtk | *.vtu | *.meshb | *.xml | *.inp | *.vol) return 0 ;; esac
-    return 1
+    b=${1%.gz}
+    case $b in *.*) [ -n "$(upload_of "${b##*.}")" ] ;; *) return 1 ;; esac
 }
 # two meshes of one name (a.msh and a.vtu, a.mesh and a.mesh.gz) would write
 # the same report (and result) in OUTDIR
@@ -261,7 +269,7 @@ done
 wait
 exec 3>&-
 if [ $n -eq 0 ]; then
-    echo "qdc-batch: no mesh in $DIR (*.mesh, *.json, *.qmesh, *.msh, *.vtk, *.vtu, *.meshb, *.xml, *.inp, *.vol, optionally .gz)" >&2
+    echo "qdc-batch: no mesh in $DIR (*.$(awk '$4 == 1 && !s[$2]++ { printf "%s%s", t, $2; t = ", *." }' "$WORK/formats"), optionally .gz)" >&2
     exit 1
 fi
 

@@ -49,24 +49,6 @@ FLAG_REGION = 1
 FLAG_FIXED = 2
 _HEADER = struct.Struct("<8sIIQQ")
 
-# file extension -> (Content-Type of an upload, None for a format without
-# one: named with ?format= then; ?format= of a result; the variants of that
-# family: a result in the job's own one is its upload written back, names,
-# tags and arrays kept; qdcd records a Gmsh or VTK upload as the variant its
-# header says)
-_FORMATS = {
-    ".mesh": ("model/x-medit", "medit", ("medit",)),
-    ".json": ("application/json", "json", ("json",)),
-    ".qmesh": (MEDIA_QMESH, "qmesh", ("qmesh",)),
-    ".msh": ("model/vnd.gmsh", "gmsh", ("gmsh", "gmsh-bin", "gmsh22", "gmsh22-bin", "gmsh40")),
-    ".vtk": ("application/vnd.vtk", "vtk", ("vtk", "vtk-ascii")),
-    ".vtu": ("application/vnd.vtk.vtu+xml", "vtu", ("vtu", "vtu-ascii")),
-    ".meshb": (None, "meshb", ("meshb",)),
-    ".xml": (None, "dolfin", ("dolfin",)),
-    ".inp": (None, "abaqus", ("abaqus",)),
-    ".vol": (None, "netgen", ("netgen",)),
-}
-_EXTS = ", ".join(sorted(_FORMATS))
 
 __all__ = ["Client", "Mesh", "QdcError", "JobFailed", "MEDIA_QMESH"]
 
@@ -335,23 +317,42 @@ class Client:
             raise QdcError(status, doc)
         return doc
 
+    # -- formats: the server's table (GET /v1/formats), read once ------------
+
+    def formats(self):
+        """The server's format table: {"formats": [{"name", "extension",
+        "media_type", "upload", "result", "splice", ...}], "surfaces": [...]}."""
+        if getattr(self, "_formats", None) is None:
+            self._formats = self._json("GET", "/v1/formats")
+        return self._formats
+
+    def _by_ext(self, path, want):
+        """The formats of path's extension (".msh": every Gmsh variant), in the
+        table's order, of those with `want` ("upload" or "result") true;
+        ValueError naming the extensions there are if none."""
+        ext = os.path.splitext(os.fspath(path))[1].lower().lstrip(".")
+        table = self.formats().get("formats", [])
+        found = [f for f in table if f.get("extension") == ext and f.get(want)]
+        if not found:
+            exts = sorted({"." + f["extension"] for f in table if f.get(want)})
+            raise ValueError("%s: use %s" % (path, ", ".join(exts)))
+        return found
+
     # -- API ----------------------------------------------------------------
 
     def submit(self, mesh, options=None, idempotency_key=None):
-        """New job. mesh: a path (.mesh Medit, .msh Gmsh, .vtk, .vtu, .json,
-        .qmesh, .meshb Medit binary, .xml DOLFIN, .inp Abaqus, .vol Netgen;
-        sent as it is), a Mesh, or a tuple (xyz, tets[, regions[, fixed]]) of
+        """New job. mesh: a path (of a format the server reads, by its
+        extension: .mesh Medit, .msh Gmsh, .vtu... see formats(); sent as it
+        is), a Mesh, or a tuple (xyz, tets[, regions[, fixed]]) of
         lists or numpy arrays.
         options: optimizer options, e.g. {"max_iter": 20, "boundary": "fixed"}.
         Returns the job (dict with "id", "state", ...)."""
         if isinstance(mesh, (str, os.PathLike)):
             path = os.fspath(mesh)
-            ext = os.path.splitext(path)[1].lower()
-            if ext not in _FORMATS:
-                raise ValueError("%s: use %s (or pass arrays)" % (path, _EXTS))
-            ctype, named = _FORMATS[ext][0], None
+            first = self._by_ext(path, "upload")[0]  # qdcd records the variant read
+            ctype, named = first.get("media_type"), None
             if ctype is None:  # no media type: named in the query
-                ctype, named = "application/octet-stream", _FORMATS[ext][1]
+                ctype, named = "application/octet-stream", first["name"]
             with open(path, "rb") as f:
                 body = f.read()
         else:
@@ -424,13 +425,11 @@ class Client:
         if path is None:
             fmt = "qmesh"
         elif fmt is None:
-            ext = os.path.splitext(os.fspath(path))[1].lower()
-            if ext not in _FORMATS:
-                raise ValueError("%s: use %s, or fmt=" % (path, _EXTS))
-            fmt = _FORMATS[ext][1]
+            family = self._by_ext(path, "upload")
+            fmt = family[0]["name"]
             own = self.job(jid).get("mesh", {}).get("format")
-            if own in _FORMATS[ext][2]:
-                fmt = own
+            if own in [f["name"] for f in family]:
+                fmt = own  # the upload written back
         status, _, data = self._request("GET", "/v1/jobs/%s/result?format=%s" % (jid, fmt))
         if status != 200:
             raise QdcError(status, _problem(data))

@@ -62,6 +62,8 @@ int cli_quality(int argc, char **argv);
 int cli_convert(int argc, char **argv);
 /* qdc options: the library's option table as JSON on stdout. */
 int cli_options(int argc, char **argv);
+/* qdc formats: the library's format table as JSON (as GET /v1/formats). */
+int cli_formats(int argc, char **argv);
 /* qdc tetra IN OUT: tetrahedralize a surface (also run by qdcd, in a child). */
 int cli_tetra(int argc, char **argv);
 /* submit, status, watch, fetch, cancel, jobs (remote.c); argv[0] is the command. */

@@ -20,10 +20,7 @@ static const struct {
     {"fix", "FILE", OPT_G_BOUNDARY,
      "vertices that must not move: 0-based indices, whitespace or comma separated, "
      "'#' comments"},
-    {"in-format", "F", -1,
-     "medit|tetgen|qmesh|json|gmsh|gmsh-bin|gmsh22|gmsh22-bin|gmsh40|vtk|vtk-ascii|vtu|"
-     "vtu-ascii|dolfin|meshb|abaqus|netgen, or a surface: stl|off|obj|poly|smesh "
-     "(default: by extension, then content)"},
+    {"in-format", "F", -1, NULL}, /* the format table: format_help */
     {"out-format", "F", -1,
      "one of the mesh formats above (default: by extension, else "
      "the input's)"},
@@ -84,11 +81,31 @@ static void table_option(FILE *f, const opt_desc *d, const opt_options *def)
     }
 }
 
+/* The --in-format help: the names of the library's format table
+ * (lib/io/formats.h), then the surfaces. */
+static void format_help(char *text, size_t cap)
+{
+    size_t n = 0;
+
+    for (int k = 1; meshio_format_name((meshio_format)k) && n < cap; k++)
+        n += (size_t)snprintf(text + n, cap - n, "%s%s", k > 1 ? "|" : "",
+                              meshio_format_name((meshio_format)k));
+    for (int k = 1; surface_format_name((surface_format)k) && n < cap; k++)
+        n += (size_t)snprintf(text + n, cap - n, "%s%s", k > 1 ? "|" : ", or a surface: ",
+                              surface_format_name((surface_format)k));
+    if (n < cap)
+        snprintf(text + n, cap - n, " (default: by extension, then content)");
+}
+
 static void own_option(FILE *f, size_t i)
 {
+    char text[1024];
+
     fprintf(f, "  --%s%s%s\n", own[i].flag, own[i].arg ? " " : "",
             own[i].arg ? own[i].arg : "");
-    wrap(f, own[i].help, 6, 6);
+    if (!own[i].help)
+        format_help(text, sizeof text);
+    wrap(f, own[i].help ? own[i].help : text, 6, 6);
 }
 
 void cli_optimize_usage(FILE *f)

@@ -150,7 +150,7 @@ static void source_note(const mesh_t *m, const char *out, meshio_format fmt, int
         return;
     fmt = meshio_save_format(out, fmt, m);
     meshio_source_bytes(m, &f32);
-    if (!meshio_splices(m, fmt, &why) && fmt != MESHIO_ABAQUS && fmt != MESHIO_NETGEN)
+    if (!meshio_splices(m, fmt, &why) && (fmt == MESHIO_AUTO || meshio_has_writer(fmt)))
         fprintf(stderr,
                 "qdc: note: %s: written by qdc's %s writer (%s): only vertices, tets, "
                 "triangles and their region tags are kept\n",
@@ -1041,4 +1041,20 @@ out:
     mesh_free(m);
     mesh_free(r);
     return rc;
+}
+
+int cli_formats(int argc, char **argv)
+{
+    qdc_error err;
+
+    (void)argv;
+    if (argc > 1) {
+        fprintf(stderr, "usage: qdc formats\n");
+        return CLI_EUSAGE;
+    }
+    if (meshio_formats_json(stdout_write, NULL, &err) != QDC_OK || fflush(stdout)) {
+        fprintf(stderr, "qdc: formats: %s\n", err.msg[0] ? err.msg : "write failed");
+        return CLI_EOUTPUT;
+    }
+    return 0;
 }

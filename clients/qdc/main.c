@@ -20,6 +20,8 @@ static void usage(FILE *f)
         "                              with only the coordinates replaced)\n"
         "  options                     the optimizer's options as JSON (names, types,\n"
         "                              valid values, defaults, help)\n"
+        "  formats                     the mesh formats as JSON (names, extensions,\n"
+        "                              media types, what is read and written)\n"
         "  tetra SURFACE OUT [--tetgen-quality Q] [--max-volume V]   tetrahedralize\n"
         "                              a closed surface with TetGen (no optimization)\n"
         "  IN or OUT '-': standard input or output (the input's format unless\n"
@@ -87,6 +89,8 @@ int main(int argc, char **argv)
         return cli_convert(argc - 1, argv + 1);
     if (!strcmp(argv[1], "options"))
         return cli_options(argc - 1, argv + 1);
+    if (!strcmp(argv[1], "formats"))
+        return cli_formats(argc - 1, argv + 1);
     if (!strcmp(argv[1], "tetra"))
         return cli_tetra(argc - 1, argv + 1);
     if (!strcmp(argv[1], "submit") || !strcmp(argv[1], "status") ||

@@ -12,57 +12,57 @@
 
 #include <stddef.h>
 
+/* Formats: one per line of io/formats.h, in its order (the format table);
+ * each format's file (io/meshio_*.c) says what it reads and writes.
+ * Gmsh .msh: tetrahedra (type 4) with their physical tag as region, triangles
+ * (type 2) kept with theirs as tri_ref; physical tag 0 means none, and a file
+ * without physical groups but with several volume entities gets the entity
+ * tags as regions. Other element types are skipped with a note. Both
+ * vertices of every $Periodic node pair are held (m->fixed, with a note),
+ * so a pair never moves apart; tags of no node are ignored. Higher-order
+ * tetrahedra (types 11, 29-31) are refused (QDC_EFORMAT), as are VTK
+ * types 24 and 71, Medit TetrahedraP2 and 10-node TetGen tets. Reading
+ * accepts 4.1 ASCII/binary, 4.0 ASCII and 2.x ASCII/binary whichever Gmsh
+ * variant is named.
+ * VTK: cells of type 10 (tets) and 5 (triangles); region from the cell
+ * array "region", "gmsh:physical" or "medit:ref" (written as "region"),
+ * vref from the point array "medit:ref". Reading accepts either encoding.
+ * Formats without a media type are named by ?format= in the daemon; those
+ * without a writer of qdc's own (Abaqus, Netgen) are written only as the
+ * input with new coordinates (spliced): meshio_write refuses them for a
+ * mesh without such a source. */
 typedef enum {
     MESHIO_AUTO = 0, /* by extension, else by sniffing the content */
-    MESHIO_MEDIT,    /* .mesh ASCII (Vertices, Tetrahedra with refs = regions, Triangles
-                        kept) */
-    MESHIO_TETGEN,   /* .node + .ele (+ attributes as regions) */
-    MESHIO_QMESH,    /* proto/mesh-binary.md, application/vnd.qdc.mesh, .qmesh */
-    MESHIO_JSON,     /* {"vertices":[[x,y,z],...],"tets":[[a,b,c,d],...],"regions":[...]}
-                        0-based */
-    /* Gmsh .msh: tetrahedra (type 4) with their physical tag as region, triangles
-     * (type 2) kept with theirs as tri_ref; physical tag 0 means none, and a file
-     * without physical groups but with several volume entities gets the entity
-     * tags as regions. Other element types are skipped with a note. Both
-     * vertices of every $Periodic node pair are held (m->fixed, with a note),
-     * so a pair never moves apart; tags of no node are ignored. Higher-order
-     * tetrahedra (types 11, 29-31) are refused (QDC_EFORMAT), as are VTK
-     * types 24 and 71, Medit TetrahedraP2 and 10-node TetGen tets. Reading
-     * accepts 4.1 ASCII/binary, 4.0 ASCII and 2.x ASCII/binary whichever Gmsh
-     * variant is named. */
-    MESHIO_GMSH41,     /* MSH 4.1 ASCII, model/vnd.gmsh, .msh */
-    MESHIO_GMSH41_BIN, /* MSH 4.1 binary (little-endian, data size 8) */
-    MESHIO_GMSH22,     /* MSH 2.2 ASCII */
-    /* VTK: cells of type 10 (tets) and 5 (triangles); region from the cell
-     * array "region", "gmsh:physical" or "medit:ref" (written as "region"),
-     * vref from the point array "medit:ref". Reading accepts either encoding. */
-    MESHIO_VTK,       /* legacy .vtk UNSTRUCTURED_GRID, binary (big-endian) */
-    MESHIO_VTK_ASCII, /* legacy .vtk, ASCII */
-    MESHIO_VTU,       /* VTK XML .vtu, appended raw data (reads ascii/base64/raw too) */
-    MESHIO_VTU_ASCII, /* VTK XML .vtu, ascii DataArrays */
-    /* Formats read, and written back spliced; qdc's own writer too, but no
-     * media type (the daemon names them: ?format=). */
-    MESHIO_GMSH22_BIN, /* MSH 2.2 binary (little-endian, data size 8) */
-    MESHIO_GMSH40,     /* MSH 4.0 ASCII (Gmsh 4.0; 4.0 binary is refused) */
-    MESHIO_DOLFIN,     /* DOLFIN/FEniCS legacy XML .xml, celltype tetrahedron: vertices
-                          and tets (domains, mesh functions kept only by splicing) */
-    MESHIO_MESHB,      /* Medit binary .meshb (libMeshb versions 1-4, either byte
-                          order; written: version 2 little-endian), read as .mesh */
-    /* Read, and written only as the input with new coordinates (spliced):
-     * meshio_write refuses them for a mesh without such a source. */
-    MESHIO_ABAQUS, /* Abaqus/CalculiX .inp: *NODE, *ELEMENT TYPE=C3D4 (regions:
-                      the 1-based order of their ELSET names), other elements
-                      skipped with a note; *INCLUDE and C3D10 refused */
-    MESHIO_NETGEN, /* Netgen .vol mesh3d: points, volumeelements (material as
-                      region), surfaceelements triangles (bc as ref) */
+#define MESHIO_FORMAT(id, desc) MESHIO_##id,
+#include "io/formats.h"
+#undef MESHIO_FORMAT
     MESHIO_FORMAT_COUNT
 } meshio_format;
 
-/* "medit", "tetgen", "qmesh", "json", "gmsh", "gmsh-bin", "gmsh22", "vtk",
- * "vtk-ascii", "vtu", "vtu-ascii", "gmsh22-bin", "gmsh40", "dolfin",
- * "meshb", "abaqus", "netgen"; NULL for
- * out-of-range values. */
+/* The format's name in the table ("medit", "gmsh", "vtu-ascii"...; "auto"
+ * for MESHIO_AUTO); NULL for out-of-range values. */
 const char *meshio_format_name(meshio_format f);
+/* What the table says of a format (the strings are static). */
+typedef struct {
+    const char *name;     /* as meshio_format_name */
+    const char *aliases;  /* other names, space-separated, each also an extension */
+    const char *about;    /* one line for people */
+    const char *ext;      /* the extension written, without the dot */
+    const char *input;    /* the file name qdcd keeps an upload under; NULL: none */
+    const char *media;    /* as meshio_media_type; NULL: none */
+    meshio_format family; /* the format its extension names (.msh: gmsh) */
+    int writes;           /* as meshio_has_writer */
+    int splices;          /* written back as its input with new coordinates */
+} meshio_format_info;
+/* 1 and *info filled for a format of the table, else 0 (AUTO, out of range). */
+int meshio_format_info_of(meshio_format f, meshio_format_info *info);
+/* The table as JSON: {"formats":[{"name", "aliases":[...], "about",
+ * "extension", "family", "media_type" (or null), "upload" (qdcd takes it as
+ * a job's input: one file), "result" (and writes a result in it), "splice"
+ * (written back as its input with new coordinates)}, ...], "surfaces":
+ * [{"name", "extension", "media_type"}, ...]} in the table's order, one entry
+ * a line. What GET /v1/formats serves and `qdc formats` prints. */
+qdc_status meshio_formats_json(qdc_write_fn fn, void *ctx, qdc_error *err);
 /* Accepts a format name (the above, and "mesh", "binary", "msh", "msh41",
  * "msh22"...), a file name or extension (".mesh", "x.node", "a.msh", ".vtu");
  * MESHIO_AUTO if unknown. */

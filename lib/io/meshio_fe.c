@@ -11,8 +11,7 @@
  * meshio_write refuses them for a mesh without a source of that format).
  * DOLFIN gets a writer: vertices and tetrahedra (regions and triangles have
  * no place in its plain mesh file). */
-#include "io/meshio.h"
-#include "io/meshio_scan.h"
+#include "io/format.h"
 
 /* Move the scanner to `to`, counting the lines passed. */
 static void adv(txt *s, const char *to)
@@ -502,7 +501,7 @@ static qdc_status dolfin_counts(txt *s, const dolfin *d, int root, qdc_error *er
     return QDC_OK;
 }
 
-qdc_status meshio_dolfin_read(const char *buf, size_t len, const meshio_options *o,
+static qdc_status read_dolfin(const char *buf, size_t len, const meshio_options *o,
                               srcrec *rec, mesh_t **out, qdc_error *err)
 {
     txt s = txt_init(buf, len, 0);
@@ -552,8 +551,12 @@ qdc_status meshio_dolfin_read(const char *buf, size_t len, const meshio_options 
     return st;
 }
 
-void meshio_dolfin_write(const mesh_t *m, wbuf *w)
+static qdc_status write_dolfin(const mesh_t *m, meshio_format fmt, int part, wbuf *w,
+                               qdc_error *err)
 {
+    (void)fmt;
+    (void)part;
+    (void)err;
     wb_str(w, "<?xml version=\"1.0\"?>\n<dolfin nsmap=\"{'dolfin': "
               "'https://fenicsproject.org/'}\">\n"
               "  <mesh celltype=\"tetrahedron\" dim=\"3\">\n    <vertices size=\"");
@@ -587,6 +590,7 @@ void meshio_dolfin_write(const mesh_t *m, wbuf *w)
         wb_str(w, "\" />\n");
     }
     wb_str(w, "    </cells>\n  </mesh>\n</dolfin>\n");
+    return QDC_OK;
 }
 
 /* ------------------------------------------------------------------------ */
@@ -705,18 +709,25 @@ static qdc_status inp_node(txt *s, const char *p, const char *eol, inp *a, srcre
     const char *t, *te;
     int64_t id;
     double x[3];
-    uint64_t off[3];
+    uint64_t off[3], end;
     qdc_status st;
 
     inp_field(&p, eol, &t, &te);
     st = int_at(s, t, te, "*NODE: node number", 1, INT32_MAX, &id, err);
-    for (int k = 0; k < 3 && st == QDC_OK; k++) {
-        if (!inp_field(&p, eol, &t, &te) || t == te)
-            return fail_txt(err, QDC_EPARSE, s, p,
-                            "*NODE: node %lld has %d coordinates (3 needed)",
-                            (long long)id, k);
+    /* A coordinate left blank or out at the end of the line is 0, as Abaqus
+     * and CalculiX read it; a spliced write puts the value there (after a
+     * comma for one left out) if the vertex moves off 0 (SRC_BLANK). */
+    end = (uint64_t)(te - s->base);
+    for (int k = 0, out = 0; k < 3 && st == QDC_OK; k++) {
+        out = out || !inp_field(&p, eol, &t, &te);
+        if (out || t == te) {
+            x[k] = 0;
+            off[k] = (out ? end | SRC_COMMA : (uint64_t)(t - s->base)) | SRC_BLANK;
+            continue;
+        }
         st = num_at(s, t, te, "*NODE: coordinate", &x[k], err);
         off[k] = (uint64_t)(t - s->base);
+        end = (uint64_t)(te - s->base);
     }
     if (st != QDC_OK)
         return st;
@@ -904,7 +915,7 @@ static qdc_status inp_keyword(txt *s, const char *p, const char *eol, inp *a, in
     return QDC_OK;
 }
 
-qdc_status meshio_abaqus_read(const char *buf, size_t len, const meshio_options *o,
+static qdc_status read_abaqus(const char *buf, size_t len, const meshio_options *o,
                               srcrec *rec, mesh_t **out, qdc_error *err)
 {
     txt s = txt_init(buf, len, 0);
@@ -1178,7 +1189,7 @@ static qdc_status vol_sections(txt *s, vol *g, parsed *pm, srcrec *rec, qdc_erro
     return st;
 }
 
-qdc_status meshio_netgen_read(const char *buf, size_t len, const meshio_options *o,
+static qdc_status read_netgen(const char *buf, size_t len, const meshio_options *o,
                               srcrec *rec, mesh_t **out, qdc_error *err)
 {
     txt s = txt_init(buf, len, 1);
@@ -1226,3 +1237,75 @@ qdc_status meshio_netgen_read(const char *buf, size_t len, const meshio_options 
     vol_free(&g);
     return st;
 }
+
+/* An XML document whose first element, within 1 kB, is a dolfin. */
+static meshio_format sniff_dolfin(const char *buf, size_t len, size_t i)
+{
+    static const char dtag[] = "<dolfin";
+    const char *p = buf + i;
+    size_t n = len - i, lim = n < 1024 ? n : 1024;
+
+    if (i >= len || buf[i] != '<')
+        return MESHIO_AUTO;
+    for (size_t k = 0; k + sizeof dtag - 1 <= lim; k++)
+        if (memcmp(p + k, dtag, sizeof dtag - 1) == 0 &&
+            (k + sizeof dtag - 1 == n || !is_word((unsigned char)p[k + sizeof dtag - 1])))
+            return MESHIO_DOLFIN;
+    return MESHIO_AUTO;
+}
+
+/* A first line starting with '*'. */
+static meshio_format sniff_abaqus(const char *buf, size_t len, size_t i)
+{
+    return i < len && buf[i] == '*' && (i == 0 || buf[i - 1] == '\n') ? MESHIO_ABAQUS
+                                                                      : MESHIO_AUTO;
+}
+
+/* "mesh3d" (or "mesh2d", which the reader refuses) first. */
+static meshio_format sniff_netgen(const char *buf, size_t len, size_t i)
+{
+    size_t w;
+
+    for (w = i; w < len && is_word((unsigned char)buf[w]); w++)
+        ;
+    return word_is(buf + i, w - i, "mesh3d") || word_is(buf + i, w - i, "mesh2d")
+               ? MESHIO_NETGEN
+               : MESHIO_AUTO;
+}
+
+const meshio_fmt fmt_dolfin = {
+    .name = "dolfin",
+    .aliases = "dolfin-xml xml",
+    .about = "DOLFIN/FEniCS legacy XML, celltype tetrahedron (domains and mesh "
+             "functions kept by splicing)",
+    .ext = "xml",
+    .input = "input.xml",
+    .sniff = sniff_dolfin,
+    .read = read_dolfin,
+    .write = write_dolfin,
+    .splices = 1,
+};
+
+const meshio_fmt fmt_abaqus = {
+    .name = "abaqus",
+    .aliases = "calculix inp",
+    .about = "Abaqus/CalculiX .inp: *NODE, *ELEMENT TYPE=C3D4, ELSETs as regions "
+             "(written only spliced)",
+    .ext = "inp",
+    .input = "input.inp",
+    .sniff = sniff_abaqus,
+    .read = read_abaqus,
+    .splices = 1,
+};
+
+const meshio_fmt fmt_netgen = {
+    .name = "netgen",
+    .aliases = "vol",
+    .about = "Netgen .vol mesh3d: materials as regions, surface elements kept "
+             "(written only spliced)",
+    .ext = "vol",
+    .input = "input.vol",
+    .sniff = sniff_netgen,
+    .read = read_netgen,
+    .splices = 1,
+};

@@ -16,8 +16,7 @@
  * (unaligned, any host); every block count is checked against the bytes left
  * before anything is allocated. Sections other than the ones we need are
  * skipped up to their $End marker. */
-#include "io/meshio.h"
-#include "io/meshio_scan.h"
+#include "io/format.h"
 
 /* Nodes per element of the Gmsh types up to 31 (0 = unknown), to skip the
  * ones we don't read in binary files. */
@@ -1174,7 +1173,7 @@ static qdc_status gmsh_mesh(gmsh *g, const meshio_options *o, mesh_t **out,
     return st;
 }
 
-qdc_status meshio_gmsh_read(const char *buf, size_t len, const meshio_options *o,
+static qdc_status read_gmsh(const char *buf, size_t len, const meshio_options *o,
                             srcrec *rec, mesh_t **out, qdc_error *err)
 {
     gmsh g;
@@ -1192,10 +1191,9 @@ qdc_status meshio_gmsh_read(const char *buf, size_t len, const meshio_options *o
     g.s = txt_init(buf, len, 0);
     g.b = (const unsigned char *)buf;
     st = next_marker(&g, &name, &nlen, err);
-    if (st == QDC_OK && word_is(name, nlen, "NOD"))
-        st = fail_txt(err, QDC_EFORMAT, &g.s, name - 1,
-                      "MSH 1 ($NOD) is not supported (4.1, 4.0, 2.2, 2.1 or 2.0)");
-    else if (st == QDC_OK && !word_is(name, nlen, "MeshFormat"))
+    if (st == QDC_OK && word_is(name, nlen, "NOD")) /* MSH 1: its own reader */
+        return fmt_msh1.read(buf, len, o, rec, out, err);
+    if (st == QDC_OK && !word_is(name, nlen, "MeshFormat"))
         st = fail_txt(err, QDC_EPARSE, &g.s, g.s.p, "expected $MeshFormat first");
     if (st == QDC_OK) {
         end_of_line(&g);
@@ -1545,8 +1543,10 @@ static void write22(const mesh_t *m, const distinct d[2], wbuf *w, int bin)
     wb_str(w, "$EndElements\n");
 }
 
-qdc_status meshio_gmsh_write(const mesh_t *m, meshio_format fmt, wbuf *w, qdc_error *err)
+static qdc_status write_gmsh(const mesh_t *m, meshio_format fmt, int part, wbuf *w,
+                             qdc_error *err)
 {
+    (void)part;
     distinct d[2] = {{NULL, 0}, {NULL, 0}};
     qdc_status st = QDC_OK;
 
@@ -1563,3 +1563,97 @@ qdc_status meshio_gmsh_write(const mesh_t *m, meshio_format fmt, wbuf *w, qdc_er
     qdc_free(d[1].u);
     return st;
 }
+
+/* After "$MeshFormat": the version ("2.2", "4", "4.1") and the file type (0
+ * ASCII, 1 binary). Unsupported versions go to the reader, which names them
+ * ("$NOD", MSH 1, is msh1's). */
+static meshio_format sniff_gmsh(const char *buf, size_t len, size_t i)
+{
+    const char *p;
+    size_t n, k = 0, v, vn;
+    int bin;
+
+    if (len - i < 11 || memcmp(buf + i, "$MeshFormat", 11) != 0)
+        return MESHIO_AUTO;
+    p = buf + i + 11;
+    n = len - i - 11;
+    while (k < n && is_space((unsigned char)p[k]))
+        k++;
+    for (v = k; k < n && !is_space((unsigned char)p[k]); k++)
+        ;
+    vn = k - v;
+    while (k < n && (p[k] == ' ' || p[k] == '\t'))
+        k++;
+    bin = k < n && p[k] == '1';
+    if (vn >= 1 && p[v] == '2')
+        return bin ? MESHIO_GMSH22_BIN : MESHIO_GMSH22;
+    if ((vn == 1 && p[v] == '4') || (vn >= 3 && memcmp(p + v, "4.0", 3) == 0))
+        return MESHIO_GMSH40;
+    return bin ? MESHIO_GMSH41_BIN : MESHIO_GMSH41;
+}
+
+const meshio_fmt fmt_gmsh41 = {
+    .name = "gmsh",
+    .aliases = "msh msh41 gmsh41",
+    .about = "Gmsh MSH 4.1 ASCII",
+    .ext = "msh",
+    .input = "input.msh",
+    .media = "model/vnd.gmsh",
+    .media_alt = "application/x-gmsh model/x-gmsh",
+    .sniff = sniff_gmsh,
+    .read = read_gmsh,
+    .write = write_gmsh,
+    .splices = 1,
+};
+
+const meshio_fmt fmt_gmsh41_bin = {
+    .name = "gmsh-bin",
+    .aliases = "msh41-bin gmsh41-bin",
+    .about = "Gmsh MSH 4.1 binary",
+    .ext = "msh",
+    .input = "input.msh",
+    .family = MESHIO_GMSH41,
+    .media = "model/vnd.gmsh;encoding=binary",
+    .media_alt = "application/x-gmsh;encoding=binary",
+    .read = read_gmsh,
+    .write = write_gmsh,
+    .splices = 1,
+};
+
+const meshio_fmt fmt_gmsh22 = {
+    .name = "gmsh22",
+    .aliases = "msh22",
+    .about = "Gmsh MSH 2.2 ASCII",
+    .ext = "msh",
+    .input = "input.msh",
+    .family = MESHIO_GMSH41,
+    .media = "model/vnd.gmsh;version=2.2",
+    .media_alt = "application/x-gmsh;version=2.2",
+    .read = read_gmsh,
+    .write = write_gmsh,
+    .splices = 1,
+};
+
+const meshio_fmt fmt_gmsh22_bin = {
+    .name = "gmsh22-bin",
+    .aliases = "msh22-bin",
+    .about = "Gmsh MSH 2.2 binary",
+    .ext = "msh",
+    .input = "input.msh",
+    .family = MESHIO_GMSH41,
+    .read = read_gmsh,
+    .write = write_gmsh,
+    .splices = 1,
+};
+
+const meshio_fmt fmt_gmsh40 = {
+    .name = "gmsh40",
+    .aliases = "msh40",
+    .about = "Gmsh MSH 4.0 ASCII (4.0 binary is refused)",
+    .ext = "msh",
+    .input = "input.msh",
+    .family = MESHIO_GMSH41,
+    .read = read_gmsh,
+    .write = write_gmsh,
+    .splices = 1,
+};

@@ -11,8 +11,7 @@
  * through its next-keyword position, and kept byte for byte by a spliced
  * write, which overwrites the coordinates in their own width and byte order
  * (version 1: float32). qdc's own writer writes version 2, little-endian. */
-#include "io/meshio.h"
-#include "io/meshio_scan.h"
+#include "io/format.h"
 
 enum {
     GMF_DIMENSION = 3,
@@ -324,7 +323,7 @@ static qdc_status gmf_keywords(gmf *g, gmf_mesh *gm, srcrec *rec, qdc_error *err
     return st;
 }
 
-qdc_status meshio_meshb_read(const char *buf, size_t len, const meshio_options *o,
+static qdc_status read_meshb(const char *buf, size_t len, const meshio_options *o,
                              srcrec *rec, mesh_t **out, qdc_error *err)
 {
     gmf g = {(const unsigned char *)buf, len, 0, 0, 0, 0, 0};
@@ -366,8 +365,12 @@ static void put32(wbuf *w, int64_t v)
 
 /* Version 2, little-endian: Dimension, Vertices, Triangles, Tetrahedra,
  * RequiredVertices (the fixed vertices), End. */
-void meshio_meshb_write(const mesh_t *m, wbuf *w)
+static qdc_status write_meshb(const mesh_t *m, meshio_format fmt, int part, wbuf *w,
+                              qdc_error *err)
 {
+    (void)fmt;
+    (void)part;
+    (void)err;
     int64_t pos = 8, nfix = 0;
     int with_fix = m->fixed != NULL; /* even with none set: read back the same */
 
@@ -424,4 +427,34 @@ void meshio_meshb_write(const mesh_t *m, wbuf *w)
     }
     put32(w, GMF_END);
     put32(w, 0);
+    return QDC_OK;
 }
+
+/* The int32 words 1 (the byte order), 1..4 (the version), 3 (the
+ * dimension's keyword) in either byte order. */
+static meshio_format sniff_meshb(const char *buf, size_t len, size_t i)
+{
+    const unsigned char *b = (const unsigned char *)buf;
+
+    (void)i;
+    if (len >= 12 &&
+        ((get_le32(b) == 1 && get_le32(b + 4) - 1 < 4 && get_le32(b + 8) == 3) ||
+         (memcmp(buf, "\0\0\0\1\0\0\0", 7) == 0 && buf[7] >= 1 && buf[7] <= 4 &&
+          memcmp(buf + 8, "\0\0\0\3", 4) == 0)))
+        return MESHIO_MESHB;
+    return MESHIO_AUTO;
+}
+
+const meshio_fmt fmt_meshb = {
+    .name = "meshb",
+    .aliases = "medit-bin",
+    .about = "Medit binary .meshb (libMeshb versions 1-4, either byte order; written: "
+             "version 2 little-endian)",
+    .ext = "meshb",
+    .input = "input.meshb",
+    .magic = 1,
+    .sniff = sniff_meshb,
+    .read = read_meshb,
+    .write = write_meshb,
+    .splices = 1,
+};

@@ -79,6 +79,18 @@ static inline qdc_status fail_bin(qdc_error *err, qdc_status st, int64_t off,
     return st;
 }
 
+/* What err->kind calls an entry of section sect. */
+static inline const char *elem_kind(const char *sect)
+{
+    if (strcmp(sect, "Tetrahedra") == 0 || strcmp(sect, "tets") == 0)
+        return "tet";
+    if (strcmp(sect, "Triangles") == 0)
+        return "triangle";
+    if (strcmp(sect, "vertices") == 0)
+        return "vertex";
+    return "entry";
+}
+
 static inline void set_index(qdc_error *err, const char *kind, int64_t index)
 {
     if (!err)
@@ -869,6 +881,12 @@ enum {
                      or '<' (XML attributes, Abaqus comma lists) */
     SRC_BLOCK     /* VTU base64 or zlib Points: bytes [blk_a, blk_b) re-encoded */
 };
+/* SRC_TEXT3 offsets with SRC_BLANK: the coordinate is not in the file (a
+ * blank field, read as 0) and the offset is where its value goes if it is not
+ * 0 when written; with SRC_COMMA too, a field left out at the end of the line:
+ * ", value" goes there, after those left out before it. */
+#define SRC_BLANK (UINT64_C(1) << 63)
+#define SRC_COMMA (UINT64_C(1) << 62)
 
 /* Values in the file that are derived from the coordinates, recomputed by a
  * spliced write (splice.c): Gmsh 4.x $Entities bounding boxes (DV_BOXES),
@@ -998,28 +1016,5 @@ int splice_ok(const mesh_t *m, meshio_format fmt, const char **why);
 qdc_status splice_set_path(mesh_t *m, const char *path, qdc_error *err);
 /* Write the source with m's coordinates; part 1 = TetGen's .ele. */
 qdc_status splice_write(const mesh_t *m, int part, wbuf *w, qdc_error *err);
-
-/* ------------------------------------------------------------------------ */
-/* Format modules, dispatched from meshio.c                                  */
-
-qdc_status meshio_gmsh_read(const char *buf, size_t len, const meshio_options *o,
-                            srcrec *rec, mesh_t **out, qdc_error *err);
-qdc_status meshio_gmsh_write(const mesh_t *m, meshio_format fmt, wbuf *w, qdc_error *err);
-qdc_status meshio_vtk_read(const char *buf, size_t len, const meshio_options *o,
-                           srcrec *rec, mesh_t **out, qdc_error *err);
-void meshio_vtk_write(const mesh_t *m, int binary, wbuf *w);
-qdc_status meshio_vtu_read(const char *buf, size_t len, const meshio_options *o,
-                           srcrec *rec, mesh_t **out, qdc_error *err);
-void meshio_vtu_write(const mesh_t *m, int appended, wbuf *w);
-qdc_status meshio_dolfin_read(const char *buf, size_t len, const meshio_options *o,
-                              srcrec *rec, mesh_t **out, qdc_error *err);
-void meshio_dolfin_write(const mesh_t *m, wbuf *w);
-qdc_status meshio_abaqus_read(const char *buf, size_t len, const meshio_options *o,
-                              srcrec *rec, mesh_t **out, qdc_error *err);
-qdc_status meshio_meshb_read(const char *buf, size_t len, const meshio_options *o,
-                             srcrec *rec, mesh_t **out, qdc_error *err);
-void meshio_meshb_write(const mesh_t *m, wbuf *w);
-qdc_status meshio_netgen_read(const char *buf, size_t len, const meshio_options *o,
-                              srcrec *rec, mesh_t **out, qdc_error *err);
 
 #endif

@@ -10,9 +10,8 @@
  * counted for a note. The region is the cell array "region", "gmsh:physical" or
  * "medit:ref" (in that order of preference), vref the point array "medit:ref".
  * Legacy binary data are big-endian; XML data follow byte_order. */
+#include "io/format.h"
 #include "io/gz.h"
-#include "io/meshio.h"
-#include "io/meshio_scan.h"
 
 #include <limits.h>
 #include <zlib.h>
@@ -797,6 +796,11 @@ static qdc_status vtk_field(vtk *v, qdc_error *err)
     st = txt_int(s, "FIELD: array count", 0, 1 << 20, &c, err);
     for (int64_t i = 0; i < c && st == QDC_OK; i++) {
         next_word(v, &name, &nl);
+        /* VTK 9 follows an array with its METADATA (INFORMATION keys) */
+        while (word_is(name, nl, "METADATA")) {
+            vtk_metadata(v);
+            next_word(v, &name, &nl);
+        }
         if (word_is(name, nl, "NULL") || !nl)
             continue;
         st = txt_int(s, "FIELD: components", 0, 1 << 20, &k, err);
@@ -888,7 +892,7 @@ static qdc_status vtk_keyword(vtk *v, const char *w, size_t n, qdc_error *err)
                     quote_tok(q, s, w, w + n));
 }
 
-qdc_status meshio_vtk_read(const char *buf, size_t len, const meshio_options *o,
+static qdc_status read_vtk(const char *buf, size_t len, const meshio_options *o,
                            srcrec *rec, mesh_t **out, qdc_error *err)
 {
     vtk v;
@@ -1000,7 +1004,7 @@ static int32_t cell_region(const mesh_t *m, int64_t c)
     return m->tri_ref ? m->tri_ref[c - m->nt] : 0;
 }
 
-void meshio_vtk_write(const mesh_t *m, int binary, wbuf *w)
+static void vtk_write(const mesh_t *m, int binary, wbuf *w)
 {
     vw o = {w, binary, 1, 3, 0, 1};
     int64_t nc = (int64_t)m->nt + m->ntri;
@@ -2025,7 +2029,7 @@ static qdc_status vtu_cells(vtu *x, double **offs_end, qdc_error *err)
     return check_offsets(x->c.offs, x->c.nc, x->c.nconn, "vtu", err);
 }
 
-qdc_status meshio_vtu_read(const char *buf, size_t len, const meshio_options *o,
+static qdc_status read_vtu(const char *buf, size_t len, const meshio_options *o,
                            srcrec *rec, mesh_t **out, qdc_error *err)
 {
     vtu x;
@@ -2129,7 +2133,7 @@ static void vtu_data(const mesh_t *m, int k, vw *o)
     vw_end(o);
 }
 
-void meshio_vtu_write(const mesh_t *m, int appended, wbuf *w)
+static void vtu_write(const mesh_t *m, int appended, wbuf *w)
 {
     int64_t nc = (int64_t)m->nt + m->ntri;
     uint64_t nconn = 4 * (uint64_t)m->nt + 3 * (uint64_t)m->ntri, off = 0;
@@ -2180,3 +2184,126 @@ void meshio_vtu_write(const mesh_t *m, int appended, wbuf *w)
     }
     wb_str(w, "</VTKFile>\n");
 }
+
+static qdc_status write_vtk(const mesh_t *m, meshio_format fmt, int part, wbuf *w,
+                            qdc_error *err)
+{
+    (void)part;
+    (void)err;
+    vtk_write(m, fmt == MESHIO_VTK, w);
+    return QDC_OK;
+}
+
+static qdc_status write_vtu(const mesh_t *m, meshio_format fmt, int part, wbuf *w,
+                            qdc_error *err)
+{
+    (void)part;
+    (void)err;
+    vtu_write(m, fmt == MESHIO_VTU, w);
+    return QDC_OK;
+}
+
+/* "# vtk DataFile", then the third line: ASCII or BINARY. */
+static meshio_format sniff_vtk(const char *p, size_t n, size_t i)
+{
+    if (n < 14 || memcmp(p, "# vtk DataFile", 14) != 0)
+        return MESHIO_AUTO;
+    for (int line = 0; line < 2 && i < n; i++)
+        line += p[i] == '\n';
+    while (i < n && is_space((unsigned char)p[i]))
+        i++;
+    return n - i >= 5 && strncasecmp(p + i, "ASCII", 5) == 0 ? MESHIO_VTK_ASCII
+                                                             : MESHIO_VTK;
+}
+
+/* Where the n bytes at p first hold the k bytes of w, or NULL. */
+static const char *find_bytes(const char *p, size_t n, const char *w, size_t k)
+{
+    for (const char *e = p + n; k <= (size_t)(e - p); p++) {
+        p = memchr(p, w[0], (size_t)(e - p) - k + 1);
+        if (!p)
+            return NULL;
+        if (memcmp(p, w, k) == 0)
+            return p;
+    }
+    return NULL;
+}
+
+/* An XML document whose first element, within 1 kB, is a VTKFile: VTU_ASCII
+ * when its Points DataArray is ascii (as the reader records it), else VTU. */
+static meshio_format sniff_vtu(const char *buf, size_t len, size_t i)
+{
+    static const char tag[] = "<VTKFile";
+    const char *p = buf + i, *e = buf + len, *pts, *da, *end;
+    size_t n = len - i, lim = n < 1024 ? n : 1024;
+
+    if (i >= len || buf[i] != '<')
+        return MESHIO_AUTO;
+    for (size_t k = 0; k + sizeof tag - 1 <= lim; k++) {
+        if (memcmp(p + k, tag, sizeof tag - 1) != 0)
+            continue;
+        p += k;
+        n -= k;
+        if (!(pts = find_bytes(p, n, "<Points", 7)) ||
+            !(da = find_bytes(pts, (size_t)(e - pts), "<DataArray", 10)) ||
+            !(end = memchr(da, '>', (size_t)(e - da))))
+            return MESHIO_VTU;
+        return find_bytes(da, (size_t)(end - da), "format=\"ascii\"", 14) ||
+                       find_bytes(da, (size_t)(end - da), "format='ascii'", 14)
+                   ? MESHIO_VTU_ASCII
+                   : MESHIO_VTU;
+    }
+    return MESHIO_AUTO;
+}
+
+const meshio_fmt fmt_vtk = {
+    .name = "vtk",
+    .aliases = "vtk-bin",
+    .about = "legacy VTK UNSTRUCTURED_GRID, binary (big-endian)",
+    .ext = "vtk",
+    .input = "input.vtk",
+    .media = "application/vnd.vtk",
+    .media_alt = "application/x-vtk",
+    .magic = 1,
+    .sniff = sniff_vtk,
+    .read = read_vtk,
+    .write = write_vtk,
+    .splices = 1,
+};
+
+const meshio_fmt fmt_vtk_ascii = {
+    .name = "vtk-ascii",
+    .about = "legacy VTK UNSTRUCTURED_GRID, ASCII",
+    .ext = "vtk",
+    .input = "input.vtk",
+    .family = MESHIO_VTK,
+    .media = "application/vnd.vtk;encoding=ascii",
+    .read = read_vtk,
+    .write = write_vtk,
+    .splices = 1,
+};
+
+const meshio_fmt fmt_vtu = {
+    .name = "vtu",
+    .about = "VTK XML .vtu, appended raw data (reads ascii, base64, raw, zlib)",
+    .ext = "vtu",
+    .input = "input.vtu",
+    .media = "application/vnd.vtk.vtu+xml",
+    .media_alt = "application/x-vtu",
+    .sniff = sniff_vtu,
+    .read = read_vtu,
+    .write = write_vtu,
+    .splices = 1,
+};
+
+const meshio_fmt fmt_vtu_ascii = {
+    .name = "vtu-ascii",
+    .about = "VTK XML .vtu, ascii DataArrays",
+    .ext = "vtu",
+    .input = "input.vtu",
+    .family = MESHIO_VTU,
+    .media = "application/vnd.vtk.vtu+xml;encoding=ascii",
+    .read = read_vtu,
+    .write = write_vtu,
+    .splices = 1,
+};

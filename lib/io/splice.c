@@ -571,6 +571,36 @@ static qdc_status splice_text(const source *s, const double *xyz, edits *ed, wbu
 }
 
 /* Coordinates one by one (SRC_TEXT3). */
+/* Coordinate i, not in the file (SRC_BLANK): its value at the recorded
+ * place if it is not 0, or if a coordinate left out after it is not (",
+ * value" for those left out: SRC_COMMA). */
+static qdc_status splice_blank(const source *s, const double *xyz, size_t i, size_t *pos,
+                               edits *ed, wbuf *w, qdc_error *err)
+{
+    size_t p = (size_t)(s->r.off[i] & ~(SRC_BLANK | SRC_COMMA));
+    int comma = (s->r.off[i] & SRC_COMMA) != 0, need = 0;
+    char buf[36];
+    qdc_status st;
+
+    for (size_t k = i; k < i / 3 * 3 + 3 && (k == i || comma); k++)
+        need = need || xyz[k] != 0;
+    if (p < *pos || p > s->len)
+        return qdc_fail(
+            err, QDC_EINTERNAL,
+            "source: coordinate %zu of vertex %zu at byte %zu is out of order", i % 3,
+            i / 3, p);
+    if (!need)
+        return QDC_OK;
+    st = put_src(ed, w, *pos, p, err);
+    if (st != QDC_OK)
+        return st;
+    *pos = p;
+    if (comma)
+        wb_str(w, ", ");
+    wb_put(w, buf, (size_t)numfmt_g17(xyz[i], buf));
+    return QDC_OK;
+}
+
 static qdc_status splice_text3(const source *s, const double *xyz, edits *ed, wbuf *w,
                                qdc_error *err)
 {
@@ -579,6 +609,12 @@ static qdc_status splice_text3(const source *s, const double *xyz, edits *ed, wb
 
     for (size_t i = 0; i < 3 * (size_t)s->nv; i++) {
         size_t p = s->r.off[i], te = p;
+        if (s->r.off[i] & SRC_BLANK) {
+            st = splice_blank(s, xyz, i, &pos, ed, w, err);
+            if (st != QDC_OK)
+                return st;
+            continue;
+        }
         while (te < s->len) {
             unsigned char c = (unsigned char)s->buf[te];
             if (is_space(c) || c == ',' || c == '"' || c == '\'' || c == '<')

@@ -2,9 +2,10 @@
 # gmsh_versions.sh - MSH versions qdc does not read are refused by the CLI
 # with `file:line:col: message` and exit 2, the message naming the version
 # found and the versions read (4.1 ASCII/binary, 4.0 ASCII, 2.x
-# ASCII/binary): MSH 1 ($NOD, also when found by sniffing), 3.0, 4.2, 4.0
-# binary (Gmsh >= 4.1 cannot write it) and big-endian binary. The versions
-# read are round-tripped by roundtrip.sh (tests/data/real).
+# ASCII/binary, and MSH 1 by its own reader): 3.0, 4.2, 4.0 binary (Gmsh >=
+# 4.1 cannot write it) and big-endian binary. MSH 1 ($NOD) is read, as a .msh
+# and when found by sniffing. The versions read are round-tripped by
+# roundtrip.sh (tests/data/real).
 . "$(dirname "$0")/../lib.sh"
 cd "$TMP" || exit 1
 printf '$NOD\n4\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 1\n$ENDNOD\n$ELM\n1\n1 4 1 1 4 1 2 3 4\n$ENDELM\n' > msh1.msh
@@ -24,8 +25,12 @@ refused() { # FILE LINE:COL TEXT...
         fail "gmsh versions: $f" "exit $rc: $(head -2 err)"
     fi
 }
-refused msh1.msh 1:1 'MSH 1 (\$NOD) is not supported (4.1, 4.0, 2.2, 2.1 or 2.0)'
-refused msh1.dat 1:1 'MSH 1 (\$NOD) is not supported (4.1, 4.0, 2.2, 2.1 or 2.0)'
+for f in msh1.msh msh1.dat; do
+    "$BIN/qdc" convert "$f" out.mesh 2> err && grep -q '^Tetrahedra' out.mesh &&
+        "$BIN/qdc" quality out.mesh | grep -q '4 vertices, 1 tets' &&
+        pass "gmsh versions: MSH 1 $f read (its own reader)" ||
+        fail "gmsh versions: MSH 1 $f" "$(head -2 err)"
+done
 refused v30.msh 2:1 '\$MeshFormat: version 3 not supported (4.1, 4.0, 2.2, 2.1 or 2.0)'
 refused v42.msh 2:1 '\$MeshFormat: version 4.2 not supported (4.1, 4.0, 2.2, 2.1 or 2.0)'
 refused b40.msh 2:1 'MSH 4.0 binary is not supported (4.0 ASCII, 4.1 ASCII or binary, 2.2 ASCII or binary)'

@@ -19,7 +19,7 @@ for gz in "$REAL"/*.gz; do
 done
 files="gmsh41.msh gmsh41_bin.msh gmsh22.msh gmsh22_bin.msh gmsh40.msh gmsh.vtk gmsh.mesh meshio_zlib.vtu meshio_ascii.vtu
 meshio_bin.vtk meshio_ascii.vtk vtk_appended_zlib.vtu tetgen.node dolfin.xml meshio.inp calculix.inp
-meshio.vol meshio.meshb"
+meshio.vol meshio.meshb gmsh_msh1.msh"
 for f in $files; do
     base=${f%%.*}
     ext=${f#*.}
@@ -41,7 +41,16 @@ for f in $files; do
         cmp -s tetgen.ele out_tetgen.ele && pass "roundtrip: $f: the .ele comes back unchanged" ||
             fail "roundtrip: $f: .ele" "$(cmp tetgen.ele out_tetgen.ele 2>&1)"
     fi
-    if [ $have_meshio = 1 ]; then
+    if [ "$f" = gmsh_msh1.msh ]; then # meshio reads no MSH 1: node numbers, all else
+        mask() { awk '/^\$NOD/ { n = 1 } /^\$ENDNOD/ { n = 0 } n && NF == 4 { print $1; next } { print }' "$1"; }
+        mask "$f" > a.mask
+        mask "out_$f" > b.mask
+        if cmp -s a.mask b.mask && ! cmp -s "$f" "out_$f"; then
+            pass "roundtrip: $f: only the coordinates changed"
+        else
+            fail "roundtrip: $f: only the coordinates changed" "$(diff a.mask b.mask | head -3)"
+        fi
+    elif [ $have_meshio = 1 ]; then
         "$PY" "$CHECK" "$f" "out_$f" "ref_$base.mesh" > chk 2>&1 ||
             grep -q '^FAIL - ' chk || fail "roundtrip: $f: splicecheck" "$(tail -2 chk)"
         sed -n 's/^\(ok\|FAIL\) - /\1 - roundtrip: /p' chk

@@ -62,7 +62,7 @@ done
 [ $fail = 0 ] && echo "ok - layers: server/ and clients/ use the library through qdc.h only"
 
 # Public and internal headers (docs/architecture.md, "Public and internal headers").
-PUBLIC="qdc.h core/base.h core/mesh.h geom/metric.h geom/bderr.h io/meshio.h io/surface.h
+PUBLIC="qdc.h core/base.h core/mesh.h geom/metric.h geom/bderr.h io/meshio.h io/formats.h io/surface.h
 io/tetra.h io/gz.h opt/opt.h opt/options.h eval/report.h"
 reach=$(
     todo=qdc.h seen=

@@ -289,5 +289,17 @@ for f in qmesh medit gmsh vtu dolfin meshb gmsh22-bin gmsh40; do
 done
 [ -z "$bad" ] && pass "a DOLFIN upload: its result in every format qdc writes (by name for dolfin, meshb, gmsh22-bin, gmsh40; each read back by qdc quality); abaqus and netgen: 400 with the offered list" ||
     fail "result formats" "$bad"
+# The upload is kept under the name the format table gives dolfin
+# (job_input_name used to fall back to input.mesh for six formats).
+[ -f "$TMP/x/jobs/$DX/input.xml" ] && [ ! -e "$TMP/x/jobs/$DX/input.mesh" ] &&
+    pass "a DOLFIN upload is kept as input.xml (the table's input name)" ||
+    fail "input name" "$(ls "$TMP/x/jobs/$DX" | tr '\n' ' ')"
+# GET /v1/formats is the library's table, as `qdc formats` prints it.
+"$BIN/qdc" formats > "$TMP/formats.cli"
+code=$(req GET /v1/formats "$TMP/formats.srv")
+[ "$code" = 200 ] && cmp -s "$TMP/formats.cli" "$TMP/formats.srv" &&
+    case $(hdr "$TMP/formats.srv" Content-Type) in application/json*) true ;; *) false ;; esac &&
+    pass "GET /v1/formats: the $(jq '.formats | length' "$TMP/formats.srv") formats and $(jq '.surfaces | length' "$TMP/formats.srv") surfaces of \`qdc formats\`, byte for byte" ||
+    fail "GET /v1/formats" "$code $(head -c 300 "$TMP/formats.srv")"
 stop_qdcd || fail "SIGTERM x" "exit status $?"
 exit $((NFAIL > 0))

@@ -38,6 +38,8 @@ gmsh -3 -nt 1 box_sphere.geo -format msh41 -o gmsh41.msh > /dev/null
 gmsh -3 -nt 1 box_sphere.geo -format msh41 -bin -o gmsh41_bin.msh > /dev/null
 gmsh -3 -nt 1 box_sphere.geo -format msh22 -o gmsh22.msh > /dev/null
 gmsh -3 -nt 1 box_sphere.geo -format msh22 -bin -o gmsh22_bin.msh > /dev/null
+sed 's/CharacteristicLengthMax = 0.2/CharacteristicLengthMax = 0.35/' box_sphere.geo > coarse.geo
+gmsh -3 -nt 1 coarse.geo -format msh1 -o gmsh_msh1.msh > /dev/null
 gmsh -3 -nt 1 box_sphere.geo -format msh40 -o gmsh40.msh > /dev/null
 gmsh -3 -nt 1 box_sphere.geo -format vtk -o gmsh.vtk > /dev/null
 gmsh -3 -nt 1 box_sphere.geo -format mesh -o gmsh.mesh > /dev/null

@@ -1,0 +1,56 @@
+/* format.h - what a mesh format module gives meshio.c: one descriptor
+ * (meshio_fmt) per format, registered by one line of formats.h. Internal to
+ * lib/io. */
+#ifndef QDC_FORMAT_H
+#define QDC_FORMAT_H
+
+#include "io/meshio.h"
+#include "io/meshio_scan.h"
+
+/* Sniffing: buf[0, len) is the start of a file, i the first byte after
+ * blanks and '#' comment lines. Return the format (the variant, for a
+ * family: the version and encoding the content says), or MESHIO_AUTO.
+ * Formats with magic set are asked first, in table order, then the others. */
+typedef meshio_format (*meshio_sniff_fn)(const char *buf, size_t len, size_t i);
+/* Reading one plain buffer; rec NULL, or to be filled for a spliced write
+ * (rec->fmt set to the variant read; left MESHIO_AUTO: no splicing). */
+typedef qdc_status (*meshio_read_fn)(const char *buf, size_t len, const meshio_options *o,
+                                     srcrec *rec, mesh_t **out, qdc_error *err);
+/* Writing m as fmt (the descriptor's own format) through w; part 1 is
+ * TetGen's .ele (0 for every other format). */
+typedef qdc_status (*meshio_write_fn)(const mesh_t *m, meshio_format fmt, int part,
+                                      wbuf *w, qdc_error *err);
+
+typedef struct {
+    const char *name;      /* the format's name: --format, ?format=, /v1/formats */
+    const char *aliases;   /* other names, space-separated; each also names the
+                              format as a file extension ("msh msh41") */
+    const char *about;     /* one line for people: "Gmsh MSH 4.1 ASCII" */
+    const char *ext;       /* the extension written, without the dot ("msh") */
+    const char *input;     /* the file name qdcd stores an upload under, or NULL
+                              (not uploaded: TetGen is two files) */
+    meshio_format family;  /* the format an extension names (.msh: GMSH41);
+                              MESHIO_AUTO: itself */
+    const char *media;     /* the media type written, with the parameter that
+                              selects this variant ("model/vnd.gmsh;version=2.2"),
+                              or NULL */
+    const char *media_alt; /* other media types read as this one, space-separated */
+    int magic;             /* sniff looks at the first bytes, not after blanks */
+    meshio_sniff_fn sniff; /* NULL: another variant of the family sniffs */
+    meshio_read_fn read;
+    meshio_write_fn write; /* NULL: written only spliced, over its own source */
+    int splices;           /* written back as its source with new coordinates */
+} meshio_fmt;
+
+#define MESHIO_FORMAT(id, desc) extern const meshio_fmt desc;
+#include "io/formats.h"
+#undef MESHIO_FORMAT
+
+/* The descriptor of f, or NULL (MESHIO_AUTO, out of range). */
+const meshio_fmt *meshio_fmt_of(meshio_format f);
+
+/* TetGen's two buffers, rec NULL or filled (meshio.c loads the pair). */
+qdc_status meshio_tetgen_read2(const char *node, size_t node_len, const char *ele,
+                               size_t ele_len, srcrec *rec, mesh_t **out, qdc_error *err);
+
+#endif
