@@ -108,6 +108,30 @@ def peer_path(sub, name):
 _SKIP = {}
 
 
+def peer_versions(tools):
+    """{peer: 'program (version)'} of the peers this run uses, with
+    $QDC_PEERS for the directory (RESULTS.md names no path of this machine)."""
+    out = {}
+    d = os.environ.get('QDC_PEERS')
+    for tool, sub, name, pat in (('mmg-optim', 'mmg/build/bin/mmg3d_O3', 'mmg3d_O3',
+                                  r'MMG3D, Release [\w.]+'),
+                                 ('stellar', 'stellar/Stellar', 'Stellar', r'Version [\w.]+')):
+        if tool not in tools and not (tool == 'mmg-optim' and 'mmg-noinsert' in tools):
+            continue
+        p = peer_path(sub, name)
+        if not p:
+            continue
+        h = subprocess.run([p, '-h'], capture_output=True, text=True, errors='replace')
+        m = re.search(pat, h.stdout + h.stderr)
+        shown = '$QDC_PEERS/' + sub if d and p == os.path.join(d, sub) else name
+        out[name] = '%s (%s)' % (shown, m.group(0) if m else 'version ?')
+    if 'netgen' in tools:
+        v = subprocess.run(['dpkg-query', '-W', '-f', '${Version}', 'python3-netgen'],
+                           capture_output=True, text=True).stdout.strip()
+        out['Netgen'] = 'Debian python3-netgen %s' % (v or '?')
+    return out
+
+
 def tool_skip(tool):
     """Why TOOL cannot run here (None when it can): a peer not built or
     installed, or a qdc without --topology."""
@@ -334,8 +358,10 @@ def write_medit(path, x, t, ref=None):
 
 def stellar_input(name, src):
     """SRC as Stellar reads it: BASE.node and BASE.ele (made before timing,
-    like gmsh_input), every tet in Stellar's orientation (the opposite of the
-    Medit files'). Returns BASE; Stellar writes BASE.1.node/.ele."""
+    like gmsh_input), the tets in Stellar's orientation (the opposite of the
+    Medit files'), turned all together, never one by one, so that the inverted
+    tets of a tangled mesh stay inverted. Returns BASE; Stellar writes
+    BASE.1.node/.ele."""
     d = os.path.join(OUT, 'stellar-in')
     os.makedirs(d, exist_ok=True)
     with open(os.path.join(OUT, 'stellar.cfg'), 'w') as f:
@@ -348,10 +374,8 @@ def stellar_input(name, src):
         return base
     quality = quality_module()
     x, t = quality.read_mesh(src)
-    vol = quality.signed_vol6(x, t)
-    t = t.copy()
-    pos = vol > 0
-    t[pos, 0], t[pos, 1] = t[pos, 1].copy(), t[pos, 0].copy()
+    if quality.signed_vol6(x, t).sum() > 0:
+        t = t[:, [1, 0, 2, 3]]
     with open(base + '.node', 'w') as f:
         f.write('%d 3 0 0\n' % len(x))
         np.savetxt(f, np.column_stack([np.arange(1, len(x) + 1), x]), fmt='%d %.17g %.17g %.17g')
@@ -398,12 +422,17 @@ def run_case(a, name, src, tool, q_in):
     base = os.path.join(rdir, tool)
     dst = base + '.mesh'
     rowf = base + '.row.json'
-    if a.resume:
+    if a.resume or a.table_only:
         row = load(rowf)
         if row:
             log('  %-16s reused %s' % (tool, rowf))
             row['reused'] = True
+            row.setdefault('measured', datetime.datetime.fromtimestamp(
+                os.path.getmtime(rowf)).astimezone().isoformat(timespec='seconds'))
             return row
+    if a.table_only and not tool_skip(tool):
+        return {'mesh': name, 'tool': tool, 'status': 'not run', 'wall': 0.0, 'cpu': 0.0,
+                'maxrss_mb': 0.0, 'reused': True}
     for f in (dst, base + '.gmsh.json', base + '.netgen.json', base + '.quality.json',
               base + '.cond.json'):
         if os.path.exists(f):
@@ -434,7 +463,8 @@ def run_case(a, name, src, tool, q_in):
     row = {'mesh': name, 'tool': tool, 'cmd': ' '.join(shlex.quote(c) for c in cmd),
            'wall': med('wall'), 'cpu': med('cpu'),
            'maxrss_mb': max(r['maxrss_mb'] for r in runs), 'rc': t['rc'],
-           'runs': len(runs), 'walls': [r['wall'] for r in runs]}
+           'runs': len(runs), 'walls': [r['wall'] for r in runs],
+           'measured': datetime.datetime.now().astimezone().isoformat(timespec='seconds')}
     if t['timed_out']:
         row['status'] = 'timeout'
     elif t['rc'] != 0:
@@ -534,12 +564,14 @@ def failure(r):
         with open(os.path.join(OUT, 'runs', r['mesh'], r['tool'] + '.time.json.log'),
                   errors='replace') as f:
             for line in f:
-                if re.match(r'\s*(## )?(Exception|Error|error|qdc:)', line):  # ## : mmg
+                # '## Error': mmg3d; '***** ALERT': Stellar
+                if re.match(r'\s*(## |\*+ )?(Exception|Error|error|qdc:|ALERT)', line):
                     msg = line.strip()
     except OSError:
         pass
     msg = re.sub(r'^Exception:\s*', 'Gmsh: ', msg).replace('|', '/')
     msg = re.sub(r'^## Error:\s*', 'mmg3d: ', msg)
+    msg = re.sub(r'^\*+ ALERT (.*?)[ *]*$', r'Stellar: \1', msg)
     return r['status'] + (' (%s)' % msg[:120] if msg else '')
 
 
@@ -733,16 +765,17 @@ def write_topo_results(path, info, rows, inputs, meshes, tools, section):
                                           ' ' + info['uptime_end'])]
     nrun = max((r.get('runs') or 1) for r in rows) if rows else 1
     skipped = sorted({(r['tool'], r['skip']) for r in rows if r['status'] == 'skipped'})
-    ng = next((r['netgen']['netgen_version'] for r in rows if r.get('netgen')), '?')
+    when = sorted(r['measured'] for r in rows if r.get('measured'))
     text = [TOPO_HEAD + ' (`bench/run.sh --topology`)', '',
             '- date: %s; command: `%s`' % (info['date'], info['command']),
+            '- rows measured from %s to %s' % (when[0], when[-1]) if when else
+            '- no row measured',
             '- machine: %s, nproc = %d; qdc commit %s%s, binary sha256 %s…' % (
                 info['cpu'], info['nproc'], info['qdc_commit'],
                 ' + uncommitted changes' if info['qdc_tree_dirty'] else '',
                 (info['qdc_binary_sha256'] or '?')[:12]),
-            '- peers: %s; Netgen %s (Debian python3-netgen)' % (
-                '; '.join('%s = `%s`' % (t, v) for t, v in info.get('peers', {}).items()) or '—',
-                ng),
+            '- peers: %s' % ('; '.join('%s: `%s`' % (t, v) for t, v in
+                                        info.get('peers', {}).items()) or '—'),
             '- quality: `/usr/bin/python3 %s OUT --orig IN --samples %d`; cond: '
             '`/usr/bin/python3 bench/cond.py OUT` (λmax/λmin of the P1 Laplacian stiffness '
             'matrix on the interior vertices)' % (os.path.relpath(QUALITY, ROOT), SAMPLES),
@@ -877,6 +910,9 @@ def main():
                     help='time limit per command (default %d)' % LIMIT)
     ap.add_argument('--resume', action='store_true',
                     help='reuse finished cases from bench/out/runs (split a long run)')
+    ap.add_argument('--table-only', action='store_true',
+                    help='write the table from the finished cases in bench/out/runs, run '
+                         'nothing (the cases not finished show as "not run")')
     ap.add_argument('--drop-outputs', action='store_true',
                     help='delete optimized meshes after evaluation (saves disk)')
     ap.add_argument('--results', metavar='FILE',
@@ -896,8 +932,7 @@ def main():
         qdc_mtime0 = snapshot_qdc() if os.path.exists(QDC) else 0
     info = machine_info(a.cmdline or ' '.join(sys.argv), up0, qdc_mtime0)
     if a.topology:
-        info['peers'] = {t: ' '.join(shlex.quote(c) for c in command(t, 'IN', 'OUT', 'B')[:-1])
-                         for t in tools if t in ('mmg-optim', 'stellar') and not tool_skip(t)}
+        info['peers'] = peer_versions(tools)
     meshes = prepare_meshes(a)
     if not meshes:
         sys.exit('bench: no mesh selected')
@@ -907,13 +942,14 @@ def main():
         log('[%d/%d] %s' % (i, n, name))
         os.makedirs(os.path.join(OUT, 'runs', name), exist_ok=True)
         qf = os.path.join(OUT, 'runs', name, 'input.quality.json')
-        q_in = load(qf) if a.resume else None
-        q_in = q_in or evaluate(src, None, qf)
+        q_in = load(qf) if a.resume or a.table_only else None
+        q_in = q_in or (None if a.table_only else evaluate(src, None, qf))
         if q_in is None:
             continue
         if a.topology:
             cf = os.path.join(OUT, 'runs', name, 'input.cond.json')
-            q_in['cond'] = (load(cf) if a.resume else None) or conditioning(src, cf)
+            c = load(cf) if a.resume or a.table_only else None
+            q_in['cond'] = c or (None if a.table_only else conditioning(src, cf))
         inputs[name] = q_in
         for tool in tools:
             row = run_case(a, name, src, tool, q_in)

@@ -4,7 +4,8 @@
 Usage: netgen_opt.py IN.mesh OUT.mesh [INFO.json]
 
 Reads IN (Vertices, Tetrahedra with their region refs; a Triangles section is
-ignored: the faces are taken from the tets), builds a Netgen mesh of it with
+ignored: the faces are taken from the tets; the tets turned all together if
+their volumes sum to less than zero), builds a Netgen mesh of it with
 Debian's python3-netgen (one Element3D per tet, its region as the element
 index; one Element2D per boundary face and per face between two regions, with
 a FaceDescriptor per (region, region-or-outside) pair, so that Netgen keeps
@@ -13,7 +14,7 @@ with Netgen's defaults (3 steps of its volume optimization: edge and face
 swaps, combining (edge collapse) and smoothing of the interior vertices), and
 writes the result as Medit: the vertices in use, the tets with their region
 refs, the boundary and interface triangles with the face descriptor's number.
-INFO gets the seconds inside OptimizeVolumeMesh and the Netgen version.
+INFO gets the seconds inside OptimizeVolumeMesh and the counts in and out.
 """
 import json
 import sys
@@ -75,14 +76,15 @@ def faces_to_keep(t, ref):
 def main():
     if len(sys.argv) not in (3, 4):
         sys.exit(__doc__)
-    import netgen
     import netgen.meshing as ng
     ng.SetMessageImportance(0)
     x, t, ref = read_medit(sys.argv[1])
-    # positive orientation (the corpus writes it; files of other tools may not)
+    # positive orientation as a whole (the corpus writes it; files of other tools
+    # may not): all tets turned when their volumes sum to less than zero, never one
+    # by one, so that the inverted tets of a tangled mesh stay inverted
     a, b, c, d = (x[t[:, k]] for k in range(4))
-    neg = np.einsum('ij,ij->i', b - a, np.cross(c - a, d - a)) < 0
-    t[neg, 0], t[neg, 1] = t[neg, 1].copy(), t[neg, 0].copy()
+    if np.einsum('ij,ij->i', b - a, np.cross(c - a, d - a)).sum() < 0:
+        t[:, [0, 1]] = t[:, [1, 0]]
     regions = sorted(set(ref.tolist()))
     rix = {r: i + 1 for i, r in enumerate(regions)}  # Netgen domains are 1..k
     faces, doms = faces_to_keep(t, ref)
@@ -123,9 +125,7 @@ def main():
         f.write('End\n')
     if len(sys.argv) == 4:
         with open(sys.argv[3], 'w') as f:
-            json.dump({'seconds': {'optimize': sec},
-                       'netgen_version': getattr(netgen, '__version__', '?'),
-                       'tets_in': len(t), 'tets_out': len(tet),
+            json.dump({'seconds': {'optimize': sec}, 'tets_in': len(t), 'tets_out': len(tet),
                        'verts_in': len(x), 'verts_out': len(pts)}, f, indent=1)
             f.write('\n')
 
