@@ -252,11 +252,22 @@ def topo_meshes(a):
 
 # --------------------------------------------------------------- evaluation --
 
+# the evaluator and cond.py run with one BLAS thread: OpenBLAS's threads wait for each
+# other by yielding, and on a loaded machine a 3-CPU-second cond.py then took over 600 s
+SCORE_ENV = dict(os.environ, OPENBLAS_NUM_THREADS='1', OMP_NUM_THREADS='1')
+
+
+def score_limit():
+    """Time limit of the evaluator and cond.py (not timed figures)."""
+    return str(max(LIMIT, 1800))
+
+
 def evaluate(path, orig, dst):
-    cmd = ['timeout', str(LIMIT), PY, QUALITY, path, '--samples', str(SAMPLES), '-o', dst]
+    cmd = ['timeout', score_limit(), PY, QUALITY, path, '--samples', str(SAMPLES), '-o', dst]
     if orig:
         cmd[4:4] = ['--orig', orig]
-    r = subprocess.run(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    r = subprocess.run(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+                       env=SCORE_ENV)
     if r.returncode != 0:
         log('  quality.py failed on', path, ':', r.stderr.strip()[-300:])
         return None
@@ -408,10 +419,11 @@ def stellar_output(inbase, dst):
 
 def conditioning(path, dst):
     """cond.py on PATH (the P1 Laplacian's condition number), its JSON or None."""
-    r = subprocess.run(['timeout', str(LIMIT), PY, os.path.join(HERE, 'cond.py'), path, '-o',
-                        dst], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    r = subprocess.run(['timeout', score_limit(), PY, os.path.join(HERE, 'cond.py'), path,
+                        '-o', dst], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                       text=True, env=SCORE_ENV)
     if r.returncode != 0:
-        log('  cond.py failed on', path, ':', r.stderr.strip()[-300:])
+        log('  cond.py failed on', path, ': rc', r.returncode, r.stderr.strip()[-300:])
         return None
     return load(dst)
 
@@ -429,6 +441,11 @@ def run_case(a, name, src, tool, q_in):
             row['reused'] = True
             row.setdefault('measured', datetime.datetime.fromtimestamp(
                 os.path.getmtime(rowf)).astimezone().isoformat(timespec='seconds'))
+            if (a.topology and not a.table_only and row['status'] == 'ok' and
+                    not row.get('cond') and os.path.exists(dst)):
+                row['cond'] = conditioning(dst, base + '.cond.json')  # it failed before
+                with open(rowf, 'w') as f:
+                    json.dump(row, f, indent=1)
             return row
     if a.table_only and not tool_skip(tool):
         return {'mesh': name, 'tool': tool, 'status': 'not run', 'wall': 0.0, 'cpu': 0.0,
@@ -758,15 +775,17 @@ def topo_matrix(rows, inputs, meshes, tools):
 TOPO_HEAD = '## Topology peers'
 
 
-def write_topo_results(path, info, rows, inputs, meshes, tools, section):
-    """The --topology results: a section of bench/RESULTS.md (SECTION, replacing
-    the one there) or a file of its own."""
+def write_topo_results(path, info, rows, inputs, meshes, tools, section, size):
+    """The --topology results: a section of bench/RESULTS.md (SECTION: it
+    replaces the section of the same SIZE there, the others are kept) or a
+    file of its own."""
     loads = [float(x) for x in re.findall(r'load average: ([\d.]+)', info['uptime_start'] +
                                           ' ' + info['uptime_end'])]
     nrun = max((r.get('runs') or 1) for r in rows) if rows else 1
     skipped = sorted({(r['tool'], r['skip']) for r in rows if r['status'] == 'skipped'})
     when = sorted(r['measured'] for r in rows if r.get('measured'))
-    text = [TOPO_HEAD + ' (`bench/run.sh --topology`)', '',
+    title = '%s, %s tets asked for' % (TOPO_HEAD, size)
+    text = [title + ' (`bench/run.sh --topology`)', '',
             '- date: %s; command: `%s`' % (info['date'], info['command']),
             '- rows measured from %s to %s' % (when[0], when[-1]) if when else
             '- no row measured',
@@ -795,9 +814,13 @@ def write_topo_results(path, info, rows, inputs, meshes, tools, section):
     text = '\n'.join(text)
     if section:
         old = open(path).read() if os.path.exists(path) else '# qdc benchmark results\n'
-        k = old.find('\n' + TOPO_HEAD)
-        old = old if k < 0 else old[:k + 1]
-        text = old.rstrip('\n') + '\n\n' + text
+        parts = re.split(r'\n(?=## )', old)  # the same title replaced, in its place
+        same = [i for i, p in enumerate(parts) if p.startswith(title + ' ')]
+        if same:
+            parts[same[0]] = text.rstrip('\n') + '\n'
+        else:
+            parts.append(text)
+        text = '\n'.join(p.rstrip('\n') + '\n' for p in parts)
     with open(path, 'w') as f:
         f.write(text)
     return text
@@ -977,7 +1000,9 @@ def main():
         path = a.results or (os.path.join(HERE, 'RESULTS.md') if full
                              else os.path.join(OUT, 'RESULTS-topology.md'))
         text = write_topo_results(path, info, rows, inputs, meshes, tools,
-                                  section=path == os.path.join(HERE, 'RESULTS.md'))
+                                  section=os.path.basename(path) == 'RESULTS.md',
+                                  size=str(a.tets or TOPO_GEN[0][0]) +
+                                  (' and %s' % TOPO_GEN[-1][0] if a.large else ''))
         log('wrote', path, 'and', rjson)
         print(text[text.find(TOPO_HEAD):])
         return
