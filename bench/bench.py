@@ -582,7 +582,10 @@ def failure(r):
                   errors='replace') as f:
             for line in f:
                 # '## Error': mmg3d; '***** ALERT': Stellar
-                if re.match(r'\s*(## |\*+ )?(Exception|Error|error|qdc:|ALERT)', line):
+                m = re.search(r"(\w+): Assertion (`.*') failed", line)  # C assert()
+                if m and not msg:
+                    msg = '%s: assertion %s failed' % m.groups()
+                elif re.match(r'\s*(## |\*+ )?(Exception|Error|error|qdc:|ALERT)', line):
                     msg = line.strip()
     except OSError:
         pass
