@@ -56,9 +56,35 @@ GEN = [('125000', 'cube', ['lowq', 'tangled'], False, 0.5),
 
 TOOLS = ['qdc', 'qdc-lsq', 'qdc-fixed', 'gmsh-relocate3d', 'gmsh-default']
 PEER = 'gmsh-relocate3d'
+# --topology: the peers that change connectivity (issue 31), on scripts/corpus.py's
+# scanned, thin, CAD, tangled and two-region meshes; (tets asked for, corpus class, large?)
+TOPO_TOOLS = ['qdc', 'qdc-fixed', 'qdc-flips', 'qdc-full', 'mmg-optim', 'mmg-noinsert',
+              'netgen', 'stellar']
+TOPO_GEN = [('110000', c, False) for c in ('ball-scan', 'bone-scan', 'bone-lowq', 'part-cad',
+                                           'bone-lowq-tangled', 'two-region')]
+TOPO_GEN += [('1100000', c, True) for c in ('ball-scan', 'bone-lowq', 'part-cad')]
 LABEL = {'input': 'input', 'qdc': 'qdc (default: slide)', 'qdc-lsq': 'qdc --boundary lsq',
          'qdc-fixed': 'qdc --boundary fixed',
-         'gmsh-relocate3d': 'Gmsh Relocate3D', 'gmsh-default': 'Gmsh default opt'}
+         'gmsh-relocate3d': 'Gmsh Relocate3D', 'gmsh-default': 'Gmsh default opt',
+         'qdc-flips': 'qdc --topology flips --boundary fixed',
+         'qdc-full': 'qdc --topology full --boundary fixed',
+         'mmg-optim': 'mmg3d -optim -nosurf', 'mmg-noinsert': 'mmg3d -optim -nosurf -noinsert',
+         'netgen': 'Netgen OptimizeVolumeMesh', 'stellar': 'Stellar (boundary kept)'}
+# Stellar's options for a boundary kept as the other rows keep it: no smoothing of
+# boundary vertices, no 2-2 flips of boundary faces, no insertion on the boundary;
+# everything else (interior smoothing, edge removal, multi-face removal, contraction,
+# interior insertion) at its defaults
+STELLAR_CFG = '''verbosity 1
+usecolor 0
+facetsmooth 0
+segmentsmooth 0
+fixedsmooth 0
+usequadrics 0
+flip22 0
+insertfacet 0
+insertsegment 0
+minsineout 0
+'''
 PHASES = ['setup', 'weights', 'assembly', 'solve', 'linesearch', 'finish']
 QKEYS = ['n_verts', 'n_tets', 'eta_mean', 'eta_std', 'eta_min', 'eta_p01', 'dihedral_min',
          'dihedral_max', 'n_dmin_lt_5', 'n_dmin_lt_15', 'n_dmin_lt_30', 'n_inverted',
@@ -71,7 +97,76 @@ def log(*a):
     print(time.strftime('%H:%M:%S'), *a, file=sys.stderr, flush=True)
 
 
+def peer_path(sub, name):
+    """A peer's program: $QDC_PEERS/SUB if that exists, else NAME on PATH."""
+    d = os.environ.get('QDC_PEERS')
+    if d and os.access(os.path.join(d, sub), os.X_OK):
+        return os.path.join(d, sub)
+    return shutil.which(name)
+
+
+_SKIP = {}
+
+
+def peer_versions(tools):
+    """{peer: 'program (version)'} of the peers this run uses, with
+    $QDC_PEERS for the directory (RESULTS.md names no path of this machine)."""
+    out = {}
+    d = os.environ.get('QDC_PEERS')
+    for tool, sub, name, pat in (('mmg-optim', 'mmg/build/bin/mmg3d_O3', 'mmg3d_O3',
+                                  r'MMG3D, Release [\w.]+'),
+                                 ('stellar', 'stellar/Stellar', 'Stellar', r'Version [\w.]+')):
+        if tool not in tools and not (tool == 'mmg-optim' and 'mmg-noinsert' in tools):
+            continue
+        p = peer_path(sub, name)
+        if not p:
+            continue
+        h = subprocess.run([p, '-h'], capture_output=True, text=True, errors='replace')
+        m = re.search(pat, h.stdout + h.stderr)
+        shown = '$QDC_PEERS/' + sub if d and p == os.path.join(d, sub) else name
+        out[name] = '%s (%s)' % (shown, m.group(0) if m else 'version ?')
+    if 'netgen' in tools:
+        v = subprocess.run(['dpkg-query', '-W', '-f', '${Version}', 'python3-netgen'],
+                           capture_output=True, text=True).stdout.strip()
+        out['Netgen'] = 'Debian python3-netgen %s' % (v or '?')
+    return out
+
+
+def tool_skip(tool):
+    """Why TOOL cannot run here (None when it can): a peer not built or
+    installed, or a qdc without --topology."""
+    if tool in _SKIP:
+        return _SKIP[tool]
+    why = None
+    if tool.startswith('mmg') and not peer_path('mmg/build/bin/mmg3d_O3', 'mmg3d_O3'):
+        why = 'mmg3d_O3 not found ($QDC_PEERS/mmg/build/bin/mmg3d_O3 or PATH)'
+    elif tool == 'stellar' and not peer_path('stellar/Stellar', 'Stellar'):
+        why = 'Stellar not found ($QDC_PEERS/stellar/Stellar or PATH)'
+    elif tool == 'netgen' and subprocess.run([PY, '-c', 'import netgen.meshing'],
+                                             capture_output=True).returncode != 0:
+        why = '%s cannot import netgen.meshing (apt-get install python3-netgen)' % PY
+    elif tool in ('qdc-flips', 'qdc-full'):
+        qdc = QDC_RUN if os.path.exists(QDC_RUN) else QDC
+        h = subprocess.run([qdc, 'optimize', '--help'], capture_output=True, text=True)
+        if '--topology' not in h.stdout + h.stderr:
+            why = 'this qdc has no --topology option (qdc optimize --help)'
+    _SKIP[tool] = why
+    return why
+
+
 def command(tool, src, dst, base):
+    if tool in ('qdc-flips', 'qdc-full'):
+        return [QDC_RUN, 'optimize', src, dst, '--topology', tool[4:], '--boundary', 'fixed']
+    if tool.startswith('mmg'):
+        return ([peer_path('mmg/build/bin/mmg3d_O3', 'mmg3d_O3'), '-optim', '-nosurf'] +
+                (['-noinsert'] if tool == 'mmg-noinsert' else []) + ['-in', src, '-out', dst])
+    if tool == 'netgen':
+        return [PY, os.path.join(HERE, 'netgen_opt.py'), src, dst, base + '.netgen.json']
+    if tool == 'stellar':
+        # src is the .node/.ele basename made by stellar_input; the output is
+        # <basename>.1.node/.ele, turned into DST by stellar_output (not timed)
+        return [peer_path('stellar/Stellar', 'Stellar'), '-s', os.path.join(OUT, 'stellar.cfg'),
+                src]
     if tool.startswith('qdc'):
         # timed as a user runs it: no --report (its boundary distances and
         # second quality scan are work Gmsh does not do); the run's figures
@@ -95,6 +190,8 @@ def load(path):
 
 def prepare_meshes(a):
     """Return [(name, path)] of the selected meshes, unpacking/generating them."""
+    if a.topology:
+        return topo_meshes(a)
     sel = []
     mdir = os.path.join(OUT, 'meshes')
     os.makedirs(mdir, exist_ok=True)
@@ -131,13 +228,46 @@ def prepare_meshes(a):
     return sel
 
 
+def topo_meshes(a):
+    """--topology: scripts/corpus.py's classes of TOPO_GEN, made once into
+    bench/out/gen-topo/N (N tets asked for) and reused while the files exist."""
+    sel = []
+    for h, cls, large in TOPO_GEN:
+        if large and not a.large:
+            continue
+        if a.tets and not large:
+            h = str(a.tets)
+        name = '%s_%s' % (cls, h)
+        if a.only and not re.search(a.only, name):
+            continue
+        gd = os.path.join(OUT, 'gen-topo', h)
+        path = os.path.join(gd, cls + '.mesh')
+        if not os.path.exists(path):
+            log('generating', cls, h, 'tets (once; reused from', gd + ')')
+            subprocess.run(['timeout', str(4 * LIMIT), PY, CORPUS, gd, '--tets', h, '--only',
+                            cls], check=True, stdout=subprocess.DEVNULL)
+        sel.append((name, path))
+    return sel
+
+
 # --------------------------------------------------------------- evaluation --
 
+# the evaluator and cond.py run with one BLAS thread: OpenBLAS's threads wait for each
+# other by yielding, and on a loaded machine a 3-CPU-second cond.py then took over 600 s
+SCORE_ENV = dict(os.environ, OPENBLAS_NUM_THREADS='1', OMP_NUM_THREADS='1')
+
+
+def score_limit():
+    """Time limit of the evaluator and cond.py (not timed figures)."""
+    return str(max(LIMIT, 1800))
+
+
 def evaluate(path, orig, dst):
-    cmd = ['timeout', str(LIMIT), PY, QUALITY, path, '--samples', str(SAMPLES), '-o', dst]
+    cmd = ['timeout', score_limit(), PY, QUALITY, path, '--samples', str(SAMPLES), '-o', dst]
     if orig:
         cmd[4:4] = ['--orig', orig]
-    r = subprocess.run(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    r = subprocess.run(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+                       env=SCORE_ENV)
     if r.returncode != 0:
         log('  quality.py failed on', path, ':', r.stderr.strip()[-300:])
         return None
@@ -225,22 +355,116 @@ def gmsh_input(name, src):
     return dst
 
 
+def write_medit(path, x, t, ref=None):
+    """Medit ASCII: vertices, tets (1-based) with their refs (1 when not given)."""
+    ref = np.ones(len(t), np.int64) if ref is None else ref
+    with open(path + '.tmp', 'w') as f:
+        f.write('MeshVersionFormatted 2\nDimension 3\nVertices\n%d\n' % len(x))
+        np.savetxt(f, np.column_stack([x, np.zeros(len(x))]), fmt='%.17g %.17g %.17g %d')
+        f.write('Tetrahedra\n%d\n' % len(t))
+        np.savetxt(f, np.column_stack([t + 1, ref]), fmt='%d')
+        f.write('End\n')
+    os.replace(path + '.tmp', path)
+
+
+def stellar_input(name, src):
+    """SRC as Stellar reads it: BASE.node and BASE.ele (made before timing,
+    like gmsh_input), the tets in Stellar's orientation (the opposite of the
+    Medit files'), turned all together, never one by one, so that the inverted
+    tets of a tangled mesh stay inverted. Returns BASE; Stellar writes
+    BASE.1.node/.ele."""
+    d = os.path.join(OUT, 'stellar-in')
+    os.makedirs(d, exist_ok=True)
+    with open(os.path.join(OUT, 'stellar.cfg'), 'w') as f:
+        f.write(STELLAR_CFG)
+    base = os.path.join(d, name)
+    for f in (base + '.1.node', base + '.1.ele'):
+        if os.path.exists(f):
+            os.remove(f)
+    if os.path.exists(base + '.ele') and os.path.getmtime(base + '.ele') >= os.path.getmtime(src):
+        return base
+    quality = quality_module()
+    x, t = quality.read_mesh(src)
+    if quality.signed_vol6(x, t).sum() > 0:
+        t = t[:, [1, 0, 2, 3]]
+    with open(base + '.node', 'w') as f:
+        f.write('%d 3 0 0\n' % len(x))
+        np.savetxt(f, np.column_stack([np.arange(1, len(x) + 1), x]), fmt='%d %.17g %.17g %.17g')
+    with open(base + '.ele', 'w') as f:
+        f.write('%d 4 0\n' % len(t))
+        np.savetxt(f, np.column_stack([np.arange(1, len(t) + 1), t + 1]), fmt='%d')
+    return base
+
+
+def read_table(path, cols):
+    """Rows of a .node/.ele file (comments dropped), the first column an index."""
+    with open(path) as f:
+        lines = [ln.split('#', 1)[0].split() for ln in f]
+    lines = [ln for ln in lines if ln]
+    n = int(lines[0][0])
+    return np.array([ln[:1 + cols] for ln in lines[1:1 + n]], float)
+
+
+def stellar_output(inbase, dst):
+    """Stellar's INBASE.1.node/.ele as Medit DST (not timed; one region)."""
+    if not os.path.exists(inbase + '.1.ele'):
+        return False
+    nd = read_table(inbase + '.1.node', 3)
+    el = read_table(inbase + '.1.ele', 4).astype(np.int64)
+    pos = np.full(int(nd[:, 0].max()) + 1, -1, np.int64)
+    pos[nd[:, 0].astype(np.int64)] = np.arange(len(nd))
+    write_medit(dst, nd[:, 1:], pos[el[:, 1:]])
+    return True
+
+
+def conditioning(path, dst):
+    """cond.py on PATH (the P1 Laplacian's condition number), its JSON or None."""
+    r = subprocess.run(['timeout', score_limit(), PY, os.path.join(HERE, 'cond.py'), path,
+                        '-o', dst], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                       text=True, env=SCORE_ENV)
+    if r.returncode != 0:
+        log('  cond.py failed on', path, ': rc', r.returncode, r.stderr.strip()[-300:])
+        return None
+    return load(dst)
+
+
 def run_case(a, name, src, tool, q_in):
     rdir = os.path.join(OUT, 'runs', name)
     os.makedirs(rdir, exist_ok=True)
     base = os.path.join(rdir, tool)
     dst = base + '.mesh'
     rowf = base + '.row.json'
-    if a.resume:
+    if a.resume or a.table_only:
         row = load(rowf)
         if row:
             log('  %-16s reused %s' % (tool, rowf))
             row['reused'] = True
+            row.setdefault('measured', datetime.datetime.fromtimestamp(
+                os.path.getmtime(rowf)).astimezone().isoformat(timespec='seconds'))
+            if (a.topology and not a.table_only and row['status'] == 'ok' and
+                    not row.get('cond') and os.path.exists(dst)):
+                row['cond'] = conditioning(dst, base + '.cond.json')  # it failed before
+                with open(rowf, 'w') as f:
+                    json.dump(row, f, indent=1)
             return row
-    for f in (dst, base + '.gmsh.json', base + '.quality.json'):
+    if a.table_only and not tool_skip(tool):
+        return {'mesh': name, 'tool': tool, 'status': 'not run', 'wall': 0.0, 'cpu': 0.0,
+                'maxrss_mb': 0.0, 'reused': True}
+    for f in (dst, base + '.gmsh.json', base + '.netgen.json', base + '.quality.json',
+              base + '.cond.json'):
         if os.path.exists(f):
             os.remove(f)
-    cmd = command(tool, gmsh_input(name, src) if tool.startswith('gmsh') else src, dst, base)
+    why = tool_skip(tool)
+    if why:
+        log('  # SKIP %s: %s' % (tool, why))
+        return {'mesh': name, 'tool': tool, 'status': 'skipped', 'skip': why, 'wall': 0.0,
+                'cpu': 0.0, 'maxrss_mb': 0.0}
+    inp = src
+    if tool.startswith('gmsh'):
+        inp = gmsh_input(name, src)
+    elif tool == 'stellar':
+        inp = stellar_input(name, src)
+    cmd = command(tool, inp, dst, base)
     runs = []
     for _ in range(max(1, a.repeat)):
         subprocess.run([PY, os.path.join(HERE, 'measure.py'), base + '.time.json',
@@ -249,12 +473,15 @@ def run_case(a, name, src, tool, q_in):
         runs.append(t)
         if t['rc'] != 0 or t['timed_out']:
             break
+    if tool == 'stellar' and t['rc'] == 0:
+        stellar_output(inp, dst)
     # the median of the runs (wall and CPU each), the largest peak
     med = lambda k: sorted(r[k] for r in runs)[len(runs) // 2]
     row = {'mesh': name, 'tool': tool, 'cmd': ' '.join(shlex.quote(c) for c in cmd),
            'wall': med('wall'), 'cpu': med('cpu'),
            'maxrss_mb': max(r['maxrss_mb'] for r in runs), 'rc': t['rc'],
-           'runs': len(runs), 'walls': [r['wall'] for r in runs]}
+           'runs': len(runs), 'walls': [r['wall'] for r in runs],
+           'measured': datetime.datetime.now().astimezone().isoformat(timespec='seconds')}
     if t['timed_out']:
         row['status'] = 'timeout'
     elif t['rc'] != 0:
@@ -271,6 +498,10 @@ def run_case(a, name, src, tool, q_in):
     if g:
         row['gmsh'] = g
         row['opt_seconds'] = g['seconds']['optimize']
+    g = load(base + '.netgen.json')
+    if g:
+        row['netgen'] = g
+        row['opt_seconds'] = g['seconds']['optimize']
     if row['status'] == 'ok':
         q = evaluate(dst, src, base + '.quality.json')
         if q is None:
@@ -284,6 +515,8 @@ def run_case(a, name, src, tool, q_in):
             else:
                 row['conn'] = renumbering(src, dst)
             row['notes'] = notes(row, q_in)
+            if a.topology:
+                row['cond'] = conditioning(dst, base + '.cond.json')
     if row['status'] != 'ok':
         log('  %s: %s (see %s.time.json.log)' % (tool, row['status'], base))
     if a.drop_outputs and os.path.exists(dst):
@@ -348,11 +581,17 @@ def failure(r):
         with open(os.path.join(OUT, 'runs', r['mesh'], r['tool'] + '.time.json.log'),
                   errors='replace') as f:
             for line in f:
-                if re.match(r'\s*(Exception|Error|error|qdc:)', line):
+                # '## Error': mmg3d; '***** ALERT': Stellar
+                m = re.search(r"(\w+): Assertion (`.*') failed", line)  # C assert()
+                if m and not msg:
+                    msg = '%s: assertion %s failed' % m.groups()
+                elif re.match(r'\s*(## |\*+ )?(Exception|Error|error|qdc:|ALERT)', line):
                     msg = line.strip()
     except OSError:
         pass
     msg = re.sub(r'^Exception:\s*', 'Gmsh: ', msg).replace('|', '/')
+    msg = re.sub(r'^## Error:\s*', 'mmg3d: ', msg)
+    msg = re.sub(r'^\*+ ALERT (.*?)[ *]*$', r'Stellar: \1', msg)
     return r['status'] + (' (%s)' % msg[:120] if msg else '')
 
 
@@ -360,17 +599,23 @@ def fnum(x, fmt):
     return '—' if x is None else fmt % x
 
 
-def table(rows, inputs, meshes):
-    cols = (['mesh', 'tool', 'tets', 'verts', 'iters'] + PHASES +
-            ['wall s', 'CPU s', 'RSS MB', '× R3D wall', '× R3D opt', 'η mean', 'η std',
-             'η min', 'dih min°', 'dih max°', '<5°', '<15°', '<30°', 'inv',
-             'Hausdorff rel', 'connectivity', 'notes'])
-    out = ['| ' + ' | '.join(cols) + ' |', '|' + '---|' * len(cols)]
+def table_head(cols):
+    return ['| ' + ' | '.join(cols) + ' |', '|' + '---|' * len(cols)]
+
+
+def by_mesh(rows, inputs, meshes):
+    """(name, input quality, rows) per evaluated mesh, in the order of MESHES."""
     for name, _ in meshes:
-        qi = inputs.get(name)
-        if qi is None:
-            continue
-        mrows = [r for r in rows if r['mesh'] == name]
+        if inputs.get(name) is not None:
+            yield name, inputs[name], [r for r in rows if r['mesh'] == name]
+
+
+def table(rows, inputs, meshes):
+    out = table_head(['mesh', 'tool', 'tets', 'verts', 'iters'] + PHASES +
+                     ['wall s', 'CPU s', 'RSS MB', '× R3D wall', '× R3D opt', 'η mean',
+                      'η std', 'η min', 'dih min°', 'dih max°', '<5°', '<15°', '<30°', 'inv',
+                      'Hausdorff rel', 'connectivity', 'notes'])
+    for name, qi, mrows in by_mesh(rows, inputs, meshes):
         peer = next((r for r in mrows if r['tool'] == PEER and r['status'] == 'ok'), None)
         for r in [{'tool': 'input', 'status': 'ok', 'quality': qi}] + mrows:
             q = r.get('quality') or {}
@@ -476,6 +721,124 @@ def scale_fit(rows):
             'iteration | tets |\n|---|---|---|---|---|\n' + '\n'.join(out))
 
 
+def topo_table(rows, inputs, meshes):
+    """--topology, per row: the figures of issue 31's table and the condition
+    number of the P1 Laplacian (interior vertices)."""
+    out = table_head(['mesh', 'tool', 'tets', 'verts', 'η mean', 'η min', 'dih min°',
+                      'dih max°', '<15°', 'inv', 'Hausdorff rel', 'CPU s', 'wall s', 'RSS MB',
+                      'cond', 'notes'])
+    for name, qi, mrows in by_mesh(rows, inputs, meshes):
+        for r in [{'tool': 'input', 'status': 'ok', 'quality': qi,
+                   'cond': qi.get('cond')}] + mrows:
+            q = r.get('quality') or {}
+            timed = r['tool'] != 'input' and r['status'] not in ('skipped',)
+            note = notes(r, qi) if r.get('quality') and timed_row(r) else []
+            if r['status'] == 'skipped':
+                note = ['SKIP: ' + r['skip']]
+            elif r['status'] != 'ok':
+                note.insert(0, failure(r))
+            if r.get('conn') and r['tool'] != 'input':
+                note.append('connectivity ' + r['conn'])
+            c = (r.get('cond') or {}).get('cond')
+            out.append('| ' + ' | '.join([
+                name, LABEL[r['tool']], fnum(q.get('n_tets'), '%d'), fnum(q.get('n_verts'), '%d'),
+                fnum(q.get('eta_mean'), '%.3f'), fnum(q.get('eta_min'), '%+.3f'),
+                fnum(q.get('dihedral_min'), '%.2f'), fnum(q.get('dihedral_max'), '%.1f'),
+                fnum(q.get('n_dmin_lt_15'), '%d'), fnum(q.get('n_inverted'), '%d'),
+                fnum(q.get('boundary_hausdorff_rel'), '%.1e'),
+                fnum(r.get('cpu') if timed else None, '%.2f'),
+                fnum(r.get('wall') if timed else None, '%.2f'),
+                fnum(r.get('maxrss_mb') if timed else None, '%.0f'),
+                fnum(c, '%.4g'), '; '.join(note)]) + ' |')
+    return '\n'.join(out)
+
+
+def topo_matrix(rows, inputs, meshes, tools):
+    """--topology, one line per mesh: mean ratio / smallest dihedral (CPU s)
+    per tool, as issue 31 tabulates them."""
+    have = [t for t in tools if any(r['tool'] == t and r['status'] != 'skipped' for r in rows)]
+    out = table_head(['mesh', 'input'] + [LABEL[t] for t in have])
+    for name, qi, mrows in by_mesh(rows, inputs, meshes):
+        cells = [name, '%.3f / %.2f°' % (qi['eta_mean'], qi['dihedral_min'])]
+        for t in have:
+            r = next((r for r in mrows if r['tool'] == t), None)
+            if r is None or r['status'] == 'skipped':
+                cells.append('—')
+            elif r['status'] != 'ok' or not r.get('quality'):
+                cells.append(r['status'])
+            else:
+                q = r['quality']
+                cells.append('%.3f / %.2f° (%.1f s)%s' % (
+                    q['eta_mean'], q['dihedral_min'], r['cpu'],
+                    ', %d inv' % q['n_inverted'] if q['n_inverted'] else ''))
+        out.append('| ' + ' | '.join(cells) + ' |')
+    return '\n'.join(out)
+
+
+TOPO_HEAD = '## Topology peers'
+
+
+def write_topo_results(path, info, rows, inputs, meshes, tools, section, size):
+    """The --topology results: a section of bench/RESULTS.md (SECTION: it
+    replaces the section of the same SIZE there, the others are kept) or a
+    file of its own."""
+    loads = [float(x) for x in re.findall(r'load average: ([\d.]+)', info['uptime_start'] +
+                                          ' ' + info['uptime_end'])]
+    nrun = max((r.get('runs') or 1) for r in rows) if rows else 1
+    skipped = sorted({(r['tool'], r['skip']) for r in rows if r['status'] == 'skipped'})
+    when = sorted(r['measured'] for r in rows if r.get('measured'))
+    title = '%s, %s tets asked for' % (TOPO_HEAD, size)
+    text = [title + ' (`bench/run.sh --topology`)', '',
+            '- date: %s; command: `%s`' % (info['date'], info['command']),
+            '- rows measured from %s to %s' % (when[0], when[-1]) if when else
+            '- no row measured',
+            '- machine: %s, nproc = %d; qdc commit %s%s, binary sha256 %s…' % (
+                info['cpu'], info['nproc'], info['qdc_commit'],
+                ' + uncommitted changes' if info['qdc_tree_dirty'] else '',
+                (info['qdc_binary_sha256'] or '?')[:12]),
+            '- peers: %s' % ('; '.join('%s: `%s`' % (t, v) for t, v in
+                                        info.get('peers', {}).items()) or '—'),
+            '- quality: `/usr/bin/python3 %s OUT --orig IN --samples %d`; cond: '
+            '`/usr/bin/python3 bench/cond.py OUT` (λmax/λmin of the P1 Laplacian stiffness '
+            'matrix on the interior vertices)' % (os.path.relpath(QUALITY, ROOT), SAMPLES),
+            '- `uptime` at start: `%s`; at end: `%s`' % (info['uptime_start'],
+                                                       info['uptime_end']),
+            '- %s' % ('one run per case' if nrun == 1 else '%d runs per case, one tool after '
+                      'the other; wall and CPU are the medians' % nrun)]
+    if max(loads or [0]) > 1:
+        text.append('- **shared machine**: load average above 1 (other helpers\' builds and '
+                    'tests on the same %d cores); wall seconds are inflated and noisy, CPU '
+                    'seconds are the figure to compare' % info['nproc'])
+    for t, why in skipped:
+        text.append('- # SKIP %s: %s' % (t, why))
+    text += ['', 'Mean ratio / smallest dihedral (CPU s):', '',
+             topo_matrix(rows, inputs, meshes, tools), '', 'Per row:', '',
+             topo_table(rows, inputs, meshes), '']
+    text = '\n'.join(text)
+    if section:
+        old = open(path).read() if os.path.exists(path) else '# qdc benchmark results\n'
+        parts = re.split(r'\n(?=## )', old)  # the same title replaced, in its place
+        same = [i for i, p in enumerate(parts) if p.startswith(title + ' ')]
+        if same:
+            parts[same[0]] = text.rstrip('\n') + '\n'
+        else:
+            parts.append(text)
+        text = '\n'.join(p.rstrip('\n') + '\n' for p in parts)
+    with open(path, 'w') as f:
+        f.write(text)
+    return text
+
+
+def kept_topo_section(path):
+    """The --topology section of PATH, kept when a full run rewrites the file."""
+    try:
+        old = open(path).read()
+    except OSError:
+        return ''
+    k = old.find('\n' + TOPO_HEAD)
+    return '' if k < 0 else '\n' + old[k + 1:].rstrip('\n') + '\n'
+
+
 def snapshot_qdc():
     """Copy build/rel/qdc so that every qdc row of this run uses one binary."""
     os.makedirs(os.path.dirname(QDC_RUN), exist_ok=True)
@@ -506,6 +869,7 @@ def machine_info(cmdline, up0, qdc_mtime0):
 
 
 def write_results(path, info, tab, summ, rows):
+    keep = kept_topo_section(path)
     gv = next((r['gmsh']['gmsh_version'] for r in rows if r.get('gmsh')), '?')
     loads = [float(x) for x in re.findall(r'load average: ([\d.]+)', info['uptime_start'] +
                                           ' ' + info['uptime_end'])]
@@ -541,10 +905,11 @@ def write_results(path, info, tab, summ, rows):
                     'One run per case' if nrun == 1 else
                     '%d runs per case, one tool after the other; wall and CPU are the '
                     'medians' % nrun))
-        f.write('## Summary\n\n' + summ + '\n\n## Per mesh\n\n' + tab + '\n')
+        f.write('## Summary\n\n' + summ + '\n\n## Per mesh\n\n' + tab + '\n' + keep)
 
 
 def main():
+    global LIMIT, SAMPLES
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument('--quick', action='store_true',
                     help='3 small dev meshes, no generated meshes, no Gmsh default optimizer')
@@ -552,9 +917,28 @@ def main():
     ap.add_argument('--only', metavar='REGEX', help='only meshes whose name matches')
     ap.add_argument('--repeat', type=int, default=1, metavar='N',
                     help='run each case N times; wall and CPU are the medians')
-    ap.add_argument('--tools', nargs='+', choices=TOOLS, help='subset of tools')
+    ap.add_argument('--tools', nargs='+', choices=TOOLS + TOPO_TOOLS[2:],
+                    help='subset of tools')
+    ap.add_argument('--topology', action='store_true',
+                    help='the topology peers (mmg3d, Netgen, Stellar, qdc --topology) on '
+                         'scanned, thin, CAD, tangled and two-region ~100k-tet meshes, with '
+                         'the P1 Laplacian condition number; writes the "Topology peers" '
+                         'section of bench/RESULTS.md')
+    ap.add_argument('--large', action='store_true',
+                    help='with --topology: also the ~1M-tet meshes')
+    ap.add_argument('--tets', type=int, metavar='N',
+                    help='with --topology: the tets asked of scripts/corpus.py for the '
+                         'smaller meshes (default %s; e.g. 5000 to try the bench quickly)'
+                         % TOPO_GEN[0][0])
+    ap.add_argument('--samples', type=int, default=SAMPLES, metavar='N',
+                    help="the evaluator's boundary samples per surface (default %d)" % SAMPLES)
+    ap.add_argument('--limit', type=float, default=LIMIT, metavar='SECONDS',
+                    help='time limit per command (default %d)' % LIMIT)
     ap.add_argument('--resume', action='store_true',
                     help='reuse finished cases from bench/out/runs (split a long run)')
+    ap.add_argument('--table-only', action='store_true',
+                    help='write the table from the finished cases in bench/out/runs, run '
+                         'nothing (the cases not finished show as "not run")')
     ap.add_argument('--drop-outputs', action='store_true',
                     help='delete optimized meshes after evaluation (saves disk)')
     ap.add_argument('--results', metavar='FILE',
@@ -563,7 +947,9 @@ def main():
     ap.add_argument('--cmdline', default=None, help=argparse.SUPPRESS)
     a = ap.parse_args()
     up0 = subprocess.run(['uptime'], capture_output=True, text=True).stdout.strip()
-    tools = a.tools or [t for t in TOOLS if not (a.quick and t == 'gmsh-default')]
+    LIMIT, SAMPLES = a.limit, a.samples
+    tools = a.tools or (TOPO_TOOLS if a.topology else
+                        [t for t in TOOLS if not (a.quick and t == 'gmsh-default')])
     if 'qdc' in ''.join(tools) and not os.access(QDC, os.X_OK):
         sys.exit('bench: %s missing; run `make all`' % QDC)
     if a.resume and os.path.exists(QDC_RUN):
@@ -571,6 +957,8 @@ def main():
     else:
         qdc_mtime0 = snapshot_qdc() if os.path.exists(QDC) else 0
     info = machine_info(a.cmdline or ' '.join(sys.argv), up0, qdc_mtime0)
+    if a.topology:
+        info['peers'] = peer_versions(tools)
     meshes = prepare_meshes(a)
     if not meshes:
         sys.exit('bench: no mesh selected')
@@ -580,10 +968,14 @@ def main():
         log('[%d/%d] %s' % (i, n, name))
         os.makedirs(os.path.join(OUT, 'runs', name), exist_ok=True)
         qf = os.path.join(OUT, 'runs', name, 'input.quality.json')
-        q_in = load(qf) if a.resume else None
-        q_in = q_in or evaluate(src, None, qf)
+        q_in = load(qf) if a.resume or a.table_only else None
+        q_in = q_in or (None if a.table_only else evaluate(src, None, qf))
         if q_in is None:
             continue
+        if a.topology:
+            cf = os.path.join(OUT, 'runs', name, 'input.cond.json')
+            c = load(cf) if a.resume or a.table_only else None
+            q_in['cond'] = c or (None if a.table_only else conditioning(src, cf))
         inputs[name] = q_in
         for tool in tools:
             row = run_case(a, name, src, tool, q_in)
@@ -596,21 +988,32 @@ def main():
                 fnum(q.get('dihedral_min'), '%.2f')))
     info['uptime_end'] = subprocess.run(['uptime'], capture_output=True,
                                         text=True).stdout.strip()
-    old = load(os.path.join(OUT, 'results.json'))
+    rjson = os.path.join(OUT, 'results-topology.json' if a.topology else 'results.json')
+    old = load(rjson)
     if (rows and all(r.get('reused') for r in rows) and old and
             {(r['mesh'], r['tool']) for r in old['rows']} == {(r['mesh'], r['tool']) for r in rows}):
         # nothing was measured now: keep the measuring run's date, command and load
         info = dict(old['info'], table_regenerated='%s by `%s`' % (info['date'], info['command']))
     for r in rows:
         r.pop('reused', None)
-    tab, summ = table(rows, inputs, meshes), summary(rows, inputs)
-    with open(os.path.join(OUT, 'results.json'), 'w') as f:
+    with open(rjson, 'w') as f:
         json.dump({'info': info, 'inputs': inputs, 'rows': rows}, f, indent=1)
-    full = not (a.quick or a.only or a.tools)
+    full = not (a.quick or a.only or a.tools or a.tets)
+    if a.topology:
+        path = a.results or (os.path.join(HERE, 'RESULTS.md') if full
+                             else os.path.join(OUT, 'RESULTS-topology.md'))
+        text = write_topo_results(path, info, rows, inputs, meshes, tools,
+                                  section=os.path.basename(path) == 'RESULTS.md',
+                                  size=str(a.tets or TOPO_GEN[0][0]) +
+                                  (' and %s' % TOPO_GEN[-1][0] if a.large else ''))
+        log('wrote', path, 'and', rjson)
+        print(text[text.find(TOPO_HEAD):])
+        return
+    tab, summ = table(rows, inputs, meshes), summary(rows, inputs)
     path = a.results or (os.path.join(HERE, 'RESULTS.md') if full
                          else os.path.join(OUT, 'RESULTS.md'))
     write_results(path, info, tab, summ, rows)
-    log('wrote', path, 'and', os.path.join(OUT, 'results.json'))
+    log('wrote', path, 'and', rjson)
     print(tab)
 
 
