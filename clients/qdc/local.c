@@ -57,7 +57,8 @@ static int on_progress(void *ctx, const opt_progress *p)
                  "%-6s %3d  q mean %.4f min %+.4f  dihedral %6.2f..%6.2f  inverted %d  "
                  "step %.3g  cg %d  %.1fs",
                  p->phase, p->iteration, p->q_mean, p->q_min, p->dih_min, p->dih_max,
-                 (int)(p->n_inverted - p->n_degenerate), p->step, p->cg_iters, p->elapsed);
+                 (int)(p->n_inverted - p->n_degenerate), p->step, p->cg_iters,
+                 p->elapsed);
     if (p->n_degenerate > 0 && n > 0 && (size_t)n < sizeof line)
         n += snprintf(line + n, sizeof line - (size_t)n, "  degenerate %d",
                       (int)p->n_degenerate);

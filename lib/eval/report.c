@@ -2,9 +2,9 @@
 #include "eval/report.h"
 
 #include "core/mesh_int.h"
+#include "core/tet.h"
 #include "geom/metric_int.h"
 #include "opt/opt_int.h"
-#include "core/tet.h"
 
 #include <math.h>
 #include <stdarg.h>

@@ -141,8 +141,7 @@ qdc_status opt_stuck_boundary(const ctx_t *c, uint8_t **out)
         return QDC_ENOMEM;
     for (int32_t t = 0; t < tp->nt; t++) {
         const int32_t *tt = tp->tets + 4 * (size_t)t;
-        if (geom_tet_bad(c->xbest, tt) ||
-            geom_tet_bad(c->x0, tt))
+        if (geom_tet_bad(c->xbest, tt) || geom_tet_bad(c->x0, tt))
             for (int a = 0; a < 4; a++)
                 core[tt[a]] = 1;
     }

@@ -50,9 +50,9 @@ typedef struct {
                         * finish/angles: accepted moves per visited vertex */
     double q_mean, q_std, q_min; /* signed mean ratio */
     double dih_min, dih_max;     /* degrees, over non-inverted tets */
-    int32_t n_inverted;   /* tets inverted or degenerate (core/tet.h geom_tet_bad):
-                           * the count every rule of the run compares */
-    int32_t n_degenerate; /* of those, the degenerate (flat) ones */
+    int32_t n_inverted;          /* tets inverted or degenerate (core/tet.h geom_tet_bad):
+                                  * the count every rule of the run compares */
+    int32_t n_degenerate;        /* of those, the degenerate (flat) ones */
     int32_t n_folded; /* global: tets valid before this step and inverted after it */
     double max_move;  /* largest vertex move this iteration, in mean edge lengths */
     double elapsed;   /* seconds since opt_run started */
@@ -144,16 +144,16 @@ typedef struct {
                                   * valid input: the global step folds nothing) */
     int32_t folded_global;       /* valid tets the global steps inverted, summed */
     double hausd_bound;          /* the boundary bound applied, mesh units (0: none) */
-    int32_t held_back;          /* vertices put back to their input positions so that no
-                                 * tet ends below the valid input's worst (opt_run) */
-    int32_t tets_in, tets_out;  /* tets of the input and of the result (set with
-                                 * --topology; 0 otherwise) */
-    int64_t topo_edge_removals; /* --topology: edges removed (3-2, 4-4, 5-6 ... flips) */
-    int64_t topo_by_ring[11];   /* of which with a ring of n tets (n = 3..10) */
-    int64_t topo_flips23;       /* 2-3 face flips */
-    int64_t topo_multiface;     /* multi-face removals */
-    int topo_rounds;            /* rounds of flips followed by smoothing */
-    opt_stop stop;              /* why the run stopped (decides; stop_reason names it) */
+    int32_t held_back;           /* vertices put back to their input positions so that no
+                                  * tet ends below the valid input's worst (opt_run) */
+    int32_t tets_in, tets_out;   /* tets of the input and of the result (set with
+                                  * --topology; 0 otherwise) */
+    int64_t topo_edge_removals;  /* --topology: edges removed (3-2, 4-4, 5-6 ... flips) */
+    int64_t topo_by_ring[11];    /* of which with a ring of n tets (n = 3..10) */
+    int64_t topo_flips23;        /* 2-3 face flips */
+    int64_t topo_multiface;      /* multi-face removals */
+    int topo_rounds;             /* rounds of flips followed by smoothing */
+    opt_stop stop;               /* why the run stopped (decides; stop_reason names it) */
     char stop_reason[64]; /* opt_stop_name(stop): "converged", "max-iter", "no-descent",
                            * "cancelled", "time-limit", "solver" */
 } opt_result;

@@ -22,12 +22,12 @@ struct slide_ctx {
     int32_t *fe_ptr; /* per vertex: feature edges around it (CSR), as vertex pairs */
     int32_t *fe_nbr;
     int32_t nfe;
-    bderr_bvh *outer; /* input boundary triangles */
-    bderr_bvh *inter; /* input interface triangles (NULL if none) */
-    double bound;     /* > 0: no vertex farther than this from its input position */
-    uint8_t *loose;   /* per vertex: freed by slide_release */
+    bderr_bvh *outer;   /* input boundary triangles */
+    bderr_bvh *inter;   /* input interface triangles (NULL if none) */
+    double bound;       /* > 0: no vertex farther than this from its input position */
+    uint8_t *loose;     /* per vertex: freed by slide_release */
     double loose_bound; /* > bound: the bound of the freed vertices instead */
-    double lift;      /* > 0: curved-surface vertices slide, within this of the surface */
+    double lift; /* > 0: curved-surface vertices slide, within this of the surface */
 };
 
 typedef struct {

@@ -12,9 +12,9 @@
  * the files below it. */
 #include "opt/opt.h"
 
+#include "core/base_int.h"
 #include "core/mesh.h"
 #include "core/tet.h"
-#include "core/base_int.h"
 #include "geom/metric_int.h"
 #include "opt/opt_int.h"
 #include "opt/run.h"
@@ -219,7 +219,8 @@ static void merge_result(opt_result *last, const opt_result *first, int32_t nt_o
     last->t_finish = first->t_finish;
     last->last_record = record;
     last->t_total = t_total;
-    snprintf(last->stop_reason, sizeof last->stop_reason, "%s", opt_stop_name(last->stop));
+    snprintf(last->stop_reason, sizeof last->stop_reason, "%s",
+             opt_stop_name(last->stop));
 }
 
 static qdc_status topology_run(mesh_t *m, const opt_options *opts, opt_result *res,

@@ -223,7 +223,8 @@ TEST(freed_vertices_keep_the_bound)
     mesh_free(m);
 }
 
-TEST_MAIN("slide", T(freed_vertices_keep_the_bound), T(cube_features_are_its_12_edges_and_8_corners),
+TEST_MAIN("slide", T(freed_vertices_keep_the_bound),
+          T(cube_features_are_its_12_edges_and_8_corners),
           T(projection_onto_face_line_and_corner), T(bvh_picks_the_closest_triangle),
           T(slide_keeps_the_cube_and_beats_fixed),
           T(slide_keeps_region_interfaces_and_tags))
