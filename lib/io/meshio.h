@@ -118,6 +118,9 @@ qdc_status meshio_read(const char *buf, size_t len, meshio_format fmt, mesh_t **
 /* meshio_read with options (o may be NULL). */
 qdc_status meshio_read_ex(const char *buf, size_t len, meshio_format fmt,
                           const meshio_options *o, mesh_t **out, qdc_error *err);
+/* TetGen's pair from memory: node[0..node_len) (.node) and ele[0..ele_len)
+ * (.ele), read only. On QDC_OK *out is a new mesh the caller frees with
+ * mesh_free; on any other status *out is untouched and err says why. */
 qdc_status meshio_read_tetgen(const char *node, size_t node_len, const char *ele,
                               size_t ele_len, mesh_t **out, qdc_error *err);
 
@@ -129,10 +132,16 @@ qdc_status meshio_write(const mesh_t *m, meshio_format fmt, qdc_write_fn fn, voi
 
 /* Files: format from fmt, else from the extension, else by sniffing.
  * TetGen: path may be "base", "base.node" or "base.ele".
- * meshio_save writes a temporary file, fsyncs and renames it over path. */
+ * meshio_load reads path (gunzipped if compressed) into a new mesh *out, which
+ * the caller frees with mesh_free; on failure *out is untouched and err says
+ * why (QDC_EIO for the file, QDC_EPARSE/QDC_EMESH for its contents). */
 qdc_status meshio_load(const char *path, meshio_format fmt, mesh_t **out, qdc_error *err);
+/* meshio_load with reading options o (may be NULL; only read). */
 qdc_status meshio_load_ex(const char *path, meshio_format fmt, const meshio_options *o,
                           mesh_t **out, qdc_error *err);
+/* Write m (only read) to path in fmt: a temporary file beside it, fsynced and
+ * renamed over path, so path holds the old file or the whole new one, never
+ * a part; compressed when path ends in .gz. QDC_EIO with err on failure. */
 qdc_status meshio_save(const char *path, meshio_format fmt, const mesh_t *m,
                        qdc_error *err);
 /* len bytes saved to path as meshio_save saves a mesh: a file through a
@@ -191,6 +200,8 @@ void meshio_drop_source(mesh_t *m);
  * returns 1 if it freed the bytes, 0 if there was nothing to park. While
  * parked, the mesh does not splice. */
 int meshio_park_source(mesh_t *m);
+/* Take a parked source of m back (see above): QDC_OK with m splicing again,
+ * or QDC_EIO (file gone or changed) with m kept as it is, not splicing. */
 qdc_status meshio_unpark_source(mesh_t *m, qdc_error *err);
 
 /* Read a whole file into a new buffer (free with qdc_free). */
