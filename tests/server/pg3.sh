@@ -96,7 +96,8 @@ w=$(runner "$idl")
 case $w in a) o1=b o2=c ;; b) o1=c o2=a ;; *) o1=a o2=b ;; esac
 $XN events "$(url_of $o2)" "$idl" > "$TMP/ev.json" &
 evp=$!
-sleep 0.3
+# node o1 hears of a record past the first (a long-poll), then shows the job
+curl -s -m 60 "$(url_of $o1)/v1/jobs/$idl/progress?after=0&wait=50" > /dev/null
 live=$(curl -s "$(url_of $o1)/v1/jobs/$idl" | jq -r '"\(.state) \(.iterations) \(.progress.seq)"')
 $XN wake "$(url_of $w)" "$(url_of $o1)" "$idl" > "$TMP/wake.json"
 wait $evp
@@ -169,10 +170,15 @@ done
 # 3. DELETE on one node: the blobs and records leave the database, the other
 # nodes' cached files go (their listeners hear it)
 code=$(curl -s -o /dev/null -w '%{http_code}' -X DELETE "$(url_of $o1)/v1/jobs/$idl")
-sleep 0.5
-left=
-for n in a b c; do
-    [ -e "$TMP/d$n/jobs/$idl" ] && left="$left $n"
+i=0
+while :; do # until every node's listener removed its copy (at most 30 s)
+    left=
+    for n in a b c; do
+        [ -e "$TMP/d$n/jobs/$idl" ] && left="$left $n"
+    done
+    [ -z "$left" ] || [ $i -ge 600 ] && break
+    sleep 0.05
+    i=$((i + 1))
 done
 nb=$(pg_sql "SELECT (SELECT COUNT(*) FROM blobs WHERE job_id = '$idl') + (SELECT COUNT(*) FROM blob_chunks WHERE job_id = '$idl') + (SELECT COUNT(*) FROM progress WHERE job_id = '$idl')")
 if [ "$code" = 204 ] && [ -z "$left" ] && [ "$nb" = 0 ]; then
@@ -182,11 +188,12 @@ else
 fi
 
 # 4. kill -9 of the node running a job: another node finishes it after the
-# lease (3 s) expires
-post "$URL_b" "$TMP/bunny.qmesh" "$LONG" "$TMP/jk" > /dev/null
+# lease (3 s) expires. The run ends by its time limit (4 s of its own), so it
+# cannot end before the kill however slow the machine; the kill waits for a
+# progress record past the first (the run is under way).
+post "$URL_b" "$TMP/bunny.qmesh" "max_iter=10000&finish=0&tol_move=0&mode=literal&time_limit=4" "$TMP/jk" > /dev/null
 idk=$(jf "$TMP/jk" .id)
-wait_running "$URL_b" "$idk"
-sleep 0.3
+curl -s -m 60 "$URL_b/v1/jobs/$idk/progress?after=0&wait=50" > /dev/null
 k=$(runner "$idk")
 kill -9 "$(pid_of "$k")"
 wait "$(pid_of "$k")" 2> /dev/null
@@ -203,7 +210,8 @@ node "$k" "$TMP/d$k" $NODEOPTS || { fail "pg3: node $k restarts" "$(tail -3 "$TM
 
 # 4b. a job during which its node dies on each of its 2 attempts fails
 # (attempts exhausted), whichever nodes ran it
-post "$URL_c" "$TMP/bunny.qmesh" "max_iter=150&finish=0&tol_move=0&mode=literal" "$TMP/jp" > /dev/null
+# (a run of up to 60 s: neither attempt can end before its kill)
+post "$URL_c" "$TMP/bunny.qmesh" "max_iter=10000&finish=0&tol_move=0&mode=literal&time_limit=60" "$TMP/jp" > /dev/null
 idp=$(jf "$TMP/jp" .id)
 killed=
 for attempt in 1 2; do

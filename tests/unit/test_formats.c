@@ -989,6 +989,18 @@ TEST(names_sniffing_media_types)
 
 /* ---- dev meshes and speed ---- */
 
+/* Read speeds are judged as ratios: a read's time over that of a reference
+ * pass over the same bytes beside it in the same process (read_ratio,
+ * testio.h), so a machine busy with other work slows both; the absolute MB/s
+ * are printed. Measured with two busy loops beside other work (load 11-25 on
+ * 2 cores): ASCII 1.5-6.2, gmsh22-bin and meshb 1.0-1.6, gmsh40, DOLFIN,
+ * Abaqus and Netgen 2.4-8.1, gmsh-bin 0.8-1.1; the limits leave 2-3 times that
+ * (the former floors were 25, 250 and 50 MB/s and 46 MB in 1 s). */
+#define ASCII_RATIO 15
+#define GMSH41_BIN_RATIO 3
+#define BIN_RATIO 3
+#define TEXT_RATIO 20
+
 TEST(dev_speed_ascii)
 {
     static const meshio_format fs[] = {MESHIO_GMSH41, MESHIO_GMSH22, MESHIO_VTK_ASCII,
@@ -1004,20 +1016,13 @@ TEST(dev_speed_ascii)
     unlink(path);
     for (int i = 0; i < 4; i++) {
         sink s = {0};
-        double best = 1e9;
+        double r;
         ASSERT_OK(meshio_write(m, fs[i], sink_write, &s, &err));
-        for (int rep = 0; rep < 3; rep++) {
-            double t0 = now();
-            ASSERT_OK(meshio_read(s.b, s.n, fs[i], &b, &err));
-            best = fmin(best, now() - t0);
-            if (rep < 2)
-                mesh_free(b);
-        }
-        printf("  # %s read: %.1f MB in %.3f s = %.0f MB/s\n", meshio_format_name(fs[i]),
-               s.n / 1e6, best, s.n / 1e6 / best);
+        r = read_ratio(s.b, s.n, fs[i], 5, &b, "");
+        ASSERT_TRUE(r > 0);
         ASSERT_TRUE(same_mesh(m, b, K_REGION));
 #if !defined(__SANITIZE_ADDRESS__)
-        ASSERT_TRUE(s.n / 1e6 / best >= 25); /* target 50; slack for a loaded machine */
+        ASSERT_TRUE(r <= ASCII_RATIO);
 #endif
         mesh_free(b);
         free(s.b);
@@ -1027,13 +1032,11 @@ TEST(dev_speed_ascii)
 
 TEST(gmsh41_binary_1m_tets_speed)
 {
-    double t = read_1m_tets(MESHIO_GMSH41_BIN);
+    double r = read_1m_tets(MESHIO_GMSH41_BIN);
 
-    ASSERT_TRUE(t >= 0);
-#if defined(__SANITIZE_ADDRESS__)
-    ASSERT_TRUE(t < 8);
-#else
-    ASSERT_TRUE(t < 1);
+    ASSERT_TRUE(r > 0);
+#if !defined(__SANITIZE_ADDRESS__)
+    ASSERT_TRUE(r <= GMSH41_BIN_RATIO);
 #endif
 }
 
@@ -1043,9 +1046,8 @@ TEST(new_formats_1m_tets_speed)
     static const meshio_format fs[] = {MESHIO_GMSH22_BIN, MESHIO_MESHB,  MESHIO_GMSH40,
                                        MESHIO_DOLFIN,     MESHIO_ABAQUS, MESHIO_NETGEN};
     const int32_t nv = 200000, nt = 1000000;
-    /* the best of 5 reads: the machine is shared (best of 2 once read
-     * gmsh22-bin at 175 MB/s in a fresh-clone CI); one in the sanitizer build,
-     * which asserts no rate */
+    /* 5 reads, each beside a reference pass: the machine is shared; one in
+     * the sanitizer build, which asserts no rate */
 #if defined(__SANITIZE_ADDRESS__)
     const int reps = 1;
 #else
@@ -1063,29 +1065,20 @@ TEST(new_formats_1m_tets_speed)
         m->region[i] = 1;
     for (size_t k = 0; k < sizeof fs / sizeof fs[0]; k++) {
         sink s = {0};
-        double best = 1e9, rate;
+        double r;
         if (fs[k] == MESHIO_ABAQUS || fs[k] == MESHIO_NETGEN)
             write_other(m, fs[k], &s);
         else
             ASSERT_OK(meshio_write(m, fs[k], sink_write, &s, &err));
-        for (int rep = 0; rep < reps; rep++) {
-            double t0 = now();
-            ASSERT_OK(meshio_read(s.b, s.n, fs[k], &b, &err));
-            best = fmin(best, now() - t0);
-            if (rep < reps - 1)
-                mesh_free(b);
-        }
-        rate = s.n / 1e6 / best;
-        printf("  # %s read of 1M tets: %.1f MB in %.3f s = %.0f MB/s\n",
-               meshio_format_name(fs[k]), s.n / 1e6, best, rate);
+        r = read_ratio(s.b, s.n, fs[k], reps, &b, " of 1M tets");
+        ASSERT_TRUE(r > 0);
         ASSERT_EQ_INT(b->nt, nt);
         ASSERT_TRUE(memcmp(b->tets, m->tets, 16 * (size_t)nt) == 0);
         if (fs[k] != MESHIO_NETGEN) /* %22.16f rounds */
             ASSERT_TRUE(memcmp(b->xyz, m->xyz, 24 * (size_t)nv) == 0);
 #if !defined(__SANITIZE_ADDRESS__)
-        /* targets 500 (binary) and 100 MB/s; half of it on a shared machine */
-        ASSERT_TRUE(rate >=
-                    (fs[k] == MESHIO_GMSH22_BIN || fs[k] == MESHIO_MESHB ? 250 : 50));
+        ASSERT_TRUE(r <= (fs[k] == MESHIO_GMSH22_BIN || fs[k] == MESHIO_MESHB ? BIN_RATIO
+                                                                              : TEXT_RATIO));
 #endif
         mesh_free(b);
         free(s.b);

@@ -479,15 +479,18 @@ TEST(dev_speed)
     mesh_free(m);
 }
 
+/* a read's time over a reference pass over the same bytes (read_ratio,
+ * testio.h): 0.24-0.39 measured with two busy loops beside other work
+ * (load 11-25 on 2 cores); the former bound was 0.5 s for 24.8 MB */
+#define QMESH_RATIO 1
+
 TEST(qmesh_1m_tets_speed)
 {
-    double t = read_1m_tets(MESHIO_QMESH);
+    double r = read_1m_tets(MESHIO_QMESH);
 
-    ASSERT_TRUE(t >= 0);
-#if defined(__SANITIZE_ADDRESS__)
-    ASSERT_TRUE(t < 5);
-#else
-    ASSERT_TRUE(t < 0.5);
+    ASSERT_TRUE(r > 0);
+#if !defined(__SANITIZE_ADDRESS__)
+    ASSERT_TRUE(r <= QMESH_RATIO);
 #endif
 }
 
