@@ -23,7 +23,11 @@ typedef enum { OPT_SOLVER_AUTO = 0, OPT_SOLVER_CHOLMOD, OPT_SOLVER_PCG } opt_sol
  * alternates the smoother with flips that keep the vertex set, the boundary
  * triangles and the region tags (opt/topology.c); full adds interior vertex
  * insertion (new vertices inside the volume, never on the boundary). */
-typedef enum { OPT_TOPOLOGY_NONE = 0, OPT_TOPOLOGY_FLIPS, OPT_TOPOLOGY_FULL } opt_topology;
+typedef enum {
+    OPT_TOPOLOGY_NONE = 0,
+    OPT_TOPOLOGY_FLIPS,
+    OPT_TOPOLOGY_FULL
+} opt_topology;
 
 /* Why a run stopped. */
 typedef enum {
@@ -154,8 +158,8 @@ typedef struct {
     int64_t topo_multiface;     /* multi-face removals */
     int64_t topo_insertions;    /* --topology full: interior vertices inserted */
     int32_t verts_in, verts_out; /* --topology: vertices before and after */
-    int topo_rounds;            /* rounds of flips followed by smoothing */
-    opt_stop stop;              /* why the run stopped (decides; stop_reason names it) */
+    int topo_rounds;             /* rounds of flips followed by smoothing */
+    opt_stop stop;               /* why the run stopped (decides; stop_reason names it) */
     char stop_reason[64]; /* opt_stop_name(stop): "converged", "max-iter", "no-descent",
                            * "cancelled", "time-limit", "solver" */
 } opt_result;

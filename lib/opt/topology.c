@@ -12,9 +12,9 @@
  * the files below it. */
 #include "opt/opt.h"
 
+#include "core/base_int.h"
 #include "core/mesh.h"
 #include "core/tet.h"
-#include "core/base_int.h"
 #include "geom/metric_int.h"
 #include "opt/opt_int.h"
 #include "opt/run.h"
@@ -67,8 +67,8 @@ static qdc_status grow_vertices(mesh_t *m, int32_t nv, double *xyz, qdc_error *e
 /* One round of flips on m: the tets oriented from the connectivity (mesh_orient:
  * tets written in the other order are flipped for lib/topo and written back so),
  * improved, and m's tets and regions replaced when a flip was made. */
-static qdc_status flip_round(mesh_t *m, const opt_options *o, int insert,
-                             topo_stats *ts, qdc_error *err)
+static qdc_status flip_round(mesh_t *m, const opt_options *o, int insert, topo_stats *ts,
+                             qdc_error *err)
 {
     uint8_t *flip = qdc_malloc((size_t)m->nt);
     int32_t *tv = qdc_mallocn(4 * (size_t)m->nt, sizeof *tv), *tets = NULL,
@@ -240,8 +240,7 @@ static void log_round_failed(const opt_options *opts, qdc_status st, const qdc_e
 /* The whole run's result: the last round's records and outcome, the first
  * run's input record, the counts and times summed over the rounds. */
 static void merge_result(opt_result *last, const opt_result *first, int32_t nt_out,
-                         int32_t nv_out,
-                         int record, double t_total)
+                         int32_t nv_out, int record, double t_total)
 {
     last->before = first->before;
     last->tets_in = first->tets_in;
@@ -264,7 +263,8 @@ static void merge_result(opt_result *last, const opt_result *first, int32_t nt_o
     last->t_finish = first->t_finish;
     last->last_record = record;
     last->t_total = t_total;
-    snprintf(last->stop_reason, sizeof last->stop_reason, "%s", opt_stop_name(last->stop));
+    snprintf(last->stop_reason, sizeof last->stop_reason, "%s",
+             opt_stop_name(last->stop));
 }
 
 static qdc_status topology_run(mesh_t *m, const opt_options *opts, opt_result *res,

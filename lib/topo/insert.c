@@ -207,8 +207,8 @@ static void grow(tmesh *tm, int32_t t, int32_t *old, int *nold, double p[3],
     }
 }
 
-qdc_status insert_in_tet(tmesh *tm, int32_t t, double margin, int *done,
-                         int32_t *new_ids, int *nnew)
+qdc_status insert_in_tet(tmesh *tm, int32_t t, double margin, int *done, int32_t *new_ids,
+                         int *nnew)
 {
     int32_t old[INS_OLD], newt[INS_NEW][4], from[INS_NEW];
     double gain, p[3] = {0, 0, 0};

@@ -19,8 +19,8 @@ qdc_status tmesh_add_vertex(tmesh *tm, const double p[3]);
  * slots in new_ids (room for 32) and their count in *nnew, the change journaled
  * (tmesh_commit keeps it, insert_undo undoes it, vertex included); else *done 0
  * and tm exactly as it was. QDC_ENOMEM. */
-qdc_status insert_in_tet(tmesh *tm, int32_t t, double margin, int *done,
-                         int32_t *new_ids, int *nnew);
+qdc_status insert_in_tet(tmesh *tm, int32_t t, double margin, int *done, int32_t *new_ids,
+                         int *nnew);
 
 /* Undo an insertion not yet committed: the journal rolled back and the vertex
  * it added removed. */

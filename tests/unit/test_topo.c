@@ -863,8 +863,9 @@ TEST(flips_allocation_failures_are_clean)
 #endif
 }
 
-TEST_MAIN("topo", T(insertion_in_a_bad_tet), T(insertion_refused_leaves_the_mesh), T(driver_with_insertion), T(orient3d_exact_near_coplanar), T(edge_removal_3_2_keeps_volume),
-          T(edge_removal_rings_3_to_8), T(flip_2_3),
+TEST_MAIN("topo", T(insertion_in_a_bad_tet), T(insertion_refused_leaves_the_mesh),
+          T(driver_with_insertion), T(orient3d_exact_near_coplanar),
+          T(edge_removal_3_2_keeps_volume), T(edge_removal_rings_3_to_8), T(flip_2_3),
           T(multiface_removal_restores_the_ring),
           T(export_keeps_the_callers_vertex_order), T(mixed_tag_shell_blocks_removal),
           T(non_convex_ring_refused), T(four_boundary_corner_floor),
