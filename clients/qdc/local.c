@@ -684,10 +684,12 @@ static void optimize_summary(const optimize_args *x, const opt_result *res)
             res->t_linesearch, res->t_harmonic, res->t_finish);
     if (res->tets_in > 0)
         fprintf(stderr,
-                "qdc: topology %s: tets %d -> %d (vertices kept); %lld edges removed "
+                "qdc: topology %s: tets %d -> %d, vertices %d -> %d (%lld inserted); "
+                "%lld edges removed "
                 "(rings of 3: %lld, 4: %lld, 5: %lld, 6: %lld, 7-10: %lld), %lld 2-3 "
                 "flips, %lld multi-face removals; rounds: %d\n",
                 opt_topology_name(x->o.topology), (int)res->tets_in, (int)res->tets_out,
+                (int)res->verts_in, (int)res->verts_out, (long long)res->topo_insertions,
                 (long long)res->topo_edge_removals, (long long)res->topo_by_ring[3],
                 (long long)res->topo_by_ring[4], (long long)res->topo_by_ring[5],
                 (long long)res->topo_by_ring[6],

@@ -349,6 +349,11 @@ qdc_status report_write_json(const report_t *r, qdc_write_fn fn, void *ctx,
             jw_int(&w, "flips23", s->topo_flips23);
             jw_int(&w, "multiface_removals", s->topo_multiface);
             jw_int(&w, "rounds", s->topo_rounds);
+            if (s->topo_insertions > 0) { /* --topology full */
+                jw_int(&w, "insertions", s->topo_insertions);
+                jw_int(&w, "vertices_in", s->verts_in);
+                jw_int(&w, "vertices_out", s->verts_out);
+            }
             jw_close(&w, '}');
         }
         jw_open(&w, "before_finish", '{');

@@ -31,7 +31,7 @@ static int options_valid(const opt_options *o)
            (unsigned)o->mode <= OPT_MODE_LITERAL &&
            (unsigned)o->weights <= OPT_WEIGHTS_PAPER &&
            (unsigned)o->solver <= OPT_SOLVER_PCG &&
-           (unsigned)o->topology <= OPT_TOPOLOGY_FLIPS;
+           (unsigned)o->topology <= OPT_TOPOLOGY_FULL;
 }
 
 /* The context of one run: topology, ctx, loose and pinned vertices, the

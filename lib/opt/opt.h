@@ -21,8 +21,13 @@ typedef enum { OPT_WEIGHTS_OPTAVG = 0, OPT_WEIGHTS_PAPER } opt_weights;
 typedef enum { OPT_SOLVER_AUTO = 0, OPT_SOLVER_CHOLMOD, OPT_SOLVER_PCG } opt_solver;
 /* --topology: none keeps the connectivity (every vertex and tet as given); flips
  * alternates the smoother with flips that keep the vertex set, the boundary
- * triangles and the region tags (opt/topology.c). */
-typedef enum { OPT_TOPOLOGY_NONE = 0, OPT_TOPOLOGY_FLIPS } opt_topology;
+ * triangles and the region tags (opt/topology.c); full adds interior vertex
+ * insertion (new vertices inside the volume, never on the boundary). */
+typedef enum {
+    OPT_TOPOLOGY_NONE = 0,
+    OPT_TOPOLOGY_FLIPS,
+    OPT_TOPOLOGY_FULL
+} opt_topology;
 
 /* Why a run stopped. */
 typedef enum {
@@ -152,6 +157,8 @@ typedef struct {
     int64_t topo_by_ring[11];    /* of which with a ring of n tets (n = 3..10) */
     int64_t topo_flips23;        /* 2-3 face flips */
     int64_t topo_multiface;      /* multi-face removals */
+    int64_t topo_insertions;     /* --topology full: interior vertices inserted */
+    int32_t verts_in, verts_out; /* --topology: vertices before and after */
     int topo_rounds;             /* rounds of flips followed by smoothing */
     opt_stop stop;               /* why the run stopped (decides; stop_reason names it) */
     char stop_reason[64]; /* opt_stop_name(stop): "converged", "max-iter", "no-descent",

@@ -40,7 +40,7 @@ static const char *const boundary_names[] = {"lsq", "fixed", "slide"};
 static const char *const mode_names[] = {"safe", "literal"};
 static const char *const weights_names[] = {"optavg", "paper"};
 static const char *const solver_names[] = {"auto", "cholmod", "pcg"};
-static const char *const topology_names[] = {"none", "flips"};
+static const char *const topology_names[] = {"none", "flips", "full"};
 
 static qdc_status parse_word(const char *s, const char *const *names, int n, int *out)
 {
@@ -163,7 +163,9 @@ static const char *const solver_say[] = {
 static const char *const topology_say[] = {
     "vertices move, the tets stay as they are (point and cell data map one to one)",
     "tets are also flipped where that raises the worst quality around them: "
-    "vertices, boundary triangles and region tags kept, the tet count changes"};
+    "vertices, boundary triangles and region tags kept, the tet count changes",
+    "flips, then a vertex inserted inside where a tet stays very bad (below 0.15 "
+    "mean ratio): boundary triangles and region tags kept, vertices added"};
 
 #define OFF(f) offsetof(opt_options, f)
 #define WORDS(w) w, (int)(sizeof w / sizeof w[0])
@@ -222,7 +224,9 @@ static const opt_desc table[] = {
      "Escobar epsilon relative to a regular tet", OPT_G_ADVANCED, NULL},
     {"topology", OPT_T_WORD, OFF(topology), 0, 0, 0, WORDS(topology_names),
      "none: connectivity kept; flips: the smoother alternated with edge removal, 2-3 "
-     "flips and multi-face removal (vertices, boundary triangles and region tags kept)",
+     "flips and multi-face removal (vertices, boundary triangles and region tags kept); "
+     "full: flips and interior vertex insertion (vertices added inside, boundary "
+     "triangles and region tags kept)",
      OPT_G_EVERYDAY, topology_say},
     {"time_limit", OPT_T_REAL, OFF(time_limit), 0, 1e9, 0, NULL, 0,
      "seconds, then the best mesh so far (0: none)", OPT_G_EVERYDAY, NULL},

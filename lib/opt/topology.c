@@ -33,16 +33,48 @@
 enum { TOPO_ROUNDS = 3 };
 #define TOPO_GAIN 1e-3
 
+/* The operations of a round of topology. */
+static int64_t round_ops(const topo_stats *ts)
+{
+    return ts->edge_removals + ts->flips23 + ts->multiface + ts->insertions;
+}
+
+/* m's vertices grown to nv with the coordinates xyz (taken over: the first
+ * m->nv as they were, the new ones inserted inside the volume): the per-vertex
+ * flags and refs of the new vertices 0 (free, no ref). */
+static qdc_status grow_vertices(mesh_t *m, int32_t nv, double *xyz, qdc_error *err)
+{
+    if (m->fixed) {
+        uint8_t *f = qdc_realloc(m->fixed, (size_t)nv);
+        if (!f)
+            return qdc_fail(err, QDC_ENOMEM, "out of memory");
+        memset(f + m->nv, 0, (size_t)(nv - m->nv));
+        m->fixed = f;
+    }
+    if (m->vref) {
+        int32_t *r = qdc_realloc(m->vref, (size_t)nv * sizeof *r);
+        if (!r)
+            return qdc_fail(err, QDC_ENOMEM, "out of memory");
+        memset(r + m->nv, 0, (size_t)(nv - m->nv) * sizeof *r);
+        m->vref = r;
+    }
+    qdc_free(m->xyz);
+    m->xyz = xyz;
+    m->nv = nv;
+    return QDC_OK;
+}
+
 /* One round of flips on m: the tets oriented from the connectivity (mesh_orient:
  * tets written in the other order are flipped for lib/topo and written back so),
  * improved, and m's tets and regions replaced when a flip was made. */
-static qdc_status flip_round(mesh_t *m, const opt_options *o, topo_stats *ts,
+static qdc_status flip_round(mesh_t *m, const opt_options *o, int insert, topo_stats *ts,
                              qdc_error *err)
 {
     uint8_t *flip = qdc_malloc((size_t)m->nt);
     int32_t *tv = qdc_mallocn(4 * (size_t)m->nt, sizeof *tv), *tets = NULL,
             *region = NULL;
-    int32_t nt = 0;
+    int32_t nt = 0, nv = 0;
+    double *xyz = NULL;
     mesh_orientation mo;
     topo_params p;
     qdc_status st;
@@ -62,12 +94,19 @@ static qdc_status flip_round(mesh_t *m, const opt_options *o, topo_stats *ts,
             tv[4 * (size_t)t + 1] = m->tets[4 * (size_t)t];
         }
     topo_params_default(&p);
-    st = topo_flip_arrays(m->nv, m->xyz, m->nt, tv, m->region, flip, &p, o->cancel, &nt,
-                          &tets, m->region ? &region : NULL, ts, err);
+    p.insert = insert;
+    st = topo_full_arrays(m->nv, m->xyz, m->nt, tv, m->region, flip, &p, o->cancel, &nv,
+                          &xyz, &nt, &tets, m->region ? &region : NULL, ts, err);
     if (st == QDC_ECANCEL)
         st = QDC_OK; /* the mesh as the flips left it is valid */
-    if (st != QDC_OK || ts->edge_removals + ts->flips23 + ts->multiface == 0)
+    if (st != QDC_OK || round_ops(ts) == 0)
         goto out;
+    if (nv > m->nv) {
+        st = grow_vertices(m, nv, xyz, err);
+        if (st != QDC_OK)
+            goto out;
+        xyz = NULL;
+    }
     qdc_free(m->tets);
     m->tets = tets;
     tets = NULL;
@@ -82,6 +121,7 @@ out:
     qdc_free(tv);
     qdc_free(tets);
     qdc_free(region);
+    qdc_free(xyz);
     return st;
 }
 
@@ -179,6 +219,7 @@ static void count_round(opt_result *acc, const topo_stats *ts)
     acc->topo_edge_removals += ts->edge_removals;
     acc->topo_flips23 += ts->flips23;
     acc->topo_multiface += ts->multiface;
+    acc->topo_insertions += ts->insertions;
     for (int n = 3; n <= FLIP_MAXRING; n++)
         acc->topo_by_ring[n] += ts->by_ring[n];
 }
@@ -199,7 +240,7 @@ static void log_round_failed(const opt_options *opts, qdc_status st, const qdc_e
 /* The whole run's result: the last round's records and outcome, the first
  * run's input record, the counts and times summed over the rounds. */
 static void merge_result(opt_result *last, const opt_result *first, int32_t nt_out,
-                         int record, double t_total)
+                         int32_t nv_out, int record, double t_total)
 {
     last->before = first->before;
     last->tets_in = first->tets_in;
@@ -208,6 +249,9 @@ static void merge_result(opt_result *last, const opt_result *first, int32_t nt_o
     last->topo_edge_removals = first->topo_edge_removals;
     last->topo_flips23 = first->topo_flips23;
     last->topo_multiface = first->topo_multiface;
+    last->topo_insertions = first->topo_insertions;
+    last->verts_in = first->verts_in;
+    last->verts_out = nv_out;
     memcpy(last->topo_by_ring, first->topo_by_ring, sizeof last->topo_by_ring);
     last->iterations = first->iterations;
     last->t_setup = first->t_setup;
@@ -242,6 +286,7 @@ static qdc_status topology_run(mesh_t *m, const opt_options *opts, opt_result *r
     }
     last = first;
     first.tets_in = m->nt;
+    first.verts_in = m->nv;
     record = first.last_record;
     for (int round = 0; round < TOPO_ROUNDS && !stopped; round++) {
         topo_stats ts;
@@ -250,10 +295,10 @@ static qdc_status topology_run(mesh_t *m, const opt_options *opts, opt_result *r
         double left = 0.0;
         if (last.outcome == OPT_STOPPED)
             break; /* cancelled, out of time or the solver in trouble */
-        st = flip_round(m, &o, &ts, err);
+        st = flip_round(m, &o, opts->topology == OPT_TOPOLOGY_FULL, &ts, err);
         if (st != QDC_OK)
             break;
-        if (ts.edge_removals + ts.flips23 + ts.multiface == 0)
+        if (round_ops(&ts) == 0)
             break;
         count_round(&first, &ts);
         st = flip_record(m, ++record, t0, &pr, err);
@@ -296,7 +341,7 @@ static qdc_status topology_run(mesh_t *m, const opt_options *opts, opt_result *r
         last.outcome = OPT_STOPPED;
         st = QDC_OK;
     }
-    merge_result(&last, &first, m->nt, record, qdc_now() - t0);
+    merge_result(&last, &first, m->nt, m->nv, record, qdc_now() - t0);
     if (res)
         *res = last;
     return st;

@@ -255,6 +255,7 @@ qdc_status tmesh_new(int32_t nv, const double *xyz, int32_t nt, const int32_t *t
     if (!tm)
         return QDC_ENOMEM;
     tm->nv = nv;
+    tm->vcap = nv;
     tm->xyz = qdc_mallocn(3 * (size_t)nv, sizeof *tm->xyz);
     tm->vcons = qdc_calloc((size_t)nv, 1);
     if (!tm->xyz || !tm->vcons) {

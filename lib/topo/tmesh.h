@@ -24,6 +24,7 @@ typedef struct tmesh_jent tmesh_jent; /* a journal entry (tmesh.c) */
 
 typedef struct tmesh {
     int32_t nv;      /* vertices */
+    int32_t vcap;    /* vertices allocated (xyz, vcons) */
     double *xyz;     /* 3*nv, the mesh's own copy */
     uint8_t *vcons;  /* nv: 1 on a constrained face */
     int32_t cap;     /* tet slots allocated */

@@ -3,6 +3,8 @@
  * with Netgen's sum-of-badness preference among improving operations). */
 #include "topo/topo.h"
 
+#include "topo/insert.h"
+
 #include <string.h>
 
 void topo_params_default(topo_params *p)
@@ -13,6 +15,9 @@ void topo_params_default(topo_params *p)
     p->floor4 = 0.1;
     p->rounds = 3;
     p->max_ops = 0;
+    p->insert = 0;
+    p->qinsert = 0.15;
+    p->imargin = 0.05;
 }
 
 typedef struct {
@@ -132,6 +137,35 @@ static int best_flip(const tmesh *tm, int32_t t, const topo_params *p, flip_cand
     return have;
 }
 
+/* Vertex insertion in the live tets below qinsert, worst first (queued once);
+ * the new tets are not revisited. Adds the insertions to *ops and st. */
+static qdc_status insert_pass(tmesh *tm, const topo_params *p, heap *h, topo_stats *st,
+                              int64_t *ops, int64_t max_ops, const atomic_int *cancel)
+{
+    qdc_status s = QDC_OK;
+
+    h->n = 0;
+    for (int32_t t = 0; t < tm->hi && s == QDC_OK; t++)
+        if (tm->tv[4 * (size_t)t] >= 0 && tm->q[t] < p->qinsert && tm->q[t] >= -1.0)
+            s = heap_push(h, tm, t);
+    while (s == QDC_OK && h->n > 0 && *ops < max_ops) {
+        qent e = heap_pop(h);
+        int32_t ids[32];
+        int done = 0, nn = 0;
+        if (cancel && atomic_load(cancel))
+            return QDC_ECANCEL;
+        if (tm->tv[4 * (size_t)e.t] < 0 || tm->stamp[e.t] != e.stamp)
+            continue;
+        s = insert_in_tet(tm, e.t, p->imargin, &done, ids, &nn);
+        if (s != QDC_OK || !done)
+            continue;
+        tmesh_commit(tm);
+        (*ops)++;
+        st->insertions++;
+    }
+    return s;
+}
+
 qdc_status topo_improve(tmesh *tm, const topo_params *p, topo_stats *st,
                         const atomic_int *cancel)
 {
@@ -144,6 +178,7 @@ qdc_status topo_improve(tmesh *tm, const topo_params *p, topo_stats *st,
         st = &local;
     memset(st, 0, sizeof *st);
     st->nt_in = tm->nlive;
+    st->nv_in = tm->nv;
     for (int r = 0; r < p->rounds; r++) {
         int64_t ops_round = 0;
         h.n = 0;
@@ -183,11 +218,17 @@ qdc_status topo_improve(tmesh *tm, const topo_params *p, topo_stats *st,
                 if (tm->q[ids[j]] < p->qgoal)
                     s = heap_push(&h, tm, ids[j]);
         }
+        if (s == QDC_OK && p->insert) {
+            int64_t before = ops;
+            s = insert_pass(tm, p, &h, st, &ops, max_ops, cancel);
+            ops_round += ops - before;
+        }
         if (s != QDC_OK || ops_round == 0 || ops >= max_ops)
             break;
     }
     qdc_free(h.a);
     st->nt_out = tm->nlive;
+    st->nv_out = tm->nv;
     return s;
 }
 
@@ -197,6 +238,25 @@ qdc_status topo_flip_arrays(int32_t nv, const double *xyz, int32_t nt,
                             const atomic_int *cancel, int32_t *nt_out, int32_t **tets_out,
                             int32_t **region_out, topo_stats *st, qdc_error *err)
 {
+    topo_params q = *p;
+    double *x = NULL;
+    int32_t n = 0;
+    qdc_status s;
+
+    q.insert = 0;
+    s = topo_full_arrays(nv, xyz, nt, tets, region, rev, &q, cancel, &n, &x, nt_out,
+                         tets_out, region_out, st, err);
+    qdc_free(x);
+    return s;
+}
+
+qdc_status topo_full_arrays(int32_t nv, const double *xyz, int32_t nt,
+                            const int32_t *tets, const int32_t *region,
+                            const uint8_t *rev, const topo_params *p,
+                            const atomic_int *cancel, int32_t *nv_out, double **xyz_out,
+                            int32_t *nt_out, int32_t **tets_out, int32_t **region_out,
+                            topo_stats *st, qdc_error *err)
+{
     tmesh *tm = NULL;
     qdc_status s = tmesh_new(nv, xyz, nt, tets, region, rev, &tm, err);
 
@@ -204,6 +264,15 @@ qdc_status topo_flip_arrays(int32_t nv, const double *xyz, int32_t nt,
         s = topo_improve(tm, p, st, cancel);
     if (s == QDC_OK || s == QDC_ECANCEL) {
         qdc_status s2 = tmesh_export(tm, nt_out, tets_out, region ? region_out : NULL);
+        if (s2 == QDC_OK) {
+            *xyz_out = qdc_mallocn(3 * (size_t)tm->nv, sizeof **xyz_out);
+            if (*xyz_out) {
+                memcpy(*xyz_out, tm->xyz, 3 * (size_t)tm->nv * sizeof **xyz_out);
+                *nv_out = tm->nv;
+            } else {
+                s2 = QDC_ENOMEM;
+            }
+        }
         if (s2 != QDC_OK)
             s = s2;
     }

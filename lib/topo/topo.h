@@ -23,6 +23,10 @@ typedef struct {
     double floor4;   /* no new tet with 4 constrained corners below this mean ratio */
     int rounds;      /* queue rebuilt from the whole mesh at most this many times */
     int64_t max_ops; /* operations at most (0: 4 per tet of the input) */
+    int insert;      /* 1: after the flips of a round, vertex insertion (insert.h)
+                      * in the tets still below qinsert, worst first */
+    double qinsert;  /* tets below this mean ratio get an insertion tried */
+    double imargin;  /* an insertion must raise the cavity's minimum by this */
 } topo_params;
 
 /* What the runs did. */
@@ -32,10 +36,13 @@ typedef struct {
     int64_t flips23;                   /* 2-3 flips */
     int64_t multiface;                 /* multi-face removals */
     int64_t visits;                    /* tets taken from the queue */
+    int64_t insertions;                /* vertices inserted (insert.h) */
+    int32_t nv_in, nv_out;             /* vertices before and after */
     int32_t nt_in, nt_out;             /* live tets before and after */
 } topo_stats;
 
-/* maxring 10, qgoal 0.6, margin 1e-3, floor4 0.1, rounds 3, max_ops 0. */
+/* maxring 10, qgoal 0.6, margin 1e-3, floor4 0.1, rounds 3, max_ops 0, insert 0,
+ * qinsert 0.3, imargin 0.02. */
 void topo_params_default(topo_params *p);
 
 /* Improve tm in place with flips (see above). cancel (may be NULL) is polled
@@ -47,11 +54,22 @@ qdc_status topo_improve(tmesh *tm, const topo_params *p, topo_stats *st,
 /* The whole round trip on arrays: build a tmesh from nt positive tets (4 each,
  * region and rev may be NULL; as tmesh_new), improve it, and hand back the live tets in
  * *tets_out (and their tags in *region_out when region is not NULL), allocated with
- * qdc_malloc for the caller, *nt_out their count. The vertices are not changed. */
+ * qdc_malloc for the caller, *nt_out their count. The vertices are not changed
+ * (p->insert is ignored). */
 qdc_status topo_flip_arrays(int32_t nv, const double *xyz, int32_t nt,
                             const int32_t *tets, const int32_t *region,
                             const uint8_t *rev, const topo_params *p,
                             const atomic_int *cancel, int32_t *nt_out, int32_t **tets_out,
                             int32_t **region_out, topo_stats *st, qdc_error *err);
+
+/* As topo_flip_arrays, with p->insert allowed: the vertices may grow, so their
+ * count and coordinates come back too (*nv_out, *xyz_out, allocated with
+ * qdc_malloc; the first nv are the input's, unchanged; new ones follow). */
+qdc_status topo_full_arrays(int32_t nv, const double *xyz, int32_t nt,
+                            const int32_t *tets, const int32_t *region,
+                            const uint8_t *rev, const topo_params *p,
+                            const atomic_int *cancel, int32_t *nv_out, double **xyz_out,
+                            int32_t *nt_out, int32_t **tets_out, int32_t **region_out,
+                            topo_stats *st, qdc_error *err);
 
 #endif

@@ -5,7 +5,9 @@
 # smallest dihedral (the independent evaluator's, tests/tools/evaluate.py), the
 # same vertices (all of them still used), the boundary triangles and the faces between regions the
 # same as sets (with the region on each side), no tet inverted, and the same bytes from two runs and from 1 and 2
-# threads. `none` still gives the input's tets.
+# threads. `none` still gives the input's tets. `full` (flips and interior
+# vertex insertion): the input's vertices first, the new ones all used, the boundary and interface triangles and the regions the
+# same as sets, none inverted, the same bytes from 1 and 2 threads.
 . "$(dirname "$0")/../lib.sh"
 
 names="bone-lowq two-region"
@@ -127,6 +129,55 @@ d = json.load(sys.stdin); print(d["n_inverted"], "%.4f" % d["eta_mean"], "%.3f" 
         pass "topology: $n: the same bytes from two runs, 1 and 2 threads"
     else
         fail "topology: $n: determinism" "outputs differ"
+    fi
+done
+
+# compare-full IN FULL: the input's vertices kept (first, same numbers), the
+# new ones all used, the constrained faces and regions as in the input
+cat > "$TMP/full.py" << 'PY'
+import sys
+import numpy as np
+exec(open(sys.argv[3]).read().split("xi, ti, ri = ")[0])
+xi, ti, ri = medit(sys.argv[1])
+xf, tf, rf = medit(sys.argv[2])
+bad = []
+if len(xf) < len(xi):
+    bad.append("vertices lost")
+if len(np.unique(tf)) != len(xf):
+    bad.append("a vertex without a tet")
+if faces(tf, rf) != faces(ti, ri):
+    bad.append("boundary or interface faces differ")
+if set(rf.tolist()) != set(ri.tolist()):
+    bad.append("region tags differ")
+print("; ".join(bad) if bad else "ok", len(xi), len(xf))
+PY
+for n in $names; do
+    in=$TMP/c/$n.mesh
+    if ! OMP_NUM_THREADS=1 "$BIN/qdc" optimize --quiet --topology full "$in" \
+        "$TMP/full1.mesh" 2> "$TMP/err" ||
+        ! OMP_NUM_THREADS=2 "$BIN/qdc" optimize --quiet --topology full "$in" \
+            "$TMP/full2.mesh" 2> "$TMP/err"; then
+        fail "topology full: $n" "exit: $(tail -2 "$TMP/err")"
+        continue
+    fi
+    "$BIN/qdc" optimize --quiet --topology none "$in" "$TMP/none.mesh" 2> /dev/null
+    set -- $("$PY" "$TMP/full.py" "$in" "$TMP/full1.mesh" "$TMP/compare.py")
+    if [ "$1" = ok ]; then
+        pass "topology full: $n: input vertices, boundary and interface triangles, regions kept ($2 -> $3 vertices)"
+    else
+        fail "topology full: $n: model" "$*"
+    fi
+    set -- $("$PY" "$QUALITY" "$TMP/full1.mesh" | "$PY" -c 'import json, sys
+d = json.load(sys.stdin); print(d["n_inverted"], "%.4f" % d["eta_mean"], "%.3f" % d["dihedral_min"])')
+    if [ "$1" = 0 ]; then
+        pass "topology full: $n: none inverted (mean ratio $2, smallest dihedral $3)"
+    else
+        fail "topology full: $n: inverted" "$1 inverted"
+    fi
+    if cmp -s "$TMP/full1.mesh" "$TMP/full2.mesh"; then
+        pass "topology full: $n: the same bytes from 1 and 2 threads"
+    else
+        fail "topology full: $n: determinism" "outputs differ"
     fi
 done
 exit $((NFAIL > 0))

@@ -1077,8 +1077,9 @@ TEST(new_formats_1m_tets_speed)
         if (fs[k] != MESHIO_NETGEN) /* %22.16f rounds */
             ASSERT_TRUE(memcmp(b->xyz, m->xyz, 24 * (size_t)nv) == 0);
 #if !defined(__SANITIZE_ADDRESS__)
-        ASSERT_TRUE(r <= (fs[k] == MESHIO_GMSH22_BIN || fs[k] == MESHIO_MESHB ? BIN_RATIO
-                                                                              : TEXT_RATIO));
+        ASSERT_TRUE(r <= (fs[k] == MESHIO_GMSH22_BIN || fs[k] == MESHIO_MESHB
+                              ? BIN_RATIO
+                              : TEXT_RATIO));
 #endif
         mesh_free(b);
         free(s.b);

@@ -7,6 +7,7 @@
 #include "testmesh.h"
 #include "topo/exact.h"
 #include "topo/flip.h"
+#include "topo/insert.h"
 #include "topo/tmesh.h"
 #include "topo/topo.h"
 
@@ -541,6 +542,143 @@ TEST(random_flips_keep_invariants)
     mesh_free(m);
 }
 
+/* The worst live tet of tm whose four faces are interior and unconstrained. */
+static int32_t worst_inner(const tmesh *tm)
+{
+    int32_t w = -1;
+    for (int32_t t = 0; t < tm->hi; t++)
+        if (tm->tv[4 * t] >= 0 && tm->fcons[t] == 0 && (w < 0 || tm->q[t] < tm->q[w]))
+            w = t;
+    return w;
+}
+
+/* A vertex inserted in the worst inner tet of a perturbed grid (any quality
+ * accepted): one vertex more, its star of at least 12 tets (the tet and its
+ * four neighbours at least), the volume, adjacency and
+ * constrained faces kept, none inverted; undone, every array as it was. */
+TEST(insertion_in_a_bad_tet)
+{
+    const int n = 4;
+    mesh_t *m = tm_grid(n, MESH_WITH_REGION);
+    tmesh *tm = NULL;
+    int32_t ids[32], t, nv, nf0, nf1, *f0, *f1;
+    double v0, v1;
+    int done = 0, nn = 0;
+    snap s;
+
+    ASSERT_TRUE(m);
+    tm_perturb(m, n, 0.3, 11);
+    ASSERT_OK(tmesh_new(m->nv, m->xyz, m->nt, m->tets, m->region, NULL, &tm, NULL));
+    t = worst_inner(tm);
+    ASSERT_TRUE(t >= 0);
+    nv = tm->nv;
+    v0 = total_vol6(tm);
+    f0 = cons_faces(tm, &nf0);
+    ASSERT_TRUE(f0);
+    ASSERT_TRUE(snap_take(tm, &s));
+    ASSERT_OK(insert_in_tet(tm, t, -INFINITY, &done, ids, &nn));
+    ASSERT_EQ_INT(done, 1);
+    ASSERT_TRUE(nn >= 12 && nn <= 32);
+    ASSERT_EQ_INT(tm->nv, nv + 1);
+    ASSERT_TRUE(tm->nlive > m->nt);
+    ASSERT_TRUE(consistent(tm));
+    v1 = total_vol6(tm);
+    ASSERT_NEAR(v1, v0, 1e-12 * v0);
+    for (int j = 0; j < nn; j++) {
+        ASSERT_TRUE(tmesh_local(tm, ids[j], nv) >= 0);
+        ASSERT_TRUE(tm->q[ids[j]] > 0);
+    }
+    f1 = cons_faces(tm, &nf1);
+    ASSERT_TRUE(f1);
+    ASSERT_EQ_INT(nf1, nf0);
+    ASSERT_TRUE(!memcmp(f0, f1, 20 * (size_t)nf0));
+    insert_undo(tm);
+    ASSERT_EQ_INT(tm->nv, nv);
+    ASSERT_TRUE(snap_same(tm, &s));
+    ASSERT_TRUE(consistent(tm));
+    free(f0);
+    free(f1);
+    snap_free(&s);
+    tmesh_free(tm);
+    mesh_free(m);
+}
+
+/* An insertion that cannot raise the cavity's minimum by the margin is refused
+ * with nothing changed; in a tet of one boundary face the face stays. */
+TEST(insertion_refused_leaves_the_mesh)
+{
+    tmesh *tm = ring_mesh(4, -1, 1, NULL);
+    int32_t ids[32], nf0, nf1, *f0, *f1;
+    int done = 1, nn = 0;
+    snap s;
+
+    ASSERT_TRUE(tm);
+    ASSERT_TRUE(snap_take(tm, &s));
+    ASSERT_OK(insert_in_tet(tm, 0, 10.0, &done, ids, &nn));
+    ASSERT_EQ_INT(done, 0);
+    ASSERT_EQ_INT(tm->nv, 6);
+    ASSERT_TRUE(snap_same(tm, &s));
+    f0 = cons_faces(tm, &nf0);
+    ASSERT_TRUE(f0);
+    ASSERT_OK(insert_in_tet(tm, 0, -INFINITY, &done, ids, &nn));
+    ASSERT_EQ_INT(done, 1);
+    ASSERT_TRUE(consistent(tm));
+    f1 = cons_faces(tm, &nf1);
+    ASSERT_TRUE(f1);
+    ASSERT_EQ_INT(nf1, nf0);
+    ASSERT_TRUE(!memcmp(f0, f1, 20 * (size_t)nf0));
+    tmesh_commit(tm);
+    free(f0);
+    free(f1);
+    snap_free(&s);
+    tmesh_free(tm);
+}
+
+/* The driver with insertion on a perturbed two-region grid: vertices added,
+ * the smallest mean ratio above the flips' alone, the constrained faces and
+ * region volumes kept, adjacency consistent, none inverted. */
+TEST(driver_with_insertion)
+{
+    const int n = 6;
+    mesh_t *m = tm_grid(n, MESH_WITH_REGION);
+    tmesh *a = NULL, *b = NULL;
+    int32_t nf0, nf1, *f0, *f1;
+    double v0[3], v1[3];
+    topo_params p;
+    topo_stats st;
+
+    ASSERT_TRUE(m);
+    tm_perturb(m, n, 0.3, 5);
+    ASSERT_OK(tmesh_new(m->nv, m->xyz, m->nt, m->tets, m->region, NULL, &a, NULL));
+    ASSERT_OK(tmesh_new(m->nv, m->xyz, m->nt, m->tets, m->region, NULL, &b, NULL));
+    f0 = cons_faces(b, &nf0);
+    ASSERT_TRUE(f0);
+    tag_vols(b, v0);
+    topo_params_default(&p);
+    p.qgoal = 0.9;
+    ASSERT_OK(topo_improve(a, &p, &st, NULL));
+    p.insert = 1;
+    p.qinsert = 0.5;
+    p.imargin = 1e-3;
+    ASSERT_OK(topo_improve(b, &p, &st, NULL));
+    ASSERT_TRUE(st.insertions > 0);
+    ASSERT_EQ_INT(st.nv_out, st.nv_in + (int32_t)st.insertions);
+    ASSERT_TRUE(consistent(b));
+    ASSERT_TRUE(min_q(b) >= min_q(a));
+    f1 = cons_faces(b, &nf1);
+    ASSERT_TRUE(f1);
+    ASSERT_EQ_INT(nf1, nf0);
+    ASSERT_TRUE(!memcmp(f0, f1, 20 * (size_t)nf0));
+    tag_vols(b, v1);
+    for (int r = 1; r <= 2; r++)
+        ASSERT_NEAR(v1[r], v0[r], 1e-12 * fabs(v0[r]));
+    free(f0);
+    free(f1);
+    tmesh_free(a);
+    tmesh_free(b);
+    mesh_free(m);
+}
+
 /* Twice the same run: the same tets in the same order. */
 TEST(driver_is_deterministic)
 {
@@ -725,8 +863,9 @@ TEST(flips_allocation_failures_are_clean)
 #endif
 }
 
-TEST_MAIN("topo", T(orient3d_exact_near_coplanar), T(edge_removal_3_2_keeps_volume),
-          T(edge_removal_rings_3_to_8), T(flip_2_3),
+TEST_MAIN("topo", T(insertion_in_a_bad_tet), T(insertion_refused_leaves_the_mesh),
+          T(driver_with_insertion), T(orient3d_exact_near_coplanar),
+          T(edge_removal_3_2_keeps_volume), T(edge_removal_rings_3_to_8), T(flip_2_3),
           T(multiface_removal_restores_the_ring),
           T(export_keeps_the_callers_vertex_order), T(mixed_tag_shell_blocks_removal),
           T(non_convex_ring_refused), T(four_boundary_corner_floor),

@@ -230,8 +230,8 @@ static inline double read_ratio(const char *b, size_t n, meshio_format f, int re
     }
     printf("  # %s read%s: %.1f MB in %.3f s = %.0f MB/s; reference pass %.0f MB/s;"
            " ratio %.2f (%llx)\n",
-           meshio_format_name(f), what, n / 1e6, best, n / 1e6 / best, n / 1e6 / ref, ratio,
-           (unsigned long long)(h & 0xf));
+           meshio_format_name(f), what, n / 1e6, best, n / 1e6 / best, n / 1e6 / ref,
+           ratio, (unsigned long long)(h & 0xf));
     return ratio;
 }
 

@@ -1,0 +1,246 @@
+/* insert.c - interior vertex insertion: the star of a new vertex placed by a
+ * small search inside the cavity of a bad tet and its face-neighbours. */
+#include "topo/insert.h"
+
+#include "core/tet.h"
+
+#include <math.h>
+#include <string.h>
+
+enum { INS_OLD = 12, INS_NEW = 32 };
+
+qdc_status tmesh_add_vertex(tmesh *tm, const double p[3])
+{
+    if (tm->nv == INT32_MAX)
+        return QDC_ENOMEM;
+    if (tm->nv == tm->vcap) {
+        int32_t cap = tm->vcap < INT32_MAX / 2 ? tm->vcap + tm->vcap / 4 + 64 : INT32_MAX;
+        double *x = qdc_realloc(tm->xyz, 3 * (size_t)cap * sizeof *x);
+        uint8_t *c;
+        if (!x)
+            return QDC_ENOMEM;
+        tm->xyz = x;
+        c = qdc_realloc(tm->vcons, (size_t)cap);
+        if (!c)
+            return QDC_ENOMEM;
+        tm->vcons = c;
+        tm->vcap = cap;
+    }
+    memcpy(tm->xyz + 3 * (size_t)tm->nv, p, 3 * sizeof *p);
+    tm->vcons[tm->nv++] = 0;
+    return QDC_OK;
+}
+
+/* The cavity of t: t and the live tets across its unconstrained faces (one tag,
+ * none inverted). Returns its size. */
+static int cavity(const tmesh *tm, int32_t t, int32_t old[INS_OLD])
+{
+    int n = 0;
+
+    old[n++] = t;
+    for (int i = 0; i < 4; i++) {
+        int32_t a = tm->adj[4 * (size_t)t + i];
+        if (a < 0 || (tm->fcons[t] >> i & 1) || tm->q[a / 4] < -1.0 ||
+            tm->tag[a / 4] != tm->tag[t])
+            continue;
+        old[n++] = a / 4;
+    }
+    return n;
+}
+
+/* The star of vertex v over the outer faces of the cavity old (each tet with
+ * the vertex opposite an outer face replaced by v). Returns the tet count, or
+ * -1 when there are more than INS_NEW. */
+static int star(const tmesh *tm, const int32_t *old, int nold, int32_t v,
+                int32_t newt[INS_NEW][4], int32_t from[INS_NEW])
+{
+    int n = 0;
+
+    for (int o = 0; o < nold; o++)
+        for (int i = 0; i < 4; i++) {
+            int32_t a = tm->adj[4 * (size_t)old[o] + i], in = 0;
+            for (int k = 0; k < nold && a >= 0; k++)
+                in |= old[k] == a / 4;
+            if (in)
+                continue;
+            if (n == INS_NEW)
+                return -1;
+            memcpy(newt[n], tm->tv + 4 * (size_t)old[o], 4 * sizeof(int32_t));
+            from[n] = 4 * old[o] + i;
+            newt[n++][i] = v;
+        }
+    return n;
+}
+
+/* The smallest quality of the star with its vertex (the last) at p. */
+static double star_min(tmesh *tm, const double p[3], int32_t (*newt)[4], int nnew)
+{
+    double q = INFINITY;
+
+    memcpy(tm->xyz + 3 * (size_t)(tm->nv - 1), p, 3 * sizeof *p);
+    for (int j = 0; j < nnew && q > -1.0; j++)
+        q = fmin(q, tmesh_quality(tm, newt[j], -INFINITY));
+    return q;
+}
+
+/* The best place found for the new vertex: the centroids of t and of the
+ * cavity's vertices, then a compass search (6 directions, step halved when
+ * none improves) from the better. Returns its smallest quality, p set. */
+static double place(tmesh *tm, int32_t t, const int32_t *old, int nold,
+                    int32_t (*newt)[4], int nnew, double p[3])
+{
+    double c0[3] = {0, 0, 0}, c1[3] = {0, 0, 0}, h = 0.0, best, q;
+    int nc = 0;
+
+    for (int k = 0; k < 4; k++)
+        for (int d = 0; d < 3; d++)
+            c0[d] += 0.25 * tm->xyz[3 * (size_t)tm->tv[4 * (size_t)t + k] + d];
+    for (int o = 0; o < nold; o++)
+        for (int k = 0; k < 4; k++, nc++) {
+            const double *x = tm->xyz + 3 * (size_t)tm->tv[4 * (size_t)old[o] + k];
+            for (int d = 0; d < 3; d++) {
+                c1[d] += x[d];
+                h = fmax(h, fabs(x[d] - c0[d]));
+            }
+        }
+    for (int d = 0; d < 3; d++)
+        c1[d] /= nc;
+    best = star_min(tm, c0, newt, nnew);
+    memcpy(p, c0, sizeof c0);
+    q = star_min(tm, c1, newt, nnew);
+    if (q > best) {
+        best = q;
+        memcpy(p, c1, sizeof c1);
+    }
+    h *= 0.25;
+    for (int it = 0; it < 24 && h > 0.0; it++) {
+        int moved = 0;
+        for (int dir = 0; dir < 6; dir++) {
+            double x[3] = {p[0], p[1], p[2]};
+            x[dir / 2] += dir % 2 ? -h : h;
+            q = star_min(tm, x, newt, nnew);
+            if (q > best) {
+                best = q;
+                memcpy(p, x, sizeof x);
+                moved = 1;
+            }
+        }
+        if (!moved)
+            h *= 0.5;
+    }
+    memcpy(tm->xyz + 3 * (size_t)(tm->nv - 1), p, 3 * sizeof *p);
+    return best;
+}
+
+/* The tet across the outer face slot f (4 * tet + face) when the cavity old
+ * may take it (interior, unconstrained, one tag, not inverted, not in it), or -1. */
+static int32_t across(const tmesh *tm, const int32_t *old, int nold, int32_t f)
+{
+    int32_t a = tm->adj[f];
+
+    if (a < 0 || (tm->fcons[f / 4] >> (f % 4) & 1) || tm->q[a / 4] < -1.0 ||
+        tm->tag[a / 4] != tm->tag[f / 4] || nold >= INS_OLD)
+        return -1;
+    for (int o = 0; o < nold; o++)
+        if (old[o] == a / 4)
+            return -1;
+    return a / 4;
+}
+
+/* 1 when every vertex of the cavity old is a vertex of the star newt (none would
+ * be left without a tet). */
+static int keeps_vertices(const tmesh *tm, const int32_t *old, int nold,
+                          int32_t (*newt)[4], int nn)
+{
+    for (int o = 0; o < nold; o++)
+        for (int k = 0; k < 4; k++) {
+            int32_t v = tm->tv[4 * (size_t)old[o] + k], found = 0;
+            for (int j = 0; j < nn && !found; j++)
+                found = newt[j][0] == v || newt[j][1] == v || newt[j][2] == v ||
+                        newt[j][3] == v;
+            if (!found)
+                return 0;
+        }
+    return 1;
+}
+
+/* The cavity grown from t and its face-neighbours, each time by the tet across
+ * the outer face of the worst new tet (Stellar's cavity growth, greedy), up to
+ * INS_OLD tets; the one whose star, its vertex placed by place(), has the best
+ * smallest quality relative to the cavity's: *best_gain, old/nold and p set. */
+static void grow(tmesh *tm, int32_t t, int32_t *old, int *nold, double p[3],
+                 double *best_gain)
+{
+    int32_t cav[INS_OLD], newt[INS_NEW][4], from[INS_NEW];
+    int n = cavity(tm, t, cav);
+    double qold = INFINITY;
+
+    *best_gain = -INFINITY;
+    *nold = 0;
+    for (int o = 0; o < n; o++)
+        qold = fmin(qold, tm->q[cav[o]]);
+    for (;;) {
+        double x[3], qn, worst = INFINITY;
+        int nn = star(tm, cav, n, tm->nv - 1, newt, from), jw = 0;
+        int32_t a;
+        if (nn < 0)
+            break;
+        qn = place(tm, t, cav, n, newt, nn, x);
+        if (qn - qold > *best_gain && keeps_vertices(tm, cav, n, newt, nn)) {
+            *best_gain = qn - qold;
+            memcpy(old, cav, (size_t)n * sizeof *cav);
+            *nold = n;
+            memcpy(p, x, sizeof x);
+        }
+        for (int j = 0; j < nn; j++) {
+            double q = tmesh_quality(tm, newt[j], -INFINITY);
+            if (q < worst) {
+                worst = q;
+                jw = j;
+            }
+        }
+        a = across(tm, cav, n, from[jw]);
+        if (a < 0)
+            break;
+        cav[n++] = a;
+        qold = fmin(qold, tm->q[a]);
+    }
+}
+
+qdc_status insert_in_tet(tmesh *tm, int32_t t, double margin, int *done, int32_t *new_ids,
+                         int *nnew)
+{
+    int32_t old[INS_OLD], newt[INS_NEW][4], from[INS_NEW];
+    double gain, p[3] = {0, 0, 0};
+    int nold = 0, nn, applied = 0;
+    qdc_status st;
+
+    *done = 0;
+    *nnew = 0;
+    if (tm->tv[4 * (size_t)t] < 0 || tm->q[t] < -1.0)
+        return QDC_OK;
+    st = tmesh_add_vertex(tm, p);
+    if (st != QDC_OK)
+        return st;
+    grow(tm, t, old, &nold, p, &gain);
+    if (nold == 0 || gain < margin) {
+        tm->nv--;
+        return QDC_OK;
+    }
+    memcpy(tm->xyz + 3 * (size_t)(tm->nv - 1), p, sizeof p);
+    nn = star(tm, old, nold, tm->nv - 1, newt, from);
+    st = tmesh_replace(tm, old, nold, (const int32_t(*)[4])newt, nn, new_ids, &applied);
+    if (st != QDC_OK || !applied) {
+        tm->nv--;
+        return st;
+    }
+    *done = 1;
+    *nnew = nn;
+    return QDC_OK;
+}
+
+void insert_undo(tmesh *tm)
+{
+    tmesh_rollback(tm);
+    tm->nv--;
+}
