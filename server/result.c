@@ -145,7 +145,8 @@ static int result_format(struct MHD_Connection *c, req *r, const job_rec *j,
             k = strchr(f, '/') ? meshio_format_from_media_type(f)
                                : meshio_format_from_name(f);
         if (offerable(k, upload_mesh_format(j)) &&
-            (r->route != R_RESULT || meshio_has_writer(k) || !job_changes_tets(j->options))) {
+            (r->route != R_RESULT || meshio_has_writer(k) ||
+             !job_changes_tets(j->options))) {
             *out = k;
             return 0;
         }
@@ -300,12 +301,7 @@ static qdc_status convert_source(req *r, const job_rec *j, mesh_t **out, qdc_err
     if (st == QDC_OK && in && tets) {
         /* the run's tets and their regions, the upload's boundary triangles
          * and vertex refs (kept as sets by the flips), qdc's own writer */
-        int32_t *t = in->tets, *g = in->region;
-        in->tets = res->tets;
-        in->region = res->region;
-        in->nt = res->nt;
-        res->tets = t;
-        res->region = g;
+        mesh_swap_tets(in, res);
     }
     if (st == QDC_OK && in) {
         memcpy(in->xyz, res->xyz, 3 * sizeof(double) * (size_t)in->nv);

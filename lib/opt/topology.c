@@ -12,9 +12,9 @@
  * the files below it. */
 #include "opt/opt.h"
 
+#include "core/base_int.h"
 #include "core/mesh.h"
 #include "core/tet.h"
-#include "core/base_int.h"
 #include "geom/metric_int.h"
 #include "opt/opt_int.h"
 #include "opt/run.h"
@@ -105,6 +105,7 @@ static qdc_status flip_record(const mesh_t *m, int iteration, double t0, opt_pro
     }
     r->iteration = iteration;
     r->phase = "topology";
+    r->n_tets = m->nt;
     r->q_min = INFINITY;
     r->dih_min = 180.0;
     r->dih_max = 0.0;
@@ -219,7 +220,8 @@ static void merge_result(opt_result *last, const opt_result *first, int32_t nt_o
     last->t_finish = first->t_finish;
     last->last_record = record;
     last->t_total = t_total;
-    snprintf(last->stop_reason, sizeof last->stop_reason, "%s", opt_stop_name(last->stop));
+    snprintf(last->stop_reason, sizeof last->stop_reason, "%s",
+             opt_stop_name(last->stop));
 }
 
 static qdc_status topology_run(mesh_t *m, const opt_options *opts, opt_result *res,
@@ -258,6 +260,7 @@ static qdc_status topology_run(mesh_t *m, const opt_options *opts, opt_result *r
         st = flip_record(m, ++record, t0, &pr, err);
         if (st != QDC_OK)
             break;
+        pr.operations = ts.edge_removals + ts.flips23 + ts.multiface;
         if (opts->progress && opts->progress(opts->progress_ctx, &pr)) {
             last.outcome = OPT_STOPPED;
             last.stop = OPT_STOP_CANCELLED;

@@ -143,8 +143,8 @@ set -- $(counts "$TMP/flips.mesh")
 jcheck "$TMP/rep" ".options.topology == \"flips\" and .run.topology.tets_in == $nt and .run.topology.tets_out == $2 and .run.topology.edge_removals + .run.topology.flips23 + .run.topology.multiface_removals > 0" \
     "server topology: report" "server topology: report: topology flips, tets $nt -> $t, flips counted"
 curl -s "$URL/v1/jobs/$idf/progress?after=-1" > "$TMP/prog"
-jcheck "$TMP/prog" '[.records[] | select(.phase == "topology")] | length > 0' \
-    "server topology: progress" "server topology: progress: records of phase topology"
+jcheck "$TMP/prog" "[.records[] | select(.phase == \"topology\")] as \$t | (\$t | length > 0) and (\$t | all(.operations > 0 and .n_tets > 0)) and \$t[-1].n_tets == $2" \
+    "server topology: progress" "server topology: progress: records of phase topology with the tets after each round and its flips"
 
 stop_qdcd || fail "server topology: stop" "exit $?"
 exit $((NFAIL > 0))
