@@ -22,17 +22,6 @@ int job_opt_set(opt_options *o, const char *key, const char *val, double cap_tim
         snprintf(why, why_cap, "%.*s", (int)(why_cap > 0 ? why_cap - 1 : 0), err.msg);
         return -1;
     }
-    /* A result is the upload with the result's coordinates put in (result.c):
-     * a run that changes the tets has no such result yet, so it is refused
-     * here, at submit time, not failed later. */
-    if (o->topology != OPT_TOPOLOGY_NONE) {
-        o->topology = OPT_TOPOLOGY_NONE;
-        snprintf(why, why_cap,
-                 "option topology: qdcd serves none only (a result is the upload with "
-                 "new coordinates: it cannot hold new tets); `qdc optimize --topology "
-                 "flips` runs it");
-        return -1;
-    }
     if (cap_time > 0 && (o->time_limit <= 0 || o->time_limit > cap_time))
         o->time_limit = cap_time;
     return 0;
@@ -166,4 +155,14 @@ void job_tetra_opts(const char *json, double *quality, double *max_volume)
     if (json_is_number(v))
         *max_volume = json_number_value(v);
     json_decref(root);
+}
+
+int job_changes_tets(const char *json)
+{
+    json_t *root = json_loads(json, 0, NULL);
+    json_t *v = json_object_get(root, "topology");
+    int r = json_is_string(v) && strcmp(json_string_value(v), "none") != 0;
+
+    json_decref(root);
+    return r;
 }

@@ -25,4 +25,9 @@ void job_opt_table_json(sbuf *out);
  * "max_volume"); -1 for each one not given. */
 void job_tetra_opts(const char *json, double *quality, double *max_volume);
 
+/* Whether a job's options JSON asks for a topology mode other than none: its
+ * result has other tets than its upload (result.c writes it with qdc's own
+ * writer, not spliced into the upload). */
+int job_changes_tets(const char *json);
+
 #endif

@@ -144,7 +144,9 @@ static int result_format(struct MHD_Connection *c, req *r, const job_rec *j,
         else
             k = strchr(f, '/') ? meshio_format_from_media_type(f)
                                : meshio_format_from_name(f);
-        if (offerable(k, upload_mesh_format(j))) {
+        if (offerable(k, upload_mesh_format(j)) &&
+            (r->route != R_RESULT || meshio_has_writer(k) ||
+             !job_changes_tets(j->options))) {
             *out = k;
             return 0;
         }
@@ -230,6 +232,14 @@ static enum MHD_Result serve_result(struct MHD_Connection *c, req *r, const job_
                  "are kept",
                  meshio_format_name(f) ? meshio_format_name(f) : "?",
                  meshio_format_name(sf) ? meshio_format_name(sf) : "?");
+    /* the upload's own format, but the run changed the tets: not spliced */
+    else if (r->route == R_RESULT && sf == f && sf != MESHIO_QMESH && sf != MESHIO_JSON &&
+             job_changes_tets(j->options))
+        snprintf(note, sizeof note,
+                 "written by qdc's %s writer, not the uploaded file with new "
+                 "coordinates (topology changed the tets): only vertices, tets, "
+                 "triangles and their region tags are kept",
+                 meshio_format_name(f) ? meshio_format_name(f) : "?");
     const char *const h[] = {MHD_HTTP_HEADER_ETAG,
                              etag,
                              MHD_HTTP_HEADER_VARY,
@@ -255,7 +265,9 @@ static int from_upload(const req *r, const job_rec *j)
     return r->route == R_RESULT && !job_is_surface(j->format);
 }
 
-/* The mesh to write for r. The input: its file, read with its source kept
+/* The mesh to write for r (a job whose topology mode changed the tets: the
+ * upload read without its source, with the result's coordinates, tets and
+ * regions put in). The input: its file, read with its source kept
  * (the input in its own format is the upload itself). A result: the upload
  * with the result's coordinates put in, so that every format holds what the
  * CLI's output holds (the boundary triangles and their refs too, which
@@ -268,8 +280,9 @@ static qdc_status convert_source(req *r, const job_rec *j, mesh_t **out, qdc_err
 {
     char src[4300];
     meshio_format sf = input_source(r, j, src, sizeof src);
+    int tets = from_upload(r, j) && job_changes_tets(j->options);
     meshio_options keep = {
-        .log = NULL, .log_ctx = NULL, .source = sf == r->res_fmt ? 1 : -1};
+        .log = NULL, .log_ctx = NULL, .source = sf == r->res_fmt && !tets ? 1 : -1};
     mesh_t *res = NULL, *in = NULL;
     qdc_status st;
 
@@ -283,8 +296,13 @@ static qdc_status convert_source(req *r, const job_rec *j, mesh_t **out, qdc_err
     }
     job_path(r->q, j->id, "result.qmesh", src, sizeof src);
     st = meshio_load(src, MESHIO_QMESH, &res, e);
-    if (st == QDC_OK && in && (in->nv != res->nv || in->nt != res->nt))
+    if (st == QDC_OK && in && (in->nv != res->nv || (!tets && in->nt != res->nt)))
         st = qdc_fail(e, QDC_EINTERNAL, "the result does not match its input");
+    if (st == QDC_OK && in && tets) {
+        /* the run's tets and their regions, the upload's boundary triangles
+         * and vertex refs (kept as sets by the flips), qdc's own writer */
+        mesh_swap_tets(in, res);
+    }
     if (st == QDC_OK && in) {
         memcpy(in->xyz, res->xyz, 3 * sizeof(double) * (size_t)in->nv);
         mesh_free(res);

@@ -195,7 +195,7 @@ window.addEventListener('popstate', route);
 // The options the form offers: their types, valid values, defaults and help
 // come from GET /v1/options (the library's table, as `qdc options` prints it),
 // so a new default shows here without touching the page.
-const MAIN_OPTIONS = ['metric', 'boundary', 'hausd', 'max_iter', 'stall', 'mode', 'time_limit',
+const MAIN_OPTIONS = ['metric', 'boundary', 'hausd', 'topology', 'max_iter', 'stall', 'mode', 'time_limit',
     'finish', 'angle_polish', 'tetgen_quality'];
 let OPTIONS = []; // the table's entries named in MAIN_OPTIONS, in that order
 
@@ -788,6 +788,10 @@ function renderReport(st) {
         ['iterations', String(run.iterations) + (run.best_iteration !== undefined ? ', best record ' + run.best_iteration : '')],
         ['solver', run.solver || '–'],
         ...(run.held_back ? [['vertices held back at their input position', int(run.held_back)]] : []),
+        ...(run.topology ? [['topology: tets', int(run.topology.tets_in) + ' → ' + int(run.topology.tets_out)],
+            ['topology: operations', int(run.topology.edge_removals) + ' edges removed, ' + int(run.topology.flips23) +
+                ' 2-3 flips, ' + int(run.topology.multiface_removals) + ' multi-face removals, ' +
+                int(run.topology.rounds) + ' rounds']] : []),
         ...Object.entries(sec).map(([k, v]) => [k + ' time', dur(v)]),
     ]);
 }
@@ -803,21 +807,26 @@ function renderDownloads(st) {
     const base = '/v1/jobs/' + st.id;
     // the upload's own format: the uploaded file with the new coordinates,
     // everything else it holds (names, tags, arrays) kept
+    // (topology other than none: new tets, so qdc's own writer in every
+    // format, and Abaqus and Netgen, written only over the upload, not offered)
     const own = st.job.mesh.format;
+    const newTets = (st.job.options || {}).topology && st.job.options.topology !== 'none';
     const formats = FMT.results.concat(FMT.ownOnly.filter(([f]) => f === own));
     // a format that shares its extension with an earlier one is named in the file name
     const first = (ext) => formats.find(([, e]) => e === ext)[0];
-    const items = (what, tag) => formats.map(([f, ext, label]) => [base + '/' + what + '?format=' + f,
-        fileStem(st.job) + tag + (first(ext) !== f ? '-' + f : '') + '.' + ext, label, f]);
-    const links = (list) => list.map(([href, name, label, f]) =>
+    const items = (what, tag) => formats.filter(([f]) => what === 'input' || !newTets || !FMT.ownOnly.some(([o]) => o === f))
+        .map(([f, ext, label]) => [base + '/' + what + '?format=' + f,
+            fileStem(st.job) + tag + (first(ext) !== f ? '-' + f : '') + '.' + ext, label, f]);
+    const links = (list, spliced) => list.map(([href, name, label, f]) =>
         el('a', { class: 'button small', href, download: name, 'data-format': f,
-            text: f === own ? label + ' (as uploaded)' : label,
-            title: f === own ? 'the uploaded file with only the coordinates replaced: names, tags and arrays kept' : undefined,
+            text: f === own && spliced ? label + ' (as uploaded)' : label,
+            title: f === own && spliced ? 'the uploaded file with only the coordinates replaced: names, tags and arrays kept'
+                : f === own ? "new tets: written by qdc's own writer (vertices, tets, triangles and their region tags)" : undefined,
             onclick: (ev) => authDownload(ev, href, name) }));
     const res = items('result', '.qdc');
     res.push([base + '/report', fileStem(st.job) + '.qdc-report.json', 'report (JSON)', 'report']);
-    box.replaceChildren(...links(res));
-    $('downloads-input').replaceChildren(...links(items('input', '.input')));
+    box.replaceChildren(...links(res, !newTets));
+    $('downloads-input').replaceChildren(...links(items('input', '.input'), true));
     $('downloads-card').hidden = false;
     $('view3d-card').hidden = false;
     const nt = st.job.mesh.tets;
@@ -854,11 +863,13 @@ async function authDownload(ev, href, name) {
 // ------------------------------------------------------------------- charts --
 
 const COLORS = ['#1f6feb', '#cf222e', '#8250df', '#9a6700', '#57606a'];
-const PHASE_FILL = { input: '#eef1f4', pre: '#fff8e1', global: '#ffffff', finish: '#eaf5ea', angles: '#f3ecfb', rerun: '#fde8e8' };
+const PHASE_FILL = { input: '#eef1f4', pre: '#fff8e1', global: '#ffffff', finish: '#eaf5ea', angles: '#f3ecfb', rerun: '#fde8e8',
+    topology: '#e3f2fd' };
 const PHASE_NAME = {
     input: 'the input', pre: 'pre-iterations (before the harmonic field)', global: 'global iteration',
     finish: 'finishing sweep (worst tets, vertex by vertex)', angles: 'smallest-angle polish',
     rerun: 'rerun: restarted from the input',
+    topology: 'topology: a round of flips (the tets change)',
 };
 
 function setupCanvas(c) {

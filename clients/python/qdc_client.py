@@ -420,7 +420,9 @@ class Client:
         With path: written there, format from fmt ('medit', 'gmsh', 'vtu',
         ...) or the extension (the job's own variant when the extension names
         its family: then the upload comes back with only the coordinates
-        replaced); returns path."""
+        replaced; a job with options {"topology": "flips"} has other tets, and
+        its result is written by qdc's own writer in every format); returns
+        path."""
         jid = _job_id(job)
         if path is None:
             fmt = "qmesh"

@@ -887,7 +887,18 @@ static int download(remote *rm, const char *id, const char *out, const char *out
             goto out;
         }
         if (want == MESHIO_AUTO) {
-            if (m->nv != local->nv || m->nt != local->nt) {
+            if (m->nv == local->nv && m->nt != local->nt) {
+                /* a topology mode changed the tets: the result's tets and
+                 * regions in the local mesh, written by qdc's own writer */
+                mesh_swap_tets(local, m);
+                meshio_drop_source(local);
+                if (!rm->quiet)
+                    fprintf(stderr,
+                            "qdc: note: %s: written by qdc's own writer (the job "
+                            "changed the tets): only vertices, tets, triangles and "
+                            "their region tags are kept\n",
+                            out);
+            } else if (m->nv != local->nv || m->nt != local->nt) {
                 fprintf(stderr,
                         "qdc: result: %d vertices, %d tets: not the input's %d, %d\n",
                         (int)m->nv, (int)m->nt, (int)local->nv, (int)local->nt);

@@ -74,6 +74,18 @@ static void *dup_array(const void *p, size_t n, size_t size, int *fail)
     return q;
 }
 
+void mesh_swap_tets(mesh_t *a, mesh_t *b)
+{
+    int32_t nt = a->nt, *t = a->tets, *g = a->region;
+
+    a->nt = b->nt;
+    a->tets = b->tets;
+    a->region = b->region;
+    b->nt = nt;
+    b->tets = t;
+    b->region = g;
+}
+
 mesh_t *mesh_dup(const mesh_t *m)
 {
     mesh_t *d;

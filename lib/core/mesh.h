@@ -52,6 +52,10 @@ qdc_status mesh_set_tris(mesh_t *m, int32_t ntri, int with_ref);
 /* A deep copy of m's arrays, owned by the caller (mesh_free); the source file
  * (m->source) is not copied. NULL if m is NULL or on allocation failure. */
 mesh_t *mesh_dup(const mesh_t *m);
+/* Exchange the tets of a and b: their tets, region tags and tet counts (the
+ * vertices, triangles and sources stay). Puts the tets of a run that changed
+ * them (--topology) into a mesh that holds the rest of the input. */
+void mesh_swap_tets(mesh_t *a, mesh_t *b);
 /* Free m, its arrays and its source. m may be NULL. */
 void mesh_free(mesh_t *m);
 

@@ -275,6 +275,10 @@ static void write_progress_fields(jw *w, const opt_progress *p)
     jw_num(w, "max_move", p->max_move);
     jw_num(w, "elapsed", p->elapsed);
     jw_int(w, "cg_iterations", p->cg_iters);
+    if (p->phase && !strcmp(p->phase, "topology")) {
+        jw_int(w, "n_tets", p->n_tets);
+        jw_int(w, "operations", p->operations);
+    }
 }
 
 qdc_status report_progress_json(const opt_progress *p, qdc_write_fn fn, void *ctx)

@@ -63,6 +63,9 @@ typedef struct {
     double elapsed;   /* seconds since opt_run started */
     int solver;       /* opt_solver actually used */
     int cg_iters;     /* PCG iterations (0 for CHOLMOD) */
+    /* phase "topology" only (not set in the other records): */
+    int32_t n_tets;     /* tets after the round of flips */
+    int64_t operations; /* flips the round made (edge removals, 2-3, multi-face) */
 } opt_progress;
 
 /* Called after each record, on opt_run's thread; p is valid only during the

@@ -145,6 +145,7 @@ static qdc_status flip_record(const mesh_t *m, int iteration, double t0, opt_pro
     }
     r->iteration = iteration;
     r->phase = "topology";
+    r->n_tets = m->nt;
     r->q_min = INFINITY;
     r->dih_min = 180.0;
     r->dih_max = 0.0;
@@ -304,6 +305,7 @@ static qdc_status topology_run(mesh_t *m, const opt_options *opts, opt_result *r
         st = flip_record(m, ++record, t0, &pr, err);
         if (st != QDC_OK)
             break;
+        pr.operations = ts.edge_removals + ts.flips23 + ts.multiface;
         if (opts->progress && opts->progress(opts->progress_ctx, &pr)) {
             last.outcome = OPT_STOPPED;
             last.stop = OPT_STOP_CANCELLED;

@@ -3,7 +3,8 @@
 # results valid and in the -o file's format, reports present, a file sent as it
 # is (TetGen's two files as the binary mesh), `submit IN -o OUT`
 # byte for byte what `qdc optimize IN OUT` writes for 13 files of
-# other tools, progress lines (plain and on a terminal), Idempotency-Key,
+# other tools (and with --topology flips, which changes the tets), progress
+# lines (plain and on a terminal), Idempotency-Key,
 # tokens, and the exit codes 1, 2, 10, 11, 12.
 . "$(dirname "$0")/../lib.sh"
 . "$ROOT/tests/server/daemon.inc"
@@ -220,6 +221,30 @@ for f in json qmesh; do
 done
 [ -z "$bad" ] && pass "submit IN.json|IN.qmesh -o -: Medit, byte for byte what qdc optimize IN - writes" ||
     fail "submit json/qmesh -o -" "$bad"
+
+# 7d. --topology flips passes through: -o in the input's format (Gmsh 4.1,
+# Medit; written by qdcd with qdc's own writer, the tets changed) is what the
+# local run writes, byte for byte; TetGen's pair (sent as the binary mesh)
+# gets the result's tets here, with a note
+bad=
+for f in gmsh41.msh gmsh.mesh; do
+    "$QDC" optimize "$TMP/$f" "$TMP/tlocal.$f" --topology flips --max-iter 3 --quiet ||
+        bad="$bad $f:local"
+    "$QDC" submit "$TMP/$f" --topology flips --max-iter 3 -q -o "$TMP/tremote.$f" \
+        --report "$TMP/t.$f.json" > /dev/null || bad="$bad $f:submit"
+    cmp -s "$TMP/tlocal.$f" "$TMP/tremote.$f" || bad="$bad $f:differs"
+    jq -e '.options.topology == "flips" and .run.topology.tets_in > 0' "$TMP/t.$f.json" \
+        > /dev/null || bad="$bad $f:report"
+done
+"$QDC" convert "$MESH" "$TMP/tp.node" 2> /dev/null
+"$QDC" submit "$TMP/tp.node" --topology flips --max-iter 3 -o "$TMP/tpo.node" \
+    --report "$TMP/tp.json" > /dev/null 2> "$TMP/tp.err" || bad="$bad node:submit"
+tout=$(jq -r .run.topology.tets_out "$TMP/tp.json")
+"$QDC" quality "$TMP/tpo.node" 2>&1 | grep -q ": [0-9]* vertices, $tout tets, 0 inverted" &&
+    [ "$tout" != $NT ] && grep -q "note: .*own writer" "$TMP/tp.err" || bad="$bad node:result"
+[ -z "$bad" ] &&
+    pass "submit --topology flips: Gmsh 4.1 and Medit -o byte for byte as qdc optimize --topology flips writes them; TetGen pair: $NT -> $tout tets, 0 inverted, with a note" ||
+    fail "submit --topology flips" "$bad $(tail -2 "$TMP/tp.err")"
 
 # a closed surface goes up as it is (qdcd tetrahedralizes it; TetGen's options
 # pass through); an open one is refused here (exit 2), before any job

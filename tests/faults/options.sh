@@ -3,15 +3,14 @@
 # submit time (400 problem+json naming the valid values), not accepted with
 # a 202 and failed later: mu=0, eps_rel=0, mu=1e-400 (underflows to 0),
 # max_iter=%205 (a leading space) and max_iter=5%00abc (a NUL byte) were all
-# taken before; topology=flips (the daemon's results cannot hold new tets yet);
-# a valid set of the same options is accepted.
+# taken before; a valid set of the same options is accepted.
 . "$(dirname "$0")/../lib.sh"
 . "$ROOT/tests/server/daemon.inc"
 start_qdcd "$TMP/d" --workers 1 || { fail "options: start qdcd" "$(tail -3 "$TMP/d.log")"; exit 1; }
 CUBE=$ROOT/tests/data/sample/cube.mesh
 for q in mu=0 eps_rel=0 mu=1e-400 "max_iter=%205" "max_iter=5%00abc" "max_iter=5.0" \
     "finish_frac=nan" "hausd=-1" "hausd=rel:" "metric=MIVL" "time_limit=inf" \
-    "topology=flips"; do
+    "topology=twist"; do
     code=$(submit "$CUBE" model/x-medit "$q" "$TMP/o")
     ct=$(hdr "$TMP/o" Content-Type)
     detail=$(jf "$TMP/o" .detail 2> /dev/null)

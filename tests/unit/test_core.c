@@ -527,6 +527,22 @@ TEST(spatial_order_is_the_morton_curve)
     free(tets);
 }
 
+TEST(swap_tets_exchanges_tets_regions_and_counts)
+{
+    mesh_t *a = mesh_new(5, 1, MESH_WITH_REGION), *b = mesh_new(5, 2, 0);
+    ASSERT_TRUE(a && b);
+    int32_t *ta = a->tets, *tb = b->tets, *ra = a->region;
+    double *xa = a->xyz;
+    mesh_swap_tets(a, b);
+    ASSERT_EQ_INT(a->nt, 2);
+    ASSERT_EQ_INT(b->nt, 1);
+    ASSERT_TRUE(a->tets == tb && b->tets == ta);
+    ASSERT_TRUE(a->region == NULL && b->region == ra);
+    ASSERT_TRUE(a->xyz == xa && a->nv == 5);
+    mesh_free(a);
+    mesh_free(b);
+}
+
 TEST(validation_errors)
 {
     mesh_t *m = tm_grid(2, 0);
@@ -685,4 +701,5 @@ TEST_MAIN("core", T(flat_tets_are_degenerate_at_every_scale),
           T(optavg_weights_sum_to_one_on_random_mesh),
           T(cholmod_and_pcg_agree_with_dense), T(topology_of_grid),
           T(topology_does_not_depend_on_vertex_order),
-          T(spatial_order_is_the_morton_curve), T(validation_errors))
+          T(spatial_order_is_the_morton_curve), T(validation_errors),
+          T(swap_tets_exchanges_tets_regions_and_counts))
