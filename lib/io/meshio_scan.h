@@ -283,6 +283,38 @@ static inline int parse_double(const char *t, const char *te, double *out)
     return 0;
 }
 
+/* A Fortran or Nastran real [t, te) (no blanks): an exponent after D as
+ * after E ("1.5D-03"), or after a bare sign ("1.-3" = 1e-3, "-.5+2" = -50).
+ * Returns 0, or -1 on bad syntax. */
+static inline int parse_fortran_real(const char *t, const char *te, double *out)
+{
+    char tmp[64];
+    size_t n = (size_t)(te - t), k = 0;
+
+    for (size_t i = 0; i < n; i++) {
+        char c = t[i];
+        if (c == 'D' || c == 'd' ||
+            ((c == '+' || c == '-') && i > 0 &&
+             ((t[i - 1] >= '0' && t[i - 1] <= '9') || t[i - 1] == '.')))
+            break;
+        if (i + 1 == n)
+            return parse_double(t, te, out); /* no D, no bare-sign exponent */
+    }
+    if (n + 2 > sizeof tmp)
+        return -1;
+    for (size_t i = 0; i < n; i++) {
+        char c = t[i];
+        if (c == 'D' || c == 'd') {
+            c = 'e';
+        } else if ((c == '+' || c == '-') && i > 0 &&
+                   ((t[i - 1] >= '0' && t[i - 1] <= '9') || t[i - 1] == '.')) {
+            tmp[k++] = 'e';
+        }
+        tmp[k++] = c;
+    }
+    return parse_double(tmp, tmp + k, out);
+}
+
 /* Integer [t, te). strict (JSON): no '+', no leading zeros. Returns 0, -1 on
  * bad syntax, -2 when the magnitude is beyond any count or index. */
 static inline int parse_int(const char *t, const char *te, int strict, int64_t *out)
@@ -857,6 +889,31 @@ static inline int64_t tagmap_find(const tagmap *tm, int64_t t)
     return -1;
 }
 
+/* ids[n] to indices out[n]; the position of the first id no node has, or -1. */
+static inline int64_t tagmap_indices(const tagmap *tm, const int64_t *ids, size_t n,
+                                     int32_t *out)
+{
+    for (size_t i = 0; i < n; i++) {
+        int64_t v = tagmap_find(tm, ids[i]);
+        if (v < 0)
+            return (int64_t)i;
+        out[i] = (int32_t)v;
+    }
+    return -1;
+}
+
+/* s->line and s->bol of the byte at (for an error found after the scan). */
+static inline void txt_locate(txt *s, const char *at)
+{
+    s->line = 1;
+    s->bol = s->base;
+    for (const char *p = s->base; p < at && p < s->end; p++)
+        if (*p == '\n') {
+            s->line++;
+            s->bol = p + 1;
+        }
+}
+
 static inline void tagmap_free(tagmap *tm)
 {
     qdc_free(tm->dense);
@@ -879,8 +936,22 @@ enum {
     SRC_TEXT3,    /* off[3v + a]: first byte of coordinate a of vertex v, in
                      increasing order; a token ends at whitespace, ',', a quote
                      or '<' (XML attributes, Abaqus comma lists) */
-    SRC_BLOCK     /* VTU base64 or zlib Points: bytes [blk_a, blk_b) re-encoded */
+    SRC_BLOCK,    /* VTU base64 or zlib Points: bytes [blk_a, blk_b) re-encoded */
+    SRC_FIELD     /* off[3v + a]: coordinate a of vertex v in a field of the
+                     line, increasing: FIELD_AT(off) its first byte,
+                     FIELD_WIDTH(off) its width; FIELD_FREE: the field is the
+                     token there (ends at blank, ',' or '$') and the new text
+                     replaces it unpadded, at most the width; else the new
+                     text, right-aligned, fills the width (Nastran fixed
+                     fields, I-DEAS columns); FIELD_EXP: Fortran form
+                     (1.2500000000000000D-01, the letter kept), else Nastran's
+                     (a '.' always, "1.25-1" if that is what fits) */
 };
+#define FIELD_FREE (UINT64_C(1) << 62)
+#define FIELD_EXP (UINT64_C(1) << 61)
+#define FIELD_AT(o) ((size_t)((o) & ((UINT64_C(1) << 48) - 1)))
+#define FIELD_WIDTH(o) ((int)(((o) >> 48) & 0xff))
+#define FIELD(at, width, flags) ((uint64_t)(at) | (uint64_t)(width) << 48 | (flags))
 /* SRC_TEXT3 offsets with SRC_BLANK: the coordinate is not in the file (a
  * blank field, read as 0) and the offset is where its value goes if it is not
  * 0 when written; with SRC_COMMA too, a field left out at the end of the line:
@@ -1016,5 +1087,149 @@ int splice_ok(const mesh_t *m, meshio_format fmt, const char **why);
 qdc_status splice_set_path(mesh_t *m, const char *path, qdc_error *err);
 /* Write the source with m's coordinates; part 1 = TetGen's .ele. */
 qdc_status splice_write(const mesh_t *m, int part, wbuf *w, qdc_error *err);
+
+/* ------------------------------------------------------------------------ */
+/* Nodes and elements by label, in any order (Nastran, I-DEAS)               */
+
+/* Nodes with their labels and coordinate fields (SRC_FIELD offsets), tets
+ * and triangles by node label with two tags each and where they are in the
+ * file; turned into a mesh once everything is read (a node may come after
+ * the elements that use it). */
+typedef struct {
+    vec tags, xyz, off;                /* int64 labels; 3 doubles; 3 uint64 FIELD()s */
+    vec el[2], tag[2], tag2[2], at[2]; /* [0] tets, [1] triangles: int64 labels,
+                                         int32 tags, int64 byte offsets */
+    const char *node, *elem[2];        /* names in messages: "GRID", "CTETRA" */
+} labelled;
+
+static inline void lab_init(labelled *l, const char *node, const char *tet,
+                            const char *tri)
+{
+    memset(l, 0, sizeof *l);
+    l->tags.size = sizeof(int64_t);
+    l->xyz.size = sizeof(double);
+    l->off.size = sizeof(uint64_t);
+    for (int k = 0; k < 2; k++) {
+        l->el[k].size = l->at[k].size = sizeof(int64_t);
+        l->tag[k].size = l->tag2[k].size = sizeof(int32_t);
+    }
+    l->node = node;
+    l->elem[0] = tet;
+    l->elem[1] = tri;
+}
+
+static inline void lab_free(labelled *l)
+{
+    vec_free(&l->tags);
+    vec_free(&l->xyz);
+    vec_free(&l->off);
+    for (int k = 0; k < 2; k++) {
+        vec_free(&l->el[k]);
+        vec_free(&l->tag[k]);
+        vec_free(&l->tag2[k]);
+        vec_free(&l->at[k]);
+    }
+}
+
+static inline qdc_status lab_node(labelled *l, int64_t label, const double x[3],
+                                  const uint64_t off[3], qdc_error *err)
+{
+    if (l->tags.n >= MESH_MAX_VERTICES || vec_grow(&l->tags, 1) != 0 ||
+        vec_grow(&l->xyz, 3) != 0 || vec_grow(&l->off, 3) != 0)
+        return qdc_fail(err, QDC_ENOMEM, "out of memory for the nodes");
+    ((int64_t *)l->tags.a)[l->tags.n++] = label;
+    memcpy((double *)l->xyz.a + l->xyz.n, x, 3 * sizeof(double));
+    memcpy((uint64_t *)l->off.a + l->off.n, off, 3 * sizeof(uint64_t));
+    l->xyz.n += 3;
+    l->off.n += 3;
+    return QDC_OK;
+}
+
+/* A tet (k 0, 4 labels) or a triangle (k 1, 3), its tags, where it starts. */
+static inline qdc_status lab_elem(labelled *l, int k, const int64_t *g, int32_t tag,
+                                  int32_t tag2, int64_t at, qdc_error *err)
+{
+    size_t n = k ? 3 : 4;
+
+    if ((!k && l->tag[0].n >= MESH_MAX_TETS) || vec_grow(&l->el[k], n) != 0 ||
+        vec_grow(&l->tag[k], 1) != 0 || vec_grow(&l->tag2[k], 1) != 0 ||
+        vec_grow(&l->at[k], 1) != 0)
+        return qdc_fail(err, QDC_ENOMEM, "out of memory for the elements");
+    memcpy((int64_t *)l->el[k].a + l->el[k].n, g, n * sizeof(int64_t));
+    l->el[k].n += n;
+    ((int32_t *)l->tag[k].a)[l->tag[k].n++] = tag;
+    ((int32_t *)l->tag2[k].a)[l->tag2[k].n++] = tag2;
+    ((int64_t *)l->at[k].a)[l->at[k].n++] = at;
+    return QDC_OK;
+}
+
+/* The mesh: labels to indices (a label twice, or one no node has, is an
+ * error at its line in s), regions and triangle refs from the tags
+ * (pick_regions: the first tags if any is set, else the second if they
+ * differ); rec (or NULL) gets the coordinate fields as fmt's. */
+static inline qdc_status lab_mesh(labelled *l, txt *s, meshio_format fmt, srcrec *rec,
+                                  mesh_t **out, qdc_error *err)
+{
+    parsed pm;
+    tagmap tm;
+    int64_t dup, bad = -1;
+    int32_t *idx[2] = {NULL, NULL};
+    qdc_status st;
+    int k = 0;
+
+    memset(&tm, 0, sizeof tm);
+    parsed_init(&pm);
+    st = tagmap_build(&tm, l->tags.a, (int64_t)l->tags.n, &dup, err);
+    if (st == QDC_OK && dup >= 0) {
+        txt_locate(s, s->base + FIELD_AT(((uint64_t *)l->off.a)[3 * dup]));
+        st = fail_txt(err, QDC_EPARSE, s, s->bol, "%s %lld appears twice", l->node,
+                      (long long)((int64_t *)l->tags.a)[dup]);
+    }
+    for (k = 0; k < 2 && st == QDC_OK && bad < 0; k++) {
+        idx[k] = qdc_mallocn(l->el[k].n + 1, sizeof(int32_t));
+        if (!idx[k])
+            st = qdc_fail(err, QDC_ENOMEM, "out of memory for the elements");
+        else
+            bad = tagmap_indices(&tm, l->el[k].a, l->el[k].n, idx[k]);
+    }
+    if (st == QDC_OK && bad >= 0) {
+        k--;
+        txt_locate(s, s->base + ((const int64_t *)l->at[k].a)[bad / (k ? 3 : 4)]);
+        st = fail_txt(err, QDC_EPARSE, s, s->bol, "%s: unknown %s %lld", l->elem[k],
+                      l->node, (long long)((const int64_t *)l->el[k].a)[bad]);
+    }
+    tagmap_free(&tm);
+    if (st != QDC_OK) {
+        qdc_free(idx[0]);
+        qdc_free(idx[1]);
+        return st;
+    }
+    pm.nv = (int64_t)l->tags.n;
+    pm.nt = (int64_t)l->tag[0].n;
+    pm.ntri = (int64_t)l->tag[1].n;
+    pm.tets = idx[0];
+    pm.tris = idx[1];
+    pm.xyz = l->xyz.a ? l->xyz.a : qdc_malloc(sizeof(double));
+    l->xyz.a = NULL;
+    pick_regions(l->tag[0].a, l->tag2[0].a, pm.nt, &pm.region);
+    pick_regions(l->tag[1].a, l->tag2[1].a, pm.ntri, &pm.tri_ref);
+    l->tag[0].a = l->tag2[0].a = l->tag[1].a = l->tag2[1].a = NULL;
+    if (!pm.xyz) {
+        parsed_free(&pm);
+        return qdc_fail(err, QDC_ENOMEM, "out of memory");
+    }
+    if (rec) {
+        rec->fmt = fmt;
+        rec->kind = SRC_FIELD;
+        rec->nv = pm.nv;
+        rec->off = l->off.a ? l->off.a : qdc_malloc(sizeof(uint64_t));
+        l->off.a = NULL;
+        if (!rec->off) {
+            parsed_free(&pm);
+            return qdc_fail(err, QDC_ENOMEM, "out of memory");
+        }
+    }
+    return parsed_mesh_move(&pm, out, err);
+}
 
 #endif

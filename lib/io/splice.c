@@ -135,7 +135,9 @@ size_t meshio_source_bytes(const mesh_t *m, int *float32)
     if (!s)
         return 0;
     return sizeof *s + (s->buf ? s->len : 0) + s->ele_len +
-           (s->r.off ? (s->r.kind == SRC_TEXT3 ? 24 : 8) * (size_t)s->r.nv : 0) +
+           (s->r.off ? (s->r.kind == SRC_TEXT3 || s->r.kind == SRC_FIELD ? 24 : 8) *
+                           (size_t)s->r.nv
+                     : 0) +
            s->r.appoff.n * sizeof(uint64_t);
 }
 
@@ -635,6 +637,169 @@ static qdc_status splice_text3(const source *s, const double *xyz, edits *ed, wb
     return put_src(ed, w, pos, s->len, err);
 }
 
+/* ---- fixed-width fields (Nastran, I-DEAS) ---- */
+
+/* x with p significant digits (1..17) in Fortran's form, the exponent
+ * letter given: "1.2500000000000000D-01" for p = 17. Length into out[64]. */
+static int fortran_text(double x, int p, char letter, char *out)
+{
+    int n = snprintf(out, 64, "%.*E", p - 1, x);
+
+    for (int i = 0; i < n; i++)
+        if (out[i] == 'E')
+            out[i] = letter;
+    return n;
+}
+
+/* x with p significant digits in Nastran's forms, the shortest that fits
+ * in w: "0.125" (or ".125"), "1.25E-1", "1.25-1". A '.' always (a field
+ * without one is an integer). Length into out[64], or 0 if none fits. */
+static int nastran_text(double x, int p, int w, char *out)
+{
+    char e[40], dig[24], c[3][64];
+    int n, nd = 0, ex, len[3];
+    const char *m = e;
+
+    snprintf(e, sizeof e, "%.*e", p - 1, x);
+    if (*m == '-')
+        m++;
+    for (; *m && *m != 'e'; m++)
+        if (*m >= '0' && *m <= '9')
+            dig[nd++] = *m;
+    ex = atoi(m + 1);
+    while (nd > 1 && dig[nd - 1] == '0')
+        nd--;
+    dig[nd] = '\0';
+    /* positional */
+    n = 0;
+    if (x < 0)
+        c[0][n++] = '-';
+    if (ex >= 0 && ex < 20) {
+        for (int i = 0; i <= ex || i < nd; i++) {
+            if (i == ex + 1)
+                c[0][n++] = '.';
+            c[0][n++] = i < nd ? dig[i] : '0';
+        }
+        if (ex + 1 >= nd)
+            c[0][n++] = '.';
+    } else if (ex < 0 && ex > -20) {
+        if (w - n - nd + ex >= 1) /* room for "0." */
+            c[0][n++] = '0';
+        c[0][n++] = '.';
+        for (int i = -1; i > ex; i--)
+            c[0][n++] = '0';
+        for (int i = 0; i < nd; i++)
+            c[0][n++] = dig[i];
+    } else {
+        n = 64;
+    }
+    len[0] = n;
+    for (int k = 1; k < 3; k++) { /* "1.25E-1", then "1.25-1" */
+        len[k] = snprintf(c[k], 64, "%s%c.%s%s%c%d", x < 0 ? "-" : "", dig[0], dig + 1,
+                          k == 1 ? "E" : "", ex < 0 ? '-' : '+', ex < 0 ? -ex : ex);
+    }
+    for (int k = 0; k < 3; k++)
+        if (len[k] <= w) {
+            memcpy(out, c[k], (size_t)len[k]);
+            return len[k];
+        }
+    return 0;
+}
+
+/* x as the text of a field of width w: Fortran's form with 17 digits
+ * (D25.16, as I-DEAS files have them), Nastran's with the fewest digits
+ * that read back as x; fewer if that does not fit. Length into out[64]; 0
+ * if not even one digit fits (w too small). */
+static int field_text(double x, int w, int fortran, char letter, char *out)
+{
+    int p = fortran ? 17 : 15, n = 0;
+    double back;
+
+    for (; p < 17; p++) { /* the fewest of 15, 16, 17 that read back as x */
+        n = fortran ? fortran_text(x, p, letter, out) : nastran_text(x, p, 64, out);
+        if (n > 0 && parse_fortran_real(out, out + n, &back) == 0 && back == x)
+            break;
+    }
+    for (; p >= 1; p--) {
+        n = fortran ? fortran_text(x, p, letter, out) : nastran_text(x, p, w, out);
+        if (n > 0 && n <= w)
+            return n;
+    }
+    return 0;
+}
+
+/* The field [*a, *b) of coordinate off in the source, blanks trimmed into
+ * [*t, *te); FIELD_FREE: the token at off. Fixed fields end at the line's end
+ * ("\r\n" too) or a '$' (a Nastran comment). */
+static void field_span(const source *s, uint64_t off, size_t *a, size_t *b, size_t *t,
+                       size_t *te)
+{
+    size_t p = FIELD_AT(off), e = p;
+
+    if (off & FIELD_FREE) {
+        while (e < s->len && !is_space((unsigned char)s->buf[e]) && s->buf[e] != ',' &&
+               s->buf[e] != '$')
+            e++;
+    } else {
+        while (e < s->len && e - p < (size_t)FIELD_WIDTH(off) && s->buf[e] != '\n' &&
+               s->buf[e] != '$' &&
+               !(s->buf[e] == '\r' && (e + 1 == s->len || s->buf[e + 1] == '\n')))
+            e++;
+    }
+    *a = p;
+    *b = e;
+    while (p < e && s->buf[p] == ' ')
+        p++;
+    while (e > p && s->buf[e - 1] == ' ')
+        e--;
+    *t = p;
+    *te = e;
+}
+
+static qdc_status splice_field(const source *s, const double *xyz, edits *ed, wbuf *w,
+                               qdc_error *err)
+{
+    size_t pos = 0;
+    char text[64];
+    qdc_status st;
+
+    for (size_t i = 0; i < 3 * (size_t)s->nv; i++) {
+        uint64_t off = s->r.off[i];
+        size_t a, b, t, te;
+        int width = FIELD_WIDTH(off), n;
+        char letter = 'E';
+        double old;
+
+        field_span(s, off, &a, &b, &t, &te);
+        if (a < pos || a > s->len || width < 1)
+            return qdc_fail(err, QDC_EINTERNAL,
+                            "source: coordinate %zu of vertex %zu at byte %zu is out of "
+                            "order",
+                            i % 3, i / 3, a);
+        if (te == t ? xyz[i] == 0 && !signbit(xyz[i])
+                    : parse_fortran_real(s->buf + t, s->buf + te, &old) == 0 &&
+                          memcmp(&old, &xyz[i], sizeof old) == 0)
+            continue; /* reads as the value: kept as it is */
+        for (size_t k = t; k < te; k++)
+            if (s->buf[k] == 'D' || s->buf[k] == 'd')
+                letter = 'D';
+        n = field_text(xyz[i], width, (off & FIELD_EXP) != 0, letter, text);
+        if (n == 0)
+            return qdc_fail(err, QDC_EINVAL,
+                            "vertex %zu: coordinate %g does not fit in a field of %d "
+                            "characters",
+                            i / 3, xyz[i], width);
+        st = put_src(ed, w, pos, a, err);
+        if (st != QDC_OK)
+            return st;
+        for (int k = n; !(off & FIELD_FREE) && k < width; k++)
+            wb_put(w, " ", 1);
+        wb_put(w, text, (size_t)n);
+        pos = b;
+    }
+    return put_src(ed, w, pos, s->len, err);
+}
+
 /* ---- binary ---- */
 
 /* x as `width` bytes (4: float32) in the byte order big. */
@@ -877,6 +1042,9 @@ qdc_status splice_write(const mesh_t *m, int part, wbuf *w, qdc_error *err)
         break;
     case SRC_BLOCK:
         st = splice_block(s, m->xyz, &ed, w, err);
+        break;
+    case SRC_FIELD:
+        st = splice_field(s, m->xyz, &ed, w, err);
         break;
     default:
         st = qdc_fail(err, QDC_EINTERNAL, "source: nothing recorded");
