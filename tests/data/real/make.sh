@@ -40,6 +40,11 @@ gmsh -3 -nt 1 box_sphere.geo -format msh22 -o gmsh22.msh > /dev/null
 gmsh -3 -nt 1 box_sphere.geo -format msh22 -bin -o gmsh22_bin.msh > /dev/null
 sed 's/CharacteristicLengthMax = 0.2/CharacteristicLengthMax = 0.35/' box_sphere.geo > coarse.geo
 gmsh -3 -nt 1 coarse.geo -format msh1 -o gmsh_msh1.msh > /dev/null
+# Nastran bulk data in Gmsh's three field formats (Mesh.BdfFieldFormat: 0 free,
+# 1 small, the default, 2 large)
+gmsh -3 -nt 1 box_sphere.geo -format bdf -o gmsh.bdf > /dev/null
+gmsh -3 -nt 1 box_sphere.geo -string 'Mesh.BdfFieldFormat=0;' -format bdf -o gmsh_free.bdf > /dev/null
+gmsh -3 -nt 1 box_sphere.geo -string 'Mesh.BdfFieldFormat=2;' -format bdf -o gmsh_large.bdf > /dev/null
 gmsh -3 -nt 1 box_sphere.geo -format msh40 -o gmsh40.msh > /dev/null
 gmsh -3 -nt 1 box_sphere.geo -format vtk -o gmsh.vtk > /dev/null
 gmsh -3 -nt 1 box_sphere.geo -format mesh -o gmsh.mesh > /dev/null
@@ -103,6 +108,14 @@ meshio.Mesh(pts, cells, cell_data={"netgen:index": [tp, sp]}).write("meshio.vol"
 # Medit binary (meshio writes GMF version 3: float64, int32, 64-bit positions)
 meshio.Mesh(pts, cells, point_data={"medit:ref": np.arange(len(pts), dtype=np.int32) % 4},
             cell_data={"medit:ref": [tp, sp]}).write("meshio.meshb")
+# Nastran (physical tags as property ids), GRID cards in free, small and
+# large field (meshio 5.0 fails on free-field cells: those are small field)
+nas = meshio.Mesh(pts, cells, cell_data={"nastran:ref": [tp, sp]})
+meshio.nastran.write("meshio_free.bdf", nas, point_format="free", cell_format="fixed-small")
+meshio.nastran.write("meshio_small.nas", nas, point_format="fixed-small",
+                     cell_format="fixed-small")
+meshio.nastran.write("meshio_large.bdf", nas, point_format="fixed-large",
+                     cell_format="fixed-large")
 
 # CalculiX's layout (as cgx writes it): one *ELEMENT block per material with
 # its ELSET, S3 boundary triangles, a material, a section and a step.
@@ -199,7 +212,8 @@ mv box.1.ele tetgen.ele
 for f in gmsh41.msh gmsh41_bin.msh gmsh22.msh gmsh22_bin.msh gmsh40.msh gmsh.vtk gmsh.mesh meshio_zlib.vtu \
     meshio_ascii.vtu meshio_bin.vtk meshio_ascii.vtk vtk_appended_zlib.vtu tetgen.node \
     tetgen.ele dolfin.xml meshio.inp calculix.inp meshio.vol meshio.meshb periodic41.msh \
-    periodic41_bin.msh periodic40.msh periodic22.msh periodic22_bin.msh; do
+    periodic41_bin.msh periodic40.msh periodic22.msh periodic22_bin.msh gmsh_msh1.msh gmsh.bdf \
+    gmsh_free.bdf gmsh_large.bdf meshio_free.bdf meshio_small.nas meshio_large.bdf; do
     gzip -n -9 -c "$f" > "$here/$f.gz"
 done
 ls -l "$here"

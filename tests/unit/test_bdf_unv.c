@@ -1,0 +1,212 @@
+/* test_bdf_unv.c - the Nastran bulk data and I-DEAS universal readers and
+ * their spliced writes, on hand-made two-tet files with known values: the
+ * three field formats read as one mesh, Nastran's short reals, tags as
+ * regions, refusals with their line, fixed-width fields written back in
+ * their width. */
+#include "testio.h"
+#include "testlib.h"
+
+/* Five points a = 0, b = x, c = y, d = z, e = (1,1,1), numbered 10..50; tets
+ * a b c d (PID 1) and e b c d (PID 2), triangle b c d (PID 7), a PSOLID and
+ * a beam kept, in each field format. */
+static const char small[] = "$ two tets, small field\n"
+                            "SOL 101\nCEND\nBEGIN BULK\n"
+                            "GRID    10      0       0.      0.      0.\n"
+                            "GRID    20              1.      0.      0.\n"
+                            "GRID    30      0       0.      1.      0.      0\n"
+                            "GRID    40      0       0.      0.      1.\n"
+                            "GRID    50      0       1.      1.      1.\n"
+                            "CTETRA  1       1       10      20      30      40\n"
+                            "CTETRA  2       2       50      20      30      40\n"
+                            "CTRIA3  3       7       20      30      40\n"
+                            "CBAR    4       9       10      20      0.      0.      1.\n"
+                            "PSOLID  1       1\n"
+                            "ENDDATA\n";
+static const char freef[] = "$ free field\nBEGIN BULK\n"
+                            "GRID,10,,0.,0.,0.\nGRID, 20, , 1., 0., 0.\n"
+                            "GRID,30,0,0.,1.,0.\nGRID,40,,0.,0.,1.\nGRID,50,,1.,1.,1.\n"
+                            "CTETRA,1,1,10,20,30,40\nCTETRA,2,2,50,20,30,40\n"
+                            "CTRIA3,3,7,20,30,40\nENDDATA\n";
+static const char large[] =
+    "$ large field\nBEGIN BULK\n"
+    "GRID*   10              0               0.              0.              *G10\n"
+    "*G10    0.\n"
+    "GRID*   20                              1.              0.\n*       0.\n"
+    "GRID*   30              0               0.              1.\n*       0.\n"
+    "GRID*   40              0               0.              0.\n*       1.\n"
+    "GRID*   50              0               1.              1.\n*       1.\n"
+    "CTETRA* 1               1               10              20              *\n"
+    "*       30              40\n"
+    "CTETRA  2       2       50      20      30      40\n"
+    "CTRIA3  3       7       20      30      40\n";
+
+static qdc_status rd(const char *s, meshio_format f, mesh_t **m, qdc_error *err)
+{
+    meshio_options o = {.log = NULL, .log_ctx = NULL, .source = 1};
+
+    return meshio_read_ex(s, strlen(s), f, &o, m, err);
+}
+
+static void check_mesh(const mesh_t *m)
+{
+    static const double xyz[15] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 1, 1, 1};
+    static const int32_t tets[8] = {0, 1, 2, 3, 4, 1, 2, 3};
+
+    ASSERT_EQ_INT(m->nv, 5);
+    ASSERT_EQ_INT(m->nt, 2);
+    ASSERT_TRUE(memcmp(m->xyz, xyz, sizeof xyz) == 0);
+    ASSERT_TRUE(memcmp(m->tets, tets, sizeof tets) == 0);
+    ASSERT_TRUE(m->region != NULL);
+    ASSERT_EQ_INT(m->region[0], 1);
+    ASSERT_EQ_INT(m->region[1], 2);
+    ASSERT_EQ_INT(m->ntri, 1);
+    ASSERT_EQ_INT(m->tris[0], 1);
+    ASSERT_EQ_INT(m->tris[2], 3);
+    ASSERT_EQ_INT(m->tri_ref[0], 7);
+}
+
+/* doc read with its source, vertex v's coordinate a set to x and written
+ * back: the output is doc with `from` replaced by `to`. */
+static void moved(const char *doc, meshio_format f, int v, int a, double x,
+                  const char *from, const char *to)
+{
+    mesh_t *m;
+    qdc_error err;
+    sink s = {0};
+    char *want = malloc(strlen(doc) + strlen(to) + 1), *at = strstr(doc, from);
+
+    ASSERT_TRUE(want && at);
+    memcpy(want, doc, (size_t)(at - doc));
+    strcpy(want + (at - doc), to);
+    strcat(want, at + strlen(from));
+    ASSERT_OK(rd(doc, f, &m, &err));
+    /* unmoved: the same bytes */
+    ASSERT_OK(meshio_write(m, MESHIO_AUTO, sink_write, &s, &err));
+    ASSERT_TRUE(s.n == strlen(doc) && memcmp(s.b, doc, s.n) == 0);
+    s.n = 0;
+    m->xyz[3 * v + a] = x;
+    ASSERT_OK(meshio_write(m, MESHIO_AUTO, sink_write, &s, &err));
+    if (s.n != strlen(want) || memcmp(s.b, want, s.n) != 0)
+        printf("  got:\n%.*s\n  want:\n%s\n", (int)s.n, s.b, want);
+    ASSERT_TRUE(s.n == strlen(want) && memcmp(s.b, want, s.n) == 0);
+    mesh_free(m);
+    free(s.b);
+    free(want);
+}
+
+/* doc with `from` replaced by `to` is refused with status, on line ln,
+ * with text in the message. */
+static void refused(const char *doc, meshio_format f, const char *from, const char *to,
+                    qdc_status status, int64_t ln, const char *text)
+{
+    char *d = malloc(strlen(doc) + strlen(to) + 1);
+    const char *at = strstr(doc, from);
+    mesh_t *m = NULL;
+    qdc_error err;
+
+    ASSERT_TRUE(d && at);
+    memcpy(d, doc, (size_t)(at - doc));
+    strcpy(d + (at - doc), to);
+    strcat(d, at + strlen(from));
+    ASSERT_EQ_INT(meshio_read(d, strlen(d), f, &m, &err), status);
+    if (!strstr(err.msg, text) || err.line != ln)
+        printf("  got line %d: %s\n", (int)err.line, err.msg);
+    ASSERT_TRUE(strstr(err.msg, text) != NULL);
+    ASSERT_EQ_INT(err.line, ln);
+    ASSERT_TRUE(m == NULL);
+    free(d);
+}
+
+TEST(bdf_three_field_formats)
+{
+    const char *docs[3] = {small, freef, large};
+    mesh_t *m;
+    qdc_error err;
+
+    for (int k = 0; k < 3; k++) {
+        ASSERT_EQ_INT(meshio_sniff(docs[k], strlen(docs[k])), MESHIO_BDF);
+        ASSERT_OK(rd(docs[k], MESHIO_AUTO, &m, &err));
+        check_mesh(m);
+        ASSERT_EQ_INT(meshio_source_format(m), MESHIO_BDF);
+        ASSERT_TRUE(meshio_splices(m, MESHIO_BDF, NULL));
+        mesh_free(m);
+    }
+    ASSERT_EQ_INT(meshio_format_from_name("a.nas"), MESHIO_BDF);
+    ASSERT_EQ_INT(meshio_format_from_name("a.bdf"), MESHIO_BDF);
+    ASSERT_EQ_INT(meshio_format_from_name("nastran"), MESHIO_BDF);
+    ASSERT_TRUE(!meshio_has_writer(MESHIO_BDF));
+}
+
+/* 1.-3 = 1e-3, -.5+2 = -50, 2.5D1 = 25, .125E+1 = 1.25, 7 (an integer where
+ * a real belongs, read as 7), blank = 0 */
+TEST(bdf_short_reals)
+{
+    static const char doc[] =
+        "GRID,1,,1.-3,-.5+2,2.5D1\nGRID    2               .125E+1 7\n"
+        "GRID,3,,0.,1.,0.\nGRID,4,,0.,0.,1.\n"
+        "CTETRA,1,,1,2,3,4\n";
+    mesh_t *m;
+    qdc_error err;
+
+    ASSERT_OK(rd(doc, MESHIO_BDF, &m, &err));
+    ASSERT_TRUE(m->xyz[0] == 1e-3 && m->xyz[1] == -50 && m->xyz[2] == 25);
+    ASSERT_TRUE(m->xyz[3] == 1.25 && m->xyz[4] == 7 && m->xyz[5] == 0);
+    ASSERT_TRUE(m->region == NULL); /* PID blank in every CTETRA: no regions */
+    /* the z of GRID 2 is left out of its line: read as 0, not spliced */
+    ASSERT_TRUE(!meshio_splices(m, MESHIO_BDF, NULL));
+    mesh_free(m);
+}
+
+/* Moved coordinates go into their own field: right-aligned in its 8 or 16
+ * characters, in place of the token in a free field; the rest unchanged. */
+TEST(bdf_splice_widths)
+{
+    moved(small, MESHIO_BDF, 3, 2, 0.5, "GRID    40      0       0.      0.      1.\n",
+          "GRID    40      0       0.      0.           0.5\n");
+    /* 8 characters hold 7 digits of 1/3, Nastran's exponent form what would not fit */
+    moved(small, MESHIO_BDF, 3, 2, 1.0 / 3, "0.      0.      1.\n",
+          "0.      0.      .3333333\n");
+    moved(small, MESHIO_BDF, 3, 0, -1.25e-7, "GRID    40      0       0.      ",
+          "GRID    40      0       -1.25E-7");
+    moved(small, MESHIO_BDF, 3, 0, 1.0 / 3e-7, "GRID    40      0       0.      ",
+          "GRID    40      0       3333333.");
+    moved(small, MESHIO_BDF, 3, 0, -1.0 / 3e-9, "GRID    40      0       0.      ",
+          "GRID    40      0       -3.333+8");
+    moved(freef, MESHIO_BDF, 3, 2, 0.5, "GRID,40,,0.,0.,1.", "GRID,40,,0.,0.,0.5");
+    moved(freef, MESHIO_BDF, 1, 0, 0.1, "GRID, 20, , 1.,", "GRID, 20, , 0.1,");
+    moved(large, MESHIO_BDF, 3, 2, 1.0 / 3, "*       1.\nGRID*   50",
+          "*       .333333333333333\nGRID*   50");
+    moved(large, MESHIO_BDF, 0, 2, -0.5, "*G10    0.", "*G10                -0.5");
+}
+
+TEST(bdf_refusals)
+{
+    refused(small, MESHIO_BDF, "GRID    30      0 ", "GRID    30      3 ", QDC_EFORMAT, 7,
+            "coordinate system 3 (CP) is not supported");
+    refused(small, MESHIO_BDF, "50      20      30      40\n",
+            "50      20      30      41\n", QDC_EPARSE, 11, "CTETRA: unknown GRID 41");
+    refused(small, MESHIO_BDF, "1.      1.      1.", "1.      nan     1.", QDC_EPARSE, 9,
+            "not finite");
+    refused(small, MESHIO_BDF, "1.      1.      1.", "1.      1.+999  1.", QDC_EPARSE, 9,
+            "not finite");
+    refused(small, MESHIO_BDF, "1.      1.      1.", "1.      1.x     1.", QDC_EPARSE, 9,
+            "expected a number, got '1.x'");
+    refused(small, MESHIO_BDF, "GRID    30", "GRID    10", QDC_EPARSE, 7,
+            "GRID 10 appears twice");
+    refused(small, MESHIO_BDF, "30      40\nCTRIA3", "30      40      60\nCTRIA3",
+            QDC_EFORMAT, 11, "second-order CTETRA (10 nodes) is not supported yet");
+    refused(large, MESHIO_BDF, "*       30              40\n",
+            "*       30              40              60\n", QDC_EFORMAT, 14,
+            "second-order CTETRA (10 nodes) is not supported yet");
+    refused(freef, MESHIO_BDF, "CTETRA,2,2,50", "CTETRA,2,2,-5", QDC_EPARSE, 9,
+            "CTETRA: node '-5' out of range");
+    refused(small, MESHIO_BDF, "GRID    50      0 ", "GRID    50\t     0 ", QDC_EFORMAT,
+            9, "a tab in a fixed-field card");
+    refused(freef, MESHIO_BDF, "GRID,10", "GRIX,10", QDC_EPARSE, 8,
+            "CTETRA: unknown GRID 10");
+    refused(small, MESHIO_BDF, "BEGIN BULK", "BEGIN BULK\nENDDATA", QDC_EPARSE, -1,
+            "no GRID card");
+}
+
+TEST_MAIN("bdf_unv", T(bdf_three_field_formats), T(bdf_short_reals), T(bdf_splice_widths),
+          T(bdf_refusals))
