@@ -4,7 +4,7 @@
 # (MSH 4.1 ASCII/binary, 4.0, 2.2 ASCII/binary, VTK, Medit), meshio (VTU zlib and ascii, legacy
 # VTK binary and ascii, DOLFIN XML, Abaqus, Netgen, Medit binary), a VTK-style appended zlib
 # VTU, a CalculiX-style .inp, TetGen (0-based), Nastran bulk data (Gmsh's and meshio's, free,
-# small and large field)
+# small and large field) and I-DEAS universal (Gmsh)
 # from tests/data/real. tests/tools/splicecheck.py masks the coordinate
 # fields with its own parsers and compares the rest byte for byte, then reads
 # both files with meshio (same cells, cell/point/field data) and compares the
@@ -20,7 +20,7 @@ for gz in "$REAL"/*.gz; do
 done
 files="gmsh41.msh gmsh41_bin.msh gmsh22.msh gmsh22_bin.msh gmsh40.msh gmsh.vtk gmsh.mesh meshio_zlib.vtu meshio_ascii.vtu
 meshio_bin.vtk meshio_ascii.vtk vtk_appended_zlib.vtu tetgen.node dolfin.xml meshio.inp calculix.inp
-meshio.vol meshio.meshb gmsh_msh1.msh gmsh.bdf gmsh_free.bdf gmsh_large.bdf meshio_free.bdf
+meshio.vol meshio.meshb gmsh_msh1.msh gmsh.bdf gmsh_free.bdf gmsh_large.bdf gmsh.unv meshio_free.bdf
 meshio_small.nas meshio_large.bdf"
 for f in $files; do
     base=${f%%.*}

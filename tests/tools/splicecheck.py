@@ -285,6 +285,19 @@ def bdf(b):
     return f
 
 
+def unv(b):
+    """I-DEAS dataset 2411: the three coordinates after each node record."""
+    f = Fields()
+    for m in re.finditer(rb"(?:^|\n)\s*-1\r?\n\s*2411\s*\n(.*?)\n\s*-1\s*\n", b, re.S):
+        lines = list(re.finditer(rb"[^\n]*\n?", b[m.start(1):m.end(1)]))
+        for k in range(1, len(lines), 2):
+            at = m.start(1) + lines[k].start()
+            for v in re.finditer(rb"\S+", lines[k].group(0)):
+                f.coords.append((at + v.start(), at + v.end(), "fortran"))
+    f.tol = 0
+    return f
+
+
 def netgen(b):
     f = Fields()
     it = tokens(b)
@@ -450,6 +463,8 @@ def fields(path, b):
         return vtu(b)
     if p.endswith(".bdf") or p.endswith(".nas"):
         return bdf(b)
+    if p.endswith(".unv"):
+        return unv(b)
     raise SystemExit("splicecheck: unknown format: " + path)
 
 

@@ -208,5 +208,83 @@ TEST(bdf_refusals)
             "no GRID card");
 }
 
+/* I-DEAS: the same two tets, a triangle and a beam (with its orientation
+ * record), units and a group kept. */
+static const char unv[] =
+    "    -1\n   164\n         1  SI - mks (Kg m s)\n"
+    "    1.0000000000000000D+00    1.0000000000000000D+00    1.0000000000000000D+00\n"
+    "    2.7314999999999998D+02\n    -1\n"
+    "    -1\n  2411\n"
+    "        10         1         1        11\n"
+    "   0.0000000000000000D+00   0.0000000000000000D+00   0.0000000000000000D+00\n"
+    "        20         1         1        11\n"
+    "   1.0000000000000000D+00   0.0000000000000000D+00   0.0000000000000000D+00\n"
+    "        30         1         1        11\n"
+    "   0.0000000000000000D+00   1.0000000000000000D+00   0.0000000000000000D+00\n"
+    "        40         1         1        11\n"
+    "   0.0000000000000000D+00   0.0000000000000000D+00   1.0000000000000000D+00\n"
+    "        50         1         1        11\n"
+    "   1.0000000000000000D+00   1.0000000000000000D+00   1.0000000000000000D+00\n"
+    "    -1\n    -1\n  2412\n"
+    "         4        21         9         0         7         2\n"
+    "         0         0         0\n"
+    "        10        20\n"
+    "         1       111         3         1         7         4\n"
+    "        10        20        30        40\n"
+    "         2       111         3         2         7         4\n"
+    "        50        20        30        40\n"
+    "         3        91         5         7         7         3\n"
+    "        20        30        40\n"
+    "    -1\n    -1\n  2477\n"
+    "         1         0         0         0         0         0         0         2\n"
+    "solid\n"
+    "         8         1         0         0         8         2         0         0\n"
+    "    -1\n";
+
+TEST(unv_read_and_splice)
+{
+    mesh_t *m;
+    qdc_error err;
+
+    ASSERT_EQ_INT(meshio_sniff(unv, strlen(unv)), MESHIO_UNV);
+    ASSERT_EQ_INT(meshio_format_from_name("a.unv"), MESHIO_UNV);
+    ASSERT_OK(rd(unv, MESHIO_AUTO, &m, &err));
+    check_mesh(m); /* material 1, 2 as regions (physical 3 for both) */
+    ASSERT_TRUE(meshio_splices(m, MESHIO_UNV, NULL));
+    mesh_free(m);
+    moved(unv, MESHIO_UNV, 3, 2, 0.5,
+          "0.0000000000000000D+00   1.0000000000000000D+00\n        50",
+          "0.0000000000000000D+00   5.0000000000000000D-01\n        50");
+    moved(unv, MESHIO_UNV, 4, 0, -1.0 / 3,
+          "   1.0000000000000000D+00   1.0000000000000000D+00   1.0000000000000000D+00\n"
+          "    -1\n    -1\n  2412",
+          "  -3.3333333333333331D-01   1.0000000000000000D+00   1.0000000000000000D+00\n"
+          "    -1\n    -1\n  2412");
+}
+
+TEST(unv_refusals)
+{
+    refused(
+        unv, MESHIO_UNV, "         2       111", "         2       118", QDC_EFORMAT, 27,
+        "second-order tetrahedra (FE descriptor 118, 10 nodes) are not supported yet");
+    refused(unv, MESHIO_UNV, "        50        20        30        40",
+            "        50        20        30        41", QDC_EPARSE, 27,
+            "unknown node 41");
+    refused(unv, MESHIO_UNV, "   1.0000000000000000D+00   1.0000000000000000D+00\n    -1",
+            "   1.0000000000000000D+00                  nan\n    -1", QDC_EPARSE, 18,
+            "not finite");
+    refused(unv, MESHIO_UNV, "   1.0000000000000000D+00   1.0000000000000000D+00\n    -1",
+            "   1.0000000000000000D+00   1.0000000000000000D+999\n   -1", QDC_EPARSE, 18,
+            "not finite");
+    refused(unv, MESHIO_UNV, "        30         1", "        10         1", QDC_EPARSE,
+            14, "node 10 appears twice");
+    refused(unv, MESHIO_UNV, "         3        91         5",
+            "         3        91        x5", QDC_EPARSE, 29,
+            "2412: physical property: expected an integer");
+    refused(unv, MESHIO_UNV, "0         0\n    -1\n", "0         0\n", QDC_EPARSE, 37,
+            "dataset 2477: no closing -1");
+    refused(unv, MESHIO_UNV, "  2411\n", "  2419\n", QDC_EPARSE, -1, "no dataset 2411");
+}
+
 TEST_MAIN("bdf_unv", T(bdf_three_field_formats), T(bdf_short_reals), T(bdf_splice_widths),
-          T(bdf_refusals))
+          T(bdf_refusals), T(unv_read_and_splice), T(unv_refusals))

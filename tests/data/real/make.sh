@@ -41,10 +41,11 @@ gmsh -3 -nt 1 box_sphere.geo -format msh22 -bin -o gmsh22_bin.msh > /dev/null
 sed 's/CharacteristicLengthMax = 0.2/CharacteristicLengthMax = 0.35/' box_sphere.geo > coarse.geo
 gmsh -3 -nt 1 coarse.geo -format msh1 -o gmsh_msh1.msh > /dev/null
 # Nastran bulk data in Gmsh's three field formats (Mesh.BdfFieldFormat: 0 free,
-# 1 small, the default, 2 large)
+# 1 small, the default, 2 large) and the I-DEAS universal file
 gmsh -3 -nt 1 box_sphere.geo -format bdf -o gmsh.bdf > /dev/null
 gmsh -3 -nt 1 box_sphere.geo -string 'Mesh.BdfFieldFormat=0;' -format bdf -o gmsh_free.bdf > /dev/null
 gmsh -3 -nt 1 box_sphere.geo -string 'Mesh.BdfFieldFormat=2;' -format bdf -o gmsh_large.bdf > /dev/null
+gmsh -3 -nt 1 box_sphere.geo -format unv -o gmsh.unv > /dev/null
 gmsh -3 -nt 1 box_sphere.geo -format msh40 -o gmsh40.msh > /dev/null
 gmsh -3 -nt 1 box_sphere.geo -format vtk -o gmsh.vtk > /dev/null
 gmsh -3 -nt 1 box_sphere.geo -format mesh -o gmsh.mesh > /dev/null
@@ -213,7 +214,7 @@ for f in gmsh41.msh gmsh41_bin.msh gmsh22.msh gmsh22_bin.msh gmsh40.msh gmsh.vtk
     meshio_ascii.vtu meshio_bin.vtk meshio_ascii.vtk vtk_appended_zlib.vtu tetgen.node \
     tetgen.ele dolfin.xml meshio.inp calculix.inp meshio.vol meshio.meshb periodic41.msh \
     periodic41_bin.msh periodic40.msh periodic22.msh periodic22_bin.msh gmsh_msh1.msh gmsh.bdf \
-    gmsh_free.bdf gmsh_large.bdf meshio_free.bdf meshio_small.nas meshio_large.bdf; do
+    gmsh_free.bdf gmsh_large.bdf gmsh.unv meshio_free.bdf meshio_small.nas meshio_large.bdf; do
     gzip -n -9 -c "$f" > "$here/$f.gz"
 done
 ls -l "$here"

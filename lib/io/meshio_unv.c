@@ -1,0 +1,249 @@
+/* meshio_unv.c - I-DEAS universal files (.unv): read, and written back only as
+ * the input with new coordinates (spliced).
+ *
+ * A file is a series of datasets, each between two lines "    -1", its number
+ * on the first line after the opening one. Read: 2411 (nodes: label, export
+ * and displacement coordinate systems, color; then X, Y, Z as D25.16, "D"
+ * exponents; the export system is taken as the global Cartesian one, label 1
+ * as Gmsh and Salome write it) and 2412 (elements: label, FE descriptor,
+ * physical and material property tables, color, node count; beams (FE 11,
+ * 21-24) have a record of orientation and end nodes; then the nodes, 8 a
+ * line). FE descriptor 111 (linear tetrahedron) is read with its material
+ * property as region (its physical property when no material is set and
+ * they differ), linear triangles (41, 51, 61, 74, 81, 91) likewise as
+ * triangles; others skipped with a note, 118 (10-node tetrahedron) refused.
+ * Every other dataset (2467/2477 groups, units 164, coordinate systems
+ * 2420...) is kept; a spliced write rewrites only the 25-column coordinate
+ * fields, in the same form (splice.c, SRC_FIELD with FIELD_EXP). */
+#include "io/format.h"
+
+#include <string.h>
+
+typedef struct {
+    txt s;
+    labelled l;
+    skipped sk;
+} unv;
+
+/* The token at the scanner (after blanks): [*t, *te). */
+static void unv_token(txt *s, const char **t, const char **te)
+{
+    skip_ws(s);
+    *t = s->p;
+    *te = tok_end(s, s->p);
+}
+
+/* A line "-1" next (a dataset's end): consumed, 1. */
+static int unv_delim(txt *s)
+{
+    const char *t, *te;
+
+    unv_token(s, &t, &te);
+    if (te - t == 2 && t[0] == '-' && t[1] == '1') {
+        s->p = te;
+        return 1;
+    }
+    return 0;
+}
+
+/* Past the rest of the dataset: lines up to one that is "-1" alone. */
+static qdc_status unv_skip(txt *s, int64_t num, qdc_error *err)
+{
+    const char *p = s->p;
+
+    while (p < s->end) {
+        const char *e = memchr(p, '\n', (size_t)(s->end - p)), *t = p, *te;
+        e = e ? e : s->end;
+        te = e;
+        while (t < te && *t == ' ')
+            t++;
+        while (te > t && (te[-1] == ' ' || te[-1] == '\r'))
+            te--;
+        if (te - t == 2 && t[0] == '-' && t[1] == '1' && p != s->p) {
+            s->p = te;
+            return QDC_OK;
+        }
+        if (e < s->end) {
+            s->line++;
+            s->bol = e + 1;
+        }
+        p = e + 1;
+    }
+    return fail_txt(err, QDC_EPARSE, s, s->end, "dataset %lld: no closing -1",
+                    (long long)num);
+}
+
+static int blanks(const char *p, const char *e)
+{
+    for (; p < e; p++)
+        if (*p != ' ')
+            return 0;
+    return 1;
+}
+
+static qdc_status unv_nodes(unv *u, qdc_error *err)
+{
+    txt *s = &u->s;
+    int64_t label, sys;
+    qdc_status st = QDC_OK;
+
+    while (st == QDC_OK && !unv_delim(s)) {
+        double x[3];
+        uint64_t off[3];
+        st = txt_int(s, "2411: node label", 1, INT32_MAX, &label, err);
+        for (int k = 0; k < 3 && st == QDC_OK; k++) /* systems, color */
+            st = txt_int(s, "2411: node record", 0, INT32_MAX, &sys, err);
+        for (int k = 0; k < 3 && st == QDC_OK; k++) {
+            const char *t, *te;
+            char q[32];
+            size_t col;
+            unv_token(s, &t, &te);
+            col = (size_t)(te - s->bol);
+            if (t == te || parse_fortran_real(t, te, &x[k]) != 0)
+                return fail_txt(err, QDC_EPARSE, s, t,
+                                "2411: node %lld: expected a coordinate, got %s",
+                                (long long)label, quote_tok(q, s, t, te));
+            if (!isfinite(x[k]))
+                return fail_txt(err, QDC_EPARSE, s, t,
+                                "2411: node %lld: coordinate %s is not finite (NaN/Inf)",
+                                (long long)label, quote_tok(q, s, t, te));
+            if (col == 25 * (size_t)(k + 1) && (size_t)(t - s->bol) >= 25 * (size_t)k &&
+                blanks(s->bol + 25 * k, t)) /* its own 25 columns */
+                off[k] = FIELD(s->bol + 25 * k - s->base, 25, FIELD_EXP);
+            else
+                off[k] = FIELD(t - s->base, te - t > 25 ? (int)(te - t) : 25,
+                               FIELD_EXP | FIELD_FREE);
+            s->p = te;
+        }
+        if (st == QDC_OK)
+            st = lab_node(&u->l, label, x, off, err);
+    }
+    return st;
+}
+
+static int is_tri(int64_t fe)
+{
+    return fe == 41 || fe == 51 || fe == 61 || fe == 74 || fe == 81 || fe == 91;
+}
+
+static qdc_status unv_elements(unv *u, qdc_error *err)
+{
+    txt *s = &u->s;
+    qdc_status st = QDC_OK;
+
+    while (st == QDC_OK && !unv_delim(s)) {
+        int64_t r[6], g[4], v;
+        const char *at;
+        int tet = 0, tri = 0;
+        static const char *const what[6] = {
+            "2412: element label",     "2412: FE descriptor", "2412: physical property",
+            "2412: material property", "2412: color",         "2412: node count"};
+        skip_ws(s);
+        at = s->p;
+        for (int k = 0; k < 6 && st == QDC_OK; k++)
+            st = txt_int(s, what[k], k == 5 || k == 0 ? 1 : 0, k == 5 ? 1000 : INT32_MAX,
+                         &r[k], err);
+        if (st != QDC_OK)
+            break;
+        if (r[1] == 118)
+            return fail_txt(err, QDC_EFORMAT, s, at,
+                            "2412: element %lld: second-order tetrahedra (FE descriptor "
+                            "118, 10 nodes) are not supported yet",
+                            (long long)r[0]);
+        tet = r[1] == 111;
+        tri = is_tri(r[1]);
+        if ((tet && r[5] != 4) || (tri && r[5] != 3))
+            return fail_txt(err, QDC_EPARSE, s, at,
+                            "2412: element %lld (FE descriptor %lld) has %lld nodes",
+                            (long long)r[0], (long long)r[1], (long long)r[5]);
+        if (r[1] == 11 || (r[1] >= 21 && r[1] <= 24)) /* beam record */
+            for (int k = 0; k < 3 && st == QDC_OK; k++)
+                st = txt_int(s, "2412: beam record", 0, INT32_MAX, &v, err);
+        for (int64_t k = 0; k < r[5] && st == QDC_OK; k++) {
+            st = txt_int(s, "2412: node label", 1, INT32_MAX, &v, err);
+            if (k < 4)
+                g[k] = v;
+        }
+        if (st != QDC_OK)
+            break;
+        if (!tet && !tri) {
+            skip_count(&u->sk, r[1], 1);
+            continue;
+        }
+        st = lab_elem(&u->l, tri, g, (int32_t)r[3], (int32_t)r[2], at - s->base, err);
+    }
+    return st;
+}
+
+static qdc_status read_unv(const char *buf, size_t len, const meshio_options *o,
+                           srcrec *rec, mesh_t **out, qdc_error *err)
+{
+    unv u;
+    int64_t num;
+    int nodes = 0;
+    qdc_status st = QDC_OK;
+
+    memset(&u, 0, sizeof u);
+    lab_init(&u.l, "node", "2412", "2412");
+    u.s = txt_init(buf, len, 0);
+    for (;;) {
+        const char *t, *te;
+        char q[32];
+        unv_token(&u.s, &t, &te);
+        if (t >= u.s.end)
+            break;
+        if (!unv_delim(&u.s)) {
+            st = fail_txt(err, QDC_EPARSE, &u.s, t, "expected -1 (a dataset), got %s",
+                          quote_tok(q, &u.s, t, te));
+            break;
+        }
+        unv_token(&u.s, &t, &te);
+        if (parse_int(t, te, 0, &num) != 0 || num < 1) {
+            st = fail_txt(err, QDC_EPARSE, &u.s, t, "expected a dataset number, got %s",
+                          quote_tok(q, &u.s, t, te));
+            break;
+        }
+        u.s.p = te;
+        if (num == 2411)
+            st = unv_nodes(&u, err);
+        else if (num == 2412)
+            st = unv_elements(&u, err);
+        else
+            st = unv_skip(&u.s, num, err);
+        nodes += num == 2411;
+        if (st != QDC_OK)
+            break;
+    }
+    if (st == QDC_OK && !nodes)
+        st = qdc_fail(err, QDC_EPARSE, "not an I-DEAS mesh: no dataset 2411 (nodes)");
+    if (st == QDC_OK)
+        st = lab_mesh(&u.l, &u.s, MESHIO_UNV, rec, out, err);
+    if (st == QDC_OK)
+        skip_note(o, &u.sk, "UNV", "elements with FE descriptor");
+    lab_free(&u.l);
+    return st;
+}
+
+/* "-1" alone on the first line, then a dataset number. */
+static meshio_format sniff_unv(const char *buf, size_t len, size_t i)
+{
+    size_t k = i + 2;
+
+    if (len - i < 4 || buf[i] != '-' || buf[i + 1] != '1' ||
+        (buf[k] != '\n' && buf[k] != '\r' && buf[k] != ' '))
+        return MESHIO_AUTO;
+    while (k < len && is_space((unsigned char)buf[k]))
+        k++;
+    return k < len && buf[k] >= '1' && buf[k] <= '9' ? MESHIO_UNV : MESHIO_AUTO;
+}
+
+const meshio_fmt fmt_unv = {
+    .name = "unv",
+    .aliases = "ideas",
+    .about = "I-DEAS universal: datasets 2411, 2412 (written only spliced)",
+    .ext = "unv",
+    .input = "input.unv",
+    .sniff = sniff_unv,
+    .read = read_unv,
+    .splices = 1,
+};
