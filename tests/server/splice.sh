@@ -17,8 +17,8 @@ PIDS=
 trap 'if [ -n "$QPID" ]; then kill -9 $QPID 2>/dev/null; fi; for p in $PIDS; do kill -9 $p 2>/dev/null; done; [ -n "${PGDIR:-}" ] && pg_cleanup; rm -rf "$TMP"' EXIT
 
 # name  file in tests/data/real  ?format= of the upload's own variant  text only that file has
-# (the formats after medit have no media type: asked by name; Abaqus and
-# Netgen are served only to a job uploaded in them)
+# (the formats after medit have no media type: asked by name; Abaqus,
+# Netgen, Nastran and I-DEAS are served only to a job uploaded in them)
 CASES="gmsh41:gmsh41.msh:gmsh:\$PhysicalNames
 gmsh41bin:gmsh41_bin.msh:gmsh-bin:\$PhysicalNames
 vtu:meshio_zlib.vtu:vtu:temperature
@@ -30,7 +30,10 @@ gmsh40:gmsh40.msh:gmsh40:\$PhysicalNames
 dolfin:dolfin.xml:dolfin:nsmap
 meshb:meshio.meshb:meshb:
 abaqus:calculix.inp:abaqus:MATERIAL
-netgen:meshio.vol:netgen:Generated"
+netgen:meshio.vol:netgen:Generated
+bdf:gmsh.bdf:bdf:CBAR
+bdffree:meshio_free.bdf:bdf:BULK
+unv:gmsh.unv:unv:2477"
 
 for c in $CASES; do
     f=$(echo "$c" | cut -d: -f2)

@@ -266,8 +266,9 @@ static inline double read_1m_tets(meshio_format f)
     return r;
 }
 
-/* Abaqus and Netgen have no writer of qdc's own (they are written only
- * spliced): m as meshio lays them out (Netgen's materials: m->region). */
+/* Abaqus, Netgen, Nastran and I-DEAS have no writer of qdc's own (they are
+ * written only spliced): m as meshio lays them out (Netgen's materials:
+ * m->region), Nastran with free-field GRIDs, I-DEAS as Gmsh does. */
 static inline void write_other(const mesh_t *m, meshio_format f, sink *s)
 {
     char line[1100]; /* three %22.16f of up to 1e308 */
@@ -285,6 +286,35 @@ static inline void write_other(const mesh_t *m, meshio_format f, sink *s)
         for (int32_t t = 0; t < m->nt; t++)
             OUT("%d, %d, %d, %d, %d\n", t + 1, m->tets[4 * t] + 1, m->tets[4 * t + 1] + 1,
                 m->tets[4 * t + 2] + 1, m->tets[4 * t + 3] + 1);
+    } else if (f == MESHIO_BDF) { /* free-field GRID (exact), small-field CTETRA */
+        OUT("$ Nastran\nBEGIN BULK\n");
+        for (int32_t i = 0; i < m->nv; i++)
+            OUT("GRID,%d,,%.17g,%.17g,%.17g\n", i + 1, m->xyz[3 * i], m->xyz[3 * i + 1],
+                m->xyz[3 * i + 2]);
+        for (int32_t t = 0; t < m->nt; t++)
+            OUT("CTETRA  %-8d%-8d%-8d%-8d%-8d%-8d\n", t + 1, m->region[t],
+                m->tets[4 * t] + 1, m->tets[4 * t + 1] + 1, m->tets[4 * t + 2] + 1,
+                m->tets[4 * t + 3] + 1);
+        OUT("ENDDATA\n");
+    } else if (f == MESHIO_UNV) { /* as Gmsh writes it */
+        OUT("    -1\n  2411\n");
+        for (int32_t i = 0; i < m->nv; i++) {
+            OUT("%10d%10d%10d%10d\n", i + 1, 1, 1, 11);
+            n = 0;
+            for (int a = 0; a < 3; a++)
+                n += snprintf(line + n, sizeof line - (size_t)n, "%25.16E",
+                              m->xyz[3 * i + a]);
+            for (int k = 0; k < n; k++)
+                line[k] = line[k] == 'E' ? 'D' : line[k];
+            line[n++] = '\n';
+            sink_write(s, line, (size_t)n);
+        }
+        OUT("    -1\n    -1\n  2412\n");
+        for (int32_t t = 0; t < m->nt; t++)
+            OUT("%10d%10d%10d%10d%10d%10d\n%10d%10d%10d%10d\n", t + 1, 111, 1, m->region[t],
+                7, 4, m->tets[4 * t] + 1, m->tets[4 * t + 1] + 1, m->tets[4 * t + 2] + 1,
+                m->tets[4 * t + 3] + 1);
+        OUT("    -1\n");
     } else {
         OUT("mesh3d\ndimension\n3\ngeomtype\n0\n\nsurfaceelements\n0\n\nvolumeelements\n%"
             "d\n",
