@@ -193,21 +193,19 @@ static qdc_status bdf_grid(bdf *b, qdc_error *err)
 }
 
 /* CTETRA (n 4) or CTRIA3 (n 3): element id, PID, n node ids. */
-static qdc_status bdf_element(bdf *b, const char *card, int n, const char *at,
-                              qdc_error *err)
+static qdc_status bdf_element(bdf *b, int n, const char *at, qdc_error *err)
 {
     int64_t eid, pid, g[4];
-    char what[40];
+    static const char *const what[2][3] = {
+        {"CTETRA: EID", "CTETRA: PID", "CTETRA: node"},
+        {"CTRIA3: EID", "CTRIA3: PID", "CTRIA3: node"}};
     qdc_status st;
 
-    snprintf(what, sizeof what, "%s: EID", card);
-    st = field_int(b, 0, what, 1, INT64_MAX, -1, &eid, err);
-    snprintf(what, sizeof what, "%s: PID", card);
+    st = field_int(b, 0, what[n == 3][0], 1, INT64_MAX, -1, &eid, err);
     if (st == QDC_OK)
-        st = field_int(b, 1, what, 0, INT32_MAX, 0, &pid, err);
-    snprintf(what, sizeof what, "%s: node", card);
+        st = field_int(b, 1, what[n == 3][1], 0, INT32_MAX, 0, &pid, err);
     for (int k = 0; k < n && st == QDC_OK; k++)
-        st = field_int(b, 2 + k, what, 1, INT32_MAX, -1, &g[k], err);
+        st = field_int(b, 2 + k, what[n == 3][2], 1, INT32_MAX, -1, &g[k], err);
     if (st != QDC_OK)
         return st;
     for (int k = 2 + n; n == 4 && k < b->nf; k++)
@@ -300,8 +298,7 @@ static qdc_status bdf_cards(bdf *b, qdc_error *err)
             if (st == QDC_OK && word_is(name, nn, "GRID"))
                 st = bdf_grid(b, err);
             else if (st == QDC_OK)
-                st = bdf_element(b, word_is(name, nn, "CTETRA") ? "CTETRA" : "CTRIA3",
-                                 word_is(name, nn, "CTETRA") ? 4 : 3, card, err);
+                st = bdf_element(b, word_is(name, nn, "CTETRA") ? 4 : 3, card, err);
         } else if (b->other++ == 0) {
             b->other_name = p;
             b->other_len = (size_t)(nte - p);

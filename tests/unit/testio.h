@@ -311,9 +311,9 @@ static inline void write_other(const mesh_t *m, meshio_format f, sink *s)
         }
         OUT("    -1\n    -1\n  2412\n");
         for (int32_t t = 0; t < m->nt; t++)
-            OUT("%10d%10d%10d%10d%10d%10d\n%10d%10d%10d%10d\n", t + 1, 111, 1, m->region[t],
-                7, 4, m->tets[4 * t] + 1, m->tets[4 * t + 1] + 1, m->tets[4 * t + 2] + 1,
-                m->tets[4 * t + 3] + 1);
+            OUT("%10d%10d%10d%10d%10d%10d\n%10d%10d%10d%10d\n", t + 1, 111, 1,
+                m->region[t], 7, 4, m->tets[4 * t] + 1, m->tets[4 * t + 1] + 1,
+                m->tets[4 * t + 2] + 1, m->tets[4 * t + 3] + 1);
         OUT("    -1\n");
     } else {
         OUT("mesh3d\ndimension\n3\ngeomtype\n0\n\nsurfaceelements\n0\n\nvolumeelements\n%"
