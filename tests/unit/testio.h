@@ -550,7 +550,7 @@ static inline int splice_check(const char *buf, size_t len, meshio_format f)
             bad = 4;
     }
     if (!bad && (b->nt != m->nt || b->nv != m->nv ||
-                 memcmp(b->tets, m->tets, 16 * (size_t)m->nt) != 0))
+                 (m->nt && memcmp(b->tets, m->tets, 16 * (size_t)m->nt) != 0)))
         bad = 5;
     if (bad)
         printf("  splice %s: check %d failed: %s\n", meshio_format_name(sf), bad,
