@@ -527,6 +527,7 @@ function jobView(id) {
     $('job-notes').hidden = true;
     $('job-stats').replaceChildren();
     $('report-card').hidden = true;
+    renderOutcome(null);
     $('downloads-card').hidden = true;
     $('view3d-card').hidden = true;
     $('view3d').hidden = true;
@@ -732,13 +733,30 @@ async function follow(st, signal) {
 async function loadReport(st) {
     try {
         st.report = await apiJSON('/v1/jobs/' + st.id + '/report');
-        if (!st.stopped) renderReport(st);
+        if (!st.stopped) {
+            renderReport(st);
+            renderOutcome(st.report.outcome);
+        }
     } catch (e) {
         /* no report: the rest of the view stands */
     } finally {
         // one frame later, so that the report's drawing is on screen first
         requestAnimationFrame(() => st.reportDone());
     }
+}
+
+// The outcome in words: the report's texts as they are (lib/eval/outcome.c
+// makes them; no rule of its own here): the summary, then the warnings and
+// suggestions in an alert when much is left bad.
+function renderOutcome(o) {
+    const box = $('job-outcome'), warn = $('outcome-warning');
+    box.hidden = !(o && o.summary);
+    if (box.hidden) return;
+    $('outcome-summary').textContent = 'Outcome: ' + o.summary;
+    const w = o.warnings || [], s = o.suggestions || [];
+    warn.hidden = !w.length;
+    warn.replaceChildren(...(w.length ? [el('strong', { text: 'Warning: ' + w.join('; ') + '.' }),
+        el('ul', {}, ...s.map((t) => el('li', { text: 'Suggestion: ' + t })))] : []));
 }
 
 function kvTable(t, head, rows) {

@@ -521,6 +521,11 @@ try {
                 JSON.stringify(figures.view3d_pixels));
         }
         figures.shot_view3d_status = await page.textContent('#view3d-status');
+        const o4 = (await apiJSON('/v1/jobs/' + id4 + '/report')).body.outcome;
+        const shown4 = await page.evaluate(() => [document.getElementById('outcome-summary').textContent,
+            document.getElementById('outcome-warning').hidden]);
+        check(o4 && shown4[0] === 'Outcome: ' + o4.summary && shown4[1] === !o4.warnings.length,
+            'outcome: the job page shows the report\'s outcome (' + (o4 && o4.warnings.length ? 'warned' : 'no warning') + ')', JSON.stringify(shown4));
         await chartChecks(page, id4, h);
         await view3dChecks(page, id4, h, URL, authH);
         await ariaChecks(page, h);
@@ -535,6 +540,18 @@ try {
         await page.goto(URL + '/ui/jobs/' + idR);
         await page.waitForFunction(() => +document.getElementById('hist').dataset.drawn > 0, null, { timeout: 10000 });
         await rerunChecks(page, idR, h);
+        // the outcome in words: the report's summary, and its warnings and
+        // suggestions in an alert (16 tets left inverted: much is left bad)
+        const oR = (await apiJSON('/v1/jobs/' + idR + '/report')).body.outcome;
+        await page.waitForSelector('#job-outcome:not([hidden])', { timeout: 10000 }).catch(() => {});
+        const shownR = await page.evaluate(() => ({ summary: document.getElementById('outcome-summary').textContent,
+            warn: document.getElementById('outcome-warning').hidden ? '' : document.getElementById('outcome-warning').textContent,
+            role: document.getElementById('outcome-warning').getAttribute('role') }));
+        check(oR && oR.warnings.length > 0 && shownR.summary === 'Outcome: ' + oR.summary && shownR.role === 'alert' &&
+            oR.warnings.every((w) => shownR.warn.includes(w)) && oR.suggestions.length > 0 &&
+            oR.suggestions.every((t) => shownR.warn.includes('Suggestion: ' + t)),
+            'outcome: a bad result\'s page shows the report\'s summary and, in an alert, its ' + (oR ? oR.warnings.length : 0) +
+            ' warnings and suggestions ("' + (oR ? oR.warnings[0] : '') + '")', JSON.stringify(shownR).slice(0, 300));
         if (env.UI_SHOTS) await page.screenshot({ path: path.join(env.UI_SHOTS, 'ui-rerun.png'), fullPage: true });
         // the list shows the result's mean ratio (the report's after), not the last record's
         const repR = (await apiJSON('/v1/jobs/' + idR + '/report')).body;
