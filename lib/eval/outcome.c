@@ -1,4 +1,5 @@
-/* outcome.c - the outcome of a run in words (outcome.h; thresholds in docs/defaults.md). */
+/* outcome.c - the outcome of a run in words (outcome.h; thresholds in docs/defaults.md).
+ */
 #include "eval/outcome.h"
 
 #include <math.h>
@@ -62,14 +63,14 @@ static void improved_text(const report_t *r, outcome_t *o)
         dmin = r->run->before.dih_min;
     } else {
         add(o->improved, sizeof o->improved,
-                 "mean ratio %.4f, worst tet %+.4f, smallest dihedral %.2f°", a->q_mean,
-                 a->q_min, a->dih_min);
+            "mean ratio %.4f, worst tet %+.4f, smallest dihedral %.2f°", a->q_mean,
+            a->q_min, a->dih_min);
         return;
     }
     add(o->improved, sizeof o->improved,
-             "mean ratio %.4f -> %.4f, worst tet %+.4f -> %+.4f, smallest dihedral "
-             "%.2f° -> %.2f°",
-             qm, a->q_mean, qmin, a->q_min, dmin, a->dih_min);
+        "mean ratio %.4f -> %.4f, worst tet %+.4f -> %+.4f, smallest dihedral "
+        "%.2f° -> %.2f°",
+        qm, a->q_mean, qmin, a->q_min, dmin, a->dih_min);
 }
 
 static void left_bad_text(const report_t *r, outcome_t *o)
@@ -88,10 +89,10 @@ static void left_bad_text(const report_t *r, outcome_t *o)
     count_of(large, sizeof large, o->n_large, a->nt);
     count_of(inv, sizeof inv, o->n_inverted, a->nt);
     add(o->left_bad, sizeof o->left_bad,
-             "left: %s of %d tets under 5° and %s over 175° dihedral, %s inverted; "
-             "worst tet %d (from 0) at (%.4g, %.4g, %.4g), mean ratio %+.4f",
-             small, (int)a->nt, large, inv, (int)a->worst_tet, a->worst_centroid[0],
-             a->worst_centroid[1], a->worst_centroid[2], a->q_min);
+        "left: %s of %d tets under 5° and %s over 175° dihedral, %s inverted; "
+        "worst tet %d (from 0) at (%.4g, %.4g, %.4g), mean ratio %+.4f",
+        small, (int)a->nt, large, inv, (int)a->worst_tet, a->worst_centroid[0],
+        a->worst_centroid[1], a->worst_centroid[2], a->q_min);
 }
 
 static void boundary_text(const report_t *r, outcome_t *o)
@@ -105,19 +106,19 @@ static void boundary_text(const report_t *r, outcome_t *o)
     o->bound_rel = bound > 0 && diag > 0 ? bound / diag : 0;
     if (r->boundary && o->bound_rel > 0)
         add(o->boundary, sizeof o->boundary,
-                 "boundary moved %.3g%% of the diagonal, %.0f%% of its bound (%.3g%%)",
-                 100 * o->moved_rel, 100 * o->moved_rel / o->bound_rel,
-                 100 * o->bound_rel);
+            "boundary moved %.3g%% of the diagonal, %.0f%% of its bound (%.3g%%)",
+            100 * o->moved_rel, 100 * o->moved_rel / o->bound_rel, 100 * o->bound_rel);
     else if (r->boundary)
         add(o->boundary, sizeof o->boundary,
-                 "boundary moved %.3g%% of the diagonal (no bound)", 100 * o->moved_rel);
+            "boundary moved %.3g%% of the diagonal (no bound)", 100 * o->moved_rel);
     else if (o->bound_rel > 0)
         add(o->boundary, sizeof o->boundary,
-                 "boundary bound %.3g%% of the diagonal (distance not measured)",
-                 100 * o->bound_rel);
+            "boundary bound %.3g%% of the diagonal (distance not measured)",
+            100 * o->bound_rel);
 }
 
-/* docs/defaults.md, "The outcome in words": when much is left bad, why, and what to try. */
+/* docs/defaults.md, "The outcome in words": when much is left bad, why, and what to try.
+ */
 static void advise(const report_t *r, outcome_t *o)
 {
     const opt_options *op = r->options;
@@ -141,18 +142,23 @@ static void advise(const report_t *r, outcome_t *o)
         suggest(o, "try --topology full: it inserts vertices where flips alone are not "
                    "enough");
     if (at_bound)
-        suggest(o, "the boundary reached its bound: try a looser --hausd, e.g. --hausd %.3g%%",
-                 200 * o->bound_rel);
+        suggest(
+            o,
+            "the boundary reached its bound: try a looser --hausd, e.g. --hausd %.3g%%",
+            200 * o->bound_rel);
     else if (op && op->boundary == OPT_BOUNDARY_FIXED)
-        suggest(o, "try --boundary slide: fixed boundary vertices keep the tets along the "
-                   "boundary as they are");
-    if (r->run && (r->run->stop == OPT_STOP_TIME_LIMIT || r->run->stop == OPT_STOP_CANCELLED))
+        suggest(o,
+                "try --boundary slide: fixed boundary vertices keep the tets along the "
+                "boundary as they are");
+    if (r->run &&
+        (r->run->stop == OPT_STOP_TIME_LIMIT || r->run->stop == OPT_STOP_CANCELLED))
         suggest(o, "the run was stopped (%s) before it converged: give it more time",
-                 r->run->stop_reason);
+                r->run->stop_reason);
     if (!o->n_suggestions)
-        suggest(o, "look at the mesh around the worst tet (%.4g, %.4g, %.4g): the input's "
-                   "shape or sizing there may be what limits the quality",
-                 o->worst_centroid[0], o->worst_centroid[1], o->worst_centroid[2]);
+        suggest(o,
+                "look at the mesh around the worst tet (%.4g, %.4g, %.4g): the input's "
+                "shape or sizing there may be what limits the quality",
+                o->worst_centroid[0], o->worst_centroid[1], o->worst_centroid[2]);
 }
 
 qdc_status outcome_compute(const report_t *r, outcome_t *o)

@@ -22,16 +22,16 @@
 
 typedef struct {
     char summary[3 * OUTCOME_TEXT]; /* improved; left bad; boundary: one paragraph */
-    char improved[OUTCOME_TEXT];    /* mean ratio, worst tet, smallest dihedral in -> out */
-    char left_bad[OUTCOME_TEXT];    /* tets under 5 and over 175 deg, inverted, worst */
-    char boundary[OUTCOME_TEXT];    /* moved against the bound; "" when neither known */
+    char improved[OUTCOME_TEXT]; /* mean ratio, worst tet, smallest dihedral in -> out */
+    char left_bad[OUTCOME_TEXT]; /* tets under 5 and over 175 deg, inverted, worst */
+    char boundary[OUTCOME_TEXT]; /* moved against the bound; "" when neither known */
     int32_t n_tets, n_small, n_large, n_inverted; /* small: min dihedral < 5, large: max
                                                    * dihedral > 175 degrees */
-    int32_t worst_tet;         /* tet of the worst mean ratio (from 0), -1 unknown */
-    double worst_q;            /* its mean ratio */
-    double worst_centroid[3];  /* its centroid, mesh units */
-    double moved_rel;          /* boundary Hausdorff / diagonal, -1 not measured */
-    double bound_rel;          /* the bound applied / diagonal, 0 none */
+    int32_t worst_tet;        /* tet of the worst mean ratio (from 0), -1 unknown */
+    double worst_q;           /* its mean ratio */
+    double worst_centroid[3]; /* its centroid, mesh units */
+    double moved_rel;         /* boundary Hausdorff / diagonal, -1 not measured */
+    double bound_rel;         /* the bound applied / diagonal, 0 none */
     int n_warnings, n_suggestions;
     char warnings[OUTCOME_MAX][OUTCOME_TEXT];
     char suggestions[OUTCOME_MAX][OUTCOME_TEXT];

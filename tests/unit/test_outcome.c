@@ -13,8 +13,8 @@
 static mesh_t *two_tets(double h)
 {
     static const double reg[12] = {0, 0, 0, 1, 1, 0, 1, 0, 1, 0, 1, 1};
-    const double tri[12] = {10, 0, 0, 11, 0, 0, 10.5, 0.8660254037844386, 0,
-                            10.5, 0.28867513459481287, h};
+    const double tri[12] = {
+        10, 0, 0, 11, 0, 0, 10.5, 0.8660254037844386, 0, 10.5, 0.28867513459481287, h};
     mesh_t *m = mesh_new(8, 2, 0);
     if (!m)
         return NULL;
@@ -38,7 +38,8 @@ TEST(worst_tet_and_centroid)
     ASSERT_OK(report_quality_compute(m, &q, NULL));
     ASSERT_EQ_INT(q.worst_tet, 1);
     ASSERT_NEAR(q.worst_centroid[0], 10.5, 1e-12);
-    ASSERT_NEAR(q.worst_centroid[1], (0.8660254037844386 + 0.28867513459481287) / 4, 1e-12);
+    ASSERT_NEAR(q.worst_centroid[1], (0.8660254037844386 + 0.28867513459481287) / 4,
+                1e-12);
     ASSERT_NEAR(q.worst_centroid[2], 0.0025, 1e-12);
     ASSERT_NEAR(q.diag, sqrt(11 * 11 + 1 + 1), 1e-12);
     mesh_free(m);
@@ -85,7 +86,8 @@ TEST(bad_result_warned)
         ASSERT_EQ_INT(out.n_suggestions, 2);
         ASSERT_TRUE(has(out.suggestions[0], "try --topology full"));
         ASSERT_TRUE(has(out.suggestions[1], "looser --hausd, e.g. --hausd 0.4%"));
-        ASSERT_TRUE(has(out.boundary, "boundary moved 0.19% of the diagonal, 95% of its bound (0.2%)"));
+        ASSERT_TRUE(has(out.boundary,
+                        "boundary moved 0.19% of the diagonal, 95% of its bound (0.2%)"));
     }
     mesh_free(m);
 }
@@ -111,4 +113,5 @@ TEST(good_result_quiet)
     mesh_free(m);
 }
 
-TEST_MAIN("outcome", T(worst_tet_and_centroid), T(bad_result_warned), T(good_result_quiet))
+TEST_MAIN("outcome", T(worst_tet_and_centroid), T(bad_result_warned),
+          T(good_result_quiet))
