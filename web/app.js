@@ -657,7 +657,8 @@ function renderStats(st) {
         return;
     }
     $('job-stats').replaceChildren(
-        stat('record', (st.recs.length ? st.recs.length - 1 : r.iteration) + ' · ' + r.phase),
+        // iterations: the latest record's number, as qdc status and the report count them
+        stat('iterations', (st.recs.length ? st.recs.length - 1 : r.iteration) + ' · ' + r.phase),
         stat('mean ratio', (r0 ? fix(r0.mean_ratio_mean, 4) + ' → ' : '') + fix(res.mean_ratio_mean, 4)),
         stat('worst', (r0 ? sgn(r0.mean_ratio_min, 3) + ' → ' : '') + sgn(res.mean_ratio_min, 3)),
         stat('dihedral', fix(res.dihedral_min, 1) + '°..' + fix(res.dihedral_max, 1) + '°'),
@@ -804,7 +805,10 @@ function renderReport(st) {
     const sec = run.seconds || {};
     kvTable($('run-table'), ['', ''], [
         ['outcome', (run.outcome || '–') + (run.stop_reason ? ' (' + run.stop_reason + ')' : '')],
-        ['iterations', String(run.iterations) + (run.best_iteration !== undefined ? ', best record ' + run.best_iteration : '')],
+        // one count (docs/defaults.md): the last record's number, as qdc status counts
+        ['iterations', String(run.iterations)],
+        ...(run.best_iteration !== undefined ? [['result from iteration', String(run.best_iteration)]] : []),
+        ...(run.global_iterations !== undefined ? [['of them global', String(run.global_iterations)]] : []),
         ['solver', run.solver || '–'],
         ...(run.held_back ? [['vertices held back at their input position', int(run.held_back)]] : []),
         ...(run.topology ? [['topology: tets', int(run.topology.tets_in) + ' → ' + int(run.topology.tets_out)],

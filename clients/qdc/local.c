@@ -675,7 +675,7 @@ static void optimize_summary(const optimize_args *x, const opt_result *res)
             res->after.q_min, (int)(res->before.n_inverted - res->before.n_degenerate),
             (int)(res->after.n_inverted - res->after.n_degenerate), deg,
             res->before.dih_min, res->before.dih_max, res->after.dih_min,
-            res->after.dih_max, res->stop_reason, res->iterations,
+            res->after.dih_max, res->stop_reason, res->last_record,
             opt_solver_name(res->solver), res->t_total);
     fprintf(stderr,
             "qdc: seconds: setup %.2f, weights %.2f, assembly %.2f, solve %.2f, "

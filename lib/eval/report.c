@@ -377,8 +377,10 @@ qdc_status report_write_json(const report_t *r, qdc_write_fn fn, void *ctx,
         jw_open(&w, "run", '{');
         jw_str(&w, "outcome", (unsigned)s->outcome < 3 ? outcomes[s->outcome] : "?");
         jw_str(&w, "stop_reason", s->stop_reason);
-        jw_int(&w, "iterations", s->iterations);
+        /* one count (docs/defaults.md): the records after the input's */
+        jw_int(&w, "iterations", s->last_record);
         jw_int(&w, "best_iteration", s->best_iteration);
+        jw_int(&w, "global_iterations", s->iterations);
         jw_int(&w, "max_inverted_global", s->max_inverted_global);
         jw_int(&w, "folded_global", s->folded_global);
         jw_num(&w, "hausd_bound", s->hausd_bound);

@@ -137,9 +137,11 @@ const char *opt_topology_name(opt_topology t);
 
 typedef struct {
     opt_outcome outcome;
-    int iterations;      /* global iterations done */
-    int best_iteration;  /* which iterate was returned (0 = input) */
-    int last_record;     /* number of the last progress record */
+    int iterations;      /* global iterations done, over all the runs (reruns, rounds) */
+    int best_iteration;  /* the progress record of the returned mesh (0 = input) */
+    int last_record;     /* number of the last progress record: the run's iterations
+                          * as the report, qdc and qdcd count them (docs/defaults.md,
+                          * "One iteration count") */
     opt_solver solver;   /* solver used */
     double solver_flops; /* CHOLMOD analysis estimate (0 if not analysed) */
     double t_setup, t_weights, t_assembly, t_solve, t_linesearch, t_harmonic, t_finish,

@@ -329,6 +329,9 @@ static qdc_status topology_run(mesh_t *m, const opt_options *opts, opt_result *r
         st = opt_run_smooth(m, &o, &r, err);
         if (st != QDC_OK)
             break; /* m is the flipped mesh, valid */
+        /* the round's records were numbered on from the topology record
+         * (its input's record is that one): its best in the whole run's numbers */
+        r.best_iteration += record;
         record += r.last_record;
         add_run(&first, &r);
         stopped = r.after.q_min <= last.after.q_min &&

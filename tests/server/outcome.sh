@@ -41,5 +41,21 @@ fi
 "$BIN/qdc" status "$B" --server "$URL" > "$TMP/statusb" 2>&1
 [ "$(grep -c '^  outcome: ' "$TMP/statusb")" = 1 ] && ! grep -q "^  \(warning\|suggestion\):" "$TMP/statusb" &&
     pass "outcome: qdc status of a good result: its outcome, no warning" || fail "outcome: status good" "$(cat "$TMP/statusb")"
+# one iteration count (docs/defaults.md): the job's, the report's and the last
+# record's number agree; the record kept is one of them
+bad=
+for id in "$A" "$B"; do
+    curl -s "$URL/v1/jobs/$id" > "$TMP/j.$id"
+    curl -s "$URL/v1/jobs/$id/report" > "$TMP/r.$id"
+    curl -s "$URL/v1/jobs/$id/progress?after=-1" > "$TMP/p.$id"
+    it=$(jf "$TMP/j.$id" .iterations)
+    [ "$it" = "$(jf "$TMP/r.$id" .run.iterations)" ] && [ "$it" = "$(jq '.records[-1].iteration' "$TMP/p.$id")" ] &&
+        [ "$it" = "$(jq '.records | length - 1' "$TMP/p.$id")" ] &&
+        jq -e --argjson n "$it" '.run.best_iteration <= $n and .run.global_iterations <= $n' "$TMP/r.$id" > /dev/null ||
+        bad="$bad $id: job $it, report $(jq -c '.run | [.iterations, .best_iteration, .global_iterations]' "$TMP/r.$id"), records $(jq '.records | length' "$TMP/p.$id")"
+done
+"$BIN/qdc" status "$A" --server "$URL" | head -1 | grep -q " $(jf "$TMP/j.$A" .iterations) it " || bad="$bad status: $("$BIN/qdc" status "$A" --server "$URL" | head -1)"
+[ -z "$bad" ] && pass "iterations: the job's, the report's, qdc status's and the last record's number agree ($(jf "$TMP/j.$A" .iterations) and $(jf "$TMP/j.$B" .iterations))" ||
+    fail "iterations" "$bad"
 stop_qdcd
 exit $((NFAIL > 0))

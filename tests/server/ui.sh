@@ -317,7 +317,7 @@ if [ -n "${UI_1M:-}" ]; then
         BJ=$(jf "$TMP/bsub" .id)
         st=$(wait_done "$BJ")
         [ "$code $st" = "202 succeeded" ] || fail "1M-tet job" "$code $st"
-        BIG_ID=$BJ BIG_RECORDS=$(jf "$TMP/job.$BJ" .iterations) QDC_URL=$URL UI_MODE=big \
+        BIG_ID=$BJ BIG_RECORDS=$(($(jf "$TMP/job.$BJ" .iterations) + 1)) QDC_URL=$URL UI_MODE=big \
             node "$ROOT/tests/ui/console.mjs" > "$TMP/big.out" 2>&1
         rc=$?
         cat "$TMP/big.out"
