@@ -50,4 +50,24 @@ cmp -s "$TMP/bad.nobound" "$TMP/bad2.got" && grep -q "^qdc: outcome: .*boundary 
 # -q: nothing printed
 "$BIN/qdc" optimize "$DEV/cube_h0.1_tangled.mesh.gz" "$TMP/bad3.mesh" --max-iter 1 --finish off -q 2> "$TMP/bad3.err"
 [ ! -s "$TMP/bad3.err" ] && pass "outcome: -q prints no outcome" || fail "outcome: quiet" "$(head -2 "$TMP/bad3.err")"
+
+# one iteration count (docs/defaults.md): a tangled bunny without the finishing
+# pass runs again from the input (its records go on, "rerun"); the summary's N
+# iterations, the report's run.iterations and the last progress line's number
+# agree, the lines are numbered 0..N, and the record run.best_iteration names is
+# the result (its printed mean ratio and worst are the report's after)
+"$BIN/qdc" optimize "$DEV/bunny_tangled-low_10k.mesh.gz" "$TMP/rr.mesh" --finish off \
+    --report "$TMP/rr.json" 2> "$TMP/rr.err"
+grep '^[a-z]* *[0-9]* *q mean' "$TMP/rr.err" | awk '{ print $1, $2, $5, $7 }' > "$TMP/rr.recs"
+n=$(jq .run.iterations "$TMP/rr.json")
+best=$(jq .run.best_iteration "$TMP/rr.json")
+want=$(jq -r '"\(.after.mean_ratio_mean * 10000 | round / 10000) \(.after.mean_ratio_min * 10000 | round / 10000)"' "$TMP/rr.json")
+got=$(awk -v b="$best" '$2 == b { printf "%g %g", $3, $4 }' "$TMP/rr.recs")
+if [ "$(awk '{ print $2 }' "$TMP/rr.recs" | tr '\n' ' ')" = "$(seq 0 "$n" | tr '\n' ' ')" ] &&
+    grep -q "^rerun " "$TMP/rr.recs" && grep -q "(converged, $n iterations, " "$TMP/rr.err" &&
+    [ "$best" -le "$n" ] && [ "$got" = "$(echo "$want" | awk '{ printf "%g %g", $1, $2 }')" ]; then
+    pass "iterations: a run with reruns numbers its records 0..$n, the summary and the report say $n, the best record ($best) is the result"
+else
+    fail "iterations" "n $n best $best got '$got' want '$want' $(grep -c . "$TMP/rr.recs") records, $(grep -o '([a-z-]*, [0-9]* iterations' "$TMP/rr.err")"
+fi
 exit $((NFAIL > 0))
