@@ -9,8 +9,10 @@
 # axe-core and no column cut at 390 px on the new views; and a job page that
 # says the job runs again when its daemon is killed (kill -9) and started again
 # on the same port (the SSE stream's `event: restart`).
-# UI_BIG=FILE (a ~1M-tet mesh, e.g. from scripts/corpus.py) adds the figures of
-# a finished big job's page: first paint, report drawn, 3D first frame and
+# UI_BIG=FILE (a ~1M-tet mesh: python3 scripts/corpus.py DIR --tets 1260000
+# --only ball-lowq makes one) adds the figures of a finished big job's page:
+# first paint, summary and report shown, against a small job's page and
+# /livez in the same fresh browser context; its 3D view's first frame and
 # frame rates (printed, not judged).
 . "$(dirname "$0")/../lib.sh"
 . "$(dirname "$0")/daemon.inc"
@@ -58,11 +60,18 @@ stop_qdcd || fail "SIGTERM" "exit status $?"
 
 if [ -n "${UI_BIG:-}" ]; then
     start_qdcd "$TMP/b" --workers 1 || { fail "start (big)" "$(tail -3 "$TMP/b.log")"; exit 1; }
-    code=$(submit "$UI_BIG" model/x-medit "" "$TMP/bsub")
+    submit "$SAMPLE" model/x-medit "name=cube.mesh" "$TMP/ssub" > /dev/null
+    SJ=$(jf "$TMP/ssub" .id)
+    code=$(submit "$UI_BIG" model/x-medit "name=$(basename "$UI_BIG")" "$TMP/bsub")
     BJ=$(jf "$TMP/bsub" .id)
-    st=$(wait_done "$BJ")
+    i=0
+    while [ $i -lt 1200 ] && [ "$(curl -s "$URL/v1/jobs/$BJ" | jq -r .done)" != true ]; do
+        sleep 0.5
+        i=$((i + 1))
+    done
+    st=$(curl -s "$URL/v1/jobs/$BJ" | jq -r .state)
     if [ "$code $st" = "202 succeeded" ]; then
-        QDC_URL=$URL UI_MODE=big BIG_ID=$BJ node "$ROOT/tests/ui/tabs.mjs" > "$TMP/big.out" 2>&1 || fail "tabs.mjs big" "exit $?"
+        QDC_URL=$URL UI_MODE=big BIG_ID=$BJ SMALL_ID=$SJ node "$ROOT/tests/ui/tabs.mjs" > "$TMP/big.out" 2>&1 || fail "tabs.mjs big" "exit $?"
         cat "$TMP/big.out"
         NFAIL=$((NFAIL + $(grep -c '^FAIL - ' "$TMP/big.out")))
     else
@@ -71,4 +80,5 @@ if [ -n "${UI_BIG:-}" ]; then
     stop_qdcd || fail "SIGTERM (big)" "exit status $?"
 fi
 echo "# figures: $(cat "$TMP/out/figures-tabs.json" 2> /dev/null | tr -d '\n ')"
+[ -n "${UI_BIG:-}" ] && echo "# figures (big): $(cat "$TMP/out/figures-big.json" 2> /dev/null | tr -d '\n ')"
 exit $((NFAIL > 0))

@@ -4,11 +4,12 @@
 // directory: figures, and the kill-now / restarted files the shell and this
 // script meet at), CHROMIUM, SAMPLE (the sample cube), LONG (a mesh whose
 // literal-mode run lasts), SPHERE (a small curved mesh: its boundary moves).
-// UI_MODE=big with BIG_ID: only the figures of a
-// finished big job's page.
+// UI_MODE=big with BIG_ID and SMALL_ID (finished jobs, a big one and a small
+// one): only the figures of the big job's page (printed, not judged).
 // Prints "ok - ..." / "FAIL - ..." lines like the shell suites.
 import { readFileSync, writeFileSync, existsSync } from 'node:fs';
 import path from 'node:path';
+import os from 'node:os';
 import { noColumnCut, axeChecks, view3dSpeed } from './views.mjs';
 import { chromium, pass, fail, check, failed, until } from './tap.mjs';
 
@@ -49,41 +50,60 @@ const rowIds = () => page.$$eval('#jobs tbody tr', (t) => t.map((r) => r.dataset
 const rowSel = (id) => '#jobs tr[data-id="' + id + '"]';
 const sortOf = (key) => page.$eval('#jobs th[data-sort="' + key + '"]', (th) => th.getAttribute('aria-sort'));
 
+// A page's first contentful paint, the summary shown (the header's sizes and
+// the stats' figures) and the report drawn, in ms from its navigation's start
+// (looked at every frame).
+async function pageTimes(p, url) {
+    await p.goto(URL + url, { waitUntil: 'load' });
+    const fcp = await p.evaluate(() => new Promise((resolve) => {
+        new PerformanceObserver((l) => {
+            const e = l.getEntries().find((x) => x.name === 'first-contentful-paint');
+            if (e) resolve(Math.round(e.startTime));
+        }).observe({ type: 'paint', buffered: true });
+        setTimeout(() => resolve(null), 5000);
+    }));
+    if (url === '/livez') return { fcp };
+    const at = (fn) => p.waitForFunction(fn, null, { timeout: 60000, polling: 'raf' }).then((x) => x.jsonValue()).then(Math.round);
+    const summary = await at(() => document.querySelectorAll('#job-stats .stat').length > 1 &&
+        / tets/.test(document.getElementById('job-meta').textContent) && performance.now());
+    const report = await at(() => +document.getElementById('hist').dataset.drawn > 0 &&
+        document.querySelectorAll('#quality-table tbody tr').length > 0 && performance.now());
+    // when each request of the page was first answered
+    const got = await p.evaluate(() => Object.fromEntries(performance.getEntriesByType('resource').reverse()
+        .map((e) => [e.name.replace(/^https?:\/\/[^/]+/, '').replace(/[0-9a-f]{32}/, '{id}'), Math.round(e.responseEnd)])));
+    return { fcp, summary, report, got };
+}
+
 async function bigFigures() {
-    // First paint of a finished big job's page, in fresh contexts (empty
-    // caches), then the report drawn and the 3D view's first frame and rates.
+    // A finished big job's page (BIG_ID) and, in the same fresh context (an
+    // empty cache) just before it, the two baselines that show what the
+    // machine's load does to chromium: /livez (a 16-byte document) and a
+    // finished small job's page (SMALL_ID). Then the big job's 3D view: its
+    // first frame and frame rates, still and while turning.
     const job = (await api('/v1/jobs/' + env.BIG_ID)).body;
     figures.big_tets = job.mesh.tets;
-    figures.big_fcp_ms = [];
-    figures.big_report_ms = [];
+    const runs = [];
     for (let k = 0; k < 3; k++) {
         const ctx = await browser.newContext({ viewport: { width: 1280, height: 900 } });
         const p = await ctx.newPage();
-        const t0 = Date.now();
-        await p.goto(URL + '/ui/jobs/' + env.BIG_ID, { waitUntil: 'load' });
-        const fcp = await p.evaluate(() => new Promise((resolve) => {
-            new PerformanceObserver((l) => {
-                const e = l.getEntries().find((x) => x.name === 'first-contentful-paint');
-                if (e) resolve(e.startTime);
-            }).observe({ type: 'paint', buffered: true });
-            setTimeout(() => resolve(null), 5000);
-        }));
-        await p.waitForFunction(() => +document.getElementById('hist').dataset.drawn > 0 &&
-            document.querySelectorAll('#quality-table tbody tr').length > 0, null, { timeout: 60000 });
-        figures.big_report_ms.push(Date.now() - t0);
-        figures.big_fcp_ms.push(fcp === null ? null : Math.round(fcp));
+        const livez = await pageTimes(p, '/livez');
+        const small = await pageTimes(p, '/ui/jobs/' + env.SMALL_ID);
+        const big = await pageTimes(p, '/ui/jobs/' + env.BIG_ID);
+        runs.push({ livez_fcp: livez.fcp, small, big });
         if (k === 2) {
-            const t1 = Date.now();
             await p.click('#view3d-load');
-            const speed = await view3dSpeed(p, h);
-            figures.big_3d_load_ms = Date.now() - t1;
-            figures.big_3d = speed;
+            figures.big_3d = await view3dSpeed(p, h);
             figures.big_3d_status = await p.textContent('#view3d-status');
         }
         await ctx.close();
     }
-    check(figures.big_fcp_ms.every((x) => x !== null), 'big job (' + job.mesh.tets + ' tets): first paint ' + figures.big_fcp_ms.join(', ') +
-        ' ms, report drawn ' + figures.big_report_ms.join(', ') + ' ms; 3D: ' + JSON.stringify(figures.big_3d), JSON.stringify(figures));
+    figures.big_runs = runs;
+    figures.loadavg = os.loadavg().map((x) => +x.toFixed(1));
+    const col = (f) => runs.map(f).join(', ');
+    check(runs.every((r) => r.big.fcp !== null && r.small.fcp !== null), 'big job (' + job.mesh.tets + ' tets), ms from navigation: first paint ' +
+        col((r) => r.big.fcp) + ' (small job ' + col((r) => r.small.fcp) + ', /livez ' + col((r) => r.livez_fcp) + '); summary ' + col((r) => r.big.summary) +
+        ' (small ' + col((r) => r.small.summary) + '); report drawn ' + col((r) => r.big.report) + ' (small ' + col((r) => r.small.report) + '); 3D: ' +
+        JSON.stringify(figures.big_3d) + ' (load average ' + figures.loadavg.join(' ') + ')', JSON.stringify(runs));
 }
 
 try {
