@@ -826,6 +826,8 @@ async function follow(st, signal) {
                         const rec = JSON.parse(ev.data);
                         after = rec.seq;
                         run = rec.attempt || run;
+                        // opened after a takeover: say whose records these are
+                        if (run > 1 && !$('job-follow').dataset.kind) runNotice(run);
                         st.recs.push(rec);
                         st.redraw();
                         if (st.job && st.job.state === 'queued') { // it started: say so now
@@ -878,6 +880,13 @@ function restartNotice(data) {
     followSay('restart', 'This job runs again from the start' + (r.attempt ? ': attempt ' + r.attempt : '') + ' (' + from +
         ' stopped: its node or the daemon went away). The chart starts over with the new run\'s records.');
     $('job-follow').dataset.attempt = String(r.attempt || '');
+}
+
+// A page opened after the job was taken over: its records are of a later run.
+function runNotice(attempt) {
+    followSay('attempt', 'This job ran again from the start: the chart shows attempt ' + attempt + ' (attempt ' + (attempt - 1) +
+        ' stopped: its node or the daemon went away).');
+    $('job-follow').dataset.attempt = String(attempt);
 }
 
 function jobGone(st) {

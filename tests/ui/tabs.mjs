@@ -316,6 +316,13 @@ try {
         check(after > 0 && prog && prog.attempt === 2 && after <= prog.count + 1,
             'restart: the chart starts over with attempt 2 (' + before + ' records of attempt 1 dropped, ' + after + ' shown of ' + (prog && prog.count) + ')',
             after + ' ' + JSON.stringify(prog && { attempt: prog.attempt, count: prog.count }));
+        // a page opened after the takeover says whose records it shows
+        const tab4 = watch(await context.newPage(), 'late tab');
+        await tab4.goto(URL + '/ui/jobs/' + j5);
+        const late = await tab4.waitForSelector('#job-follow[data-kind="attempt"]:not([hidden])', { timeout: 20000 })
+            .then(() => tab4.textContent('#job-follow')).catch((e) => e.message);
+        check(/the chart shows attempt 2 \(attempt 1 stopped/.test(late), 'restart: a page opened afterwards says "' + late.slice(0, 70) + '…"', late);
+        await tab4.close();
         await api('/v1/jobs/' + j5 + ':cancel', { method: 'POST' });
         await tab2.waitForFunction(() => document.getElementById('job-state').textContent === 'cancelled', null, { timeout: 30000 })
             .then(() => pass('restart: the job page still follows the job (cancelled on attempt 2)'))
