@@ -14,34 +14,17 @@
 //   OPTIONS_JSON `qdc options` output
 //   UI_MODE=big: BIG_ID, BIG_RECORDS name a finished ~1M-tet job: time its view
 // Prints "ok - ..." / "FAIL - ..." lines like the shell suites.
-import { createRequire } from 'node:module';
 import { readFileSync, writeFileSync } from 'node:fs';
 import path from 'node:path';
 import { gunzipSync } from 'node:zlib';
 import { view3dPixels, chartChecks, view3dChecks, view3dSpeed, rerunChecks, noColumnCut, ariaChecks, axeChecks } from './views.mjs';
+import { chromium, pass, fail, check, failed, until } from './tap.mjs';
 
 const env = process.env;
-const require = createRequire(path.join(env.UI_MODULES, 'package.json'));
-const { chromium } = require('playwright-core');
-
 const URL = env.QDC_URL;
 const OUT = env.UI_OUT;
 const figures = {};
-let nfail = 0;
-const pass = (m) => console.log('ok - ' + m);
-const fail = (m, why) => { console.log('FAIL - ' + m + ': ' + String(why).replace(/\s+/g, ' ').slice(0, 400)); nfail++; };
-const check = (cond, m, why) => (cond ? pass(m) : fail(m, why));
 const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
-
-async function until(fn, ms, what) {
-    const t0 = Date.now();
-    for (;;) {
-        const v = await fn();
-        if (v) return v;
-        if (Date.now() - t0 > ms) throw new Error('timed out waiting for ' + what);
-        await sleep(50);
-    }
-}
 
 const authH = env.UI_MODE === 'tokens' ? { Authorization: 'Bearer ' + env.UI_TOKEN } : {};
 async function apiJSON(p, opts) {
@@ -679,4 +662,4 @@ try {
     writeFileSync(path.join(OUT, 'figures-' + env.UI_MODE + '.json'), JSON.stringify(figures, null, 1));
     await browser.close();
 }
-process.exit(nfail ? 1 : 0);
+process.exit(failed());
