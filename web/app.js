@@ -431,7 +431,8 @@ async function listJobs() {
 function listFigures(j) {
     const s = listState;
     const key = j.id + (j.done ? ':done' : '');
-    if (s.first.has(key) || s.firstBusy.has(key) || !(j.iterations > 0)) return;
+    // a record (the input's is record 0: iterations 0) or the report to read
+    if (s.first.has(key) || s.firstBusy.has(key) || !(j.progress || (j.done && j.links && j.links.report))) return;
     s.firstBusy.add(key);
     const got = j.done && j.links && j.links.report
         ? apiJSON(j.links.report).then((r) => ({ in: r.before, out: r.after }))
