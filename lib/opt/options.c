@@ -163,7 +163,8 @@ static const char *const solver_say[] = {
 static const char *const topology_say[] = {
     "vertices move, the tets stay as they are (point and cell data map one to one)",
     "tets are also flipped where that raises the worst quality around them: "
-    "vertices, boundary triangles and region tags kept, the tet count changes",
+    "vertices, boundary triangles and region tags kept, the tet count changes (with "
+    "--hausd given, boundary edges flipped and flat tets peeled off within it)",
     "flips, then a vertex inserted inside where a tet stays very bad (below 0.15 "
     "mean ratio): boundary triangles and region tags kept, vertices added"};
 

@@ -36,7 +36,8 @@ enum { TOPO_ROUNDS = 3 };
 /* The operations of a round of topology. */
 static int64_t round_ops(const topo_stats *ts)
 {
-    return ts->edge_removals + ts->flips23 + ts->multiface + ts->insertions;
+    return ts->edge_removals + ts->flips23 + ts->multiface + ts->insertions + ts->bflips +
+           ts->peels;
 }
 
 /* m's vertices grown to nv with the coordinates xyz (taken over: the first
@@ -64,11 +65,34 @@ static qdc_status grow_vertices(mesh_t *m, int32_t nv, double *xyz, qdc_error *e
     return QDC_OK;
 }
 
+/* m's triangles replaced by those of sf after a round with boundary operations
+ * (sf's arrays taken over or freed). */
+static qdc_status take_surface(mesh_t *m, topo_surface *sf, qdc_error *err)
+{
+    qdc_status st = QDC_OK;
+
+    if (sf->removed > 0 || sf->added > 0) {
+        st = mesh_set_tris(m, sf->ntri_out, m->tri_ref != NULL);
+        if (st == QDC_OK) {
+            memcpy(m->tris, sf->tris_out, 3 * (size_t)sf->ntri_out * sizeof *m->tris);
+            if (m->tri_ref)
+                memcpy(m->tri_ref, sf->refs_out, (size_t)sf->ntri_out * sizeof *m->tri_ref);
+        } else {
+            st = qdc_fail(err, st, "out of memory");
+        }
+    }
+    qdc_free(sf->tris_out);
+    qdc_free(sf->refs_out);
+    sf->tris_out = sf->refs_out = NULL;
+    return st;
+}
+
 /* One round of flips on m: the tets oriented from the connectivity (mesh_orient:
  * tets written in the other order are flipped for lib/topo and written back so),
- * improved, and m's tets and regions replaced when a flip was made. */
-static qdc_status flip_round(mesh_t *m, const opt_options *o, int insert, topo_stats *ts,
-                             qdc_error *err)
+ * improved, and m's tets and regions replaced when a flip was made. hausd > 0:
+ * boundary flips and peeling within it too, m's triangles brought up to date. */
+static qdc_status flip_round(mesh_t *m, const opt_options *o, int insert, double hausd,
+                             topo_stats *ts, topo_surface *sf, qdc_error *err)
 {
     uint8_t *flip = qdc_malloc((size_t)m->nt);
     int32_t *tv = qdc_mallocn(4 * (size_t)m->nt, sizeof *tv), *tets = NULL,
@@ -95,12 +119,23 @@ static qdc_status flip_round(mesh_t *m, const opt_options *o, int insert, topo_s
         }
     topo_params_default(&p);
     p.insert = insert;
+    p.bound.hausd = hausd;
+    p.bound.cos_feature = cos(o->feature_angle * (3.14159265358979323846 / 180.0));
+    sf->ntri = m->ntri;
+    sf->tris = m->tris;
+    sf->refs = m->tri_ref;
     st = topo_full_arrays(m->nv, m->xyz, m->nt, tv, m->region, flip, &p, o->cancel, &nv,
-                          &xyz, &nt, &tets, m->region ? &region : NULL, ts, err);
+                          &xyz, &nt, &tets, m->region ? &region : NULL,
+                          hausd > 0 ? sf : NULL, ts, err);
     if (st == QDC_ECANCEL)
         st = QDC_OK; /* the mesh as the flips left it is valid */
     if (st != QDC_OK || round_ops(ts) == 0)
         goto out;
+    if (hausd > 0) {
+        st = take_surface(m, sf, err);
+        if (st != QDC_OK)
+            goto out;
+    }
     if (nv > m->nv) {
         st = grow_vertices(m, nv, xyz, err);
         if (st != QDC_OK)
@@ -122,6 +157,9 @@ out:
     qdc_free(tets);
     qdc_free(region);
     qdc_free(xyz);
+    qdc_free(sf->tris_out);
+    qdc_free(sf->refs_out);
+    sf->tris_out = sf->refs_out = NULL;
     return st;
 }
 
@@ -221,6 +259,8 @@ static void count_round(opt_result *acc, const topo_stats *ts)
     acc->topo_flips23 += ts->flips23;
     acc->topo_multiface += ts->multiface;
     acc->topo_insertions += ts->insertions;
+    acc->topo_bflips += ts->bflips;
+    acc->topo_peels += ts->peels;
     for (int n = 3; n <= FLIP_MAXRING; n++)
         acc->topo_by_ring[n] += ts->by_ring[n];
 }
@@ -251,6 +291,10 @@ static void merge_result(opt_result *last, const opt_result *first, int32_t nt_o
     last->topo_flips23 = first->topo_flips23;
     last->topo_multiface = first->topo_multiface;
     last->topo_insertions = first->topo_insertions;
+    last->topo_bflips = first->topo_bflips;
+    last->topo_peels = first->topo_peels;
+    last->topo_tris_removed = first->topo_tris_removed;
+    last->topo_tris_added = first->topo_tris_added;
     last->verts_in = first->verts_in;
     last->verts_out = nv_out;
     memcpy(last->topo_by_ring, first->topo_by_ring, sizeof last->topo_by_ring);
@@ -276,6 +320,8 @@ static qdc_status topology_run(mesh_t *m, const opt_options *opts, opt_result *r
     double t0 = qdc_now();
     int record = 0, stopped = 0;
     round_progress rp = {opts->progress, opts->progress_ctx, 0, 0.0};
+    topo_surface sf = {0};
+    double hausd = 0.0;
     qdc_status st;
 
     o.topology = OPT_TOPOLOGY_NONE;
@@ -286,6 +332,12 @@ static qdc_status topology_run(mesh_t *m, const opt_options *opts, opt_result *r
         return st;
     }
     last = first;
+    /* the boundary changes only under a bound the user asked for (not the
+     * default's) and when it may move at all (issue #31: triangle for
+     * triangle otherwise) */
+    if (opts->boundary != OPT_BOUNDARY_FIXED &&
+        (opts->hausd > 0 || (opts->hausd_rel > 0 && opts->hausd_rel != OPT_HAUSD_AUTO)))
+        hausd = first.hausd_bound;
     first.tets_in = m->nt;
     first.verts_in = m->nv;
     record = first.last_record;
@@ -296,16 +348,18 @@ static qdc_status topology_run(mesh_t *m, const opt_options *opts, opt_result *r
         double left = 0.0;
         if (last.outcome == OPT_STOPPED)
             break; /* cancelled, out of time or the solver in trouble */
-        st = flip_round(m, &o, opts->topology == OPT_TOPOLOGY_FULL, &ts, err);
+        st = flip_round(m, &o, opts->topology == OPT_TOPOLOGY_FULL, hausd, &ts, &sf, err);
         if (st != QDC_OK)
             break;
         if (round_ops(&ts) == 0)
             break;
         count_round(&first, &ts);
+        first.topo_tris_removed += sf.removed;
+        first.topo_tris_added += sf.added;
         st = flip_record(m, ++record, t0, &pr, err);
         if (st != QDC_OK)
             break;
-        pr.operations = ts.edge_removals + ts.flips23 + ts.multiface;
+        pr.operations = ts.edge_removals + ts.flips23 + ts.multiface + ts.bflips + ts.peels;
         if (opts->progress && opts->progress(opts->progress_ctx, &pr)) {
             last.outcome = OPT_STOPPED;
             last.stop = OPT_STOP_CANCELLED;

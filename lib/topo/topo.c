@@ -3,8 +3,10 @@
  * with Netgen's sum-of-badness preference among improving operations). */
 #include "topo/topo.h"
 
+#include "core/tet.h"
 #include "topo/insert.h"
 
+#include <stdlib.h>
 #include <string.h>
 
 void topo_params_default(topo_params *p)
@@ -18,6 +20,8 @@ void topo_params_default(topo_params *p)
     p->insert = 0;
     p->qinsert = 0.15;
     p->imargin = 0.05;
+    p->bound.hausd = 0.0;
+    p->bound.cos_feature = 0.8660254037844387; /* 30 degrees */
 }
 
 typedef struct {
@@ -122,6 +126,20 @@ static int best_flip(const tmesh *tm, int32_t t, const topo_params *p, flip_cand
             *best = c;
             have = 1;
         }
+    if (p->bound.hausd > 0 && tm->fref) {
+        for (int e = 0; e < 6; e++)
+            if (flip_bedge_eval(tm, t, e, p->maxring, p->floor4, p->margin, &p->bound,
+                                &c) &&
+                (!have || better(&c, best))) {
+                *best = c;
+                have = 1;
+            }
+        if (flip_peel_eval(tm, t, p->margin, &p->bound, &c) &&
+            (!have || better(&c, best))) {
+            *best = c;
+            have = 1;
+        }
+    }
     for (int f = 0; f < 4; f++) {
         if (flip_23_eval(tm, t, f, p->floor4, p->margin, &c) &&
             (!have || better(&c, best))) {
@@ -199,8 +217,12 @@ qdc_status topo_improve(tmesh *tm, const topo_params *p, topo_stats *st,
             st->visits++;
             if (!best_flip(tm, e.t, p, &c))
                 continue;
-            s = tmesh_replace(tm, c.old, c.nold, (const int32_t(*)[4])c.newt, c.nnew, ids,
-                              &applied);
+            if (c.kind == FLIP_BEDGE || c.kind == FLIP_PEEL)
+                s = tmesh_replace_surface(tm, c.old, c.nold, (const int32_t(*)[4])c.newt,
+                                          c.nnew, c.dev, ids, &applied);
+            else
+                s = tmesh_replace(tm, c.old, c.nold, (const int32_t(*)[4])c.newt, c.nnew,
+                                  ids, &applied);
             if (s != QDC_OK || !applied)
                 continue;
             tmesh_commit(tm);
@@ -211,6 +233,10 @@ qdc_status topo_improve(tmesh *tm, const topo_params *p, topo_stats *st,
                 st->by_ring[c.nold]++;
             } else if (c.kind == FLIP_23) {
                 st->flips23++;
+            } else if (c.kind == FLIP_BEDGE) {
+                st->bflips++;
+            } else if (c.kind == FLIP_PEEL) {
+                st->peels++;
             } else {
                 st->multiface++;
             }
@@ -245,9 +271,71 @@ qdc_status topo_flip_arrays(int32_t nv, const double *xyz, int32_t nt,
 
     q.insert = 0;
     s = topo_full_arrays(nv, xyz, nt, tets, region, rev, &q, cancel, &n, &x, nt_out,
-                         tets_out, region_out, st, err);
+                         tets_out, region_out, NULL, st, err);
     qdc_free(x);
     return s;
+}
+
+static int key_cmp(const void *x, const void *y)
+{
+    const int32_t *a = x, *b = y;
+
+    for (int s = 0; s < 3; s++)
+        if (a[s] != b[s])
+            return a[s] < b[s] ? -1 : 1;
+    return 0;
+}
+
+/* sf's triangles after the run: the input's whose faces were not removed from
+ * the boundary, then each boundary face a boundary operation made (with a ref),
+ * in slot order, oriented as the input's triangles it replaced. */
+static qdc_status surface_out(tmesh *tm, topo_surface *sf)
+{
+    int32_t nnew = 0, k = 0;
+
+    if (tm->ngone > 0)
+        qsort(tm->gone, (size_t)tm->ngone, sizeof *tm->gone, key_cmp);
+    for (int32_t t = 0; t < tm->hi; t++)
+        for (int i = 0; i < 4 && tm->tv[4 * (size_t)t] >= 0; i++)
+            nnew += tm->adj[4 * (size_t)t + i] < 0 && (tm->fsurf[t] >> i & 1) &&
+                    tm->fref[4 * (size_t)t + i] != TMESH_NOREF;
+    sf->tris_out = qdc_mallocn(3 * ((size_t)sf->ntri + (size_t)nnew) + 3,
+                               sizeof *sf->tris_out);
+    sf->refs_out = qdc_mallocn((size_t)sf->ntri + (size_t)nnew + 1, sizeof *sf->refs_out);
+    if (!sf->tris_out || !sf->refs_out)
+        return QDC_ENOMEM;
+    sf->removed = 0;
+    for (int32_t s = 0; s < sf->ntri; s++) {
+        const int32_t *tr = sf->tris + 3 * (size_t)s;
+        int32_t key[3];
+        tet_sort3(tr[0], tr[1], tr[2], key);
+        if (tm->ngone > 0 &&
+            bsearch(key, tm->gone, (size_t)tm->ngone, sizeof *tm->gone, key_cmp)) {
+            sf->removed++;
+            continue;
+        }
+        memcpy(sf->tris_out + 3 * (size_t)k, tr, 3 * sizeof *tr);
+        sf->refs_out[k++] = sf->refs ? sf->refs[s] : 0;
+    }
+    sf->added = nnew;
+    for (int32_t t = 0; t < tm->hi; t++)
+        for (int i = 0; i < 4 && tm->tv[4 * (size_t)t] >= 0; i++) {
+            const int32_t *tt = tm->tv + 4 * (size_t)t;
+            int32_t *o = sf->tris_out + 3 * (size_t)k;
+            if (tm->adj[4 * (size_t)t + i] >= 0 || !(tm->fsurf[t] >> i & 1) ||
+                tm->fref[4 * (size_t)t + i] == TMESH_NOREF)
+                continue;
+            o[0] = tt[tet_face_of[i][0]];
+            o[1] = tt[tet_face_of[i][1]];
+            o[2] = tt[tet_face_of[i][2]];
+            if (tm->fsurf[t] >> (4 + i) & 1) {
+                o[1] = tt[tet_face_of[i][2]];
+                o[2] = tt[tet_face_of[i][1]];
+            }
+            sf->refs_out[k++] = tm->fref[4 * (size_t)t + i];
+        }
+    sf->ntri_out = k;
+    return QDC_OK;
 }
 
 qdc_status topo_full_arrays(int32_t nv, const double *xyz, int32_t nt,
@@ -255,13 +343,25 @@ qdc_status topo_full_arrays(int32_t nv, const double *xyz, int32_t nt,
                             const uint8_t *rev, const topo_params *p,
                             const atomic_int *cancel, int32_t *nv_out, double **xyz_out,
                             int32_t *nt_out, int32_t **tets_out, int32_t **region_out,
-                            topo_stats *st, qdc_error *err)
+                            topo_surface *sf, topo_stats *st, qdc_error *err)
 {
     tmesh *tm = NULL;
     qdc_status s = tmesh_new(nv, xyz, nt, tets, region, rev, &tm, err);
 
+    if (sf) {
+        sf->tris_out = NULL;
+        sf->refs_out = NULL;
+        sf->ntri_out = sf->removed = sf->added = 0;
+    }
+    if (s == QDC_OK && sf)
+        s = tmesh_set_surface(tm, sf->ntri, sf->tris, sf->refs);
     if (s == QDC_OK)
         s = topo_improve(tm, p, st, cancel);
+    if ((s == QDC_OK || s == QDC_ECANCEL) && sf) {
+        qdc_status s2 = surface_out(tm, sf);
+        if (s2 != QDC_OK)
+            s = s2;
+    }
     if (s == QDC_OK || s == QDC_ECANCEL) {
         qdc_status s2 = tmesh_export(tm, nt_out, tets_out, region ? region_out : NULL);
         if (s2 == QDC_OK) {
