@@ -304,31 +304,15 @@ static int same_surface(const tmesh *tm, int32_t ta, int fa, int32_t tb, int fb,
  * tets around c through the faces that contain c. */
 static int edge_exists(const tmesh *tm, int32_t t0, int32_t c, int32_t d)
 {
-    enum { STAR = 256 };
-    int32_t seen[STAR];
-    int n = 1;
+    int32_t star[256];
+    int n = tmesh_star(tm, t0, c, star, 256);
 
-    seen[0] = t0;
-    for (int k = 0; k < n; k++) {
-        int lc = tmesh_local(tm, seen[k], c);
-        if (tmesh_local(tm, seen[k], d) >= 0)
+    if (n < 0 || (tm->vdeg && n != tm->vdeg[c]))
+        return 1;
+    for (int k = 0; k < n; k++)
+        if (tmesh_local(tm, star[k], d) >= 0)
             return 1;
-        for (int i = 0; i < 4; i++) {
-            int32_t nb = tm->adj[4 * (size_t)seen[k] + i], u;
-            int dup = 0;
-            if (i == lc || nb < 0)
-                continue;
-            u = nb / 4;
-            for (int j = 0; j < n && !dup; j++)
-                dup = seen[j] == u;
-            if (dup)
-                continue;
-            if (n == STAR)
-                return 1;
-            seen[n++] = u;
-        }
-    }
-    return tm->vdeg && n != tm->vdeg[c];
+    return 0;
 }
 
 int flip_bedge_eval(const tmesh *tm, int32_t t, int e, int maxring, double floor4,

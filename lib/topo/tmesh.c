@@ -14,8 +14,9 @@
 const int tmesh_edge[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
 
 /* Largest cavity tmesh_replace takes: edge removal of a ring of 10 makes 16
- * tets out of 10; multi-face removal stays below these too. */
-enum { CAV_OLD = 32, CAV_NEW = 64 };
+ * tets out of 10; multi-face removal stays below these too; an edge
+ * contraction takes a vertex's star (contract.h). */
+enum { CAV_OLD = 64, CAV_NEW = 64 };
 
 enum { J_NEW, J_DEL, J_ADJ, J_FACE };
 
@@ -272,7 +273,8 @@ qdc_status tmesh_new(int32_t nv, const double *xyz, int32_t nt, const int32_t *t
     tm->vcap = nv;
     tm->xyz = qdc_mallocn(3 * (size_t)nv, sizeof *tm->xyz);
     tm->vcons = qdc_calloc((size_t)nv, 1);
-    if (!tm->xyz || !tm->vcons) {
+    tm->vdeg = qdc_calloc((size_t)nv, sizeof *tm->vdeg);
+    if (!tm->xyz || !tm->vcons || !tm->vdeg) {
         st = QDC_ENOMEM;
         goto out;
     }
@@ -295,6 +297,8 @@ qdc_status tmesh_new(int32_t nv, const double *xyz, int32_t nt, const int32_t *t
                 }
         }
         memcpy(tm->tv + 4 * (size_t)t, tt, 4 * sizeof *tt);
+        for (int a = 0; a < 4; a++)
+            tm->vdeg[tt[a]]++;
         tm->tag[t] = region ? region[t] : 0;
         tm->rev[t] = rev ? rev[t] != 0 : 0;
         tm->stamp[t] = 1;
@@ -554,6 +558,30 @@ static qdc_status constrain_edge(tmesh *tm, int32_t t0, int32_t u, int32_t w)
     return QDC_OK;
 }
 
+/* 1 when (u, w) is no edge of the cavity old but an edge of a tet around u
+ * outside it; with x >= 0 the same for the face (u, w, x). */
+static int new_edge_taken(const tmesh *tm, const int32_t *old, int nold, int32_t u,
+                          int32_t w, int32_t x)
+{
+    int32_t star[256];
+    int n = -1;
+
+    for (int o = 0; o < nold; o++)
+        if (tmesh_local(tm, old[o], u) >= 0) {
+            if (x < 0 && tmesh_local(tm, old[o], w) >= 0)
+                return 0; /* an edge of the cavity */
+            if (n < 0)
+                n = tmesh_star(tm, old[o], u, star, 256);
+        }
+    if (n >= 0 && n != tm->vdeg[u])
+        return 1; /* a pinched star: its other piece may hold the edge */
+    for (int k = 0; k < n; k++)
+        if (!tm->mark[star[k]] && tmesh_local(tm, star[k], w) >= 0 &&
+            (x < 0 || tmesh_local(tm, star[k], x) >= 0))
+            return 1;
+    return 0;
+}
+
 enum { LINK_BND = INT16_MIN };
 
 static qdc_status replace_impl(tmesh *tm, const int32_t *old, int nold,
@@ -654,6 +682,19 @@ static qdc_status replace_impl(tmesh *tm, const int32_t *old, int nold,
     }
     if (bnd && (!nsrc || !nmade))
         ok = 0;
+    /* a new edge, and a face inside the cavity, must be new to the mesh: one
+     * elsewhere (where the input overlaps itself, at a pinched vertex) would
+     * leave faces of three tets */
+    for (int j = 0; ok && j < nnew; j++)
+        for (int e = 0; ok && e < 6; e++)
+            ok = !new_edge_taken(tm, old, nold, newt[j][tmesh_edge[e][0]],
+                                 newt[j][tmesh_edge[e][1]], -1);
+    for (int j = 0; ok && j < nnew; j++)
+        for (int i = 0; ok && i < 4; i++)
+            if (link[j][i] < 0)
+                ok = !new_edge_taken(tm, old, nold, newt[j][tet_face_of[i][0]],
+                                     newt[j][tet_face_of[i][1]],
+                                     newt[j][tet_face_of[i][2]]);
     for (int j = 0; ok && j < nnew; j++) {
         ebits[j] = 0;
         for (int e = 0; e < 6; e++)
@@ -834,9 +875,7 @@ qdc_status tmesh_set_surface(tmesh *tm, int32_t ntri, const int32_t *tris,
     tm->fref = qdc_mallocn(4 * (size_t)tm->cap, sizeof *tm->fref);
     tm->fdev = qdc_calloc(4 * (size_t)tm->cap, sizeof *tm->fdev);
     tm->fsurf = qdc_calloc((size_t)tm->cap, 1);
-    qdc_free(tm->vdeg);
-    tm->vdeg = qdc_calloc((size_t)tm->vcap, sizeof *tm->vdeg);
-    if (!tm->fref || !tm->fdev || !tm->fsurf || !tm->vdeg) {
+    if (!tm->fref || !tm->fdev || !tm->fsurf) {
         qdc_free(keys);
         return QDC_ENOMEM;
     }
@@ -847,9 +886,6 @@ qdc_status tmesh_set_surface(tmesh *tm, int32_t ntri, const int32_t *tris,
     }
     if (ntri > 0)
         qsort(keys, (size_t)ntri, sizeof *keys, tri_key_cmp);
-    for (int32_t t = 0; t < tm->hi; t++)
-        for (int s = 0; s < 4 && tm->tv[4 * (size_t)t] >= 0; s++)
-            tm->vdeg[tm->tv[4 * (size_t)t + s]]++;
     for (int32_t t = 0; t < tm->cap; t++)
         for (int i = 0; i < 4; i++) {
             const int32_t *tt = tm->tv + 4 * (size_t)t;
@@ -881,6 +917,33 @@ qdc_status tmesh_set_surface(tmesh *tm, int32_t ntri, const int32_t *tris,
         }
     qdc_free(keys);
     return QDC_OK;
+}
+
+int tmesh_star(const tmesh *tm, int32_t t0, int32_t v, int32_t *out, int cap)
+{
+    int n = 0;
+
+    if (cap < 1)
+        return -1;
+    out[n++] = t0;
+    for (int k = 0; k < n; k++) {
+        int lv = tmesh_local(tm, out[k], v);
+        for (int i = 0; i < 4; i++) {
+            int32_t nb = tm->adj[4 * (size_t)out[k] + i], u;
+            int dup = 0;
+            if (i == lv || nb < 0)
+                continue;
+            u = nb / 4;
+            for (int j = 0; j < n && !dup; j++)
+                dup = out[j] == u;
+            if (dup)
+                continue;
+            if (n == cap)
+                return -1;
+            out[n++] = u;
+        }
+    }
+    return n;
 }
 
 int tmesh_check(const tmesh *tm, int32_t *ninv, char *why, size_t n)

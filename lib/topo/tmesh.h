@@ -55,8 +55,8 @@ typedef struct tmesh {
     uint8_t *fsurf; /* cap: bit i: boundary face i was made by a boundary
                      * operation; bit 4 + i: its triangle is written with the
                      * orientation opposite to tet_face_of's (the input's) */
-    int32_t *vdeg;      /* nv: the tets around each vertex (to tell a star that
-                         * is not one piece through its faces) */
+    int32_t *vdeg;      /* vcap: the live tets around each vertex (to tell a
+                         * star that is not one piece through its faces) */
     int32_t (*gone)[3]; /* sorted vertices of the boundary faces removed */
     int32_t ngone, capgone, ngone_op; /* ..., at the operation's start */
     tmesh_jent *jr; /* the journal of the operation under way */
@@ -125,6 +125,12 @@ void tmesh_rollback(tmesh *tm);
  * quality is below -1 and no operation touches them). 0 when consistent, else
  * -1 with a reason in why (n bytes). */
 int tmesh_check(const tmesh *tm, int32_t *ninv, char *why, size_t n);
+
+/* The tets around vertex v, from tet t0 (which has v) across the faces that
+ * have v, into out (room for cap), in search order: their count, or -1 when
+ * there are more than cap. A star that is not one piece through its faces
+ * (a pinched vertex) gives the piece of t0 only. */
+int tmesh_star(const tmesh *tm, int32_t t0, int32_t v, int32_t *out, int cap);
 
 /* Local index of vertex v in tet t, or -1. */
 static inline int tmesh_local(const tmesh *tm, int32_t t, int32_t v)

@@ -4,6 +4,7 @@
 #include "topo/topo.h"
 
 #include "core/tet.h"
+#include "topo/contract.h"
 #include "topo/insert.h"
 
 #include <stdlib.h>
@@ -20,6 +21,8 @@ void topo_params_default(topo_params *p)
     p->insert = 0;
     p->qinsert = 0.15;
     p->imargin = 0.05;
+    p->contract = 0;
+    p->qcontract = 0.3;
     p->bound.hausd = 0.0;
     p->bound.cos_feature = 0.8660254037844387; /* 30 degrees */
 }
@@ -155,6 +158,18 @@ static int best_flip(const tmesh *tm, int32_t t, const topo_params *p, flip_cand
     return have;
 }
 
+/* The heap emptied, then the live tets below q (not inverted) pushed. */
+static qdc_status queue_below(const tmesh *tm, heap *h, double q)
+{
+    qdc_status s = QDC_OK;
+
+    h->n = 0;
+    for (int32_t t = 0; t < tm->hi && s == QDC_OK; t++)
+        if (tm->tv[4 * (size_t)t] >= 0 && tm->q[t] < q && tm->q[t] >= -1.0)
+            s = heap_push(h, tm, t);
+    return s;
+}
+
 /* Vertex insertion in the live tets below qinsert, worst first (queued once);
  * the new tets are not revisited. Adds the insertions to *ops and st. */
 static qdc_status insert_pass(tmesh *tm, const topo_params *p, heap *h, topo_stats *st,
@@ -162,10 +177,7 @@ static qdc_status insert_pass(tmesh *tm, const topo_params *p, heap *h, topo_sta
 {
     qdc_status s = QDC_OK;
 
-    h->n = 0;
-    for (int32_t t = 0; t < tm->hi && s == QDC_OK; t++)
-        if (tm->tv[4 * (size_t)t] >= 0 && tm->q[t] < p->qinsert && tm->q[t] >= -1.0)
-            s = heap_push(h, tm, t);
+    s = queue_below(tm, h, p->qinsert);
     while (s == QDC_OK && h->n > 0 && *ops < max_ops) {
         qent e = heap_pop(h);
         int32_t ids[32];
@@ -180,6 +192,42 @@ static qdc_status insert_pass(tmesh *tm, const topo_params *p, heap *h, topo_sta
         tmesh_commit(tm);
         (*ops)++;
         st->insertions++;
+    }
+    return s;
+}
+
+/* Edge contraction in the live tets below qcontract, worst first (queued
+ * once): each tet's best contraction of its edges. Adds to *ops and st. */
+static qdc_status contract_pass(tmesh *tm, const topo_params *p, heap *h, topo_stats *st,
+                                int64_t *ops, int64_t max_ops, const atomic_int *cancel)
+{
+    qdc_status s = QDC_OK;
+
+    s = queue_below(tm, h, p->qcontract);
+    while (s == QDC_OK && h->n > 0 && *ops < max_ops) {
+        qent e = heap_pop(h);
+        contract_cand best, c;
+        int have = 0, applied = 0;
+        if (cancel && atomic_load(cancel))
+            return QDC_ECANCEL;
+        if (tm->tv[4 * (size_t)e.t] < 0 || tm->stamp[e.t] != e.stamp)
+            continue;
+        for (int k = 0; k < 6; k++)
+            if (contract_eval(tm, e.t, k, p->floor4, p->margin, &c) &&
+                (!have || c.qmin_new > best.qmin_new ||
+                 (c.qmin_new == best.qmin_new && c.gain > best.gain))) {
+                best = c;
+                have = 1;
+            }
+        if (!have)
+            continue;
+        s = tmesh_replace(tm, best.old, best.nold, (const int32_t(*)[4])best.newt,
+                          best.nnew, NULL, &applied);
+        if (s != QDC_OK || !applied)
+            continue;
+        tmesh_commit(tm);
+        (*ops)++;
+        st->contractions++;
     }
     return s;
 }
@@ -199,10 +247,7 @@ qdc_status topo_improve(tmesh *tm, const topo_params *p, topo_stats *st,
     st->nv_in = tm->nv;
     for (int r = 0; r < p->rounds; r++) {
         int64_t ops_round = 0;
-        h.n = 0;
-        for (int32_t t = 0; t < tm->hi && s == QDC_OK; t++)
-            if (tm->tv[4 * (size_t)t] >= 0 && tm->q[t] < p->qgoal && tm->q[t] >= -1.0)
-                s = heap_push(&h, tm, t);
+        s = queue_below(tm, &h, p->qgoal);
         while (s == QDC_OK && h.n > 0 && ops < max_ops) {
             qent e = heap_pop(&h);
             flip_cand c;
@@ -244,6 +289,11 @@ qdc_status topo_improve(tmesh *tm, const topo_params *p, topo_stats *st,
                 if (tm->q[ids[j]] < p->qgoal)
                     s = heap_push(&h, tm, ids[j]);
         }
+        if (s == QDC_OK && p->contract) {
+            int64_t before = ops;
+            s = contract_pass(tm, p, &h, st, &ops, max_ops, cancel);
+            ops_round += ops - before;
+        }
         if (s == QDC_OK && p->insert) {
             int64_t before = ops;
             s = insert_pass(tm, p, &h, st, &ops, max_ops, cancel);
@@ -270,8 +320,9 @@ qdc_status topo_flip_arrays(int32_t nv, const double *xyz, int32_t nt,
     qdc_status s;
 
     q.insert = 0;
+    q.contract = 0;
     s = topo_full_arrays(nv, xyz, nt, tets, region, rev, &q, cancel, &n, &x, nt_out,
-                         tets_out, region_out, NULL, st, err);
+                         tets_out, region_out, NULL, NULL, st, err);
     qdc_free(x);
     return s;
 }
@@ -338,12 +389,63 @@ static qdc_status surface_out(tmesh *tm, topo_surface *sf)
     return QDC_OK;
 }
 
+/* The vertices after the run: the input's still used, or never used, in their
+ * order, then the new ones used (a contraction leaves its vertex unused);
+ * tets renumbered in place, *vmap (if asked) each input vertex's new index. */
+static qdc_status compact(const tmesh *tm, int32_t nv, int32_t nt, const int32_t *tets,
+                          int32_t nt_out, int32_t *tets_out, int32_t *nv_out,
+                          double **xyz_out, int32_t **vmap)
+{
+    int32_t *map = qdc_mallocn((size_t)tm->nv + 1, sizeof *map), n = 0;
+    uint8_t *in = qdc_calloc((size_t)tm->nv + 1, 1), *out = qdc_calloc((size_t)tm->nv + 1, 1);
+    qdc_status s = QDC_OK;
+
+    *xyz_out = qdc_mallocn(3 * (size_t)tm->nv + 3, sizeof **xyz_out);
+    if (vmap)
+        *vmap = qdc_mallocn((size_t)nv + 1, sizeof **vmap);
+    if (!map || !in || !out || !*xyz_out || (vmap && !*vmap)) {
+        s = QDC_ENOMEM;
+        goto done;
+    }
+    for (int64_t k = 0; k < 4 * (int64_t)nt; k++)
+        in[tets[k]] = 1;
+    for (int64_t k = 0; k < 4 * (int64_t)nt_out; k++)
+        out[tets_out[k]] = 1;
+    for (int32_t v = 0; v < tm->nv; v++) {
+        int keep = v < nv ? !in[v] || out[v] : out[v];
+        map[v] = keep ? n : -1;
+        if (keep) {
+            memcpy(*xyz_out + 3 * (size_t)n, tm->xyz + 3 * (size_t)v, 3 * sizeof **xyz_out);
+            n++;
+        }
+    }
+    for (int64_t k = 0; k < 4 * (int64_t)nt_out; k++)
+        tets_out[k] = map[tets_out[k]];
+    if (vmap)
+        memcpy(*vmap, map, (size_t)nv * sizeof *map);
+    *nv_out = n;
+done:
+    if (s != QDC_OK) {
+        qdc_free(*xyz_out);
+        *xyz_out = NULL;
+        if (vmap) {
+            qdc_free(*vmap);
+            *vmap = NULL;
+        }
+    }
+    qdc_free(map);
+    qdc_free(in);
+    qdc_free(out);
+    return s;
+}
+
 qdc_status topo_full_arrays(int32_t nv, const double *xyz, int32_t nt,
                             const int32_t *tets, const int32_t *region,
                             const uint8_t *rev, const topo_params *p,
                             const atomic_int *cancel, int32_t *nv_out, double **xyz_out,
                             int32_t *nt_out, int32_t **tets_out, int32_t **region_out,
-                            topo_surface *sf, topo_stats *st, qdc_error *err)
+                            int32_t **vmap_out, topo_surface *sf, topo_stats *st,
+                            qdc_error *err)
 {
     tmesh *tm = NULL;
     qdc_status s = tmesh_new(nv, xyz, nt, tets, region, rev, &tm, err);
@@ -364,15 +466,8 @@ qdc_status topo_full_arrays(int32_t nv, const double *xyz, int32_t nt,
     }
     if (s == QDC_OK || s == QDC_ECANCEL) {
         qdc_status s2 = tmesh_export(tm, nt_out, tets_out, region ? region_out : NULL);
-        if (s2 == QDC_OK) {
-            *xyz_out = qdc_mallocn(3 * (size_t)tm->nv, sizeof **xyz_out);
-            if (*xyz_out) {
-                memcpy(*xyz_out, tm->xyz, 3 * (size_t)tm->nv * sizeof **xyz_out);
-                *nv_out = tm->nv;
-            } else {
-                s2 = QDC_ENOMEM;
-            }
-        }
+        if (s2 == QDC_OK)
+            s2 = compact(tm, nv, nt, tets, *nt_out, *tets_out, nv_out, xyz_out, vmap_out);
         if (s2 != QDC_OK)
             s = s2;
     }

@@ -27,6 +27,9 @@ typedef struct {
                       * in the tets still below qinsert, worst first */
     double qinsert;  /* tets below this mean ratio get an insertion tried */
     double imargin;  /* an insertion must raise the cavity's minimum by this */
+    int contract;    /* 1: after the flips of a round, interior edge contraction
+                      * (contract.h) in the tets still below qcontract */
+    double qcontract;
     flip_bound bound; /* hausd > 0 and a surface attached: boundary flips and
                        * peeling (flip.h) too; hausd 0 (default): none */
 } topo_params;
@@ -41,6 +44,7 @@ typedef struct {
     int64_t insertions;                /* vertices inserted (insert.h) */
     int64_t bflips;                    /* boundary edge flips */
     int64_t peels;                     /* tets peeled off the boundary */
+    int64_t contractions;              /* interior edges contracted */
     int32_t nv_in, nv_out;             /* vertices before and after */
     int32_t nt_in, nt_out;             /* live tets before and after */
 } topo_stats;
@@ -58,7 +62,7 @@ typedef struct {
 } topo_surface;
 
 /* maxring 10, qgoal 0.6, margin 1e-3, floor4 0.1, rounds 3, max_ops 0, insert 0,
- * qinsert 0.3, imargin 0.02. */
+ * qinsert 0.15, imargin 0.05, contract 0, qcontract 0.3, no bound. */
 void topo_params_default(topo_params *p);
 
 /* Improve tm in place with flips (see above). cancel (may be NULL) is polled
@@ -78,9 +82,12 @@ qdc_status topo_flip_arrays(int32_t nv, const double *xyz, int32_t nt,
                             const atomic_int *cancel, int32_t *nt_out, int32_t **tets_out,
                             int32_t **region_out, topo_stats *st, qdc_error *err);
 
-/* As topo_flip_arrays, with p->insert allowed: the vertices may grow, so their
- * count and coordinates come back too (*nv_out, *xyz_out, allocated with
- * qdc_malloc; the first nv are the input's, unchanged; new ones follow).
+/* As topo_flip_arrays, with p->insert and p->contract allowed: the vertices
+ * may change, so their count and coordinates come back too (*nv_out, *xyz_out,
+ * allocated with qdc_malloc): the input's that are still used (or were never
+ * used) in their order, unchanged, then the new ones; *vmap_out (may be NULL;
+ * nv entries, qdc_malloc) the new index of each input vertex, -1 for one a
+ * contraction removed.
  * sf (may be NULL) attaches the surface (tmesh_set_surface) and receives the
  * triangles after; boundary operations need it and p->bound.hausd > 0. */
 qdc_status topo_full_arrays(int32_t nv, const double *xyz, int32_t nt,
@@ -88,6 +95,7 @@ qdc_status topo_full_arrays(int32_t nv, const double *xyz, int32_t nt,
                             const uint8_t *rev, const topo_params *p,
                             const atomic_int *cancel, int32_t *nv_out, double **xyz_out,
                             int32_t *nt_out, int32_t **tets_out, int32_t **region_out,
-                            topo_surface *sf, topo_stats *st, qdc_error *err);
+                            int32_t **vmap_out, topo_surface *sf, topo_stats *st,
+                            qdc_error *err);
 
 #endif

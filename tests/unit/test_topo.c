@@ -5,6 +5,7 @@
 #include "opt/opt.h"
 #include "testlib.h"
 #include "testmesh.h"
+#include "topo/contract.h"
 #include "topo/exact.h"
 #include "topo/flip.h"
 #include "topo/insert.h"
@@ -1048,7 +1049,7 @@ TEST(driver_writes_the_new_boundary_triangles)
     sf.tris = &tris[0][0];
     sf.refs = refs;
     ASSERT_OK(topo_full_arrays(5, x, 2, tv, NULL, NULL, &p, NULL, &nv, &xo, &nt, &tets,
-                               NULL, &sf, &st, NULL));
+                               NULL, NULL, &sf, &st, NULL));
     ASSERT_EQ_INT(st.bflips, 1);
     ASSERT_EQ_INT(nt, 2);
     ASSERT_EQ_INT(sf.removed, 2);
@@ -1077,7 +1078,53 @@ TEST(driver_writes_the_new_boundary_triangles)
     qdc_free(xo);
 }
 
-TEST_MAIN("topo", T(boundary_flip_2_2_coplanar), T(peeling_a_flat_boundary_tet),
+/* Contraction on a 4x4x4 Kuhn grid of the unit cube (coordinates in quarters,
+ * the centre vertex moved by (1/64, 1/128, 0): every 6V a multiple of 2^-13,
+ * sums exact): some interior edge contracts; the volume is kept exactly, the
+ * tets of the edge's ring vanish, the vertex that went is used by no tet, the
+ * adjacency stays consistent; an edge with a boundary end never contracts. */
+TEST(contraction_keeps_the_volume_exactly)
+{
+    mesh_t *m = tm_grid(4, 0);
+    tmesh *tm = NULL;
+    contract_cand c;
+    int32_t centre = 2 + 5 * (2 + 5 * 2);
+    double v0;
+    int found = 0, applied = 0, refused = 1;
+
+    ASSERT_TRUE(m);
+    m->xyz[3 * centre] += 1.0 / 64;
+    m->xyz[3 * centre + 1] += 1.0 / 128;
+    ASSERT_OK(tmesh_new(m->nv, m->xyz, m->nt, m->tets, NULL, NULL, &tm, NULL));
+    v0 = total_vol6(tm);
+    ASSERT_NEAR(v0, 6.0, 0);
+    for (int32_t t = 0; t < tm->hi && !found; t++)
+        for (int e = 0; e < 6 && !found; e++) {
+            int32_t a = tm->tv[4 * t + tmesh_edge[e][0]], b = tm->tv[4 * t + tmesh_edge[e][1]];
+            int ok = contract_eval(tm, t, e, 0.0, -INFINITY, &c);
+            if (tm->vcons[a] || tm->vcons[b])
+                refused &= !ok;
+            else if (ok && (c.gone == centre || c.keep == centre))
+                found = 1;
+        }
+    ASSERT_TRUE(refused);
+    ASSERT_TRUE(found);
+    ASSERT_TRUE(c.nnew < c.nold);
+    ASSERT_OK(tmesh_replace(tm, c.old, c.nold, (const int32_t(*)[4])c.newt, c.nnew, NULL,
+                            &applied));
+    ASSERT_EQ_INT(applied, 1);
+    tmesh_commit(tm);
+    ASSERT_TRUE(consistent(tm));
+    ASSERT_EQ_INT(tm->nlive, m->nt - (c.nold - c.nnew));
+    ASSERT_NEAR(total_vol6(tm), v0, 0);
+    for (int32_t t = 0; t < tm->hi; t++)
+        if (tm->tv[4 * t] >= 0)
+            ASSERT_TRUE(tmesh_local(tm, t, c.gone) < 0);
+    tmesh_free(tm);
+    mesh_free(m);
+}
+
+TEST_MAIN("topo", T(contraction_keeps_the_volume_exactly), T(boundary_flip_2_2_coplanar), T(peeling_a_flat_boundary_tet),
           T(driver_writes_the_new_boundary_triangles), T(insertion_in_a_bad_tet), T(insertion_refused_leaves_the_mesh),
           T(driver_with_insertion), T(orient3d_exact_near_coplanar),
           T(edge_removal_3_2_keeps_volume), T(edge_removal_rings_3_to_8), T(flip_2_3),
