@@ -697,6 +697,15 @@ static void optimize_summary(const optimize_args *x, const opt_result *res)
                             res->topo_by_ring[9] + res->topo_by_ring[10]),
                 (long long)res->topo_flips23, (long long)res->topo_multiface,
                 res->topo_rounds);
+    if (res->topo_contractions > 0)
+        fprintf(stderr, "qdc: topology: %lld interior edges contracted\n",
+                (long long)res->topo_contractions);
+    if (res->topo_bflips + res->topo_peels > 0)
+        fprintf(stderr,
+                "qdc: topology: %lld boundary edge flips, %lld tets peeled within the "
+                "bound: boundary triangles %d removed, %d added\n",
+                (long long)res->topo_bflips, (long long)res->topo_peels,
+                (int)res->topo_tris_removed, (int)res->topo_tris_added);
 }
 
 /* The outcome in words (docs/defaults.md), the last lines: from the report when

@@ -163,6 +163,11 @@ typedef struct {
     int64_t topo_flips23;        /* 2-3 face flips */
     int64_t topo_multiface;      /* multi-face removals */
     int64_t topo_insertions;     /* --topology full: interior vertices inserted */
+    int64_t topo_contractions;   /* --topology full: interior edges contracted */
+    int64_t topo_bflips;         /* --topology with --hausd: boundary edge flips */
+    int64_t topo_peels;          /* ... and flat tets peeled off the boundary */
+    int32_t topo_tris_removed;   /* ... boundary triangles of the input removed */
+    int32_t topo_tris_added;     /* ... and new boundary triangles written */
     int32_t verts_in, verts_out; /* --topology: vertices before and after */
     int topo_rounds;             /* rounds of flips followed by smoothing */
     opt_stop stop;               /* why the run stopped (decides; stop_reason names it) */
