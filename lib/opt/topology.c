@@ -399,6 +399,43 @@ static qdc_status full_round(mesh_t *m, opt_options *o, double hausd, topo_surfa
     return QDC_OK;
 }
 
+/* A round's start, after its flips: their record (number `record`) sent,
+ * and o's time limit and progress set for the round's smoothing. Returns 1
+ * when the run stops here: *st says why if it failed, else last's outcome
+ * (cancelled, out of time). */
+static int round_begin(const mesh_t *m, const opt_options *opts, opt_options *o,
+                       const topo_stats *ts, int record, double t0, round_progress *rp,
+                       opt_result *last, qdc_status *st, qdc_error *err)
+{
+    opt_progress pr;
+
+    *st = flip_record(m, record, t0, &pr, err);
+    if (*st != QDC_OK)
+        return 1;
+    pr.operations = ts->edge_removals + ts->flips23 + ts->multiface + ts->bflips + ts->peels;
+    if (opts->progress && opts->progress(opts->progress_ctx, &pr)) {
+        last->outcome = OPT_STOPPED;
+        last->stop = OPT_STOP_CANCELLED;
+        return 1;
+    }
+    if (opts->time_limit > 0) {
+        double left = opts->time_limit - (qdc_now() - t0);
+        if (left <= 0) {
+            last->outcome = OPT_STOPPED;
+            last->stop = OPT_STOP_TIME_LIMIT;
+            return 1;
+        }
+        o->time_limit = left;
+    }
+    if (opts->progress) {
+        rp->offset = record;
+        rp->t_offset = qdc_now() - t0;
+        o->progress = round_report;
+        o->progress_ctx = rp;
+    }
+    return 0;
+}
+
 static qdc_status topology_run(mesh_t *m, const opt_options *opts, opt_result *res,
                                qdc_error *err)
 {
@@ -431,8 +468,6 @@ static qdc_status topology_run(mesh_t *m, const opt_options *opts, opt_result *r
     for (int round = 0; round < TOPO_ROUNDS && !stopped; round++) {
         topo_stats ts;
         opt_result r;
-        opt_progress pr;
-        double left = 0.0;
         if (last.outcome == OPT_STOPPED)
             break; /* cancelled, out of time or the solver in trouble */
         st = flip_round(m, &o, 0, hausd, &ts, &sf, err);
@@ -443,30 +478,8 @@ static qdc_status topology_run(mesh_t *m, const opt_options *opts, opt_result *r
         count_round(&first, &ts);
         first.topo_tris_removed += sf.removed;
         first.topo_tris_added += sf.added;
-        st = flip_record(m, ++record, t0, &pr, err);
-        if (st != QDC_OK)
+        if (round_begin(m, opts, &o, &ts, ++record, t0, &rp, &last, &st, err))
             break;
-        pr.operations = ts.edge_removals + ts.flips23 + ts.multiface + ts.bflips + ts.peels;
-        if (opts->progress && opts->progress(opts->progress_ctx, &pr)) {
-            last.outcome = OPT_STOPPED;
-            last.stop = OPT_STOP_CANCELLED;
-            break;
-        }
-        if (opts->time_limit > 0) {
-            left = opts->time_limit - (qdc_now() - t0);
-            if (left <= 0) {
-                last.outcome = OPT_STOPPED;
-                last.stop = OPT_STOP_TIME_LIMIT;
-                break;
-            }
-            o.time_limit = left;
-        }
-        if (opts->progress) {
-            rp.offset = record;
-            rp.t_offset = qdc_now() - t0;
-            o.progress = round_report;
-            o.progress_ctx = &rp;
-        }
         st = opt_run_smooth(m, &o, &r, err);
         if (st != QDC_OK)
             break; /* m is the flipped mesh, valid */
