@@ -60,6 +60,8 @@ typedef struct {
     tagmap tm;
     vec ent[2];  /* int64 entity keys of dimensions 2 and 3 (4.1) */
     elems el[2]; /* 0 triangles, 1 tets */
+    vec mid;     /* int32: second-order tets' 6 mid-edge nodes each (MESH_P2_EDGES) */
+    int order;   /* tets read so far: 0 none, 1 linear (type 4), 2 second order (11) */
     skipped sk;
     vec per;        /* int64 node tags of the $Periodic pairs, both sides */
     int64_t nlinks; /* $Periodic links read */
@@ -74,6 +76,7 @@ static void gmsh_free(gmsh *g)
     qdc_free(g->tags);
     tagmap_free(&g->tm);
     vec_free(&g->per);
+    vec_free(&g->mid);
     for (int k = 0; k < 2; k++) {
         vec_free(&g->ent[k]);
         vec_free(&g->el[k].idx);
@@ -676,7 +679,8 @@ static qdc_status elems_grow(gmsh *g, int k, int64_t c, qdc_error *err)
         return qdc_fail(err, QDC_ETOOBIG, "more than %d %ss",
                         k ? MESH_MAX_TETS : INT32_MAX / 3, elem_names[k]);
     if (vec_grow(&e->idx, (size_t)c * (size_t)(3 + k)) != 0 ||
-        vec_grow(&e->phys, (size_t)c) != 0 || vec_grow(&e->ent, (size_t)c) != 0)
+        vec_grow(&e->phys, (size_t)c) != 0 || vec_grow(&e->ent, (size_t)c) != 0 ||
+        (k && g->order == 2 && vec_grow(&g->mid, (size_t)c * 6) != 0))
         return qdc_fail(err, QDC_ENOMEM, "out of memory for %lld %ss", (long long)c,
                         elem_names[k]);
     return QDC_OK;
@@ -714,42 +718,83 @@ static qdc_status node_ref(gmsh *g, int k, int32_t *out, qdc_error *err)
     return QDC_OK;
 }
 
-/* One element of kind k: its nodes (the element tag was read). */
-static qdc_status elem_nodes(gmsh *g, int k, int32_t phys, int32_t ent, qdc_error *err)
+/* Gmsh's 10-node tet lists its mid-edge nodes on edges 01, 12, 20, 30, 32,
+ * 31 (the Gmsh manual's node ordering): the last two are swapped against
+ * MESH_P2_EDGES. gmsh_p2[e]: which of the file's six is edge e. */
+static const int gmsh_p2[6] = {0, 1, 2, 3, 5, 4};
+
+/* The nodes of a 10-node tet past its corners, in(to) MESH_P2_EDGES order. */
+static void put_mid(gmsh *g, const int32_t file[6])
+{
+    int32_t *o = (int32_t *)g->mid.a + g->mid.n;
+
+    for (int e = 0; e < 6; e++)
+        o[e] = file[gmsh_p2[e]];
+    g->mid.n += 6;
+}
+
+/* Nodes per element of kind k: tets 4 or 10, triangles 3 or 6. */
+static int kind_nodes(const gmsh *g, int k, int64_t type)
+{
+    return k ? (g->order == 2 ? 10 : 4) : type == 9 ? 6 : 3;
+}
+
+/* One element of kind k and type: its nodes (the element tag was read); a
+ * 6-node triangle keeps its corners, a 10-node tet puts the rest in g->mid. */
+static qdc_status elem_nodes(gmsh *g, int k, int64_t type, int32_t phys, int32_t ent,
+                             qdc_error *err)
 {
     elems *e = &g->el[k];
-    int32_t *idx = (int32_t *)e->idx.a + e->idx.n;
+    int32_t *idx = (int32_t *)e->idx.a + e->idx.n, extra[6];
+    const int nn = kind_nodes(g, k, type);
     qdc_status st = QDC_OK;
 
-    for (int j = 0; j < 3 + k && st == QDC_OK; j++)
-        st = node_ref(g, k, &idx[j], err);
+    for (int j = 0; j < nn && st == QDC_OK; j++)
+        st = node_ref(g, k, j < 3 + k ? &idx[j] : &extra[j - 3 - k], err);
     if (st != QDC_OK)
         return st;
+    if (k && nn == 10)
+        put_mid(g, extra);
     e->idx.n += (size_t)(3 + k);
     ((int32_t *)e->phys.a)[e->phys.n++] = phys;
     ((int32_t *)e->ent.a)[e->ent.n++] = ent;
     return QDC_OK;
 }
 
-/* Higher-order tetrahedra (Gmsh types 11, 29, 30, 31: 10, 20, 35, 56 nodes)
- * would be broken by moving their corners alone: refused, naming the type.
- * at: where the type is. */
+/* Higher-order tetrahedra past the second (Gmsh types 29, 30, 31: 20, 35,
+ * 56 nodes) would be broken by moving their corners alone: refused, naming
+ * the type; a file of both linear (4) and second-order (11) tets too. at:
+ * where the type is. */
 static qdc_status ho_tet(gmsh *g, const char *at, int64_t type, qdc_error *err)
 {
     static const char *const order[] = {"second", "third", "fourth", "fifth"};
-    int o = type == 11 ? 0 : type >= 29 && type <= 31 ? (int)type - 28 : -1;
+    int o = type >= 29 && type <= 31 ? (int)type - 28 : -1;
 
+    if (type == 4 || type == 11) {
+        int want = type == 4 ? 1 : 2;
+        if (g->order && g->order != want) {
+            if (g->binary)
+                return fail_bin(err, QDC_EFORMAT, at - g->s.base,
+                                "$Elements: linear (type 4) and second-order (type 11) "
+                                "tetrahedra in one file are not supported");
+            return fail_txt(err, QDC_EFORMAT, &g->s, at,
+                            "$Elements: linear (type 4) and second-order (type 11) "
+                            "tetrahedra in one file are not supported");
+        }
+        g->order = want;
+    }
     if (o < 0)
         return QDC_OK;
     if (g->binary)
         return fail_bin(err, QDC_EFORMAT, at - g->s.base,
                         "$Elements: %s-order tetrahedra (Gmsh element type %lld, %lld "
-                        "nodes) are not supported: qdc optimizes linear tetrahedra "
-                        "(type 4)",
+                        "nodes) are not supported: qdc optimizes linear and "
+                        "second-order tetrahedra (types 4 and 11)",
                         order[o], (long long)type, (long long)type_nodes(type));
     return fail_txt(err, QDC_EFORMAT, &g->s, at,
                     "$Elements: %s-order tetrahedra (Gmsh element type %lld, %lld nodes) "
-                    "are not supported: qdc optimizes linear tetrahedra (type 4)",
+                    "are not supported: qdc optimizes linear and second-order "
+                    "tetrahedra (types 4 and 11)",
                     order[o], (long long)type, (long long)type_nodes(type));
 }
 
@@ -768,11 +813,11 @@ static void skip_line(txt *s)
  * scanner at the first one not read, for the checked path to read again and
  * say what is wrong with it. A 1M-tet file reads in half the time it takes
  * with the checked reads alone. */
-static int64_t elems_bin_fast(gmsh *g, int k, int64_t cnt, int64_t ntags, int w,
-                              int32_t phys0, int32_t ent0)
+static int64_t elems_bin_fast(gmsh *g, int k, int64_t type, int64_t cnt, int64_t ntags,
+                              int w, int32_t phys0, int32_t ent0)
 {
     elems *e = &g->el[k];
-    const int nn = 3 + k;
+    const int nn = kind_nodes(g, k, type), nc = 3 + k;
     const size_t rec = (size_t)w * (size_t)(1 + ntags + nn);
     const unsigned char *p = g->b + boff(g);
     int32_t *idx = (int32_t *)e->idx.a + e->idx.n;
@@ -782,7 +827,7 @@ static int64_t elems_bin_fast(gmsh *g, int k, int64_t cnt, int64_t ntags, int w,
 
     for (j = 0; j < cnt; j++, p += rec) {
         const unsigned char *q = p + (size_t)w * (size_t)(1 + ntags);
-        int32_t ix[4];
+        int32_t ix[10];
         int a;
         if (w == 8 && (int64_t)get_le64(p) < 0)
             break;
@@ -796,11 +841,13 @@ static int64_t elems_bin_fast(gmsh *g, int k, int64_t cnt, int64_t ntags, int w,
         }
         if (a < nn)
             break;
-        memcpy(idx + (size_t)j * (size_t)nn, ix, sizeof(int32_t) * (size_t)nn);
+        memcpy(idx + (size_t)j * (size_t)nc, ix, sizeof(int32_t) * (size_t)nc);
+        if (nn == 10)
+            put_mid(g, ix + 4);
         phys[j] = ntags > 0 ? (int32_t)get_le32(p + 4) : phys0;
         ent[j] = ntags > 1 ? (int32_t)get_le32(p + 8) : ent0;
     }
-    e->idx.n += (size_t)j * (size_t)nn;
+    e->idx.n += (size_t)j * (size_t)nc;
     e->phys.n += (size_t)j;
     e->ent.n += (size_t)j;
     g->s.p += (size_t)j * rec;
@@ -843,7 +890,7 @@ static qdc_status elements41(gmsh *g, qdc_error *err)
                      (uint64_t)(nn + 1) * (uint64_t)g->dsize, INT64_MAX, &c, err);
         if (st != QDC_OK)
             break;
-        k = type == 4 ? 1 : type == 2 ? 0 : -1;
+        k = type == 4 || type == 11 ? 1 : type == 2 || type == 9 ? 0 : -1;
         if (k < 0) {
             skip_count(&g->sk, type, c);
             if (g->binary) {
@@ -860,11 +907,11 @@ static qdc_status elements41(gmsh *g, qdc_error *err)
         if (st != QDC_OK)
             break;
         phys = entity_phys(g, k, etag);
-        j = g->binary ? elems_bin_fast(g, k, c, 0, g->dsize, phys, (int32_t)etag) : 0;
+        j = g->binary ? elems_bin_fast(g, k, type, c, 0, g->dsize, phys, (int32_t)etag) : 0;
         for (; j < c && st == QDC_OK; j++) {
             st = g_int(g, "$Elements: element tag", 0, INT64_MAX, &v, err);
             if (st == QDC_OK)
-                st = elem_nodes(g, k, phys, (int32_t)etag, err);
+                st = elem_nodes(g, k, type, phys, (int32_t)etag, err);
         }
     }
     return st == QDC_OK ? want_end(g, "Elements", err) : st;
@@ -889,7 +936,7 @@ static qdc_status elements22(gmsh *g, qdc_error *err)
             st = ho_tet(g, at, type, err);
         if (st != QDC_OK)
             break;
-        k = type == 4 ? 1 : type == 2 ? 0 : -1;
+        k = type == 4 || type == 11 ? 1 : type == 2 || type == 9 ? 0 : -1;
         if (k < 0) {
             skip_count(&g->sk, type, 1);
             skip_line(s);
@@ -907,7 +954,7 @@ static qdc_status elements22(gmsh *g, qdc_error *err)
         if (st == QDC_OK)
             st = elems_grow(g, k, 1, err);
         if (st == QDC_OK)
-            st = elem_nodes(g, k, (int32_t)phys, (int32_t)ent, err);
+            st = elem_nodes(g, k, type, (int32_t)phys, (int32_t)ent, err);
     }
     return st == QDC_OK ? want_end(g, "Elements", err) : st;
 }
@@ -937,7 +984,7 @@ static qdc_status elements40(gmsh *g, qdc_error *err)
             st = g_count(g, "$Elements: elements in block", 2, 0, INT64_MAX, &c, err);
         if (st != QDC_OK)
             break;
-        k = type == 4 ? 1 : type == 2 ? 0 : -1;
+        k = type == 4 || type == 11 ? 1 : type == 2 || type == 9 ? 0 : -1;
         if (k < 0) {
             skip_count(&g->sk, type, c);
             for (int64_t j = 0; j < c; j++) {
@@ -950,7 +997,7 @@ static qdc_status elements40(gmsh *g, qdc_error *err)
         for (int64_t j = 0; j < c && st == QDC_OK; j++) {
             st = g_int(g, "$Elements: element tag", 0, INT64_MAX, &v, err);
             if (st == QDC_OK)
-                st = elem_nodes(g, k, entity_phys(g, k, etag), (int32_t)etag, err);
+                st = elem_nodes(g, k, type, entity_phys(g, k, etag), (int32_t)etag, err);
         }
     }
     return st == QDC_OK ? want_end(g, "Elements", err) : st;
@@ -990,7 +1037,7 @@ static qdc_status elements22_bin(gmsh *g, qdc_error *err)
         if (st != QDC_OK)
             break;
         done += cnt;
-        k = type == 4 ? 1 : type == 2 ? 0 : -1;
+        k = type == 4 || type == 11 ? 1 : type == 2 || type == 9 ? 0 : -1;
         if (k < 0) {
             skip_count(&g->sk, type, cnt);
             s->p += (size_t)cnt * (size_t)rec;
@@ -1002,7 +1049,7 @@ static qdc_status elements22_bin(gmsh *g, qdc_error *err)
         /* the group's bytes are there (bin_need above): whole records are read
          * here, and the first one that is not right is read again below, which
          * says what is wrong with it */
-        j = elems_bin_fast(g, k, cnt, ntags, 4, 0, 0);
+        j = elems_bin_fast(g, k, type, cnt, ntags, 4, 0, 0);
         for (; j < cnt && st == QDC_OK; j++) {
             st = g_i32(g, "$Elements: element tag", INT32_MIN, INT32_MAX, &v, err);
             phys = ent = 0;
@@ -1014,7 +1061,7 @@ static qdc_status elements22_bin(gmsh *g, qdc_error *err)
                     ent = v;
             }
             if (st == QDC_OK)
-                st = elem_nodes(g, k, (int32_t)phys, (int32_t)ent, err);
+                st = elem_nodes(g, k, type, (int32_t)phys, (int32_t)ent, err);
         }
     }
     return st == QDC_OK ? want_end(g, "Elements", err) : st;
@@ -1164,6 +1211,16 @@ static qdc_status gmsh_mesh(gmsh *g, const meshio_options *o, mesh_t **out,
     st = periodic_held(g, &pm, err);
     if (st == QDC_OK)
         st = parsed_mesh(&pm, out, err);
+    if (st == QDC_OK && g->order == 2) {
+        st = mesh_set_mid(*out);
+        if (st != QDC_OK) {
+            mesh_free(*out);
+            *out = NULL;
+            st = qdc_fail(err, QDC_ENOMEM, "out of memory for the mid-edge nodes");
+        } else {
+            memcpy((*out)->mid, g->mid.a, (size_t)pm.nt * 6 * sizeof(int32_t));
+        }
+    }
     if (st == QDC_OK && pm.nfix > 0)
         periodic_note(g, o, *out);
     qdc_free(reg[0]);
@@ -1184,6 +1241,7 @@ static qdc_status read_gmsh(const char *buf, size_t len, const meshio_options *o
     memset(&g, 0, sizeof g);
     g.rec = rec;
     g.per.size = sizeof(int64_t);
+    g.mid.size = sizeof(int32_t);
     for (int k = 0; k < 2; k++) {
         g.ent[k].size = sizeof(int64_t);
         g.el[k].idx.size = g.el[k].phys.size = g.el[k].ent.size = sizeof(int32_t);
