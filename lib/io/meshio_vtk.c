@@ -255,6 +255,17 @@ static qdc_status check_points(const cells *c, const char *fmtname, int64_t i, i
     return QDC_OK;
 }
 
+/* Cell i is a tet of the other order than those before it. */
+static qdc_status mixed_order(const char *fmtname, int64_t i, qdc_error *err)
+{
+    qdc_fail(err, QDC_EFORMAT,
+             "%s: cell %lld: linear (type 10) and second-order (type 24) tetrahedra in "
+             "one file are not supported",
+             fmtname, (long long)i);
+    set_index(err, "cell", i);
+    return QDC_EFORMAT;
+}
+
 /* One walk over the cells: without fill, every check and the counts of
  * tets and triangles (*nt, *ntri) and skipped types (sk); with fill (arrays
  * sized by the first walk), their points and regions. Point indices and
@@ -277,14 +288,8 @@ static qdc_status cells_walk(const cells *c, const char *fmtname, parsed *fill,
         /* VTK_QUADRATIC_TETRA (24) and a Lagrange tetra (71) of order 2 list
          * their mid-edge nodes in the order of MESH_P2_EDGES */
         if ((type == 24 || type == 71) && k == 10) {
-            if (n4 > nq) {
-                qdc_fail(err, QDC_EFORMAT,
-                         "%s: cell %lld: linear (type 10) and second-order tetrahedra "
-                         "in one file are not supported",
-                         fmtname, (long long)i);
-                set_index(err, "cell", i);
-                return QDC_EFORMAT;
-            }
+            if (n4 > nq)
+                return mixed_order(fmtname, i, err);
             k = 4;
             nq++;
         } else if (type == 24 || type == 71) { /* corners alone would break them */
@@ -298,12 +303,7 @@ static qdc_status cells_walk(const cells *c, const char *fmtname, parsed *fill,
             set_index(err, "cell", i);
             return QDC_EFORMAT;
         } else if (type == 10 && nq) {
-            qdc_fail(err, QDC_EFORMAT,
-                     "%s: cell %lld: linear (type 10) and second-order tetrahedra in one "
-                     "file are not supported",
-                     fmtname, (long long)i);
-            set_index(err, "cell", i);
-            return QDC_EFORMAT;
+            return mixed_order(fmtname, i, err);
         } else if (!((type == 10 && k == 4) || (type == 5 && k == 3))) {
             if (!fill)
                 skip_count(sk, type, 1);

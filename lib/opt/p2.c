@@ -406,6 +406,21 @@ static void transport(mesh_t *m, const double *x0, const int32_t *first,
     }
 }
 
+/* 1 if both corners of the edge at 6 * tet + edge fe are within bound
+ * (and a rounding's width) of the input's boundary. */
+static int corners_on_input(const mesh_t *m, const p2_surface *s, int32_t fe, double bound)
+{
+    const int32_t *tt = m->tets + 4 * (size_t)(fe / 6);
+
+    for (int k = 0; k < 2; k++) {
+        const double *p = m->xyz + 3 * (size_t)tt[p2_edge[fe % 6][k]];
+        double tol = bound + 1e-12 * (fabs(p[0]) + fabs(p[1]) + fabs(p[2]) + 1);
+        if (!(bderr_bvh_closest(s->bvh, p, NULL, NULL) <= tol))
+            return 0;
+    }
+    return 1;
+}
+
 /* Scaled Jacobians of every element at x into j. */
 static void jacobians(const mesh_t *m, const double *x, double *j)
 {
@@ -482,11 +497,16 @@ qdc_status p2_finish(mesh_t *m, const double *x0, opt_result *res, qdc_error *er
         goto out;
     jacobians(m, x0, jin);
     transport(m, x0, first, sum, cnt);
-    /* boundary mid-edge nodes back onto the input's curved surface */
+    /* boundary mid-edge nodes back onto the input's curved surface where
+     * both corners stayed on the input's boundary (within the run's bound:
+     * they slid along it); where the surface itself moved (an affine map of
+     * the whole mesh, boundary lsq without a bound) the transport alone is
+     * right */
 #pragma omp parallel for schedule(dynamic, 256)
     for (int32_t v = 0; v < m->nv; v++) {
         double cp[3];
-        if (role[v] != 2 || !moved(m->xyz, x0, v))
+        if (role[v] != 2 || !moved(m->xyz, x0, v) ||
+            !corners_on_input(m, &s, first[v], res->hausd_bound))
             continue;
         surface_closest(&s, x0, m->xyz + 3 * (size_t)v, cp);
         memcpy(m->xyz + 3 * (size_t)v, cp, sizeof cp);
