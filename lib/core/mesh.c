@@ -8,6 +8,7 @@
 #include <string.h>
 
 const int tet_face_of[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+const int mesh_p2_edges[6][2] = {{0, 1}, {1, 2}, {0, 2}, {0, 3}, {1, 3}, {2, 3}};
 
 mesh_t *mesh_new(int32_t nv, int32_t nt, unsigned flags)
 {
@@ -487,7 +488,7 @@ static qdc_status orient_tets(const mesh_t *m, const int32_t *nbr, uint8_t *flip
 
 /* Swap the first two vertices of each flipped tet of tets (in place), and
  * with them the mid-edge nodes (mid, or NULL) of edges 12/02 and 03/13
- * (MESH_P2_EDGES); edges 01 and 23 stay. */
+ * (mesh_p2_edges); edges 01 and 23 stay. */
 static void apply_flip(int32_t nt, int32_t *tets, int32_t *mid, const uint8_t *flip)
 {
     for (int32_t t = 0; t < nt; t++)

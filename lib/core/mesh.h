@@ -38,15 +38,16 @@ typedef struct mesh {
     mesh_source *source; /* the input file (io/), or NULL; owned by the mesh */
     int32_t *mid;        /* second-order (10-node) tets: 6*nt vertex indices, the
                           * mid-edge node of each tet's edges in the order of
-                          * MESH_P2_EDGES; NULL for linear tets. The mid-edge
+                          * mesh_p2_edges; NULL for linear tets. The mid-edge
                           * nodes are vertices in no tet: the optimizer moves
                           * the corners only (opt/p2.c moves these after it) */
 } mesh_t;
 
 /* The one edge order of a second-order tet's mid-edge nodes (VTK's
- * VTK_QUADRATIC_TETRA and Abaqus C3D10 order): edges 01, 12, 02, 03, 13, 23.
- * Readers map each file's order to this one (io/, docs/formats.md). */
-#define MESH_P2_EDGES {{0, 1}, {1, 2}, {0, 2}, {0, 3}, {1, 3}, {2, 3}}
+ * VTK_QUADRATIC_TETRA and Abaqus C3D10 order): edges 01, 12, 02, 03, 13, 23,
+ * as the corners of each: mesh_p2_edges[e][0..1]. Readers map each file's
+ * order to this one (io/; README, "Formats"). */
+extern const int mesh_p2_edges[6][2];
 /* Give m a zeroed mid-edge table (6*nt; the previous one freed).
  * QDC_EINVAL (m NULL), QDC_ENOMEM (m unchanged). */
 qdc_status mesh_set_mid(mesh_t *m);

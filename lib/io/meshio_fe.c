@@ -602,7 +602,7 @@ typedef struct {
     vec xyz, tags, off; /* double x3, int64, uint64 x3 (when recording) */
     vec at;             /* uint64: byte offset of each node's line (errors) */
     vec tets, reg;      /* int32 x4, int32 */
-    vec mid;            /* int32 x6: C3D10's mid-edge nodes (MESH_P2_EDGES order) */
+    vec mid;            /* int32 x6: C3D10's mid-edge nodes (mesh_p2_edges order) */
     int order;          /* tets read: 0 none yet, 1 C3D4, 2 C3D10 */
     tagmap tm;
     int64_t tm_n; /* nodes in tm; -1 when not built */
@@ -776,7 +776,7 @@ static qdc_status inp_map(const txt *s, inp *a, qdc_error *err)
 
 /* One C3D4 element: "id, n1, n2, n3, n4", or C3D10: "id, n1, ..., n10", the
  * mid-edge nodes of edges 12, 23, 31, 14, 24, 34 (the Abaqus manual's node
- * ordering; MESH_P2_EDGES), continued on the next line after a trailing
+ * ordering; mesh_p2_edges), continued on the next line after a trailing
  * comma; *pp and *peol move with it. */
 static qdc_status inp_tet(txt *s, const char **pp, const char **peol, inp *a, int32_t reg,
                           qdc_error *err)
@@ -1304,8 +1304,9 @@ const meshio_fmt fmt_dolfin = {
 const meshio_fmt fmt_abaqus = {
     .name = "abaqus",
     .aliases = "calculix inp",
-    .about = "Abaqus/CalculiX .inp: *NODE, *ELEMENT TYPE=C3D4 or C3D10, ELSETs as regions "
-             "(written only spliced)",
+    .about =
+        "Abaqus/CalculiX .inp: *NODE, *ELEMENT TYPE=C3D4 or C3D10, ELSETs as regions "
+        "(written only spliced)",
     .ext = "inp",
     .input = "input.inp",
     .sniff = sniff_abaqus,

@@ -60,7 +60,7 @@ typedef struct {
     tagmap tm;
     vec ent[2];  /* int64 entity keys of dimensions 2 and 3 (4.1) */
     elems el[2]; /* 0 triangles, 1 tets */
-    vec mid;     /* int32: second-order tets' 6 mid-edge nodes each (MESH_P2_EDGES) */
+    vec mid;     /* int32: second-order tets' 6 mid-edge nodes each (mesh_p2_edges) */
     int order;   /* tets read so far: 0 none, 1 linear (type 4), 2 second order (11) */
     skipped sk;
     vec per;        /* int64 node tags of the $Periodic pairs, both sides */
@@ -720,10 +720,10 @@ static qdc_status node_ref(gmsh *g, int k, int32_t *out, qdc_error *err)
 
 /* Gmsh's 10-node tet lists its mid-edge nodes on edges 01, 12, 20, 30, 32,
  * 31 (the Gmsh manual's node ordering): the last two are swapped against
- * MESH_P2_EDGES. gmsh_p2[e]: which of the file's six is edge e. */
+ * mesh_p2_edges. gmsh_p2[e]: which of the file's six is edge e. */
 static const int gmsh_p2[6] = {0, 1, 2, 3, 5, 4};
 
-/* The nodes of a 10-node tet past its corners, in(to) MESH_P2_EDGES order. */
+/* The nodes of a 10-node tet past its corners, in(to) mesh_p2_edges order. */
 static void put_mid(gmsh *g, const int32_t file[6])
 {
     int32_t *o = (int32_t *)g->mid.a + g->mid.n;
@@ -907,7 +907,8 @@ static qdc_status elements41(gmsh *g, qdc_error *err)
         if (st != QDC_OK)
             break;
         phys = entity_phys(g, k, etag);
-        j = g->binary ? elems_bin_fast(g, k, type, c, 0, g->dsize, phys, (int32_t)etag) : 0;
+        j = g->binary ? elems_bin_fast(g, k, type, c, 0, g->dsize, phys, (int32_t)etag)
+                      : 0;
         for (; j < c && st == QDC_OK; j++) {
             st = g_int(g, "$Elements: element tag", 0, INT64_MAX, &v, err);
             if (st == QDC_OK)

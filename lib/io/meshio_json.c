@@ -1,6 +1,6 @@
 /* meshio_json.c - the JSON mesh: {"vertices":[[x,y,z],...],"tets":[[a,b,c,d],...],
  * "regions":[...],"fixed":[...],"mid":[[m01,m12,m02,m03,m13,m23],...]}, 0-based
- * ("mid": second-order tets' mid-edge nodes, MESH_P2_EDGES). */
+ * ("mid": second-order tets' mid-edge nodes, mesh_p2_edges). */
 #include "io/format.h"
 
 #include <string.h>

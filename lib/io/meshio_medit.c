@@ -255,8 +255,8 @@ static qdc_status medit_skip_unknown(txt *s, const char *kw, size_t kl, qdc_erro
 
 typedef struct {
     parsed pm;
-    int64_t np2;                /* TetrahedraP2 entries, -1 = none */
-    int32_t *p2, *p2_ref;       /* 10 indices each, and refs */
+    int64_t np2;          /* TetrahedraP2 entries, -1 = none */
+    int32_t *p2, *p2_ref; /* 10 indices each, and refs */
     txt p2_at;
     txt tet_at, tri_at, fix_at; /* section bodies, rescanned if nv came later */
     srcrec *rec;                /* where the coordinates are, or NULL */
@@ -363,7 +363,7 @@ static qdc_status medit_keyword(txt *s, const char *kw, size_t kl, medit_state *
 }
 
 /* The orders in which writers list a TetrahedraP2's mid-edge nodes, as
- * positions in MESH_P2_EDGES (01, 12, 02, 03, 13, 23): that one (Gmsh's
+ * positions in mesh_p2_edges (01, 12, 02, 03, 13, 23): that one (Gmsh's
  * Medit writer, qdc), Mmg's edge numbering (01, 02, 03, 12, 13, 23) and
  * Gmsh's own (01, 12, 02, 03, 23, 13). */
 static const int medit_p2_orders[3][6] = {
@@ -374,7 +374,6 @@ static const int medit_p2_orders[3][6] = {
  * tie keeps the first). p2 holds 10 checked indices per tet. */
 static int medit_p2_order(const parsed *pm, const int32_t *p2, int64_t nt)
 {
-    static const int edge[6][2] = MESH_P2_EDGES;
     double best = INFINITY;
     int pick = 0;
 
@@ -383,7 +382,7 @@ static int medit_p2_order(const parsed *pm, const int32_t *p2, int64_t nt)
         for (int64_t t = 0; t < nt; t++) {
             const int32_t *e = p2 + 10 * t;
             for (int f = 0; f < 6; f++) { /* file position f is edge order[o][f] */
-                const int *ab = edge[medit_p2_orders[o][f]];
+                const int *ab = mesh_p2_edges[medit_p2_orders[o][f]];
                 const double *a = pm->xyz + 3 * (size_t)e[ab[0]],
                              *b = pm->xyz + 3 * (size_t)e[ab[1]],
                              *mm = pm->xyz + 3 * (size_t)e[4 + f];
@@ -417,7 +416,8 @@ static qdc_status medit_p2_split(medit_state *ms, const txt *s, qdc_error *err)
     pm->region = ms->p2_ref;
     ms->p2_ref = NULL;
     if (!pm->tets || !pm->mid)
-        return qdc_fail(err, QDC_ENOMEM, "out of memory for %lld tets", (long long)pm->nt);
+        return qdc_fail(err, QDC_ENOMEM, "out of memory for %lld tets",
+                        (long long)pm->nt);
     o = medit_p2_order(pm, ms->p2, pm->nt);
     for (int64_t t = 0; t < pm->nt; t++) {
         memcpy(pm->tets + 4 * t, ms->p2 + 10 * t, 4 * sizeof(int32_t));
@@ -512,7 +512,7 @@ static qdc_status write_medit(const mesh_t *m, meshio_format fmt, int part, wbuf
     wb_str(w, "\n");
     for (int32_t t = 0; t < m->nt; t++) {
         wb_ints(w, m->tets + 4 * (size_t)t, 4, 1, " ", " ");
-        if (m->mid) /* in MESH_P2_EDGES order, as Gmsh writes it */
+        if (m->mid) /* in mesh_p2_edges order, as Gmsh writes it */
             wb_ints(w, m->mid + 6 * (size_t)t, 6, 1, " ", " ");
         wb_int(w, m->region ? m->region[t] : 0);
         wb_str(w, "\n");

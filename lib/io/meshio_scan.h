@@ -481,7 +481,7 @@ typedef struct {
     double *xyz;
     int32_t *vref, *tets, *region, *tris, *tri_ref;
     int32_t *fix; /* nfix indices of fixed vertices */
-    int32_t *mid; /* second-order tets: 6*nt mid-edge nodes (MESH_P2_EDGES), or NULL */
+    int32_t *mid; /* second-order tets: 6*nt mid-edge nodes (mesh_p2_edges), or NULL */
 } parsed;
 
 static inline void parsed_init(parsed *pm)

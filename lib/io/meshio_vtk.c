@@ -286,7 +286,7 @@ static qdc_status cells_walk(const cells *c, const char *fmtname, parsed *fill,
                             "%s: CELLS list ends inside a cell (wrong counts)", fmtname);
         type = is_int32(c->types[i]) ? (int64_t)c->types[i] : -1;
         /* VTK_QUADRATIC_TETRA (24) and a Lagrange tetra (71) of order 2 list
-         * their mid-edge nodes in the order of MESH_P2_EDGES */
+         * their mid-edge nodes in the order of mesh_p2_edges */
         if ((type == 24 || type == 71) && k == 10) {
             if (n4 > nq)
                 return mixed_order(fmtname, i, err);
@@ -309,7 +309,8 @@ static qdc_status cells_walk(const cells *c, const char *fmtname, parsed *fill,
                 skip_count(sk, type, 1);
             continue;
         }
-        if (!idx_ok && check_points(c, fmtname, i, a, nq && k == 4 ? 10 : k, err) != QDC_OK)
+        if (!idx_ok &&
+            check_points(c, fmtname, i, a, nq && k == 4 ? 10 : k, err) != QDC_OK)
             return QDC_EPARSE;
         if (!reg_ok && !is_int32(c->creg[i])) {
             qdc_fail(err, QDC_EPARSE, "%s: cell %lld: region %.17g is not an int32",
@@ -2154,7 +2155,8 @@ static void vtu_data(const mesh_t *m, int k, vw *o)
         break;
     case 2:
         for (int64_t c = 0; c < nc; c++)
-            vw_int(o, c < m->nt ? tn * (c + 1) : tn * (int64_t)m->nt + 3 * (c - m->nt + 1),
+            vw_int(o,
+                   c < m->nt ? tn * (c + 1) : tn * (int64_t)m->nt + 3 * (c - m->nt + 1),
                    8);
         break;
     case 3:

@@ -11,13 +11,11 @@
 #include <stdlib.h>
 #include <string.h>
 
-static const int p2_edge[6][2] = MESH_P2_EDGES;
-
 /* The 10 nodes of the element in reference coordinates (r, s, t). */
-static const double p2_ref[11][3] = {
-    {0, 0, 0},       {1, 0, 0},       {0, 1, 0},     {0, 0, 1},
-    {0.5, 0, 0},     {0.5, 0.5, 0},   {0, 0.5, 0},   {0, 0, 0.5},
-    {0.5, 0, 0.5},   {0, 0.5, 0.5},   {0.25, 0.25, 0.25}};
+static const double p2_ref[11][3] = {{0, 0, 0},     {1, 0, 0},         {0, 1, 0},
+                                     {0, 0, 1},     {0.5, 0, 0},       {0.5, 0.5, 0},
+                                     {0, 0.5, 0},   {0, 0, 0.5},       {0.5, 0, 0.5},
+                                     {0, 0.5, 0.5}, {0.25, 0.25, 0.25}};
 
 static double det3(const double a[3], const double b[3], const double c[3])
 {
@@ -38,7 +36,7 @@ double p2_jacobian(const double x[10][3], double r, double s, double t)
                 col[j][i] += x[k][i] * dn;
         }
     for (int e = 0; e < 6; e++) {
-        int a = p2_edge[e][0], b = p2_edge[e][1];
+        int a = mesh_p2_edges[e][0], b = mesh_p2_edges[e][1];
         for (int j = 0; j < 3; j++) {
             double dn = 4 * (l[b] * dl[a][j] + l[a] * dl[b][j]);
             for (int i = 0; i < 3; i++)
@@ -64,8 +62,8 @@ double p2_scaled_jacobian(const double x[10][3])
 }
 
 /* The point and the two tangents of the quadratic triangle at (u, v). */
-static void tri_eval(const double x[6][3], double u, double v, double p[3],
-                     double du[3], double dv[3])
+static void tri_eval(const double x[6][3], double u, double v, double p[3], double du[3],
+                     double dv[3])
 {
     const double l[3] = {1 - u - v, u, v};
     const double dl[3][2] = {{-1, -1}, {1, 0}, {0, 1}};
@@ -107,8 +105,7 @@ static void clamp_uv(double uv[2])
     }
 }
 
-double p2_tri_closest(const double x[6][3], const double p[3], double uv[2],
-                      double cp[3])
+double p2_tri_closest(const double x[6][3], const double p[3], double uv[2], double cp[3])
 {
     double best = DBL_MAX, bu[2];
 
@@ -116,7 +113,8 @@ double p2_tri_closest(const double x[6][3], const double p[3], double uv[2],
     bu[0] = uv[0];
     bu[1] = uv[1];
     for (int it = 0; it < 40; it++) {
-        double q[3], du[3], dv[3], r[3], a11 = 0, a12 = 0, a22 = 0, b1 = 0, b2 = 0, det, d;
+        double q[3], du[3], dv[3], r[3], a11 = 0, a12 = 0, a22 = 0, b1 = 0, b2 = 0, det,
+                                         d;
         tri_eval(x, uv[0], uv[1], q, du, dv);
         for (int i = 0; i < 3; i++) {
             r[i] = q[i] - p[i];
@@ -185,10 +183,10 @@ static int face_cmp(const void *a, const void *b)
  * each, corners first) and a BVH over their corner triangles. */
 typedef struct {
     int32_t n;
-    int32_t *tri6;  /* 6*n */
-    int32_t *tri3;  /* 3*n */
+    int32_t *tri6;            /* 6*n */
+    int32_t *tri3;            /* 3*n */
     int32_t *vt_ptr, *vt_idx; /* the triangles around each vertex (CSR, nv+1) */
-    bderr_bvh *bvh; /* over tri3 at the input's coordinates */
+    bderr_bvh *bvh;           /* over tri3 at the input's coordinates */
 } p2_surface;
 
 static qdc_status surface_build(const mesh_t *m, const double *x0, uint8_t *role,
@@ -203,8 +201,8 @@ static qdc_status surface_build(const mesh_t *m, const double *x0, uint8_t *role
     if (!f)
         return qdc_fail(err, QDC_ENOMEM, "out of memory for the faces");
     for (int e = 0; e < 6; e++) {
-        eidx[p2_edge[e][0]][p2_edge[e][1]] = e;
-        eidx[p2_edge[e][1]][p2_edge[e][0]] = e;
+        eidx[mesh_p2_edges[e][0]][mesh_p2_edges[e][1]] = e;
+        eidx[mesh_p2_edges[e][1]][mesh_p2_edges[e][0]] = e;
     }
     for (size_t i = 0; i < nf; i++) {
         const int32_t *tt = m->tets + 4 * (i / 4);
@@ -332,8 +330,8 @@ static double surface_closest(const p2_surface *s, const double *x0, const doubl
 /* Each mid-edge node whose edge moved: the new midpoint plus its input
  * offset mapped by the average of the affine maps of its tets' corners.
  * first[v]: 6 * tet + edge of v's first appearance (-1: no mid-edge node). */
-static void transport(mesh_t *m, const double *x0, const int32_t *first,
-                            double *sum, int32_t *cnt)
+static void transport(mesh_t *m, const double *x0, const int32_t *first, double *sum,
+                      int32_t *cnt)
 {
     double *x = m->xyz;
 
@@ -342,8 +340,10 @@ static void transport(mesh_t *m, const double *x0, const int32_t *first,
         double e0[3][3], e1[3][3], d0, inv[3][3];
         for (int j = 0; j < 3; j++)
             for (int i = 0; i < 3; i++) {
-                e0[j][i] = x0[3 * (size_t)tt[j + 1] + (size_t)i] - x0[3 * (size_t)tt[0] + (size_t)i];
-                e1[j][i] = x[3 * (size_t)tt[j + 1] + (size_t)i] - x[3 * (size_t)tt[0] + (size_t)i];
+                e0[j][i] = x0[3 * (size_t)tt[j + 1] + (size_t)i] -
+                           x0[3 * (size_t)tt[0] + (size_t)i];
+                e1[j][i] = x[3 * (size_t)tt[j + 1] + (size_t)i] -
+                           x[3 * (size_t)tt[0] + (size_t)i];
             }
         d0 = det3(e0[0], e0[1], e0[2]);
         if (geom_tet_degenerate(fabs(d0), geom_tet_l2sum(x0, tt)) ||
@@ -362,13 +362,14 @@ static void transport(mesh_t *m, const double *x0, const int32_t *first,
             }
         }
         for (int e = 0; e < 6; e++) {
-            int32_t v = mid[e], a = tt[p2_edge[e][0]], b = tt[p2_edge[e][1]];
+            int32_t v = mid[e], a = tt[mesh_p2_edges[e][0]], b = tt[mesh_p2_edges[e][1]];
             double off[3], lam[3];
             if (!moved(x, x0, a) && !moved(x, x0, b))
                 continue;
             for (int i = 0; i < 3; i++)
-                off[i] = x0[3 * (size_t)v + (size_t)i] -
-                         0.5 * (x0[3 * (size_t)a + (size_t)i] + x0[3 * (size_t)b + (size_t)i]);
+                off[i] =
+                    x0[3 * (size_t)v + (size_t)i] -
+                    0.5 * (x0[3 * (size_t)a + (size_t)i] + x0[3 * (size_t)b + (size_t)i]);
             for (int j = 0; j < 3; j++)
                 lam[j] = inv[j][0] * off[0] + inv[j][1] * off[1] + inv[j][2] * off[2];
             for (int i = 0; i < 3; i++)
@@ -383,8 +384,8 @@ static void transport(mesh_t *m, const double *x0, const int32_t *first,
         if (first[v] < 0)
             continue;
         t = first[v] / 6;
-        a = m->tets[4 * (size_t)t + (size_t)p2_edge[first[v] % 6][0]];
-        b = m->tets[4 * (size_t)t + (size_t)p2_edge[first[v] % 6][1]];
+        a = m->tets[4 * (size_t)t + (size_t)mesh_p2_edges[first[v] % 6][0]];
+        b = m->tets[4 * (size_t)t + (size_t)mesh_p2_edges[first[v] % 6][1]];
         if ((!moved(x, x0, a) && !moved(x, x0, b)) || (m->fixed && m->fixed[v]))
             continue;
         for (int i = 0; i < 3; i++) {
@@ -394,9 +395,11 @@ static void transport(mesh_t *m, const double *x0, const int32_t *first,
             l1 += d1 * d1;
         }
         for (int i = 0; i < 3; i++) {
-            double mp = 0.5 * (x[3 * (size_t)a + (size_t)i] + x[3 * (size_t)b + (size_t)i]);
-            double off = x0[3 * (size_t)v + (size_t)i] -
-                         0.5 * (x0[3 * (size_t)a + (size_t)i] + x0[3 * (size_t)b + (size_t)i]);
+            double mp =
+                0.5 * (x[3 * (size_t)a + (size_t)i] + x[3 * (size_t)b + (size_t)i]);
+            double off =
+                x0[3 * (size_t)v + (size_t)i] -
+                0.5 * (x0[3 * (size_t)a + (size_t)i] + x0[3 * (size_t)b + (size_t)i]);
             /* no tet around the edge was a proper map: the offset scaled with
              * the edge */
             x[3 * (size_t)v + (size_t)i] =
@@ -408,12 +411,13 @@ static void transport(mesh_t *m, const double *x0, const int32_t *first,
 
 /* 1 if both corners of the edge at 6 * tet + edge fe are within bound
  * (and a rounding's width) of the input's boundary. */
-static int corners_on_input(const mesh_t *m, const p2_surface *s, int32_t fe, double bound)
+static int corners_on_input(const mesh_t *m, const p2_surface *s, int32_t fe,
+                            double bound)
 {
     const int32_t *tt = m->tets + 4 * (size_t)(fe / 6);
 
     for (int k = 0; k < 2; k++) {
-        const double *p = m->xyz + 3 * (size_t)tt[p2_edge[fe % 6][k]];
+        const double *p = m->xyz + 3 * (size_t)tt[mesh_p2_edges[fe % 6][k]];
         double tol = bound + 1e-12 * (fabs(p[0]) + fabs(p[1]) + fabs(p[2]) + 1);
         if (!(bderr_bvh_closest(s->bvh, p, NULL, NULL) <= tol))
             return 0;
@@ -450,13 +454,16 @@ static void straighten(mesh_t *m, const double *jin, double *jout, uint8_t *trie
             any = 1;
             tries[t] += tries[t] < 255;
             for (int e = 0; e < 6; e++) {
-                int32_t v = mid[e], a = tt[p2_edge[e][0]], b = tt[p2_edge[e][1]];
+                int32_t v = mid[e], a = tt[mesh_p2_edges[e][0]],
+                        b = tt[mesh_p2_edges[e][1]];
                 double f = tries[t] > 16 ? 0.0 : 0.5;
                 if (role[v] == 2 && tries[t] <= 8)
                     continue; /* boundary: only if the interior ones were not enough */
                 for (int i = 0; i < 3; i++) {
-                    double mp = 0.5 * (x[3 * (size_t)a + (size_t)i] + x[3 * (size_t)b + (size_t)i]);
-                    x[3 * (size_t)v + (size_t)i] = mp + f * (x[3 * (size_t)v + (size_t)i] - mp);
+                    double mp = 0.5 * (x[3 * (size_t)a + (size_t)i] +
+                                       x[3 * (size_t)b + (size_t)i]);
+                    x[3 * (size_t)v + (size_t)i] =
+                        mp + f * (x[3 * (size_t)v + (size_t)i] - mp);
                 }
                 pulled[v] = 1;
             }

@@ -3,7 +3,7 @@
  * edges, boundary ones put back on the input's curved surface, and elements
  * whose Jacobian turned non-positive at a node straightened until it is not.
  * A 10-node element here is x[10][3]: corners 0-3, then the mid-edge nodes of
- * MESH_P2_EDGES (01, 12, 02, 03, 13, 23). Thread-safe: no global state. */
+ * mesh_p2_edges (01, 12, 02, 03, 13, 23). Thread-safe: no global state. */
 #ifndef QDC_P2_H
 #define QDC_P2_H
 

@@ -1,5 +1,5 @@
 /* test_p2.c - second-order (10-node) tets: each format's mid-edge node order
- * mapped to the one of MESH_P2_EDGES (a straight tet read from every format
+ * mapped to the one of mesh_p2_edges (a straight tet read from every format
  * has every mid-edge node at its edge's midpoint), the Jacobian of the
  * quadratic element against closed forms, the closest point of a quadratic
  * triangle, and the mid-edge nodes moved exactly by an affine map of the
@@ -16,9 +16,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-static const int edges[6][2] = MESH_P2_EDGES;
-
-/* The straight reference tet: corners, then the midpoints of MESH_P2_EDGES. */
+/* The straight reference tet: corners, then the midpoints of mesh_p2_edges. */
 static void ref_nodes(double x[10][3])
 {
     static const double c[4][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
@@ -26,7 +24,7 @@ static void ref_nodes(double x[10][3])
     memcpy(x, c, sizeof c);
     for (int e = 0; e < 6; e++)
         for (int i = 0; i < 3; i++)
-            x[4 + e][i] = 0.5 * (c[edges[e][0]][i] + c[edges[e][1]][i]);
+            x[4 + e][i] = 0.5 * (c[mesh_p2_edges[e][0]][i] + c[mesh_p2_edges[e][1]][i]);
 }
 
 /* The file lists node perm[j] at position j: scrambled, so that an index
@@ -42,7 +40,7 @@ static int pos_of(int node)
 }
 
 /* The element's ten node positions in the file's order: corners, then the
- * mid-edge nodes as the format lists them (order[f]: the MESH_P2_EDGES
+ * mid-edge nodes as the format lists them (order[f]: the mesh_p2_edges
  * edge of the file's f-th mid-edge node). */
 static void element(const int order[6], int out[10])
 {
@@ -109,10 +107,11 @@ static void write_tet(txtbuf *t, int f, const int order[6])
             put(t, " %d", el[k]);
         put(t, "\nCELL_TYPES 1\n24\n");
     } else if (f == F_VTU) {
-        put(t, "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" "
-               "version=\"0.1\" byte_order=\"LittleEndian\">\n<UnstructuredGrid>\n"
-               "<Piece NumberOfPoints=\"10\" NumberOfCells=\"1\">\n<Points>\n"
-               "<DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n");
+        put(t,
+            "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" "
+            "version=\"0.1\" byte_order=\"LittleEndian\">\n<UnstructuredGrid>\n"
+            "<Piece NumberOfPoints=\"10\" NumberOfCells=\"1\">\n<Points>\n"
+            "<DataArray type=\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">\n");
         for (int j = 0; j < 10; j++)
             put(t, "%.17g %.17g %.17g\n", x[perm[j]][0], x[perm[j]][1], x[perm[j]][2]);
         put(t, "</DataArray>\n</Points>\n<Cells>\n<DataArray type=\"Int32\" "
@@ -156,8 +155,9 @@ static double mid_offset(const mesh_t *m)
         if (memcmp(m->xyz + 3 * m->tets[k], x[k], sizeof x[k]) != 0)
             return -1;
     for (int e = 0; e < 6; e++) {
-        const double *a = m->xyz + 3 * m->tets[edges[e][0]],
-                     *b = m->xyz + 3 * m->tets[edges[e][1]], *p = m->xyz + 3 * m->mid[e];
+        const double *a = m->xyz + 3 * m->tets[mesh_p2_edges[e][0]],
+                     *b = m->xyz + 3 * m->tets[mesh_p2_edges[e][1]],
+                     *p = m->xyz + 3 * m->mid[e];
         for (int i = 0; i < 3; i++)
             worst = fmax(worst, fabs(p[i] - 0.5 * (a[i] + b[i])));
     }
@@ -215,8 +215,8 @@ TEST(medit_takes_the_order_that_fits)
 
 TEST(writers_keep_ten_nodes)
 {
-    static const meshio_format fmts[] = {MESHIO_VTK,   MESHIO_VTK_ASCII, MESHIO_VTU,
-                                         MESHIO_VTU_ASCII, MESHIO_MEDIT, MESHIO_QMESH,
+    static const meshio_format fmts[] = {MESHIO_VTK,       MESHIO_VTK_ASCII, MESHIO_VTU,
+                                         MESHIO_VTU_ASCII, MESHIO_MEDIT,     MESHIO_QMESH,
                                          MESHIO_JSON};
     static const int gmsh[6] = {0, 1, 2, 3, 5, 4};
     txtbuf t;
@@ -272,8 +272,8 @@ TEST(closest_point_of_a_quadratic_triangle)
 {
     /* the triangle z = 0 with its edge 01 bulged to y = -0.2 at its middle:
      * the patch is still in z = 0 */
-    double x[6][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0.5, -0.2, 0}, {0.5, 0.5, 0},
-                      {0, 0.5, 0}};
+    double x[6][3] = {{0, 0, 0},      {1, 0, 0},     {0, 1, 0},
+                      {0.5, -0.2, 0}, {0.5, 0.5, 0}, {0, 0.5, 0}};
     double p[3] = {0.5, -0.1, 0.3}, uv[2] = {0.3, 0.1}, cp[3];
 
     ASSERT_NEAR(p2_tri_closest((const double(*)[3])x, p, uv, cp), 0.3, 1e-12);
@@ -315,10 +315,11 @@ static mesh_t *ring(const double inner[3])
     for (int t = 0; t < 3; t++) {
         int32_t *mid = m->mid + 6 * t, *tt = m->tets + 4 * t;
         for (int e = 0; e < 6; e++) {
-            int32_t a = tt[edges[e][0]], b = tt[edges[e][1]], found = -1;
+            int32_t a = tt[mesh_p2_edges[e][0]], b = tt[mesh_p2_edges[e][1]], found = -1;
             for (int u = 0; u < t && found < 0; u++)
                 for (int f = 0; f < 6; f++) {
-                    int32_t c = m->tets[4 * u + edges[f][0]], d = m->tets[4 * u + edges[f][1]];
+                    int32_t c = m->tets[4 * u + mesh_p2_edges[f][0]],
+                            d = m->tets[4 * u + mesh_p2_edges[f][1]];
                     if ((c == a && d == b) || (c == b && d == a))
                         found = m->mid[6 * u + f];
                 }
@@ -397,7 +398,8 @@ TEST(boundary_mid_nodes_stay_on_the_input_surface)
     /* a corner left alone keeps its edges' nodes where they were */
     for (int32_t t = 0; t < 3; t++)
         for (int e = 0; e < 6; e++) {
-            int32_t a = m->tets[4 * t + edges[e][0]], b = m->tets[4 * t + edges[e][1]];
+            int32_t a = m->tets[4 * t + mesh_p2_edges[e][0]],
+                    b = m->tets[4 * t + mesh_p2_edges[e][1]];
             int32_t v = m->mid[6 * t + e];
             if (a != 0 && b != 0)
                 ASSERT_TRUE(memcmp(m->xyz + 3 * v, x0 + 3 * v, 3 * sizeof(double)) == 0);
@@ -432,5 +434,6 @@ TEST(non_affine_move_straightens_until_positive)
 TEST_MAIN("p2", T(each_format_puts_mid_nodes_on_their_edges),
           T(medit_takes_the_order_that_fits), T(writers_keep_ten_nodes),
           T(jacobian_closed_forms), T(closest_point_of_a_quadratic_triangle),
-          T(affine_map_moves_mid_nodes_exactly), T(boundary_mid_nodes_stay_on_the_input_surface),
+          T(affine_map_moves_mid_nodes_exactly),
+          T(boundary_mid_nodes_stay_on_the_input_surface),
           T(non_affine_move_straightens_until_positive))
