@@ -1411,7 +1411,14 @@ static int32_t count_blocks(const int32_t *tag, int32_t n)
     return b;
 }
 
-static void write41(const mesh_t *m, const distinct d[2], wbuf *w, int bin)
+/* The tets as written: their nodes (4, or 10 in Gmsh's order) and type. */
+typedef struct {
+    const int32_t *v;
+    int k, type;
+} gtets;
+
+static void write41(const mesh_t *m, const gtets *gt, const distinct d[2], wbuf *w,
+                    int bin)
 {
     gw g = {w, bin};
     double lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
@@ -1455,20 +1462,21 @@ static void write41(const mesh_t *m, const distinct d[2], wbuf *w, int bin)
     gw_size(&g, (uint64_t)m->nt + (uint64_t)m->ntri, " ");
     gw_size(&g, m->nt + m->ntri ? 1 : 0, " ");
     gw_size(&g, (uint64_t)m->nt + (uint64_t)m->ntri, "\n");
-    write_blocks(&g, 3, 4, m->tets, 4, m->region, m->nt, &d[1], &etag);
+    write_blocks(&g, 3, gt->type, gt->v, gt->k, m->region, m->nt, &d[1], &etag);
     write_blocks(&g, 2, 2, m->tris, 3, m->tri_ref, m->ntri, &d[0], &etag);
     wb_str(w, bin ? "\n$EndElements\n" : "$EndElements\n");
 }
 
 /* MSH 4.0 ASCII: as 4.1, with 4.0's block headers and node lines. */
-static void write40(const mesh_t *m, const distinct d[2], wbuf *w)
+static void write40(const mesh_t *m, const gtets *gt, const distinct d[2], wbuf *w)
 {
     gw g = {w, 0};
     double lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
     int64_t etag = 0;
     int32_t nb = count_blocks(m->region, m->nt) + count_blocks(m->tri_ref, m->ntri);
-    const int32_t *tag[2] = {m->tri_ref, m->region}, *idx[2] = {m->tris, m->tets};
+    const int32_t *tag[2] = {m->tri_ref, m->region}, *idx[2] = {m->tris, gt->v};
     int32_t n[2] = {m->ntri, m->nt};
+    const int nk[2] = {3, gt->k};
 
     if (m->nv)
         mesh_bbox(m, lo, hi);
@@ -1506,13 +1514,13 @@ static void write40(const mesh_t *m, const distinct d[2], wbuf *w)
             while (j < n[k] && tag[k][j] == tag[k][i])
                 j++;
             wb_int(w, entity_of(&d[k], tag[k], (size_t)i));
-            wb_str(w, k ? " 3 4 " : " 2 2 ");
+            wb_str(w, k ? (gt->type == 11 ? " 3 11 " : " 3 4 ") : " 2 2 ");
             wb_int(w, j - i);
             wb_str(w, "\n");
             for (; i < j; i++) {
                 wb_int(w, ++etag);
                 wb_str(w, " ");
-                wb_ints(w, idx[k] + (size_t)(3 + k) * (size_t)i, 3 + k, 1, " ", "\n");
+                wb_ints(w, idx[k] + (size_t)nk[k] * (size_t)i, nk[k], 1, " ", "\n");
             }
         }
     }
@@ -1532,7 +1540,8 @@ static void put_i32s(wbuf *w, const int32_t *v, int n, int64_t add)
 
 /* Elementary tags follow the regions (as in 4.1), so Gmsh's entities match
  * its physical groups. bin: 2.2 binary (one group per element type). */
-static void write22(const mesh_t *m, const distinct d[2], wbuf *w, int bin)
+static void write22(const mesh_t *m, const gtets *gt, const distinct d[2], wbuf *w,
+                    int bin)
 {
     unsigned char b[28];
 
@@ -1564,10 +1573,11 @@ static void write22(const mesh_t *m, const distinct d[2], wbuf *w, int bin)
     wb_int(w, (int64_t)m->nt + m->ntri);
     wb_str(w, "\n");
     if (bin) {
-        const int32_t *tag[2] = {m->tri_ref, m->region}, *idx[2] = {m->tris, m->tets};
+        const int32_t *tag[2] = {m->tri_ref, m->region}, *idx[2] = {m->tris, gt->v};
         int32_t n[2] = {m->ntri, m->nt}, e = 0;
+        const int nk[2] = {3, gt->k};
         for (int k = 1; k >= 0; k--) {
-            int32_t h[3] = {k ? 4 : 2, n[k], 2};
+            int32_t h[3] = {k ? gt->type : 2, n[k], 2};
             if (!n[k])
                 continue;
             put_i32s(w, h, 3, 0);
@@ -1575,7 +1585,7 @@ static void write22(const mesh_t *m, const distinct d[2], wbuf *w, int bin)
                 int32_t r[3] = {++e, tag[k] ? tag[k][t] : 0,
                                 (int32_t)entity_of(&d[k], tag[k], (size_t)t)};
                 put_i32s(w, r, 3, 0);
-                put_i32s(w, idx[k] + (size_t)(3 + k) * (size_t)t, 3 + k, 1);
+                put_i32s(w, idx[k] + (size_t)nk[k] * (size_t)t, nk[k], 1);
             }
         }
         wb_str(w, "\n$EndElements\n");
@@ -1583,12 +1593,12 @@ static void write22(const mesh_t *m, const distinct d[2], wbuf *w, int bin)
     }
     for (int32_t t = 0; t < m->nt; t++) {
         wb_int(w, (int64_t)t + 1);
-        wb_str(w, " 4 2 ");
+        wb_str(w, gt->type == 11 ? " 11 2 " : " 4 2 ");
         wb_int(w, m->region ? m->region[t] : 0);
         wb_str(w, " ");
         wb_int(w, entity_of(&d[1], m->region, (size_t)t));
         wb_str(w, " ");
-        wb_ints(w, m->tets + 4 * (size_t)t, 4, 1, " ", "\n");
+        wb_ints(w, gt->v + (size_t)gt->k * (size_t)t, gt->k, 1, " ", "\n");
     }
     for (int32_t t = 0; t < m->ntri; t++) {
         wb_int(w, (int64_t)m->nt + t + 1);
@@ -1608,16 +1618,32 @@ static qdc_status write_gmsh(const mesh_t *m, meshio_format fmt, int part, wbuf 
     (void)part;
     distinct d[2] = {{NULL, 0}, {NULL, 0}};
     qdc_status st = QDC_OK;
+    gtets gt = {m->tets, 4, 4};
+    int32_t *t10 = NULL;
 
+    if (m->mid) { /* second-order: type 11, its mid-edge nodes in Gmsh's order */
+        t10 = qdc_mallocn((size_t)m->nt * 10 + 1, sizeof(int32_t));
+        if (!t10)
+            return qdc_fail(err, QDC_ENOMEM, "out of memory for the 10-node tets");
+        for (size_t t = 0; t < (size_t)m->nt; t++) {
+            memcpy(t10 + 10 * t, m->tets + 4 * t, 4 * sizeof(int32_t));
+            for (int f = 0; f < 6; f++) /* gmsh_p2 is its own inverse */
+                t10[10 * t + 4 + (size_t)f] = m->mid[6 * t + (size_t)gmsh_p2[f]];
+        }
+        gt.v = t10;
+        gt.k = 10;
+        gt.type = 11;
+    }
     if (distinct_of(&d[0], m->tri_ref, (size_t)m->ntri) != 0 ||
         distinct_of(&d[1], m->region, (size_t)m->nt) != 0)
         st = qdc_fail(err, QDC_ENOMEM, "out of memory for the Gmsh entities");
     else if (fmt == MESHIO_GMSH22 || fmt == MESHIO_GMSH22_BIN)
-        write22(m, d, w, fmt == MESHIO_GMSH22_BIN);
+        write22(m, &gt, d, w, fmt == MESHIO_GMSH22_BIN);
     else if (fmt == MESHIO_GMSH40)
-        write40(m, d, w);
+        write40(m, &gt, d, w);
     else
-        write41(m, d, w, fmt == MESHIO_GMSH41_BIN);
+        write41(m, &gt, d, w, fmt == MESHIO_GMSH41_BIN);
+    qdc_free(t10);
     qdc_free(d[0].u);
     qdc_free(d[1].u);
     return st;
@@ -1663,6 +1689,7 @@ const meshio_fmt fmt_gmsh41 = {
     .read = read_gmsh,
     .write = write_gmsh,
     .splices = 1,
+    .p2 = 1,
 };
 
 const meshio_fmt fmt_gmsh41_bin = {
@@ -1677,6 +1704,7 @@ const meshio_fmt fmt_gmsh41_bin = {
     .read = read_gmsh,
     .write = write_gmsh,
     .splices = 1,
+    .p2 = 1,
 };
 
 const meshio_fmt fmt_gmsh22 = {
@@ -1691,6 +1719,7 @@ const meshio_fmt fmt_gmsh22 = {
     .read = read_gmsh,
     .write = write_gmsh,
     .splices = 1,
+    .p2 = 1,
 };
 
 const meshio_fmt fmt_gmsh22_bin = {
@@ -1703,6 +1732,7 @@ const meshio_fmt fmt_gmsh22_bin = {
     .read = read_gmsh,
     .write = write_gmsh,
     .splices = 1,
+    .p2 = 1,
 };
 
 const meshio_fmt fmt_gmsh40 = {
@@ -1715,4 +1745,5 @@ const meshio_fmt fmt_gmsh40 = {
     .read = read_gmsh,
     .write = write_gmsh,
     .splices = 1,
+    .p2 = 1,
 };
