@@ -136,11 +136,12 @@ double p2_tri_closest(const double x[6][3], const double p[3], double uv[2], dou
             break;
         {
             double su = -(a22 * b1 - a12 * b2) / det, sv = -(a11 * b2 - a12 * b1) / det;
+            double u0 = uv[0], v0 = uv[1];
             uv[0] += su;
             uv[1] += sv;
             clamp_uv(uv);
-            if (fabs(su) + fabs(sv) < 1e-15)
-                break;
+            if (fabs(uv[0] - u0) + fabs(uv[1] - v0) < 1e-15) /* converged, or */
+                break;                                       /* stopped at a side */
         }
     }
     uv[0] = bu[0];
@@ -436,20 +437,26 @@ static void jacobians(const mesh_t *m, const double *x, double *j)
     }
 }
 
-/* Pull the mid-edge nodes of the elements whose Jacobian went non-positive
- * toward their straight midpoints: interior ones halfway each round, then
- * boundary ones too, then all of them onto the straight edge (always
- * positive while the corner tet is: the optimizer never inverts one). */
+/* An element's scaled Jacobian is kept at least min(input's, this): a
+ * valid input element never comes out folded nor much more curved. */
+#define P2_JAC_FLOOR 0.2
+
+/* Pull the mid-edge nodes of the elements whose scaled Jacobian fell below
+ * P2_JAC_FLOOR and their input's toward their straight midpoints: interior
+ * ones halfway each round, then boundary ones too, then all of them onto the
+ * straight edge (scaled Jacobian 1 while the corner tet is positive: the
+ * optimizer never inverts one). */
 static void straighten(mesh_t *m, const double *jin, double *jout, uint8_t *tries,
                        const uint8_t *role, uint8_t *pulled)
 {
     double *x = m->xyz;
+    uint8_t *now = qdc_calloc((size_t)m->nv + 1, 1); /* moved this round */
 
     for (int round = 0; round < 64; round++) {
         int any = 0;
         for (int32_t t = 0; t < m->nt; t++) {
             const int32_t *tt = m->tets + 4 * (size_t)t, *mid = m->mid + 6 * (size_t)t;
-            if (!(jout[t] <= 0 && jin[t] > 0))
+            if (!(jin[t] > 0 && jout[t] < fmin(jin[t], P2_JAC_FLOOR)))
                 continue;
             any = 1;
             tries[t] += tries[t] < 255;
@@ -466,12 +473,30 @@ static void straighten(mesh_t *m, const double *jin, double *jout, uint8_t *trie
                         mp + f * (x[3 * (size_t)v + (size_t)i] - mp);
                 }
                 pulled[v] = 1;
+                if (now)
+                    now[v] = 1;
             }
         }
         if (!any)
             break;
-        jacobians(m, x, jout);
+        if (!now) {
+            jacobians(m, x, jout);
+            continue;
+        }
+        /* again only the elements around the nodes that moved */
+#pragma omp parallel for schedule(static)
+        for (int32_t t = 0; t < m->nt; t++) {
+            const int32_t *mid = m->mid + 6 * (size_t)t;
+            double e[10][3];
+            if (!(now[mid[0]] | now[mid[1]] | now[mid[2]] | now[mid[3]] | now[mid[4]] |
+                  now[mid[5]]))
+                continue;
+            gather(x, m->tets + 4 * (size_t)t, mid, e);
+            jout[t] = p2_scaled_jacobian((const double(*)[3])e);
+        }
+        memset(now, 0, (size_t)m->nv);
     }
+    qdc_free(now);
 }
 
 qdc_status p2_finish(mesh_t *m, const double *x0, opt_result *res, qdc_error *err)

@@ -32,9 +32,10 @@ double p2_tri_closest(const double x[6][3], const double p[3], double uv[2],
  * mapped by the affine map of the corners of each tet around the edge (the
  * average of those maps: exact when the corners moved by one affine map);
  * one on a boundary edge is then projected to the input's curved boundary
- * (its quadratic triangles); then every element whose scaled Jacobian is
- * <= 0 where the input's was > 0 has its mid-edge nodes pulled toward the
- * straight midpoints until it is positive (interior ones first). m->mid must
+ * (its quadratic triangles); then every element whose scaled Jacobian fell
+ * below both its input's and 0.2 (where the input's was > 0) has its
+ * mid-edge nodes pulled toward the straight midpoints until it is not
+ * (interior ones first). m->mid must
  * be set; m->xyz changes at the mid-edge nodes only. res receives the counts
  * (opt_result's p2_* fields). QDC_ENOMEM. */
 qdc_status p2_finish(mesh_t *m, const double *xyz_in, opt_result *res, qdc_error *err);
