@@ -432,9 +432,51 @@ TEST(non_affine_move_straightens_until_positive)
     mesh_free(m);
 }
 
+/* 1 if every mid-edge node but ab's (vertex 5) is at its edge's midpoint. */
+static int ring_consistent(const mesh_t *m)
+{
+    for (int32_t t = 0; t < m->nt; t++)
+        for (int e = 0; e < 6; e++) {
+            const int32_t *tt = m->tets + 4 * t;
+            int32_t v = m->mid[6 * t + e];
+            const double *a = m->xyz + 3 * tt[mesh_p2_edges[e][0]],
+                         *b = m->xyz + 3 * tt[mesh_p2_edges[e][1]];
+            if (v == 5)
+                continue;
+            for (int i = 0; i < 3; i++)
+                if (m->xyz[3 * v + i] != 0.5 * (a[i] + b[i]))
+                    return 0;
+        }
+    return 1;
+}
+
+TEST(reorienting_a_tet_moves_its_mid_edge_nodes_along)
+{
+    const double inner[3] = {0, 0, 0.1};
+    mesh_t *m = ring(inner);
+    mesh_orientation o;
+    int32_t *tt, *mid, x;
+
+    ASSERT_TRUE(m != NULL);
+    /* tet 1 written in the other vertex order, its table rewritten to match:
+     * swapping corners 0 and 1 exchanges edges 12/02 and 03/13 */
+    tt = m->tets + 4;
+    mid = m->mid + 6;
+    x = tt[0], tt[0] = tt[1], tt[1] = x;
+    x = mid[1], mid[1] = mid[2], mid[2] = x;
+    x = mid[3], mid[3] = mid[4], mid[4] = x;
+    ASSERT_TRUE(ring_consistent(m));
+    ASSERT_OK(mesh_reorient(m, &o, NULL));
+    ASSERT_EQ_INT(o.flipped, 1);
+    ASSERT_TRUE(ring_consistent(m));
+    ASSERT_EQ_INT(m->tets[4], 0); /* back in the order of the others */
+    mesh_free(m);
+}
+
 TEST_MAIN("p2", T(each_format_puts_mid_nodes_on_their_edges),
           T(medit_takes_the_order_that_fits), T(writers_keep_ten_nodes),
           T(jacobian_closed_forms), T(closest_point_of_a_quadratic_triangle),
           T(affine_map_moves_mid_nodes_exactly),
           T(boundary_mid_nodes_stay_on_the_input_surface),
-          T(non_affine_move_straightens_until_positive))
+          T(non_affine_move_straightens_until_positive),
+          T(reorienting_a_tet_moves_its_mid_edge_nodes_along))
