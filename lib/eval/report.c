@@ -397,6 +397,21 @@ qdc_status report_write_json(const report_t *r, qdc_write_fn fn, void *ctx,
         jw_num(&w, "finish", s->t_finish);
         jw_num(&w, "total", s->t_total);
         jw_close(&w, '}');
+        if (s->p2_tets > 0) { /* second-order tets (opt/p2.c) */
+            jw_open(&w, "second_order", '{');
+            jw_int(&w, "tets", s->p2_tets);
+            jw_int(&w, "mid_nodes", s->p2_mid);
+            jw_int(&w, "mid_moved", s->p2_mid_moved);
+            jw_int(&w, "boundary_mid", s->p2_boundary_mid);
+            jw_int(&w, "pulled_straighter", s->p2_pulled);
+            jw_int(&w, "jacobian_nonpositive_before", s->p2_bad_in);
+            jw_int(&w, "jacobian_nonpositive_after", s->p2_bad_out);
+            jw_num(&w, "scaled_jacobian_min_before", s->p2_jac_min_in);
+            jw_num(&w, "scaled_jacobian_min_after", s->p2_jac_min_out);
+            jw_num(&w, "boundary_mid_distance", s->p2_bd_mid_dist);
+            jw_num(&w, "boundary_corner_distance", s->p2_bd_corner_dist);
+            jw_close(&w, '}');
+        }
         if (s->tets_in > 0) {
             jw_open(&w, "topology", '{');
             jw_int(&w, "tets_in", s->tets_in);

@@ -170,7 +170,20 @@ typedef struct {
     int32_t topo_tris_added;     /* ... and new boundary triangles written */
     int32_t verts_in, verts_out; /* --topology: vertices before and after */
     int topo_rounds;             /* rounds of flips followed by smoothing */
-    opt_stop stop;               /* why the run stopped (decides; stop_reason names it) */
+    /* second-order tets (mesh_t.mid, opt/p2.c); all 0 for linear tets: */
+    int32_t p2_tets;          /* 10-node tets */
+    int32_t p2_mid;           /* mid-edge nodes */
+    int32_t p2_mid_moved;     /* of those, moved with their edge */
+    int32_t p2_boundary_mid;  /* of those, on the boundary (on the curved surface) */
+    int32_t p2_pulled;        /* moved toward the straight midpoint (Jacobian) */
+    int32_t p2_bad_in;        /* elements with a Jacobian <= 0 at a node or the */
+    int32_t p2_bad_out;       /*   centroid, in the input and the result */
+    double p2_jac_min_in;     /* smallest scaled Jacobian (1 = straight), in the */
+    double p2_jac_min_out;    /*   input and the result */
+    double p2_bd_mid_dist;    /* largest distance of a boundary mid-edge node to the
+                               * input's curved boundary (its quadratic triangles) */
+    double p2_bd_corner_dist; /* the same, of the boundary corners */
+    opt_stop stop;            /* why the run stopped (decides; stop_reason names it) */
     char stop_reason[64]; /* opt_stop_name(stop): "converged", "max-iter", "no-descent",
                            * "cancelled", "time-limit", "solver" */
 } opt_result;

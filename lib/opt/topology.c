@@ -19,6 +19,7 @@
 #include "core/tet.h"
 #include "geom/metric_int.h"
 #include "opt/opt_int.h"
+#include "opt/p2.h"
 #include "opt/run.h"
 #include "topo/topo.h"
 
@@ -508,8 +509,42 @@ static qdc_status topology_run(mesh_t *m, const opt_options *opts, opt_result *r
     return st;
 }
 
+/* Second-order tets: the run on the corners (the mid-edge nodes are in no
+ * tet: held), then the mid-edge nodes moved with their edges (p2.c). */
+static qdc_status p2_run(mesh_t *m, const opt_options *opts, opt_result *res,
+                         qdc_error *err)
+{
+    opt_result own;
+    double *x0;
+    qdc_status st;
+
+    if (opts && opts->topology != OPT_TOPOLOGY_NONE)
+        return qdc_fail(err, QDC_EINVAL,
+                        "second-order (10-node) tets: --topology %s would change the "
+                        "edges their mid-edge nodes are on; use --topology none",
+                        opt_topology_name(opts->topology));
+    if (!res)
+        res = &own;
+    x0 = qdc_mallocn((size_t)m->nv * 3 + 1, sizeof(double));
+    if (!x0)
+        return qdc_fail(err, QDC_ENOMEM, "out of memory for the input's coordinates");
+    memcpy(x0, m->xyz, (size_t)m->nv * 3 * sizeof(double));
+    st = opt_run_smooth(m, opts, res, err);
+    if (st == QDC_OK && res->outcome != OPT_FAILED) {
+        st = p2_finish(m, x0, res, err);
+        if (st != QDC_OK) /* m unchanged on failure */
+            memcpy(m->xyz, x0, (size_t)m->nv * 3 * sizeof(double));
+    }
+    qdc_free(x0);
+    return st;
+}
+
 qdc_status opt_run(mesh_t *m, const opt_options *opts, opt_result *res, qdc_error *err)
 {
+    if (m && m->mid && m->nv > 0 && m->nt > 0 && m->xyz && m->tets) {
+        qdc_status st = mesh_validate(m, NULL, err);
+        return st != QDC_OK ? st : p2_run(m, opts, res, err);
+    }
     if (opts && opts->topology != OPT_TOPOLOGY_NONE && m && m->nv > 0 && m->nt > 0 &&
         m->xyz && m->tets)
         return topology_run(m, opts, res, err);

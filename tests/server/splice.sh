@@ -30,7 +30,8 @@ gmsh40:gmsh40.msh:gmsh40:\$PhysicalNames
 dolfin:dolfin.xml:dolfin:nsmap
 meshb:meshio.meshb:meshb:
 abaqus:calculix.inp:abaqus:MATERIAL
-netgen:meshio.vol:netgen:Generated"
+netgen:meshio.vol:netgen:Generated
+gmsh41p2:gmsh41_p2.msh:gmsh:skin"
 
 for c in $CASES; do
     f=$(echo "$c" | cut -d: -f2)
