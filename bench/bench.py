@@ -52,9 +52,11 @@ GEN = [('125000', 'cube', ['lowq', 'tangled'], False, 0.5),
        ('105000', 'bone', ['scan'], False, 0.5),
        ('1250000', 'cube', ['lowq'], True, 0.5),
        ('1260000', 'ball', ['lowq'], True, 0.5),
-       ('1100000', 'ball', ['lowq'], True, 0.32)]
+       ('1100000', 'ball', ['lowq'], True, 0.32),
+       ('5000000', 'cube', ['lowq', 'tangled'], 'huge', 0.5)]  # ~4M tets: --huge
 
-TOOLS = ['qdc', 'qdc-lsq', 'qdc-fixed', 'gmsh-relocate3d', 'gmsh-default']
+TOOLS = ['qdc', 'qdc-report', 'qdc-1t', 'qdc-lsq', 'qdc-fixed', 'gmsh-relocate3d',
+         'gmsh-default']
 PEER = 'gmsh-relocate3d'
 # --topology: the peers that change connectivity (issue 31), on scripts/corpus.py's
 # scanned, thin, CAD, tangled and two-region meshes; (tets asked for, corpus class, large?)
@@ -64,6 +66,7 @@ TOPO_GEN = [('110000', c, False) for c in ('ball-scan', 'bone-scan', 'bone-lowq'
                                            'bone-lowq-tangled', 'two-region')]
 TOPO_GEN += [('1100000', c, True) for c in ('ball-scan', 'bone-lowq', 'part-cad')]
 LABEL = {'input': 'input', 'qdc': 'qdc (default: slide)', 'qdc-lsq': 'qdc --boundary lsq',
+         'qdc-report': 'qdc --report', 'qdc-1t': 'qdc, 1 thread',
          'qdc-fixed': 'qdc --boundary fixed',
          'gmsh-relocate3d': 'Gmsh Relocate3D', 'gmsh-default': 'Gmsh default opt',
          'qdc-flips': 'qdc --topology flips --boundary fixed',
@@ -171,9 +174,14 @@ def command(tool, src, dst, base):
         # timed as a user runs it: no --report (its boundary distances and
         # second quality scan are work Gmsh does not do); the run's figures
         # come from the two summary lines on stderr (qdc_summary)
+        # qdc-report: the same run with the report a service writes (timed);
+        # qdc-1t: one OpenMP thread, for the speed-up of each phase
         c = [QDC_RUN, 'optimize', src, dst]
+        if tool == 'qdc-1t':
+            c = ['env', 'OMP_NUM_THREADS=1'] + c
         return c + {'qdc-fixed': ['--boundary', 'fixed'],
-                    'qdc-lsq': ['--boundary', 'lsq']}.get(tool, [])
+                    'qdc-lsq': ['--boundary', 'lsq'],
+                    'qdc-report': ['--report', base + '.report.json']}.get(tool, [])
     method = {'gmsh-relocate3d': 'Relocate3D', 'gmsh-default': ''}[tool]
     return [PY, os.path.join(HERE, 'gmsh_opt.py'), src, dst, method, base + '.gmsh.json']
 
@@ -208,7 +216,7 @@ def prepare_meshes(a):
     if not a.quick:
         gdir = os.path.join(OUT, 'gen')
         for h, shape, classes, large, share in GEN:
-            if large and a.no_large:
+            if (large and a.no_large) or (large == 'huge' and not a.huge):
                 continue
             tag = h if share == 0.5 else '%s-share%g' % (h, share)
             gd = os.path.join(gdir, tag)
@@ -682,7 +690,39 @@ def summary(rows, inputs):
         lines.append('| %s | %d%s | %s | %s | %s | %d |' % (
             LABEL[tool], n, ' (+%d not ok)' % failed if failed else '', gm(w), gm(o),
             '%+.3f' % (sum(d) / len(d)) if d else '—', flagged))
-    return '\n'.join(lines) + scale_fit(rows)
+    return '\n'.join(lines) + scale_fit(rows) + speed_table(rows)
+
+
+def speed_table(rows):
+    """Per mesh: qdc's wall and CPU against Gmsh Relocate3D's with and without
+    --report, and the speed-up from 1 to 2 threads of the whole run and of
+    each phase (qdc's own phase seconds; medians of --repeat runs)."""
+    by = {}
+    for r in rows:
+        if r['status'] == 'ok':
+            by.setdefault(r['mesh'], {})[r['tool']] = r
+    out = []
+    for mesh, m in by.items():
+        q, qr, q1, p = m.get('qdc'), m.get('qdc-report'), m.get('qdc-1t'), m.get(PEER)
+        if not q or not (qr or q1 or p):
+            continue
+        x = lambda a, b, k: '%.2f' % (a[k] / b[k]) if a and b and b[k] else '—'
+        ph = []
+        for k in PHASES:
+            s1 = ((q1 or {}).get('seconds') or {}).get(k)
+            s2 = (q.get('seconds') or {}).get(k)
+            ph.append('%.2f' % (s1 / s2) if s1 and s2 and s2 > 0.01 else '—')
+        out.append('| %s | %s | %s | %s | %s | %s | %s | %s |' % (
+            mesh, fnum((q.get('quality') or {}).get('n_tets'), '%d'), x(q, p, 'wall'),
+            x(q, p, 'cpu'), x(qr, p, 'wall'), x(qr, p, 'cpu'), x(q1, q, 'wall'),
+            ' / '.join(ph)))
+    if not out:
+        return ''
+    return ('\n\nSpeed against Gmsh Relocate3D (same run) without and with `--report`, and '
+            'from 1 to 2 threads (the 1-thread time over the 2-thread time; phases: ' +
+            ', '.join(PHASES) + '):\n\n| mesh | tets | × R3D wall | × R3D CPU | --report × '
+            'R3D wall | --report × R3D CPU | 1→2 threads | per phase |\n'
+            '|---|---|---|---|---|---|---|---|\n' + '\n'.join(out))
 
 
 def scale_fit(rows):
@@ -914,6 +954,8 @@ def main():
     ap.add_argument('--quick', action='store_true',
                     help='3 small dev meshes, no generated meshes, no Gmsh default optimizer')
     ap.add_argument('--no-large', action='store_true', help='skip the ~1M-tet mesh')
+    ap.add_argument('--huge', action='store_true',
+                    help='also the ~4M-tet cubes (low quality and tangled)')
     ap.add_argument('--only', metavar='REGEX', help='only meshes whose name matches')
     ap.add_argument('--repeat', type=int, default=1, metavar='N',
                     help='run each case N times; wall and CPU are the medians')

@@ -19,6 +19,7 @@
 
 #include "core/base.h"
 #include "core/mesh.h"
+#include "eval/outcome.h"
 #include "eval/report.h"
 #include "geom/bderr.h"
 #include "io/gz.h"

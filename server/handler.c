@@ -90,7 +90,7 @@ void job_json(req *r, const job_rec *j, sbuf *b)
         lastseq >= 0) {
         last.len = 0;
         poll_read(r->q->hub, j->id, lastseq - 1, &last, &cnt, &lastseq, &done);
-        sb_printf(b, ",\"iterations\":%ld,\"progress\":%s", lastseq + 1,
+        sb_printf(b, ",\"iterations\":%ld,\"progress\":%s", lastseq,
                   last.len ? last.buf : "null");
     } else {
         sb_printf(b, ",\"iterations\":%d,\"progress\":%s", j->iterations,

@@ -65,7 +65,7 @@ enum MHD_Result ops_metrics(struct MHD_Connection *c, req *r)
     metric(&b, "qdcd_parked_hangups_total", "counter",
            "Parked connections dropped because their client had closed them.",
            poll_gone_count(q->hub));
-    metric(&b, "qdcd_iterations_total", "counter", "Progress records published.",
+    metric(&b, "qdcd_records_total", "counter", "Progress records published.",
            (long long)atomic_load(&q->m.iterations));
     metric(&b, "qdcd_upload_bytes_total", "counter",
            "Request body bytes received on uploads.",

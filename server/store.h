@@ -47,7 +47,7 @@ typedef struct {
     double lease_until;
     double created, started, finished, expires;
     int purged;              /* files removed after retention (result: 410) */
-    int iterations;          /* progress records published by the last run */
+    int iterations;          /* the last run's last record number (its seq) */
     char last_progress[768]; /* latest progress record JSON, "" if none */
     char error[1024];        /* problem+json object of a failed job, "" otherwise */
     char stop_reason[64];

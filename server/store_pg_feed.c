@@ -51,7 +51,7 @@ static int write_group(PGconn *c, prec *first, prec *last)
         goto out; /* dropped */
     p_text(&p, first->id);
     p_text(&p, first->worker);
-    p_i64(&p, last->seq + 1);
+    p_i64(&p, last->seq); /* the job's iterations: its last record's number */
     /* the row keeps the last record when it fits (job_rec.last_progress) */
     p_text(&p, last->len < sizeof((job_rec *)0)->last_progress ? last->json : NULL);
     p_text(&p, seqs.buf);

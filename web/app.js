@@ -165,19 +165,18 @@ let hoverState = () => null; // the job view's state, for the charts' tooltips
 function route() {
     if (view && view.stop) view.stop();
     const m = location.pathname.match(/^\/ui\/jobs\/([0-9a-f]{32})$/);
-    if (m) {
-        $('view-list').hidden = true;
-        $('view-job').hidden = false;
-        view = jobView(m[1]);
-    } else {
-        $('view-job').hidden = true;
-        $('view-list').hidden = false;
-        view = listView();
-    }
+    const c = location.pathname === '/' && compareIds(location.hash);
+    $('view-list').hidden = !!(m || c);
+    $('view-job').hidden = !m;
+    $('view-compare').hidden = !c;
+    if (m) view = jobView(m[1]);
+    else if (c) view = compareView(c);
+    else view = listView();
+    view.key = location.pathname + location.hash;
 }
 
 function go(path) {
-    if (path !== location.pathname) history.pushState(null, '', path);
+    if (path !== location.pathname + location.hash) history.pushState(null, '', path);
     route();
     window.scrollTo(0, 0);
 }
@@ -189,6 +188,32 @@ document.addEventListener('click', (ev) => {
     go(a.getAttribute('href'));
 });
 window.addEventListener('popstate', route);
+// a hash typed or followed by hand (#compare/ID/ID); popstate has routed a
+// history step already
+window.addEventListener('hashchange', () => { if (!view || view.key !== location.pathname + location.hash) route(); });
+
+// ------------------------------------------------------------ other tabs --
+// Every open tab follows deletions and state changes: the views poll the API
+// (which also sees what curl or another machine did), and a tab that deletes,
+// cancels or submits tells the others of this origin at once. The message
+// names the job only: each tab fetches what it shows with its own token.
+
+const tabs = typeof BroadcastChannel === 'function' ? new BroadcastChannel('qdc-jobs') : null;
+
+function tellTabs(kind, id) {
+    if (tabs) tabs.postMessage({ kind, id });
+}
+
+if (tabs) {
+    tabs.onmessage = (ev) => {
+        const m = ev.data;
+        if (m && typeof m.id === 'string' && view && view.onNews) view.onNews(m);
+    };
+}
+// a tab that comes back to the front looks at once (its timers idle while hidden)
+document.addEventListener('visibilitychange', () => {
+    if (!document.hidden && view && view.onNews) view.onNews({ kind: 'visible', id: '' });
+});
 
 // ---------------------------------------------------------------- job list --
 
@@ -219,7 +244,11 @@ function loadFormats() {
     return formatsLoading;
 }
 
-const listState = { filter: '', jobs: [], first: new Map(), firstBusy: new Set() };
+// filter: the state shown (all when empty); find: text in the name, label,
+// file name or id; sort: a column and a direction; ticked: the (at most two)
+// jobs picked for comparison
+const listState = { filter: '', find: '', sort: { key: 'created', dir: 'desc' }, ticked: [],
+    jobs: [], first: new Map(), firstBusy: new Set() };
 let chosen = null; // {file, name, format, surface, gz}
 
 // The short help shown under a name: the table's text up to its first
@@ -346,6 +375,7 @@ async function submit(ev) {
         if (r.status === 202 && r.body && r.body.id) {
             status.textContent = '';
             $('label-input').value = '';
+            tellTabs('submitted', r.body.id);
             go('/ui/jobs/' + r.body.id);
         } else {
             status.textContent = '';
@@ -401,13 +431,16 @@ async function listJobs() {
 function listFigures(j) {
     const s = listState;
     const key = j.id + (j.done ? ':done' : '');
-    if (s.first.has(key) || s.firstBusy.has(key) || !(j.iterations > 0)) return;
+    // a record (the input's is record 0: iterations 0) or the report to read
+    if (s.first.has(key) || s.firstBusy.has(key) || !(j.progress || (j.done && j.links && j.links.report))) return;
     s.firstBusy.add(key);
     const got = j.done && j.links && j.links.report
         ? apiJSON(j.links.report).then((r) => ({ in: r.before, out: r.after }))
         : apiJSON('/v1/jobs/' + j.id + '/progress?after=-1').then((b) => (b.records.length ? { in: b.records[0] } : null));
-    got.then((f) => { if (f) s.first.set(key, f); })
-        .catch(() => {})
+    // no figures (no record yet, no report) is an answer too: asked again
+    // only when the job's state changes, not on every drawing of the list
+    got.then((f) => { s.first.set(key, f || {}); })
+        .catch(() => { s.first.set(key, {}); })
         .finally(() => { s.firstBusy.delete(key); if (view && view.name === 'list') renderJobs(); });
 }
 
@@ -431,6 +464,7 @@ async function jobAction(id, what) {
             const res = await api('/v1/jobs/' + id, { method: 'DELETE' });
             if (!res.ok && res.status !== 404) throw problem(res.status, await res.json().catch(() => null));
         }
+        tellTabs(what === 'cancel' ? 'changed' : 'deleted', id);
     } catch (e) {
         alertError(e);
     }
@@ -446,7 +480,7 @@ function alertError(e) {
 function renderJobs() {
     const s = listState;
     const tbody = $('jobs').tBodies[0];
-    const rows = s.jobs.filter((j) => !s.filter || j.state === s.filter);
+    const rows = listRows(s);
     const frag = document.createDocumentFragment();
     for (const j of rows) {
         listFigures(j);
@@ -463,21 +497,98 @@ function renderJobs() {
             onclick: () => jobAction(j.id, 'delete').then(refreshList) }));
         const tets = j.mesh.tets || (j.mesh.surface ? 'surface' : 0);
         frag.append(el('tr', { 'data-id': j.id, 'data-state': j.state },
-            el('td', { class: 'name' }, el('a', { href: '/ui/jobs/' + j.id, 'data-nav': true, class: j.label || j.file_name ? 'jobname' : 'id', text: jobName(j), title: (j.label || j.file_name ? jobName(j) + ' · ' : '') + j.id }),
+            el('td', { class: 'name' }, tickBox(j), el('a', { href: '/ui/jobs/' + j.id, 'data-nav': true, class: j.label || j.file_name ? 'jobname' : 'id', text: jobName(j), title: (j.label || j.file_name ? jobName(j) + ' · ' : '') + j.id }),
                 j.label && j.file_name ? el('span', { class: 'small muted', text: ' ' + j.file_name }) : null),
             el('td', {}, el('span', { class: 'state ' + j.state, text: j.state + (j.cancel_requested && !j.done ? ' (cancelling)' : '') })),
             el('td', { class: 'num', 'data-label': 'tets', text: typeof tets === 'number' ? int(tets) : tets }),
             el('td', { class: 'num opt wide', text: int(j.mesh.vertices) }),
-            el('td', { class: 'opt mid', text: j.mesh.format + ' · ' + bytes(j.mesh.bytes) }),
+            el('td', { class: 'opt wide', text: j.mesh.format + ' · ' + bytes(j.mesh.bytes) }),
             el('td', { class: 'num', 'data-label': 'mean ratio', text: (f ? fix(f.mean_ratio_mean, 4) : '–') + ' → ' + (p ? fix(p.mean_ratio_mean, 4) : '–') }),
             el('td', { class: 'num opt', text: (f ? fix(f.dihedral_min, 1) + '°' : '–') + ' → ' + (p ? fix(p.dihedral_min, 1) + '°' : '–') }),
             el('td', { class: 'num', 'data-label': 'elapsed', text: elapsed(j) }),
-            el('td', { class: 'opt wide', text: when(j.created) }),
+            el('td', { class: 'opt mid', text: when(j.created) }),
             acts));
     }
-    tbody.replaceChildren(frag);
+    // the rows are new each time: keep the keyboard's place (a tick or a button)
+    const had = document.activeElement;
+    const tr = had && tbody.contains(had) ? had.closest('tr') : null;
+    const what = tr && (had.dataset.tick ? 'input.tick' : had.dataset.act ? 'button[data-act="' + had.dataset.act + '"]' : had.tagName === 'A' ? 'a' : null);
+    // the same rows as drawn: leave them (a click or a tick in progress stays put)
+    const probe = document.createElement('tbody');
+    probe.append(frag.cloneNode(true));
+    if (probe.innerHTML !== tbody.innerHTML) tbody.replaceChildren(frag);
+    if (what && !tbody.contains(had)) {
+        const again = tbody.querySelector('tr[data-id="' + tr.dataset.id + '"] ' + what);
+        if (again) again.focus();
+    }
     $('jobs-empty').hidden = rows.length > 0;
-    $('jobs-empty').textContent = s.jobs.length ? 'No ' + s.filter + ' jobs.' : 'No jobs yet: submit a mesh above.';
+    $('jobs-empty').textContent = !s.jobs.length ? 'No jobs yet: submit a mesh above.'
+        : 'No ' + (s.filter ? s.filter + ' ' : '') + 'jobs' + (s.find ? ' matching "' + s.find + '"' : '') + '.';
+    listTools(s, rows);
+}
+
+// The rows shown: the state filter, then the text, then the order chosen
+// (ties: newest first).
+function listRows(s) {
+    const find = s.find.trim().toLowerCase();
+    const hit = (j) => !find || [jobName(j), j.label, j.file_name, j.id].some((x) => x && x.toLowerCase().includes(find));
+    const by = {
+        name: (a, b) => jobName(a).localeCompare(jobName(b), 'en', { numeric: true, sensitivity: 'base' }),
+        state: (a, b) => a.state.localeCompare(b.state),
+        created: (a, b) => a.created - b.created,
+    }[s.sort.key];
+    const sign = s.sort.dir === 'desc' ? -1 : 1;
+    return s.jobs.filter((j) => (!s.filter || j.state === s.filter) && hit(j))
+        .sort((a, b) => sign * by(a, b) || b.created - a.created || (a.id < b.id ? -1 : 1));
+}
+
+// The compare tick of a row: a third tick drops the first.
+function tickBox(j) {
+    const s = listState;
+    return el('input', { type: 'checkbox', class: 'tick', 'data-tick': j.id, 'aria-label': 'compare ' + jobName(j),
+        title: 'tick two jobs, then Compare', checked: s.ticked.includes(j.id) ? 'checked' : null,
+        onchange: (ev) => {
+            s.ticked = s.ticked.filter((x) => x !== j.id);
+            if (ev.target.checked) s.ticked.push(j.id);
+            if (s.ticked.length > 2) s.ticked.shift();
+            renderJobs();
+        } });
+}
+
+// The sort headers (aria-sort), the sort menu, the count and the compare button.
+function listTools(s, rows) {
+    for (const th of $('jobs').tHead.querySelectorAll('th[data-sort]')) {
+        const on = th.dataset.sort === s.sort.key;
+        if (on) th.setAttribute('aria-sort', s.sort.dir === 'asc' ? 'ascending' : 'descending');
+        else th.removeAttribute('aria-sort');
+        th.querySelector('button').dataset.arrow = on ? (s.sort.dir === 'asc' ? '▲' : '▼') : '';
+    }
+    $('jobs-sort').value = s.sort.key + ':' + s.sort.dir;
+    s.ticked = s.ticked.filter((id) => s.jobs.some((j) => j.id === id));
+    $('compare-btn').disabled = s.ticked.length !== 2;
+    $('compare-btn').textContent = 'Compare the 2 ticked jobs' + (s.ticked.length === 1 ? ' (1 ticked)' : '');
+    const n = rows.length === s.jobs.length ? s.jobs.length + ' jobs' : rows.length + ' of ' + s.jobs.length + ' jobs';
+    if ($('jobs-count').textContent !== n) $('jobs-count').textContent = n;
+}
+
+function sortBy(key, dir) {
+    const s = listState;
+    s.sort = { key, dir: dir || (s.sort.key === key ? (s.sort.dir === 'asc' ? 'desc' : 'asc') : key === 'created' ? 'desc' : 'asc') };
+    renderJobs();
+}
+
+function listToolsInit() {
+    for (const th of $('jobs').tHead.querySelectorAll('th[data-sort]')) {
+        const b = el('button', { type: 'button', class: 'sort', title: 'sort by ' + th.textContent, onclick: () => sortBy(th.dataset.sort) });
+        b.append(...th.childNodes);
+        th.append(b);
+    }
+    $('jobs-sort').addEventListener('change', (ev) => { const [k, d] = ev.target.value.split(':'); sortBy(k, d); });
+    $('jobs-find').addEventListener('input', (ev) => { listState.find = ev.target.value; renderJobs(); });
+    $('compare-btn').addEventListener('click', () => {
+        if (listState.ticked.length === 2) go('/#compare/' + listState.ticked.join('/'));
+    });
+    for (const b of $('filters').querySelectorAll('button')) b.setAttribute('aria-pressed', String(b.classList.contains('on')));
 }
 
 let refreshList = async () => {};
@@ -503,7 +614,9 @@ function listView() {
         if (!stopped) timer = setTimeout(tick, 1500);
     };
     tick();
-    return { name: 'list', stop: () => { stopped = true; clearTimeout(timer); } };
+    // another tab deleted, cancelled or submitted: look now
+    const onNews = () => { if (!stopped) refreshList(); };
+    return { name: 'list', onNews, stop: () => { stopped = true; clearTimeout(timer); } };
 }
 
 // ----------------------------------------------------------------- job view --
@@ -515,7 +628,7 @@ function stat(k, v) {
 
 function jobView(id) {
     const ctl = new AbortController();
-    const st = { id, job: null, recs: [], report: null, stopped: false, drawQueued: false, timer: 0 };
+    const st = { id, job: null, recs: [], report: null, stopped: false, drawQueued: false, timer: 0, ctl };
     st.reportDrawn = new Promise((resolve) => { st.reportDone = resolve; });
     document.title = 'qdcd · job ' + short(id);
     $('job-id').textContent = id;
@@ -525,8 +638,10 @@ function jobView(id) {
     $('job-options-text').textContent = '';
     $('job-error').hidden = true;
     $('job-notes').hidden = true;
+    followReset();
     $('job-stats').replaceChildren();
     $('report-card').hidden = true;
+    renderOutcome(null);
     $('downloads-card').hidden = true;
     $('view3d-card').hidden = true;
     $('view3d').hidden = true;
@@ -572,22 +687,26 @@ function jobView(id) {
     $('view3d-load').onclick = () => load3d(st);
     // the header (state, elapsed, cancel requested) every 2 s until the job ends
     const header = async () => {
-        if (st.stopped || (st.job && st.job.done)) return;
+        if (st.stopped || st.gone || (st.job && st.job.done)) return;
         if (!document.hidden && st.job) await loadJob(st);
         st.headerTimer = setTimeout(header, 2000);
     };
     (async () => {
         if (!(await loadJob(st))) return;
         st.headerTimer = setTimeout(header, 2000);
+        watchGone(st);
         await follow(st, ctl.signal);
     })();
     return {
         name: 'job',
+        // another tab deleted or cancelled this job (or came to the front)
+        onNews: (m) => { if (!st.stopped && !st.gone && st.job && (!m.id || m.id === id)) loadJob(st); },
         stop: () => {
             st.stopped = true;
             ctl.abort();
             clearTimeout(st.timer);
             clearTimeout(st.headerTimer);
+            clearTimeout(st.goneTimer);
             window.removeEventListener('resize', onResize);
             if (st.gl) st.gl.stop();
         },
@@ -598,6 +717,10 @@ async function loadJob(st) {
     try {
         st.job = await apiJSON('/v1/jobs/' + st.id);
     } catch (e) {
+        if (e.status === 404 && st.job) { // it was here: deleted since
+            if (!st.stopped) jobGone(st);
+            return false;
+        }
         if (e.status === 404) {
             $('job-meta').textContent = 'There is no job ' + st.id + ' (or it belongs to another token).';
             $('job-state').textContent = 'not found';
@@ -656,7 +779,8 @@ function renderStats(st) {
         return;
     }
     $('job-stats').replaceChildren(
-        stat('record', (st.recs.length ? st.recs.length - 1 : r.iteration) + ' · ' + r.phase),
+        // iterations: the latest record's number, as qdc status and the report count them
+        stat('iterations', (st.recs.length ? st.recs.length - 1 : r.iteration) + ' · ' + r.phase),
         stat('mean ratio', (r0 ? fix(r0.mean_ratio_mean, 4) + ' → ' : '') + fix(res.mean_ratio_mean, 4)),
         stat('worst', (r0 ? sgn(r0.mean_ratio_min, 3) + ' → ' : '') + sgn(res.mean_ratio_min, 3)),
         stat('dihedral', fix(res.dihedral_min, 1) + '°..' + fix(res.dihedral_max, 1) + '°'),
@@ -697,6 +821,7 @@ async function follow(st, signal) {
                         else ev[k] = v;
                     }
                     if (ev.event === 'restart') { // the records start over
+                        restartNotice(ev.data);
                         st.recs = [];
                         after = -1;
                         st.redraw();
@@ -704,6 +829,8 @@ async function follow(st, signal) {
                         const rec = JSON.parse(ev.data);
                         after = rec.seq;
                         run = rec.attempt || run;
+                        // opened after a takeover: say whose records these are
+                        if (run > 1 && !$('job-follow').dataset.kind) runNotice(run);
                         st.recs.push(rec);
                         st.redraw();
                         if (st.job && st.job.state === 'queued') { // it started: say so now
@@ -729,16 +856,104 @@ async function follow(st, signal) {
     }
 }
 
+// ------------------------------------------- the job page follows the job --
+// #job-follow says what happened to the job behind the page's back: deleted
+// (by another tab or client), or run again from the start (taken over after
+// its node died or the daemon restarted).
+
+function followReset() {
+    $('job-follow').hidden = true;
+    $('job-follow').textContent = '';
+    delete $('job-follow').dataset.kind;
+    $('job-delete').hidden = false;
+}
+
+function followSay(kind, text) {
+    const p = $('job-follow');
+    p.dataset.kind = kind;
+    p.textContent = text;
+    p.hidden = false;
+}
+
+// The SSE stream's `event: restart` ({from_attempt, attempt}).
+function restartNotice(data) {
+    let r = {};
+    try { r = JSON.parse(data) || {}; } catch (e) { /* an empty restart still restarts */ }
+    const from = r.from_attempt ? 'attempt ' + r.from_attempt : 'its run';
+    followSay('restart', 'This job runs again from the start' + (r.attempt ? ': attempt ' + r.attempt : '') + ' (' + from +
+        ' stopped: its node or the daemon went away). The chart starts over with the new run\'s records.');
+    $('job-follow').dataset.attempt = String(r.attempt || '');
+}
+
+// A page opened after the job was taken over: its records are of a later run.
+function runNotice(attempt) {
+    followSay('attempt', 'This job ran again from the start: the chart shows attempt ' + attempt + ' (attempt ' + (attempt - 1) +
+        ' stopped: its node or the daemon went away).');
+    $('job-follow').dataset.attempt = String(attempt);
+}
+
+function jobGone(st) {
+    if (st.gone) return;
+    st.gone = true;
+    st.ctl.abort();
+    clearTimeout(st.goneTimer);
+    $('job-state').textContent = 'deleted';
+    $('job-state').className = 'state failed';
+    $('job-cancel').hidden = true;
+    $('job-delete').hidden = true;
+    $('downloads-card').hidden = true;
+    followSay('deleted', 'This job was deleted (in another tab or by another client): its input, result and report are gone from qdcd. ' +
+        'What this page shows is what it had loaded.');
+    document.title = 'qdcd · deleted: ' + jobName(st.job);
+}
+
+// Once the job has ended the header stops polling; a deletion elsewhere must
+// still show: look every 3 s while the tab is in front (a 404 is the news).
+function watchGone(st) {
+    const tick = async () => {
+        if (st.stopped || st.gone) return;
+        if (!document.hidden && st.job && st.job.done) {
+            try {
+                const res = await api('/v1/jobs/' + st.id, { signal: st.ctl.signal });
+                if (res.status === 404) jobGone(st);
+                else if (res.ok) {
+                    const j = await res.json();
+                    if (j.state !== st.job.state || j.expired !== st.job.expired) loadJob(st);
+                }
+            } catch (e) { /* not answering: the next look */ }
+        }
+        if (!st.stopped && !st.gone) st.goneTimer = setTimeout(tick, 3000);
+    };
+    st.goneTimer = setTimeout(tick, 3000);
+}
+
 async function loadReport(st) {
     try {
         st.report = await apiJSON('/v1/jobs/' + st.id + '/report');
-        if (!st.stopped) renderReport(st);
+        if (!st.stopped) {
+            renderReport(st);
+            renderOutcome(st.report.outcome);
+        }
     } catch (e) {
         /* no report: the rest of the view stands */
     } finally {
         // one frame later, so that the report's drawing is on screen first
         requestAnimationFrame(() => st.reportDone());
     }
+}
+
+// The outcome in words: the report's texts as they are (lib/eval/outcome.c
+// makes them; no rule of its own here): the summary, then the warnings and
+// suggestions in an alert when much is left bad.
+function renderOutcome(o) {
+    const box = $('job-outcome'), warn = $('outcome-warning');
+    box.hidden = !(o && o.summary);
+    if (box.hidden) return;
+    $('outcome-summary').textContent = 'Outcome: ' + o.summary;
+    const w = o.warnings || [], s = o.suggestions || [];
+    warn.hidden = !w.length;
+    warn.replaceChildren(...(w.length ? [el('strong', { text: 'Warning: ' + w.join('; ') + '.' }),
+        el('ul', {}, ...s.map((t) => el('li', { text: 'Suggestion: ' + t })))] : []));
 }
 
 function kvTable(t, head, rows) {
@@ -786,7 +1001,10 @@ function renderReport(st) {
     const sec = run.seconds || {};
     kvTable($('run-table'), ['', ''], [
         ['outcome', (run.outcome || '–') + (run.stop_reason ? ' (' + run.stop_reason + ')' : '')],
-        ['iterations', String(run.iterations) + (run.best_iteration !== undefined ? ', best record ' + run.best_iteration : '')],
+        // one count (docs/defaults.md): the last record's number, as qdc status counts
+        ['iterations', String(run.iterations)],
+        ...(run.best_iteration !== undefined ? [['result from iteration', String(run.best_iteration)]] : []),
+        ...(run.global_iterations !== undefined ? [['of them global', String(run.global_iterations)]] : []),
         ['solver', run.solver || '–'],
         ...(run.held_back ? [['vertices held back at their input position', int(run.held_back)]] : []),
         ...(run.topology ? [['topology: tets', int(run.topology.tets_in) + ' → ' + int(run.topology.tets_out)],
@@ -859,6 +1077,177 @@ async function authDownload(ev, href, name) {
     } catch (e) {
         alertError(e);
     }
+}
+
+// ------------------------------------------------------------ compare view --
+// Two jobs side by side (/#compare/ID/ID), typically one input with different
+// options: the options that differ marked, both quality tables (before and
+// after), the boundary moved, both histograms on one scale. A job still
+// running is looked at every 2 s until it ends; one deleted meanwhile is
+// said so (another tab's news, or a 404 on the next look).
+
+function compareIds(hash) {
+    const m = hash.match(/^#compare\/([0-9a-f]{32})\/([0-9a-f]{32})$/);
+    return m ? [m[1], m[2]] : null;
+}
+
+const AB = ['A', 'B'];
+
+function compareView(ids) {
+    const st = { ids, jobs: [null, null], reports: [null, null], gone: [false, false], stopped: false, timer: 0 };
+    document.title = 'qdcd · compare';
+    $('cmp-status').textContent = 'loading…';
+    for (const t of ['cmp-heads', 'cmp-options', 'cmp-quality', 'cmp-boundary', 'cmp-run']) $(t).replaceChildren();
+    $('cmp-input').textContent = '';
+    for (const c of ['cmp-hist-a', 'cmp-hist-b']) $(c).dataset.drawn = '0';
+    const look = async () => {
+        clearTimeout(st.timer);
+        for (let i = 0; i < 2; i++) {
+            if (st.gone[i]) continue;
+            try {
+                st.jobs[i] = await apiJSON('/v1/jobs/' + ids[i]);
+                if (st.jobs[i].done && st.jobs[i].links.report && !st.reports[i])
+                    st.reports[i] = await apiJSON(st.jobs[i].links.report).catch(() => null);
+            } catch (e) {
+                if (e.status === 404) st.gone[i] = true;
+                else if (e instanceof TypeError) setConn(false);
+            }
+        }
+        if (st.stopped) return;
+        renderCompare(st);
+        const waiting = st.jobs.some((j, i) => !st.gone[i] && (!j || !j.done || (j.links.report && !st.reports[i])));
+        st.timer = setTimeout(look, waiting ? 2000 : 3000);
+    };
+    look();
+    return {
+        name: 'compare',
+        redraw: () => compareHists(st),
+        onNews: (m) => { if (!st.stopped && (!m.id || ids.includes(m.id))) look(); },
+        stop: () => { st.stopped = true; clearTimeout(st.timer); window.removeEventListener('resize', st.onResize); },
+        st,
+    };
+}
+
+// A table of rows [label, cells...] (a cell: text or a node, or {v, cls}); the
+// first column heads its row. head: rows of [text, colspan] for <thead>.
+function cmpTable(t, head, rows, rowClass) {
+    const hrow = (r, k) => el('tr', {}, ...r.map(([x, span], i) => el('th', {
+        scope: span > 1 ? 'colgroup' : 'col', colspan: span > 1 ? String(span) : null,
+        class: (i && k === head.length - 1) ? 'num' : null }, x ? x : el('span', { class: 'vh', text: 'measure' }))));
+    const cell = (c) => (c && typeof c === 'object' && !(c instanceof Node)
+        ? el('td', { class: 'num ' + (c.cls || '') }, c.v, c.note ? el('span', { class: 'vh', text: ' ' + c.note }) : null)
+        : el('td', { class: 'num' }, c));
+    t.replaceChildren(el('thead', {}, ...head.map(hrow)),
+        el('tbody', {}, ...rows.map((r, k) => el('tr', { class: rowClass ? rowClass(r, k) : null },
+            el('th', { scope: 'row' }, r[0]), ...r.slice(1).map(cell)))));
+}
+
+// The quality rows: [label, key, format, +1 higher is better / -1 lower].
+const CMP_QUALITY = [
+    ['mean ratio: mean', 'mean_ratio_mean', (x) => fix(x, 4), 1],
+    ['mean ratio: worst', 'mean_ratio_min', (x) => sgn(x, 4), 1],
+    ['volume-length: mean', 'volume_length_mean', (x) => fix(x, 4), 1],
+    ['condition number: max', 'condition_number_max', (x) => fix(x, 3), -1],
+    ['smallest dihedral', 'dihedral_min', (x) => fix(x, 2) + '°', 1],
+    ['largest dihedral', 'dihedral_max', (x) => fix(x, 2) + '°', -1],
+    ['inverted tets', 'n_inverted', int, -1],
+    ['tets: smallest angle < 5°', 'n_dmin_lt_5', int, -1],
+    ['tets: smallest angle < 15°', 'n_dmin_lt_15', int, -1],
+    ['tets: largest angle > 175°', 'n_dmax_gt_175', int, -1],
+    ['tets: largest angle > 165°', 'n_dmax_gt_165', int, -1],
+];
+
+function renderCompare(st) {
+    const [ja, jb] = st.jobs;
+    const [ra, rb] = st.reports;
+    const said = [];
+    st.ids.forEach((id, i) => {
+        const j = st.jobs[i];
+        if (st.gone[i]) said.push('Job ' + AB[i] + ' (' + (j ? jobName(j) : short(id)) + ') ' + (j ? 'was deleted' : 'does not exist (or belongs to another token)') + '.');
+        else if (j && !j.done) said.push('Job ' + AB[i] + ' is ' + j.state + ': its report comes when it ends.');
+        else if (j && !st.reports[i]) said.push('Job ' + AB[i] + ' ' + j.state + ' with no report.');
+    });
+    if ($('cmp-status').textContent !== said.join(' ')) $('cmp-status').textContent = said.join(' ');
+    document.title = 'qdcd · compare ' + st.ids.map((id, i) => (st.jobs[i] ? jobName(st.jobs[i]) : short(id))).join(' / ');
+    $('cmp-heads').replaceChildren(...st.ids.map((id, i) => {
+        const j = st.jobs[i];
+        return el('div', { class: 'cmp-head', 'data-job': id },
+            el('span', { class: 'ab', text: AB[i] }),
+            j && !st.gone[i] ? el('a', { href: '/ui/jobs/' + id, 'data-nav': true, class: 'jobname', text: jobName(j), title: id })
+                : el('span', { class: 'jobname', text: j ? jobName(j) : short(id) }),
+            el('span', { class: 'state ' + (st.gone[i] ? 'failed' : j ? j.state : ''), text: st.gone[i] ? (j ? 'deleted' : 'not found') : j ? j.state : '…' }),
+            j ? el('span', { class: 'small muted', text: ' ' + int(j.mesh.tets) + ' tets · submitted ' + when(j.created) }) : null);
+    }));
+    if (ja && jb) {
+        const sameIn = ja.mesh.tets === jb.mesh.tets && ja.mesh.vertices === jb.mesh.vertices && ja.mesh.bytes === jb.mesh.bytes &&
+            ja.mesh.format === jb.mesh.format && (!ra || !rb || ra.before.mean_ratio_mean === rb.before.mean_ratio_mean);
+        $('cmp-input').textContent = sameIn
+            ? 'Same input: ' + (ja.file_name || ja.mesh.format) + ', ' + int(ja.mesh.tets) + ' tets, ' + int(ja.mesh.vertices) + ' vertices.'
+            : 'Different inputs: A ' + (ja.file_name || ja.mesh.format) + ' (' + int(ja.mesh.tets) + ' tets), B ' +
+                (jb.file_name || jb.mesh.format) + ' (' + int(jb.mesh.tets) + ' tets): the figures compare different meshes.';
+        $('cmp-input').className = sameIn ? 'small' : 'small warn';
+        const oa = ja.options || {}, ob = jb.options || {};
+        const keys = [...new Set([...Object.keys(oa), ...Object.keys(ob)])];
+        const val = (o, k) => (k in o ? String(o[k]) : '–');
+        const differ = keys.filter((k) => val(oa, k) !== val(ob, k));
+        // the ones that differ first, marked (colour and a word)
+        const rows = [...differ, ...keys.filter((k) => !differ.includes(k))].map((k) => differ.includes(k)
+            ? [k, { v: val(oa, k), cls: 'diff', note: '(differs)' }, { v: val(ob, k), cls: 'diff', note: '(differs)' }]
+            : [k, val(oa, k), val(ob, k)]);
+        cmpTable($('cmp-options'), [[['option', 1], ['A', 1], ['B', 1]]], rows, (r, k) => (k < differ.length ? 'diff' : null));
+        $('cmp-options').dataset.differ = differ.join(',');
+        $('cmp-options').querySelector('tbody').setAttribute('aria-label', differ.length + ' options differ: ' + (differ.join(', ') || 'none'));
+    }
+    if (ra || rb) {
+        const get = (r, side, k) => (r && r[side] ? r[side][k] : undefined);
+        const rows = CMP_QUALITY.map(([label, k, f, dir]) => {
+            const a = get(ra, 'after', k), b = get(rb, 'after', k);
+            const better = typeof a === 'number' && typeof b === 'number' && a !== b ? ((a - b) * dir > 0 ? 0 : 1) : -1;
+            const after = (x, i) => ({ v: typeof x === 'number' ? f(x) : '–', cls: better === i ? 'better' : '', note: better === i ? '(the better result)' : '' });
+            return [label, typeof get(ra, 'before', k) === 'number' ? f(get(ra, 'before', k)) : '–', after(a, 0),
+                typeof get(rb, 'before', k) === 'number' ? f(get(rb, 'before', k)) : '–', after(b, 1)];
+        });
+        cmpTable($('cmp-quality'), [[['', 1], ['A', 2], ['B', 2]], [['measure', 1], ['before', 1], ['after', 1], ['before', 1], ['after', 1]]], rows);
+        const be = (r) => (r && r.boundary_error) || {};
+        const abs = (x) => (typeof x === 'number' ? x.toPrecision(4) : '–');
+        const pct = (x) => (typeof x === 'number' ? (100 * x).toPrecision(3) + '% of diagonal' : '');
+        const two = (x, rel) => el('span', {}, abs(x), rel ? el('span', { class: 'sub muted', text: pct(rel) }) : null);
+        const bnd = (r) => (r && r.run && r.run.hausd_bound) || 0;
+        cmpTable($('cmp-boundary'), [[['', 1], ['A', 1], ['B', 1]]], [
+            ['Hausdorff', two(be(ra).hausdorff, be(ra).hausdorff_rel), two(be(rb).hausdorff, be(rb).hausdorff_rel)],
+            ['its bound', bnd(ra) ? abs(bnd(ra)) : 'none', bnd(rb) ? abs(bnd(rb)) : 'none'],
+            ['mean', two(be(ra).mean, be(ra).mean_rel), two(be(rb).mean, be(rb).mean_rel)],
+            ['rms', two(be(ra).rms, be(ra).rms_rel), two(be(rb).rms, be(rb).rms_rel)],
+            ['vertex off the surface (max)', two(be(ra).vertex_max, be(ra).vertex_max_rel), two(be(rb).vertex_max, be(rb).vertex_max_rel)],
+        ]);
+        const run = (r) => (r && r.run) || {};
+        const sec = (r) => run(r).seconds || {};
+        cmpTable($('cmp-run'), [[['', 1], ['A', 1], ['B', 1]]], [
+            ['outcome', ...[ra, rb].map((r) => (run(r).outcome || '–') + (run(r).stop_reason ? ' (' + run(r).stop_reason + ')' : ''))],
+            ['iterations', ...[ra, rb].map((r) => (run(r).iterations !== undefined ? String(run(r).iterations) : '–'))],
+            ['run time', ...[ra, rb].map((r) => dur(sec(r).total))],
+        ]);
+        compareHists(st);
+    }
+    if (!st.onResize) {
+        st.onResize = () => compareHists(st);
+        window.addEventListener('resize', st.onResize);
+    }
+}
+
+// Both histograms on the scale of the larger.
+function compareHists(st) {
+    const log = $('cmp-hist-log').checked;
+    const f = (v) => (log ? logc(v) : v);
+    const top = Math.max(1, ...st.reports.flatMap((r) => (r ? [r.before, r.after] : []))
+        .flatMap((x) => ((x && x.dihedral_histogram) || []).map(f)));
+    st.reports.forEach((r, i) => {
+        const c = $(i ? 'cmp-hist-b' : 'cmp-hist-a');
+        $(c.id + '-h').textContent = AB[i] + (st.jobs[i] ? ': ' + jobName(st.jobs[i]) : '');
+        if (!r) return;
+        drawHist(c, r, log, top);
+        c.setAttribute('aria-label', 'Job ' + AB[i] + '. ' + histSummary(r));
+    });
 }
 
 // ------------------------------------------------------------------- charts --
@@ -1118,13 +1507,15 @@ function chartHover(c, tip, line, getState) {
 // Before/after dihedral histograms (1° bins): "before" a grey filled outline,
 // "after" a blue line on top, so that each shows where the other is higher.
 // Returns the geometry the hover needs.
-function drawHist(c, r, log) {
+// top: the y scale's top (in the scale's units) when larger than this
+// histogram's own (two histograms drawn on one scale)
+function drawHist(c, r, log, top) {
     const { g, w, h } = setupCanvas(c);
     const hb = (r.before && r.before.dihedral_histogram) || [];
     const ha = (r.after && r.after.dihedral_histogram) || [];
     const L = 58, R = 10, T = 10, B = 36;
     const f = (v) => (log ? logc(v) : v);
-    const mx = Math.max(1, ...hb.map(f), ...ha.map(f));
+    const mx = Math.max(1, top || 0, ...hb.map(f), ...ha.map(f));
     const nb = Math.max(hb.length, ha.length, 180);
     const bw = (w - L - R) / nb;
     const Y = (v) => T + (h - T - B) * (1 - f(v) / mx);
@@ -1864,10 +2255,15 @@ function init() {
         return st ? { geom: st.chartGeom, recs: st.recs } : { recs: [] };
     });
     histHover($('hist'), $('hist-tip'), () => { const st = hoverState(); return st && st.histGeom; });
+    listToolsInit();
+    $('cmp-hist-log').onchange = () => { if (view && view.redraw) view.redraw(); };
     for (const b of $('filters').querySelectorAll('button')) {
         b.addEventListener('click', () => {
             listState.filter = b.dataset.state;
-            for (const o of $('filters').querySelectorAll('button')) o.classList.toggle('on', o === b);
+            for (const o of $('filters').querySelectorAll('button')) {
+                o.classList.toggle('on', o === b);
+                o.setAttribute('aria-pressed', String(o === b));
+            }
             renderJobs();
         });
     }

@@ -10,6 +10,7 @@
 #              file written back with only its coordinates replaced), or one
 #              the server writes (GET /v1/formats: "result": true)
 #   -q QUERY   optimizer options as a query string, e.g. 'max_iter=20&boundary=fixed'
+#   -l LABEL   a label for every job of the run (each job also gets its file's name)
 #   -Q         quiet: no progress lines
 #
 # Meshes: DIR/* with the extension of a format the server reads (its format
@@ -30,11 +31,12 @@ OUT=./qdc-out
 FORMAT=same
 QUERY=
 QUIET=
+LABEL=
 WAIT=30
 
-usage() { sed -n '3,13s/^# \{0,1\}//p' "$0" >&2; exit 2; }
+usage() { sed -n '3,14s/^# \{0,1\}//p' "$0" >&2; exit 2; }
 
-while getopts s:t:j:o:f:q:Qh opt; do
+while getopts s:t:j:o:f:q:l:Qh opt; do
     case $opt in
     s) SERVER=$OPTARG ;;
     t) TOKEN=$OPTARG ;;
@@ -42,6 +44,7 @@ while getopts s:t:j:o:f:q:Qh opt; do
     o) OUT=$OPTARG ;;
     f) FORMAT=$OPTARG ;;
     q) QUERY=$OPTARG ;;
+    l) LABEL=$OPTARG ;;
     Q) QUIET=1 ;;
     *) usage ;;
     esac
@@ -73,6 +76,9 @@ qcurl() {
         curl -sS --retry 8 --retry-connrefused --retry-max-time 600 "$@"
     fi
 }
+
+# urlenc TEXT: every byte as %XX (a query value of any bytes)
+urlenc() { printf '%s' "$1" | od -An -tx1 -v | tr -d ' \n' | sed 's/../%&/g'; }
 
 # field FILE KEY [OBJECT]: a string or number member of a one-line JSON reply;
 # with OBJECT, inside the object member OBJECT (one without nested objects).
@@ -143,6 +149,7 @@ one() {
     ext=${base##*.}
     base=${base%.*}
     q=$QUERY${named:+${QUERY:+&}format=$named}
+    q=$q${q:+&}name=$(urlenc "$name")${LABEL:+&label=$(urlenc "$LABEL")}
     t0=$(date +%s)
     code=$(qcurl -o "$w.sub" -w '%{http_code}' -X POST --data-binary "@$body" \
         -H "Content-Type: $ct" -H "Idempotency-Key: batch-$RUN-$base.$ext" \

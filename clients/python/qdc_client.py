@@ -14,13 +14,15 @@ the binary mesh format in proto/mesh-binary.md.
     mesh = c.result(job)                          # Mesh: .xyz, .tets, .regions, .fixed
     c.result(job, "out.mesh")                     # or a file, format by extension
     rep = c.report(job)                           # quality before/after, boundary error
+    print("\n".join(outcome_lines(rep)))          # the outcome in words, as qdc prints it
 
 Every request is retried on 429, 5xx and connection failures, waiting what
 the server's Retry-After says (else an exponential backoff); submit() sends an
 Idempotency-Key so a retried upload never makes two jobs.
 
 Command line:
-    python3 qdc_client.py submit IN [-o OUT] [--report R.json] [--opt max_iter=20 ...]
+    python3 qdc_client.py submit IN [-o OUT] [--report R.json] [--label TEXT] [--name NAME]
+                                    [--opt max_iter=20 ...]
     python3 qdc_client.py status JOB | cancel JOB | jobs
     python3 qdc_client.py fetch JOB -o OUT [--report R.json]
 """
@@ -50,7 +52,7 @@ FLAG_FIXED = 2
 _HEADER = struct.Struct("<8sIIQQ")
 
 
-__all__ = ["Client", "Mesh", "QdcError", "JobFailed", "MEDIA_QMESH"]
+__all__ = ["Client", "Mesh", "QdcError", "JobFailed", "MEDIA_QMESH", "outcome_lines"]
 
 
 class QdcError(Exception):
@@ -340,15 +342,20 @@ class Client:
 
     # -- API ----------------------------------------------------------------
 
-    def submit(self, mesh, options=None, idempotency_key=None):
+    def submit(self, mesh, options=None, idempotency_key=None, name=None, label=None):
         """New job. mesh: a path (of a format the server reads, by its
         extension: .mesh Medit, .msh Gmsh, .vtu... see formats(); sent as it
         is), a Mesh, or a tuple (xyz, tets[, regions[, fixed]]) of
         lists or numpy arrays.
         options: optimizer options, e.g. {"max_iter": 20, "boundary": "fixed"}.
+        name: the job's file name (default: the path's last part; none for
+        arrays); label: a text of the submitter's (at most 127 bytes). The
+        job's "file_name" and "label" carry them.
         Returns the job (dict with "id", "state", ...)."""
         if isinstance(mesh, (str, os.PathLike)):
             path = os.fspath(mesh)
+            if name is None:
+                name = os.path.basename(path)
             first = self._by_ext(path, "upload")[0]  # qdcd records the variant read
             ctype, named = first.get("media_type"), None
             if ctype is None:  # no media type: named in the query
@@ -363,6 +370,10 @@ class Client:
                   for k, v in (options or {}).items()}
         if named:
             params["format"] = named
+        if name:
+            params["name"] = name
+        if label:
+            params["label"] = label
         query = "?" + urllib.parse.urlencode(params) if params else ""
         key = idempotency_key or uuid.uuid4().hex
         return self._json("POST", "/v1/jobs" + query, body,
@@ -450,6 +461,12 @@ class Client:
                 f.write(data)
         return json.loads(data.decode("utf-8"))
 
+    def outcome(self, job):
+        """The outcome in words of a finished job (its report's "outcome":
+        summary, left_bad, boundary, warnings, suggestions); outcome_lines()
+        prints it as qdc does."""
+        return self.report(job).get("outcome", {})
+
     def cancel(self, job):
         return self._json("POST", "/v1/jobs/%s:cancel" % _job_id(job))
 
@@ -464,12 +481,28 @@ def _problem(data):
         return {}
 
 
+def outcome_lines(report):
+    """The outcome in words of a report (dict), as `qdc optimize` ends: "outcome:
+    ...", then "warning: ..." and "suggestion: ..." lines. The texts are the
+    report's (computed by the library, docs/defaults.md); none are made here."""
+    o = report.get("outcome") or {}
+    if not o.get("summary"):
+        return []
+    return (["outcome: " + o["summary"]] + ["warning: " + w for w in o.get("warnings", [])]
+            + ["suggestion: " + t for t in o.get("suggestions", [])])
+
+
 # -- command line -------------------------------------------------------------
 
 def _line(rec):
     return "%-6s %3d  q mean %.4f min %+.4f  inverted %d  %.1fs" % (
         rec.get("phase", "?"), rec.get("iteration", 0), rec.get("mean_ratio_mean", 0),
         rec.get("mean_ratio_min", 0), rec.get("n_inverted", 0), rec.get("elapsed", 0))
+
+
+def _print_outcome(report):
+    for line in outcome_lines(report):
+        print("qdc: " + line, file=sys.stderr)
 
 
 def main(argv=None):
@@ -484,6 +517,8 @@ def main(argv=None):
     s.add_argument("-o", "--output")
     s.add_argument("--report")
     s.add_argument("--wait", action="store_true")
+    s.add_argument("--label", help="a label for the job (shown with its file name)")
+    s.add_argument("--name", help="the job's file name (default: IN's last part)")
     s.add_argument("--opt", action="append", default=[], metavar="NAME=VALUE",
                    help="optimizer option, e.g. max_iter=20 (repeatable)")
     f = sub.add_parser("fetch", help="download a finished job's result and/or report")
@@ -498,26 +533,26 @@ def main(argv=None):
     try:
         if a.cmd == "submit":
             opts = dict(o.split("=", 1) for o in a.opt)
-            job = c.submit(a.mesh, opts)
+            job = c.submit(a.mesh, opts, name=a.name, label=a.label)
             print(job["id"], flush=True)
             if a.wait or a.output or a.report:
                 c.wait(job, on_progress=lambda r: print(_line(r), file=sys.stderr, flush=True))
                 if a.output:
                     c.result(job, a.output)
-                if a.report:
-                    c.report(job, a.report)
+                _print_outcome(c.report(job, a.report))
         elif a.cmd == "fetch":
             if a.output:
                 c.result(a.job, a.output)
-            if a.report:
-                c.report(a.job, a.report)
+            _print_outcome(c.report(a.job, a.report))
         elif a.cmd == "status":
             print(json.dumps(c.job(a.job), indent=1))
         elif a.cmd == "cancel":
             print(c.cancel(a.job)["state"])
         else:
             for j in c.jobs():
-                print(j["id"], j["state"])
+                names = j.get("label", "") + (" (%s)" % j["file_name"] if j.get("label") and
+                                              j.get("file_name") else j.get("file_name", ""))
+                print(j["id"], j["state"], names) if names else print(j["id"], j["state"])
     except JobFailed as e:
         print("qdc: %s" % e, file=sys.stderr)
         return 11

@@ -675,7 +675,7 @@ static void optimize_summary(const optimize_args *x, const opt_result *res)
             res->after.q_min, (int)(res->before.n_inverted - res->before.n_degenerate),
             (int)(res->after.n_inverted - res->after.n_degenerate), deg,
             res->before.dih_min, res->before.dih_max, res->after.dih_min,
-            res->after.dih_max, res->stop_reason, res->iterations,
+            res->after.dih_max, res->stop_reason, res->last_record,
             opt_solver_name(res->solver), res->t_total);
     fprintf(stderr,
             "qdc: seconds: setup %.2f, weights %.2f, assembly %.2f, solve %.2f, "
@@ -697,30 +697,60 @@ static void optimize_summary(const optimize_args *x, const opt_result *res)
                             res->topo_by_ring[9] + res->topo_by_ring[10]),
                 (long long)res->topo_flips23, (long long)res->topo_multiface,
                 res->topo_rounds);
+    if (res->topo_contractions > 0)
+        fprintf(stderr, "qdc: topology: %lld interior edges contracted\n",
+                (long long)res->topo_contractions);
+    if (res->topo_bflips + res->topo_peels > 0)
+        fprintf(stderr,
+                "qdc: topology: %lld boundary edge flips, %lld tets peeled within the "
+                "bound: boundary triangles %d removed, %d added\n",
+                (long long)res->topo_bflips, (long long)res->topo_peels,
+                (int)res->topo_tris_removed, (int)res->topo_tris_added);
 }
 
-/* --report FILE.json: quality of the input (orig) and of the result (m), the
- * boundary error between them, the run. */
+/* The outcome in words (docs/defaults.md), the last lines: from the report when
+ * there is one (the same words as its "outcome"), else from a scan of the result. */
+static void print_outcome(const report_t *r)
+{
+    outcome_t o;
+
+    if (outcome_compute(r, &o) != QDC_OK)
+        return;
+    fprintf(stderr, "qdc: outcome: %s\n", o.summary);
+    for (int i = 0; i < o.n_warnings; i++)
+        fprintf(stderr, "qdc: warning: %s\n", o.warnings[i]);
+    for (int i = 0; i < o.n_suggestions; i++)
+        fprintf(stderr, "qdc: suggestion: %s\n", o.suggestions[i]);
+}
+
+/* The outcome and --report FILE.json: quality of the input (orig, NULL without
+ * --report) and of the result (m), the boundary error between them, the run. */
 static int optimize_report(const optimize_args *x, const mesh_t *orig, const mesh_t *m,
                            const opt_result *res)
 {
     report_quality qb, qa;
     bderr_result be;
-    report_t r = {&qb, &qa, res, &x->o, &be};
+    report_t r = {orig ? &qb : NULL, &qa, res, &x->o, orig ? &be : NULL};
     qdc_error err;
     qdc_status st;
 
+    if (x->ps.quiet && !orig)
+        return CLI_OK;
     qdc_error_clear(&err);
-    st = report_quality_compute(orig, &qb, &err);
-    if (st == QDC_OK)
-        st = report_quality_compute(m, &qa, &err);
-    if (st == QDC_OK)
+    st = report_quality_compute(m, &qa, &err);
+    if (st == QDC_OK && orig)
+        st = report_quality_compute(orig, &qb, &err);
+    if (st == QDC_OK && orig)
         st = bderr_meshes(m, orig, 200000, &be, &err);
+    if (st != QDC_OK && !orig)
+        return CLI_OK; /* no outcome (out of memory): the result is written */
     if (st != QDC_OK) {
         cli_error(x->report_path, &err, st);
         return CLI_EOUTPUT;
     }
-    return write_report(x->report_path, &r);
+    if (!x->ps.quiet)
+        print_outcome(&r);
+    return orig ? write_report(x->report_path, &r) : CLI_OK;
 }
 
 int cli_optimize(int argc, char **argv)
@@ -785,8 +815,7 @@ int cli_optimize(int argc, char **argv)
     if (rc != CLI_OK)
         goto out;
     optimize_summary(&x, &res);
-    if (x.report_path)
-        rc = optimize_report(&x, orig, m, &res);
+    rc = optimize_report(&x, orig, m, &res);
     if (rc == CLI_OK && interrupted)
         rc = CLI_EINTR;
 out:

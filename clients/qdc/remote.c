@@ -181,16 +181,15 @@ static int jget(jv v, const char *key, jv *out)
     return 0;
 }
 
-/* String member (escapes decoded; non-ASCII \u escapes become '?'). */
-static int jstr(jv v, const char *key, char *out, size_t cap)
+/* The string s (escapes decoded; non-ASCII \u escapes become '?'; UTF-8 kept). */
+static int jtext(jv s, char *out, size_t cap)
 {
-    jv s;
     size_t n = 0;
 
     if (!cap)
         return 0;
     out[0] = 0;
-    if (!jget(v, key, &s) || *s.p != '"')
+    if (s.p >= s.end || *s.p != '"')
         return 0;
     for (const char *p = s.p + 1; p < s.end - 1 && n + 1 < cap; p++) {
         char c = *p;
@@ -212,6 +211,16 @@ static int jstr(jv v, const char *key, char *out, size_t cap)
     }
     out[n] = 0;
     return 1;
+}
+
+/* String member (jtext). */
+static int jstr(jv v, const char *key, char *out, size_t cap)
+{
+    jv s;
+
+    if (cap)
+        out[0] = 0;
+    return jget(v, key, &s) && jtext(s, out, cap);
 }
 
 static int jnum(jv v, const char *key, double *out)
@@ -824,6 +833,41 @@ static int write_file(const char *path, const char *buf, size_t len)
     return meshio_save_bytes(path, buf, len, &err) == QDC_OK ? 0 : -1;
 }
 
+/* The outcome in words of a finished job (docs/defaults.md): its report's
+ * "outcome", the lines `qdc optimize` ends with, each line led by lead. body: the
+ * report when already fetched, else NULL (fetched here; nothing printed when the
+ * job has no report). */
+static void print_outcome(remote *rm, const char *id, const rbuf *body, FILE *f,
+                          const char *lead)
+{
+    char path[128], text[1024];
+    reply r = {0};
+    jv b, arr, it, e;
+    static const char *const lists[2][2] = {{"outcome.warnings", "warning"},
+                                            {"outcome.suggestions", "suggestion"}};
+
+    if (!body) {
+        snprintf(path, sizeof path, "/v1/jobs/%s/report", id);
+        if (http(rm, "GET", path, NULL, NULL, 0, 60, &r) || r.status != 200)
+            goto out;
+        body = &r.body;
+    }
+    b = jbody(body);
+    if (!jstr(b, "outcome.summary", text, sizeof text))
+        goto out;
+    fprintf(f, "%soutcome: %s\n", lead, text);
+    for (int l = 0; l < 2; l++) {
+        if (!jget(b, lists[l][0], &arr))
+            continue;
+        it = arr;
+        while (jnext(&it, &e))
+            if (jtext(e, text, sizeof text))
+                fprintf(f, "%s%s: %s\n", lead, lists[l][1], text);
+    }
+out:
+    rb_free(&r.body);
+}
+
 /* Downloads the result into out, in its extension's format or out_format,
  * and the report into report; either may be NULL. local: the input as read
  * with its source, when it was sent as the binary mesh (TetGen's files): an
@@ -932,6 +976,8 @@ static int download(remote *rm, const char *id, const char *out, const char *out
             rc = CLI_EOUTPUT;
         }
     }
+    if (!rm->quiet)
+        print_outcome(rm, id, report ? &r.body : NULL, stderr, "qdc: ");
 out:
     mesh_free(m);
     rb_free(&r.body);
@@ -1177,8 +1223,13 @@ static int job_request(args *a, const char *method, const char *suffix, const ch
         rc = http_fail(what, hr, &r);
     else if (a->json)
         fwrite(r.body.buf, 1, r.body.len, stdout);
-    else
-        print_job(jbody(&r.body), stdout);
+    else {
+        jv j = jbody(&r.body), link;
+        print_job(j, stdout);
+        /* a finished job's outcome in words, under its line */
+        if (!strcmp(what, "status") && jget(j, "links.report", &link))
+            print_outcome(&a->rm, id, NULL, stdout, "  ");
+    }
     rb_free(&r.body);
     return rc;
 }

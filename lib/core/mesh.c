@@ -8,6 +8,7 @@
 #include <string.h>
 
 const int tet_face_of[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+const int mesh_p2_edges[6][2] = {{0, 1}, {1, 2}, {0, 2}, {0, 3}, {1, 3}, {2, 3}};
 
 mesh_t *mesh_new(int32_t nv, int32_t nt, unsigned flags)
 {
@@ -74,9 +75,23 @@ static void *dup_array(const void *p, size_t n, size_t size, int *fail)
     return q;
 }
 
+qdc_status mesh_set_mid(mesh_t *m)
+{
+    int32_t *mid;
+
+    if (!m || m->nt < 0)
+        return QDC_EINVAL;
+    mid = qdc_calloc((size_t)m->nt * 6 + 1, sizeof(int32_t));
+    if (!mid)
+        return QDC_ENOMEM;
+    qdc_free(m->mid);
+    m->mid = mid;
+    return QDC_OK;
+}
+
 void mesh_swap_tets(mesh_t *a, mesh_t *b)
 {
-    int32_t nt = a->nt, *t = a->tets, *g = a->region;
+    int32_t nt = a->nt, *t = a->tets, *g = a->region, *mid = a->mid;
 
     a->nt = b->nt;
     a->tets = b->tets;
@@ -84,6 +99,8 @@ void mesh_swap_tets(mesh_t *a, mesh_t *b)
     b->nt = nt;
     b->tets = t;
     b->region = g;
+    a->mid = b->mid;
+    b->mid = mid;
 }
 
 mesh_t *mesh_dup(const mesh_t *m)
@@ -106,6 +123,7 @@ mesh_t *mesh_dup(const mesh_t *m)
     d->vref = dup_array(m->vref, (size_t)m->nv, sizeof(int32_t), &fail);
     d->tris = dup_array(m->tris, (size_t)m->ntri * 3, sizeof(int32_t), &fail);
     d->tri_ref = dup_array(m->tri_ref, (size_t)m->ntri, sizeof(int32_t), &fail);
+    d->mid = dup_array(m->mid, (size_t)m->nt * 6, sizeof(int32_t), &fail);
     if (fail || !d->xyz || !d->tets) {
         mesh_free(d);
         return NULL;
@@ -124,6 +142,7 @@ void mesh_free(mesh_t *m)
     qdc_free(m->vref);
     qdc_free(m->tris);
     qdc_free(m->tri_ref);
+    qdc_free(m->mid);
     if (m->source)
         m->source->release(m->source);
     qdc_free(m);
@@ -467,14 +486,21 @@ static qdc_status orient_tets(const mesh_t *m, const int32_t *nbr, uint8_t *flip
     return st;
 }
 
-/* Swap the first two vertices of each flipped tet of tets (in place). */
-static void apply_flip(int32_t nt, int32_t *tets, const uint8_t *flip)
+/* Swap the first two vertices of each flipped tet of tets (in place), and
+ * with them the mid-edge nodes (mid, or NULL) of edges 12/02 and 03/13
+ * (mesh_p2_edges); edges 01 and 23 stay. */
+static void apply_flip(int32_t nt, int32_t *tets, int32_t *mid, const uint8_t *flip)
 {
     for (int32_t t = 0; t < nt; t++)
         if (flip[t]) {
             int32_t x = tets[4 * (size_t)t];
             tets[4 * (size_t)t] = tets[4 * (size_t)t + 1];
             tets[4 * (size_t)t + 1] = x;
+            if (mid) {
+                int32_t *e = mid + 6 * (size_t)t;
+                x = e[1], e[1] = e[2], e[2] = x;
+                x = e[3], e[3] = e[4], e[4] = x;
+            }
         }
 }
 
@@ -559,7 +585,7 @@ qdc_status mesh_reorient(mesh_t *m, mesh_orientation *o, qdc_error *err)
         return QDC_ENOMEM;
     st = mesh_orient(m, flip, o, err);
     if (st == QDC_OK)
-        apply_flip(m->nt, m->tets, flip);
+        apply_flip(m->nt, m->tets, m->mid, flip);
     qdc_free(flip);
     return st;
 }
@@ -648,6 +674,22 @@ static qdc_status validate_basic(const mesh_t *m, mesh_check *c, qdc_error *err)
         else
             nneg++;
     }
+    /* mid-edge nodes: in range and no tet's corner (the optimizer would move
+     * them as corners, and opt/p2.c again as mid-edge nodes) */
+    for (size_t i = 0; st == QDC_OK && m->mid && i < (size_t)m->nt * 6; i++)
+        if (m->mid[i] < 0 || m->mid[i] >= m->nv || used[m->mid[i]] == 1) {
+            st = qdc_fail(err, QDC_EMESH,
+                          m->mid[i] < 0 || m->mid[i] >= m->nv
+                              ? "tet %d: mid-edge node index %d out of range"
+                              : "tet %d: mid-edge node %d is a corner of a tet",
+                          (int)(i / 6), (int)m->mid[i]);
+            if (err) {
+                err->index = (int64_t)(i / 6);
+                strcpy(err->kind, "tet");
+            }
+        } else {
+            used[m->mid[i]] = 2; /* in a tet, as its mid-edge node */
+        }
     if (st == QDC_OK) {
         for (int32_t v = 0; v < m->nv; v++)
             if (!used[v]) {

@@ -36,7 +36,21 @@ typedef struct mesh {
     int32_t *tris;       /*   Triangles with their refs = boundary-condition tags): */
     int32_t *tri_ref;    /*   3*ntri indices and ntri refs (tri_ref may be NULL) */
     mesh_source *source; /* the input file (io/), or NULL; owned by the mesh */
+    int32_t *mid;        /* second-order (10-node) tets: 6*nt vertex indices, the
+                          * mid-edge node of each tet's edges in the order of
+                          * mesh_p2_edges; NULL for linear tets. The mid-edge
+                          * nodes are vertices in no tet: the optimizer moves
+                          * the corners only (opt/p2.c moves these after it) */
 } mesh_t;
+
+/* The one edge order of a second-order tet's mid-edge nodes (VTK's
+ * VTK_QUADRATIC_TETRA and Abaqus C3D10 order): edges 01, 12, 02, 03, 13, 23,
+ * as the corners of each: mesh_p2_edges[e][0..1]. Readers map each file's
+ * order to this one (io/; README, "Formats"). */
+extern const int mesh_p2_edges[6][2];
+/* Give m a zeroed mid-edge table (6*nt; the previous one freed).
+ * QDC_EINVAL (m NULL), QDC_ENOMEM (m unchanged). */
+qdc_status mesh_set_mid(mesh_t *m);
 
 enum { MESH_WITH_REGION = 1, MESH_WITH_FIXED = 2, MESH_WITH_VREF = 4 };
 
@@ -52,7 +66,8 @@ qdc_status mesh_set_tris(mesh_t *m, int32_t ntri, int with_ref);
 /* A deep copy of m's arrays, owned by the caller (mesh_free); the source file
  * (m->source) is not copied. NULL if m is NULL or on allocation failure. */
 mesh_t *mesh_dup(const mesh_t *m);
-/* Exchange the tets of a and b: their tets, region tags and tet counts (the
+/* Exchange the tets of a and b: their tets, region tags, mid-edge tables and
+ * tet counts (the
  * vertices, triangles and sources stay). Puts the tets of a run that changed
  * them (--topology) into a mesh that holds the rest of the input. */
 void mesh_swap_tets(mesh_t *a, mesh_t *b);
@@ -61,7 +76,8 @@ void mesh_free(mesh_t *m);
 
 /* What mesh_validate found that is not an error. */
 typedef struct {
-    int32_t n_unreferenced;     /* vertices used by no tet (kept, never moved) */
+    int32_t n_unreferenced;     /* vertices used by no tet, neither as a corner nor
+                                 * as a mid-edge node (kept, never moved) */
     int32_t first_unreferenced; /* -1 if none */
     int32_t n_inverted;         /* tets against the orientation of the connectivity */
     int32_t n_degenerate;       /* flat tets (core/tet.h), either sign */

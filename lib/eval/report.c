@@ -1,6 +1,8 @@
 /* report.c - mesh quality evaluation and the JSON report (docs/method.md §9). */
 #include "eval/report.h"
 
+#include "eval/outcome.h"
+
 #include "core/mesh_int.h"
 #include "core/tet.h"
 #include "geom/metric_int.h"
@@ -44,9 +46,13 @@ qdc_status report_quality_compute(const mesh_t *m, report_quality *q, qdc_error 
             for (size_t i = 0; i < 3 * (size_t)n->nv; i++)
                 n->xyz[i] = (m->xyz[i] - lo[i % 3]) / diag;
             st = report_quality_compute(n, q, err);
+            for (int k = 0; k < 3; k++)
+                q->worst_centroid[k] = lo[k] + q->worst_centroid[k] * diag;
+            q->diag = diag;
             mesh_free(n);
             return st;
         }
+        q->diag = diag;
     }
     /* docs/method.md §1: each tet is measured in the vertex order its
      * component's orientation gives it (mesh_orient); a connectivity that
@@ -82,8 +88,12 @@ qdc_status report_quality_compute(const mesh_t *m, report_quality *q, qdc_error 
         sum += eta;
         sum2 += eta * eta;
         vsum += vl;
-        if (eta < q->q_min)
+        if (eta < q->q_min) {
             q->q_min = eta;
+            q->worst_tet = t;
+            for (int k = 0; k < 3; k++)
+                q->worst_centroid[k] = (p0[k] + p1[k] + p2[k] + p3[k]) / 4;
+        }
         if (vl < q->vl_min)
             q->vl_min = vl;
         if (pt.vol < 0)
@@ -209,9 +219,9 @@ static void jw_int(jw *w, const char *k, long long v)
     jw_printf(w, "%lld", v);
 }
 
-static void jw_str(jw *w, const char *k, const char *s)
+/* a JSON string of s */
+static void jw_text(jw *w, const char *s)
 {
-    jw_key(w, k);
     jw_raw(w, "\"", 1);
     for (; s && *s; s++) {
         unsigned char ch = (unsigned char)*s;
@@ -223,6 +233,12 @@ static void jw_str(jw *w, const char *k, const char *s)
             jw_raw(w, (const char *)&ch, 1);
     }
     jw_raw(w, "\"", 1);
+}
+
+static void jw_str(jw *w, const char *k, const char *s)
+{
+    jw_key(w, k);
+    jw_text(w, s);
 }
 
 static void write_quality(jw *w, const char *k, const report_quality *q)
@@ -292,6 +308,47 @@ qdc_status report_progress_json(const opt_progress *p, qdc_write_fn fn, void *ct
     return w.failed ? QDC_EIO : QDC_OK;
 }
 
+static void write_texts(jw *w, const char *k, const char (*list)[OUTCOME_TEXT], int n)
+{
+    jw_open(w, k, '[');
+    for (int i = 0; i < n; i++) {
+        if (i)
+            jw_raw(w, ",", 1);
+        jw_text(w, list[i]);
+    }
+    jw_close(w, ']');
+}
+
+/* The outcome in words (outcome.h) of a report with an "after". */
+static void write_outcome(jw *w, const outcome_t *o)
+{
+    jw_open(w, "outcome", '{');
+    jw_str(w, "summary", o->summary);
+    jw_str(w, "improved", o->improved);
+    jw_open(w, "left_bad", '{');
+    jw_str(w, "text", o->left_bad);
+    jw_int(w, "n_tets", o->n_tets);
+    jw_int(w, "n_dihedral_lt_5", o->n_small);
+    jw_int(w, "n_dihedral_gt_175", o->n_large);
+    jw_int(w, "n_inverted", o->n_inverted);
+    jw_int(w, "worst_tet", o->worst_tet);
+    jw_num(w, "worst_mean_ratio", o->worst_q);
+    jw_open(w, "worst_centroid", '[');
+    jw_printf(w, "%.10g,%.10g,%.10g", o->worst_centroid[0], o->worst_centroid[1],
+              o->worst_centroid[2]);
+    jw_close(w, ']');
+    jw_close(w, '}');
+    jw_open(w, "boundary", '{');
+    jw_str(w, "text", o->boundary);
+    if (o->moved_rel >= 0)
+        jw_num(w, "moved_rel", o->moved_rel);
+    jw_num(w, "bound_rel", o->bound_rel);
+    jw_close(w, '}');
+    write_texts(w, "warnings", o->warnings, o->n_warnings);
+    write_texts(w, "suggestions", o->suggestions, o->n_suggestions);
+    jw_close(w, '}');
+}
+
 qdc_status report_write_json(const report_t *r, qdc_write_fn fn, void *ctx,
                              qdc_error *err)
 {
@@ -320,8 +377,10 @@ qdc_status report_write_json(const report_t *r, qdc_write_fn fn, void *ctx,
         jw_open(&w, "run", '{');
         jw_str(&w, "outcome", (unsigned)s->outcome < 3 ? outcomes[s->outcome] : "?");
         jw_str(&w, "stop_reason", s->stop_reason);
-        jw_int(&w, "iterations", s->iterations);
+        /* one count (docs/defaults.md): the records after the input's */
+        jw_int(&w, "iterations", s->last_record);
         jw_int(&w, "best_iteration", s->best_iteration);
+        jw_int(&w, "global_iterations", s->iterations);
         jw_int(&w, "max_inverted_global", s->max_inverted_global);
         jw_int(&w, "folded_global", s->folded_global);
         jw_num(&w, "hausd_bound", s->hausd_bound);
@@ -338,6 +397,21 @@ qdc_status report_write_json(const report_t *r, qdc_write_fn fn, void *ctx,
         jw_num(&w, "finish", s->t_finish);
         jw_num(&w, "total", s->t_total);
         jw_close(&w, '}');
+        if (s->p2_tets > 0) { /* second-order tets (opt/p2.c) */
+            jw_open(&w, "second_order", '{');
+            jw_int(&w, "tets", s->p2_tets);
+            jw_int(&w, "mid_nodes", s->p2_mid);
+            jw_int(&w, "mid_moved", s->p2_mid_moved);
+            jw_int(&w, "boundary_mid", s->p2_boundary_mid);
+            jw_int(&w, "pulled_straighter", s->p2_pulled);
+            jw_int(&w, "jacobian_nonpositive_before", s->p2_bad_in);
+            jw_int(&w, "jacobian_nonpositive_after", s->p2_bad_out);
+            jw_num(&w, "scaled_jacobian_min_before", s->p2_jac_min_in);
+            jw_num(&w, "scaled_jacobian_min_after", s->p2_jac_min_out);
+            jw_num(&w, "boundary_mid_distance", s->p2_bd_mid_dist);
+            jw_num(&w, "boundary_corner_distance", s->p2_bd_corner_dist);
+            jw_close(&w, '}');
+        }
         if (s->tets_in > 0) {
             jw_open(&w, "topology", '{');
             jw_int(&w, "tets_in", s->tets_in);
@@ -353,8 +427,15 @@ qdc_status report_write_json(const report_t *r, qdc_write_fn fn, void *ctx,
             jw_int(&w, "flips23", s->topo_flips23);
             jw_int(&w, "multiface_removals", s->topo_multiface);
             jw_int(&w, "rounds", s->topo_rounds);
-            if (s->topo_insertions > 0) { /* --topology full */
+            if (s->topo_bflips + s->topo_peels > 0) { /* --hausd given */
+                jw_int(&w, "boundary_flips", s->topo_bflips);
+                jw_int(&w, "peeled", s->topo_peels);
+                jw_int(&w, "boundary_triangles_removed", s->topo_tris_removed);
+                jw_int(&w, "boundary_triangles_added", s->topo_tris_added);
+            }
+            if (s->topo_insertions + s->topo_contractions > 0) { /* --topology full */
                 jw_int(&w, "insertions", s->topo_insertions);
+                jw_int(&w, "contractions", s->topo_contractions);
                 jw_int(&w, "vertices_in", s->verts_in);
                 jw_int(&w, "vertices_out", s->verts_out);
             }
@@ -385,6 +466,11 @@ qdc_status report_write_json(const report_t *r, qdc_write_fn fn, void *ctx,
         jw_num(&w, "bbox_diagonal", b->diag);
         jw_int(&w, "n_samples", b->n_samples);
         jw_close(&w, '}');
+    }
+    if (r->after) {
+        outcome_t o;
+        if (outcome_compute(r, &o) == QDC_OK)
+            write_outcome(&w, &o);
     }
     jw_close(&w, '}');
     jw_raw(&w, "\n", 1);

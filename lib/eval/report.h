@@ -23,6 +23,9 @@ typedef struct {
     int32_t n_dmin_lt[4];    /* tets with min dihedral < 5, 15, 30, 40 deg */
     int32_t n_dmax_gt[4];    /* tets with max dihedral > 175, 165, 150, 140 deg */
     int64_t hist[REPORT_HIST_BINS]; /* every dihedral angle of every tet, 1 deg bins */
+    int32_t worst_tet;              /* the (first) tet of q_min, from 0 */
+    double worst_centroid[3];       /* its centroid */
+    double diag;                    /* bounding-box diagonal */
 } report_quality;
 
 extern const int report_dmin_thresholds[4]; /* 5, 15, 30, 40 */

@@ -40,6 +40,8 @@ typedef struct {
     meshio_read_fn read;
     meshio_write_fn write; /* NULL: written only spliced, over its own source */
     int splices;           /* written back as its source with new coordinates */
+    int p2;                /* write writes second-order tets (mesh_t.mid) with their
+                              ten nodes; 0: such a mesh is written only spliced */
 } meshio_fmt;
 
 #define MESHIO_FORMAT(id, desc) extern const meshio_fmt desc;

@@ -421,6 +421,12 @@ static qdc_status write_fmt(const mesh_t *m, meshio_format fmt, int part, qdc_wr
                         "%s: written only as the input file with new coordinates, and "
                         "here %s (qdc has no %s writer of its own)",
                         d->name, why, d->name);
+    if (d && d->write && m->mid && !d->p2 && !splice_ok(m, fmt, &why))
+        return qdc_fail(err, QDC_EINVAL,
+                        "%s: second-order (10-node) tets are written only as the input "
+                        "file with new coordinates, and here %s (qdc's %s writer writes "
+                        "linear tets)",
+                        d->name, why, d->name);
     if (!fn)
         return qdc_fail(err, QDC_EINVAL, "meshio_write: NULL write function");
     w.b = qdc_malloc(WB_CAP);

@@ -602,6 +602,8 @@ typedef struct {
     vec xyz, tags, off; /* double x3, int64, uint64 x3 (when recording) */
     vec at;             /* uint64: byte offset of each node's line (errors) */
     vec tets, reg;      /* int32 x4, int32 */
+    vec mid;            /* int32 x6: C3D10's mid-edge nodes (mesh_p2_edges order) */
+    int order;          /* tets read: 0 none yet, 1 C3D4, 2 C3D10 */
     tagmap tm;
     int64_t tm_n; /* nodes in tm; -1 when not built */
     const char *set[INP_SETS];
@@ -619,6 +621,7 @@ static void inp_free(inp *a)
     vec_free(&a->off);
     vec_free(&a->tets);
     vec_free(&a->reg);
+    vec_free(&a->mid);
     tagmap_free(&a->tm);
 }
 
@@ -771,20 +774,23 @@ static qdc_status inp_map(const txt *s, inp *a, qdc_error *err)
     return st;
 }
 
-/* One C3D4 element: "id, n1, n2, n3, n4" (continued on the next line after a
- * trailing comma); *pp and *peol move with it. */
+/* One C3D4 element: "id, n1, n2, n3, n4", or C3D10: "id, n1, ..., n10", the
+ * mid-edge nodes of edges 12, 23, 31, 14, 24, 34 (the Abaqus manual's node
+ * ordering; mesh_p2_edges), continued on the next line after a trailing
+ * comma; *pp and *peol move with it. */
 static qdc_status inp_tet(txt *s, const char **pp, const char **peol, inp *a, int32_t reg,
                           qdc_error *err)
 {
     const char *p = *pp, *eol = *peol, *t = p, *te;
-    int64_t v[5];
-    int32_t idx[4];
+    const int nn = a->order == 2 ? 11 : 5;
+    int64_t v[11];
+    int32_t idx[10];
     qdc_status st = QDC_OK;
 
     st = inp_map(s, a, err); /* nodes may have been added since the last element */
     if (st != QDC_OK)
         return st;
-    for (int k = 0; k < 5 && st == QDC_OK; k++) {
+    for (int k = 0; k < nn && st == QDC_OK; k++) {
         while (!inp_field(&p, eol, &t, &te)) {
             /* continued after a trailing comma */
             const char *q = eol;
@@ -792,7 +798,8 @@ static qdc_status inp_tet(txt *s, const char **pp, const char **peol, inp *a, in
                 q--;
             if (q == s->p || q[-1] != ',' || eol >= s->end)
                 return fail_txt(err, QDC_EPARSE, s, eol,
-                                "*ELEMENT: a C3D4 element needs 5 numbers, got %d", k);
+                                "*ELEMENT: a %s element needs %d numbers, got %d",
+                                nn == 11 ? "C3D10" : "C3D4", nn, k);
             adv(s, eol + 1);
             p = s->p;
             eol = memchr(p, '\n', (size_t)(s->end - p));
@@ -817,10 +824,15 @@ static qdc_status inp_tet(txt *s, const char **pp, const char **peol, inp *a, in
         return st;
     if ((int64_t)a->reg.n >= MESH_MAX_TETS)
         return fail_txt(err, QDC_ETOOBIG, s, s->bol, "more than %d tets", MESH_MAX_TETS);
-    if (vec_grow(&a->tets, 4) != 0 || vec_grow(&a->reg, 1) != 0)
+    if (vec_grow(&a->tets, 4) != 0 || vec_grow(&a->reg, 1) != 0 ||
+        (nn == 11 && vec_grow(&a->mid, 6) != 0))
         return qdc_fail(err, QDC_ENOMEM, "out of memory for the tets");
-    memcpy((int32_t *)a->tets.a + a->tets.n, idx, sizeof idx);
+    memcpy((int32_t *)a->tets.a + a->tets.n, idx, 4 * sizeof(int32_t));
     a->tets.n += 4;
+    if (nn == 11) {
+        memcpy((int32_t *)a->mid.a + a->mid.n, idx + 4, 6 * sizeof(int32_t));
+        a->mid.n += 6;
+    }
     ((int32_t *)a->reg.a)[a->reg.n++] = reg;
     *pp = p;
     *peol = eol;
@@ -894,12 +906,13 @@ static qdc_status inp_keyword(txt *s, const char *p, const char *eol, inp *a, in
         if (!inp_param(ke, eol, "TYPE", &v, &ve))
             return fail_txt(err, QDC_EPARSE, s, p, "*ELEMENT without TYPE=");
         tt = inp_tet_type(v, ve);
-        if (tt == 2)
+        if (tt && a->order && tt != a->order)
             return fail_txt(err, QDC_EFORMAT, s, v,
-                            "*ELEMENT TYPE=%.*s: second-order tetrahedra are not "
-                            "supported (C3D4 only)",
+                            "*ELEMENT TYPE=%.*s: linear (C3D4) and second-order (C3D10) "
+                            "tetrahedra in one file are not supported",
                             (int)(ve - v > 16 ? 16 : ve - v), v);
-        if (tt == 1) {
+        if (tt) {
+            a->order = tt;
             *mode = INP_TET;
             *reg = 0;
             if (inp_param(ke, eol, "ELSET", &v, &ve))
@@ -928,7 +941,7 @@ static qdc_status read_abaqus(const char *buf, size_t len, const meshio_options 
     memset(&a, 0, sizeof a);
     a.xyz.size = sizeof(double);
     a.tags.size = a.off.size = a.at.size = sizeof(int64_t);
-    a.tets.size = a.reg.size = sizeof(int32_t);
+    a.tets.size = a.reg.size = a.mid.size = sizeof(int32_t);
     a.tm_n = -1;
     while (s.p < s.end && st == QDC_OK) {
         const char *eol = memchr(s.p, '\n', (size_t)(s.end - s.p)), *p = s.p;
@@ -976,10 +989,12 @@ static qdc_status read_abaqus(const char *buf, size_t len, const meshio_options 
         pm.nt = (int64_t)a.reg.n;
         pm.tets = a.tets.a;
         pm.region = a.nset ? a.reg.a : NULL;
+        pm.mid = a.order == 2 ? a.mid.a : NULL;
         st = parsed_mesh(&pm, out, err);
         if (a.skipped)
             note(o,
-                 "abaqus: skipped %lld elements of other types (%s): only C3D4 is read",
+                 "abaqus: skipped %lld elements of other types (%s): only C3D4 and C3D10 "
+                 "are read",
                  (long long)a.skipped, a.skipped_types);
     }
     inp_free(&a);
@@ -1289,8 +1304,9 @@ const meshio_fmt fmt_dolfin = {
 const meshio_fmt fmt_abaqus = {
     .name = "abaqus",
     .aliases = "calculix inp",
-    .about = "Abaqus/CalculiX .inp: *NODE, *ELEMENT TYPE=C3D4, ELSETs as regions "
-             "(written only spliced)",
+    .about =
+        "Abaqus/CalculiX .inp: *NODE, *ELEMENT TYPE=C3D4 or C3D10, ELSETs as regions "
+        "(written only spliced)",
     .ext = "inp",
     .input = "input.inp",
     .sniff = sniff_abaqus,

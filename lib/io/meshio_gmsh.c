@@ -60,6 +60,8 @@ typedef struct {
     tagmap tm;
     vec ent[2];  /* int64 entity keys of dimensions 2 and 3 (4.1) */
     elems el[2]; /* 0 triangles, 1 tets */
+    vec mid;     /* int32: second-order tets' 6 mid-edge nodes each (mesh_p2_edges) */
+    int order;   /* tets read so far: 0 none, 1 linear (type 4), 2 second order (11) */
     skipped sk;
     vec per;        /* int64 node tags of the $Periodic pairs, both sides */
     int64_t nlinks; /* $Periodic links read */
@@ -74,6 +76,7 @@ static void gmsh_free(gmsh *g)
     qdc_free(g->tags);
     tagmap_free(&g->tm);
     vec_free(&g->per);
+    vec_free(&g->mid);
     for (int k = 0; k < 2; k++) {
         vec_free(&g->ent[k]);
         vec_free(&g->el[k].idx);
@@ -676,7 +679,8 @@ static qdc_status elems_grow(gmsh *g, int k, int64_t c, qdc_error *err)
         return qdc_fail(err, QDC_ETOOBIG, "more than %d %ss",
                         k ? MESH_MAX_TETS : INT32_MAX / 3, elem_names[k]);
     if (vec_grow(&e->idx, (size_t)c * (size_t)(3 + k)) != 0 ||
-        vec_grow(&e->phys, (size_t)c) != 0 || vec_grow(&e->ent, (size_t)c) != 0)
+        vec_grow(&e->phys, (size_t)c) != 0 || vec_grow(&e->ent, (size_t)c) != 0 ||
+        (k && g->order == 2 && vec_grow(&g->mid, (size_t)c * 6) != 0))
         return qdc_fail(err, QDC_ENOMEM, "out of memory for %lld %ss", (long long)c,
                         elem_names[k]);
     return QDC_OK;
@@ -714,42 +718,83 @@ static qdc_status node_ref(gmsh *g, int k, int32_t *out, qdc_error *err)
     return QDC_OK;
 }
 
-/* One element of kind k: its nodes (the element tag was read). */
-static qdc_status elem_nodes(gmsh *g, int k, int32_t phys, int32_t ent, qdc_error *err)
+/* Gmsh's 10-node tet lists its mid-edge nodes on edges 01, 12, 20, 30, 32,
+ * 31 (the Gmsh manual's node ordering): the last two are swapped against
+ * mesh_p2_edges. gmsh_p2[e]: which of the file's six is edge e. */
+static const int gmsh_p2[6] = {0, 1, 2, 3, 5, 4};
+
+/* The nodes of a 10-node tet past its corners, in(to) mesh_p2_edges order. */
+static void put_mid(gmsh *g, const int32_t file[6])
+{
+    int32_t *o = (int32_t *)g->mid.a + g->mid.n;
+
+    for (int e = 0; e < 6; e++)
+        o[e] = file[gmsh_p2[e]];
+    g->mid.n += 6;
+}
+
+/* Nodes per element of kind k: tets 4 or 10, triangles 3 or 6. */
+static int kind_nodes(const gmsh *g, int k, int64_t type)
+{
+    return k ? (g->order == 2 ? 10 : 4) : type == 9 ? 6 : 3;
+}
+
+/* One element of kind k and type: its nodes (the element tag was read); a
+ * 6-node triangle keeps its corners, a 10-node tet puts the rest in g->mid. */
+static qdc_status elem_nodes(gmsh *g, int k, int64_t type, int32_t phys, int32_t ent,
+                             qdc_error *err)
 {
     elems *e = &g->el[k];
-    int32_t *idx = (int32_t *)e->idx.a + e->idx.n;
+    int32_t *idx = (int32_t *)e->idx.a + e->idx.n, extra[6];
+    const int nn = kind_nodes(g, k, type);
     qdc_status st = QDC_OK;
 
-    for (int j = 0; j < 3 + k && st == QDC_OK; j++)
-        st = node_ref(g, k, &idx[j], err);
+    for (int j = 0; j < nn && st == QDC_OK; j++)
+        st = node_ref(g, k, j < 3 + k ? &idx[j] : &extra[j - 3 - k], err);
     if (st != QDC_OK)
         return st;
+    if (k && nn == 10)
+        put_mid(g, extra);
     e->idx.n += (size_t)(3 + k);
     ((int32_t *)e->phys.a)[e->phys.n++] = phys;
     ((int32_t *)e->ent.a)[e->ent.n++] = ent;
     return QDC_OK;
 }
 
-/* Higher-order tetrahedra (Gmsh types 11, 29, 30, 31: 10, 20, 35, 56 nodes)
- * would be broken by moving their corners alone: refused, naming the type.
- * at: where the type is. */
+/* Higher-order tetrahedra past the second (Gmsh types 29, 30, 31: 20, 35,
+ * 56 nodes) would be broken by moving their corners alone: refused, naming
+ * the type; a file of both linear (4) and second-order (11) tets too. at:
+ * where the type is. */
 static qdc_status ho_tet(gmsh *g, const char *at, int64_t type, qdc_error *err)
 {
     static const char *const order[] = {"second", "third", "fourth", "fifth"};
-    int o = type == 11 ? 0 : type >= 29 && type <= 31 ? (int)type - 28 : -1;
+    int o = type >= 29 && type <= 31 ? (int)type - 28 : -1;
 
+    if (type == 4 || type == 11) {
+        int want = type == 4 ? 1 : 2;
+        if (g->order && g->order != want) {
+            if (g->binary)
+                return fail_bin(err, QDC_EFORMAT, at - g->s.base,
+                                "$Elements: linear (type 4) and second-order (type 11) "
+                                "tetrahedra in one file are not supported");
+            return fail_txt(err, QDC_EFORMAT, &g->s, at,
+                            "$Elements: linear (type 4) and second-order (type 11) "
+                            "tetrahedra in one file are not supported");
+        }
+        g->order = want;
+    }
     if (o < 0)
         return QDC_OK;
     if (g->binary)
         return fail_bin(err, QDC_EFORMAT, at - g->s.base,
                         "$Elements: %s-order tetrahedra (Gmsh element type %lld, %lld "
-                        "nodes) are not supported: qdc optimizes linear tetrahedra "
-                        "(type 4)",
+                        "nodes) are not supported: qdc optimizes linear and "
+                        "second-order tetrahedra (types 4 and 11)",
                         order[o], (long long)type, (long long)type_nodes(type));
     return fail_txt(err, QDC_EFORMAT, &g->s, at,
                     "$Elements: %s-order tetrahedra (Gmsh element type %lld, %lld nodes) "
-                    "are not supported: qdc optimizes linear tetrahedra (type 4)",
+                    "are not supported: qdc optimizes linear and second-order "
+                    "tetrahedra (types 4 and 11)",
                     order[o], (long long)type, (long long)type_nodes(type));
 }
 
@@ -768,11 +813,11 @@ static void skip_line(txt *s)
  * scanner at the first one not read, for the checked path to read again and
  * say what is wrong with it. A 1M-tet file reads in half the time it takes
  * with the checked reads alone. */
-static int64_t elems_bin_fast(gmsh *g, int k, int64_t cnt, int64_t ntags, int w,
-                              int32_t phys0, int32_t ent0)
+static int64_t elems_bin_fast(gmsh *g, int k, int64_t type, int64_t cnt, int64_t ntags,
+                              int w, int32_t phys0, int32_t ent0)
 {
     elems *e = &g->el[k];
-    const int nn = 3 + k;
+    const int nn = kind_nodes(g, k, type), nc = 3 + k;
     const size_t rec = (size_t)w * (size_t)(1 + ntags + nn);
     const unsigned char *p = g->b + boff(g);
     int32_t *idx = (int32_t *)e->idx.a + e->idx.n;
@@ -782,7 +827,7 @@ static int64_t elems_bin_fast(gmsh *g, int k, int64_t cnt, int64_t ntags, int w,
 
     for (j = 0; j < cnt; j++, p += rec) {
         const unsigned char *q = p + (size_t)w * (size_t)(1 + ntags);
-        int32_t ix[4];
+        int32_t ix[10];
         int a;
         if (w == 8 && (int64_t)get_le64(p) < 0)
             break;
@@ -796,11 +841,13 @@ static int64_t elems_bin_fast(gmsh *g, int k, int64_t cnt, int64_t ntags, int w,
         }
         if (a < nn)
             break;
-        memcpy(idx + (size_t)j * (size_t)nn, ix, sizeof(int32_t) * (size_t)nn);
+        memcpy(idx + (size_t)j * (size_t)nc, ix, sizeof(int32_t) * (size_t)nc);
+        if (nn == 10)
+            put_mid(g, ix + 4);
         phys[j] = ntags > 0 ? (int32_t)get_le32(p + 4) : phys0;
         ent[j] = ntags > 1 ? (int32_t)get_le32(p + 8) : ent0;
     }
-    e->idx.n += (size_t)j * (size_t)nn;
+    e->idx.n += (size_t)j * (size_t)nc;
     e->phys.n += (size_t)j;
     e->ent.n += (size_t)j;
     g->s.p += (size_t)j * rec;
@@ -843,7 +890,7 @@ static qdc_status elements41(gmsh *g, qdc_error *err)
                      (uint64_t)(nn + 1) * (uint64_t)g->dsize, INT64_MAX, &c, err);
         if (st != QDC_OK)
             break;
-        k = type == 4 ? 1 : type == 2 ? 0 : -1;
+        k = type == 4 || type == 11 ? 1 : type == 2 || type == 9 ? 0 : -1;
         if (k < 0) {
             skip_count(&g->sk, type, c);
             if (g->binary) {
@@ -860,11 +907,12 @@ static qdc_status elements41(gmsh *g, qdc_error *err)
         if (st != QDC_OK)
             break;
         phys = entity_phys(g, k, etag);
-        j = g->binary ? elems_bin_fast(g, k, c, 0, g->dsize, phys, (int32_t)etag) : 0;
+        j = g->binary ? elems_bin_fast(g, k, type, c, 0, g->dsize, phys, (int32_t)etag)
+                      : 0;
         for (; j < c && st == QDC_OK; j++) {
             st = g_int(g, "$Elements: element tag", 0, INT64_MAX, &v, err);
             if (st == QDC_OK)
-                st = elem_nodes(g, k, phys, (int32_t)etag, err);
+                st = elem_nodes(g, k, type, phys, (int32_t)etag, err);
         }
     }
     return st == QDC_OK ? want_end(g, "Elements", err) : st;
@@ -889,7 +937,7 @@ static qdc_status elements22(gmsh *g, qdc_error *err)
             st = ho_tet(g, at, type, err);
         if (st != QDC_OK)
             break;
-        k = type == 4 ? 1 : type == 2 ? 0 : -1;
+        k = type == 4 || type == 11 ? 1 : type == 2 || type == 9 ? 0 : -1;
         if (k < 0) {
             skip_count(&g->sk, type, 1);
             skip_line(s);
@@ -907,7 +955,7 @@ static qdc_status elements22(gmsh *g, qdc_error *err)
         if (st == QDC_OK)
             st = elems_grow(g, k, 1, err);
         if (st == QDC_OK)
-            st = elem_nodes(g, k, (int32_t)phys, (int32_t)ent, err);
+            st = elem_nodes(g, k, type, (int32_t)phys, (int32_t)ent, err);
     }
     return st == QDC_OK ? want_end(g, "Elements", err) : st;
 }
@@ -937,7 +985,7 @@ static qdc_status elements40(gmsh *g, qdc_error *err)
             st = g_count(g, "$Elements: elements in block", 2, 0, INT64_MAX, &c, err);
         if (st != QDC_OK)
             break;
-        k = type == 4 ? 1 : type == 2 ? 0 : -1;
+        k = type == 4 || type == 11 ? 1 : type == 2 || type == 9 ? 0 : -1;
         if (k < 0) {
             skip_count(&g->sk, type, c);
             for (int64_t j = 0; j < c; j++) {
@@ -950,7 +998,7 @@ static qdc_status elements40(gmsh *g, qdc_error *err)
         for (int64_t j = 0; j < c && st == QDC_OK; j++) {
             st = g_int(g, "$Elements: element tag", 0, INT64_MAX, &v, err);
             if (st == QDC_OK)
-                st = elem_nodes(g, k, entity_phys(g, k, etag), (int32_t)etag, err);
+                st = elem_nodes(g, k, type, entity_phys(g, k, etag), (int32_t)etag, err);
         }
     }
     return st == QDC_OK ? want_end(g, "Elements", err) : st;
@@ -990,7 +1038,7 @@ static qdc_status elements22_bin(gmsh *g, qdc_error *err)
         if (st != QDC_OK)
             break;
         done += cnt;
-        k = type == 4 ? 1 : type == 2 ? 0 : -1;
+        k = type == 4 || type == 11 ? 1 : type == 2 || type == 9 ? 0 : -1;
         if (k < 0) {
             skip_count(&g->sk, type, cnt);
             s->p += (size_t)cnt * (size_t)rec;
@@ -1002,7 +1050,7 @@ static qdc_status elements22_bin(gmsh *g, qdc_error *err)
         /* the group's bytes are there (bin_need above): whole records are read
          * here, and the first one that is not right is read again below, which
          * says what is wrong with it */
-        j = elems_bin_fast(g, k, cnt, ntags, 4, 0, 0);
+        j = elems_bin_fast(g, k, type, cnt, ntags, 4, 0, 0);
         for (; j < cnt && st == QDC_OK; j++) {
             st = g_i32(g, "$Elements: element tag", INT32_MIN, INT32_MAX, &v, err);
             phys = ent = 0;
@@ -1014,7 +1062,7 @@ static qdc_status elements22_bin(gmsh *g, qdc_error *err)
                     ent = v;
             }
             if (st == QDC_OK)
-                st = elem_nodes(g, k, (int32_t)phys, (int32_t)ent, err);
+                st = elem_nodes(g, k, type, (int32_t)phys, (int32_t)ent, err);
         }
     }
     return st == QDC_OK ? want_end(g, "Elements", err) : st;
@@ -1164,6 +1212,16 @@ static qdc_status gmsh_mesh(gmsh *g, const meshio_options *o, mesh_t **out,
     st = periodic_held(g, &pm, err);
     if (st == QDC_OK)
         st = parsed_mesh(&pm, out, err);
+    if (st == QDC_OK && g->order == 2) {
+        st = mesh_set_mid(*out);
+        if (st != QDC_OK) {
+            mesh_free(*out);
+            *out = NULL;
+            st = qdc_fail(err, QDC_ENOMEM, "out of memory for the mid-edge nodes");
+        } else {
+            memcpy((*out)->mid, g->mid.a, (size_t)pm.nt * 6 * sizeof(int32_t));
+        }
+    }
     if (st == QDC_OK && pm.nfix > 0)
         periodic_note(g, o, *out);
     qdc_free(reg[0]);
@@ -1184,6 +1242,7 @@ static qdc_status read_gmsh(const char *buf, size_t len, const meshio_options *o
     memset(&g, 0, sizeof g);
     g.rec = rec;
     g.per.size = sizeof(int64_t);
+    g.mid.size = sizeof(int32_t);
     for (int k = 0; k < 2; k++) {
         g.ent[k].size = sizeof(int64_t);
         g.el[k].idx.size = g.el[k].phys.size = g.el[k].ent.size = sizeof(int32_t);
@@ -1352,7 +1411,14 @@ static int32_t count_blocks(const int32_t *tag, int32_t n)
     return b;
 }
 
-static void write41(const mesh_t *m, const distinct d[2], wbuf *w, int bin)
+/* The tets as written: their nodes (4, or 10 in Gmsh's order) and type. */
+typedef struct {
+    const int32_t *v;
+    int k, type;
+} gtets;
+
+static void write41(const mesh_t *m, const gtets *gt, const distinct d[2], wbuf *w,
+                    int bin)
 {
     gw g = {w, bin};
     double lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
@@ -1396,20 +1462,21 @@ static void write41(const mesh_t *m, const distinct d[2], wbuf *w, int bin)
     gw_size(&g, (uint64_t)m->nt + (uint64_t)m->ntri, " ");
     gw_size(&g, m->nt + m->ntri ? 1 : 0, " ");
     gw_size(&g, (uint64_t)m->nt + (uint64_t)m->ntri, "\n");
-    write_blocks(&g, 3, 4, m->tets, 4, m->region, m->nt, &d[1], &etag);
+    write_blocks(&g, 3, gt->type, gt->v, gt->k, m->region, m->nt, &d[1], &etag);
     write_blocks(&g, 2, 2, m->tris, 3, m->tri_ref, m->ntri, &d[0], &etag);
     wb_str(w, bin ? "\n$EndElements\n" : "$EndElements\n");
 }
 
 /* MSH 4.0 ASCII: as 4.1, with 4.0's block headers and node lines. */
-static void write40(const mesh_t *m, const distinct d[2], wbuf *w)
+static void write40(const mesh_t *m, const gtets *gt, const distinct d[2], wbuf *w)
 {
     gw g = {w, 0};
     double lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
     int64_t etag = 0;
     int32_t nb = count_blocks(m->region, m->nt) + count_blocks(m->tri_ref, m->ntri);
-    const int32_t *tag[2] = {m->tri_ref, m->region}, *idx[2] = {m->tris, m->tets};
+    const int32_t *tag[2] = {m->tri_ref, m->region}, *idx[2] = {m->tris, gt->v};
     int32_t n[2] = {m->ntri, m->nt};
+    const int nk[2] = {3, gt->k};
 
     if (m->nv)
         mesh_bbox(m, lo, hi);
@@ -1447,13 +1514,13 @@ static void write40(const mesh_t *m, const distinct d[2], wbuf *w)
             while (j < n[k] && tag[k][j] == tag[k][i])
                 j++;
             wb_int(w, entity_of(&d[k], tag[k], (size_t)i));
-            wb_str(w, k ? " 3 4 " : " 2 2 ");
+            wb_str(w, k ? (gt->type == 11 ? " 3 11 " : " 3 4 ") : " 2 2 ");
             wb_int(w, j - i);
             wb_str(w, "\n");
             for (; i < j; i++) {
                 wb_int(w, ++etag);
                 wb_str(w, " ");
-                wb_ints(w, idx[k] + (size_t)(3 + k) * (size_t)i, 3 + k, 1, " ", "\n");
+                wb_ints(w, idx[k] + (size_t)nk[k] * (size_t)i, nk[k], 1, " ", "\n");
             }
         }
     }
@@ -1473,7 +1540,8 @@ static void put_i32s(wbuf *w, const int32_t *v, int n, int64_t add)
 
 /* Elementary tags follow the regions (as in 4.1), so Gmsh's entities match
  * its physical groups. bin: 2.2 binary (one group per element type). */
-static void write22(const mesh_t *m, const distinct d[2], wbuf *w, int bin)
+static void write22(const mesh_t *m, const gtets *gt, const distinct d[2], wbuf *w,
+                    int bin)
 {
     unsigned char b[28];
 
@@ -1505,10 +1573,11 @@ static void write22(const mesh_t *m, const distinct d[2], wbuf *w, int bin)
     wb_int(w, (int64_t)m->nt + m->ntri);
     wb_str(w, "\n");
     if (bin) {
-        const int32_t *tag[2] = {m->tri_ref, m->region}, *idx[2] = {m->tris, m->tets};
+        const int32_t *tag[2] = {m->tri_ref, m->region}, *idx[2] = {m->tris, gt->v};
         int32_t n[2] = {m->ntri, m->nt}, e = 0;
+        const int nk[2] = {3, gt->k};
         for (int k = 1; k >= 0; k--) {
-            int32_t h[3] = {k ? 4 : 2, n[k], 2};
+            int32_t h[3] = {k ? gt->type : 2, n[k], 2};
             if (!n[k])
                 continue;
             put_i32s(w, h, 3, 0);
@@ -1516,7 +1585,7 @@ static void write22(const mesh_t *m, const distinct d[2], wbuf *w, int bin)
                 int32_t r[3] = {++e, tag[k] ? tag[k][t] : 0,
                                 (int32_t)entity_of(&d[k], tag[k], (size_t)t)};
                 put_i32s(w, r, 3, 0);
-                put_i32s(w, idx[k] + (size_t)(3 + k) * (size_t)t, 3 + k, 1);
+                put_i32s(w, idx[k] + (size_t)nk[k] * (size_t)t, nk[k], 1);
             }
         }
         wb_str(w, "\n$EndElements\n");
@@ -1524,12 +1593,12 @@ static void write22(const mesh_t *m, const distinct d[2], wbuf *w, int bin)
     }
     for (int32_t t = 0; t < m->nt; t++) {
         wb_int(w, (int64_t)t + 1);
-        wb_str(w, " 4 2 ");
+        wb_str(w, gt->type == 11 ? " 11 2 " : " 4 2 ");
         wb_int(w, m->region ? m->region[t] : 0);
         wb_str(w, " ");
         wb_int(w, entity_of(&d[1], m->region, (size_t)t));
         wb_str(w, " ");
-        wb_ints(w, m->tets + 4 * (size_t)t, 4, 1, " ", "\n");
+        wb_ints(w, gt->v + (size_t)gt->k * (size_t)t, gt->k, 1, " ", "\n");
     }
     for (int32_t t = 0; t < m->ntri; t++) {
         wb_int(w, (int64_t)m->nt + t + 1);
@@ -1549,16 +1618,32 @@ static qdc_status write_gmsh(const mesh_t *m, meshio_format fmt, int part, wbuf 
     (void)part;
     distinct d[2] = {{NULL, 0}, {NULL, 0}};
     qdc_status st = QDC_OK;
+    gtets gt = {m->tets, 4, 4};
+    int32_t *t10 = NULL;
 
+    if (m->mid) { /* second-order: type 11, its mid-edge nodes in Gmsh's order */
+        t10 = qdc_mallocn((size_t)m->nt * 10 + 1, sizeof(int32_t));
+        if (!t10)
+            return qdc_fail(err, QDC_ENOMEM, "out of memory for the 10-node tets");
+        for (size_t t = 0; t < (size_t)m->nt; t++) {
+            memcpy(t10 + 10 * t, m->tets + 4 * t, 4 * sizeof(int32_t));
+            for (int f = 0; f < 6; f++) /* gmsh_p2 is its own inverse */
+                t10[10 * t + 4 + (size_t)f] = m->mid[6 * t + (size_t)gmsh_p2[f]];
+        }
+        gt.v = t10;
+        gt.k = 10;
+        gt.type = 11;
+    }
     if (distinct_of(&d[0], m->tri_ref, (size_t)m->ntri) != 0 ||
         distinct_of(&d[1], m->region, (size_t)m->nt) != 0)
         st = qdc_fail(err, QDC_ENOMEM, "out of memory for the Gmsh entities");
     else if (fmt == MESHIO_GMSH22 || fmt == MESHIO_GMSH22_BIN)
-        write22(m, d, w, fmt == MESHIO_GMSH22_BIN);
+        write22(m, &gt, d, w, fmt == MESHIO_GMSH22_BIN);
     else if (fmt == MESHIO_GMSH40)
-        write40(m, d, w);
+        write40(m, &gt, d, w);
     else
-        write41(m, d, w, fmt == MESHIO_GMSH41_BIN);
+        write41(m, &gt, d, w, fmt == MESHIO_GMSH41_BIN);
+    qdc_free(t10);
     qdc_free(d[0].u);
     qdc_free(d[1].u);
     return st;
@@ -1604,6 +1689,7 @@ const meshio_fmt fmt_gmsh41 = {
     .read = read_gmsh,
     .write = write_gmsh,
     .splices = 1,
+    .p2 = 1,
 };
 
 const meshio_fmt fmt_gmsh41_bin = {
@@ -1618,6 +1704,7 @@ const meshio_fmt fmt_gmsh41_bin = {
     .read = read_gmsh,
     .write = write_gmsh,
     .splices = 1,
+    .p2 = 1,
 };
 
 const meshio_fmt fmt_gmsh22 = {
@@ -1632,6 +1719,7 @@ const meshio_fmt fmt_gmsh22 = {
     .read = read_gmsh,
     .write = write_gmsh,
     .splices = 1,
+    .p2 = 1,
 };
 
 const meshio_fmt fmt_gmsh22_bin = {
@@ -1644,6 +1732,7 @@ const meshio_fmt fmt_gmsh22_bin = {
     .read = read_gmsh,
     .write = write_gmsh,
     .splices = 1,
+    .p2 = 1,
 };
 
 const meshio_fmt fmt_gmsh40 = {
@@ -1656,4 +1745,5 @@ const meshio_fmt fmt_gmsh40 = {
     .read = read_gmsh,
     .write = write_gmsh,
     .splices = 1,
+    .p2 = 1,
 };

@@ -1,5 +1,6 @@
 /* meshio_json.c - the JSON mesh: {"vertices":[[x,y,z],...],"tets":[[a,b,c,d],...],
- * "regions":[...],"fixed":[...]}, 0-based. */
+ * "regions":[...],"fixed":[...],"mid":[[m01,m12,m02,m03,m13,m23],...]}, 0-based
+ * ("mid": second-order tets' mid-edge nodes, mesh_p2_edges). */
 #include "io/format.h"
 
 #include <string.h>
@@ -250,9 +251,10 @@ static int json_null(txt *s)
     return 0;
 }
 
-enum { J_VERTICES, J_TETS, J_REGIONS, J_FIXED, J_KEYS };
+enum { J_VERTICES, J_TETS, J_REGIONS, J_FIXED, J_MID, J_KEYS };
 
-static const char *const json_keys[J_KEYS] = {"vertices", "tets", "regions", "fixed"};
+static const char *const json_keys[J_KEYS] = {"vertices", "tets", "regions", "fixed",
+                                              "mid"};
 
 typedef struct {
     vec v[J_KEYS];
@@ -294,6 +296,8 @@ static qdc_status json_member(txt *s, json_state *js, qdc_error *err)
         return json_array(s, "tets", 4, 1, 0, INT32_MAX, &js->v[k], err);
     case J_REGIONS:
         return json_array(s, "regions", 0, 1, INT32_MIN, INT32_MAX, &js->v[k], err);
+    case J_MID:
+        return json_array(s, "mid", 6, 1, 0, INT32_MAX, &js->v[k], err);
     default:
         return json_array(s, "fixed", 0, 1, 0, INT32_MAX, &js->v[k], err);
     }
@@ -360,9 +364,16 @@ static qdc_status read_json(const char *buf, size_t len, const meshio_options *o
                       "regions: %zu entries for %zu tets", js.v[J_REGIONS].n, nt);
         goto out;
     }
+    if (js.seen[J_MID] == 1 && js.v[J_MID].n != 6 * nt) {
+        st = fail_txt(err, QDC_EPARSE, &js.at[J_MID], js.at[J_MID].p,
+                      "mid: %zu entries for %zu tets", js.v[J_MID].n / 6, nt);
+        goto out;
+    }
     st = json_recheck(&js, J_TETS, 4, (int64_t)nv, err);
     if (st == QDC_OK)
         st = json_recheck(&js, J_FIXED, 0, (int64_t)nv, err);
+    if (st == QDC_OK)
+        st = json_recheck(&js, J_MID, 6, (int64_t)nv, err);
     if (st != QDC_OK)
         goto out;
     pm.nv = (int64_t)nv;
@@ -372,6 +383,7 @@ static qdc_status read_json(const char *buf, size_t len, const meshio_options *o
     pm.region = js.v[J_REGIONS].a;
     pm.fix = js.v[J_FIXED].a;
     pm.nfix = js.seen[J_FIXED] == 1 ? (int64_t)js.v[J_FIXED].n : -1;
+    pm.mid = js.seen[J_MID] == 1 ? js.v[J_MID].a : NULL;
     st = parsed_mesh(&pm, out, err);
 out:
     for (int k = 0; k < J_KEYS; k++)
@@ -416,6 +428,14 @@ static qdc_status write_json(const mesh_t *m, meshio_format fmt, int part, wbuf 
         }
         wb_str(w, "]");
     }
+    if (m->mid) {
+        wb_str(w, ",\n\"mid\": [");
+        for (int32_t t = 0; t < m->nt; t++) {
+            wb_str(w, t ? ",\n[" : "\n[");
+            wb_ints(w, m->mid + 6 * (size_t)t, 6, 0, ", ", "]");
+        }
+        wb_str(w, "]");
+    }
     wb_str(w, "}\n");
     return QDC_OK;
 }
@@ -428,11 +448,12 @@ static meshio_format sniff_json(const char *buf, size_t len, size_t i)
 const meshio_fmt fmt_json = {
     .name = "json",
     .aliases = "application/json",
-    .about = "JSON mesh: vertices, tets, regions and fixed arrays, 0-based",
+    .about = "JSON mesh: vertices, tets, regions, fixed and mid arrays, 0-based",
     .ext = "json",
     .input = "input.json",
     .media = "application/json",
     .sniff = sniff_json,
     .read = read_json,
     .write = write_json,
+    .p2 = 1,
 };

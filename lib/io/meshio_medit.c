@@ -2,6 +2,7 @@
  * and writer. */
 #include "io/format.h"
 
+#include <math.h>
 #include <string.h>
 
 /* ------------------------------------------------------------------------ */
@@ -254,6 +255,9 @@ static qdc_status medit_skip_unknown(txt *s, const char *kw, size_t kl, qdc_erro
 
 typedef struct {
     parsed pm;
+    int64_t np2;          /* TetrahedraP2 entries, -1 = none */
+    int32_t *p2, *p2_ref; /* 10 indices each, and refs */
+    txt p2_at;
     txt tet_at, tri_at, fix_at; /* section bodies, rescanned if nv came later */
     srcrec *rec;                /* where the coordinates are, or NULL */
 } medit_state;
@@ -346,9 +350,8 @@ static qdc_status medit_keyword(txt *s, const char *kw, size_t kl, medit_state *
         return medit_elem_section(s, "Triangles", 3, INT32_MAX / 3, pm, &pm->ntri,
                                   &pm->tris, &pm->tri_ref, &ms->tri_at, err);
     if (word_is(kw, kl, "TetrahedraP2"))
-        return fail_txt(err, QDC_EFORMAT, s, kw,
-                        "TetrahedraP2: second-order tetrahedra (10 vertices) are not "
-                        "supported: qdc optimizes linear Tetrahedra");
+        return medit_elem_section(s, "TetrahedraP2", 10, MESH_MAX_TETS, pm, &ms->np2,
+                                  &ms->p2, &ms->p2_ref, &ms->p2_at, err);
     if (word_is(kw, kl, "RequiredVertices")) {
         return medit_elem_section(s, "RequiredVertices", 1, INT32_MAX, pm, &pm->nfix,
                                   &pm->fix, NULL, &ms->fix_at, err);
@@ -357,6 +360,71 @@ static qdc_status medit_keyword(txt *s, const char *kw, size_t kl, medit_state *
         if (word_is(kw, kl, medit_skip[i].kw))
             return medit_skip_section(s, medit_skip[i].kw, medit_skip[i].ntok, err);
     return medit_skip_unknown(s, kw, kl, err);
+}
+
+/* The orders in which writers list a TetrahedraP2's mid-edge nodes, as
+ * positions in mesh_p2_edges (01, 12, 02, 03, 13, 23): that one (Gmsh's
+ * Medit writer, qdc), Mmg's edge numbering (01, 02, 03, 12, 13, 23) and
+ * Gmsh's own (01, 12, 02, 03, 23, 13). */
+static const int medit_p2_orders[3][6] = {
+    {0, 1, 2, 3, 4, 5}, {0, 2, 3, 1, 4, 5}, {0, 1, 2, 3, 5, 4}};
+
+/* Which of medit_p2_orders the file follows: the one that puts the
+ * mid-edge nodes nearest their edges' midpoints (summed over the tets; a
+ * tie keeps the first). p2 holds 10 checked indices per tet. */
+static int medit_p2_order(const parsed *pm, const int32_t *p2, int64_t nt)
+{
+    double best = INFINITY;
+    int pick = 0;
+
+    for (int o = 0; o < 3; o++) {
+        double sum = 0;
+        for (int64_t t = 0; t < nt; t++) {
+            const int32_t *e = p2 + 10 * t;
+            for (int f = 0; f < 6; f++) { /* file position f is edge order[o][f] */
+                const int *ab = mesh_p2_edges[medit_p2_orders[o][f]];
+                const double *a = pm->xyz + 3 * (size_t)e[ab[0]],
+                             *b = pm->xyz + 3 * (size_t)e[ab[1]],
+                             *mm = pm->xyz + 3 * (size_t)e[4 + f];
+                for (int k = 0; k < 3; k++)
+                    sum += fabs(mm[k] - 0.5 * (a[k] + b[k]));
+            }
+        }
+        if (sum < best) {
+            best = sum;
+            pick = o;
+        }
+    }
+    return pick;
+}
+
+/* TetrahedraP2 (checked) into pm's tets and mid-edge table. */
+static qdc_status medit_p2_split(medit_state *ms, const txt *s, qdc_error *err)
+{
+    parsed *pm = &ms->pm;
+    int o;
+
+    if (pm->nt > 0)
+        return fail_txt(err, QDC_EFORMAT, s, s->p,
+                        "Tetrahedra and TetrahedraP2: linear and second-order "
+                        "tetrahedra in one file are not supported");
+    qdc_free(pm->tets);
+    qdc_free(pm->region);
+    pm->nt = ms->np2;
+    pm->tets = qdc_mallocn((size_t)pm->nt * 4 + 1, sizeof(int32_t));
+    pm->mid = qdc_mallocn((size_t)pm->nt * 6 + 1, sizeof(int32_t));
+    pm->region = ms->p2_ref;
+    ms->p2_ref = NULL;
+    if (!pm->tets || !pm->mid)
+        return qdc_fail(err, QDC_ENOMEM, "out of memory for %lld tets",
+                        (long long)pm->nt);
+    o = medit_p2_order(pm, ms->p2, pm->nt);
+    for (int64_t t = 0; t < pm->nt; t++) {
+        memcpy(pm->tets + 4 * t, ms->p2 + 10 * t, 4 * sizeof(int32_t));
+        for (int f = 0; f < 6; f++)
+            pm->mid[6 * t + medit_p2_orders[o][f]] = ms->p2[10 * t + 4 + f];
+    }
+    return QDC_OK;
 }
 
 static qdc_status read_medit(const char *buf, size_t len, const meshio_options *o,
@@ -370,6 +438,7 @@ static qdc_status read_medit(const char *buf, size_t len, const meshio_options *
     char q[32];
 
     memset(&ms, 0, sizeof ms);
+    ms.np2 = -1;
     ms.rec = rec;
     if (rec)
         rec->fmt = MESHIO_MEDIT;
@@ -409,10 +478,16 @@ static qdc_status read_medit(const char *buf, size_t len, const meshio_options *
     if (st == QDC_OK)
         st = medit_recheck(&ms.fix_at, "RequiredVertices", pm->nfix, 1, 0, pm->nv,
                            pm->fix, err);
+    if (st == QDC_OK && ms.np2 >= 0)
+        st = medit_recheck(&ms.p2_at, "TetrahedraP2", ms.np2, 10, 1, pm->nv, ms.p2, err);
+    if (st == QDC_OK && ms.np2 >= 0)
+        st = medit_p2_split(&ms, &s, err);
     if (st == QDC_OK)
         st = parsed_mesh(pm, out, err);
 out:
     parsed_free(pm);
+    qdc_free(ms.p2);
+    qdc_free(ms.p2_ref);
     return st;
 }
 
@@ -432,11 +507,13 @@ static qdc_status write_medit(const mesh_t *m, meshio_format fmt, int part, wbuf
         wb_int(w, m->vref ? m->vref[i] : 0);
         wb_str(w, "\n");
     }
-    wb_str(w, "\nTetrahedra\n");
+    wb_str(w, m->mid ? "\nTetrahedraP2\n" : "\nTetrahedra\n");
     wb_int(w, m->nt);
     wb_str(w, "\n");
     for (int32_t t = 0; t < m->nt; t++) {
         wb_ints(w, m->tets + 4 * (size_t)t, 4, 1, " ", " ");
+        if (m->mid) /* in mesh_p2_edges order, as Gmsh writes it */
+            wb_ints(w, m->mid + 6 * (size_t)t, 6, 1, " ", " ");
         wb_int(w, m->region ? m->region[t] : 0);
         wb_str(w, "\n");
     }
@@ -493,4 +570,5 @@ const meshio_fmt fmt_medit = {
     .read = read_medit,
     .write = write_medit,
     .splices = 1,
+    .p2 = 1,
 };

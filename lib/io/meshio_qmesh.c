@@ -11,6 +11,7 @@
 #define QMESH_VERSION 1u
 #define QMESH_REGION 1u
 #define QMESH_FIXED 2u
+#define QMESH_MID 4u /* second-order tets: i32[nt][6] mid-edge nodes after the rest */
 
 static qdc_status read_qmesh(const char *buf, size_t len, const meshio_options *o,
                              srcrec *rec, mesh_t **out, qdc_error *err)
@@ -36,14 +37,14 @@ static qdc_status read_qmesh(const char *buf, size_t len, const meshio_options *
         return fail_bin(err, QDC_EFORMAT, 8,
                         "QMESH: unsupported version %u (expected %u)", version,
                         QMESH_VERSION);
-    if (flags & ~(QMESH_REGION | QMESH_FIXED))
+    if (flags & ~(QMESH_REGION | QMESH_FIXED | QMESH_MID))
         return fail_bin(err, QDC_EFORMAT, 12, "QMESH: unknown flags 0x%x", flags);
     /* Both counts below 2^40 keep the size arithmetic far from overflow; larger
      * ones cannot match any buffer we could be holding anyway. */
     need = UINT64_MAX;
     if (nv < (UINT64_C(1) << 40) && nt < (UINT64_C(1) << 40))
         need = QMESH_HEADER + 24 * nv + 16 * nt + (flags & QMESH_REGION ? 4 * nt : 0) +
-               (flags & QMESH_FIXED ? nv : 0);
+               (flags & QMESH_FIXED ? nv : 0) + (flags & QMESH_MID ? 24 * nt : 0);
     if (need != len)
         return fail_bin(
             err, QDC_EPARSE, (int64_t)(need < len ? need : len),
@@ -89,6 +90,22 @@ static qdc_status read_qmesh(const char *buf, size_t len, const meshio_options *
         m->region[i] = (int32_t)get_le32(b + off);
     if (m->fixed)
         memcpy(m->fixed, b + off, nv);
+    off += m->fixed ? nv : 0;
+    if ((flags & QMESH_MID) && mesh_set_mid(m) != QDC_OK) {
+        qdc_fail(err, QDC_ENOMEM, "out of memory for the mid-edge nodes");
+        goto fail;
+    }
+    for (size_t i = 0; m->mid && i < 6 * nt; i++, off += 4) {
+        int32_t v = (int32_t)get_le32(b + off);
+        if (v < 0 || (uint64_t)v >= nv) {
+            fail_bin(err, QDC_EPARSE, (int64_t)off,
+                     "QMESH: tet %zu: mid-edge node %d out of range [0, %lld]", i / 6, v,
+                     (long long)nv - 1);
+            set_index(err, "tet", (int64_t)(i / 6));
+            goto fail;
+        }
+        m->mid[i] = v;
+    }
     *out = m;
     return QDC_OK;
 fail:
@@ -103,7 +120,8 @@ static qdc_status write_qmesh(const mesh_t *m, meshio_format fmt, int part, wbuf
     (void)part;
     (void)err;
     unsigned char h[QMESH_HEADER], b[8];
-    uint32_t flags = (m->region ? QMESH_REGION : 0) | (m->fixed ? QMESH_FIXED : 0);
+    uint32_t flags = (m->region ? QMESH_REGION : 0) | (m->fixed ? QMESH_FIXED : 0) |
+                     (m->mid ? QMESH_MID : 0);
 
     memcpy(h, QMESH_MAGIC, 8);
     put_le32(h + 8, QMESH_VERSION);
@@ -127,6 +145,10 @@ static qdc_status write_qmesh(const mesh_t *m, meshio_format fmt, int part, wbuf
     }
     if (m->fixed)
         wb_put(w, m->fixed, (size_t)m->nv);
+    for (size_t i = 0; m->mid && i < 6 * (size_t)m->nt; i++) {
+        put_le32(b, (uint32_t)m->mid[i]);
+        wb_put(w, b, 4);
+    }
     return QDC_OK;
 }
 
@@ -147,4 +169,5 @@ const meshio_fmt fmt_qmesh = {
     .sniff = sniff_qmesh,
     .read = read_qmesh,
     .write = write_qmesh,
+    .p2 = 1,
 };

@@ -82,7 +82,8 @@ static inline qdc_status fail_bin(qdc_error *err, qdc_status st, int64_t off,
 /* What err->kind calls an entry of section sect. */
 static inline const char *elem_kind(const char *sect)
 {
-    if (strcmp(sect, "Tetrahedra") == 0 || strcmp(sect, "tets") == 0)
+    if (strcmp(sect, "Tetrahedra") == 0 || strcmp(sect, "TetrahedraP2") == 0 ||
+        strcmp(sect, "tets") == 0)
         return "tet";
     if (strcmp(sect, "Triangles") == 0)
         return "triangle";
@@ -512,6 +513,7 @@ typedef struct {
     double *xyz;
     int32_t *vref, *tets, *region, *tris, *tri_ref;
     int32_t *fix; /* nfix indices of fixed vertices */
+    int32_t *mid; /* second-order tets: 6*nt mid-edge nodes (mesh_p2_edges), or NULL */
 } parsed;
 
 static inline void parsed_init(parsed *pm)
@@ -529,6 +531,7 @@ static inline void parsed_free(parsed *pm)
     qdc_free(pm->tris);
     qdc_free(pm->tri_ref);
     qdc_free(pm->fix);
+    qdc_free(pm->mid);
     parsed_init(pm);
 }
 
@@ -569,6 +572,13 @@ static inline qdc_status parsed_mesh(const parsed *pm, mesh_t **out, qdc_error *
         memcpy(m->tris, pm->tris, (size_t)pm->ntri * 3 * sizeof(int32_t));
         copy_opt(m->tri_ref, pm->tri_ref, (size_t)pm->ntri * sizeof(int32_t));
     }
+    if (pm->mid) {
+        if (mesh_set_mid(m) != QDC_OK) {
+            mesh_free(m);
+            return qdc_fail(err, QDC_ENOMEM, "out of memory for the mid-edge nodes");
+        }
+        memcpy(m->mid, pm->mid, (size_t)nt * 6 * sizeof(int32_t));
+    }
     *out = m;
     return QDC_OK;
 }
@@ -597,6 +607,7 @@ static inline qdc_status parsed_mesh_move(parsed *pm, mesh_t **out, qdc_error *e
     m->tets = pm->tets;
     m->region = pm->region;
     m->vref = pm->vref;
+    m->mid = pm->mid;
     for (int64_t i = 0; i < pm->nfix; i++)
         m->fixed[pm->fix[i]] = 1;
     if (pm->ntri > 0) {
@@ -608,7 +619,7 @@ static inline qdc_status parsed_mesh_move(parsed *pm, mesh_t **out, qdc_error *e
         qdc_free(pm->tri_ref);
     }
     pm->xyz = NULL;
-    pm->tets = pm->region = pm->vref = pm->tris = pm->tri_ref = NULL;
+    pm->tets = pm->region = pm->vref = pm->tris = pm->tri_ref = pm->mid = NULL;
     *out = m;
     return QDC_OK;
 }

@@ -255,15 +255,27 @@ static qdc_status check_points(const cells *c, const char *fmtname, int64_t i, i
     return QDC_OK;
 }
 
+/* Cell i is a tet of the other order than those before it. */
+static qdc_status mixed_order(const char *fmtname, int64_t i, qdc_error *err)
+{
+    qdc_fail(err, QDC_EFORMAT,
+             "%s: cell %lld: linear (type 10) and second-order (type 24) tetrahedra in "
+             "one file are not supported",
+             fmtname, (long long)i);
+    set_index(err, "cell", i);
+    return QDC_EFORMAT;
+}
+
 /* One walk over the cells: without fill, every check and the counts of
  * tets and triangles (*nt, *ntri) and skipped types (sk); with fill (arrays
  * sized by the first walk), their points and regions. Point indices and
  * regions are checked for the whole array at once; only if that fails, per
  * cell (so the error names the first bad cell as before). */
 static qdc_status cells_walk(const cells *c, const char *fmtname, parsed *fill,
-                             skipped *sk, int64_t *nt, int64_t *ntri, qdc_error *err)
+                             skipped *sk, int64_t *nt, int64_t *ntri, int64_t *n10,
+                             qdc_error *err)
 {
-    int64_t pos = 0, n4 = 0, n3 = 0;
+    int64_t pos = 0, n4 = 0, n3 = 0, nq = 0;
     int idx_ok = fill || all_in(c->conn, c->nconn, 0, (double)c->nv - 1);
     int reg_ok = fill || !c->creg || all_in(c->creg, c->nc, INT32_MIN, INT32_MAX);
 
@@ -273,22 +285,32 @@ static qdc_status cells_walk(const cells *c, const char *fmtname, parsed *fill,
             return qdc_fail(err, QDC_EPARSE,
                             "%s: CELLS list ends inside a cell (wrong counts)", fmtname);
         type = is_int32(c->types[i]) ? (int64_t)c->types[i] : -1;
-        if (type == 24 || type == 71) { /* corners alone would break them */
+        /* VTK_QUADRATIC_TETRA (24) and a Lagrange tetra (71) of order 2 list
+         * their mid-edge nodes in the order of mesh_p2_edges */
+        if ((type == 24 || type == 71) && k == 10) {
+            if (n4 > nq)
+                return mixed_order(fmtname, i, err);
+            k = 4;
+            nq++;
+        } else if (type == 24 || type == 71) { /* corners alone would break them */
             qdc_fail(
                 err, QDC_EFORMAT,
                 "%s: cell %lld is a %s tetrahedron (VTK cell type %lld, %lld points): "
-                "not supported, qdc optimizes linear tetrahedra (type 10)",
+                "not supported, qdc optimizes linear (type 10) and second-order (type "
+                "24, 10 points) tetrahedra",
                 fmtname, (long long)i, type == 24 ? "second-order" : "Lagrange",
                 (long long)type, (long long)k);
             set_index(err, "cell", i);
             return QDC_EFORMAT;
-        }
-        if (!((type == 10 && k == 4) || (type == 5 && k == 3))) {
+        } else if (type == 10 && nq) {
+            return mixed_order(fmtname, i, err);
+        } else if (!((type == 10 && k == 4) || (type == 5 && k == 3))) {
             if (!fill)
                 skip_count(sk, type, 1);
             continue;
         }
-        if (!idx_ok && check_points(c, fmtname, i, a, k, err) != QDC_OK)
+        if (!idx_ok &&
+            check_points(c, fmtname, i, a, nq && k == 4 ? 10 : k, err) != QDC_OK)
             return QDC_EPARSE;
         if (!reg_ok && !is_int32(c->creg[i])) {
             qdc_fail(err, QDC_EPARSE, "%s: cell %lld: region %.17g is not an int32",
@@ -300,6 +322,9 @@ static qdc_status cells_walk(const cells *c, const char *fmtname, parsed *fill,
             int32_t *dst = k == 4 ? fill->tets + 4 * n4 : fill->tris + 3 * n3;
             for (int64_t j = 0; j < k; j++)
                 dst[j] = (int32_t)c->conn[a + j];
+            if (nq && k == 4)
+                for (int64_t j = 0; j < 6; j++)
+                    fill->mid[6 * n4 + j] = (int32_t)c->conn[a + 4 + j];
             if (c->creg)
                 *(k == 4 ? &fill->region[n4] : &fill->tri_ref[n3]) = (int32_t)c->creg[i];
         }
@@ -310,12 +335,13 @@ static qdc_status cells_walk(const cells *c, const char *fmtname, parsed *fill,
     }
     *nt = n4;
     *ntri = n3;
+    *n10 = nq;
     return QDC_OK;
 }
 
 /* Arrays for nt tets and ntri triangles (and their regions). */
 static qdc_status cells_alloc(const cells *c, parsed *pm, int64_t nt, int64_t ntri,
-                              const char *fmtname, qdc_error *err)
+                              int64_t n10, const char *fmtname, qdc_error *err)
 {
     if (nt > MESH_MAX_TETS || ntri > INT32_MAX / 3)
         return qdc_fail(err, QDC_ETOOBIG, "%s: %lld tets exceed the limit", fmtname,
@@ -326,7 +352,10 @@ static qdc_status cells_alloc(const cells *c, parsed *pm, int64_t nt, int64_t nt
         pm->region = qdc_mallocn((size_t)nt + 1, sizeof(int32_t));
         pm->tri_ref = qdc_mallocn((size_t)ntri + 1, sizeof(int32_t));
     }
-    if (!pm->tets || !pm->tris || (c->creg && (!pm->region || !pm->tri_ref)))
+    if (n10)
+        pm->mid = qdc_mallocn((size_t)nt * 6 + 1, sizeof(int32_t));
+    if (!pm->tets || !pm->tris || (c->creg && (!pm->region || !pm->tri_ref)) ||
+        (n10 && !pm->mid))
         return qdc_fail(err, QDC_ENOMEM, "out of memory for %lld cells",
                         (long long)c->nc);
     return QDC_OK;
@@ -358,18 +387,18 @@ static qdc_status cells_mesh(cells *c, const char *fmtname, const meshio_options
 {
     parsed pm;
     skipped sk;
-    int64_t nt = 0, ntri = 0;
+    int64_t nt = 0, ntri = 0, n10 = 0;
     qdc_status st;
 
     memset(&sk, 0, sizeof sk);
     parsed_init(&pm);
     if (!c->types && c->nc)
         return qdc_fail(err, QDC_EPARSE, "%s: no cell types", fmtname);
-    st = cells_walk(c, fmtname, NULL, &sk, &nt, &ntri, err);
+    st = cells_walk(c, fmtname, NULL, &sk, &nt, &ntri, &n10, err);
     if (st == QDC_OK)
-        st = cells_alloc(c, &pm, nt, ntri, fmtname, err);
+        st = cells_alloc(c, &pm, nt, ntri, n10, fmtname, err);
     if (st == QDC_OK)
-        st = cells_walk(c, fmtname, &pm, NULL, &nt, &ntri, err);
+        st = cells_walk(c, fmtname, &pm, NULL, &nt, &ntri, &n10, err);
     if (st == QDC_OK)
         st = cells_vref(c, fmtname, &pm, err);
     if (st == QDC_OK) {
@@ -1004,6 +1033,12 @@ static int32_t cell_region(const mesh_t *m, int64_t c)
     return m->tri_ref ? m->tri_ref[c - m->nt] : 0;
 }
 
+/* The VTK cell type of m's tets: 10, or 24 (VTK_QUADRATIC_TETRA). */
+static int tet_type(const mesh_t *m)
+{
+    return m->mid ? 24 : 10;
+}
+
 static void vtk_write(const mesh_t *m, int binary, wbuf *w)
 {
     vw o = {w, binary, 1, 3, 0, 1};
@@ -1020,16 +1055,18 @@ static void vtk_write(const mesh_t *m, int binary, wbuf *w)
     wb_str(w, "CELLS ");
     wb_int(w, nc);
     wb_str(w, " ");
-    wb_int(w, 5 * (int64_t)m->nt + 4 * (int64_t)m->ntri);
+    wb_int(w, (m->mid ? 11 : 5) * (int64_t)m->nt + 4 * (int64_t)m->ntri);
     wb_str(w, "\n");
     for (int64_t c = 0; c < nc; c++) {
-        int k = c < m->nt ? 4 : 3;
+        int k = c < m->nt ? 4 : 3, q = c < m->nt && m->mid ? 6 : 0;
         const int32_t *v = k == 4 ? m->tets + 4 * c : m->tris + 3 * (c - m->nt);
-        o.per_line = k + 1;
+        o.per_line = k + q + 1;
         o.i = 0;
-        vw_int(&o, k, 4);
+        vw_int(&o, k + q, 4);
         for (int j = 0; j < k; j++)
             vw_int(&o, v[j], 4);
+        for (int j = 0; j < q; j++)
+            vw_int(&o, m->mid[6 * c + j], 4);
     }
     o.i = 0;
     vw_end(&o);
@@ -1038,7 +1075,7 @@ static void vtk_write(const mesh_t *m, int binary, wbuf *w)
     wb_str(w, "\n");
     o.per_line = 16;
     for (int64_t c = 0; c < nc; c++)
-        vw_int(&o, c < m->nt ? 10 : 5, 4);
+        vw_int(&o, c < m->nt ? tet_type(m) : 5, 4);
     vw_end(&o);
     if (has_regions(m)) {
         wb_str(w, "CELL_DATA ");
@@ -2099,7 +2136,7 @@ static void xml_array_head(wbuf *w, const vtu_arr *a, int appended, uint64_t *of
  * region, medit:ref) written as data; i picks the value. */
 static void vtu_data(const mesh_t *m, int k, vw *o)
 {
-    int64_t nc = (int64_t)m->nt + m->ntri;
+    int64_t nc = (int64_t)m->nt + m->ntri, tn = m->mid ? 10 : 4;
 
     switch (k) {
     case 0:
@@ -2107,19 +2144,24 @@ static void vtu_data(const mesh_t *m, int k, vw *o)
             vw_real(o, m->xyz[i]);
         break;
     case 1:
-        for (size_t i = 0; i < 4 * (size_t)m->nt; i++)
-            vw_int(o, m->tets[i], 4);
+        for (size_t t = 0; t < (size_t)m->nt; t++) {
+            for (size_t j = 0; j < 4; j++)
+                vw_int(o, m->tets[4 * t + j], 4);
+            for (size_t j = 0; m->mid && j < 6; j++)
+                vw_int(o, m->mid[6 * t + j], 4);
+        }
         for (size_t i = 0; i < 3 * (size_t)m->ntri; i++)
             vw_int(o, m->tris[i], 4);
         break;
     case 2:
         for (int64_t c = 0; c < nc; c++)
-            vw_int(o, c < m->nt ? 4 * (c + 1) : 4 * (int64_t)m->nt + 3 * (c - m->nt + 1),
+            vw_int(o,
+                   c < m->nt ? tn * (c + 1) : tn * (int64_t)m->nt + 3 * (c - m->nt + 1),
                    8);
         break;
     case 3:
         for (int64_t c = 0; c < nc; c++)
-            vw_int(o, c < m->nt ? 10 : 5, 1);
+            vw_int(o, c < m->nt ? tet_type(m) : 5, 1);
         break;
     case 4:
         for (int64_t c = 0; c < nc; c++)
@@ -2136,7 +2178,7 @@ static void vtu_data(const mesh_t *m, int k, vw *o)
 static void vtu_write(const mesh_t *m, int appended, wbuf *w)
 {
     int64_t nc = (int64_t)m->nt + m->ntri;
-    uint64_t nconn = 4 * (uint64_t)m->nt + 3 * (uint64_t)m->ntri, off = 0;
+    uint64_t nconn = (m->mid ? 10 : 4) * (uint64_t)m->nt + 3 * (uint64_t)m->ntri, off = 0;
     const vtu_arr arr[6] = {{NULL, "Float64", 3, 24 * (uint64_t)m->nv},
                             {"connectivity", "Int32", 1, 4 * nconn},
                             {"offsets", "Int64", 1, 8 * (uint64_t)nc},
@@ -2269,6 +2311,7 @@ const meshio_fmt fmt_vtk = {
     .read = read_vtk,
     .write = write_vtk,
     .splices = 1,
+    .p2 = 1,
 };
 
 const meshio_fmt fmt_vtk_ascii = {
@@ -2281,6 +2324,7 @@ const meshio_fmt fmt_vtk_ascii = {
     .read = read_vtk,
     .write = write_vtk,
     .splices = 1,
+    .p2 = 1,
 };
 
 const meshio_fmt fmt_vtu = {
@@ -2294,6 +2338,7 @@ const meshio_fmt fmt_vtu = {
     .read = read_vtu,
     .write = write_vtu,
     .splices = 1,
+    .p2 = 1,
 };
 
 const meshio_fmt fmt_vtu_ascii = {
@@ -2306,4 +2351,5 @@ const meshio_fmt fmt_vtu_ascii = {
     .read = read_vtu,
     .write = write_vtu,
     .splices = 1,
+    .p2 = 1,
 };

@@ -77,6 +77,8 @@ static uint64_t mesh_hash(const mesh_t *m)
     h = hash_bytes(h, m->vref, 4 * (size_t)m->nv);
     h = hash_bytes(h, m->tris, 12 * (size_t)m->ntri);
     h = hash_bytes(h, m->tri_ref, 4 * (size_t)m->ntri);
+    if (m->mid)
+        h = hash_bytes(h, m->mid, 24 * (size_t)m->nt);
     return h;
 }
 

@@ -237,6 +237,7 @@ qdc_status ctx_init(ctx_t *c, const mesh_t *m, const mesh_topo *tp, const opt_op
     memset(c, 0, sizeof *c);
     c->o = o;
     c->tp = tp;
+    c->region = m->region;
     c->nv = m->nv;
     c->nt = m->nt;
     c->x = qdc_mallocn(n3, sizeof(double));

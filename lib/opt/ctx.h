@@ -18,18 +18,24 @@ typedef struct {
     double center[3], scale; /* x = (X - center) / scale */
     double lbar, eps;
     double *x, *x0, *xn, *xbest, *trial, *tmp, *rhs;
-    uint8_t *locked;  /* not an unknown of the linear system */
-    double *vfac;     /* nv: share of the step each vertex takes (feasible step) */
-    double hbound;    /* --hausd in normalized units (0: none) */
-    int autob;        /* the default bound (--hausd auto under slide) */
-    int rerun_stuck;  /* tets left inverted get a rerun (run_once's stuck): no angle
-                       * pass on such a result, the rerun's own does it */
-    int keep_surface; /* the finishing pass folds no tet at the surface (finish.h) */
-    uint8_t *vmark;   /* nv: scratch marks */
-    int32_t *vlist;   /* nv: scratch list of vertices */
-    double *wq2;      /* squared QDC row weights */
-    double *bw2;      /* squared boundary row weights (0: no row) */
-    double *dg;       /* bw2 + mu */
+    uint8_t *locked;       /* not an unknown of the linear system */
+    double *vfac;          /* nv: share of the step each vertex takes (feasible step) */
+    double hbound;         /* --hausd in normalized units (0: none) */
+    int autob;             /* the default bound (--hausd auto under slide) */
+    int rerun_stuck;       /* tets left inverted get a rerun (run_once's stuck): no angle
+                            * pass on such a result, the rerun's own does it */
+    int keep_surface;      /* the finishing pass folds no tet at the surface (finish.h) */
+    const int32_t *region; /* the mesh's region tags (NULL: none), for local.c */
+    /* Optimizes a mesh of its own (local.c's regions, in normalized units):
+     * set by opt_run_once on the runs it makes for its callers, NULL on the
+     * regions' own runs (so a region is not repaired inside itself). */
+    qdc_status (*repair)(mesh_t *m, const opt_options *o, int keep_surface, opt_result *r,
+                         qdc_error *err);
+    uint8_t *vmark; /* nv: scratch marks */
+    int32_t *vlist; /* nv: scratch list of vertices */
+    double *wq2;    /* squared QDC row weights */
+    double *bw2;    /* squared boundary row weights (0: no row) */
+    double *dg;     /* bw2 + mu */
     double *qt, *qval, *d;
     uint8_t *fslot; /* encode_face_slots (NULL: searched) */
     double *eta; /* nt: mean ratio per tet at the x of the last evaluate() that asked */

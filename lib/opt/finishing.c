@@ -5,6 +5,7 @@
 
 #include "opt/angle.h"
 #include "opt/finish.h"
+#include "opt/local.h"
 #include "opt/untangle.h"
 
 #include <math.h>
@@ -330,6 +331,9 @@ qdc_status opt_finishing_phase(ctx_t *c, opt_result *res, opt_progress *r)
     }
     if (st == QDC_OK && c->best.n_inverted > 0 && res->stop != OPT_STOP_CANCELLED)
         st = untangle_pass(c, movable, res, r, &next);
+    /* still inverted: their neighbourhoods again on their own (local.c) */
+    if (st == QDC_OK && c->best.n_inverted > 0 && res->stop != OPT_STOP_CANCELLED)
+        st = local_pass(c, res, r, &next);
     /* (measured on a 4M-tet cube whose finished mesh kept one inverted tet:
      * the angle pass took 12 s, from an unfinished iterate, for a result the
      * rerun replaced) */

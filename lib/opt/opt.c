@@ -160,16 +160,37 @@ static void map_back(ctx_t *c, mesh_t *m, const mesh_topo *tp, opt_result *res)
                        : OPT_STOPPED;
 }
 
+static qdc_status run_once(mesh_t *m, const opt_options *opts, const uint8_t *pins,
+                           const uint8_t *loose, uint8_t **squashed, uint8_t **stuck,
+                           int keep_surface, int region, opt_result *res_out,
+                           qdc_error *err);
+
+/* The repair hook of a run (ctx.h): one run of a region of its mesh, itself
+ * without the hook. */
+static qdc_status run_region(mesh_t *m, const opt_options *o, int keep_surface,
+                             opt_result *r, qdc_error *err)
+{
+    return run_once(m, o, NULL, NULL, NULL, NULL, keep_surface, 1, r, err);
+}
+
+qdc_status opt_run_once(mesh_t *m, const opt_options *opts, const uint8_t *pins,
+                        const uint8_t *loose, uint8_t **squashed, uint8_t **stuck,
+                        int keep_surface, opt_result *res_out, qdc_error *err)
+{
+    return run_once(m, opts, pins, loose, squashed, stuck, keep_surface, 0, res_out, err);
+}
+
 /* One optimization of m. pins (nv flags, may be NULL): extra vertices that
  * keep their input position; loose (may be NULL): sliding vertices that move
  * freely (slide_release). In slide mode *squashed (if not NULL) receives the
  * corners of the ears this run squashed (opt_squashed_ears), and *stuck (if
  * not NULL) the boundary vertices around tets left inverted (opt_stuck_boundary);
  * else NULL. keep_surface: the finishing pass folds no tet at the surface
- * (finish.h). */
-qdc_status opt_run_once(mesh_t *m, const opt_options *opts, const uint8_t *pins,
-                        const uint8_t *loose, uint8_t **squashed, uint8_t **stuck,
-                        int keep_surface, opt_result *res_out, qdc_error *err)
+ * (finish.h). region: a run of local.c's region (no repair hook). */
+static qdc_status run_once(mesh_t *m, const opt_options *opts, const uint8_t *pins,
+                           const uint8_t *loose, uint8_t **squashed, uint8_t **stuck,
+                           int keep_surface, int region, opt_result *res_out,
+                           qdc_error *err)
 {
     opt_options o;
     opt_result res;
@@ -201,6 +222,7 @@ qdc_status opt_run_once(mesh_t *m, const opt_options *opts, const uint8_t *pins,
     if (st != QDC_OK)
         goto out;
     c.keep_surface = keep_surface;
+    c.repair = region ? NULL : run_region;
     if (ctx_report(&c, &r)) {
         stop = 1;
         ctx_set_stop(&res, OPT_STOP_CANCELLED);

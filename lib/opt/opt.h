@@ -137,9 +137,11 @@ const char *opt_topology_name(opt_topology t);
 
 typedef struct {
     opt_outcome outcome;
-    int iterations;      /* global iterations done */
-    int best_iteration;  /* which iterate was returned (0 = input) */
-    int last_record;     /* number of the last progress record */
+    int iterations;      /* global iterations done, over all the runs (reruns, rounds) */
+    int best_iteration;  /* the progress record of the returned mesh (0 = input) */
+    int last_record;     /* number of the last progress record: the run's iterations
+                          * as the report, qdc and qdcd count them (docs/defaults.md,
+                          * "One iteration count") */
     opt_solver solver;   /* solver used */
     double solver_flops; /* CHOLMOD analysis estimate (0 if not analysed) */
     double t_setup, t_weights, t_assembly, t_solve, t_linesearch, t_harmonic, t_finish,
@@ -161,9 +163,27 @@ typedef struct {
     int64_t topo_flips23;        /* 2-3 face flips */
     int64_t topo_multiface;      /* multi-face removals */
     int64_t topo_insertions;     /* --topology full: interior vertices inserted */
+    int64_t topo_contractions;   /* --topology full: interior edges contracted */
+    int64_t topo_bflips;         /* --topology with --hausd: boundary edge flips */
+    int64_t topo_peels;          /* ... and flat tets peeled off the boundary */
+    int32_t topo_tris_removed;   /* ... boundary triangles of the input removed */
+    int32_t topo_tris_added;     /* ... and new boundary triangles written */
     int32_t verts_in, verts_out; /* --topology: vertices before and after */
     int topo_rounds;             /* rounds of flips followed by smoothing */
-    opt_stop stop;               /* why the run stopped (decides; stop_reason names it) */
+    /* second-order tets (mesh_t.mid, opt/p2.c); all 0 for linear tets: */
+    int32_t p2_tets;          /* 10-node tets */
+    int32_t p2_mid;           /* mid-edge nodes */
+    int32_t p2_mid_moved;     /* of those, moved with their edge */
+    int32_t p2_boundary_mid;  /* of those, on the boundary (on the curved surface) */
+    int32_t p2_pulled;        /* moved toward the straight midpoint (Jacobian) */
+    int32_t p2_bad_in;        /* elements with a Jacobian <= 0 at a node or the */
+    int32_t p2_bad_out;       /*   centroid, in the input and the result */
+    double p2_jac_min_in;     /* smallest scaled Jacobian (1 = straight), in the */
+    double p2_jac_min_out;    /*   input and the result */
+    double p2_bd_mid_dist;    /* largest distance of a boundary mid-edge node to the
+                               * input's curved boundary (its quadratic triangles) */
+    double p2_bd_corner_dist; /* the same, of the boundary corners */
+    opt_stop stop;            /* why the run stopped (decides; stop_reason names it) */
     char stop_reason[64]; /* opt_stop_name(stop): "converged", "max-iter", "no-descent",
                            * "cancelled", "time-limit", "solver" */
 } opt_result;

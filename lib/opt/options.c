@@ -163,9 +163,11 @@ static const char *const solver_say[] = {
 static const char *const topology_say[] = {
     "vertices move, the tets stay as they are (point and cell data map one to one)",
     "tets are also flipped where that raises the worst quality around them: "
-    "vertices, boundary triangles and region tags kept, the tet count changes",
-    "flips, then a vertex inserted inside where a tet stays very bad (below 0.15 "
-    "mean ratio): boundary triangles and region tags kept, vertices added"};
+    "vertices, boundary triangles and region tags kept, the tet count changes (with "
+    "--hausd given, boundary edges flipped and flat tets peeled off within it)",
+    "flips, then a round that also contracts interior edges and inserts vertices "
+    "inside where tets stay bad, kept when better: boundary triangles and region "
+    "tags kept, vertices added and removed inside"};
 
 #define OFF(f) offsetof(opt_options, f)
 #define WORDS(w) w, (int)(sizeof w / sizeof w[0])
@@ -225,8 +227,8 @@ static const opt_desc table[] = {
     {"topology", OPT_T_WORD, OFF(topology), 0, 0, 0, WORDS(topology_names),
      "none: connectivity kept; flips: the smoother alternated with edge removal, 2-3 "
      "flips and multi-face removal (vertices, boundary triangles and region tags kept); "
-     "full: flips and interior vertex insertion (vertices added inside, boundary "
-     "triangles and region tags kept)",
+     "full: flips, then interior edge contraction and vertex insertion when better "
+     "(vertices added and removed inside, boundary triangles and region tags kept)",
      OPT_G_EVERYDAY, topology_say},
     {"time_limit", OPT_T_REAL, OFF(time_limit), 0, 1e9, 0, NULL, 0,
      "seconds, then the best mesh so far (0: none)", OPT_G_EVERYDAY, NULL},

@@ -34,6 +34,14 @@ static int rerun_report(void *ctx, const opt_progress *p)
     return rp->fn(rp->ctx, &q);
 }
 
+/* A run whose records were published from number offset on: its record
+ * numbers (the last, the best) in the whole run's numbering. */
+static void numbered_on(opt_result *r, int offset)
+{
+    r->last_record += offset;
+    r->best_iteration += offset;
+}
+
 /* run_once again after the run prev, its progress records numbered on. */
 static qdc_status run_again(mesh_t *m, const opt_options *opts, const opt_result *prev,
                             const uint8_t *pins, const uint8_t *loose, uint8_t **squashed,
@@ -45,15 +53,20 @@ static qdc_status run_again(mesh_t *m, const opt_options *opts, const opt_result
     rerun_progress rp = {opts->progress, opts->progress_ctx, prev->last_record + 1,
                          prev->t_total};
 
+    qdc_status st;
+
     if (opts->progress) {
         o2.progress = rerun_report;
         o2.progress_ctx = &rp;
     }
-    return opt_run_once(m, &o2, pins, loose, squashed, stuck, keep_surface, r, err);
+    st = opt_run_once(m, &o2, pins, loose, squashed, stuck, keep_surface, r, err);
+    numbered_on(r, rp.offset);
+    return st;
 }
 
 /* After a rerun r with coordinates x: best and xbest become r's if better;
- * either way the times add up and the records go on. */
+ * either way the times and the global iterations add up and the records go
+ * on (docs/defaults.md, "One iteration count"). */
 static void keep_better(opt_result *best, opt_result *r, double *xbest, const double *x,
                         size_t n3)
 {
@@ -62,6 +75,8 @@ static void keep_better(opt_result *best, opt_result *r, double *xbest, const do
                     &best->t_finish, &best->t_total};
     double *tr[] = {&r->t_setup,      &r->t_weights,  &r->t_assembly, &r->t_solve,
                     &r->t_linesearch, &r->t_harmonic, &r->t_finish,   &r->t_total};
+
+    int global = best->iterations + r->iterations;
 
     for (int i = 0; i < 8; i++) /* the phase times of all runs add up */
         *tr[i] += *tb[i];
@@ -73,6 +88,7 @@ static void keep_better(opt_result *best, opt_result *r, double *xbest, const do
             *tb[i] = *tr[i];
         best->last_record = r->last_record;
     }
+    best->iterations = global;
 }
 
 /* A rerun's log line, if the caller logs. */
@@ -209,6 +225,7 @@ static qdc_status rerun_no_fold(mesh_t *m, const opt_options *opts, opt_result *
     }
     memcpy(m->xyz, xin, n3 * sizeof(double));
     st = run_numbered(m, &wide, &r, err); /* not again: its bound is not the default */
+    numbered_on(&r, rp.offset);
     if (st == QDC_OK)
         keep_better(best, &r, xbest, m->xyz, n3);
     return st;

@@ -3,6 +3,7 @@
 #include "topo/flip.h"
 
 #include "core/tet.h"
+#include "geom/bderr_int.h"
 
 #include <math.h>
 #include <string.h>
@@ -38,70 +39,20 @@ static int even_perm(int i, int j, int k, int l)
     return !(inv & 1);
 }
 
-int flip_edge_eval(const tmesh *tm, int32_t t, int e, int maxring, double floor4,
-                   double margin, flip_cand *c)
+/* Klincsek's dynamic programming over the polygon ring[0..n) (n >= 3) seen from
+ * the edge ab, (a, b, ring[x], ring[x+1]) positive: the triangulation whose
+ * worst tet is best, each triangle (x, z, y) making (ring x, z, y, b) and
+ * (ring x, y, z, a); every new tet above qneed. Fills c->newt, c->nnew,
+ * c->qmin_new and *qsum; 0 when there is none. */
+static int ring_dp(const tmesh *tm, int32_t a, int32_t b, const int32_t *ring, int n,
+                   double qneed, double floor4, flip_cand *c, double *qsum)
 {
-    const int32_t *tt = tm->tv + 4 * (size_t)t;
-    int i = tmesh_edge[e][0], j = tmesh_edge[e][1], k = -1, l = -1, n = 1;
-    int32_t a, b, ring[FLIP_MAXRING + 1], cur = t, prev, pc;
     /* best[x][y]: the best triangulation of ring[x..y]: its worst quality, its
      * sum, its apex (-1: none valid); x + 1 == y is an edge of the polygon */
-    double bmin[FLIP_MAXRING][FLIP_MAXRING], bsum[FLIP_MAXRING][FLIP_MAXRING];
-    int8_t bk[FLIP_MAXRING][FLIP_MAXRING];
-    int stk[FLIP_MAXRING][2], ns = 0;
-    double qneed, qsum = 0.0;
+    double bmin[FLIP_MAXRING + 1][FLIP_MAXRING + 1], bsum[FLIP_MAXRING + 1][FLIP_MAXRING + 1];
+    int8_t bk[FLIP_MAXRING + 1][FLIP_MAXRING + 1];
+    int stk[FLIP_MAXRING + 1][2], ns = 0;
 
-    if (maxring > FLIP_MAXRING)
-        maxring = FLIP_MAXRING;
-    if (tm->econs[t] >> e & 1 || tm->q[t] < -1.0)
-        return 0;
-    for (int s = 0; s < 4; s++)
-        if (s != i && s != j) {
-            if (k < 0)
-                k = s;
-            else
-                l = s;
-        }
-    a = tt[i];
-    b = tt[j];
-    /* (a, b, ring[x], ring[x+1]) are the ring's tets, positive */
-    if (even_perm(i, j, k, l)) {
-        ring[0] = tt[k];
-        ring[1] = tt[l];
-    } else {
-        ring[0] = tt[l];
-        ring[1] = tt[k];
-    }
-    c->old[0] = t;
-    prev = ring[0];
-    pc = ring[1];
-    for (;;) {
-        int32_t nb = tm->adj[4 * (size_t)cur + tmesh_local(tm, cur, prev)], u, pn = -1;
-        const int32_t *tu;
-        if (nb < 0)
-            return 0;
-        u = nb / 4;
-        if (u == t)
-            break;
-        if (n >= maxring || tm->tag[u] != tm->tag[t] || tm->q[u] < -1.0)
-            return 0;
-        tu = tm->tv + 4 * (size_t)u;
-        for (int s = 0; s < 4; s++)
-            if (tu[s] != a && tu[s] != b && tu[s] != pc)
-                pn = tu[s];
-        c->old[n] = u;
-        ring[n + 1] = pn;
-        n++;
-        prev = pc;
-        pc = pn;
-        cur = u;
-    }
-    if (n < 3 || ring[n] != ring[0])
-        return 0;
-    c->kind = FLIP_EDGE;
-    c->nold = n;
-    c->qmin_old = cavity_min(tm, c->old, n);
-    qneed = c->qmin_old + margin;
     for (int x = 0; x + 1 < n; x++) {
         bmin[x][x + 1] = INFINITY;
         bsum[x][x + 1] = 0.0;
@@ -163,11 +114,340 @@ int flip_edge_eval(const tmesh *tm, int32_t t, int e, int maxring, double floor4
         stk[ns][1] = y;
         ns++;
     }
-    qsum = bsum[0][n - 1];
+    *qsum = bsum[0][n - 1];
+    return 1;
+}
+
+/* The other two local vertices of tet t than i and j, ordered so that
+ * (v[i], v[j], v[k], v[l]) is positive. */
+static void edge_ring_start(const int32_t *tt, int i, int j, int32_t *r0, int32_t *r1)
+{
+    int k = -1, l = -1;
+
+    for (int s = 0; s < 4; s++)
+        if (s != i && s != j) {
+            if (k < 0)
+                k = s;
+            else
+                l = s;
+        }
+    if (even_perm(i, j, k, l)) {
+        *r0 = tt[k];
+        *r1 = tt[l];
+    } else {
+        *r0 = tt[l];
+        *r1 = tt[k];
+    }
+}
+
+/* The candidate of an edge ab's removal completed: its key and totals. */
+static void edge_done(const tmesh *tm, flip_cand *c, int32_t a, int32_t b, double qsum)
+{
     c->key[0] = a < b ? a : b;
     c->key[1] = a < b ? b : a;
     c->key[2] = -1;
     finish_cand(tm, c, qsum);
+}
+
+int flip_edge_eval(const tmesh *tm, int32_t t, int e, int maxring, double floor4,
+                   double margin, flip_cand *c)
+{
+    const int32_t *tt = tm->tv + 4 * (size_t)t;
+    int i = tmesh_edge[e][0], j = tmesh_edge[e][1], n = 1;
+    int32_t a, b, ring[FLIP_MAXRING + 1], cur = t, prev, pc;
+    double qsum = 0.0;
+
+    if (maxring > FLIP_MAXRING)
+        maxring = FLIP_MAXRING;
+    if (tm->econs[t] >> e & 1 || tm->q[t] < -1.0)
+        return 0;
+    a = tt[i];
+    b = tt[j];
+    /* (a, b, ring[x], ring[x+1]) are the ring's tets, positive */
+    edge_ring_start(tt, i, j, &ring[0], &ring[1]);
+    c->old[0] = t;
+    prev = ring[0];
+    pc = ring[1];
+    for (;;) {
+        int32_t nb = tm->adj[4 * (size_t)cur + tmesh_local(tm, cur, prev)], u, pn = -1;
+        const int32_t *tu;
+        if (nb < 0)
+            return 0;
+        u = nb / 4;
+        if (u == t)
+            break;
+        if (n >= maxring || tm->tag[u] != tm->tag[t] || tm->q[u] < -1.0)
+            return 0;
+        tu = tm->tv + 4 * (size_t)u;
+        for (int s = 0; s < 4; s++)
+            if (tu[s] != a && tu[s] != b && tu[s] != pc)
+                pn = tu[s];
+        c->old[n] = u;
+        ring[n + 1] = pn;
+        n++;
+        prev = pc;
+        pc = pn;
+        cur = u;
+    }
+    if (n < 3 || ring[n] != ring[0])
+        return 0;
+    c->kind = FLIP_EDGE;
+    c->nold = n;
+    c->dev = 0.0;
+    c->qmin_old = cavity_min(tm, c->old, n);
+    if (!ring_dp(tm, a, b, ring, n, c->qmin_old + margin, floor4, c, &qsum))
+        return 0;
+    edge_done(tm, c, a, b, qsum);
+    return 1;
+}
+
+static void sub3(const double *p, const double *q, double *r)
+{
+    r[0] = p[0] - q[0];
+    r[1] = p[1] - q[1];
+    r[2] = p[2] - q[2];
+}
+
+static void cross3(const double *u, const double *v, double *r)
+{
+    r[0] = u[1] * v[2] - u[2] * v[1];
+    r[1] = u[2] * v[0] - u[0] * v[2];
+    r[2] = u[0] * v[1] - u[1] * v[0];
+}
+
+static double dot3(const double *u, const double *v)
+{
+    return u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
+}
+
+/* The distance from p to the triangle (a, b, c). */
+static double point_tri(const double *p, const double *a, const double *b,
+                        const double *c)
+{
+    double cp[3];
+
+    return bderr_point_triangle(p, a, b, c, cp);
+}
+
+/* The surface moved from the boundary triangles (a, b, c) and (b, a, d) to
+ * (c, d, a) and (d, c, b), the four faces of the tet abcd: a bound on the
+ * Hausdorff distance, or -1 when not allowed: the smaller of two. Below, the
+ * slab of a convex quad. Else: the distance to a triangle is
+ * convex, so over a triangle with two corners on another it is largest at the
+ * third: a point of acd is within min(|d, abc|, |c, abd|) of the old surface,
+ * and so on for each of the four. Not allowed: the triangles' normals more
+ * than the feature angle apart (acos cos_feature) and, when convex is set, a
+ * quad acbd that is not convex seen along ab x cd (a flip needs one; peeling
+ * does not). */
+static double quad_dev(const tmesh *tm, int32_t a, int32_t b, int32_t c, int32_t d,
+                       double cos_feature, int convex)
+{
+    const double *pa = tm->xyz + 3 * (size_t)a, *pb = tm->xyz + 3 * (size_t)b;
+    const double *pc = tm->xyz + 3 * (size_t)c, *pd = tm->xyz + 3 * (size_t)d;
+    double ab[3], cd[3], ac[3], ad[3], ca[3], cb[3], n[3], w[3], n1[3], n2[3], ba[3],
+        bd[3], s1, s2, s3, s4, l1, l2, hn, ho, slab;
+
+    sub3(pb, pa, ab);
+    sub3(pd, pc, cd);
+    sub3(pc, pa, ac);
+    sub3(pd, pa, ad);
+    sub3(pa, pc, ca);
+    sub3(pb, pc, cb);
+    /* ab and cd crossing seen along n = ab x cd (a convex quad): each surface
+     * is a graph over the quad along n, so each point of one is within the
+     * slab width |ac . n| / |n| = 6V / |ab x cd| of the other */
+    cross3(ab, cd, n);
+    cross3(ab, ac, w);
+    s1 = dot3(w, n);
+    cross3(ab, ad, w);
+    s2 = dot3(w, n);
+    cross3(cd, ca, w);
+    s3 = dot3(w, n);
+    cross3(cd, cb, w);
+    s4 = dot3(w, n);
+    slab = s1 * s2 < 0.0 && s3 * s4 < 0.0 && dot3(n, n) > 0.0
+               ? fabs(dot3(ac, n)) / sqrt(dot3(n, n))
+               : INFINITY;
+    if (convex && slab == INFINITY)
+        return -1.0;
+    sub3(pa, pb, ba);
+    sub3(pd, pb, bd);
+    cross3(ab, ac, n1);
+    cross3(ba, bd, n2);
+    l1 = sqrt(dot3(n1, n1));
+    l2 = sqrt(dot3(n2, n2));
+    if (!(l1 > 0.0 && l2 > 0.0) || dot3(n1, n2) < cos_feature * l1 * l2)
+        return -1.0;
+    /* new to old (acd and bcd alike), old to new (abc and abd alike) */
+    hn = fmin(point_tri(pd, pa, pb, pc), point_tri(pc, pa, pb, pd));
+    ho = fmin(point_tri(pb, pa, pc, pd), point_tri(pa, pb, pc, pd));
+    return fmin(slab, fmax(hn, ho));
+}
+
+/* 1 when the boundary faces fa (of ta) and fb (of tb) carry the same ref and
+ * orientation rule, with *dev their larger deviation so far. */
+static int same_surface(const tmesh *tm, int32_t ta, int fa, int32_t tb, int fb,
+                        double *dev)
+{
+    int32_t sa = 4 * ta + fa, sb = 4 * tb + fb;
+
+    if (!tm->fref || tm->fref[sa] != tm->fref[sb] ||
+        (tm->fsurf[ta] >> (4 + fa) & 1) != (tm->fsurf[tb] >> (4 + fb) & 1))
+        return 0;
+    *dev = fmax(tm->fdev[sa], tm->fdev[sb]);
+    return 1;
+}
+
+/* 1 when vertex d is in the star of vertex c, which tet t0 is in: an edge cd
+ * exists (or the star is too large, or not one piece through its faces, to
+ * tell: a pinched vertex, whose other piece may hold d). A search over the
+ * tets around c through the faces that contain c. */
+static int edge_exists(const tmesh *tm, int32_t t0, int32_t c, int32_t d)
+{
+    int32_t star[256];
+    int n = tmesh_star(tm, t0, c, star, 256);
+
+    if (n < 0 || (tm->vdeg && n != tm->vdeg[c]))
+        return 1;
+    for (int k = 0; k < n; k++)
+        if (tmesh_local(tm, star[k], d) >= 0)
+            return 1;
+    return 0;
+}
+
+int flip_bedge_eval(const tmesh *tm, int32_t t, int e, int maxring, double floor4,
+                    double margin, const flip_bound *bd, flip_cand *c)
+{
+    const int32_t *tt = tm->tv + 4 * (size_t)t;
+    int i = tmesh_edge[e][0], j = tmesh_edge[e][1], n;
+    int32_t a = tt[i], b = tt[j], ring[FLIP_MAXRING + 1], x0, x1, cur = t, first, tag;
+    double qsum = 0.0, dev0, w;
+
+    if (maxring > FLIP_MAXRING)
+        maxring = FLIP_MAXRING;
+    if (!(tm->econs[t] >> e & 1) || tm->q[t] < -1.0 || !tm->fref || !(bd->hausd > 0))
+        return 0;
+    tag = tm->tag[t];
+    edge_ring_start(tt, i, j, &x0, &x1);
+    /* back to the fan's first tet, whose face (a, b, x0) is on the boundary */
+    for (n = 1;; n++) {
+        int l = tmesh_local(tm, cur, x1);
+        int32_t nb = tm->adj[4 * (size_t)cur + l], u, wv = -1;
+        const int32_t *tu;
+        if (nb < 0)
+            break;
+        u = nb / 4;
+        if (u == t || n >= maxring || tm->fcons[cur] >> l & 1 || tm->tag[u] != tag ||
+            tm->q[u] < -1.0)
+            return 0; /* a closed ring (interior edge), too long, an interface */
+        tu = tm->tv + 4 * (size_t)u;
+        for (int s = 0; s < 4; s++)
+            if (tu[s] != a && tu[s] != b && tu[s] != x0)
+                wv = tu[s];
+        x1 = x0;
+        x0 = wv;
+        cur = u;
+    }
+    first = cur;
+    ring[0] = x0;
+    ring[1] = x1;
+    c->old[0] = cur;
+    /* forward to the last, whose face (a, b, ring[n - 1]) is on the boundary */
+    for (n = 1;; n++) {
+        int l = tmesh_local(tm, cur, ring[n - 1]);
+        int32_t nb = tm->adj[4 * (size_t)cur + l], u, pn = -1;
+        const int32_t *tu;
+        if (nb < 0)
+            break;
+        u = nb / 4;
+        if (n >= maxring || tm->fcons[cur] >> l & 1 || tm->tag[u] != tag ||
+            tm->q[u] < -1.0)
+            return 0;
+        tu = tm->tv + 4 * (size_t)u;
+        for (int s = 0; s < 4; s++)
+            if (tu[s] != a && tu[s] != b && tu[s] != ring[n])
+                pn = tu[s];
+        c->old[n] = u;
+        ring[n + 1] = pn;
+        cur = u;
+    }
+    /* n tets, n + 1 ring vertices; one tet is peeling (flip_peel_eval) */
+    if (n < 2 ||
+        !same_surface(tm, first, tmesh_local(tm, first, ring[1]), cur,
+                      tmesh_local(tm, cur, ring[n - 1]), &dev0))
+        return 0;
+    /* an edge cd elsewhere (across a thin wall) would be doubled, its faces
+     * shared by three tets */
+    if (edge_exists(tm, first, ring[0], ring[n]))
+        return 0;
+    w = quad_dev(tm, a, b, ring[0], ring[n], bd->cos_feature, 1);
+    if (w < 0.0 || w + dev0 > bd->hausd)
+        return 0;
+    c->kind = FLIP_BEDGE;
+    c->nold = n;
+    c->dev = w;
+    c->qmin_old = cavity_min(tm, c->old, n);
+    if (!ring_dp(tm, a, b, ring, n + 1, c->qmin_old + margin, floor4, c, &qsum))
+        return 0;
+    edge_done(tm, c, a, b, qsum);
+    return 1;
+}
+
+int flip_peel_eval(const tmesh *tm, int32_t t, double margin, const flip_bound *bd,
+                   flip_cand *c)
+{
+    const int32_t *tt = tm->tv + 4 * (size_t)t;
+    int fb[4], nfb = 0, fi[4], nfi = 0;
+    double dev0, w, qn = INFINITY;
+
+    if (!tm->fref || !(bd->hausd > 0) || tm->q[t] < -1.0)
+        return 0;
+    for (int f = 0; f < 4; f++) {
+        int32_t nb = tm->adj[4 * (size_t)t + f];
+        if (nb < 0)
+            fb[nfb++] = f;
+        else if (tm->fcons[t] >> f & 1 || tm->q[nb / 4] < -1.0)
+            return 0; /* an interface: the other region's tets would be exposed */
+        else
+            fi[nfi++] = f;
+    }
+    if (nfb != 2 || !same_surface(tm, t, fb[0], t, fb[1], &dev0))
+        return 0;
+    /* the boundary faces are (a, b, d) and (a, b, c), opposite c = tt[fb[0]] and
+     * d = tt[fb[1]]; (a, b) in the order that makes (a, b, c, d) positive */
+    {
+        int i = fi[0], j = fi[1];
+        int32_t a = tt[i], b = tt[j], c0, d0;
+        /* cd on the boundary already would be left with four boundary faces */
+        for (int e = 0; e < 6; e++)
+            if (((tmesh_edge[e][0] == fb[0] && tmesh_edge[e][1] == fb[1]) ||
+                 (tmesh_edge[e][0] == fb[1] && tmesh_edge[e][1] == fb[0])) &&
+                (tm->econs[t] >> e & 1))
+                return 0;
+        edge_ring_start(tt, i, j, &c0, &d0);
+        w = quad_dev(tm, a, b, c0, d0, bd->cos_feature, 0);
+    }
+    if (w < 0.0 || w + dev0 > bd->hausd)
+        return 0;
+    for (int k = 0; k < nfi; k++) {
+        double q = tm->q[tm->adj[4 * (size_t)t + fi[k]] / 4];
+        if (q < qn)
+            qn = q;
+    }
+    c->kind = FLIP_PEEL;
+    c->nold = 1;
+    c->old[0] = t;
+    c->nnew = 0;
+    c->dev = w;
+    c->qmin_old = tm->q[t];
+    /* the tets across the two faces that become boundary are unchanged: the
+     * cavity's new minimum is theirs */
+    c->qmin_new = qn;
+    if (!(qn > c->qmin_old + margin))
+        return 0;
+    tet_sort3(tt[fb[0]], tt[fb[1]], tt[fi[0]] < tt[fi[1]] ? tt[fi[0]] : tt[fi[1]],
+              c->key);
+    finish_cand(tm, c, 0.0);
     return 1;
 }
 
@@ -189,6 +469,7 @@ int flip_23_eval(const tmesh *tm, int32_t t, int f, double floor4, double margin
     f1 = tt[tet_face_of[f][1]];
     f2 = tt[tet_face_of[f][2]];
     c->kind = FLIP_23;
+    c->dev = 0.0;
     c->nold = 2;
     c->old[0] = t;
     c->old[1] = u;
@@ -384,6 +665,7 @@ int flip_multiface_eval(const tmesh *tm, int32_t t, int f, int maxring, double f
     if (!best_n)
         return 0;
     c->kind = FLIP_MULTIFACE;
+    c->dev = 0.0;
     c->nold = 2 * best_n;
     for (int i = 0; i < best_n; i++) {
         c->old[2 * i] = best_s[i].ta;

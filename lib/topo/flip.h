@@ -13,16 +13,23 @@
 #include "topo/tmesh.h"
 
 enum { FLIP_MAXRING = 10 };
-enum { FLIP_EDGE = 1, FLIP_23 = 2, FLIP_MULTIFACE = 3 };
+enum { FLIP_EDGE = 1, FLIP_23 = 2, FLIP_MULTIFACE = 3, FLIP_BEDGE = 4, FLIP_PEEL = 5 };
+
+/* What a boundary operation may do (flip_bedge_eval, flip_peel_eval). */
+typedef struct {
+    double hausd;       /* > 0: a bound on how far the surface may move (mesh units) */
+    double cos_feature; /* the two triangles' normals at most this far apart */
+} flip_bound;
 
 typedef struct {
-    int kind; /* FLIP_EDGE or FLIP_23 */
+    int kind; /* FLIP_EDGE, FLIP_23, ... */
     int nold; /* tets removed (the ring, or the two tets of the face) */
     int nnew; /* tets made */
     int32_t old[2 * FLIP_MAXRING];
     int32_t newt[2 * FLIP_MAXRING][4];
     double qmin_old, qmin_new; /* smallest mean ratio in the cavity before, after */
     double gain;               /* sum of (1 - q) over the old tets less over the new */
+    double dev;                /* a boundary operation: how far the surface moves */
     int32_t key[3]; /* the edge's vertices sorted (and -1), or the (first) face's */
 } flip_cand;
 
@@ -54,5 +61,26 @@ int flip_23_eval(const tmesh *tm, int32_t t, int f, double floor4, double margin
  * leaves the mesh: the disk never has a vertex inside it. */
 int flip_multiface_eval(const tmesh *tm, int32_t t, int f, int maxring, double floor4,
                         double margin, flip_cand *c);
+
+/* Boundary edge flip (Stellar's 2-2 boundary flip, mmg's boundary swap) under
+ * a surface attached (tmesh_set_surface): the boundary edge e = ab of t, whose
+ * open fan of n = 2..maxring - 1 tets runs from boundary triangle (a, b, c) to
+ * (b, a, d) through unconstrained faces of one tag, becomes edge cd: the fan's
+ * polygon c ... d triangulated best (as flip_edge_eval) over the new edge cd,
+ * the boundary triangles (c, d, a) and (d, c, b). Allowed when the two
+ * triangles carry one ref, quad acbd is convex seen across it, their normals
+ * are within the feature angle, and the surface moves by at most bd->hausd
+ * together with what the two faces moved before (c->dev: this move).
+ * Returns 1 with *c filled when the new tets are above qmin_old + margin. */
+int flip_bedge_eval(const tmesh *tm, int32_t t, int e, int maxring, double floor4,
+                    double margin, const flip_bound *bd, flip_cand *c);
+
+/* Peeling: t with exactly two boundary faces (a, b, c) and (b, a, d), one
+ * ref, and two unconstrained interior faces is removed; (c, d, a) and (d, c,
+ * b) become boundary faces of the tets across them. Allowed as for
+ * flip_bedge_eval; taken when the tets across (the cavity's new minimum) are
+ * above t's quality + margin. c->nnew is 0. */
+int flip_peel_eval(const tmesh *tm, int32_t t, double margin, const flip_bound *bd,
+                   flip_cand *c);
 
 #endif

@@ -24,9 +24,17 @@ qdc_status tmesh_add_vertex(tmesh *tm, const double p[3])
         if (!c)
             return QDC_ENOMEM;
         tm->vcons = c;
+        if (tm->vdeg) {
+            int32_t *d = qdc_realloc(tm->vdeg, (size_t)cap * sizeof *d);
+            if (!d)
+                return QDC_ENOMEM;
+            tm->vdeg = d;
+        }
         tm->vcap = cap;
     }
     memcpy(tm->xyz + 3 * (size_t)tm->nv, p, 3 * sizeof *p);
+    if (tm->vdeg)
+        tm->vdeg[tm->nv] = 0;
     tm->vcons[tm->nv++] = 0;
     return QDC_OK;
 }

@@ -9,7 +9,9 @@
  * (01 02 03 12 13 23, the order of metric_dihedrals).
  * Constrained: a boundary face (of one tet), a face between tets of different
  * tags, and every edge of such a face. Operations never remove a constrained face
- * or edge, so the boundary triangles and the interfaces stay as they are.
+ * or edge, so the boundary triangles and the interfaces stay as they are; the
+ * one exception is tmesh_replace_surface (boundary flips and peeling under a
+ * Hausdorff bound), which needs the surface given by tmesh_set_surface.
  * Thread safety: a tmesh is used by one thread at a time. */
 #ifndef QDC_TMESH_H
 #define QDC_TMESH_H
@@ -21,6 +23,9 @@
 extern const int tmesh_edge[6][2];
 
 typedef struct tmesh_jent tmesh_jent; /* a journal entry (tmesh.c) */
+
+/* The surface ref of a boundary face that no input triangle carries. */
+#define TMESH_NOREF INT32_MIN
 
 typedef struct tmesh {
     int32_t nv;      /* vertices */
@@ -43,6 +48,17 @@ typedef struct tmesh {
     int32_t *freel;  /* free slots below hi, a stack */
     int32_t nfree;
     uint8_t *mark;  /* cap scratch flags, all 0 between calls */
+    /* The surface (tmesh_set_surface; NULL until then), per tet face i: */
+    int32_t *fref; /* 4*cap: the ref of boundary face i's triangle, TMESH_NOREF */
+    double *fdev;  /* 4*cap: a bound on boundary face i's distance from the
+                    * surface tmesh_set_surface saw (0 for its own faces) */
+    uint8_t *fsurf; /* cap: bit i: boundary face i was made by a boundary
+                     * operation; bit 4 + i: its triangle is written with the
+                     * orientation opposite to tet_face_of's (the input's) */
+    int32_t *vdeg;      /* vcap: the live tets around each vertex (to tell a
+                         * star that is not one piece through its faces) */
+    int32_t (*gone)[3]; /* sorted vertices of the boundary faces removed */
+    int32_t ngone, capgone, ngone_op; /* ..., at the operation's start */
     tmesh_jent *jr; /* the journal of the operation under way */
     int32_t njr, capjr;
 } tmesh;
@@ -79,6 +95,26 @@ qdc_status tmesh_replace(tmesh *tm, const int32_t *old, int nold,
                          const int32_t (*newt)[4], int nnew, int32_t *new_ids,
                          int *applied);
 void tmesh_commit(tmesh *tm);
+
+/* Attach the surface: ntri triangles (3 each, 0-based) with refs (may be NULL:
+ * 0). Each boundary face takes the ref of the triangle with its vertices
+ * (TMESH_NOREF when none has) and its orientation; other triangles (of
+ * interfaces, inside) are ignored. QDC_ENOMEM. */
+qdc_status tmesh_set_surface(tmesh *tm, int32_t ntri, const int32_t *tris,
+                             const int32_t *refs);
+
+/* As tmesh_replace, for an operation that changes the boundary (a surface
+ * attached): outer faces of the cavity that the new tets do not close must be
+ * boundary faces (removed: listed in tm->gone) or unconstrained faces to tets of
+ * the cavity's tag (they become boundary faces of those tets); new faces that
+ * close nothing become boundary faces. Every new boundary face takes the ref and
+ * orientation of the removed ones (which must agree), fdev = dev, its fsurf bit
+ * set, and its edges become constrained in every tet around them. nnew may be 0
+ * (a tet peeled off). *applied 0 when these do not hold or no boundary face is
+ * removed. QDC_ENOMEM. */
+qdc_status tmesh_replace_surface(tmesh *tm, const int32_t *old, int nold,
+                                 const int32_t (*newt)[4], int nnew, double dev,
+                                 int32_t *new_ids, int *applied);
 /* Undo the journaled operation: slots, vertices, adjacency, tags, bits, the free
  * list and hi exactly as they were. */
 void tmesh_rollback(tmesh *tm);
@@ -89,6 +125,12 @@ void tmesh_rollback(tmesh *tm);
  * quality is below -1 and no operation touches them). 0 when consistent, else
  * -1 with a reason in why (n bytes). */
 int tmesh_check(const tmesh *tm, int32_t *ninv, char *why, size_t n);
+
+/* The tets around vertex v, from tet t0 (which has v) across the faces that
+ * have v, into out (room for cap), in search order: their count, or -1 when
+ * there are more than cap. A star that is not one piece through its faces
+ * (a pinched vertex) gives the piece of t0 only. */
+int tmesh_star(const tmesh *tm, int32_t t0, int32_t v, int32_t *out, int cap);
 
 /* Local index of vertex v in tet t, or -1. */
 static inline int tmesh_local(const tmesh *tm, int32_t t, int32_t v)

@@ -3,8 +3,11 @@
  * with Netgen's sum-of-badness preference among improving operations). */
 #include "topo/topo.h"
 
+#include "core/tet.h"
+#include "topo/contract.h"
 #include "topo/insert.h"
 
+#include <stdlib.h>
 #include <string.h>
 
 void topo_params_default(topo_params *p)
@@ -18,6 +21,10 @@ void topo_params_default(topo_params *p)
     p->insert = 0;
     p->qinsert = 0.15;
     p->imargin = 0.05;
+    p->contract = 0;
+    p->qcontract = 0.3;
+    p->bound.hausd = 0.0;
+    p->bound.cos_feature = 0.8660254037844387; /* 30 degrees */
 }
 
 typedef struct {
@@ -122,6 +129,20 @@ static int best_flip(const tmesh *tm, int32_t t, const topo_params *p, flip_cand
             *best = c;
             have = 1;
         }
+    if (p->bound.hausd > 0 && tm->fref) {
+        for (int e = 0; e < 6; e++)
+            if (flip_bedge_eval(tm, t, e, p->maxring, p->floor4, p->margin, &p->bound,
+                                &c) &&
+                (!have || better(&c, best))) {
+                *best = c;
+                have = 1;
+            }
+        if (flip_peel_eval(tm, t, p->margin, &p->bound, &c) &&
+            (!have || better(&c, best))) {
+            *best = c;
+            have = 1;
+        }
+    }
     for (int f = 0; f < 4; f++) {
         if (flip_23_eval(tm, t, f, p->floor4, p->margin, &c) &&
             (!have || better(&c, best))) {
@@ -137,6 +158,18 @@ static int best_flip(const tmesh *tm, int32_t t, const topo_params *p, flip_cand
     return have;
 }
 
+/* The heap emptied, then the live tets below q (not inverted) pushed. */
+static qdc_status queue_below(const tmesh *tm, heap *h, double q)
+{
+    qdc_status s = QDC_OK;
+
+    h->n = 0;
+    for (int32_t t = 0; t < tm->hi && s == QDC_OK; t++)
+        if (tm->tv[4 * (size_t)t] >= 0 && tm->q[t] < q && tm->q[t] >= -1.0)
+            s = heap_push(h, tm, t);
+    return s;
+}
+
 /* Vertex insertion in the live tets below qinsert, worst first (queued once);
  * the new tets are not revisited. Adds the insertions to *ops and st. */
 static qdc_status insert_pass(tmesh *tm, const topo_params *p, heap *h, topo_stats *st,
@@ -144,10 +177,7 @@ static qdc_status insert_pass(tmesh *tm, const topo_params *p, heap *h, topo_sta
 {
     qdc_status s = QDC_OK;
 
-    h->n = 0;
-    for (int32_t t = 0; t < tm->hi && s == QDC_OK; t++)
-        if (tm->tv[4 * (size_t)t] >= 0 && tm->q[t] < p->qinsert && tm->q[t] >= -1.0)
-            s = heap_push(h, tm, t);
+    s = queue_below(tm, h, p->qinsert);
     while (s == QDC_OK && h->n > 0 && *ops < max_ops) {
         qent e = heap_pop(h);
         int32_t ids[32];
@@ -162,6 +192,42 @@ static qdc_status insert_pass(tmesh *tm, const topo_params *p, heap *h, topo_sta
         tmesh_commit(tm);
         (*ops)++;
         st->insertions++;
+    }
+    return s;
+}
+
+/* Edge contraction in the live tets below qcontract, worst first (queued
+ * once): each tet's best contraction of its edges. Adds to *ops and st. */
+static qdc_status contract_pass(tmesh *tm, const topo_params *p, heap *h, topo_stats *st,
+                                int64_t *ops, int64_t max_ops, const atomic_int *cancel)
+{
+    qdc_status s = QDC_OK;
+
+    s = queue_below(tm, h, p->qcontract);
+    while (s == QDC_OK && h->n > 0 && *ops < max_ops) {
+        qent e = heap_pop(h);
+        contract_cand best, c;
+        int have = 0, applied = 0;
+        if (cancel && atomic_load(cancel))
+            return QDC_ECANCEL;
+        if (tm->tv[4 * (size_t)e.t] < 0 || tm->stamp[e.t] != e.stamp)
+            continue;
+        for (int k = 0; k < 6; k++)
+            if (contract_eval(tm, e.t, k, p->floor4, p->margin, &c) &&
+                (!have || c.qmin_new > best.qmin_new ||
+                 (c.qmin_new == best.qmin_new && c.gain > best.gain))) {
+                best = c;
+                have = 1;
+            }
+        if (!have)
+            continue;
+        s = tmesh_replace(tm, best.old, best.nold, (const int32_t(*)[4])best.newt,
+                          best.nnew, NULL, &applied);
+        if (s != QDC_OK || !applied)
+            continue;
+        tmesh_commit(tm);
+        (*ops)++;
+        st->contractions++;
     }
     return s;
 }
@@ -181,10 +247,7 @@ qdc_status topo_improve(tmesh *tm, const topo_params *p, topo_stats *st,
     st->nv_in = tm->nv;
     for (int r = 0; r < p->rounds; r++) {
         int64_t ops_round = 0;
-        h.n = 0;
-        for (int32_t t = 0; t < tm->hi && s == QDC_OK; t++)
-            if (tm->tv[4 * (size_t)t] >= 0 && tm->q[t] < p->qgoal && tm->q[t] >= -1.0)
-                s = heap_push(&h, tm, t);
+        s = queue_below(tm, &h, p->qgoal);
         while (s == QDC_OK && h.n > 0 && ops < max_ops) {
             qent e = heap_pop(&h);
             flip_cand c;
@@ -199,8 +262,12 @@ qdc_status topo_improve(tmesh *tm, const topo_params *p, topo_stats *st,
             st->visits++;
             if (!best_flip(tm, e.t, p, &c))
                 continue;
-            s = tmesh_replace(tm, c.old, c.nold, (const int32_t(*)[4])c.newt, c.nnew, ids,
-                              &applied);
+            if (c.kind == FLIP_BEDGE || c.kind == FLIP_PEEL)
+                s = tmesh_replace_surface(tm, c.old, c.nold, (const int32_t(*)[4])c.newt,
+                                          c.nnew, c.dev, ids, &applied);
+            else
+                s = tmesh_replace(tm, c.old, c.nold, (const int32_t(*)[4])c.newt, c.nnew,
+                                  ids, &applied);
             if (s != QDC_OK || !applied)
                 continue;
             tmesh_commit(tm);
@@ -211,12 +278,21 @@ qdc_status topo_improve(tmesh *tm, const topo_params *p, topo_stats *st,
                 st->by_ring[c.nold]++;
             } else if (c.kind == FLIP_23) {
                 st->flips23++;
+            } else if (c.kind == FLIP_BEDGE) {
+                st->bflips++;
+            } else if (c.kind == FLIP_PEEL) {
+                st->peels++;
             } else {
                 st->multiface++;
             }
             for (int j = 0; j < c.nnew && s == QDC_OK; j++)
                 if (tm->q[ids[j]] < p->qgoal)
                     s = heap_push(&h, tm, ids[j]);
+        }
+        if (s == QDC_OK && p->contract) {
+            int64_t before = ops;
+            s = contract_pass(tm, p, &h, st, &ops, max_ops, cancel);
+            ops_round += ops - before;
         }
         if (s == QDC_OK && p->insert) {
             int64_t before = ops;
@@ -244,9 +320,122 @@ qdc_status topo_flip_arrays(int32_t nv, const double *xyz, int32_t nt,
     qdc_status s;
 
     q.insert = 0;
+    q.contract = 0;
     s = topo_full_arrays(nv, xyz, nt, tets, region, rev, &q, cancel, &n, &x, nt_out,
-                         tets_out, region_out, st, err);
+                         tets_out, region_out, NULL, NULL, st, err);
     qdc_free(x);
+    return s;
+}
+
+static int key_cmp(const void *x, const void *y)
+{
+    const int32_t *a = x, *b = y;
+
+    for (int s = 0; s < 3; s++)
+        if (a[s] != b[s])
+            return a[s] < b[s] ? -1 : 1;
+    return 0;
+}
+
+/* sf's triangles after the run: the input's whose faces were not removed from
+ * the boundary, then each boundary face a boundary operation made (with a ref),
+ * in slot order, oriented as the input's triangles it replaced. */
+static qdc_status surface_out(tmesh *tm, topo_surface *sf)
+{
+    int32_t nnew = 0, k = 0;
+
+    if (tm->ngone > 0)
+        qsort(tm->gone, (size_t)tm->ngone, sizeof *tm->gone, key_cmp);
+    for (int32_t t = 0; t < tm->hi; t++)
+        for (int i = 0; i < 4 && tm->tv[4 * (size_t)t] >= 0; i++)
+            nnew += tm->adj[4 * (size_t)t + i] < 0 && (tm->fsurf[t] >> i & 1) &&
+                    tm->fref[4 * (size_t)t + i] != TMESH_NOREF;
+    sf->tris_out = qdc_mallocn(3 * ((size_t)sf->ntri + (size_t)nnew) + 3,
+                               sizeof *sf->tris_out);
+    sf->refs_out = qdc_mallocn((size_t)sf->ntri + (size_t)nnew + 1, sizeof *sf->refs_out);
+    if (!sf->tris_out || !sf->refs_out)
+        return QDC_ENOMEM;
+    sf->removed = 0;
+    for (int32_t s = 0; s < sf->ntri; s++) {
+        const int32_t *tr = sf->tris + 3 * (size_t)s;
+        int32_t key[3];
+        tet_sort3(tr[0], tr[1], tr[2], key);
+        if (tm->ngone > 0 &&
+            bsearch(key, tm->gone, (size_t)tm->ngone, sizeof *tm->gone, key_cmp)) {
+            sf->removed++;
+            continue;
+        }
+        memcpy(sf->tris_out + 3 * (size_t)k, tr, 3 * sizeof *tr);
+        sf->refs_out[k++] = sf->refs ? sf->refs[s] : 0;
+    }
+    sf->added = nnew;
+    for (int32_t t = 0; t < tm->hi; t++)
+        for (int i = 0; i < 4 && tm->tv[4 * (size_t)t] >= 0; i++) {
+            const int32_t *tt = tm->tv + 4 * (size_t)t;
+            int32_t *o = sf->tris_out + 3 * (size_t)k;
+            if (tm->adj[4 * (size_t)t + i] >= 0 || !(tm->fsurf[t] >> i & 1) ||
+                tm->fref[4 * (size_t)t + i] == TMESH_NOREF)
+                continue;
+            o[0] = tt[tet_face_of[i][0]];
+            o[1] = tt[tet_face_of[i][1]];
+            o[2] = tt[tet_face_of[i][2]];
+            if (tm->fsurf[t] >> (4 + i) & 1) {
+                o[1] = tt[tet_face_of[i][2]];
+                o[2] = tt[tet_face_of[i][1]];
+            }
+            sf->refs_out[k++] = tm->fref[4 * (size_t)t + i];
+        }
+    sf->ntri_out = k;
+    return QDC_OK;
+}
+
+/* The vertices after the run: the input's still used, or never used, in their
+ * order, then the new ones used (a contraction leaves its vertex unused);
+ * tets renumbered in place, *vmap (if asked) each input vertex's new index. */
+static qdc_status compact(const tmesh *tm, int32_t nv, int32_t nt, const int32_t *tets,
+                          int32_t nt_out, int32_t *tets_out, int32_t *nv_out,
+                          double **xyz_out, int32_t **vmap)
+{
+    int32_t *map = qdc_mallocn((size_t)tm->nv + 1, sizeof *map), n = 0;
+    uint8_t *in = qdc_calloc((size_t)tm->nv + 1, 1), *out = qdc_calloc((size_t)tm->nv + 1, 1);
+    qdc_status s = QDC_OK;
+
+    *xyz_out = qdc_mallocn(3 * (size_t)tm->nv + 3, sizeof **xyz_out);
+    if (vmap)
+        *vmap = qdc_mallocn((size_t)nv + 1, sizeof **vmap);
+    if (!map || !in || !out || !*xyz_out || (vmap && !*vmap)) {
+        s = QDC_ENOMEM;
+        goto done;
+    }
+    for (int64_t k = 0; k < 4 * (int64_t)nt; k++)
+        in[tets[k]] = 1;
+    for (int64_t k = 0; k < 4 * (int64_t)nt_out; k++)
+        out[tets_out[k]] = 1;
+    for (int32_t v = 0; v < tm->nv; v++) {
+        int keep = v < nv ? !in[v] || out[v] : out[v];
+        map[v] = keep ? n : -1;
+        if (keep) {
+            memcpy(*xyz_out + 3 * (size_t)n, tm->xyz + 3 * (size_t)v, 3 * sizeof **xyz_out);
+            n++;
+        }
+    }
+    for (int64_t k = 0; k < 4 * (int64_t)nt_out; k++)
+        tets_out[k] = map[tets_out[k]];
+    if (vmap)
+        memcpy(*vmap, map, (size_t)nv * sizeof *map);
+    *nv_out = n;
+done:
+    if (s != QDC_OK) {
+        qdc_free(*xyz_out);
+        *xyz_out = NULL;
+        if (vmap) {
+            qdc_free(*vmap);
+            *vmap = NULL;
+        }
+    }
+    qdc_free(map);
+    qdc_free(in);
+    qdc_free(out);
     return s;
 }
 
@@ -255,24 +444,30 @@ qdc_status topo_full_arrays(int32_t nv, const double *xyz, int32_t nt,
                             const uint8_t *rev, const topo_params *p,
                             const atomic_int *cancel, int32_t *nv_out, double **xyz_out,
                             int32_t *nt_out, int32_t **tets_out, int32_t **region_out,
-                            topo_stats *st, qdc_error *err)
+                            int32_t **vmap_out, topo_surface *sf, topo_stats *st,
+                            qdc_error *err)
 {
     tmesh *tm = NULL;
     qdc_status s = tmesh_new(nv, xyz, nt, tets, region, rev, &tm, err);
 
+    if (sf) {
+        sf->tris_out = NULL;
+        sf->refs_out = NULL;
+        sf->ntri_out = sf->removed = sf->added = 0;
+    }
+    if (s == QDC_OK && sf)
+        s = tmesh_set_surface(tm, sf->ntri, sf->tris, sf->refs);
     if (s == QDC_OK)
         s = topo_improve(tm, p, st, cancel);
+    if ((s == QDC_OK || s == QDC_ECANCEL) && sf) {
+        qdc_status s2 = surface_out(tm, sf);
+        if (s2 != QDC_OK)
+            s = s2;
+    }
     if (s == QDC_OK || s == QDC_ECANCEL) {
         qdc_status s2 = tmesh_export(tm, nt_out, tets_out, region ? region_out : NULL);
-        if (s2 == QDC_OK) {
-            *xyz_out = qdc_mallocn(3 * (size_t)tm->nv, sizeof **xyz_out);
-            if (*xyz_out) {
-                memcpy(*xyz_out, tm->xyz, 3 * (size_t)tm->nv * sizeof **xyz_out);
-                *nv_out = tm->nv;
-            } else {
-                s2 = QDC_ENOMEM;
-            }
-        }
+        if (s2 == QDC_OK)
+            s2 = compact(tm, nv, nt, tets, *nt_out, *tets_out, nv_out, xyz_out, vmap_out);
         if (s2 != QDC_OK)
             s = s2;
     }

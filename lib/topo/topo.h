@@ -27,6 +27,11 @@ typedef struct {
                       * in the tets still below qinsert, worst first */
     double qinsert;  /* tets below this mean ratio get an insertion tried */
     double imargin;  /* an insertion must raise the cavity's minimum by this */
+    int contract;    /* 1: after the flips of a round, interior edge contraction
+                      * (contract.h) in the tets still below qcontract */
+    double qcontract;
+    flip_bound bound; /* hausd > 0 and a surface attached: boundary flips and
+                       * peeling (flip.h) too; hausd 0 (default): none */
 } topo_params;
 
 /* What the runs did. */
@@ -37,12 +42,27 @@ typedef struct {
     int64_t multiface;                 /* multi-face removals */
     int64_t visits;                    /* tets taken from the queue */
     int64_t insertions;                /* vertices inserted (insert.h) */
+    int64_t bflips;                    /* boundary edge flips */
+    int64_t peels;                     /* tets peeled off the boundary */
+    int64_t contractions;              /* interior edges contracted */
     int32_t nv_in, nv_out;             /* vertices before and after */
     int32_t nt_in, nt_out;             /* live tets before and after */
 } topo_stats;
 
+/* The boundary triangles through a run with boundary operations. */
+typedef struct {
+    int32_t ntri;         /* in: triangles (3 each, 0-based), refs (may be NULL: 0), */
+    const int32_t *tris;  /*     of the boundary and of anything else (kept) */
+    const int32_t *refs;
+    int32_t ntri_out;     /* out (qdc_malloc, the caller frees): the input's triangles */
+    int32_t *tris_out;    /*     still there, in their order, then the new boundary */
+    int32_t *refs_out;    /*     triangles with the ref and orientation of theirs */
+    int32_t removed;      /* input triangles no longer on the boundary */
+    int32_t added;        /* new boundary triangles written (those with a ref) */
+} topo_surface;
+
 /* maxring 10, qgoal 0.6, margin 1e-3, floor4 0.1, rounds 3, max_ops 0, insert 0,
- * qinsert 0.3, imargin 0.02. */
+ * qinsert 0.15, imargin 0.05, contract 0, qcontract 0.3, no bound. */
 void topo_params_default(topo_params *p);
 
 /* Improve tm in place with flips (see above). cancel (may be NULL) is polled
@@ -62,14 +82,20 @@ qdc_status topo_flip_arrays(int32_t nv, const double *xyz, int32_t nt,
                             const atomic_int *cancel, int32_t *nt_out, int32_t **tets_out,
                             int32_t **region_out, topo_stats *st, qdc_error *err);
 
-/* As topo_flip_arrays, with p->insert allowed: the vertices may grow, so their
- * count and coordinates come back too (*nv_out, *xyz_out, allocated with
- * qdc_malloc; the first nv are the input's, unchanged; new ones follow). */
+/* As topo_flip_arrays, with p->insert and p->contract allowed: the vertices
+ * may change, so their count and coordinates come back too (*nv_out, *xyz_out,
+ * allocated with qdc_malloc): the input's that are still used (or were never
+ * used) in their order, unchanged, then the new ones; *vmap_out (may be NULL;
+ * nv entries, qdc_malloc) the new index of each input vertex, -1 for one a
+ * contraction removed.
+ * sf (may be NULL) attaches the surface (tmesh_set_surface) and receives the
+ * triangles after; boundary operations need it and p->bound.hausd > 0. */
 qdc_status topo_full_arrays(int32_t nv, const double *xyz, int32_t nt,
                             const int32_t *tets, const int32_t *region,
                             const uint8_t *rev, const topo_params *p,
                             const atomic_int *cancel, int32_t *nv_out, double **xyz_out,
                             int32_t *nt_out, int32_t **tets_out, int32_t **region_out,
-                            topo_stats *st, qdc_error *err);
+                            int32_t **vmap_out, topo_surface *sf, topo_stats *st,
+                            qdc_error *err);
 
 #endif

@@ -51,11 +51,24 @@ n=$(grep -c ': \(global\|finish\|input\) .*q mean' "$TMP/batch.err")
 njobs=$(curl -s "$URL/v1/jobs" | jq '.jobs | length')
 [ "$njobs" = 5 ] && pass "batch: 5 jobs made, one per mesh" || fail "batch jobs" "$njobs jobs"
 
-QDC_BATCH_JQ=0 sh "$BATCH" -s "$URL" -j 2 -Q -q 'max_iter=1&finish=off' -o "$TMP/out2" "$TMP/in" 2> "$TMP/batch2.err"
+# each job carries its file's name (GET /v1/jobs/ID), no label unless -l
+ls "$TMP/in" | sort > "$TMP/names.want"
+curl -s "$URL/v1/jobs?page_size=100" | jq -r '.jobs[].id' | while read -r id; do
+    curl -s "$URL/v1/jobs/$id" | jq -r 'if has("label") then "label!" else .file_name end'
+done | sort > "$TMP/names.got"
+cmp -s "$TMP/names.want" "$TMP/names.got" && pass "batch: every job has its file's name (GET /v1/jobs/ID), no label" ||
+    fail "batch names" "$(diff "$TMP/names.want" "$TMP/names.got" | head -4)"
+
+QDC_BATCH_JQ=0 sh "$BATCH" -s "$URL" -j 2 -Q -l "second run é&=" -q 'max_iter=1&finish=off' -o "$TMP/out2" "$TMP/in" 2> "$TMP/batch2.err"
 rc=$?
 [ $rc = 0 ] && [ "$(wc -l < "$TMP/batch2.err")" = 1 ] && pass "batch (sed, -Q): exit 0, one summary line" ||
     fail "batch sed rc" "rc $rc $(tail -3 "$TMP/batch2.err")"
 check_run "$TMP/out2" "batch (sed)"
+curl -s "$URL/v1/jobs?page_size=100" | jq -r '.jobs[].id' | while read -r id; do
+    curl -s "$URL/v1/jobs/$id" | jq -r 'select(.label == "second run é&=") | .file_name'
+done | sort > "$TMP/names2.got"
+cmp -s "$TMP/names.want" "$TMP/names2.got" && pass "batch -l: the label (UTF-8, & and =) and the file's name on every job of the run" ||
+    fail "batch label" "$(diff "$TMP/names.want" "$TMP/names2.got" | head -4)"
 # input-derived columns agree between the jq and the sed runs
 c1=$(cut -d, -f1,4,6,8,10 "$TMP/out/summary.csv" | sort)
 c2=$(cut -d, -f1,4,6,8,10 "$TMP/out2/summary.csv" | sort)

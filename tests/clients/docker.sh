@@ -140,7 +140,7 @@ done
 QDCD=$TMP/ctx/build/rel/qdcd QDC_TOKENS_FILE=$TMP/none sh "$EP" --listen 127.0.0.1:0 --port-file "$TMP/port" --data "$TMP/data" 2> "$TMP/ep.log" &
 EPID=$!
 i=0
-while [ $i -lt 100 ] && ! [ -s "$TMP/port" ]; do sleep 0.1; i=$((i + 1)); done
+while [ $i -lt 600 ] && ! [ -s "$TMP/port" ]; do sleep 0.1; i=$((i + 1)); done
 URL=http://127.0.0.1:$(cat "$TMP/port" 2> /dev/null)
 live=$(curl -s -m 5 -o /dev/null -w '%{http_code}' "$URL/livez")
 comm=$(cat "/proc/$EPID/comm" 2> /dev/null)
@@ -158,7 +158,7 @@ rm -f "$TMP/port"
 QDCD=$TMP/ctx/build/rel/qdcd QDC_TOKENS_FILE=$TMP/tokens sh "$EP" --listen 127.0.0.1:0 --port-file "$TMP/port" --data "$TMP/data" 2> "$TMP/ep2.log" &
 EPID=$!
 i=0
-while [ $i -lt 100 ] && ! [ -s "$TMP/port" ]; do sleep 0.1; i=$((i + 1)); done
+while [ $i -lt 600 ] && ! [ -s "$TMP/port" ]; do sleep 0.1; i=$((i + 1)); done
 URL=http://127.0.0.1:$(cat "$TMP/port" 2> /dev/null)
 c1=$(curl -s -o /dev/null -w '%{http_code}' "$URL/v1/jobs")
 c2=$(curl -s -o /dev/null -w '%{http_code}' -H 'Authorization: Bearer tok' "$URL/v1/jobs")

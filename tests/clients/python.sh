@@ -26,6 +26,18 @@ fi
 QDC_SERVER=$URL $PY "$PYC" fetch "$id" -o "$TMP/cli2.json" && QDC_SERVER=$URL $PY "$PYC" status "$id" > "$TMP/st.json" &&
     [ "$(jq -r .state "$TMP/st.json")" = succeeded ] && "$BIN/qdc" quality "$TMP/cli2.json" > /dev/null &&
     pass "python CLI: fetch (JSON) and status with QDC_SERVER" || fail "python CLI fetch" "$(cat "$TMP/st.json")"
+# --label and --name; the outcome in words ends what it prints, the report's texts
+id3=$($PY "$PYC" --server "$URL" submit "$MESH" --opt max_iter=1 --opt finish=off --label "cli label" --wait 2> "$TMP/cli3.err")
+curl -s "$URL/v1/jobs/$id3" > "$TMP/j3"
+curl -s "$URL/v1/jobs/$id3/report" | jq -r '.outcome | "qdc: outcome: " + .summary, (.warnings[] | "qdc: warning: " + .), (.suggestions[] | "qdc: suggestion: " + .)' > "$TMP/want3"
+if jq -e --arg n "$(basename "$MESH")" '.label == "cli label" and .file_name == $n' "$TMP/j3" > /dev/null &&
+    grep "^qdc: \(outcome\|warning\|suggestion\): " "$TMP/cli3.err" | cmp -s - "$TMP/want3" && [ -s "$TMP/want3" ]; then
+    pass "python CLI: submit --label sends the label and the file's name; --wait ends with the report's outcome ($(wc -l < "$TMP/want3") lines)"
+else
+    fail "python CLI label" "$(jq -c '[.label, .file_name]' "$TMP/j3") $(tail -3 "$TMP/cli3.err")"
+fi
+$PY "$PYC" --server "$URL" jobs | grep -q "^$id3 succeeded cli label (" && pass "python CLI: jobs shows the label and file name" ||
+    fail "python CLI jobs" "$($PY "$PYC" --server "$URL" jobs | grep "$id3")"
 $PY "$PYC" --server "$URL" submit "$MESH" --opt metric=nope 2> /dev/null
 [ $? = 10 ] && pass "python CLI: rejected request exits 10" || fail "python CLI exit" "not 10"
 stop_qdcd

@@ -49,6 +49,22 @@ rep = c.report(job)
 check("report(): before/after quality, boundary error",
       rep["after"]["n_tets"] == NT and rep["after"]["mean_ratio_min"] >= rep["before"]["mean_ratio_min"]
       and "hausdorff_rel" in rep["boundary_error"], json.dumps(rep)[:200])
+# the file's name by default and a label: in the job
+j = c.job(job)
+check("submit(path): the job's file_name is the path's last part (%s)" % j.get("file_name"),
+      j.get("file_name") == os.path.basename(MESH) and "label" not in j, json.dumps(j)[:300])
+jl = c.submit(MESH, {"max_iter": 1}, name="bunny_low_10k.mesh.gz", label="py run é")
+jl = c.wait(jl)
+check("submit(name=, label=): GET /v1/jobs/ID carries them",
+      jl.get("file_name") == "bunny_low_10k.mesh.gz" and jl.get("label") == "py run é",
+      json.dumps(jl)[:300])
+# the outcome in words: the report's texts, nothing made up here
+lines = qdc_client.outcome_lines(rep)
+o = c.outcome(job)
+check("outcome_lines(report): %d lines, the report's summary, warnings and suggestions" % len(lines),
+      lines and lines[0] == "outcome: " + o["summary"] and "left: " in o["summary"] and
+      lines[1:] == ["warning: " + w for w in o["warnings"]] + ["suggestion: " + t for t in o["suggestions"]],
+      "%s %s" % (lines, o))
 
 # 2. the binary format: round trip through to_bytes/from_bytes and a .qmesh file
 m.save(os.path.join(TMP, "py.qmesh"))

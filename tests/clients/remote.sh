@@ -160,8 +160,8 @@ fi
 "$QDC" submit "$BIG" --max-iter 1000 --wait -o "$TMP/int.mesh" > "$TMP/int.id" 2> "$TMP/int.err" &
 QP=$!
 i=0
-while [ $i -lt 100 ] && [ ! -s "$TMP/int.id" ]; do sleep 0.1; i=$((i + 1)); done
-sleep 0.5
+# (the handler is installed before the id is printed: no pause needed)
+while [ $i -lt 600 ] && [ ! -s "$TMP/int.id" ]; do sleep 0.1; i=$((i + 1)); done
 kill -INT $QP
 wait $QP
 rc=$?

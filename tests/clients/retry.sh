@@ -15,7 +15,7 @@ export QDC_SERVER=$URL
 # A runs for ~4 s on the only worker, B waits in the queue: the queue is full.
 A=$("$QDC" submit "$BIG" --max-iter 1000 --time-limit 4 --finish off -q)
 i=0
-while [ $i -lt 100 ] && ! "$QDC" status "$A" | grep -q ' running '; do
+while [ $i -lt 600 ] && ! "$QDC" status "$A" | grep -q ' running '; do
     sleep 0.1
     i=$((i + 1))
 done

@@ -9,6 +9,11 @@
 STL=$ROOT/tests/fuzz/seeds/surface/cube.stl
 start_qdcd "$TMP/d" --workers 1 --max-tets 1000000 --child-memory 268435456 ||
     { fail "tetgen: start" "$(tail -3 "$TMP/d.log")"; exit 1; }
+# baseline from the same run: a small job on the same cube, meshed and optimized
+t0=$(date +%s%N)
+submit "$STL" model/stl "max_volume=0.01" "$TMP/j0" > /dev/null
+st0=$(poll_all "$(jf "$TMP/j0" .id)")
+base=$((($(date +%s%N) - t0) / 1000000))
 t0=$(date +%s%N)
 code=$(submit "$STL" model/stl "max_volume=1e-9" "$TMP/j")
 id=$(jf "$TMP/j" .id)
@@ -19,8 +24,9 @@ status=$(jf "$TMP/job" .error.status)
 detail=$(jf "$TMP/job" .error.detail)
 case $st:$status:$detail in
 failed:422:*"would make at least"*)
-    [ $ms -lt 5000 ] && pass "tetgen: max_volume=1e-9 on a unit cube: failed 422 in $ms ms: $detail" ||
-        fail "tetgen: fast refusal" "took $ms ms" ;;
+    [ "$st0" = succeeded ] && [ $ms -lt $((2000 + 3 * base)) ] &&
+        pass "tetgen: max_volume=1e-9 on a unit cube: failed 422 in $ms ms (a small job: $base ms): $detail" ||
+        fail "tetgen: fast refusal" "took $ms ms; a small job $st0 in $base ms" ;;
 *) fail "tetgen: volume bound" "code $code state $st status $status: $detail" ;;
 esac
 # within the tet limit but beyond the memory limit: 1e-6 -> ~1e6+ tets under 256 MB of address space

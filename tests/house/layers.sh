@@ -63,7 +63,7 @@ done
 
 # Public and internal headers (docs/architecture.md, "Public and internal headers").
 PUBLIC="qdc.h core/base.h core/mesh.h geom/metric.h geom/bderr.h io/meshio.h io/formats.h io/surface.h
-io/tetra.h io/gz.h opt/opt.h opt/options.h eval/report.h"
+io/tetra.h io/gz.h opt/opt.h opt/options.h eval/report.h eval/outcome.h"
 reach=$(
     todo=qdc.h seen=
     while [ -n "$todo" ]; do

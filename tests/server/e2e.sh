@@ -50,9 +50,9 @@ for kind in qmesh json medit; do
     fi
     code=$(req GET "/v1/jobs/$id" "$TMP/job.$id")
     if [ "$code" = 200 ] && [ "$(jf "$TMP/job.$id" .state)" = succeeded ] &&
-        [ "$(jf "$TMP/job.$id" .iterations)" = "$n" ] && [ "$(jf "$TMP/job.$id" .progress.seq)" = $((n - 1)) ] &&
-        [ "$(jf "$TMP/job.$id" .done)" = true ]; then
-        pass "job $kind: succeeded, done, iterations $n, latest record seq $((n - 1))"
+        [ "$(jf "$TMP/job.$id" .iterations)" = $((n - 1)) ] && [ "$(jf "$TMP/job.$id" .progress.seq)" = $((n - 1)) ] &&
+        [ "$(jf "$TMP/job.$id" .progress.iteration)" = $((n - 1)) ] && [ "$(jf "$TMP/job.$id" .done)" = true ]; then
+        pass "job $kind: succeeded, done, $n records: iterations $((n - 1)), the latest record's seq and iteration"
     else
         fail "job $kind" "$code $(head -c 400 "$TMP/job.$id")"
     fi
@@ -167,14 +167,14 @@ fi
 # Metrics and readiness.
 req GET /metrics "$TMP/metrics" > /dev/null
 succ=$(awk '$1 == "qdcd_jobs{state=\"succeeded\"}" { print $2 }' "$TMP/metrics")
-iters=$(awk '$1 == "qdcd_iterations_total" { print $2 }' "$TMP/metrics")
+iters=$(awk '$1 == "qdcd_records_total" { print $2 }' "$TMP/metrics")
 cnt=$(awk '$1 == "qdcd_http_request_duration_seconds_count" { print $2 }' "$TMP/metrics")
 total=$(cat "$TMP"/seqs.* | wc -l)
 if [ "$succ" = 4 ] && [ "$iters" -ge "$total" ] && [ "$cnt" -gt 10 ] &&
     grep -q '^qdcd_upload_bytes_total [1-9]' "$TMP/metrics" && grep -q '^qdcd_queue_depth 0$' "$TMP/metrics"; then
-    pass "metrics: 4 succeeded, $iters iterations (>= $total polled), $cnt timed requests, queue depth 0"
+    pass "metrics: 4 succeeded, $iters progress records (>= $total polled), $cnt timed requests, queue depth 0"
 else
-    fail "metrics" "succeeded '$succ' iterations '$iters' count '$cnt'"
+    fail "metrics" "succeeded '$succ' records '$iters' count '$cnt'"
 fi
 code=$(req GET /readyz "$TMP/ready")
 [ "$code" = 200 ] && pass "readyz: 200" || fail "readyz" "$code"

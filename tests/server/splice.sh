@@ -31,6 +31,7 @@ dolfin:dolfin.xml:dolfin:nsmap
 meshb:meshio.meshb:meshb:
 abaqus:calculix.inp:abaqus:MATERIAL
 netgen:meshio.vol:netgen:Generated
+gmsh41p2:gmsh41_p2.msh:gmsh:skin
 bdf:gmsh.bdf:bdf:CBAR
 bdffree:meshio_free.bdf:bdf:BULK
 unv:gmsh.unv:unv:2477"

@@ -186,34 +186,8 @@ code=$(req GET "/v1/jobs/$HOLD/input" "$TMP/hin")
 for j in $HOLD $SJ $SS $SX; do curl -s -X DELETE "$URL/v1/jobs/$j" > /dev/null; done
 
 # ---------------------------------------------------------------- browser --
-CHROMIUM=${CHROMIUM:-/usr/bin/chromium}
-if [ ! -x "$CHROMIUM" ]; then
-    echo "ok - browser tests # SKIP no $CHROMIUM (scripts/deps.sh installs chromium)"
-    stop_qdcd
-    exit $((NFAIL > 0))
-fi
-if ! command -v npm > /dev/null 2>&1 || ! command -v node > /dev/null 2>&1; then
-    echo "ok - browser tests # SKIP no node/npm (scripts/deps.sh installs them)"
-    stop_qdcd
-    exit $((NFAIL > 0))
-fi
-MODS=$ROOT/build/uitest
-if ! cmp -s "$ROOT/tests/ui/package-lock.json" "$MODS/package-lock.json" ||
-    [ ! -d "$MODS/node_modules/playwright-core" ]; then
-    mkdir -p "$MODS"
-    cp "$ROOT/tests/ui/package.json" "$ROOT/tests/ui/package-lock.json" "$MODS/"
-    if ! (cd "$MODS" && npm ci --no-audit --no-fund --ignore-scripts > "$TMP/npm.log" 2>&1); then
-        rm -f "$MODS/package-lock.json"
-        if grep -Eqi 'ENOTFOUND|EAI_AGAIN|ECONNREFUSED|ETIMEDOUT|network' "$TMP/npm.log"; then
-            echo "ok - browser tests # SKIP npm ci: no registry ($(grep -m1 -i err "$TMP/npm.log"))"
-            stop_qdcd
-            exit $((NFAIL > 0))
-        fi
-        fail "npm ci" "$(tail -3 "$TMP/npm.log")"
-        exit 1
-    fi
-fi
-pass "playwright-core $(node -p "require('$MODS/node_modules/playwright-core/package.json').version") installed by npm ci from tests/ui/package-lock.json"
+. "$(dirname "$0")/uimods.inc"
+ui_modules || { stop_qdcd; exit $((NFAIL > 0)); }
 
 mkdir -p "$TMP/out"
 export UI_MODULES="$MODS" QDC_URL="$URL" UI_OUT="$TMP/out" OPTIONS_JSON="$TMP/options.json" CHROMIUM
@@ -317,7 +291,7 @@ if [ -n "${UI_1M:-}" ]; then
         BJ=$(jf "$TMP/bsub" .id)
         st=$(wait_done "$BJ")
         [ "$code $st" = "202 succeeded" ] || fail "1M-tet job" "$code $st"
-        BIG_ID=$BJ BIG_RECORDS=$(jf "$TMP/job.$BJ" .iterations) QDC_URL=$URL UI_MODE=big \
+        BIG_ID=$BJ BIG_RECORDS=$(($(jf "$TMP/job.$BJ" .iterations) + 1)) QDC_URL=$URL UI_MODE=big \
             node "$ROOT/tests/ui/console.mjs" > "$TMP/big.out" 2>&1
         rc=$?
         cat "$TMP/big.out"

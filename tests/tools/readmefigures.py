@@ -11,6 +11,8 @@ Checked, each printing one "ok - ..." or "FAIL - ...":
   - every shown line "qdc: IN -> OUT: mean ratio ... (outcome, N iterations,
     solver, T s)" against the line the run printed for the same IN -> OUT
     (all of it but the time);
+  - every shown "qdc: outcome: ..." (the outcome in words) is a line a run
+    printed, word for word;
   - the 10-degree dihedral table before/after against the 1-degree
     histograms of the report it names ("from `R.json`"), summed per 10 degrees;
   - the summary lines under it (mean ratio, worst, dihedral range, tets with
@@ -66,6 +68,18 @@ def main():
                 % (m.group(3), m.group(4), runs[-1].group(3), runs[-1].group(4)))
         else:
             ok("%s -> %s prints what the README shows (%s; %s)" % (m.group(1), m.group(2), m.group(3), m.group(4)))
+
+    # the outcome in words, word for word
+    outcomes = [l[4:] for l in text.splitlines() if l.startswith("    qdc: outcome: ")]
+    said = set(l.strip() for l in printed.splitlines())
+    if not outcomes:
+        bad("outcome", "README.md shows no 'qdc: outcome: ...' line")
+    for o in outcomes:
+        if o in said:
+            ok("the outcome line is one a run printed (%s...)" % o[:60])
+        else:
+            near = [l for l in said if l.startswith("qdc: outcome: ")]
+            bad("outcome", "README shows '%s', the runs printed %s" % (o, near))
 
     # 2. the histogram table and its summary, against the report it names
     name = re.search(r"from `([^`]+\.json)`:\n\n    dihedral ", text)

@@ -14,34 +14,17 @@
 //   OPTIONS_JSON `qdc options` output
 //   UI_MODE=big: BIG_ID, BIG_RECORDS name a finished ~1M-tet job: time its view
 // Prints "ok - ..." / "FAIL - ..." lines like the shell suites.
-import { createRequire } from 'node:module';
 import { readFileSync, writeFileSync } from 'node:fs';
 import path from 'node:path';
 import { gunzipSync } from 'node:zlib';
 import { view3dPixels, chartChecks, view3dChecks, view3dSpeed, rerunChecks, noColumnCut, ariaChecks, axeChecks } from './views.mjs';
+import { chromium, pass, fail, check, failed, until } from './tap.mjs';
 
 const env = process.env;
-const require = createRequire(path.join(env.UI_MODULES, 'package.json'));
-const { chromium } = require('playwright-core');
-
 const URL = env.QDC_URL;
 const OUT = env.UI_OUT;
 const figures = {};
-let nfail = 0;
-const pass = (m) => console.log('ok - ' + m);
-const fail = (m, why) => { console.log('FAIL - ' + m + ': ' + String(why).replace(/\s+/g, ' ').slice(0, 400)); nfail++; };
-const check = (cond, m, why) => (cond ? pass(m) : fail(m, why));
 const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
-
-async function until(fn, ms, what) {
-    const t0 = Date.now();
-    for (;;) {
-        const v = await fn();
-        if (v) return v;
-        if (Date.now() - t0 > ms) throw new Error('timed out waiting for ' + what);
-        await sleep(50);
-    }
-}
 
 const authH = env.UI_MODE === 'tokens' ? { Authorization: 'Bearer ' + env.UI_TOKEN } : {};
 async function apiJSON(p, opts) {
@@ -426,7 +409,7 @@ try {
             rtt.length + ' round trips, floor 250 ms (the target on an idle machine)', JSON.stringify(figures.chart_latency_ms));
         const j2 = (await apiJSON('/v1/jobs/' + id2)).body;
         check(j2.state === 'succeeded' && j2.mesh.tets > 100000, 'gzipped ' + path.basename(env.BIG) + ' gunzipped by the page and optimized (' +
-            j2.mesh.tets + ' tets, ' + j2.iterations + ' records)', JSON.stringify(j2.state));
+            j2.mesh.tets + ' tets, ' + j2.iterations + ' iterations)', JSON.stringify(j2.state));
         await download('medit', 'big-out.mesh');
         // the 3D view of the 100k-tet result
         await page.waitForFunction(() => +document.getElementById('view3d').dataset.triangles > 0 ||
@@ -443,7 +426,7 @@ try {
             const t = Date.now();
             await page.reload();
             await page.waitForFunction((n) => +document.getElementById('chart').dataset.points === n &&
-                +document.getElementById('hist').dataset.drawn > 0, j.iterations, { timeout: 60000 });
+                +document.getElementById('hist').dataset.drawn > 0, j.iterations + 1, { timeout: 60000 }); // records 0..iterations
             return Date.now() - t;
         };
         const jSmall = (await apiJSON('/v1/jobs/' + id1)).body;
@@ -521,6 +504,11 @@ try {
                 JSON.stringify(figures.view3d_pixels));
         }
         figures.shot_view3d_status = await page.textContent('#view3d-status');
+        const o4 = (await apiJSON('/v1/jobs/' + id4 + '/report')).body.outcome;
+        const shown4 = await page.evaluate(() => [document.getElementById('outcome-summary').textContent,
+            document.getElementById('outcome-warning').hidden]);
+        check(o4 && shown4[0] === 'Outcome: ' + o4.summary && shown4[1] === !o4.warnings.length,
+            'outcome: the job page shows the report\'s outcome (' + (o4 && o4.warnings.length ? 'warned' : 'no warning') + ')', JSON.stringify(shown4));
         await chartChecks(page, id4, h);
         await view3dChecks(page, id4, h, URL, authH);
         await ariaChecks(page, h);
@@ -535,6 +523,18 @@ try {
         await page.goto(URL + '/ui/jobs/' + idR);
         await page.waitForFunction(() => +document.getElementById('hist').dataset.drawn > 0, null, { timeout: 10000 });
         await rerunChecks(page, idR, h);
+        // the outcome in words: the report's summary, and its warnings and
+        // suggestions in an alert (16 tets left inverted: much is left bad)
+        const oR = (await apiJSON('/v1/jobs/' + idR + '/report')).body.outcome;
+        await page.waitForSelector('#job-outcome:not([hidden])', { timeout: 10000 }).catch(() => {});
+        const shownR = await page.evaluate(() => ({ summary: document.getElementById('outcome-summary').textContent,
+            warn: document.getElementById('outcome-warning').hidden ? '' : document.getElementById('outcome-warning').textContent,
+            role: document.getElementById('outcome-warning').getAttribute('role') }));
+        check(oR && oR.warnings.length > 0 && shownR.summary === 'Outcome: ' + oR.summary && shownR.role === 'alert' &&
+            oR.warnings.every((w) => shownR.warn.includes(w)) && oR.suggestions.length > 0 &&
+            oR.suggestions.every((t) => shownR.warn.includes('Suggestion: ' + t)),
+            'outcome: a bad result\'s page shows the report\'s summary and, in an alert, its ' + (oR ? oR.warnings.length : 0) +
+            ' warnings and suggestions ("' + (oR ? oR.warnings[0] : '') + '")', JSON.stringify(shownR).slice(0, 300));
         if (env.UI_SHOTS) await page.screenshot({ path: path.join(env.UI_SHOTS, 'ui-rerun.png'), fullPage: true });
         // the list shows the result's mean ratio (the report's after), not the last record's
         const repR = (await apiJSON('/v1/jobs/' + idR + '/report')).body;
@@ -662,4 +662,4 @@ try {
     writeFileSync(path.join(OUT, 'figures-' + env.UI_MODE + '.json'), JSON.stringify(figures, null, 1));
     await browser.close();
 }
-process.exit(nfail ? 1 : 0);
+process.exit(failed());

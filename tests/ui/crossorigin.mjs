@@ -5,18 +5,12 @@
 // qdcd must answer 403 and create no job. Run by tests/server/ui.sh with
 // UI_MODULES, QDC_URL, SAMPLE and CHROMIUM in the environment; prints
 // "ok - ..." / "FAIL - ..." lines.
-import { createRequire } from 'node:module';
 import { readFileSync } from 'node:fs';
 import http from 'node:http';
-import path from 'node:path';
+import { chromium, pass, fail, failed } from './tap.mjs';
 
 const env = process.env;
-const require = createRequire(path.join(env.UI_MODULES, 'package.json'));
-const { chromium } = require('playwright-core');
 const URL = env.QDC_URL;
-let nfail = 0;
-const pass = (m) => console.log('ok - ' + m);
-const fail = (m, why) => { console.log('FAIL - ' + m + ': ' + String(why).replace(/\s+/g, ' ').slice(0, 400)); nfail++; };
 
 const page = `<!doctype html><meta charset="utf-8"><title>elsewhere</title>
 <script>
@@ -60,4 +54,4 @@ try {
     await browser.close();
     server.close();
 }
-process.exit(nfail ? 1 : 0);
+process.exit(failed());

@@ -1,6 +1,7 @@
 /* test_slide.c - sliding boundary: feature detection, projection, and the
  * optimizer keeping the shape, the regions and the locked vertices. */
 #include "core/mesh_int.h"
+#include "core/tet.h"
 #include "geom/bderr_int.h"
 #include "opt/slide.h"
 #include "qdc.h"
@@ -8,6 +9,7 @@
 #include "testmesh.h"
 
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 static int on_cube_edge(const double *p)
@@ -223,7 +225,87 @@ TEST(freed_vertices_keep_the_bound)
     mesh_free(m);
 }
 
+/* Degenerate is as bad as inverted, pass by pass: small cubes whose every or
+ * nearly every tet has four boundary corners, the face vertices slid within
+ * their faces and the interior tangled, optimized in every boundary mode. No
+ * tet that was usable comes out flat (degenerate, not inverted), the count
+ * of unusable tets never rises, and a valid input keeps its worst tet. */
+static int32_t count_bad(const mesh_t *m, uint8_t *flat)
+{
+    int32_t bad = 0;
+    for (int32_t t = 0; t < m->nt; t++) {
+        const int32_t *tt = m->tets + 4 * t;
+        double v6 = geom_tet_vol6(m->xyz, tt), l2 = geom_tet_l2sum(m->xyz, tt);
+        bad += geom_tet_bad_vl(v6, l2);
+        if (flat)
+            flat[t] = (uint8_t)geom_tet_degenerate(v6, l2);
+    }
+    return bad;
+}
+
+static void squash_faces(mesh_t *m, int n, double amp, uint64_t seed)
+{
+    uint64_t r = seed;
+    for (int32_t v = 0; v < m->nv; v++) {
+        double *p = m->xyz + 3 * v;
+        int onface = -1, extreme = 0;
+        for (int k = 0; k < 3; k++)
+            if (p[k] == 0.0 || p[k] == 1.0) {
+                extreme++;
+                onface = k;
+            }
+        if (extreme == 1) {
+            p[(onface + 1) % 3] += amp / n * tm_rand(&r);
+            p[(onface + 2) % 3] += amp / n * tm_rand(&r);
+        }
+    }
+}
+
+TEST(no_tet_is_flattened_in_any_boundary_mode)
+{
+    static const opt_boundary modes[] = {OPT_BOUNDARY_SLIDE, OPT_BOUNDARY_FIXED,
+                                         OPT_BOUNDARY_LSQ};
+    int tangled = 0, runs = 0;
+    for (int n = 2; n <= 3; n++)
+        for (uint64_t seed = 1; seed <= 5; seed++)
+            for (size_t k = 0; k < sizeof modes / sizeof modes[0]; k++) {
+                mesh_t *m = tm_grid(n, 0), *in;
+                uint8_t *flat_in, *flat_out;
+                report_quality q0, q1;
+                opt_options o;
+                int32_t bad0, bad1;
+                ASSERT_TRUE(m != NULL);
+                tm_perturb(m, n, 1.1, seed);
+                squash_faces(m, n, 0.9, seed * 7919);
+                in = mesh_dup(m);
+                flat_in = calloc((size_t)m->nt, 1);
+                flat_out = calloc((size_t)m->nt, 1);
+                ASSERT_TRUE(in && flat_in && flat_out);
+                bad0 = count_bad(in, flat_in);
+                report_quality_compute(in, &q0, NULL);
+                opt_defaults(&o);
+                o.boundary = modes[k];
+                ASSERT_OK(opt_run(m, &o, NULL, NULL));
+                bad1 = count_bad(m, flat_out);
+                report_quality_compute(m, &q1, NULL);
+                for (int32_t t = 0; t < m->nt; t++)
+                    ASSERT_TRUE(!flat_out[t] || flat_in[t]);
+                ASSERT_TRUE(bad1 <= bad0);
+                if (bad0 == 0)
+                    ASSERT_TRUE(q1.q_min >= q0.q_min);
+                tangled += bad0 > 0;
+                runs++;
+                free(flat_out);
+                free(flat_in);
+                mesh_free(in);
+                mesh_free(m);
+            }
+    ASSERT_EQ_INT(runs, 30);
+    ASSERT_TRUE(tangled >= 5); /* the cases do untangle, not only smooth */
+}
+
 TEST_MAIN("slide", T(freed_vertices_keep_the_bound),
+          T(no_tet_is_flattened_in_any_boundary_mode),
           T(cube_features_are_its_12_edges_and_8_corners),
           T(projection_onto_face_line_and_corner), T(bvh_picks_the_closest_triangle),
           T(slide_keeps_the_cube_and_beats_fixed),

@@ -5,6 +5,7 @@
 #include "opt/opt.h"
 #include "testlib.h"
 #include "testmesh.h"
+#include "topo/contract.h"
 #include "topo/exact.h"
 #include "topo/flip.h"
 #include "topo/insert.h"
@@ -863,7 +864,268 @@ TEST(flips_allocation_failures_are_clean)
 #endif
 }
 
-TEST_MAIN("topo", T(insertion_in_a_bad_tet), T(insertion_refused_leaves_the_mesh),
+/* The boundary faces of tm as triangles in tet_face_of order (outward), ref
+ * top for those in z >= ztop, else 3; *n their count (room for 16). */
+static void surface_of(const tmesh *tm, double ztop, int32_t top, int32_t tris[16][3],
+                       int32_t refs[16], int32_t *n)
+{
+    *n = 0;
+    for (int32_t t = 0; t < tm->hi; t++)
+        for (int i = 0; i < 4 && tm->tv[4 * t] >= 0; i++) {
+            int up = 1;
+            if (tm->adj[4 * t + i] >= 0)
+                continue;
+            for (int s = 0; s < 3; s++) {
+                tris[*n][s] = tm->tv[4 * t + tet_face_of[i][s]];
+                up &= tm->xyz[3 * tris[*n][s] + 2] >= ztop;
+            }
+            refs[(*n)++] = up ? top : 3;
+        }
+}
+
+/* Two tets under the rhombus a (-2,0,0) b (2,0,0) c (0,-1,z) d (0,1,0) over
+ * p (0,0,-1), around the boundary edge ab; 6V = 4 each when z = 0. */
+static tmesh *rhombus_pair(double z)
+{
+    double x[5 * 3] = {-2, 0, 0, 2, 0, 0, 0, -1, z, 0, 1, 0, 0, 0, -1};
+    int32_t tv[8] = {0, 1, 2, 4, 1, 0, 3, 4};
+    tmesh *tm = NULL;
+
+    if (tmesh_new(5, x, 2, tv, NULL, NULL, &tm, NULL) != QDC_OK)
+        return NULL;
+    return tm;
+}
+
+/* The coplanar pair: edge ab (length 4) becomes cd (length 2), the volume
+ * exactly kept, the surface not moved; the two top triangles (ref 7) replaced
+ * by two with ref 7, their removal logged; refused without a bound, across
+ * refs, and beyond the bound when c leaves the plane. */
+TEST(boundary_flip_2_2_coplanar)
+{
+    tmesh *tm = rhombus_pair(0.0);
+    int32_t tris[16][3], refs[16], n = 0, ids[4];
+    flip_bound bd = {1e-9, cos(30 * PI / 180)}, none = {0.0, bd.cos_feature};
+    flip_cand c;
+    int applied = 0, e = -1, made = 0;
+
+    ASSERT_TRUE(tm != NULL);
+    surface_of(tm, 0.0, 7, tris, refs, &n);
+    ASSERT_EQ_INT(n, 6);
+    ASSERT_OK(tmesh_set_surface(tm, n, &tris[0][0], refs));
+    for (int k = 0; k < 6; k++) /* edge ab of tet 0 */
+        if ((tm->tv[tmesh_edge[k][0]] == 0 && tm->tv[tmesh_edge[k][1]] == 1) ||
+            (tm->tv[tmesh_edge[k][0]] == 1 && tm->tv[tmesh_edge[k][1]] == 0))
+            e = k;
+    ASSERT_TRUE(e >= 0);
+    ASSERT_EQ_INT(flip_edge_eval(tm, 0, e, 10, 0.0, -INFINITY, &c), 0); /* constrained */
+    ASSERT_EQ_INT(flip_bedge_eval(tm, 0, e, 10, 0.0, 0.0, &none, &c), 0);
+    ASSERT_EQ_INT(flip_bedge_eval(tm, 0, e, 10, 0.0, 0.0, &bd, &c), 1);
+    ASSERT_EQ_INT(c.kind, FLIP_BEDGE);
+    ASSERT_EQ_INT(c.nold, 2);
+    ASSERT_EQ_INT(c.nnew, 2);
+    ASSERT_NEAR(c.dev, 0.0, 0);
+    ASSERT_TRUE(c.qmin_new > c.qmin_old);
+    ASSERT_OK(tmesh_replace_surface(tm, c.old, c.nold, (const int32_t(*)[4])c.newt,
+                                    c.nnew, c.dev, ids, &applied));
+    ASSERT_EQ_INT(applied, 1);
+    tmesh_commit(tm);
+    ASSERT_TRUE(consistent(tm));
+    ASSERT_EQ_INT(tm->nlive, 2);
+    ASSERT_NEAR(geom_tet_vol6(tm->xyz, tm->tv + 4 * ids[0]), 4.0, 0);
+    ASSERT_NEAR(geom_tet_vol6(tm->xyz, tm->tv + 4 * ids[1]), 4.0, 0);
+    ASSERT_NEAR(total_vol6(tm), 8.0, 0);
+    ASSERT_EQ_INT(tm->ngone, 2);
+    for (int j = 0; j < 2; j++) {
+        const int32_t *tt = tm->tv + 4 * ids[j];
+        ASSERT_TRUE(tmesh_local(tm, ids[j], 2) >= 0 && tmesh_local(tm, ids[j], 3) >= 0);
+        for (int i = 0; i < 4; i++)
+            if (tm->fsurf[ids[j]] >> i & 1) { /* a new top face: ref 7, cd constrained */
+                ASSERT_EQ_INT(tm->adj[4 * ids[j] + i], -1);
+                ASSERT_EQ_INT(tm->fref[4 * ids[j] + i], 7);
+                ASSERT_EQ_INT(tt[i], 4); /* opposite p */
+                made++;
+            }
+        ASSERT_EQ_INT(tm->econs[ids[j]], 63); /* every edge on the surface */
+    }
+    ASSERT_EQ_INT(made, 2);
+    tmesh_free(tm);
+
+    /* c lifted by 0.1: the slab is 6V / |ab x cd| = 0.4 / |(0, 0.4, 8)| thick */
+    tm = rhombus_pair(0.1);
+    ASSERT_TRUE(tm != NULL);
+    surface_of(tm, -0.5, 7, tris, refs, &n);
+    for (int k = 0; k < n; k++) /* the top two: ref 7, the rest 3 */
+        refs[k] = (tris[k][0] == 4 || tris[k][1] == 4 || tris[k][2] == 4) ? 3 : 7;
+    ASSERT_OK(tmesh_set_surface(tm, n, &tris[0][0], refs));
+    bd.hausd = 0.049;
+    ASSERT_EQ_INT(flip_bedge_eval(tm, 0, e, 10, 0.0, 0.0, &bd, &c), 0);
+    bd.hausd = 0.051;
+    ASSERT_EQ_INT(flip_bedge_eval(tm, 0, e, 10, 0.0, 0.0, &bd, &c), 1);
+    ASSERT_NEAR(c.dev, 0.4 / sqrt(64.16), 1e-15);
+    for (int k = 0; k < n; k++) /* the top triangles' refs differ: refused */
+        if (refs[k] == 7 && (tris[k][0] == 3 || tris[k][1] == 3 || tris[k][2] == 3))
+            refs[k] = 8;
+    ASSERT_OK(tmesh_set_surface(tm, n, &tris[0][0], refs));
+    ASSERT_EQ_INT(flip_bedge_eval(tm, 0, e, 10, 0.0, 0.0, &bd, &c), 0);
+    tmesh_free(tm);
+}
+
+/* Peeling the sliver (a, b, c, d), a (-2,0,0) b (2,0,0) c (0,-1,-1/8)
+ * d (0,1,-1/8), 6V = 8h = 1, off the tets (d, c, a, p) and (c, d, b, p),
+ * p (0,0,-1), 6V = 4 - 4h = 3.5 each: 6V 8 -> 7, the faces cda and cdb
+ * become boundary (ref 7, the sliver's), edge cd constrained, the surface
+ * moved by the slab h = 1/8; rolled back exactly. */
+TEST(peeling_a_flat_boundary_tet)
+{
+    double x[5 * 3] = {-2, 0, 0, 2, 0, 0, 0, -1, -0.125, 0, 1, -0.125, 0, 0, -1};
+    int32_t tv[12] = {0, 1, 2, 3, 3, 2, 0, 4, 2, 3, 1, 4};
+    int32_t tris[16][3], refs[16], n = 0;
+    flip_bound bd = {0.124, cos(30 * PI / 180)};
+    tmesh *tm = NULL;
+    flip_cand c;
+    int applied = 0;
+
+    ASSERT_OK(tmesh_new(5, x, 3, tv, NULL, NULL, &tm, NULL));
+    ASSERT_NEAR(total_vol6(tm), 8.0, 0);
+    surface_of(tm, 0.0, 7, tris, refs, &n);
+    for (int k = 0; k < n; k++) /* the sliver's top faces: ref 7 */
+        refs[k] = (tris[k][0] == 4 || tris[k][1] == 4 || tris[k][2] == 4) ? 3 : 7;
+    ASSERT_OK(tmesh_set_surface(tm, n, &tris[0][0], refs));
+    ASSERT_EQ_INT(flip_peel_eval(tm, 0, 0.0, &bd, &c), 0); /* beyond the bound */
+    bd.hausd = 0.126;
+    ASSERT_EQ_INT(flip_peel_eval(tm, 0, 0.0, &bd, &c), 1);
+    ASSERT_EQ_INT(c.kind, FLIP_PEEL);
+    ASSERT_EQ_INT(c.nnew, 0);
+    ASSERT_NEAR(c.dev, 0.125, 1e-15);
+    ASSERT_TRUE(c.qmin_new > c.qmin_old);
+    ASSERT_OK(tmesh_replace_surface(tm, c.old, c.nold, NULL, 0, c.dev, NULL, &applied));
+    ASSERT_EQ_INT(applied, 1);
+    ASSERT_TRUE(consistent(tm));
+    ASSERT_EQ_INT(tm->nlive, 2);
+    ASSERT_NEAR(total_vol6(tm), 7.0, 0);
+    ASSERT_EQ_INT(tm->ngone, 2);
+    for (int32_t t = 1; t < 3; t++) {
+        int f = tmesh_local(tm, t, 4); /* the face opposite p: cda or cdb */
+        int lc = tmesh_local(tm, t, 2), ld = tmesh_local(tm, t, 3), ecd = -1;
+        ASSERT_EQ_INT(tm->adj[4 * t + f], -1);
+        ASSERT_EQ_INT(tm->fref[4 * t + f], 7);
+        ASSERT_NEAR(tm->fdev[4 * t + f], 0.125, 1e-15);
+        for (int k = 0; k < 6; k++)
+            if ((tmesh_edge[k][0] == lc && tmesh_edge[k][1] == ld) ||
+                (tmesh_edge[k][0] == ld && tmesh_edge[k][1] == lc))
+                ecd = k;
+        ASSERT_EQ_INT(tm->econs[t] >> ecd & 1, 1);
+    }
+    tmesh_rollback(tm);
+    ASSERT_TRUE(consistent(tm));
+    ASSERT_EQ_INT(tm->nlive, 3);
+    ASSERT_EQ_INT(tm->ngone, 0);
+    ASSERT_NEAR(total_vol6(tm), 8.0, 0);
+    ASSERT_EQ_INT(tm->fcons[1] >> tmesh_local(tm, 1, 4) & 1, 0);
+    tmesh_free(tm);
+}
+
+/* The driver with a bound on the coplanar pair: one boundary flip, and the
+ * triangles handed back are the four untouched ones in their order, then the
+ * two new top ones with ref 7, facing up (+z) as the input's did. */
+TEST(driver_writes_the_new_boundary_triangles)
+{
+    double x[5 * 3] = {-2, 0, 0, 2, 0, 0, 0, -1, 0, 0, 1, 0, 0, 0, -1};
+    int32_t tv[8] = {0, 1, 2, 4, 1, 0, 3, 4}, tris[16][3], refs[16], n = 0;
+    int32_t nt = 0, nv = 0, *tets = NULL;
+    double *xo = NULL;
+    tmesh *tm = rhombus_pair(0.0);
+    topo_params p;
+    topo_stats st;
+    topo_surface sf = {0};
+
+    ASSERT_TRUE(tm != NULL);
+    surface_of(tm, 0.0, 7, tris, refs, &n);
+    tmesh_free(tm);
+    topo_params_default(&p);
+    p.qgoal = 1.0;
+    p.bound.hausd = 1e-9;
+    sf.ntri = n;
+    sf.tris = &tris[0][0];
+    sf.refs = refs;
+    ASSERT_OK(topo_full_arrays(5, x, 2, tv, NULL, NULL, &p, NULL, &nv, &xo, &nt, &tets,
+                               NULL, NULL, &sf, &st, NULL));
+    ASSERT_EQ_INT(st.bflips, 1);
+    ASSERT_EQ_INT(nt, 2);
+    ASSERT_EQ_INT(sf.removed, 2);
+    ASSERT_EQ_INT(sf.added, 2);
+    ASSERT_EQ_INT(sf.ntri_out, 6);
+    for (int k = 0, j = 0; k < n; k++)
+        if (refs[k] != 7) {
+            ASSERT_EQ_INT(memcmp(sf.tris_out + 3 * j, tris[k], sizeof tris[k]), 0);
+            j++;
+        }
+    for (int k = 4; k < 6; k++) {
+        const int32_t *t = sf.tris_out + 3 * k;
+        double u[3], v[3];
+        ASSERT_EQ_INT(sf.refs_out[k], 7);
+        for (int s = 0; s < 3; s++) {
+            u[s] = x[3 * t[1] + s] - x[3 * t[0] + s];
+            v[s] = x[3 * t[2] + s] - x[3 * t[0] + s];
+        }
+        ASSERT_TRUE(u[0] * v[1] - u[1] * v[0] > 0); /* facing +z */
+        ASSERT_TRUE((t[0] == 2 || t[1] == 2 || t[2] == 2) &&
+                    (t[0] == 3 || t[1] == 3 || t[2] == 3));
+    }
+    qdc_free(sf.tris_out);
+    qdc_free(sf.refs_out);
+    qdc_free(tets);
+    qdc_free(xo);
+}
+
+/* Contraction on a 4x4x4 Kuhn grid of the unit cube (coordinates in quarters,
+ * the centre vertex moved by (1/64, 1/128, 0): every 6V a multiple of 2^-13,
+ * sums exact): some interior edge contracts; the volume is kept exactly, the
+ * tets of the edge's ring vanish, the vertex that went is used by no tet, the
+ * adjacency stays consistent; an edge with a boundary end never contracts. */
+TEST(contraction_keeps_the_volume_exactly)
+{
+    mesh_t *m = tm_grid(4, 0);
+    tmesh *tm = NULL;
+    contract_cand c;
+    int32_t centre = 2 + 5 * (2 + 5 * 2);
+    double v0;
+    int found = 0, applied = 0, refused = 1;
+
+    ASSERT_TRUE(m);
+    m->xyz[3 * centre] += 1.0 / 64;
+    m->xyz[3 * centre + 1] += 1.0 / 128;
+    ASSERT_OK(tmesh_new(m->nv, m->xyz, m->nt, m->tets, NULL, NULL, &tm, NULL));
+    v0 = total_vol6(tm);
+    ASSERT_NEAR(v0, 6.0, 0);
+    for (int32_t t = 0; t < tm->hi && !found; t++)
+        for (int e = 0; e < 6 && !found; e++) {
+            int32_t a = tm->tv[4 * t + tmesh_edge[e][0]], b = tm->tv[4 * t + tmesh_edge[e][1]];
+            int ok = contract_eval(tm, t, e, 0.0, -INFINITY, &c);
+            if (tm->vcons[a] || tm->vcons[b])
+                refused &= !ok;
+            else if (ok && (c.gone == centre || c.keep == centre))
+                found = 1;
+        }
+    ASSERT_TRUE(refused);
+    ASSERT_TRUE(found);
+    ASSERT_TRUE(c.nnew < c.nold);
+    ASSERT_OK(tmesh_replace(tm, c.old, c.nold, (const int32_t(*)[4])c.newt, c.nnew, NULL,
+                            &applied));
+    ASSERT_EQ_INT(applied, 1);
+    tmesh_commit(tm);
+    ASSERT_TRUE(consistent(tm));
+    ASSERT_EQ_INT(tm->nlive, m->nt - (c.nold - c.nnew));
+    ASSERT_NEAR(total_vol6(tm), v0, 0);
+    for (int32_t t = 0; t < tm->hi; t++)
+        if (tm->tv[4 * t] >= 0)
+            ASSERT_TRUE(tmesh_local(tm, t, c.gone) < 0);
+    tmesh_free(tm);
+    mesh_free(m);
+}
+
+TEST_MAIN("topo", T(contraction_keeps_the_volume_exactly), T(boundary_flip_2_2_coplanar), T(peeling_a_flat_boundary_tet),
+          T(driver_writes_the_new_boundary_triangles), T(insertion_in_a_bad_tet), T(insertion_refused_leaves_the_mesh),
           T(driver_with_insertion), T(orient3d_exact_near_coplanar),
           T(edge_removal_3_2_keeps_volume), T(edge_removal_rings_3_to_8), T(flip_2_3),
           T(multiface_removal_restores_the_ring),

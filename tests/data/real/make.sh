@@ -72,6 +72,21 @@ done
 gmsh -3 -nt 1 periodic.geo -format msh41 -bin -o periodic41_bin.msh 2>&1 | grep -v ANN > /dev/null
 gmsh -3 -nt 1 periodic.geo -format msh22 -bin -o periodic22_bin.msh 2>&1 | grep -v ANN > /dev/null
 
+# Second-order (10-node) tets on a curved boundary: a unit sphere, physical
+# volume and surface, Mesh.ElementOrder = 2 (MSH 4.1 and Gmsh's Abaqus .inp).
+cat > sphere_p2.geo <<'EOF'
+SetFactory("OpenCASCADE");
+Sphere(1) = {0, 0, 0, 1};
+Physical Volume("ball") = {1};
+Physical Surface("skin") = {1};
+Mesh.CharacteristicLengthMax = 0.6;
+Mesh.ElementOrder = 2;
+Mesh.MaxNumThreads3D = 1;
+Mesh.RandomSeed = 1;
+EOF
+gmsh -3 -nt 1 sphere_p2.geo -format msh41 -o gmsh41_p2.msh > /dev/null
+gmsh -3 -nt 1 sphere_p2.geo -format inp -o gmsh_p2.inp > /dev/null
+
 # meshio: the Gmsh mesh with a point array and cell arrays of several types.
 /usr/bin/python3 - <<'EOF'
 import zlib, struct
@@ -213,8 +228,9 @@ mv box.1.ele tetgen.ele
 for f in gmsh41.msh gmsh41_bin.msh gmsh22.msh gmsh22_bin.msh gmsh40.msh gmsh.vtk gmsh.mesh meshio_zlib.vtu \
     meshio_ascii.vtu meshio_bin.vtk meshio_ascii.vtk vtk_appended_zlib.vtu tetgen.node \
     tetgen.ele dolfin.xml meshio.inp calculix.inp meshio.vol meshio.meshb periodic41.msh \
-    periodic41_bin.msh periodic40.msh periodic22.msh periodic22_bin.msh gmsh_msh1.msh gmsh.bdf \
-    gmsh_free.bdf gmsh_large.bdf gmsh.unv meshio_free.bdf meshio_small.nas meshio_large.bdf; do
+    periodic41_bin.msh periodic40.msh periodic22.msh periodic22_bin.msh gmsh41_p2.msh gmsh_p2.inp \
+    gmsh_msh1.msh gmsh.bdf gmsh_free.bdf gmsh_large.bdf gmsh.unv meshio_free.bdf meshio_small.nas \
+    meshio_large.bdf; do
     gzip -n -9 -c "$f" > "$here/$f.gz"
 done
 ls -l "$here"

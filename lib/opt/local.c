@@ -1,0 +1,183 @@
+/* local.c - local repair of the tets the finishing pass left inverted
+ * (docs/method.md §5a): the tets within a few vertex rings of them become a
+ * mesh of their own, whose vertices on the cut to the rest of the mesh (and
+ * the run's locked ones) are held where the run has them, and whose other
+ * vertices start again from the input; that small mesh is optimized
+ * (untangled and smoothed, under the run's bound and then, with the default
+ * bound, OPT_HAUSD_STUCK) by the run's repair hook and put back, kept by the
+ * best-iterate rule. What a rerun of the whole mesh from the input did for a
+ * handful of tets, for the cost of their neighbourhood; the angle polish
+ * then runs on the whole mesh. */
+#include "opt/local.h"
+
+#include "core/tet.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+/* Rings of each round; rounds run while tets stay inverted. */
+static const int local_rings[] = {3, 6, 12};
+
+/* The region of a round: lev[v] the ring of v around the tets unusable at x
+ * (0 their corners, -1 beyond rings), region[t] the tets with a corner inside
+ * the last ring, hold[v] their corners that are also corners of a tet outside
+ * (the cut). Returns the number of region tets. */
+static int32_t local_region(const int32_t *tets, int32_t nv, int32_t ntet,
+                            const double *x, int rings, int8_t *lev, uint8_t *region,
+                            uint8_t *hold)
+{
+    int32_t n = 0;
+
+    memset(lev, -1, (size_t)nv);
+    for (int32_t t = 0; t < ntet; t++)
+        if (geom_tet_bad(x, tets + 4 * (size_t)t))
+            for (int k = 0; k < 4; k++)
+                lev[tets[4 * (size_t)t + k]] = 0;
+    for (int ring = 0; ring < rings; ring++)
+        for (int32_t t = 0; t < ntet; t++) {
+            const int32_t *tt = tets + 4 * (size_t)t;
+            int near = 0;
+            for (int k = 0; k < 4; k++)
+                near |= lev[tt[k]] == ring;
+            for (int k = 0; near && k < 4; k++)
+                if (lev[tt[k]] < 0)
+                    lev[tt[k]] = (int8_t)(ring + 1);
+        }
+    memset(hold, 0, (size_t)nv);
+    for (int32_t t = 0; t < ntet; t++) {
+        const int32_t *tt = tets + 4 * (size_t)t;
+        int in = 0;
+        for (int k = 0; k < 4; k++)
+            in |= lev[tt[k]] >= 0 && lev[tt[k]] < rings;
+        region[t] = (uint8_t)in;
+        n += in;
+    }
+    /* a region corner on a tet outside is on the cut */
+    for (int32_t t = 0; t < ntet; t++)
+        for (int k = 0; !region[t] && k < 4; k++)
+            if (lev[tets[4 * (size_t)t + k]] >= 0)
+                hold[tets[4 * (size_t)t + k]] = 1;
+    return n;
+}
+
+/* The region's mesh (normalized units): its vertices numbered in order
+ * (map[v], -1 outside), held ones (the cut, locked) at xbest and fixed, the
+ * others at the input x0. NULL on allocation failure. */
+static mesh_t *local_mesh(const ctx_t *c, const uint8_t *region, const uint8_t *hold,
+                          int32_t nt, int32_t *map)
+{
+    const int32_t *tets = c->tp->tets;
+    int32_t nv = 0, t2 = 0;
+    mesh_t *s;
+
+    for (int32_t v = 0; v < c->nv; v++)
+        map[v] = -1;
+    for (int32_t t = 0; t < c->nt; t++)
+        for (int k = 0; region[t] && k < 4; k++)
+            map[tets[4 * (size_t)t + k]] = 0;
+    for (int32_t v = 0; v < c->nv; v++)
+        map[v] = map[v] == 0 ? nv++ : -1;
+    s = mesh_new(nv, nt, MESH_WITH_FIXED | (c->region ? MESH_WITH_REGION : 0));
+    if (!s)
+        return NULL;
+    for (int32_t v = 0; v < c->nv; v++) {
+        int32_t w = map[v];
+        int held = w >= 0 && (hold[v] || c->locked[v]);
+        if (w < 0)
+            continue;
+        memcpy(s->xyz + 3 * (size_t)w, (held ? c->xbest : c->x0) + 3 * (size_t)v,
+               3 * sizeof(double));
+        s->fixed[w] = (uint8_t)held;
+    }
+    for (int32_t t = 0; t < c->nt; t++) {
+        if (!region[t])
+            continue;
+        for (int k = 0; k < 4; k++)
+            s->tets[4 * (size_t)t2 + k] = map[tets[4 * (size_t)t + k]];
+        if (c->region)
+            s->region[t2] = c->region[t];
+        t2++;
+    }
+    return s;
+}
+
+/* The region's run: the run's options without progress records or log lines
+ * (its figures are the region's), the bound in normalized units. A failed
+ * region run (say, out of memory) leaves *ok 0 and the mesh as it was. */
+static void local_run(const ctx_t *c, mesh_t *s, double bound, int *ok)
+{
+    opt_options o = *c->o;
+    opt_result r;
+    qdc_error e;
+
+    o.progress = NULL;
+    o.progress_ctx = NULL;
+    o.log = NULL;
+    o.hausd = bound;
+    o.hausd_rel = 0;
+    memset(&e, 0, sizeof e);
+    *ok = c->repair(s, &o, c->keep_surface, &r, &e) == QDC_OK && r.outcome != OPT_FAILED;
+}
+
+/* One round at `rings` with the bound `bound` (normalized units): the region
+ * optimized and put into c->trial, recorded (phase "local") and considered. */
+static qdc_status local_round(ctx_t *c, opt_result *res, opt_progress *r, int *next,
+                              int rings, double bound)
+{
+    size_t nv = (size_t)c->nv, n3 = 3 * nv;
+    int8_t *lev = qdc_malloc(nv + 1);
+    uint8_t *hold = qdc_malloc(nv + 1), *region = qdc_malloc((size_t)c->nt + 1);
+    int32_t *map = qdc_mallocn(nv + 1, sizeof(int32_t)), nt, was = c->best.n_inverted;
+    mesh_t *s = NULL;
+    qdc_status st = QDC_ENOMEM;
+    int ok = 0;
+
+    if (!lev || !hold || !region || !map)
+        goto out;
+    nt = local_region(c->tp->tets, c->nv, c->nt, c->xbest, rings, lev, region, hold);
+    s = local_mesh(c, region, hold, nt, map);
+    if (!s)
+        goto out;
+    st = QDC_OK;
+    local_run(c, s, bound, &ok);
+    if (!ok)
+        goto out;
+    memcpy(c->trial, c->xbest, n3 * sizeof(double));
+    for (size_t v = 0; v < nv; v++)
+        if (map[v] >= 0 && !s->fixed[map[v]])
+            memcpy(c->trial + 3 * v, s->xyz + 3 * (size_t)map[v], 3 * sizeof(double));
+    ctx_pass_record(c, r, next, "local");
+    r->step = 0;
+    ctx_consider(c, c->x, r);
+    if (c->best_it == r->iteration && bound * c->scale > res->hausd_bound)
+        res->hausd_bound = bound * c->scale;
+    ctx_log(c, 0,
+            "local repair: %d tets within %d rings of the %d inverted, %d vertices: %s",
+            (int)nt, rings, (int)was, (int)s->nv,
+            c->best_it == r->iteration ? "kept" : "not better");
+    if (ctx_report(c, r))
+        ctx_set_stop(res, OPT_STOP_CANCELLED);
+out:
+    mesh_free(s);
+    qdc_free(map);
+    qdc_free(region);
+    qdc_free(hold);
+    qdc_free(lev);
+    return st;
+}
+
+qdc_status local_pass(ctx_t *c, opt_result *res, opt_progress *r, int *next)
+{
+    qdc_status st = QDC_OK;
+
+    if (!c->repair)
+        return QDC_OK;
+    for (size_t i = 0; i < sizeof local_rings / sizeof local_rings[0]; i++) {
+        if (st == QDC_OK && c->best.n_inverted > 0 && res->stop != OPT_STOP_CANCELLED)
+            st = local_round(c, res, r, next, local_rings[i], c->hbound);
+        if (st == QDC_OK && c->autob && c->best.n_inverted > 0 &&
+            res->stop != OPT_STOP_CANCELLED)
+            st = local_round(c, res, r, next, local_rings[i], OPT_HAUSD_STUCK);
+    }
+    return st;
+}

@@ -1,0 +1,182 @@
+#!/bin/sh
+# topobound.sh - `qdc optimize --topology flips` with an explicit --hausd:
+# boundary edge flips and the peeling of flat tets with two boundary faces
+# within the bound. On the thin bone of scripts/corpus.py (20k tets) given
+# boundary triangles with two refs (by the sign of the normal's x): the
+# report counts the boundary operations and the triangles removed and added,
+# the written triangles are exactly the boundary faces of the written tets
+# (as sets), each facing out as the input's did, those kept with their ref
+# and the new ones with a ref of an input triangle they touch, the counts of
+# the report those of the files; no tet
+# inverted or flat, the vertices kept, the same bytes from 1 and 2 threads;
+# and without --hausd (the default bound) the triangles come back exactly as
+# they went in.
+. "$(dirname "$0")/../lib.sh"
+
+if ! "$PY" -c 'import numpy' 2> /dev/null; then
+    echo "ok - topobound # SKIP python3-numpy missing"
+    exit 0
+fi
+if ! "$PY" "$ROOT/scripts/corpus.py" "$TMP/c" --tets 20000 --seed 3 --only bone-lowq \
+    > "$TMP/list" 2>&1; then
+    fail "topobound: corpus" "$(tail -1 "$TMP/list")"
+    exit 1
+fi
+
+cat > "$TMP/lib.py" << 'PY'
+import numpy as np
+
+def medit(path):
+    tok = open(path).read().split()
+    i, x, t, tri, tref = 0, None, None, np.zeros((0, 3), np.int64), np.zeros(0, np.int64)
+    while i < len(tok):
+        k = tok[i]
+        if k == "Vertices":
+            n = int(tok[i + 1])
+            x = np.array(tok[i + 2:i + 2 + 4 * n], dtype=float).reshape(n, 4)[:, :3]
+            i += 2 + 4 * n
+        elif k == "Tetrahedra":
+            n = int(tok[i + 1])
+            t = np.array(tok[i + 2:i + 2 + 5 * n], dtype=np.int64).reshape(n, 5)[:, :4] - 1
+            i += 2 + 5 * n
+        elif k == "Triangles":
+            n = int(tok[i + 1])
+            a = np.array(tok[i + 2:i + 2 + 4 * n], dtype=np.int64).reshape(n, 4)
+            tri, tref = a[:, :3] - 1, a[:, 3]
+            i += 2 + 4 * n
+        else:
+            i += 1
+    return x, t, tri, tref
+
+def outward(x, t):
+    """{sorted face: the face oriented outward} of the faces of one tet"""
+    f = {}
+    for tt in t.tolist():
+        a, b, c, d = (x[v] for v in tt)
+        s = np.dot(np.cross(b - a, c - a), d - a) > 0
+        for o, (i, j, k) in enumerate(((1, 2, 3), (0, 3, 2), (0, 1, 3), (0, 2, 1))):
+            face = (tt[i], tt[j], tt[k]) if s else (tt[i], tt[k], tt[j])
+            key = tuple(sorted(face))
+            if key in f:
+                f[key] = None
+            else:
+                f[key] = face
+    return {k: v for k, v in f.items() if v is not None}
+
+def same_turn(p, q):
+    return tuple(p) in (tuple(q), (q[1], q[2], q[0]), (q[2], q[0], q[1]))
+PY
+
+# the input with its boundary triangles, facing out, refs 1 and 2
+"$PY" - "$TMP/c/bone-lowq.mesh" "$TMP/in.mesh" "$TMP" << 'PY'
+import sys
+sys.path.insert(0, sys.argv[3])
+import numpy as np
+from lib import medit, outward
+x, t, _, _ = medit(sys.argv[1])
+f = list(outward(x, t).values())
+with open(sys.argv[2], "w") as o:
+    o.write("MeshVersionFormatted 2\nDimension 3\nVertices\n%d\n" % len(x))
+    for p in x:
+        o.write("%.17g %.17g %.17g 0\n" % tuple(p))
+    o.write("Tetrahedra\n%d\n" % len(t))
+    for tt in t:
+        o.write("%d %d %d %d 1\n" % tuple(tt + 1))
+    o.write("Triangles\n%d\n" % len(f))
+    for a, b, c in f:
+        n = np.cross(x[b] - x[a], x[c] - x[a])
+        o.write("%d %d %d %d\n" % (a + 1, b + 1, c + 1, 1 if n[0] >= 0 else 2))
+    o.write("End\n")
+PY
+
+cat > "$TMP/check.py" << 'PY'
+import sys, json
+sys.path.insert(0, sys.argv[4])
+import numpy as np
+from lib import medit, outward, same_turn
+xi, ti, fi, ri = medit(sys.argv[1])
+xo, to, fo, ro = medit(sys.argv[2])
+rep = json.load(open(sys.argv[3]))["run"].get("topology", {})
+bad = []
+inref = {tuple(sorted(f)): r for f, r in zip(fi.tolist(), ri.tolist())}
+byvert = {}
+for f, r in zip(fi.tolist(), ri.tolist()):
+    for v in f:
+        byvert.setdefault(v, set()).add(r)
+bnd = outward(xo, to)
+got = {}
+for f, r in zip(fo.tolist(), ro.tolist()):
+    got[tuple(sorted(f))] = (f, r)
+if set(got) != set(bnd):
+    bad.append("triangles %d, boundary faces %d, %d differ"
+               % (len(got), len(bnd), len(set(got) ^ set(bnd))))
+added = 0
+for k, (f, r) in got.items():
+    if k in bnd and not same_turn(f, bnd[k]):
+        bad.append("a triangle faces in")
+        break
+    # a triangle made again where one was removed takes the ref of the
+    # operation's triangles: one of those around it
+    if inref.get(k) != r:
+        added += 1
+        if not any(r in byvert.get(v, ()) for v in f):
+            bad.append("a new triangle's ref is no neighbour's")
+            break
+    elif k not in inref:
+        added += 1
+if len(np.unique(to)) != len(np.unique(ti)) or len(xo) != len(xi):
+    bad.append("vertices changed")
+ops = rep.get("boundary_flips", 0) + rep.get("peeled", 0)
+if ops == 0 or added == 0:
+    bad.append("no boundary operation (%s)" % rep)
+na, nr = rep.get("boundary_triangles_added", -1), rep.get("boundary_triangles_removed", -1)
+if len(fo) != len(fi) - nr + na or added > na:
+    bad.append("report: %d added, %d removed; files: %d -> %d triangles, %d new"
+               % (na, nr, len(fi), len(fo), added))
+print("; ".join(bad) if bad else "ok", ops, added)
+PY
+
+in=$TMP/in.mesh
+for th in 1 2; do
+    if ! OMP_NUM_THREADS=$th "$BIN/qdc" optimize --quiet --topology flips --hausd rel:1e-3 \
+        "$in" "$TMP/h$th.mesh" --report "$TMP/h$th.json" 2> "$TMP/err"; then
+        fail "topobound: run" "exit $?: $(tail -2 "$TMP/err")"
+        exit 1
+    fi
+done
+set -- $("$PY" "$TMP/check.py" "$in" "$TMP/h1.mesh" "$TMP/h1.json" "$TMP")
+if [ "$1" = ok ]; then
+    pass "topobound: triangles = boundary faces, facing out, refs kept ($2 operations, $3 new triangles)"
+else
+    fail "topobound: triangles" "$*"
+fi
+set -- $("$PY" "$QUALITY" "$TMP/h1.mesh" | "$PY" -c 'import json, sys
+d = json.load(sys.stdin); print(d["n_inverted"], d["n_degenerate"])')
+if [ "$1" = 0 ] && [ "$2" = 0 ]; then
+    pass "topobound: no tet inverted or flat"
+else
+    fail "topobound: validity" "$1 inverted, $2 degenerate"
+fi
+if cmp -s "$TMP/h1.mesh" "$TMP/h2.mesh"; then
+    pass "topobound: the same bytes from 1 and 2 threads"
+else
+    fail "topobound: determinism" "1 and 2 threads differ"
+fi
+# the default bound is no licence: the triangles come back as they went in
+if "$BIN/qdc" optimize --quiet --topology flips "$in" "$TMP/d.mesh" 2> "$TMP/err" &&
+    "$PY" - "$in" "$TMP/d.mesh" "$TMP" << 'PY'
+import sys
+sys.path.insert(0, sys.argv[3])
+from lib import medit
+_, _, fi, ri = medit(sys.argv[1])
+_, _, fo, ro = medit(sys.argv[2])
+a = sorted((tuple(sorted(f)), r) for f, r in zip(fi.tolist(), ri.tolist()))
+b = sorted((tuple(sorted(f)), r) for f, r in zip(fo.tolist(), ro.tolist()))
+sys.exit(0 if a == b else 1)
+PY
+then
+    pass "topobound: without --hausd the boundary triangles are kept as a set"
+else
+    fail "topobound: default" "the triangles changed without --hausd"
+fi
+[ "$NFAIL" = 0 ]

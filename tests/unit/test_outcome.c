@@ -1,0 +1,117 @@
+/* test_outcome.c - the outcome in words (eval/outcome.h): the worst tet and its
+ * centroid from the quality scan, the warnings at their thresholds, the
+ * suggestions from the options and the boundary, on two-tet meshes whose
+ * figures are known in closed form. */
+#include "qdc.h"
+#include "testlib.h"
+
+#include <string.h>
+
+/* Two separate tets: a regular one (corners of a unit cube's alternate
+ * vertices: mean ratio 1) and, second, a flat one (apex h above the centroid
+ * of a unit triangle): a sliver with dihedral angles near 0 when h is small. */
+static mesh_t *two_tets(double h)
+{
+    static const double reg[12] = {0, 0, 0, 1, 1, 0, 1, 0, 1, 0, 1, 1};
+    const double tri[12] = {
+        10, 0, 0, 11, 0, 0, 10.5, 0.8660254037844386, 0, 10.5, 0.28867513459481287, h};
+    mesh_t *m = mesh_new(8, 2, 0);
+    if (!m)
+        return NULL;
+    memcpy(m->xyz, reg, sizeof reg);
+    memcpy(m->xyz + 12, tri, sizeof tri);
+    for (int i = 0; i < 8; i++)
+        m->tets[i] = i;
+    return m;
+}
+
+static int has(const char *s, const char *sub)
+{
+    return strstr(s, sub) != NULL;
+}
+
+TEST(worst_tet_and_centroid)
+{
+    mesh_t *m = two_tets(0.01);
+    report_quality q;
+    ASSERT_TRUE(m);
+    ASSERT_OK(report_quality_compute(m, &q, NULL));
+    ASSERT_EQ_INT(q.worst_tet, 1);
+    ASSERT_NEAR(q.worst_centroid[0], 10.5, 1e-12);
+    ASSERT_NEAR(q.worst_centroid[1], (0.8660254037844386 + 0.28867513459481287) / 4,
+                1e-12);
+    ASSERT_NEAR(q.worst_centroid[2], 0.0025, 1e-12);
+    ASSERT_NEAR(q.diag, sqrt(11 * 11 + 1 + 1), 1e-12);
+    mesh_free(m);
+}
+
+TEST(bad_result_warned)
+{
+    mesh_t *m = two_tets(0.001);
+    report_quality q;
+    opt_options o;
+    outcome_t out;
+    opt_defaults(&o);
+    ASSERT_TRUE(m);
+    ASSERT_OK(report_quality_compute(m, &q, NULL));
+    report_t r = {&q, &q, NULL, &o, NULL};
+    ASSERT_OK(outcome_compute(&r, &out));
+    ASSERT_EQ_INT(out.n_tets, 2);
+    ASSERT_EQ_INT(out.n_small, 1);
+    ASSERT_EQ_INT(out.n_large, 1); /* a flat tet has a dihedral angle near 180 too */
+    ASSERT_EQ_INT(out.n_inverted, 0);
+    ASSERT_EQ_INT(out.worst_tet, 1);
+    /* 1 of 2 under 5 degrees (over 0.1%) and a worst mean ratio under 0.05 */
+    ASSERT_EQ_INT(out.n_warnings, 2);
+    ASSERT_TRUE(has(out.warnings[0], "1 tets (50%, over 0.1%) are left with a dihedral"));
+    ASSERT_TRUE(has(out.warnings[1], "the worst tet's mean ratio is +0.0"));
+    ASSERT_EQ_INT(out.n_suggestions, 1);
+    ASSERT_TRUE(has(out.suggestions[0], "try --topology flips (or --topology full)"));
+    ASSERT_TRUE(has(out.left_bad, "worst tet 1 (from 0) at (10.5, 0.2887, 0.00025)"));
+    ASSERT_TRUE(has(out.summary, out.improved) && has(out.summary, out.left_bad));
+    ASSERT_EQ_INT(out.boundary[0], 0); /* neither measured nor bounded */
+    ASSERT_NEAR(out.moved_rel, -1, 0);
+    /* after flips: full is suggested; a boundary at its bound: a looser --hausd */
+    {
+        opt_result res;
+        bderr_result b;
+        memset(&res, 0, sizeof res);
+        memset(&b, 0, sizeof b);
+        res.hausd_bound = 0.02;
+        b.diag = 10;
+        b.hausdorff_rel = 0.0019; /* 95% of the bound 0.2% */
+        o.topology = OPT_TOPOLOGY_FLIPS;
+        report_t r2 = {&q, &q, &res, &o, &b};
+        ASSERT_OK(outcome_compute(&r2, &out));
+        ASSERT_EQ_INT(out.n_suggestions, 2);
+        ASSERT_TRUE(has(out.suggestions[0], "try --topology full"));
+        ASSERT_TRUE(has(out.suggestions[1], "looser --hausd, e.g. --hausd 0.4%"));
+        ASSERT_TRUE(has(out.boundary,
+                        "boundary moved 0.19% of the diagonal, 95% of its bound (0.2%)"));
+    }
+    mesh_free(m);
+}
+
+TEST(good_result_quiet)
+{
+    mesh_t *m = two_tets(0.8);
+    report_quality q;
+    opt_options o;
+    outcome_t out;
+    opt_defaults(&o);
+    ASSERT_TRUE(m);
+    ASSERT_OK(report_quality_compute(m, &q, NULL));
+    report_t r = {NULL, &q, NULL, &o, NULL};
+    ASSERT_OK(outcome_compute(&r, &out));
+    ASSERT_EQ_INT(out.n_small + out.n_large + out.n_inverted, 0);
+    ASSERT_EQ_INT(out.n_warnings, 0);
+    ASSERT_EQ_INT(out.n_suggestions, 0);
+    ASSERT_TRUE(has(out.left_bad, "left: 0 of 2 tets under 5° and 0 over 175° dihedral"));
+    /* no after: refused */
+    report_t none = {&q, NULL, NULL, &o, NULL};
+    ASSERT_EQ_INT(outcome_compute(&none, &out), QDC_EINVAL);
+    mesh_free(m);
+}
+
+TEST_MAIN("outcome", T(worst_tet_and_centroid), T(bad_result_warned),
+          T(good_result_quiet))
