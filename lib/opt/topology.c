@@ -92,7 +92,8 @@ static qdc_status take_surface(mesh_t *m, topo_surface *sf, qdc_error *err)
         if (st == QDC_OK) {
             memcpy(m->tris, sf->tris_out, 3 * (size_t)sf->ntri_out * sizeof *m->tris);
             if (m->tri_ref)
-                memcpy(m->tri_ref, sf->refs_out, (size_t)sf->ntri_out * sizeof *m->tri_ref);
+                memcpy(m->tri_ref, sf->refs_out,
+                       (size_t)sf->ntri_out * sizeof *m->tri_ref);
         } else {
             st = qdc_fail(err, st, "out of memory");
         }
@@ -383,8 +384,8 @@ static qdc_status full_round(mesh_t *m, opt_options *o, double hausd, topo_surfa
         acc.topo_tris_added += sf->added;
         o->progress = NULL; /* a trial: its records would not be the result's */
         st = opt_run_smooth(m, o, &r, err);
-        if (st == QDC_OK && r.outcome != OPT_STOPPED && r.after.q_min >= last->after.q_min &&
-            r.after.q_mean >= last->after.q_mean) {
+        if (st == QDC_OK && r.outcome != OPT_STOPPED &&
+            r.after.q_min >= last->after.q_min && r.after.q_mean >= last->after.q_mean) {
             add_run(&acc, &r);
             *first = acc;
             *last = r;
@@ -413,7 +414,8 @@ static int round_begin(const mesh_t *m, const opt_options *opts, opt_options *o,
     *st = flip_record(m, record, t0, &pr, err);
     if (*st != QDC_OK)
         return 1;
-    pr.operations = ts->edge_removals + ts->flips23 + ts->multiface + ts->bflips + ts->peels;
+    pr.operations =
+        ts->edge_removals + ts->flips23 + ts->multiface + ts->bflips + ts->peels;
     if (opts->progress && opts->progress(opts->progress_ctx, &pr)) {
         last->outcome = OPT_STOPPED;
         last->stop = OPT_STOP_CANCELLED;
@@ -493,7 +495,8 @@ static qdc_status topology_run(mesh_t *m, const opt_options *opts, opt_result *r
                   r.after.q_mean < last.after.q_mean + TOPO_GAIN;
         last = r;
     }
-    if (st == QDC_OK && opts->topology == OPT_TOPOLOGY_FULL && last.outcome != OPT_STOPPED)
+    if (st == QDC_OK && opts->topology == OPT_TOPOLOGY_FULL &&
+        last.outcome != OPT_STOPPED)
         st = full_round(m, &o, hausd, &sf, &first, &last, &record, err);
     if (st != QDC_OK) {
         /* m is the valid mesh of the round before (flip_round replaces the

@@ -49,7 +49,8 @@ static int ring_dp(const tmesh *tm, int32_t a, int32_t b, const int32_t *ring, i
 {
     /* best[x][y]: the best triangulation of ring[x..y]: its worst quality, its
      * sum, its apex (-1: none valid); x + 1 == y is an edge of the polygon */
-    double bmin[FLIP_MAXRING + 1][FLIP_MAXRING + 1], bsum[FLIP_MAXRING + 1][FLIP_MAXRING + 1];
+    double bmin[FLIP_MAXRING + 1][FLIP_MAXRING + 1],
+        bsum[FLIP_MAXRING + 1][FLIP_MAXRING + 1];
     int8_t bk[FLIP_MAXRING + 1][FLIP_MAXRING + 1];
     int stk[FLIP_MAXRING + 1][2], ns = 0;
 
@@ -372,9 +373,8 @@ int flip_bedge_eval(const tmesh *tm, int32_t t, int e, int maxring, double floor
         cur = u;
     }
     /* n tets, n + 1 ring vertices; one tet is peeling (flip_peel_eval) */
-    if (n < 2 ||
-        !same_surface(tm, first, tmesh_local(tm, first, ring[1]), cur,
-                      tmesh_local(tm, cur, ring[n - 1]), &dev0))
+    if (n < 2 || !same_surface(tm, first, tmesh_local(tm, first, ring[1]), cur,
+                               tmesh_local(tm, cur, ring[n - 1]), &dev0))
         return 0;
     /* an edge cd elsewhere (across a thin wall) would be doubled, its faces
      * shared by three tets */

@@ -858,8 +858,8 @@ static int tri_key_cmp(const void *x, const void *y)
 /* 1 when (p, q, r) is (x, y, z) rotated. */
 static int same_turn(const int32_t *p, int32_t x, int32_t y, int32_t z)
 {
-    return (p[0] == x && p[1] == y && p[2] == z) || (p[0] == y && p[1] == z && p[2] == x) ||
-           (p[0] == z && p[1] == x && p[2] == y);
+    return (p[0] == x && p[1] == y && p[2] == z) ||
+           (p[0] == y && p[1] == z && p[2] == x) || (p[0] == z && p[1] == x && p[2] == y);
 }
 
 qdc_status tmesh_set_surface(tmesh *tm, int32_t ntri, const int32_t *tris,
@@ -906,7 +906,8 @@ qdc_status tmesh_set_surface(tmesh *tm, int32_t ntri, const int32_t *tris,
                     else
                         hi = mid;
                 }
-                hit = lo < (size_t)ntri && same_key(keys[lo].k, want.k) ? keys + lo : NULL;
+                hit =
+                    lo < (size_t)ntri && same_key(keys[lo].k, want.k) ? keys + lo : NULL;
             }
             if (!hit)
                 continue;

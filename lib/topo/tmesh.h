@@ -47,19 +47,19 @@ typedef struct tmesh {
     uint32_t *stamp; /* cap: bumped each time a slot gets a new tet */
     int32_t *freel;  /* free slots below hi, a stack */
     int32_t nfree;
-    uint8_t *mark;  /* cap scratch flags, all 0 between calls */
+    uint8_t *mark; /* cap scratch flags, all 0 between calls */
     /* The surface (tmesh_set_surface; NULL until then), per tet face i: */
-    int32_t *fref; /* 4*cap: the ref of boundary face i's triangle, TMESH_NOREF */
-    double *fdev;  /* 4*cap: a bound on boundary face i's distance from the
-                    * surface tmesh_set_surface saw (0 for its own faces) */
-    uint8_t *fsurf; /* cap: bit i: boundary face i was made by a boundary
-                     * operation; bit 4 + i: its triangle is written with the
-                     * orientation opposite to tet_face_of's (the input's) */
+    int32_t *fref;      /* 4*cap: the ref of boundary face i's triangle, TMESH_NOREF */
+    double *fdev;       /* 4*cap: a bound on boundary face i's distance from the
+                         * surface tmesh_set_surface saw (0 for its own faces) */
+    uint8_t *fsurf;     /* cap: bit i: boundary face i was made by a boundary
+                         * operation; bit 4 + i: its triangle is written with the
+                         * orientation opposite to tet_face_of's (the input's) */
     int32_t *vdeg;      /* vcap: the live tets around each vertex (to tell a
                          * star that is not one piece through its faces) */
     int32_t (*gone)[3]; /* sorted vertices of the boundary faces removed */
     int32_t ngone, capgone, ngone_op; /* ..., at the operation's start */
-    tmesh_jent *jr; /* the journal of the operation under way */
+    tmesh_jent *jr;                   /* the journal of the operation under way */
     int32_t njr, capjr;
 } tmesh;
 

@@ -350,8 +350,8 @@ static qdc_status surface_out(tmesh *tm, topo_surface *sf)
         for (int i = 0; i < 4 && tm->tv[4 * (size_t)t] >= 0; i++)
             nnew += tm->adj[4 * (size_t)t + i] < 0 && (tm->fsurf[t] >> i & 1) &&
                     tm->fref[4 * (size_t)t + i] != TMESH_NOREF;
-    sf->tris_out = qdc_mallocn(3 * ((size_t)sf->ntri + (size_t)nnew) + 3,
-                               sizeof *sf->tris_out);
+    sf->tris_out =
+        qdc_mallocn(3 * ((size_t)sf->ntri + (size_t)nnew) + 3, sizeof *sf->tris_out);
     sf->refs_out = qdc_mallocn((size_t)sf->ntri + (size_t)nnew + 1, sizeof *sf->refs_out);
     if (!sf->tris_out || !sf->refs_out)
         return QDC_ENOMEM;
@@ -397,7 +397,8 @@ static qdc_status compact(const tmesh *tm, int32_t nv, int32_t nt, const int32_t
                           double **xyz_out, int32_t **vmap)
 {
     int32_t *map = qdc_mallocn((size_t)tm->nv + 1, sizeof *map), n = 0;
-    uint8_t *in = qdc_calloc((size_t)tm->nv + 1, 1), *out = qdc_calloc((size_t)tm->nv + 1, 1);
+    uint8_t *in = qdc_calloc((size_t)tm->nv + 1, 1),
+            *out = qdc_calloc((size_t)tm->nv + 1, 1);
     qdc_status s = QDC_OK;
 
     *xyz_out = qdc_mallocn(3 * (size_t)tm->nv + 3, sizeof **xyz_out);
@@ -415,7 +416,8 @@ static qdc_status compact(const tmesh *tm, int32_t nv, int32_t nt, const int32_t
         int keep = v < nv ? !in[v] || out[v] : out[v];
         map[v] = keep ? n : -1;
         if (keep) {
-            memcpy(*xyz_out + 3 * (size_t)n, tm->xyz + 3 * (size_t)v, 3 * sizeof **xyz_out);
+            memcpy(*xyz_out + 3 * (size_t)n, tm->xyz + 3 * (size_t)v,
+                   3 * sizeof **xyz_out);
             n++;
         }
     }

@@ -51,14 +51,14 @@ typedef struct {
 
 /* The boundary triangles through a run with boundary operations. */
 typedef struct {
-    int32_t ntri;         /* in: triangles (3 each, 0-based), refs (may be NULL: 0), */
-    const int32_t *tris;  /*     of the boundary and of anything else (kept) */
+    int32_t ntri;        /* in: triangles (3 each, 0-based), refs (may be NULL: 0), */
+    const int32_t *tris; /*     of the boundary and of anything else (kept) */
     const int32_t *refs;
-    int32_t ntri_out;     /* out (qdc_malloc, the caller frees): the input's triangles */
-    int32_t *tris_out;    /*     still there, in their order, then the new boundary */
-    int32_t *refs_out;    /*     triangles with the ref and orientation of theirs */
-    int32_t removed;      /* input triangles no longer on the boundary */
-    int32_t added;        /* new boundary triangles written (those with a ref) */
+    int32_t ntri_out;  /* out (qdc_malloc, the caller frees): the input's triangles */
+    int32_t *tris_out; /*     still there, in their order, then the new boundary */
+    int32_t *refs_out; /*     triangles with the ref and orientation of theirs */
+    int32_t removed;   /* input triangles no longer on the boundary */
+    int32_t added;     /* new boundary triangles written (those with a ref) */
 } topo_surface;
 
 /* maxring 10, qgoal 0.6, margin 1e-3, floor4 0.1, rounds 3, max_ops 0, insert 0,

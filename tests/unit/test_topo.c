@@ -1100,7 +1100,8 @@ TEST(contraction_keeps_the_volume_exactly)
     ASSERT_NEAR(v0, 6.0, 0);
     for (int32_t t = 0; t < tm->hi && !found; t++)
         for (int e = 0; e < 6 && !found; e++) {
-            int32_t a = tm->tv[4 * t + tmesh_edge[e][0]], b = tm->tv[4 * t + tmesh_edge[e][1]];
+            int32_t a = tm->tv[4 * t + tmesh_edge[e][0]],
+                    b = tm->tv[4 * t + tmesh_edge[e][1]];
             int ok = contract_eval(tm, t, e, 0.0, -INFINITY, &c);
             if (tm->vcons[a] || tm->vcons[b])
                 refused &= !ok;
@@ -1124,8 +1125,9 @@ TEST(contraction_keeps_the_volume_exactly)
     mesh_free(m);
 }
 
-TEST_MAIN("topo", T(contraction_keeps_the_volume_exactly), T(boundary_flip_2_2_coplanar), T(peeling_a_flat_boundary_tet),
-          T(driver_writes_the_new_boundary_triangles), T(insertion_in_a_bad_tet), T(insertion_refused_leaves_the_mesh),
+TEST_MAIN("topo", T(contraction_keeps_the_volume_exactly), T(boundary_flip_2_2_coplanar),
+          T(peeling_a_flat_boundary_tet), T(driver_writes_the_new_boundary_triangles),
+          T(insertion_in_a_bad_tet), T(insertion_refused_leaves_the_mesh),
           T(driver_with_insertion), T(orient3d_exact_near_coplanar),
           T(edge_removal_3_2_keeps_volume), T(edge_removal_rings_3_to_8), T(flip_2_3),
           T(multiface_removal_restores_the_ring),
