@@ -12,11 +12,14 @@
 
 #include "core/tet.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
-/* Rings of each round; rounds run while tets stay inverted. */
+/* Rings of each round; rounds run while tets stay inverted and the region
+ * stays local: at most LOCAL_MAX_TETS tets or 2% of the mesh's. */
 static const int local_rings[] = {3, 6, 12};
+#define LOCAL_MAX_TETS 30000
 
 /* The region of a round: lev[v] the ring of v around the tets unusable at x
  * (0 their corners, -1 beyond rings), region[t] the tets with a corner inside
@@ -60,11 +63,22 @@ static int32_t local_region(const int32_t *tets, int32_t nv, int32_t ntet,
     return n;
 }
 
+/* Whether v is a surface or interface vertex that the run's bound holds
+ * (not one sliding on a planar patch or a straight line, which keeps the
+ * shape wherever it goes). */
+static int bounded(const ctx_t *c, int32_t v)
+{
+    return (c->tp->vflag[v] & (MESH_V_BOUNDARY | MESH_V_INTERFACE)) &&
+           !(c->sl && slide_flat(c->sl, v));
+}
+
 /* The region's mesh (normalized units): its vertices numbered in order
- * (map[v], -1 outside), held ones (the cut, locked) at xbest and fixed, the
- * others at the input x0. NULL on allocation failure. */
+ * (map[v], -1 outside), all at xbest (a start of the free ones from the
+ * input made regions of the tangled 4M-tet cube with hundreds of tets
+ * inverted that no region run undid), held ones (the cut, locked, and with
+ * hold_surface the bounded surface ones) fixed. NULL on allocation failure. */
 static mesh_t *local_mesh(const ctx_t *c, const uint8_t *region, const uint8_t *hold,
-                          int32_t nt, int32_t *map)
+                          int hold_surface, int32_t nt, int32_t *map)
 {
     const int32_t *tets = c->tp->tets;
     int32_t nv = 0, t2 = 0;
@@ -82,11 +96,10 @@ static mesh_t *local_mesh(const ctx_t *c, const uint8_t *region, const uint8_t *
         return NULL;
     for (int32_t v = 0; v < c->nv; v++) {
         int32_t w = map[v];
-        int held = w >= 0 && (hold[v] || c->locked[v]);
+        int held = w >= 0 && (hold[v] || c->locked[v] || (hold_surface && bounded(c, v)));
         if (w < 0)
             continue;
-        memcpy(s->xyz + 3 * (size_t)w, (held ? c->xbest : c->x0) + 3 * (size_t)v,
-               3 * sizeof(double));
+        memcpy(s->xyz + 3 * (size_t)w, c->xbest + 3 * (size_t)v, 3 * sizeof(double));
         s->fixed[w] = (uint8_t)held;
     }
     for (int32_t t = 0; t < c->nt; t++) {
@@ -122,7 +135,7 @@ static void local_run(const ctx_t *c, mesh_t *s, double bound, int *ok)
 /* One round at `rings` with the bound `bound` (normalized units): the region
  * optimized and put into c->trial, recorded (phase "local") and considered. */
 static qdc_status local_round(ctx_t *c, opt_result *res, opt_progress *r, int *next,
-                              int rings, double bound)
+                              int rings, double bound, int *big)
 {
     size_t nv = (size_t)c->nv, n3 = 3 * nv;
     int8_t *lev = qdc_malloc(nv + 1);
@@ -130,16 +143,32 @@ static qdc_status local_round(ctx_t *c, opt_result *res, opt_progress *r, int *n
     int32_t *map = qdc_mallocn(nv + 1, sizeof(int32_t)), nt, was = c->best.n_inverted;
     mesh_t *s = NULL;
     qdc_status st = QDC_ENOMEM;
+    double used = 0.0;
     int ok = 0;
 
     if (!lev || !hold || !region || !map)
         goto out;
     nt = local_region(c->tp->tets, c->nv, c->nt, c->xbest, rings, lev, region, hold);
-    s = local_mesh(c, region, hold, nt, map);
+    if (nt > LOCAL_MAX_TETS && nt > c->nt / 50) {
+        st = QDC_OK; /* not local any more: the reruns' business */
+        *big = 1;
+        goto out;
+    }
+    /* the region's bound is measured from xbest: what the bound has left
+     * after the farthest move so far of a bounded free vertex */
+    for (size_t v = 0; v < nv; v++)
+        if (lev[v] >= 0 && !hold[v] && bounded(c, (int32_t)v)) {
+            double d = 0;
+            for (int k = 0; k < 3; k++)
+                d += (c->xbest[3 * v + k] - c->x0[3 * v + k]) *
+                     (c->xbest[3 * v + k] - c->x0[3 * v + k]);
+            used = sqrt(d) > used ? sqrt(d) : used;
+        }
+    s = local_mesh(c, region, hold, bound > 0 && used >= 0.9 * bound, nt, map);
     if (!s)
         goto out;
     st = QDC_OK;
-    local_run(c, s, bound, &ok);
+    local_run(c, s, bound > 0 && used < 0.9 * bound ? bound - used : bound, &ok);
     if (!ok)
         goto out;
     memcpy(c->trial, c->xbest, n3 * sizeof(double));
@@ -169,15 +198,16 @@ out:
 qdc_status local_pass(ctx_t *c, opt_result *res, opt_progress *r, int *next)
 {
     qdc_status st = QDC_OK;
+    int big = 0;
 
     if (!c->repair)
         return QDC_OK;
-    for (size_t i = 0; i < sizeof local_rings / sizeof local_rings[0]; i++) {
+    for (size_t i = 0; i < sizeof local_rings / sizeof local_rings[0] && !big; i++) {
         if (st == QDC_OK && c->best.n_inverted > 0 && res->stop != OPT_STOP_CANCELLED)
-            st = local_round(c, res, r, next, local_rings[i], c->hbound);
-        if (st == QDC_OK && c->autob && c->best.n_inverted > 0 &&
+            st = local_round(c, res, r, next, local_rings[i], c->hbound, &big);
+        if (st == QDC_OK && c->autob && !big && c->best.n_inverted > 0 &&
             res->stop != OPT_STOP_CANCELLED)
-            st = local_round(c, res, r, next, local_rings[i], OPT_HAUSD_STUCK);
+            st = local_round(c, res, r, next, local_rings[i], OPT_HAUSD_STUCK, &big);
     }
     return st;
 }
