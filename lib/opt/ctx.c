@@ -229,6 +229,30 @@ static double mean_edge(const mesh_topo *tp, const double *x)
     return ecount ? esum / (double)ecount : 1.0;
 }
 
+/* The bounding-box diagonal of the boundary vertices: the surface whose
+ * diagonal the report's boundary error is relative to. 0 if there is none or
+ * its size is out of the plain formula's range. */
+static double surface_diag(const mesh_t *m, const mesh_topo *tp)
+{
+    double lo[3] = {INFINITY, INFINITY, INFINITY},
+           hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    double d[3], e;
+
+    for (int32_t v = 0; v < m->nv; v++)
+        if (tp->vflag[v] & MESH_V_BOUNDARY)
+            for (int k = 0; k < 3; k++) {
+                double x = m->xyz[3 * (size_t)v + k];
+                if (x < lo[k])
+                    lo[k] = x;
+                if (x > hi[k])
+                    hi[k] = x;
+            }
+    for (int k = 0; k < 3; k++)
+        d[k] = hi[k] - lo[k];
+    e = fmax(d[0], fmax(d[1], d[2]));
+    return e > 1e-140 && e < 1e140 ? sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) : 0.0;
+}
+
 qdc_status ctx_init(ctx_t *c, const mesh_t *m, const mesh_topo *tp, const opt_options *o)
 {
     size_t n3 = 3 * (size_t)m->nv;
@@ -286,6 +310,14 @@ qdc_status ctx_init(ctx_t *c, const mesh_t *m, const mesh_topo *tp, const opt_op
                 : o->hausd_rel > 0 ? o->hausd_rel
                 : c->autob         ? OPT_HAUSD_DEFAULT
                                    : 0.0;
+    /* a relative bound is of the surface's diagonal, as the report measures:
+     * not the same as the mesh's only where vertices lie outside the surface's
+     * box (a tangle, second-order mid-edge nodes, unused vertices) */
+    if (o->hausd <= 0 && c->hbound > 0) {
+        double sd = surface_diag(m, tp);
+        if (sd > 0 && sd != c->scale)
+            c->hbound *= sd / c->scale;
+    }
     if (o->boundary == OPT_BOUNDARY_SLIDE) {
         qdc_status st = slide_new(tp, c->x0, o->feature_angle, &c->sl, NULL);
         if (st != QDC_OK)
