@@ -573,6 +573,17 @@ try {
         await page.waitForSelector(rowSel(id3) + '[data-state="cancelled"]', { timeout: 15000 })
             .then(() => pass('list: Cancel stops the running job (cancelled)'))
             .catch((e) => fail('cancel', e.message));
+        // cancel keeps the best mesh so far: the cancelled job's page offers it, and it downloads
+        await page.click(rowSel(id3) + ' td:first-child a');
+        const resLink = await page.waitForSelector('#downloads a[data-format="medit"]', { timeout: 15000 })
+            .then((a) => a.getAttribute('href')).catch(() => null);
+        const got = resLink ? await fetch(URL + resLink, { headers: authH }) : null;
+        const body = got && got.status === 200 ? await got.text() : '';
+        check(resLink !== null && /^\s*MeshVersionFormatted/.test(body) && /Tetrahedra/.test(body),
+            'cancel: the cancelled job\'s page offers its best mesh so far, and it downloads (' +
+            (got ? got.status : 'no link') + ', ' + body.length + ' bytes)', resLink + ' ' + (got && got.status));
+        await page.click('a[data-nav][href="/"]');
+        await page.waitForSelector(rowSel(id3));
         await page.waitForFunction(() => document.querySelectorAll('#jobs tbody tr').length === 4 &&
             [...document.querySelectorAll('#jobs tbody td:nth-child(6)')].filter((t) => /→ 0\./.test(t.textContent)).length >= 3, null, { timeout: 5000 }).catch(() => {});
         if (env.UI_SHOTS) await page.screenshot({ path: path.join(env.UI_SHOTS, 'ui-list.png') });
