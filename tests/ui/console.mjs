@@ -347,9 +347,12 @@ try {
             const t = setInterval(() => { if (!bar.hidden) window.__bar.push(bar.value); }, 20);
             window.__barStop = () => clearInterval(t);
         });
+        await page.fill('#label-input', 'big, literal mode');
         const id2 = await submitFile(env.BIG, { max_iter: 60, mode: 'literal' });
         await cdp.send('Network.emulateNetworkConditions', { offline: false, latency: 0, downloadThroughput: -1, uploadThroughput: -1 });
         const bar = await page.evaluate(() => { window.__barStop(); return window.__bar; });
+        const lab2 = (await apiJSON('/v1/jobs/' + id2)).body.label;
+        check(lab2 === 'big, literal mode', 'label: the upload form\'s label is the job\'s (' + lab2 + ')', lab2);
         const mid = bar.filter((v) => v > 0.05 && v < 0.95);
         check(mid.length >= 2 && bar[bar.length - 1] >= mid[mid.length - 1], 'upload progress bar moves (' + mid.length +
             ' readings between 5% and 95% at 4 MB/s)', JSON.stringify(bar.slice(0, 20)));
