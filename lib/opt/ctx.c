@@ -253,6 +253,27 @@ static double surface_diag(const mesh_t *m, const mesh_topo *tp)
     return e > 1e-140 && e < 1e140 ? sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) : 0.0;
 }
 
+/* c->autob and c->hbound (normalized units) from o's bound. */
+static void set_bound(ctx_t *c, const mesh_t *m, const mesh_topo *tp,
+                      const opt_options *o)
+{
+    /* the default (auto, under slide): the Hausdorff bound OPT_HAUSD_DEFAULT */
+    c->autob = o->hausd <= 0 && o->hausd_rel == OPT_HAUSD_AUTO &&
+               o->boundary == OPT_BOUNDARY_SLIDE;
+    c->hbound = o->hausd > 0       ? o->hausd / c->scale
+                : o->hausd_rel > 0 ? o->hausd_rel
+                : c->autob         ? OPT_HAUSD_DEFAULT
+                                   : 0.0;
+    /* a relative bound is of the surface's diagonal, as the report measures:
+     * not the same as the mesh's only where vertices lie outside the surface's
+     * box (a tangle, second-order mid-edge nodes, unused vertices) */
+    if (o->hausd <= 0 && c->hbound > 0) {
+        double sd = surface_diag(m, tp);
+        if (sd > 0 && sd != c->scale)
+            c->hbound *= sd / c->scale;
+    }
+}
+
 qdc_status ctx_init(ctx_t *c, const mesh_t *m, const mesh_topo *tp, const opt_options *o)
 {
     size_t n3 = 3 * (size_t)m->nv;
@@ -303,21 +324,7 @@ qdc_status ctx_init(ctx_t *c, const mesh_t *m, const mesh_topo *tp, const opt_op
     c->lbar = mean_edge(tp, c->x);
     c->bref = c->x0;
     c->mu_factor = 1.0;
-    /* the default (auto, under slide): the Hausdorff bound OPT_HAUSD_DEFAULT */
-    c->autob = o->hausd <= 0 && o->hausd_rel == OPT_HAUSD_AUTO &&
-               o->boundary == OPT_BOUNDARY_SLIDE;
-    c->hbound = o->hausd > 0       ? o->hausd / c->scale
-                : o->hausd_rel > 0 ? o->hausd_rel
-                : c->autob         ? OPT_HAUSD_DEFAULT
-                                   : 0.0;
-    /* a relative bound is of the surface's diagonal, as the report measures:
-     * not the same as the mesh's only where vertices lie outside the surface's
-     * box (a tangle, second-order mid-edge nodes, unused vertices) */
-    if (o->hausd <= 0 && c->hbound > 0) {
-        double sd = surface_diag(m, tp);
-        if (sd > 0 && sd != c->scale)
-            c->hbound *= sd / c->scale;
-    }
+    set_bound(c, m, tp, o);
     if (o->boundary == OPT_BOUNDARY_SLIDE) {
         qdc_status st = slide_new(tp, c->x0, o->feature_angle, &c->sl, NULL);
         if (st != QDC_OK)
