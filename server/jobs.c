@@ -8,6 +8,7 @@
 #include "job.h"
 #include "parse.h"
 #include "shared.h"
+#include "trash.h"
 
 #include <errno.h>
 #include <limits.h>
@@ -77,7 +78,7 @@ enum MHD_Result do_delete(struct MHD_Connection *c, req *r)
      * when it finished just before the row went away). */
     if (!running_here) {
         job_path(q, j.id, NULL, dir, sizeof dir);
-        dir_remove(dir);
+        trash_put(dir); /* a big job's files take seconds to unlink */
     }
     return http_reply(c, r, 204, NULL, "", 0, no_headers);
 }

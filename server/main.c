@@ -9,6 +9,7 @@
 #include "server.h"
 #include "sha256.h"
 #include "shared.h"
+#include "trash.h"
 
 #include <errno.h>
 #include <fcntl.h>
@@ -35,7 +36,8 @@ static void usage(FILE *f)
         "                            port 0 picks a free port)\n"
         "  --port-file FILE          write the bound port to FILE once listening\n"
         "  --data DIR                data directory: qdcd.db (SQLite, WAL), jobs/, tmp/\n"
-        "                            (default ./var)\n"
+        "                            and trash/ (deleted jobs' files being removed;\n"
+        "                            default ./var)\n"
         "  --store URI               job store: sqlite:DIR (the same as --data DIR, the\n"
         "                            default) or a PostgreSQL connection URI\n"
         "                            postgresql://USER@HOST:PORT/DB (jobs and their\n"
@@ -372,7 +374,7 @@ static void purge_expired(qdcd *q)
         return;
     for (int i = 0; i < n; i++) {
         job_path(q, ids[i], NULL, dir, sizeof dir);
-        dir_remove(dir);
+        trash_put(dir);
         q->store->ops->mark_purged(q->store, ids[i]);
     }
 }
@@ -444,7 +446,9 @@ static int prepare_data_dir(qdcd *q, int shared)
      * may be receiving one right now. */
     if (!shared)
         dir_remove(p);
-    return dir_ensure(p);
+    if (dir_ensure(p))
+        return -1;
+    return trash_open(q);
 }
 
 /* One job directory of remove_orphans: removed (1) when its row is gone. */
@@ -623,6 +627,10 @@ static int start_services(qdcd *q)
         fprintf(stderr, "qdcd: cannot start the intake thread\n");
         return -1;
     }
+    if (trash_start()) {
+        fprintf(stderr, "qdcd: cannot start the trash thread\n");
+        return -1;
+    }
     if (http_start(q, &api_handlers, &err) != QDC_OK) {
         fprintf(stderr, "qdcd: %s\n", err.msg);
         return -1;
@@ -734,6 +742,7 @@ static void teardown(qdcd *q)
         poll_shutdown(q->hub);
     api_stop();
     http_stop(q);
+    trash_stop(); /* after the last DELETE */
     if (q->store)
         shared_listen_stop(q);
     job_pool_stop(q->pool, 0);
