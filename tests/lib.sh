@@ -20,3 +20,20 @@ devmesh() {
     [ -f "$TMP/$1.mesh" ] || gzip -dc "$DEV/$1.mesh.gz" > "$TMP/$1.mesh"
     echo "$TMP/$1.mesh"
 }
+# corpus_mesh CHECK NAME TETS [corpus.py options...]: scripts/corpus.py's mesh
+# NAME at TETS tets, made in $TMP/c; its path in CORPUS_MESH. Without
+# numpy/scipy the script ends here with "ok - CHECK # SKIP ..."; when
+# corpus.py fails, CHECK fails and the script ends (exit 1).
+corpus_mesh() {
+    _check=$1 _name=$2 _tets=$3
+    shift 3
+    if ! "$PY" -c 'import numpy, scipy' 2> /dev/null; then
+        echo "ok - $_check # SKIP python3-numpy/python3-scipy missing"
+        exit 0
+    fi
+    if ! "$PY" "$ROOT/scripts/corpus.py" "$TMP/c" --tets "$_tets" "$@" --only "$_name" > "$TMP/list" 2>&1; then
+        fail "$_check" "scripts/corpus.py failed: $(tail -1 "$TMP/list")"
+        exit 1
+    fi
+    CORPUS_MESH=$TMP/c/$_name.mesh
+}

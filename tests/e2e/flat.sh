@@ -10,16 +10,8 @@
 # the summary line names no degenerate tet either.
 . "$(dirname "$0")/../lib.sh"
 
-if ! "$PY" -c 'import numpy, scipy' 2> /dev/null; then
-    echo "ok - flat: bone-scan-tangled # SKIP python3-numpy/python3-scipy missing"
-    exit 0
-fi
-if ! "$PY" "$ROOT/scripts/corpus.py" "$TMP/c" --tets 100000 --seed 1 --tangle-frac 0.05 \
-    --only bone-scan-tangled > "$TMP/list" 2>&1; then
-    fail "flat: bone-scan-tangled" "scripts/corpus.py failed: $(tail -1 "$TMP/list")"
-    exit 1
-fi
-in=$TMP/c/bone-scan-tangled.mesh
+corpus_mesh "flat: bone-scan-tangled" bone-scan-tangled 100000 --seed 1 --tangle-frac 0.05
+in=$CORPUS_MESH
 if ! "$BIN/qdc" optimize "$in" "$TMP/o.mesh" 2> "$TMP/err"; then
     fail "flat: bone-scan-tangled" "exit $?: $(tail -2 "$TMP/err")"
     exit 0

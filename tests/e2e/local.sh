@@ -10,16 +10,8 @@
 # default bound (3e-3 of the diagonal) and the mean ratio up.
 . "$(dirname "$0")/../lib.sh"
 
-if ! "$PY" -c 'import numpy, scipy' 2> /dev/null; then
-    echo "ok - local: bone-lowq-tangled # SKIP python3-numpy/python3-scipy missing"
-    exit 0
-fi
-if ! "$PY" "$ROOT/scripts/corpus.py" "$TMP/c" --tets 30000 --seed 1 --tangle-frac 0.05 \
-    --only bone-lowq-tangled > "$TMP/list" 2>&1; then
-    fail "local: bone-lowq-tangled" "scripts/corpus.py failed: $(tail -1 "$TMP/list")"
-    exit 1
-fi
-in=$TMP/c/bone-lowq-tangled.mesh
+corpus_mesh "local: bone-lowq-tangled" bone-lowq-tangled 30000 --seed 1 --tangle-frac 0.05
+in=$CORPUS_MESH
 if ! "$BIN/qdc" optimize "$in" "$TMP/o.mesh" --report "$TMP/r.json" 2> "$TMP/err"; then
     fail "local: bone-lowq-tangled" "exit $?: $(tail -2 "$TMP/err")"
     exit 0
