@@ -6,32 +6,65 @@
 # "ok - ... # SKIP reason" (or "# SKIP ...") for a check it could not run:
 # skips are counted apart, never as passes.
 # QDC_QUICK=1: release unit tests only.
-# Suites run QDC_TEST_JOBS at a time (default 2: many of them wait on
-# daemons, databases, browsers and timers more than they compute); each
-# suite's output is printed whole, in the order below, once it has ended.
-# Every suite has its own temporary directory and free ports. The suites in
-# ALONE run with nothing beside them: the container suites (one engine, the
-# same image tags) and the load test (its latency limit is judged against an
-# idle phase of its own).
+#
+# Suites run QDC_TEST_JOBS at a time (default 2); each suite's output is
+# printed whole, with its time, once it and those started before it have
+# ended. Every suite has its own temporary directory and free ports. The
+# order pairs a computing suite (unit tests, house rules, end-to-end: the
+# optimizer, Python checks) with a waiting one (daemon, fault and client
+# suites: timers, leases, databases, browsers), so that two at a time use
+# the machine rather than fight over it. The container suites share one
+# engine and the same image tags: they run one after the other, in one
+# place. tests/faults/load.sh runs last with nothing beside it: its latency
+# limit is judged against an idle phase of its own.
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
 export ROOT
 cd "$ROOT" || exit 1
 JOBS=${QDC_TEST_JOBS:-2}
-ALONE="tests/container/*.sh tests/faults/load.sh"
+ALONE=tests/faults/load.sh
 OUT=$(mktemp -d "${TMPDIR:-/tmp}/qdc-run.XXXXXX")
 trap 'rm -rf "$OUT"' EXIT
 LOG=$OUT/log
 : > "$LOG"
 
-# run_one N LABEL COMMAND...: the suite's output, its failure if it exited
-# non-zero without reporting one, and its time, into $OUT/N.out
+# The suites, one per line: "LABEL<tab>COMMAND..." ("unit NAME" and the
+# sanitizer's run their binary; a script's label is its path)
+{
+    for t in build/rel/tests/test_*; do
+        [ -x "$t" ] && printf 'unit %s\t%s\n' "$(basename "$t")" "$t"
+    done
+    if [ -z "${QDC_QUICK:-}" ]; then
+        for t in build/san/tests/test_*; do
+            [ -x "$t" ] && printf 'asan+ubsan %s\tenv ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 %s\n' \
+                "$(basename "$t")" "$t"
+        done
+        for t in tests/house/*.sh tests/e2e/*.sh; do
+            [ -f "$t" ] && printf '%s\tsh %s\n' "$t" "$t"
+        done
+    fi
+} > "$OUT/compute"
+: > "$OUT/wait"
+: > "$OUT/containers"
+if [ -z "${QDC_QUICK:-}" ]; then
+    for t in tests/server/*.sh tests/faults/*.sh tests/clients/*.sh; do
+        [ -f "$t" ] && [ "$t" != "$ALONE" ] && printf '%s\tsh %s\n' "$t" "$t"
+    done > "$OUT/wait"
+    for t in tests/container/*.sh; do
+        [ -f "$t" ] && printf '%s\tsh %s\n' "$t" "$t"
+    done > "$OUT/containers"
+fi
+
+# run_one N LINE: the suite's output, its failure if it exited non-zero
+# without reporting one, and its time, into $OUT/N.out
 run_one() {
-    n=$1 label=$2
-    shift 2
+    n=$1
+    label=$(printf '%s' "$2" | cut -f1)
+    cmd=$(printf '%s' "$2" | cut -f2-)
     start=$(date +%s)
     {
         echo "# $label"
-        "$@" > "$OUT/$n.raw" 2>&1 3>&-
+        # (paths and options without blanks: the command is split on them)
+        $cmd > "$OUT/$n.raw" 2>&1 3>&-
         rc=$?
         cat "$OUT/$n.raw"
         # a suite that exits non-zero without reporting a failure counts as one
@@ -43,7 +76,8 @@ run_one() {
     rm -f "$OUT/$n.raw"
 }
 
-# The pool: a suite that ends writes its number to the FIFO on fd 3.
+# The pool: each suite that ends writes "N" to the FIFO on fd 3, and
+# "N free" when its place is free for the next one.
 mkfifo "$OUT/done" || exit 1
 exec 3<> "$OUT/done"
 started=0 running=0 printed=0
@@ -55,43 +89,48 @@ flush() {
         cat "$OUT/$printed.out" >> "$LOG"
     done
 }
-# reap: wait for one suite to end
+# reap: wait for a suite to end
 reap() {
-    read -r d <&3
+    read -r d free <&3
     : > "$OUT/$d.end"
-    running=$((running - 1))
+    [ -n "$free" ] && running=$((running - 1))
     flush
 }
-# suite LABEL COMMAND...: run it when a place is free (alone: when all are)
-suite() {
-    limit=$JOBS
-    for a in $ALONE; do
-        case "$2 $3" in "sh $a") limit=1 ;; esac
-    done
-    while [ $running -gt 0 ] && [ $running -ge "$limit" ]; do reap; done
-    started=$((started + 1))
+# place FILE: run FILE's suites one after the other in the next free place
+place() {
+    [ -s "$1" ] || return 0
+    while [ $running -ge "$JOBS" ]; do reap; done
+    first=$((started + 1))
+    started=$((started + $(wc -l < "$1")))
     running=$((running + 1))
+    cp "$1" "$OUT/place.$first"
     (
-        run_one $started "$@"
-        echo $started >&3
+        n=$first
+        while IFS= read -r line; do
+            run_one $n "$line"
+            [ $n = $started ] && echo "$n free" >&3 || echo "$n" >&3
+            n=$((n + 1))
+        done < "$OUT/place.$first"
     ) &
-    # nothing starts beside a suite that runs alone
-    [ "$limit" = 1 ] && while [ $running -gt 0 ]; do reap; done
 }
 
-for t in build/rel/tests/test_*; do
-    [ -x "$t" ] && suite "unit $(basename "$t")" "$t"
+place "$OUT/containers"
+# computing and waiting suites in turns
+nc=$(wc -l < "$OUT/compute") nw=$(wc -l < "$OUT/wait")
+i=1
+while [ $i -le "$nc" ] || [ $i -le "$nw" ]; do
+    for f in compute wait; do
+        sed -n "${i}p" "$OUT/$f" > "$OUT/one"
+        place "$OUT/one"
+    done
+    i=$((i + 1))
 done
-if [ -z "${QDC_QUICK:-}" ]; then
-    for t in build/san/tests/test_*; do
-        [ -x "$t" ] && suite "asan+ubsan $(basename "$t")" env ASAN_OPTIONS=detect_leaks=1 \
-            UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 "$t"
-    done
-    for t in tests/house/*.sh tests/e2e/*.sh tests/server/*.sh tests/faults/*.sh tests/clients/*.sh tests/container/*.sh; do
-        [ -f "$t" ] && suite "$t" sh "$t"
-    done
-fi
 while [ $running -gt 0 ]; do reap; done
+if [ -z "${QDC_QUICK:-}" ] && [ -f "$ALONE" ]; then
+    printf '%s\tsh %s\n' "$ALONE" "$ALONE" > "$OUT/one"
+    place "$OUT/one"
+    while [ $running -gt 0 ]; do reap; done
+fi
 exec 3>&-
 skipped=$(grep -Ec '^(ok - .*)?# SKIP' "$LOG")
 passed=$(grep '^ok - ' "$LOG" | grep -vc '# SKIP')
