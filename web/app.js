@@ -1305,11 +1305,13 @@ function rerunNotes(recs, report) {
             : 'the run before squashed ears of the surface, so the optimizer started again from the input with their corners held';
         notes.push({ i, text: 'Record ' + i + ': restarted from the input — ' + why + '. The jump back is the input again, not a regression: the best run is kept.' });
     }
-    // the record whose quality is the result's (the report's "best record"
-    // counts within the run it belongs to, so it is found by its figures)
-    const a = report && report.after;
-    let k = -1, dk = Infinity;
-    if (a) for (let i = 0; i < recs.length; i++) {
+    // the record that is the result: the report's run.best_iteration (a
+    // record number of the whole run, reruns and topology rounds included);
+    // a report without it (older daemons), the record with its figures
+    const a = report && report.after, run = report && report.run;
+    let k = run && Number.isInteger(run.best_iteration) ? recs.findIndex((r) => r.iteration === run.best_iteration) : -1;
+    let dk = k >= 0 ? 0 : Infinity;
+    if (k < 0 && a) for (let i = 0; i < recs.length; i++) {
         const r = recs[i];
         if (r.n_inverted !== a.n_inverted) continue;
         const d = Math.abs(r.mean_ratio_mean - a.mean_ratio_mean) + Math.abs(r.mean_ratio_min - a.mean_ratio_min);

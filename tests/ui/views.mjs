@@ -262,8 +262,10 @@ export async function rerunChecks(page, id, h) {
         t.includes(recs[starts[i] - 1].n_inverted.toLocaleString('en-US') + ' tets inverted')),
     'reruns explained in place: ' + starts.length + ' notes at records ' + starts.join(', ') + ' ("' + (reruns[0] ? reruns[0][1].slice(0, 100) : '') + '…")',
     JSON.stringify({ starts, notes }));
-    h.check(k >= 0 && recs[k].n_inverted === report.after.n_inverted && Math.abs(recs[k].mean_ratio_mean - report.after.mean_ratio_mean) < 1e-4,
-        'the record that is the result is named (' + (kept ? kept[1] : 'none') + '), as the report\'s after (' + report.after.n_inverted + ' inverted)', JSON.stringify(kept));
+    h.check(k >= 0 && recs[k].iteration === report.run.best_iteration && recs[k].n_inverted === report.after.n_inverted &&
+        Math.abs(recs[k].mean_ratio_mean - report.after.mean_ratio_mean) < 1e-4,
+        'the record that is the result is named (' + (kept ? kept[1] : 'none') + '): the report\'s run.best_iteration (' + report.run.best_iteration +
+        '), with its after\'s figures (' + report.after.n_inverted + ' inverted)', JSON.stringify({ kept, best_iteration: report.run.best_iteration }));
     const stats = await page.textContent('#job-stats');
     h.check(stats.includes(report.after.mean_ratio_mean.toFixed(4)) && stats.includes('→ ' + report.after.n_inverted.toLocaleString('en-US')),
         'job header shows the result\'s figures (mean ratio ' + report.after.mean_ratio_mean.toFixed(4) + ', ' + report.after.n_inverted + ' inverted), not the last record\'s',
