@@ -59,11 +59,14 @@ r = json.load(open(sys.argv[1]))
 print(r["boundary_error"]["hausdorff_rel"], r["run"]["hausd_bound"] / r["boundary_error"]["bbox_diagonal"],
       r["after"]["mean_ratio_mean"], r["before"]["mean_ratio_mean"], r["after"]["n_inverted"],
       r["boundary_error"]["vertex_max_rel"])' "$TMP/r.json")
-            hrel=$1 brel=$2 am=$3 bm=$4 inv=$5 vmax=$6
-            set -- $(moved "$in" "$TMP/o.mesh")
-            mv=$1 off=$2
-            mv=$vmax
-            [ $b = slide ] || off=0
+            hrel=$1 brel=$2 am=$3 bm=$4 inv=$5 mv=$6
+            # the planes are checked under slide only (lsq's angle pass may
+            # move planar-patch vertices off them): no mesh read for lsq
+            off=0
+            if [ $b = slide ]; then
+                set -- $(moved "$in" "$TMP/o.mesh")
+                off=$2
+            fi
             if awk -v h="$hrel" -v m="$mv" -v off="$off" -v r="$r" -v b="$brel" -v am="$am" -v bm="$bm" -v inv="$inv" 'BEGIN {
                     tol = 1e-9 * r
                     exit !(m != "" && h <= r + tol && m <= r + tol && off <= 1e-12 && (b - r) < tol && (r - b) < tol && am >= bm && inv == 0) }'; then
