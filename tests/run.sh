@@ -9,11 +9,11 @@
 #
 # Suites run QDC_TEST_JOBS at a time (default 2); each suite's output is
 # printed whole, with its time, once it and those started before it have
-# ended. Every suite has its own temporary directory and free ports. The
-# order pairs a computing suite (unit tests, house rules, end-to-end: the
-# optimizer, Python checks) with a waiting one (daemon, fault and client
-# suites: timers, leases, databases, browsers), so that two at a time use
-# the machine rather than fight over it. The container suites share one
+# ended. Every suite has its own temporary directory and free ports. A free
+# place goes to a computing suite (unit tests, house rules, end-to-end: the
+# optimizer, Python checks) when the other runs a waiting one (daemon, fault
+# and client suites: timers, leases, databases, browsers) and the other way
+# round, so that two at a time use the machine rather than fight over it. The container suites share one
 # engine and the same image tags: they run one after the other, in one
 # place. tests/faults/load.sh runs last with nothing beside it: its latency
 # limit is judged against an idle phase of its own.
@@ -93,16 +93,25 @@ flush() {
 reap() {
     read -r d free <&3
     : > "$OUT/$d.end"
-    [ -n "$free" ] && running=$((running - 1))
+    if [ -n "$free" ]; then
+        running=$((running - 1))
+        case $(cat "$OUT/kind.$d") in
+        compute) ncomp=$((ncomp - 1)) ;;
+        *) nwait=$((nwait - 1)) ;;
+        esac
+    fi
     flush
 }
-# place FILE: run FILE's suites one after the other in the next free place
+# place FILE KIND: run FILE's suites one after the other in the next free
+# place; KIND (compute or wait) counts for the choice of the next suite
 place() {
     [ -s "$1" ] || return 0
     while [ $running -ge "$JOBS" ]; do reap; done
     first=$((started + 1))
     started=$((started + $(wc -l < "$1")))
     running=$((running + 1))
+    echo "$2" > "$OUT/kind.$started"
+    case $2 in compute) ncomp=$((ncomp + 1)) ;; *) nwait=$((nwait + 1)) ;; esac
     cp "$1" "$OUT/place.$first"
     (
         n=$first
@@ -114,21 +123,28 @@ place() {
     ) &
 }
 
-place "$OUT/containers"
-# computing and waiting suites in turns
+ncomp=0 nwait=0
+place "$OUT/containers" compute
+# a free place takes a computing suite when fewer of those run than
+# waiting ones, else a waiting one (while both lists last)
 nc=$(wc -l < "$OUT/compute") nw=$(wc -l < "$OUT/wait")
-i=1
-while [ $i -le "$nc" ] || [ $i -le "$nw" ]; do
-    for f in compute wait; do
-        sed -n "${i}p" "$OUT/$f" > "$OUT/one"
-        place "$OUT/one"
-    done
-    i=$((i + 1))
+ic=1 iw=1
+while [ $ic -le "$nc" ] || [ $iw -le "$nw" ]; do
+    while [ $running -ge "$JOBS" ]; do reap; done
+    if [ $iw -gt "$nw" ] || { [ $ic -le "$nc" ] && [ $ncomp -le $nwait ]; }; then
+        sed -n "${ic}p" "$OUT/compute" > "$OUT/one"
+        place "$OUT/one" compute
+        ic=$((ic + 1))
+    else
+        sed -n "${iw}p" "$OUT/wait" > "$OUT/one"
+        place "$OUT/one" wait
+        iw=$((iw + 1))
+    fi
 done
 while [ $running -gt 0 ]; do reap; done
 if [ -z "${QDC_QUICK:-}" ] && [ -f "$ALONE" ]; then
     printf '%s\tsh %s\n' "$ALONE" "$ALONE" > "$OUT/one"
-    place "$OUT/one"
+    place "$OUT/one" wait
     while [ $running -gt 0 ]; do reap; done
 fi
 exec 3>&-
