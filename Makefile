@@ -125,7 +125,8 @@ $(B)/tests/test_http: tests/unit/test_http.c tests/unit/testlib.h tests/unit/tes
 	$(CC) $(CPPFLAGS) -Itests/unit -Iserver $(CFLAGS) -o $@ $< $(HTTP_PURE_OBJ) $(B)/libqdc.a \
 	    $(LIB_LIBS) $(LDFLAGS)
 
-# The whole suite: release build, sanitizer build, unit + end-to-end + daemon tests.
+# The whole suite: release build, sanitizer build, unit + end-to-end + daemon tests,
+# two suites at a time (tests/run.sh; QDC_TEST_JOBS=1 for one at a time).
 # The last line is "N passed, N failed".
 test: deps
 	$(MAKE) -j$$(nproc) all
