@@ -11,7 +11,7 @@
 # printed whole, with its time, once it and those started before it have
 # ended. Every suite has its own temporary directory and free ports. A free
 # place goes to a computing suite (unit tests, house rules, end-to-end: the
-# optimizer, Python checks) when the other runs a waiting one (daemon, fault
+# optimizer, Python checks; the client suites that build) when the other runs a waiting one (daemon, fault
 # and client suites: timers, leases, databases, browsers) and the other way
 # round, so that two at a time use the machine rather than fight over it. The container suites share one
 # engine and the same image tags: they run one after the other, in one
@@ -22,6 +22,9 @@ export ROOT
 cd "$ROOT" || exit 1
 JOBS=${QDC_TEST_JOBS:-2}
 ALONE=tests/faults/load.sh
+# client suites that compute: each builds the project (make run in a fresh
+# clone, the Dockerfile's build stage)
+BUILDS="tests/clients/make_run.sh tests/clients/docker.sh"
 OUT=$(mktemp -d "${TMPDIR:-/tmp}/qdc-run.XXXXXX")
 trap 'rm -rf "$OUT"' EXIT
 LOG=$OUT/log
@@ -38,7 +41,7 @@ LOG=$OUT/log
             [ -x "$t" ] && printf 'asan+ubsan %s\tenv ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 %s\n' \
                 "$(basename "$t")" "$t"
         done
-        for t in tests/house/*.sh tests/e2e/*.sh; do
+        for t in tests/house/*.sh tests/e2e/*.sh $BUILDS; do
             [ -f "$t" ] && printf '%s\tsh %s\n' "$t" "$t"
         done
     fi
@@ -47,7 +50,8 @@ LOG=$OUT/log
 : > "$OUT/containers"
 if [ -z "${QDC_QUICK:-}" ]; then
     for t in tests/server/*.sh tests/faults/*.sh tests/clients/*.sh; do
-        [ -f "$t" ] && [ "$t" != "$ALONE" ] && printf '%s\tsh %s\n' "$t" "$t"
+        case " $ALONE $BUILDS " in *" $t "*) continue ;; esac
+        [ -f "$t" ] && printf '%s\tsh %s\n' "$t" "$t"
     done > "$OUT/wait"
     for t in tests/container/*.sh; do
         [ -f "$t" ] && printf '%s\tsh %s\n' "$t" "$t"
