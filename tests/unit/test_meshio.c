@@ -486,7 +486,7 @@ TEST(dev_speed)
 
 TEST(qmesh_1m_tets_speed)
 {
-    double r = read_1m_tets(MESHIO_QMESH);
+    double r = read_1m_tets(MESHIO_QMESH, QMESH_RATIO);
 
     ASSERT_TRUE(r > 0);
 #if !defined(__SANITIZE_ADDRESS__)
