@@ -18,7 +18,8 @@ proxy() {
     $PY "$ROOT/tests/clients/flaky_proxy.py" "$PORT" "$TMP/pport" "$TMP/plog" "$1" &
     PPID_=$!
     i=0
-    while [ $i -lt 50 ] && [ ! -s "$TMP/pport" ]; do sleep 0.1; i=$((i + 1)); done
+    # (up to 30 s: Python starts slowly on a busy machine)
+    while [ $i -lt 300 ] && [ ! -s "$TMP/pport" ]; do sleep 0.1; i=$((i + 1)); done
     PURL=http://127.0.0.1:$(cat "$TMP/pport")
 }
 njobs() { curl -s "$URL/v1/jobs" | jq '.jobs | length'; }
