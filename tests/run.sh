@@ -11,12 +11,13 @@
 # printed whole, with its time, once it and those started before it have
 # ended. Every suite has its own temporary directory and free ports. A free
 # place goes to a computing suite (unit tests, house rules, end-to-end: the
-# optimizer, Python checks; the client suites that build) when the other runs a waiting one (daemon, fault
-# and client suites: timers, leases, databases, browsers) and the other way
-# round, so that two at a time use the machine rather than fight over it. The container suites share one
+# optimizer, Python checks; the client suites that build) when the other
+# runs a waiting one (daemon, fault and client suites: timers, leases,
+# databases, browsers) and the other way round, so that two at a time use
+# the machine rather than fight over it. The container suites share one
 # engine and the same image tags: they run one after the other, in one
 # place. tests/faults/load.sh runs last with nothing beside it: its latency
-# limit is judged against an idle phase of its own.
+# limit (100 ms at least) is judged against an idle phase of its own.
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
 export ROOT
 cd "$ROOT" || exit 1
