@@ -35,6 +35,7 @@ QUALITY = os.path.join(ROOT, 'tests', 'tools', 'evaluate.py')  # one evaluator f
 DEV = os.path.join(ROOT, 'tests', 'data', 'dev')
 CORPUS = os.path.join(ROOT, 'scripts', 'corpus.py')
 LIMIT = 600  # seconds, per command
+NO_COND = False  # --no-cond
 SAMPLES = 50000
 
 QUICK = ['bunny_low_10k', 'bunny_tangled-low_10k', 'bracket_h0.1_noisy']
@@ -60,17 +61,21 @@ TOOLS = ['qdc', 'qdc-report', 'qdc-1t', 'qdc-lsq', 'qdc-fixed', 'gmsh-relocate3d
 PEER = 'gmsh-relocate3d'
 # --topology: the peers that change connectivity (issue 31), on scripts/corpus.py's
 # scanned, thin, CAD, tangled and two-region meshes; (tets asked for, corpus class, large?)
-TOPO_TOOLS = ['qdc', 'qdc-fixed', 'qdc-flips', 'qdc-full', 'mmg-optim', 'mmg-noinsert',
-              'netgen', 'stellar']
-TOPO_GEN = [('110000', c, False) for c in ('ball-scan', 'bone-scan', 'bone-lowq', 'part-cad',
-                                           'bone-lowq-tangled', 'two-region')]
+# qdc's topology modes with the boundary as its default keeps it (slide, within the
+# default bound) and fixed, as the peers keep it (-nosurf, Netgen's kept faces)
+TOPO_TOOLS = ['qdc', 'qdc-fixed', 'qdc-flips', 'qdc-flips-fixed', 'qdc-full',
+              'qdc-full-fixed', 'mmg-optim', 'mmg-noinsert', 'netgen', 'stellar']
+TOPO_GEN = [('110000', c, False) for c in ('ball-scan', 'ball-lowq', 'bone-scan', 'bone-lowq',
+                                           'part-cad', 'bone-lowq-tangled', 'two-region')]
 TOPO_GEN += [('1100000', c, True) for c in ('ball-scan', 'bone-lowq', 'part-cad')]
 LABEL = {'input': 'input', 'qdc': 'qdc (default: slide)', 'qdc-lsq': 'qdc --boundary lsq',
          'qdc-report': 'qdc --report', 'qdc-1t': 'qdc, 1 thread',
          'qdc-fixed': 'qdc --boundary fixed',
          'gmsh-relocate3d': 'Gmsh Relocate3D', 'gmsh-default': 'Gmsh default opt',
-         'qdc-flips': 'qdc --topology flips --boundary fixed',
-         'qdc-full': 'qdc --topology full --boundary fixed',
+         'qdc-flips': 'qdc --topology flips',
+         'qdc-flips-fixed': 'qdc --topology flips --boundary fixed',
+         'qdc-full': 'qdc --topology full',
+         'qdc-full-fixed': 'qdc --topology full --boundary fixed',
          'mmg-optim': 'mmg3d -optim -nosurf', 'mmg-noinsert': 'mmg3d -optim -nosurf -noinsert',
          'netgen': 'Netgen OptimizeVolumeMesh', 'stellar': 'Stellar (boundary kept)'}
 # Stellar's options for a boundary kept as the other rows keep it: no smoothing of
@@ -148,7 +153,7 @@ def tool_skip(tool):
     elif tool == 'netgen' and subprocess.run([PY, '-c', 'import netgen.meshing'],
                                              capture_output=True).returncode != 0:
         why = '%s cannot import netgen.meshing (apt-get install python3-netgen)' % PY
-    elif tool in ('qdc-flips', 'qdc-full'):
+    elif tool.startswith(('qdc-flips', 'qdc-full')):
         qdc = QDC_RUN if os.path.exists(QDC_RUN) else QDC
         h = subprocess.run([qdc, 'optimize', '--help'], capture_output=True, text=True)
         if '--topology' not in h.stdout + h.stderr:
@@ -158,8 +163,9 @@ def tool_skip(tool):
 
 
 def command(tool, src, dst, base):
-    if tool in ('qdc-flips', 'qdc-full'):
-        return [QDC_RUN, 'optimize', src, dst, '--topology', tool[4:], '--boundary', 'fixed']
+    if tool.startswith(('qdc-flips', 'qdc-full')):
+        return ([QDC_RUN, 'optimize', src, dst, '--topology', tool.split('-')[1]] +
+                (['--boundary', 'fixed'] if tool.endswith('-fixed') else []))
     if tool.startswith('mmg'):
         return ([peer_path('mmg/build/bin/mmg3d_O3', 'mmg3d_O3'), '-optim', '-nosurf'] +
                 (['-noinsert'] if tool == 'mmg-noinsert' else []) + ['-in', src, '-out', dst])
@@ -426,7 +432,10 @@ def stellar_output(inbase, dst):
 
 
 def conditioning(path, dst):
-    """cond.py on PATH (the P1 Laplacian's condition number), its JSON or None."""
+    """cond.py on PATH (the P1 Laplacian's condition number), its JSON or None
+    (None too under --no-cond)."""
+    if NO_COND:
+        return None
     r = subprocess.run(['timeout', score_limit(), PY, os.path.join(HERE, 'cond.py'), path,
                         '-o', dst], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
                        text=True, env=SCORE_ENV)
@@ -949,7 +958,7 @@ def write_results(path, info, tab, summ, rows):
 
 
 def main():
-    global LIMIT, SAMPLES
+    global LIMIT, SAMPLES, NO_COND
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument('--quick', action='store_true',
                     help='3 small dev meshes, no generated meshes, no Gmsh default optimizer')
@@ -981,6 +990,9 @@ def main():
     ap.add_argument('--table-only', action='store_true',
                     help='write the table from the finished cases in bench/out/runs, run '
                          'nothing (the cases not finished show as "not run")')
+    ap.add_argument('--no-cond', action='store_true',
+                    help='with --topology: no condition numbers (bench/cond.py; its '
+                    'eigenvalue solves cost more than some runs on a busy machine)')
     ap.add_argument('--drop-outputs', action='store_true',
                     help='delete optimized meshes after evaluation (saves disk)')
     ap.add_argument('--results', metavar='FILE',
@@ -988,6 +1000,7 @@ def main():
                          'for a full run, bench/out/RESULTS.md otherwise)')
     ap.add_argument('--cmdline', default=None, help=argparse.SUPPRESS)
     a = ap.parse_args()
+    NO_COND = a.no_cond
     up0 = subprocess.run(['uptime'], capture_output=True, text=True).stdout.strip()
     LIMIT, SAMPLES = a.limit, a.samples
     tools = a.tools or (TOPO_TOOLS if a.topology else

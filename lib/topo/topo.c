@@ -7,6 +7,7 @@
 #include "topo/contract.h"
 #include "topo/insert.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -441,6 +442,42 @@ done:
     return s;
 }
 
+/* Each boundary face's fdev: the largest vdev of its corners (the bound the
+ * rounds before spent there). */
+static void seed_dev(tmesh *tm, const double *vdev)
+{
+    for (int32_t t = 0; t < tm->hi; t++)
+        for (int i = 0; i < 4 && tm->tv[4 * (size_t)t] >= 0; i++) {
+            const int32_t *tt = tm->tv + 4 * (size_t)t;
+            double d = 0.0;
+            if (tm->adj[4 * (size_t)t + i] >= 0)
+                continue;
+            for (int k = 0; k < 3; k++)
+                d = fmax(d, vdev[tt[tet_face_of[i][k]]]);
+            tm->fdev[4 * (size_t)t + i] = d;
+        }
+}
+
+/* sf->vdev and sf->vop at the corners of the boundary faces the run made. */
+static void spent_out(const tmesh *tm, int32_t nv, topo_surface *sf)
+{
+    for (int32_t t = 0; t < tm->hi; t++)
+        for (int i = 0; i < 4 && tm->tv[4 * (size_t)t] >= 0; i++) {
+            const int32_t *tt = tm->tv + 4 * (size_t)t;
+            if (tm->adj[4 * (size_t)t + i] >= 0 || !(tm->fsurf[t] >> i & 1))
+                continue;
+            for (int k = 0; k < 3; k++) {
+                int32_t v = tt[tet_face_of[i][k]];
+                if (v >= nv)
+                    continue; /* a new vertex is inside: on no boundary face */
+                if (sf->vdev)
+                    sf->vdev[v] = fmax(sf->vdev[v], tm->fdev[4 * (size_t)t + i]);
+                if (sf->vop)
+                    sf->vop[v] = 1;
+            }
+        }
+}
+
 qdc_status topo_full_arrays(int32_t nv, const double *xyz, int32_t nt,
                             const int32_t *tets, const int32_t *region,
                             const uint8_t *rev, const topo_params *p,
@@ -459,12 +496,16 @@ qdc_status topo_full_arrays(int32_t nv, const double *xyz, int32_t nt,
     }
     if (s == QDC_OK && sf)
         s = tmesh_set_surface(tm, sf->ntri, sf->tris, sf->refs);
+    if (s == QDC_OK && sf && sf->vdev)
+        seed_dev(tm, sf->vdev);
     if (s == QDC_OK)
         s = topo_improve(tm, p, st, cancel);
     if ((s == QDC_OK || s == QDC_ECANCEL) && sf) {
         qdc_status s2 = surface_out(tm, sf);
         if (s2 != QDC_OK)
             s = s2;
+        if (sf->vdev || sf->vop)
+            spent_out(tm, nv, sf);
     }
     if (s == QDC_OK || s == QDC_ECANCEL) {
         qdc_status s2 = tmesh_export(tm, nt_out, tets_out, region ? region_out : NULL);

@@ -59,6 +59,13 @@ typedef struct {
     int32_t *refs_out; /*     triangles with the ref and orientation of theirs */
     int32_t removed;   /* input triangles no longer on the boundary */
     int32_t added;     /* new boundary triangles written (those with a ref) */
+    /* The bound spent so far (may be NULL; nv entries each, the input's vertex
+     * numbering), so that a run's rounds spend one bound: */
+    double *vdev; /* in: each boundary face starts with the largest vdev of its
+                   * corners as the distance it has moved so far (fdev);
+                   * out: raised at the corners of each boundary face a boundary
+                   * operation made to that face's fdev */
+    uint8_t *vop; /* out: set to 1 at those corners (not cleared) */
 } topo_surface;
 
 /* maxring 10, qgoal 0.6, margin 1e-3, floor4 0.1, rounds 3, max_ops 0, insert 0,

@@ -1078,6 +1078,60 @@ TEST(driver_writes_the_new_boundary_triangles)
     qdc_free(xo);
 }
 
+/* The bound spent before a run (topo_surface.vdev): the peel of the sliver of
+ * peeling_a_flat_boundary_tet moves the surface by h = 1/8. With nothing
+ * spent and the bound 0.126 it is made, and the corners of the two faces it
+ * makes (a, b, c, d; not p) come back with 1/8 spent and marked; with 0.002
+ * spent at a (on the sliver's top faces, so they start at 0.002) 1/8 more is
+ * over the bound: refused, nothing marked, vdev as it was. */
+TEST(driver_spends_one_bound)
+{
+    double x[5 * 3] = {-2, 0, 0, 2, 0, 0, 0, -1, -0.125, 0, 1, -0.125, 0, 0, -1};
+    int32_t tv[12] = {0, 1, 2, 3, 3, 2, 0, 4, 2, 3, 1, 4};
+    int32_t tris[16][3], refs[16], n = 0, nt = 0, nv = 0, *tets = NULL;
+    double vdev[5], *xo = NULL;
+    uint8_t vop[5];
+    tmesh *tm = NULL;
+    topo_params p;
+    topo_stats st;
+    topo_surface sf = {0};
+
+    ASSERT_OK(tmesh_new(5, x, 3, tv, NULL, NULL, &tm, NULL));
+    surface_of(tm, 0.0, 7, tris, refs, &n);
+    tmesh_free(tm);
+    for (int k = 0; k < n; k++)
+        refs[k] = (tris[k][0] == 4 || tris[k][1] == 4 || tris[k][2] == 4) ? 3 : 7;
+    topo_params_default(&p);
+    p.qgoal = 1.0;
+    p.bound.hausd = 0.126;
+    for (int pass = 0; pass < 2; pass++) {
+        memset(vdev, 0, sizeof vdev);
+        memset(vop, 0, sizeof vop);
+        vdev[0] = pass ? 0.002 : 0.0;
+        vdev[4] = 0.01; /* on none of the sliver's faces */
+        sf.ntri = n;
+        sf.tris = &tris[0][0];
+        sf.refs = refs;
+        sf.vdev = vdev;
+        sf.vop = vop;
+        ASSERT_OK(topo_full_arrays(5, x, 3, tv, NULL, NULL, &p, NULL, &nv, &xo, &nt,
+                                   &tets, NULL, NULL, &sf, &st, NULL));
+        ASSERT_EQ_INT(st.peels, pass ? 0 : 1);
+        for (int v = 0; v < 4; v++) {
+            ASSERT_NEAR(vdev[v], pass ? (v == 0 ? 0.002 : 0.0) : 0.125, 0);
+            ASSERT_EQ_INT(vop[v], pass ? 0 : 1);
+        }
+        ASSERT_NEAR(vdev[4], 0.01, 0);
+        ASSERT_EQ_INT(vop[4], 0);
+        qdc_free(sf.tris_out);
+        qdc_free(sf.refs_out);
+        qdc_free(tets);
+        qdc_free(xo);
+        tets = NULL;
+        xo = NULL;
+    }
+}
+
 /* Contraction on a 4x4x4 Kuhn grid of the unit cube (coordinates in quarters,
  * the centre vertex moved by (1/64, 1/128, 0): every 6V a multiple of 2^-13,
  * sums exact): some interior edge contracts; the volume is kept exactly, the
@@ -1127,9 +1181,10 @@ TEST(contraction_keeps_the_volume_exactly)
 
 TEST_MAIN("topo", T(contraction_keeps_the_volume_exactly), T(boundary_flip_2_2_coplanar),
           T(peeling_a_flat_boundary_tet), T(driver_writes_the_new_boundary_triangles),
-          T(insertion_in_a_bad_tet), T(insertion_refused_leaves_the_mesh),
-          T(driver_with_insertion), T(orient3d_exact_near_coplanar),
-          T(edge_removal_3_2_keeps_volume), T(edge_removal_rings_3_to_8), T(flip_2_3),
+          T(driver_spends_one_bound), T(insertion_in_a_bad_tet),
+          T(insertion_refused_leaves_the_mesh), T(driver_with_insertion),
+          T(orient3d_exact_near_coplanar), T(edge_removal_3_2_keeps_volume),
+          T(edge_removal_rings_3_to_8), T(flip_2_3),
           T(multiface_removal_restores_the_ring),
           T(export_keeps_the_callers_vertex_order), T(mixed_tag_shell_blocks_removal),
           T(non_convex_ring_refused), T(four_boundary_corner_floor),
