@@ -18,8 +18,8 @@
  * []>"), any other declaration (ENTITY...) and CDATA are refused, and an
  * attribute value that qdc reads must not hold a reference ('&').
  * Heavy data in HDF5 (Format="HDF"), in a binary file or a function of other
- * items is refused here (QDC_EFORMAT): HDF5 is read by the qdc-h5 program,
- * outside the library. */
+ * items is refused (QDC_EFORMAT). HDF5 would be read by the qdc-h5 program,
+ * outside the library, as MED is (meshio_med.c); XDMF's is not yet. */
 #include "io/format.h"
 
 #include <string.h>
@@ -321,8 +321,8 @@ static qdc_status item_read(xd *x, const xtag *t, item *it, qdc_error *err)
                         kind);
     if (strcasecmp(fmt, "HDF") == 0)
         return fail_txt(err, QDC_EFORMAT, &x->s, t->at,
-                        "XDMF: heavy data in HDF5 (Format=\"HDF\"): read with the qdc "
-                        "command, which runs qdc-h5 on it");
+                        "XDMF: heavy data in HDF5 (Format=\"HDF\") is not read yet: "
+                        "write the data inline (meshio: data_format=\"XML\")");
     if (strcasecmp(fmt, "XML") != 0)
         return fail_txt(err, QDC_EFORMAT, &x->s, t->at,
                         "XDMF: DataItem Format %s: only XML (inline) and HDF are read",
@@ -918,7 +918,7 @@ static meshio_format sniff_xdmf(const char *buf, size_t len, size_t i)
 const meshio_fmt fmt_xdmf = {
     .name = "xdmf",
     .aliases = "xmf",
-    .about = "XDMF 2/3, tetrahedra with the data inline (XML); HDF5 data through qdc-h5",
+    .about = "XDMF 2/3, tetrahedra with the data inline (XML; HDF5 heavy data refused)",
     .ext = "xdmf",
     .input = "input.xdmf",
     .sniff = sniff_xdmf,

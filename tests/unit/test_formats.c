@@ -1094,7 +1094,7 @@ TEST(new_formats_1m_tets_speed)
 
 TEST(fuzz_replay)
 {
-    static const char *const names[] = {"gmsh", "vtk", "fe", "msh1", "bdf", "unv", "xdmf"};
+    static const char *const names[] = {"gmsh", "vtk", "fe", "msh1", "bdf", "unv", "xdmf", "med"};
     int total = 0, bad = 0;
 
     for (int k = 0; k < (int)(sizeof names / sizeof names[0]); k++) {
