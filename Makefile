@@ -60,7 +60,13 @@ UNIT_BIN := $(UNIT_C:tests/unit/%.c=$(B)/tests/%)
 EX_C := $(wildcard examples/*.c)
 EX_BIN := $(EX_C:%.c=$(B)/%)
 
-PROGS := $(B)/qdc $(if $(SRV_C),$(B)/qdcd)
+# qdc-h5: HDF5 (MED files) in a program of its own, which the qdc command runs
+# as a child (libqdc never calls HDF5); built when libhdf5-dev is there.
+H5_CFLAGS := $(shell pkg-config --cflags hdf5 2>/dev/null)
+H5_LIBS := $(shell pkg-config --libs hdf5 2>/dev/null)
+H5_PROG := $(if $(H5_LIBS),$(B)/qdc-h5)
+
+PROGS := $(B)/qdc $(if $(SRV_C),$(B)/qdcd) $(H5_PROG)
 
 .PHONY: all hooks deps test test-quick test-container test-faults test-load run bench clean fuzz format format-check fault
 all: $(B)/libqdc.a $(PROGS) $(UNIT_BIN) $(EX_BIN) hooks
@@ -106,6 +112,10 @@ $(B)/libqdc.a: $(LIB_OBJ)
 
 $(B)/qdc: $(CLI_OBJ) $(B)/libqdc.a
 	$(CC) $(LDFLAGS) -o $@ $(CLI_OBJ) $(B)/libqdc.a $(CLI_LIBS) $(LIB_LIBS)
+
+$(B)/qdc-h5: clients/qdc-h5/qdc-h5.c
+	@mkdir -p $(dir $@)
+	$(CC) $(H5_CFLAGS) $(CFLAGS) -o $@ $< $(H5_LIBS) $(LDFLAGS)
 
 $(B)/qdcd: $(SRV_OBJ) $(B)/libqdc.a
 	$(CC) $(LDFLAGS) -o $@ $(SRV_OBJ) $(B)/libqdc.a $(SRV_LIBS) $(LIB_LIBS)

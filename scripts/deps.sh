@@ -9,11 +9,12 @@ set -eu
 # (the Docker image's stages); default: everything, tests and benchmarks included.
 BUILD_PKGS="build-essential pkg-config ca-certificates
 libsuitesparse-dev libopenblas0-pthread libopenblas-dev
-libmicrohttpd-dev libjansson-dev libsqlite3-dev libpq-dev zlib1g-dev libcurl4-openssl-dev libtet1.5-dev"
+libmicrohttpd-dev libjansson-dev libsqlite3-dev libpq-dev zlib1g-dev libcurl4-openssl-dev libtet1.5-dev
+libhdf5-dev"
 RUNTIME_PKGS="ca-certificates curl libcholmod3 libopenblas0-pthread libmicrohttpd12
-libjansson4 libsqlite3-0 libpq5 zlib1g libcurl4 libtet1.5 libgomp1"
+libjansson4 libsqlite3-0 libpq5 zlib1g libcurl4 libtet1.5 libgomp1 libhdf5-103-1"
 TEST_PKGS="curl tetgen clang clang-format libclang-rt-14-dev jq
-python3 python3-numpy python3-scipy python3-meshio python3-gmsh python3-netgen python3-yaml gmsh
+python3 python3-numpy python3-scipy python3-meshio python3-h5py hdf5-tools python3-gmsh python3-netgen python3-yaml gmsh
 podman debootstrap runc postgresql chromium"
 case "${1:-}" in
 --build) PKGS=$BUILD_PKGS; shift ;;

@@ -741,6 +741,14 @@ static int inflate_upload(struct MHD_Connection *c, req *r, const char *buf, siz
     return 0;
 }
 
+/* 1 if the table gives f a file name for uploads (TetGen and MED have none). */
+static int job_uploadable(meshio_format f)
+{
+    meshio_format_info fi;
+
+    return meshio_format_info_of(f, &fi) && fi.input;
+}
+
 /* Map the body, inflate it if it is gzip, settle its format (sniffed when
  * nothing named it), parse and validate it (check_upload): 0, or 1 with the
  * answer in *ret. */
@@ -782,6 +790,11 @@ static int inspect_upload(struct MHD_Connection *c, req *r, job_rec *j,
         *ret = unsupported(c, r,
                            "the body is not a mesh or surface this server recognises; "
                            "set Content-Type to one of the accepted types");
+    else if (u->fmt != MESHIO_AUTO && !job_uploadable(u->fmt))
+        /* MED: HDF5 is read by the qdc command's qdc-h5 child, not by qdcd */
+        *ret = unsupported(c, r,
+                           "this format is not taken as an upload (MED: read by the qdc "
+                           "command; convert it first, e.g. qdc convert in.med in.vtu)");
     else if (u->fmt == MESHIO_JSON && (int64_t)len > r->q->cfg.max_json)
         *ret = too_big(c, r, MESHIO_JSON, plain != NULL, 0);
     else if (plain && u->sfmt != SURFACE_AUTO)

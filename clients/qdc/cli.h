@@ -42,6 +42,15 @@ qdc_status cli_read_mesh(const char *path, meshio_format fin, const meshio_optio
 qdc_status cli_save_mesh(const char *out, meshio_format fout, const mesh_t *m,
                          qdc_error *err);
 
+/* MED (HDF5) through the qdc-h5 child (h5.c). cli_h5_wanted: 1 if path is
+ * to be read that way (fin MESHIO_MED, or a file that starts as HDF5 does).
+ * cli_h5_read: the mesh (its source kept as mo says); cli_h5_write: m, read
+ * by cli_h5_read, written to out as its MED file with the new coordinates. */
+int cli_h5_wanted(const char *path, meshio_format fin);
+qdc_status cli_h5_read(const char *path, const meshio_options *mo, mesh_t **m,
+                       qdc_error *err);
+qdc_status cli_h5_write(const char *out, const mesh_t *m, qdc_error *err);
+
 /* One-line error in the form "qdc: FILE:LINE:COL: message". */
 void cli_error(const char *path, const qdc_error *err, qdc_status st);
 

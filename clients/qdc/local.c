@@ -389,6 +389,8 @@ qdc_status cli_read_mesh(const char *path, meshio_format fin, const meshio_optio
 
     *raw = NULL;
     *rawlen = 0;
+    if (!is_stream(path) && cli_h5_wanted(path, f))
+        return cli_h5_read(path, mo, m, err); /* no bytes to send as they are */
     if (!is_stream(path) &&
         (f == MESHIO_TETGEN || (f == MESHIO_AUTO && access(path, F_OK))))
         return meshio_load_ex(path, fin, mo, m, err); /* TetGen's two files */
@@ -411,6 +413,10 @@ qdc_status cli_load_mesh(const char *path, meshio_format fin, const meshio_optio
     size_t len;
     qdc_status st;
 
+    if (!is_stream(path) && cli_h5_wanted(path, fin != MESHIO_AUTO
+                                                     ? fin
+                                                     : meshio_format_from_name(path)))
+        return cli_h5_read(path, mo, m, err);
     if (!is_stream(path))
         return meshio_load_ex(path, fin, mo, m, err);
     st = cli_read_mesh(path, fin, mo, m, &raw, &len, err);
@@ -469,9 +475,11 @@ qdc_status cli_save_mesh(const char *out, meshio_format fout, const mesh_t *m,
     meshio_format f;
     qdc_status st;
 
+    f = meshio_save_format(out, fout, m);
+    if (f == MESHIO_MED)
+        return cli_h5_write(out, m, err);
     if (strcmp(out, "-"))
         return meshio_save(out, fout, m, err);
-    f = meshio_save_format(out, fout, m);
     if (f == MESHIO_AUTO) /* not read from a mesh file (a surface) */
         f = MESHIO_MEDIT;
     if (f == MESHIO_TETGEN)

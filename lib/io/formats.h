@@ -27,3 +27,5 @@ MESHIO_FORMAT(NETGEN, fmt_netgen)         /* Netgen .vol (spliced only) */
 MESHIO_FORMAT(MSH1, fmt_msh1)             /* Gmsh MSH 1 (spliced only) */
 MESHIO_FORMAT(BDF, fmt_bdf)               /* Nastran bulk data (spliced only) */
 MESHIO_FORMAT(UNV, fmt_unv)               /* I-DEAS universal (spliced only) */
+MESHIO_FORMAT(XDMF, fmt_xdmf)             /* XDMF 2/3, inline XML data */
+MESHIO_FORMAT(MED, fmt_med)               /* MED, HDF5 via qdc-h5 (spliced only) */

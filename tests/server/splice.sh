@@ -34,7 +34,9 @@ netgen:meshio.vol:netgen:Generated
 gmsh41p2:gmsh41_p2.msh:gmsh:skin
 bdf:gmsh.bdf:bdf:CBAR
 bdffree:meshio_free.bdf:bdf:BULK
-unv:gmsh.unv:unv:2477"
+unv:gmsh.unv:unv:2477
+xdmf:meshio.xdmf:xdmf:velocity
+xdmfp2:meshio_p2.xdmf:xdmf:Tetrahedron_10"
 
 for c in $CASES; do
     f=$(echo "$c" | cut -d: -f2)

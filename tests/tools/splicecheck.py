@@ -4,7 +4,7 @@ coordinates changed?
 
 Finds the coordinate fields of both files with its own small parsers (Medit
 .mesh, TetGen .node, Gmsh MSH 2.x ASCII/binary, 4.0 ASCII and 4.1 ASCII/binary,
-DOLFIN XML, Medit binary, Abaqus .inp, Netgen .vol, legacy VTK
+DOLFIN XML, XDMF inline, Medit binary, Abaqus .inp, Netgen .vol, legacy VTK
 ASCII/binary, VTU ascii/base64/appended, zlib or not), masks them and compares
 what is left byte for byte (for VTU, the offset="" of appended arrays may
 differ too; Gmsh 4.x $Entities bounding boxes and VTU Points
@@ -225,6 +225,16 @@ def dolfin(b):
             v = re.search(rb"\s" + a + rb"\s*=\s*[\"']\s*([^\"'\s]+)", m.group(0))
             f.coords.append((m.start() + v.start(1), m.start() + v.end(1), "text"))
     f.coords.sort()
+    return f
+
+
+def xdmf(b):
+    """XDMF, data inline: the numbers of the first Geometry's DataItem."""
+    f = Fields()
+    m = re.search(rb"<Geometry\b[^>]*>\s*<DataItem\b[^>]*>", b)
+    end = b.index(b"<", m.end())
+    for s, e in tokens(b[:end], m.end(), hash_comments=False):
+        f.coords.append((s, e, "text"))
     return f
 
 
@@ -465,6 +475,8 @@ def fields(path, b):
         return bdf(b)
     if p.endswith(".unv"):
         return unv(b)
+    if p.endswith((".xdmf", ".xmf")):
+        return xdmf(b)
     raise SystemExit("splicecheck: unknown format: " + path)
 
 

@@ -950,12 +950,12 @@ TEST(names_sniffing_media_types)
         ASSERT_TRUE(mt != NULL);
         ASSERT_EQ_INT(meshio_format_from_media_type(mt), f);
     }
-    /* qdc writes every format but Abaqus, Netgen, MSH 1, Nastran and I-DEAS,
-     * which it writes only over their own source */
+    /* qdc writes every format but Abaqus, Netgen, MSH 1, Nastran, I-DEAS and
+     * MED, which it writes only over their own source */
     for (int f = 1; f < MESHIO_FORMAT_COUNT; f++)
         ASSERT_EQ_INT(meshio_has_writer((meshio_format)f),
                       f != MESHIO_ABAQUS && f != MESHIO_NETGEN && f != MESHIO_MSH1 &&
-                          f != MESHIO_BDF && f != MESHIO_UNV);
+                          f != MESHIO_BDF && f != MESHIO_UNV && f != MESHIO_MED);
     ASSERT_EQ_INT(meshio_has_writer(MESHIO_AUTO), 0);
     ASSERT_EQ_INT(meshio_has_writer(MESHIO_FORMAT_COUNT), 0);
     ASSERT_EQ_INT(meshio_has_writer((meshio_format)-1), 0);
@@ -1090,7 +1090,7 @@ TEST(new_formats_1m_tets_speed)
 
 TEST(fuzz_replay)
 {
-    static const char *const names[] = {"gmsh", "vtk", "fe", "msh1", "bdf", "unv"};
+    static const char *const names[] = {"gmsh", "vtk", "fe", "msh1", "bdf", "unv", "xdmf", "med"};
     int total = 0, bad = 0;
 
     for (int k = 0; k < (int)(sizeof names / sizeof names[0]); k++) {

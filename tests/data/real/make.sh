@@ -133,6 +133,26 @@ meshio.nastran.write("meshio_small.nas", nas, point_format="fixed-small",
 meshio.nastran.write("meshio_large.bdf", nas, point_format="fixed-large",
                      cell_format="fixed-large")
 
+# XDMF (XDMF 3, one topology: the tets alone) with the data inline
+# (data_format="XML"), the physical tag as Int cell data, a scalar and a vector
+# point array and a float cell array; the second-order sphere as Tetrahedron_10.
+# With the data in HDF5 (meshio's default: meshio_h5.xdmf beside meshio_h5.h5,
+# named in the XML) and as MED (Code_Aster/Salome: families from cell_tags,
+# as meshio writes them when it has them).
+xd = meshio.Mesh(pts, [("tetra", tets)],
+                 point_data={"temperature": temperature, "velocity": velocity},
+                 cell_data={"gmsh:physical": [tp.astype(np.int32)],
+                            "stress": [stress[0]]})
+meshio.write("meshio.xdmf", xd, data_format="XML")
+meshio.write("meshio_h5.xdmf", xd)
+p2 = meshio.read("gmsh41_p2.msh")
+meshio.write("meshio_p2.xdmf", meshio.Mesh(p2.points, [("tetra10", p2.cells_dict["tetra10"])]),
+             data_format="XML")
+med = meshio.Mesh(pts, [("tetra", tets)], point_data={"temperature": temperature},
+                  cell_data={"cell_tags": [-np.searchsorted(sorted(set(tp)), tp) - 1]})
+med.cell_tags = {-1 - i: ["material_%d" % i] for i in range(len(set(tp)))}
+meshio.write("meshio.med", med)
+
 # CalculiX's layout (as cgx writes it): one *ELEMENT block per material with
 # its ELSET, S3 boundary triangles, a material, a section and a step.
 with open("calculix.inp", "w") as f:
@@ -230,7 +250,7 @@ for f in gmsh41.msh gmsh41_bin.msh gmsh22.msh gmsh22_bin.msh gmsh40.msh gmsh.vtk
     tetgen.ele dolfin.xml meshio.inp calculix.inp meshio.vol meshio.meshb periodic41.msh \
     periodic41_bin.msh periodic40.msh periodic22.msh periodic22_bin.msh gmsh41_p2.msh gmsh_p2.inp \
     gmsh_msh1.msh gmsh.bdf gmsh_free.bdf gmsh_large.bdf gmsh.unv meshio_free.bdf meshio_small.nas \
-    meshio_large.bdf; do
+    meshio_large.bdf meshio.xdmf meshio_p2.xdmf meshio_h5.xdmf meshio_h5.h5 meshio.med; do
     gzip -n -9 -c "$f" > "$here/$f.gz"
 done
 ls -l "$here"

@@ -1,0 +1,929 @@
+/* meshio_xdmf.c - XDMF 2 and 3 with the data inline (Format="XML"): read,
+ * written (XDMF 3, inline, as meshio writes it) and written back spliced.
+ *
+ * The mesh is the first Grid with a Topology or Geometry child (inside a
+ * temporal Collection: its first step). Topology Tetrahedron (4 nodes) or
+ * Tetrahedron_10 (the VTK order of the mid-edge nodes, as mesh_p2_edges),
+ * 0-based; Geometry XYZ, "N 3". Its cell attributes: the first scalar one of
+ * integers (Int, UInt, Char, UChar) is the region (one named "region",
+ * "gmsh:physical", "cell_tags" or "name_to_read" first), as DOLFIN's
+ * MeshFunction and meshio's cell data write them. Grids after the mesh that
+ * share its geometry (dolfinx MeshTags: an xi:include of the Geometry) with
+ * Tetrahedron topology and an integer cell attribute give the region of the
+ * tets they list. Other attributes, grids and elements are kept by a spliced
+ * write, which rewrites only the numbers of the Geometry's DataItem.
+ *
+ * The XML is read without any entity expansion: a DOCTYPE is taken only with
+ * an empty internal subset (DOLFIN writes "<!DOCTYPE Xdmf SYSTEM "Xdmf.dtd"
+ * []>"), any other declaration (ENTITY...) and CDATA are refused, and an
+ * attribute value that qdc reads must not hold a reference ('&').
+ * Heavy data in HDF5 (Format="HDF"), in a binary file or a function of other
+ * items is refused (QDC_EFORMAT). HDF5 would be read by the qdc-h5 program,
+ * outside the library, as MED is (meshio_med.c); XDMF's is not yet. */
+#include "io/format.h"
+
+#include <string.h>
+
+enum { XD_DEPTH = 64 };
+
+/* What an element is to the reader. */
+enum { K_OTHER, K_XDMF, K_GRID, K_TOPO, K_GEOM, K_ATTR, K_DATA, K_INCLUDE };
+
+typedef struct {
+    const char *at;    /* its '<' */
+    const char *n, *ne; /* its name */
+    const char *a, *ae; /* its attributes */
+    int empty;          /* <.../> */
+    int end;            /* </...> */
+} xtag;
+
+/* A grid after the mesh holding tet tags (dolfinx MeshTags). */
+typedef struct {
+    vec tets;   /* int32, 4 a tet */
+    vec vals;   /* int32 */
+    int shares; /* its geometry is an xi:include */
+} tagset;
+
+typedef struct {
+    txt s;
+    const meshio_options *o;
+    srcrec *rec;
+    /* the mesh grid */
+    int mesh_depth;     /* depth of its Grid element, 0 not found yet */
+    int mesh_done;      /* its Grid closed */
+    int64_t nv, nt;     /* -1 until read */
+    int nodes;          /* 4 or 10 a tet */
+    double *xyz;
+    int32_t *conn;      /* nodes a tet */
+    int32_t *region;
+    int region_rank;    /* how good a name the region's attribute has */
+    int64_t nreg;
+    const char *topo_at, *reg_at;
+    /* what the element being read is about */
+    int kind[XD_DEPTH];
+    const char *name[XD_DEPTH], *name_end[XD_DEPTH]; /* the open elements' names */
+    int depth;
+    int attr_cell_int;  /* the Attribute open is a scalar cell one (mesh grid) */
+    int attr_rank;
+    /* grids after the mesh */
+    tagset ts;
+    int ts_depth, ts_topo, ts_attr;
+} xd;
+
+/* ------------------------------------------------------------------------ */
+/* XML markup                                                                */
+
+static int is_name(unsigned char c)
+{
+    return is_word(c) || c == ':' || c == '-' || c == '.' || c >= 0x80;
+}
+
+/* Past the next occurrence of lit (the scanner's line count kept); 0 if none. */
+static int skip_past(txt *s, const char *lit)
+{
+    size_t n = strlen(lit);
+
+    while (s->p < s->end) {
+        if ((size_t)(s->end - s->p) >= n && memcmp(s->p, lit, n) == 0) {
+            s->p += n;
+            return 1;
+        }
+        if (*s->p == '\n') {
+            s->line++;
+            s->bol = s->p + 1;
+        }
+        s->p++;
+    }
+    return 0;
+}
+
+/* Through markup from s->p to the first of '>', '[' or '<' outside quotes,
+ * the line count kept: that character (s->p at it), or 0 at the end. */
+static char markup_stop(txt *s)
+{
+    char quote = 0;
+
+    for (; s->p < s->end; s->p++) {
+        char c = *s->p;
+        if (c == '\n') {
+            s->line++;
+            s->bol = s->p + 1;
+        }
+        if (quote)
+            quote = c == quote ? 0 : quote;
+        else if (c == '"' || c == '\'')
+            quote = c;
+        else if (c == '>' || c == '[' || c == '<')
+            return c;
+    }
+    return 0;
+}
+
+/* A DOCTYPE at s->p ("<!DOCTYPE"): its internal subset, if any, must be blank. */
+static qdc_status xd_doctype(txt *s, qdc_error *err)
+{
+    const char *at = s->p;
+    char c;
+
+    s->p += 9;
+    while ((c = markup_stop(s)) == '[') {
+        s->p++;
+        skip_ws(s);
+        if (s->p >= s->end || *s->p != ']')
+            return fail_txt(err, QDC_EPARSE, s, s->p,
+                            "XDMF: a DOCTYPE with declarations (entities are not "
+                            "expanded): refused");
+        s->p++;
+    }
+    if (c == '>') {
+        s->p++;
+        return QDC_OK;
+    }
+    return fail_txt(err, QDC_EPARSE, s, at, "XDMF: DOCTYPE not closed");
+}
+
+/* The next tag (comments, processing instructions, a DOCTYPE and text
+ * skipped); t->at NULL at the end of the input. */
+static qdc_status xd_tag(txt *s, xtag *t, qdc_error *err)
+{
+    memset(t, 0, sizeof *t);
+    for (;;) {
+        const char *q = memchr(s->p, '<', (size_t)(s->end - s->p));
+        const char *lt;
+        for (const char *p = s->p; p < (q ? q : s->end); p++)
+            if (*p == '\n') {
+                s->line++;
+                s->bol = p + 1;
+            }
+        if (!q) {
+            s->p = s->end;
+            return QDC_OK;
+        }
+        s->p = lt = q;
+        if ((size_t)(s->end - lt) >= 4 && memcmp(lt, "<!--", 4) == 0) {
+            if (!skip_past(s, "-->"))
+                return fail_txt(err, QDC_EPARSE, s, lt, "XDMF: comment not closed");
+            continue;
+        }
+        if ((size_t)(s->end - lt) >= 2 && lt[1] == '?') {
+            if (!skip_past(s, "?>"))
+                return fail_txt(err, QDC_EPARSE, s, lt,
+                                "XDMF: processing instruction not closed");
+            continue;
+        }
+        if ((size_t)(s->end - lt) >= 9 && memcmp(lt, "<!DOCTYPE", 9) == 0) {
+            qdc_status st = xd_doctype(s, err);
+            if (st != QDC_OK)
+                return st;
+            continue;
+        }
+        if ((size_t)(s->end - lt) >= 2 && lt[1] == '!')
+            return fail_txt(err, QDC_EPARSE, s, lt,
+                            "XDMF: declarations and CDATA are not read (no entity is "
+                            "expanded)");
+        break;
+    }
+    t->at = s->p++;
+    if (s->p < s->end && *s->p == '/') {
+        t->end = 1;
+        s->p++;
+    }
+    t->n = s->p;
+    while (s->p < s->end && is_name((unsigned char)*s->p))
+        s->p++;
+    t->ne = s->p;
+    if (t->n == t->ne)
+        return fail_txt(err, QDC_EPARSE, s, t->at, "XDMF: expected an element name");
+    t->a = s->p;
+    if (markup_stop(s) == '>') { /* '[' in a start tag: not XML */
+        t->ae = s->p;
+        t->empty = s->p > t->a && s->p[-1] == '/';
+        if (t->empty)
+            t->ae--;
+        s->p++;
+        return QDC_OK;
+    }
+    return fail_txt(err, QDC_EPARSE, s, t->at, "XDMF: tag <%.*s not closed",
+                    t->ne - t->n > 24 ? 24 : (int)(t->ne - t->n), t->n);
+}
+
+/* The value of attribute key in [a, ae): 1 and [*v, *ve); 0 if absent. */
+static int xattr(const char *a, const char *ae, const char *key, const char **v,
+                 const char **ve)
+{
+    size_t kn = strlen(key);
+
+    while (a < ae) {
+        const char *n, *ne;
+        char quote;
+        while (a < ae && is_space((unsigned char)*a))
+            a++;
+        n = a;
+        while (a < ae && is_name((unsigned char)*a))
+            a++;
+        ne = a;
+        while (a < ae && is_space((unsigned char)*a))
+            a++;
+        if (n == ne || a >= ae || *a != '=')
+            return 0;
+        a++;
+        while (a < ae && is_space((unsigned char)*a))
+            a++;
+        if (a >= ae || (*a != '"' && *a != '\''))
+            return 0;
+        quote = *a++;
+        *v = a;
+        while (a < ae && *a != quote)
+            a++;
+        if (a >= ae)
+            return 0;
+        *ve = a++;
+        if ((size_t)(ne - n) == kn && memcmp(n, key, kn) == 0)
+            return 1;
+    }
+    return 0;
+}
+
+/* The value of key (or of key2 if key is absent; key2 may be NULL) into
+ * out[size] with blanks trimmed: 1; 0 if absent; -1 if it holds a reference
+ * or is too long. */
+static int xattr_str(const xtag *t, const char *key, const char *key2, char *out,
+                     size_t size)
+{
+    const char *v, *ve;
+
+    if (!xattr(t->a, t->ae, key, &v, &ve) && !(key2 && xattr(t->a, t->ae, key2, &v, &ve)))
+        return 0;
+    while (v < ve && is_space((unsigned char)*v))
+        v++;
+    while (ve > v && is_space((unsigned char)ve[-1]))
+        ve--;
+    if ((size_t)(ve - v) >= size || memchr(v, '&', (size_t)(ve - v)))
+        return -1;
+    memcpy(out, v, (size_t)(ve - v));
+    out[ve - v] = '\0';
+    return 1;
+}
+
+static int name_is(const xtag *t, const char *name)
+{
+    size_t n = strlen(name);
+
+    return (size_t)(t->ne - t->n) == n && memcmp(t->n, name, n) == 0;
+}
+
+/* An attribute qdc reads, as text (XDMF: case as written, compared without
+ * case). */
+static qdc_status attr_text(xd *x, const xtag *t, const char *key, const char *key2,
+                            const char *dflt, char *out, size_t size, qdc_error *err)
+{
+    int rc = xattr_str(t, key, key2, out, size);
+
+    if (rc < 0)
+        return fail_txt(err, QDC_EPARSE, &x->s, t->at,
+                        "XDMF: <%.*s %s=...>: a reference (&) or a value too long",
+                        t->ne - t->n > 24 ? 24 : (int)(t->ne - t->n), t->n, key);
+    if (rc == 0)
+        snprintf(out, size, "%s", dflt);
+    return QDC_OK;
+}
+
+/* ------------------------------------------------------------------------ */
+/* DataItems                                                                 */
+
+typedef struct {
+    int64_t dims[4], n; /* the dimensions and their product */
+    int ndims;
+    int integer;        /* NumberType Int, UInt, Char, UChar */
+} item;
+
+/* Check what the DataItem t is (XML data, one uniform item) and its size. */
+static qdc_status item_read(xd *x, const xtag *t, item *it, qdc_error *err)
+{
+    char fmt[16], type[16], kind[16], dims[96];
+    qdc_status st;
+    const char *p;
+
+    memset(it, 0, sizeof *it);
+    st = attr_text(x, t, "Format", NULL, "XML", fmt, sizeof fmt, err);
+    if (st == QDC_OK)
+        st = attr_text(x, t, "NumberType", "DataType", "Float", type, sizeof type, err);
+    if (st == QDC_OK)
+        st = attr_text(x, t, "ItemType", NULL, "Uniform", kind, sizeof kind, err);
+    if (st == QDC_OK)
+        st = attr_text(x, t, "Dimensions", NULL, "", dims, sizeof dims, err);
+    if (st != QDC_OK)
+        return st;
+    if (strcasecmp(kind, "Uniform") != 0)
+        return fail_txt(err, QDC_EFORMAT, &x->s, t->at,
+                        "XDMF: DataItem of ItemType %s: only data given as it is "
+                        "(Uniform) is read",
+                        kind);
+    if (strcasecmp(fmt, "HDF") == 0)
+        return fail_txt(err, QDC_EFORMAT, &x->s, t->at,
+                        "XDMF: heavy data in HDF5 (Format=\"HDF\") is not read yet: "
+                        "write the data inline (meshio: data_format=\"XML\")");
+    if (strcasecmp(fmt, "XML") != 0)
+        return fail_txt(err, QDC_EFORMAT, &x->s, t->at,
+                        "XDMF: DataItem Format %s: only XML (inline) and HDF are read",
+                        fmt);
+    it->integer = strcasecmp(type, "Int") == 0 || strcasecmp(type, "UInt") == 0 ||
+                  strcasecmp(type, "Char") == 0 || strcasecmp(type, "UChar") == 0;
+    if (!it->integer && strcasecmp(type, "Float") != 0)
+        return fail_txt(err, QDC_EPARSE, &x->s, t->at, "XDMF: unknown NumberType %s",
+                        type);
+    it->n = 1;
+    for (p = dims; *p;) {
+        int64_t d;
+        const char *e;
+        while (*p && is_space((unsigned char)*p))
+            p++;
+        if (!*p)
+            break;
+        for (e = p; *e && !is_space((unsigned char)*e); e++)
+            ;
+        if (it->ndims == 4 || parse_int(p, e, 0, &d) != 0 || d < 0 || d > INT32_MAX)
+            return fail_txt(err, QDC_EPARSE, &x->s, t->at,
+                            "XDMF: DataItem Dimensions \"%s\" are not up to four "
+                            "counts",
+                            dims);
+        it->dims[it->ndims++] = d;
+        it->n = d && it->n > INT64_MAX / d ? INT64_MAX : it->n * d;
+        p = e;
+    }
+    if (!it->ndims)
+        return fail_txt(err, QDC_EPARSE, &x->s, t->at, "XDMF: DataItem without Dimensions");
+    /* each number needs a character and a separator */
+    if (it->n > (int64_t)((size_t)(x->s.end - x->s.p) / 2 + 1))
+        return fail_txt(err, QDC_EPARSE, &x->s, t->at,
+                        "XDMF: DataItem of %lld values does not fit in the %zu bytes "
+                        "left (truncated?)",
+                        (long long)it->n, (size_t)(x->s.end - x->s.p));
+    return QDC_OK;
+}
+
+/* The end of the token at p: white space or '<'. */
+static const char *xd_tok_end(const txt *s, const char *p)
+{
+    while (p < s->end && !is_space((unsigned char)*p) && *p != '<')
+        p++;
+    return p;
+}
+
+/* n numbers of the item's text into d (doubles) or i (int32 in [lo, hi]);
+ * off: where every third starts (the Geometry). Then </DataItem>. */
+static qdc_status item_values(xd *x, int64_t n, double *d, int32_t *iv, int64_t lo,
+                              int64_t hi, uint64_t *off, qdc_error *err)
+{
+    txt *s = &x->s;
+    xtag t;
+    qdc_status st;
+    char q[32];
+
+    for (int64_t k = 0; k < n; k++) {
+        const char *tk, *te;
+        skip_ws(s);
+        tk = s->p;
+        te = xd_tok_end(s, tk);
+        if (tk == te)
+            return fail_txt(err, QDC_EPARSE, s, tk,
+                            "XDMF: DataItem: %lld values, expected %lld", (long long)k,
+                            (long long)n);
+        if (d) {
+            st = tok_real(s, tk, te, "XDMF: coordinate", &d[k], err);
+            if (off && st == QDC_OK && k % 3 == 0)
+                off[k / 3] = (uint64_t)(tk - s->base);
+        } else {
+            int64_t v = 0;
+            st = tok_int(s, tk, te, 0, "XDMF: value", lo, hi, &v, err);
+            iv[k] = (int32_t)v;
+        }
+        if (st != QDC_OK)
+            return st;
+    }
+    skip_ws(s);
+    if (s->p < s->end && *s->p != '<')
+        return fail_txt(err, QDC_EPARSE, s, s->p,
+                        "XDMF: DataItem holds more than its %lld values: %s",
+                        (long long)n, quote_tok(q, s, s->p, xd_tok_end(s, s->p)));
+    st = xd_tag(s, &t, err);
+    if (st == QDC_OK && (!t.at || !t.end || !name_is(&t, "DataItem")))
+        st = fail_txt(err, QDC_EPARSE, s, t.at ? t.at : s->end,
+                      "XDMF: expected </DataItem> after the values");
+    return st;
+}
+
+/* ------------------------------------------------------------------------ */
+/* Elements                                                                  */
+
+/* The region names, best first; 0 for another name. */
+static int region_rank(const xtag *t)
+{
+    static const char *const names[] = {"region", "gmsh:physical", "cell_tags",
+                                        "name_to_read"};
+    char name[64];
+
+    if (xattr_str(t, "Name", NULL, name, sizeof name) != 1)
+        return 0;
+    for (int k = 0; k < 4; k++)
+        if (strcmp(name, names[k]) == 0)
+            return 4 - k;
+    return 0;
+}
+
+static qdc_status topo_start(xd *x, const xtag *t, int *nodes, qdc_error *err)
+{
+    char type[32], npe[16];
+    qdc_status st = attr_text(x, t, "TopologyType", "Type", "", type, sizeof type, err);
+
+    if (st == QDC_OK)
+        st = attr_text(x, t, "NodesPerElement", NULL, "", npe, sizeof npe, err);
+    if (st != QDC_OK)
+        return st;
+    if (strcasecmp(type, "Tetrahedron") == 0)
+        *nodes = 4;
+    else if (strcasecmp(type, "Tetrahedron_10") == 0)
+        *nodes = 10;
+    else if (strcasecmp(type, "Mixed") == 0)
+        return fail_txt(err, QDC_EFORMAT, &x->s, t->at,
+                        "XDMF: Topology Mixed: qdc reads one topology of tetrahedra");
+    else
+        return fail_txt(err, QDC_EFORMAT, &x->s, t->at,
+                        "XDMF: Topology \"%s\": qdc optimizes tetrahedra (Tetrahedron, "
+                        "Tetrahedron_10)",
+                        type);
+    if (*npe && (strtol(npe, NULL, 10) != *nodes))
+        return fail_txt(err, QDC_EPARSE, &x->s, t->at,
+                        "XDMF: Topology %s with NodesPerElement %s", type, npe);
+    return QDC_OK;
+}
+
+/* A DataItem in the mesh grid's Topology, Geometry or a cell Attribute;
+ * *read 1 if its values and end tag were read. */
+static qdc_status mesh_item(xd *x, const xtag *t, int parent, int *read, qdc_error *err)
+{
+    item it;
+    qdc_status st;
+
+    *read = 0;
+    if (t->empty)
+        return fail_txt(err, QDC_EPARSE, &x->s, t->at, "XDMF: empty DataItem");
+    st = item_read(x, t, &it, err);
+    if (st != QDC_OK)
+        return st;
+    *read = parent != K_ATTR ||
+            (it.integer && x->attr_cell_int && (!x->region || x->attr_rank > x->region_rank));
+    if (parent == K_GEOM) {
+        if (x->nv >= 0)
+            return fail_txt(err, QDC_EFORMAT, &x->s, t->at,
+                            "XDMF: a second DataItem in the Geometry");
+        if (it.n % 3 || (it.ndims == 2 && it.dims[1] != 3) || it.ndims > 2)
+            return fail_txt(err, QDC_EFORMAT, &x->s, t->at,
+                            "XDMF: Geometry XYZ of Dimensions other than \"N 3\"");
+        if (it.n / 3 > MESH_MAX_VERTICES)
+            return fail_txt(err, QDC_ETOOBIG, &x->s, t->at, "XDMF: %lld vertices",
+                            (long long)(it.n / 3));
+        x->nv = it.n / 3;
+        x->xyz = qdc_mallocn((size_t)it.n + 1, sizeof(double));
+        if (!x->xyz)
+            return qdc_fail(err, QDC_ENOMEM, "out of memory for %lld vertices",
+                            (long long)x->nv);
+        if (x->rec) {
+            x->rec->fmt = MESHIO_XDMF;
+            x->rec->kind = SRC_TEXT;
+            x->rec->lt = 1;
+            st = srcrec_alloc(x->rec, x->nv, err);
+            if (st != QDC_OK)
+                return st;
+        }
+        return item_values(x, it.n, x->xyz, NULL, 0, 0, x->rec ? x->rec->off : NULL,
+                           err);
+    }
+    if (parent == K_TOPO) {
+        if (x->nt >= 0)
+            return fail_txt(err, QDC_EFORMAT, &x->s, t->at,
+                            "XDMF: a second DataItem in the Topology");
+        if (!it.integer)
+            return fail_txt(err, QDC_EPARSE, &x->s, t->at,
+                            "XDMF: Topology of NumberType Float");
+        if (it.n % x->nodes || (it.ndims == 2 && it.dims[1] != x->nodes) || it.ndims > 2)
+            return fail_txt(err, QDC_EPARSE, &x->s, t->at,
+                            "XDMF: Topology of %lld values, not %d a tetrahedron",
+                            (long long)it.n, x->nodes);
+        if (it.n / x->nodes > MESH_MAX_TETS)
+            return fail_txt(err, QDC_ETOOBIG, &x->s, t->at, "XDMF: %lld tetrahedra",
+                            (long long)(it.n / x->nodes));
+        x->nt = it.n / x->nodes;
+        x->topo_at = t->at;
+        x->conn = qdc_mallocn((size_t)it.n + 1, sizeof(int32_t));
+        if (!x->conn)
+            return qdc_fail(err, QDC_ENOMEM, "out of memory for %lld tetrahedra",
+                            (long long)x->nt);
+        return item_values(x, it.n, NULL, x->conn, 0, INT32_MAX, NULL, err);
+    }
+    /* a scalar cell attribute: integers become the region */
+    if (it.integer && x->attr_cell_int && (!x->region || x->attr_rank > x->region_rank)) {
+        qdc_free(x->region);
+        x->region = qdc_mallocn((size_t)it.n + 1, sizeof(int32_t));
+        if (!x->region)
+            return qdc_fail(err, QDC_ENOMEM, "out of memory for the regions");
+        x->nreg = it.n;
+        x->region_rank = x->attr_rank;
+        x->reg_at = t->at;
+        return item_values(x, it.n, NULL, x->region, INT32_MIN, INT32_MAX, NULL, err);
+    }
+    return QDC_OK; /* skipped with the rest of the element */
+}
+
+/* A DataItem of a tag grid (after the mesh); *read as for mesh_item. */
+static qdc_status tags_item(xd *x, const xtag *t, int parent, int *read, qdc_error *err)
+{
+    item it;
+    vec *v = parent == K_TOPO ? &x->ts.tets : &x->ts.vals;
+    qdc_status st;
+
+    *read = 0;
+    if (t->empty)
+        return QDC_OK;
+    st = item_read(x, t, &it, err);
+    if (st != QDC_OK)
+        return st;
+    if (!it.integer || it.n > INT32_MAX || (parent == K_TOPO && it.n % 4))
+        return QDC_OK;
+    *read = 1;
+    if (vec_grow(v, (size_t)it.n + 1) != 0)
+        return qdc_fail(err, QDC_ENOMEM, "out of memory for the tags");
+    st = item_values(x, it.n, NULL, (int32_t *)v->a + v->n, parent == K_TOPO ? 0 : INT32_MIN,
+                     INT32_MAX, NULL, err);
+    if (st == QDC_OK)
+        v->n += (size_t)it.n;
+    return st;
+}
+
+/* The region of the tets a tag grid lists (dolfinx MeshTags), by their
+ * sorted corners. */
+static int cmp_key4(const void *a, const void *b)
+{
+    const int32_t *p = a, *q = b;
+
+    for (int k = 0; k < 5; k++)
+        if (p[k] != q[k])
+            return p[k] < q[k] ? -1 : 1;
+    return 0;
+}
+
+static void sort4(int32_t *k)
+{
+    for (int i = 1; i < 4; i++)
+        for (int j = i; j > 0 && k[j - 1] > k[j]; j--) {
+            int32_t tmp = k[j];
+            k[j] = k[j - 1];
+            k[j - 1] = tmp;
+        }
+}
+
+static qdc_status tags_apply(xd *x, qdc_error *err)
+{
+    size_t n = x->ts.tets.n / 4;
+    int32_t *keys;
+    const int32_t *tt = x->ts.tets.a, *tv = x->ts.vals.a;
+
+    if (!x->ts.shares || !n || x->ts.vals.n != n || x->nt <= 0)
+        return QDC_OK;
+    keys = qdc_mallocn(5 * n, sizeof(int32_t));
+    if (!keys)
+        return qdc_fail(err, QDC_ENOMEM, "out of memory for the tags");
+    for (size_t i = 0; i < n; i++) {
+        memcpy(keys + 5 * i, tt + 4 * i, 4 * sizeof(int32_t));
+        sort4(keys + 5 * i);
+        keys[5 * i + 4] = tv[i];
+    }
+    qsort(keys, n, 5 * sizeof(int32_t), cmp_key4);
+    if (!x->region) {
+        x->region = qdc_calloc((size_t)x->nt + 1, sizeof(int32_t));
+        x->nreg = x->nt;
+    }
+    if (!x->region) {
+        qdc_free(keys);
+        return qdc_fail(err, QDC_ENOMEM, "out of memory for the regions");
+    }
+    for (int64_t e = 0; e < x->nt; e++) {
+        int32_t k[4];
+        size_t a = 0, b = n;
+        memcpy(k, x->conn + x->nodes * e, sizeof k);
+        sort4(k);
+        while (a < b) {
+            size_t mid = a + (b - a) / 2;
+            int c = 0;
+            for (int j = 0; j < 4 && !c; j++)
+                c = keys[5 * mid + j] < k[j] ? -1 : keys[5 * mid + j] > k[j];
+            if (!c) {
+                x->region[e] = keys[5 * mid + 4];
+                break;
+            }
+            if (c < 0)
+                a = mid + 1;
+            else
+                b = mid;
+        }
+    }
+    qdc_free(keys);
+    return QDC_OK;
+}
+
+static qdc_status xd_start(xd *x, const xtag *t, qdc_error *err)
+{
+    int parent = x->depth ? x->kind[x->depth - 1] : -1, k = K_OTHER;
+    int in_mesh = x->mesh_depth && !x->mesh_done;
+    qdc_status st = QDC_OK;
+
+    if (name_is(t, "Xdmf"))
+        k = K_XDMF;
+    else if (name_is(t, "Grid"))
+        k = K_GRID;
+    else if (name_is(t, "Topology"))
+        k = K_TOPO;
+    else if (name_is(t, "Geometry"))
+        k = K_GEOM;
+    else if (name_is(t, "Attribute"))
+        k = K_ATTR;
+    else if (name_is(t, "DataItem"))
+        k = K_DATA;
+    else if (name_is(t, "xi:include"))
+        k = K_INCLUDE;
+    if (!x->depth && k != K_XDMF)
+        return fail_txt(err, QDC_EPARSE, &x->s, t->at,
+                        "not an XDMF file: the root element is not <Xdmf>");
+    if (x->depth == XD_DEPTH)
+        return fail_txt(err, QDC_EPARSE, &x->s, t->at, "XDMF: elements nested deeper "
+                                                       "than %d",
+                        XD_DEPTH);
+    /* the mesh: the first grid with a topology or geometry */
+    if ((k == K_TOPO || k == K_GEOM) && parent == K_GRID && !x->mesh_depth) {
+        x->mesh_depth = x->depth;
+        in_mesh = 1;
+    }
+    if (in_mesh && x->depth == x->mesh_depth && k == K_TOPO) {
+        if (x->nodes)
+            return fail_txt(err, QDC_EFORMAT, &x->s, t->at,
+                            "XDMF: a second Topology in the mesh's Grid");
+        st = topo_start(x, t, &x->nodes, err);
+    } else if (in_mesh && x->depth == x->mesh_depth && k == K_GEOM) {
+        char type[16];
+        st = attr_text(x, t, "GeometryType", "Type", "XYZ", type, sizeof type, err);
+        if (st == QDC_OK && strcasecmp(type, "XYZ") != 0)
+            st = fail_txt(err, QDC_EFORMAT, &x->s, t->at,
+                          "XDMF: Geometry %s: qdc reads XYZ (three coordinates a point)",
+                          type);
+    } else if (in_mesh && x->depth == x->mesh_depth && k == K_ATTR) {
+        char center[16], type[16];
+        st = attr_text(x, t, "Center", NULL, "Node", center, sizeof center, err);
+        if (st == QDC_OK)
+            st = attr_text(x, t, "AttributeType", NULL, "Scalar", type, sizeof type, err);
+        x->attr_cell_int = strcasecmp(center, "Cell") == 0 && strcasecmp(type, "Scalar") == 0;
+        x->attr_rank = region_rank(t);
+    } else if (in_mesh && x->depth == x->mesh_depth + 1 && k == K_DATA &&
+               (parent == K_TOPO || parent == K_GEOM || parent == K_ATTR)) {
+        int read = 0;
+        st = mesh_item(x, t, parent, &read, err);
+        if (read)
+            k = -1; /* its end tag was read with the values */
+    } else if (in_mesh && x->depth > x->mesh_depth && k == K_INCLUDE &&
+               (parent == K_TOPO || parent == K_GEOM)) {
+        st = fail_txt(err, QDC_EFORMAT, &x->s, t->at,
+                      "XDMF: the mesh's Topology or Geometry by reference (xi:include)");
+    } else if (in_mesh && x->depth == x->mesh_depth && k == K_INCLUDE) {
+        st = fail_txt(err, QDC_EFORMAT, &x->s, t->at,
+                      "XDMF: part of the mesh's Grid by reference (xi:include)");
+    } else if (x->mesh_done && k == K_GRID && !x->ts_depth) {
+        x->ts_depth = x->depth + 1;
+        x->ts.tets.n = x->ts.vals.n = 0;
+        x->ts.shares = x->ts_topo = x->ts_attr = 0;
+    } else if (x->ts_depth && x->depth == x->ts_depth) {
+        if (k == K_INCLUDE)
+            x->ts.shares = 1;
+        if (k == K_TOPO) {
+            int nodes = 0;
+            x->ts_topo = topo_start(x, t, &nodes, NULL) == QDC_OK && nodes == 4;
+        }
+        if (k == K_ATTR) {
+            char center[16];
+            x->ts_attr = xattr_str(t, "Center", NULL, center, sizeof center) == 1 &&
+                         strcasecmp(center, "Cell") == 0;
+        }
+    } else if (x->ts_depth && x->depth == x->ts_depth + 1 && k == K_DATA &&
+               ((parent == K_TOPO && x->ts_topo && !x->ts.tets.n) ||
+                (parent == K_ATTR && x->ts_attr && !x->ts.vals.n))) {
+        int read = 0;
+        st = tags_item(x, t, parent, &read, err);
+        if (read)
+            k = -1;
+    }
+    if (st != QDC_OK || t->empty || k < 0)
+        return st;
+    x->name[x->depth] = t->n;
+    x->name_end[x->depth] = t->ne;
+    x->kind[x->depth++] = k;
+    return QDC_OK;
+}
+
+static qdc_status xd_end(xd *x, const xtag *t, qdc_error *err)
+{
+    size_t n;
+
+    if (!x->depth)
+        return fail_txt(err, QDC_EPARSE, &x->s, t->at, "XDMF: an end tag with no element");
+    x->depth--;
+    n = (size_t)(x->name_end[x->depth] - x->name[x->depth]);
+    if ((size_t)(t->ne - t->n) != n || memcmp(t->n, x->name[x->depth], n) != 0)
+        return fail_txt(err, QDC_EPARSE, &x->s, t->at, "XDMF: expected </%.*s>",
+                        n > 24 ? 24 : (int)n, x->name[x->depth]);
+    if (x->kind[x->depth] == K_GRID && x->mesh_depth == x->depth + 1 && !x->mesh_done)
+        x->mesh_done = 1;
+    if (x->kind[x->depth] == K_GRID && x->ts_depth == x->depth + 1) {
+        qdc_status st = tags_apply(x, err);
+        x->ts_depth = 0;
+        if (st != QDC_OK)
+            return st;
+    }
+    return QDC_OK;
+}
+
+static void xd_free(xd *x)
+{
+    qdc_free(x->xyz);
+    qdc_free(x->conn);
+    qdc_free(x->region);
+    vec_free(&x->ts.tets);
+    vec_free(&x->ts.vals);
+}
+
+/* The mesh from what was read: indices checked, corners and mid-edge nodes
+ * apart. */
+static qdc_status xd_mesh(xd *x, mesh_t **out, qdc_error *err)
+{
+    parsed pm;
+    int64_t bad;
+    qdc_status st;
+
+    if (x->nv < 0 || x->nt < 0)
+        return qdc_fail(err, QDC_EPARSE, "XDMF: no %s in the mesh's Grid",
+                        x->nv < 0 ? "Geometry DataItem" : "Topology DataItem");
+    bad = first_bad_index(x->conn, x->nt * x->nodes, x->nv);
+    if (bad >= 0) {
+        txt_locate(&x->s, x->topo_at);
+        st = fail_txt(err, QDC_EPARSE, &x->s, x->topo_at,
+                      "XDMF: tetrahedron %lld: vertex %d out of range [0, %lld)",
+                      (long long)(bad / x->nodes), (int)x->conn[bad], (long long)x->nv);
+        set_index(err, "tet", bad / x->nodes);
+        return st;
+    }
+    if (x->region && x->nreg != x->nt) {
+        txt_locate(&x->s, x->reg_at);
+        return fail_txt(err, QDC_EPARSE, &x->s, x->reg_at,
+                        "XDMF: cell attribute of %lld values for %lld tetrahedra",
+                        (long long)x->nreg, (long long)x->nt);
+    }
+    parsed_init(&pm);
+    pm.nv = x->nv;
+    pm.nt = x->nt;
+    pm.xyz = x->xyz;
+    x->xyz = NULL;
+    pm.region = x->region;
+    x->region = NULL;
+    if (x->nodes == 4) {
+        pm.tets = x->conn;
+        x->conn = NULL;
+    } else {
+        pm.tets = qdc_mallocn((size_t)x->nt * 4 + 1, sizeof(int32_t));
+        pm.mid = qdc_mallocn((size_t)x->nt * 6 + 1, sizeof(int32_t));
+        if (!pm.tets || !pm.mid) {
+            parsed_free(&pm);
+            return qdc_fail(err, QDC_ENOMEM, "out of memory for %lld tetrahedra",
+                            (long long)x->nt);
+        }
+        for (int64_t e = 0; e < x->nt; e++) {
+            memcpy(pm.tets + 4 * e, x->conn + 10 * e, 4 * sizeof(int32_t));
+            memcpy(pm.mid + 6 * e, x->conn + 10 * e + 4, 6 * sizeof(int32_t));
+        }
+    }
+    return parsed_mesh_move(&pm, out, err);
+}
+
+static qdc_status read_xdmf(const char *buf, size_t len, const meshio_options *o,
+                            srcrec *rec, mesh_t **out, qdc_error *err)
+{
+    xd x;
+    qdc_status st = QDC_OK;
+
+    memset(&x, 0, sizeof x);
+    x.s = txt_init(buf, len, 0);
+    x.o = o;
+    x.rec = rec;
+    x.nv = x.nt = -1;
+    x.ts.tets.size = x.ts.vals.size = sizeof(int32_t);
+    for (;;) {
+        xtag t;
+        st = xd_tag(&x.s, &t, err);
+        if (st != QDC_OK || !t.at)
+            break;
+        st = t.end ? xd_end(&x, &t, err) : xd_start(&x, &t, err);
+        if (st != QDC_OK)
+            break;
+        if (!x.depth && !t.empty) /* the root closed */
+            break;
+    }
+    if (st == QDC_OK && x.depth)
+        st = fail_txt(err, QDC_EPARSE, &x.s, x.s.end, "XDMF: ends inside an element");
+    if (st == QDC_OK) {
+        xtag t;
+        st = xd_tag(&x.s, &t, err);
+        if (st == QDC_OK && t.at)
+            st = fail_txt(err, QDC_EPARSE, &x.s, t.at, "XDMF: markup after </Xdmf>");
+    }
+    if (st == QDC_OK)
+        st = xd_mesh(&x, out, err);
+    if (st != QDC_OK && rec)
+        rec->kind = SRC_NONE;
+    xd_free(&x);
+    return st;
+}
+
+/* ------------------------------------------------------------------------ */
+/* Writing: XDMF 3, inline                                                   */
+
+static qdc_status write_xdmf(const mesh_t *m, meshio_format fmt, int part, wbuf *w,
+                             qdc_error *err)
+{
+    qdc_status st = check_for_write(m, err);
+    int nodes = m->mid ? 10 : 4;
+
+    (void)fmt;
+    (void)part;
+    if (st != QDC_OK)
+        return st;
+    wb_str(w, "<?xml version=\"1.0\"?>\n<Xdmf Version=\"3.0\">\n<Domain>\n"
+              "<Grid Name=\"mesh\" GridType=\"Uniform\">\n"
+              "<Geometry GeometryType=\"XYZ\">\n<DataItem DataType=\"Float\" "
+              "Dimensions=\"");
+    wb_int(w, m->nv);
+    wb_str(w, " 3\" Format=\"XML\" Precision=\"8\">\n");
+    for (int32_t v = 0; v < m->nv; v++)
+        wb_reals(w, m->xyz + 3 * (size_t)v, 3, " ", "\n");
+    wb_str(w, "</DataItem>\n</Geometry>\n<Topology TopologyType=\"");
+    wb_str(w, m->mid ? "Tetrahedron_10" : "Tetrahedron");
+    wb_str(w, "\" NumberOfElements=\"");
+    wb_int(w, m->nt);
+    wb_str(w, "\" NodesPerElement=\"");
+    wb_int(w, nodes);
+    wb_str(w, "\">\n<DataItem DataType=\"Int\" Dimensions=\"");
+    wb_int(w, m->nt);
+    wb_str(w, m->mid ? " 10" : " 4");
+    wb_str(w, "\" Format=\"XML\" Precision=\"4\">\n");
+    for (int32_t t = 0; t < m->nt; t++) {
+        wb_ints(w, m->tets + 4 * (size_t)t, 4, 0, " ", m->mid ? " " : "\n");
+        if (m->mid)
+            wb_ints(w, m->mid + 6 * (size_t)t, 6, 0, " ", "\n");
+    }
+    wb_str(w, "</DataItem>\n</Topology>\n");
+    if (m->region) {
+        wb_str(w, "<Attribute Name=\"region\" AttributeType=\"Scalar\" Center=\"Cell\">\n"
+                  "<DataItem DataType=\"Int\" Dimensions=\"");
+        wb_int(w, m->nt);
+        wb_str(w, "\" Format=\"XML\" Precision=\"4\">\n");
+        for (int32_t t = 0; t < m->nt; t++)
+            wb_ints(w, m->region + t, 1, 0, "", "\n");
+        wb_str(w, "</DataItem>\n</Attribute>\n");
+    }
+    wb_str(w, "</Grid>\n</Domain>\n</Xdmf>\n");
+    return QDC_OK;
+}
+
+/* "<Xdmf" as the first element, after an XML declaration, comments or a
+ * DOCTYPE, in the first kB. */
+static meshio_format sniff_xdmf(const char *buf, size_t len, size_t i)
+{
+    static const char tag[] = "<Xdmf";
+    size_t lim = len - i < 1024 ? len : i + 1024;
+
+    if (i >= len || buf[i] != '<')
+        return MESHIO_AUTO;
+    for (size_t k = i; k + sizeof tag - 1 < lim; k++)
+        if (buf[k] == '<' && memcmp(buf + k, tag, sizeof tag - 1) == 0 &&
+            !is_name((unsigned char)buf[k + sizeof tag - 1]))
+            return MESHIO_XDMF;
+    return MESHIO_AUTO;
+}
+
+const meshio_fmt fmt_xdmf = {
+    .name = "xdmf",
+    .aliases = "xmf",
+    .about = "XDMF 2/3, tetrahedra with the data inline (XML; HDF5 heavy data refused)",
+    .ext = "xdmf",
+    .input = "input.xdmf",
+    .sniff = sniff_xdmf,
+    .read = read_xdmf,
+    .write = write_xdmf,
+    .splices = 1,
+    .p2 = 1,
+};
