@@ -4,8 +4,9 @@
 # (MSH 4.1 ASCII/binary, 4.0, 2.2 ASCII/binary, VTK, Medit), meshio (VTU zlib and ascii, legacy
 # VTK binary and ascii, DOLFIN XML, Abaqus, Netgen, Medit binary), a VTK-style appended zlib
 # VTU, a CalculiX-style .inp, TetGen (0-based), Gmsh's second-order (10-node) tets in
-# MSH 4.1 and Abaqus .inp, Nastran bulk data (Gmsh's and meshio's, free, small and large
-# field) and I-DEAS universal (Gmsh)
+# MSH 4.1, Abaqus .inp, Nastran (10-node CTETRA, Gmsh's and meshio's) and I-DEAS (FE 118),
+# Nastran bulk data (Gmsh's and meshio's, free, small and large field) and I-DEAS
+# universal (Gmsh)
 # from tests/data/real. tests/tools/splicecheck.py masks the coordinate
 # fields with its own parsers and compares the rest byte for byte, then reads
 # both files with meshio (same cells, cell/point/field data) and compares the
@@ -22,7 +23,8 @@ done
 files="gmsh41.msh gmsh41_bin.msh gmsh22.msh gmsh22_bin.msh gmsh40.msh gmsh.vtk gmsh.mesh meshio_zlib.vtu meshio_ascii.vtu
 meshio_bin.vtk meshio_ascii.vtk vtk_appended_zlib.vtu tetgen.node dolfin.xml meshio.inp calculix.inp
 meshio.vol meshio.meshb gmsh_msh1.msh gmsh41_p2.msh gmsh_p2.inp gmsh.bdf gmsh_free.bdf gmsh_large.bdf
-gmsh.unv meshio_free.bdf meshio_small.nas meshio_large.bdf"
+gmsh.unv meshio_free.bdf meshio_small.nas meshio_large.bdf gmsh_p2.bdf gmsh_large_p2.bdf
+gmsh_p2.unv meshio_p2.bdf"
 for f in $files; do
     base=${f%%.*}
     ext=${f#*.}

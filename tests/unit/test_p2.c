@@ -65,7 +65,7 @@ static void put(txtbuf *t, const char *fmt, ...)
     va_end(ap);
 }
 
-enum { F_GMSH22, F_GMSH41, F_VTK, F_VTU, F_MEDIT, F_INP };
+enum { F_GMSH22, F_GMSH41, F_VTK, F_VTU, F_MEDIT, F_INP, F_BDF, F_UNV };
 
 /* The straight tet as a file of format f, its mid-edge nodes in order. */
 static void write_tet(txtbuf *t, int f, const int order[6])
@@ -130,6 +130,25 @@ static void write_tet(txtbuf *t, int f, const int order[6])
         for (int k = 0; k < 10; k++)
             put(t, "%d ", el[k] + 1);
         put(t, "3\nEnd\n");
+    } else if (f == F_BDF) { /* small field, the CTETRA continued */
+        put(t, "BEGIN BULK\n");
+        for (int j = 0; j < 10; j++)
+            put(t, "GRID    %-8d        %-8.5g%-8.5g%-8.5g\n", 101 + j, x[perm[j]][0],
+                x[perm[j]][1], x[perm[j]][2]);
+        put(t, "CTETRA  1       1       ");
+        for (int k = 0; k < 10; k++)
+            put(t, "%-8d%s", 101 + el[k], k == 5 ? "+\n+       " : "");
+        put(t, "\nENDDATA\n");
+    } else if (f == F_UNV) { /* corners and mid-edge nodes interleaved */
+        static const int slot[10] = {0, 4, 1, 5, 2, 6, 7, 8, 9, 3};
+        put(t, "    -1\n  2411\n");
+        for (int j = 0; j < 10; j++)
+            put(t, "%10d%10d%10d%10d\n%25.16E%25.16E%25.16E\n", 101 + j, 1, 1, 11,
+                x[perm[j]][0], x[perm[j]][1], x[perm[j]][2]);
+        put(t, "    -1\n    -1\n  2412\n%10d%10d%10d%10d%10d%10d\n", 1, 118, 1, 1, 7, 10);
+        for (int k = 0; k < 10; k++)
+            put(t, "%10d%s", 101 + el[slot[k]], k == 7 || k == 9 ? "\n" : "");
+        put(t, "    -1\n");
     } else {
         put(t, "*HEADING\nt\n*NODE\n");
         for (int j = 0; j < 10; j++)
@@ -167,7 +186,9 @@ static double mid_offset(const mesh_t *m)
 TEST(each_format_puts_mid_nodes_on_their_edges)
 {
     /* each format's documented order: Gmsh (manual, "node ordering"): 01 12 20
-     * 30 32 31; VTK_QUADRATIC_TETRA and Abaqus C3D10: 01 12 20 03 13 23 */
+     * 30 32 31; VTK_QUADRATIC_TETRA, Abaqus C3D10 and Nastran CTETRA (G5-G10:
+     * edges 1-2, 2-3, 3-1, 1-4, 2-4, 3-4): 01 12 20 03 13 23; I-DEAS FE 118
+     * the same, interleaved with the corners (write_tet) */
     static const int gmsh[6] = {0, 1, 2, 3, 5, 4}, vtk[6] = {0, 1, 2, 3, 4, 5};
     static const struct {
         int f;
@@ -175,7 +196,8 @@ TEST(each_format_puts_mid_nodes_on_their_edges)
         const int *order;
     } cases[] = {{F_GMSH22, MESHIO_GMSH22, gmsh}, {F_GMSH41, MESHIO_GMSH41, gmsh},
                  {F_VTK, MESHIO_VTK_ASCII, vtk},  {F_VTU, MESHIO_VTU_ASCII, vtk},
-                 {F_MEDIT, MESHIO_MEDIT, vtk},    {F_INP, MESHIO_ABAQUS, vtk}};
+                 {F_MEDIT, MESHIO_MEDIT, vtk},    {F_INP, MESHIO_ABAQUS, vtk},
+                 {F_BDF, MESHIO_BDF, vtk},        {F_UNV, MESHIO_UNV, vtk}};
     txtbuf t;
     qdc_error err;
 
