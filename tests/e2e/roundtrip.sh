@@ -5,6 +5,7 @@
 # VTK binary and ascii, DOLFIN XML, Abaqus, Netgen, Medit binary), a VTK-style appended zlib
 # VTU, a CalculiX-style .inp, TetGen (0-based), Gmsh's second-order (10-node) tets in
 # MSH 4.1, Abaqus .inp, Nastran (10-node CTETRA, Gmsh's and meshio's) and I-DEAS (FE 118),
+# Netgen's own second-order .vol,
 # Nastran bulk data (Gmsh's and meshio's, free, small and large field) and I-DEAS
 # universal (Gmsh)
 # from tests/data/real. tests/tools/splicecheck.py masks the coordinate
@@ -24,7 +25,7 @@ files="gmsh41.msh gmsh41_bin.msh gmsh22.msh gmsh22_bin.msh gmsh40.msh gmsh.vtk g
 meshio_bin.vtk meshio_ascii.vtk vtk_appended_zlib.vtu tetgen.node dolfin.xml meshio.inp calculix.inp
 meshio.vol meshio.meshb gmsh_msh1.msh gmsh41_p2.msh gmsh_p2.inp gmsh.bdf gmsh_free.bdf gmsh_large.bdf
 gmsh.unv meshio_free.bdf meshio_small.nas meshio_large.bdf gmsh_p2.bdf gmsh_large_p2.bdf
-gmsh_p2.unv meshio_p2.bdf"
+gmsh_p2.unv meshio_p2.bdf netgen_p2.vol"
 for f in $files; do
     base=${f%%.*}
     ext=${f#*.}

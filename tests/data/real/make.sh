@@ -1,7 +1,7 @@
 #!/bin/sh
 # make.sh - regenerate the files of tests/data/real (see README.md) with the
 # tools that write them: gmsh (the gmsh Debian package, 4.8), meshio (python3-meshio,
-# 5.0) and tetgen (the tetgen package, 1.6). Run from anywhere:
+# 5.0), netgen (python3-netgen) and tetgen (the tetgen package, 1.6). Run from anywhere:
 #   sh tests/data/real/make.sh
 # Each file is stored gzip-compressed (gzip -n: no name or time, so a rerun with the
 # same tool versions gives the same bytes).
@@ -239,12 +239,25 @@ tetgen -pq1.4aAzQ box.poly
 mv box.1.node tetgen.node
 mv box.1.ele tetgen.ele
 
+# Netgen's own second-order mesh (python3-netgen): a CSG unit sphere, maxh
+# 0.5, mesh.SecondOrder() (10-point volume elements, 6-point surface elements
+# with the new points on the sphere) and Save.
+/usr/bin/python3 - <<'EOF' > /dev/null
+from netgen.csg import CSGeometry, Pnt, Sphere
+geo = CSGeometry()
+geo.Add(Sphere(Pnt(0, 0, 0), 1).bc("skin"))
+mesh = geo.GenerateMesh(maxh=0.5)
+mesh.SecondOrder()
+mesh.Save("netgen_p2.vol")
+EOF
+
 for f in gmsh41.msh gmsh41_bin.msh gmsh22.msh gmsh22_bin.msh gmsh40.msh gmsh.vtk gmsh.mesh meshio_zlib.vtu \
     meshio_ascii.vtu meshio_bin.vtk meshio_ascii.vtk vtk_appended_zlib.vtu tetgen.node \
     tetgen.ele dolfin.xml meshio.inp calculix.inp meshio.vol meshio.meshb periodic41.msh \
     periodic41_bin.msh periodic40.msh periodic22.msh periodic22_bin.msh gmsh41_p2.msh gmsh_p2.inp \
     gmsh_msh1.msh gmsh.bdf gmsh_free.bdf gmsh_large.bdf gmsh.unv meshio_free.bdf meshio_small.nas \
-    meshio_large.bdf gmsh_p2.bdf gmsh_large_p2.bdf gmsh_p2.unv meshio_p2.bdf; do
+    meshio_large.bdf gmsh_p2.bdf gmsh_large_p2.bdf gmsh_p2.unv meshio_p2.bdf \
+    netgen_p2.vol; do
     gzip -n -9 -c "$f" > "$here/$f.gz"
 done
 ls -l "$here"
