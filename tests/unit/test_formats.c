@@ -996,11 +996,14 @@ TEST(names_sniffing_media_types)
  * are printed. Measured with two busy loops beside other work (load 11-25 on
  * 2 cores): ASCII 1.5-6.2, gmsh22-bin and meshb 1.0-1.6, gmsh40, DOLFIN,
  * Abaqus and Netgen 2.4-8.1, gmsh-bin 0.8-1.1; the limits leave 2-3 times that
- * (the former floors were 25, 250 and 50 MB/s and 46 MB in 1 s). */
+ * (the former floors were 25, 250 and 50 MB/s and 46 MB in 1 s). DOLFIN XML
+ * at load 15-20: 2.7 (127 MB/s; 5.45 and 41 MB/s before its reader stopped
+ * formatting a message per attribute): its own limit, below the old ratio. */
 #define ASCII_RATIO 15
 #define GMSH41_BIN_RATIO 3
 #define BIN_RATIO 3
 #define TEXT_RATIO 20
+#define DOLFIN_RATIO 5
 
 TEST(dev_speed_ascii)
 {
@@ -1079,9 +1082,9 @@ TEST(new_formats_1m_tets_speed)
         if (fs[k] != MESHIO_NETGEN) /* %22.16f rounds */
             ASSERT_TRUE(memcmp(b->xyz, m->xyz, 24 * (size_t)nv) == 0);
 #if !defined(__SANITIZE_ADDRESS__)
-        ASSERT_TRUE(r <= (fs[k] == MESHIO_GMSH22_BIN || fs[k] == MESHIO_MESHB
-                              ? BIN_RATIO
-                              : TEXT_RATIO));
+        ASSERT_TRUE(r <= (fs[k] == MESHIO_GMSH22_BIN || fs[k] == MESHIO_MESHB ? BIN_RATIO
+                          : fs[k] == MESHIO_DOLFIN ? DOLFIN_RATIO
+                                                   : TEXT_RATIO));
 #endif
         mesh_free(b);
         free(s.b);
