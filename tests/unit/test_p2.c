@@ -433,22 +433,40 @@ TEST(affine_map_moves_mid_nodes_exactly)
     mesh_free(m);
 }
 
+/* ring(inner) with its coordinate k set to x, its mid-edge nodes then moved
+ * by p2_finish (the run's bound on the surface: bound) against the ring as
+ * it was, which *x0 gets (the caller frees it); NULL if either fails. */
+static mesh_t *ring_moved(const double inner[3], int k, double x, double bound,
+                          opt_result *res, double **x0)
+{
+    mesh_t *m = ring(inner);
+
+    *x0 = m ? malloc(3 * sizeof(double) * (size_t)m->nv) : NULL;
+    if (!*x0) {
+        mesh_free(m);
+        return NULL;
+    }
+    memcpy(*x0, m->xyz, 3 * sizeof(double) * (size_t)m->nv);
+    m->xyz[k] = x;
+    memset(res, 0, sizeof *res);
+    res->hausd_bound = bound;
+    if (p2_finish(m, *x0, res, NULL) != QDC_OK) {
+        mesh_free(m);
+        return NULL;
+    }
+    return m;
+}
+
 TEST(boundary_mid_nodes_stay_on_the_input_surface)
 {
     /* apex a moved 0.1 inside, within the run's bound of 0.2 of the input's
      * surface: the mid-edge nodes of its edges go back onto that surface */
     const double inner[3] = {0, 0, 0.1};
-    mesh_t *m = ring(inner);
-    double *x0;
+    double *x0 = NULL;
     opt_result res;
+    mesh_t *m = ring_moved(inner, 2, -0.9, 0.2, &res, &x0);
 
     ASSERT_TRUE(m != NULL);
-    x0 = malloc(3 * sizeof(double) * (size_t)m->nv);
-    memcpy(x0, m->xyz, 3 * sizeof(double) * (size_t)m->nv);
-    m->xyz[2] = -0.9;
-    memset(&res, 0, sizeof res);
-    res.hausd_bound = 0.2;
-    ASSERT_OK(p2_finish(m, x0, &res, NULL));
     ASSERT_TRUE(res.p2_bd_mid_dist < 1e-12);
     ASSERT_EQ_INT(res.p2_bad_out, 0);
     /* a corner left alone keeps its edges' nodes where they were */
@@ -469,16 +487,11 @@ TEST(non_affine_move_straightens_until_positive)
     /* ab bent far toward p0; p0 then moved next to the axis: the mapped
      * offset would put ab's node outside the tets at p0 */
     const double inner[3] = {0.25, 0, 0};
-    mesh_t *m = ring(inner);
-    double *x0;
+    double *x0 = NULL;
     opt_result res;
+    mesh_t *m = ring_moved(inner, 3 * 2, 0.12, 0, &res, &x0);
 
     ASSERT_TRUE(m != NULL);
-    x0 = malloc(3 * sizeof(double) * (size_t)m->nv);
-    memcpy(x0, m->xyz, 3 * sizeof(double) * (size_t)m->nv);
-    m->xyz[3 * 2] = 0.12;
-    memset(&res, 0, sizeof res);
-    ASSERT_OK(p2_finish(m, x0, &res, NULL));
     ASSERT_EQ_INT(res.p2_bad_in, 0);
     ASSERT_EQ_INT(res.p2_bad_out, 0);
     ASSERT_TRUE(res.p2_pulled > 0);
