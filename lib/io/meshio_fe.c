@@ -737,6 +737,8 @@ static qdc_status inp_node(txt *s, const char *p, const char *eol, inp *a, srcre
         if (out || t == te) {
             x[k] = 0;
             off[k] = (out ? end | SRC_COMMA : (uint64_t)(t - s->base)) | SRC_BLANK;
+            if (!out) /* a coordinate left out after it goes past this field */
+                end = (uint64_t)(te - s->base);
             continue;
         }
         st = num_at(s, t, te, "*NODE: coordinate", &x[k], err);

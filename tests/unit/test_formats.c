@@ -842,6 +842,20 @@ TEST(abaqus_missing_coordinates)
     ASSERT_TRUE(strstr(s.b, "*ELEMENT, TYPE=C3D4, ELSET=E\n1, 1, 2, 3, 4\n") != NULL);
     mesh_free(b);
     mesh_free(m);
+    /* x blank, then y and z left out after a trailing comma (a fuzz crash:
+     * z's place was put before y's) */
+    inp = "*NODE\n1,,\n2, 1, 0, 0\n3, 0, 1, 0\n4, 0, 0, 1\n*ELEMENT, TYPE=C3D4\n1, 1, 2, "
+          "3, 4\n";
+    ASSERT_OK(meshio_read_ex(inp, strlen(inp), MESHIO_AUTO, &o, &m, &err));
+    m->xyz[0] = 0.5;
+    m->xyz[1] = 0.25;
+    m->xyz[2] = -0.125;
+    s.n = 0;
+    ASSERT_OK(meshio_write(m, MESHIO_AUTO, sink_write, &s, &err));
+    ASSERT_OK(meshio_read(s.b, s.n, MESHIO_ABAQUS, &b, &err));
+    ASSERT_TRUE(memcmp(b->xyz, m->xyz, 12 * sizeof(double)) == 0);
+    mesh_free(b);
+    mesh_free(m);
     free(s.b);
 }
 
