@@ -7,14 +7,16 @@
  * after the 8-character name, the continuation line starting with '*') or
  * free (separated by commas, at most 8 data fields a line, 4 for a large
  * card). Read: GRID (ID, CP, X1-X3, CD; CP 0 or blank, the basic system, as
- * other systems would need their CORD cards), CTETRA with 4 nodes (PID as
- * region) and CTRIA3 (PID as tri_ref); everything else is kept, and written
+ * other systems would need their CORD cards), CTETRA with 4 nodes or 10
+ * (second order: mesh_t.mid; PID as region) and CTRIA3 and CTRIA6 (their
+ * corners, PID as tri_ref); everything else is kept, and written
  * back unchanged: only the GRID coordinate fields are rewritten, each in its
  * own width (splice.c, SRC_FIELD). Reals take Nastran's short forms, "1.-3"
  * (1e-3) and "-.5+2" (-50), and the D exponent. Lines before BEGIN BULK
  * (executive and case control) and after ENDDATA are skipped. */
 #include "io/format.h"
 
+#include <stdio.h>
 #include <string.h>
 
 enum { BDF_FIELDS = 16 }; /* data fields kept of a card: CTETRA has 12 */
@@ -192,32 +194,56 @@ static qdc_status bdf_grid(bdf *b, qdc_error *err)
     return lab_node(&b->l, id, x, off, err);
 }
 
-/* CTETRA (n 4) or CTRIA3 (n 3): element id, PID, n node ids. */
+/* Where field k is, for an error there. */
+static const char *at_field(bdf *b, int k)
+{
+    b->s.line = b->f[k].line;
+    b->s.bol = b->f[k].bol;
+    return b->f[k].t;
+}
+
+/* CTETRA (n 4: G1-G4, or all of G1-G10: the mid-side nodes of edges 1-2,
+ * 2-3, 3-1, 1-4, 2-4, 3-4, the order of mesh_p2_edges), CTRIA3 (n 3) or
+ * CTRIA6 (n 6: its corners read, G4-G6 may be blank): element id, PID, the
+ * node ids. */
 static qdc_status bdf_element(bdf *b, int n, const char *at, qdc_error *err)
 {
-    int64_t eid, pid, g[4];
-    static const char *const what[2][3] = {
-        {"CTETRA: EID", "CTETRA: PID", "CTETRA: node"},
-        {"CTRIA3: EID", "CTRIA3: PID", "CTRIA3: node"}};
+    int64_t eid, pid, g[10];
+    int tri = n != 4, mids = 0, last = 2 + (tri ? n : 10);
+    const char *name = !tri ? "CTETRA" : n == 3 ? "CTRIA3" : "CTRIA6";
+    char what[3][16];
     qdc_status st;
 
-    st = field_int(b, 0, what[n == 3][0], 1, INT64_MAX, -1, &eid, err);
+    snprintf(what[0], sizeof what[0], "%s: EID", name);
+    snprintf(what[1], sizeof what[1], "%s: PID", name);
+    snprintf(what[2], sizeof what[2], "%s: node", name);
+    st = field_int(b, 0, what[0], 1, INT64_MAX, -1, &eid, err);
     if (st == QDC_OK)
-        st = field_int(b, 1, what[n == 3][1], 0, INT32_MAX, 0, &pid, err);
+        st = field_int(b, 1, what[1], 0, INT32_MAX, 0, &pid, err);
+    for (int k = last; k < b->nf && st == QDC_OK; k++)
+        if (b->f[k].t != b->f[k].te)
+            return fail_txt(err, QDC_EFORMAT, &b->s, at_field(b, k),
+                            "%s %lld: more than %d nodes", name, (long long)eid,
+                            last - 2);
+    for (int k = 6; !tri && k < last && k < b->nf; k++)
+        mids += b->f[k].t != b->f[k].te;
+    if (st == QDC_OK && mids && mids < 6)
+        return fail_txt(err, QDC_EFORMAT, &b->s, at_field(b, 6),
+                        "CTETRA %lld: the mid-side nodes G5-G10 must be all given (10 "
+                        "nodes) or all left out (4 nodes)",
+                        (long long)eid);
+    n = mids ? 10 : n;
     for (int k = 0; k < n && st == QDC_OK; k++)
-        st = field_int(b, 2 + k, what[n == 3][2], 1, INT32_MAX, -1, &g[k], err);
+        st = field_int(b, 2 + k, what[2], k < 3 || !tri ? 1 : 0, INT32_MAX,
+                       k < 3 || !tri ? -1 : 0, &g[k], err);
+    if (st == QDC_OK && !tri && lab_mixed(&b->l, n))
+        return fail_txt(err, QDC_EFORMAT, &b->s, at_field(b, 0),
+                        "CTETRA %lld: 4-node and 10-node CTETRA in one file are not "
+                        "supported",
+                        (long long)eid);
     if (st != QDC_OK)
         return st;
-    for (int k = 2 + n; n == 4 && k < b->nf; k++)
-        if (b->f[k].t != b->f[k].te) {
-            b->s.line = b->f[k].line;
-            b->s.bol = b->f[k].bol;
-            return fail_txt(err, QDC_EFORMAT, &b->s, b->f[k].t,
-                            "CTETRA %lld: second-order CTETRA (10 nodes) is not "
-                            "supported yet",
-                            (long long)eid);
-        }
-    return lab_elem(&b->l, n == 3, g, (int32_t)pid, 0, at - b->s.base, err);
+    return lab_elem(&b->l, tri, g, (int32_t)pid, 0, at - b->s.base, err);
 }
 
 /* The card name [t, te) of the line at bol (up to 8 characters or a comma);
@@ -233,9 +259,24 @@ static void card_name(const char *bol, const char *eol, const char **te, int *la
     *te = *large ? p - 1 : p;
 }
 
+/* A continuation line at p: its first field a '+' or '*' marker, a comma
+ * (free field), or blank (Gmsh's large-field CTETRA) on a line that is not. */
 static int is_cont(const char *p, const char *end)
 {
-    return p < end && (*p == '+' || *p == '*' || *p == ',');
+    const char *q = p;
+
+    if (p < end && (*p == '+' || *p == '*' || *p == ','))
+        return 1;
+    while (q < end && *q == ' ')
+        q++;
+    return q - p >= 8 && q < end && *q != '\n' && *q != '\r';
+}
+
+/* CTETRA, or "CTETRA_", meshio 5.0's name for the 10-node one (its writer
+ * puts it in the file). */
+static int is_ctetra(const char *name, size_t n)
+{
+    return word_is(name, n, "CTETRA") || word_is(name, n, "CTETRA_");
 }
 
 /* The cards, line by line, into b. */
@@ -281,9 +322,9 @@ static qdc_status bdf_cards(bdf *b, qdc_error *err)
         card_name(p, eol, &nte, &large);
         if (word_is(p, (size_t)(nte - p), "ENDDATA"))
             break;
-        if (word_is(p, (size_t)(nte - p), "GRID") ||
-            word_is(p, (size_t)(nte - p), "CTETRA") ||
-            word_is(p, (size_t)(nte - p), "CTRIA3")) {
+        if (word_is(p, (size_t)(nte - p), "GRID") || is_ctetra(p, (size_t)(nte - p)) ||
+            word_is(p, (size_t)(nte - p), "CTRIA3") ||
+            word_is(p, (size_t)(nte - p), "CTRIA6")) {
             const char *name = p;
             size_t nn = (size_t)(nte - p);
             b->nf = 0;
@@ -298,7 +339,11 @@ static qdc_status bdf_cards(bdf *b, qdc_error *err)
             if (st == QDC_OK && word_is(name, nn, "GRID"))
                 st = bdf_grid(b, err);
             else if (st == QDC_OK)
-                st = bdf_element(b, word_is(name, nn, "CTETRA") ? 4 : 3, card, err);
+                st = bdf_element(b,
+                                 is_ctetra(name, nn)           ? 4
+                                 : word_is(name, nn, "CTRIA3") ? 3
+                                                               : 6,
+                                 card, err);
         } else if (b->other++ == 0) {
             b->other_name = p;
             b->other_len = (size_t)(nte - p);
@@ -327,8 +372,8 @@ static qdc_status read_bdf(const char *buf, size_t len, const meshio_options *o,
         srcrec_refuse(rec, "a GRID card leaves a coordinate field out");
     if (st == QDC_OK && b.other)
         note(o,
-             "Nastran: kept %lld cards not read (%.*s...) unchanged: GRID, CTETRA and "
-             "CTRIA3 are read",
+             "Nastran: kept %lld cards not read (%.*s...) unchanged: GRID, CTETRA, "
+             "CTRIA3 and CTRIA6 are read",
              (long long)b.other, (int)(b.other_len < 16 ? b.other_len : 16),
              b.other_name);
     lab_free(&b.l);
@@ -356,7 +401,8 @@ static meshio_format sniff_bdf(const char *buf, size_t len, size_t i)
 const meshio_fmt fmt_bdf = {
     .name = "bdf",
     .aliases = "nas nastran",
-    .about = "Nastran bulk data: GRID, CTETRA, CTRIA3 (written only spliced)",
+    .about = "Nastran bulk data: GRID, CTETRA (4 or 10 nodes), CTRIA3/6 (written only "
+             "spliced)",
     .ext = "bdf",
     .input = "input.bdf",
     .sniff = sniff_bdf,

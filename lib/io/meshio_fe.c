@@ -192,7 +192,7 @@ static qdc_status xml_tag(txt *s, xtag *t, int *eof, qdc_error *err)
 
     if (st != QDC_OK || *eof)
         return st;
-    memset(t, 0, sizeof *t);
+    t->close = t->empty = t->na = 0; /* the attributes past na are not read */
     t->at = s->p;
     t->line = s->line;
     t->bol = s->bol;
@@ -232,8 +232,10 @@ static qdc_status xml_tag(txt *s, xtag *t, int *eof, qdc_error *err)
 
 static const xattr *xml_attr(const xtag *t, const char *name)
 {
+    size_t n = strlen(name);
+
     for (int i = 0; i < t->na; i++)
-        if (t->a[i].nl == strlen(name) && memcmp(t->a[i].n, name, t->a[i].nl) == 0)
+        if (t->a[i].nl == n && t->a[i].n[0] == name[0] && memcmp(t->a[i].n, name, n) == 0)
             return &t->a[i];
     return NULL;
 }
@@ -248,11 +250,12 @@ static qdc_status xml_need(const txt *s, const xtag *t, const char *name, const 
                            const char **ve, qdc_error *err)
 {
     const xattr *a = xml_attr(t, name);
-    txt e = at_line(s, t->line, t->bol);
 
-    if (!a)
+    if (!a) {
+        txt e = at_line(s, t->line, t->bol);
         return fail_txt(err, QDC_EPARSE, &e, t->at, "<%.*s>: no %s=\"\" attribute",
                         (int)(t->nlen > 32 ? 32 : t->nlen), t->name, name);
+    }
     *v = a->v;
     *ve = a->v + a->vl;
     while (*v < *ve && is_space((unsigned char)**v))
@@ -262,17 +265,25 @@ static qdc_status xml_need(const txt *s, const xtag *t, const char *name, const 
     return QDC_OK;
 }
 
+/* Attribute `name` of t, an integer in [lo, hi]. The message names the
+ * tag and the attribute, written only on failure (a 1M-tet file has 5M of
+ * these). */
 static qdc_status xml_int(const txt *s, const xtag *t, const char *name, int64_t lo,
                           int64_t hi, int64_t *out, qdc_error *err)
 {
     const char *v, *ve;
-    txt e = at_line(s, t->line, t->bol);
+    txt e;
     char what[48];
     qdc_status st = xml_need(s, t, name, &v, &ve, err);
 
+    if (st != QDC_OK)
+        return st;
+    if (parse_int(v, ve, 0, out) == 0 && *out >= lo && *out <= hi)
+        return QDC_OK;
+    e = at_line(s, t->line, t->bol);
     snprintf(what, sizeof what, "<%.*s> %s", (int)(t->nlen > 20 ? 20 : t->nlen), t->name,
              name);
-    return st != QDC_OK ? st : int_at(&e, v, ve, what, lo, hi, out, err);
+    return int_at(&e, v, ve, what, lo, hi, out, err);
 }
 
 typedef struct {
@@ -726,6 +737,8 @@ static qdc_status inp_node(txt *s, const char *p, const char *eol, inp *a, srcre
         if (out || t == te) {
             x[k] = 0;
             off[k] = (out ? end | SRC_COMMA : (uint64_t)(t - s->base)) | SRC_BLANK;
+            if (!out) /* a coordinate left out after it goes past this field */
+                end = (uint64_t)(te - s->base);
             continue;
         }
         st = num_at(s, t, te, "*NODE: coordinate", &x[k], err);
@@ -1006,12 +1019,15 @@ static qdc_status read_abaqus(const char *buf, size_t len, const meshio_options 
 
 typedef struct {
     vec tets, reg, tris, ref; /* int32: 1-based points until checked */
+    vec mid;                  /* int32 x6: second-order tets' mid-edge points */
     vec at_tet, at_tri;       /* uint64: byte offset of each element (errors) */
     int64_t skipped;
+    int np; /* points of the tets read: 0 none yet, 4, 10 */
 } vol;
 
 static void vol_free(vol *g)
 {
+    vec_free(&g->mid);
     vec_free(&g->at_tet);
     vec_free(&g->at_tri);
     vec_free(&g->tets);
@@ -1020,9 +1036,12 @@ static void vol_free(vol *g)
     vec_free(&g->ref);
 }
 
-/* volumeelements: "matnr np p1 .. pnp" */
+/* volumeelements: "matnr np p1 .. pnp"; a tet of np 4, or 10 (second
+ * order: Netgen lists the mid-edge points of edges 01 02 03 12 13 23 after
+ * the corners); all tets of one order. */
 static qdc_status vol_volume(txt *s, vol *g, qdc_error *err)
 {
+    static const int edge[6] = {0, 2, 3, 1, 4, 5}; /* Netgen's to mesh_p2_edges */
     int64_t n, mat = 0, np = 0, v = 0;
     qdc_status st = txt_count(s, "volumeelements", 6, MESH_MAX_TETS, &n, err);
 
@@ -1032,6 +1051,7 @@ static qdc_status vol_volume(txt *s, vol *g, qdc_error *err)
         return qdc_fail(err, QDC_ENOMEM, "out of memory for %lld tets", (long long)n);
     for (int64_t i = 0; i < n && st == QDC_OK; i++) {
         const char *at;
+        int32_t *mid = NULL;
         skip_ws(s);
         ((uint64_t *)g->at_tet.a)[g->at_tet.n] = (uint64_t)(s->p - s->base);
         st = txt_int(s, "volumeelements: material", INT32_MIN, INT32_MAX, &mat, err);
@@ -1039,18 +1059,27 @@ static qdc_status vol_volume(txt *s, vol *g, qdc_error *err)
         at = s->p;
         if (st == QDC_OK)
             st = txt_int(s, "volumeelements: point count", 1, 64, &np, err);
-        if (st == QDC_OK && np == 10)
+        if (st == QDC_OK && (np == 4 || np == 10) && g->np && np != g->np)
             return fail_txt(err, QDC_EFORMAT, s, at,
-                            "volumeelements: second-order tetrahedra (10 points) are not "
-                            "supported");
+                            "volumeelements: linear (4 points) and second-order (10 "
+                            "points) tetrahedra in one mesh are not supported");
+        if (st == QDC_OK && np == 10) {
+            if (vec_grow(&g->mid, 6) != 0)
+                return qdc_fail(err, QDC_ENOMEM, "out of memory for the mid-edge points");
+            mid = (int32_t *)g->mid.a + g->mid.n;
+        }
         for (int64_t k = 0; k < np && st == QDC_OK; k++) {
             st = txt_int(s, "volumeelements: point", 1, INT32_MAX, &v, err);
-            if (st == QDC_OK && np == 4)
+            if (st == QDC_OK && (np == 4 || (np == 10 && k < 4)))
                 ((int32_t *)g->tets.a)[g->tets.n + (size_t)k] = (int32_t)v;
+            else if (st == QDC_OK && np == 10)
+                mid[edge[k - 4]] = (int32_t)v;
         }
         if (st != QDC_OK)
             set_index(err, "tet", i);
-        else if (np == 4) {
+        else if (np == 4 || np == 10) {
+            g->np = (int)np;
+            g->mid.n += np == 10 ? 6 : 0;
             g->at_tet.n++;
             g->tets.n += 4;
             ((int32_t *)g->reg.a)[g->reg.n++] = (int32_t)mat;
@@ -1062,7 +1091,8 @@ static qdc_status vol_volume(txt *s, vol *g, qdc_error *err)
 }
 
 /* surfaceelements[gi|uv]: "surfnr bcnr domin domout np p1 .. pnp" (+ np
- * geometry ints for gi, np u v pairs for uv). */
+ * geometry ints for gi, np u v pairs for uv); a triangle of np 3, or 6
+ * (second order: its corners first, read). */
 static qdc_status vol_surface(txt *s, vol *g, int kind, qdc_error *err)
 {
     int64_t n, v = 0, bc = 0, np = 0;
@@ -1086,7 +1116,7 @@ static qdc_status vol_surface(txt *s, vol *g, int kind, qdc_error *err)
             st = txt_int(s, "surfaceelements: point count", 1, 64, &np, err);
         for (int64_t k = 0; k < np && st == QDC_OK; k++) {
             st = txt_int(s, "surfaceelements: point", 1, INT32_MAX, &v, err);
-            if (st == QDC_OK && np == 3)
+            if (st == QDC_OK && (np == 3 || np == 6) && k < 3)
                 ((int32_t *)g->tris.a)[g->tris.n + (size_t)k] = (int32_t)v;
         }
         for (int64_t k = 0; k < (kind == 1 ? np : 0) && st == QDC_OK; k++)
@@ -1094,7 +1124,7 @@ static qdc_status vol_surface(txt *s, vol *g, int kind, qdc_error *err)
                          err);
         for (int64_t k = 0; k < (kind == 2 ? 2 * np : 0) && st == QDC_OK; k++)
             st = txt_real(s, "surfaceelementsuv: parameter", &x, err);
-        if (st == QDC_OK && np == 3) {
+        if (st == QDC_OK && (np == 3 || np == 6)) {
             g->at_tri.n++;
             g->tris.n += 3;
             ((int32_t *)g->ref.a)[g->ref.n++] = (int32_t)bc;
@@ -1115,7 +1145,7 @@ static qdc_status vol_check(const txt *s, const uint64_t *at, int32_t *idx, size
             fail_txt(err, QDC_EPARSE, &e, e.p,
                      "%s: element %zu: point %d out of range [1, %lld]", what,
                      i / (size_t)k + 1, (int)idx[i], (long long)nv);
-            set_index(err, k == 4 ? "tet" : "triangle", (int64_t)(i / (size_t)k));
+            set_index(err, k == 3 ? "triangle" : "tet", (int64_t)(i / (size_t)k));
             return QDC_EPARSE;
         }
         idx[i]--;
@@ -1214,7 +1244,7 @@ static qdc_status read_netgen(const char *buf, size_t len, const meshio_options 
     qdc_status st;
 
     memset(&g, 0, sizeof g);
-    g.tets.size = g.reg.size = g.tris.size = g.ref.size = sizeof(int32_t);
+    g.tets.size = g.reg.size = g.tris.size = g.ref.size = g.mid.size = sizeof(int32_t);
     g.at_tet.size = g.at_tri.size = sizeof(uint64_t);
     parsed_init(&pm);
     skip_ws(&s);
@@ -1233,6 +1263,8 @@ static qdc_status read_netgen(const char *buf, size_t len, const meshio_options 
         st = vol_check(&s, g.at_tet.a, g.tets.a, g.tets.n, 4, pm.nv, "volumeelements",
                        err);
     if (st == QDC_OK)
+        st = vol_check(&s, g.at_tet.a, g.mid.a, g.mid.n, 6, pm.nv, "volumeelements", err);
+    if (st == QDC_OK)
         st = vol_check(&s, g.at_tri.a, g.tris.a, g.tris.n, 3, pm.nv, "surfaceelements",
                        err);
     if (st == QDC_OK) {
@@ -1242,8 +1274,9 @@ static qdc_status read_netgen(const char *buf, size_t len, const meshio_options 
         pm.ntri = (int64_t)g.ref.n;
         pm.tris = g.tris.a;
         pm.tri_ref = g.ref.a;
+        pm.mid = g.np == 10 ? g.mid.a : NULL;
         st = parsed_mesh(&pm, out, err);
-        pm.tets = pm.region = pm.tris = pm.tri_ref = NULL;
+        pm.tets = pm.region = pm.tris = pm.tri_ref = pm.mid = NULL;
         if (g.skipped)
             note(o, "netgen: skipped %lld volume elements that are not tetrahedra",
                  (long long)g.skipped);

@@ -1677,73 +1677,35 @@ static meshio_format sniff_gmsh(const char *buf, size_t len, size_t i)
     return bin ? MESHIO_GMSH41_BIN : MESHIO_GMSH41;
 }
 
+/* What every Gmsh variant shares: one reader and writer for all versions and
+ * encodings, spliced writes, ten-node tets. The variants differ in their
+ * names and media types; .msh names the family (MSH 4.1 ASCII), whose
+ * sniffer tells the others apart. */
+#define GMSH_VARIANT                                                                     \
+    .ext = "msh", .input = "input.msh", .read = read_gmsh, .write = write_gmsh,          \
+    .splices = 1, .p2 = 1
+#define GMSH_OTHER(var, name_, aliases_, about_, media_, media_alt_)                     \
+    const meshio_fmt var = {.name = name_,                                               \
+                            .aliases = aliases_,                                         \
+                            .about = about_,                                             \
+                            .family = MESHIO_GMSH41,                                     \
+                            .media = media_,                                             \
+                            .media_alt = media_alt_,                                     \
+                            GMSH_VARIANT}
+
 const meshio_fmt fmt_gmsh41 = {
     .name = "gmsh",
     .aliases = "msh msh41 gmsh41",
     .about = "Gmsh MSH 4.1 ASCII",
-    .ext = "msh",
-    .input = "input.msh",
     .media = "model/vnd.gmsh",
     .media_alt = "application/x-gmsh model/x-gmsh",
     .sniff = sniff_gmsh,
-    .read = read_gmsh,
-    .write = write_gmsh,
-    .splices = 1,
-    .p2 = 1,
+    GMSH_VARIANT,
 };
-
-const meshio_fmt fmt_gmsh41_bin = {
-    .name = "gmsh-bin",
-    .aliases = "msh41-bin gmsh41-bin",
-    .about = "Gmsh MSH 4.1 binary",
-    .ext = "msh",
-    .input = "input.msh",
-    .family = MESHIO_GMSH41,
-    .media = "model/vnd.gmsh;encoding=binary",
-    .media_alt = "application/x-gmsh;encoding=binary",
-    .read = read_gmsh,
-    .write = write_gmsh,
-    .splices = 1,
-    .p2 = 1,
-};
-
-const meshio_fmt fmt_gmsh22 = {
-    .name = "gmsh22",
-    .aliases = "msh22",
-    .about = "Gmsh MSH 2.2 ASCII",
-    .ext = "msh",
-    .input = "input.msh",
-    .family = MESHIO_GMSH41,
-    .media = "model/vnd.gmsh;version=2.2",
-    .media_alt = "application/x-gmsh;version=2.2",
-    .read = read_gmsh,
-    .write = write_gmsh,
-    .splices = 1,
-    .p2 = 1,
-};
-
-const meshio_fmt fmt_gmsh22_bin = {
-    .name = "gmsh22-bin",
-    .aliases = "msh22-bin",
-    .about = "Gmsh MSH 2.2 binary",
-    .ext = "msh",
-    .input = "input.msh",
-    .family = MESHIO_GMSH41,
-    .read = read_gmsh,
-    .write = write_gmsh,
-    .splices = 1,
-    .p2 = 1,
-};
-
-const meshio_fmt fmt_gmsh40 = {
-    .name = "gmsh40",
-    .aliases = "msh40",
-    .about = "Gmsh MSH 4.0 ASCII (4.0 binary is refused)",
-    .ext = "msh",
-    .input = "input.msh",
-    .family = MESHIO_GMSH41,
-    .read = read_gmsh,
-    .write = write_gmsh,
-    .splices = 1,
-    .p2 = 1,
-};
+GMSH_OTHER(fmt_gmsh41_bin, "gmsh-bin", "msh41-bin gmsh41-bin", "Gmsh MSH 4.1 binary",
+           "model/vnd.gmsh;encoding=binary", "application/x-gmsh;encoding=binary");
+GMSH_OTHER(fmt_gmsh22, "gmsh22", "msh22", "Gmsh MSH 2.2 ASCII",
+           "model/vnd.gmsh;version=2.2", "application/x-gmsh;version=2.2");
+GMSH_OTHER(fmt_gmsh22_bin, "gmsh22-bin", "msh22-bin", "Gmsh MSH 2.2 binary", NULL, NULL);
+GMSH_OTHER(fmt_gmsh40, "gmsh40", "msh40", "Gmsh MSH 4.0 ASCII (4.0 binary is refused)",
+           NULL, NULL);

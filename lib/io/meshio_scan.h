@@ -1105,11 +1105,14 @@ qdc_status splice_write(const mesh_t *m, int part, wbuf *w, qdc_error *err);
 /* Nodes with their labels and coordinate fields (SRC_FIELD offsets), tets
  * and triangles by node label with two tags each and where they are in the
  * file; turned into a mesh once everything is read (a node may come after
- * the elements that use it). */
+ * the elements that use it). A tet is 4 labels, or 10 for a second-order
+ * one: its corners, then its mid-edge nodes in the order of mesh_p2_edges
+ * (the reader maps its format's order); all tets of a file have the same. */
 typedef struct {
     vec tags, xyz, off;                /* int64 labels; 3 doubles; 3 uint64 FIELD()s */
     vec el[2], tag[2], tag2[2], at[2]; /* [0] tets, [1] triangles: int64 labels,
                                          int32 tags, int64 byte offsets */
+    int tet_nodes;                     /* 4 or 10; 0 before the first tet */
     const char *node, *elem[2];        /* names in messages: "GRID", "CTETRA" */
 } labelled;
 
@@ -1156,11 +1159,22 @@ static inline qdc_status lab_node(labelled *l, int64_t label, const double x[3],
     return QDC_OK;
 }
 
-/* A tet (k 0, 4 labels) or a triangle (k 1, 3), its tags, where it starts. */
+/* 1 if a tet of n nodes (4 or 10) cannot join the tets read so far (the
+ * other order); else 0, and the tets are of n nodes from now on. */
+static inline int lab_mixed(labelled *l, int n)
+{
+    if (l->tet_nodes && l->tet_nodes != n)
+        return 1;
+    l->tet_nodes = n;
+    return 0;
+}
+
+/* A tet (k 0, 4 labels, or 10 after lab_mixed(l, 10)) or a triangle (k 1,
+ * 3), its tags, where it starts. */
 static inline qdc_status lab_elem(labelled *l, int k, const int64_t *g, int32_t tag,
                                   int32_t tag2, int64_t at, qdc_error *err)
 {
-    size_t n = k ? 3 : 4;
+    size_t n = k ? 3 : l->tet_nodes == 10 ? 10 : 4;
 
     if ((!k && l->tag[0].n >= MESH_MAX_TETS) || vec_grow(&l->el[k], n) != 0 ||
         vec_grow(&l->tag[k], 1) != 0 || vec_grow(&l->tag2[k], 1) != 0 ||
@@ -1174,10 +1188,26 @@ static inline qdc_status lab_elem(labelled *l, int k, const int64_t *g, int32_t 
     return QDC_OK;
 }
 
+/* Second-order tets: idx[10 nt] (corners, mid-edge nodes) split into its
+ * first 4 nt (the corners) and *mid (6 nt); QDC_ENOMEM. */
+static inline qdc_status lab_split_mid(int32_t *idx, int64_t nt, int32_t **mid,
+                                       qdc_error *err)
+{
+    *mid = qdc_mallocn(6 * (size_t)nt + 1, sizeof(int32_t));
+    if (!*mid)
+        return qdc_fail(err, QDC_ENOMEM, "out of memory for the mid-edge nodes");
+    for (int64_t t = 0; t < nt; t++) { /* in place: 4t + 3 < 10t + 4 */
+        memcpy(*mid + 6 * t, idx + 10 * t + 4, 6 * sizeof(int32_t));
+        memmove(idx + 4 * t, idx + 10 * t, 4 * sizeof(int32_t));
+    }
+    return QDC_OK;
+}
+
 /* The mesh: labels to indices (a label twice, or one no node has, is an
  * error at its line in s), regions and triangle refs from the tags
  * (pick_regions: the first tags if any is set, else the second if they
- * differ); rec (or NULL) gets the coordinate fields as fmt's. */
+ * differ), second-order tets' mid-edge nodes; rec (or NULL) gets the
+ * coordinate fields as fmt's. */
 static inline qdc_status lab_mesh(labelled *l, txt *s, meshio_format fmt, srcrec *rec,
                                   mesh_t **out, qdc_error *err)
 {
@@ -1186,7 +1216,7 @@ static inline qdc_status lab_mesh(labelled *l, txt *s, meshio_format fmt, srcrec
     int64_t dup, bad = -1;
     int32_t *idx[2] = {NULL, NULL};
     qdc_status st;
-    int k = 0;
+    int k = 0, per[2] = {l->tet_nodes == 10 ? 10 : 4, 3};
 
     memset(&tm, 0, sizeof tm);
     parsed_init(&pm);
@@ -1205,7 +1235,7 @@ static inline qdc_status lab_mesh(labelled *l, txt *s, meshio_format fmt, srcrec
     }
     if (st == QDC_OK && bad >= 0) {
         k--;
-        txt_locate(s, s->base + ((const int64_t *)l->at[k].a)[bad / (k ? 3 : 4)]);
+        txt_locate(s, s->base + ((const int64_t *)l->at[k].a)[bad / per[k]]);
         st = fail_txt(err, QDC_EPARSE, s, s->bol, "%s: unknown %s %lld", l->elem[k],
                       l->node, (long long)((const int64_t *)l->el[k].a)[bad]);
     }
@@ -1220,6 +1250,10 @@ static inline qdc_status lab_mesh(labelled *l, txt *s, meshio_format fmt, srcrec
     pm.ntri = (int64_t)l->tag[1].n;
     pm.tets = idx[0];
     pm.tris = idx[1];
+    if (per[0] == 10 && lab_split_mid(idx[0], pm.nt, &pm.mid, err) != QDC_OK) {
+        parsed_free(&pm);
+        return QDC_ENOMEM;
+    }
     pm.xyz = l->xyz.a ? l->xyz.a : qdc_malloc(sizeof(double));
     l->xyz.a = NULL;
     pick_regions(l->tag[0].a, l->tag2[0].a, pm.nt, &pm.region);

@@ -8,10 +8,13 @@
  * as Gmsh and Salome write it) and 2412 (elements: label, FE descriptor,
  * physical and material property tables, color, node count; beams (FE 11,
  * 21-24) have a record of orientation and end nodes; then the nodes, 8 a
- * line). FE descriptor 111 (linear tetrahedron) is read with its material
- * property as region (its physical property when no material is set and
- * they differ), linear triangles (41, 51, 61, 74, 81, 91) likewise as
- * triangles; others skipped with a note, 118 (10-node tetrahedron) refused.
+ * line). FE descriptors 111 (linear tetrahedron) and 118 (parabolic: its
+ * nodes go around, corner 1, mid-edge 1-2, corner 2, 2-3, corner 3, 3-1,
+ * then 1-4, 2-4, 3-4 and corner 4; second order, mesh_t.mid) are read with
+ * their material property as region (the physical property when no
+ * material is set and they differ), linear and parabolic triangles (41, 51,
+ * 61, 74, 81, 91; 42, 52, 62, 72, 82, 92: their corners) likewise as
+ * triangles; others skipped with a note.
  * Every other dataset (2467/2477 groups, units 164, coordinate systems
  * 2420...) is kept; a spliced write rewrites only the 25-column coordinate
  * fields, in the same form (splice.c, SRC_FIELD with FIELD_EXP). */
@@ -121,9 +124,25 @@ static qdc_status unv_nodes(unv *u, qdc_error *err)
     return st;
 }
 
-static int is_tri(int64_t fe)
+/* The nodes of a triangle of FE descriptor fe (linear 3, parabolic 6), or 0. */
+static int tri_nodes(int64_t fe)
 {
-    return fe == 41 || fe == 51 || fe == 61 || fe == 74 || fe == 81 || fe == 91;
+    if (fe == 41 || fe == 51 || fe == 61 || fe == 74 || fe == 81 || fe == 91)
+        return 3;
+    if (fe == 42 || fe == 52 || fe == 62 || fe == 72 || fe == 82 || fe == 92)
+        return 6;
+    return 0;
+}
+
+/* Where an element's k-th node goes in g: a parabolic tet's (FE 118, see
+ * above) corners to 0-3, its mid-edge nodes to 4-9 (mesh_p2_edges); a
+ * parabolic triangle's corners to 0-2 (the others to 3-5, not used). */
+static int node_slot(int nodes, int tri, int64_t k)
+{
+    static const int tet10[10] = {0, 4, 1, 5, 2, 6, 7, 8, 9, 3},
+                     tri6[6] = {0, 3, 1, 4, 2, 5};
+
+    return tri && nodes == 6 ? tri6[k] : !tri && nodes == 10 ? tet10[k] : (int)k;
 }
 
 static qdc_status unv_elements(unv *u, qdc_error *err)
@@ -132,9 +151,9 @@ static qdc_status unv_elements(unv *u, qdc_error *err)
     qdc_status st = QDC_OK;
 
     while (st == QDC_OK && !unv_delim(s)) {
-        int64_t r[6], g[4], v;
+        int64_t r[6], g[10], v;
         const char *at;
-        int tet = 0, tri = 0;
+        int tet = 0, tri = 0, nodes;
         static const char *const what[6] = {
             "2412: element label",     "2412: FE descriptor", "2412: physical property",
             "2412: material property", "2412: color",         "2412: node count"};
@@ -145,24 +164,26 @@ static qdc_status unv_elements(unv *u, qdc_error *err)
                          &r[k], err);
         if (st != QDC_OK)
             break;
-        if (r[1] == 118)
-            return fail_txt(err, QDC_EFORMAT, s, at,
-                            "2412: element %lld: second-order tetrahedra (FE descriptor "
-                            "118, 10 nodes) are not supported yet",
-                            (long long)r[0]);
-        tet = r[1] == 111;
-        tri = is_tri(r[1]);
-        if ((tet && r[5] != 4) || (tri && r[5] != 3))
+        tet = r[1] == 111 || r[1] == 118;
+        tri = tri_nodes(r[1]) > 0;
+        nodes = tri ? tri_nodes(r[1]) : r[1] == 118 ? 10 : 4;
+        if ((tet || tri) && r[5] != nodes)
             return fail_txt(err, QDC_EPARSE, s, at,
                             "2412: element %lld (FE descriptor %lld) has %lld nodes",
                             (long long)r[0], (long long)r[1], (long long)r[5]);
+        if (tet && lab_mixed(&u->l, nodes))
+            return fail_txt(
+                err, QDC_EFORMAT, s, at,
+                "2412: element %lld: linear (FE descriptor 111) and parabolic "
+                "(118) tetrahedra in one file are not supported",
+                (long long)r[0]);
         if (r[1] == 11 || (r[1] >= 21 && r[1] <= 24)) /* beam record */
             for (int k = 0; k < 3 && st == QDC_OK; k++)
                 st = txt_int(s, "2412: beam record", 0, INT32_MAX, &v, err);
         for (int64_t k = 0; k < r[5] && st == QDC_OK; k++) {
             st = txt_int(s, "2412: node label", 1, INT32_MAX, &v, err);
-            if (k < 4)
-                g[k] = v;
+            if (tet || tri)
+                g[node_slot(nodes, tri, k)] = v;
         }
         if (st != QDC_OK)
             break;
@@ -240,7 +261,8 @@ static meshio_format sniff_unv(const char *buf, size_t len, size_t i)
 const meshio_fmt fmt_unv = {
     .name = "unv",
     .aliases = "ideas",
-    .about = "I-DEAS universal: datasets 2411, 2412 (written only spliced)",
+    .about = "I-DEAS universal: datasets 2411, 2412, tets FE 111 and 118 (written only "
+             "spliced)",
     .ext = "unv",
     .input = "input.unv",
     .sniff = sniff_unv,

@@ -2298,58 +2298,45 @@ static meshio_format sniff_vtu(const char *buf, size_t len, size_t i)
     return MESHIO_AUTO;
 }
 
+/* What the variants of each VTK family share: its reader and writer (one
+ * for both encodings), spliced writes, ten-node tets (VTK_QUADRATIC_TETRA).
+ * The binary variant of each sniffs and names the family. */
+#define VTK_VARIANT(ext_, read_, write_)                                                 \
+    .ext = ext_, .input = "input." ext_, .read = read_, .write = write_, .splices = 1,   \
+    .p2 = 1
+
 const meshio_fmt fmt_vtk = {
     .name = "vtk",
     .aliases = "vtk-bin",
     .about = "legacy VTK UNSTRUCTURED_GRID, binary (big-endian)",
-    .ext = "vtk",
-    .input = "input.vtk",
     .media = "application/vnd.vtk",
     .media_alt = "application/x-vtk",
     .magic = 1,
     .sniff = sniff_vtk,
-    .read = read_vtk,
-    .write = write_vtk,
-    .splices = 1,
-    .p2 = 1,
+    VTK_VARIANT("vtk", read_vtk, write_vtk),
 };
 
 const meshio_fmt fmt_vtk_ascii = {
     .name = "vtk-ascii",
     .about = "legacy VTK UNSTRUCTURED_GRID, ASCII",
-    .ext = "vtk",
-    .input = "input.vtk",
     .family = MESHIO_VTK,
     .media = "application/vnd.vtk;encoding=ascii",
-    .read = read_vtk,
-    .write = write_vtk,
-    .splices = 1,
-    .p2 = 1,
+    VTK_VARIANT("vtk", read_vtk, write_vtk),
 };
 
 const meshio_fmt fmt_vtu = {
     .name = "vtu",
     .about = "VTK XML .vtu, appended raw data (reads ascii, base64, raw, zlib)",
-    .ext = "vtu",
-    .input = "input.vtu",
     .media = "application/vnd.vtk.vtu+xml",
     .media_alt = "application/x-vtu",
     .sniff = sniff_vtu,
-    .read = read_vtu,
-    .write = write_vtu,
-    .splices = 1,
-    .p2 = 1,
+    VTK_VARIANT("vtu", read_vtu, write_vtu),
 };
 
 const meshio_fmt fmt_vtu_ascii = {
     .name = "vtu-ascii",
     .about = "VTK XML .vtu, ascii DataArrays",
-    .ext = "vtu",
-    .input = "input.vtu",
     .family = MESHIO_VTU,
     .media = "application/vnd.vtk.vtu+xml;encoding=ascii",
-    .read = read_vtu,
-    .write = write_vtu,
-    .splices = 1,
-    .p2 = 1,
+    VTK_VARIANT("vtu", read_vtu, write_vtu),
 };

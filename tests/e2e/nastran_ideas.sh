@@ -2,9 +2,10 @@
 # nastran_ideas.sh - Nastran bulk data and I-DEAS universal files are read by
 # extension (.bdf, .nas, .unv) and by sniffing; what qdc does not read is
 # refused by the CLI with `file:line:col: message` and exit 2: a malformed
-# number, a GRID in another coordinate system, a 10-node CTETRA or FE 118
-# tet, NaN, an unknown node. The files of other tools are round-tripped by
-# roundtrip.sh (tests/data/real).
+# number, a GRID in another coordinate system, a CTETRA of 5 nodes (4 or 10)
+# or an FE 118 tet of 4, NaN, an unknown node. The files of other tools
+# (10-node CTETRA and FE 118 too) are round-tripped by roundtrip.sh
+# (tests/data/real).
 . "$(dirname "$0")/../lib.sh"
 cd "$TMP" || exit 1
 printf '$ two tets\nBEGIN BULK\nGRID    1       0       0.      0.      0.\nGRID    2       0       1.      0.      0.\nGRID    3       0       0.      1.      0.\nGRID    4       0       0.      0.      1.\nGRID,5,,1.,1.,1.-0\nCTETRA  1       1       1       2       3       4\nCTETRA  2       2       5       2       4       3\nENDDATA\n' > ok.bdf
@@ -45,12 +46,12 @@ refused "malformed number" num.bdf 7:15 "expected a number, got '1.x'"
 sed 's/^GRID    3       0 /GRID    3       2 /' ok.bdf > cp.bdf
 refused "coordinate system" cp.bdf 5:17 "coordinate system 2 (CP) is not supported"
 sed "s/^\\(CTETRA  2 .*\\)$/\\1       6/" ok.bdf > tet10.bdf
-refused "10-node CTETRA" tet10.bdf 9:57 "second-order CTETRA (10 nodes) is not supported yet"
+refused "CTETRA of 5 nodes" tet10.bdf 9:57 "the mid-side nodes G5-G10 must be all given (10 nodes) or all left out"
 sed 's/1\.-0$/nan/' ok.bdf > nan.bdf
 refused "NaN" nan.bdf 7:15 "not finite"
 sed 's/       5       2       4       3/       5       2       4       9/' ok.bdf > node.bdf
 refused "unknown GRID" node.bdf 9:1 "CTETRA: unknown GRID 9"
 sed 's/       111/       118/' ok.unv > tet10.unv
-refused "FE 118" tet10.unv 14:10 "FE descriptor 118, 10 nodes) are not supported yet"
+refused "FE 118 of 4 nodes" tet10.unv 14:10 "element 1 (FE descriptor 118) has 4 nodes"
 sed 's/^   1.0000000000000000D+00/                      nan/' ok.unv > nan.unv
 refused "NaN (I-DEAS)" nan.unv 6:23 "not finite"

@@ -5,8 +5,8 @@
 # VTK binary and ascii, DOLFIN XML, Abaqus, Netgen, Medit binary), a VTK-style appended zlib
 # VTU, a CalculiX-style .inp, TetGen (0-based), Gmsh's second-order (10-node) tets in
 # MSH 4.1 and Abaqus .inp, Nastran bulk data (Gmsh's and meshio's, free, small and large
-# field), I-DEAS universal (Gmsh) and XDMF with the data inline (meshio: linear and
-# second-order tets)
+# field; 10-node CTETRA), I-DEAS universal (Gmsh; FE 118), Netgen's own second-order .vol
+# and XDMF with the data inline (meshio: linear and second-order tets)
 # from tests/data/real. tests/tools/splicecheck.py masks the coordinate
 # fields with its own parsers and compares the rest byte for byte, then reads
 # both files with meshio (same cells, cell/point/field data) and compares the
@@ -23,7 +23,8 @@ done
 files="gmsh41.msh gmsh41_bin.msh gmsh22.msh gmsh22_bin.msh gmsh40.msh gmsh.vtk gmsh.mesh meshio_zlib.vtu meshio_ascii.vtu
 meshio_bin.vtk meshio_ascii.vtk vtk_appended_zlib.vtu tetgen.node dolfin.xml meshio.inp calculix.inp
 meshio.vol meshio.meshb gmsh_msh1.msh gmsh41_p2.msh gmsh_p2.inp gmsh.bdf gmsh_free.bdf gmsh_large.bdf
-gmsh.unv meshio_free.bdf meshio_small.nas meshio_large.bdf meshio.xdmf meshio_p2.xdmf"
+gmsh.unv meshio_free.bdf meshio_small.nas meshio_large.bdf meshio.xdmf meshio_p2.xdmf gmsh_p2.bdf
+gmsh_large_p2.bdf gmsh_p2.unv meshio_p2.bdf netgen_p2.vol"
 for f in $files; do
     base=${f%%.*}
     ext=${f#*.}

@@ -1,8 +1,9 @@
 #!/bin/sh
 # second_order.sh - second-order (10-node) tetrahedra: a cylinder and a
 # sphere meshed by gmsh with Mesh.ElementOrder = 2, written as MSH 4.1
-# ASCII/binary, MSH 2.2, legacy VTK, Medit TetrahedraP2 and Abaqus C3D10
-# (and VTU through qdc convert): `qdc optimize` writes each back in its own
+# ASCII/binary, MSH 2.2, legacy VTK, Medit TetrahedraP2, Abaqus C3D10,
+# Nastran 10-node CTETRA (large field) and I-DEAS FE 118 (and VTU through
+# qdc convert), and Netgen's own second-order .vol: `qdc optimize` writes each back in its own
 # format (spliced: only coordinates change), every element keeps its ten
 # nodes and its Jacobian stays positive at every node (the report's
 # run.second_order, and the output read again), boundary mid-edge nodes
@@ -70,9 +71,12 @@ for shape in cylinder sphere; do
     gmsh -3 "${shape}2.geo" -format vtk -o "${shape}.vtk" > /dev/null 2>&1
     gmsh -3 "${shape}2.geo" -format mesh -o "${shape}.mesh" > /dev/null 2>&1
     gmsh -3 "${shape}2.geo" -format inp -o "${shape}.inp" > /dev/null 2>&1
+    gmsh -3 "${shape}2.geo" -string 'Mesh.BdfFieldFormat=2;' -format bdf -o "${shape}.bdf" \
+        > /dev/null 2>&1
+    gmsh -3 "${shape}2.geo" -format unv -o "${shape}.unv" > /dev/null 2>&1
     "$BIN/qdc" convert "$shape.msh" "$shape.vtu" -q 2> /dev/null
     for f in "$shape.msh" "${shape}_b.msh" "${shape}_22.msh" "$shape.vtk" "$shape.mesh" \
-        "$shape.inp" "$shape.vtu"; do
+        "$shape.inp" "$shape.vtu" "$shape.bdf" "$shape.unv"; do
         roundtrip "$f" "$f" "out_$f"
     done
     # only coordinates change: the elements of a spliced MSH are the input's
@@ -93,6 +97,21 @@ for shape in cylinder sphere; do
         fail "second order: $shape" "corner mean ratio $q2, first-order run $q1"
     fi
 done
+# Netgen's own second-order sphere (tests/data/real), read back by Netgen
+gzip -dc "$ROOT/tests/data/real/netgen_p2.vol.gz" > netgen_p2.vol
+roundtrip netgen_p2.vol netgen_p2.vol out_netgen_p2.vol
+if ! "$PY" -c 'import netgen.meshing' 2> /dev/null; then
+    pass "second order: netgen reads out_netgen_p2.vol # SKIP python3-netgen missing"
+elif n=$("$PY" -c 'import sys
+from netgen.meshing import Mesh
+m = Mesh()
+m.Load(sys.argv[1])
+print(len(m.Elements3D()), len(m.Elements3D()[0].points))' out_netgen_p2.vol 2> /dev/null | tail -1) &&
+    [ "$n" = "191 10" ]; then
+    pass "second order: netgen reads out_netgen_p2.vol back: 191 elements of 10 points"
+else
+    fail "second order: netgen reads out_netgen_p2.vol" "got '$n'"
+fi
 # a mesh with mid-edge nodes is not written by a writer of linear tets
 if "$BIN/qdc" convert cylinder.vtk c.xml 2> err; then
     fail "second order: convert to DOLFIN XML" "accepted"

@@ -291,19 +291,27 @@ def bdf(b):
                     spans.append((at + a, at + min(a + w, len(t)), w))
         for s, e, w in spans[2:5]:
             f.coords.append((s, e, "nastran"))
-            f.tol = max(f.tol, 1e-6 if w == 8 else 1e-14)
+            # "-1.00389" keeps 5 decimals of -1.0038915, 16 characters 13
+            f.tol = max(f.tol, 1e-5 if w == 8 else 1e-13)
     return f
 
 
 def unv(b):
-    """I-DEAS dataset 2411: the three coordinates after each node record."""
+    """I-DEAS dataset 2411: the three coordinates after each node record, each
+    its 25 columns when the line is three such fields (a sign may take a
+    blank of its field), else its token."""
     f = Fields()
     for m in re.finditer(rb"(?:^|\n)\s*-1\r?\n\s*2411\s*\n(.*?)\n\s*-1\s*\n", b, re.S):
         lines = list(re.finditer(rb"[^\n]*\n?", b[m.start(1):m.end(1)]))
         for k in range(1, len(lines), 2):
             at = m.start(1) + lines[k].start()
-            for v in re.finditer(rb"\S+", lines[k].group(0)):
-                f.coords.append((at + v.start(), at + v.end(), "fortran"))
+            line = lines[k].group(0).rstrip(b"\r\n")
+            cols = [(c, c + 25) for c in (0, 25, 50)]
+            if len(line) != 75 or any(not line[a:e].strip() or b" " in line[a:e].strip()
+                                      for a, e in cols):
+                cols = [v.span() for v in re.finditer(rb"\S+", line)]
+            for a, e in cols:
+                f.coords.append((at + a, at + e, "fortran"))
     f.tol = 0
     return f
 

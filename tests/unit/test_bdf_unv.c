@@ -65,6 +65,22 @@ static void check_mesh(const mesh_t *m)
     ASSERT_EQ_INT(m->tri_ref[0], 7);
 }
 
+/* doc with its first `from` replaced by `to` (malloc'ed), or NULL. */
+static char *replaced(const char *doc, const char *from, const char *to)
+{
+    char *d = malloc(strlen(doc) + strlen(to) + 1);
+    const char *at = strstr(doc, from);
+
+    if (!d || !at) {
+        free(d);
+        return NULL;
+    }
+    memcpy(d, doc, (size_t)(at - doc));
+    strcpy(d + (at - doc), to);
+    strcat(d, at + strlen(from));
+    return d;
+}
+
 /* doc read with its source, vertex v's coordinate a set to x and written
  * back: the output is doc with `from` replaced by `to`. */
 static void moved(const char *doc, meshio_format f, int v, int a, double x,
@@ -73,12 +89,9 @@ static void moved(const char *doc, meshio_format f, int v, int a, double x,
     mesh_t *m;
     qdc_error err;
     sink s = {0};
-    char *want = malloc(strlen(doc) + strlen(to) + 1), *at = strstr(doc, from);
+    char *want = replaced(doc, from, to);
 
-    ASSERT_TRUE(want && at);
-    memcpy(want, doc, (size_t)(at - doc));
-    strcpy(want + (at - doc), to);
-    strcat(want, at + strlen(from));
+    ASSERT_TRUE(want != NULL);
     ASSERT_OK(rd(doc, f, &m, &err));
     /* unmoved: the same bytes */
     ASSERT_OK(meshio_write(m, MESHIO_AUTO, sink_write, &s, &err));
@@ -99,15 +112,11 @@ static void moved(const char *doc, meshio_format f, int v, int a, double x,
 static void refused(const char *doc, meshio_format f, const char *from, const char *to,
                     qdc_status status, int64_t ln, const char *text)
 {
-    char *d = malloc(strlen(doc) + strlen(to) + 1);
-    const char *at = strstr(doc, from);
+    char *d = replaced(doc, from, to);
     mesh_t *m = NULL;
     qdc_error err;
 
-    ASSERT_TRUE(d && at);
-    memcpy(d, doc, (size_t)(at - doc));
-    strcpy(d + (at - doc), to);
-    strcat(d, at + strlen(from));
+    ASSERT_TRUE(d != NULL);
     ASSERT_EQ_INT(meshio_read(d, strlen(d), f, &m, &err), status);
     if (!strstr(err.msg, text) || err.line != ln)
         printf("  got line %d: %s\n", (int)err.line, err.msg);
@@ -194,10 +203,14 @@ TEST(bdf_refusals)
     refused(small, MESHIO_BDF, "GRID    30", "GRID    10", QDC_EPARSE, 7,
             "GRID 10 appears twice");
     refused(small, MESHIO_BDF, "30      40\nCTRIA3", "30      40      60\nCTRIA3",
-            QDC_EFORMAT, 11, "second-order CTETRA (10 nodes) is not supported yet");
+            QDC_EFORMAT, 11, "CTETRA 2: the mid-side nodes G5-G10 must be all given");
     refused(large, MESHIO_BDF, "*       30              40\n",
             "*       30              40              60\n", QDC_EFORMAT, 14,
-            "second-order CTETRA (10 nodes) is not supported yet");
+            "CTETRA 1: the mid-side nodes G5-G10 must be all given");
+    refused(small, MESHIO_BDF, "30      40\nCTRIA3",
+            "30      40      1       2       +\n+       3       4       5       6       "
+            "7\nCTRIA3",
+            QDC_EFORMAT, 12, "CTETRA 2: more than 10 nodes");
     refused(freef, MESHIO_BDF, "CTETRA,2,2,50", "CTETRA,2,2,-5", QDC_EPARSE, 9,
             "CTETRA: node '-5' out of range");
     refused(small, MESHIO_BDF, "GRID    50      0 ", "GRID    50\t     0 ", QDC_EFORMAT,
@@ -262,11 +275,125 @@ TEST(unv_read_and_splice)
           "    -1\n    -1\n  2412");
 }
 
+/* One 10-node tet: corners 1-4 at 0, x, y, z, mid-edge nodes 5-10 at their
+ * edges' midpoints, listed in each format's order (Nastran: 12 23 31 14 24
+ * 34 after the corners; I-DEAS FE 118: around the base, then to the apex),
+ * a 6-node triangle on its face 1 2 3. */
+static const char bdf10[] =
+    "$ one 10-node tet, large field\nBEGIN BULK\n"
+    "GRID*   1                               0.              0.\n*       0.\n"
+    "GRID*   2                               1.              0.\n*       0.\n"
+    "GRID*   3                               0.              1.\n*       0.\n"
+    "GRID*   4                               0.              0.\n*       1.\n"
+    "GRID,5,,.5,0.,0.\nGRID,6,,.5,.5,0.\nGRID,7,,0.,.5,0.\n"
+    "GRID,8,,0.,0.,.5\nGRID,9,,.5,0.,.5\nGRID,10,,0.,.5,.5\n"
+    "CTETRA  1       3       1       2       3       4       5       6\n"
+    "        7       8       9       10\n"
+    "CTRIA6  2       4       1       3       2       7       6       5\n"
+    "ENDDATA\n";
+static const char unv10[] =
+    "    -1\n  2411\n"
+    "         1         1         1        11\n"
+    "   0.0000000000000000D+00   0.0000000000000000D+00   0.0000000000000000D+00\n"
+    "         2         1         1        11\n"
+    "   1.0000000000000000D+00   0.0000000000000000D+00   0.0000000000000000D+00\n"
+    "         3         1         1        11\n"
+    "   0.0000000000000000D+00   1.0000000000000000D+00   0.0000000000000000D+00\n"
+    "         4         1         1        11\n"
+    "   0.0000000000000000D+00   0.0000000000000000D+00   1.0000000000000000D+00\n"
+    "         5         1         1        11\n"
+    "   5.0000000000000000D-01   0.0000000000000000D+00   0.0000000000000000D+00\n"
+    "         6         1         1        11\n"
+    "   5.0000000000000000D-01   5.0000000000000000D-01   0.0000000000000000D+00\n"
+    "         7         1         1        11\n"
+    "   0.0000000000000000D+00   5.0000000000000000D-01   0.0000000000000000D+00\n"
+    "         8         1         1        11\n"
+    "   0.0000000000000000D+00   0.0000000000000000D+00   5.0000000000000000D-01\n"
+    "         9         1         1        11\n"
+    "   5.0000000000000000D-01   0.0000000000000000D+00   5.0000000000000000D-01\n"
+    "        10         1         1        11\n"
+    "   0.0000000000000000D+00   5.0000000000000000D-01   5.0000000000000000D-01\n"
+    "    -1\n    -1\n  2412\n"
+    "         1       118         1         3         7        10\n"
+    "         1         5         2         6         3         7         8         9\n"
+    "        10         4\n"
+    "         2        92         1         4         7         6\n"
+    "         1         7         3         6         2         5\n"
+    "    -1\n";
+
+/* The tet of bdf10 or unv10: corners 0-3 (reoriented: 1 and 2 exchanged by
+ * the reader's orientation fix, their edges' nodes with them), every
+ * mid-edge node at its edge's midpoint, region 3, the triangle's corners
+ * with ref 4. */
+static void check_tet10(const mesh_t *m)
+{
+    ASSERT_EQ_INT(m->nv, 10);
+    ASSERT_EQ_INT(m->nt, 1);
+    ASSERT_TRUE(m->mid != NULL);
+    for (int e = 0; e < 6; e++) {
+        const double *a = m->xyz + 3 * m->tets[mesh_p2_edges[e][0]],
+                     *b = m->xyz + 3 * m->tets[mesh_p2_edges[e][1]],
+                     *p = m->xyz + 3 * m->mid[e];
+        for (int i = 0; i < 3; i++)
+            ASSERT_TRUE(p[i] == 0.5 * (a[i] + b[i]));
+    }
+    ASSERT_EQ_INT(m->region[0], 3);
+    ASSERT_EQ_INT(m->ntri, 1);
+    ASSERT_EQ_INT(m->tri_ref[0], 4);
+    ASSERT_EQ_INT(m->tris[0] + m->tris[1] + m->tris[2], 0 + 1 + 2);
+}
+
+TEST(ten_node_tets)
+{
+    mesh_t *m;
+    qdc_error err;
+    char *d;
+
+    ASSERT_OK(rd(bdf10, MESHIO_AUTO, &m, &err));
+    check_tet10(m);
+    ASSERT_TRUE(meshio_splices(m, MESHIO_BDF, NULL));
+    mesh_free(m);
+    ASSERT_OK(rd(unv10, MESHIO_AUTO, &m, &err));
+    check_tet10(m);
+    ASSERT_TRUE(meshio_splices(m, MESHIO_UNV, NULL));
+    mesh_free(m);
+    /* a mid-edge node moved: its own field rewritten, nothing else */
+    moved(bdf10, MESHIO_BDF, 5, 2, 0.25, "GRID,6,,.5,.5,0.", "GRID,6,,.5,.5,0.25");
+    moved(unv10, MESHIO_UNV, 9, 0, 0.25,
+          "   0.0000000000000000D+00   5.0000000000000000D-01   5.0000000000000000D-01\n"
+          "    -1",
+          "   2.5000000000000000D-01   5.0000000000000000D-01   5.0000000000000000D-01\n"
+          "    -1");
+    /* meshio 5.0 names the 10-node CTETRA "CTETRA_" */
+    d = replaced(bdf10, "CTETRA  1 ", "CTETRA_ 1 ");
+    ASSERT_TRUE(d != NULL);
+    ASSERT_OK(rd(d, MESHIO_BDF, &m, &err));
+    check_tet10(m);
+    mesh_free(m);
+    free(d);
+}
+
+TEST(ten_node_refusals)
+{
+    refused(bdf10, MESHIO_BDF, "ENDDATA",
+            "CTETRA  3       3       1       2       3       9", QDC_EFORMAT, 20,
+            "CTETRA 3: 4-node and 10-node CTETRA in one file");
+    refused(bdf10, MESHIO_BDF, "        7       8       9       10\n",
+            "        7       8       9       11\n", QDC_EPARSE, 17,
+            "CTETRA: unknown GRID 11");
+    refused(unv10, MESHIO_UNV, "        10         4\n", "        10        40\n",
+            QDC_EPARSE, 26, "unknown node 40");
+    refused(unv10, MESHIO_UNV, "       118         1         3         7        10",
+            "       118         1         3         7         4", QDC_EPARSE, 26,
+            "element 1 (FE descriptor 118) has 4 nodes");
+    refused(unv10, MESHIO_UNV, "    -1\n    -1\n  2412\n",
+            "    -1\n    -1\n  2412\n         9       111         1         3         7  "
+            "       4\n         1         2         3         4\n",
+            QDC_EFORMAT, 28, "linear (FE descriptor 111) and parabolic (118) tetrahedra");
+}
+
 TEST(unv_refusals)
 {
-    refused(
-        unv, MESHIO_UNV, "         2       111", "         2       118", QDC_EFORMAT, 27,
-        "second-order tetrahedra (FE descriptor 118, 10 nodes) are not supported yet");
     refused(unv, MESHIO_UNV, "        50        20        30        40",
             "        50        20        30        41", QDC_EPARSE, 27,
             "unknown node 41");
@@ -287,4 +414,5 @@ TEST(unv_refusals)
 }
 
 TEST_MAIN("bdf_unv", T(bdf_three_field_formats), T(bdf_short_reals), T(bdf_splice_widths),
-          T(bdf_refusals), T(unv_read_and_splice), T(unv_refusals))
+          T(bdf_refusals), T(unv_read_and_splice), T(unv_refusals), T(ten_node_tets),
+          T(ten_node_refusals))

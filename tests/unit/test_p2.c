@@ -65,7 +65,7 @@ static void put(txtbuf *t, const char *fmt, ...)
     va_end(ap);
 }
 
-enum { F_GMSH22, F_GMSH41, F_VTK, F_VTU, F_MEDIT, F_INP };
+enum { F_GMSH22, F_GMSH41, F_VTK, F_VTU, F_MEDIT, F_INP, F_BDF, F_UNV, F_VOL };
 
 /* The straight tet as a file of format f, its mid-edge nodes in order. */
 static void write_tet(txtbuf *t, int f, const int order[6])
@@ -130,6 +130,33 @@ static void write_tet(txtbuf *t, int f, const int order[6])
         for (int k = 0; k < 10; k++)
             put(t, "%d ", el[k] + 1);
         put(t, "3\nEnd\n");
+    } else if (f == F_BDF) { /* small field, the CTETRA continued */
+        put(t, "BEGIN BULK\n");
+        for (int j = 0; j < 10; j++)
+            put(t, "GRID    %-8d        %-8.5g%-8.5g%-8.5g\n", 101 + j, x[perm[j]][0],
+                x[perm[j]][1], x[perm[j]][2]);
+        put(t, "CTETRA  1       1       ");
+        for (int k = 0; k < 10; k++)
+            put(t, "%-8d%s", 101 + el[k], k == 5 ? "+\n+       " : "");
+        put(t, "\nENDDATA\n");
+    } else if (f == F_VOL) {
+        put(t, "mesh3d\ndimension\n3\nvolumeelements\n1\n1 10");
+        for (int k = 0; k < 10; k++)
+            put(t, " %d", el[k] + 1);
+        put(t, "\npoints\n10\n");
+        for (int j = 0; j < 10; j++)
+            put(t, "%.17g %.17g %.17g\n", x[perm[j]][0], x[perm[j]][1], x[perm[j]][2]);
+        put(t, "endmesh\n");
+    } else if (f == F_UNV) { /* corners and mid-edge nodes interleaved */
+        static const int slot[10] = {0, 4, 1, 5, 2, 6, 7, 8, 9, 3};
+        put(t, "    -1\n  2411\n");
+        for (int j = 0; j < 10; j++)
+            put(t, "%10d%10d%10d%10d\n%25.16E%25.16E%25.16E\n", 101 + j, 1, 1, 11,
+                x[perm[j]][0], x[perm[j]][1], x[perm[j]][2]);
+        put(t, "    -1\n    -1\n  2412\n%10d%10d%10d%10d%10d%10d\n", 1, 118, 1, 1, 7, 10);
+        for (int k = 0; k < 10; k++)
+            put(t, "%10d%s", 101 + el[slot[k]], k == 7 || k == 9 ? "\n" : "");
+        put(t, "    -1\n");
     } else {
         put(t, "*HEADING\nt\n*NODE\n");
         for (int j = 0; j < 10; j++)
@@ -167,15 +194,21 @@ static double mid_offset(const mesh_t *m)
 TEST(each_format_puts_mid_nodes_on_their_edges)
 {
     /* each format's documented order: Gmsh (manual, "node ordering"): 01 12 20
-     * 30 32 31; VTK_QUADRATIC_TETRA and Abaqus C3D10: 01 12 20 03 13 23 */
-    static const int gmsh[6] = {0, 1, 2, 3, 5, 4}, vtk[6] = {0, 1, 2, 3, 4, 5};
+     * 30 32 31; VTK_QUADRATIC_TETRA, Abaqus C3D10 and Nastran CTETRA (G5-G10:
+     * edges 1-2, 2-3, 3-1, 1-4, 2-4, 3-4): 01 12 20 03 13 23; I-DEAS FE 118
+     * the same, interleaved with the corners (write_tet); Netgen (its
+     * tet10 as meshio maps it, and its SecondOrder output): 01 02 03 12 13 23 */
+    static const int gmsh[6] = {0, 1, 2, 3, 5, 4}, vtk[6] = {0, 1, 2, 3, 4, 5},
+                     netgen[6] = {0, 2, 3, 1, 4, 5};
     static const struct {
         int f;
         meshio_format fmt;
         const int *order;
     } cases[] = {{F_GMSH22, MESHIO_GMSH22, gmsh}, {F_GMSH41, MESHIO_GMSH41, gmsh},
                  {F_VTK, MESHIO_VTK_ASCII, vtk},  {F_VTU, MESHIO_VTU_ASCII, vtk},
-                 {F_MEDIT, MESHIO_MEDIT, vtk},    {F_INP, MESHIO_ABAQUS, vtk}};
+                 {F_MEDIT, MESHIO_MEDIT, vtk},    {F_INP, MESHIO_ABAQUS, vtk},
+                 {F_BDF, MESHIO_BDF, vtk},        {F_UNV, MESHIO_UNV, vtk},
+                 {F_VOL, MESHIO_NETGEN, netgen}};
     txtbuf t;
     qdc_error err;
 
@@ -189,11 +222,33 @@ TEST(each_format_puts_mid_nodes_on_their_edges)
         ASSERT_TRUE(mid_offset(m) == 0);
         /* the wrong order puts a node off its edge: the check can fail */
         mesh_free(m);
-        write_tet(&t, cases[c].f, cases[c].order == gmsh ? vtk : gmsh);
+        write_tet(&t, cases[c].f, cases[c].order == vtk ? gmsh : vtk);
         ASSERT_OK(meshio_read(t.b, t.n, MESHIO_AUTO, &m, &err));
         ASSERT_TRUE(cases[c].f == F_MEDIT ? mid_offset(m) == 0 : mid_offset(m) > 0.4);
         mesh_free(m);
     }
+}
+
+TEST(netgen_refuses_mixed_orders)
+{
+    static const int netgen[6] = {0, 2, 3, 1, 4, 5};
+    static const char lin[] = "volumeelements\n2\n1 4 1 2 3 4\n";
+    txtbuf t;
+    char *at, doc[sizeof t.b + 64];
+    mesh_t *m = NULL;
+    qdc_error err;
+
+    write_tet(&t, F_VOL, netgen);
+    /* a second, linear, tet before the 10-point one */
+    at = strstr(t.b, "volumeelements\n1\n");
+    ASSERT_TRUE(at != NULL);
+    snprintf(doc, sizeof doc, "%.*s%s%s", (int)(at - t.b), t.b, lin,
+             at + strlen("volumeelements\n1\n"));
+    ASSERT_EQ_INT(meshio_read(doc, strlen(doc), MESHIO_NETGEN, &m, &err), QDC_EFORMAT);
+    ASSERT_TRUE(strstr(err.msg, "linear (4 points) and second-order (10 points)") !=
+                NULL);
+    ASSERT_EQ_INT(err.line, 7); /* the 10-point tet after a linear one */
+    ASSERT_TRUE(m == NULL);
 }
 
 TEST(medit_takes_the_order_that_fits)
@@ -378,22 +433,40 @@ TEST(affine_map_moves_mid_nodes_exactly)
     mesh_free(m);
 }
 
+/* ring(inner) with its coordinate k set to x, its mid-edge nodes then moved
+ * by p2_finish (the run's bound on the surface: bound) against the ring as
+ * it was, which *x0 gets (the caller frees it); NULL if either fails. */
+static mesh_t *ring_moved(const double inner[3], int k, double x, double bound,
+                          opt_result *res, double **x0)
+{
+    mesh_t *m = ring(inner);
+
+    *x0 = m ? malloc(3 * sizeof(double) * (size_t)m->nv) : NULL;
+    if (!*x0) {
+        mesh_free(m);
+        return NULL;
+    }
+    memcpy(*x0, m->xyz, 3 * sizeof(double) * (size_t)m->nv);
+    m->xyz[k] = x;
+    memset(res, 0, sizeof *res);
+    res->hausd_bound = bound;
+    if (p2_finish(m, *x0, res, NULL) != QDC_OK) {
+        mesh_free(m);
+        return NULL;
+    }
+    return m;
+}
+
 TEST(boundary_mid_nodes_stay_on_the_input_surface)
 {
     /* apex a moved 0.1 inside, within the run's bound of 0.2 of the input's
      * surface: the mid-edge nodes of its edges go back onto that surface */
     const double inner[3] = {0, 0, 0.1};
-    mesh_t *m = ring(inner);
-    double *x0;
+    double *x0 = NULL;
     opt_result res;
+    mesh_t *m = ring_moved(inner, 2, -0.9, 0.2, &res, &x0);
 
     ASSERT_TRUE(m != NULL);
-    x0 = malloc(3 * sizeof(double) * (size_t)m->nv);
-    memcpy(x0, m->xyz, 3 * sizeof(double) * (size_t)m->nv);
-    m->xyz[2] = -0.9;
-    memset(&res, 0, sizeof res);
-    res.hausd_bound = 0.2;
-    ASSERT_OK(p2_finish(m, x0, &res, NULL));
     ASSERT_TRUE(res.p2_bd_mid_dist < 1e-12);
     ASSERT_EQ_INT(res.p2_bad_out, 0);
     /* a corner left alone keeps its edges' nodes where they were */
@@ -414,16 +487,11 @@ TEST(non_affine_move_straightens_until_positive)
     /* ab bent far toward p0; p0 then moved next to the axis: the mapped
      * offset would put ab's node outside the tets at p0 */
     const double inner[3] = {0.25, 0, 0};
-    mesh_t *m = ring(inner);
-    double *x0;
+    double *x0 = NULL;
     opt_result res;
+    mesh_t *m = ring_moved(inner, 3 * 2, 0.12, 0, &res, &x0);
 
     ASSERT_TRUE(m != NULL);
-    x0 = malloc(3 * sizeof(double) * (size_t)m->nv);
-    memcpy(x0, m->xyz, 3 * sizeof(double) * (size_t)m->nv);
-    m->xyz[3 * 2] = 0.12;
-    memset(&res, 0, sizeof res);
-    ASSERT_OK(p2_finish(m, x0, &res, NULL));
     ASSERT_EQ_INT(res.p2_bad_in, 0);
     ASSERT_EQ_INT(res.p2_bad_out, 0);
     ASSERT_TRUE(res.p2_pulled > 0);
@@ -474,9 +542,9 @@ TEST(reorienting_a_tet_moves_its_mid_edge_nodes_along)
 }
 
 TEST_MAIN("p2", T(each_format_puts_mid_nodes_on_their_edges),
-          T(medit_takes_the_order_that_fits), T(writers_keep_ten_nodes),
-          T(jacobian_closed_forms), T(closest_point_of_a_quadratic_triangle),
-          T(affine_map_moves_mid_nodes_exactly),
+          T(netgen_refuses_mixed_orders), T(medit_takes_the_order_that_fits),
+          T(writers_keep_ten_nodes), T(jacobian_closed_forms),
+          T(closest_point_of_a_quadratic_triangle), T(affine_map_moves_mid_nodes_exactly),
           T(boundary_mid_nodes_stay_on_the_input_surface),
           T(non_affine_move_straightens_until_positive),
           T(reorienting_a_tet_moves_its_mid_edge_nodes_along))

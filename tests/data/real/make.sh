@@ -1,7 +1,7 @@
 #!/bin/sh
 # make.sh - regenerate the files of tests/data/real (see README.md) with the
 # tools that write them: gmsh (the gmsh Debian package, 4.8), meshio (python3-meshio,
-# 5.0) and tetgen (the tetgen package, 1.6). Run from anywhere:
+# 5.0), netgen (python3-netgen) and tetgen (the tetgen package, 1.6). Run from anywhere:
 #   sh tests/data/real/make.sh
 # Each file is stored gzip-compressed (gzip -n: no name or time, so a rerun with the
 # same tool versions gives the same bytes).
@@ -86,6 +86,12 @@ Mesh.RandomSeed = 1;
 EOF
 gmsh -3 -nt 1 sphere_p2.geo -format msh41 -o gmsh41_p2.msh > /dev/null
 gmsh -3 -nt 1 sphere_p2.geo -format inp -o gmsh_p2.inp > /dev/null
+# ... as Nastran 10-node CTETRA (small field: "+E" continuations; large: GRID*
+# cards, CTETRA continued on a line whose first field is blank) and I-DEAS
+# FE 118 (parabolic tetrahedron) with FE 92 parabolic triangles
+gmsh -3 -nt 1 sphere_p2.geo -format bdf -o gmsh_p2.bdf > /dev/null
+gmsh -3 -nt 1 sphere_p2.geo -string 'Mesh.BdfFieldFormat=2;' -format bdf -o gmsh_large_p2.bdf > /dev/null
+gmsh -3 -nt 1 sphere_p2.geo -format unv -o gmsh_p2.unv > /dev/null
 
 # meshio: the Gmsh mesh with a point array and cell arrays of several types.
 /usr/bin/python3 - <<'EOF'
@@ -132,6 +138,14 @@ meshio.nastran.write("meshio_small.nas", nas, point_format="fixed-small",
                      cell_format="fixed-small")
 meshio.nastran.write("meshio_large.bdf", nas, point_format="fixed-large",
                      cell_format="fixed-large")
+# meshio's Nastran of Gmsh's second-order sphere: 10-node tets as "CTETRA_"
+# (meshio 5.0's own name for them) and CTRIA6, GRID in free field; moved by
+# (2, 2, 2), as meshio 5.0 cannot write a negative real in 16 characters
+p2 = meshio.read("gmsh41_p2.msh")
+p2c = [(k, v) for k, v in p2.cells_dict.items() if k in ("tetra10", "triangle6")]
+p2p = p2.cell_data_dict["gmsh:physical"]
+meshio.nastran.write("meshio_p2.bdf", meshio.Mesh(p2.points + 2.0, p2c, cell_data={
+    "nastran:ref": [p2p[k] for k, _ in p2c]}), point_format="free", cell_format="fixed-small")
 
 # XDMF (XDMF 3, one topology: the tets alone) with the data inline
 # (data_format="XML"), the physical tag as Int cell data, a scalar and a vector
@@ -245,12 +259,25 @@ tetgen -pq1.4aAzQ box.poly
 mv box.1.node tetgen.node
 mv box.1.ele tetgen.ele
 
+# Netgen's own second-order mesh (python3-netgen): a CSG unit sphere, maxh
+# 0.5, mesh.SecondOrder() (10-point volume elements, 6-point surface elements
+# with the new points on the sphere) and Save.
+/usr/bin/python3 - <<'EOF' > /dev/null
+from netgen.csg import CSGeometry, Pnt, Sphere
+geo = CSGeometry()
+geo.Add(Sphere(Pnt(0, 0, 0), 1).bc("skin"))
+mesh = geo.GenerateMesh(maxh=0.5)
+mesh.SecondOrder()
+mesh.Save("netgen_p2.vol")
+EOF
+
 for f in gmsh41.msh gmsh41_bin.msh gmsh22.msh gmsh22_bin.msh gmsh40.msh gmsh.vtk gmsh.mesh meshio_zlib.vtu \
     meshio_ascii.vtu meshio_bin.vtk meshio_ascii.vtk vtk_appended_zlib.vtu tetgen.node \
     tetgen.ele dolfin.xml meshio.inp calculix.inp meshio.vol meshio.meshb periodic41.msh \
     periodic41_bin.msh periodic40.msh periodic22.msh periodic22_bin.msh gmsh41_p2.msh gmsh_p2.inp \
     gmsh_msh1.msh gmsh.bdf gmsh_free.bdf gmsh_large.bdf gmsh.unv meshio_free.bdf meshio_small.nas \
-    meshio_large.bdf meshio.xdmf meshio_p2.xdmf meshio_h5.xdmf meshio_h5.h5 meshio.med; do
+    meshio_large.bdf meshio.xdmf meshio_p2.xdmf meshio_h5.xdmf meshio_h5.h5 meshio.med \
+    gmsh_p2.bdf gmsh_large_p2.bdf gmsh_p2.unv meshio_p2.bdf netgen_p2.vol; do
     gzip -n -9 -c "$f" > "$here/$f.gz"
 done
 ls -l "$here"
