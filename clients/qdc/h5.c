@@ -69,7 +69,8 @@ static qdc_status cloexec_pipe(int fd[2], qdc_error *err)
 {
     if (pipe(fd) != 0)
         return qdc_fail(err, QDC_EIO, "pipe: %s", strerror(errno));
-    if (fcntl(fd[0], F_SETFD, FD_CLOEXEC) != 0 || fcntl(fd[1], F_SETFD, FD_CLOEXEC) != 0) {
+    if (fcntl(fd[0], F_SETFD, FD_CLOEXEC) != 0 ||
+        fcntl(fd[1], F_SETFD, FD_CLOEXEC) != 0) {
         close(fd[0]);
         close(fd[1]);
         return qdc_fail(err, QDC_EIO, "fcntl: %s", strerror(errno));
@@ -121,7 +122,8 @@ qdc_status cli_h5_read(const char *path, const meshio_options *mo, mesh_t **m,
                        qdc_error *err)
 {
     char prog[PATH_MAX + 8];
-    char *argv[] = {(char *)h5_program(prog, sizeof prog), "med-read", (char *)path, NULL};
+    char *argv[] = {(char *)h5_program(prog, sizeof prog), "med-read", (char *)path,
+                    NULL};
     int fd[2];
     pid_t pid;
     char *buf = NULL;
@@ -197,7 +199,8 @@ qdc_status cli_h5_write(const char *out, const mesh_t *m, qdc_error *err)
     void (*old)(int);
 
     if (!strcmp(out, "-"))
-        return qdc_fail(err, QDC_EINVAL, "a MED file is written to a file, not to a pipe");
+        return qdc_fail(err, QDC_EINVAL,
+                        "a MED file is written to a file, not to a pipe");
     if (!med_source[0] || meshio_source_format(m) != MESHIO_MED ||
         !meshio_splices(m, MESHIO_MED, NULL))
         return qdc_fail(err, QDC_EINVAL,

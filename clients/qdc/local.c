@@ -413,9 +413,8 @@ qdc_status cli_load_mesh(const char *path, meshio_format fin, const meshio_optio
     size_t len;
     qdc_status st;
 
-    if (!is_stream(path) && cli_h5_wanted(path, fin != MESHIO_AUTO
-                                                     ? fin
-                                                     : meshio_format_from_name(path)))
+    if (!is_stream(path) &&
+        cli_h5_wanted(path, fin != MESHIO_AUTO ? fin : meshio_format_from_name(path)))
         return cli_h5_read(path, mo, m, err);
     if (!is_stream(path))
         return meshio_load_ex(path, fin, mo, m, err);

@@ -47,7 +47,8 @@ static qdc_status med_frames(const char *buf, size_t len, med_frame *fr, qdc_err
         uint64_t n;
         int k;
         if (len - pos < 32)
-            return fail_bin(err, QDC_EPARSE, (int64_t)pos, "MED: a frame header cut short");
+            return fail_bin(err, QDC_EPARSE, (int64_t)pos,
+                            "MED: a frame header cut short");
         n = get_le64(h + 24);
         if (n > (len - pos - 32) / 8)
             return fail_bin(err, QDC_EPARSE, (int64_t)pos,
@@ -102,7 +103,8 @@ static qdc_status read_med(const char *buf, size_t len, const meshio_options *o,
     if (fr[F_COORDS].n % 3 || fr[conn].n % (uint64_t)nodes)
         return fail_bin(err, QDC_EPARSE, (int64_t)fr[F_COORDS].at,
                         "MED: %llu coordinates, %llu tet nodes",
-                        (unsigned long long)fr[F_COORDS].n, (unsigned long long)fr[conn].n);
+                        (unsigned long long)fr[F_COORDS].n,
+                        (unsigned long long)fr[conn].n);
     nv = (int64_t)(fr[F_COORDS].n / 3);
     nt = (int64_t)(fr[conn].n / (uint64_t)nodes);
     if (nv > MESH_MAX_VERTICES || nt > MESH_MAX_TETS)

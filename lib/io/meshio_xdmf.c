@@ -30,7 +30,7 @@ enum { XD_DEPTH = 64 };
 enum { K_OTHER, K_XDMF, K_GRID, K_TOPO, K_GEOM, K_ATTR, K_DATA, K_INCLUDE };
 
 typedef struct {
-    const char *at;    /* its '<' */
+    const char *at;     /* its '<' */
     const char *n, *ne; /* its name */
     const char *a, *ae; /* its attributes */
     int empty;          /* <.../> */
@@ -49,21 +49,21 @@ typedef struct {
     const meshio_options *o;
     srcrec *rec;
     /* the mesh grid */
-    int mesh_depth;     /* depth of its Grid element, 0 not found yet */
-    int mesh_done;      /* its Grid closed */
-    int64_t nv, nt;     /* -1 until read */
-    int nodes;          /* 4 or 10 a tet */
+    int mesh_depth; /* depth of its Grid element, 0 not found yet */
+    int mesh_done;  /* its Grid closed */
+    int64_t nv, nt; /* -1 until read */
+    int nodes;      /* 4 or 10 a tet */
     double *xyz;
-    int32_t *conn;      /* nodes a tet */
+    int32_t *conn; /* nodes a tet */
     int32_t *region;
-    int region_rank;    /* how good a name the region's attribute has */
+    int region_rank; /* how good a name the region's attribute has */
     int64_t nreg;
     const char *topo_at, *reg_at;
     /* what the element being read is about */
     int kind[XD_DEPTH];
     const char *name[XD_DEPTH], *name_end[XD_DEPTH]; /* the open elements' names */
     int depth;
-    int attr_cell_int;  /* the Attribute open is a scalar cell one (mesh grid) */
+    int attr_cell_int; /* the Attribute open is a scalar cell one (mesh grid) */
     int attr_rank;
     /* grids after the mesh */
     tagset ts;
@@ -294,7 +294,7 @@ static qdc_status attr_text(xd *x, const xtag *t, const char *key, const char *k
 typedef struct {
     int64_t dims[4], n; /* the dimensions and their product */
     int ndims;
-    int integer;        /* NumberType Int, UInt, Char, UChar */
+    int integer; /* NumberType Int, UInt, Char, UChar */
 } item;
 
 /* Check what the DataItem t is (XML data, one uniform item) and its size. */
@@ -352,7 +352,8 @@ static qdc_status item_read(xd *x, const xtag *t, item *it, qdc_error *err)
         p = e;
     }
     if (!it->ndims)
-        return fail_txt(err, QDC_EPARSE, &x->s, t->at, "XDMF: DataItem without Dimensions");
+        return fail_txt(err, QDC_EPARSE, &x->s, t->at,
+                        "XDMF: DataItem without Dimensions");
     /* each number needs a character and a separator */
     if (it->n > (int64_t)((size_t)(x->s.end - x->s.p) / 2 + 1))
         return fail_txt(err, QDC_EPARSE, &x->s, t->at,
@@ -471,8 +472,8 @@ static qdc_status mesh_item(xd *x, const xtag *t, int parent, int *read, qdc_err
     st = item_read(x, t, &it, err);
     if (st != QDC_OK)
         return st;
-    *read = parent != K_ATTR ||
-            (it.integer && x->attr_cell_int && (!x->region || x->attr_rank > x->region_rank));
+    *read = parent != K_ATTR || (it.integer && x->attr_cell_int &&
+                                 (!x->region || x->attr_rank > x->region_rank));
     if (parent == K_GEOM) {
         if (x->nv >= 0)
             return fail_txt(err, QDC_EFORMAT, &x->s, t->at,
@@ -496,8 +497,7 @@ static qdc_status mesh_item(xd *x, const xtag *t, int parent, int *read, qdc_err
             if (st != QDC_OK)
                 return st;
         }
-        return item_values(x, it.n, x->xyz, NULL, 0, 0, x->rec ? x->rec->off : NULL,
-                           err);
+        return item_values(x, it.n, x->xyz, NULL, 0, 0, x->rec ? x->rec->off : NULL, err);
     }
     if (parent == K_TOPO) {
         if (x->nt >= 0)
@@ -553,8 +553,8 @@ static qdc_status tags_item(xd *x, const xtag *t, int parent, int *read, qdc_err
     *read = 1;
     if (vec_grow(v, (size_t)it.n + 1) != 0)
         return qdc_fail(err, QDC_ENOMEM, "out of memory for the tags");
-    st = item_values(x, it.n, NULL, (int32_t *)v->a + v->n, parent == K_TOPO ? 0 : INT32_MIN,
-                     INT32_MAX, NULL, err);
+    st = item_values(x, it.n, NULL, (int32_t *)v->a + v->n,
+                     parent == K_TOPO ? 0 : INT32_MIN, INT32_MAX, NULL, err);
     if (st == QDC_OK)
         v->n += (size_t)it.n;
     return st;
@@ -655,8 +655,9 @@ static qdc_status xd_start(xd *x, const xtag *t, qdc_error *err)
         return fail_txt(err, QDC_EPARSE, &x->s, t->at,
                         "not an XDMF file: the root element is not <Xdmf>");
     if (x->depth == XD_DEPTH)
-        return fail_txt(err, QDC_EPARSE, &x->s, t->at, "XDMF: elements nested deeper "
-                                                       "than %d",
+        return fail_txt(err, QDC_EPARSE, &x->s, t->at,
+                        "XDMF: elements nested deeper "
+                        "than %d",
                         XD_DEPTH);
     /* the mesh: the first grid with a topology or geometry */
     if ((k == K_TOPO || k == K_GEOM) && parent == K_GRID && !x->mesh_depth) {
@@ -680,7 +681,8 @@ static qdc_status xd_start(xd *x, const xtag *t, qdc_error *err)
         st = attr_text(x, t, "Center", NULL, "Node", center, sizeof center, err);
         if (st == QDC_OK)
             st = attr_text(x, t, "AttributeType", NULL, "Scalar", type, sizeof type, err);
-        x->attr_cell_int = strcasecmp(center, "Cell") == 0 && strcasecmp(type, "Scalar") == 0;
+        x->attr_cell_int =
+            strcasecmp(center, "Cell") == 0 && strcasecmp(type, "Scalar") == 0;
         x->attr_rank = region_rank(t);
     } else if (in_mesh && x->depth == x->mesh_depth + 1 && k == K_DATA &&
                (parent == K_TOPO || parent == K_GEOM || parent == K_ATTR)) {
@@ -732,7 +734,8 @@ static qdc_status xd_end(xd *x, const xtag *t, qdc_error *err)
     size_t n;
 
     if (!x->depth)
-        return fail_txt(err, QDC_EPARSE, &x->s, t->at, "XDMF: an end tag with no element");
+        return fail_txt(err, QDC_EPARSE, &x->s, t->at,
+                        "XDMF: an end tag with no element");
     x->depth--;
     n = (size_t)(x->name_end[x->depth] - x->name[x->depth]);
     if ((size_t)(t->ne - t->n) != n || memcmp(t->n, x->name[x->depth], n) != 0)

@@ -480,6 +480,39 @@ static int round_begin(const mesh_t *m, const opt_options *opts, opt_options *o,
     return 0;
 }
 
+/* The first smoothing, whose bound is the run's: under a bound the user gave
+ * it spends only a share of it; every round after spends what it has left
+ * (spend.h). *hausd: the bound the boundary operations may use (0: none). */
+static qdc_status first_round(mesh_t *m, const opt_options *opts, opt_options *o,
+                              spend *sp, opt_result *first, double *hausd, qdc_error *err)
+{
+    /* the boundary changes only under a bound the user asked for (not the
+     * default's) and when it may move at all (issue #31: triangle for
+     * triangle otherwise) */
+    int given =
+        opts->boundary != OPT_BOUNDARY_FIXED &&
+        (opts->hausd > 0 || (opts->hausd_rel > 0 && opts->hausd_rel != OPT_HAUSD_AUTO));
+    qdc_status st;
+
+    if (given) {
+        o->hausd *= TOPO_FIRST_SHARE;
+        o->hausd_rel *= TOPO_FIRST_SHARE;
+    }
+    st = opt_run_smooth(m, o, first, err);
+    if (given)
+        first->hausd_bound /= TOPO_FIRST_SHARE; /* the run's bound */
+    if (st != QDC_OK)
+        return st;
+    if (opts->boundary != OPT_BOUNDARY_FIXED && first->outcome != OPT_FAILED) {
+        st = spend_set_bound(sp, m, first->hausd_bound, err);
+        if (st != QDC_OK)
+            return st;
+    }
+    if (given)
+        *hausd = first->hausd_bound;
+    return QDC_OK;
+}
+
 static qdc_status topology_run(mesh_t *m, const opt_options *opts, opt_result *res,
                                qdc_error *err)
 {
@@ -491,26 +524,13 @@ static qdc_status topology_run(mesh_t *m, const opt_options *opts, opt_result *r
     topo_surface sf = {0};
     double hausd = 0.0;
     spend sp;
-    int given;
     qdc_status st;
 
     o.topology = OPT_TOPOLOGY_NONE;
     st = spend_new(m, opts, &sp, err);
     if (st != QDC_OK)
         return st;
-    /* the boundary changes only under a bound the user asked for (not the
-     * default's) and when it may move at all (issue #31: triangle for
-     * triangle otherwise) */
-    given =
-        opts->boundary != OPT_BOUNDARY_FIXED &&
-        (opts->hausd > 0 || (opts->hausd_rel > 0 && opts->hausd_rel != OPT_HAUSD_AUTO));
-    if (given) {
-        o.hausd *= TOPO_FIRST_SHARE;
-        o.hausd_rel *= TOPO_FIRST_SHARE;
-    }
-    st = opt_run_smooth(m, &o, &first, err);
-    if (given)
-        first.hausd_bound /= TOPO_FIRST_SHARE; /* the run's bound */
+    st = first_round(m, opts, &o, &sp, &first, &hausd, err);
     if (st != QDC_OK) {
         if (res)
             *res = first;
@@ -518,16 +538,6 @@ static qdc_status topology_run(mesh_t *m, const opt_options *opts, opt_result *r
         return st;
     }
     last = first;
-    /* the first smoothing's bound is the run's: every round after spends what
-     * it has left (spend.h) */
-    if (opts->boundary != OPT_BOUNDARY_FIXED && first.outcome != OPT_FAILED)
-        st = spend_set_bound(&sp, m, first.hausd_bound, err);
-    if (st != QDC_OK) {
-        spend_free(&sp);
-        return st;
-    }
-    if (given)
-        hausd = first.hausd_bound;
     first.tets_in = m->nt;
     first.verts_in = m->nv;
     record = first.last_record;

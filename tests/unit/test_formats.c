@@ -1082,8 +1082,8 @@ TEST(new_formats_1m_tets_speed)
     for (size_t k = 0; k < sizeof fs / sizeof fs[0]; k++) {
         sink s = {0};
         double r, lim = fs[k] == MESHIO_GMSH22_BIN || fs[k] == MESHIO_MESHB ? BIN_RATIO
-                        : fs[k] == MESHIO_DOLFIN                           ? DOLFIN_RATIO
-                                                                           : TEXT_RATIO;
+                        : fs[k] == MESHIO_DOLFIN                            ? DOLFIN_RATIO
+                                                                            : TEXT_RATIO;
         if (!meshio_has_writer(fs[k]))
             write_other(m, fs[k], &s);
         else
@@ -1107,7 +1107,8 @@ TEST(new_formats_1m_tets_speed)
 
 TEST(fuzz_replay)
 {
-    static const char *const names[] = {"gmsh", "vtk", "fe", "msh1", "bdf", "unv", "xdmf", "med"};
+    static const char *const names[] = {"gmsh", "vtk", "fe",   "msh1",
+                                        "bdf",  "unv", "xdmf", "med"};
     int total = 0, bad = 0;
 
     for (int k = 0; k < (int)(sizeof names / sizeof names[0]); k++) {

@@ -267,8 +267,8 @@ TEST(refusals_say_where)
         qdc_status st;
         ASSERT_TRUE(d != NULL);
         st = meshio_read(d, strlen(d), MESHIO_XDMF, &m, &err);
-        if (st != cases[k].st ||
-            (st != QDC_OK && (!strstr(err.msg, cases[k].text) || err.line != cases[k].line)))
+        if (st != cases[k].st || (st != QDC_OK && (!strstr(err.msg, cases[k].text) ||
+                                                   err.line != cases[k].line)))
             printf("  case %zu: status %d, line %d: %s\n", k, (int)st, (int)err.line,
                    st == QDC_OK ? "" : err.msg);
         ASSERT_EQ_INT(st, cases[k].st);
