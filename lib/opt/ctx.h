@@ -28,9 +28,11 @@ typedef struct {
     const int32_t *region; /* the mesh's region tags (NULL: none), for local.c */
     /* Optimizes a mesh of its own (local.c's regions, in normalized units):
      * set by opt_run_once on the runs it makes for its callers, NULL on the
-     * regions' own runs (so a region is not repaired inside itself). */
-    qdc_status (*repair)(mesh_t *m, const opt_options *o, int keep_surface, opt_result *r,
-                         qdc_error *err);
+     * regions' own runs (so a region is not repaired inside itself).
+     * loose (m->nv flags, may be NULL): boundary vertices that leave their
+     * surface within the bound (run_once's loose). */
+    qdc_status (*repair)(mesh_t *m, const opt_options *o, int keep_surface,
+                         const uint8_t *loose, opt_result *r, qdc_error *err);
     uint8_t *vmark; /* nv: scratch marks */
     int32_t *vlist; /* nv: scratch list of vertices */
     double *wq2;    /* squared QDC row weights */

@@ -287,7 +287,7 @@ static qdc_status untangle_pass(ctx_t *c, const uint8_t *movable, opt_result *re
     qdc_status st;
 
     memcpy(c->trial, c->xbest, 3 * (size_t)c->nv * sizeof(double));
-    st = finish_untangle(c->tp, movable, c->trial, c->lbar, &ninv);
+    st = finish_untangle(c->tp, movable, c->sl, c->trial, c->lbar, &ninv);
     if (st != QDC_OK || ninv >= c->best.n_inverted)
         return st;
     ctx_pass_record(c, r, next, "untangle");

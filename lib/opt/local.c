@@ -2,9 +2,10 @@
  * (docs/method.md §5a): the tets within a few vertex rings of them become a
  * mesh of their own, whose vertices on the cut to the rest of the mesh (and
  * the run's locked ones) are held where the run has them, and whose other
- * vertices start again from the input; that small mesh is optimized
+ * vertices start where the run has them; that small mesh is optimized
  * (untangled and smoothed, under the run's bound and then, with the default
- * bound, OPT_HAUSD_STUCK) by the run's repair hook and put back, kept by the
+ * bound, OPT_HAUSD_STUCK, the boundary corners of the inverted tets free to
+ * leave their surface) by the run's repair hook and put back, kept by the
  * best-iterate rule. What a rerun of the whole mesh from the input did for a
  * handful of tets, for the cost of their neighbourhood; the angle polish
  * then runs on the whole mesh. */
@@ -114,10 +115,35 @@ static mesh_t *local_mesh(const ctx_t *c, const uint8_t *region, const uint8_t *
     return s;
 }
 
+/* The boundary corners of the unusable tets (lev 0) that the region moves
+ * (not held): loose in the region's numbering (run_once's loose), so that
+ * they may leave their surface within the round's bound. A face shared by two
+ * tets whose three corners slide on one plane, with both apexes on the same
+ * side of it (measured on the tangled cubes of scripts/corpus.py: one such
+ * pair at 1M tets), leaves one of the two inverted wherever the corners
+ * slide; lifting a corner off the plane by a little opens both. Returns how
+ * many. */
+static int32_t local_loose(const ctx_t *c, const int8_t *lev, const uint8_t *hold,
+                           const int32_t *map, const mesh_t *s, uint8_t *loose)
+{
+    int32_t n = 0;
+
+    for (int32_t v = 0; v < c->nv; v++) {
+        int32_t w = map[v];
+        if (w < 0 || lev[v] != 0 || hold[v] || s->fixed[w] ||
+            !(c->tp->vflag[v] & (MESH_V_BOUNDARY | MESH_V_INTERFACE)))
+            continue;
+        loose[w] = 1;
+        n++;
+    }
+    return n;
+}
+
 /* The region's run: the run's options without progress records or log lines
  * (its figures are the region's), the bound in normalized units. A failed
  * region run (say, out of memory) leaves *ok 0 and the mesh as it was. */
-static void local_run(const ctx_t *c, mesh_t *s, double bound, int *ok)
+static void local_run(const ctx_t *c, mesh_t *s, const uint8_t *loose, double bound,
+                      int *ok)
 {
     opt_options o = *c->o;
     opt_result r;
@@ -129,18 +155,21 @@ static void local_run(const ctx_t *c, mesh_t *s, double bound, int *ok)
     o.hausd = bound;
     o.hausd_rel = 0;
     memset(&e, 0, sizeof e);
-    *ok = c->repair(s, &o, c->keep_surface, &r, &e) == QDC_OK && r.outcome != OPT_FAILED;
+    *ok = c->repair(s, &o, c->keep_surface, loose, &r, &e) == QDC_OK &&
+          r.outcome != OPT_FAILED;
 }
 
 /* One round at `rings` with the bound `bound` (normalized units): the region
  * optimized and put into c->trial, recorded (phase "local") and considered. */
 static qdc_status local_round(ctx_t *c, opt_result *res, opt_progress *r, int *next,
-                              int rings, double bound, int *big)
+                              int rings, double bound, int free_corners, int *big)
 {
     size_t nv = (size_t)c->nv, n3 = 3 * nv;
     int8_t *lev = qdc_malloc(nv + 1);
     uint8_t *hold = qdc_malloc(nv + 1), *region = qdc_malloc((size_t)c->nt + 1);
     int32_t *map = qdc_mallocn(nv + 1, sizeof(int32_t)), nt, was = c->best.n_inverted;
+    int32_t nloose = 0;
+    uint8_t *loose = NULL;
     mesh_t *s = NULL;
     qdc_status st = QDC_ENOMEM;
     double used = 0.0;
@@ -167,8 +196,14 @@ static qdc_status local_round(ctx_t *c, opt_result *res, opt_progress *r, int *n
     s = local_mesh(c, region, hold, bound > 0 && used >= 0.9 * bound, nt, map);
     if (!s)
         goto out;
+    if (free_corners) {
+        loose = qdc_calloc((size_t)s->nv + 1, 1);
+        if (!loose)
+            goto out;
+        nloose = local_loose(c, lev, hold, map, s, loose);
+    }
     st = QDC_OK;
-    local_run(c, s, bound > 0 && used < 0.9 * bound ? bound - used : bound, &ok);
+    local_run(c, s, loose, bound > 0 && used < 0.9 * bound ? bound - used : bound, &ok);
     if (!ok)
         goto out;
     memcpy(c->trial, c->xbest, n3 * sizeof(double));
@@ -181,13 +216,15 @@ static qdc_status local_round(ctx_t *c, opt_result *res, opt_progress *r, int *n
     if (c->best_it == r->iteration && bound * c->scale > res->hausd_bound)
         res->hausd_bound = bound * c->scale;
     ctx_log(c, 0,
-            "local repair: %d tets within %d rings of the %d inverted, %d vertices: %s",
-            (int)nt, rings, (int)was, (int)s->nv,
+            "local repair: %d tets within %d rings of the %d inverted, %d vertices "
+            "(%d off their surface): %s",
+            (int)nt, rings, (int)was, (int)s->nv, (int)nloose,
             c->best_it == r->iteration ? "kept" : "not better");
     if (ctx_report(c, r))
         ctx_set_stop(res, OPT_STOP_CANCELLED);
 out:
     mesh_free(s);
+    qdc_free(loose);
     qdc_free(map);
     qdc_free(region);
     qdc_free(hold);
@@ -202,12 +239,17 @@ qdc_status local_pass(ctx_t *c, opt_result *res, opt_progress *r, int *next)
 
     if (!c->repair)
         return QDC_OK;
+    /* each ring count: sliding within the run's bound, then with the bad
+     * tets' boundary corners free to leave their surface within the bound
+     * (the default's: OPT_HAUSD_STUCK) */
     for (size_t i = 0; i < sizeof local_rings / sizeof local_rings[0] && !big; i++) {
+        double wide = c->autob && OPT_HAUSD_STUCK > c->hbound ? OPT_HAUSD_STUCK : c->hbound;
         if (st == QDC_OK && c->best.n_inverted > 0 && res->stop != OPT_STOP_CANCELLED)
-            st = local_round(c, res, r, next, local_rings[i], c->hbound, &big);
-        if (st == QDC_OK && c->autob && !big && c->best.n_inverted > 0 &&
+            st = local_round(c, res, r, next, local_rings[i], c->hbound, 0, &big);
+        if (st == QDC_OK && wide > 0 && (c->sl || wide > c->hbound) && !big &&
+            c->best.n_inverted > 0 &&
             res->stop != OPT_STOP_CANCELLED)
-            st = local_round(c, res, r, next, local_rings[i], OPT_HAUSD_STUCK, &big);
+            st = local_round(c, res, r, next, local_rings[i], wide, c->sl != NULL, &big);
     }
     return st;
 }

@@ -168,9 +168,9 @@ static qdc_status run_once(mesh_t *m, const opt_options *opts, const uint8_t *pi
 /* The repair hook of a run (ctx.h): one run of a region of its mesh, itself
  * without the hook. */
 static qdc_status run_region(mesh_t *m, const opt_options *o, int keep_surface,
-                             opt_result *r, qdc_error *err)
+                             const uint8_t *loose, opt_result *r, qdc_error *err)
 {
-    return run_once(m, o, NULL, NULL, NULL, NULL, keep_surface, 1, r, err);
+    return run_once(m, o, NULL, loose, NULL, NULL, keep_surface, 1, r, err);
 }
 
 qdc_status opt_run_once(mesh_t *m, const opt_options *opts, const uint8_t *pins,

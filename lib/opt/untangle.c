@@ -28,12 +28,24 @@ static double star_min_vol6(const mesh_topo *tp, const double *x, int32_t v,
     return m;
 }
 
-/* Max-min ascent of the star's signed volumes for one interior vertex (valid
- * stars too: their tets open room for the inverted ones). The direction is
- * the minimum-norm point of the hull of the gradients of the volumes that a
- * step of length s could make the smallest (within s |g| of it); a step is
- * taken when the smallest volume rises and the star gains no inverted tet. */
-static int32_t untangle_vertex(const mesh_topo *tp, double *x, int32_t v, double lbar)
+/* g replaced by its part along v's surface or line (slide_tangent). */
+static void tangent(const slide_ctx *sl, int32_t v, double g[3])
+{
+    double t[3];
+
+    slide_tangent(sl, v, g, t);
+    memcpy(g, t, sizeof t);
+}
+
+/* Max-min ascent of the star's signed volumes for one vertex (valid stars
+ * too: their tets open room for the inverted ones). The direction is the
+ * minimum-norm point of the hull of the gradients of the volumes that a step
+ * of length s could make the smallest (within s |g| of it); a step is taken
+ * when the smallest volume rises and the star gains no inverted tet. With sl
+ * (a sliding vertex) the gradients are those along its surface or line and
+ * the trial point is put back on it (star_trial_point). */
+static int32_t untangle_vertex(const mesh_topo *tp, const slide_ctx *sl, double *x,
+                               int32_t v, double lbar)
 {
     double *xv = x + 3 * (size_t)v, s = 0.1 * lbar;
     int32_t moves = 0;
@@ -49,12 +61,16 @@ static int32_t untangle_vertex(const mesh_topo *tp, double *x, int32_t v, double
             double gk[3], l2, vk = star_vol6(tp, x, k, xv, gk, &l2);
             f0 = fmin(f0, vk);
             nb0 += geom_tet_bad_vl(vk, l2);
+            if (sl)
+                tangent(sl, v, gk);
             gmax = fmax(gmax, sqrt(gk[0] * gk[0] + gk[1] * gk[1] + gk[2] * gk[2]));
         }
         if (!isfinite(f0))
             break;
         for (int32_t k = tp->vt_ptr[v]; k < tp->vt_ptr[v + 1]; k++) {
             double gk[3], vk = star_vol6(tp, x, k, xv, gk, NULL);
+            if (sl)
+                tangent(sl, v, gk);
             if (vk - f0 > 2.0 * s * gmax)
                 continue;
             if (nact < UNTANGLE_ACT) {
@@ -79,7 +95,7 @@ static int32_t untangle_vertex(const mesh_topo *tp, double *x, int32_t v, double
             s *= 0.5; /* a corner at this scale: look closer */
             continue;
         }
-        star_trial_point(NULL, v, xv, d, s / dn, y);
+        star_trial_point(sl, v, xv, d, s / dn, y);
         f1 = star_min_vol6(tp, x, v, y, &nb1);
         if (!(f1 > f0 && nb1 <= nb0)) {
             s *= 0.5;
@@ -92,8 +108,20 @@ static int32_t untangle_vertex(const mesh_topo *tp, double *x, int32_t v, double
     return moves;
 }
 
-qdc_status finish_untangle(const mesh_topo *tp, const uint8_t *movable, double *x,
-                           double lbar, int32_t *n_inverted)
+/* 0 for an interior vertex, 1 for one sliding on a surface or a line of sl,
+ * -1 for one that stays (a corner, or a boundary vertex without sl). */
+static int slides(const mesh_topo *tp, const slide_ctx *sl, int32_t v)
+{
+    int k = sl ? slide_kind(sl, v) : SLIDE_INTERIOR;
+
+    if (!(tp->vflag[v] & (MESH_V_BOUNDARY | MESH_V_INTERFACE)))
+        return 0;
+    return k == SLIDE_SURFACE || k == SLIDE_LINE ? 1 : k == SLIDE_INTERIOR && sl ? 0 : -1;
+}
+
+qdc_status finish_untangle(const mesh_topo *tp, const uint8_t *movable,
+                           const slide_ctx *sl, double *x, double lbar,
+                           int32_t *n_inverted)
 {
     uint8_t *mark = qdc_calloc((size_t)tp->nv + 1, 1);
     int32_t *list = NULL, n = 0;
@@ -118,13 +146,13 @@ qdc_status finish_untangle(const mesh_topo *tp, const uint8_t *movable, double *
         return QDC_ENOMEM;
     }
     for (int32_t v = 0; v < tp->nv; v++)
-        if (mark[v] && movable[v] &&
-            !(tp->vflag[v] & (MESH_V_BOUNDARY | MESH_V_INTERFACE)))
+        if (mark[v] && movable[v] && slides(tp, sl, v) >= 0)
             list[n++] = v;
     for (int s = 0; s < UNTANGLE_SWEEPS; s++) {
         int32_t moves = 0;
         for (int32_t i = 0; i < n; i++)
-            moves += untangle_vertex(tp, x, list[i], lbar);
+            moves += untangle_vertex(tp, slides(tp, sl, list[i]) ? sl : NULL, x, list[i],
+                                     lbar);
         if (!moves)
             break;
     }

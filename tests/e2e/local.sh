@@ -5,9 +5,11 @@
 # whole run again from the input with the boundary around them freed to 1e-2
 # of the diagonal. A harshly tangled thin bone (scripts/corpus.py bone-lowq
 # at 30k tets, 5% of the interior vertices pushed, seed 1: 737 tets inverted)
-# kept 1 inverted after untangling: local repairs take it to 0 (independent
-# evaluator), with no rerun that frees the boundary, the surface within the
-# default bound (3e-3 of the diagonal) and the mean ratio up.
+# kept 1 inverted after untangling the interior vertices: local repairs took
+# it to 0; untangling that slides the boundary vertices too now does (either
+# counts as repaired where it is). 0 left (independent evaluator), with no
+# rerun that frees the boundary, the surface within the default bound (3e-3
+# of the diagonal) and the mean ratio up.
 . "$(dirname "$0")/../lib.sh"
 
 corpus_mesh "local: bone-lowq-tangled" bone-lowq-tangled 30000 --seed 1 --tangle-frac 0.05
@@ -28,7 +30,8 @@ print(qi["n_inverted"], qo["n_inverted"], "%.4f" % qi["eta_mean"], "%.4f" % qo["
 PYEOF
 )
 bi=$1 ai=$2 bm=$3 am=$4 hd=$5 bound=$6
-if grep -q 'local repair: .*: kept' "$TMP/err" && ! grep -q 'boundary vertices around them free' "$TMP/err" &&
+if grep -Eq 'local repair: .*: kept|^untangle .* inverted 0 ' "$TMP/err" &&
+    ! grep -q 'boundary vertices around them free' "$TMP/err" &&
     ! grep -q 'with the boundary within' "$TMP/err"; then
     pass "local: bone-lowq-tangled: repaired locally, no rerun that frees the boundary"
 else

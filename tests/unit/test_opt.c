@@ -632,13 +632,66 @@ TEST(max_min_volume_untangles_a_grid)
     ASSERT_TRUE(grid_case_new(&g, 6, 1.6, 5));
     before = mesh_count_inverted(g.tp, g.m->xyz);
     ASSERT_TRUE(before > 20);
-    ASSERT_OK(finish_untangle(g.tp, g.movable, g.m->xyz, 1.0 / g.n, &after));
+    ASSERT_OK(finish_untangle(g.tp, g.movable, NULL, g.m->xyz, 1.0 / g.n, &after));
     printf("  # inverted tets %d -> %d\n", (int)before, (int)after);
     ASSERT_EQ_INT(after, mesh_count_inverted(g.tp, g.m->xyz));
     ASSERT_TRUE(after < before / 3);
     ASSERT_TRUE(fixed_kept(&g));
     ASSERT_TRUE(all_finite(g.m));
     grid_case_free(&g);
+}
+
+/* Untangling moves sliding boundary vertices too, along their face: two
+ * neighbours on the face z = 0 of a 4^3 grid pushed across each other (in
+ * the plane, each within its input star) fold the face's triangles and
+ * invert tets that no interior vertex can open; with the slide constraints
+ * the tangle goes, every boundary vertex still on its face plane and the
+ * corners where they were. With the boundary held it stays. */
+TEST(untangling_slides_boundary_vertices_on_their_faces)
+{
+    const int n = 4;
+    const double h = 1.0 / n;
+    int32_t v = 1 + (n + 1) * 2, before, held = -1, after = -1; /* (h, 2h, 0) */
+    for (int c = 0; c < 2; c++) {
+        mesh_t *m = tm_grid(n, 0);
+        mesh_topo *tp = NULL;
+        slide_ctx *sl = NULL;
+        uint8_t *movable = calloc((size_t)m->nv, 1);
+        double *x0 = malloc(3 * (size_t)m->nv * sizeof(double));
+        ASSERT_TRUE(m && movable && x0);
+        ASSERT_OK(mesh_topo_build(m, &tp, NULL));
+        ASSERT_OK(slide_new(tp, m->xyz, 30.0, &sl, NULL));
+        ASSERT_EQ_INT(slide_kind(sl, v), SLIDE_SURFACE);
+        m->xyz[3 * v] += 0.6 * h;       /* v and its neighbour (2h, 2h, 0) */
+        m->xyz[3 * (v + 1)] -= 0.6 * h; /* cross, each within its input star */
+        memcpy(x0, m->xyz, 3 * (size_t)m->nv * sizeof(double));
+        before = mesh_count_inverted(tp, m->xyz);
+        ASSERT_TRUE(before > 0);
+        for (int32_t w = 0; w < m->nv; w++)
+            movable[w] = c == 1 ? slide_kind(sl, w) != SLIDE_CORNER
+                                : !(tp->vflag[w] & MESH_V_BOUNDARY);
+        ASSERT_OK(finish_untangle(tp, movable, c == 1 ? sl : NULL, m->xyz, h,
+                                  c == 1 ? &after : &held));
+        ASSERT_EQ_INT(c == 1 ? after : held, mesh_count_inverted(tp, m->xyz));
+        for (int32_t w = 0; w < m->nv; w++) {
+            const double *p = m->xyz + 3 * (size_t)w, *q = x0 + 3 * (size_t)w;
+            ASSERT_TRUE(isfinite(p[0]) && isfinite(p[1]) && isfinite(p[2]));
+            for (int k = 0; k < 3; k++) /* a face plane's coordinate is kept */
+                if (q[k] == 0.0 || q[k] == 1.0)
+                    ASSERT_TRUE(p[k] == q[k] || (tp->vflag[w] & MESH_V_BOUNDARY) == 0);
+            if (slide_kind(sl, w) == SLIDE_CORNER || (c == 0 && !movable[w]))
+                ASSERT_TRUE(p[0] == q[0] && p[1] == q[1] && p[2] == q[2]);
+        }
+        slide_free(sl);
+        mesh_topo_free(tp);
+        free(x0);
+        free(movable);
+        mesh_free(m);
+    }
+    printf("  # inverted tets %d -> %d with the boundary held, %d sliding\n", (int)before,
+           (int)held, (int)after);
+    ASSERT_TRUE(held > 0);
+    ASSERT_EQ_INT(after, 0);
 }
 
 /* The same joint moves on the tets' mean ratios lift the worst of them; the
@@ -704,4 +757,5 @@ TEST_MAIN("opt", T(fixed_boundary_untangles_without_folding),
           T(regions_and_connectivity_untouched), T(cancel_from_progress_callback),
           T(cancel_flag_before_start), T(solvers_and_metrics_all_work),
           T(harmonic_guidance_runs), T(bad_options_and_bad_mesh_rejected),
-          T(max_min_volume_untangles_a_grid), T(allocation_failures_are_clean))
+          T(max_min_volume_untangles_a_grid),
+          T(untangling_slides_boundary_vertices_on_their_faces), T(allocation_failures_are_clean))
