@@ -243,12 +243,12 @@ qdc_status local_pass(ctx_t *c, opt_result *res, opt_progress *r, int *next)
      * tets' boundary corners free to leave their surface within the bound
      * (the default's: OPT_HAUSD_STUCK) */
     for (size_t i = 0; i < sizeof local_rings / sizeof local_rings[0] && !big; i++) {
-        double wide = c->autob && OPT_HAUSD_STUCK > c->hbound ? OPT_HAUSD_STUCK : c->hbound;
+        double wide =
+            c->autob && OPT_HAUSD_STUCK > c->hbound ? OPT_HAUSD_STUCK : c->hbound;
         if (st == QDC_OK && c->best.n_inverted > 0 && res->stop != OPT_STOP_CANCELLED)
             st = local_round(c, res, r, next, local_rings[i], c->hbound, 0, &big);
         if (st == QDC_OK && wide > 0 && (c->sl || wide > c->hbound) && !big &&
-            c->best.n_inverted > 0 &&
-            res->stop != OPT_STOP_CANCELLED)
+            c->best.n_inverted > 0 && res->stop != OPT_STOP_CANCELLED)
             st = local_round(c, res, r, next, local_rings[i], wide, c->sl != NULL, &big);
     }
     return st;

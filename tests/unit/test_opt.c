@@ -758,4 +758,5 @@ TEST_MAIN("opt", T(fixed_boundary_untangles_without_folding),
           T(cancel_flag_before_start), T(solvers_and_metrics_all_work),
           T(harmonic_guidance_runs), T(bad_options_and_bad_mesh_rejected),
           T(max_min_volume_untangles_a_grid),
-          T(untangling_slides_boundary_vertices_on_their_faces), T(allocation_failures_are_clean))
+          T(untangling_slides_boundary_vertices_on_their_faces),
+          T(allocation_failures_are_clean))
