@@ -11,10 +11,11 @@ for k in truncated magic sizes index nan empty badjson jsonindex mediterr garbag
     $MT bad $k "$MESH" "$TMP/bad.$k"
 done
 $MT json "$MESH" "$TMP/big.json"   # ~1.3 MB, over the 1 MB JSON cap below
-# Nastran with a malformed coordinate on line 4, I-DEAS with a 10-node tet
+# Nastran with a malformed coordinate on line 4, I-DEAS with a linear (FE 111)
+# and a parabolic (FE 118) tet in one file (line 10)
 printf '$ Nastran\nBEGIN BULK\nGRID    1       0       0.      0.      0.\nGRID    2       0       1.x     0.      0.\n' > "$TMP/bad.bdf"
-printf '    -1\n  2411\n%10d%10d%10d%10d\n%25s%25s%25s\n    -1\n    -1\n  2412\n%10d%10d%10d%10d%10d%10d\n' \
-    1 1 1 11 0.0D+00 0.0D+00 0.0D+00 1 118 1 1 7 10 > "$TMP/bad.unv"
+printf '    -1\n  2411\n%10d%10d%10d%10d\n%25s%25s%25s\n    -1\n    -1\n  2412\n%10d%10d%10d%10d%10d%10d\n%10d%10d%10d%10d\n%10d%10d%10d%10d%10d%10d\n' \
+    1 1 1 11 0.0D+00 0.0D+00 0.0D+00 1 111 1 1 7 4 1 1 1 1 2 118 1 1 7 10 > "$TMP/bad.unv"
 
 start_qdcd "$TMP/d" --workers 1 --max-json 1000000 --max-body 3000000 --max-tets 30000 ||
     { fail "start" "$(tail -3 "$TMP/d.log")"; exit 1; }
@@ -44,7 +45,7 @@ expect "JSON tet index out of range" 400 '.index == 1' "$(submit "$TMP/bad.jsoni
 expect "Medit syntax error" 400 '.line > 4' "$(submit "$TMP/bad.mediterr" model/x-medit "" "$TMP/out")"
 expect "Nastran malformed number (sniffed)" 400 '.line == 4 and .column == 25 and (.detail | test("1.x"))' \
     "$(submit "$TMP/bad.bdf" application/octet-stream "" "$TMP/out")"
-expect "I-DEAS 10-node tet (?format=unv): unsupported" 415 '.line == 8 and (.detail | test("FE descriptor 118"))' \
+expect "I-DEAS linear and parabolic tets (?format=unv): unsupported" 415 '.line == 10 and (.detail | test("FE descriptor 111"))' \
     "$(submit "$TMP/bad.unv" application/octet-stream "format=unv" "$TMP/out")"
 expect "JSON over the cap" 413 '.max_bytes == 1000000 and .use == "application/vnd.qdc.mesh" and (.detail | test("vnd.qdc.mesh"))' \
     "$(submit "$TMP/big.json" application/json "" "$TMP/out")"
