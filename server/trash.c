@@ -7,11 +7,9 @@
 
 #include "util.h"
 
-#include <dirent.h>
 #include <errno.h>
 #include <stdio.h>
 #include <string.h>
-#include <unistd.h>
 
 static struct {
     pthread_mutex_t lock;
@@ -26,21 +24,7 @@ static struct {
  * dir_remove); stray files too. */
 static void empty_trash(void)
 {
-    DIR *d = opendir(t.dir);
-    struct dirent *e;
-    char p[4500];
-
-    if (!d)
-        return;
-    while ((e = readdir(d)) != NULL) {
-        if (e->d_name[0] == '.' &&
-            (!e->d_name[1] || (e->d_name[1] == '.' && !e->d_name[2])))
-            continue;
-        snprintf(p, sizeof p, "%s/%s", t.dir, e->d_name);
-        if (unlink(p))
-            dir_remove(p);
-    }
-    closedir(d);
+    dir_clear(t.dir, 1);
 }
 
 int trash_open(const qdcd *q)

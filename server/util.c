@@ -225,11 +225,11 @@ int dir_ensure(const char *path)
     return 0;
 }
 
-void dir_remove(const char *path)
+void dir_clear(const char *path, int depth)
 {
     DIR *d = opendir(path);
     struct dirent *e;
-    char p[4096];
+    char p[4608];
 
     if (!d)
         return;
@@ -238,8 +238,16 @@ void dir_remove(const char *path)
             (!e->d_name[1] || (e->d_name[1] == '.' && !e->d_name[2])))
             continue;
         snprintf(p, sizeof p, "%s/%s", path, e->d_name);
-        unlink(p);
+        if (unlink(p) && depth > 0) {
+            dir_clear(p, depth - 1);
+            rmdir(p);
+        }
     }
     closedir(d);
+}
+
+void dir_remove(const char *path)
+{
+    dir_clear(path, 0);
     rmdir(path);
 }

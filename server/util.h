@@ -32,6 +32,9 @@ int fsync_parent(const char *path);
 char *file_read_all(const char *path, size_t *len);
 /* mkdir -p for one level below an existing parent; 0 if it exists. */
 int dir_ensure(const char *path);
+/* Remove the entries of a directory: files, and subdirectories down to
+ * `depth` levels (each emptied the same way, then removed). */
+void dir_clear(const char *path, int depth);
 /* Remove a directory and the regular files in it (one level). */
 void dir_remove(const char *path);
 

@@ -49,36 +49,11 @@ static qdc_status rd(const char *s, meshio_format f, mesh_t **m, qdc_error *err)
 
 static void check_mesh(const mesh_t *m)
 {
-    static const double xyz[15] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 1, 1, 1};
-    static const int32_t tets[8] = {0, 1, 2, 3, 4, 1, 2, 3};
-
-    ASSERT_EQ_INT(m->nv, 5);
-    ASSERT_EQ_INT(m->nt, 2);
-    ASSERT_TRUE(memcmp(m->xyz, xyz, sizeof xyz) == 0);
-    ASSERT_TRUE(memcmp(m->tets, tets, sizeof tets) == 0);
-    ASSERT_TRUE(m->region != NULL);
-    ASSERT_EQ_INT(m->region[0], 1);
-    ASSERT_EQ_INT(m->region[1], 2);
+    ASSERT_TRUE(is_two_tets(m, 1, 2));
     ASSERT_EQ_INT(m->ntri, 1);
     ASSERT_EQ_INT(m->tris[0], 1);
     ASSERT_EQ_INT(m->tris[2], 3);
     ASSERT_EQ_INT(m->tri_ref[0], 7);
-}
-
-/* doc with its first `from` replaced by `to` (malloc'ed), or NULL. */
-static char *replaced(const char *doc, const char *from, const char *to)
-{
-    char *d = malloc(strlen(doc) + strlen(to) + 1);
-    const char *at = strstr(doc, from);
-
-    if (!d || !at) {
-        free(d);
-        return NULL;
-    }
-    memcpy(d, doc, (size_t)(at - doc));
-    strcpy(d + (at - doc), to);
-    strcat(d, at + strlen(from));
-    return d;
 }
 
 /* doc read with its source, vertex v's coordinate a set to x and written

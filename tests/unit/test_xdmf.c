@@ -91,38 +91,6 @@ static qdc_status rd(const char *s, mesh_t **m, qdc_error *err)
     return meshio_read_ex(s, strlen(s), MESHIO_AUTO, &o, m, err);
 }
 
-static void check_two(const mesh_t *m, int r0, int r1)
-{
-    static const double xyz[15] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 1, 1, 1};
-    static const int32_t tets[8] = {0, 1, 2, 3, 4, 1, 2, 3};
-
-    ASSERT_EQ_INT(m->nv, 5);
-    ASSERT_EQ_INT(m->nt, 2);
-    ASSERT_TRUE(memcmp(m->xyz, xyz, sizeof xyz) == 0);
-    ASSERT_TRUE(memcmp(m->tets, tets, sizeof tets) == 0);
-    ASSERT_TRUE(m->region != NULL);
-    ASSERT_EQ_INT(m->region[0], r0);
-    ASSERT_EQ_INT(m->region[1], r1);
-    ASSERT_TRUE(m->mid == NULL);
-}
-
-/* s with the first `from` replaced by `to` (malloc'd; NULL if from is not
- * in s). */
-static char *edit(const char *s, const char *from, const char *to)
-{
-    const char *at = strstr(s, from);
-    char *d = malloc(strlen(s) + strlen(to) + 1);
-
-    if (!at || !d) {
-        free(d);
-        return NULL;
-    }
-    memcpy(d, s, (size_t)(at - s));
-    strcpy(d + (at - s), to);
-    strcat(d, at + strlen(from));
-    return d;
-}
-
 TEST(three_forms_read)
 {
     const char *docs[3] = {meshio3, dolfin2, dolfinx};
@@ -133,7 +101,8 @@ TEST(three_forms_read)
     for (int k = 0; k < 3; k++) {
         ASSERT_EQ_INT(meshio_sniff(docs[k], strlen(docs[k])), MESHIO_XDMF);
         ASSERT_OK(rd(docs[k], &m, &err));
-        check_two(m, reg[k][0], reg[k][1]);
+        ASSERT_TRUE(is_two_tets(m, reg[k][0], reg[k][1]));
+        ASSERT_TRUE(m->mid == NULL);
         ASSERT_EQ_INT(meshio_source_format(m), MESHIO_XDMF);
         ASSERT_TRUE(meshio_splices(m, MESHIO_XDMF, NULL));
         mesh_free(m);
@@ -155,7 +124,7 @@ TEST(spliced_geometry_only)
         mesh_t *m;
         qdc_error err;
         sink s = {0};
-        char *want = edit(docs[k], from[k], to[k]);
+        char *want = replaced(docs[k], from[k], to[k]);
         ASSERT_TRUE(want != NULL);
         ASSERT_OK(rd(docs[k], &m, &err));
         ASSERT_OK(meshio_write(m, MESHIO_AUTO, sink_write, &s, &err));
@@ -261,7 +230,7 @@ TEST(refusals_say_where)
     };
 
     for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
-        char *d = edit(dolfin2, cases[k].from, cases[k].to);
+        char *d = replaced(dolfin2, cases[k].from, cases[k].to);
         mesh_t *m = NULL;
         qdc_error err;
         qdc_status st;

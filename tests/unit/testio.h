@@ -606,4 +606,44 @@ static inline int replay_meshio(const char *buf, size_t len)
     return 0;
 }
 
+/* The two-tet case of the format tests: points a = 0, b = x, c = y, d = z,
+ * e = (1,1,1) and tets a b c d, e b c d in regions r0 and r1. 1 if m is
+ * exactly that; what differs is printed. */
+static inline int is_two_tets(const mesh_t *m, int r0, int r1)
+{
+    static const double xyz[15] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 1, 1, 1};
+    static const int32_t tets[8] = {0, 1, 2, 3, 4, 1, 2, 3};
+
+    if (m->nv != 5 || m->nt != 2) {
+        printf("  %d vertices, %d tets; want 5, 2\n", (int)m->nv, (int)m->nt);
+        return 0;
+    }
+    if (memcmp(m->xyz, xyz, sizeof xyz) || memcmp(m->tets, tets, sizeof tets)) {
+        printf("  not the two tets' coordinates or corners\n");
+        return 0;
+    }
+    if (!m->region || m->region[0] != r0 || m->region[1] != r1) {
+        printf("  regions not %d, %d\n", r0, r1);
+        return 0;
+    }
+    return 1;
+}
+
+/* doc with its first `from` replaced by `to` (malloc'd), or NULL if from is
+ * not in doc. */
+static inline char *replaced(const char *doc, const char *from, const char *to)
+{
+    char *d = malloc(strlen(doc) + strlen(to) + 1);
+    const char *at = strstr(doc, from);
+
+    if (!d || !at) {
+        free(d);
+        return NULL;
+    }
+    memcpy(d, doc, (size_t)(at - doc));
+    strcpy(d + (at - doc), to);
+    strcat(d, at + strlen(from));
+    return d;
+}
+
 #endif
