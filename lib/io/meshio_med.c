@@ -77,8 +77,8 @@ static qdc_status med_frames(const char *buf, size_t len, h5_frame *fr, qdc_erro
 
     if (len >= 8 && memcmp(buf, hdf5_magic, 8) == 0)
         return fail_bin(err, QDC_EFORMAT, 0,
-                        "MED: an HDF5 file, read through qdc-h5: the qdc command does "
-                        "it (qdcd takes no MED upload)");
+                        "MED: an HDF5 file, read through the qdc-h5 program (the qdc "
+                        "command and qdcd run it)");
     st = h5_frames(buf, len, "MED", names, "fiiii", F_COUNT, fr, err);
     if (st != QDC_OK)
         return st;
@@ -209,5 +209,6 @@ const meshio_fmt fmt_med = {
     .magic = 1,
     .sniff = sniff_med,
     .read = read_med,
+    .input = "input.med", /* read by qdcd's qdc-h5 child (server/h5job.h) */
     .splices = 1,
 };

@@ -4,8 +4,8 @@
 # bytes, optimized and written back with only the coordinate dataset changed
 # (h5py compares every other dataset and attribute; meshio reads the same
 # cells and tags and the coordinates of qdc's own Medit output of the run);
-# refusals: an HDF5 file that is no MED, qdc-h5 missing, MED through qdcd's
-# library reader. A .med.gz file and MED on standard input are read through a
+# refusals: an HDF5 file that is no MED, qdc-h5 missing. A .med.gz file and
+# MED on standard input are read through a
 # private temporary file that no path leaves behind. XDMF whose heavy data is
 # in HDF5 (meshio's default): read from the .h5 beside it, written back as
 # the .xdmf (only the .h5 name changed) and a copy of the .h5 (only the
