@@ -77,8 +77,8 @@ static qdc_status med_frames(const char *buf, size_t len, h5_frame *fr, qdc_erro
 
     if (len >= 8 && memcmp(buf, hdf5_magic, 8) == 0)
         return fail_bin(err, QDC_EFORMAT, 0,
-                        "MED: an HDF5 file, read through the qdc-h5 program (the qdc "
-                        "command and qdcd run it)");
+                        "MED: an HDF5 file, read through qdc-h5 (the qdc command and "
+                        "qdcd run it)");
     st = h5_frames(buf, len, "MED", names, "fiiii", F_COUNT, fr, err);
     if (st != QDC_OK)
         return st;

@@ -1293,7 +1293,8 @@ static meshio_format sniff_xdmf(const char *buf, size_t len, size_t i)
 const meshio_fmt fmt_xdmf = {
     .name = "xdmf",
     .aliases = "xmf",
-    .about = "XDMF 2/3, tetrahedra with the data inline (XML; HDF5 heavy data refused)",
+    .about = "XDMF 2/3, tetrahedra with the data inline (XML), or in HDF5 through qdc-h5 "
+             "(command line only)",
     .ext = "xdmf",
     .input = "input.xdmf",
     .sniff = sniff_xdmf,
