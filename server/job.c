@@ -13,6 +13,7 @@
 #include "problem.h"
 
 #include "child.h"
+#include "h5job.h"
 #include "qdc.h"
 #include "sha256.h"
 #include "shared.h"
@@ -388,6 +389,59 @@ static int tetrahedralize(worker *w, job_rec *j, opt_options *opts, mesh_t **out
     return 0;
 }
 
+/* A MED job's mesh: qdc-h5 reads DATA/jobs/ID/input.med into input.frames
+ * in a child process (h5job.h), whose time comes out of the job's budget;
+ * the mesh is then checked as an upload is at intake. 0 with *out set, 1 when
+ * the job failed (j->error set), 2 when it was cancelled. */
+static int med_load(worker *w, job_rec *j, opt_options *opts, mesh_t **out)
+{
+    qdcd *q = w->pool->q;
+    char fr[4200], detail[600];
+    double budget = opts->time_limit > 0 ? opts->time_limit : q->cfg.job_time_limit;
+    h5job_outcome ho;
+    size_t len = 0;
+    char *buf;
+    qdc_error err;
+    qdc_status st;
+
+    h5job_run(q, j->id, NULL, NULL, mono_now() + budget, &w->cancel, &ho);
+    if (ho.status < 0)
+        return 2;
+    if (ho.status) {
+        problem(j, ho.status, ho.slug, "the MED file could not be read", ho.detail);
+        return 1;
+    }
+    job_path(q, j->id, H5JOB_FRAMES, fr, sizeof fr);
+    buf = file_read_all(fr, &len);
+    qdc_error_clear(&err);
+    st = buf ? meshio_read(buf, len, MESHIO_MED, out, &err)
+             : qdc_fail(&err, QDC_EIO, "qdc-h5 left no mesh");
+    free(buf);
+    if (st == QDC_OK && ((*out)->nv > q->cfg.max_vertices || (*out)->nt > q->cfg.max_tets))
+        st = qdc_fail(&err, QDC_ETOOBIG,
+                      "%d vertices and %d tets; this server accepts %lld and %lld at most",
+                      (*out)->nv, (*out)->nt, (long long)q->cfg.max_vertices,
+                      (long long)q->cfg.max_tets);
+    if (st == QDC_OK)
+        st = mesh_validate(*out, NULL, &err);
+    if (st != QDC_OK) {
+        mesh_free(*out);
+        *out = NULL;
+        snprintf(detail, sizeof detail, "%s", err.msg);
+        problem(j, qdc_status_http(st) < 500 ? qdc_status_http(st) : 500,
+                st == QDC_ETOOBIG  ? "too-big"
+                : st == QDC_EMESH  ? "invalid-mesh"
+                : st == QDC_EPARSE ? "malformed-mesh"
+                                   : "internal",
+                "the MED file could not be read", detail);
+        return 1;
+    }
+    j->nv = (*out)->nv;
+    j->nt = (*out)->nt;
+    opts->time_limit = budget - ho.seconds > 0.001 ? budget - ho.seconds : 0.001;
+    return 0;
+}
+
 /* One run of a job: what its steps share. */
 typedef struct {
     worker *w;
@@ -481,6 +535,10 @@ static run_step run_load(run_state *s)
     }
     meshio_format fin = meshio_format_from_name(s->j->format);
     double t0 = mono_now();
+    if (fin == MESHIO_MED) {
+        int t = med_load(s->w, s->j, &s->opts, &s->m);
+        return t == 1 ? RUN_FAILED : t == 2 ? RUN_STOPPED : RUN_ON;
+    }
     if (read_intake(s, fin) == 0) {
         if (s->q->cfg.verbose)
             fprintf(stderr, "qdcd: job %s: input read from %s in %.3f s\n", s->j->id,

@@ -7,6 +7,7 @@
  * and a conversion is stored there for the other nodes. */
 #define _GNU_SOURCE
 #include "endpoints.h"
+#include "h5job.h"
 #include "handler.h"
 
 #include "job.h"
@@ -45,8 +46,34 @@ void result_stop(void)
 static meshio_format input_source(req *r, const job_rec *j, char *path, size_t cap)
 {
     int surf = job_is_surface(j->format);
-    job_path(r->q, j->id, surf ? JOB_INPUT_TETS : job_input_name(j->format), path, cap);
-    return surf ? MESHIO_QMESH : meshio_format_from_name(j->format);
+    meshio_format f = surf ? MESHIO_QMESH : meshio_format_from_name(j->format);
+
+    /* MED: the frames qdc-h5 read the upload into (h5job.h), not HDF5 */
+    job_path(r->q, j->id,
+             surf                  ? JOB_INPUT_TETS
+             : f == MESHIO_MED     ? H5JOB_FRAMES
+                                   : job_input_name(j->format),
+             path, cap);
+    return f;
+}
+
+/* m, read from a MED job's frames, saved as path: its frames written beside
+ * it, and qdc-h5 puts their coordinates into a copy of the upload (in a
+ * child process, h5job.h). */
+static qdc_status save_med(req *r, const job_rec *j, const mesh_t *m, const char *path,
+                           qdc_error *e)
+{
+    char fr[4400];
+    h5job_outcome ho;
+    qdc_status st;
+
+    snprintf(fr, sizeof fr, "%s.frames", path);
+    st = meshio_save(fr, MESHIO_MED, m, e);
+    if (st != QDC_OK)
+        return st;
+    h5job_run(r->q, j->id, fr, path, mono_now() + r->q->cfg.job_time_limit, NULL, &ho);
+    unlink(fr);
+    return ho.status ? qdc_fail(e, QDC_EIO, "%s", ho.detail) : QDC_OK;
 }
 
 /* 409 / 410 for a job without a result (or, GET /input, an input mesh) to
@@ -359,7 +386,9 @@ static enum MHD_Result process_convert(struct MHD_Connection *c, req *r)
     qdc_error_clear(&e);
     double t0 = mono_now();
     st = convert_source(r, &j, &m, &e);
-    if (st == QDC_OK)
+    if (st == QDC_OK && r->res_fmt == MESHIO_MED)
+        st = save_med(r, &j, m, path, &e);
+    else if (st == QDC_OK)
         st = meshio_save(path, r->res_fmt, m, &e);
     mesh_free(m);
     if (st == QDC_OK && sha256_file_hex(path, hex))

@@ -674,6 +674,20 @@ static int check_upload(struct MHD_Connection *c, req *r, const char *buf, size_
         return 0;
     }
 
+    if (u->fmt == MESHIO_MED) {
+        /* HDF5 is read by the worker's qdc-h5 child (h5job.h), never here */
+        static const char sig[8] = {'\x89', 'H', 'D', 'F', '\r', '\n', '\x1a', '\n'};
+        if (len < 8 || memcmp(buf, sig, 8) != 0) {
+            st = qdc_fail(&e, QDC_EPARSE, "MED: not an HDF5 file");
+            *ret = mesh_problem(c, r, st, &e);
+            return 1;
+        }
+        j->nv = j->nt = 0; /* known once qdc-h5 read it */
+        snprintf(j->notes, sizeof j->notes,
+                 "MED (HDF5): read by qdc-h5 in a child process before the optimization");
+        return 0;
+    }
+
     mesh_t *m = NULL;
     sbuf notes = {0};
     meshio_options mo = {.log = collect_note, .log_ctx = &notes};
@@ -791,10 +805,10 @@ static int inspect_upload(struct MHD_Connection *c, req *r, job_rec *j,
                            "the body is not a mesh or surface this server recognises; "
                            "set Content-Type to one of the accepted types");
     else if (u->fmt != MESHIO_AUTO && !job_uploadable(u->fmt))
-        /* MED: HDF5 is read by the qdc command's qdc-h5 child, not by qdcd */
-        *ret = unsupported(c, r,
-                           "this format is not taken as an upload (MED: read by the qdc "
-                           "command; convert it first, e.g. qdc convert in.med in.vtu)");
+        *ret = unsupported(c, r, "this format is not taken as an upload");
+    else if (plain && u->fmt == MESHIO_MED)
+        /* the worker's qdc-h5 child reads the stored upload as it is */
+        *ret = unsupported(c, r, "MED is read uncompressed; send it without gzip");
     else if (u->fmt == MESHIO_JSON && (int64_t)len > r->q->cfg.max_json)
         *ret = too_big(c, r, MESHIO_JSON, plain != NULL, 0);
     else if (plain && u->sfmt != SURFACE_AUTO)

@@ -4,9 +4,26 @@
  * child and talks to it over a pipe in a framed form that libqdc parses
  * (lib/io/meshio_med.c says what it is).
  *
- *   qdc-h5 med-read FILE.med          the mesh's datasets, framed, on stdout
- *   qdc-h5 med-write IN.med OUT.med   OUT = IN with its coordinates replaced
- *                                     by the "coords" frame read from stdin
+ *   qdc-h5 [-n NAME] med-read FILE.med          the mesh's datasets, framed,
+ *                                               on stdout
+ *   qdc-h5 [-n NAME] med-write IN.med OUT.med   OUT = IN with its coordinates
+ *                                               replaced by the "coords" frame
+ *                                               read from stdin
+ *
+ *   qdc-h5 [-n NAME] h5-read FILE.h5 NAME:T:DIMS:PATH...
+ *                       XDMF's heavy data: each dataset PATH, checked to be
+ *                       of shape DIMS ("356x3"), as frame NAME of type T
+ *   qdc-h5 [-n NAME] h5-write IN.h5 OUT.h5 FRAME PATH
+ *                       OUT = IN with dataset PATH replaced by the float64
+ *                       frame FRAME read from stdin
+ *
+ * Options before the command: -i FILE, -o FILE (standard input, output from
+ * and to FILE); --sandbox BYTES (qdcd's child: an address-space limit of
+ * BYTES, killed with its parent, and no network: a network namespace of its
+ * own, when the kernel lets it make one).
+ *
+ * NAME: what messages call the input (qdc gives a private copy of a .med.gz
+ * file as /proc/self/fd/3, and its own name here).
  *
  * MED (Salome, Code_Aster): the first mesh of /ENS_MAA, its first step;
  * NOE/COO (x of every node, then y, then z), MAI/TE4 and MAI/T10 NOD (node k
@@ -23,6 +40,10 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sched.h>
+#include <signal.h>
+#include <sys/prctl.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -31,6 +52,9 @@
 #define MAX_VALUES ((hssize_t)1 << 31)
 
 static const char magic[8] = {'Q', 'D', 'C', 'H', '5', 'v', '1', '\n'};
+
+/* -n NAME, else NULL: what messages call the input file */
+static const char *shown;
 
 static void die(const char *fmt, ...) __attribute__((noreturn, format(printf, 1, 2)));
 
@@ -178,9 +202,46 @@ static void mesh_base(hid_t f, char *base, size_t size, int *dim)
     *dim = esp;
 }
 
-static void med_read(const char *file)
+/* fname opened read-only. A link to a deleted file (qdc's private copy,
+ * /proc/self/fd/3) is read whole and opened as a file image: HDF5 resolves a
+ * link's target by its name, which such a file no longer has. */
+static hid_t open_ro(const char *fname)
 {
-    hid_t f = H5Fopen(file, H5F_ACC_RDONLY, H5P_DEFAULT);
+    struct stat sb;
+    hid_t f = H5Fopen(fname, H5F_ACC_RDONLY, H5P_DEFAULT), fapl;
+    unsigned char *img;
+    size_t got = 0;
+    int fd;
+
+    if (f >= 0 || lstat(fname, &sb) != 0 || !S_ISLNK(sb.st_mode))
+        return f;
+    fd = open(fname, O_RDONLY);
+    if (fd < 0 || fstat(fd, &sb) != 0 || !S_ISREG(sb.st_mode) || sb.st_size <= 0)
+        return -1;
+    img = xmalloc((size_t)sb.st_size);
+    while (got < (size_t)sb.st_size) {
+        ssize_t k = read(fd, img + got, (size_t)sb.st_size - got);
+        if (k < 0 && errno == EINTR)
+            continue;
+        if (k <= 0)
+            die("%s: %s", shown ? shown : fname, k ? strerror(errno) : "cut short");
+        got += (size_t)k;
+    }
+    close(fd);
+    fapl = H5Pcreate(H5P_FILE_ACCESS);
+    if (fapl < 0 || H5Pset_fapl_core(fapl, 1 << 20, 0) < 0 ||
+        H5Pset_file_image(fapl, img, got) < 0)
+        die("cannot set up an in-memory HDF5 file");
+    f = H5Fopen("qdc-h5 image", H5F_ACC_RDONLY, fapl); /* a name, not a file */
+    H5Pclose(fapl);
+    free(img); /* H5Pset_file_image took a copy */
+    return f;
+}
+
+static void med_read(const char *fname)
+{
+    hid_t f = open_ro(fname);
+    const char *file = shown ? shown : fname;
     static const char *const types[2] = {"TE4", "T10"};
     static const int nodes[2] = {4, 10};
     char base[1100], path[1200];
@@ -279,32 +340,39 @@ static void copy_file(const char *from, int to)
     close(fd);
 }
 
-static void med_write(const char *in, const char *out)
+/* The values of the frame named want in the framed data of stdin (b, len):
+ * a pointer into b and their count. */
+static const unsigned char *stdin_frame(const unsigned char *b, size_t len,
+                                        const char *want, uint64_t *count)
 {
-    size_t len, pos = sizeof magic;
-    unsigned char *b = slurp_stdin(&len);
-    const unsigned char *xyz = NULL;
-    uint64_t n = 0;
-    char tmp[4200], base[1100], path[1200];
-    int fd, dim;
-    hid_t f, d, sp;
-    double *cols;
+    size_t pos = sizeof magic;
+    const unsigned char *vals = NULL;
 
     if (len < sizeof magic || memcmp(b, magic, sizeof magic) != 0)
         die("standard input is not framed data");
     while (len - pos >= 32) {
         uint64_t c = le64(b + pos + 24);
-        if (c > (len - pos - 32) / 8)
+        uint64_t words = b[pos + 16] == 'b' ? c / 8 + (c % 8 != 0) : c;
+        if (words > (len - pos - 32) / 8)
             die("a frame runs past the end of the input");
-        if (strncmp((const char *)b + pos, "coords", 16) == 0) {
-            xyz = b + pos + 32;
-            n = c;
+        if (strncmp((const char *)b + pos, want, 16) == 0 && b[pos + 16] == 'f') {
+            vals = b + pos + 32;
+            *count = c;
         }
-        pos += 32 + (size_t)c * 8;
+        pos += 32 + (size_t)words * 8;
     }
-    if (!xyz || n % 3)
-        die("no coordinates in the input");
-    if (snprintf(tmp, sizeof tmp, "%s.qdc-h5.XXXXXX", out) >= (int)sizeof tmp)
+    if (!vals)
+        die("no frame %s in the input", want);
+    return vals;
+}
+
+/* A copy of in beside out (its temporary name into tmp), opened read-write. */
+static hid_t open_copy(const char *in, const char *out, char *tmp, size_t size)
+{
+    int fd;
+    hid_t f;
+
+    if (snprintf(tmp, size, "%s.qdc-h5.XXXXXX", out) >= (int)size)
         die("%s: name too long", out);
     fd = mkstemp(tmp);
     if (fd < 0)
@@ -317,29 +385,36 @@ static void med_write(const char *in, const char *out)
     f = H5Fopen(tmp, H5F_ACC_RDWR, H5P_DEFAULT);
     if (f < 0) {
         unlink(tmp);
-        die("%s: not an HDF5 file", in);
+        die("%s: not an HDF5 file", shown ? shown : in);
     }
-    mesh_base(f, base, sizeof base, &dim);
-    snprintf(path, sizeof path, "%s/NOE/COO", base);
-    d = H5Dopen2(f, path, H5P_DEFAULT);
-    sp = d < 0 ? -1 : H5Dget_space(d);
+    return f;
+}
+
+/* n doubles (vals, native order) over the dataset path of the copy f. */
+static void put_dataset(hid_t f, const char *tmp, const char *path, const double *vals,
+                        uint64_t n, const char *in)
+{
+    hid_t d = H5Dopen2(f, path, H5P_DEFAULT);
+    hid_t sp = d < 0 ? -1 : H5Dget_space(d);
+
     if (sp < 0 || H5Sget_simple_extent_npoints(sp) != (hssize_t)n) {
         unlink(tmp);
-        die("%s: the coordinates given are not as many as the file's", in);
+        die("%s: %s: the coordinates given are not as many as the file's",
+            shown ? shown : in, path);
     }
-    cols = xmalloc((size_t)n * 8);
-    for (uint64_t v = 0; v < n / 3; v++)
-        for (int a = 0; a < 3; a++) {
-            uint64_t u = le64(xyz + 8 * (3 * v + (uint64_t)a));
-            memcpy(&cols[(uint64_t)a * (n / 3) + v], &u, 8);
-        }
-    if (H5Dwrite(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, cols) < 0) {
+    if (H5Dwrite(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, vals) < 0) {
         unlink(tmp);
         die("cannot write %s", path);
     }
-    free(cols);
     H5Sclose(sp);
     H5Dclose(d);
+}
+
+/* Close the copy f and rename it over out. */
+static void close_copy(hid_t f, const char *tmp, const char *out)
+{
+    int fd;
+
     if (H5Fclose(f) < 0) {
         unlink(tmp);
         die("cannot close %s", tmp);
@@ -349,6 +424,135 @@ static void med_write(const char *in, const char *out)
         unlink(tmp);
         die("cannot save %s: %s", out, strerror(errno));
     }
+}
+
+static void med_write(const char *in, const char *out)
+{
+    size_t len;
+    unsigned char *b = slurp_stdin(&len);
+    const unsigned char *xyz;
+    uint64_t n = 0;
+    char tmp[4200], base[1100], path[1200];
+    int dim;
+    hid_t f;
+    double *cols;
+
+    xyz = stdin_frame(b, len, "coords", &n);
+    if (n % 3)
+        die("no coordinates in the input");
+    f = open_copy(in, out, tmp, sizeof tmp);
+    mesh_base(f, base, sizeof base, &dim);
+    snprintf(path, sizeof path, "%s/NOE/COO", base);
+    cols = xmalloc((size_t)n * 8);
+    for (uint64_t v = 0; v < n / 3; v++)
+        for (int a = 0; a < 3; a++) {
+            uint64_t u = le64(xyz + 8 * (3 * v + (uint64_t)a));
+            memcpy(&cols[(uint64_t)a * (n / 3) + v], &u, 8);
+        }
+    put_dataset(f, tmp, path, cols, n, in);
+    free(cols);
+    close_copy(f, tmp, out);
+    free(b);
+}
+
+/* XDMF's heavy data: the datasets specs name ("NAME:T:DIMS:PATH", T 'f' or
+ * 'i', DIMS "356x3" as the XDMF gives them), each checked to have that
+ * shape, framed as NAME on stdout. */
+static void h5_read(const char *fname, int nspec, char **spec)
+{
+    const char *file = shown ? shown : fname;
+    struct stat sb;
+    hid_t f;
+
+    if (stat(fname, &sb) != 0)
+        die("%s: %s", file, strerror(errno));
+    f = H5Fopen(fname, H5F_ACC_RDONLY, H5P_DEFAULT);
+    if (f < 0)
+        die("%s: not an HDF5 file, or unreadable", file);
+    put_all(magic, sizeof magic);
+    for (int k = 0; k < nspec; k++) {
+        char name[17], want[160] = "", have[160] = "";
+        const char *p = spec[k], *c1 = strchr(p, ':'), *c2, *c3, *path;
+        hsize_t dims[H5S_MAX_RANK];
+        unsigned long long xd[4];
+        int rank, nd = 0, same;
+        hid_t d, sp, ty;
+        H5T_class_t cls;
+        uint64_t n;
+        void *vals;
+        c2 = c1 ? strchr(c1 + 1, ':') : NULL;
+        c3 = c2 ? strchr(c2 + 1, ':') : NULL;
+        if (!c3 || c1 - p > 16 || c2 != c1 + 2 || (c1[1] != 'f' && c1[1] != 'i'))
+            die("bad dataset spec %s (NAME:T:DIMS:PATH)", p);
+        snprintf(name, sizeof name, "%.*s", (int)(c1 - p), p);
+        for (const char *q = c2 + 1; q < c3 && nd < 4; nd++) {
+            char *e;
+            xd[nd] = strtoull(q, &e, 10);
+            if (e == q || (e < c3 && *e != 'x'))
+                die("bad dataset spec %s (NAME:T:DIMS:PATH)", p);
+            snprintf(want + strlen(want), sizeof want - strlen(want), "%s%llu",
+                     nd ? " x " : "", xd[nd]);
+            q = e < c3 ? e + 1 : c3;
+        }
+        path = c3 + 1;
+        d = H5Dopen2(f, path, H5P_DEFAULT);
+        if (d < 0)
+            die("%s: no dataset %s", file, path);
+        sp = H5Dget_space(d);
+        rank = sp < 0 ? -1 : H5Sget_simple_extent_ndims(sp);
+        if (rank < 0 || rank > H5S_MAX_RANK ||
+            H5Sget_simple_extent_dims(sp, dims, NULL) < 0)
+            die("%s:%s: cannot read its shape", file, path);
+        same = rank == nd;
+        for (int i = 0; i < rank; i++) {
+            snprintf(have + strlen(have), sizeof have - strlen(have), "%s%llu",
+                     i ? " x " : "", (unsigned long long)dims[i]);
+            same = same && i < nd && dims[i] == xd[i];
+        }
+        if (!same)
+            die("%s:%s: a dataset of shape %s, where the XDMF says %s", file, path,
+                rank ? have : "(scalar)", want);
+        ty = H5Dget_type(d);
+        cls = ty < 0 ? H5T_NO_CLASS : H5Tget_class(ty);
+        if (cls != H5T_INTEGER && (cls != H5T_FLOAT || c1[1] == 'i'))
+            die("%s:%s: a dataset of %s, where numbers%s are expected", file, path,
+                cls == H5T_FLOAT ? "floating-point numbers" : "another type",
+                c1[1] == 'i' ? " (integers)" : "");
+        H5Tclose(ty);
+        H5Sclose(sp);
+        H5Dclose(d);
+        vals = read_all(f, path, c1[1] == 'f' ? H5T_NATIVE_DOUBLE : H5T_NATIVE_INT64, &n);
+        frame(name, c1[1], vals, n);
+        free(vals);
+    }
+    H5Fclose(f);
+    if (fflush(stdout) != 0)
+        die("cannot write to standard output: %s", strerror(errno));
+}
+
+/* OUT = IN with the dataset path replaced by the float64 frame named fname
+ * of stdin (XDMF's geometry: the values in the dataset's own order). */
+static void h5_write(const char *in, const char *out, const char *fname,
+                     const char *path)
+{
+    size_t len;
+    unsigned char *b = slurp_stdin(&len);
+    const unsigned char *raw;
+    uint64_t n = 0;
+    char tmp[4200];
+    double *vals;
+    hid_t f;
+
+    raw = stdin_frame(b, len, fname, &n);
+    vals = xmalloc((size_t)n * 8);
+    for (uint64_t i = 0; i < n; i++) {
+        uint64_t u = le64(raw + 8 * i);
+        memcpy(&vals[i], &u, 8);
+    }
+    f = open_copy(in, out, tmp, sizeof tmp);
+    put_dataset(f, tmp, path, vals, n, in);
+    free(vals);
+    close_copy(f, tmp, out);
     free(b);
 }
 
@@ -359,12 +563,46 @@ int main(int argc, char **argv)
     if (*(const unsigned char *)&one != 1)
         die("big-endian hosts are not supported");
     H5Eset_auto2(H5E_DEFAULT, NULL, NULL); /* errors as our own one line */
+    while (argc > 2 && argv[1][0] == '-') {
+        const char *o = argv[1], *v = argv[2];
+        if (!strcmp(o, "-n")) {
+            shown = v;
+        } else if (!strcmp(o, "-i") || !strcmp(o, "-o")) {
+            if (!freopen(v, o[1] == 'i' ? "rb" : "wb", o[1] == 'i' ? stdin : stdout))
+                die("%s: %s", v, strerror(errno));
+        } else if (!strcmp(o, "--sandbox")) {
+            struct rlimit rl;
+            char *end;
+            rl.rlim_cur = rl.rlim_max = (rlim_t)strtoull(v, &end, 10);
+            if (*end || !rl.rlim_cur)
+                die("bad value for --sandbox: %s", v);
+            prctl(PR_SET_PDEATHSIG, SIGKILL);
+            if (getppid() == 1)
+                die("the parent is gone");
+            /* no network: a namespace of its own (root), or with a user
+             * namespace (unprivileged), when the kernel allows either */
+            if (unshare(CLONE_NEWNET) != 0)
+                (void)unshare(CLONE_NEWUSER | CLONE_NEWNET);
+            if (setrlimit(RLIMIT_AS, &rl) != 0)
+                die("cannot limit memory: %s", strerror(errno));
+        } else {
+            break;
+        }
+        argc -= 2;
+        argv += 2;
+    }
     if (argc == 3 && strcmp(argv[1], "med-read") == 0)
         med_read(argv[2]);
     else if (argc == 4 && strcmp(argv[1], "med-write") == 0)
         med_write(argv[2], argv[3]);
+    else if (argc >= 3 && strcmp(argv[1], "h5-read") == 0)
+        h5_read(argv[2], argc - 3, argv + 3);
+    else if (argc == 6 && strcmp(argv[1], "h5-write") == 0)
+        h5_write(argv[2], argv[3], argv[4], argv[5]);
     else
-        die("usage: qdc-h5 med-read FILE.med > FRAMES | qdc-h5 med-write IN.med OUT.med "
-            "< FRAMES");
+        die("usage (options: -n NAME, -i FILE, -o FILE, --sandbox BYTES): qdc-h5 [-n NAME] med-read FILE.med > FRAMES | qdc-h5 [-n NAME] "
+            "med-write IN.med OUT.med < FRAMES | qdc-h5 [-n NAME] h5-read FILE.h5 "
+            "NAME:T:DIMS:PATH... > FRAMES | qdc-h5 [-n NAME] h5-write IN.h5 OUT.h5 "
+            "FRAME PATH < FRAMES");
     return 0;
 }

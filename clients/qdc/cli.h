@@ -46,10 +46,29 @@ qdc_status cli_save_mesh(const char *out, meshio_format fout, const mesh_t *m,
  * to be read that way (fin MESHIO_MED, or a file that starts as HDF5 does).
  * cli_h5_read: the mesh (its source kept as mo says); cli_h5_write: m, read
  * by cli_h5_read, written to out as its MED file with the new coordinates. */
+/* A .gz file or standard input is inflated into a private temporary file
+ * first (cli_h5_bytes: 1 if buf is such an HDF5 file; cli_h5_read_bytes: read
+ * it, shown as name). */
 int cli_h5_wanted(const char *path, meshio_format fin);
+int cli_h5_bytes(const char *buf, size_t len);
 qdc_status cli_h5_read(const char *path, const meshio_options *mo, mesh_t **m,
                        qdc_error *err);
+qdc_status cli_h5_read_bytes(const char *name, const char *buf, size_t len,
+                             const meshio_options *mo, mesh_t **m, qdc_error *err);
 qdc_status cli_h5_write(const char *out, const mesh_t *m, qdc_error *err);
+
+/* XDMF whose heavy data is in HDF5 (h5.c): the datasets read by qdc-h5 from
+ * the .h5 file the XML names, in the .xdmf file's folder.
+ * cli_xdmf_h5_retry: after a read of path failed with st, the mesh read
+ * that way if path is such an XDMF file, else st (err as it was).
+ * cli_xdmf_h5_source: 1 if m is to be written so (read that way, splicing);
+ * cli_xdmf_h5_write: out (.xdmf) written with a copy of the .h5 file beside
+ * it, named as out with .h5 for its extension, only the coordinates
+ * changed. */
+qdc_status cli_xdmf_h5_retry(const char *path, qdc_status st, const meshio_options *mo,
+                             mesh_t **m, qdc_error *err);
+int cli_xdmf_h5_source(const mesh_t *m);
+qdc_status cli_xdmf_h5_write(const char *out, const mesh_t *m, qdc_error *err);
 
 /* One-line error in the form "qdc: FILE:LINE:COL: message". */
 void cli_error(const char *path, const qdc_error *err, qdc_status st);

@@ -395,6 +395,11 @@ qdc_status cli_read_mesh(const char *path, meshio_format fin, const meshio_optio
         (f == MESHIO_TETGEN || (f == MESHIO_AUTO && access(path, F_OK))))
         return meshio_load_ex(path, fin, mo, m, err); /* TetGen's two files */
     st = cli_slurp(path, &buf, &len, err);
+    if (st == QDC_OK && (f == MESHIO_AUTO || f == MESHIO_MED) && cli_h5_bytes(buf, len)) {
+        st = cli_h5_read_bytes(path, buf, len, mo, m, err); /* MED on standard input */
+        qdc_free(buf);
+        return st;
+    }
     if (st == QDC_OK)
         st = meshio_read_ex(buf, len, f, mo, m, err);
     if (st != QDC_OK) {
@@ -416,8 +421,10 @@ qdc_status cli_load_mesh(const char *path, meshio_format fin, const meshio_optio
     if (!is_stream(path) &&
         cli_h5_wanted(path, fin != MESHIO_AUTO ? fin : meshio_format_from_name(path)))
         return cli_h5_read(path, mo, m, err);
-    if (!is_stream(path))
-        return meshio_load_ex(path, fin, mo, m, err);
+    if (!is_stream(path)) {
+        st = meshio_load_ex(path, fin, mo, m, err);
+        return cli_xdmf_h5_retry(path, st, mo, m, err);
+    }
     st = cli_read_mesh(path, fin, mo, m, &raw, &len, err);
     qdc_free(raw);
     return st;
@@ -449,7 +456,10 @@ static qdc_status load_input(const char *path, meshio_format fin, surface_format
         }
         if (!buf)
             return cli_load_mesh(path, fin, &mo, m, err);
-        st = meshio_read_ex(buf, len, fin, &mo, m, err); /* a stream, read above */
+        if (cli_h5_bytes(buf, len)) /* a stream, read above */
+            st = cli_h5_read_bytes(path, buf, len, &mo, m, err);
+        else
+            st = meshio_read_ex(buf, len, fin, &mo, m, err);
         qdc_free(buf);
         return st;
     }
@@ -477,6 +487,8 @@ qdc_status cli_save_mesh(const char *out, meshio_format fout, const mesh_t *m,
     f = meshio_save_format(out, fout, m);
     if (f == MESHIO_MED)
         return cli_h5_write(out, m, err);
+    if (f == MESHIO_XDMF && cli_xdmf_h5_source(m))
+        return cli_xdmf_h5_write(out, m, err);
     if (strcmp(out, "-"))
         return meshio_save(out, fout, m, err);
     if (f == MESHIO_AUTO) /* not read from a mesh file (a surface) */

@@ -48,6 +48,20 @@ typedef struct {
 #include "io/formats.h"
 #undef MESHIO_FORMAT
 
+/* The framed form qdc-h5 prints (meshio_med.c says what it is), read by MED
+ * and by XDMF with its heavy data in HDF5. */
+typedef struct {
+    uint64_t at, n; /* byte offset of the first value; value count ('b': bytes) */
+    int type;       /* 'f' float64, 'i' int64, 'b' bytes; 0: absent */
+} h5_frame;
+extern const char h5_magic[8];
+/* The frames of buf[0..len) (h5_magic first): fr[k] (count of them) gets
+ * the one named names[k], which must be of type types[k]; others are
+ * skipped. QDC_EPARSE, the message starting with what ("MED"). */
+qdc_status h5_frames(const char *buf, size_t len, const char *what,
+                     const char *const *names, const char *types, int count, h5_frame *fr,
+                     qdc_error *err);
+
 /* The descriptor of f, or NULL (MESHIO_AUTO, out of range). */
 const meshio_fmt *meshio_fmt_of(meshio_format f);
 

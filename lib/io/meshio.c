@@ -345,6 +345,25 @@ static qdc_status read_plain(const char *buf, size_t len, meshio_format fmt,
     return d->read(buf, len, o, d->splices ? rec : NULL, out, err);
 }
 
+qdc_status meshio_gunzip(const char *buf, size_t len, const meshio_options *o,
+                         char **plain, size_t *plen, qdc_error *err)
+{
+    qdc_status st;
+
+    *plain = NULL;
+    *plen = 0;
+    st = gz_inflate_max(buf, len, gz_budget(len, o ? o->max_bytes : 0, o ? o->max_ratio : 0),
+                        plain, plen, err);
+    if (st == QDC_OK && gz_is_gzip(*plain, *plen))
+        st = qdc_fail(err, QDC_EPARSE, "gzip: compressed twice");
+    if (st != QDC_OK) {
+        qdc_free(*plain);
+        *plain = NULL;
+        *plen = 0;
+    }
+    return st;
+}
+
 /* buf (gzip or not) into *out; keep: attach the (decompressed) buffer as the
  * mesh's source. own: buf is qdc_malloc'ed and ours to take (it is then
  * always consumed, freed or kept). */
@@ -359,17 +378,11 @@ static qdc_status read_buf(char *buf, size_t len, int own, meshio_format fmt,
         /* a gzip-compressed file of any format: read what it holds */
         char *plain = NULL;
         size_t plen = 0;
-        st = gz_inflate_max(buf, len,
-                            gz_budget(len, o ? o->max_bytes : 0, o ? o->max_ratio : 0),
-                            &plain, &plen, err);
+        st = meshio_gunzip(buf, len, o, &plain, &plen, err);
         if (own)
             qdc_free(buf);
-        if (st == QDC_OK && gz_is_gzip(plain, plen))
-            st = qdc_fail(err, QDC_EPARSE, "gzip: compressed twice");
-        if (st != QDC_OK) {
-            qdc_free(plain);
+        if (st != QDC_OK)
             return st;
-        }
         return read_buf(plain, plen, 1, fmt, o, keep, out, err);
     }
     srcrec_init(&rec);

@@ -109,6 +109,14 @@ typedef struct {
     unsigned max_ratio;
 } meshio_options;
 
+/* The gzip stream buf[0..len) inflated as a gzip input file is when read:
+ * within o's max_bytes and max_ratio (o may be NULL: GZ_MAX_OUT), a gzip
+ * file inside refused. *plain: a new NUL-terminated buffer (qdc_free) of
+ * *plen bytes, NULL on failure. QDC_EPARSE (corrupt, truncated, compressed
+ * twice), QDC_ETOOBIG (over the limit), QDC_ENOMEM. */
+qdc_status meshio_gunzip(const char *buf, size_t len, const meshio_options *o,
+                         char **plain, size_t *plen, qdc_error *err);
+
 /* Parse one buffer (not TETGEN: it needs two). fmt MESHIO_AUTO sniffs.
  * On success *out is a new mesh (free with mesh_free); on failure *out is NULL
  * and err says what and where. Does not call mesh_validate beyond bounds and
@@ -150,6 +158,39 @@ qdc_status meshio_save(const char *path, meshio_format fmt, const mesh_t *m,
  * into; gzip-compressed when path ends in .gz. */
 qdc_status meshio_save_bytes(const char *path, const void *buf, size_t len,
                              qdc_error *err);
+
+/* XDMF whose heavy data is in HDF5 (Format="HDF", "file.h5:/dataset"):
+ * libqdc never calls HDF5; the qdc command has the qdc-h5 program read the
+ * datasets (meshio_xdmf.c says how). meshio_xdmf_h5_refs: the datasets the
+ * mesh takes from the HDF5 file (n = 0: none, the data is inline), from the
+ * XML buf[0..len); every reference must name one file, relative and inside
+ * the .xdmf's folder (QDC_EFORMAT otherwise). */
+typedef struct {
+    char file[1024]; /* the HDF5 file as the XML names it ("mesh.h5") */
+    int n;
+    struct {
+        char name[16];   /* the frame qdc-h5 gives it as: "geometry", "topology",
+                            "region" */
+        char type;       /* 'f' float64, 'i' int64 */
+        char path[1024]; /* the dataset ("/data0") */
+        int ndims;       /* the shape the XML gives it */
+        int64_t dims[4];
+    } set[3];
+} meshio_xdmf_h5;
+qdc_status meshio_xdmf_h5_refs(const char *buf, size_t len, meshio_xdmf_h5 *h,
+                               qdc_error *err);
+/* The input meshio_read takes as MESHIO_XDMF: the XML and the frames qdc-h5
+ * printed for the datasets above, in a new buffer *out (qdc_free). Such a
+ * mesh is written back spliced as this same form, the geometry's values
+ * replaced. */
+qdc_status meshio_xdmf_h5_input(const char *xml, size_t xml_len, const char *frames,
+                                size_t frames_len, char **out, size_t *out_len,
+                                qdc_error *err);
+/* The XML buf[0..len) through fn with every HDF reference naming file
+ * instead (the only change): the .xdmf of a copy of its .h5. QDC_EINVAL for
+ * a name XML or XDMF cannot hold (&<>"': in it), QDC_EIO if fn fails. */
+qdc_status meshio_xdmf_h5_rename(const char *buf, size_t len, const char *file,
+                                 qdc_write_fn fn, void *ctx, qdc_error *err);
 
 /* Spliced writing. qdc never changes connectivity, so a mesh can be written
  * back as the very file it was read from with only the coordinates

@@ -7,8 +7,10 @@
  * new coordinates), which puts them into a copy of IN. The framed form:
  *
  *   "QDCH5v1\n", then frames to the end, each: a name of 16 bytes (NUL-padded
- *   ASCII), a type byte ('f' float64, 'i' int64), 7 zero bytes, the value
- *   count (uint64), the values; all little-endian, 8-byte aligned.
+ *   ASCII), a type byte ('f' float64, 'i' int64, 'b' bytes), 7 zero bytes,
+ *   the value count (uint64), the values (bytes: zero-padded to a multiple
+ *   of 8); all little-endian, 8-byte aligned. (h5_frames reads them, here
+ *   and for XDMF with HDF5 heavy data, meshio_xdmf.c.)
  *
  * Frames: "coords" (x y z a node, 3 per node), "te4" or "t10" (the 4 or 10
  * nodes of each tet, 1-based, MED's order: the corners, then the mid-edge
@@ -20,56 +22,66 @@
 
 #include <string.h>
 
-static const char med_magic[8] = {'Q', 'D', 'C', 'H', '5', 'v', '1', '\n'};
+const char h5_magic[8] = {'Q', 'D', 'C', 'H', '5', 'v', '1', '\n'};
 static const unsigned char hdf5_magic[8] = {0x89, 'H', 'D', 'F', '\r', '\n', 0x1a, '\n'};
 
-typedef struct {
-    uint64_t at, n; /* byte offset of the first value, value count */
-    int type;       /* 'f', 'i'; 0 absent */
-} med_frame;
-
-enum { F_COORDS, F_TE4, F_T10, F_TE4_FAM, F_T10_FAM, F_COUNT };
-
-static qdc_status med_frames(const char *buf, size_t len, med_frame *fr, qdc_error *err)
+qdc_status h5_frames(const char *buf, size_t len, const char *what,
+                     const char *const *names, const char *types, int count, h5_frame *fr,
+                     qdc_error *err)
 {
-    static const char *const names[F_COUNT] = {"coords", "te4", "t10", "te4_fam",
-                                               "t10_fam"};
-    size_t pos = sizeof med_magic;
+    size_t pos = sizeof h5_magic;
 
-    if (len >= 8 && memcmp(buf, hdf5_magic, 8) == 0)
-        return fail_bin(err, QDC_EFORMAT, 0,
-                        "MED: an HDF5 file, read through qdc-h5: the qdc command does "
-                        "it (qdcd takes no MED upload)");
-    if (len < sizeof med_magic || memcmp(buf, med_magic, sizeof med_magic) != 0)
-        return fail_bin(err, QDC_EPARSE, 0, "MED: not what qdc-h5 writes");
+    memset(fr, 0, (size_t)count * sizeof *fr);
+    if (len < sizeof h5_magic || memcmp(buf, h5_magic, sizeof h5_magic) != 0)
+        return fail_bin(err, QDC_EPARSE, 0, "%s: not what qdc-h5 writes", what);
     while (pos < len) {
         const unsigned char *h = (const unsigned char *)buf + pos;
-        uint64_t n;
+        uint64_t n, size;
         int k;
         if (len - pos < 32)
-            return fail_bin(err, QDC_EPARSE, (int64_t)pos,
-                            "MED: a frame header cut short");
+            return fail_bin(err, QDC_EPARSE, (int64_t)pos, "%s: a frame header cut short",
+                            what);
         n = get_le64(h + 24);
-        if (n > (len - pos - 32) / 8)
-            return fail_bin(err, QDC_EPARSE, (int64_t)pos,
-                            "MED: a frame of %llu values runs past the end",
-                            (unsigned long long)n);
-        if (h[16] != 'f' && h[16] != 'i')
-            return fail_bin(err, QDC_EPARSE, (int64_t)pos + 16, "MED: frame type %d",
+        if (h[16] != 'f' && h[16] != 'i' && h[16] != 'b')
+            return fail_bin(err, QDC_EPARSE, (int64_t)pos + 16, "%s: frame type %d", what,
                             h[16]);
-        for (k = 0; k < F_COUNT; k++)
+        size = h[16] == 'b' ? (n > UINT64_MAX - 7 ? UINT64_MAX : (n + 7) / 8) : n;
+        if (size > (len - pos - 32) / 8)
+            return fail_bin(err, QDC_EPARSE, (int64_t)pos,
+                            "%s: a frame of %llu values runs past the end", what,
+                            (unsigned long long)n);
+        for (k = 0; k < count; k++)
             if (strncmp((const char *)h, names[k], 16) == 0)
                 break;
-        if (k < F_COUNT) {
-            if (fr[k].type || h[16] != (k == F_COORDS ? 'f' : 'i'))
+        if (k < count) {
+            if (fr[k].type || h[16] != types[k])
                 return fail_bin(err, QDC_EPARSE, (int64_t)pos,
-                                "MED: frame %s twice or of the wrong type", names[k]);
+                                "%s: frame %s twice or of the wrong type", what,
+                                names[k]);
             fr[k].at = pos + 32;
             fr[k].n = n;
             fr[k].type = h[16];
         }
-        pos += 32 + (size_t)n * 8;
+        pos += 32 + (size_t)size * 8;
     }
+    return QDC_OK;
+}
+
+enum { F_COORDS, F_TE4, F_T10, F_TE4_FAM, F_T10_FAM, F_COUNT };
+
+static qdc_status med_frames(const char *buf, size_t len, h5_frame *fr, qdc_error *err)
+{
+    static const char *const names[F_COUNT] = {"coords", "te4", "t10", "te4_fam",
+                                               "t10_fam"};
+    qdc_status st;
+
+    if (len >= 8 && memcmp(buf, hdf5_magic, 8) == 0)
+        return fail_bin(err, QDC_EFORMAT, 0,
+                        "MED: an HDF5 file, read through qdc-h5 (the qdc command and "
+                        "qdcd run it)");
+    st = h5_frames(buf, len, "MED", names, "fiiii", F_COUNT, fr, err);
+    if (st != QDC_OK)
+        return st;
     if (!fr[F_COORDS].type)
         return fail_bin(err, QDC_EPARSE, (int64_t)len, "MED: no coordinates");
     return QDC_OK;
@@ -78,7 +90,7 @@ static qdc_status med_frames(const char *buf, size_t len, med_frame *fr, qdc_err
 static qdc_status read_med(const char *buf, size_t len, const meshio_options *o,
                            srcrec *rec, mesh_t **out, qdc_error *err)
 {
-    med_frame fr[F_COUNT];
+    h5_frame fr[F_COUNT];
     const unsigned char *b = (const unsigned char *)buf;
     int nodes, conn, fam;
     int64_t nv, nt;
@@ -86,7 +98,6 @@ static qdc_status read_med(const char *buf, size_t len, const meshio_options *o,
     qdc_status st;
 
     (void)o;
-    memset(fr, 0, sizeof fr);
     st = med_frames(buf, len, fr, err);
     if (st != QDC_OK)
         return st;
@@ -185,7 +196,7 @@ static qdc_status read_med(const char *buf, size_t len, const meshio_options *o,
 static meshio_format sniff_med(const char *buf, size_t len, size_t i)
 {
     (void)i;
-    if (len >= 8 && (memcmp(buf, med_magic, 8) == 0 || memcmp(buf, hdf5_magic, 8) == 0))
+    if (len >= 8 && (memcmp(buf, h5_magic, 8) == 0 || memcmp(buf, hdf5_magic, 8) == 0))
         return MESHIO_MED;
     return MESHIO_AUTO;
 }
@@ -198,5 +209,6 @@ const meshio_fmt fmt_med = {
     .magic = 1,
     .sniff = sniff_med,
     .read = read_med,
+    .input = "input.med", /* read by qdcd's qdc-h5 child (server/h5job.h) */
     .splices = 1,
 };

@@ -17,14 +17,34 @@
  * an empty internal subset (DOLFIN writes "<!DOCTYPE Xdmf SYSTEM "Xdmf.dtd"
  * []>"), any other declaration (ENTITY...) and CDATA are refused, and an
  * attribute value that qdc reads must not hold a reference ('&').
- * Heavy data in HDF5 (Format="HDF"), in a binary file or a function of other
- * items is refused (QDC_EFORMAT). HDF5 would be read by the qdc-h5 program,
- * outside the library, as MED is (meshio_med.c); XDMF's is not yet. */
+ * Heavy data in a binary file or a function of other items is refused
+ * (QDC_EFORMAT).
+ *
+ * Heavy data in HDF5 (Format="HDF", the text "file.h5:/dataset", meshio's and
+ * dolfin's default) is read by the qdc-h5 program, outside the library, as
+ * MED is (meshio_med.c): meshio_xdmf_h5_refs lists the datasets the mesh
+ * needs (its Geometry, Topology and region attribute), qdc-h5 reads them,
+ * and the reader is given the framed form of meshio_med.c: a frame "xdmf"
+ * (bytes: the XML) and frames "geometry", "topology", "region" (float64,
+ * int64, int64; the values in the dataset's order). Such a mesh is written
+ * back spliced as that framed form with the geometry frame's values
+ * replaced; the qdc command puts them into a copy of the .h5 and writes the
+ * XML again with only the .h5 file's name changed (meshio_xdmf_h5_rename).
+ * Every HDF reference must name one file, relative and inside the .xdmf's
+ * folder (no "..", not absolute). A plain read refuses HDF heavy data in the
+ * mesh's Grid with a message saying how it is read. dolfinx MeshTags grids
+ * in HDF5 are not read. */
 #include "io/format.h"
 
 #include <string.h>
 
 enum { XD_DEPTH = 64 };
+
+/* How HDF heavy data is taken: refused, listed, or from the frames. */
+enum { X_PLAIN, X_COLLECT, X_FRAMED };
+/* The datasets the mesh takes from HDF5. */
+enum { H_GEOM, H_TOPO, H_REG, H_COUNT };
+static const char *const h5_names[H_COUNT] = {"geometry", "topology", "region"};
 
 /* What an element is to the reader. */
 enum { K_OTHER, K_XDMF, K_GRID, K_TOPO, K_GEOM, K_ATTR, K_DATA, K_INCLUDE };
@@ -36,6 +56,20 @@ typedef struct {
     int empty;          /* <.../> */
     int end;            /* </...> */
 } xtag;
+
+typedef struct {
+    int64_t dims[4], n; /* the dimensions and their product */
+    int ndims;
+    int integer; /* NumberType Int, UInt, Char, UChar */
+    int hdf;     /* Format="HDF" (not in X_PLAIN) */
+} item;
+
+/* A DataItem the mesh takes from HDF5: its dataset and shape. */
+typedef struct {
+    int set;
+    const char *p, *pe; /* the dataset's path */
+    item it;
+} pend;
 
 /* A grid after the mesh holding tet tags (dolfinx MeshTags). */
 typedef struct {
@@ -68,6 +102,12 @@ typedef struct {
     /* grids after the mesh */
     tagset ts;
     int ts_depth, ts_topo, ts_attr;
+    /* heavy data in HDF5 */
+    int mode;
+    const char *h5f, *h5fe; /* the file every reference names */
+    vec spans;              /* (uint64) start and end of each reference's file */
+    pend pend[H_COUNT];
+    h5_frame fr[H_COUNT]; /* X_FRAMED */
 } xd;
 
 /* ------------------------------------------------------------------------ */
@@ -291,12 +331,6 @@ static qdc_status attr_text(xd *x, const xtag *t, const char *key, const char *k
 /* ------------------------------------------------------------------------ */
 /* DataItems                                                                 */
 
-typedef struct {
-    int64_t dims[4], n; /* the dimensions and their product */
-    int ndims;
-    int integer; /* NumberType Int, UInt, Char, UChar */
-} item;
-
 /* Check what the DataItem t is (XML data, one uniform item) and its size. */
 static qdc_status item_read(xd *x, const xtag *t, item *it, qdc_error *err)
 {
@@ -319,11 +353,14 @@ static qdc_status item_read(xd *x, const xtag *t, item *it, qdc_error *err)
                         "XDMF: DataItem of ItemType %s: only data given as it is "
                         "(Uniform) is read",
                         kind);
-    if (strcasecmp(fmt, "HDF") == 0)
+    it->hdf = strcasecmp(fmt, "HDF") == 0;
+    if (it->hdf && x->mode == X_PLAIN)
         return fail_txt(err, QDC_EFORMAT, &x->s, t->at,
-                        "XDMF: heavy data in HDF5 (Format=\"HDF\") is not read yet: "
-                        "write the data inline (meshio: data_format=\"XML\")");
-    if (strcasecmp(fmt, "XML") != 0)
+                        "XDMF: heavy data in HDF5 (Format=\"HDF\"): the qdc command reads "
+                        "it from the .h5 file beside the .xdmf file (a stream or an "
+                        "upload to qdcd has no such file: write the data inline, "
+                        "meshio: data_format=\"XML\")");
+    if (!it->hdf && strcasecmp(fmt, "XML") != 0)
         return fail_txt(err, QDC_EFORMAT, &x->s, t->at,
                         "XDMF: DataItem Format %s: only XML (inline) and HDF are read",
                         fmt);
@@ -355,7 +392,7 @@ static qdc_status item_read(xd *x, const xtag *t, item *it, qdc_error *err)
         return fail_txt(err, QDC_EPARSE, &x->s, t->at,
                         "XDMF: DataItem without Dimensions");
     /* each number needs a character and a separator */
-    if (it->n > (int64_t)((size_t)(x->s.end - x->s.p) / 2 + 1))
+    if (!it->hdf && it->n > (int64_t)((size_t)(x->s.end - x->s.p) / 2 + 1))
         return fail_txt(err, QDC_EPARSE, &x->s, t->at,
                         "XDMF: DataItem of %lld values does not fit in the %zu bytes "
                         "left (truncated?)",
@@ -459,9 +496,26 @@ static qdc_status topo_start(xd *x, const xtag *t, int *nodes, qdc_error *err)
     return QDC_OK;
 }
 
+static int have_region(const xd *x)
+{
+    return x->region || x->pend[H_REG].set;
+}
+
+/* The DataItem t in HDF5 (its path [p, pe)) is the mesh's role k: kept to
+ * be read from the frames (X_FRAMED) or listed (X_COLLECT). */
+static void pend_set(xd *x, int k, const char *p, const char *pe, const item *it)
+{
+    x->pend[k].set = 1;
+    x->pend[k].p = p;
+    x->pend[k].pe = pe;
+    x->pend[k].it = *it;
+}
+
 /* A DataItem in the mesh grid's Topology, Geometry or a cell Attribute;
- * *read 1 if its values and end tag were read. */
-static qdc_status mesh_item(xd *x, const xtag *t, int parent, int *read, qdc_error *err)
+ * *read 1 if its values and end tag were read. HDF heavy data: [rp, rpe) is
+ * its dataset (its text and end tag already read), else rp is NULL. */
+static qdc_status mesh_item(xd *x, const xtag *t, int parent, const char *rp,
+                            const char *rpe, int *read, qdc_error *err)
 {
     item it;
     qdc_status st;
@@ -473,7 +527,7 @@ static qdc_status mesh_item(xd *x, const xtag *t, int parent, int *read, qdc_err
     if (st != QDC_OK)
         return st;
     *read = parent != K_ATTR || (it.integer && x->attr_cell_int &&
-                                 (!x->region || x->attr_rank > x->region_rank));
+                                 (!have_region(x) || x->attr_rank > x->region_rank));
     if (parent == K_GEOM) {
         if (x->nv >= 0)
             return fail_txt(err, QDC_EFORMAT, &x->s, t->at,
@@ -485,6 +539,10 @@ static qdc_status mesh_item(xd *x, const xtag *t, int parent, int *read, qdc_err
             return fail_txt(err, QDC_ETOOBIG, &x->s, t->at, "XDMF: %lld vertices",
                             (long long)(it.n / 3));
         x->nv = it.n / 3;
+        if (rp) {
+            pend_set(x, H_GEOM, rp, rpe, &it);
+            return QDC_OK;
+        }
         x->xyz = qdc_mallocn((size_t)it.n + 1, sizeof(double));
         if (!x->xyz)
             return qdc_fail(err, QDC_ENOMEM, "out of memory for %lld vertices",
@@ -515,6 +573,10 @@ static qdc_status mesh_item(xd *x, const xtag *t, int parent, int *read, qdc_err
                             (long long)(it.n / x->nodes));
         x->nt = it.n / x->nodes;
         x->topo_at = t->at;
+        if (rp) {
+            pend_set(x, H_TOPO, rp, rpe, &it);
+            return QDC_OK;
+        }
         x->conn = qdc_mallocn((size_t)it.n + 1, sizeof(int32_t));
         if (!x->conn)
             return qdc_fail(err, QDC_ENOMEM, "out of memory for %lld tetrahedra",
@@ -522,14 +584,21 @@ static qdc_status mesh_item(xd *x, const xtag *t, int parent, int *read, qdc_err
         return item_values(x, it.n, NULL, x->conn, 0, INT32_MAX, NULL, err);
     }
     /* a scalar cell attribute: integers become the region */
-    if (it.integer && x->attr_cell_int && (!x->region || x->attr_rank > x->region_rank)) {
+    if (it.integer && x->attr_cell_int &&
+        (!have_region(x) || x->attr_rank > x->region_rank)) {
         qdc_free(x->region);
-        x->region = qdc_mallocn((size_t)it.n + 1, sizeof(int32_t));
-        if (!x->region)
-            return qdc_fail(err, QDC_ENOMEM, "out of memory for the regions");
+        x->region = NULL;
+        x->pend[H_REG].set = 0;
         x->nreg = it.n;
         x->region_rank = x->attr_rank;
         x->reg_at = t->at;
+        if (rp) {
+            pend_set(x, H_REG, rp, rpe, &it);
+            return QDC_OK;
+        }
+        x->region = qdc_mallocn((size_t)it.n + 1, sizeof(int32_t));
+        if (!x->region)
+            return qdc_fail(err, QDC_ENOMEM, "out of memory for the regions");
         return item_values(x, it.n, NULL, x->region, INT32_MIN, INT32_MAX, NULL, err);
     }
     return QDC_OK; /* skipped with the rest of the element */
@@ -588,8 +657,8 @@ static qdc_status tags_apply(xd *x, qdc_error *err)
     int32_t *keys;
     const int32_t *tt = x->ts.tets.a, *tv = x->ts.vals.a;
 
-    if (!x->ts.shares || !n || x->ts.vals.n != n || x->nt <= 0)
-        return QDC_OK;
+    if (!x->ts.shares || !n || x->ts.vals.n != n || x->nt <= 0 || !x->conn)
+        return QDC_OK; /* (no conn: the mesh's Topology is in HDF5, not read yet) */
     keys = qdc_mallocn(5 * n, sizeof(int32_t));
     if (!keys)
         return qdc_fail(err, QDC_ENOMEM, "out of memory for the tags");
@@ -631,6 +700,78 @@ static qdc_status tags_apply(xd *x, qdc_error *err)
     return QDC_OK;
 }
 
+static int is_hdf(const xtag *t)
+{
+    char fmt[16];
+
+    return xattr_str(t, "Format", NULL, fmt, sizeof fmt) == 1 &&
+           strcasecmp(fmt, "HDF") == 0;
+}
+
+/* The text of the HDF DataItem t, "file:/dataset", and its end tag: the
+ * dataset in [*p, *pe). The file must be the one every reference names,
+ * relative, inside the .xdmf's folder. */
+static qdc_status hdf_ref(xd *x, const xtag *t, const char **p, const char **pe,
+                          qdc_error *err)
+{
+    txt *s = &x->s;
+    const char *a, *e, *colon, *c;
+    xtag end;
+    qdc_status st;
+
+    skip_ws(s);
+    a = s->p;
+    e = memchr(a, '<', (size_t)(s->end - a));
+    e = e ? e : s->end;
+    for (c = a; c < e; c++)
+        if (*c == '\n') {
+            s->line++;
+            s->bol = c + 1;
+        }
+    s->p = e;
+    while (e > a && is_space((unsigned char)e[-1]))
+        e--;
+    colon = memchr(a, ':', (size_t)(e - a));
+    if (!colon || colon == a || colon + 1 == e || memchr(a, '&', (size_t)(e - a)))
+        return fail_txt(err, QDC_EPARSE, s, t->at,
+                        "XDMF: an HDF DataItem whose text is not \"file.h5:/dataset\"");
+    if (*a == '/' || *a == '\\')
+        return fail_txt(err, QDC_EFORMAT, s, a,
+                        "XDMF: heavy data in \"%.*s\", an absolute path: only a file in "
+                        "the .xdmf file's folder is read",
+                        (int)(colon - a > 64 ? 64 : colon - a), a);
+    for (c = a; c < colon; c++) {
+        int dots = c + 1 < colon && c[0] == '.' && c[1] == '.' &&
+                   (c == a || c[-1] == '/') && (c + 2 == colon || c[2] == '/');
+        if (dots || *c == '\\' || *c < ' ')
+            return fail_txt(err, QDC_EFORMAT, s, a,
+                            "XDMF: heavy data in \"%.*s\", outside the .xdmf file's "
+                            "folder: only a file in it is read",
+                            (int)(colon - a > 64 ? 64 : colon - a), a);
+    }
+    if (x->h5f && ((size_t)(x->h5fe - x->h5f) != (size_t)(colon - a) ||
+                   memcmp(x->h5f, a, (size_t)(colon - a)) != 0))
+        return fail_txt(err, QDC_EFORMAT, s, a,
+                        "XDMF: heavy data in two HDF5 files (%.*s, %.*s): qdc reads one",
+                        (int)(x->h5fe - x->h5f > 64 ? 64 : x->h5fe - x->h5f), x->h5f,
+                        (int)(colon - a > 64 ? 64 : colon - a), a);
+    x->h5f = a;
+    x->h5fe = colon;
+    if (x->spans.size) {
+        if (vec_grow(&x->spans, 2) != 0)
+            return qdc_fail(err, QDC_ENOMEM, "out of memory for the references");
+        ((uint64_t *)x->spans.a)[x->spans.n++] = (uint64_t)(a - s->base);
+        ((uint64_t *)x->spans.a)[x->spans.n++] = (uint64_t)(colon - s->base);
+    }
+    *p = colon + 1;
+    *pe = e;
+    st = xd_tag(s, &end, err);
+    if (st == QDC_OK && (!end.at || !end.end || !name_is(&end, "DataItem")))
+        st = fail_txt(err, QDC_EPARSE, s, end.at ? end.at : s->end,
+                      "XDMF: expected </DataItem> after the HDF5 reference");
+    return st;
+}
+
 static qdc_status xd_start(xd *x, const xtag *t, qdc_error *err)
 {
     int parent = x->depth ? x->kind[x->depth - 1] : -1, k = K_OTHER;
@@ -664,6 +805,15 @@ static qdc_status xd_start(xd *x, const xtag *t, qdc_error *err)
         x->mesh_depth = x->depth;
         in_mesh = 1;
     }
+    if (k == K_DATA && !t->empty && x->mode != X_PLAIN && is_hdf(t)) {
+        const char *p = NULL, *pe = NULL;
+        int read;
+        st = hdf_ref(x, t, &p, &pe, err);
+        if (st == QDC_OK && in_mesh && x->depth == x->mesh_depth + 1 &&
+            (parent == K_TOPO || parent == K_GEOM || parent == K_ATTR))
+            st = mesh_item(x, t, parent, p, pe, &read, err);
+        return st; /* its text and end tag read */
+    }
     if (in_mesh && x->depth == x->mesh_depth && k == K_TOPO) {
         if (x->nodes)
             return fail_txt(err, QDC_EFORMAT, &x->s, t->at,
@@ -687,7 +837,7 @@ static qdc_status xd_start(xd *x, const xtag *t, qdc_error *err)
     } else if (in_mesh && x->depth == x->mesh_depth + 1 && k == K_DATA &&
                (parent == K_TOPO || parent == K_GEOM || parent == K_ATTR)) {
         int read = 0;
-        st = mesh_item(x, t, parent, &read, err);
+        st = mesh_item(x, t, parent, NULL, NULL, &read, err);
         if (read)
             k = -1; /* its end tag was read with the values */
     } else if (in_mesh && x->depth > x->mesh_depth && k == K_INCLUDE &&
@@ -759,6 +909,76 @@ static void xd_free(xd *x)
     qdc_free(x->region);
     vec_free(&x->ts.tets);
     vec_free(&x->ts.vals);
+    vec_free(&x->spans);
+}
+
+/* The mesh's datasets in HDF5 from the frames (X_FRAMED); whole: the
+ * framed buffer, which x->s.base is. */
+static qdc_status heavy_fill(xd *x, qdc_error *err)
+{
+    const unsigned char *b = (const unsigned char *)x->s.base;
+
+    for (int k = 0; k < H_COUNT; k++) {
+        const h5_frame *f = &x->fr[k];
+        int64_t n = x->pend[k].it.n;
+        if (!x->pend[k].set)
+            continue;
+        if (!f->type || f->n != (uint64_t)n)
+            return qdc_fail(err, QDC_EPARSE,
+                            "XDMF: the %s dataset %.*s: %llu values from the HDF5 file, "
+                            "the XDMF says %lld",
+                            h5_names[k], (int)(x->pend[k].pe - x->pend[k].p > 64
+                                                   ? 64
+                                                   : x->pend[k].pe - x->pend[k].p),
+                            x->pend[k].p, (unsigned long long)f->n, (long long)n);
+        if (k == H_GEOM) {
+            x->xyz = qdc_mallocn((size_t)n + 1, sizeof(double));
+            if (!x->xyz)
+                return qdc_fail(err, QDC_ENOMEM, "out of memory for %lld vertices",
+                                (long long)x->nv);
+            for (int64_t i = 0; i < n; i++) {
+                uint64_t u = get_le64(b + f->at + 8 * (uint64_t)i);
+                memcpy(&x->xyz[i], &u, 8);
+                if (!isfinite(x->xyz[i])) {
+                    fail_bin(err, QDC_EPARSE, (int64_t)(f->at + 8 * (uint64_t)i),
+                             "XDMF: node %lld has a coordinate that is not finite "
+                             "(NaN/Inf)",
+                             (long long)(i / 3));
+                    set_index(err, "vertex", i / 3);
+                    return QDC_EPARSE;
+                }
+            }
+            if (x->rec) {
+                qdc_status st;
+                x->rec->fmt = MESHIO_XDMF;
+                x->rec->kind = SRC_BIN;
+                x->rec->width = 8;
+                x->rec->big = 0;
+                st = srcrec_alloc(x->rec, x->nv, err);
+                if (st != QDC_OK)
+                    return st;
+                for (int64_t v = 0; v < x->nv; v++)
+                    x->rec->off[v] = f->at + 24 * (uint64_t)v;
+            }
+        } else {
+            int32_t *a = qdc_mallocn((size_t)n + 1, sizeof(int32_t));
+            int64_t lo = k == H_TOPO ? 0 : INT32_MIN;
+            if (!a)
+                return qdc_fail(err, QDC_ENOMEM, "out of memory for %lld values",
+                                (long long)n);
+            *(k == H_TOPO ? &x->conn : &x->region) = a;
+            for (int64_t i = 0; i < n; i++) {
+                int64_t v = (int64_t)get_le64(b + f->at + 8 * (uint64_t)i);
+                if (v < lo || v > INT32_MAX)
+                    return fail_bin(err, QDC_EPARSE, (int64_t)(f->at + 8 * (uint64_t)i),
+                                    "XDMF: the %s dataset: value %lld at %lld is out of "
+                                    "range",
+                                    h5_names[k], (long long)v, (long long)i);
+                a[i] = (int32_t)v;
+            }
+        }
+    }
+    return QDC_OK;
 }
 
 /* The mesh from what was read: indices checked, corners and mid-edge nodes
@@ -813,43 +1033,195 @@ static qdc_status xd_mesh(xd *x, mesh_t **out, qdc_error *err)
     return parsed_mesh_move(&pm, out, err);
 }
 
+/* x set up over its text: read it to the end of the root element. */
+static qdc_status xd_run(xd *x, qdc_error *err)
+{
+    qdc_status st = QDC_OK;
+
+    x->nv = x->nt = -1;
+    x->ts.tets.size = x->ts.vals.size = sizeof(int32_t);
+    for (;;) {
+        xtag t;
+        st = xd_tag(&x->s, &t, err);
+        if (st != QDC_OK || !t.at)
+            break;
+        st = t.end ? xd_end(x, &t, err) : xd_start(x, &t, err);
+        if (st != QDC_OK)
+            break;
+        if (!x->depth && !t.empty) /* the root closed */
+            break;
+    }
+    if (st == QDC_OK && x->depth)
+        st = fail_txt(err, QDC_EPARSE, &x->s, x->s.end, "XDMF: ends inside an element");
+    if (st == QDC_OK) {
+        xtag t;
+        st = xd_tag(&x->s, &t, err);
+        if (st == QDC_OK && t.at)
+            st = fail_txt(err, QDC_EPARSE, &x->s, t.at, "XDMF: markup after </Xdmf>");
+    }
+    return st;
+}
+
+/* x over the XML of buf[0..len): the text itself, or the "xdmf" frame of the
+ * framed form (X_FRAMED, its frames in x->fr). */
+static qdc_status xd_open(xd *x, const char *buf, size_t len, qdc_error *err)
+{
+    static const char *const names[H_COUNT + 1] = {"geometry", "topology", "region",
+                                                   "xdmf"};
+    h5_frame fr[H_COUNT + 1];
+    qdc_status st;
+
+    if (len < sizeof h5_magic || memcmp(buf, h5_magic, sizeof h5_magic) != 0) {
+        x->s = txt_init(buf, len, 0);
+        return QDC_OK;
+    }
+    st = h5_frames(buf, len, "XDMF", names, "fiib", H_COUNT + 1, fr, err);
+    if (st != QDC_OK)
+        return st;
+    if (!fr[H_COUNT].type)
+        return fail_bin(err, QDC_EPARSE, 0, "XDMF: framed input without its XML");
+    memcpy(x->fr, fr, sizeof x->fr);
+    x->mode = X_FRAMED;
+    /* the text's offsets are the buffer's, as a spliced write needs them */
+    x->s = txt_init(buf, (size_t)(fr[H_COUNT].at + fr[H_COUNT].n), 0);
+    x->s.p = x->s.bol = buf + fr[H_COUNT].at;
+    return QDC_OK;
+}
+
 static qdc_status read_xdmf(const char *buf, size_t len, const meshio_options *o,
                             srcrec *rec, mesh_t **out, qdc_error *err)
 {
     xd x;
-    qdc_status st = QDC_OK;
+    qdc_status st;
 
     memset(&x, 0, sizeof x);
-    x.s = txt_init(buf, len, 0);
     x.o = o;
     x.rec = rec;
-    x.nv = x.nt = -1;
-    x.ts.tets.size = x.ts.vals.size = sizeof(int32_t);
-    for (;;) {
-        xtag t;
-        st = xd_tag(&x.s, &t, err);
-        if (st != QDC_OK || !t.at)
-            break;
-        st = t.end ? xd_end(&x, &t, err) : xd_start(&x, &t, err);
-        if (st != QDC_OK)
-            break;
-        if (!x.depth && !t.empty) /* the root closed */
-            break;
-    }
-    if (st == QDC_OK && x.depth)
-        st = fail_txt(err, QDC_EPARSE, &x.s, x.s.end, "XDMF: ends inside an element");
-    if (st == QDC_OK) {
-        xtag t;
-        st = xd_tag(&x.s, &t, err);
-        if (st == QDC_OK && t.at)
-            st = fail_txt(err, QDC_EPARSE, &x.s, t.at, "XDMF: markup after </Xdmf>");
-    }
+    st = xd_open(&x, buf, len, err);
+    if (st == QDC_OK)
+        st = xd_run(&x, err);
+    if (st == QDC_OK && x.mode == X_FRAMED)
+        st = heavy_fill(&x, err);
     if (st == QDC_OK)
         st = xd_mesh(&x, out, err);
     if (st != QDC_OK && rec)
         rec->kind = SRC_NONE;
     xd_free(&x);
     return st;
+}
+
+/* ------------------------------------------------------------------------ */
+/* Heavy data in HDF5: what the qdc command hands qdc-h5                     */
+
+/* buf read as X_COLLECT: the HDF references in x (xd_free it). */
+static qdc_status xd_collect(xd *x, const char *buf, size_t len, int spans,
+                             qdc_error *err)
+{
+    memset(x, 0, sizeof *x);
+    x->mode = X_COLLECT;
+    x->spans.size = spans ? sizeof(uint64_t) : 0;
+    x->s = txt_init(buf, len, 0);
+    if (len >= sizeof h5_magic && memcmp(buf, h5_magic, sizeof h5_magic) == 0)
+        return fail_bin(err, QDC_EINVAL, 0, "XDMF: the XML, not the framed form");
+    return xd_run(x, err);
+}
+
+static void copy_span(char *out, size_t size, const char *a, const char *e)
+{
+    size_t n = (size_t)(e - a) < size - 1 ? (size_t)(e - a) : size - 1;
+
+    memcpy(out, a, n);
+    out[n] = '\0';
+}
+
+qdc_status meshio_xdmf_h5_refs(const char *buf, size_t len, meshio_xdmf_h5 *h,
+                               qdc_error *err)
+{
+    xd x;
+    qdc_status st;
+
+    qdc_error_clear(err);
+    memset(h, 0, sizeof *h);
+    st = xd_collect(&x, buf, len, 0, err);
+    for (int k = 0; st == QDC_OK && k < H_COUNT; k++) {
+        const pend *pd = &x.pend[k];
+        if (!pd->set)
+            continue;
+        if ((size_t)(x.h5fe - x.h5f) >= sizeof h->file ||
+            (size_t)(pd->pe - pd->p) >= sizeof h->set[0].path) {
+            st = qdc_fail(err, QDC_EPARSE, "XDMF: an HDF5 reference too long");
+            break;
+        }
+        copy_span(h->file, sizeof h->file, x.h5f, x.h5fe);
+        snprintf(h->set[h->n].name, sizeof h->set[0].name, "%s", h5_names[k]);
+        h->set[h->n].type = k == H_GEOM ? 'f' : 'i';
+        copy_span(h->set[h->n].path, sizeof h->set[0].path, pd->p, pd->pe);
+        h->set[h->n].ndims = pd->it.ndims;
+        memcpy(h->set[h->n].dims, pd->it.dims, sizeof pd->it.dims);
+        h->n++;
+    }
+    xd_free(&x);
+    return st;
+}
+
+qdc_status meshio_xdmf_h5_rename(const char *buf, size_t len, const char *file,
+                                 qdc_write_fn fn, void *ctx, qdc_error *err)
+{
+    xd x;
+    qdc_status st;
+    size_t at = 0;
+    const uint64_t *sp;
+
+    qdc_error_clear(err);
+    if (strpbrk(file, "&<>\"':") || !*file)
+        return qdc_fail(err, QDC_EINVAL,
+                        "XDMF: \"%s\" cannot name an HDF5 file in XDMF (none of "
+                        "&<>\"': in it)",
+                        file);
+    st = xd_collect(&x, buf, len, 1, err);
+    sp = x.spans.a;
+    for (size_t i = 0; st == QDC_OK && i < x.spans.n; i += 2) {
+        if (fn(ctx, buf + at, (size_t)sp[i] - at) != 0 || fn(ctx, file, strlen(file)) != 0)
+            st = qdc_fail(err, QDC_EIO, "XDMF: write failed");
+        at = (size_t)sp[i + 1];
+    }
+    if (st == QDC_OK && fn(ctx, buf + at, len - at) != 0)
+        st = qdc_fail(err, QDC_EIO, "XDMF: write failed");
+    xd_free(&x);
+    return st;
+}
+
+qdc_status meshio_xdmf_h5_input(const char *xml, size_t xml_len, const char *frames,
+                                size_t frames_len, char **out, size_t *out_len,
+                                qdc_error *err)
+{
+    size_t pad = (8 - xml_len % 8) % 8, n;
+    unsigned char *b;
+
+    qdc_error_clear(err);
+    *out = NULL;
+    *out_len = 0;
+    if (frames_len < sizeof h5_magic || memcmp(frames, h5_magic, sizeof h5_magic) != 0)
+        return qdc_fail(err, QDC_EPARSE, "XDMF: qdc-h5 gave no frames");
+    if (xml_len > SIZE_MAX / 2 || frames_len > SIZE_MAX / 2)
+        return qdc_fail(err, QDC_ETOOBIG, "XDMF: input too large");
+    n = sizeof h5_magic + 32 + xml_len + pad + frames_len - sizeof h5_magic;
+    b = qdc_malloc(n + 1);
+    if (!b)
+        return qdc_fail(err, QDC_ENOMEM, "out of memory for %zu bytes", n);
+    memcpy(b, h5_magic, sizeof h5_magic);
+    memset(b + 8, 0, 32);
+    memcpy(b + 8, "xdmf", 4);
+    b[8 + 16] = 'b';
+    for (int k = 0; k < 8; k++)
+        b[8 + 24 + k] = (unsigned char)((uint64_t)xml_len >> (8 * k));
+    memcpy(b + 40, xml, xml_len);
+    memset(b + 40 + xml_len, 0, pad);
+    memcpy(b + 40 + xml_len + pad, frames + sizeof h5_magic, frames_len - sizeof h5_magic);
+    b[n] = 0;
+    *out = (char *)b;
+    *out_len = n;
+    return QDC_OK;
 }
 
 /* ------------------------------------------------------------------------ */
@@ -921,7 +1293,8 @@ static meshio_format sniff_xdmf(const char *buf, size_t len, size_t i)
 const meshio_fmt fmt_xdmf = {
     .name = "xdmf",
     .aliases = "xmf",
-    .about = "XDMF 2/3, tetrahedra with the data inline (XML; HDF5 heavy data refused)",
+    .about = "XDMF 2/3, tetrahedra with the data inline (XML), or in HDF5 through qdc-h5 "
+             "(command line only)",
     .ext = "xdmf",
     .input = "input.xdmf",
     .sniff = sniff_xdmf,

@@ -4,8 +4,13 @@
 # bytes, optimized and written back with only the coordinate dataset changed
 # (h5py compares every other dataset and attribute; meshio reads the same
 # cells and tags and the coordinates of qdc's own Medit output of the run);
-# refusals: an HDF5 file that is no MED, qdc-h5 missing, XDMF with HDF5 heavy
-# data (not read yet), MED through qdcd's library reader.
+# refusals: an HDF5 file that is no MED, qdc-h5 missing. A .med.gz file and
+# MED on standard input are read through a
+# private temporary file that no path leaves behind. XDMF whose heavy data is
+# in HDF5 (meshio's default): read from the .h5 beside it, written back as
+# the .xdmf (only the .h5 name changed) and a copy of the .h5 (only the
+# geometry dataset changed); refusals: .h5 missing, a path out of the
+# folder, a dataset of another shape than the XDMF says.
 . "$(dirname "$0")/../lib.sh"
 REAL=$ROOT/tests/data/real
 cd "$TMP" || exit 1
@@ -13,6 +18,11 @@ if [ ! -x "$BIN/qdc-h5" ]; then
     pass "hdf5: all # SKIP qdc-h5 not built (libhdf5-dev missing)"
     exit 0
 fi
+tally() { # FILE NAME: FILE's ok/FAIL lines shown and counted
+    cat "$1"
+    grep -q '^FAIL' "$1" && NFAIL=$((NFAIL + 1))
+    grep -q '^ok' "$1" || fail "$2" "$(tail -2 "$1")"
+}
 for f in meshio.med meshio_h5.h5 meshio_h5.xdmf; do
     gzip -dc "$REAL/$f.gz" > "$f"
 done
@@ -73,30 +83,136 @@ print(("ok" if same else "FAIL") + " - hdf5: out.med: meshio reads the same cell
 print(("ok" if np.array_equal(mb.points, r.points) else "FAIL")
       + " - hdf5: out.med: coordinates equal to qdc's own ref.mesh")
 EOF
-    cat chk
-    grep -q '^FAIL' chk && NFAIL=$((NFAIL + 1))
-    grep -q '^ok' chk || fail "hdf5: h5py check" "$(tail -2 chk)"
+    tally chk "hdf5: h5py check"
 else
     pass "hdf5: h5py comparison # SKIP python3-h5py or meshio missing"
 fi
 
-check_refused() { # name, command..., expected text in the message
+want_rc= # the exit status a refusal must have, if set
+check_refused() { # name, expected text in the message, command...
     name=$1
     want=$2
     shift 2
-    if "$@" > out 2> err; then
+    "$@" > out 2> err
+    rc=$?
+    if [ $rc = 0 ]; then
         fail "hdf5: $name" "accepted"
-    elif grep -q "$want" err; then
-        pass "hdf5: $name: refused ($(head -1 err | cut -c1-90))"
+    elif grep -q "$want" err && [ "${want_rc:-$rc}" = $rc ]; then
+        pass "hdf5: $name: refused, exit $rc ($(grep -m1 "$want" err | cut -c1-100))"
     else
-        fail "hdf5: $name" "$(head -2 err)"
+        fail "hdf5: $name" "exit $rc: $(head -2 err)"
     fi
 }
 check_refused "an HDF5 file that is no MED" "not a MED file" \
     "$BIN/qdc" convert meshio_h5.h5 x.mesh
 check_refused "qdc-h5 missing" "cannot run" env QDC_H5=/nonexistent/qdc-h5 \
     "$BIN/qdc" convert meshio.med x.mesh
-check_refused "XDMF with HDF5 heavy data" "HDF5" "$BIN/qdc" convert meshio_h5.xdmf x.mesh
 check_refused "MED written from another format" "only over the MED file" \
     "$BIN/qdc" convert ref.mesh x.med
+
+# --- .med.gz and standard input ------------------------------------------
+mkdir t
+gzip -c meshio.med > meshio.med.gz
+cp meshio.med.gz blob
+gzip -c meshio.med.gz > twice.med.gz
+head -c $(($(wc -c < meshio.med.gz) / 2)) meshio.med.gz > cut.med.gz
+for how in named sniffed stdin stdin-gz; do
+    case $how in
+    named) set -- "$BIN/qdc" convert meshio.med.gz gz_$how.med --quiet ;;
+    sniffed) set -- "$BIN/qdc" convert blob gz_$how.med --quiet ;;
+    stdin) set -- sh -c '"$0" convert - gz_stdin.med --quiet < meshio.med' "$BIN/qdc" ;;
+    stdin-gz) set -- sh -c '"$0" convert - gz_stdin-gz.med --quiet < meshio.med.gz' "$BIN/qdc" ;;
+    esac
+    if TMPDIR=$TMP/t "$@" 2> err && cmp -s meshio.med gz_$how.med &&
+        [ -z "$(ls -A t)" ]; then
+        pass "hdf5: meshio.med.gz ($how): read, written back as the same bytes, no temporary file left"
+    else
+        fail "hdf5: .med.gz $how" "$(head -2 err) $(cmp meshio.med gz_$how.med 2>&1) $(ls t)"
+    fi
+done
+if TMPDIR=$TMP/t "$BIN/qdc" optimize meshio.med.gz gz_opt.med --quiet --max-iter 5 2> err &&
+    cmp -s gz_opt.med out.med && [ -z "$(ls -A t)" ]; then
+    pass "hdf5: meshio.med.gz optimized: the same file as from meshio.med"
+else
+    fail "hdf5: .med.gz optimize" "$(head -2 err) $(cmp gz_opt.med out.med 2>&1)"
+fi
+for f in twice cut; do
+    TMPDIR=$TMP/t "$BIN/qdc" convert $f.med.gz x.med > out 2> err
+    rc=$?
+    if [ $rc = 2 ] && [ -z "$(ls -A t)" ] && grep -q "gzip" err; then
+        pass "hdf5: $f.med.gz refused, exit 2, no temporary file left ($(head -1 err | cut -c1-70))"
+    else
+        fail "hdf5: $f.med.gz" "exit $rc: $(head -2 err) $(ls t)"
+    fi
+done
+check_refused "MED written gzip-compressed" "uncompressed" \
+    "$BIN/qdc" convert meshio.med x.med.gz
+
+# --- XDMF with HDF5 heavy data --------------------------------------------
+if "$BIN/qdc" convert meshio_h5.xdmf h5regions.json --quiet 2> err &&
+    "$PY" -c 'import json, sys
+d = json.load(open("h5regions.json"))
+sys.exit(0 if len(d["tets"]) == 1228 and d.get("regions") else 1)' 2>> err; then
+    pass "hdf5: meshio_h5.xdmf read from its .h5: 1228 tets, gmsh:physical as regions"
+else
+    fail "hdf5: xdmf+h5 read" "$(head -3 err)"
+fi
+if "$BIN/qdc" optimize meshio_h5.xdmf xout.xdmf --quiet --max-iter 5 2> err &&
+    "$BIN/qdc" optimize meshio_h5.xdmf xref.mesh --quiet --max-iter 5 --no-keep-source 2>> err &&
+    [ -f xout.h5 ]; then
+    pass "hdf5: meshio_h5.xdmf optimized into xout.xdmf and xout.h5"
+else
+    fail "hdf5: xdmf+h5 optimize" "$(head -3 err)"
+fi
+if sed 's/meshio_h5\.h5:/xout.h5:/g' meshio_h5.xdmf | cmp -s - xout.xdmf; then
+    pass "hdf5: xout.xdmf: the input's XML with only the .h5 name changed"
+else
+    fail "hdf5: xout.xdmf" "$(sed 's/meshio_h5\.h5:/xout.h5:/g' meshio_h5.xdmf | cmp - xout.xdmf 2>&1)"
+fi
+if "$PY" -c 'import h5py, meshio' 2> /dev/null; then
+    "$PY" - meshio_h5.h5 xout.h5 meshio_h5.xdmf xout.xdmf xref.mesh > chk 2>&1 << 'EOF'
+import sys
+import h5py, meshio, numpy as np
+a, b = h5py.File(sys.argv[1], "r"), h5py.File(sys.argv[2], "r")
+same, diff = [], []
+for n in a:
+    x, y = a[n][()], b[n][()]
+    (same if x.dtype == y.dtype and x.shape == y.shape and np.array_equal(x, y) else diff).append(n)
+ok = sorted(b) == sorted(a) and diff == ["data0"]
+print(("ok" if ok else "FAIL") + " - hdf5: xout.h5: only the coordinates (data0) changed "
+      "(%d datasets the same, changed: %s)" % (len(same), diff))
+c = a["data0"][()] - b["data0"][()]
+print(("ok" if b["data0"].dtype == a["data0"].dtype and np.any(c != 0) else "FAIL")
+      + " - hdf5: xout.h5: data0 rewritten, %d of %d values moved" % (int(np.sum(c != 0)), c.size))
+ma, mb, r = meshio.read(sys.argv[3]), meshio.read(sys.argv[4]), meshio.read(sys.argv[5])
+tags = all(np.array_equal(ma.cell_data[k][0], mb.cell_data[k][0]) for k in ma.cell_data)
+print(("ok" if np.array_equal(ma.cells[0].data, mb.cells[0].data) and tags else "FAIL")
+      + " - hdf5: meshio reads xout.xdmf with the same cells and cell data")
+print(("ok" if np.array_equal(mb.points, r.points) else "FAIL")
+      + " - hdf5: xout.xdmf: coordinates equal to qdc's own xref.mesh")
+EOF
+    tally chk "hdf5: h5py check of xout.h5"
+else
+    pass "hdf5: h5py comparison of xout.h5 # SKIP python3-h5py or meshio missing"
+fi
+if "$BIN/qdc" convert meshio_h5.xdmf xsame.xdmf --quiet 2> err && cmp -s meshio_h5.h5 xsame.h5; then
+    pass "hdf5: meshio_h5.xdmf converted to .xdmf: the .h5 copy has the same bytes"
+else
+    fail "hdf5: xdmf+h5 convert" "$(head -2 err) $(cmp meshio_h5.h5 xsame.h5 2>&1)"
+fi
+
+want_rc=2
+mkdir lone sub
+cp meshio_h5.xdmf lone/
+check_refused "XDMF whose .h5 is missing" "No such file" "$BIN/qdc" convert lone/meshio_h5.xdmf x.mesh
+sed 's#meshio_h5\.h5:#../meshio_h5.h5:#g' meshio_h5.xdmf > sub/up.xdmf
+check_refused "XDMF naming ../x.h5" "outside the .xdmf file's folder" \
+    "$BIN/qdc" convert sub/up.xdmf x.mesh
+sed "s#meshio_h5\.h5:#$TMP/meshio_h5.h5:#g" meshio_h5.xdmf > abs.xdmf
+check_refused "XDMF naming an absolute path" "absolute path" "$BIN/qdc" convert abs.xdmf x.mesh
+sed 's#Dimensions="356 3"#Dimensions="355 3"#' meshio_h5.xdmf > shape.xdmf
+check_refused "XDMF with a dataset of another shape" "shape 356 x 3, where the XDMF says 355 x 3" \
+    "$BIN/qdc" convert shape.xdmf x.mesh
+check_refused "XDMF with HDF5 data on standard input" "beside the .xdmf" \
+    sh -c '"$0" convert - x.mesh --in-format xdmf < meshio_h5.xdmf' "$BIN/qdc"
 exit $NFAIL

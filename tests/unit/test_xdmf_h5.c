@@ -1,0 +1,191 @@
+/* test_xdmf_h5.c - XDMF whose heavy data is in HDF5 (meshio_xdmf.c): the
+ * datasets the reader asks for (meshio_xdmf_h5_refs), the framed input
+ * read into the mesh and written back spliced with only the geometry
+ * frame's values changed, the XML renamed to another .h5 file, and the
+ * references refused (absolute, "..", two files, a plain read). */
+#include "qdc.h"
+#include "testlib.h"
+
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* One tet in HDF5: geometry, topology, a region, and a node attribute. */
+static const char xml[] =
+    "<Xdmf Version=\"3.0\"><Domain><Grid Name=\"g\">"
+    "<Geometry GeometryType=\"XYZ\"><DataItem DataType=\"Float\" Dimensions=\"4 3\" "
+    "Format=\"HDF\" Precision=\"8\">m.h5:/g</DataItem></Geometry>"
+    "<Topology TopologyType=\"Tetrahedron\" NumberOfElements=\"1\"><DataItem "
+    "DataType=\"Int\" Dimensions=\"1 4\" Format=\"HDF\">\n  m.h5:/t\n</DataItem></Topology>"
+    "<Attribute Name=\"x\" Center=\"Node\"><DataItem Dimensions=\"4\" Format=\"HDF\">"
+    "m.h5:/x</DataItem></Attribute>"
+    "<Attribute Name=\"region\" Center=\"Cell\"><DataItem DataType=\"Int\" "
+    "Dimensions=\"1\" Format=\"HDF\">m.h5:/r</DataItem></Attribute>"
+    "</Grid></Domain></Xdmf>\n";
+
+typedef struct {
+    char b[4096];
+    size_t n;
+} buf_t;
+
+static int sink(void *ctx, const void *data, size_t len)
+{
+    buf_t *o = ctx;
+    if (o->n + len > sizeof o->b)
+        return -1;
+    memcpy(o->b + o->n, data, len);
+    o->n += len;
+    return 0;
+}
+
+static void frame(buf_t *o, const char *name, char type, const void *vals, uint64_t n)
+{
+    unsigned char h[32] = {0};
+    memcpy(h, name, strlen(name));
+    h[16] = (unsigned char)type;
+    for (int k = 0; k < 8; k++)
+        h[24 + k] = (unsigned char)(n >> (8 * k));
+    sink(o, h, 32);
+    sink(o, vals, (size_t)n * 8);
+}
+
+/* What qdc-h5 prints for the datasets of xml (little-endian host). */
+static void frames(buf_t *o, uint64_t ngeom)
+{
+    static const double g[12] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1};
+    static const int64_t t[4] = {0, 1, 2, 3}, r[1] = {7};
+    o->n = 0;
+    sink(o, "QDCH5v1\n", 8);
+    frame(o, "geometry", 'f', g, ngeom);
+    frame(o, "topology", 'i', t, 4);
+    frame(o, "region", 'i', r, 1);
+}
+
+TEST(refs_list_the_mesh_datasets)
+{
+    meshio_xdmf_h5 h;
+    ASSERT_OK(meshio_xdmf_h5_refs(xml, strlen(xml), &h, NULL));
+    ASSERT_TRUE(!strcmp(h.file, "m.h5"));
+    ASSERT_EQ_INT(h.n, 3);
+    ASSERT_TRUE(!strcmp(h.set[0].name, "geometry") && h.set[0].type == 'f');
+    ASSERT_TRUE(!strcmp(h.set[0].path, "/g"));
+    ASSERT_EQ_INT(h.set[0].ndims, 2);
+    ASSERT_EQ_INT(h.set[0].dims[0], 4);
+    ASSERT_EQ_INT(h.set[0].dims[1], 3);
+    ASSERT_TRUE(!strcmp(h.set[1].name, "topology") && !strcmp(h.set[1].path, "/t"));
+    ASSERT_TRUE(!strcmp(h.set[2].name, "region") && !strcmp(h.set[2].path, "/r"));
+    ASSERT_EQ_INT(h.set[2].dims[0], 1);
+}
+
+TEST(framed_read_and_spliced_write)
+{
+    static buf_t fr, out;
+    char *in = NULL;
+    size_t in_len = 0;
+    mesh_t *m = NULL;
+    meshio_options mo = {.source = 1};
+    size_t geom;
+
+    frames(&fr, 12);
+    ASSERT_OK(meshio_xdmf_h5_input(xml, strlen(xml), fr.b, fr.n, &in, &in_len, NULL));
+    ASSERT_OK(meshio_read_ex(in, in_len, MESHIO_XDMF, &mo, &m, NULL));
+    ASSERT_EQ_INT(m->nv, 4);
+    ASSERT_EQ_INT(m->nt, 1);
+    ASSERT_TRUE(m->region != NULL);
+    ASSERT_EQ_INT(m->region[0], 7);
+    ASSERT_NEAR(m->xyz[3], 1.0, 0);
+    ASSERT_TRUE(meshio_splices(m, MESHIO_XDMF, NULL));
+    m->xyz[3] = 0.5;
+    out.n = 0;
+    ASSERT_OK(meshio_write(m, MESHIO_XDMF, sink, &out, NULL));
+    ASSERT_EQ_INT((long long)out.n, (long long)in_len);
+    /* the second node's x: after the magic, the XML frame, a frame header */
+    geom = 8 + 32 + (strlen(xml) + 7) / 8 * 8 + 32 + 3 * 8;
+    {
+        double x;
+        memcpy(&x, out.b + geom, 8);
+        ASSERT_NEAR(x, 0.5, 0);
+    }
+    ASSERT_TRUE(memcmp(out.b, in, geom) == 0);
+    ASSERT_TRUE(memcmp(out.b + geom + 8, in + geom + 8, in_len - geom - 8) == 0);
+    mesh_free(m);
+    qdc_free(in);
+}
+
+TEST(a_geometry_frame_of_another_size_is_refused)
+{
+    static buf_t fr;
+    char *in = NULL;
+    size_t in_len = 0;
+    mesh_t *m = NULL;
+    qdc_error e;
+
+    frames(&fr, 9);
+    ASSERT_OK(meshio_xdmf_h5_input(xml, strlen(xml), fr.b, fr.n, &in, &in_len, NULL));
+    ASSERT_EQ_INT(meshio_read_ex(in, in_len, MESHIO_XDMF, NULL, &m, &e), QDC_EPARSE);
+    ASSERT_TRUE(strstr(e.msg, "9 values") != NULL);
+    qdc_free(in);
+}
+
+TEST(rename_changes_only_the_file_names)
+{
+    static buf_t out;
+    static char want[sizeof xml + 64];
+    const char *p = xml;
+    size_t n = 0;
+
+    ASSERT_OK(meshio_xdmf_h5_rename(xml, strlen(xml), "out.h5", sink, &out, NULL));
+    while (*p) { /* "m.h5:" -> "out.h5:" */
+        if (!strncmp(p, "m.h5:", 5)) {
+            memcpy(want + n, "out.h5:", 7);
+            n += 7;
+            p += 5;
+        } else {
+            want[n++] = *p++;
+        }
+    }
+    ASSERT_EQ_INT((long long)out.n, (long long)n);
+    ASSERT_TRUE(memcmp(out.b, want, n) == 0);
+    out.n = 0;
+    ASSERT_EQ_INT(meshio_xdmf_h5_rename(xml, strlen(xml), "a&b.h5", sink, &out, NULL),
+                  QDC_EINVAL);
+}
+
+/* xml with its first "m.h5" replaced by file */
+static qdc_status refs_with(const char *file, qdc_error *e)
+{
+    static char x[sizeof xml + 64];
+    const char *at = strstr(xml, "m.h5");
+    meshio_xdmf_h5 h;
+
+    snprintf(x, sizeof x, "%.*s%s%s", (int)(at - xml), xml, file, at + 4);
+    return meshio_xdmf_h5_refs(x, strlen(x), &h, e);
+}
+
+TEST(references_out_of_the_folder_are_refused)
+{
+    qdc_error e;
+    mesh_t *m = NULL;
+
+    ASSERT_EQ_INT(refs_with("../m.h5", &e), QDC_EFORMAT);
+    ASSERT_TRUE(strstr(e.msg, "outside") != NULL);
+    ASSERT_EQ_INT(refs_with("a/../../m.h5", &e), QDC_EFORMAT);
+    ASSERT_EQ_INT(refs_with("/tmp/m.h5", &e), QDC_EFORMAT);
+    ASSERT_TRUE(strstr(e.msg, "absolute") != NULL);
+    ASSERT_EQ_INT(refs_with("n.h5", &e), QDC_EFORMAT);
+    ASSERT_TRUE(strstr(e.msg, "two HDF5 files") != NULL);
+    {
+        static buf_t x;
+        meshio_xdmf_h5 h;
+        ASSERT_OK(meshio_xdmf_h5_rename(xml, strlen(xml), "sub/..m.h5", sink, &x, NULL));
+        ASSERT_OK(meshio_xdmf_h5_refs(x.b, x.n, &h, NULL)); /* a name, not a parent */
+        ASSERT_TRUE(!strcmp(h.file, "sub/..m.h5"));
+    }
+    ASSERT_EQ_INT(meshio_read(xml, strlen(xml), MESHIO_XDMF, &m, &e), QDC_EFORMAT);
+    ASSERT_TRUE(strstr(e.msg, "qdc command") != NULL);
+}
+
+TEST_MAIN("xdmf_h5", T(refs_list_the_mesh_datasets), T(framed_read_and_spliced_write),
+          T(a_geometry_frame_of_another_size_is_refused),
+          T(rename_changes_only_the_file_names),
+          T(references_out_of_the_folder_are_refused))
