@@ -78,6 +78,21 @@ code=$(req GET "/v1/jobs/$ID/result?format=vtu" "$TMP/result.vtu")
 [ "$code" = 200 ] && pass "hdf5: the MED job's result as VTU too" ||
     fail "hdf5: result vtu" "$code $(head -c 300 "$TMP/result.vtu")"
 
+# a run that changed the tets has no MED result (MED is only ever spliced):
+# MED is not among the offered formats (400 naming them), VTU is
+if job flips "$TMP/meshio.med" "max_iter=5&topology=flips" && [ "$ST" = succeeded ]; then
+    code=$(req GET "/v1/jobs/$ID/result?format=med" "$TMP/flips.med")
+    code2=$(req GET "/v1/jobs/$ID/result?format=vtu" "$TMP/flips.vtu")
+    if [ "$code" = 400 ] && jq -e '.offered | index("model/vnd.med") == null' "$TMP/flips.med" \
+        > /dev/null && [ "$code2" = 200 ]; then
+        pass "hdf5: topology=flips on a MED upload: result?format=med 400 (not offered), as VTU 200"
+    else
+        fail "hdf5: MED result after flips" "$code $(head -c 300 "$TMP/flips.med") vtu $code2"
+    fi
+else
+    fail "hdf5: topology=flips MED job" "$ST $(head -c 400 "$TMP/job.$ID" 2> /dev/null)"
+fi
+
 code=$(submit "$TMP/frames.bin" application/octet-stream format=med "$TMP/out")
 if [ "$code" = 400 ] && grep -q "not an HDF5 file" "$TMP/out"; then
     pass "hdf5: a body named MED that is no HDF5 file: 400 at once"
