@@ -59,7 +59,7 @@ enum { TOPO_ROUNDS = 3 };
  * 1.34 / 5.4; bone-lowq 0.6561 / 0.14 / 3.4 and 0.6574 / 0.14 / 10.3 (tets
  * under 1 degree 28 -> 11). Insertion at 0.6 accepted on the mean ratio alone
  * lifted ball-scan to 0.8246 but took its smallest angle from 14.0 to 10.8. */
-#define TOPO_QINSERT 0.6
+#define TOPO_QINSERT 0.5
 
 /* Under a bound the user gave, the first smoothing spends this share of it and
  * the rounds after the flips the rest (spend.h: the whole run keeps the one
