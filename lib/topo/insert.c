@@ -3,6 +3,7 @@
 #include "topo/insert.h"
 
 #include "core/tet.h"
+#include "geom/metric_int.h"
 
 #include <math.h>
 #include <string.h>
@@ -91,6 +92,18 @@ static double star_min(tmesh *tm, const double p[3], int32_t (*newt)[4], int nne
     return q;
 }
 
+/* The cosine of the smallest dihedral angle of tet v (the largest of its six;
+ * 1 for a degenerate face): the smaller, the better. */
+static double cos_smallest(const tmesh *tm, const int32_t v[4])
+{
+    double cmin, cmax;
+
+    metric_dihedral_cos_range(tm->xyz + 3 * (size_t)v[0], tm->xyz + 3 * (size_t)v[1],
+                              tm->xyz + 3 * (size_t)v[2], tm->xyz + 3 * (size_t)v[3],
+                              &cmin, &cmax);
+    return cmax;
+}
+
 /* The best place found for the new vertex: the centroids of t and of the
  * cavity's vertices, then a compass search (6 directions, step halved when
  * none improves) from the better. Returns its smallest quality, p set. */
@@ -172,21 +185,38 @@ static int keeps_vertices(const tmesh *tm, const int32_t *old, int nold,
     return 1;
 }
 
+/* 1 when the smallest dihedral angle of the star (its vertex at p) is at least
+ * the one whose cosine is cold (the cavity's). */
+static int keeps_angle(tmesh *tm, const double p[3], int32_t (*newt)[4], int nn,
+                       double cold)
+{
+    memcpy(tm->xyz + 3 * (size_t)(tm->nv - 1), p, 3 * sizeof *p);
+    for (int j = 0; j < nn; j++)
+        if (cos_smallest(tm, newt[j]) > cold)
+            return 0;
+    return 1;
+}
+
 /* The cavity grown from t and its face-neighbours, each time by the tet across
  * the outer face of the worst new tet (Stellar's cavity growth, greedy), up to
  * INS_OLD tets; the one whose star, its vertex placed by place(), has the best
- * smallest quality relative to the cavity's: *best_gain, old/nold and p set. */
-static void grow(tmesh *tm, int32_t t, int32_t *old, int *nold, double p[3],
+ * smallest quality relative to the cavity's (with angle, only among the stars
+ * whose smallest dihedral angle is at least the cavity's): *best_gain,
+ * old/nold and p set. */
+static void grow(tmesh *tm, int32_t t, int angle, int32_t *old, int *nold, double p[3],
                  double *best_gain)
 {
     int32_t cav[INS_OLD], newt[INS_NEW][4], from[INS_NEW];
     int n = cavity(tm, t, cav);
-    double qold = INFINITY;
+    double qold = INFINITY, cold = -1.0;
 
     *best_gain = -INFINITY;
     *nold = 0;
-    for (int o = 0; o < n; o++)
+    for (int o = 0; o < n; o++) {
         qold = fmin(qold, tm->q[cav[o]]);
+        if (angle)
+            cold = fmax(cold, cos_smallest(tm, tm->tv + 4 * (size_t)cav[o]));
+    }
     for (;;) {
         double x[3], qn, worst = INFINITY;
         int nn = star(tm, cav, n, tm->nv - 1, newt, from), jw = 0;
@@ -194,7 +224,8 @@ static void grow(tmesh *tm, int32_t t, int32_t *old, int *nold, double p[3],
         if (nn < 0)
             break;
         qn = place(tm, t, cav, n, newt, nn, x);
-        if (qn - qold > *best_gain && keeps_vertices(tm, cav, n, newt, nn)) {
+        if (qn - qold > *best_gain && keeps_vertices(tm, cav, n, newt, nn) &&
+            (!angle || keeps_angle(tm, x, newt, nn, cold))) {
             *best_gain = qn - qold;
             memcpy(old, cav, (size_t)n * sizeof *cav);
             *nold = n;
@@ -212,11 +243,13 @@ static void grow(tmesh *tm, int32_t t, int32_t *old, int *nold, double p[3],
             break;
         cav[n++] = a;
         qold = fmin(qold, tm->q[a]);
+        if (angle)
+            cold = fmax(cold, cos_smallest(tm, tm->tv + 4 * (size_t)a));
     }
 }
 
-qdc_status insert_in_tet(tmesh *tm, int32_t t, double margin, int *done, int32_t *new_ids,
-                         int *nnew)
+qdc_status insert_in_tet(tmesh *tm, int32_t t, double margin, int angle, int *done,
+                         int32_t *new_ids, int *nnew)
 {
     int32_t old[INS_OLD], newt[INS_NEW][4], from[INS_NEW];
     double gain, p[3] = {0, 0, 0};
@@ -230,7 +263,7 @@ qdc_status insert_in_tet(tmesh *tm, int32_t t, double margin, int *done, int32_t
     st = tmesh_add_vertex(tm, p);
     if (st != QDC_OK)
         return st;
-    grow(tm, t, old, &nold, p, &gain);
+    grow(tm, t, angle, old, &nold, p, &gain);
     if (nold == 0 || gain < margin) {
         tm->nv--;
         return QDC_OK;

@@ -2,7 +2,8 @@
  * insertion, Klingner and Shewchuk 2007, in its simplest cavity): a bad tet and
  * the tets across its unconstrained faces (one tag) are replaced by the star of
  * a new vertex placed inside them, when every cavity face is visible from it
- * (exact orient3d) and the cavity's smallest mean ratio rises.
+ * (exact orient3d) and the cavity's smallest mean ratio rises (and, when
+ * asked, its smallest dihedral angle does not fall).
  * No constrained face or edge is removed (the faces removed are the bad tet's
  * own unconstrained faces; every edge of the cavity stays on its outer faces);
  * the new vertex is interior (vcons 0). Thread safety: as tmesh. */
@@ -15,12 +16,15 @@
 qdc_status tmesh_add_vertex(tmesh *tm, const double p[3]);
 
 /* Insert a vertex into the cavity of live tet t (above) when the cavity's
- * smallest mean ratio rises by at least margin: *done 1 with the new tets'
+ * smallest mean ratio rises by at least margin and, with angle 1, its smallest
+ * dihedral angle does not fall (the vertex placed for the mean ratio first,
+ * then the angle checked: a star that lifts the mean ratio with a thinner
+ * angle is refused): *done 1 with the new tets'
  * slots in new_ids (room for 32) and their count in *nnew, the change journaled
  * (tmesh_commit keeps it, insert_undo undoes it, vertex included); else *done 0
  * and tm exactly as it was. QDC_ENOMEM. */
-qdc_status insert_in_tet(tmesh *tm, int32_t t, double margin, int *done, int32_t *new_ids,
-                         int *nnew);
+qdc_status insert_in_tet(tmesh *tm, int32_t t, double margin, int angle, int *done,
+                         int32_t *new_ids, int *nnew);
 
 /* Undo an insertion not yet committed: the journal rolled back and the vertex
  * it added removed. */

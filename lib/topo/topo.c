@@ -22,6 +22,7 @@ void topo_params_default(topo_params *p)
     p->insert = 0;
     p->qinsert = 0.15;
     p->imargin = 0.05;
+    p->iangle = 1;
     p->contract = 0;
     p->qcontract = 0.3;
     p->bound.hausd = 0.0;
@@ -187,7 +188,7 @@ static qdc_status insert_pass(tmesh *tm, const topo_params *p, heap *h, topo_sta
             return QDC_ECANCEL;
         if (tm->tv[4 * (size_t)e.t] < 0 || tm->stamp[e.t] != e.stamp)
             continue;
-        s = insert_in_tet(tm, e.t, p->imargin, &done, ids, &nn);
+        s = insert_in_tet(tm, e.t, p->imargin, p->iangle, &done, ids, &nn);
         if (s != QDC_OK || !done)
             continue;
         tmesh_commit(tm);

@@ -27,6 +27,7 @@ typedef struct {
                       * in the tets still below qinsert, worst first */
     double qinsert;  /* tets below this mean ratio get an insertion tried */
     double imargin;  /* an insertion must raise the cavity's minimum by this */
+    int iangle;      /* 1: and must not lower its smallest dihedral angle */
     int contract;    /* 1: after the flips of a round, interior edge contraction
                       * (contract.h) in the tets still below qcontract */
     double qcontract;
@@ -69,7 +70,7 @@ typedef struct {
 } topo_surface;
 
 /* maxring 10, qgoal 0.6, margin 1e-3, floor4 0.1, rounds 3, max_ops 0, insert 0,
- * qinsert 0.15, imargin 0.05, contract 0, qcontract 0.3, no bound. */
+ * qinsert 0.15, imargin 0.05, iangle 1, contract 0, qcontract 0.3, no bound. */
 void topo_params_default(topo_params *p);
 
 /* Improve tm in place with flips (see above). cancel (may be NULL) is polled

@@ -9,7 +9,12 @@
 # with interior vertex insertion and edge contraction kept when better): the
 # input's vertices in their order (less those contracted away), all used, the
 # boundary and interface triangles and the regions the same as sets, none
-# inverted, the same bytes from 1 and 2 threads.
+# inverted, the same bytes from 1 and 2 threads. Tangled input (the bone at
+# 5k tets with 5% of its interior vertices pushed, split into two regions):
+# flips and full end with no tet inverted by the independent evaluator, the
+# boundary and interface triangles and the regions as in the input (as sets,
+# under full's renumbering), the surface within the report's bound, the mean
+# ratio above the input's and the same bytes from 1 and 2 threads.
 . "$(dirname "$0")/../lib.sh"
 
 names="bone-lowq two-region"
@@ -22,6 +27,10 @@ if ! "$PY" "$ROOT/scripts/corpus.py" "$TMP/c" --tets 20000 --seed 3 \
     for n in $names; do fail "topology: $n" "scripts/corpus.py failed: $(tail -1 "$TMP/list")"; done
     exit 1
 fi
+
+# q MESH: the evaluator's inverted count, mean ratio and smallest dihedral
+q() { "$PY" "$QUALITY" "$1" | "$PY" -c 'import json, sys
+d = json.load(sys.stdin); print(d["n_inverted"], "%.4f" % d["eta_mean"], "%.3f" % d["dihedral_min"])'; }
 
 # compare IN NONE FLIPS: prints "ok" or what differs
 cat > "$TMP/compare.py" << 'PY'
@@ -114,8 +123,6 @@ PY
     else
         fail "topology: $n: report" "$r"
     fi
-    q() { "$PY" "$QUALITY" "$1" | "$PY" -c 'import json, sys
-d = json.load(sys.stdin); print(d["n_inverted"], "%.4f" % d["eta_mean"], "%.3f" % d["dihedral_min"])'; }
     set -- $(q "$TMP/none.mesh")
     nm=$2 nd=$3
     set -- $(q "$TMP/flips.mesh")
@@ -176,8 +183,7 @@ for n in $names; do
     else
         fail "topology full: $n: model" "$*"
     fi
-    set -- $("$PY" "$QUALITY" "$TMP/full1.mesh" | "$PY" -c 'import json, sys
-d = json.load(sys.stdin); print(d["n_inverted"], "%.4f" % d["eta_mean"], "%.3f" % d["dihedral_min"])')
+    set -- $(q "$TMP/full1.mesh")
     if [ "$1" = 0 ]; then
         pass "topology full: $n: none inverted (mean ratio $2, smallest dihedral $3)"
     else
@@ -187,6 +193,71 @@ d = json.load(sys.stdin); print(d["n_inverted"], "%.4f" % d["eta_mean"], "%.3f" 
         pass "topology full: $n: the same bytes from 1 and 2 threads"
     else
         fail "topology full: $n: determinism" "outputs differ"
+    fi
+done
+
+# tangled input, two regions (the tets west of the median x in region 2)
+if ! "$PY" "$ROOT/scripts/corpus.py" "$TMP/t" --tets 5000 --seed 1 --tangle-frac 0.05 \
+    --only bone-lowq-tangled > "$TMP/list" 2>&1; then
+    fail "topology tangled" "scripts/corpus.py failed: $(tail -1 "$TMP/list")"
+    exit 1
+fi
+in=$TMP/tangled.mesh
+"$PY" - "$TMP/t/bone-lowq-tangled.mesh" "$in" << 'PY'
+import sys
+lines = open(sys.argv[1]).read().split("\n")
+i = lines.index("Vertices")
+x = [float(l.split()[0]) for l in lines[i + 2:i + 2 + int(lines[i + 1])]]
+mid = sorted(x)[len(x) // 2]
+j = lines.index("Tetrahedra")
+for k in range(j + 2, j + 2 + int(lines[j + 1])):
+    t = lines[k].split()[:4]
+    west = sum(x[int(v) - 1] for v in t) < 4 * mid
+    lines[k] = " ".join(t + ["2" if west else "1"])
+open(sys.argv[2], "w").write("\n".join(lines))
+PY
+set -- $(q "$in")
+ninv=$1 imean=$2
+for mode in flips full; do
+    n="topology $mode: tangled bone, two regions"
+    if [ "$ninv" = 0 ]; then
+        fail "$n" "the input has no tet inverted"
+        continue
+    fi
+    if ! OMP_NUM_THREADS=1 "$BIN/qdc" optimize --quiet --topology $mode "$in" \
+        "$TMP/g1.mesh" --report "$TMP/g1.json" 2> "$TMP/err" ||
+        ! OMP_NUM_THREADS=2 "$BIN/qdc" optimize --quiet --topology $mode "$in" \
+            "$TMP/g2.mesh" 2> "$TMP/err"; then
+        fail "$n" "exit: $(tail -2 "$TMP/err")"
+        continue
+    fi
+    set -- $(q "$TMP/g1.mesh")
+    if [ "$1" = 0 ] && awk -v a="$2" -v b="$imean" 'BEGIN { exit !(a > b) }'; then
+        pass "$n: $ninv inverted -> 0, mean ratio $imean -> $2 (smallest dihedral $3)"
+    else
+        fail "$n: quality" "$1 inverted, mean ratio $imean -> $2"
+    fi
+    set -- $("$PY" "$TMP/full.py" "$in" "$TMP/g1.mesh" "$TMP/compare.py")
+    r=$1
+    [ $mode = flips ] && [ "$2" != "$3" ] && r="vertex count $2 -> $3"
+    if [ "$r" = ok ]; then
+        pass "$n: boundary and interface triangles, regions kept ($2 -> $3 vertices)"
+    else
+        fail "$n: model" "$*"
+    fi
+    set -- $("$PY" -c 'import json, sys
+d = json.load(open(sys.argv[1]))
+h, b = d["boundary_error"]["hausdorff"], d["run"]["hausd_bound"]
+print("ok" if 0 < b and h <= b * (1 + 1e-9) else "over", h, b)' "$TMP/g1.json")
+    if [ "$1" = ok ]; then
+        pass "$n: the surface within the report's bound ($2 <= $3)"
+    else
+        fail "$n: bound" "surface distance $2 over the bound $3"
+    fi
+    if cmp -s "$TMP/g1.mesh" "$TMP/g2.mesh"; then
+        pass "$n: the same bytes from 1 and 2 threads"
+    else
+        fail "$n: determinism" "outputs differ"
     fi
 done
 exit $((NFAIL > 0))

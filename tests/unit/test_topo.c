@@ -2,6 +2,7 @@
  * journal, edge removal, the 2-3 flip, their constraints, and the driver. */
 #include "core/mesh_int.h"
 #include "core/tet.h"
+#include "geom/metric_int.h"
 #include "opt/opt.h"
 #include "testlib.h"
 #include "testmesh.h"
@@ -577,7 +578,7 @@ TEST(insertion_in_a_bad_tet)
     f0 = cons_faces(tm, &nf0);
     ASSERT_TRUE(f0);
     ASSERT_TRUE(snap_take(tm, &s));
-    ASSERT_OK(insert_in_tet(tm, t, -INFINITY, &done, ids, &nn));
+    ASSERT_OK(insert_in_tet(tm, t, -INFINITY, 0, &done, ids, &nn));
     ASSERT_EQ_INT(done, 1);
     ASSERT_TRUE(nn >= 12 && nn <= 32);
     ASSERT_EQ_INT(tm->nv, nv + 1);
@@ -615,13 +616,13 @@ TEST(insertion_refused_leaves_the_mesh)
 
     ASSERT_TRUE(tm);
     ASSERT_TRUE(snap_take(tm, &s));
-    ASSERT_OK(insert_in_tet(tm, 0, 10.0, &done, ids, &nn));
+    ASSERT_OK(insert_in_tet(tm, 0, 10.0, 0, &done, ids, &nn));
     ASSERT_EQ_INT(done, 0);
     ASSERT_EQ_INT(tm->nv, 6);
     ASSERT_TRUE(snap_same(tm, &s));
     f0 = cons_faces(tm, &nf0);
     ASSERT_TRUE(f0);
-    ASSERT_OK(insert_in_tet(tm, 0, -INFINITY, &done, ids, &nn));
+    ASSERT_OK(insert_in_tet(tm, 0, -INFINITY, 0, &done, ids, &nn));
     ASSERT_EQ_INT(done, 1);
     ASSERT_TRUE(consistent(tm));
     f1 = cons_faces(tm, &nf1);
@@ -632,6 +633,83 @@ TEST(insertion_refused_leaves_the_mesh)
     free(f0);
     free(f1);
     snap_free(&s);
+    tmesh_free(tm);
+}
+
+/* The smallest dihedral angle (degrees) over the live tets of tm from slot lo. */
+static double min_dihedral_from(const tmesh *tm, int32_t lo)
+{
+    double m = 180.0, a0, a1;
+    for (int32_t t = lo; t < tm->hi; t++) {
+        const int32_t *v = tm->tv + 4 * t;
+        if (v[0] < 0)
+            continue;
+        metric_dihedral_range(tm->xyz + 3 * v[0], tm->xyz + 3 * v[1], tm->xyz + 3 * v[2],
+                              tm->xyz + 3 * v[3], &a0, &a1);
+        m = fmin(m, a0);
+    }
+    return m;
+}
+
+/* Insertion in the octahedron of the ring of 4 tets around the z axis, its
+ * apexes at z = -h and h, the ring points at distance 1. The star of its
+ * centre is 8 trirectangular tets (0, h e_z, e_x, e_y) and mirrors: mean
+ * ratio 12 (h / 2)^(2/3) / (6 + 3 h^2) against the ring's 12 h^(2/3) /
+ * (6 + 8 h^2); smallest dihedral atan(h sqrt2) (at the ring edge, where the
+ * ring's tet has 2 atan(h sqrt2)) and acos(h / sqrt(2 h^2 + 1)) (at the
+ * apex-to-ring edges, as the ring's).
+ * h = 0.5 (flat): the star's mean ratio 0.7055 < 0.9449 and smallest angle
+ * 35.26 deg < 65.91: with any margin it is made without the angle check
+ * (the vertex at the centre), and refused with it, nothing changed.
+ * h = 2 (tall): 0.6667 > 0.5013, the smallest angle 48.19 both: made with the
+ * angle check and a margin of 0.1. */
+TEST(insertion_keeps_the_smallest_angle)
+{
+    const double flat = 0.5, tall = 2.0;
+    double qs = 12 * pow(flat / 2, 2.0 / 3) / (6 + 3 * flat * flat);
+    double qt = 12 * pow(tall / 2, 2.0 / 3) / (6 + 3 * tall * tall);
+    double q0 = 12 * pow(tall, 2.0 / 3) / (6 + 8 * tall * tall);
+    tmesh *tm = ring_mesh(4, -flat, flat, NULL);
+    int32_t ids[32];
+    int done = 1, nn = 0;
+    snap s;
+
+    ASSERT_TRUE(tm);
+    ASSERT_NEAR(min_dihedral_from(tm, 0),
+                acos(flat / sqrt(2 * flat * flat + 1)) * 180 / PI, 1e-9);
+    ASSERT_TRUE(snap_take(tm, &s));
+    ASSERT_OK(insert_in_tet(tm, 0, -INFINITY, 1, &done, ids, &nn));
+    ASSERT_EQ_INT(done, 0);
+    ASSERT_EQ_INT(tm->nv, 6);
+    ASSERT_TRUE(snap_same(tm, &s));
+    snap_free(&s);
+    ASSERT_OK(insert_in_tet(tm, 0, -INFINITY, 0, &done, ids, &nn));
+    ASSERT_EQ_INT(done, 1);
+    ASSERT_EQ_INT(nn, 8);
+    ASSERT_EQ_INT(tm->nlive, 8);
+    ASSERT_TRUE(consistent(tm));
+    for (int d = 0; d < 3; d++)
+        ASSERT_NEAR(tm->xyz[3 * 6 + d], 0.0, 1e-12);
+    for (int j = 0; j < nn; j++)
+        ASSERT_NEAR(tm->q[ids[j]], qs, 1e-9);
+    ASSERT_NEAR(min_dihedral_from(tm, 0), atan(flat * sqrt(2.0)) * 180 / PI, 1e-9);
+    tmesh_commit(tm);
+    tmesh_free(tm);
+
+    tm = ring_mesh(4, -tall, tall, NULL);
+    ASSERT_TRUE(tm);
+    ASSERT_NEAR(tm->q[0], q0, 1e-12);
+    ASSERT_OK(insert_in_tet(tm, 0, 0.1, 1, &done, ids, &nn));
+    ASSERT_EQ_INT(done, 1);
+    ASSERT_EQ_INT(nn, 8);
+    ASSERT_TRUE(consistent(tm));
+    for (int d = 0; d < 3; d++)
+        ASSERT_NEAR(tm->xyz[3 * 6 + d], 0.0, 1e-12);
+    for (int j = 0; j < nn; j++)
+        ASSERT_NEAR(tm->q[ids[j]], qt, 1e-9);
+    ASSERT_NEAR(min_dihedral_from(tm, 0),
+                acos(tall / sqrt(2 * tall * tall + 1)) * 180 / PI, 1e-9);
+    tmesh_commit(tm);
     tmesh_free(tm);
 }
 
@@ -1182,9 +1260,9 @@ TEST(contraction_keeps_the_volume_exactly)
 TEST_MAIN("topo", T(contraction_keeps_the_volume_exactly), T(boundary_flip_2_2_coplanar),
           T(peeling_a_flat_boundary_tet), T(driver_writes_the_new_boundary_triangles),
           T(driver_spends_one_bound), T(insertion_in_a_bad_tet),
-          T(insertion_refused_leaves_the_mesh), T(driver_with_insertion),
-          T(orient3d_exact_near_coplanar), T(edge_removal_3_2_keeps_volume),
-          T(edge_removal_rings_3_to_8), T(flip_2_3),
+          T(insertion_refused_leaves_the_mesh), T(insertion_keeps_the_smallest_angle),
+          T(driver_with_insertion), T(orient3d_exact_near_coplanar),
+          T(edge_removal_3_2_keeps_volume), T(edge_removal_rings_3_to_8), T(flip_2_3),
           T(multiface_removal_restores_the_ring),
           T(export_keeps_the_callers_vertex_order), T(mixed_tag_shell_blocks_removal),
           T(non_convex_ring_refused), T(four_boundary_corner_floor),
