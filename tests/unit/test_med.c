@@ -6,18 +6,6 @@
 #include "testio.h"
 #include "testlib.h"
 
-static void put_frame(sink *s, const char *name, char type, const void *v, uint64_t n)
-{
-    unsigned char h[32] = {0};
-
-    memcpy(h, name, strlen(name));
-    h[16] = (unsigned char)type;
-    for (int k = 0; k < 8; k++)
-        h[24 + k] = (unsigned char)(n >> (8 * k));
-    sink_write(s, h, sizeof h);
-    sink_write(s, v, (size_t)n * 8);
-}
-
 /* a = 0, b = x, c = y, d = z, e = (1,1,1); tets a b c d (family -1), e b c d
  * (family -2), 1-based; an unknown frame between. */
 static void two_tets(sink *s, int64_t bad_node, double bad_x)

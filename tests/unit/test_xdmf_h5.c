@@ -3,7 +3,7 @@
  * read into the mesh and written back spliced with only the geometry
  * frame's values changed, the XML renamed to another .h5 file, and the
  * references refused (absolute, "..", two files, a plain read). */
-#include "qdc.h"
+#include "testio.h"
 #include "testlib.h"
 
 #include <stdint.h>
@@ -16,49 +16,24 @@ static const char xml[] =
     "<Geometry GeometryType=\"XYZ\"><DataItem DataType=\"Float\" Dimensions=\"4 3\" "
     "Format=\"HDF\" Precision=\"8\">m.h5:/g</DataItem></Geometry>"
     "<Topology TopologyType=\"Tetrahedron\" NumberOfElements=\"1\"><DataItem "
-    "DataType=\"Int\" Dimensions=\"1 4\" Format=\"HDF\">\n  m.h5:/t\n</DataItem></Topology>"
+    "DataType=\"Int\" Dimensions=\"1 4\" Format=\"HDF\">\n  "
+    "m.h5:/t\n</DataItem></Topology>"
     "<Attribute Name=\"x\" Center=\"Node\"><DataItem Dimensions=\"4\" Format=\"HDF\">"
     "m.h5:/x</DataItem></Attribute>"
     "<Attribute Name=\"region\" Center=\"Cell\"><DataItem DataType=\"Int\" "
     "Dimensions=\"1\" Format=\"HDF\">m.h5:/r</DataItem></Attribute>"
     "</Grid></Domain></Xdmf>\n";
 
-typedef struct {
-    char b[4096];
-    size_t n;
-} buf_t;
-
-static int sink(void *ctx, const void *data, size_t len)
-{
-    buf_t *o = ctx;
-    if (o->n + len > sizeof o->b)
-        return -1;
-    memcpy(o->b + o->n, data, len);
-    o->n += len;
-    return 0;
-}
-
-static void frame(buf_t *o, const char *name, char type, const void *vals, uint64_t n)
-{
-    unsigned char h[32] = {0};
-    memcpy(h, name, strlen(name));
-    h[16] = (unsigned char)type;
-    for (int k = 0; k < 8; k++)
-        h[24 + k] = (unsigned char)(n >> (8 * k));
-    sink(o, h, 32);
-    sink(o, vals, (size_t)n * 8);
-}
-
 /* What qdc-h5 prints for the datasets of xml (little-endian host). */
-static void frames(buf_t *o, uint64_t ngeom)
+static void frames(sink *o, uint64_t ngeom)
 {
     static const double g[12] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1};
     static const int64_t t[4] = {0, 1, 2, 3}, r[1] = {7};
     o->n = 0;
-    sink(o, "QDCH5v1\n", 8);
-    frame(o, "geometry", 'f', g, ngeom);
-    frame(o, "topology", 'i', t, 4);
-    frame(o, "region", 'i', r, 1);
+    sink_write(o, "QDCH5v1\n", 8);
+    put_frame(o, "geometry", 'f', g, ngeom);
+    put_frame(o, "topology", 'i', t, 4);
+    put_frame(o, "region", 'i', r, 1);
 }
 
 TEST(refs_list_the_mesh_datasets)
@@ -79,7 +54,7 @@ TEST(refs_list_the_mesh_datasets)
 
 TEST(framed_read_and_spliced_write)
 {
-    static buf_t fr, out;
+    static sink fr, out;
     char *in = NULL;
     size_t in_len = 0;
     mesh_t *m = NULL;
@@ -97,7 +72,7 @@ TEST(framed_read_and_spliced_write)
     ASSERT_TRUE(meshio_splices(m, MESHIO_XDMF, NULL));
     m->xyz[3] = 0.5;
     out.n = 0;
-    ASSERT_OK(meshio_write(m, MESHIO_XDMF, sink, &out, NULL));
+    ASSERT_OK(meshio_write(m, MESHIO_XDMF, sink_write, &out, NULL));
     ASSERT_EQ_INT((long long)out.n, (long long)in_len);
     /* the second node's x: after the magic, the XML frame, a frame header */
     geom = 8 + 32 + (strlen(xml) + 7) / 8 * 8 + 32 + 3 * 8;
@@ -114,7 +89,7 @@ TEST(framed_read_and_spliced_write)
 
 TEST(a_geometry_frame_of_another_size_is_refused)
 {
-    static buf_t fr;
+    static sink fr;
     char *in = NULL;
     size_t in_len = 0;
     mesh_t *m = NULL;
@@ -129,12 +104,12 @@ TEST(a_geometry_frame_of_another_size_is_refused)
 
 TEST(rename_changes_only_the_file_names)
 {
-    static buf_t out;
+    static sink out;
     static char want[sizeof xml + 64];
     const char *p = xml;
     size_t n = 0;
 
-    ASSERT_OK(meshio_xdmf_h5_rename(xml, strlen(xml), "out.h5", sink, &out, NULL));
+    ASSERT_OK(meshio_xdmf_h5_rename(xml, strlen(xml), "out.h5", sink_write, &out, NULL));
     while (*p) { /* "m.h5:" -> "out.h5:" */
         if (!strncmp(p, "m.h5:", 5)) {
             memcpy(want + n, "out.h5:", 7);
@@ -147,8 +122,9 @@ TEST(rename_changes_only_the_file_names)
     ASSERT_EQ_INT((long long)out.n, (long long)n);
     ASSERT_TRUE(memcmp(out.b, want, n) == 0);
     out.n = 0;
-    ASSERT_EQ_INT(meshio_xdmf_h5_rename(xml, strlen(xml), "a&b.h5", sink, &out, NULL),
-                  QDC_EINVAL);
+    ASSERT_EQ_INT(
+        meshio_xdmf_h5_rename(xml, strlen(xml), "a&b.h5", sink_write, &out, NULL),
+        QDC_EINVAL);
 }
 
 /* xml with its first "m.h5" replaced by file */
@@ -175,9 +151,10 @@ TEST(references_out_of_the_folder_are_refused)
     ASSERT_EQ_INT(refs_with("n.h5", &e), QDC_EFORMAT);
     ASSERT_TRUE(strstr(e.msg, "two HDF5 files") != NULL);
     {
-        static buf_t x;
+        static sink x;
         meshio_xdmf_h5 h;
-        ASSERT_OK(meshio_xdmf_h5_rename(xml, strlen(xml), "sub/..m.h5", sink, &x, NULL));
+        ASSERT_OK(
+            meshio_xdmf_h5_rename(xml, strlen(xml), "sub/..m.h5", sink_write, &x, NULL));
         ASSERT_OK(meshio_xdmf_h5_refs(x.b, x.n, &h, NULL)); /* a name, not a parent */
         ASSERT_TRUE(!strcmp(h.file, "sub/..m.h5"));
     }

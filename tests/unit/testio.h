@@ -646,4 +646,19 @@ static inline char *replaced(const char *doc, const char *from, const char *to)
     return d;
 }
 
+/* One frame of what qdc-h5 prints: a 32-byte header (name, type 'f' or 'i',
+ * the count, little-endian) and n 8-byte values. */
+static inline void put_frame(sink *s, const char *name, char type, const void *v,
+                             uint64_t n)
+{
+    unsigned char h[32] = {0};
+
+    memcpy(h, name, strlen(name));
+    h[16] = (unsigned char)type;
+    for (int k = 0; k < 8; k++)
+        h[24 + k] = (unsigned char)(n >> (8 * k));
+    sink_write(s, h, sizeof h);
+    sink_write(s, v, (size_t)n * 8);
+}
+
 #endif
