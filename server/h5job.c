@@ -14,7 +14,8 @@ static void h5_program(const qdcd *q, char *out, size_t cap)
     if (!slash)
         snprintf(out, cap, "qdc-h5");
     else
-        snprintf(out, cap, "%.*s/qdc-h5", (int)(slash - q->cfg.qdc_path), q->cfg.qdc_path);
+        snprintf(out, cap, "%.*s/qdc-h5", (int)(slash - q->cfg.qdc_path),
+                 q->cfg.qdc_path);
 }
 
 void h5job_run(const qdcd *q, const char *id, const char *frames, const char *res,

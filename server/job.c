@@ -417,11 +417,13 @@ static int med_load(worker *w, job_rec *j, opt_options *opts, mesh_t **out)
     st = buf ? meshio_read(buf, len, MESHIO_MED, out, &err)
              : qdc_fail(&err, QDC_EIO, "qdc-h5 left no mesh");
     free(buf);
-    if (st == QDC_OK && ((*out)->nv > q->cfg.max_vertices || (*out)->nt > q->cfg.max_tets))
-        st = qdc_fail(&err, QDC_ETOOBIG,
-                      "%d vertices and %d tets; this server accepts %lld and %lld at most",
-                      (*out)->nv, (*out)->nt, (long long)q->cfg.max_vertices,
-                      (long long)q->cfg.max_tets);
+    if (st == QDC_OK &&
+        ((*out)->nv > q->cfg.max_vertices || (*out)->nt > q->cfg.max_tets))
+        st =
+            qdc_fail(&err, QDC_ETOOBIG,
+                     "%d vertices and %d tets; this server accepts %lld and %lld at most",
+                     (*out)->nv, (*out)->nt, (long long)q->cfg.max_vertices,
+                     (long long)q->cfg.max_tets);
     if (st == QDC_OK)
         st = mesh_validate(*out, NULL, &err);
     if (st != QDC_OK) {

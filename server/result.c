@@ -50,9 +50,9 @@ static meshio_format input_source(req *r, const job_rec *j, char *path, size_t c
 
     /* MED: the frames qdc-h5 read the upload into (h5job.h), not HDF5 */
     job_path(r->q, j->id,
-             surf                  ? JOB_INPUT_TETS
-             : f == MESHIO_MED     ? H5JOB_FRAMES
-                                   : job_input_name(j->format),
+             surf              ? JOB_INPUT_TETS
+             : f == MESHIO_MED ? H5JOB_FRAMES
+                               : job_input_name(j->format),
              path, cap);
     return f;
 }

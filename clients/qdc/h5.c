@@ -249,8 +249,9 @@ static qdc_status med_read(const char *path, int copy_fd, const meshio_options *
                            mesh_t **m, qdc_error *err)
 {
     char prog[PATH_MAX + 8];
-    char *argv[] = {(char *)h5_program(prog, sizeof prog), "-n", (char *)path,
-                    "med-read", (char *)(copy_fd >= 0 ? COPY_PATH : path), NULL};
+    char *argv[] = {
+        (char *)h5_program(prog, sizeof prog),     "-n", (char *)path, "med-read",
+        (char *)(copy_fd >= 0 ? COPY_PATH : path), NULL};
     char *buf;
     size_t len;
     qdc_status st = run_output(argv, copy_fd, &buf, &len, err);
@@ -365,13 +366,9 @@ static int ends_gz(const char *path)
 qdc_status cli_h5_write(const char *out, const mesh_t *m, qdc_error *err)
 {
     char prog[PATH_MAX + 8];
-    char *argv[] = {(char *)h5_program(prog, sizeof prog),
-                    "-n",
-                    med_source,
-                    "med-write",
-                    med_copy >= 0 ? COPY_PATH : med_source,
-                    (char *)out,
-                    NULL};
+    char *argv[] = {
+        (char *)h5_program(prog, sizeof prog),  "-n",        med_source, "med-write",
+        med_copy >= 0 ? COPY_PATH : med_source, (char *)out, NULL};
 
     if (!strcmp(out, "-"))
         return qdc_fail(err, QDC_EINVAL,

@@ -352,8 +352,9 @@ qdc_status meshio_gunzip(const char *buf, size_t len, const meshio_options *o,
 
     *plain = NULL;
     *plen = 0;
-    st = gz_inflate_max(buf, len, gz_budget(len, o ? o->max_bytes : 0, o ? o->max_ratio : 0),
-                        plain, plen, err);
+    st = gz_inflate_max(buf, len,
+                        gz_budget(len, o ? o->max_bytes : 0, o ? o->max_ratio : 0), plain,
+                        plen, err);
     if (st == QDC_OK && gz_is_gzip(*plain, *plen))
         st = qdc_fail(err, QDC_EPARSE, "gzip: compressed twice");
     if (st != QDC_OK) {

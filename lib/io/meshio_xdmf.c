@@ -355,11 +355,12 @@ static qdc_status item_read(xd *x, const xtag *t, item *it, qdc_error *err)
                         kind);
     it->hdf = strcasecmp(fmt, "HDF") == 0;
     if (it->hdf && x->mode == X_PLAIN)
-        return fail_txt(err, QDC_EFORMAT, &x->s, t->at,
-                        "XDMF: heavy data in HDF5 (Format=\"HDF\"): the qdc command reads "
-                        "it from the .h5 file beside the .xdmf file (a stream or an "
-                        "upload to qdcd has no such file: write the data inline, "
-                        "meshio: data_format=\"XML\")");
+        return fail_txt(
+            err, QDC_EFORMAT, &x->s, t->at,
+            "XDMF: heavy data in HDF5 (Format=\"HDF\"): the qdc command reads "
+            "it from the .h5 file beside the .xdmf file (a stream or an "
+            "upload to qdcd has no such file: write the data inline, "
+            "meshio: data_format=\"XML\")");
     if (!it->hdf && strcasecmp(fmt, "XML") != 0)
         return fail_txt(err, QDC_EFORMAT, &x->s, t->at,
                         "XDMF: DataItem Format %s: only XML (inline) and HDF are read",
@@ -927,9 +928,10 @@ static qdc_status heavy_fill(xd *x, qdc_error *err)
             return qdc_fail(err, QDC_EPARSE,
                             "XDMF: the %s dataset %.*s: %llu values from the HDF5 file, "
                             "the XDMF says %lld",
-                            h5_names[k], (int)(x->pend[k].pe - x->pend[k].p > 64
-                                                   ? 64
-                                                   : x->pend[k].pe - x->pend[k].p),
+                            h5_names[k],
+                            (int)(x->pend[k].pe - x->pend[k].p > 64
+                                      ? 64
+                                      : x->pend[k].pe - x->pend[k].p),
                             x->pend[k].p, (unsigned long long)f->n, (long long)n);
         if (k == H_GEOM) {
             x->xyz = qdc_mallocn((size_t)n + 1, sizeof(double));
@@ -1181,7 +1183,8 @@ qdc_status meshio_xdmf_h5_rename(const char *buf, size_t len, const char *file,
     st = xd_collect(&x, buf, len, 1, err);
     sp = x.spans.a;
     for (size_t i = 0; st == QDC_OK && i < x.spans.n; i += 2) {
-        if (fn(ctx, buf + at, (size_t)sp[i] - at) != 0 || fn(ctx, file, strlen(file)) != 0)
+        if (fn(ctx, buf + at, (size_t)sp[i] - at) != 0 ||
+            fn(ctx, file, strlen(file)) != 0)
             st = qdc_fail(err, QDC_EIO, "XDMF: write failed");
         at = (size_t)sp[i + 1];
     }
@@ -1217,7 +1220,8 @@ qdc_status meshio_xdmf_h5_input(const char *xml, size_t xml_len, const char *fra
         b[8 + 24 + k] = (unsigned char)((uint64_t)xml_len >> (8 * k));
     memcpy(b + 40, xml, xml_len);
     memset(b + 40 + xml_len, 0, pad);
-    memcpy(b + 40 + xml_len + pad, frames + sizeof h5_magic, frames_len - sizeof h5_magic);
+    memcpy(b + 40 + xml_len + pad, frames + sizeof h5_magic,
+           frames_len - sizeof h5_magic);
     b[n] = 0;
     *out = (char *)b;
     *out_len = n;
