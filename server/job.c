@@ -189,10 +189,12 @@ static qdc_status write_report(const char *path, const report_t *rep, qdc_error 
     return st;
 }
 
-/* Results, report and etags of a finished optimization. */
+/* Results, report and etags of a finished optimization. faces (may be NULL):
+ * ref's, and out's too (opt_run_faces). */
 static qdc_status save_outputs(qdcd *q, job_rec *j, const mesh_t *out, const mesh_t *ref,
-                               const opt_options *opts, const opt_result *res,
-                               const report_quality *before, qdc_error *err)
+                               const mesh_faces *faces, const opt_options *opts,
+                               const opt_result *res, const report_quality *before,
+                               qdc_error *err)
 {
     static const struct {
         meshio_format fmt;
@@ -221,10 +223,11 @@ static qdc_status save_outputs(qdcd *q, job_rec *j, const mesh_t *out, const mes
                              j->lease_owner)) != QDC_OK)
             return qdc_fail(err, st, "cannot store %s in the database", outs[i].name);
     }
-    st = report_quality_compute(out, &after, err);
+    st = report_quality_faces(out, faces, &after, err);
     if (st != QDC_OK)
         return st;
-    have_bd = bderr_meshes(out, ref, q->cfg.bderr_samples, &bd, NULL) == QDC_OK;
+    have_bd =
+        bderr_meshes_faces(out, ref, faces, q->cfg.bderr_samples, &bd, NULL) == QDC_OK;
     report_t rep = {before, &after, res, opts, have_bd ? &bd : NULL};
     job_path(q, j->id, "report.json", path, sizeof path);
     st = write_report(path, &rep, err);
@@ -451,6 +454,7 @@ typedef struct {
     job_rec *j;
     run_ctx ctx; /* the progress callback's */
     mesh_t *m, *ref;
+    mesh_faces *faces; /* the run's (opt_run_faces), for the report */
     opt_options opts;
     opt_result res;
     report_quality before;
@@ -567,7 +571,8 @@ static run_step run_load(run_state *s)
     return s->st == QDC_OK ? RUN_ON : RUN_ERROR;
 }
 
-/* The mesh as it came (boundary reference, quality before), then opt_run. */
+/* The mesh as it came (boundary reference), opt_run, then the quality before
+ * measured on the faces the run found. */
 static run_step run_optimize(run_state *s)
 {
     s->ref = mesh_dup(s->m);
@@ -575,9 +580,6 @@ static run_step run_optimize(run_state *s)
         s->st = qdc_fail(&s->err, QDC_ENOMEM, "out of memory");
         return RUN_ERROR;
     }
-    s->st = report_quality_compute(s->m, &s->before, &s->err);
-    if (s->st != QDC_OK)
-        return RUN_ERROR;
     /* Workers already run side by side: split the cores instead of letting
      * every job's OpenMP team take them all. */
     long ncpu = sysconf(_SC_NPROCESSORS_ONLN);
@@ -585,7 +587,9 @@ static run_step run_optimize(run_state *s)
     s->opts.cancel = &s->w->cancel;
     s->opts.progress = on_progress;
     s->opts.progress_ctx = &s->ctx;
-    s->st = opt_run(s->m, &s->opts, &s->res, &s->err);
+    s->st = opt_run_faces(s->m, &s->opts, &s->res, &s->faces, &s->err);
+    if (s->st == QDC_OK)
+        s->st = report_quality_faces(s->ref, s->faces, &s->before, &s->err);
     return s->st == QDC_OK ? RUN_ON : RUN_ERROR;
 }
 
@@ -597,8 +601,8 @@ static run_step run_save(run_state *s)
 {
     worker *w = s->w;
 
-    s->st =
-        save_outputs(s->q, s->j, s->m, s->ref, &s->opts, &s->res, &s->before, &s->err);
+    s->st = save_outputs(s->q, s->j, s->m, s->ref, s->faces, &s->opts, &s->res,
+                         &s->before, &s->err);
     for (double pause = 0.5, t0 = mono_now();
          s->st == QDC_EIO && mono_now() - t0 < 600.0 && !atomic_load(&w->cancel) &&
          !w->pool->stopping;
@@ -609,8 +613,8 @@ static run_step run_save(run_state *s)
         struct timespec ts = {(time_t)pause, (long)((pause - (time_t)pause) * 1e9)};
         nanosleep(&ts, NULL);
         qdc_error_clear(&s->err);
-        s->st = save_outputs(s->q, s->j, s->m, s->ref, &s->opts, &s->res, &s->before,
-                             &s->err);
+        s->st = save_outputs(s->q, s->j, s->m, s->ref, s->faces, &s->opts, &s->res,
+                             &s->before, &s->err);
     }
     if (s->st == QDC_EIO) {
         fprintf(stderr,
@@ -640,8 +644,8 @@ static void keep_best(run_state *s)
         s->q->store->ops->get(s->q->store, s->j->id, &row) != QDC_OK)
         return;
     qdc_error_clear(&err);
-    if (save_outputs(s->q, s->j, s->m, s->ref, &s->opts, &s->res, &s->before, &err) !=
-        QDC_OK) {
+    if (save_outputs(s->q, s->j, s->m, s->ref, s->faces, &s->opts, &s->res, &s->before,
+                     &err) != QDC_OK) {
         fprintf(stderr, "qdcd: job %s: cancelled; its best mesh was not kept: %s\n",
                 s->j->id, err.msg);
         s->j->etag_qmesh[0] = s->j->etag_json[0] = s->j->etag_medit[0] = 0;
@@ -747,6 +751,7 @@ static void run_job(worker *w, job_rec *j)
     }
     if (s.ctx.progress)
         fclose(s.ctx.progress);
+    mesh_faces_free(s.faces);
     mesh_free(s.m);
     mesh_free(s.ref);
 }

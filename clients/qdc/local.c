@@ -635,8 +635,9 @@ static int optimize_parse(int argc, char **argv, optimize_args *x)
 }
 
 /* OUT written: with --reorient every tet in the order that is positive
- * under the mesh's orientation, spliced when OUT is in IN's format. */
-static int optimize_write(const optimize_args *x, mesh_t *m)
+ * under the mesh's orientation (*rewrote: 1 if that rewrote a tet of m),
+ * spliced when OUT is in IN's format. */
+static int optimize_write(const optimize_args *x, mesh_t *m, int *rewrote)
 {
     qdc_error err;
     qdc_status st;
@@ -661,6 +662,7 @@ static int optimize_write(const optimize_args *x, mesh_t *m)
             cli_error(x->in, &err, st);
             return CLI_EOPT;
         }
+        *rewrote = mo.flipped > 0;
         if (!x->ps.quiet && mo.flipped)
             fprintf(stderr,
                     "qdc: note: %d of %d tets written in the other vertex order "
@@ -743,9 +745,11 @@ static void print_outcome(const report_t *r)
 }
 
 /* The outcome and --report FILE.json: quality of the input (orig, NULL without
- * --report) and of the result (m), the boundary error between them, the run. */
+ * --report) and of the result (m), the boundary error between them, the run.
+ * faces (may be NULL): the input's faces as the run found them (opt_run_faces);
+ * out_faces: they are m's too (--reorient rewrote none of its tets). */
 static int optimize_report(const optimize_args *x, const mesh_t *orig, const mesh_t *m,
-                           const opt_result *res)
+                           const opt_result *res, const mesh_faces *faces, int out_faces)
 {
     report_quality qb, qa;
     bderr_result be;
@@ -756,11 +760,11 @@ static int optimize_report(const optimize_args *x, const mesh_t *orig, const mes
     if (x->ps.quiet && !orig)
         return CLI_OK;
     qdc_error_clear(&err);
-    st = report_quality_compute(m, &qa, &err);
+    st = report_quality_faces(m, out_faces ? faces : NULL, &qa, &err);
     if (st == QDC_OK && orig)
-        st = report_quality_compute(orig, &qb, &err);
+        st = report_quality_faces(orig, faces, &qb, &err);
     if (st == QDC_OK && orig)
-        st = bderr_meshes(m, orig, 200000, &be, &err);
+        st = bderr_meshes_faces(m, orig, out_faces ? faces : NULL, 200000, &be, &err);
     if (st != QDC_OK && !orig)
         return CLI_OK; /* no outcome (out of memory): the result is written */
     if (st != QDC_OK) {
@@ -777,9 +781,10 @@ int cli_optimize(int argc, char **argv)
     optimize_args x;
     opt_result res;
     mesh_t *m = NULL, *orig = NULL;
+    mesh_faces *faces = NULL;
     qdc_error err;
     qdc_status st;
-    int rc = optimize_parse(argc, argv, &x);
+    int rewrote = 0, rc = optimize_parse(argc, argv, &x);
     struct sigaction sa;
 
     if (rc >= 0)
@@ -822,7 +827,8 @@ int cli_optimize(int argc, char **argv)
      * run and read again at writing: a 5M-tet Medit file is 215 MB, 15% of
      * the run's peak memory */
     meshio_park_source(m);
-    st = opt_run(m, &x.o, &res, &err);
+    /* the run's faces serve the report (no second face matching) */
+    st = opt_run_faces(m, &x.o, &res, x.ps.quiet && !orig ? NULL : &faces, &err);
     if (x.ps.tty && x.ps.last_len)
         fputc('\n', stderr);
     if (st != QDC_OK) {
@@ -830,14 +836,15 @@ int cli_optimize(int argc, char **argv)
         rc = st == QDC_EMESH || st == QDC_EINVAL ? CLI_EINPUT : CLI_EOPT;
         goto out;
     }
-    rc = optimize_write(&x, m);
+    rc = optimize_write(&x, m, &rewrote);
     if (rc != CLI_OK)
         goto out;
     optimize_summary(&x, &res);
-    rc = optimize_report(&x, orig, m, &res);
+    rc = optimize_report(&x, orig, m, &res, faces, !rewrote);
     if (rc == CLI_OK && interrupted)
         rc = CLI_EINTR;
 out:
+    mesh_faces_free(faces);
     mesh_free(m);
     mesh_free(orig);
     return rc;

@@ -866,6 +866,8 @@ static qdc_status collect_faces(const mesh_t *m, mesh_topo *tp, const int32_t *n
                                             : tp->ifaces + 3 * (size_t)ni;
                         for (int k = 0; k < 3; k++)
                             dst[k] = tp->tets[4 * (size_t)t + tet_face_of[f][k]];
+                        if (is_b)
+                            tp->bface_of[nb] = 4 * t + f;
                     }
                     nb += is_b;
                     ni += is_i;
@@ -888,7 +890,8 @@ static qdc_status collect_faces(const mesh_t *m, mesh_topo *tp, const int32_t *n
             tp->nif = ni;
             tp->bfaces = qdc_mallocn((size_t)nb * 3 + 1, sizeof(int32_t));
             tp->ifaces = qdc_mallocn((size_t)ni * 3 + 1, sizeof(int32_t));
-            if (!tp->bfaces || !tp->ifaces)
+            tp->bface_of = qdc_mallocn((size_t)nb + 1, sizeof(int32_t));
+            if (!tp->bfaces || !tp->ifaces || !tp->bface_of)
                 return QDC_ENOMEM;
         }
     }
@@ -940,6 +943,12 @@ qdc_status mesh_topo_build(const mesh_t *m, mesh_topo **out, qdc_error *err)
         st = orient_tets(m, nbr, flip, &tp->orientation, err);
     if (st != QDC_OK)
         goto fail;
+    tp->oflip = qdc_mallocn((size_t)m->nt, 1);
+    if (!tp->oflip) {
+        st = QDC_ENOMEM;
+        goto fail;
+    }
+    memcpy(tp->oflip, flip, (size_t)m->nt);
 #pragma omp parallel for schedule(static)
     for (int32_t t = 0; t < m->nt; t++) /* each tet alone: in parallel */
         /* flip[] becomes each tet's permutation code (canon_tet) */
@@ -992,6 +1001,8 @@ void mesh_topo_free(mesh_topo *t)
     qdc_free(t->adj_ptr);
     qdc_free(t->adj_idx);
     qdc_free(t->bfaces);
+    qdc_free(t->bface_of);
+    qdc_free(t->oflip);
     qdc_free(t->ifaces);
     qdc_free(t->vflag);
     qdc_free(t);
@@ -1004,4 +1015,73 @@ int32_t mesh_count_inverted(const mesh_topo *t, const double *xyz)
     for (int32_t i = 0; i < t->nt; i++)
         n += geom_tet_bad(xyz, t->tets + 4 * (size_t)i);
     return n;
+}
+
+void mesh_faces_free(mesh_faces *f)
+{
+    if (!f)
+        return;
+    qdc_free(f->flip);
+    qdc_free(f->tris);
+    qdc_free(f);
+}
+
+/* A boundary triangle and its sorted vertices, for the order of mesh_faces. */
+typedef struct {
+    int32_t s[3];
+    int32_t tri[3];
+} sorted_tri;
+
+static int sorted_tri_cmp(const void *a, const void *b)
+{
+    const int32_t *x = ((const sorted_tri *)a)->s, *y = ((const sorted_tri *)b)->s;
+
+    for (int k = 0; k < 3; k++)
+        if (x[k] != y[k])
+            return x[k] < y[k] ? -1 : 1;
+    return 0;
+}
+
+qdc_status mesh_faces_of_topo(const mesh_topo *tp, const int32_t *tets,
+                              const int32_t *told, const int32_t *vold, mesh_faces **out)
+{
+    mesh_faces *f = qdc_calloc(1, sizeof *f);
+    sorted_tri *st = qdc_mallocn((size_t)tp->nbf + 1, sizeof *st);
+
+    *out = NULL;
+    if (f) {
+        f->flip = qdc_mallocn((size_t)tp->nt + 1, 1);
+        f->tris = qdc_mallocn(3 * (size_t)tp->nbf + 1, sizeof(int32_t));
+    }
+    if (!f || !st || !f->flip || !f->tris) {
+        mesh_faces_free(f);
+        qdc_free(st);
+        return QDC_ENOMEM;
+    }
+    f->nt = tp->nt;
+    f->ntri = tp->nbf;
+    for (int32_t t = 0; t < tp->nt; t++)
+        f->flip[told ? told[t] : t] = tp->oflip[t];
+        /* each boundary face in its tet's input vertex order: the corner tp's
+         * canonical order put opposite it is found in that order, and the face
+         * is that corner's face there (bderr.c's boundary_faces) */
+#pragma omp parallel for schedule(static)
+    for (int32_t i = 0; i < tp->nbf; i++) {
+        int32_t t = tp->bface_of[i] >> 2, w = tp->tets[tp->bface_of[i]];
+        const int32_t *tt = tets + 4 * (size_t)t;
+        int a = 0;
+        while (a < 3 && tt[a] != w)
+            a++;
+        for (int k = 0; k < 3; k++) {
+            int32_t v = tt[tet_face_of[a][k]];
+            st[i].tri[k] = vold ? vold[v] : v;
+        }
+        tet_sort3(st[i].tri[0], st[i].tri[1], st[i].tri[2], st[i].s);
+    }
+    qsort(st, (size_t)tp->nbf, sizeof *st, sorted_tri_cmp);
+    for (int32_t i = 0; i < tp->nbf; i++)
+        memcpy(f->tris + 3 * (size_t)i, st[i].tri, sizeof st[i].tri);
+    qdc_free(st);
+    *out = f;
+    return QDC_OK;
 }

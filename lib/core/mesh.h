@@ -111,6 +111,21 @@ qdc_status mesh_orient(const mesh_t *m, uint8_t *flip, mesh_orientation *o,
  * Statuses of mesh_orient, QDC_ENOMEM. */
 qdc_status mesh_reorient(mesh_t *m, mesh_orientation *o, qdc_error *err);
 
+/* A mesh's faces as the quality report and the boundary distance read them,
+ * found once and shared by the report of an input and of a result with the
+ * same tets (opt_run_faces hands out the run's; report_quality_faces,
+ * bderr_meshes_faces read them): each tet's orientation and the boundary. */
+typedef struct {
+    int32_t nt;    /* tets */
+    uint8_t *flip; /* nt: mesh_orient's flip of each tet */
+    int32_t ntri;  /* boundary faces (faces of one tet) */
+    int32_t *tris; /* 3*ntri: each in its tet's vertex order (outward for a
+                    * positive tet), ordered by their sorted vertex triples:
+                    * the triangles and order of bderr_meshes */
+} mesh_faces;
+/* Free f and its arrays. f may be NULL. */
+void mesh_faces_free(mesh_faces *f);
+
 /* Check a mesh before use. Errors (QDC_EMESH unless said): empty mesh
  * (no vertices or no tets), a coordinate that is NaN/Inf (err->index = vertex),
  * a tet index out of [0, nv) (err->index = tet), a vertex repeated inside a tet,

@@ -30,18 +30,31 @@ typedef struct mesh_topo {
     mesh_orientation orientation; /* what mesh_orient found */
     int32_t *vt_ptr; /* nv+1: incidences of vertex v are vt_idx[vt_ptr[v]..vt_ptr[v+1]) */
     int32_t *vt_idx; /* 4*nt entries, each 4*t + a (tet t, local vertex a) */
-    int32_t *adj_ptr; /* nv+1: CSR pattern of the 1-ring, diagonal included, */
-    int32_t *adj_idx; /*       columns sorted ascending */
-    int32_t nbf;      /* boundary faces (faces of one tet) */
-    int32_t *bfaces;  /* 3*nbf, outward for positively oriented tets */
-    int32_t nif;      /* interface faces (between tets of different regions) */
-    int32_t *ifaces;  /* 3*nif */
-    uint8_t *vflag;   /* nv MESH_V_* flags */
-    int32_t nb;       /* vertices with MESH_V_BOUNDARY */
+    int32_t *adj_ptr;  /* nv+1: CSR pattern of the 1-ring, diagonal included, */
+    int32_t *adj_idx;  /*       columns sorted ascending */
+    int32_t nbf;       /* boundary faces (faces of one tet) */
+    int32_t *bfaces;   /* 3*nbf, outward for positively oriented tets */
+    int32_t *bface_of; /* nbf: 4*t + f, the tet of each and the face's place in
+                        * tets (opposite corner f) */
+    uint8_t *oflip;    /* nt: 1 where the input's tet had two vertices swapped
+                        * to be positive under the orientation (mesh_orient's
+                        * flip), before tets took its canonical vertex order */
+    int32_t nif;       /* interface faces (between tets of different regions) */
+    int32_t *ifaces;   /* 3*nif */
+    uint8_t *vflag;    /* nv MESH_V_* flags */
+    int32_t nb;        /* vertices with MESH_V_BOUNDARY */
 } mesh_topo;
 
 qdc_status mesh_topo_build(const mesh_t *m, mesh_topo **out, qdc_error *err);
 void mesh_topo_free(mesh_topo *t);
+
+/* The faces of the mesh tp was built from, as the report reads them
+ * (mesh_faces of mesh.h), in the caller's numbering: tets holds tp's tets in
+ * their input vertex order (tp's numbering), told[t] is the caller's number
+ * of tet t and vold[v] of vertex v (both NULL: the same numbering). *out is
+ * the caller's (mesh_faces_free). QDC_ENOMEM. */
+qdc_status mesh_faces_of_topo(const mesh_topo *tp, const int32_t *tets,
+                              const int32_t *told, const int32_t *vold, mesh_faces **out);
 
 /* Tets of topo->tets that are inverted or degenerate at coordinates xyz
  * (geom_tet_bad of core/tet.h: the count every pass compares). */

@@ -18,9 +18,15 @@ const int report_dmax_thresholds[4] = {175, 165, 150, 140};
 
 qdc_status report_quality_compute(const mesh_t *m, report_quality *q, qdc_error *err)
 {
+    return report_quality_faces(m, NULL, q, err);
+}
+
+qdc_status report_quality_faces(const mesh_t *m, const mesh_faces *f, report_quality *q,
+                                qdc_error *err)
+{
     int32_t npos = 0, nneg = 0, nvalid = 0;
     double sum = 0, sum2 = 0, vsum = 0, cnsum = 0;
-    uint8_t *flip = NULL;
+    uint8_t *flip;
     mesh_orientation orient;
 
     memset(q, 0, sizeof *q);
@@ -45,7 +51,7 @@ qdc_status report_quality_compute(const mesh_t *m, report_quality *q, qdc_error 
                 return QDC_ENOMEM;
             for (size_t i = 0; i < 3 * (size_t)n->nv; i++)
                 n->xyz[i] = (m->xyz[i] - lo[i % 3]) / diag;
-            st = report_quality_compute(n, q, err);
+            st = report_quality_faces(n, f, q, err);
             for (int k = 0; k < 3; k++)
                 q->worst_centroid[k] = lo[k] + q->worst_centroid[k] * diag;
             q->diag = diag;
@@ -58,10 +64,13 @@ qdc_status report_quality_compute(const mesh_t *m, report_quality *q, qdc_error 
      * component's orientation gives it (mesh_orient); a connectivity that
      * cannot be oriented (reported, never optimized) falls back to the
      * majority sign of the whole mesh. */
-    flip = qdc_calloc((size_t)m->nt, 1);
+    if (f && f->nt != m->nt)
+        return qdc_fail(err, QDC_EINVAL, "report: faces of %d tets for a mesh of %d",
+                        (int)f->nt, (int)m->nt);
+    flip = f ? f->flip : qdc_calloc((size_t)m->nt, 1);
     if (!flip)
         return QDC_ENOMEM;
-    if (mesh_orient(m, flip, &orient, NULL) != QDC_OK) {
+    if (!f && mesh_orient(m, flip, &orient, NULL) != QDC_OK) {
         for (int32_t t = 0; t < m->nt; t++) {
             const int32_t *tt = m->tets + 4 * (size_t)t;
             metric_parts pt;
@@ -131,7 +140,8 @@ qdc_status report_quality_compute(const mesh_t *m, report_quality *q, qdc_error 
     q->q_std = sqrt(fmax(0.0, sum2 / m->nt - q->q_mean * q->q_mean));
     q->vl_mean = vsum / m->nt;
     q->cn_mean = nvalid ? cnsum / nvalid : 0.0;
-    qdc_free(flip);
+    if (!f)
+        qdc_free(flip);
     return QDC_OK;
 }
 

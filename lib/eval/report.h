@@ -36,6 +36,12 @@ extern const int report_dmax_thresholds[4]; /* 175, 165, 150, 140 */
  * the vertex order of its component's orientation (mesh_orient). QDC_EMESH
  * (an empty mesh, a vertex index out of range), QDC_ENOMEM. */
 qdc_status report_quality_compute(const mesh_t *m, report_quality *q, qdc_error *err);
+/* The same with each tet's orientation from f (mesh_faces of m's tets, from
+ * the run: opt_run_faces) instead of finding it again; f NULL:
+ * report_quality_compute. QDC_EINVAL (f for another tet count), and the
+ * statuses of report_quality_compute. */
+qdc_status report_quality_faces(const mesh_t *m, const mesh_faces *f, report_quality *q,
+                                qdc_error *err);
 
 /* Everything the CLI and the daemon hand back about a run. Any pointer may be NULL
  * (that section is left out); all are the caller's, only read. */

@@ -900,21 +900,16 @@ out:
     return st;
 }
 
-qdc_status bderr_meshes(const mesh_t *out, const mesh_t *ref, int64_t samples_per_side,
-                        bderr_result *r, qdc_error *err)
+/* bderr_meshes on the boundary triangles ta (na) of out and tb (nb) of ref. */
+static qdc_status meshes_with(const mesh_t *out, const mesh_t *ref, const int32_t *ta,
+                              int32_t na, const int32_t *tb, int32_t nb,
+                              int64_t samples_per_side, bderr_result *r, qdc_error *err)
 {
-    int32_t *ta = NULL, *tb = NULL, na = 0, nb = 0;
-    qdc_status st;
-
+    qdc_status st = QDC_OK;
     double lo[3], hi[3], diag, *xa = NULL, *xb = NULL;
 
-    if (!out || !ref || !r)
-        return qdc_fail(err, QDC_EINVAL, "bderr_meshes: NULL argument");
-    st = boundary_faces(out, "output mesh", &ta, &na, err);
-    if (st == QDC_OK)
-        st = boundary_faces(ref, "reference mesh", &tb, &nb, err);
     diag = mesh_bbox(ref, lo, hi);
-    if (st == QDC_OK && isfinite(diag) && diag > 0 && (diag < 1e-50 || diag > 1e50)) {
+    if (isfinite(diag) && diag > 0 && (diag < 1e-50 || diag > 1e50)) {
         /* squared distances of a mesh of size 1e200 overflow, of 1e-200
          * underflow: measure in units of the reference's diagonal */
         xa = qdc_mallocn(3 * (size_t)out->nv + 1, sizeof(double));
@@ -937,13 +932,40 @@ qdc_status bderr_meshes(const mesh_t *out, const mesh_t *ref, int64_t samples_pe
                 r->diag = diag;
             }
         }
-    } else if (st == QDC_OK) {
+    } else {
         st = bderr_surfaces(out->xyz, out->nv, ta, na, ref->xyz, ref->nv, tb, nb,
                             samples_per_side, UINT64_C(0x51ab5eed), r, err);
     }
     qdc_free(xa);
     qdc_free(xb);
+    return st;
+}
+
+qdc_status bderr_meshes(const mesh_t *out, const mesh_t *ref, int64_t samples_per_side,
+                        bderr_result *r, qdc_error *err)
+{
+    int32_t *ta = NULL, *tb = NULL, na = 0, nb = 0;
+    qdc_status st;
+
+    if (!out || !ref || !r)
+        return qdc_fail(err, QDC_EINVAL, "bderr_meshes: NULL argument");
+    st = boundary_faces(out, "output mesh", &ta, &na, err);
+    if (st == QDC_OK)
+        st = boundary_faces(ref, "reference mesh", &tb, &nb, err);
+    if (st == QDC_OK)
+        st = meshes_with(out, ref, ta, na, tb, nb, samples_per_side, r, err);
     qdc_free(ta);
     qdc_free(tb);
     return st;
+}
+
+qdc_status bderr_meshes_faces(const mesh_t *out, const mesh_t *ref, const mesh_faces *f,
+                              int64_t samples_per_side, bderr_result *r, qdc_error *err)
+{
+    if (!f)
+        return bderr_meshes(out, ref, samples_per_side, r, err);
+    if (!out || !ref || !r || out->nt != f->nt || ref->nt != f->nt || out->nv != ref->nv)
+        return qdc_fail(err, QDC_EINVAL, "bderr_meshes_faces: invalid arguments");
+    return meshes_with(out, ref, f->tris, f->ntri, f->tris, f->ntri, samples_per_side, r,
+                       err);
 }

@@ -41,5 +41,11 @@ qdc_status bderr_surfaces(const double *xa, int32_t nva, const int32_t *ta, int3
  * range, no boundary), QDC_ENOMEM. */
 qdc_status bderr_meshes(const mesh_t *out, const mesh_t *ref, int64_t samples_per_side,
                         bderr_result *r, qdc_error *err);
+/* bderr_meshes of two meshes with the same tets (a result and its input), on
+ * the boundary f already found (mesh_faces: from the run, opt_run_faces);
+ * f NULL: bderr_meshes. The same result as bderr_meshes, without finding the
+ * faces again. QDC_EINVAL (counts that differ from f's), QDC_ENOMEM. */
+qdc_status bderr_meshes_faces(const mesh_t *out, const mesh_t *ref, const mesh_faces *f,
+                              int64_t samples_per_side, bderr_result *r, qdc_error *err);
 
 #endif

@@ -34,20 +34,23 @@ static int options_valid(const opt_options *o)
            (unsigned)o->topology <= OPT_TOPOLOGY_FULL;
 }
 
-/* The context of one run: topology, ctx, loose and pinned vertices, the
- * solver, the input's record (reported). */
+/* The context of one run: topology (shared, the caller's, if not NULL; else
+ * built into *own), ctx, loose and pinned vertices, the solver, the input's
+ * record (reported). */
 static qdc_status run_setup(ctx_t *c, mesh_t *m, const opt_options *o,
-                            const uint8_t *pins, const uint8_t *loose, mesh_topo **tpp,
-                            opt_result *res, opt_progress *r, qdc_error *err)
+                            const uint8_t *pins, const uint8_t *loose,
+                            const mesh_topo *shared, mesh_topo **own, opt_result *res,
+                            opt_progress *r, qdc_error *err)
 {
-    mesh_topo *tp;
+    const mesh_topo *tp = shared;
     double t0 = c->t0, bound;
     int32_t nloose = 0;
-    qdc_status st = mesh_topo_build(m, tpp, err);
+    qdc_status st = shared ? QDC_OK : mesh_topo_build(m, own, err);
 
     if (st != QDC_OK)
         return st;
-    tp = *tpp;
+    if (!shared)
+        tp = *own;
     st = ctx_init(c, m, tp, o); /* clears c */
     c->t0 = t0;
     if (st != QDC_OK)
@@ -160,41 +163,44 @@ static void map_back(ctx_t *c, mesh_t *m, const mesh_topo *tp, opt_result *res)
                        : OPT_STOPPED;
 }
 
-static qdc_status run_once(mesh_t *m, const opt_options *opts, const uint8_t *pins,
-                           const uint8_t *loose, uint8_t **squashed, uint8_t **stuck,
-                           int keep_surface, int region, opt_result *res_out,
-                           qdc_error *err);
+static qdc_status run_once(mesh_t *m, const opt_options *opts, const mesh_topo *shared,
+                           const uint8_t *pins, const uint8_t *loose, uint8_t **squashed,
+                           uint8_t **stuck, int keep_surface, int region,
+                           opt_result *res_out, qdc_error *err);
 
 /* The repair hook of a run (ctx.h): one run of a region of its mesh, itself
  * without the hook. */
 static qdc_status run_region(mesh_t *m, const opt_options *o, int keep_surface,
                              const uint8_t *loose, opt_result *r, qdc_error *err)
 {
-    return run_once(m, o, NULL, loose, NULL, NULL, keep_surface, 1, r, err);
+    return run_once(m, o, NULL, NULL, loose, NULL, NULL, keep_surface, 1, r, err);
 }
 
-qdc_status opt_run_once(mesh_t *m, const opt_options *opts, const uint8_t *pins,
-                        const uint8_t *loose, uint8_t **squashed, uint8_t **stuck,
-                        int keep_surface, opt_result *res_out, qdc_error *err)
+qdc_status opt_run_once(mesh_t *m, const opt_options *opts, const mesh_topo *tp,
+                        const uint8_t *pins, const uint8_t *loose, uint8_t **squashed,
+                        uint8_t **stuck, int keep_surface, opt_result *res_out,
+                        qdc_error *err)
 {
-    return run_once(m, opts, pins, loose, squashed, stuck, keep_surface, 0, res_out, err);
+    return run_once(m, opts, tp, pins, loose, squashed, stuck, keep_surface, 0, res_out,
+                    err);
 }
 
-/* One optimization of m. pins (nv flags, may be NULL): extra vertices that
+/* One optimization of m, on the topology shared (of m; NULL: its own). pins
+ * (nv flags, may be NULL): extra vertices that
  * keep their input position; loose (may be NULL): sliding vertices that move
  * freely (slide_release). In slide mode *squashed (if not NULL) receives the
  * corners of the ears this run squashed (opt_squashed_ears), and *stuck (if
  * not NULL) the boundary vertices around tets left inverted (opt_stuck_boundary);
  * else NULL. keep_surface: the finishing pass folds no tet at the surface
  * (finish.h). region: a run of local.c's region (no repair hook). */
-static qdc_status run_once(mesh_t *m, const opt_options *opts, const uint8_t *pins,
-                           const uint8_t *loose, uint8_t **squashed, uint8_t **stuck,
-                           int keep_surface, int region, opt_result *res_out,
-                           qdc_error *err)
+static qdc_status run_once(mesh_t *m, const opt_options *opts, const mesh_topo *shared,
+                           const uint8_t *pins, const uint8_t *loose, uint8_t **squashed,
+                           uint8_t **stuck, int keep_surface, int region,
+                           opt_result *res_out, qdc_error *err)
 {
     opt_options o;
     opt_result res;
-    mesh_topo *tp = NULL;
+    mesh_topo *own = NULL;
     ctx_t c;
     qdc_status st;
     int stop = 0, saved_threads = 0;
@@ -218,7 +224,7 @@ static qdc_status run_once(mesh_t *m, const opt_options *opts, const uint8_t *pi
     saved_threads = omp_get_max_threads();
     if (o.threads > 0)
         omp_set_num_threads(o.threads);
-    st = run_setup(&c, m, &o, pins, loose, &tp, &res, &r, err);
+    st = run_setup(&c, m, &o, pins, loose, shared, &own, &res, &r, err);
     if (st != QDC_OK)
         goto out;
     c.keep_surface = keep_surface;
@@ -241,7 +247,7 @@ static qdc_status run_once(mesh_t *m, const opt_options *opts, const uint8_t *pi
     st = rerun_masks(&c, squashed, stuck);
     if (st != QDC_OK)
         goto out;
-    map_back(&c, m, tp, &res);
+    map_back(&c, m, c.tp, &res);
     st = QDC_OK;
 out:
     res.t_total = qdc_now() - c.t0;
@@ -250,7 +256,7 @@ out:
     if (res_out)
         *res_out = res;
     ctx_free(&c);
-    mesh_topo_free(tp);
+    mesh_topo_free(own);
     if (saved_threads > 0)
         omp_set_num_threads(saved_threads);
     return st;

@@ -206,5 +206,13 @@ typedef struct {
  * QDC_EMESH (m fails mesh_validate or cannot be oriented), QDC_EINVAL (an
  * option out of range), QDC_ENOMEM, QDC_ESOLVE. */
 qdc_status opt_run(mesh_t *m, const opt_options *o, opt_result *res, qdc_error *err);
+/* opt_run, and in *faces (not NULL) m's faces as the run found them
+ * (mesh_faces: each tet's orientation and the boundary, in m's numbering),
+ * for the report of the input and of the result (report_quality_faces,
+ * bderr_meshes_faces), so that it does not find them again. *faces is the
+ * caller's (mesh_faces_free); NULL when the run changed the tets (o->topology
+ * not NONE), on second-order tets, or on failure. */
+qdc_status opt_run_faces(mesh_t *m, const opt_options *o, opt_result *res,
+                         mesh_faces **faces, qdc_error *err);
 
 #endif

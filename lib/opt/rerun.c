@@ -43,10 +43,10 @@ static void numbered_on(opt_result *r, int offset)
 }
 
 /* run_once again after the run prev, its progress records numbered on. */
-static qdc_status run_again(mesh_t *m, const opt_options *opts, const opt_result *prev,
-                            const uint8_t *pins, const uint8_t *loose, uint8_t **squashed,
-                            uint8_t **stuck, int keep_surface, opt_result *r,
-                            qdc_error *err)
+static qdc_status run_again(mesh_t *m, const opt_options *opts, const mesh_topo *tp,
+                            const opt_result *prev, const uint8_t *pins,
+                            const uint8_t *loose, uint8_t **squashed, uint8_t **stuck,
+                            int keep_surface, opt_result *r, qdc_error *err)
 {
     opt_options o2 = *opts;
     /* the last record's number: global iterations plus finishing sweeps */
@@ -59,7 +59,7 @@ static qdc_status run_again(mesh_t *m, const opt_options *opts, const opt_result
         o2.progress = rerun_report;
         o2.progress_ctx = &rp;
     }
-    st = opt_run_once(m, &o2, pins, loose, squashed, stuck, keep_surface, r, err);
+    st = opt_run_once(m, &o2, tp, pins, loose, squashed, stuck, keep_surface, r, err);
     numbered_on(r, rp.offset);
     return st;
 }
@@ -111,7 +111,8 @@ static void rerun_log(const opt_options *opts, const char *fmt, ...)
 /* run_again from the input coordinates xin (pins held, loose free,
  * keep_surface as run_once takes it), its result kept in best and xbest if
  * better. */
-static qdc_status rerun_from_input(mesh_t *m, const opt_options *opts, opt_result *best,
+static qdc_status rerun_from_input(mesh_t *m, const opt_options *opts,
+                                   const mesh_topo *tp, opt_result *best,
                                    const uint8_t *pins, const uint8_t *loose,
                                    int keep_surface, const double *xin, double *xbest,
                                    qdc_error *err)
@@ -121,7 +122,7 @@ static qdc_status rerun_from_input(mesh_t *m, const opt_options *opts, opt_resul
     qdc_status st;
 
     memcpy(m->xyz, xin, n3 * sizeof(double));
-    st = run_again(m, opts, best, pins, loose, NULL, NULL, keep_surface, &r, err);
+    st = run_again(m, opts, tp, best, pins, loose, NULL, NULL, keep_surface, &r, err);
     if (st == QDC_OK)
         keep_better(best, &r, xbest, m->xyz, n3);
     return st;
@@ -133,9 +134,9 @@ static qdc_status rerun_from_input(mesh_t *m, const opt_options *opts, opt_resul
  * iterate, with those vertices free: on a 4M-tet cube with one flat inverted
  * boundary tet it fixed the tet once and failed twice, which then cost the
  * whole run on top; the global phase is what moves the freed vertices.) */
-static qdc_status free_stuck(mesh_t *m, const opt_options *opts, opt_result *best,
-                             const uint8_t *pins, const uint8_t *loose, const double *xin,
-                             double *xbest, qdc_error *err)
+static qdc_status free_stuck(mesh_t *m, const opt_options *opts, const mesh_topo *tp,
+                             opt_result *best, const uint8_t *pins, const uint8_t *loose,
+                             const double *xin, double *xbest, qdc_error *err)
 {
     int32_t nfree = 0;
 
@@ -145,15 +146,15 @@ static qdc_status free_stuck(mesh_t *m, const opt_options *opts, opt_result *bes
               "%d tets left inverted by sliding: again with %d boundary vertices "
               "around them free",
               (int)best->after.n_inverted, (int)nfree);
-    return rerun_from_input(m, opts, best, pins, loose, 0, xin, xbest, err);
+    return rerun_from_input(m, opts, tp, best, pins, loose, 0, xin, xbest, err);
 }
 
 /* The ear reruns: while the last run squashed ears it did not hold (*sq),
  * again from the input xin with their corners added to pins (at most 3
  * reruns), the best result kept in best and xbest. */
-static qdc_status hold_ears(mesh_t *m, const opt_options *opts, opt_result *best,
-                            uint8_t *pins, const uint8_t *loose, uint8_t **sq,
-                            uint8_t **stk, const double *xin, double *xbest,
+static qdc_status hold_ears(mesh_t *m, const opt_options *opts, const mesh_topo *tp,
+                            opt_result *best, uint8_t *pins, const uint8_t *loose,
+                            uint8_t **sq, uint8_t **stk, const double *xin, double *xbest,
                             qdc_error *err)
 {
     size_t n3 = 3 * (size_t)m->nv;
@@ -177,7 +178,7 @@ static qdc_status hold_ears(mesh_t *m, const opt_options *opts, opt_result *best
         rerun_log(opts,
                   "slide squashed ears of the surface: again with their %d corners held",
                   (int)held);
-        st = run_again(m, opts, best, pins, loose, sq, *stk ? NULL : stk, 0, &r, err);
+        st = run_again(m, opts, tp, best, pins, loose, sq, *stk ? NULL : stk, 0, &r, err);
         if (st != QDC_OK)
             break;
         keep_better(best, &r, xbest, m->xyz, n3);
@@ -187,12 +188,12 @@ static qdc_status hold_ears(mesh_t *m, const opt_options *opts, opt_result *best
 
 /* The rerun with no fold at the surface (keep_surface) from the input xin,
  * pins held, kept if better. */
-static qdc_status run_numbered(mesh_t *m, const opt_options *opts, opt_result *res_out,
-                               qdc_error *err);
+static qdc_status run_numbered(mesh_t *m, const opt_options *opts, const mesh_topo *tp,
+                               opt_result *res_out, qdc_error *err);
 
-static qdc_status rerun_no_fold(mesh_t *m, const opt_options *opts, opt_result *best,
-                                const uint8_t *pins, const double *xin, double *xbest,
-                                qdc_error *err)
+static qdc_status rerun_no_fold(mesh_t *m, const opt_options *opts, const mesh_topo *tp,
+                                opt_result *best, const uint8_t *pins, const double *xin,
+                                double *xbest, qdc_error *err)
 {
     size_t n3 = 3 * (size_t)m->nv;
     opt_options wide;
@@ -202,7 +203,7 @@ static qdc_status rerun_no_fold(mesh_t *m, const opt_options *opts, opt_result *
 
     rerun_log(opts, "%d tets left inverted: again with no fold at the surface",
               (int)best->after.n_inverted);
-    st = rerun_from_input(m, opts, best, pins, NULL, 1, xin, xbest, err);
+    st = rerun_from_input(m, opts, tp, best, pins, NULL, 1, xin, xbest, err);
     /* Still inverted under the default bound: once more from the input with
      * the whole boundary within OPT_HAUSD_STUCK, the bound the result then
      * reports (a tangled 100k-tet scanned bone of scripts/corpus.py kept 1
@@ -224,16 +225,18 @@ static qdc_status rerun_no_fold(mesh_t *m, const opt_options *opts, opt_result *
         wide.progress_ctx = &rp;
     }
     memcpy(m->xyz, xin, n3 * sizeof(double));
-    st = run_numbered(m, &wide, &r, err); /* not again: its bound is not the default */
+    st =
+        run_numbered(m, &wide, tp, &r, err); /* not again: its bound is not the default */
     numbered_on(&r, rp.offset);
     if (st == QDC_OK)
         keep_better(best, &r, xbest, m->xyz, n3);
     return st;
 }
 
-/* opt_run in the mesh's own numbering. */
-static qdc_status run_numbered(mesh_t *m, const opt_options *opts, opt_result *res_out,
-                               qdc_error *err)
+/* opt_run in the mesh's own numbering, on m's topology tp (NULL: each run
+ * builds its own). */
+static qdc_status run_numbered(mesh_t *m, const opt_options *opts, const mesh_topo *tp,
+                               opt_result *res_out, qdc_error *err)
 {
     uint8_t *pins = NULL, *sq = NULL, *stk = NULL, *loose = NULL;
     double *xin = NULL, *xbest = NULL;
@@ -249,7 +252,7 @@ static qdc_status run_numbered(mesh_t *m, const opt_options *opts, opt_result *r
         opts = &dflt;
     }
     if (opts->boundary != OPT_BOUNDARY_SLIDE)
-        return opt_run_once(m, opts, NULL, NULL, NULL, NULL, 0, res_out, err);
+        return opt_run_once(m, opts, tp, NULL, NULL, NULL, NULL, 0, res_out, err);
     xin = qdc_mallocn(n3 + 1, sizeof(double));
     xbest = qdc_mallocn(n3 + 1, sizeof(double));
     pins = qdc_calloc(n3 / 3 + 1, 1);
@@ -260,7 +263,7 @@ static qdc_status run_numbered(mesh_t *m, const opt_options *opts, opt_result *r
         goto out;
     }
     memcpy(xin, m->xyz, n3 * sizeof(double));
-    st = opt_run_once(m, opts, NULL, NULL, &sq, &stk, 0, &best, err);
+    st = opt_run_once(m, opts, tp, NULL, NULL, &sq, &stk, 0, &best, err);
     if (st != QDC_OK) {
         if (res_out)
             *res_out = best;
@@ -275,7 +278,7 @@ static qdc_status run_numbered(mesh_t *m, const opt_options *opts, opt_result *r
      * no result (measured 2026-11-25 on the 21 dev meshes and the 12 meshes of
      * scripts/corpus.py at 20k tets: identical quality) while taking up to 5x
      * the time (bone-lowq, 20k tets: 5.1 s against 1.05 s). */
-    st = hold_ears(m, opts, &best, pins, loose, &sq, &stk, xin, xbest, err);
+    st = hold_ears(m, opts, tp, &best, pins, loose, &sq, &stk, xin, xbest, err);
     /* Inverted tets left where the tangle reaches the boundary: once more with
      * the boundary vertices around them free (stuck_boundary), ears held as
      * before; kept only if better (fewer inverted tets first). */
@@ -283,7 +286,7 @@ static qdc_status run_numbered(mesh_t *m, const opt_options *opts, opt_result *r
         best.after.n_inverted > 0) {
         loose = stk;
         stk = NULL;
-        st = free_stuck(m, opts, &best, pins, loose, xin, xbest, err);
+        st = free_stuck(m, opts, tp, &best, pins, loose, xin, xbest, err);
     }
     /* Tets still left inverted (measured on tangled thin bones of
      * scripts/corpus.py at 100k-200k tets, where the finishing pass had traded
@@ -293,7 +296,7 @@ static qdc_status run_numbered(mesh_t *m, const opt_options *opts, opt_result *r
      * better. Not on every run: on the tangled 1M-tet ball the rule left 17
      * tets inverted where the run without it leaves none. */
     if (st == QDC_OK && best.outcome == OPT_CONVERGED && best.after.n_inverted > 0)
-        st = rerun_no_fold(m, opts, &best, pins, xin, xbest, err);
+        st = rerun_no_fold(m, opts, tp, &best, pins, xin, xbest, err);
     /* a failed rerun leaves the best result so far */
     memcpy(m->xyz, xbest, n3 * sizeof(double));
     st = QDC_OK;
@@ -309,22 +312,57 @@ out:
     return st;
 }
 
+/* m's topology for a run (NULL if it cannot be built: the run then builds
+ * its own and fails with the reason), and the time it took into *t. */
+static mesh_topo *shared_topo(const mesh_t *m, double *t)
+{
+    mesh_topo *tp = NULL;
+    double t0 = qdc_now();
+
+    if (mesh_topo_build(m, &tp, NULL) != QDC_OK)
+        tp = NULL;
+    *t = qdc_now() - t0;
+    return tp;
+}
+
+/* run_numbered of m on one topology built for it and all its reruns: the
+ * building counted in the setup time, the faces handed out if asked for
+ * (in the numbering told, vold: see mesh_faces_of_topo). */
+static qdc_status run_shared(mesh_t *m, const opt_options *opts, opt_result *res,
+                             const int32_t *told, const int32_t *vold, mesh_faces **faces,
+                             qdc_error *err)
+{
+    double t;
+    mesh_topo *tp = shared_topo(m, &t);
+    qdc_status st = run_numbered(m, opts, tp, res, err);
+
+    if (res && tp) {
+        res->t_setup += t;
+        res->t_total += t;
+    }
+    if (st == QDC_OK && tp && faces && (!res || res->outcome != OPT_FAILED) &&
+        mesh_faces_of_topo(tp, m->tets, told, vold, faces) != QDC_OK)
+        *faces = NULL; /* out of memory: the report finds them itself */
+    mesh_topo_free(tp);
+    return st;
+}
+
 /* The run works on a copy of the mesh numbered along a space-filling curve
  * (core/order.h): measured on an 800k-tet ball whose vertices came in random
  * order, 7.7 -> 5.7 s, the global phase 40% faster. A failure that names a
  * vertex or tet is found again in the caller's numbering, for its message. */
-qdc_status opt_run_smooth(mesh_t *m, const opt_options *opts, opt_result *res,
-                          qdc_error *err)
+static qdc_status run_smooth(mesh_t *m, const opt_options *opts, opt_result *res,
+                             mesh_faces **faces, qdc_error *err)
 {
     mesh_order ord;
     mesh_t *pm;
     qdc_status st;
 
     if (!m || m->nv <= 0 || m->nt <= 0 || !m->xyz || !m->tets)
-        return run_numbered(m, opts, res, err);
+        return run_numbered(m, opts, NULL, res, err);
     st = mesh_order_build(m, &ord);
     if (st == QDC_EINVAL)
-        return run_numbered(m, opts, res, err);
+        return run_shared(m, opts, res, NULL, NULL, faces, err);
     pm = st == QDC_OK ? mesh_order_take(m, &ord) : NULL;
     if (!pm) {
         mesh_order_free(&ord);
@@ -332,13 +370,39 @@ qdc_status opt_run_smooth(mesh_t *m, const opt_options *opts, opt_result *res,
             memset(res, 0, sizeof *res);
         return qdc_fail(err, QDC_ENOMEM, "out of memory");
     }
-    st = run_numbered(pm, opts, res, err);
+    st = run_shared(pm, opts, res, ord.told, ord.vold, faces, err);
     mesh_order_give_back(&ord, pm, m);
     if (st == QDC_OK)
         mesh_order_restore_xyz(&ord, pm, m);
     mesh_free(pm);
     mesh_order_free(&ord);
     if (st != QDC_OK && err && err->index >= 0)
-        st = run_numbered(m, opts, res, err);
+        st = run_numbered(m, opts, NULL, res, err);
+    return st;
+}
+
+qdc_status opt_run_smooth(mesh_t *m, const opt_options *opts, opt_result *res,
+                          qdc_error *err)
+{
+    return run_smooth(m, opts, res, NULL, err);
+}
+
+qdc_status opt_run_faces(mesh_t *m, const opt_options *opts, opt_result *res,
+                         mesh_faces **faces, qdc_error *err)
+{
+    qdc_status st;
+
+    if (!faces)
+        return opt_run(m, opts, res, err);
+    *faces = NULL;
+    /* opt_run's own dispatch (topology.c): second-order tets and a run that
+     * changes the tets go there, the rest is run_smooth */
+    if ((opts && opts->topology != OPT_TOPOLOGY_NONE) || (m && m->mid))
+        return opt_run(m, opts, res, err);
+    st = run_smooth(m, opts, res, faces, err);
+    if (st != QDC_OK) {
+        mesh_faces_free(*faces);
+        *faces = NULL;
+    }
     return st;
 }

@@ -3,17 +3,20 @@
 #ifndef QDC_RUN_H
 #define QDC_RUN_H
 
+#include "core/mesh_int.h"
 #include "opt/opt.h"
 
-/* One optimization of m (opts NULL: the defaults). pins (nv flags, may be
+/* One optimization of m (opts NULL: the defaults) on m's topology tp (built
+ * once for a run and its reruns; NULL: the run builds its own). pins (nv flags, may be
  * NULL): extra vertices that keep their input position; loose (may be NULL):
  * sliding vertices that move freely. In slide mode *squashed (if not NULL)
  * receives the corners of the ears this run squashed, and *stuck (if not
  * NULL) the boundary vertices around tets left inverted (hold.h); else NULL.
  * keep_surface: the finishing sweeps fold no tet at the surface (finish.h). */
-qdc_status opt_run_once(mesh_t *m, const opt_options *opts, const uint8_t *pins,
-                        const uint8_t *loose, uint8_t **squashed, uint8_t **stuck,
-                        int keep_surface, opt_result *res_out, qdc_error *err);
+qdc_status opt_run_once(mesh_t *m, const opt_options *opts, const mesh_topo *tp,
+                        const uint8_t *pins, const uint8_t *loose, uint8_t **squashed,
+                        uint8_t **stuck, int keep_surface, opt_result *res_out,
+                        qdc_error *err);
 
 /* opt_run with the connectivity kept (o->topology ignored): what opt_run does
  * for --topology none, and the smoothing of each round of --topology flips. */

@@ -12,6 +12,7 @@
 #include "testmesh.h"
 
 #include <math.h>
+#include <omp.h>
 #include <string.h>
 
 static report_quality quality(const mesh_t *m)
@@ -743,6 +744,59 @@ TEST(angle_polish_option_keeps_every_guarantee)
     mesh_free(b);
 }
 
+/* The finishing sweeps move the vertices of one colour class at once (no two
+ * share a tet: select.h), each reading only its own star, which no other
+ * vertex of the class writes; the classes go in a fixed order. So the bytes
+ * of the result do not depend on the thread count: broad and polish sweeps
+ * (interior vertices by Newton, boundary ones sliding on the cube's faces)
+ * and an angle sweep give the same coordinates at 1, 2 and 4 threads. */
+TEST(finishing_sweeps_do_not_depend_on_the_thread_count)
+{
+    static const int threads[3] = {1, 2, 4};
+    int saved = omp_get_max_threads();
+    double *ref = NULL;
+
+    for (int i = 0; i < 3; i++) {
+        grid_case g;
+        slide_ctx *sl = NULL;
+        finish_stats fs;
+        double s0, q0;
+        int32_t moves = 0;
+        size_t n3;
+        ASSERT_TRUE(grid_case_new(&g, 7, 0.35, 11));
+        n3 = 3 * (size_t)g.m->nv;
+        ASSERT_OK(slide_new(g.tp, g.x0, 30.0, &sl, NULL));
+        for (int32_t v = 0; v < g.m->nv; v++)
+            g.movable[v] = slide_kind(sl, v) != SLIDE_CORNER;
+        omp_set_num_threads(threads[i]);
+        for (int s = 0; s < 4; s++) {
+            for (int32_t t = 0; t < g.m->nt; t++)
+                tet_values(g.m, t, &s0, &g.val[t]);
+            ASSERT_OK(finish_sweep(g.tp, g.movable, sl, g.m->xyz, OPT_METRIC_MIVL, g.val,
+                                   0.0, 1.0 / g.n, s < 3 ? 1.0 : 0.01, s < 3 ? 1e-3 : 0.0,
+                                   0, &fs));
+            moves += fs.n_moves;
+        }
+        worst_of(g.m, &s0, &q0);
+        ASSERT_OK(finish_dihedral_sweep(g.tp, g.movable, sl, g.m->xyz, 1.0 / g.n, 0.05,
+                                        q0, g.val, 0, &fs));
+        omp_set_num_threads(saved);
+        printf("  # %d threads: %d moves in the sweeps, %d in the angle sweep\n",
+               threads[i], (int)moves, (int)fs.n_moves);
+        ASSERT_TRUE(moves > 100 && fs.n_moves > 0);
+        if (!ref) {
+            ref = malloc(n3 * sizeof(double));
+            ASSERT_TRUE(ref);
+            memcpy(ref, g.m->xyz, n3 * sizeof(double));
+        } else {
+            ASSERT_TRUE(memcmp(ref, g.m->xyz, n3 * sizeof(double)) == 0);
+        }
+        slide_free(sl);
+        grid_case_free(&g);
+    }
+    free(ref);
+}
+
 TEST_MAIN("opt", T(fixed_boundary_untangles_without_folding),
           T(result_does_not_depend_on_vertex_numbering),
           T(sliding_vertex_takes_a_tangent_newton_step_in_a_good_star),
@@ -759,4 +813,5 @@ TEST_MAIN("opt", T(fixed_boundary_untangles_without_folding),
           T(harmonic_guidance_runs), T(bad_options_and_bad_mesh_rejected),
           T(max_min_volume_untangles_a_grid),
           T(untangling_slides_boundary_vertices_on_their_faces),
-          T(allocation_failures_are_clean))
+          T(allocation_failures_are_clean),
+          T(finishing_sweeps_do_not_depend_on_the_thread_count))

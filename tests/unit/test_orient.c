@@ -1,5 +1,6 @@
 /* test_orient.c - the orientation of a mesh from its connectivity (core/mesh.h
- * mesh_orient, mesh_topo_build, and the quality report that uses it): tets
+ * mesh_orient, mesh_topo_build, the faces a run hands to the report, and
+ * the quality report that uses them): tets
  * written in either vertex order are valid when their geometry agrees with
  * their component's orientation, whatever the file's vertex order. */
 #include "core/mesh_int.h"
@@ -259,8 +260,68 @@ TEST(topo_shortcut_agrees_with_the_walk)
     }
 }
 
+/* The faces a run hands out (opt_run_faces: found on its renumbered copy,
+ * mapped back) are those the report would find itself: mesh_orient's flips,
+ * and the same quality and boundary distances (every field, to the bit) for
+ * the input and for the result, in either vertex order, on a tangle, with
+ * the vertices numbered against the space-filling curve. */
+TEST(run_faces_are_the_reports_own)
+{
+    for (int c = 0; c < 4; c++) {
+        mesh_t *m = tm_grid(4, 0), *in;
+        uint8_t *flip = calloc((size_t)m->nt, 1);
+        mesh_orientation o;
+        mesh_faces *f = NULL;
+        report_quality qa, qb;
+        bderr_result ba, bb;
+        opt_result res;
+        opt_options opts;
+        tm_perturb(m, 4, 0.2, 7);
+        if (c == 1) /* DOLFIN's order: mixed vertex orders */
+            sort_tets(m);
+        if (c == 2) /* every tet written negative */
+            for (int32_t t = 0; t < m->nt; t++)
+                swap01(m->tets + 4 * (size_t)t);
+        if (c == 3) /* a tangle */
+            m->xyz[3 * 31] += 0.3;
+        for (int32_t t = 0; c == 3 && t < m->nt / 2; t++) { /* tets reversed */
+            int32_t *a = m->tets + 4 * (size_t)t,
+                    *b = m->tets + 4 * (size_t)(m->nt - 1 - t);
+            for (int k = 0; k < 4; k++) {
+                int32_t x = a[k];
+                a[k] = b[k];
+                b[k] = x;
+            }
+        }
+        in = mesh_dup(m);
+        opt_defaults(&opts);
+        ASSERT_OK(opt_run_faces(m, &opts, &res, &f, NULL));
+        ASSERT_TRUE(f != NULL);
+        ASSERT_OK(mesh_orient(in, flip, &o, NULL));
+        ASSERT_EQ_INT(f->nt, m->nt);
+        ASSERT_TRUE(memcmp(f->flip, flip, (size_t)m->nt) == 0);
+        for (int side = 0; side < 2; side++) {
+            const mesh_t *q = side ? m : in;
+            ASSERT_OK(report_quality_compute(q, &qa, NULL));
+            ASSERT_OK(report_quality_faces(q, f, &qb, NULL));
+            ASSERT_TRUE(memcmp(&qa, &qb, sizeof qa) == 0);
+        }
+        memset(&ba, 0, sizeof ba);
+        memset(&bb, 0, sizeof bb);
+        ASSERT_OK(bderr_meshes(m, in, 5000, &ba, NULL));
+        ASSERT_OK(bderr_meshes_faces(m, in, f, 5000, &bb, NULL));
+        ASSERT_EQ_INT(bb.ntri_a, f->ntri);
+        ASSERT_TRUE(memcmp(&ba, &bb, sizeof ba) == 0);
+        ASSERT_TRUE(ba.n_samples > 0 && bb.ntri_b == f->ntri);
+        mesh_faces_free(f);
+        free(flip);
+        mesh_free(in);
+        mesh_free(m);
+    }
+}
+
 TEST_MAIN("orient", T(two_tets_either_vertex_order), T(dolfin_sorted_grid_is_valid),
           T(all_inverted_components_each_flip_whole),
           T(tangled_component_keeps_its_majority),
           T(non_orientable_connectivity_is_an_error),
-          T(topo_shortcut_agrees_with_the_walk))
+          T(topo_shortcut_agrees_with_the_walk), T(run_faces_are_the_reports_own))
