@@ -387,19 +387,11 @@ qdc_status opt_run_smooth(mesh_t *m, const opt_options *opts, opt_result *res,
     return run_smooth(m, opts, res, NULL, err);
 }
 
-qdc_status opt_run_faces(mesh_t *m, const opt_options *opts, opt_result *res,
-                         mesh_faces **faces, qdc_error *err)
+qdc_status opt_run_smooth_faces(mesh_t *m, const opt_options *opts, opt_result *res,
+                                mesh_faces **faces, qdc_error *err)
 {
-    qdc_status st;
+    qdc_status st = run_smooth(m, opts, res, faces, err);
 
-    if (!faces)
-        return opt_run(m, opts, res, err);
-    *faces = NULL;
-    /* opt_run's own dispatch (topology.c): second-order tets and a run that
-     * changes the tets go there, the rest is run_smooth */
-    if ((opts && opts->topology != OPT_TOPOLOGY_NONE) || (m && m->mid))
-        return opt_run(m, opts, res, err);
-    st = run_smooth(m, opts, res, faces, err);
     if (st != QDC_OK) {
         mesh_faces_free(*faces);
         *faces = NULL;

@@ -22,5 +22,9 @@ qdc_status opt_run_once(mesh_t *m, const opt_options *opts, const mesh_topo *tp,
  * for --topology none, and the smoothing of each round of --topology flips. */
 qdc_status opt_run_smooth(mesh_t *m, const opt_options *opts, opt_result *res,
                           qdc_error *err);
+/* opt_run_smooth handing out the run's faces (opt_run_faces); *faces NULL
+ * on failure. */
+qdc_status opt_run_smooth_faces(mesh_t *m, const opt_options *opts, opt_result *res,
+                                mesh_faces **faces, qdc_error *err);
 
 #endif

@@ -647,3 +647,16 @@ qdc_status opt_run(mesh_t *m, const opt_options *opts, opt_result *res, qdc_erro
         return topology_run(m, opts, res, err);
     return opt_run_smooth(m, opts, res, err);
 }
+
+qdc_status opt_run_faces(mesh_t *m, const opt_options *opts, opt_result *res,
+                         mesh_faces **faces, qdc_error *err)
+{
+    if (!faces)
+        return opt_run(m, opts, res, err);
+    *faces = NULL;
+    /* second-order tets and a run that changes the tets: the report finds
+     * the faces itself */
+    if ((opts && opts->topology != OPT_TOPOLOGY_NONE) || (m && m->mid))
+        return opt_run(m, opts, res, err);
+    return opt_run_smooth_faces(m, opts, res, faces, err);
+}
