@@ -223,6 +223,11 @@ static qdc_status save_outputs(qdcd *q, job_rec *j, const mesh_t *out, const mes
                              j->lease_owner)) != QDC_OK)
             return qdc_fail(err, st, "cannot store %s in the database", outs[i].name);
     }
+    /* a MED job's results are written from qdc-h5's frames of the upload:
+     * into the store with them, for the other nodes */
+    if (shared_on(q) && meshio_format_from_name(j->format) == MESHIO_MED &&
+        (st = shared_put(q, j->id, H5JOB_FRAMES, "", j->lease_owner)) != QDC_OK)
+        return qdc_fail(err, st, "cannot store %s in the database", H5JOB_FRAMES);
     st = report_quality_faces(out, faces, &after, err);
     if (st != QDC_OK)
         return st;

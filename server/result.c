@@ -57,6 +57,17 @@ static meshio_format input_source(req *r, const job_rec *j, char *path, size_t c
     return f;
 }
 
+/* A MED job's frames (what qdc-h5 read its upload into: its input mesh, and
+ * what its results are written from) from the store, unless cached here;
+ * QDC_OK for any other job. */
+static qdc_status fetch_frames(req *r, const job_rec *j)
+{
+    if (!shared_on(r->q) || job_is_surface(j->format) ||
+        meshio_format_from_name(j->format) != MESHIO_MED)
+        return QDC_OK;
+    return shared_fetch(r->q, j->id, H5JOB_FRAMES, NULL);
+}
+
 /* m, read from a MED job's frames, saved as path: its frames written beside
  * it, and qdc-h5 puts their coordinates into a copy of the upload (in a
  * child process, h5job.h). */
@@ -86,8 +97,10 @@ static int not_servable(struct MHD_Connection *c, req *r, const job_rec *j,
 
     if (r->route == R_INPUT && !(job_state_done(j->state) && gone)) {
         input_source(r, j, src, sizeof src);
-        if (shared_on(r->q) && !job_is_surface(j->format))
+        if (shared_on(r->q) && !job_is_surface(j->format)) {
             (void)shared_fetch(r->q, j->id, job_input_name(j->format), NULL); /* or use */
+            (void)fetch_frames(r, j);
+        }
         if (access(src, R_OK) == 0)
             return 0;
         if (job_state_done(j->state)) { /* a surface TetGen could not mesh */
@@ -348,6 +361,20 @@ static qdc_status convert_source(req *r, const job_rec *j, mesh_t **out, qdc_err
 /* Converter thread: write the result in r->res_fmt from result.qmesh (or the
  * input from its file), hash it, serve it. One thread, so two requests never
  * write the same file. */
+/* What a conversion reads, from the store unless cached here: the result
+ * (or the input), the upload it is written into, a MED job's frames.
+ * QDC_EIO when the store could not be read. */
+static qdc_status fetch_sources(req *r, const job_rec *j)
+{
+    if (shared_fetch(r->q, j->id,
+                     r->route == R_INPUT ? job_input_name(j->format) : "result.qmesh",
+                     NULL) == QDC_EIO ||
+        (from_upload(r, j) &&
+         shared_fetch(r->q, j->id, job_input_name(j->format), NULL) == QDC_EIO))
+        return QDC_EIO;
+    return fetch_frames(r, j);
+}
+
 static enum MHD_Result process_convert(struct MHD_Connection *c, req *r)
 {
     job_rec j;
@@ -374,11 +401,7 @@ static enum MHD_Result process_convert(struct MHD_Connection *c, req *r)
         if (fs == QDC_OK && hex[0])
             return serve_result(c, r, &j, r->res_fmt, path, hex);
         hex[0] = 0;
-        if (shared_fetch(r->q, j.id,
-                         r->route == R_INPUT ? job_input_name(j.format) : "result.qmesh",
-                         NULL) == QDC_EIO ||
-            (from_upload(r, &j) &&
-             shared_fetch(r->q, j.id, job_input_name(j.format), NULL) == QDC_EIO))
+        if (fetch_sources(r, &j) == QDC_EIO)
             return store_unavailable(c, r, "the result could not be read");
     }
     if (hex[0]) /* written for a request queued before this one */

@@ -1,0 +1,28 @@
+#!/usr/bin/python3
+# medcoo.py A B WHAT - h5py: is MED file B the same file as A but for the
+# coordinates (NOE/COO)? Every other dataset and every attribute equal, none
+# added or missing, some coordinates changed. Prints one "ok - " or "FAIL - "
+# line naming WHAT.
+import sys
+import h5py, numpy as np
+a, b = h5py.File(sys.argv[1], "r"), h5py.File(sys.argv[2], "r")
+bad, names = [], []
+def walk(name, obj):
+    o = b.get(name)
+    if o is None or type(o) != type(obj):
+        bad.append("missing " + name)
+        return
+    if sorted(obj.attrs) != sorted(o.attrs) or any(
+            not np.array_equal(obj.attrs[k], o.attrs[k]) for k in obj.attrs):
+        bad.append("attributes of " + name)
+    if isinstance(obj, h5py.Dataset):
+        if name.endswith("/NOE/COO"):
+            names.append(name)
+        elif obj.dtype != o.dtype or not np.array_equal(obj[()], o[()]):
+            bad.append("dataset " + name)
+a.visititems(walk)
+b.visititems(lambda n, o: None if n in a else bad.append("added " + n))
+ca, cb = a[names[0]][()], b[names[0]][()]
+moved = int(np.sum(ca != cb))
+print(("ok" if not bad and ca.shape == cb.shape and moved else "FAIL")
+      + " - %s: only NOE/COO changed (%d of %d values) %s" % (sys.argv[3], moved, ca.size, bad[:3]))
