@@ -37,7 +37,7 @@ job() {
 # coo_check A B WHAT: h5py finds B the same file as A but for NOE/COO (one
 # "ok - " or "FAIL - " line; a failure counted)
 coo_check() {
-    "$PY" "$ROOT/tests/server/medcoo.py" "$1" "$2" "$3" > "$TMP/chk" 2>&1
+    "$PY" "$ROOT/tests/tools/medcoo.py" "$1" "$2" "$3" > "$TMP/chk" 2>&1
     cat "$TMP/chk"
     grep -q '^ok' "$TMP/chk" || NFAIL=$((NFAIL + 1))
 }

@@ -38,7 +38,7 @@ fi
 node b "$TMP/db" --workers 1 || { fail "pgmed: node b starts" "$(tail -3 "$TMP/b.log")"; exit 1; }
 code=$(curl -s -m 60 -o "$TMP/b.med" -w '%{http_code}' "$URL_b/v1/jobs/$ID/result?format=med")
 if [ "$code" = 200 ] && [ ! -e "$TMP/db/jobs/$ID/result.med.frames" ]; then
-    "$PY" "$ROOT/tests/server/medcoo.py" "$TMP/m.med" "$TMP/b.med" \
+    "$PY" "$ROOT/tests/tools/medcoo.py" "$TMP/m.med" "$TMP/b.med" \
         "pgmed: MED result from node b" > "$TMP/chk" 2>&1
     cat "$TMP/chk"
     grep -q '^ok' "$TMP/chk" || NFAIL=$((NFAIL + 1))

@@ -24,5 +24,5 @@ a.visititems(walk)
 b.visititems(lambda n, o: None if n in a else bad.append("added " + n))
 ca, cb = a[names[0]][()], b[names[0]][()]
 moved = int(np.sum(ca != cb))
-print(("ok" if not bad and ca.shape == cb.shape and moved else "FAIL")
+print(("ok" if not bad and ca.dtype == cb.dtype and ca.shape == cb.shape and moved else "FAIL")
       + " - %s: only NOE/COO changed (%d of %d values) %s" % (sys.argv[3], moved, ca.size, bad[:3]))
