@@ -566,7 +566,12 @@ try {
         await noColumnCut(page, 'desktop (1280 px), job list with file names', h);
         const listName = await page.textContent(rowSel(id1) + ' td:first-child a');
         check(listName === path.basename(env.SAMPLE), 'names: the list shows the job by its file\'s name (' + listName + ')', listName);
-        const inout = await page.textContent(rowSel(id2) + ' td:nth-child(6)');
+        // the figures come from the job's report, fetched after the row is drawn
+        const inout = await page.waitForFunction((sel) => {
+            const td = document.querySelector(sel);
+            return td && /^0\.\d{4} → 0\.\d{4}$/.test(td.textContent.trim()) && td.textContent;
+        }, rowSel(id2) + ' td:nth-child(6)', { timeout: 10000 }).then((x) => x.jsonValue())
+            .catch(() => page.textContent(rowSel(id2) + ' td:nth-child(6)'));
         check(/^0\.\d{4} → 0\.\d{4}$/.test(inout.trim()), 'list: mean ratio in → out shown (' + inout.trim() + ')', inout);
         await page.click('#filters button[data-state="succeeded"]');
         const states = await page.$$eval('#jobs tbody tr', (t) => t.map((r) => r.dataset.state));
