@@ -254,11 +254,7 @@ submit "$TMP/cube.stl" model/stl "" "$TMP/out" > /dev/null
 HID=$(jf "$TMP/out" .id)
 submit "$TMP/cube.stl" model/stl "" "$TMP/out" > /dev/null
 KID=$(jf "$TMP/out" .id)
-_i=0
-while [ $_i -lt 100 ] && [ "$(curl -s "$URL/v1/jobs/$KID" | jq -r .state)" != running ]; do
-    sleep 0.1
-    _i=$((_i + 1))
-done
+wait_running "$KID"
 t0=$(date +%s)
 req POST "/v1/jobs/$KID:cancel" "$TMP/out" > /dev/null
 st=$(wait_done "$KID")
