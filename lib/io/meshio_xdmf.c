@@ -1298,7 +1298,7 @@ const meshio_fmt fmt_xdmf = {
     .name = "xdmf",
     .aliases = "xmf",
     .about = "XDMF 2/3, tetrahedra with the data inline (XML), or in HDF5 through qdc-h5 "
-             "(command line only)",
+             "(the qdc command, or qdcd as a two-file multipart upload)",
     .ext = "xdmf",
     .input = "input.xdmf",
     .sniff = sniff_xdmf,
