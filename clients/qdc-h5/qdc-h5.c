@@ -26,8 +26,9 @@
  * file as /proc/self/fd/3, and its own name here).
  *
  * MED (Salome, Code_Aster): the first mesh of /ENS_MAA, its first step;
- * NOE/COO (x of every node, then y, then z), MAI/TE4 and MAI/T10 NOD (node k
- * of every element, then node k + 1; 1-based) and FAM. Frames carry them
+ * NOE/COO (x of every node, then y, then z) and NOE/FAM, MAI/TE4, MAI/T10,
+ * MAI/TR3 and MAI/TR6 NOD (node k of every element, then node k + 1;
+ * 1-based) and FAM. Frames carry them
  * interlaced (x y z a node, the nodes of an element together), as int64 and
  * float64, little-endian. Exit status 0, or 1 with one line "qdc-h5: ..." on
  * stderr. */
@@ -242,8 +243,12 @@ static void med_read(const char *fname)
 {
     hid_t f = open_ro(fname);
     const char *file = shown ? shown : fname;
-    static const char *const types[2] = {"TE4", "T10"};
-    static const int nodes[2] = {4, 10};
+    /* tetrahedra, and triangles: the boundary's (their families its refs) */
+    static const char *const types[4] = {"TE4", "T10", "TR3", "TR6"};
+    static const char *const names[4] = {"te4", "t10", "tr3", "tr6"};
+    static const int nodes[4] = {4, 10, 3, 6};
+    char fam[16];
+    uint64_t count_coords;
     char base[1100], path[1200];
     uint64_t n;
     void *raw, *rows;
@@ -261,9 +266,20 @@ static void med_read(const char *fname)
     rows = interlace(raw, n / 3, 3);
     put_all(magic, sizeof magic);
     frame("coords", 'f', rows, n);
+    count_coords = n;
     free(raw);
     free(rows);
-    for (int k = 0; k < 2; k++) {
+    /* the node families (NOE/FAM) */
+    snprintf(path, sizeof path, "%s/NOE/FAM", base);
+    if (exists(f, path)) {
+        raw = read_all(f, path, H5T_NATIVE_INT64, &n);
+        if (n * 3 != count_coords)
+            die("%s: %llu families for %llu nodes", path, (unsigned long long)n,
+                (unsigned long long)(count_coords / 3));
+        frame("noe_fam", 'i', raw, n);
+        free(raw);
+    }
+    for (int k = 0; k < 4; k++) {
         uint64_t ne, nf;
         snprintf(path, sizeof path, "%s/MAI/%s/NOD", base, types[k]);
         if (!exists(f, path))
@@ -274,7 +290,7 @@ static void med_read(const char *fname)
                 nodes[k]);
         ne = n / (uint64_t)nodes[k];
         rows = interlace(raw, ne, nodes[k]);
-        frame(k ? "t10" : "te4", 'i', rows, n);
+        frame(names[k], 'i', rows, n);
         free(raw);
         free(rows);
         snprintf(path, sizeof path, "%s/MAI/%s/FAM", base, types[k]);
@@ -284,7 +300,8 @@ static void med_read(const char *fname)
         if (nf != ne)
             die("%s: %llu families for %llu elements", path, (unsigned long long)nf,
                 (unsigned long long)ne);
-        frame(k ? "t10_fam" : "te4_fam", 'i', raw, nf);
+        snprintf(fam, sizeof fam, "%s_fam", names[k]);
+        frame(fam, 'i', raw, nf);
         free(raw);
     }
     H5Fclose(f);
