@@ -86,7 +86,8 @@ static void put_all(const void *p, size_t n)
         die("cannot write to standard output: %s", strerror(errno));
 }
 
-/* One frame: name, type 'f' (float64) or 'i' (int64), count, values. */
+/* One frame: name, type 'f' (float64) or 'i' (int64), count, values (NULL:
+ * the header alone, the caller writes them). */
 static void frame(const char *name, char type, const void *vals, uint64_t count)
 {
     unsigned char h[32];
@@ -98,7 +99,8 @@ static void frame(const char *name, char type, const void *vals, uint64_t count)
         h[24 + k] = (unsigned char)(count >> (8 * k));
     put_all(h, sizeof h);
     /* little-endian hosts only (checked in main) */
-    put_all(vals, (size_t)count * 8);
+    if (vals)
+        put_all(vals, (size_t)count * 8);
 }
 
 /* 1 if every group on the way to path and path itself exist. */
@@ -167,19 +169,6 @@ static void *read_all(hid_t f, const char *path, hid_t type, uint64_t *count)
     return buf;
 }
 
-/* Columns to rows: in holds `cols` runs of `rows` values (MED's
- * non-interlaced order), out gets rows of cols. */
-static void *interlace(const void *in, uint64_t rows, int cols)
-{
-    const uint64_t *a = in;
-    uint64_t *b = xmalloc((size_t)(rows * (uint64_t)cols) * 8);
-
-    for (uint64_t r = 0; r < rows; r++)
-        for (int c = 0; c < cols; c++)
-            b[r * (uint64_t)cols + (uint64_t)c] = a[(uint64_t)c * rows + r];
-    return b;
-}
-
 /* "/ENS_MAA/<first mesh>/<its first step>" */
 static void mesh_base(hid_t f, char *base, size_t size, int *dim)
 {
@@ -239,6 +228,88 @@ static hid_t open_ro(const char *fname)
     return f;
 }
 
+/* The value count of dataset d (path), checked against MAX_VALUES. */
+static uint64_t values_of(hid_t d, const char *path)
+{
+    hid_t sp = H5Dget_space(d);
+    hssize_t n = sp < 0 ? -1 : H5Sget_simple_extent_npoints(sp);
+
+    if (n < 0 || n > MAX_VALUES)
+        die("dataset %s: %lld values (at most %lld)", path, (long long)n,
+            (long long)MAX_VALUES);
+    H5Sclose(sp);
+    return (uint64_t)n;
+}
+
+/* Rows of values a block of stream_frame: 256 KiB a column at most. */
+#define BLOCK_ROWS ((hsize_t)1 << 15)
+
+/* Dataset d (path) of n values in cols columns (MED's order: all of column
+ * 0, then all of column 1...) written as frame name of type t ('f' float64,
+ * 'i' int64) with its rows interlaced: a block of rows at a time, each
+ * column's part read by HDF5 straight into a small buffer, interlaced into
+ * another and written out, so that no copy of the whole dataset is made
+ * (allocating and faulting in two of them took most of the time). */
+static void stream_frame(hid_t d, const char *path, uint64_t n, int cols, const char *name,
+                         char t)
+{
+    hid_t type = t == 'f' ? H5T_NATIVE_DOUBLE : H5T_NATIVE_INT64;
+    hid_t fs = H5Dget_space(d), ms;
+    uint64_t rows = n / (uint64_t)cols;
+    uint64_t *col = xmalloc((size_t)BLOCK_ROWS * (size_t)cols * 8);
+    uint64_t *out = cols > 1 ? xmalloc((size_t)BLOCK_ROWS * (size_t)cols * 8) : col;
+
+    if (fs < 0 || H5Sget_simple_extent_ndims(fs) != 1)
+        die("dataset %s is not a list of values", path);
+    frame(name, t, NULL, n);
+    for (uint64_t r0 = 0; r0 < rows; r0 += BLOCK_ROWS) {
+        hsize_t cnt = rows - r0 < BLOCK_ROWS ? rows - r0 : BLOCK_ROWS;
+        ms = H5Screate_simple(1, &cnt, NULL);
+        for (int c = 0; c < cols; c++) {
+            hsize_t start = (hsize_t)c * rows + r0;
+            if (ms < 0 ||
+                H5Sselect_hyperslab(fs, H5S_SELECT_SET, &start, NULL, &cnt, NULL) < 0 ||
+                H5Dread(d, type, ms, fs, H5P_DEFAULT, col + (size_t)c * cnt) < 0)
+                die("cannot read dataset %s", path);
+        }
+        H5Sclose(ms);
+        for (hsize_t r = 0; cols > 1 && r < cnt; r++)
+            for (int c = 0; c < cols; c++)
+                out[r * (hsize_t)cols + (hsize_t)c] = col[(hsize_t)c * cnt + r];
+        put_all(out, (size_t)cnt * (size_t)cols * 8);
+    }
+    H5Sclose(fs);
+    if (out != col)
+        free(out);
+    free(col);
+}
+
+/* Dataset path (of cols columns, each of rows values when rows > 0) as
+ * frame name, or nothing when the file has no such dataset; its row count. */
+static uint64_t med_frame(hid_t f, const char *path, int cols, uint64_t rows,
+                          const char *name, char t)
+{
+    hid_t d;
+    uint64_t n;
+
+    if (!exists(f, path))
+        return 0;
+    d = H5Dopen2(f, path, H5P_DEFAULT);
+    if (d < 0)
+        die("cannot open dataset %s", path);
+    n = values_of(d, path);
+    if (n % (uint64_t)cols)
+        die("%s: %llu values, not %d a %s", path, (unsigned long long)n, cols,
+            cols == 3 && t == 'f' ? "node" : "element");
+    if (rows && n / (uint64_t)cols != rows)
+        die("%s: %llu families for %llu %s", path, (unsigned long long)n,
+            (unsigned long long)rows, t == 'i' && !strcmp(name, "noe_fam") ? "nodes"
+                                                                          : "elements");
+    stream_frame(d, path, n, cols, name, t);
+    H5Dclose(d);
+    return n / (uint64_t)cols;
+}
+
 static void med_read(const char *fname)
 {
     hid_t f = open_ro(fname);
@@ -247,11 +318,8 @@ static void med_read(const char *fname)
     static const char *const types[4] = {"TE4", "T10", "TR3", "TR6"};
     static const char *const names[4] = {"te4", "t10", "tr3", "tr6"};
     static const int nodes[4] = {4, 10, 3, 6};
-    char fam[16];
-    uint64_t count_coords;
-    char base[1100], path[1200];
-    uint64_t n;
-    void *raw, *rows;
+    char base[1100], path[1200], fam[16];
+    uint64_t nv, ne;
     int dim;
 
     if (f < 0)
@@ -260,49 +328,21 @@ static void med_read(const char *fname)
     if (dim != 3)
         die("%s: a mesh of dimension %d: qdc reads 3D meshes", file, dim);
     snprintf(path, sizeof path, "%s/NOE/COO", base);
-    raw = read_all(f, path, H5T_NATIVE_DOUBLE, &n);
-    if (n % 3)
-        die("%s: %llu coordinates, not 3 a node", path, (unsigned long long)n);
-    rows = interlace(raw, n / 3, 3);
+    if (!exists(f, path))
+        die("cannot open dataset %s", path);
     put_all(magic, sizeof magic);
-    frame("coords", 'f', rows, n);
-    count_coords = n;
-    free(raw);
-    free(rows);
+    nv = med_frame(f, path, 3, 0, "coords", 'f');
     /* the node families (NOE/FAM) */
     snprintf(path, sizeof path, "%s/NOE/FAM", base);
-    if (exists(f, path)) {
-        raw = read_all(f, path, H5T_NATIVE_INT64, &n);
-        if (n * 3 != count_coords)
-            die("%s: %llu families for %llu nodes", path, (unsigned long long)n,
-                (unsigned long long)(count_coords / 3));
-        frame("noe_fam", 'i', raw, n);
-        free(raw);
-    }
+    med_frame(f, path, 1, nv, "noe_fam", 'i');
     for (int k = 0; k < 4; k++) {
-        uint64_t ne, nf;
         snprintf(path, sizeof path, "%s/MAI/%s/NOD", base, types[k]);
-        if (!exists(f, path))
+        ne = med_frame(f, path, nodes[k], 0, names[k], 'i');
+        if (!ne)
             continue;
-        raw = read_all(f, path, H5T_NATIVE_INT64, &n);
-        if (n % (uint64_t)nodes[k])
-            die("%s: %llu nodes, not %d an element", path, (unsigned long long)n,
-                nodes[k]);
-        ne = n / (uint64_t)nodes[k];
-        rows = interlace(raw, ne, nodes[k]);
-        frame(names[k], 'i', rows, n);
-        free(raw);
-        free(rows);
         snprintf(path, sizeof path, "%s/MAI/%s/FAM", base, types[k]);
-        if (!exists(f, path))
-            continue;
-        raw = read_all(f, path, H5T_NATIVE_INT64, &nf);
-        if (nf != ne)
-            die("%s: %llu families for %llu elements", path, (unsigned long long)nf,
-                (unsigned long long)ne);
         snprintf(fam, sizeof fam, "%s_fam", names[k]);
-        frame(fam, 'i', raw, nf);
-        free(raw);
+        med_frame(f, path, 1, ne, fam, 'i');
     }
     H5Fclose(f);
     if (fflush(stdout) != 0)
