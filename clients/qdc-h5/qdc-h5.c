@@ -241,6 +241,24 @@ static uint64_t values_of(hid_t d, const char *path)
     return (uint64_t)n;
 }
 
+/* HDF5's error stack says it could not allocate memory (under qdcd's
+ * --sandbox limit: a chunk larger than the limit, to be inflated whole). */
+static herr_t oom_walk(unsigned n, const H5E_error2_t *e, void *flag)
+{
+    (void)n;
+    if (e->min_num == H5E_CANTALLOC || e->min_num == H5E_NOSPACE)
+        *(int *)flag = 1;
+    return 0;
+}
+
+static int h5_oom(void)
+{
+    int flag = 0;
+
+    H5Ewalk2(H5E_DEFAULT, H5E_WALK_DOWNWARD, oom_walk, &flag);
+    return flag;
+}
+
 /* Rows of values a block of stream_frame: 256 KiB a column at most. */
 #define BLOCK_ROWS ((hsize_t)1 << 15)
 
@@ -270,7 +288,8 @@ static void stream_frame(hid_t d, const char *path, uint64_t n, int cols, const 
             if (ms < 0 ||
                 H5Sselect_hyperslab(fs, H5S_SELECT_SET, &start, NULL, &cnt, NULL) < 0 ||
                 H5Dread(d, type, ms, fs, H5P_DEFAULT, col + (size_t)c * cnt) < 0)
-                die("cannot read dataset %s", path);
+                die(h5_oom() ? "out of memory reading dataset %s" : "cannot read dataset %s",
+                    path);
         }
         H5Sclose(ms);
         for (hsize_t r = 0; cols > 1 && r < cnt; r++)
@@ -289,12 +308,20 @@ static void stream_frame(hid_t d, const char *path, uint64_t n, int cols, const 
 static uint64_t med_frame(hid_t f, const char *path, int cols, uint64_t rows,
                           const char *name, char t)
 {
-    hid_t d;
+    hid_t d, dapl;
     uint64_t n;
 
     if (!exists(f, path))
         return 0;
-    d = H5Dopen2(f, path, H5P_DEFAULT);
+    /* a chunked (compressed) dataset: its chunks kept once inflated, each
+     * column's blocks read from them (by default a chunk over 1 MiB is
+     * inflated again for every block); at most the dataset's own size, as a
+     * whole read would take */
+    dapl = H5Pcreate(H5P_DATASET_ACCESS);
+    if (dapl < 0 || H5Pset_chunk_cache(dapl, 10007, (size_t)MAX_VALUES * 8, 1.0) < 0)
+        die("cannot set up the reading of %s", path);
+    d = H5Dopen2(f, path, dapl);
+    H5Pclose(dapl);
     if (d < 0)
         die("cannot open dataset %s", path);
     n = values_of(d, path);

@@ -13,7 +13,8 @@
 # (h5py) and result?format=xdmf its XML naming result.h5; a missing part,
 # two .h5 names, a part that is no HDF5 file are 400s at once, a cut .h5
 # fails its job with a 400; the .xdmf alone is a 415 saying how to send
-# both. Inline XDMF is taken.
+# both. Inline XDMF is taken. qdc-h5 over --child-memory (a 96 MB chunk to
+# inflate, 64 MiB allowed) fails its job with a 422 naming the limit.
 . "$(dirname "$0")/../lib.sh"
 . "$(dirname "$0")/daemon.inc"
 
@@ -201,4 +202,37 @@ else
     fail "hdf5: XDMF upload" "$code $(head -c 300 "$TMP/out")"
 fi
 stop_qdcd
+
+# qdc-h5 over its memory limit: a MED file whose NOE/COO is one gzip chunk
+# of 96 MB (zeros: 238 kB on disk) that HDF5 must inflate whole, read under
+# the smallest --child-memory (64 MiB): the job fails with a 422 that names
+# the limit, and the daemon lives on
+if "$PY" - "$TMP/meshio.med" "$TMP/bigchunk.med" 2> "$TMP/bigchunk.err" << 'EOF'; then
+import shutil, sys
+import h5py
+shutil.copy(sys.argv[1], sys.argv[2])
+f = h5py.File(sys.argv[2], "r+")
+base = "ENS_MAA/" + list(f["ENS_MAA"])[0]
+base += "/" + list(f[base])[0]
+n = 3 * (1 << 22)
+del f[base + "/NOE/COO"]
+f.create_dataset(base + "/NOE/COO", shape=(n,), dtype="<f8", chunks=(n,), compression="gzip")
+f[base + "/NOE/COO"][0:8] = 0.25  # the chunk written (a chunk never written is not read)
+f.close()
+EOF
+    start_qdcd "$TMP/d2" --workers 1 --child-memory 67108864 ||
+        { fail "hdf5: qdcd --child-memory 64 MiB starts" "$(tail -3 "$TMP/d2.log")"; exit 1; }
+    if job oom "$TMP/bigchunk.med" "format=med" && [ "$ST" = failed ] &&
+        jq -e '.error.status == 422 and (.error.detail | test("qdc-h5.*memory limit \\(67108864 bytes\\)"))' \
+            "$TMP/job.$ID" > /dev/null; then
+        pass "hdf5: qdc-h5 over --child-memory: job failed with a 422 ($(jf "$TMP/job.$ID" .error.detail | cut -c1-100))"
+    else
+        fail "hdf5: qdc-h5 memory limit" "$ST $(jq -c .error "$TMP/job.$ID")"
+    fi
+    curl -sf "$URL/livez" > /dev/null && pass "hdf5: qdcd still answers after the memory kill" ||
+        fail "hdf5: livez after the memory kill" "no answer"
+    stop_qdcd
+else
+    pass "hdf5: qdc-h5 memory limit # SKIP python3-h5py missing ($(tail -1 "$TMP/bigchunk.err"))"
+fi
 exit $NFAIL
