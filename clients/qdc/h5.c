@@ -407,8 +407,8 @@ static void folder_of(const char *path, char *dir, size_t size)
 qdc_status cli_xdmf_h5_retry(const char *path, qdc_status st, const meshio_options *mo,
                              mesh_t **m, qdc_error *err)
 {
-    char prog[PATH_MAX + 8], dir[PATH_MAX], h5[PATH_MAX], spec[3][1200];
-    char *argv[10];
+    char prog[PATH_MAX + 8], dir[PATH_MAX], h5[PATH_MAX], spec[5][1200];
+    char *argv[12];
     char *xml = NULL, *frames = NULL, *in = NULL;
     size_t xml_len, frames_len, in_len;
     meshio_xdmf_h5 h;
