@@ -13,6 +13,7 @@
 #include "handler.h"
 
 #include "h5job.h"
+#include "h5upload.h"
 #include "job.h"
 #include "multipart.h"
 #include "offq.h"
@@ -188,22 +189,11 @@ static int upload_format(struct MHD_Connection *c, upload *u, char *why, size_t 
 
     u->fmt = MESHIO_AUTO;
     u->sfmt = SURFACE_AUTO;
-    if (ct && !strncasecmp(ct, "multipart/form-data", 19)) {
-        /* an .xdmf and its .h5 (curl -F, a browser's FormData) */
-        if (mp_boundary(ct, u->boundary)) {
-            snprintf(why, cap, "multipart/form-data without a valid boundary");
-            return -1;
-        }
-        if (fq && meshio_format_from_name(fq) != MESHIO_XDMF) {
-            snprintf(why, cap,
-                     "multipart/form-data is taken for XDMF and its .h5 file, not "
-                     "format '%.60s'",
-                     fq);
-            return -1;
-        }
-        u->multipart = 1;
+    int form = h5up_form(ct, fq, u->boundary, why, cap); /* an .xdmf and its .h5 */
+    if (form) {
+        u->multipart = form > 0;
         u->fmt = MESHIO_XDMF;
-        return 0;
+        return form > 0 ? 0 : -1;
     }
     if (fq) {
         u->fmt = strchr(fq, '/') ? meshio_format_from_media_type(fq)
@@ -529,17 +519,9 @@ static int commit_input(req *r, const char *id, const char *format)
     job_path(r->q, id, NULL, dir, sizeof dir);
     job_path(r->q, id, job_input_name(format), path, sizeof path);
     if (u->multipart) {
-        /* the two files cut from the body (already synced), the body dropped */
         char h5[4300];
         job_path(r->q, id, JOB_INPUT_H5, h5, sizeof h5);
-        if (dir_ensure(dir) || rename(u->xtmp, path) || (u->xtmp[0] = 0, 0) ||
-            rename(u->htmp, h5) || (u->htmp[0] = 0, fsync_parent(path)) ||
-            fsync_parent(dir)) {
-            int e = errno ? errno : EIO;
-            dir_remove(dir);
-            return e;
-        }
-        return 0;
+        return h5up_commit(u->xtmp, u->htmp, dir, path, h5);
     }
     if (dir_ensure(dir) || (durable && fsync(u->fd)) || rename(u->tmp, path) ||
         (u->tmp[0] = 0, durable && (fsync_parent(path) || fsync_parent(dir)))) {
@@ -719,32 +701,11 @@ static int check_upload(struct MHD_Connection *c, req *r, const char *buf, size_
         return 0;
     }
 
-    if (u->fmt == MESHIO_MED) {
-        /* HDF5 is read by the worker's qdc-h5 child (h5job.h), never here */
-        static const char sig[8] = {'\x89', 'H', 'D', 'F', '\r', '\n', '\x1a', '\n'};
-        if (len < 8 || memcmp(buf, sig, 8) != 0) {
-            st = qdc_fail(&e, QDC_EPARSE, "MED: not an HDF5 file");
+    /* HDF5 is read by the worker's qdc-h5 child (h5job.h), never here */
+    if (h5up_check(buf, len, u->fmt, j, &st, &e)) {
+        if (st != QDC_OK)
             *ret = mesh_problem(c, r, st, &e);
-            return 1;
-        }
-        j->nv = j->nt = 0; /* known once qdc-h5 read it */
-        snprintf(j->notes, sizeof j->notes,
-                 "MED (HDF5): read by qdc-h5 in a child process before the optimization");
-        return 0;
-    }
-
-    if (u->fmt == MESHIO_XDMF) {
-        meshio_xdmf_h5 refs;
-        if (meshio_xdmf_h5_refs(buf, len, &refs, &e) == QDC_OK && refs.n) {
-            st = qdc_fail(&e, QDC_EFORMAT,
-                          "XDMF with its heavy data in %.200s (HDF5): send the .xdmf and "
-                          "the .h5 file together as multipart/form-data (curl -F "
-                          "xdmf=@mesh.xdmf -F h5=@mesh.h5), or `qdc submit mesh.xdmf`",
-                          refs.file);
-            *ret = mesh_problem(c, r, st, &e);
-            return 1;
-        }
-        qdc_error_clear(&e);
+        return st != QDC_OK;
     }
     mesh_t *m = NULL;
     sbuf notes = {0};
@@ -821,97 +782,26 @@ static int job_uploadable(meshio_format f)
     return meshio_format_info_of(f, &fi) && fi.input;
 }
 
-/* The role of part p of a multipart upload: 'x' the XDMF file, 'h' its .h5,
- * by its name ("xdmf", "h5") or else its file name's extension; 0 neither. */
-static char part_role(const mp_part *p)
-{
-    const char *dot = strrchr(p->filename, '.');
-
-    if (!strcmp(p->name, "xdmf"))
-        return 'x';
-    if (!strcmp(p->name, "h5"))
-        return 'h';
-    if (dot && (!strcasecmp(dot, ".xdmf") || !strcasecmp(dot, ".xmf")))
-        return 'x';
-    if (dot && (!strcasecmp(dot, ".h5") || !strcasecmp(dot, ".hdf5")))
-        return 'h';
-    return 0;
-}
-
 /* A multipart/form-data upload (buf[0..len), the body as sent): an XDMF
- * file whose heavy data is in HDF5 and that .h5 file, each a part. Checked
- * here as far as qdcd reads (the parts, the XML's references to one .h5
- * file, the HDF5 signature); the worker's qdc-h5 child reads the .h5. The
- * two are written beside the body (u->xtmp, u->htmp; the XML naming
- * JOB_INPUT_H5), which commit_input moves into the job's directory. 0, or 1
- * with the answer (400) in *ret. */
+ * file and its .h5 file (h5upload.h), written beside the body (u->xtmp,
+ * u->htmp), which commit_input moves into the job's directory. 0, or 1 with
+ * the answer (400) in *ret. */
 static int multipart_upload(struct MHD_Connection *c, req *r, const char *buf, size_t len,
                             job_rec *j, enum MHD_Result *ret)
 {
-    static const char sig[8] = {'\x89', 'H', 'D', 'F', '\r', '\n', '\x1a', '\n'};
     upload *u = r->up;
-    mp_part p[4];
-    const mp_part *x = NULL, *h = NULL;
-    char why[400] = "", extra[200];
-    meshio_xdmf_h5 refs;
-    sbuf xml = {0};
+    char why[400], extra[200];
     qdc_error e;
-    int n = 0, geom = 0;
+    int n = 0;
 
     qdc_error_clear(&e);
-    if (mp_parse(buf, len, u->boundary, p, 4, &n, why, sizeof why) == 0) {
-        for (int k = 0; k < n && !why[0]; k++) {
-            char role = part_role(&p[k]);
-            const mp_part **slot = role == 'x' ? &x : &h;
-            if (!role)
-                snprintf(why, sizeof why,
-                         "part '%.60s' (file '%.100s') is neither the XDMF file (name "
-                         "\"xdmf\") nor its .h5 file (name \"h5\")",
-                         p[k].name, p[k].filename);
-            else if (*slot)
-                snprintf(why, sizeof why, "two %s parts ('%.60s' and '%.60s')",
-                         role == 'x' ? "XDMF" : ".h5", (*slot)->name, p[k].name);
-            else
-                *slot = &p[k];
-        }
-        if (!why[0] && !x)
-            snprintf(why, sizeof why, "no XDMF part (send it as -F xdmf=@mesh.xdmf)");
-        else if (!why[0] && !h)
-            snprintf(why, sizeof why, "no .h5 part (send it as -F h5=@mesh.h5)");
-    }
-    if (!why[0] && meshio_sniff(buf + x->off, x->len) != MESHIO_XDMF)
-        snprintf(why, sizeof why, "part '%.60s' is not an XDMF file", x->name);
-    if (!why[0] && meshio_xdmf_h5_refs(buf + x->off, x->len, &refs, &e) != QDC_OK)
-        snprintf(why, sizeof why, "%s", e.msg);
-    else if (!why[0] && refs.n == 0)
-        snprintf(why, sizeof why,
-                 "the XDMF file holds its data inline: upload it alone, without a .h5 "
-                 "file");
-    for (int k = 0; !why[0] && k < refs.n; k++)
-        geom |= !strcmp(refs.set[k].name, "geometry");
-    if (!why[0] && !geom)
-        snprintf(why, sizeof why,
-                 "XDMF: the Geometry inline, the rest of the mesh in HDF5: not read (qdc "
-                 "writes the coordinates back into the .h5 file)");
-    if (!why[0] && (h->len < 8 || memcmp(buf + h->off, sig, 8)))
-        snprintf(why, sizeof why, "part '%.60s' is not an HDF5 file", h->name);
+    qdc_status st = h5up_multipart(buf, len, u->boundary, u->tmp, u->xtmp, u->htmp,
+                                   sizeof u->xtmp, j, why, sizeof why, &n, &e);
     if (why[0]) {
         snprintf(extra, sizeof extra, "\"format\":\"xdmf\",\"parts\":%d", n);
         *ret = http_problem(c, r, 400, "malformed-mesh", NULL, why, extra, NULL);
         return 1;
     }
-    /* the XML naming the job's copy of the .h5, and that copy */
-    snprintf(u->xtmp, sizeof u->xtmp, "%s.xdmf", u->tmp);
-    snprintf(u->htmp, sizeof u->htmp, "%s.h5", u->tmp);
-    qdc_status st =
-        meshio_xdmf_h5_rename(buf + x->off, x->len, JOB_INPUT_H5, sb_writer, &xml, &e);
-    if (st == QDC_OK && xml.oom)
-        st = qdc_fail(&e, QDC_ENOMEM, "out of memory");
-    if (st == QDC_OK)
-        st = meshio_save_bytes(u->xtmp, xml.buf, xml.len, &e);
-    if (st == QDC_OK)
-        st = meshio_save_bytes(u->htmp, buf + h->off, h->len, &e);
-    sb_free(&xml);
     if (st == QDC_EIO) {
         *ret = store_failed(c, r, errno, "the upload could not be stored");
         return 1;
@@ -920,12 +810,6 @@ static int multipart_upload(struct MHD_Connection *c, req *r, const char *buf, s
         *ret = mesh_problem(c, r, st, &e);
         return 1;
     }
-    j->nv = j->nt = 0; /* known once qdc-h5 read it */
-    snprintf(
-        j->notes, sizeof j->notes,
-        "XDMF with its heavy data in HDF5 (%.200s): read by qdc-h5 in a child process "
-        "before the optimization",
-        refs.file);
     return 0;
 }
 
@@ -1048,7 +932,7 @@ static enum MHD_Result process_upload(struct MHD_Connection *c, req *r)
 {
     upload *u = r->up;
     qdcd *q = r->q;
-    enum MHD_Result ret;
+    enum MHD_Result ret = MHD_NO;
     job_rec j, old;
     double t_parse = 0, t_valid = 0, t_commit;
 
