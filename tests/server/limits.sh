@@ -35,8 +35,10 @@ code=$(req GET /v1/jobs "$TMP/out" -H "Authorization: Bearer wrong")
 [ "$code" = 401 ] && pass "unknown token -> 401" || fail "unknown token" "$code"
 [ "$(req GET /livez "$TMP/out")" = 200 ] && pass "/livez needs no token" || fail "livez" "token required"
 
-# job 1 runs long; jobs 2 and 3 wait; job 4 finds the queue full
-c1=$(submit "$TMP/big.qmesh" $QM "max_iter=200&finish=0&tol_move=0&mode=literal" "$TMP/j1" -H "$A")
+# job 1 runs until it is cancelled below (a fixed amount of work could end
+# before the checks that need it running on a busy machine); jobs 2 and 3
+# wait; job 4 finds the queue full
+c1=$(submit "$TMP/big.qmesh" $QM "max_iter=10000&finish=0&tol_move=0&mode=literal" "$TMP/j1" -H "$A")
 id1=$(jf "$TMP/j1" .id)
 curl -s -m 30 -H "$A" "$URL/v1/jobs/$id1/progress?after=-1&wait=20" > /dev/null
 c2=$(submit "$TMP/small.qmesh" $QM "max_iter=2" "$TMP/j2" -H "$A")

@@ -9,11 +9,11 @@
 MESH=$(devmesh cube_h0.1_lowq)
 $MT qmesh "$MESH" "$TMP/in.qmesh"
 start_qdcd "$TMP/d" --workers 2 || { fail "start" "$(tail -3 "$TMP/d.log")"; exit 1; }
-# every one of the 10 iterations (no stall or move rule ends the run early), so
+# every one of the 40 iterations (no stall or move rule ends the run early), so
 # that records keep coming after the 200 pollers have started: with the stall
 # rule the run had 7 records (0-6), and on a loaded machine the pollers once
 # started after the 4th (a fresh-clone CI: start 3, last 6)
-code=$(submit "$TMP/in.qmesh" application/vnd.qdc.mesh "max_iter=10&stall=0&tol_move=0" "$TMP/sub")
+code=$(submit "$TMP/in.qmesh" application/vnd.qdc.mesh "max_iter=40&stall=0&tol_move=0" "$TMP/sub")
 id=$(jf "$TMP/sub" .id)
 # start once the run is under way (its first record is out)
 curl -s -m 30 "$URL/v1/jobs/$id/progress?after=-1&wait=20" > /dev/null
