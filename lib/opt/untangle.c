@@ -122,17 +122,20 @@ static int slides(const mesh_topo *tp, const slide_ctx *sl, int32_t v)
 
 /* The vertices finish_untangle moves: the movable ones (that may move:
  * slides >= 0) of the inverted tets and of the tets around them, as the
- * pass's vworst (0; 2 for the others). near[] is scratch of nv entries. Each
- * vertex decides its own, in parallel. */
+ * pass's vworst (0; 2 for the others). bad[] (nt) and near[] (nv) are
+ * scratch. Each tet, then each vertex, decides its own, in parallel. */
 static void untangle_set(const mesh_topo *tp, const uint8_t *movable, const slide_ctx *sl,
-                         const double *x, uint8_t *near, double *vworst)
+                         const double *x, uint8_t *bad, uint8_t *near, double *vworst)
 {
 #pragma omp parallel for schedule(static)
+    for (int32_t t = 0; t < tp->nt; t++)
+        bad[t] = (uint8_t)geom_tet_bad(x, tp->tets + 4 * (size_t)t);
+#pragma omp parallel for schedule(static)
     for (int32_t v = 0; v < tp->nv; v++) { /* a corner of an inverted tet */
-        int in = 0;
-        for (int32_t k = tp->vt_ptr[v]; !in && k < tp->vt_ptr[v + 1]; k++)
-            in = geom_tet_bad(x, tp->tets + 4 * (size_t)(tp->vt_idx[k] >> 2));
-        near[v] = (uint8_t)in;
+        uint8_t in = 0;
+        for (int32_t k = tp->vt_ptr[v]; k < tp->vt_ptr[v + 1]; k++)
+            in |= bad[tp->vt_idx[k] >> 2];
+        near[v] = in;
     }
 #pragma omp parallel for schedule(static)
     for (int32_t v = 0; v < tp->nv; v++) { /* a tet of v's star has such a corner */
@@ -150,15 +153,17 @@ qdc_status finish_untangle(const mesh_topo *tp, const uint8_t *movable,
                            int32_t *n_inverted)
 {
     uint8_t *near = qdc_mallocn((size_t)tp->nv + 1, 1);
+    uint8_t *bad = qdc_mallocn((size_t)tp->nt + 1, 1);
     double *vworst = qdc_mallocn((size_t)tp->nv + 1, sizeof(double));
     vq_pair *list = NULL;
     int32_t n = 0, *start = NULL, ncol = -1;
 
-    if (near && vworst) {
-        untangle_set(tp, movable, sl, x, near, vworst);
+    if (near && bad && vworst) {
+        untangle_set(tp, movable, sl, x, bad, near, vworst);
         ncol = select_vertices(tp, movable, vworst, &list, &n, &start);
     }
     qdc_free(near);
+    qdc_free(bad);
     qdc_free(vworst);
     if (ncol < 0)
         return QDC_ENOMEM;
