@@ -68,7 +68,7 @@ H5_PROG := $(if $(H5_LIBS),$(B)/qdc-h5)
 
 PROGS := $(B)/qdc $(if $(SRV_C),$(B)/qdcd) $(H5_PROG)
 
-.PHONY: all hooks deps test test-quick test-container test-faults test-load run bench clean fuzz format format-check fault
+.PHONY: all hooks deps test test-quick test-container test-faults test-load run bench clean fuzz fuzz-run format format-check fault
 all: $(B)/libqdc.a $(PROGS) $(UNIT_BIN) $(EX_BIN) hooks
 
 # The commit-msg hook for contributors (scripts/commit-msg: subjects of at
@@ -134,6 +134,12 @@ $(B)/tests/test_http: tests/unit/test_http.c tests/unit/testlib.h tests/unit/tes
 	@mkdir -p $(dir $@)
 	$(CC) $(CPPFLAGS) -Itests/unit -Iserver $(CFLAGS) -o $@ $< $(HTTP_PURE_OBJ) $(B)/libqdc.a \
 	    $(LIB_LIBS) $(LDFLAGS)
+
+# The multipart parser, linked alone.
+$(B)/tests/test_multipart: tests/unit/test_multipart.c tests/unit/testlib.h tests/unit/testio.h tests/fuzz/fuzz_multipart.c $(B)/server/multipart.o $(B)/libqdc.a
+	@mkdir -p $(dir $@)
+	$(CC) $(CPPFLAGS) -Itests/unit -Iserver $(CFLAGS) -o $@ $< $(B)/server/multipart.o \
+	    $(B)/libqdc.a $(LIB_LIBS) $(LDFLAGS)
 
 # The whole suite: release build, sanitizer build, unit + end-to-end + daemon tests,
 # two suites at a time (tests/run.sh; QDC_TEST_JOBS=1 for one at a time).
@@ -201,18 +207,28 @@ format-check:
 # tests/fuzz/fuzz_NAME.c is built with the library's io/ layer and run FUZZ_SECONDS on
 # its seeds (tests/fuzz/seeds/NAME); crashes land in tests/fuzz/crashes/NAME, which
 # `make test` replays (unit tests). FUZZ=name runs one target. A target that crashes
-# fails the run.
+# fails the run. CI runs `make fuzz FUZZ_SECONDS=20` (.ci/run).
 FUZZ_SECONDS ?= 60
 FUZZ_CC ?= $(shell command -v clang-14 2>/dev/null || echo clang)
-FUZZ_LIB := lib/core/base.c lib/core/mesh.c $(wildcard lib/io/*.c) server/parse.c server/route.c
+FUZZ_LIB := lib/core/base.c lib/core/mesh.c $(wildcard lib/io/*.c) server/parse.c server/route.c \
+            server/multipart.c
 FUZZ_SRC := $(if $(FUZZ),tests/fuzz/fuzz_$(FUZZ).c,$(wildcard tests/fuzz/fuzz_*.c))
-fuzz:
+FUZZ_FLAGS := -g -O1 -fno-sanitize-recover=undefined -fopenmp $(CPPFLAGS) -Iserver -MMD -MP
+# the library is compiled once for every target (instrumented, not linked
+# with the fuzzer's main), each target then only its own file
+FUZZ_OBJ := $(patsubst %.c,build/fuzz/obj/%.o,$(FUZZ_LIB))
+build/fuzz/obj/%.o: %.c
+	@mkdir -p $(dir $@)
+	$(FUZZ_CC) -fsanitize=fuzzer-no-link,address,undefined $(FUZZ_FLAGS) -c $< -o $@
+fuzz: deps
+	@$(MAKE) --no-print-directory fuzz-run
+fuzz-run: $(FUZZ_OBJ)
 	@mkdir -p build/fuzz
 	@set -e; for src in $(FUZZ_SRC); do \
 	    name=$$(basename $$src .c); name=$${name#fuzz_}; \
 	    echo "# fuzz $$name ($(FUZZ_SECONDS) s)"; \
-	    $(FUZZ_CC) -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=undefined \
-	        -fopenmp $(CPPFLAGS) -Iserver $$src $(FUZZ_LIB) -lz -lm -o build/fuzz/fuzz_$$name; \
+	    $(FUZZ_CC) -fsanitize=fuzzer,address,undefined $(FUZZ_FLAGS) $$src $(FUZZ_OBJ) \
+	        -lz -lm -o build/fuzz/fuzz_$$name; \
 	    mkdir -p build/fuzz/corpus/$$name tests/fuzz/crashes/$$name; \
 	    OMP_NUM_THREADS=1 build/fuzz/fuzz_$$name -max_total_time=$(FUZZ_SECONDS) -max_len=8192 \
 	        -artifact_prefix=tests/fuzz/crashes/$$name/ build/fuzz/corpus/$$name \

@@ -4,8 +4,10 @@
 # seed 1), writes it in each format with `qdc convert` (Abaqus and Netgen,
 # which qdc writes only spliced, with meshio), builds bench/read_speed.c
 # against build/rel/libqdc.a and prints one line per format: size, tets, best
-# of three parses (file already in memory, no source kept) and MB/s. Targets:
-# ASCII >= 100 MB/s, binary >= 500 MB/s. Files go to bench/out/read_speed
+# of three parses (file already in memory, no source kept) and MB/s. Then MED
+# (HDF5, written by meshio, families -1/-2): `qdc-h5 med-read`, the whole
+# process, best of three. Targets: ASCII >= 100 MB/s, binary and HDF5
+# >= 500 MB/s. Files go to bench/out/read_speed
 # (gitignored); run `make` first.
 #   sh bench/read_speed.sh [TETS]
 set -e
@@ -42,3 +44,27 @@ cc -D_POSIX_C_SOURCE=200809L -I"$ROOT/lib" -std=c11 -O2 -o read_speed \
     "$ROOT/bench/read_speed.c" "$BIN/libqdc.a" -lcholmod -lz -lm -ltet -lstdc++ -fopenmp
 ./read_speed cube.mesh gmsh41.msh gmsh41b.msh gmsh22.msh gmsh22b.msh gmsh40.msh ascii.vtk \
     bin.vtk ascii.vtu appended.vtu medit.meshb dolfin.xml abaqus.inp netgen.vol
+if [ ! -s cube.med ] || [ cube.mesh -nt cube.med ]; then
+    "$PY" - << 'PYEOF'
+import meshio, numpy as np
+m = meshio.read("cube.mesh")
+t = m.cells_dict["tetra"]
+med = meshio.Mesh(m.points, [("tetra", t)], cell_data={"cell_tags": [-1 - np.arange(len(t)) % 2]})
+med.cell_tags = {-1: ["material_0"], -2: ["material_1"]}
+med.write("cube.med")
+PYEOF
+fi
+if [ -x "$BIN/qdc-h5" ]; then
+    "$PY" - "$BIN/qdc-h5" cube.med << 'PYEOF'
+import os, subprocess, sys, time
+best = None
+for _ in range(3):
+    t0 = time.perf_counter()
+    subprocess.run([sys.argv[1], "med-read", sys.argv[2]], stdout=subprocess.DEVNULL, check=True)
+    dt = time.perf_counter() - t0
+    best = dt if best is None or dt < best else best
+mb = os.path.getsize(sys.argv[2]) / 1e6
+print("%-14s %8.1f MB  qdc-h5 med-read, whole process, best of 3: %.3f s = %.0f MB/s"
+      % (sys.argv[2], mb, best, mb / best))
+PYEOF
+fi

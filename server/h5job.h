@@ -1,18 +1,23 @@
-/* h5job.h - MED uploads: HDF5 is a large parser for untrusted files, so
- * qdcd never links it. The qdc-h5 program (built beside qdc and qdcd) reads
- * and writes MED files in a child process, as TetGen runs in `qdc tetra`:
- * child_run (killed at the job's deadline, on cancel, with the daemon),
- * --child-memory as its address-space limit, and a network namespace of its
- * own (qdc-h5 --sandbox). Thread-safe. */
+/* h5job.h - MED and XDMF+HDF5 uploads: HDF5 is a large parser for untrusted
+ * files, so qdcd never links it. The qdc-h5 program (built beside qdc and
+ * qdcd) reads and writes MED files and XDMF's HDF5 heavy data in a child
+ * process, as TetGen runs in `qdc tetra`: child_run (killed at the job's
+ * deadline, on cancel, with the daemon), --child-memory as its address-space
+ * limit, and a network namespace of its own (qdc-h5 --sandbox). Thread-safe. */
 #ifndef QDCD_H5JOB_H
 #define QDCD_H5JOB_H
 
 #include "child.h"
 #include "server.h"
 
-/* What the worker leaves beside input.med: the mesh as qdc-h5 read it (the
- * framed form of lib/io/meshio_med.c), the source of a MED result. */
+/* What the worker leaves beside the upload: the mesh as qdc-h5 read it, the
+ * source of the job's results. A MED job's: the framed form of
+ * lib/io/meshio_med.c, read as MED; an XDMF+HDF5 job's: the XML and the
+ * frames of its datasets (meshio_xdmf_h5_input), read as XDMF. */
 #define H5JOB_FRAMES "input.frames"
+/* An XDMF+HDF5 job's two files (upload.c stores them so): the XML, whose
+ * references name JOB_INPUT_H5, and the .h5 file as it was sent. */
+#define JOB_INPUT_H5 "input.h5"
 
 /* What a run of qdc-h5 came to: 0 ok; else an HTTP status (400 a file
  * qdc-h5 refused, 422 killed by a limit, 500 not run) with a problem slug
@@ -29,5 +34,15 @@ typedef struct {
  * in DATA/jobs/ID/qdc-h5.log. */
 void h5job_run(const qdcd *q, const char *id, const char *frames, const char *res,
                double deadline, const atomic_int *cancel, h5job_outcome *out);
+
+/* Is job id (uploaded as format) an XDMF+HDF5 job: XDMF with JOB_INPUT_H5
+ * beside its input? */
+int h5job_is_xdmf(const qdcd *q, const char *id, const char *format);
+/* An XDMF+HDF5 job's datasets read by qdc-h5 and put with its XML into its
+ * input.frames (frames NULL); or (frames: an XDMF file written from a mesh
+ * read from input.frames, that is, XML and frames again) a copy of its
+ * JOB_INPUT_H5 written as res with only the geometry's dataset replaced. */
+void h5job_xdmf(const qdcd *q, const char *id, const char *frames, const char *res,
+                double deadline, const atomic_int *cancel, h5job_outcome *out);
 
 #endif

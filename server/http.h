@@ -42,6 +42,7 @@ typedef struct req {
     struct req *off_next;
     int off_done;          /* that thread has handled this request */
     meshio_format res_fmt; /* the format a conversion is to write (result.c) */
+    int res_h5;            /* ... or an XDMF+HDF5 job's .h5 file (res_fmt XDMF) */
     struct upload *up;     /* POST /v1/jobs (upload.c) */
     struct watch *watch;   /* /progress, /events (progress.c) */
 } req;

@@ -397,32 +397,39 @@ static int tetrahedralize(worker *w, job_rec *j, opt_options *opts, mesh_t **out
     return 0;
 }
 
-/* A MED job's mesh: qdc-h5 reads DATA/jobs/ID/input.med into input.frames
- * in a child process (h5job.h), whose time comes out of the job's budget;
- * the mesh is then checked as an upload is at intake. 0 with *out set, 1 when
+/* A MED or XDMF+HDF5 job's mesh: qdc-h5 reads its upload (DATA/jobs/ID/
+ * input.med, or input.xdmf's datasets in input.h5) into input.frames in a
+ * child process (h5job.h), whose time comes out of the job's budget; the
+ * mesh is then checked as an upload is at intake. 0 with *out set, 1 when
  * the job failed (j->error set), 2 when it was cancelled. */
-static int med_load(worker *w, job_rec *j, opt_options *opts, mesh_t **out)
+static int h5_load(worker *w, job_rec *j, meshio_format fin, opt_options *opts,
+                   mesh_t **out)
 {
     qdcd *q = w->pool->q;
     char fr[4200], detail[600];
     double budget = opts->time_limit > 0 ? opts->time_limit : q->cfg.job_time_limit;
+    const char *what = fin == MESHIO_MED ? "the MED file could not be read"
+                                         : "the XDMF+HDF5 upload could not be read";
     h5job_outcome ho;
     size_t len = 0;
     char *buf;
     qdc_error err;
     qdc_status st;
 
-    h5job_run(q, j->id, NULL, NULL, mono_now() + budget, &w->cancel, &ho);
+    if (fin == MESHIO_MED)
+        h5job_run(q, j->id, NULL, NULL, mono_now() + budget, &w->cancel, &ho);
+    else
+        h5job_xdmf(q, j->id, NULL, NULL, mono_now() + budget, &w->cancel, &ho);
     if (ho.status < 0)
         return 2;
     if (ho.status) {
-        problem(j, ho.status, ho.slug, "the MED file could not be read", ho.detail);
+        problem(j, ho.status, ho.slug, what, ho.detail);
         return 1;
     }
     job_path(q, j->id, H5JOB_FRAMES, fr, sizeof fr);
     buf = file_read_all(fr, &len);
     qdc_error_clear(&err);
-    st = buf ? meshio_read(buf, len, MESHIO_MED, out, &err)
+    st = buf ? meshio_read(buf, len, fin, out, &err)
              : qdc_fail(&err, QDC_EIO, "qdc-h5 left no mesh");
     free(buf);
     if (st == QDC_OK &&
@@ -443,7 +450,7 @@ static int med_load(worker *w, job_rec *j, opt_options *opts, mesh_t **out)
                 : st == QDC_EMESH  ? "invalid-mesh"
                 : st == QDC_EPARSE ? "malformed-mesh"
                                    : "internal",
-                "the MED file could not be read", detail);
+                what, detail);
         return 1;
     }
     j->nv = (*out)->nv;
@@ -546,8 +553,8 @@ static run_step run_load(run_state *s)
     }
     meshio_format fin = meshio_format_from_name(s->j->format);
     double t0 = mono_now();
-    if (fin == MESHIO_MED) {
-        int t = med_load(s->w, s->j, &s->opts, &s->m);
+    if (fin == MESHIO_MED || h5job_is_xdmf(s->q, s->j->id, s->j->format)) {
+        int t = h5_load(s->w, s->j, fin, &s->opts, &s->m);
         return t == 1 ? RUN_FAILED : t == 2 ? RUN_STOPPED : RUN_ON;
     }
     if (read_intake(s, fin) == 0) {

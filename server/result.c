@@ -48,11 +48,13 @@ static meshio_format input_source(req *r, const job_rec *j, char *path, size_t c
     int surf = job_is_surface(j->format);
     meshio_format f = surf ? MESHIO_QMESH : meshio_format_from_name(j->format);
 
-    /* MED: the frames qdc-h5 read the upload into (h5job.h), not HDF5 */
+    /* MED, XDMF+HDF5: the frames qdc-h5 read the upload into (h5job.h),
+     * not HDF5 */
     job_path(r->q, j->id,
-             surf              ? JOB_INPUT_TETS
-             : f == MESHIO_MED ? H5JOB_FRAMES
-                               : job_input_name(j->format),
+             surf ? JOB_INPUT_TETS
+             : f == MESHIO_MED || h5job_is_xdmf(r->q, j->id, j->format)
+                 ? H5JOB_FRAMES
+                 : job_input_name(j->format),
              path, cap);
     return f;
 }
@@ -68,23 +70,54 @@ static qdc_status fetch_frames(req *r, const job_rec *j)
     return shared_fetch(r->q, j->id, H5JOB_FRAMES, NULL);
 }
 
-/* m, read from a MED job's frames, saved as path: its frames written beside
- * it, and qdc-h5 puts their coordinates into a copy of the upload (in a
- * child process, h5job.h). */
-static qdc_status save_med(req *r, const job_rec *j, const mesh_t *m, const char *path,
-                           qdc_error *e)
+/* m, read from a MED or XDMF+HDF5 job's frames (fmt: MESHIO_MED,
+ * MESHIO_XDMF), saved as path: its frames written beside it, and qdc-h5
+ * puts their coordinates into a copy of the upload (the .med; an XDMF
+ * job's .h5) in a child process (h5job.h). */
+static qdc_status save_h5(req *r, const job_rec *j, const mesh_t *m, meshio_format fmt,
+                          const char *path, qdc_error *e)
 {
     char fr[4400];
     h5job_outcome ho;
     qdc_status st;
 
     snprintf(fr, sizeof fr, "%s.frames", path);
-    st = meshio_save(fr, MESHIO_MED, m, e);
+    st = meshio_save(fr, fmt, m, e);
     if (st != QDC_OK)
         return st;
-    h5job_run(r->q, j->id, fr, path, mono_now() + r->q->cfg.job_time_limit, NULL, &ho);
+    if (fmt == MESHIO_MED)
+        h5job_run(r->q, j->id, fr, path, mono_now() + r->q->cfg.job_time_limit, NULL,
+                  &ho);
+    else
+        h5job_xdmf(r->q, j->id, fr, path, mono_now() + r->q->cfg.job_time_limit, NULL,
+                   &ho);
     unlink(fr);
     return ho.status ? qdc_fail(e, QDC_EIO, "%s", ho.detail) : QDC_OK;
+}
+
+/* An XDMF+HDF5 job's .xdmf result, as path: the upload's XML naming
+ * "result.h5" (the only change: the coordinates are in the .h5, the
+ * result in ?format=h5). */
+static qdc_status save_xdmf_xml(req *r, const job_rec *j, const char *path, qdc_error *e)
+{
+    char in[4400];
+    size_t len = 0;
+    char *xml;
+    sbuf out = {0};
+    qdc_status st;
+
+    job_path(r->q, j->id, job_input_name(j->format), in, sizeof in);
+    xml = file_read_all(in, &len);
+    if (!xml)
+        return qdc_fail(e, QDC_EIO, "cannot read %s", in);
+    st = meshio_xdmf_h5_rename(xml, len, "result.h5", sb_writer, &out, e);
+    free(xml);
+    if (st == QDC_OK && out.oom)
+        st = qdc_fail(e, QDC_ENOMEM, "out of memory");
+    if (st == QDC_OK)
+        st = meshio_save_bytes(path, out.buf, out.len, e);
+    sb_free(&out);
+    return st;
 }
 
 /* 409 / 410 for a job without a result (or, GET /input, an input mesh) to
@@ -178,6 +211,15 @@ static int result_format(struct MHD_Connection *c, req *r, const job_rec *j,
     sbuf x = {0};
     char d[300];
 
+    r->res_h5 = 0;
+    if (f && (!strcasecmp(f, "h5") || !strcasecmp(f, "application/x-hdf5")) &&
+        r->route == R_RESULT && h5job_is_xdmf(r->q, j->id, j->format) &&
+        !job_changes_tets(j->options)) {
+        /* an XDMF+HDF5 job's .h5 with the new coordinates */
+        r->res_h5 = 1;
+        *out = MESHIO_XDMF;
+        return 0;
+    }
     if (f) {
         if (!strcasecmp(f, "text/plain"))
             k = MESHIO_MEDIT;
@@ -240,7 +282,7 @@ static void result_file(req *r, const job_rec *j, meshio_format f, char *path, s
         break;
     default:
         snprintf(name, sizeof name, "%s.%s", r->route == R_INPUT ? "input-as" : "result",
-                 meshio_format_name(f));
+                 r->res_h5 ? "h5" : meshio_format_name(f));
         break;
     }
     job_path(r->q, j->id, name, path, cap);
@@ -265,7 +307,9 @@ static enum MHD_Result serve_result(struct MHD_Connection *c, req *r, const job_
     snprintf(etag, sizeof etag, "\"%s\"", hex);
     /* a result in another format than the upload's: say what it cannot hold
      * (the CLI says the same in a note line) */
-    if (r->route == R_RESULT && sf != MESHIO_AUTO && sf != f)
+    if (r->res_h5)
+        ; /* the upload's .h5 with its coordinates replaced: nothing lost */
+    else if (r->route == R_RESULT && sf != MESHIO_AUTO && sf != f)
         snprintf(note, sizeof note,
                  "written by qdc's %s writer, not the uploaded %s file with new "
                  "coordinates: only vertices, tets, triangles and their region tags "
@@ -293,9 +337,11 @@ static enum MHD_Result serve_result(struct MHD_Connection *c, req *r, const job_
                                                  MHD_HTTP_HEADER_IF_NONE_MATCH),
                      etag))
         return http_reply(c, r, 304, NULL, "", 0, h);
-    return http_reply_file(
-        c, r, 200, path,
-        meshio_media_type(f) ? meshio_media_type(f) : "application/octet-stream", h);
+    return http_reply_file(c, r, 200, path,
+                           r->res_h5              ? "application/x-hdf5"
+                           : meshio_media_type(f) ? meshio_media_type(f)
+                                                  : "application/octet-stream",
+                           h);
 }
 
 /* Whether a result is written from the job's upload: a mesh upload (a
@@ -409,8 +455,12 @@ static enum MHD_Result process_convert(struct MHD_Connection *c, req *r)
     qdc_error_clear(&e);
     double t0 = mono_now();
     st = convert_source(r, &j, &m, &e);
-    if (st == QDC_OK && r->res_fmt == MESHIO_MED)
-        st = save_med(r, &j, m, path, &e);
+    /* an XDMF+HDF5 job's .h5 (r->res_h5), or its .xdmf naming it */
+    if (st == QDC_OK && (r->res_fmt == MESHIO_MED || r->res_h5))
+        st = save_h5(r, &j, m, r->res_fmt, path, &e);
+    else if (st == QDC_OK && r->res_fmt == MESHIO_XDMF && from_upload(r, &j) &&
+             h5job_is_xdmf(r->q, j.id, j.format) && !job_changes_tets(j.options))
+        st = save_xdmf_xml(r, &j, path, &e);
     else if (st == QDC_OK)
         st = meshio_save(path, r->res_fmt, m, &e);
     mesh_free(m);

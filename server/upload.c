@@ -12,7 +12,10 @@
 #include "endpoints.h"
 #include "handler.h"
 
+#include "h5job.h"
+#include "h5upload.h"
 #include "job.h"
+#include "multipart.h"
 #include "offq.h"
 #include "qdc.h"
 #include "shared.h"
@@ -48,6 +51,10 @@ struct upload {
     char options[1024];  /* canonical options JSON */
     char file_name[256]; /* ?name=: the uploaded file's name (its last path part) */
     char label[128];     /* ?label= */
+    /* multipart/form-data: an XDMF file and its .h5 (multipart_upload) */
+    int multipart;
+    char boundary[MP_BOUNDARY_MAX + 1];
+    char xtmp[4300], htmp[4300]; /* the two files cut from the body, or "" */
 };
 
 static enum MHD_Result process_upload(struct MHD_Connection *c, req *r);
@@ -182,6 +189,12 @@ static int upload_format(struct MHD_Connection *c, upload *u, char *why, size_t 
 
     u->fmt = MESHIO_AUTO;
     u->sfmt = SURFACE_AUTO;
+    int form = h5up_form(ct, fq, u->boundary, why, cap); /* an .xdmf and its .h5 */
+    if (form) {
+        u->multipart = form > 0;
+        u->fmt = MESHIO_XDMF;
+        return form > 0 ? 0 : -1;
+    }
     if (fq) {
         u->fmt = strchr(fq, '/') ? meshio_format_from_media_type(fq)
                                  : meshio_format_from_name(fq);
@@ -333,6 +346,11 @@ enum MHD_Result upload_begin(struct MHD_Connection *c, req *r)
         return http_problem(c, r, 400, "invalid-option", NULL, why, NULL, NULL);
     if (upload_format(c, u, why, sizeof why))
         return unsupported(c, r, why);
+    if (u->multipart && shared_on(q))
+        return unsupported(c, r,
+                           "XDMF with its .h5 file (two files) is taken by a single node "
+                           "only, not with a PostgreSQL store; send inline XDMF, or "
+                           "convert it with the qdc command");
     if (u->tetgen_opts && u->fmt != MESHIO_AUTO)
         return http_problem(c, r, 400, "invalid-option", NULL,
                             "tetgen_quality and max_volume apply to surface uploads only",
@@ -407,6 +425,10 @@ void upload_done(req *r)
         unlink(u->tmp);
     if (u->mtmp[0])
         unlink(u->mtmp);
+    if (u->xtmp[0])
+        unlink(u->xtmp);
+    if (u->htmp[0])
+        unlink(u->htmp);
     free(u);
     r->up = NULL;
 }
@@ -496,6 +518,11 @@ static int commit_input(req *r, const char *id, const char *format)
 
     job_path(r->q, id, NULL, dir, sizeof dir);
     job_path(r->q, id, job_input_name(format), path, sizeof path);
+    if (u->multipart) {
+        char h5[4300];
+        job_path(r->q, id, JOB_INPUT_H5, h5, sizeof h5);
+        return h5up_commit(u->xtmp, u->htmp, dir, path, h5);
+    }
     if (dir_ensure(dir) || (durable && fsync(u->fd)) || rename(u->tmp, path) ||
         (u->tmp[0] = 0, durable && (fsync_parent(path) || fsync_parent(dir)))) {
         int e = errno ? errno : EIO;
@@ -674,20 +701,12 @@ static int check_upload(struct MHD_Connection *c, req *r, const char *buf, size_
         return 0;
     }
 
-    if (u->fmt == MESHIO_MED) {
-        /* HDF5 is read by the worker's qdc-h5 child (h5job.h), never here */
-        static const char sig[8] = {'\x89', 'H', 'D', 'F', '\r', '\n', '\x1a', '\n'};
-        if (len < 8 || memcmp(buf, sig, 8) != 0) {
-            st = qdc_fail(&e, QDC_EPARSE, "MED: not an HDF5 file");
+    /* HDF5 is read by the worker's qdc-h5 child (h5job.h), never here */
+    if (h5up_check(buf, len, u->fmt, j, &st, &e)) {
+        if (st != QDC_OK)
             *ret = mesh_problem(c, r, st, &e);
-            return 1;
-        }
-        j->nv = j->nt = 0; /* known once qdc-h5 read it */
-        snprintf(j->notes, sizeof j->notes,
-                 "MED (HDF5): read by qdc-h5 in a child process before the optimization");
-        return 0;
+        return st != QDC_OK;
     }
-
     mesh_t *m = NULL;
     sbuf notes = {0};
     meshio_options mo = {.log = collect_note, .log_ctx = &notes};
@@ -763,6 +782,37 @@ static int job_uploadable(meshio_format f)
     return meshio_format_info_of(f, &fi) && fi.input;
 }
 
+/* A multipart/form-data upload (buf[0..len), the body as sent): an XDMF
+ * file and its .h5 file (h5upload.h), written beside the body (u->xtmp,
+ * u->htmp), which commit_input moves into the job's directory. 0, or 1 with
+ * the answer (400) in *ret. */
+static int multipart_upload(struct MHD_Connection *c, req *r, const char *buf, size_t len,
+                            job_rec *j, enum MHD_Result *ret)
+{
+    upload *u = r->up;
+    char why[400], extra[200];
+    qdc_error e;
+    int n = 0;
+
+    qdc_error_clear(&e);
+    qdc_status st = h5up_multipart(buf, len, u->boundary, u->tmp, u->xtmp, u->htmp,
+                                   sizeof u->xtmp, j, why, sizeof why, &n, &e);
+    if (why[0]) {
+        snprintf(extra, sizeof extra, "\"format\":\"xdmf\",\"parts\":%d", n);
+        *ret = http_problem(c, r, 400, "malformed-mesh", NULL, why, extra, NULL);
+        return 1;
+    }
+    if (st == QDC_EIO) {
+        *ret = store_failed(c, r, errno, "the upload could not be stored");
+        return 1;
+    }
+    if (st != QDC_OK) {
+        *ret = mesh_problem(c, r, st, &e);
+        return 1;
+    }
+    return 0;
+}
+
 /* Map the body, inflate it if it is gzip, settle its format (sniffed when
  * nothing named it), parse and validate it (check_upload): 0, or 1 with the
  * answer in *ret. */
@@ -778,6 +828,12 @@ static int inspect_upload(struct MHD_Connection *c, req *r, job_rec *j,
     if (map == MAP_FAILED) {
         *ret = http_problem(c, r, 500, "io", NULL, "cannot map the upload", NULL, NULL);
         return 1;
+    }
+    if (u->multipart) {
+        *t_parse = *t_valid = mono_now();
+        bad = multipart_upload(c, r, map, mlen, j, ret);
+        munmap(map, mlen);
+        return bad;
     }
     if (gz_is_gzip(map, mlen)) {
         if (inflate_upload(c, r, map, mlen, &plain, &len, ret)) {
@@ -876,7 +932,7 @@ static enum MHD_Result process_upload(struct MHD_Connection *c, req *r)
 {
     upload *u = r->up;
     qdcd *q = r->q;
-    enum MHD_Result ret;
+    enum MHD_Result ret = MHD_NO;
     job_rec j, old;
     double t_parse = 0, t_valid = 0, t_commit;
 

@@ -26,8 +26,9 @@
  * file as /proc/self/fd/3, and its own name here).
  *
  * MED (Salome, Code_Aster): the first mesh of /ENS_MAA, its first step;
- * NOE/COO (x of every node, then y, then z), MAI/TE4 and MAI/T10 NOD (node k
- * of every element, then node k + 1; 1-based) and FAM. Frames carry them
+ * NOE/COO (x of every node, then y, then z) and NOE/FAM, MAI/TE4, MAI/T10,
+ * MAI/TR3 and MAI/TR6 NOD (node k of every element, then node k + 1;
+ * 1-based) and FAM. Frames carry them
  * interlaced (x y z a node, the nodes of an element together), as int64 and
  * float64, little-endian. Exit status 0, or 1 with one line "qdc-h5: ..." on
  * stderr. */
@@ -85,7 +86,8 @@ static void put_all(const void *p, size_t n)
         die("cannot write to standard output: %s", strerror(errno));
 }
 
-/* One frame: name, type 'f' (float64) or 'i' (int64), count, values. */
+/* One frame: name, type 'f' (float64) or 'i' (int64), count, values (NULL:
+ * the header alone, the caller writes them). */
 static void frame(const char *name, char type, const void *vals, uint64_t count)
 {
     unsigned char h[32];
@@ -97,7 +99,8 @@ static void frame(const char *name, char type, const void *vals, uint64_t count)
         h[24 + k] = (unsigned char)(count >> (8 * k));
     put_all(h, sizeof h);
     /* little-endian hosts only (checked in main) */
-    put_all(vals, (size_t)count * 8);
+    if (vals)
+        put_all(vals, (size_t)count * 8);
 }
 
 /* 1 if every group on the way to path and path itself exist. */
@@ -166,19 +169,6 @@ static void *read_all(hid_t f, const char *path, hid_t type, uint64_t *count)
     return buf;
 }
 
-/* Columns to rows: in holds `cols` runs of `rows` values (MED's
- * non-interlaced order), out gets rows of cols. */
-static void *interlace(const void *in, uint64_t rows, int cols)
-{
-    const uint64_t *a = in;
-    uint64_t *b = xmalloc((size_t)(rows * (uint64_t)cols) * 8);
-
-    for (uint64_t r = 0; r < rows; r++)
-        for (int c = 0; c < cols; c++)
-            b[r * (uint64_t)cols + (uint64_t)c] = a[(uint64_t)c * rows + r];
-    return b;
-}
-
 /* "/ENS_MAA/<first mesh>/<its first step>" */
 static void mesh_base(hid_t f, char *base, size_t size, int *dim)
 {
@@ -238,15 +228,125 @@ static hid_t open_ro(const char *fname)
     return f;
 }
 
+/* The value count of dataset d (path), checked against MAX_VALUES. */
+static uint64_t values_of(hid_t d, const char *path)
+{
+    hid_t sp = H5Dget_space(d);
+    hssize_t n = sp < 0 ? -1 : H5Sget_simple_extent_npoints(sp);
+
+    if (n < 0 || n > MAX_VALUES)
+        die("dataset %s: %lld values (at most %lld)", path, (long long)n,
+            (long long)MAX_VALUES);
+    H5Sclose(sp);
+    return (uint64_t)n;
+}
+
+/* HDF5's error stack says it could not allocate memory (under qdcd's
+ * --sandbox limit: a chunk larger than the limit, to be inflated whole). */
+static herr_t oom_walk(unsigned n, const H5E_error2_t *e, void *flag)
+{
+    (void)n;
+    if (e->min_num == H5E_CANTALLOC || e->min_num == H5E_NOSPACE)
+        *(int *)flag = 1;
+    return 0;
+}
+
+static int h5_oom(void)
+{
+    int flag = 0;
+
+    H5Ewalk2(H5E_DEFAULT, H5E_WALK_DOWNWARD, oom_walk, &flag);
+    return flag;
+}
+
+/* Rows of values a block of stream_frame: 256 KiB a column at most. */
+#define BLOCK_ROWS ((hsize_t)1 << 15)
+
+/* Dataset d (path) of n values in cols columns (MED's order: all of column
+ * 0, then all of column 1...) written as frame name of type t ('f' float64,
+ * 'i' int64) with its rows interlaced: a block of rows at a time, each
+ * column's part read by HDF5 straight into a small buffer, interlaced into
+ * another and written out, so that no copy of the whole dataset is made
+ * (allocating and faulting in two of them took most of the time). */
+static void stream_frame(hid_t d, const char *path, uint64_t n, int cols, const char *name,
+                         char t)
+{
+    hid_t type = t == 'f' ? H5T_NATIVE_DOUBLE : H5T_NATIVE_INT64;
+    hid_t fs = H5Dget_space(d), ms;
+    uint64_t rows = n / (uint64_t)cols;
+    uint64_t *col = xmalloc((size_t)BLOCK_ROWS * (size_t)cols * 8);
+    uint64_t *out = cols > 1 ? xmalloc((size_t)BLOCK_ROWS * (size_t)cols * 8) : col;
+
+    if (fs < 0 || H5Sget_simple_extent_ndims(fs) != 1)
+        die("dataset %s is not a list of values", path);
+    frame(name, t, NULL, n);
+    for (uint64_t r0 = 0; r0 < rows; r0 += BLOCK_ROWS) {
+        hsize_t cnt = rows - r0 < BLOCK_ROWS ? rows - r0 : BLOCK_ROWS;
+        ms = H5Screate_simple(1, &cnt, NULL);
+        for (int c = 0; c < cols; c++) {
+            hsize_t start = (hsize_t)c * rows + r0;
+            if (ms < 0 ||
+                H5Sselect_hyperslab(fs, H5S_SELECT_SET, &start, NULL, &cnt, NULL) < 0 ||
+                H5Dread(d, type, ms, fs, H5P_DEFAULT, col + (size_t)c * cnt) < 0)
+                die(h5_oom() ? "out of memory reading dataset %s" : "cannot read dataset %s",
+                    path);
+        }
+        H5Sclose(ms);
+        for (hsize_t r = 0; cols > 1 && r < cnt; r++)
+            for (int c = 0; c < cols; c++)
+                out[r * (hsize_t)cols + (hsize_t)c] = col[(hsize_t)c * cnt + r];
+        put_all(out, (size_t)cnt * (size_t)cols * 8);
+    }
+    H5Sclose(fs);
+    if (out != col)
+        free(out);
+    free(col);
+}
+
+/* Dataset path (of cols columns, each of rows values when rows > 0) as
+ * frame name, or nothing when the file has no such dataset; its row count. */
+static uint64_t med_frame(hid_t f, const char *path, int cols, uint64_t rows,
+                          const char *name, char t)
+{
+    hid_t d, dapl;
+    uint64_t n;
+
+    if (!exists(f, path))
+        return 0;
+    /* a chunked (compressed) dataset: its chunks kept once inflated, each
+     * column's blocks read from them (by default a chunk over 1 MiB is
+     * inflated again for every block); at most the dataset's own size, as a
+     * whole read would take */
+    dapl = H5Pcreate(H5P_DATASET_ACCESS);
+    if (dapl < 0 || H5Pset_chunk_cache(dapl, 10007, (size_t)MAX_VALUES * 8, 1.0) < 0)
+        die("cannot set up the reading of %s", path);
+    d = H5Dopen2(f, path, dapl);
+    H5Pclose(dapl);
+    if (d < 0)
+        die("cannot open dataset %s", path);
+    n = values_of(d, path);
+    if (n % (uint64_t)cols)
+        die("%s: %llu values, not %d a %s", path, (unsigned long long)n, cols,
+            cols == 3 && t == 'f' ? "node" : "element");
+    if (rows && n / (uint64_t)cols != rows)
+        die("%s: %llu families for %llu %s", path, (unsigned long long)n,
+            (unsigned long long)rows, t == 'i' && !strcmp(name, "noe_fam") ? "nodes"
+                                                                          : "elements");
+    stream_frame(d, path, n, cols, name, t);
+    H5Dclose(d);
+    return n / (uint64_t)cols;
+}
+
 static void med_read(const char *fname)
 {
     hid_t f = open_ro(fname);
     const char *file = shown ? shown : fname;
-    static const char *const types[2] = {"TE4", "T10"};
-    static const int nodes[2] = {4, 10};
-    char base[1100], path[1200];
-    uint64_t n;
-    void *raw, *rows;
+    /* tetrahedra, and triangles: the boundary's (their families its refs) */
+    static const char *const types[4] = {"TE4", "T10", "TR3", "TR6"};
+    static const char *const names[4] = {"te4", "t10", "tr3", "tr6"};
+    static const int nodes[4] = {4, 10, 3, 6};
+    char base[1100], path[1200], fam[16];
+    uint64_t nv, ne;
     int dim;
 
     if (f < 0)
@@ -255,37 +355,21 @@ static void med_read(const char *fname)
     if (dim != 3)
         die("%s: a mesh of dimension %d: qdc reads 3D meshes", file, dim);
     snprintf(path, sizeof path, "%s/NOE/COO", base);
-    raw = read_all(f, path, H5T_NATIVE_DOUBLE, &n);
-    if (n % 3)
-        die("%s: %llu coordinates, not 3 a node", path, (unsigned long long)n);
-    rows = interlace(raw, n / 3, 3);
+    if (!exists(f, path))
+        die("cannot open dataset %s", path);
     put_all(magic, sizeof magic);
-    frame("coords", 'f', rows, n);
-    free(raw);
-    free(rows);
-    for (int k = 0; k < 2; k++) {
-        uint64_t ne, nf;
+    nv = med_frame(f, path, 3, 0, "coords", 'f');
+    /* the node families (NOE/FAM) */
+    snprintf(path, sizeof path, "%s/NOE/FAM", base);
+    med_frame(f, path, 1, nv, "noe_fam", 'i');
+    for (int k = 0; k < 4; k++) {
         snprintf(path, sizeof path, "%s/MAI/%s/NOD", base, types[k]);
-        if (!exists(f, path))
+        ne = med_frame(f, path, nodes[k], 0, names[k], 'i');
+        if (!ne)
             continue;
-        raw = read_all(f, path, H5T_NATIVE_INT64, &n);
-        if (n % (uint64_t)nodes[k])
-            die("%s: %llu nodes, not %d an element", path, (unsigned long long)n,
-                nodes[k]);
-        ne = n / (uint64_t)nodes[k];
-        rows = interlace(raw, ne, nodes[k]);
-        frame(k ? "t10" : "te4", 'i', rows, n);
-        free(raw);
-        free(rows);
         snprintf(path, sizeof path, "%s/MAI/%s/FAM", base, types[k]);
-        if (!exists(f, path))
-            continue;
-        raw = read_all(f, path, H5T_NATIVE_INT64, &nf);
-        if (nf != ne)
-            die("%s: %llu families for %llu elements", path, (unsigned long long)nf,
-                (unsigned long long)ne);
-        frame(k ? "t10_fam" : "te4_fam", 'i', raw, nf);
-        free(raw);
+        snprintf(fam, sizeof fam, "%s_fam", names[k]);
+        med_frame(f, path, 1, ne, fam, 'i');
     }
     H5Fclose(f);
     if (fflush(stdout) != 0)

@@ -69,6 +69,11 @@ qdc_status cli_xdmf_h5_retry(const char *path, qdc_status st, const meshio_optio
                              mesh_t **m, qdc_error *err);
 int cli_xdmf_h5_source(const mesh_t *m);
 qdc_status cli_xdmf_h5_write(const char *out, const mesh_t *m, qdc_error *err);
+/* The XDMF file that cli_xdmf_h5_retry read, named name, and its .h5 file as
+ * a multipart/form-data body with the boundary b (parts "xdmf" and "h5",
+ * what `qdc submit` sends qdcd) into fn. */
+qdc_status cli_xdmf_h5_form(const char *name, const char *b, qdc_write_fn fn, void *ctx,
+                            qdc_error *err);
 
 /* One-line error in the form "qdc: FILE:LINE:COL: message". */
 void cli_error(const char *path, const qdc_error *err, qdc_status st);

@@ -407,8 +407,8 @@ static void folder_of(const char *path, char *dir, size_t size)
 qdc_status cli_xdmf_h5_retry(const char *path, qdc_status st, const meshio_options *mo,
                              mesh_t **m, qdc_error *err)
 {
-    char prog[PATH_MAX + 8], dir[PATH_MAX], h5[PATH_MAX], spec[3][1200];
-    char *argv[10];
+    char prog[PATH_MAX + 8], dir[PATH_MAX], h5[PATH_MAX], spec[5][1200];
+    char *argv[12];
     char *xml = NULL, *frames = NULL, *in = NULL;
     size_t xml_len, frames_len, in_len;
     meshio_xdmf_h5 h;
@@ -548,5 +548,55 @@ qdc_status cli_xdmf_h5_write(const char *out, const mesh_t *m, qdc_error *err)
     if (st == QDC_OK)
         st = meshio_save_bytes(out, mb.b, mb.n, err);
     qdc_free(mb.b);
+    return st;
+}
+
+/* fn(ctx, the text s) as a status */
+static qdc_status form_put(qdc_write_fn fn, void *ctx, const char *s, size_t n,
+                           qdc_error *err)
+{
+    return fn(ctx, s, n) ? qdc_fail(err, QDC_ENOMEM, "out of memory") : QDC_OK;
+}
+
+qdc_status cli_xdmf_h5_form(const char *name, const char *b, qdc_write_fn fn, void *ctx,
+                            qdc_error *err)
+{
+    const char *xb = strrchr(name, '/'), *hb = strrchr(xdmf_h5, '/');
+    char head[2 * PATH_MAX + 400];
+    char *h5 = NULL;
+    size_t h5_len = 0;
+    int n;
+    qdc_status st;
+
+    if (!xdmf_xml)
+        return qdc_fail(err, QDC_EINVAL, "no XDMF file with HDF5 data was read");
+    xb = xb ? xb + 1 : name;
+    hb = hb ? hb + 1 : xdmf_h5;
+    /* a quote or line break in a name would end the header: not sent */
+    if (strpbrk(xb, "\"\r\n") || strpbrk(hb, "\"\r\n"))
+        return qdc_fail(err, QDC_EINVAL, "%s: a file name with a quote or line break",
+                        name);
+    st = cli_slurp(xdmf_h5, &h5, &h5_len, err);
+    if (st != QDC_OK)
+        return st;
+    n = snprintf(head, sizeof head,
+                 "--%s\r\nContent-Disposition: form-data; name=\"xdmf\"; "
+                 "filename=\"%s\"\r\nContent-Type: application/xml\r\n\r\n",
+                 b, xb);
+    st = form_put(fn, ctx, head, (size_t)n, err);
+    if (st == QDC_OK)
+        st = form_put(fn, ctx, xdmf_xml, xdmf_len, err);
+    n = snprintf(head, sizeof head,
+                 "\r\n--%s\r\nContent-Disposition: form-data; name=\"h5\"; "
+                 "filename=\"%s\"\r\nContent-Type: application/x-hdf5\r\n\r\n",
+                 b, hb);
+    if (st == QDC_OK)
+        st = form_put(fn, ctx, head, (size_t)n, err);
+    if (st == QDC_OK)
+        st = form_put(fn, ctx, h5, h5_len, err);
+    n = snprintf(head, sizeof head, "\r\n--%s--\r\n", b);
+    if (st == QDC_OK)
+        st = form_put(fn, ctx, head, (size_t)n, err);
+    qdc_free(h5);
     return st;
 }

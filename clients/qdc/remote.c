@@ -1053,7 +1053,7 @@ static int cmd_submit(args *a)
     meshio_options keep = {.log = NULL, .log_ctx = NULL, .source = 1};
     meshio_format src, own; /* sent as; the input's own format (AUTO: none kept) */
     surface_format sf;
-    char *raw = NULL, ctype[80];
+    char *raw = NULL, ctype[128];
     size_t rawlen = 0;
     const char *out_format = a->out_format;
 
@@ -1100,9 +1100,29 @@ static int cmd_submit(args *a)
              : cli_read_mesh(
                    in, a->in_format ? meshio_format_from_name(a->in_format) : MESHIO_AUTO,
                    &keep, &m, &raw, &rawlen, &err);
+    /* XDMF whose heavy data is in a .h5 file: the two sent together as
+     * multipart/form-data */
+    if (st == QDC_EFORMAT && strcmp(in, "-") &&
+        cli_xdmf_h5_retry(in, st, &keep, &m, &err) == QDC_OK) {
+        char b[64];
+        random_key(b);
+        st = cli_xdmf_h5_form(in, b, rb_writer, &body, &err);
+        snprintf(ctype, sizeof ctype, "Content-Type: multipart/form-data; boundary=%.40s",
+                 b);
+        if (st == QDC_OK && !body.oom) {
+            if (!a->out) { /* else kept: -o is written here as qdc optimize writes it */
+                mesh_free(m);
+                m = NULL;
+            }
+            goto send;
+        }
+        rb_free(&body);
+        st = body.oom ? QDC_ENOMEM : st;
+    }
     if (st != QDC_OK) {
         cli_error(in, &err, st);
         qdc_free(raw);
+        mesh_free(m);
         return CLI_EINPUT;
     }
     /* sent as it is (the file's own variant, which the server writes back

@@ -15,9 +15,11 @@
  * Frames: "coords" (x y z a node, 3 per node), "te4" or "t10" (the 4 or 10
  * nodes of each tet, 1-based, MED's order: the corners, then the mid-edge
  * nodes of edges 12, 23, 31, 14, 24, 34, which is mesh_p2_edges'), and
- * "te4_fam"/"t10_fam" (each tet's family number: its region). Other frames
- * are skipped. A plain HDF5 file is refused with a message saying how MED is
- * read (QDC_EFORMAT). */
+ * "te4_fam"/"t10_fam" (each tet's family number: its region), "tr3" and
+ * "tr6" (the 3 or 6 nodes of each triangle: the boundary triangles, their
+ * corners kept) with "tr3_fam"/"tr6_fam" (their refs), and "noe_fam" (each
+ * node's family: its ref). Other frames are skipped. A plain HDF5 file is refused with a
+ * message saying how MED is read (QDC_EFORMAT). */
 #include "io/format.h"
 
 #include <string.h>
@@ -67,24 +69,115 @@ qdc_status h5_frames(const char *buf, size_t len, const char *what,
     return QDC_OK;
 }
 
-enum { F_COORDS, F_TE4, F_T10, F_TE4_FAM, F_T10_FAM, F_COUNT };
+enum {
+    F_COORDS,
+    F_TE4,
+    F_T10,
+    F_TE4_FAM,
+    F_T10_FAM,
+    F_TR3,
+    F_TR6,
+    F_TR3_FAM,
+    F_TR6_FAM,
+    F_NOE_FAM,
+    F_COUNT
+};
 
 static qdc_status med_frames(const char *buf, size_t len, h5_frame *fr, qdc_error *err)
 {
-    static const char *const names[F_COUNT] = {"coords", "te4", "t10", "te4_fam",
-                                               "t10_fam"};
+    static const char *const names[F_COUNT] = {"coords",  "te4",    "t10", "te4_fam",
+                                               "t10_fam", "tr3",    "tr6", "tr3_fam",
+                                               "tr6_fam", "noe_fam"};
     qdc_status st;
 
     if (len >= 8 && memcmp(buf, hdf5_magic, 8) == 0)
         return fail_bin(err, QDC_EFORMAT, 0,
                         "MED: an HDF5 file, read through qdc-h5 (the qdc command and "
                         "qdcd run it)");
-    st = h5_frames(buf, len, "MED", names, "fiiii", F_COUNT, fr, err);
+    st = h5_frames(buf, len, "MED", names, "fiiiiiiiii", F_COUNT, fr, err);
     if (st != QDC_OK)
         return st;
     if (!fr[F_COORDS].type)
         return fail_bin(err, QDC_EPARSE, (int64_t)len, "MED: no coordinates");
     return QDC_OK;
+}
+
+/* Frame fr's n int64 values at b, each into out[k * stride] (stride 1: a
+ * family a node or element) as an int32 (minus one: node numbers, checked
+ * against [1, nv] when nv > 0): 0, or QDC_EPARSE naming what (the element
+ * kind) and the element (values per element: per). */
+static qdc_status med_ints(const unsigned char *b, const h5_frame *fr, int64_t nv,
+                           const char *what, int per, int32_t *out, int keep,
+                           qdc_error *err)
+{
+    for (uint64_t i = 0, o = 0; i < fr->n; i++) {
+        uint64_t at = fr->at + 8 * i;
+        int64_t v = (int64_t)get_le64(b + at);
+        if (nv > 0 && (v < 1 || v > nv))
+            return fail_bin(err, QDC_EPARSE, (int64_t)at,
+                            "MED: %s %llu: node %lld out of range [1, %lld]", what,
+                            (unsigned long long)(i / (uint64_t)per + 1), (long long)v,
+                            (long long)nv);
+        if (nv <= 0 && (v < INT32_MIN || v > INT32_MAX))
+            return fail_bin(err, QDC_EPARSE, (int64_t)at,
+                            "MED: %s %llu: family %lld is not an int32", what,
+                            (unsigned long long)(i + 1), (long long)v);
+        if ((int)(i % (uint64_t)per) < keep)
+            out[o++] = (int32_t)(nv > 0 ? v - 1 : v);
+    }
+    return QDC_OK;
+}
+
+/* The boundary triangles (TR3 and TR6, corners only) and their families, and
+ * the node families, of fr into pm (nv nodes). */
+static qdc_status med_extras(const unsigned char *b, const h5_frame *fr, parsed *pm,
+                             qdc_error *err)
+{
+    static const int tri[2] = {F_TR3, F_TR6}, nodes[2] = {3, 6};
+    int64_t ntri = 0, at = 0;
+    qdc_status st = QDC_OK;
+
+    if (fr[F_NOE_FAM].type) {
+        if (fr[F_NOE_FAM].n != (uint64_t)pm->nv)
+            return fail_bin(err, QDC_EPARSE, (int64_t)fr[F_NOE_FAM].at,
+                            "MED: %llu node families for %lld nodes",
+                            (unsigned long long)fr[F_NOE_FAM].n, (long long)pm->nv);
+        pm->vref = qdc_mallocn((size_t)pm->nv + 1, sizeof(int32_t));
+        if (!pm->vref)
+            return qdc_fail(err, QDC_ENOMEM, "out of memory");
+        st = med_ints(b, &fr[F_NOE_FAM], 0, "node", 1, pm->vref, 1, err);
+    }
+    for (int k = 0; st == QDC_OK && k < 2; k++) {
+        const h5_frame *fam = &fr[tri[k] + 2];
+        if (fr[tri[k]].n % (uint64_t)nodes[k])
+            return fail_bin(err, QDC_EPARSE, (int64_t)fr[tri[k]].at,
+                            "MED: %llu triangle nodes, not %d a triangle",
+                            (unsigned long long)fr[tri[k]].n, nodes[k]);
+        if (fam->type && fam->n != fr[tri[k]].n / (uint64_t)nodes[k])
+            return fail_bin(err, QDC_EPARSE, (int64_t)fam->at,
+                            "MED: %llu families for %llu triangles",
+                            (unsigned long long)fam->n,
+                            (unsigned long long)(fr[tri[k]].n / (uint64_t)nodes[k]));
+        ntri += (int64_t)(fr[tri[k]].n / (uint64_t)nodes[k]);
+    }
+    if (st != QDC_OK || ntri == 0)
+        return st;
+    if (ntri > MESH_MAX_TETS)
+        return fail_bin(err, QDC_ETOOBIG, 0, "MED: %lld triangles", (long long)ntri);
+    pm->ntri = ntri;
+    pm->tris = qdc_mallocn((size_t)ntri * 3 + 1, sizeof(int32_t));
+    pm->tri_ref = qdc_calloc((size_t)ntri + 1, sizeof(int32_t));
+    if (!pm->tris || !pm->tri_ref)
+        return qdc_fail(err, QDC_ENOMEM, "out of memory");
+    for (int k = 0; st == QDC_OK && k < 2; k++) {
+        int64_t n = (int64_t)(fr[tri[k]].n / (uint64_t)nodes[k]);
+        st = med_ints(b, &fr[tri[k]], pm->nv, "triangle", nodes[k], pm->tris + 3 * at, 3,
+                      err);
+        if (st == QDC_OK && fr[tri[k] + 2].type)
+            st = med_ints(b, &fr[tri[k] + 2], 0, "triangle", 1, pm->tri_ref + at, 1, err);
+        at += n;
+    }
+    return st;
 }
 
 static qdc_status read_med(const char *buf, size_t len, const meshio_options *o,
@@ -176,6 +269,11 @@ static qdc_status read_med(const char *buf, size_t len, const meshio_options *o,
         }
         pm.region[e] = (int32_t)f;
     }
+    st = med_extras(b, fr, &pm, err);
+    if (st != QDC_OK) {
+        parsed_free(&pm);
+        return st;
+    }
     if (rec) {
         rec->fmt = MESHIO_MED;
         rec->kind = SRC_BIN;
@@ -204,7 +302,8 @@ static meshio_format sniff_med(const char *buf, size_t len, size_t i)
 const meshio_fmt fmt_med = {
     .name = "med",
     .about = "MED (Salome, Code_Aster; HDF5 through qdc-h5): TE4/T10 tetrahedra, "
-             "families as regions (written only spliced)",
+             "families as regions, TR3/TR6 boundary triangles, node families as refs "
+             "(written only spliced)",
     .ext = "med",
     .magic = 1,
     .sniff = sniff_med,

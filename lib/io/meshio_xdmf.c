@@ -32,8 +32,10 @@
  * XML again with only the .h5 file's name changed (meshio_xdmf_h5_rename).
  * Every HDF reference must name one file, relative and inside the .xdmf's
  * folder (no "..", not absolute). A plain read refuses HDF heavy data in the
- * mesh's Grid with a message saying how it is read. dolfinx MeshTags grids
- * in HDF5 are not read. */
+ * mesh's Grid with a message saying how it is read. A dolfinx MeshTags grid
+ * with its data in HDF5 (the first tag grid of tets after the mesh that
+ * shares its geometry) is listed too ("tagtopo", "tagvals") and applied as
+ * inline tags are. */
 #include "io/format.h"
 
 #include <string.h>
@@ -42,9 +44,11 @@ enum { XD_DEPTH = 64 };
 
 /* How HDF heavy data is taken: refused, listed, or from the frames. */
 enum { X_PLAIN, X_COLLECT, X_FRAMED };
-/* The datasets the mesh takes from HDF5. */
-enum { H_GEOM, H_TOPO, H_REG, H_COUNT };
-static const char *const h5_names[H_COUNT] = {"geometry", "topology", "region"};
+/* The datasets the mesh takes from HDF5: its own, and the tets and values
+ * of a tag grid after it (dolfinx MeshTags). */
+enum { H_GEOM, H_TOPO, H_REG, H_TTOPO, H_TVALS, H_COUNT };
+static const char *const h5_names[H_COUNT] = {"geometry", "topology", "region", "tagtopo",
+                                              "tagvals"};
 
 /* What an element is to the reader. */
 enum { K_OTHER, K_XDMF, K_GRID, K_TOPO, K_GEOM, K_ATTR, K_DATA, K_INCLUDE };
@@ -497,6 +501,13 @@ static qdc_status topo_start(xd *x, const xtag *t, int *nodes, qdc_error *err)
     return QDC_OK;
 }
 
+/* Is dataset k to be read from HDF5 (a tag grid's: both of its two)? */
+static int pend_used(const xd *x, int k)
+{
+    return x->pend[k].set &&
+           (k < H_TTOPO || (x->pend[H_TTOPO].set && x->pend[H_TVALS].set));
+}
+
 static int have_region(const xd *x)
 {
     return x->region || x->pend[H_REG].set;
@@ -701,6 +712,27 @@ static qdc_status tags_apply(xd *x, qdc_error *err)
     return QDC_OK;
 }
 
+/* An HDF DataItem of a tag grid of tets sharing the mesh's geometry (its
+ * dataset [p, pe)): the first grid's kept to be read from the frames, as
+ * inline tags are read from the first grid that has them. */
+static qdc_status tags_hdf(xd *x, const xtag *t, int parent, const char *p,
+                           const char *pe, qdc_error *err)
+{
+    int k = parent == K_TOPO ? H_TTOPO : H_TVALS;
+    item it;
+    qdc_status st;
+
+    if (x->pend[H_TTOPO].set && x->pend[H_TVALS].set)
+        return QDC_OK;
+    if (x->pend[k].set && !x->pend[k == H_TTOPO ? H_TVALS : H_TTOPO].set)
+        x->pend[k].set = 0; /* the grid before had only half of them */
+    st = item_read(x, t, &it, err);
+    if (st != QDC_OK || !it.integer || it.n > INT32_MAX || (k == H_TTOPO && it.n % 4))
+        return st;
+    pend_set(x, k, p, pe, &it);
+    return QDC_OK;
+}
+
 static int is_hdf(const xtag *t)
 {
     char fmt[16];
@@ -813,6 +845,10 @@ static qdc_status xd_start(xd *x, const xtag *t, qdc_error *err)
         if (st == QDC_OK && in_mesh && x->depth == x->mesh_depth + 1 &&
             (parent == K_TOPO || parent == K_GEOM || parent == K_ATTR))
             st = mesh_item(x, t, parent, p, pe, &read, err);
+        else if (st == QDC_OK && x->ts_depth && x->depth == x->ts_depth + 1 &&
+                 x->ts.shares &&
+                 ((parent == K_TOPO && x->ts_topo) || (parent == K_ATTR && x->ts_attr)))
+            st = tags_hdf(x, t, parent, p, pe, err);
         return st; /* its text and end tag read */
     }
     if (in_mesh && x->depth == x->mesh_depth && k == K_TOPO) {
@@ -922,7 +958,7 @@ static qdc_status heavy_fill(xd *x, qdc_error *err)
     for (int k = 0; k < H_COUNT; k++) {
         const h5_frame *f = &x->fr[k];
         int64_t n = x->pend[k].it.n;
-        if (!x->pend[k].set)
+        if (!pend_used(x, k))
             continue;
         if (!f->type || f->n != (uint64_t)n)
             return qdc_fail(err, QDC_EPARSE,
@@ -964,11 +1000,18 @@ static qdc_status heavy_fill(xd *x, qdc_error *err)
             }
         } else {
             int32_t *a = qdc_mallocn((size_t)n + 1, sizeof(int32_t));
-            int64_t lo = k == H_TOPO ? 0 : INT32_MIN;
+            int64_t lo = k == H_TOPO || k == H_TTOPO ? 0 : INT32_MIN;
+            vec *tv = k == H_TTOPO ? &x->ts.tets : &x->ts.vals;
             if (!a)
                 return qdc_fail(err, QDC_ENOMEM, "out of memory for %lld values",
                                 (long long)n);
-            *(k == H_TOPO ? &x->conn : &x->region) = a;
+            if (k == H_TTOPO || k == H_TVALS) { /* a tag grid's: tags_apply */
+                qdc_free(tv->a);
+                tv->a = a;
+                tv->n = tv->cap = (size_t)n;
+            } else {
+                *(k == H_TOPO ? &x->conn : &x->region) = a;
+            }
             for (int64_t i = 0; i < n; i++) {
                 int64_t v = (int64_t)get_le64(b + f->at + 8 * (uint64_t)i);
                 if (v < lo || v > INT32_MAX)
@@ -1069,7 +1112,7 @@ static qdc_status xd_run(xd *x, qdc_error *err)
 static qdc_status xd_open(xd *x, const char *buf, size_t len, qdc_error *err)
 {
     static const char *const names[H_COUNT + 1] = {"geometry", "topology", "region",
-                                                   "xdmf"};
+                                                   "tagtopo",  "tagvals",  "xdmf"};
     h5_frame fr[H_COUNT + 1];
     qdc_status st;
 
@@ -1077,7 +1120,7 @@ static qdc_status xd_open(xd *x, const char *buf, size_t len, qdc_error *err)
         x->s = txt_init(buf, len, 0);
         return QDC_OK;
     }
-    st = h5_frames(buf, len, "XDMF", names, "fiib", H_COUNT + 1, fr, err);
+    st = h5_frames(buf, len, "XDMF", names, "fiiiib", H_COUNT + 1, fr, err);
     if (st != QDC_OK)
         return st;
     if (!fr[H_COUNT].type)
@@ -1104,6 +1147,10 @@ static qdc_status read_xdmf(const char *buf, size_t len, const meshio_options *o
         st = xd_run(&x, err);
     if (st == QDC_OK && x.mode == X_FRAMED)
         st = heavy_fill(&x, err);
+    if (st == QDC_OK && x.mode == X_FRAMED && pend_used(&x, H_TTOPO)) {
+        x.ts.shares = 1; /* listed only so */
+        st = tags_apply(&x, err);
+    }
     if (st == QDC_OK)
         st = xd_mesh(&x, out, err);
     if (st != QDC_OK && rec)
@@ -1147,7 +1194,7 @@ qdc_status meshio_xdmf_h5_refs(const char *buf, size_t len, meshio_xdmf_h5 *h,
     st = xd_collect(&x, buf, len, 0, err);
     for (int k = 0; st == QDC_OK && k < H_COUNT; k++) {
         const pend *pd = &x.pend[k];
-        if (!pd->set)
+        if (!pend_used(&x, k))
             continue;
         if ((size_t)(x.h5fe - x.h5f) >= sizeof h->file ||
             (size_t)(pd->pe - pd->p) >= sizeof h->set[0].path) {
@@ -1298,7 +1345,7 @@ const meshio_fmt fmt_xdmf = {
     .name = "xdmf",
     .aliases = "xmf",
     .about = "XDMF 2/3, tetrahedra with the data inline (XML), or in HDF5 through qdc-h5 "
-             "(command line only)",
+             "(the qdc command, or qdcd as a two-file multipart upload)",
     .ext = "xdmf",
     .input = "input.xdmf",
     .sniff = sniff_xdmf,

@@ -23,7 +23,7 @@ tally() { # FILE NAME: FILE's ok/FAIL lines shown and counted
     grep -q '^FAIL' "$1" && NFAIL=$((NFAIL + 1))
     grep -q '^ok' "$1" || fail "$2" "$(tail -2 "$1")"
 }
-for f in meshio.med meshio_h5.h5 meshio_h5.xdmf; do
+for f in meshio.med meshio_tri.med meshio_h5.h5 meshio_h5.xdmf; do
     gzip -dc "$REAL/$f.gz" > "$f"
 done
 
@@ -64,6 +64,80 @@ EOF
     tally chk "hdf5: h5py check"
 else
     pass "hdf5: h5py comparison # SKIP python3-h5py or meshio missing"
+fi
+
+# MED with boundary triangles (TR3, families -11 and -12) and node families
+# (NOE/FAM): the triangles read with their families as refs, the node
+# families as vertex refs; the copy written back differs only in NOE/COO
+if "$BIN/qdc" convert meshio_tri.med tri.mesh --quiet 2> err &&
+    [ "$(awk '/^Triangles/{getline; print; exit}' tri.mesh)" = 270 ] &&
+    [ "$(awk '/^Triangles/{f=1; getline; next} f && NF == 4 {print $4} /^End/{f=0}' tri.mesh |
+        sort | uniq -c | awk '{printf "%s:%s ", $2, $1}')" = "-11:90 -12:180 " ] &&
+    [ "$(awk '/^Vertices/{f=1; getline; next} f && NF == 4 {print $4} /^Tetra/{f=0}' tri.mesh |
+        sort | uniq -c | awk '{printf "%s:%s ", $2, $1}')" = "0:196 1:58 2:102 " ]; then
+    pass "hdf5: meshio_tri.med: 270 boundary triangles, families -11 and -12 as refs; node families 0/1/2 as vertex refs"
+else
+    fail "hdf5: MED triangles and node families" "$(head -2 err) $(grep -A1 -E '^(Vertices|Triangles)' tri.mesh)"
+fi
+if "$BIN/qdc" convert meshio_tri.med same_tri.med --quiet 2> err && cmp -s meshio_tri.med same_tri.med &&
+    "$BIN/qdc" optimize meshio_tri.med out_tri.med --quiet --max-iter 5 2>> err; then
+    pass "hdf5: meshio_tri.med: converted to the same bytes, optimized into out_tri.med"
+else
+    fail "hdf5: meshio_tri.med round trip" "$(head -3 err)"
+fi
+if "$PY" -c 'import h5py' 2> /dev/null; then
+    "$PY" "$ROOT/tests/tools/medcoo.py" meshio_tri.med out_tri.med "hdf5: out_tri.med" > chk 2>&1
+    tally chk "hdf5: h5py check of out_tri.med"
+else
+    pass "hdf5: h5py comparison of out_tri.med # SKIP python3-h5py missing"
+fi
+
+# dolfinx's form (made here with h5py from meshio_h5.h5): the mesh's
+# Geometry and Topology in HDF5 and no cell attribute; a MeshTags grid after
+# it (an xi:include of the Geometry) lists every tet, corners rolled and rows
+# reversed, with a 2-D (N x 1) dataset of values 100 + the physical tag: read
+# as the regions; written back, only the geometry dataset changes
+if "$PY" - meshio_h5.h5 2> err << 'EOF'; then
+import sys
+import h5py, numpy as np
+src = h5py.File(sys.argv[1], "r")
+pts, tets, phys = src["data0"][()], src["data1"][()], src["data4"][()]
+n = len(tets)
+with h5py.File("dx.h5", "w") as f:
+    f["Mesh/mesh/geometry"] = pts
+    f["Mesh/mesh/topology"] = tets.astype(np.int64)
+    f["MeshTags/cells/topology"] = np.roll(tets, 1, axis=1)[::-1].astype(np.int64)
+    f["MeshTags/cells/Values"] = (100 + phys[::-1]).astype(np.int32).reshape(-1, 1)
+item = '<DataItem Dimensions="%s" NumberType="%s" Format="HDF">dx.h5:/%s</DataItem>'
+topo = '<Topology TopologyType="Tetrahedron" NumberOfElements="%d" NodesPerElement="4">' % n
+open("dx.xdmf", "w").write(
+    '<?xml version="1.0"?>\n<Xdmf Version="3.0" xmlns:xi="http://www.w3.org/2001/XInclude">'
+    '<Domain><Grid Name="mesh" GridType="Uniform">' + topo
+    + item % ("%d 4" % n, "Int", "Mesh/mesh/topology") + '</Topology>'
+    '<Geometry GeometryType="XYZ">' + item % ("%d 3" % len(pts), "Float", "Mesh/mesh/geometry")
+    + '</Geometry></Grid><Grid Name="cells" GridType="Uniform">'
+    '<xi:include xpointer="xpointer(/Xdmf/Domain/Grid[@GridType=\'Uniform\'][1]/Geometry)" />'
+    + topo + item % ("%d 4" % n, "Int", "MeshTags/cells/topology") + '</Topology>'
+    '<Attribute Name="cells" AttributeType="Scalar" Center="Cell">'
+    + item % ("%d 1" % n, "Int", "MeshTags/cells/Values") + '</Attribute></Grid></Domain></Xdmf>\n')
+np.save("dx_want.npy", 100 + phys)
+EOF
+    if "$BIN/qdc" convert dx.xdmf dx.json --quiet 2> err && "$PY" -c 'import json, sys, numpy as np
+r = np.array(json.load(open("dx.json"))["regions"])
+sys.exit(0 if np.array_equal(r, np.load("dx_want.npy")) else 1)' 2>> err; then
+        pass "hdf5: dolfinx MeshTags in HDF5 (tets reordered, N x 1 values): read as the regions"
+    else
+        fail "hdf5: dolfinx MeshTags in HDF5" "$(head -3 err)"
+    fi
+    if "$BIN/qdc" optimize dx.xdmf dxout.xdmf --quiet --max-iter 3 2> err &&
+        sed 's/dx\.h5:/dxout.h5:/g' dx.xdmf | cmp -s - dxout.xdmf; then
+        "$PY" "$ROOT/tests/tools/medcoo.py" dx.h5 dxout.h5 "hdf5: dxout.h5" Mesh/mesh/geometry > chk 2>&1
+        tally chk "hdf5: h5py check of dxout.h5"
+    else
+        fail "hdf5: dolfinx XDMF optimized" "$(head -3 err)"
+    fi
+else
+    pass "hdf5: dolfinx MeshTags in HDF5 # SKIP python3-h5py missing ($(tail -1 err))"
 fi
 
 want_rc= # the exit status a refusal must have, if set

@@ -180,7 +180,7 @@ node b "$TMP/db" --workers 1 --lease 2 || { fail "pg: node b" "$(tail -3 "$TMP/b
 n0=$(pg_sql "SELECT COUNT(*) FROM jobs")
 post "$URL_b" "$TMP/cube.qmesh" "max_iter=40&finish=0&tol_move=0&mode=literal" "$TMP/jd" > /dev/null
 idd=$(jf "$TMP/jd" .id)
-sleep 0.3
+wait_running "$URL_b" "$idd"
 pg_stop
 # the job ends while the database is away: its end is written when it is back
 sleep 3

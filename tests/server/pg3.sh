@@ -44,13 +44,6 @@ runner() {
         case $_o in *:"$(pid_of $_n)":*) echo $_n; return ;; esac
     done
 }
-wait_running() { # URL ID: until the job runs (max 10 s)
-    _i=0
-    while [ $_i -lt 200 ] && [ "$(curl -s "$1/v1/jobs/$2" | jq -r .state)" != running ]; do
-        sleep 0.05
-        _i=$((_i + 1))
-    done
-}
 succeeded_total() { # sum over the nodes of qdcd_jobs_finished_total{state="succeeded"}
     _t=0
     for _n in a b c; do
@@ -262,7 +255,7 @@ for n in a b c a b c; do
     post "$(url_of $n)" "$TMP/bunny.qmesh" "max_iter=30&finish=0&tol_move=0&mode=literal" "$TMP/db$i" > /dev/null
     ids="$ids $(jf "$TMP/db$i" .id)"
 done
-sleep 0.5
+wait_running "$URL_a" "$(jf "$TMP/db1" .id)"
 pg_stop
 sleep 3
 down=$(curl -s -o /dev/null -w '%{http_code}' -m 10 "$URL_c/v1/jobs")

@@ -4,6 +4,7 @@
 # saw it (started after the job ended), serves the result as MED: it fetches the upload and qdc-h5's frames
 # from the store, and the file it gives is the upload with only NOE/COO
 # changed (medcoo.py, h5py). Also as VTU, and the input mesh, from node b.
+# XDMF with its .h5 file (multipart) is not taken with a shared store: 415.
 . "$(dirname "$0")/../lib.sh"
 . "$(dirname "$0")/pg.inc"
 QDCD=${QDCD:-$BIN/qdcd}
@@ -11,7 +12,7 @@ QM='application/octet-stream'
 PIDS=
 trap 'for p in $PIDS; do kill -9 $p 2>/dev/null; done; pg_cleanup; rm -rf "$TMP"' EXIT
 
-CHECKS="job on node a|MED result from node b|VTU result from node b|input from node b"
+CHECKS="job on node a|MED result from node b|VTU result from node b|input from node b|XDMF+HDF5 upload 415"
 if [ ! -x "$BIN/qdc-h5" ]; then
     echo "$CHECKS" | tr '|' '\n' | while read -r n; do
         echo "ok - pgmed: $n # SKIP qdc-h5 not built (libhdf5-dev missing)"
@@ -53,4 +54,11 @@ code=$(curl -s -m 60 -o "$TMP/b.in" -w '%{http_code}' "$URL_b/v1/jobs/$ID/input?
 [ "$code" = 200 ] && grep -q "^Tetrahedra" "$TMP/b.in" &&
     pass "pgmed: input from node b: the MED job's input mesh as Medit" ||
     fail "pgmed: input from node b" "$code $(head -c 300 "$TMP/b.in")"
+gzip -dc "$ROOT/tests/data/real/meshio_h5.xdmf.gz" > "$TMP/m.xdmf"
+gzip -dc "$ROOT/tests/data/real/meshio_h5.h5.gz" > "$TMP/m.h5"
+code=$(curl -s -m 60 -o "$TMP/x.json" -w '%{http_code}' -F "xdmf=@$TMP/m.xdmf" \
+    -F "h5=@$TMP/m.h5" "$URL_b/v1/jobs")
+[ "$code" = 415 ] && grep -q "PostgreSQL" "$TMP/x.json" &&
+    pass "pgmed: XDMF+HDF5 upload 415 with a shared store (one input file a job)" ||
+    fail "pgmed: XDMF+HDF5 upload 415" "$code $(head -c 300 "$TMP/x.json")"
 exit $NFAIL

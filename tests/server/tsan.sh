@@ -80,7 +80,7 @@ case $states in
 esac
 # one more job, then SIGTERM while it runs
 submit "$TMP/b.mesh" model/x-medit "max_iter=50" "$TMP/s9" > /dev/null
-sleep 0.5
+wait_running "$(jf "$TMP/s9" .id)"
 stop_qdcd && pass "tsan: SIGTERM with a job running: exit 0" || fail "tsan: stop" "exit status $?"
 reports=$(cat "$TMP"/tsan.* 2> /dev/null | grep -c '^WARNING: ThreadSanitizer' || true)
 if [ "$reports" -eq 0 ]; then

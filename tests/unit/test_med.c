@@ -1,5 +1,6 @@
 /* test_med.c - the MED reader on the frames qdc-h5 writes (lib/io/meshio_med.c),
- * built here by hand: two tets with their families, a second-order tet, the
+ * built here by hand: two tets with their families, boundary triangles (TR3,
+ * TR6) with theirs and node families, a second-order tet, the
  * coordinate frame alone rewritten by a spliced write, and refusals (an HDF5
  * file given as it is, frames cut short, nodes out of range, NaN, mixed
  * orders) with their byte offset. */
@@ -50,6 +51,52 @@ TEST(two_tets_with_families)
         free(w.b);
     }
     mesh_free(m);
+    free(s.b);
+}
+
+/* two_tets with a TR3 triangle (b c d, family -11), a TR6 one (a b c and
+ * three mid-side nodes, family -12) and node families (1 0 0 2 0); tr3's
+ * first node bad_node. */
+static void with_triangles(sink *s, int64_t bad_node, int nfam)
+{
+    const int64_t tr3[3] = {bad_node, 3, 4}, tr6[6] = {1, 2, 3, 2, 3, 4};
+    const int64_t f3[1] = {-11}, f6[1] = {-12}, noe[5] = {1, 0, 0, 2, 0};
+
+    two_tets(s, 4, 1);
+    put_frame(s, "tr3", 'i', tr3, 3);
+    put_frame(s, "tr3_fam", 'i', f3, 1);
+    put_frame(s, "tr6", 'i', tr6, 6);
+    put_frame(s, "tr6_fam", 'i', f6, 1);
+    put_frame(s, "noe_fam", 'i', noe, nfam);
+}
+
+TEST(boundary_triangles_and_node_families)
+{
+    sink s = {0};
+    mesh_t *m;
+    qdc_error err;
+    static const int32_t tris[6] = {1, 2, 3, 0, 1, 2}, vref[5] = {1, 0, 0, 2, 0};
+
+    with_triangles(&s, 2, 5);
+    ASSERT_OK(meshio_read(s.b, s.n, MESHIO_MED, &m, &err));
+    ASSERT_EQ_INT(m->nt, 2);
+    ASSERT_EQ_INT(m->ntri, 2);
+    ASSERT_TRUE(memcmp(m->tris, tris, sizeof tris) == 0);
+    ASSERT_TRUE(m->tri_ref && m->tri_ref[0] == -11 && m->tri_ref[1] == -12);
+    ASSERT_TRUE(m->vref && memcmp(m->vref, vref, sizeof vref) == 0);
+    ASSERT_TRUE(m->region && m->region[0] == -1 && m->region[1] == -2);
+    mesh_free(m);
+    free(s.b);
+    /* a triangle's node out of range, node families not one a node */
+    memset(&s, 0, sizeof s);
+    with_triangles(&s, 9, 5);
+    ASSERT_EQ_INT(meshio_read(s.b, s.n, MESHIO_MED, &m, &err), QDC_EPARSE);
+    ASSERT_TRUE(strstr(err.msg, "triangle 1: node 9 out of range [1, 5]") != NULL);
+    free(s.b);
+    memset(&s, 0, sizeof s);
+    with_triangles(&s, 2, 4);
+    ASSERT_EQ_INT(meshio_read(s.b, s.n, MESHIO_MED, &m, &err), QDC_EPARSE);
+    ASSERT_TRUE(strstr(err.msg, "4 node families for 5 nodes") != NULL);
     free(s.b);
 }
 
@@ -114,4 +161,5 @@ TEST(refusals)
     free(h.b);
 }
 
-TEST_MAIN("med", T(two_tets_with_families), T(second_order), T(refusals))
+TEST_MAIN("med", T(two_tets_with_families), T(boundary_triangles_and_node_families),
+          T(second_order), T(refusals))

@@ -1,8 +1,9 @@
 /* test_xdmf_h5.c - XDMF whose heavy data is in HDF5 (meshio_xdmf.c): the
  * datasets the reader asks for (meshio_xdmf_h5_refs), the framed input
  * read into the mesh and written back spliced with only the geometry
- * frame's values changed, the XML renamed to another .h5 file, and the
- * references refused (absolute, "..", two files, a plain read). */
+ * frame's values changed, a dolfinx MeshTags grid in HDF5 as regions, the
+ * XML renamed to another .h5 file, and the references refused (absolute,
+ * "..", two files, a plain read). */
 #include "testio.h"
 #include "testlib.h"
 
@@ -87,6 +88,72 @@ TEST(framed_read_and_spliced_write)
     qdc_free(in);
 }
 
+/* Two tets in HDF5 and no region in the mesh's grid; a dolfinx MeshTags
+ * grid after it (sharing its Geometry) lists them (corners in another order,
+ * the second first) with values 5 and 6; a facet tag grid after that is not
+ * a tet one. */
+static const char dx[] =
+    "<Xdmf Version=\"3.0\" xmlns:xi=\"http://www.w3.org/2001/XInclude\"><Domain>"
+    "<Grid Name=\"mesh\" GridType=\"Uniform\">"
+    "<Topology TopologyType=\"Tetrahedron\" NumberOfElements=\"2\" "
+    "NodesPerElement=\"4\"><DataItem Dimensions=\"2 4\" NumberType=\"Int\" "
+    "Format=\"HDF\">d.h5:/Mesh/topology</DataItem></Topology>"
+    "<Geometry GeometryType=\"XYZ\"><DataItem Dimensions=\"5 3\" Format=\"HDF\">"
+    "d.h5:/Mesh/geometry</DataItem></Geometry></Grid>"
+    "<Grid Name=\"cells\" GridType=\"Uniform\">"
+    "<xi:include xpointer=\"xpointer(/Xdmf/Domain/Grid[@GridType='Uniform'][1]/"
+    "Geometry)\" />"
+    "<Topology TopologyType=\"Tetrahedron\" NumberOfElements=\"2\" "
+    "NodesPerElement=\"4\"><DataItem Dimensions=\"2 4\" NumberType=\"Int\" "
+    "Format=\"HDF\">d.h5:/Tags/cells/topology</DataItem></Topology>"
+    "<Attribute Name=\"cells\" AttributeType=\"Scalar\" Center=\"Cell\"><DataItem "
+    "Dimensions=\"2 1\" NumberType=\"Int\" Format=\"HDF\">d.h5:/Tags/cells/Values"
+    "</DataItem></Attribute></Grid>"
+    "<Grid Name=\"facets\" GridType=\"Uniform\">"
+    "<xi:include xpointer=\"xpointer(/Xdmf/Domain/Grid[@GridType='Uniform'][1]/"
+    "Geometry)\" />"
+    "<Topology TopologyType=\"Triangle\" NumberOfElements=\"1\" "
+    "NodesPerElement=\"3\"><DataItem Dimensions=\"1 3\" NumberType=\"Int\" "
+    "Format=\"HDF\">d.h5:/Tags/facets/topology</DataItem></Topology>"
+    "<Attribute Name=\"facets\" AttributeType=\"Scalar\" Center=\"Cell\"><DataItem "
+    "Dimensions=\"1 1\" NumberType=\"Int\" Format=\"HDF\">d.h5:/Tags/facets/Values"
+    "</DataItem></Attribute></Grid>"
+    "</Domain></Xdmf>\n";
+
+TEST(dolfinx_meshtags_in_hdf5_as_regions)
+{
+    static const double g[15] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 1, 1, 1};
+    static const int64_t t[8] = {0, 1, 2, 3, 4, 1, 3, 2};
+    static const int64_t tt[8] = {3, 1, 4, 2, 2, 1, 3, 0}, tv[2] = {6, 5};
+    static sink fr;
+    meshio_xdmf_h5 h;
+    char *in = NULL;
+    size_t in_len = 0;
+    mesh_t *m = NULL;
+
+    ASSERT_OK(meshio_xdmf_h5_refs(dx, strlen(dx), &h, NULL));
+    ASSERT_EQ_INT(h.n, 4);
+    ASSERT_TRUE(!strcmp(h.set[2].name, "tagtopo") &&
+                !strcmp(h.set[2].path, "/Tags/cells/topology"));
+    ASSERT_TRUE(!strcmp(h.set[3].name, "tagvals") &&
+                !strcmp(h.set[3].path, "/Tags/cells/Values") && h.set[3].type == 'i');
+    ASSERT_EQ_INT(h.set[3].ndims, 2);
+    fr.n = 0;
+    sink_write(&fr, "QDCH5v1\n", 8);
+    put_frame(&fr, "geometry", 'f', g, 15);
+    put_frame(&fr, "topology", 'i', t, 8);
+    put_frame(&fr, "tagtopo", 'i', tt, 8);
+    put_frame(&fr, "tagvals", 'i', tv, 2);
+    ASSERT_OK(meshio_xdmf_h5_input(dx, strlen(dx), fr.b, fr.n, &in, &in_len, NULL));
+    ASSERT_OK(meshio_read(in, in_len, MESHIO_XDMF, &m, NULL));
+    ASSERT_EQ_INT(m->nt, 2);
+    ASSERT_TRUE(m->region != NULL);
+    ASSERT_EQ_INT(m->region[0], 5);
+    ASSERT_EQ_INT(m->region[1], 6);
+    mesh_free(m);
+    qdc_free(in);
+}
+
 TEST(a_geometry_frame_of_another_size_is_refused)
 {
     static sink fr;
@@ -163,6 +230,7 @@ TEST(references_out_of_the_folder_are_refused)
 }
 
 TEST_MAIN("xdmf_h5", T(refs_list_the_mesh_datasets), T(framed_read_and_spliced_write),
+          T(dolfinx_meshtags_in_hdf5_as_regions),
           T(a_geometry_frame_of_another_size_is_refused),
           T(rename_changes_only_the_file_names),
           T(references_out_of_the_folder_are_refused))

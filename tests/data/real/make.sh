@@ -166,6 +166,21 @@ med = meshio.Mesh(pts, [("tetra", tets)], point_data={"temperature": temperature
                   cell_data={"cell_tags": [-np.searchsorted(sorted(set(tp)), tp) - 1]})
 med.cell_tags = {-1 - i: ["material_%d" % i] for i in range(len(set(tp)))}
 meshio.write("meshio.med", med)
+# MED with its boundary triangles (TR3: families -11, -12 by physical surface,
+# after the tets' -1, -2) and node families (NOE/FAM: 1 on the first surface's
+# nodes, 2 on the rest of the boundary, 0 inside)
+tfam = -np.searchsorted(sorted(set(tp)), tp) - 1
+sfam = -np.searchsorted(sorted(set(sp)), sp) - 11
+nfam = np.zeros(len(pts), dtype=np.int64)
+nfam[np.unique(tris)] = 2
+nfam[np.unique(tris[sp == sorted(set(sp))[0]])] = 1
+medt = meshio.Mesh(pts, [("tetra", tets), ("triangle", tris)],
+                   point_data={"temperature": temperature, "point_tags": nfam},
+                   cell_data={"cell_tags": [tfam, sfam]})
+medt.cell_tags = {**{-1 - i: ["material_%d" % i] for i in range(len(set(tp)))},
+                  **{-11 - i: ["surface_%d" % s] for i, s in enumerate(sorted(set(sp)))}}
+medt.point_tags = {1: ["inlet_nodes"], 2: ["boundary_nodes"]}
+meshio.write("meshio_tri.med", medt)
 
 # CalculiX's layout (as cgx writes it): one *ELEMENT block per material with
 # its ELSET, S3 boundary triangles, a material, a section and a step.
@@ -276,7 +291,7 @@ for f in gmsh41.msh gmsh41_bin.msh gmsh22.msh gmsh22_bin.msh gmsh40.msh gmsh.vtk
     tetgen.ele dolfin.xml meshio.inp calculix.inp meshio.vol meshio.meshb periodic41.msh \
     periodic41_bin.msh periodic40.msh periodic22.msh periodic22_bin.msh gmsh41_p2.msh gmsh_p2.inp \
     gmsh_msh1.msh gmsh.bdf gmsh_free.bdf gmsh_large.bdf gmsh.unv meshio_free.bdf meshio_small.nas \
-    meshio_large.bdf meshio.xdmf meshio_p2.xdmf meshio_h5.xdmf meshio_h5.h5 meshio.med \
+    meshio_large.bdf meshio.xdmf meshio_p2.xdmf meshio_h5.xdmf meshio_h5.h5 meshio.med meshio_tri.med \
     gmsh_p2.bdf gmsh_large_p2.bdf gmsh_p2.unv meshio_p2.bdf netgen_p2.vol; do
     gzip -n -9 -c "$f" > "$here/$f.gz"
 done
