@@ -1012,6 +1012,7 @@ int32_t mesh_count_inverted(const mesh_topo *t, const double *xyz)
 {
     int32_t n = 0;
 
+#pragma omp parallel for reduction(+ : n) schedule(static)
     for (int32_t i = 0; i < t->nt; i++)
         n += geom_tet_bad(xyz, t->tets + 4 * (size_t)i);
     return n;

@@ -16,6 +16,87 @@
 const int report_dmin_thresholds[4] = {5, 15, 30, 40};
 const int report_dmax_thresholds[4] = {175, 165, 150, 140};
 
+/* Tets measured at once by report_quality_faces, then added up in order. */
+#define SCAN_BLOCK 65536
+
+/* What the scan takes from one tet. */
+typedef struct {
+    double eta, vl, cn; /* cn: NAN unless valid and finite */
+    double amin, amax;  /* its smallest and largest dihedral angle, degrees */
+    uint8_t kind;       /* 0 valid, 1 inverted, 2 degenerate */
+    uint8_t bin[6];     /* each angle's histogram bin */
+} tet_measure;
+
+typedef struct {
+    double sum, sum2, vsum, cnsum;
+    int32_t nvalid;
+    int worst; /* a q_min was found (worst_tet set) */
+} scan_sums;
+
+/* Tet t of m in its positive vertex order (flip) into *o. */
+static void measure_tet(const mesh_t *m, const uint8_t *flip, int32_t t, tet_measure *o)
+{
+    const int32_t *tt = m->tets + 4 * (size_t)t;
+    int a = flip[t] ? 1 : 0, b = flip[t] ? 0 : 1; /* positive vertex order */
+    const double *p0 = m->xyz + 3 * (size_t)tt[a], *p1 = m->xyz + 3 * (size_t)tt[b];
+    const double *p2 = m->xyz + 3 * (size_t)tt[2], *p3 = m->xyz + 3 * (size_t)tt[3];
+    metric_parts pt;
+    double ang[6], amin = 180, amax = 0;
+
+    metric_parts_of(p0, p1, p2, p3, &pt);
+    o->eta = metric_mean_ratio(&pt);
+    o->vl = metric_vol_length(&pt);
+    o->cn = NAN;
+    o->kind = pt.vol < 0 ? 1 : geom_tet_degenerate(6.0 * pt.vol, pt.l2sum) ? 2 : 0;
+    if (!o->kind) /* condition number ||S|| ||S^-1|| / 3 = ||S|| ||adj S|| / (3 sigma) =
+                     MICN */
+        o->cn = metric_qt(OPT_METRIC_MICN, &pt, 0.0);
+    metric_dihedrals(p0, p1, p2, p3, ang);
+    for (int e = 0; e < 6; e++) {
+        int bin = (int)ang[e];
+        amin = ang[e] < amin ? ang[e] : amin;
+        amax = ang[e] > amax ? ang[e] : amax;
+        o->bin[e] = (uint8_t)(bin < 0                   ? 0
+                              : bin >= REPORT_HIST_BINS ? REPORT_HIST_BINS - 1
+                                                        : bin);
+    }
+    o->amin = amin;
+    o->amax = amax;
+}
+
+/* Tet t's measures o added to q and acc. */
+static void add_tet(report_quality *q, const tet_measure *o, int32_t t, scan_sums *acc)
+{
+    acc->sum += o->eta;
+    acc->sum2 += o->eta * o->eta;
+    acc->vsum += o->vl;
+    if (o->eta < q->q_min) {
+        q->q_min = o->eta;
+        q->worst_tet = t;
+        acc->worst = 1;
+    }
+    if (o->vl < q->vl_min)
+        q->vl_min = o->vl;
+    q->n_inverted += o->kind == 1;
+    q->n_degenerate += o->kind == 2;
+    if (isfinite(o->cn)) {
+        acc->cnsum += o->cn;
+        acc->nvalid++;
+        if (o->cn > q->cn_max)
+            q->cn_max = o->cn;
+    }
+    for (int e = 0; e < 6; e++)
+        q->hist[o->bin[e]]++;
+    if (o->amin < q->dih_min)
+        q->dih_min = o->amin;
+    if (o->amax > q->dih_max)
+        q->dih_max = o->amax;
+    for (int k = 0; k < 4; k++) {
+        q->n_dmin_lt[k] += o->amin < report_dmin_thresholds[k];
+        q->n_dmax_gt[k] += o->amax > report_dmax_thresholds[k];
+    }
+}
+
 qdc_status report_quality_compute(const mesh_t *m, report_quality *q, qdc_error *err)
 {
     return report_quality_faces(m, NULL, q, err);
@@ -24,8 +105,9 @@ qdc_status report_quality_compute(const mesh_t *m, report_quality *q, qdc_error 
 qdc_status report_quality_faces(const mesh_t *m, const mesh_faces *f, report_quality *q,
                                 qdc_error *err)
 {
-    int32_t npos = 0, nneg = 0, nvalid = 0;
-    double sum = 0, sum2 = 0, vsum = 0, cnsum = 0;
+    int32_t npos = 0, nneg = 0;
+    scan_sums acc = {0, 0, 0, 0, 0, 0};
+    tet_measure *ms;
     uint8_t *flip;
     mesh_orientation orient;
 
@@ -84,62 +166,33 @@ qdc_status report_quality_faces(const mesh_t *m, const mesh_faces *f, report_qua
     q->q_min = q->vl_min = INFINITY;
     q->dih_min = INFINITY;
     q->dih_max = -INFINITY;
-    for (int32_t t = 0; t < m->nt; t++) {
-        const int32_t *tt = m->tets + 4 * (size_t)t;
-        int a = flip[t] ? 1 : 0, b = flip[t] ? 0 : 1; /* positive vertex order */
-        const double *p0 = m->xyz + 3 * (size_t)tt[a], *p1 = m->xyz + 3 * (size_t)tt[b];
-        const double *p2 = m->xyz + 3 * (size_t)tt[2], *p3 = m->xyz + 3 * (size_t)tt[3];
-        metric_parts pt;
-        double eta, vl, ang[6], amin = 180, amax = 0;
-        metric_parts_of(p0, p1, p2, p3, &pt);
-        eta = metric_mean_ratio(&pt);
-        vl = metric_vol_length(&pt);
-        sum += eta;
-        sum2 += eta * eta;
-        vsum += vl;
-        if (eta < q->q_min) {
-            q->q_min = eta;
-            q->worst_tet = t;
-            for (int k = 0; k < 3; k++)
-                q->worst_centroid[k] = (p0[k] + p1[k] + p2[k] + p3[k]) / 4;
-        }
-        if (vl < q->vl_min)
-            q->vl_min = vl;
-        if (pt.vol < 0)
-            q->n_inverted++;
-        else if (geom_tet_degenerate(6.0 * pt.vol, pt.l2sum))
-            q->n_degenerate++;
-        else {
-            /* condition number ||S|| ||S^-1|| / 3 = ||S|| ||adj S|| / (3 sigma) = MICN */
-            double cn = metric_qt(OPT_METRIC_MICN, &pt, 0.0);
-            if (isfinite(cn)) {
-                cnsum += cn;
-                nvalid++;
-                if (cn > q->cn_max)
-                    q->cn_max = cn;
-            }
-        }
-        metric_dihedrals(p0, p1, p2, p3, ang);
-        for (int e = 0; e < 6; e++) {
-            int bin = (int)ang[e];
-            amin = ang[e] < amin ? ang[e] : amin;
-            amax = ang[e] > amax ? ang[e] : amax;
-            q->hist[bin < 0 ? 0
-                            : (bin >= REPORT_HIST_BINS ? REPORT_HIST_BINS - 1 : bin)]++;
-        }
-        if (amin < q->dih_min)
-            q->dih_min = amin;
-        if (amax > q->dih_max)
-            q->dih_max = amax;
-        for (int k = 0; k < 4; k++) {
-            q->n_dmin_lt[k] += amin < report_dmin_thresholds[k];
-            q->n_dmax_gt[k] += amax > report_dmax_thresholds[k];
-        }
+    ms = qdc_mallocn(SCAN_BLOCK, sizeof *ms);
+    if (!ms) {
+        if (!f)
+            qdc_free(flip);
+        return QDC_ENOMEM;
     }
-    q->q_mean = sum / m->nt;
-    q->q_std = sqrt(fmax(0.0, sum2 / m->nt - q->q_mean * q->q_mean));
-    q->vl_mean = vsum / m->nt;
-    q->cn_mean = nvalid ? cnsum / nvalid : 0.0;
+    for (int32_t t0 = 0; t0 < m->nt; t0 += SCAN_BLOCK) {
+        int32_t nb = m->nt - t0 < SCAN_BLOCK ? m->nt - t0 : SCAN_BLOCK;
+#pragma omp parallel for schedule(static)
+        for (int32_t i = 0; i < nb; i++)
+            measure_tet(m, flip, t0 + i, &ms[i]);
+        for (int32_t i = 0; i < nb; i++) /* in tet order: the same sums at any count */
+            add_tet(q, &ms[i], t0 + i, &acc);
+    }
+    qdc_free(ms);
+    if (acc.worst) {
+        const int32_t *tt = m->tets + 4 * (size_t)q->worst_tet;
+        for (int k = 0; k < 3; k++)
+            q->worst_centroid[k] =
+                (m->xyz[3 * (size_t)tt[0] + k] + m->xyz[3 * (size_t)tt[1] + k] +
+                 m->xyz[3 * (size_t)tt[2] + k] + m->xyz[3 * (size_t)tt[3] + k]) /
+                4;
+    }
+    q->q_mean = acc.sum / m->nt;
+    q->q_std = sqrt(fmax(0.0, acc.sum2 / m->nt - q->q_mean * q->q_mean));
+    q->vl_mean = acc.vsum / m->nt;
+    q->cn_mean = acc.nvalid ? acc.cnsum / acc.nvalid : 0.0;
     if (!f)
         qdc_free(flip);
     return QDC_OK;

@@ -26,6 +26,9 @@ typedef struct {
                             * pass on such a result, the rerun's own does it */
     int keep_surface;      /* the finishing pass folds no tet at the surface (finish.h) */
     const int32_t *region; /* the mesh's region tags (NULL: none), for local.c */
+    int hold_flat; /* local.c's regions hold the vertices sliding on a plane or a line
+                    * (but the corners of the unusable tets): a region classifies its
+                    * surface where it starts, where a fold looks like an edge */
     /* Optimizes a mesh of its own (local.c's regions, in normalized units):
      * set by opt_run_once on the runs it makes for its callers, NULL on the
      * regions' own runs (so a region is not repaired inside itself).

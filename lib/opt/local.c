@@ -64,13 +64,20 @@ static int32_t local_region(const int32_t *tets, int32_t nv, int32_t ntet,
     return n;
 }
 
+/* Whether v is a surface or interface vertex sliding on a planar patch or a
+ * straight line. */
+static int flat(const ctx_t *c, int32_t v)
+{
+    return (c->tp->vflag[v] & (MESH_V_BOUNDARY | MESH_V_INTERFACE)) && c->sl &&
+           slide_flat(c->sl, v);
+}
+
 /* Whether v is a surface or interface vertex that the run's bound holds
  * (not one sliding on a planar patch or a straight line, which keeps the
  * shape wherever it goes). */
 static int bounded(const ctx_t *c, int32_t v)
 {
-    return (c->tp->vflag[v] & (MESH_V_BOUNDARY | MESH_V_INTERFACE)) &&
-           !(c->sl && slide_flat(c->sl, v));
+    return (c->tp->vflag[v] & (MESH_V_BOUNDARY | MESH_V_INTERFACE)) && !flat(c, v);
 }
 
 /* The region's mesh (normalized units): its vertices numbered in order
@@ -79,7 +86,7 @@ static int bounded(const ctx_t *c, int32_t v)
  * inverted that no region run undid), held ones (the cut, locked, and with
  * hold_surface the bounded surface ones) fixed. NULL on allocation failure. */
 static mesh_t *local_mesh(const ctx_t *c, const uint8_t *region, const uint8_t *hold,
-                          int hold_surface, int32_t nt, int32_t *map)
+                          const int8_t *lev, int hold_surface, int32_t nt, int32_t *map)
 {
     const int32_t *tets = c->tp->tets;
     int32_t nv = 0, t2 = 0;
@@ -97,7 +104,9 @@ static mesh_t *local_mesh(const ctx_t *c, const uint8_t *region, const uint8_t *
         return NULL;
     for (int32_t v = 0; v < c->nv; v++) {
         int32_t w = map[v];
-        int held = w >= 0 && (hold[v] || c->locked[v] || (hold_surface && bounded(c, v)));
+        int held =
+            w >= 0 && (hold[v] || c->locked[v] || (hold_surface && bounded(c, v)) ||
+                       (c->hold_flat && lev[v] != 0 && flat(c, v)));
         if (w < 0)
             continue;
         memcpy(s->xyz + 3 * (size_t)w, c->xbest + 3 * (size_t)v, 3 * sizeof(double));
@@ -181,6 +190,9 @@ static qdc_status local_round(ctx_t *c, opt_result *res, opt_progress *r, int *n
     if (nt > LOCAL_MAX_TETS && nt > c->nt / 50) {
         st = QDC_OK; /* not local any more: the reruns' business */
         *big = 1;
+        ctx_log(c, 0,
+                "local repair: %d tets within %d rings of the %d inverted: not local",
+                (int)nt, rings, (int)was);
         goto out;
     }
     /* the region's bound is measured from xbest: what the bound has left
@@ -193,7 +205,7 @@ static qdc_status local_round(ctx_t *c, opt_result *res, opt_progress *r, int *n
                      (c->xbest[3 * v + k] - c->x0[3 * v + k]);
             used = sqrt(d) > used ? sqrt(d) : used;
         }
-    s = local_mesh(c, region, hold, bound > 0 && used >= 0.9 * bound, nt, map);
+    s = local_mesh(c, region, hold, lev, bound > 0 && used >= 0.9 * bound, nt, map);
     if (!s)
         goto out;
     if (free_corners) {
@@ -204,8 +216,11 @@ static qdc_status local_round(ctx_t *c, opt_result *res, opt_progress *r, int *n
     }
     st = QDC_OK;
     local_run(c, s, loose, bound > 0 && used < 0.9 * bound ? bound - used : bound, &ok);
-    if (!ok)
+    if (!ok) {
+        ctx_log(c, 0, "local repair: %d tets within %d rings of the %d inverted: failed",
+                (int)nt, rings, (int)was);
         goto out;
+    }
     memcpy(c->trial, c->xbest, n3 * sizeof(double));
     for (size_t v = 0; v < nv; v++)
         if (map[v] >= 0 && !s->fixed[map[v]])
@@ -232,6 +247,23 @@ out:
     return st;
 }
 
+/* The rounds at `rings`: sliding within the run's bound, then with the bad
+ * tets' boundary corners free to leave their surface within the bound (the
+ * default's: OPT_HAUSD_STUCK). *big if the region is not local. */
+static qdc_status local_rings_round(ctx_t *c, opt_result *res, opt_progress *r, int *next,
+                                    int rings, int *big)
+{
+    double wide = c->autob && OPT_HAUSD_STUCK > c->hbound ? OPT_HAUSD_STUCK : c->hbound;
+    qdc_status st = QDC_OK;
+
+    if (c->best.n_inverted > 0 && res->stop != OPT_STOP_CANCELLED)
+        st = local_round(c, res, r, next, rings, c->hbound, 0, big);
+    if (st == QDC_OK && wide > 0 && (c->sl || wide > c->hbound) && !*big &&
+        c->best.n_inverted > 0 && res->stop != OPT_STOP_CANCELLED)
+        st = local_round(c, res, r, next, rings, wide, c->sl != NULL, big);
+    return st;
+}
+
 qdc_status local_pass(ctx_t *c, opt_result *res, opt_progress *r, int *next)
 {
     qdc_status st = QDC_OK;
@@ -239,17 +271,18 @@ qdc_status local_pass(ctx_t *c, opt_result *res, opt_progress *r, int *next)
 
     if (!c->repair)
         return QDC_OK;
-    /* each ring count: sliding within the run's bound, then with the bad
-     * tets' boundary corners free to leave their surface within the bound
-     * (the default's: OPT_HAUSD_STUCK) */
     for (size_t i = 0; i < sizeof local_rings / sizeof local_rings[0] && !big; i++) {
-        double wide =
-            c->autob && OPT_HAUSD_STUCK > c->hbound ? OPT_HAUSD_STUCK : c->hbound;
-        if (st == QDC_OK && c->best.n_inverted > 0 && res->stop != OPT_STOP_CANCELLED)
-            st = local_round(c, res, r, next, local_rings[i], c->hbound, 0, &big);
-        if (st == QDC_OK && wide > 0 && (c->sl || wide > c->hbound) && !big &&
-            c->best.n_inverted > 0 && res->stop != OPT_STOP_CANCELLED)
-            st = local_round(c, res, r, next, local_rings[i], wide, c->sl != NULL, &big);
+        st = local_rings_round(c, res, r, next, local_rings[i], &big);
+        /* too many tets at this ring count (at 4M tets of a cube of
+         * scripts/corpus.py, 137k within 6 rings of 2 tets, where 3 rings
+         * had 10k): the largest count between the last and this one that is
+         * still local, before the reruns from the input */
+        for (int k = local_rings[i] - 1, done = 0;
+             st == QDC_OK && big && !done && i > 0 && k > local_rings[i - 1]; k--) {
+            int over = 0;
+            st = local_rings_round(c, res, r, next, k, &over);
+            done = !over; /* the last round this pass makes (big stays set) */
+        }
     }
     return st;
 }

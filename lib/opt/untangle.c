@@ -2,6 +2,7 @@
  * (docs/method.md §5a). */
 #include "opt/untangle.h"
 #include "core/tet.h"
+#include "opt/select.h"
 #include "opt/star.h"
 
 #include <math.h>
@@ -119,45 +120,68 @@ static int slides(const mesh_topo *tp, const slide_ctx *sl, int32_t v)
     return k == SLIDE_SURFACE || k == SLIDE_LINE ? 1 : k == SLIDE_INTERIOR && sl ? 0 : -1;
 }
 
+/* The vertices finish_untangle moves: the movable ones (that may move:
+ * slides >= 0) of the inverted tets and of the tets around them, as the
+ * pass's vworst (0; 2 for the others). bad[] (nt) and near[] (nv) are
+ * scratch. Each tet, then each vertex, decides its own, in parallel. */
+static void untangle_set(const mesh_topo *tp, const uint8_t *movable, const slide_ctx *sl,
+                         const double *x, uint8_t *bad, uint8_t *near, double *vworst)
+{
+#pragma omp parallel for schedule(static)
+    for (int32_t t = 0; t < tp->nt; t++)
+        bad[t] = (uint8_t)geom_tet_bad(x, tp->tets + 4 * (size_t)t);
+#pragma omp parallel for schedule(static)
+    for (int32_t v = 0; v < tp->nv; v++) { /* a corner of an inverted tet */
+        uint8_t in = 0;
+        for (int32_t k = tp->vt_ptr[v]; k < tp->vt_ptr[v + 1]; k++)
+            in |= bad[tp->vt_idx[k] >> 2];
+        near[v] = in;
+    }
+#pragma omp parallel for schedule(static)
+    for (int32_t v = 0; v < tp->nv; v++) { /* a tet of v's star has such a corner */
+        int in = 0;
+        for (int32_t k = tp->vt_ptr[v]; !in && k < tp->vt_ptr[v + 1]; k++) {
+            const int32_t *tt = tp->tets + 4 * (size_t)(tp->vt_idx[k] >> 2);
+            in = near[tt[0]] | near[tt[1]] | near[tt[2]] | near[tt[3]];
+        }
+        vworst[v] = in && movable[v] && slides(tp, sl, v) >= 0 ? 0.0 : 2.0;
+    }
+}
+
 qdc_status finish_untangle(const mesh_topo *tp, const uint8_t *movable,
                            const slide_ctx *sl, double *x, double lbar,
                            int32_t *n_inverted)
 {
-    uint8_t *mark = qdc_calloc((size_t)tp->nv + 1, 1);
-    int32_t *list = NULL, n = 0;
+    uint8_t *near = qdc_mallocn((size_t)tp->nv + 1, 1);
+    uint8_t *bad = qdc_mallocn((size_t)tp->nt + 1, 1);
+    double *vworst = qdc_mallocn((size_t)tp->nv + 1, sizeof(double));
+    vq_pair *list = NULL;
+    int32_t n = 0, *start = NULL, ncol = -1;
 
-    if (!mark)
-        return QDC_ENOMEM;
-    /* the interior vertices of the inverted tets and of the tets around them */
-    for (int32_t t = 0; t < tp->nt; t++)
-        if (geom_tet_bad(x, tp->tets + 4 * (size_t)t))
-            for (int a = 0; a < 4; a++)
-                mark[tp->tets[4 * (size_t)t + a]] = 1;
-    for (int32_t v = 0; v < tp->nv; v++)
-        if (mark[v] & 1)
-            for (int32_t k = tp->vt_ptr[v]; k < tp->vt_ptr[v + 1]; k++) {
-                const int32_t *tt = tp->tets + 4 * (size_t)(tp->vt_idx[k] >> 2);
-                for (int a = 0; a < 4; a++)
-                    mark[tt[a]] |= 2;
-            }
-    list = qdc_mallocn((size_t)tp->nv + 1, sizeof *list);
-    if (!list) {
-        qdc_free(mark);
-        return QDC_ENOMEM;
+    if (near && bad && vworst) {
+        untangle_set(tp, movable, sl, x, bad, near, vworst);
+        ncol = select_vertices(tp, movable, vworst, &list, &n, &start);
     }
-    for (int32_t v = 0; v < tp->nv; v++)
-        if (mark[v] && movable[v] && slides(tp, sl, v) >= 0)
-            list[n++] = v;
+    qdc_free(near);
+    qdc_free(bad);
+    qdc_free(vworst);
+    if (ncol < 0)
+        return QDC_ENOMEM;
+    /* classes in turn (Gauss-Seidel), the vertices of a class at once: no two
+     * share a tet, so each reads only positions no other moves (the same
+     * bytes at any thread count) */
     for (int s = 0; s < UNTANGLE_SWEEPS; s++) {
         int32_t moves = 0;
-        for (int32_t i = 0; i < n; i++)
-            moves += untangle_vertex(tp, slides(tp, sl, list[i]) ? sl : NULL, x, list[i],
-                                     lbar);
+        for (int32_t c = 0; c < ncol; c++)
+#pragma omp parallel for reduction(+ : moves) schedule(dynamic, 16) if (c < COLOUR_SHARED)
+            for (int32_t i = start[c]; i < start[c + 1]; i++)
+                moves += untangle_vertex(tp, slides(tp, sl, list[i].v) ? sl : NULL, x,
+                                         list[i].v, lbar);
         if (!moves)
             break;
     }
     *n_inverted = mesh_count_inverted(tp, x);
     qdc_free(list);
-    qdc_free(mark);
+    qdc_free(start);
     return QDC_OK;
 }

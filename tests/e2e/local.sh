@@ -9,7 +9,8 @@
 # it to 0; untangling that slides the boundary vertices too now does (either
 # counts as repaired where it is). 0 left (independent evaluator), with no
 # rerun that frees the boundary, the surface within the default bound (3e-3
-# of the diagonal) and the mean ratio up.
+# of the diagonal) and the mean ratio up; the same bytes at 1, 2 and 4
+# threads.
 . "$(dirname "$0")/../lib.sh"
 
 corpus_mesh "local: bone-lowq-tangled" bone-lowq-tangled 30000 --seed 1 --tangle-frac 0.05
@@ -42,5 +43,17 @@ if [ "$bi" -gt 0 ] && [ "$ai" = 0 ] && awk -v a="$am" -v b="$bm" -v h="$hd" -v B
     pass "local: bone-lowq-tangled: inverted $bi -> 0, mean ratio $bm -> $am, Hausdorff $hd (bound $bound)"
 else
     fail "local: bone-lowq-tangled" "inverted $bi -> $ai, mean $bm -> $am, Hausdorff $hd, bound $bound"
+fi
+# The untangling moves colour classes in parallel, as the sweeps do: the same
+# run gives the same bytes at 1, 2 and 4 threads.
+same=yes
+for n in 1 2 4; do
+    OMP_NUM_THREADS=$n "$BIN/qdc" optimize "$in" "$TMP/t$n.mesh" 2> /dev/null || same="exit $? at $n"
+    [ "$same" = yes ] && ! cmp -s "$TMP/t1.mesh" "$TMP/t$n.mesh" && same="differs at $n threads"
+done
+if [ "$same" = yes ] && grep -q '^untangle' "$TMP/err"; then
+    pass "local: bone-lowq-tangled: untangled, the same bytes at 1, 2 and 4 threads"
+else
+    fail "local: bone-lowq-tangled: the same bytes at 1, 2 and 4 threads" "$same"
 fi
 exit 0

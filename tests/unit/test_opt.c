@@ -744,6 +744,30 @@ TEST(angle_polish_option_keeps_every_guarantee)
     mesh_free(b);
 }
 
+/* grid_case_new with the cube's faces sliding (*sl) and every vertex but
+ * the corners movable; 0 on failure. */
+static int sliding_grid(grid_case *g, int n, double amp, unsigned seed, slide_ctx **sl)
+{
+    if (!grid_case_new(g, n, amp, seed) ||
+        slide_new(g->tp, g->x0, 30.0, sl, NULL) != QDC_OK)
+        return 0;
+    for (int32_t v = 0; v < g->m->nv; v++)
+        g->movable[v] = slide_kind(*sl, v) != SLIDE_CORNER;
+    return 1;
+}
+
+/* 1 if x[0..n) has the bytes of the first x given (*ref, kept on the first
+ * call; the caller frees it); 0 if not, or out of memory. */
+static int same_as_first(double **ref, const double *x, size_t n)
+{
+    if (*ref)
+        return memcmp(*ref, x, n * sizeof(double)) == 0;
+    *ref = malloc(n * sizeof(double));
+    if (*ref)
+        memcpy(*ref, x, n * sizeof(double));
+    return *ref != NULL;
+}
+
 /* The finishing sweeps move the vertices of one colour class at once (no two
  * share a tet: select.h), each reading only its own star, which no other
  * vertex of the class writes; the classes go in a fixed order. So the bytes
@@ -763,11 +787,8 @@ TEST(finishing_sweeps_do_not_depend_on_the_thread_count)
         double s0, q0;
         int32_t moves = 0;
         size_t n3;
-        ASSERT_TRUE(grid_case_new(&g, 7, 0.35, 11));
+        ASSERT_TRUE(sliding_grid(&g, 7, 0.35, 11, &sl));
         n3 = 3 * (size_t)g.m->nv;
-        ASSERT_OK(slide_new(g.tp, g.x0, 30.0, &sl, NULL));
-        for (int32_t v = 0; v < g.m->nv; v++)
-            g.movable[v] = slide_kind(sl, v) != SLIDE_CORNER;
         omp_set_num_threads(threads[i]);
         for (int s = 0; s < 4; s++) {
             for (int32_t t = 0; t < g.m->nt; t++)
@@ -784,13 +805,39 @@ TEST(finishing_sweeps_do_not_depend_on_the_thread_count)
         printf("  # %d threads: %d moves in the sweeps, %d in the angle sweep\n",
                threads[i], (int)moves, (int)fs.n_moves);
         ASSERT_TRUE(moves > 100 && fs.n_moves > 0);
-        if (!ref) {
-            ref = malloc(n3 * sizeof(double));
-            ASSERT_TRUE(ref);
-            memcpy(ref, g.m->xyz, n3 * sizeof(double));
-        } else {
-            ASSERT_TRUE(memcmp(ref, g.m->xyz, n3 * sizeof(double)) == 0);
-        }
+        ASSERT_TRUE(same_as_first(&ref, g.m->xyz, n3));
+        slide_free(sl);
+        grid_case_free(&g);
+    }
+    free(ref);
+}
+
+/* The untangling moves a colour class at once (select.h), each vertex
+ * reading only its own star: a tangled grid, its boundary sliding on the
+ * cube's faces, untangles to the same bytes at 1, 2 and 4 threads, with
+ * fewer inverted tets than it had. */
+TEST(untangling_does_not_depend_on_the_thread_count)
+{
+    static const int threads[3] = {1, 2, 4};
+    int saved = omp_get_max_threads();
+    double *ref = NULL;
+
+    for (int i = 0; i < 3; i++) {
+        grid_case g;
+        slide_ctx *sl = NULL;
+        int32_t before, after = -1;
+        size_t n3;
+        ASSERT_TRUE(sliding_grid(&g, 8, 1.6, 5, &sl));
+        n3 = 3 * (size_t)g.m->nv;
+        before = mesh_count_inverted(g.tp, g.m->xyz);
+        omp_set_num_threads(threads[i]);
+        ASSERT_OK(finish_untangle(g.tp, g.movable, sl, g.m->xyz, 1.0 / g.n, &after));
+        omp_set_num_threads(saved);
+        printf("  # %d threads: inverted tets %d -> %d\n", threads[i], (int)before,
+               (int)after);
+        ASSERT_EQ_INT(after, mesh_count_inverted(g.tp, g.m->xyz));
+        ASSERT_TRUE(before > 20 && after < before / 3);
+        ASSERT_TRUE(same_as_first(&ref, g.m->xyz, n3));
         slide_free(sl);
         grid_case_free(&g);
     }
@@ -814,4 +861,5 @@ TEST_MAIN("opt", T(fixed_boundary_untangles_without_folding),
           T(max_min_volume_untangles_a_grid),
           T(untangling_slides_boundary_vertices_on_their_faces),
           T(allocation_failures_are_clean),
-          T(finishing_sweeps_do_not_depend_on_the_thread_count))
+          T(finishing_sweeps_do_not_depend_on_the_thread_count),
+          T(untangling_does_not_depend_on_the_thread_count))
