@@ -199,7 +199,8 @@ static qdc_status insert_pass(tmesh *tm, const topo_params *p, heap *h, topo_sta
 }
 
 /* Edge contraction in the live tets below qcontract, worst first (queued
- * once): each tet's best contraction of its edges. Adds to *ops and st. */
+ * once): each tet's best contraction of its edges (of its boundary edges too
+ * under a bound). Adds to *ops and st. */
 static qdc_status contract_pass(tmesh *tm, const topo_params *p, heap *h, topo_stats *st,
                                 int64_t *ops, int64_t max_ops, const atomic_int *cancel)
 {
@@ -214,8 +215,10 @@ static qdc_status contract_pass(tmesh *tm, const topo_params *p, heap *h, topo_s
             return QDC_ECANCEL;
         if (tm->tv[4 * (size_t)e.t] < 0 || tm->stamp[e.t] != e.stamp)
             continue;
-        for (int k = 0; k < 6; k++)
-            if (contract_eval(tm, e.t, k, p->floor4, p->margin, &c) &&
+        for (int k = 0; k < 12; k++)
+            if ((k < 6 ? contract_eval(tm, e.t, k, p->floor4, p->margin, &c)
+                       : contract_bedge_eval(tm, e.t, k - 6, p->floor4, p->margin,
+                                             &p->bound, &c)) &&
                 (!have || c.qmin_new > best.qmin_new ||
                  (c.qmin_new == best.qmin_new && c.gain > best.gain))) {
                 best = c;
@@ -223,13 +226,19 @@ static qdc_status contract_pass(tmesh *tm, const topo_params *p, heap *h, topo_s
             }
         if (!have)
             continue;
-        s = tmesh_replace(tm, best.old, best.nold, (const int32_t(*)[4])best.newt,
-                          best.nnew, NULL, &applied);
+        if (best.bnd)
+            s = tmesh_replace_surface(tm, best.old, best.nold,
+                                      (const int32_t(*)[4])best.newt, best.nnew, best.dev,
+                                      NULL, &applied);
+        else
+            s = tmesh_replace(tm, best.old, best.nold, (const int32_t(*)[4])best.newt,
+                              best.nnew, NULL, &applied);
         if (s != QDC_OK || !applied)
             continue;
         tmesh_commit(tm);
         (*ops)++;
         st->contractions++;
+        st->bcontractions += best.bnd;
     }
     return s;
 }

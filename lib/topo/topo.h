@@ -45,7 +45,8 @@ typedef struct {
     int64_t insertions;                /* vertices inserted (insert.h) */
     int64_t bflips;                    /* boundary edge flips */
     int64_t peels;                     /* tets peeled off the boundary */
-    int64_t contractions;              /* interior edges contracted */
+    int64_t contractions;              /* edges contracted */
+    int64_t bcontractions;             /* of which boundary edges (under a bound) */
     int32_t nv_in, nv_out;             /* vertices before and after */
     int32_t nt_in, nt_out;             /* live tets before and after */
 } topo_stats;

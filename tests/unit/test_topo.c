@@ -1257,7 +1257,94 @@ TEST(contraction_keeps_the_volume_exactly)
     mesh_free(m);
 }
 
-TEST_MAIN("topo", T(contraction_keeps_the_volume_exactly), T(boundary_flip_2_2_coplanar),
+/* The boundary faces of tm (faces with no tet across). */
+static int32_t open_faces(const tmesh *tm)
+{
+    int32_t n = 0;
+    for (int32_t t = 0; t < tm->hi; t++)
+        for (int i = 0; i < 4 && tm->tv[4 * t] >= 0; i++)
+            n += tm->adj[4 * t + i] < 0;
+    return n;
+}
+
+/* Boundary edge contraction on the 4x4x4 Kuhn grid of the unit cube, the
+ * centre vertex u of the top face moved in its plane by (1/64, 1/128, 0):
+ * never without a bound; with one, u goes onto a neighbour w of the top face,
+ * the move bound is in (0, |uw|], the cube is kept (volume exactly 6/6, the
+ * boundary two triangles fewer, u in no tet); a vertex on an edge of the cube
+ * goes only along it (elsewhere its side triangles would fold); no candidate
+ * moves the surface by more than the bound. */
+TEST(boundary_contraction_keeps_a_flat_face)
+{
+    mesh_t *m = tm_grid(4, 0);
+    tmesh *tm = NULL;
+    flip_bound bd = {10.0, cos(30 * PI / 180)}, none = {0.0, bd.cos_feature};
+    contract_cand c, pick;
+    int32_t u = 2 + 5 * (2 + 5 * 4), dummy[3] = {0, 1, 2}, nb0;
+    double v0, uw;
+    int found = 0, applied = 0, refused = 1, along = 1, bounded = 1;
+
+    ASSERT_TRUE(m);
+    m->xyz[3 * u] += 1.0 / 64;
+    m->xyz[3 * u + 1] += 1.0 / 128;
+    ASSERT_OK(tmesh_new(m->nv, m->xyz, m->nt, m->tets, NULL, NULL, &tm, NULL));
+    ASSERT_OK(tmesh_set_surface(tm, 0, dummy, NULL));
+    v0 = total_vol6(tm);
+    nb0 = open_faces(tm);
+    ASSERT_NEAR(v0, 6.0, 0);
+    for (int32_t t = 0; t < tm->hi; t++)
+        for (int e = 0; e < 6; e++) {
+            const double *g, *k;
+            int on_edge;
+            refused &= !contract_bedge_eval(tm, t, e, 0.0, -INFINITY, &none, &c);
+            if (!contract_bedge_eval(tm, t, e, 0.0, -INFINITY, &bd, &c))
+                continue;
+            ASSERT_EQ_INT(c.bnd, 1);
+            g = tm->xyz + 3 * c.gone;
+            k = tm->xyz + 3 * c.keep;
+            on_edge = (g[0] == 0 || g[0] == 1) + (g[1] == 0 || g[1] == 1) +
+                          (g[2] == 0 || g[2] == 1) ==
+                      2;
+            for (int d = 0; d < 3 && on_edge; d++)
+                if ((g[d] == 0 || g[d] == 1) && k[d] != g[d])
+                    along = 0;
+            if (c.gone == u && !found) {
+                pick = c;
+                found = 1;
+            }
+        }
+    ASSERT_TRUE(refused);
+    ASSERT_TRUE(along);
+    ASSERT_TRUE(found);
+    uw = sqrt(pow(tm->xyz[3 * u] - tm->xyz[3 * pick.keep], 2) +
+              pow(tm->xyz[3 * u + 1] - tm->xyz[3 * pick.keep + 1], 2) +
+              pow(tm->xyz[3 * u + 2] - tm->xyz[3 * pick.keep + 2], 2));
+    ASSERT_TRUE(pick.dev > 0 && pick.dev <= uw);
+    ASSERT_NEAR(tm->xyz[3 * pick.keep + 2], 1.0, 0);
+    /* a bound just under this move: no candidate exceeds it */
+    bd.hausd = 0.999 * pick.dev;
+    for (int32_t t = 0; t < tm->hi; t++)
+        for (int e = 0; e < 6; e++)
+            if (contract_bedge_eval(tm, t, e, 0.0, -INFINITY, &bd, &c))
+                bounded &= c.dev <= bd.hausd && !(c.gone == u && c.keep == pick.keep);
+    ASSERT_TRUE(bounded);
+    ASSERT_OK(tmesh_replace_surface(tm, pick.old, pick.nold,
+                                    (const int32_t(*)[4])pick.newt, pick.nnew, pick.dev,
+                                    NULL, &applied));
+    ASSERT_EQ_INT(applied, 1);
+    tmesh_commit(tm);
+    ASSERT_TRUE(consistent(tm));
+    ASSERT_NEAR(total_vol6(tm), v0, 0);
+    ASSERT_EQ_INT(open_faces(tm), nb0 - 2);
+    for (int32_t t = 0; t < tm->hi; t++)
+        if (tm->tv[4 * t] >= 0)
+            ASSERT_TRUE(tmesh_local(tm, t, u) < 0);
+    tmesh_free(tm);
+    mesh_free(m);
+}
+
+TEST_MAIN("topo", T(contraction_keeps_the_volume_exactly),
+          T(boundary_contraction_keeps_a_flat_face), T(boundary_flip_2_2_coplanar),
           T(peeling_a_flat_boundary_tet), T(driver_writes_the_new_boundary_triangles),
           T(driver_spends_one_bound), T(insertion_in_a_bad_tet),
           T(insertion_refused_leaves_the_mesh), T(insertion_keeps_the_smallest_angle),
