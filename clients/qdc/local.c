@@ -721,12 +721,15 @@ static void optimize_summary(const optimize_args *x, const opt_result *res)
     if (res->topo_contractions > 0)
         fprintf(stderr, "qdc: topology: %lld interior edges contracted\n",
                 (long long)res->topo_contractions);
-    if (res->topo_bflips + res->topo_peels > 0)
-        fprintf(stderr,
-                "qdc: topology: %lld boundary edge flips, %lld tets peeled within the "
-                "bound: boundary triangles %d removed, %d added\n",
-                (long long)res->topo_bflips, (long long)res->topo_peels,
-                (int)res->topo_tris_removed, (int)res->topo_tris_added);
+    if (res->topo_bflips + res->topo_peels + res->topo_bcontractions > 0)
+        fprintf(
+            stderr,
+            "qdc: topology: %lld boundary edge flips, %lld tets peeled, %lld boundary "
+            "edges contracted within the bound: boundary triangles %d removed, %d "
+            "added\n",
+            (long long)res->topo_bflips, (long long)res->topo_peels,
+            (long long)res->topo_bcontractions, (int)res->topo_tris_removed,
+            (int)res->topo_tris_added);
 }
 
 /* The outcome in words (docs/defaults.md), the last lines: from the report when

@@ -490,9 +490,11 @@ qdc_status report_write_json(const report_t *r, qdc_write_fn fn, void *ctx,
             jw_int(&w, "flips23", s->topo_flips23);
             jw_int(&w, "multiface_removals", s->topo_multiface);
             jw_int(&w, "rounds", s->topo_rounds);
-            if (s->topo_bflips + s->topo_peels > 0) { /* --hausd given */
+            if (s->topo_bflips + s->topo_peels + s->topo_bcontractions >
+                0) { /* --hausd */
                 jw_int(&w, "boundary_flips", s->topo_bflips);
                 jw_int(&w, "peeled", s->topo_peels);
+                jw_int(&w, "boundary_contractions", s->topo_bcontractions);
                 jw_int(&w, "boundary_triangles_removed", s->topo_tris_removed);
                 jw_int(&w, "boundary_triangles_added", s->topo_tris_added);
             }

@@ -166,6 +166,8 @@ typedef struct {
     int64_t topo_contractions;   /* --topology full: interior edges contracted */
     int64_t topo_bflips;         /* --topology with --hausd: boundary edge flips */
     int64_t topo_peels;          /* ... and flat tets peeled off the boundary */
+    int64_t topo_bcontractions;  /* ... and boundary edges contracted (--topology full;
+                                  * counted in topo_contractions too) */
     int32_t topo_tris_removed;   /* ... boundary triangles of the input removed */
     int32_t topo_tris_added;     /* ... and new boundary triangles written */
     int32_t verts_in, verts_out; /* --topology: vertices before and after */

@@ -322,6 +322,7 @@ static void count_round(opt_result *acc, const topo_stats *ts)
     acc->topo_bflips += ts->bflips;
     acc->topo_peels += ts->peels;
     acc->topo_contractions += ts->contractions;
+    acc->topo_bcontractions += ts->bcontractions;
     for (int n = 3; n <= FLIP_MAXRING; n++)
         acc->topo_by_ring[n] += ts->by_ring[n];
 }
@@ -355,6 +356,7 @@ static void merge_result(opt_result *last, const opt_result *first, int32_t nt_o
     last->topo_bflips = first->topo_bflips;
     last->topo_peels = first->topo_peels;
     last->topo_contractions = first->topo_contractions;
+    last->topo_bcontractions = first->topo_bcontractions;
     last->topo_tris_removed = first->topo_tris_removed;
     last->topo_tris_added = first->topo_tris_added;
     last->verts_in = first->verts_in;

@@ -131,6 +131,9 @@ if len(np.unique(to)) != len(np.unique(ti)) or len(xo) != len(xi):
 ops = rep.get("boundary_flips", 0) + rep.get("peeled", 0)
 if ops == 0 or added == 0:
     bad.append("no boundary operation (%s)" % rep)
+# flips never contract an edge: the count is there, and 0
+if rep.get("boundary_contractions") != 0 or rep.get("contractions", 0) != 0:
+    bad.append("contractions counted under flips (%s)" % rep)
 na, nr = rep.get("boundary_triangles_added", -1), rep.get("boundary_triangles_removed", -1)
 if len(fo) != len(fi) - nr + na or added > na:
     bad.append("report: %d added, %d removed; files: %d -> %d triangles, %d new"
