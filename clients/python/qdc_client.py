@@ -13,6 +13,8 @@ the binary mesh format in proto/mesh-binary.md.
     c.wait(job, on_progress=lambda r: print(r["iteration"], r["mean_ratio_min"]))
     mesh = c.result(job)                          # Mesh: .xyz, .tets, .regions, .fixed
     c.result(job, "out.mesh")                     # or a file, format by extension
+    job = c.submit("m.xdmf")                      # XDMF naming an .h5 file: both sent
+    c.result(job, "out.xdmf")                     # out.xdmf + out.h5 beside it
     rep = c.report(job)                           # quality before/after, boundary error
     print("\n".join(outcome_lines(rep)))          # the outcome in words, as qdc prints it
 
@@ -31,6 +33,7 @@ import array
 import json
 import os
 import random
+import re
 import stat
 import struct
 import sys
@@ -39,6 +42,7 @@ import urllib.error
 import urllib.parse
 import urllib.request
 import uuid
+import xml.etree.ElementTree as _ET
 
 try:
     import numpy as _np
@@ -250,6 +254,64 @@ def _save(path, data):
         raise
 
 
+def xdmf_h5_file(path):
+    """The .h5 file an XDMF file at path keeps its heavy data in (its path,
+    in the .xdmf's folder), or None if its data is inline. The rule is qdc's:
+    every Format="HDF" DataItem reads "FILE.h5:/dataset", one FILE for all,
+    relative, no "..". ValueError otherwise."""
+    with open(path, "rb") as f:
+        xml = f.read()
+    try:
+        root = _ET.fromstring(xml)
+    except _ET.ParseError as e:
+        raise ValueError("%s: not XML: %s" % (path, e)) from None
+    files = set()
+    for item in root.iter():
+        if not str(item.tag).endswith("DataItem") or \
+                (item.get("Format") or "").upper() != "HDF":
+            continue
+        ref = (item.text or "").strip()
+        name = ref.split(":", 1)[0]
+        if ":" not in ref or not name:
+            raise ValueError("%s: an HDF DataItem without FILE.h5:/dataset: %r"
+                             % (path, ref[:80]))
+        files.add(name)
+    if not files:
+        return None
+    if len(files) > 1:
+        raise ValueError("%s: HDF data in %d files (%s): one .h5 file is read"
+                         % (path, len(files), ", ".join(sorted(files))))
+    name = files.pop()
+    if os.path.isabs(name) or ".." in name.replace("\\", "/").split("/"):
+        raise ValueError("%s: the .h5 file %s is not in the .xdmf's folder" % (path, name))
+    return os.path.join(os.path.dirname(path), name)
+
+
+def _form(parts):
+    """(content type, body) of multipart/form-data: parts (name, file name,
+    media type, bytes); the boundary found in none of them."""
+    while True:
+        b = "qdc" + uuid.uuid4().hex
+        if not any(b.encode() in data for _, _, _, data in parts):
+            break
+    out = []
+    for name, fname, ctype, data in parts:
+        if any(ch in fname for ch in "\"\r\n"):
+            raise ValueError("%s: a file name with a quote or line break" % fname)
+        out.append(("--%s\r\nContent-Disposition: form-data; name=\"%s\"; filename=\"%s\"\r\n"
+                    "Content-Type: %s\r\n\r\n" % (b, name, fname, ctype)).encode("utf-8"))
+        out.extend([data, b"\r\n"])
+    out.append(("--%s--\r\n" % b).encode())
+    return "multipart/form-data; boundary=" + b, b"".join(out)
+
+
+def _xdmf_renamed(xml, h5name):
+    """The result's XML (naming result.h5) naming h5name instead."""
+    if not h5name or any(ch in h5name for ch in "&<>\"':"):
+        raise ValueError("%s cannot name an HDF5 file in XDMF (none of &<>\"': in it)" % h5name)
+    return re.sub(rb"(>\s*)result\.h5:", lambda m: m.group(1) + h5name.encode("utf-8") + b":", xml)
+
+
 def _job_id(job):
     jid = job["id"] if isinstance(job, dict) else str(job)
     return jid.rsplit("/", 1)[-1]
@@ -291,7 +353,7 @@ class Client:
                 err = "HTTP %d" % e.code
                 retry_after = e.headers.get("Retry-After")
                 if attempt == self.retries:
-                    return status, e.headers, data
+                    return e.code, e.headers, data
             except (urllib.error.URLError, OSError) as e:
                 err = str(getattr(e, "reason", e))
                 if attempt == self.retries:
@@ -352,16 +414,26 @@ class Client:
         arrays); label: a text of the submitter's (at most 127 bytes). The
         job's "file_name" and "label" carry them.
         Returns the job (dict with "id", "state", ...)."""
+        h5 = None
         if isinstance(mesh, (str, os.PathLike)):
             path = os.fspath(mesh)
             if name is None:
                 name = os.path.basename(path)
-            first = self._by_ext(path, "upload")[0]  # qdcd records the variant read
-            ctype, named = first.get("media_type"), None
-            if ctype is None:  # no media type: named in the query
-                ctype, named = "application/octet-stream", first["name"]
+            if path.lower().endswith(".xdmf"):
+                h5 = xdmf_h5_file(path)
+            if h5 is None:
+                first = self._by_ext(path, "upload")[0]  # qdcd records the variant read
+                ctype, named = first.get("media_type"), None
+                if ctype is None:  # no media type: named in the query
+                    ctype, named = "application/octet-stream", first["name"]
             with open(path, "rb") as f:
                 body = f.read()
+            if h5 is not None:  # the .xdmf and its .h5 in one request
+                with open(h5, "rb") as f:
+                    h5data = f.read()
+                named = None
+                ctype, body = _form([("xdmf", os.path.basename(path), "application/xml", body),
+                                     ("h5", os.path.basename(h5), "application/x-hdf5", h5data)])
         else:
             if not isinstance(mesh, Mesh):
                 mesh = Mesh(*mesh)
@@ -432,9 +504,15 @@ class Client:
         ...) or the extension (the job's own variant when the extension names
         its family: then the upload comes back with only the coordinates
         replaced; a job with options {"topology": "flips"} has other tets, and
-        its result is written by qdc's own writer in every format); returns
-        path."""
+        its result is written by qdc's own writer in every format). A job
+        sent as an .xdmf with its .h5 file, written to a .xdmf path, comes
+        back as two files: the .h5 beside it (out.xdmf: out.h5) and the .xdmf
+        naming it. Returns path."""
         jid = _job_id(job)
+        if path is not None and fmt is None and os.fspath(path).lower().endswith(".xdmf"):
+            status, _, h5data = self._request("GET", "/v1/jobs/%s/result?format=h5" % jid)
+            if status == 200:  # an XDMF+HDF5 job
+                return self._xdmf_h5_result(jid, os.fspath(path), h5data)
         if path is None:
             fmt = "qmesh"
         elif fmt is None:
@@ -449,6 +527,17 @@ class Client:
         if path is None:
             return Mesh.from_bytes(data)
         _save(path, data)
+        return path
+
+    def _xdmf_h5_result(self, jid, path, h5data):
+        """path (.xdmf) and the .h5 beside it of an XDMF+HDF5 job."""
+        h5path = os.path.splitext(path)[0] + ".h5"
+        status, _, xml = self._request("GET", "/v1/jobs/%s/result?format=xdmf" % jid)
+        if status != 200:
+            raise QdcError(status, _problem(xml))
+        xml = _xdmf_renamed(xml, os.path.basename(h5path))
+        _save(h5path, h5data)  # the .h5 first: the .xdmf names it
+        _save(path, xml)
         return path
 
     def report(self, job, path=None):

@@ -1,6 +1,9 @@
 #!/bin/sh
 # python.sh - clients/python/qdc_client.py against a real qdcd: the module
-# (tests/clients/python_client.py) and its command line.
+# (tests/clients/python_client.py) and its command line. With qdc-h5 built,
+# meshio_h5.xdmf + meshio_h5.h5 go as one multipart/form-data upload and the
+# result comes back as pyx.xdmf + pyx.h5 (read by `qdc convert`; h5py, when
+# installed, finds only the coordinates changed).
 . "$(dirname "$0")/../lib.sh"
 . "$ROOT/tests/server/daemon.inc"
 PYC=$ROOT/clients/python/qdc_client.py
@@ -10,7 +13,10 @@ BIG=$(devmesh bunny_low_100k)
 $MT qmesh "$MESH" "$TMP/in.qmesh"
 start_qdcd "$TMP/d" --workers 2 || { fail "start" "qdcd did not come up: $(tail -3 "$TMP/d.log")"; exit 1; }
 
-export URL TMP MESH BIG ROOT
+H5=0 H5PY=0
+[ -x "$BIN/qdc-h5" ] && H5=1
+"$PY" -c 'import h5py' 2> /dev/null && H5PY=1
+export URL TMP MESH BIG ROOT H5 H5PY
 MESHQ=$TMP/in.qmesh NT=9033 QDC=$BIN/qdc $PY "$ROOT/tests/clients/python_client.py" ||
     echo "# python_client.py exited $?"
 

@@ -145,6 +145,64 @@ if qdc_client._np is not None:
 else:
     print("ok - python: numpy not installed, array.array path only")
 
+# 6. XDMF whose heavy data is in HDF5: the .xdmf and its .h5 in one
+# multipart/form-data request; the result written as out.xdmf + out.h5
+if os.environ.get("H5") == "1":
+    xdir = os.path.join(TMP, "xin")
+    os.makedirs(xdir, exist_ok=True)
+    for name in ("meshio_h5.xdmf", "meshio_h5.h5"):
+        with gzip.open(os.path.join(ROOT, "tests", "data", "real", name + ".gz")) as g, \
+                open(os.path.join(xdir, name), "wb") as f:
+            f.write(g.read())
+    xin = os.path.join(xdir, "meshio_h5.xdmf")
+    check("xdmf_h5_file(): the .h5 file named by the .xdmf, beside it",
+          qdc_client.xdmf_h5_file(xin) == os.path.join(xdir, "meshio_h5.h5"),
+          qdc_client.xdmf_h5_file(xin))
+    jx = c.submit(xin, {"max_iter": 5})
+    fx = c.wait(jx)
+    check("submit(.xdmf naming an .h5): both sent, job succeeded with %s tets"
+          % fx.get("mesh", {}).get("tets"),
+          fx["state"] == "succeeded" and fx["mesh"]["tets"] == 1228, json.dumps(fx)[:300])
+    odir = os.path.join(TMP, "xout")
+    os.makedirs(odir, exist_ok=True)
+    xo = c.result(jx, os.path.join(odir, "pyx.xdmf"))
+    xml = open(xo, "rb").read()
+    check("result(job, 'pyx.xdmf'): pyx.xdmf naming pyx.h5, and pyx.h5 beside it",
+          sorted(os.listdir(odir)) == ["pyx.h5", "pyx.xdmf"] and b"pyx.h5:/" in xml
+          and b"result.h5" not in xml, "%s %s" % (os.listdir(odir), xml[:300]))
+    conv = subprocess.run([QDC, "convert", xo, os.path.join(odir, "pyx.mesh")],
+                          capture_output=True, text=True)
+    ok, out = valid(os.path.join(odir, "pyx.mesh"), 1228)
+    check("qdc convert reads the written pyx.xdmf + pyx.h5 (1228 tets, none inverted)",
+          conv.returncode == 0 and ok, conv.stderr + out)
+    if os.environ.get("H5PY") == "1":
+        chk = subprocess.run([sys.executable, os.path.join(ROOT, "tests", "tools", "medcoo.py"),
+                              os.path.join(xdir, "meshio_h5.h5"), os.path.join(odir, "pyx.h5"),
+                              "python: result pyx.h5 is the upload's .h5 but for the coordinates",
+                              "data0"], capture_output=True, text=True)
+        print(chk.stdout.strip() or "FAIL - python: medcoo.py: " + chk.stderr[-300:])
+        nfail += 0 if chk.stdout.startswith("ok") else 1
+    # the .h5 missing, an .h5 outside the .xdmf's folder: refused before sending
+    alone = os.path.join(TMP, "alone.xdmf")
+    with open(alone, "wb") as f:
+        f.write(open(xin, "rb").read())
+    try:
+        c.submit(alone)
+        check("submit(.xdmf without its .h5): refused", False, "no exception")
+    except OSError as e:
+        check("submit(.xdmf without its .h5): OSError naming it (%s)" % e,
+              "meshio_h5.h5" in str(e), str(e))
+    up = os.path.join(xdir, "up.xdmf")
+    with open(up, "wb") as f:
+        f.write(open(xin, "rb").read().replace(b"meshio_h5.h5:", b"../meshio_h5.h5:"))
+    try:
+        c.submit(up)
+        check("submit(.xdmf naming ../x.h5): refused", False, "no exception")
+    except ValueError as e:
+        check("submit(.xdmf naming ../x.h5): ValueError (%s)" % e, "folder" in str(e), str(e))
+else:
+    print("ok - python: XDMF+HDF5 # SKIP qdc-h5 not built")
+
 # 5. errors, idempotency, cancel, list
 try:
     c.submit(MESH, {"metric": "nope"})
