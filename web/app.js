@@ -300,11 +300,54 @@ function surfaceOptions(on) {
     }
 }
 
-function chooseFile(file) {
+// The .h5 file an XDMF text keeps its heavy data in (its Format="HDF"
+// DataItems read "FILE.h5:/dataset"), or '' if its data is inline.
+function xdmfH5Name(text) {
+    const m = /<DataItem\b[^>]*\bFormat\s*=\s*["']HDF["'][^>]*>\s*([^<:]+):/i.exec(text);
+    return m ? m[1].trim() : '';
+}
+
+function chooseError(text) {
+    chosen = null;
+    $('submit-btn').disabled = true;
+    $('file-info').textContent = '';
+    $('submit-error').textContent = text;
+    $('submit-error').hidden = false;
+}
+
+// Files picked or dropped: one mesh, or an .xdmf with the .h5 it names (sent
+// together as multipart/form-data, parts "xdmf" and "h5").
+async function chooseFiles(list) {
+    const files = Array.from(list || []);
+    $('submit-error').hidden = true;
+    if (files.length < 2 && !(files.length === 1 && /\.xdmf$/i.test(files[0].name)))
+        return chooseFile(files[0]);
+    const xdmf = files.filter((f) => /\.xdmf$/i.test(f.name));
+    const h5 = files.filter((f) => /\.h5$/i.test(f.name));
+    if (files.length > 2 || xdmf.length !== 1 || (files.length === 2 && h5.length !== 1))
+        return chooseError('Pick one mesh file, or an .xdmf file together with its .h5 file.');
+    let want = '';
+    try {
+        want = xdmfH5Name(await xdmf[0].text());
+    } catch (e) {
+        return chooseError('cannot read ' + xdmf[0].name + ': ' + (e.message || e));
+    }
+    if (!want) { // inline XDMF: one file as any other
+        if (files.length === 2)
+            return chooseError(xdmf[0].name + ' keeps its data inline: pick it alone, without ' + h5[0].name + '.');
+        return chooseFile(xdmf[0]);
+    }
+    if (!h5.length)
+        return chooseError(xdmf[0].name + ' keeps its data in ' + want +
+            ': pick (or drop) the .xdmf and ' + want + ' together.');
+    chooseFile(xdmf[0], h5[0]);
+}
+
+function chooseFile(file, h5) {
     $('submit-error').hidden = true;
     if (!file) return;
     if (!FMT) { // the table first (a file picked before it loaded)
-        loadFormats().then(() => chooseFile(file)).catch((e) => {
+        loadFormats().then(() => chooseFile(file, h5)).catch((e) => {
             $('submit-error').textContent = 'The format table (GET /v1/formats) did not load: ' + (e.message || e);
             $('submit-error').hidden = false;
         });
@@ -316,6 +359,14 @@ function chooseFile(file) {
     const ext = name.includes('.') ? name.slice(name.lastIndexOf('.') + 1) : '';
     const meshExt = FMT ? FMT.meshExt : {}, surfExt = FMT ? FMT.surfExt : {};
     const surface = ext in surfExt;
+    if (h5) { // the format is the pair's: no format= in the query
+        chosen = { file, h5, format: '', surface: false, gz: false };
+        $('file-info').textContent = file.name + ' + ' + h5.name + ' · ' + bytes(file.size + h5.size) +
+            ' · XDMF with its heavy data in HDF5, sent together';
+        surfaceOptions(false);
+        $('submit-btn').disabled = false;
+        return;
+    }
     chosen = { file, format: meshExt[ext] || surfExt[ext] || '', surface, gz };
     $('file-info').textContent = file.name + ' · ' + bytes(file.size) + ' · ' +
         (chosen.format ? (surface ? 'surface (' + chosen.format + '), tetrahedralized by TetGen first' : chosen.format)
@@ -346,6 +397,11 @@ async function submit(ev) {
     btn.disabled = true;
     err.hidden = true;
     let body = chosen.file;
+    if (chosen.h5) { // the browser writes the multipart body and its boundary
+        body = new FormData();
+        body.append('xdmf', chosen.file, chosen.file.name);
+        body.append('h5', chosen.h5, chosen.h5.name);
+    }
     try {
         if (chosen.gz) {
             status.textContent = 'decompressing…';
@@ -392,7 +448,8 @@ function upload(url, body, bar, status) {
         const xhr = new XMLHttpRequest();
         const hadToken = !!token();
         xhr.open('POST', url);
-        const h = authHeaders({ 'Content-Type': 'application/octet-stream' });
+        // FormData: the browser sets multipart/form-data with its boundary
+        const h = authHeaders(body instanceof FormData ? {} : { 'Content-Type': 'application/octet-stream' });
         for (const [k, v] of Object.entries(h)) xhr.setRequestHeader(k, v);
         bar.hidden = false;
         bar.value = 0;
@@ -2242,14 +2299,14 @@ function init() {
     $('token-dialog').addEventListener('cancel', (e) => e.preventDefault());
     $('forget').hidden = !token();
     $('forget').onclick = () => { sessionStorage.removeItem(TOKEN_KEY); location.reload(); };
-    $('file').addEventListener('change', (e) => chooseFile(e.target.files[0]));
+    $('file').addEventListener('change', (e) => chooseFiles(e.target.files));
     const drop = $('drop');
     drop.addEventListener('dragover', (e) => { e.preventDefault(); drop.classList.add('over'); });
     drop.addEventListener('dragleave', () => drop.classList.remove('over'));
     drop.addEventListener('drop', (e) => {
         e.preventDefault();
         drop.classList.remove('over');
-        if (e.dataTransfer.files.length) chooseFile(e.dataTransfer.files[0]);
+        if (e.dataTransfer.files.length) chooseFiles(e.dataTransfer.files);
     });
     $('submit-form').addEventListener('submit', submit);
     chartHover($('chart'), $('chart-tip'), $('chart-line'), () => {

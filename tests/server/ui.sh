@@ -10,7 +10,9 @@
 # scales and rerun notes, the 3D view's fit, reset, clip plane, click-to-inspect
 # and lighter detail while turning (its first frame and frame rates measured),
 # ARIA roles and live regions, axe-core (0 serious violations), no console
-# errors, and the token prompt with --tokens; a page served from another
+# errors, XDMF+HDF5 (with qdc-h5 built: the .xdmf alone gets a message asking
+# for its .h5, the two picked together are sent as FormData and the job
+# succeeds), and the token prompt with --tokens; a page served from another
 # origin whose script POSTs a mesh gets 403 (tests/ui/crossorigin.mjs).
 # Before the browser: GET /v1/options (the form's table) and GET /input (the
 # job's input mesh: every format, Accept, ETag, 404/409, a surface's TetGen
@@ -198,6 +200,16 @@ UI_SHOTS=${UI_SHOTS:-$ROOT/build/ui-shots}
 case $UI_SHOTS in /*) ;; *) UI_SHOTS=$ROOT/$UI_SHOTS ;; esac
 mkdir -p "$UI_SHOTS"
 export UI_SHOTS
+# XDMF with its heavy data in HDF5 (when qdc-h5 is built): the two files
+# picked together
+XDMF_H5=
+if [ -x "$BIN/qdc-h5" ]; then
+    mkdir -p "$TMP/xh5"
+    gzip -dc "$ROOT/tests/data/real/meshio_h5.xdmf.gz" > "$TMP/xh5/meshio_h5.xdmf"
+    gzip -dc "$ROOT/tests/data/real/meshio_h5.h5.gz" > "$TMP/xh5/meshio_h5.h5"
+    XDMF_H5=$TMP/xh5/meshio_h5.xdmf
+fi
+export XDMF_H5
 UI_MODE=open node "$ROOT/tests/ui/console.mjs" > "$TMP/open.out" 2>&1
 rc=$?
 cat "$TMP/open.out"
