@@ -1102,6 +1102,15 @@ function renderDownloads(st) {
     const res = items('result', '.qdc');
     res.push([base + '/report', fileStem(st.job) + '.qdc-report.json', 'report (JSON)', 'report']);
     box.replaceChildren(...links(res, !newTets));
+    if (own === 'xdmf' && !newTets) { // sent with an .h5: its .h5, which the .xdmf names result.h5
+        const href = base + '/result?format=h5';
+        fetch(href, { method: 'HEAD', headers: authHeaders() }).then((r) => {
+            if (!r.ok || box.dataset.id !== st.id) return;
+            const [a] = links([[href, 'result.h5', 'HDF5 .h5 (of the .xdmf)', 'h5']], false);
+            a.title = 'the uploaded .h5 with the new coordinates; the .xdmf names it result.h5: keep the two in one folder';
+            box.insertBefore(a, box.lastChild);
+        }).catch(() => {});
+    }
     $('downloads-input').replaceChildren(...links(items('input', '.input'), true));
     $('downloads-card').hidden = false;
     $('view3d-card').hidden = false;

@@ -330,6 +330,12 @@ try {
             check(jx.state === 'succeeded' && jx.mesh.tets === 1228 && jx.file_name === 'meshio_h5.xdmf' && rx.status === 200,
                 'XDMF+HDF5: meshio_h5.xdmf and meshio_h5.h5 picked together, sent as FormData: job succeeded (' +
                 jx.mesh.tets + ' tets), its result?format=h5 there', JSON.stringify([jx.state, jx.mesh, jx.file_name, rx.status]));
+            // the job's .h5 among the downloads, as result.h5 (the name its .xdmf gives it)
+            await page.waitForSelector('#downloads a[data-format="h5"]', { timeout: 10000 }).catch(() => {});
+            const h5name = await page.$('#downloads a[data-format="h5"]') ? await download('h5', 'xdmf-result.h5') : 'none';
+            const h5got = h5name === 'none' ? Buffer.alloc(0) : readFileSync(path.join(OUT, 'xdmf-result.h5'));
+            check(h5name === 'result.h5' && h5got.subarray(0, 8).equals(Buffer.from([0x89, 0x48, 0x44, 0x46, 0x0d, 0x0a, 0x1a, 0x0a])),
+                'XDMF+HDF5: the job page offers its .h5 as result.h5 (an HDF5 file of ' + h5got.length + ' bytes)', h5name);
             // deleted: the checks below count the jobs of this run
             const del = await fetch(URL + '/v1/jobs/' + idx, { method: 'DELETE', headers: authH });
             check(del.status === 204 && (await apiJSON('/v1/jobs?page_size=1000')).body.jobs.length === nJobs,
