@@ -14,13 +14,6 @@
 #include <string.h>
 #include <strings.h>
 
-static const char hdf5_sig[8] = {'\x89', 'H', 'D', 'F', '\r', '\n', '\x1a', '\n'};
-
-static int is_hdf5(const char *buf, size_t len)
-{
-    return len >= 8 && memcmp(buf, hdf5_sig, 8) == 0;
-}
-
 int h5up_check(const char *buf, size_t len, meshio_format f, job_rec *j, qdc_status *st,
                qdc_error *e)
 {
@@ -28,7 +21,7 @@ int h5up_check(const char *buf, size_t len, meshio_format f, job_rec *j, qdc_sta
 
     *st = QDC_OK;
     if (f == MESHIO_MED) {
-        if (!is_hdf5(buf, len)) {
+        if (!meshio_is_hdf5(buf, len)) {
             *st = qdc_fail(e, QDC_EPARSE, "MED: not an HDF5 file");
             return 1;
         }
@@ -139,7 +132,7 @@ static void check_pair(const char *xml, size_t xlen, const char *h5, size_t hlen
         snprintf(why, cap,
                  "XDMF: the Geometry inline, the rest of the mesh in HDF5: not read (qdc "
                  "writes the coordinates back into the .h5 file)");
-    else if (!is_hdf5(h5, hlen))
+    else if (!meshio_is_hdf5(h5, hlen))
         snprintf(why, cap, "part '%.60s' is not an HDF5 file", hname);
 }
 

@@ -26,8 +26,6 @@
 
 extern char **environ;
 
-static const unsigned char h5_sig[8] = {0x89, 'H', 'D', 'F', '\r', '\n', 0x1a, '\n'};
-
 /* The child's descriptor for a private copy, and the name it opens it by. */
 enum { COPY_FD = 3 };
 #define COPY_PATH "/proc/self/fd/3"
@@ -63,10 +61,10 @@ static int h5_head(const char *head, size_t n)
 {
     char plain[8];
 
-    if (n >= 8 && memcmp(head, h5_sig, 8) == 0)
+    if (meshio_is_hdf5(head, n))
         return 1;
     return gz_is_gzip(head, n) && gz_head(head, n, plain, 8) == 8 &&
-           memcmp(plain, h5_sig, 8) == 0;
+           meshio_is_hdf5(plain, 8);
 }
 
 int cli_h5_wanted(const char *path, meshio_format f)

@@ -159,6 +159,9 @@ qdc_status meshio_save(const char *path, meshio_format fmt, const mesh_t *m,
 qdc_status meshio_save_bytes(const char *path, const void *buf, size_t len,
                              qdc_error *err);
 
+/* 1 if buf[0..len) starts with the HDF5 signature (a MED file, an XDMF's .h5). */
+int meshio_is_hdf5(const void *buf, size_t len);
+
 /* XDMF whose heavy data is in HDF5 (Format="HDF", "file.h5:/dataset"):
  * libqdc never calls HDF5; the qdc command has the qdc-h5 program read the
  * datasets (meshio_xdmf.c says how). meshio_xdmf_h5_refs: the datasets the

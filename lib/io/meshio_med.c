@@ -83,6 +83,11 @@ enum {
     F_COUNT
 };
 
+int meshio_is_hdf5(const void *buf, size_t len)
+{
+    return len >= 8 && memcmp(buf, hdf5_magic, 8) == 0;
+}
+
 static qdc_status med_frames(const char *buf, size_t len, h5_frame *fr, qdc_error *err)
 {
     static const char *const names[F_COUNT] = {"coords",  "te4",    "t10", "te4_fam",
@@ -90,7 +95,7 @@ static qdc_status med_frames(const char *buf, size_t len, h5_frame *fr, qdc_erro
                                                "tr6_fam", "noe_fam"};
     qdc_status st;
 
-    if (len >= 8 && memcmp(buf, hdf5_magic, 8) == 0)
+    if (meshio_is_hdf5(buf, len))
         return fail_bin(err, QDC_EFORMAT, 0,
                         "MED: an HDF5 file, read through qdc-h5 (the qdc command and "
                         "qdcd run it)");
@@ -294,7 +299,7 @@ static qdc_status read_med(const char *buf, size_t len, const meshio_options *o,
 static meshio_format sniff_med(const char *buf, size_t len, size_t i)
 {
     (void)i;
-    if (len >= 8 && (memcmp(buf, h5_magic, 8) == 0 || memcmp(buf, hdf5_magic, 8) == 0))
+    if ((len >= 8 && memcmp(buf, h5_magic, 8) == 0) || meshio_is_hdf5(buf, len))
         return MESHIO_MED;
     return MESHIO_AUTO;
 }
