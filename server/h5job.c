@@ -108,13 +108,15 @@ void h5job_run(const qdcd *q, const char *id, const char *frames, const char *re
              deadline, cancel, out);
 }
 
-int h5job_is_xdmf(const qdcd *q, const char *id, const char *format)
+int h5job_is_xdmf(const qdcd *q, const job_rec *j)
 {
     char p[4200];
 
-    if (meshio_format_from_name(format) != MESHIO_XDMF)
+    if (meshio_format_from_name(j->format) != MESHIO_XDMF)
         return 0;
-    job_path(q, id, JOB_INPUT_H5, p, sizeof p);
+    if (j->input_h5)
+        return 1;
+    job_path(q, j->id, JOB_INPUT_H5, p, sizeof p);
     return access(p, F_OK) == 0;
 }
 

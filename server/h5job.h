@@ -35,9 +35,9 @@ typedef struct {
 void h5job_run(const qdcd *q, const char *id, const char *frames, const char *res,
                double deadline, const atomic_int *cancel, h5job_outcome *out);
 
-/* Is job id (uploaded as format) an XDMF+HDF5 job: XDMF with JOB_INPUT_H5
- * beside its input? */
-int h5job_is_xdmf(const qdcd *q, const char *id, const char *format);
+/* Is job j an XDMF+HDF5 job: XDMF with JOB_INPUT_H5 stored with its input
+ * (its record says so; a job recorded before it did: the file is there)? */
+int h5job_is_xdmf(const qdcd *q, const job_rec *j);
 /* An XDMF+HDF5 job's datasets read by qdc-h5 and put with its XML into its
  * input.frames (frames NULL); or (frames: an XDMF file written from a mesh
  * read from input.frames, that is, XML and frames again) a copy of its

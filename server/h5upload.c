@@ -169,6 +169,7 @@ qdc_status h5up_multipart(const char *buf, size_t len, const char *boundary,
     if (st != QDC_OK)
         return st;
     j->nv = j->nt = 0; /* known once qdc-h5 read it */
+    j->input_h5 = 1;
     snprintf(
         j->notes, sizeof j->notes,
         "XDMF with its heavy data in HDF5 (%.200s): read by qdc-h5 in a child process "

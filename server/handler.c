@@ -5,6 +5,7 @@
 #define _GNU_SOURCE
 #include "handler.h"
 
+#include "h5job.h"
 #include "job.h"
 #include "qdc.h"
 
@@ -61,7 +62,9 @@ void job_json(req *r, const job_rec *j, sbuf *b)
         b,
         ",\"mesh\":{\"format\":\"%s\",\"vertices\":%lld,\"tets\":%lld,\"bytes\":%lld%s}",
         j->format, (long long)j->nv, (long long)j->nt, (long long)j->in_bytes,
-        job_is_surface(j->format) ? ",\"surface\":true" : "");
+        job_is_surface(j->format) ? ",\"surface\":true"
+        : h5job_is_xdmf(r->q, j)  ? ",\"h5\":true" /* result?format=h5 */
+                                  : "");
     if (j->file_name[0]) {
         sb_puts(b, ",\"file_name\":");
         sb_json_str(b, j->file_name);

@@ -223,9 +223,10 @@ static qdc_status save_outputs(qdcd *q, job_rec *j, const mesh_t *out, const mes
                              j->lease_owner)) != QDC_OK)
             return qdc_fail(err, st, "cannot store %s in the database", outs[i].name);
     }
-    /* a MED job's results are written from qdc-h5's frames of the upload:
-     * into the store with them, for the other nodes */
-    if (shared_on(q) && meshio_format_from_name(j->format) == MESHIO_MED &&
+    /* a MED or XDMF+HDF5 job's results are written from qdc-h5's frames of
+     * the upload: into the store with them, for the other nodes */
+    if (shared_on(q) &&
+        (meshio_format_from_name(j->format) == MESHIO_MED || h5job_is_xdmf(q, j)) &&
         (st = shared_put(q, j->id, H5JOB_FRAMES, "", j->lease_owner)) != QDC_OK)
         return qdc_fail(err, st, "cannot store %s in the database", H5JOB_FRAMES);
     st = report_quality_faces(out, faces, &after, err);
@@ -490,6 +491,8 @@ static run_step run_fetch(run_state *s)
     if (!shared_on(s->q))
         return RUN_ON;
     s->st = shared_fetch(s->q, s->j->id, job_input_name(s->j->format), NULL);
+    if (s->st == QDC_OK && s->j->input_h5) /* an XDMF file's .h5 */
+        s->st = shared_fetch(s->q, s->j->id, JOB_INPUT_H5, NULL);
     if (s->st == QDC_EINVAL) {
         s->st = qdc_fail(&s->err, QDC_EIO, "the job's input is missing from the store");
         return RUN_ERROR;
@@ -553,7 +556,7 @@ static run_step run_load(run_state *s)
     }
     meshio_format fin = meshio_format_from_name(s->j->format);
     double t0 = mono_now();
-    if (fin == MESHIO_MED || h5job_is_xdmf(s->q, s->j->id, s->j->format)) {
+    if (fin == MESHIO_MED || h5job_is_xdmf(s->q, s->j)) {
         int t = h5_load(s->w, s->j, fin, &s->opts, &s->m);
         return t == 1 ? RUN_FAILED : t == 2 ? RUN_STOPPED : RUN_ON;
     }

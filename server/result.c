@@ -51,23 +51,28 @@ static meshio_format input_source(req *r, const job_rec *j, char *path, size_t c
     /* MED, XDMF+HDF5: the frames qdc-h5 read the upload into (h5job.h),
      * not HDF5 */
     job_path(r->q, j->id,
-             surf ? JOB_INPUT_TETS
-             : f == MESHIO_MED || h5job_is_xdmf(r->q, j->id, j->format)
-                 ? H5JOB_FRAMES
-                 : job_input_name(j->format),
+             surf                                        ? JOB_INPUT_TETS
+             : f == MESHIO_MED || h5job_is_xdmf(r->q, j) ? H5JOB_FRAMES
+                                                         : job_input_name(j->format),
              path, cap);
     return f;
 }
 
-/* A MED job's frames (what qdc-h5 read its upload into: its input mesh, and
- * what its results are written from) from the store, unless cached here;
- * QDC_OK for any other job. */
+/* A MED or XDMF+HDF5 job's frames (what qdc-h5 read its upload into: its
+ * input mesh, and what its results are written from) from the store, unless
+ * cached here, and an XDMF+HDF5 job's .h5 when r asks for the result's .h5
+ * (written into a copy of it); QDC_OK for any other job. */
 static qdc_status fetch_frames(req *r, const job_rec *j)
 {
+    qdc_status st;
+
     if (!shared_on(r->q) || job_is_surface(j->format) ||
-        meshio_format_from_name(j->format) != MESHIO_MED)
+        (meshio_format_from_name(j->format) != MESHIO_MED && !h5job_is_xdmf(r->q, j)))
         return QDC_OK;
-    return shared_fetch(r->q, j->id, H5JOB_FRAMES, NULL);
+    st = shared_fetch(r->q, j->id, H5JOB_FRAMES, NULL);
+    if (st == QDC_OK && r->res_h5)
+        st = shared_fetch(r->q, j->id, JOB_INPUT_H5, NULL);
+    return st;
 }
 
 /* m, read from a MED or XDMF+HDF5 job's frames (fmt: MESHIO_MED,
@@ -213,8 +218,7 @@ static int result_format(struct MHD_Connection *c, req *r, const job_rec *j,
 
     r->res_h5 = 0;
     if (f && (!strcasecmp(f, "h5") || !strcasecmp(f, "application/x-hdf5")) &&
-        r->route == R_RESULT && h5job_is_xdmf(r->q, j->id, j->format) &&
-        !job_changes_tets(j->options)) {
+        r->route == R_RESULT && h5job_is_xdmf(r->q, j) && !job_changes_tets(j->options)) {
         /* an XDMF+HDF5 job's .h5 with the new coordinates */
         r->res_h5 = 1;
         *out = MESHIO_XDMF;
@@ -459,7 +463,7 @@ static enum MHD_Result process_convert(struct MHD_Connection *c, req *r)
     if (st == QDC_OK && (r->res_fmt == MESHIO_MED || r->res_h5))
         st = save_h5(r, &j, m, r->res_fmt, path, &e);
     else if (st == QDC_OK && r->res_fmt == MESHIO_XDMF && from_upload(r, &j) &&
-             h5job_is_xdmf(r->q, j.id, j.format) && !job_changes_tets(j.options))
+             h5job_is_xdmf(r->q, &j) && !job_changes_tets(j.options))
         st = save_xdmf_xml(r, &j, path, &e);
     else if (st == QDC_OK)
         st = meshio_save(path, r->res_fmt, m, &e);

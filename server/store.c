@@ -53,7 +53,7 @@ static const char schema[] =
     "'',"
     " error TEXT DEFAULT '', stop_reason TEXT DEFAULT '', etag_qmesh TEXT DEFAULT '',"
     " etag_json TEXT DEFAULT '', etag_medit TEXT DEFAULT '', notes TEXT DEFAULT '',"
-    " file_name TEXT DEFAULT '', label TEXT DEFAULT '');"
+    " file_name TEXT DEFAULT '', label TEXT DEFAULT '', input_h5 INTEGER DEFAULT 0);"
     "CREATE UNIQUE INDEX IF NOT EXISTS jobs_idem ON jobs(owner, idem_key) WHERE idem_key "
     "!= '';"
     "CREATE INDEX IF NOT EXISTS jobs_state ON jobs(state, seq);"
@@ -64,7 +64,7 @@ static const char schema[] =
     " in_bytes, options, attempts, lease_owner, lease_until, created, started, "         \
     "finished,"                                                                          \
     " expires, purged, iterations, last_progress, error, stop_reason, etag_qmesh,"       \
-    " etag_json, etag_medit, notes, file_name, label"
+    " etag_json, etag_medit, notes, file_name, label, input_h5"
 
 static void col_text(sqlite3_stmt *st, int i, char *dst, size_t cap)
 {
@@ -105,6 +105,7 @@ static void row_to_rec(sqlite3_stmt *st, job_rec *j)
     col_text(st, 27, j->notes, sizeof j->notes);
     col_text(st, 28, j->file_name, sizeof j->file_name);
     col_text(st, 29, j->label, sizeof j->label);
+    j->input_h5 = sqlite3_column_int(st, 30);
 }
 
 /* Prepare sql on db; binds are done by the caller. NULL on failure. */
@@ -199,8 +200,8 @@ static qdc_status sq_create(job_store *s_, const job_rec *j, int *dup, job_rec *
     }
     st = prep(s->wr,
               "INSERT INTO jobs(id, owner, state, idem_key, body_hash, format, nv, nt,"
-              " in_bytes, options, created, notes, file_name, label)"
-              " VALUES(?,?,0,?,?,?,?,?,?,?,?,?,?,?)");
+              " in_bytes, options, created, notes, file_name, label, input_h5)"
+              " VALUES(?,?,0,?,?,?,?,?,?,?,?,?,?,?,?)");
     if (!st)
         goto end;
     bind_text(st, 1, j->id);
@@ -216,6 +217,7 @@ static qdc_status sq_create(job_store *s_, const job_rec *j, int *dup, job_rec *
     bind_text(st, 11, j->notes);
     bind_text(st, 12, j->file_name);
     bind_text(st, 13, j->label);
+    sqlite3_bind_int(st, 14, j->input_h5);
     ok = sqlite3_step(st) == SQLITE_DONE;
     rc = ok ? QDC_OK : QDC_EIO;
 end:
@@ -570,13 +572,14 @@ qdc_status store_sqlite_open(const char *dir, job_store **out, qdc_error *err)
     st = open_db(path, &s->wr, err);
     if (st == QDC_OK && exec(s->wr, schema) != QDC_OK)
         st = qdc_fail(err, QDC_EIO, "cannot create the schema in %s", path);
-    /* A store made before the notes, file_name or label column: add it (an
-     * error only means it is there already). */
-    for (int i = 0; st == QDC_OK && i < 3; i++) {
+    /* A store made before the notes, file_name, label or input_h5 column: add
+     * it (an error only means it is there already). */
+    for (int i = 0; st == QDC_OK && i < 4; i++) {
         static const char *const added[] = {
             "ALTER TABLE jobs ADD COLUMN notes TEXT DEFAULT ''",
             "ALTER TABLE jobs ADD COLUMN file_name TEXT DEFAULT ''",
-            "ALTER TABLE jobs ADD COLUMN label TEXT DEFAULT ''"};
+            "ALTER TABLE jobs ADD COLUMN label TEXT DEFAULT ''",
+            "ALTER TABLE jobs ADD COLUMN input_h5 INTEGER DEFAULT 0"};
         sqlite3_exec(s->wr, added[i], NULL, NULL, NULL);
     }
     if (st == QDC_OK)

@@ -55,6 +55,8 @@ typedef struct {
     char notes[512];     /* reader notes (skipped element types...), lines, "" if none */
     char file_name[256]; /* the upload's file name (?name=), "" if not given */
     char label[128];     /* the submitter's label (?label=), "" if none */
+    int input_h5;        /* an XDMF job whose heavy data is its second input file,
+                            the .h5 sent with it (h5job.h: JOB_INPUT_H5) */
 } job_rec;
 
 /* j has a result and a report: it succeeded, or it was cancelled while the
@@ -129,9 +131,11 @@ typedef struct {
 
     /* ---- Node-shared job files (PostgreSQL); NULL in the SQLite backend. ---- */
     /* create, with the job's input: the file at path, stored as blob `name` in
-     * the same transaction as the row (streamed in chunks). */
+     * the same transaction as the row (streamed in chunks), and the file at
+     * path2 as blob name2 unless name2 is NULL (an XDMF file's .h5). */
     qdc_status (*create_with_input)(job_store *s, const job_rec *j, const char *name,
-                                    const char *path, int *dup, job_rec *existing);
+                                    const char *path, const char *name2,
+                                    const char *path2, int *dup, job_rec *existing);
     /* Store the file at path as job id's blob `name` (replacing an older one),
      * with its SHA-256 hex (sha, or "" if none), streamed in chunks. worker:
      * only while that worker holds the job's lease (NULL: any time). QDC_EINVAL

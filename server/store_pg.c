@@ -98,6 +98,8 @@ static const char *const migrations[] = {
     /* 3: the upload's file name and the submitter's label */
     "ALTER TABLE jobs ADD COLUMN file_name TEXT NOT NULL DEFAULT '',"
     " ADD COLUMN label TEXT NOT NULL DEFAULT '';",
+    /* 4: an XDMF job's .h5 stored with it (blob input.h5) */
+    "ALTER TABLE jobs ADD COLUMN input_h5 INTEGER NOT NULL DEFAULT 0;",
 };
 #define N_MIGRATIONS ((int)(sizeof migrations / sizeof migrations[0]))
 
@@ -105,7 +107,7 @@ static const char *const migrations[] = {
     "seq, id, owner, state, cancel_requested, idem_key, body_hash, format, nv, nt,"      \
     " in_bytes, options, attempts, lease_owner, lease_until, created, started,"          \
     " finished, expires, purged, iterations, last_progress, error, stop_reason,"         \
-    " etag_qmesh, etag_json, etag_medit, notes, file_name, label"
+    " etag_qmesh, etag_json, etag_medit, notes, file_name, label, input_h5"
 
 static void row_to_rec(const PGresult *r, int row, job_rec *j)
 {
@@ -140,6 +142,7 @@ static void row_to_rec(const PGresult *r, int row, job_rec *j)
     col_text(r, row, 27, j->notes, sizeof j->notes);
     col_text(r, row, 28, j->file_name, sizeof j->file_name);
     col_text(r, row, 29, j->label, sizeof j->label);
+    j->input_h5 = (int)col_i64(r, row, 30);
 }
 
 /* One statement that returns at most one job row into out (if not NULL).
@@ -169,8 +172,8 @@ static qdc_status one(pg_store *s, const char *sql, const params *p, job_rec *ou
 
 #define INSERT_JOB                                                                       \
     "INSERT INTO jobs(id, owner, state, idem_key, body_hash, format, nv, nt,"            \
-    " in_bytes, options, created, notes, file_name, label)"                              \
-    " VALUES($1,$2,0,$3,$4,$5,$6,$7,$8,$9,$10,$11,$12,$13)"                              \
+    " in_bytes, options, created, notes, file_name, label, input_h5)"                    \
+    " VALUES($1,$2,0,$3,$4,$5,$6,$7,$8,$9,$10,$11,$12,$13,$14)"                          \
     " ON CONFLICT (owner, idem_key) WHERE idem_key <> '' DO NOTHING"                     \
     " RETURNING seq"
 
@@ -190,6 +193,7 @@ static void create_params(const job_rec *j, params *p)
     p_text(p, j->notes);
     p_text(p, j->file_name);
     p_text(p, j->label);
+    p_i64(p, j->input_h5);
 }
 
 /* The job that holds j's Idempotency-Key (an insert found it taken). */
@@ -774,11 +778,12 @@ static qdc_status pg_blob_get(job_store *s_, const char *id, const char *name,
     return st;
 }
 
-/* The row and its input in one transaction: other nodes see (and claim) the
- * job only once its input is there; a duplicate Idempotency-Key stores
- * nothing. */
+/* The row and its input (name from path; name2 from path2 too unless NULL)
+ * in one transaction: other nodes see (and claim) the job only once its
+ * input is there; a duplicate Idempotency-Key stores nothing. */
 static qdc_status create_tx(PGconn *c, const job_rec *j, const char *name,
-                            const char *path, int *inserted)
+                            const char *path, const char *name2, const char *path2,
+                            int *inserted)
 {
     params p = {.n = 0};
     char state[6];
@@ -798,6 +803,8 @@ static qdc_status create_tx(PGconn *c, const job_rec *j, const char *name,
     if (!*inserted)
         return QDC_OK; /* the key was taken: the caller rolls back */
     st = put_chunks(c, j->id, name, path, "");
+    if (st == QDC_OK && name2)
+        st = put_chunks(c, j->id, name2, path2, "");
     if (st != QDC_OK)
         return st;
     r = pg_cx(c, "COMMIT", NULL, state);
@@ -810,7 +817,8 @@ static qdc_status create_tx(PGconn *c, const job_rec *j, const char *name,
 }
 
 static qdc_status pg_create_with_input(job_store *s_, const job_rec *j, const char *name,
-                                       const char *path, int *dup, job_rec *existing)
+                                       const char *path, const char *name2,
+                                       const char *path2, int *dup, job_rec *existing)
 {
     pg_store *s = (pg_store *)s_;
     qdc_status st = QDC_EIO;
@@ -821,7 +829,7 @@ static qdc_status pg_create_with_input(job_store *s_, const job_rec *j, const ch
         int i = pool_take(s);
         if (i < 0)
             return QDC_EIO;
-        st = create_tx(s->pool[i], j, name, path, &inserted);
+        st = create_tx(s->pool[i], j, name, path, name2, path2, &inserted);
         int bad = PQstatus(s->pool[i]) != CONNECTION_OK;
         pool_give(s, i); /* rolls back what was not committed */
         if (st != QDC_EIO || !bad)

@@ -346,11 +346,6 @@ enum MHD_Result upload_begin(struct MHD_Connection *c, req *r)
         return http_problem(c, r, 400, "invalid-option", NULL, why, NULL, NULL);
     if (upload_format(c, u, why, sizeof why))
         return unsupported(c, r, why);
-    if (u->multipart && shared_on(q))
-        return unsupported(c, r,
-                           "XDMF with its .h5 file (two files) is taken by a single node "
-                           "only, not with a PostgreSQL store; send inline XDMF, or "
-                           "convert it with the qdc command");
     if (u->tetgen_opts && u->fmt != MESHIO_AUTO)
         return http_problem(c, r, 400, "invalid-option", NULL,
                             "tetgen_quality and max_volume apply to surface uploads only",
@@ -908,10 +903,13 @@ static int create_job(struct MHD_Connection *c, req *r, job_rec *j, enum MHD_Res
         *ret = store_failed(c, r, e, "the mesh could not be stored durably");
         return 1;
     }
-    if (shared_on(q)) {
+    if (shared_on(q)) { /* an XDMF file's .h5 too, in the same transaction */
+        char h5[4300];
         job_path(q, j->id, job_input_name(j->format), d, sizeof d);
+        job_path(q, j->id, JOB_INPUT_H5, h5, sizeof h5);
         st = q->store->ops->create_with_input(q->store, j, job_input_name(j->format), d,
-                                              &dup, &old);
+                                              j->input_h5 ? JOB_INPUT_H5 : NULL, h5, &dup,
+                                              &old);
     } else {
         st = q->store->ops->create(q->store, j, &dup, &old);
     }
