@@ -6,7 +6,10 @@
 # against build/rel/libqdc.a and prints one line per format: size, tets, best
 # of three parses (file already in memory, no source kept) and MB/s. Then MED
 # (HDF5, written by meshio, families -1/-2): `qdc-h5 med-read`, the whole
-# process, best of three. Targets: ASCII >= 100 MB/s, binary and HDF5
+# process, best of three; and XDMF with its heavy data in HDF5 (meshio,
+# uncompressed and gzip): `qdc-h5 h5-read` of its two datasets and `qdc
+# convert` of the .xdmf, each the whole process, best of three (MB/s of the
+# .h5 file). Targets: ASCII >= 100 MB/s, binary and HDF5
 # >= 500 MB/s. Files go to bench/out/read_speed
 # (gitignored); run `make` first.
 #   sh bench/read_speed.sh [TETS]
@@ -66,5 +69,40 @@ for _ in range(3):
 mb = os.path.getsize(sys.argv[2]) / 1e6
 print("%-14s %8.1f MB  qdc-h5 med-read, whole process, best of 3: %.3f s = %.0f MB/s"
       % (sys.argv[2], mb, best, mb / best))
+PYEOF
+fi
+if [ ! -s cube_h5.xdmf ] || [ cube.mesh -nt cube_h5.xdmf ]; then
+    "$PY" - << 'PYEOF'
+import meshio
+m = meshio.read("cube.mesh")
+m = meshio.Mesh(m.points, [("tetra", m.cells_dict["tetra"])])
+meshio.xdmf.write("cube_h5.xdmf", m, data_format="HDF", compression=None)
+meshio.xdmf.write("cube_h5z.xdmf", m, data_format="HDF", compression="gzip")
+PYEOF
+fi
+if [ -x "$BIN/qdc-h5" ]; then
+    "$PY" - "$BIN" << 'PYEOF'
+import os, re, subprocess, sys, time
+def best(cmd):
+    b = None
+    for _ in range(3):
+        t0 = time.perf_counter()
+        subprocess.run(cmd, stdout=subprocess.DEVNULL, check=True)
+        dt = time.perf_counter() - t0
+        b = dt if b is None or dt < b else b
+    return b
+for x in ("cube_h5.xdmf", "cube_h5z.xdmf"):
+    xml = open(x).read()
+    h5 = x[:-5] + ".h5"
+    items = re.findall(r'Dimensions="(\d+) (\d+)"[^>]*>[^:<]*:(/\w+)<', xml)
+    spec = ["%s:%s:%sx%s:%s" % (n, t, a, b, p)
+            for (n, t), (a, b, p) in zip((("geometry", "f"), ("topology", "i")), items)]
+    mb = os.path.getsize(h5) / 1e6
+    for what, cmd in (("qdc-h5 h5-read", [sys.argv[1] + "/qdc-h5", "h5-read", h5] + spec),
+                      ("qdc convert", [sys.argv[1] + "/qdc", "convert", x, "xdmf_h5.qmesh",
+                                       "--quiet"])):
+        dt = best(cmd)
+        print("%-14s %8.1f MB  %s, whole process, best of 3: %.3f s = %.0f MB/s"
+              % (h5, mb, what, dt, mb / dt))
 PYEOF
 fi

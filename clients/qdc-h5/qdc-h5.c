@@ -145,30 +145,6 @@ static void first_in(hid_t f, const char *path, char out[256])
     H5Gclose(g);
 }
 
-/* The whole dataset path as type (H5T_NATIVE_DOUBLE or H5T_NATIVE_INT64):
- * a new array and its size. */
-static void *read_all(hid_t f, const char *path, hid_t type, uint64_t *count)
-{
-    hid_t d = H5Dopen2(f, path, H5P_DEFAULT), sp;
-    hssize_t n;
-    void *buf;
-
-    if (d < 0)
-        die("cannot open dataset %s", path);
-    sp = H5Dget_space(d);
-    n = sp < 0 ? -1 : H5Sget_simple_extent_npoints(sp);
-    if (n < 0 || n > MAX_VALUES)
-        die("dataset %s: %lld values (at most %lld)", path, (long long)n,
-            (long long)MAX_VALUES);
-    buf = xmalloc((size_t)n * 8);
-    if (n && H5Dread(d, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, buf) < 0)
-        die("cannot read dataset %s", path);
-    H5Sclose(sp);
-    H5Dclose(d);
-    *count = (uint64_t)n;
-    return buf;
-}
-
 /* "/ENS_MAA/<first mesh>/<its first step>" */
 static void mesh_base(hid_t f, char *base, size_t size, int *dim)
 {
@@ -301,6 +277,64 @@ static void stream_frame(hid_t d, const char *path, uint64_t n, int cols, const 
     if (out != col)
         free(out);
     free(col);
+}
+
+/* Values a block of stream_rows: 512 KiB. */
+#define BLOCK_VALUES ((hsize_t)1 << 16)
+
+/* Dataset d (path) of n values, of rank dimensions dims, written as frame
+ * name of type t ('f' float64, 'i' int64) in its own (row-major) order: a
+ * block of rows (along the first dimension) at a time, read by HDF5 into a
+ * small buffer and written out, so that no copy of the whole dataset is
+ * made (XDMF's heavy data; MED's columns are stream_frame's). A chunked
+ * (compressed) dataset's blocks are whole rows of chunks, so that each
+ * chunk is inflated once without a chunk cache (meshio writes one chunk a
+ * column: 7883 x 1 of a million tets). */
+static void stream_rows(hid_t d, const char *path, uint64_t n, int rank,
+                        const hsize_t *dims, const char *name, char t)
+{
+    hid_t type = t == 'f' ? H5T_NATIVE_DOUBLE : H5T_NATIVE_INT64;
+    hid_t fs = H5Dget_space(d), ms, pl = H5Dget_create_plist(d);
+    hsize_t rows = rank ? dims[0] : 1, per = 1, start[H5S_MAX_RANK] = {0},
+            cnt[H5S_MAX_RANK], ch[H5S_MAX_RANK];
+    hsize_t block, m;
+    void *buf;
+
+    for (int i = 1; i < rank; i++)
+        per *= dims[i];
+    block = per && per < BLOCK_VALUES ? BLOCK_VALUES / per : 1;
+    if (pl >= 0 && rank && H5Pget_layout(pl) == H5D_CHUNKED &&
+        H5Pget_chunk(pl, rank, ch) == rank && ch[0] > 0)
+        block = (block + ch[0] - 1) / ch[0] * ch[0];
+    if (pl >= 0)
+        H5Pclose(pl);
+    if (fs < 0)
+        die("cannot read dataset %s", path);
+    frame(name, t, NULL, n);
+    if (!n) {
+        H5Sclose(fs);
+        return;
+    }
+    buf = xmalloc((size_t)(block < rows ? block : rows) * (size_t)per * 8);
+    for (int i = 1; i < rank; i++)
+        cnt[i] = dims[i];
+    for (hsize_t r0 = 0; r0 < rows; r0 += block) {
+        cnt[0] = rows - r0 < block ? rows - r0 : block;
+        start[0] = r0;
+        m = cnt[0] * per;
+        /* the block's own shape: HDF5 copies a selection of the same shape
+         * as runs of values, another shape one value at a time */
+        ms = H5Screate_simple(rank ? rank : 1, rank ? cnt : &m, NULL);
+        if (ms < 0 ||
+            (rank && H5Sselect_hyperslab(fs, H5S_SELECT_SET, start, NULL, cnt, NULL) < 0) ||
+            H5Dread(d, type, ms, fs, H5P_DEFAULT, buf) < 0)
+            die(h5_oom() ? "out of memory reading dataset %s" : "cannot read dataset %s",
+                path);
+        H5Sclose(ms);
+        put_all(buf, (size_t)m * 8);
+    }
+    H5Sclose(fs);
+    free(buf);
 }
 
 /* Dataset path (of cols columns, each of rows values when rows > 0) as
@@ -562,8 +596,6 @@ static void h5_read(const char *fname, int nspec, char **spec)
         int rank, nd = 0, same;
         hid_t d, sp, ty;
         H5T_class_t cls;
-        uint64_t n;
-        void *vals;
         c2 = c1 ? strchr(c1 + 1, ':') : NULL;
         c3 = c2 ? strchr(c2 + 1, ':') : NULL;
         if (!c3 || c1 - p > 16 || c2 != c1 + 2 || (c1[1] != 'f' && c1[1] != 'i'))
@@ -604,10 +636,8 @@ static void h5_read(const char *fname, int nspec, char **spec)
                 c1[1] == 'i' ? " (integers)" : "");
         H5Tclose(ty);
         H5Sclose(sp);
+        stream_rows(d, path, values_of(d, path), rank, dims, name, c1[1]);
         H5Dclose(d);
-        vals = read_all(f, path, c1[1] == 'f' ? H5T_NATIVE_DOUBLE : H5T_NATIVE_INT64, &n);
-        frame(name, c1[1], vals, n);
-        free(vals);
     }
     H5Fclose(f);
     if (fflush(stdout) != 0)

@@ -187,14 +187,16 @@ static qdc_status reap(pid_t pid, const char *what, qdc_error *err)
     return qdc_fail(err, QDC_EPARSE, "qdc-h5 %s failed (its message above)", what);
 }
 
-/* What qdc-h5 argv prints on its stdout, into *buf (qdc_free) of *len bytes. */
-static qdc_status run_output(char *const argv[], int copy_fd, char **out, size_t *outlen,
-                             qdc_error *err)
+/* What qdc-h5 argv prints on its stdout, after room bytes left free, into
+ * *buf (qdc_free) of *len bytes (room included); size: what it is expected
+ * to print (0 if unknown), allocated at once. */
+static qdc_status run_output(char *const argv[], int copy_fd, size_t room, size_t size,
+                             char **out, size_t *outlen, qdc_error *err)
 {
     int fd[2];
     pid_t pid;
     char *buf = NULL;
-    size_t len = 0, cap = 0;
+    size_t len = room, cap = 0;
     qdc_status st, st2;
 
     *out = NULL;
@@ -210,14 +212,18 @@ static qdc_status run_output(char *const argv[], int copy_fd, char **out, size_t
     }
     for (;;) {
         ssize_t k;
-        if (len == cap) {
-            char *nb = qdc_realloc(buf, cap ? 2 * cap : 1 << 20);
+        if (len >= cap) {
+            /* the expected size and a byte (to see the end), else doubled */
+            size_t want = !cap && size ? room + size + 1
+                          : cap        ? 2 * cap
+                                       : room + (1 << 20);
+            char *nb = qdc_realloc(buf, want);
             if (!nb) {
                 st = qdc_fail(err, QDC_ENOMEM, "out of memory reading qdc-h5's output");
                 break;
             }
             buf = nb;
-            cap = cap ? 2 * cap : 1 << 20;
+            cap = want;
         }
         k = read(fd[0], buf + len, cap - len);
         if (k < 0 && errno == EINTR)
@@ -252,7 +258,7 @@ static qdc_status med_read(const char *path, int copy_fd, const meshio_options *
         (char *)(copy_fd >= 0 ? COPY_PATH : path), NULL};
     char *buf;
     size_t len;
-    qdc_status st = run_output(argv, copy_fd, &buf, &len, err);
+    qdc_status st = run_output(argv, copy_fd, 0, 0, &buf, &len, err);
 
     if (st == QDC_OK)
         st = meshio_read_ex(buf, len, MESHIO_MED, mo, m, err);
@@ -402,16 +408,46 @@ static void folder_of(const char *path, char *dir, size_t size)
     snprintf(dir, size, "%.*s", (int)(n < size ? n : size - 1), path);
 }
 
+/* qdc-h5's specs of h's datasets ("geometry:f:356x3:/data0") into spec and
+ * args (NULL-ended); the index of the geometry's (-1: none) and into *size
+ * the bytes qdc-h5 prints for them (0 when over 1 GiB: the buffer then
+ * grows as they come, and a file smaller than its XML says costs nothing). */
+static int h5_specs(const meshio_xdmf_h5 *h, char spec[5][1200], char **args,
+                    size_t *size)
+{
+    int geom = -1;
+    double bytes = 8;
+
+    for (int k = 0; k < h->n; k++) {
+        double vals = 1;
+        size_t n = (size_t)snprintf(spec[k], sizeof spec[k], "%s:%c:", h->set[k].name,
+                                    h->set[k].type);
+        for (int d = 0; d < h->set[k].ndims; d++) {
+            n += (size_t)snprintf(spec[k] + n, sizeof spec[k] - n, "%s%lld", d ? "x" : "",
+                                  (long long)h->set[k].dims[d]);
+            vals *= (double)h->set[k].dims[d];
+        }
+        snprintf(spec[k] + n, sizeof spec[k] - n, ":%s", h->set[k].path);
+        args[k] = spec[k];
+        bytes += 32 + 8 * vals;
+        if (!strcmp(h->set[k].name, "geometry"))
+            geom = k;
+    }
+    args[h->n] = NULL;
+    *size = bytes <= (double)(1u << 30) ? (size_t)bytes : 0;
+    return geom;
+}
+
 qdc_status cli_xdmf_h5_retry(const char *path, qdc_status st, const meshio_options *mo,
                              mesh_t **m, qdc_error *err)
 {
     char prog[PATH_MAX + 8], dir[PATH_MAX], h5[PATH_MAX], spec[5][1200];
     char *argv[12];
-    char *xml = NULL, *frames = NULL, *in = NULL;
-    size_t xml_len, frames_len, in_len;
+    char *xml = NULL, *in = NULL;
+    size_t xml_len, in_len, size;
     meshio_xdmf_h5 h;
     qdc_error e;
-    int geom = -1;
+    int geom;
 
     if (st != QDC_EFORMAT || meshio_slurp_plain(path, &xml, &xml_len, &e) != QDC_OK)
         return st;
@@ -435,30 +471,19 @@ qdc_status cli_xdmf_h5_retry(const char *path, qdc_status st, const meshio_optio
     argv[2] = h5;
     argv[3] = "h5-read";
     argv[4] = h5;
-    for (int k = 0; k < h.n; k++) {
-        size_t n = (size_t)snprintf(spec[k], sizeof spec[k], "%s:%c:", h.set[k].name,
-                                    h.set[k].type);
-        for (int d = 0; d < h.set[k].ndims; d++)
-            n += (size_t)snprintf(spec[k] + n, sizeof spec[k] - n, "%s%lld", d ? "x" : "",
-                                  (long long)h.set[k].dims[d]);
-        snprintf(spec[k] + n, sizeof spec[k] - n, ":%s", h.set[k].path);
-        argv[5 + k] = spec[k];
-        if (!strcmp(h.set[k].name, "geometry"))
-            geom = k;
-    }
-    argv[5 + h.n] = NULL;
+    geom = h5_specs(&h, spec, argv + 5, &size);
     if (geom < 0) {
         qdc_free(xml);
         return qdc_fail(err, QDC_EFORMAT,
                         "XDMF: the Geometry inline, the rest of the mesh in HDF5: not "
                         "read (qdc writes the coordinates back into the .h5 file)");
     }
-    st = run_output(argv, -1, &frames, &frames_len, err);
+    /* the frames read after room for the XML: the form is made in place */
+    st = run_output(argv, -1, meshio_xdmf_h5_room(xml_len), size, &in, &in_len, err);
     if (st == QDC_OK)
-        st = meshio_xdmf_h5_input(xml, xml_len, frames, frames_len, &in, &in_len, err);
+        st = meshio_xdmf_h5_fill(in, in_len, xml, xml_len, err);
     if (st == QDC_OK)
         st = meshio_read_ex(in, in_len, MESHIO_XDMF, mo, m, err);
-    qdc_free(frames);
     qdc_free(in);
     if (st != QDC_OK) {
         qdc_free(xml);

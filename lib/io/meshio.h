@@ -190,6 +190,12 @@ qdc_status meshio_xdmf_h5_refs(const char *buf, size_t len, meshio_xdmf_h5 *h,
 qdc_status meshio_xdmf_h5_input(const char *xml, size_t xml_len, const char *frames,
                                 size_t frames_len, char **out, size_t *out_len,
                                 qdc_error *err);
+/* The same in place, without a copy of the frames: buf[0..len) holds
+ * meshio_xdmf_h5_room(xml_len) bytes of room, then the frames; the room is
+ * filled with the XML and what the form needs around it. */
+size_t meshio_xdmf_h5_room(size_t xml_len);
+qdc_status meshio_xdmf_h5_fill(char *buf, size_t len, const char *xml, size_t xml_len,
+                               qdc_error *err);
 /* The XML buf[0..len) through fn with every HDF reference naming file
  * instead (the only change): the .xdmf of a copy of its .h5. QDC_EINVAL for
  * a name XML or XDMF cannot hold (&<>"': in it), QDC_EIO if fn fails. */

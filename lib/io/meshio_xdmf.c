@@ -1241,24 +1241,26 @@ qdc_status meshio_xdmf_h5_rename(const char *buf, size_t len, const char *file,
     return st;
 }
 
-qdc_status meshio_xdmf_h5_input(const char *xml, size_t xml_len, const char *frames,
-                                size_t frames_len, char **out, size_t *out_len,
-                                qdc_error *err)
+size_t meshio_xdmf_h5_room(size_t xml_len)
 {
-    size_t pad = (8 - xml_len % 8) % 8, n;
-    unsigned char *b;
+    /* the form: magic, a frame header, the XML padded to 8 bytes, then the
+     * frames without their magic, whose place the room's end takes */
+    return 32 + xml_len + (8 - xml_len % 8) % 8;
+}
+
+qdc_status meshio_xdmf_h5_fill(char *buf, size_t len, const char *xml, size_t xml_len,
+                               qdc_error *err)
+{
+    size_t room, pad = (8 - xml_len % 8) % 8;
+    unsigned char *b = (unsigned char *)buf;
 
     qdc_error_clear(err);
-    *out = NULL;
-    *out_len = 0;
-    if (frames_len < sizeof h5_magic || memcmp(frames, h5_magic, sizeof h5_magic) != 0)
-        return qdc_fail(err, QDC_EPARSE, "XDMF: qdc-h5 gave no frames");
-    if (xml_len > SIZE_MAX / 2 || frames_len > SIZE_MAX / 2)
+    if (xml_len > SIZE_MAX / 2)
         return qdc_fail(err, QDC_ETOOBIG, "XDMF: input too large");
-    n = sizeof h5_magic + 32 + xml_len + pad + frames_len - sizeof h5_magic;
-    b = qdc_malloc(n + 1);
-    if (!b)
-        return qdc_fail(err, QDC_ENOMEM, "out of memory for %zu bytes", n);
+    room = meshio_xdmf_h5_room(xml_len);
+    if (len < room + sizeof h5_magic ||
+        memcmp(buf + room, h5_magic, sizeof h5_magic) != 0)
+        return qdc_fail(err, QDC_EPARSE, "XDMF: qdc-h5 gave no frames");
     memcpy(b, h5_magic, sizeof h5_magic);
     memset(b + 8, 0, 32);
     memcpy(b + 8, "xdmf", 4);
@@ -1267,10 +1269,34 @@ qdc_status meshio_xdmf_h5_input(const char *xml, size_t xml_len, const char *fra
         b[8 + 24 + k] = (unsigned char)((uint64_t)xml_len >> (8 * k));
     memcpy(b + 40, xml, xml_len);
     memset(b + 40 + xml_len, 0, pad);
-    memcpy(b + 40 + xml_len + pad, frames + sizeof h5_magic,
-           frames_len - sizeof h5_magic);
+    return QDC_OK;
+}
+
+qdc_status meshio_xdmf_h5_input(const char *xml, size_t xml_len, const char *frames,
+                                size_t frames_len, char **out, size_t *out_len,
+                                qdc_error *err)
+{
+    size_t room = meshio_xdmf_h5_room(xml_len), n;
+    char *b;
+    qdc_status st;
+
+    qdc_error_clear(err);
+    *out = NULL;
+    *out_len = 0;
+    if (xml_len > SIZE_MAX / 2 || frames_len > SIZE_MAX / 2)
+        return qdc_fail(err, QDC_ETOOBIG, "XDMF: input too large");
+    n = room + frames_len;
+    b = qdc_malloc(n + 1);
+    if (!b)
+        return qdc_fail(err, QDC_ENOMEM, "out of memory for %zu bytes", n);
+    memcpy(b + room, frames, frames_len);
     b[n] = 0;
-    *out = (char *)b;
+    st = meshio_xdmf_h5_fill(b, n, xml, xml_len, err);
+    if (st != QDC_OK) {
+        qdc_free(b);
+        return st;
+    }
+    *out = b;
     *out_len = n;
     return QDC_OK;
 }

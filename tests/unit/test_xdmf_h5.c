@@ -1,7 +1,8 @@
 /* test_xdmf_h5.c - XDMF whose heavy data is in HDF5 (meshio_xdmf.c): the
  * datasets the reader asks for (meshio_xdmf_h5_refs), the framed input
  * read into the mesh and written back spliced with only the geometry
- * frame's values changed, a dolfinx MeshTags grid in HDF5 as regions, the
+ * frame's values changed (the form also made in place, after the frames),
+ * a dolfinx MeshTags grid in HDF5 as regions, the
  * XML renamed to another .h5 file, and the references refused (absolute,
  * "..", two files, a plain read). */
 #include "testio.h"
@@ -86,6 +87,33 @@ TEST(framed_read_and_spliced_write)
     ASSERT_TRUE(memcmp(out.b + geom + 8, in + geom + 8, in_len - geom - 8) == 0);
     mesh_free(m);
     qdc_free(in);
+}
+
+/* The form made in place after the frames were read into room left for it
+ * is the one meshio_xdmf_h5_input copies together; frames without their
+ * magic, or cut before it, are refused. */
+TEST(the_form_is_made_in_place)
+{
+    static sink fr;
+    static char buf[4096];
+    char *in = NULL;
+    size_t in_len = 0, room = meshio_xdmf_h5_room(strlen(xml));
+    qdc_error e;
+
+    frames(&fr, 12);
+    ASSERT_EQ_INT((long long)room, (long long)(32 + (strlen(xml) + 7) / 8 * 8));
+    ASSERT_TRUE(room + fr.n <= sizeof buf);
+    memcpy(buf + room, fr.b, fr.n);
+    ASSERT_OK(meshio_xdmf_h5_fill(buf, room + fr.n, xml, strlen(xml), NULL));
+    ASSERT_OK(meshio_xdmf_h5_input(xml, strlen(xml), fr.b, fr.n, &in, &in_len, NULL));
+    ASSERT_EQ_INT((long long)in_len, (long long)(room + fr.n));
+    ASSERT_TRUE(memcmp(buf, in, in_len) == 0);
+    qdc_free(in);
+    ASSERT_EQ_INT(meshio_xdmf_h5_fill(buf, room + 7, xml, strlen(xml), &e), QDC_EPARSE);
+    memcpy(buf + room, "QDCH5v0\n", 8);
+    ASSERT_EQ_INT(meshio_xdmf_h5_fill(buf, room + fr.n, xml, strlen(xml), &e),
+                  QDC_EPARSE);
+    ASSERT_TRUE(strstr(e.msg, "no frames") != NULL);
 }
 
 /* Two tets in HDF5 and no region in the mesh's grid; a dolfinx MeshTags
@@ -230,7 +258,7 @@ TEST(references_out_of_the_folder_are_refused)
 }
 
 TEST_MAIN("xdmf_h5", T(refs_list_the_mesh_datasets), T(framed_read_and_spliced_write),
-          T(dolfinx_meshtags_in_hdf5_as_regions),
+          T(the_form_is_made_in_place), T(dolfinx_meshtags_in_hdf5_as_regions),
           T(a_geometry_frame_of_another_size_is_refused),
           T(rename_changes_only_the_file_names),
           T(references_out_of_the_folder_are_refused))
