@@ -254,6 +254,11 @@ def _save(path, data):
         raise
 
 
+def _is_xdmf(path):
+    """Whether path names an XDMF file (.xdmf or .xmf, as qdc takes both)."""
+    return path.lower().endswith((".xdmf", ".xmf"))
+
+
 def xdmf_h5_file(path):
     """The .h5 file an XDMF file at path keeps its heavy data in (its path,
     in the .xdmf's folder), or None if its data is inline. The rule is qdc's:
@@ -419,7 +424,7 @@ class Client:
             path = os.fspath(mesh)
             if name is None:
                 name = os.path.basename(path)
-            if path.lower().endswith(".xdmf"):
+            if _is_xdmf(path):
                 h5 = xdmf_h5_file(path)
             if h5 is None:
                 first = self._by_ext(path, "upload")[0]  # qdcd records the variant read
@@ -505,14 +510,13 @@ class Client:
         its family: then the upload comes back with only the coordinates
         replaced; a job with options {"topology": "flips"} has other tets, and
         its result is written by qdc's own writer in every format). A job
-        sent as an .xdmf with its .h5 file, written to a .xdmf path, comes
-        back as two files: the .h5 beside it (out.xdmf: out.h5) and the .xdmf
-        naming it. Returns path."""
+        sent as an .xdmf with its .h5 file (its record says "h5": true),
+        written to a .xdmf or .xmf path, comes back as two files: the .h5
+        beside it (out.xdmf: out.h5) and the .xdmf naming it. Returns path."""
         jid = _job_id(job)
-        if path is not None and fmt is None and os.fspath(path).lower().endswith(".xdmf"):
-            status, _, h5data = self._request("GET", "/v1/jobs/%s/result?format=h5" % jid)
-            if status == 200:  # an XDMF+HDF5 job
-                return self._xdmf_h5_result(jid, os.fspath(path), h5data)
+        if path is not None and fmt is None and _is_xdmf(os.fspath(path)):
+            if self.job(jid).get("mesh", {}).get("h5"):  # an XDMF+HDF5 job
+                return self._xdmf_h5_result(jid, os.fspath(path))
         if path is None:
             fmt = "qmesh"
         elif fmt is None:
@@ -529,9 +533,12 @@ class Client:
         _save(path, data)
         return path
 
-    def _xdmf_h5_result(self, jid, path, h5data):
+    def _xdmf_h5_result(self, jid, path):
         """path (.xdmf) and the .h5 beside it of an XDMF+HDF5 job."""
         h5path = os.path.splitext(path)[0] + ".h5"
+        status, _, h5data = self._request("GET", "/v1/jobs/%s/result?format=h5" % jid)
+        if status != 200:
+            raise QdcError(status, _problem(h5data))
         status, _, xml = self._request("GET", "/v1/jobs/%s/result?format=xdmf" % jid)
         if status != 200:
             raise QdcError(status, _problem(xml))

@@ -3,7 +3,8 @@
 # (tests/clients/python_client.py) and its command line. With qdc-h5 built,
 # meshio_h5.xdmf + meshio_h5.h5 go as one multipart/form-data upload and the
 # result comes back as pyx.xdmf + pyx.h5 (read by `qdc convert`; h5py, when
-# installed, finds only the coordinates changed).
+# installed, finds only the coordinates changed); an .xmf pair likewise, and
+# the job's record ("h5": true) tells such a job from an inline one.
 . "$(dirname "$0")/../lib.sh"
 . "$ROOT/tests/server/daemon.inc"
 PYC=$ROOT/clients/python/qdc_client.py

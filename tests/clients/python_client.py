@@ -163,6 +163,31 @@ if os.environ.get("H5") == "1":
     check("submit(.xdmf naming an .h5): both sent, job succeeded with %s tets"
           % fx.get("mesh", {}).get("tets"),
           fx["state"] == "succeeded" and fx["mesh"]["tets"] == 1228, json.dumps(fx)[:300])
+    check("the XDMF+HDF5 job's record says so (mesh.h5 true)",
+          fx["mesh"].get("h5") is True, json.dumps(fx.get("mesh")))
+    # .xmf as well as .xdmf, both ways
+    xmf = os.path.join(xdir, "m.xmf")
+    with open(xmf, "wb") as f:
+        f.write(open(xin, "rb").read())
+    fm = c.wait(c.submit(xmf, {"max_iter": 2}))
+    mdir = os.path.join(TMP, "xmfout")
+    os.makedirs(mdir, exist_ok=True)
+    c.result(fm, os.path.join(mdir, "o.xmf"))
+    check("submit(m.xmf) sends its .h5 too; result(job, 'o.xmf'): o.xmf + o.h5 (%s)"
+          % sorted(os.listdir(mdir)),
+          fm["state"] == "succeeded" and fm["mesh"].get("h5") is True
+          and sorted(os.listdir(mdir)) == ["o.h5", "o.xmf"]
+          and b"o.h5:/" in open(os.path.join(mdir, "o.xmf"), "rb").read(),
+          json.dumps(fm)[:300])
+    # a job sent inline (no "h5" in its record) written to a .xdmf path: one file
+    idir = os.path.join(TMP, "xinline")
+    os.makedirs(idir, exist_ok=True)
+    fi = c.wait(c.submit(os.environ["MESHQ"], {"max_iter": 1}))
+    c.result(fi, os.path.join(idir, "inline.xdmf"))
+    check("a job without \"h5\" written to inline.xdmf: that one file, inline XML",
+          "h5" not in fi["mesh"] and os.listdir(idir) == ["inline.xdmf"]
+          and b'Format="XML"' in open(os.path.join(idir, "inline.xdmf"), "rb").read(),
+          "%s %s" % (fi.get("mesh"), os.listdir(idir)))
     odir = os.path.join(TMP, "xout")
     os.makedirs(odir, exist_ok=True)
     xo = c.result(jx, os.path.join(odir, "pyx.xdmf"))
