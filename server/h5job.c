@@ -143,7 +143,7 @@ static void h5_spec(const meshio_xdmf_h5 *h, int k, char *s, size_t cap)
 void h5job_xdmf(const qdcd *q, const char *id, const char *frames, const char *res,
                 double deadline, const atomic_int *cancel, h5job_outcome *out)
 {
-    char xp[4200], h5[4200], fr[4300], spec[5][1200];
+    char xp[4200], h5[4200], fr[4300], spec[7][1200];
     char *args[12];
     size_t xlen = 0, flen = 0, inlen = 0;
     char *xml, *raw = NULL, *in = NULL;

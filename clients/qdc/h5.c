@@ -412,7 +412,7 @@ static void folder_of(const char *path, char *dir, size_t size)
  * args (NULL-ended); the index of the geometry's (-1: none) and into *size
  * the bytes qdc-h5 prints for them (0 when over 1 GiB: the buffer then
  * grows as they come, and a file smaller than its XML says costs nothing). */
-static int h5_specs(const meshio_xdmf_h5 *h, char spec[5][1200], char **args,
+static int h5_specs(const meshio_xdmf_h5 *h, char spec[7][1200], char **args,
                     size_t *size)
 {
     int geom = -1;
@@ -441,8 +441,8 @@ static int h5_specs(const meshio_xdmf_h5 *h, char spec[5][1200], char **args,
 qdc_status cli_xdmf_h5_retry(const char *path, qdc_status st, const meshio_options *mo,
                              mesh_t **m, qdc_error *err)
 {
-    char prog[PATH_MAX + 8], dir[PATH_MAX], h5[PATH_MAX], spec[5][1200];
-    char *argv[12];
+    char prog[PATH_MAX + 8], dir[PATH_MAX], h5[PATH_MAX], spec[7][1200];
+    char *argv[13];
     char *xml = NULL, *in = NULL;
     size_t xml_len, in_len, size;
     meshio_xdmf_h5 h;

@@ -174,12 +174,12 @@ typedef struct {
     struct {
         char name[16];   /* the frame qdc-h5 gives it as: "geometry", "topology",
                             "region"; a dolfinx MeshTags grid's "tagtopo",
-                            "tagvals" */
+                            "tagvals" (tets), "tritopo", "trivals" (facets) */
         char type;       /* 'f' float64, 'i' int64 */
         char path[1024]; /* the dataset ("/data0") */
         int ndims;       /* the shape the XML gives it */
         int64_t dims[4];
-    } set[5];
+    } set[7];
 } meshio_xdmf_h5;
 qdc_status meshio_xdmf_h5_refs(const char *buf, size_t len, meshio_xdmf_h5 *h,
                                qdc_error *err);

@@ -10,7 +10,9 @@
  * MeshFunction and meshio's cell data write them. Grids after the mesh that
  * share its geometry (dolfinx MeshTags: an xi:include of the Geometry) with
  * Tetrahedron topology and an integer cell attribute give the region of the
- * tets they list. Other attributes, grids and elements are kept by a spliced
+ * tets they list; the first such grid with Triangle topology (facet tags)
+ * gives the boundary triangles, its values their refs; in any order. Other
+ * attributes, grids and elements are kept by a spliced
  * write, which rewrites only the numbers of the Geometry's DataItem.
  *
  * The XML is read without any entity expansion: a DOCTYPE is taken only with
@@ -32,10 +34,11 @@
  * XML again with only the .h5 file's name changed (meshio_xdmf_h5_rename).
  * Every HDF reference must name one file, relative and inside the .xdmf's
  * folder (no "..", not absolute). A plain read refuses HDF heavy data in the
- * mesh's Grid with a message saying how it is read. A dolfinx MeshTags grid
- * with its data in HDF5 (the first tag grid of tets after the mesh that
- * shares its geometry) is listed too ("tagtopo", "tagvals") and applied as
- * inline tags are. */
+ * mesh's Grid with a message saying how it is read. dolfinx MeshTags grids
+ * with their data in HDF5 (the first tag grid of tets after the mesh that
+ * shares its geometry, and the first of triangles, whichever comes first)
+ * are listed too ("tagtopo", "tagvals"; "tritopo", "trivals") and applied
+ * as inline tags are. */
 #include "io/format.h"
 
 #include <string.h>
@@ -44,11 +47,13 @@ enum { XD_DEPTH = 64 };
 
 /* How HDF heavy data is taken: refused, listed, or from the frames. */
 enum { X_PLAIN, X_COLLECT, X_FRAMED };
-/* The datasets the mesh takes from HDF5: its own, and the tets and values
- * of a tag grid after it (dolfinx MeshTags). */
-enum { H_GEOM, H_TOPO, H_REG, H_TTOPO, H_TVALS, H_COUNT };
+/* The datasets the mesh takes from HDF5: its own, the tets and values of a
+ * tag grid after it and the triangles and values of a facet tag grid after
+ * it (dolfinx MeshTags: cell tags, facet tags). Each pair is read from one
+ * grid, or not at all. */
+enum { H_GEOM, H_TOPO, H_REG, H_TTOPO, H_TVALS, H_FTOPO, H_FVALS, H_COUNT };
 static const char *const h5_names[H_COUNT] = {"geometry", "topology", "region", "tagtopo",
-                                              "tagvals"};
+                                              "tagvals",  "tritopo",  "trivals"};
 
 /* What an element is to the reader. */
 enum { K_OTHER, K_XDMF, K_GRID, K_TOPO, K_GEOM, K_ATTR, K_DATA, K_INCLUDE };
@@ -75,9 +80,9 @@ typedef struct {
     item it;
 } pend;
 
-/* A grid after the mesh holding tet tags (dolfinx MeshTags). */
+/* A grid after the mesh holding tet or triangle tags (dolfinx MeshTags). */
 typedef struct {
-    vec tets;   /* int32, 4 a tet */
+    vec tets;   /* int32, 4 a tet (3 a triangle) */
     vec vals;   /* int32 */
     int shares; /* its geometry is an xi:include */
 } tagset;
@@ -104,8 +109,13 @@ typedef struct {
     int attr_cell_int; /* the Attribute open is a scalar cell one (mesh grid) */
     int attr_rank;
     /* grids after the mesh */
-    tagset ts;
-    int ts_depth, ts_topo, ts_attr;
+    tagset ts; /* the one being read (inline) */
+    tagset fs; /* the facet tags from the frames (X_FRAMED) */
+    int ts_depth;
+    int ts_topo; /* its Topology: 4 tets, 3 triangles, 0 other */
+    int ts_attr;
+    int32_t *ftris, *fref; /* the first facet tag grid's: boundary triangles */
+    int64_t nftri;
     /* heavy data in HDF5 */
     int mode;
     const char *h5f, *h5fe; /* the file every reference names */
@@ -501,11 +511,30 @@ static qdc_status topo_start(xd *x, const xtag *t, int *nodes, qdc_error *err)
     return QDC_OK;
 }
 
+/* The nodes an element of a tag grid's Topology t: 4 (Tetrahedron), 3
+ * (Triangle), 0 for another (not read). */
+static int tag_nodes(xd *x, const xtag *t)
+{
+    char type[32], npe[16];
+    int nodes = 0;
+
+    if (topo_start(x, t, &nodes, NULL) == QDC_OK)
+        return nodes == 4 ? 4 : 0;
+    if (xattr_str(t, "TopologyType", "Type", type, sizeof type) != 1 ||
+        strcasecmp(type, "Triangle") != 0)
+        return 0;
+    if (xattr_str(t, "NodesPerElement", NULL, npe, sizeof npe) == 1 &&
+        strcmp(npe, "3") != 0)
+        return 0;
+    return 3;
+}
+
 /* Is dataset k to be read from HDF5 (a tag grid's: both of its two)? */
 static int pend_used(const xd *x, int k)
 {
-    return x->pend[k].set &&
-           (k < H_TTOPO || (x->pend[H_TTOPO].set && x->pend[H_TVALS].set));
+    int pair = k < H_TTOPO ? -1 : H_TTOPO + (k - H_TTOPO) / 2 * 2;
+
+    return x->pend[k].set && (pair < 0 || (x->pend[pair].set && x->pend[pair + 1].set));
 }
 
 static int have_region(const xd *x)
@@ -616,7 +645,8 @@ static qdc_status mesh_item(xd *x, const xtag *t, int parent, const char *rp,
     return QDC_OK; /* skipped with the rest of the element */
 }
 
-/* A DataItem of a tag grid (after the mesh); *read as for mesh_item. */
+/* A DataItem of a tag grid (after the mesh; its Topology of x->ts_topo
+ * nodes an element); *read as for mesh_item. */
 static qdc_status tags_item(xd *x, const xtag *t, int parent, int *read, qdc_error *err)
 {
     item it;
@@ -629,7 +659,7 @@ static qdc_status tags_item(xd *x, const xtag *t, int parent, int *read, qdc_err
     st = item_read(x, t, &it, err);
     if (st != QDC_OK)
         return st;
-    if (!it.integer || it.n > INT32_MAX || (parent == K_TOPO && it.n % 4))
+    if (!it.integer || it.n > INT32_MAX || (parent == K_TOPO && it.n % x->ts_topo))
         return QDC_OK;
     *read = 1;
     if (vec_grow(v, (size_t)it.n + 1) != 0)
@@ -712,22 +742,48 @@ static qdc_status tags_apply(xd *x, qdc_error *err)
     return QDC_OK;
 }
 
-/* An HDF DataItem of a tag grid of tets sharing the mesh's geometry (its
- * dataset [p, pe)): the first grid's kept to be read from the frames, as
- * inline tags are read from the first grid that has them. */
+/* The triangles a facet tag grid (ts, sharing the mesh's geometry) lists,
+ * with their values: the mesh's boundary triangles and their refs, from the
+ * first such grid. */
+static void facets_take(xd *x, tagset *ts)
+{
+    size_t n = ts->tets.n / 3;
+
+    if (x->ftris || !ts->shares || !n || ts->vals.n != n || ts->tets.n % 3)
+        return;
+    x->ftris = ts->tets.a;
+    x->fref = ts->vals.a;
+    x->nftri = (int64_t)n;
+    ts->tets.a = ts->vals.a = NULL;
+    ts->tets.n = ts->tets.cap = ts->vals.n = ts->vals.cap = 0;
+}
+
+/* A tag grid's datasets in HDF5 are taken from one grid: at the start of
+ * the next, a pair the grid before gave only half of is dropped. */
+static void tags_hdf_grid(xd *x)
+{
+    for (int k = H_TTOPO; k < H_COUNT; k += 2)
+        if (x->pend[k].set != x->pend[k + 1].set)
+            x->pend[k].set = x->pend[k + 1].set = 0;
+}
+
+/* An HDF DataItem of a tag grid of tets or triangles sharing the mesh's
+ * geometry (its dataset [p, pe)): the first such grid's of each kept to be
+ * read from the frames, as inline tags are read from the first grid that
+ * has them, whichever comes first. */
 static qdc_status tags_hdf(xd *x, const xtag *t, int parent, const char *p,
                            const char *pe, qdc_error *err)
 {
-    int k = parent == K_TOPO ? H_TTOPO : H_TVALS;
+    int base = x->ts_topo == 3 ? H_FTOPO : H_TTOPO;
+    int k = parent == K_TOPO ? base : base + 1;
     item it;
     qdc_status st;
 
-    if (x->pend[H_TTOPO].set && x->pend[H_TVALS].set)
+    if (x->pend[base].set && x->pend[base + 1].set)
         return QDC_OK;
-    if (x->pend[k].set && !x->pend[k == H_TTOPO ? H_TVALS : H_TTOPO].set)
-        x->pend[k].set = 0; /* the grid before had only half of them */
     st = item_read(x, t, &it, err);
-    if (st != QDC_OK || !it.integer || it.n > INT32_MAX || (k == H_TTOPO && it.n % 4))
+    if (st != QDC_OK || !it.integer || it.n > INT32_MAX ||
+        (k == base && it.n % x->ts_topo))
         return st;
     pend_set(x, k, p, pe, &it);
     return QDC_OK;
@@ -888,13 +944,12 @@ static qdc_status xd_start(xd *x, const xtag *t, qdc_error *err)
         x->ts_depth = x->depth + 1;
         x->ts.tets.n = x->ts.vals.n = 0;
         x->ts.shares = x->ts_topo = x->ts_attr = 0;
+        tags_hdf_grid(x);
     } else if (x->ts_depth && x->depth == x->ts_depth) {
         if (k == K_INCLUDE)
             x->ts.shares = 1;
-        if (k == K_TOPO) {
-            int nodes = 0;
-            x->ts_topo = topo_start(x, t, &nodes, NULL) == QDC_OK && nodes == 4;
-        }
+        if (k == K_TOPO)
+            x->ts_topo = tag_nodes(x, t);
         if (k == K_ATTR) {
             char center[16];
             x->ts_attr = xattr_str(t, "Center", NULL, center, sizeof center) == 1 &&
@@ -931,7 +986,11 @@ static qdc_status xd_end(xd *x, const xtag *t, qdc_error *err)
     if (x->kind[x->depth] == K_GRID && x->mesh_depth == x->depth + 1 && !x->mesh_done)
         x->mesh_done = 1;
     if (x->kind[x->depth] == K_GRID && x->ts_depth == x->depth + 1) {
-        qdc_status st = tags_apply(x, err);
+        qdc_status st = QDC_OK;
+        if (x->ts_topo == 3)
+            facets_take(x, &x->ts);
+        else
+            st = tags_apply(x, err);
         x->ts_depth = 0;
         if (st != QDC_OK)
             return st;
@@ -944,8 +1003,12 @@ static void xd_free(xd *x)
     qdc_free(x->xyz);
     qdc_free(x->conn);
     qdc_free(x->region);
+    qdc_free(x->ftris);
+    qdc_free(x->fref);
     vec_free(&x->ts.tets);
     vec_free(&x->ts.vals);
+    vec_free(&x->fs.tets);
+    vec_free(&x->fs.vals);
     vec_free(&x->spans);
 }
 
@@ -1000,12 +1063,14 @@ static qdc_status heavy_fill(xd *x, qdc_error *err)
             }
         } else {
             int32_t *a = qdc_mallocn((size_t)n + 1, sizeof(int32_t));
-            int64_t lo = k == H_TOPO || k == H_TTOPO ? 0 : INT32_MIN;
-            vec *tv = k == H_TTOPO ? &x->ts.tets : &x->ts.vals;
+            int conn = k == H_TOPO || k == H_TTOPO || k == H_FTOPO;
+            int64_t lo = conn ? 0 : INT32_MIN;
+            tagset *ts = k >= H_FTOPO ? &x->fs : &x->ts;
+            vec *tv = conn ? &ts->tets : &ts->vals;
             if (!a)
                 return qdc_fail(err, QDC_ENOMEM, "out of memory for %lld values",
                                 (long long)n);
-            if (k == H_TTOPO || k == H_TVALS) { /* a tag grid's: tags_apply */
+            if (k >= H_TTOPO) { /* a tag grid's: tags_apply, facets_take */
                 qdc_free(tv->a);
                 tv->a = a;
                 tv->n = tv->cap = (size_t)n;
@@ -1046,6 +1111,14 @@ static qdc_status xd_mesh(xd *x, mesh_t **out, qdc_error *err)
         set_index(err, "tet", bad / x->nodes);
         return st;
     }
+    bad = first_bad_index(x->ftris, 3 * x->nftri, x->nv);
+    if (bad >= 0) {
+        st = qdc_fail(err, QDC_EPARSE,
+                      "XDMF: facet tag triangle %lld: vertex %d out of range [0, %lld)",
+                      (long long)(bad / 3), (int)x->ftris[bad], (long long)x->nv);
+        set_index(err, "triangle", bad / 3);
+        return st;
+    }
     if (x->region && x->nreg != x->nt) {
         txt_locate(&x->s, x->reg_at);
         return fail_txt(err, QDC_EPARSE, &x->s, x->reg_at,
@@ -1059,6 +1132,12 @@ static qdc_status xd_mesh(xd *x, mesh_t **out, qdc_error *err)
     x->xyz = NULL;
     pm.region = x->region;
     x->region = NULL;
+    if (x->nftri > 0) { /* facet tags: boundary triangles and their refs */
+        pm.ntri = x->nftri;
+        pm.tris = x->ftris;
+        pm.tri_ref = x->fref;
+        x->ftris = x->fref = NULL;
+    }
     if (x->nodes == 4) {
         pm.tets = x->conn;
         x->conn = NULL;
@@ -1085,6 +1164,7 @@ static qdc_status xd_run(xd *x, qdc_error *err)
 
     x->nv = x->nt = -1;
     x->ts.tets.size = x->ts.vals.size = sizeof(int32_t);
+    x->fs.tets.size = x->fs.vals.size = sizeof(int32_t);
     for (;;) {
         xtag t;
         st = xd_tag(&x->s, &t, err);
@@ -1112,7 +1192,8 @@ static qdc_status xd_run(xd *x, qdc_error *err)
 static qdc_status xd_open(xd *x, const char *buf, size_t len, qdc_error *err)
 {
     static const char *const names[H_COUNT + 1] = {"geometry", "topology", "region",
-                                                   "tagtopo",  "tagvals",  "xdmf"};
+                                                   "tagtopo",  "tagvals",  "tritopo",
+                                                   "trivals",  "xdmf"};
     h5_frame fr[H_COUNT + 1];
     qdc_status st;
 
@@ -1120,7 +1201,7 @@ static qdc_status xd_open(xd *x, const char *buf, size_t len, qdc_error *err)
         x->s = txt_init(buf, len, 0);
         return QDC_OK;
     }
-    st = h5_frames(buf, len, "XDMF", names, "fiiiib", H_COUNT + 1, fr, err);
+    st = h5_frames(buf, len, "XDMF", names, "fiiiiiib", H_COUNT + 1, fr, err);
     if (st != QDC_OK)
         return st;
     if (!fr[H_COUNT].type)
@@ -1150,6 +1231,10 @@ static qdc_status read_xdmf(const char *buf, size_t len, const meshio_options *o
     if (st == QDC_OK && x.mode == X_FRAMED && pend_used(&x, H_TTOPO)) {
         x.ts.shares = 1; /* listed only so */
         st = tags_apply(&x, err);
+    }
+    if (st == QDC_OK && x.mode == X_FRAMED && pend_used(&x, H_FTOPO)) {
+        x.fs.shares = 1;
+        facets_take(&x, &x.fs);
     }
     if (st == QDC_OK)
         st = xd_mesh(&x, out, err);

@@ -96,7 +96,9 @@ fi
 # Geometry and Topology in HDF5 and no cell attribute; a MeshTags grid after
 # it (an xi:include of the Geometry) lists every tet, corners rolled and rows
 # reversed, with a 2-D (N x 1) dataset of values 100 + the physical tag: read
-# as the regions; written back, only the geometry dataset changes
+# as the regions; a facet tags grid before it (the boundary triangles, values
+# 1000 + k % 3): the boundary triangles with those refs (as Medit); written
+# back, only the geometry dataset changes
 if "$PY" - meshio_h5.h5 2> err << 'EOF'; then
 import sys
 import h5py, numpy as np
@@ -108,6 +110,12 @@ with h5py.File("dx.h5", "w") as f:
     f["Mesh/mesh/topology"] = tets.astype(np.int64)
     f["MeshTags/cells/topology"] = np.roll(tets, 1, axis=1)[::-1].astype(np.int64)
     f["MeshTags/cells/Values"] = (100 + phys[::-1]).astype(np.int32).reshape(-1, 1)
+    faces = np.sort(tets[:, [[1, 2, 3], [0, 2, 3], [0, 1, 3], [0, 1, 2]]].reshape(-1, 3), axis=1)
+    u, cnt = np.unique(faces, axis=0, return_counts=True)
+    tris = u[cnt == 1]
+    f["MeshTags/facets/topology"] = tris.astype(np.int64)
+    f["MeshTags/facets/Values"] = (1000 + np.arange(len(tris)) % 3).astype(np.int32)
+np.save("dx_tris.npy", np.c_[tris + 1, 1000 + np.arange(len(tris)) % 3])
 item = '<DataItem Dimensions="%s" NumberType="%s" Format="HDF">dx.h5:/%s</DataItem>'
 topo = '<Topology TopologyType="Tetrahedron" NumberOfElements="%d" NodesPerElement="4">' % n
 open("dx.xdmf", "w").write(
@@ -115,7 +123,13 @@ open("dx.xdmf", "w").write(
     '<Domain><Grid Name="mesh" GridType="Uniform">' + topo
     + item % ("%d 4" % n, "Int", "Mesh/mesh/topology") + '</Topology>'
     '<Geometry GeometryType="XYZ">' + item % ("%d 3" % len(pts), "Float", "Mesh/mesh/geometry")
-    + '</Geometry></Grid><Grid Name="cells" GridType="Uniform">'
+    + '</Geometry></Grid><Grid Name="facets" GridType="Uniform">'
+    '<xi:include xpointer="xpointer(/Xdmf/Domain/Grid[@GridType=\'Uniform\'][1]/Geometry)" />'
+    '<Topology TopologyType="Triangle" NumberOfElements="%d" NodesPerElement="3">' % len(tris)
+    + item % ("%d 3" % len(tris), "Int", "MeshTags/facets/topology") + '</Topology>'
+    '<Attribute Name="facets" AttributeType="Scalar" Center="Cell">'
+    + item % ("%d" % len(tris), "Int", "MeshTags/facets/Values") + '</Attribute></Grid>'
+    '<Grid Name="cells" GridType="Uniform">'
     '<xi:include xpointer="xpointer(/Xdmf/Domain/Grid[@GridType=\'Uniform\'][1]/Geometry)" />'
     + topo + item % ("%d 4" % n, "Int", "MeshTags/cells/topology") + '</Topology>'
     '<Attribute Name="cells" AttributeType="Scalar" Center="Cell">'
@@ -128,6 +142,18 @@ sys.exit(0 if np.array_equal(r, np.load("dx_want.npy")) else 1)' 2>> err; then
         pass "hdf5: dolfinx MeshTags in HDF5 (tets reordered, N x 1 values): read as the regions"
     else
         fail "hdf5: dolfinx MeshTags in HDF5" "$(head -3 err)"
+    fi
+    if "$BIN/qdc" convert dx.xdmf dx.mesh --quiet 2> err && "$PY" -c 'import sys, numpy as np
+w = open("dx.mesh").read().split()
+i = w.index("Triangles")
+n = int(w[i + 1])
+got = np.array(w[i + 2:i + 2 + 4 * n], dtype=int).reshape(-1, 4)
+want = np.load("dx_tris.npy")
+print(n, "triangles, refs", sorted(set(got[:, 3])))
+sys.exit(0 if np.array_equal(got, want) and n > 0 else 1)' > tris.out 2>> err; then
+        pass "hdf5: dolfinx facet tags in HDF5 (before the cell tags): $(cat tris.out) as Medit's Triangles"
+    else
+        fail "hdf5: dolfinx facet tags in HDF5" "$(cat tris.out) $(head -3 err)"
     fi
     if "$BIN/qdc" optimize dx.xdmf dxout.xdmf --quiet --max-iter 3 2> err &&
         sed 's/dx\.h5:/dxout.h5:/g' dx.xdmf | cmp -s - dxout.xdmf; then

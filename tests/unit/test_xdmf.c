@@ -1,7 +1,8 @@
 /* test_xdmf.c - the XDMF reader (data inline), its writer and its spliced
  * write, on hand-made two-tet documents in the forms meshio, DOLFIN (XDMF 2,
  * MeshFunction) and dolfinx (MeshTags) write: known coordinates, tets and
- * regions, second-order tets, the Geometry's numbers alone rewritten, and
+ * regions, dolfinx facet tags as boundary triangles with refs,
+ * second-order tets, the Geometry's numbers alone rewritten, and
  * refusals (entities, heavy data, bad counts and indices) with their line. */
 #include "testio.h"
 #include "testlib.h"
@@ -264,5 +265,48 @@ TEST(truncated)
     }
 }
 
+/* dolfinx's facet tags grid (triangles, before the cell tags grid here):
+ * the boundary triangles, its values their refs; the cell tags still the
+ * regions; written back unmoved, the same bytes. */
+TEST(facet_tags_as_boundary_triangles)
+{
+    static const char facets[] =
+        "    <Grid Name=\"facets\" GridType=\"Uniform\">\n"
+        "      <xi:include xpointer=\"xpointer(/Xdmf/Domain/Grid[@GridType='Uniform'][1]/"
+        "Geometry)\" />\n"
+        "      <Topology TopologyType=\"Triangle\" NumberOfElements=\"2\" "
+        "NodesPerElement=\"3\">\n"
+        "        <DataItem Dimensions=\"2 3\" NumberType=\"Int\" Format=\"XML\">\n"
+        "          0 2 1\n          1 2 4\n        </DataItem>\n"
+        "      </Topology>\n"
+        "      <Attribute Name=\"facets\" AttributeType=\"Scalar\" Center=\"Cell\">\n"
+        "        <DataItem Dimensions=\"2\" NumberType=\"Int\" Format=\"XML\">\n"
+        "          7\n          8\n        </DataItem>\n"
+        "      </Attribute>\n"
+        "    </Grid>\n"
+        "    <Grid Name=\"cells\"";
+    static const int32_t tris[6] = {0, 2, 1, 1, 2, 4};
+    char *doc = replaced(dolfinx, "    <Grid Name=\"cells\"", facets);
+    mesh_t *m;
+    qdc_error err;
+    sink s = {0};
+
+    ASSERT_TRUE(doc != NULL);
+    ASSERT_OK(rd(doc, &m, &err));
+    ASSERT_TRUE(is_two_tets(m, 10, 20));
+    ASSERT_EQ_INT(m->ntri, 2);
+    ASSERT_TRUE(m->tri_ref != NULL);
+    ASSERT_TRUE(memcmp(m->tris, tris, sizeof tris) == 0);
+    ASSERT_EQ_INT(m->tri_ref[0], 7);
+    ASSERT_EQ_INT(m->tri_ref[1], 8);
+    ASSERT_OK(meshio_write(m, MESHIO_AUTO, sink_write, &s, &err));
+    ASSERT_EQ_INT((long long)s.n, (long long)strlen(doc));
+    ASSERT_TRUE(memcmp(s.b, doc, s.n) == 0);
+    free(s.b);
+    mesh_free(m);
+    free(doc);
+}
+
 TEST_MAIN("xdmf", T(three_forms_read), T(spliced_geometry_only), T(second_order),
-          T(writer_roundtrip), T(refusals_say_where), T(truncated))
+          T(writer_roundtrip), T(refusals_say_where), T(truncated),
+          T(facet_tags_as_boundary_triangles))

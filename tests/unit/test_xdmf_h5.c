@@ -2,7 +2,9 @@
  * datasets the reader asks for (meshio_xdmf_h5_refs), the framed input
  * read into the mesh and written back spliced with only the geometry
  * frame's values changed (the form also made in place, after the frames),
- * a dolfinx MeshTags grid in HDF5 as regions, the
+ * dolfinx MeshTags grids in HDF5 (cell tags as regions, facet tags as
+ * boundary triangles with refs, in either order; a facet off the mesh
+ * refused), the
  * XML renamed to another .h5 file, and the references refused (absolute,
  * "..", two files, a plain read). */
 #include "testio.h"
@@ -117,68 +119,125 @@ TEST(the_form_is_made_in_place)
 }
 
 /* Two tets in HDF5 and no region in the mesh's grid; a dolfinx MeshTags
- * grid after it (sharing its Geometry) lists them (corners in another order,
- * the second first) with values 5 and 6; a facet tag grid after that is not
- * a tet one. */
-static const char dx[] =
-    "<Xdmf Version=\"3.0\" xmlns:xi=\"http://www.w3.org/2001/XInclude\"><Domain>"
-    "<Grid Name=\"mesh\" GridType=\"Uniform\">"
-    "<Topology TopologyType=\"Tetrahedron\" NumberOfElements=\"2\" "
-    "NodesPerElement=\"4\"><DataItem Dimensions=\"2 4\" NumberType=\"Int\" "
-    "Format=\"HDF\">d.h5:/Mesh/topology</DataItem></Topology>"
-    "<Geometry GeometryType=\"XYZ\"><DataItem Dimensions=\"5 3\" Format=\"HDF\">"
+ * grid of cell tags (sharing its Geometry) lists them (corners in another
+ * order, the second first) with values 5 and 6, one of facet tags lists two
+ * triangles with values 9 and 8: DX_CELLS before DX_FACETS in dx, after
+ * them in dx2. */
+#define DX_HEAD                                                                          \
+    "<Xdmf Version=\"3.0\" xmlns:xi=\"http://www.w3.org/2001/XInclude\"><Domain>"        \
+    "<Grid Name=\"mesh\" GridType=\"Uniform\">"                                          \
+    "<Topology TopologyType=\"Tetrahedron\" NumberOfElements=\"2\" "                     \
+    "NodesPerElement=\"4\"><DataItem Dimensions=\"2 4\" NumberType=\"Int\" "             \
+    "Format=\"HDF\">d.h5:/Mesh/topology</DataItem></Topology>"                           \
+    "<Geometry GeometryType=\"XYZ\"><DataItem Dimensions=\"5 3\" Format=\"HDF\">"        \
     "d.h5:/Mesh/geometry</DataItem></Geometry></Grid>"
-    "<Grid Name=\"cells\" GridType=\"Uniform\">"
-    "<xi:include xpointer=\"xpointer(/Xdmf/Domain/Grid[@GridType='Uniform'][1]/"
+#define DX_SHARED                                                                        \
+    "<xi:include xpointer=\"xpointer(/Xdmf/Domain/Grid[@GridType='Uniform'][1]/"         \
     "Geometry)\" />"
-    "<Topology TopologyType=\"Tetrahedron\" NumberOfElements=\"2\" "
-    "NodesPerElement=\"4\"><DataItem Dimensions=\"2 4\" NumberType=\"Int\" "
-    "Format=\"HDF\">d.h5:/Tags/cells/topology</DataItem></Topology>"
-    "<Attribute Name=\"cells\" AttributeType=\"Scalar\" Center=\"Cell\"><DataItem "
-    "Dimensions=\"2 1\" NumberType=\"Int\" Format=\"HDF\">d.h5:/Tags/cells/Values"
+#define DX_CELLS                                                                         \
+    "<Grid Name=\"cells\" GridType=\"Uniform\">" DX_SHARED                               \
+    "<Topology TopologyType=\"Tetrahedron\" NumberOfElements=\"2\" "                     \
+    "NodesPerElement=\"4\"><DataItem Dimensions=\"2 4\" NumberType=\"Int\" "             \
+    "Format=\"HDF\">d.h5:/Tags/cells/topology</DataItem></Topology>"                     \
+    "<Attribute Name=\"cells\" AttributeType=\"Scalar\" Center=\"Cell\"><DataItem "      \
+    "Dimensions=\"2 1\" NumberType=\"Int\" Format=\"HDF\">d.h5:/Tags/cells/Values"       \
     "</DataItem></Attribute></Grid>"
-    "<Grid Name=\"facets\" GridType=\"Uniform\">"
-    "<xi:include xpointer=\"xpointer(/Xdmf/Domain/Grid[@GridType='Uniform'][1]/"
-    "Geometry)\" />"
-    "<Topology TopologyType=\"Triangle\" NumberOfElements=\"1\" "
-    "NodesPerElement=\"3\"><DataItem Dimensions=\"1 3\" NumberType=\"Int\" "
-    "Format=\"HDF\">d.h5:/Tags/facets/topology</DataItem></Topology>"
-    "<Attribute Name=\"facets\" AttributeType=\"Scalar\" Center=\"Cell\"><DataItem "
-    "Dimensions=\"1 1\" NumberType=\"Int\" Format=\"HDF\">d.h5:/Tags/facets/Values"
+#define DX_FACETS                                                                        \
+    "<Grid Name=\"facets\" GridType=\"Uniform\">" DX_SHARED                              \
+    "<Topology TopologyType=\"Triangle\" NumberOfElements=\"2\" "                        \
+    "NodesPerElement=\"3\"><DataItem Dimensions=\"2 3\" NumberType=\"Int\" "             \
+    "Format=\"HDF\">d.h5:/Tags/facets/topology</DataItem></Topology>"                    \
+    "<Attribute Name=\"facets\" AttributeType=\"Scalar\" Center=\"Cell\"><DataItem "     \
+    "Dimensions=\"2 1\" NumberType=\"Int\" Format=\"HDF\">d.h5:/Tags/facets/Values"      \
     "</DataItem></Attribute></Grid>"
-    "</Domain></Xdmf>\n";
+static const char dx[] = DX_HEAD DX_CELLS DX_FACETS "</Domain></Xdmf>\n";
+static const char dx2[] = DX_HEAD DX_FACETS DX_CELLS "</Domain></Xdmf>\n";
 
-TEST(dolfinx_meshtags_in_hdf5_as_regions)
+/* What qdc-h5 prints for the datasets of dx: the facet tags' triangles ft
+ * (the second's last corner: last). */
+static void dx_frames(sink *fr, int64_t last)
 {
     static const double g[15] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 1, 1, 1};
     static const int64_t t[8] = {0, 1, 2, 3, 4, 1, 3, 2};
     static const int64_t tt[8] = {3, 1, 4, 2, 2, 1, 3, 0}, tv[2] = {6, 5};
+    static const int64_t fv[2] = {9, 8};
+    const int64_t ft[6] = {0, 2, 1, 1, 2, last};
+
+    fr->n = 0;
+    sink_write(fr, "QDCH5v1\n", 8);
+    put_frame(fr, "geometry", 'f', g, 15);
+    put_frame(fr, "topology", 'i', t, 8);
+    put_frame(fr, "tagtopo", 'i', tt, 8);
+    put_frame(fr, "tagvals", 'i', tv, 2);
+    put_frame(fr, "tritopo", 'i', ft, 6);
+    put_frame(fr, "trivals", 'i', fv, 2);
+}
+
+/* Read dxml (dx or dx2) from frames as qdc-h5 gives them: the cell tags
+ * the regions, the facet tags the boundary triangles with their refs. */
+static void check_meshtags(const char *dxml)
+{
+    static const int32_t ft[6] = {0, 2, 1, 1, 2, 4};
     static sink fr;
     meshio_xdmf_h5 h;
     char *in = NULL;
     size_t in_len = 0;
     mesh_t *m = NULL;
 
-    ASSERT_OK(meshio_xdmf_h5_refs(dx, strlen(dx), &h, NULL));
-    ASSERT_EQ_INT(h.n, 4);
+    ASSERT_OK(meshio_xdmf_h5_refs(dxml, strlen(dxml), &h, NULL));
+    ASSERT_EQ_INT(h.n, 6); /* listed in the frames' order, not the grids' */
     ASSERT_TRUE(!strcmp(h.set[2].name, "tagtopo") &&
                 !strcmp(h.set[2].path, "/Tags/cells/topology"));
     ASSERT_TRUE(!strcmp(h.set[3].name, "tagvals") &&
                 !strcmp(h.set[3].path, "/Tags/cells/Values") && h.set[3].type == 'i');
     ASSERT_EQ_INT(h.set[3].ndims, 2);
-    fr.n = 0;
-    sink_write(&fr, "QDCH5v1\n", 8);
-    put_frame(&fr, "geometry", 'f', g, 15);
-    put_frame(&fr, "topology", 'i', t, 8);
-    put_frame(&fr, "tagtopo", 'i', tt, 8);
-    put_frame(&fr, "tagvals", 'i', tv, 2);
-    ASSERT_OK(meshio_xdmf_h5_input(dx, strlen(dx), fr.b, fr.n, &in, &in_len, NULL));
+    ASSERT_TRUE(!strcmp(h.set[4].name, "tritopo") &&
+                !strcmp(h.set[4].path, "/Tags/facets/topology"));
+    ASSERT_EQ_INT(h.set[4].dims[1], 3);
+    ASSERT_TRUE(!strcmp(h.set[5].name, "trivals") &&
+                !strcmp(h.set[5].path, "/Tags/facets/Values"));
+    dx_frames(&fr, 4);
+    ASSERT_OK(meshio_xdmf_h5_input(dxml, strlen(dxml), fr.b, fr.n, &in, &in_len, NULL));
     ASSERT_OK(meshio_read(in, in_len, MESHIO_XDMF, &m, NULL));
     ASSERT_EQ_INT(m->nt, 2);
     ASSERT_TRUE(m->region != NULL);
     ASSERT_EQ_INT(m->region[0], 5);
     ASSERT_EQ_INT(m->region[1], 6);
+    ASSERT_EQ_INT(m->ntri, 2);
+    ASSERT_TRUE(m->tri_ref != NULL);
+    ASSERT_TRUE(memcmp(m->tris, ft, sizeof ft) == 0);
+    ASSERT_EQ_INT(m->tri_ref[0], 9);
+    ASSERT_EQ_INT(m->tri_ref[1], 8);
     mesh_free(m);
+    qdc_free(in);
+}
+
+TEST(dolfinx_meshtags_in_hdf5_as_regions)
+{
+    check_meshtags(dx);
+}
+
+/* dolfinx writes facet tags and cell tags as two grids, in either order:
+ * the facet grid first (its values as many as the cells) used to give the
+ * cell tags' topology its values. */
+TEST(facet_tags_first_and_cell_tags_after_them)
+{
+    check_meshtags(dx2);
+}
+
+/* A facet tag grid whose triangle names a vertex the mesh lacks: refused. */
+TEST(a_facet_tag_off_the_mesh_is_refused)
+{
+    static sink fr;
+    char *in = NULL;
+    size_t in_len = 0;
+    mesh_t *m = NULL;
+    qdc_error e;
+
+    dx_frames(&fr, 5);
+    ASSERT_OK(meshio_xdmf_h5_input(dx, strlen(dx), fr.b, fr.n, &in, &in_len, NULL));
+    ASSERT_EQ_INT(meshio_read(in, in_len, MESHIO_XDMF, &m, &e), QDC_EPARSE);
+    ASSERT_TRUE(strstr(e.msg, "facet tag triangle 1: vertex 5") != NULL);
     qdc_free(in);
 }
 
@@ -259,6 +318,8 @@ TEST(references_out_of_the_folder_are_refused)
 
 TEST_MAIN("xdmf_h5", T(refs_list_the_mesh_datasets), T(framed_read_and_spliced_write),
           T(the_form_is_made_in_place), T(dolfinx_meshtags_in_hdf5_as_regions),
+          T(facet_tags_first_and_cell_tags_after_them),
+          T(a_facet_tag_off_the_mesh_is_refused),
           T(a_geometry_frame_of_another_size_is_refused),
           T(rename_changes_only_the_file_names),
           T(references_out_of_the_folder_are_refused))
