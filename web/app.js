@@ -315,15 +315,30 @@ function chooseError(text) {
     $('submit-error').hidden = false;
 }
 
-// Files picked or dropped: one mesh, or an .xdmf with the .h5 it names (sent
-// together as multipart/form-data, parts "xdmf" and "h5").
+// A picked file, gunzipped here when its name ends in .gz (the name without it).
+async function gunzipped(f) {
+    if (!/\.gz$/i.test(f.name)) return f;
+    const blob = await new Response(f.stream().pipeThrough(new DecompressionStream('gzip'))).blob();
+    return new File([blob], f.name.slice(0, -3));
+}
+
+// Files picked or dropped: one mesh, or an .xdmf (.xmf) with the .h5 it names
+// (sent together as multipart/form-data, parts "xdmf" and "h5"; either may
+// be gzipped: gunzipped here first).
 async function chooseFiles(list) {
-    const files = Array.from(list || []);
+    let files = Array.from(list || []);
+    const isX = (f) => /\.(xdmf|xmf)(\.gz)?$/i.test(f.name);
     $('submit-error').hidden = true;
-    if (files.length < 2 && !(files.length === 1 && /\.xdmf$/i.test(files[0].name)))
+    if (files.length < 2 && !(files.length === 1 && isX(files[0])))
         return chooseFile(files[0]);
-    const xdmf = files.filter((f) => /\.xdmf$/i.test(f.name));
-    const h5 = files.filter((f) => /\.h5$/i.test(f.name));
+    const picked = files;
+    try {
+        files = files.length <= 2 ? await Promise.all(files.map(gunzipped)) : files;
+    } catch (e) {
+        return chooseError('cannot gunzip ' + picked.map((f) => f.name).join(' or ') + ': ' + (e.message || e));
+    }
+    const xdmf = files.filter((f) => /\.(xdmf|xmf)$/i.test(f.name));
+    const h5 = files.filter((f) => /\.(h5|hdf5)$/i.test(f.name));
     if (files.length > 2 || xdmf.length !== 1 || (files.length === 2 && h5.length !== 1))
         return chooseError('Pick one mesh file, or an .xdmf file together with its .h5 file.');
     let want = '';
@@ -332,10 +347,10 @@ async function chooseFiles(list) {
     } catch (e) {
         return chooseError('cannot read ' + xdmf[0].name + ': ' + (e.message || e));
     }
-    if (!want) { // inline XDMF: one file as any other
+    if (!want) { // inline XDMF: one file as any other (gunzipped at upload)
         if (files.length === 2)
             return chooseError(xdmf[0].name + ' keeps its data inline: pick it alone, without ' + h5[0].name + '.');
-        return chooseFile(xdmf[0]);
+        return chooseFile(picked[0]);
     }
     if (!h5.length)
         return chooseError(xdmf[0].name + ' keeps its data in ' + want +
@@ -1102,14 +1117,10 @@ function renderDownloads(st) {
     const res = items('result', '.qdc');
     res.push([base + '/report', fileStem(st.job) + '.qdc-report.json', 'report (JSON)', 'report']);
     box.replaceChildren(...links(res, !newTets));
-    if (own === 'xdmf' && !newTets) { // sent with an .h5: its .h5, which the .xdmf names result.h5
-        const href = base + '/result?format=h5';
-        fetch(href, { method: 'HEAD', headers: authHeaders() }).then((r) => {
-            if (!r.ok || box.dataset.id !== st.id) return;
-            const [a] = links([[href, 'result.h5', 'HDF5 .h5 (of the .xdmf)', 'h5']], false);
-            a.title = 'the uploaded .h5 with the new coordinates; the .xdmf names it result.h5: keep the two in one folder';
-            box.insertBefore(a, box.lastChild);
-        }).catch(() => {});
+    if (st.job.mesh.h5 && !newTets) { // sent with an .h5: its .h5, which the .xdmf names result.h5
+        const [a] = links([[base + '/result?format=h5', 'result.h5', 'HDF5 .h5 (of the .xdmf)', 'h5']], false);
+        a.title = 'the uploaded .h5 with the new coordinates; the .xdmf names it result.h5: keep the two in one folder';
+        box.insertBefore(a, box.lastChild);
     }
     $('downloads-input').replaceChildren(...links(items('input', '.input'), true));
     $('downloads-card').hidden = false;

@@ -12,7 +12,8 @@
 # ARIA roles and live regions, axe-core (0 serious violations), no console
 # errors, XDMF+HDF5 (with qdc-h5 built: the .xdmf alone gets a message asking
 # for its .h5, the two picked together are sent as FormData and the job
-# succeeds), and the token prompt with --tokens; a page served from another
+# succeeds; a gzipped .xmf.gz + .h5.gz pair is gunzipped by the page and sent
+# the same), and the token prompt with --tokens; a page served from another
 # origin whose script POSTs a mesh gets 403 (tests/ui/crossorigin.mjs).
 # Before the browser: GET /v1/options (the form's table) and GET /input (the
 # job's input mesh: every format, Accept, ETag, 404/409, a surface's TetGen
@@ -207,6 +208,9 @@ if [ -x "$BIN/qdc-h5" ]; then
     mkdir -p "$TMP/xh5"
     gzip -dc "$ROOT/tests/data/real/meshio_h5.xdmf.gz" > "$TMP/xh5/meshio_h5.xdmf"
     gzip -dc "$ROOT/tests/data/real/meshio_h5.h5.gz" > "$TMP/xh5/meshio_h5.h5"
+    mkdir -p "$TMP/xh5gz" # the pair gzipped, the .xdmf as .xmf
+    gzip -c "$TMP/xh5/meshio_h5.xdmf" > "$TMP/xh5gz/meshio_h5.xmf.gz"
+    cp "$ROOT/tests/data/real/meshio_h5.h5.gz" "$TMP/xh5gz/"
     XDMF_H5=$TMP/xh5/meshio_h5.xdmf
 fi
 export XDMF_H5

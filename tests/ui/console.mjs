@@ -336,10 +336,25 @@ try {
             const h5got = h5name === 'none' ? Buffer.alloc(0) : readFileSync(path.join(OUT, 'xdmf-result.h5'));
             check(h5name === 'result.h5' && h5got.subarray(0, 8).equals(Buffer.from([0x89, 0x48, 0x44, 0x46, 0x0d, 0x0a, 0x1a, 0x0a])),
                 'XDMF+HDF5: the job page offers its .h5 as result.h5 (an HDF5 file of ' + h5got.length + ' bytes)', h5name);
+            // the pair gzipped (.xmf.gz + .h5.gz): gunzipped by the page, sent as the pair
+            await page.click('a[data-nav][href="/"]');
+            await page.waitForSelector('#view-list:not([hidden])');
+            const gzd = path.join(path.dirname(env.XDMF_H5), '..', 'xh5gz');
+            const idz = await submitFile([path.join(gzd, 'meshio_h5.xmf.gz'), path.join(gzd, 'meshio_h5.h5.gz')],
+                { max_iter: 5 });
+            await waitDone(idz, 60000);
+            const jz = (await apiJSON('/v1/jobs/' + idz)).body;
+            await page.waitForSelector('#downloads a[data-format="h5"]', { timeout: 10000 }).catch(() => {});
+            check(jz.state === 'succeeded' && jz.mesh.tets === 1228 && jz.mesh.h5 === true &&
+                jz.file_name === 'meshio_h5.xmf' && !!(await page.$('#downloads a[data-format="h5"]')),
+                'XDMF+HDF5 gzipped: meshio_h5.xmf.gz and meshio_h5.h5.gz gunzipped by the page and sent as the pair (' +
+                jz.mesh.tets + ' tets, mesh.h5 ' + jz.mesh.h5 + ', its .h5 offered)', JSON.stringify([jz.state, jz.mesh, jz.file_name]));
             // deleted: the checks below count the jobs of this run
             const del = await fetch(URL + '/v1/jobs/' + idx, { method: 'DELETE', headers: authH });
-            check(del.status === 204 && (await apiJSON('/v1/jobs?page_size=1000')).body.jobs.length === nJobs,
-                'XDMF+HDF5: the job deleted again', String(del.status));
+            const delz = await fetch(URL + '/v1/jobs/' + idz, { method: 'DELETE', headers: authH });
+            check(del.status === 204 && delz.status === 204 &&
+                (await apiJSON('/v1/jobs?page_size=1000')).body.jobs.length === nJobs,
+                'XDMF+HDF5: the jobs deleted again', String(del.status) + ' ' + delz.status);
             await page.click('a[data-nav][href="/"]');
         } else {
             console.log('ok - XDMF+HDF5 upload # SKIP qdc-h5 not built');
