@@ -163,6 +163,55 @@ TEST(bvh_matches_brute_force)
     free(t);
 }
 
+TEST(bvh_refit_matches_brute_force)
+{
+    enum { NT = 500, NQ = 1000 };
+    double *x = malloc(9 * NT * sizeof(double)), *y = malloc(9 * NT * sizeof(double));
+    int32_t *t = malloc(3 * NT * sizeof(int32_t));
+    bderr_bvh *b = NULL, *r = NULL;
+    qdc_error err;
+
+    ASSERT_TRUE(x && y && t);
+    for (int i = 0; i < NT; i++) {
+        double o[3] = {urand(), urand(), urand()};
+        for (int v = 0; v < 3; v++) {
+            for (int d = 0; d < 3; d++) {
+                x[9 * i + 3 * v + d] = o[d] + 0.1 * urand();
+                /* moved by up to 0.2: boxes of the old tree no longer fit */
+                y[9 * i + 3 * v + d] = x[9 * i + 3 * v + d] + 0.2 * (urand() - 0.5);
+            }
+            t[3 * i + v] = 3 * i + v;
+        }
+    }
+    ASSERT_OK(bderr_bvh_build(x, 3 * NT, t, NT, &b, &err));
+    ASSERT_OK(bderr_bvh_refit(b, y, 3 * NT, &r, &err));
+    for (int q = 0; q < NQ; q++) {
+        double p[3] = {2 * urand() - 0.5, 2 * urand() - 0.5, 2 * urand() - 0.5};
+        double best = INFINITY;
+        int32_t tri;
+        for (int i = 0; i < NT; i++)
+            best = fmin(best, bderr_point_triangle(p, y + 9 * i, y + 9 * i + 3,
+                                                   y + 9 * i + 6, NULL));
+        ASSERT_NEAR(bderr_bvh_closest(r, p, NULL, &tri), best, 0);
+        ASSERT_NEAR(
+            bderr_point_triangle(p, y + 9 * tri, y + 9 * tri + 3, y + 9 * tri + 6, NULL),
+            best, 0);
+        ASSERT_NEAR(bderr_bvh_closest_near(r, p, q % NT, NULL, NULL), best, 0);
+    }
+    ASSERT_EQ_INT(bderr_bvh_position(r, 7), bderr_bvh_position(b, 7));
+    ASSERT_EQ_INT(bderr_bvh_position(r, NT), -1);
+    ASSERT_EQ_INT(bderr_bvh_size(r), NT);
+    bderr_bvh_free(r);
+    y[4] = NAN; /* a coordinate the refit must refuse */
+    ASSERT_EQ_INT(bderr_bvh_refit(b, y, 3 * NT, &r, &err), QDC_EINVAL);
+    ASSERT_TRUE(r == NULL);
+    ASSERT_EQ_INT(bderr_bvh_refit(b, y, 2, &r, &err), QDC_EINVAL); /* indices past nv */
+    bderr_bvh_free(b);
+    free(x);
+    free(y);
+    free(t);
+}
+
 TEST(bvh_edge_cases)
 {
     const double x[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0}, p[3] = {0, 0, 1},
@@ -289,6 +338,53 @@ TEST(deterministic_and_thread_independent)
     ASSERT_OK(bderr_surfaces(xa, nva, ta, nta, xb, nvb, tb, ntb, 50000, 43, &r3, &err));
     ASSERT_TRUE(r3.mean != r1.mean);
     ASSERT_TRUE(r1.hausdorff > 0.005 && r1.hausdorff < 0.05);
+    free(xa);
+    free(xb);
+    free(ta);
+    free(tb);
+}
+
+/* One triangle list for both sides (a result and its input: A's tree is then
+ * B's refitted) gives what two copies of it give (two trees built), and the
+ * largest distance of A's vertices is the brute-force one. */
+TEST(shared_triangles_same_as_copies)
+{
+    double *xa, *xb, vmax = 0;
+    int32_t nva, nvb, nta, ntb, *ta, *tb;
+    bderr_result r1, r2, r3;
+    qdc_error err;
+
+    cube_surface(7, 0.0, &xa, &nva, &ta, &nta);
+    cube_surface(7, 0.0, &xb, &nvb, &tb, &ntb);
+    for (int32_t i = 0; i < nva; i++) /* bumped and slid along the faces */
+        for (int d = 0; d < 3; d++)
+            xa[3 * i + d] *= 1 + 0.04 * sin(7 * xa[3 * i + (d + 1) % 3] + d);
+    ASSERT_OK(bderr_surfaces(xa, nva, tb, ntb, xb, nvb, tb, ntb, 30000, 5, &r1, &err));
+    ASSERT_OK(bderr_surfaces(xa, nva, ta, nta, xb, nvb, tb, ntb, 30000, 5, &r2, &err));
+    ASSERT_NEAR(r1.hausdorff, r2.hausdorff, 0);
+    ASSERT_NEAR(r1.h_a_to_b, r2.h_a_to_b, 0);
+    ASSERT_NEAR(r1.h_b_to_a, r2.h_b_to_a, 0);
+    ASSERT_NEAR(r1.vertex_max, r2.vertex_max, 0);
+    ASSERT_NEAR(r1.mean, r2.mean, 1e-12 * r2.mean);
+    ASSERT_NEAR(r1.rms, r2.rms, 1e-12 * r2.rms);
+    ASSERT_TRUE(r1.hausdorff > 0.01 && r1.hausdorff < 0.05);
+    for (int32_t i = 0; i < nva; i++) {
+        double best = INFINITY;
+        for (int32_t k = 0; k < ntb; k++)
+            best = fmin(best, bderr_point_triangle(xa + 3 * i, xb + 3 * tb[3 * k],
+                                                   xb + 3 * tb[3 * k + 1],
+                                                   xb + 3 * tb[3 * k + 2], NULL));
+        vmax = fmax(vmax, best);
+    }
+    ASSERT_NEAR(r1.vertex_max, vmax, 0);
+#ifdef _OPENMP
+    omp_set_num_threads(1);
+#endif
+    ASSERT_OK(bderr_surfaces(xa, nva, tb, ntb, xb, nvb, tb, ntb, 30000, 5, &r3, &err));
+#ifdef _OPENMP
+    omp_set_num_threads(omp_get_num_procs());
+#endif
+    ASSERT_TRUE(memcmp(&r1, &r3, sizeof r1) == 0);
     free(xa);
     free(xb);
     free(ta);
@@ -450,8 +546,9 @@ TEST(allocation_failures)
 }
 
 TEST_MAIN("bderr", T(point_triangle_regions), T(point_triangle_degenerate),
-          T(point_triangle_vs_sampling), T(bvh_matches_brute_force), T(bvh_edge_cases),
+          T(point_triangle_vs_sampling), T(bvh_matches_brute_force),
+          T(bvh_refit_matches_brute_force), T(bvh_edge_cases),
           T(hausdorff_translated_cube), T(parallel_planes_mean_rms),
-          T(deterministic_and_thread_independent), T(surfaces_bad_input),
-          T(meshes_boundary_faces), T(meshes_big_grid_speed), T(dev_meshes),
-          T(allocation_failures))
+          T(deterministic_and_thread_independent), T(shared_triangles_same_as_copies),
+          T(surfaces_bad_input), T(meshes_boundary_faces), T(meshes_big_grid_speed),
+          T(dev_meshes), T(allocation_failures))
