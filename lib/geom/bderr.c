@@ -163,10 +163,6 @@ typedef struct {
     int64_t n;
 } dstats;
 
-/* Samples measured in a sorted order at most: beyond, each is measured as it
- * is drawn (its point and order cost 32 bytes). */
-#define SORT_MAX (INT64_C(1) << 23)
-
 /* The samples of s in an order that keeps consecutive queries in one part of
  * the tree: by the leaf position in b of their starting triangle (a counting
  * sort, stable). *pts: their points (3 doubles each, by sample), *tri: the
@@ -182,7 +178,7 @@ static void sample_order(const surface *s, const bderr_bvh *b, int64_t n, double
     *pts = NULL;
     *tri = NULL;
     *ord = NULL;
-    if (n > SORT_MAX || n <= 0)
+    if (n > BDERR_SORT_MAX || n <= 0)
         return;
     *pts = qdc_mallocn((size_t)n, 3 * sizeof(double));
     *tri = qdc_mallocn((size_t)n, sizeof(int32_t));

@@ -9,6 +9,11 @@
 
 #include <stdint.h>
 
+/* bderr_surfaces measures up to this many samples of a side in the order of
+ * the BVH's leaves (each costs 32 bytes while it runs); more in the order they
+ * are drawn. The same distances either way. */
+#define BDERR_SORT_MAX (INT64_C(1) << 23)
+
 /* A BVH over triangles (xyz: 3 doubles per vertex, tris: 3 indices per triangle).
  * It copies the triangles' indices but reads the coordinates from xyz, which
  * must stay, unchanged, as long as the BVH does. */

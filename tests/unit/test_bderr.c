@@ -297,22 +297,42 @@ TEST(hausdorff_translated_cube)
     free(tb);
 }
 
-TEST(parallel_planes_mean_rms)
+/* Two unit squares at distance PLANES_D: every sample is exactly that far. */
+#define PLANES_D 0.125
+static const double sq_a[12] = {0, 0, PLANES_D, 1, 0, PLANES_D,
+                                1, 1, PLANES_D, 0, 1, PLANES_D};
+static const double sq_b[12] = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0};
+static const int32_t sq_t[6] = {0, 1, 2, 0, 2, 3};
+
+/* bderr_surfaces of the two squares with that many samples a side, checked
+ * (a failure marks the calling test failed). */
+static void planes_case(int64_t samples)
 {
-    /* two unit squares at distance d: every sample is exactly d away */
-    const double d = 0.125;
-    const double xa[12] = {0, 0, d, 1, 0, d, 1, 1, d, 0, 1, d};
-    const double xb[12] = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0};
-    const int32_t t[6] = {0, 1, 2, 0, 2, 3};
     bderr_result r;
     qdc_error err;
 
-    ASSERT_OK(bderr_surfaces(xa, 4, t, 2, xb, 4, t, 2, 5000, 7, &r, &err));
-    ASSERT_NEAR(r.hausdorff, d, 1e-15);
-    ASSERT_NEAR(r.mean, d, 1e-15);
-    ASSERT_NEAR(r.rms, d, 1e-15);
-    ASSERT_NEAR(r.mean_rel, d / sqrt(2), 1e-15);
-    ASSERT_EQ_INT(r.n_samples, 2 * (4 + 2 + 5000));
+    ASSERT_OK(bderr_surfaces(sq_a, 4, sq_t, 2, sq_b, 4, sq_t, 2, samples, 7, &r, &err));
+    ASSERT_NEAR(r.hausdorff, PLANES_D, 1e-15);
+    ASSERT_NEAR(r.vertex_max, PLANES_D, 1e-15);
+    ASSERT_NEAR(r.mean, PLANES_D, 1e-12);
+    ASSERT_NEAR(r.rms, PLANES_D, 1e-12);
+    ASSERT_NEAR(r.mean_rel, PLANES_D / sqrt(2), 1e-12);
+    ASSERT_EQ_INT(r.n_samples, 2 * (4 + 2 + samples));
+}
+
+TEST(parallel_planes_mean_rms)
+{
+    planes_case(5000);
+}
+
+/* Past BDERR_SORT_MAX samples a side, the samples are measured as they are
+ * drawn: the same figures. */
+TEST(many_samples_in_drawing_order)
+{
+#if defined(__SANITIZE_ADDRESS__)
+    SKIP("16.8M samples: too slow under the sanitizers");
+#endif
+    planes_case(BDERR_SORT_MAX);
 }
 
 TEST(deterministic_and_thread_independent)
@@ -549,6 +569,7 @@ TEST_MAIN("bderr", T(point_triangle_regions), T(point_triangle_degenerate),
           T(point_triangle_vs_sampling), T(bvh_matches_brute_force),
           T(bvh_refit_matches_brute_force), T(bvh_edge_cases),
           T(hausdorff_translated_cube), T(parallel_planes_mean_rms),
-          T(deterministic_and_thread_independent), T(shared_triangles_same_as_copies),
-          T(surfaces_bad_input), T(meshes_boundary_faces), T(meshes_big_grid_speed),
-          T(dev_meshes), T(allocation_failures))
+          T(many_samples_in_drawing_order), T(deterministic_and_thread_independent),
+          T(shared_triangles_same_as_copies), T(surfaces_bad_input),
+          T(meshes_boundary_faces), T(meshes_big_grid_speed), T(dev_meshes),
+          T(allocation_failures))
