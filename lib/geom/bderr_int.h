@@ -9,6 +9,11 @@
 
 #include <stdint.h>
 
+/* bderr_surfaces measures up to this many samples of a side in the order of
+ * the BVH's leaves (each costs 32 bytes while it runs); more in the order they
+ * are drawn. The same distances either way. */
+#define BDERR_SORT_MAX (INT64_C(1) << 23)
+
 /* A BVH over triangles (xyz: 3 doubles per vertex, tris: 3 indices per triangle).
  * It copies the triangles' indices but reads the coordinates from xyz, which
  * must stay, unchanged, as long as the BVH does. */
@@ -17,6 +22,15 @@ typedef struct bderr_bvh bderr_bvh;
 qdc_status bderr_bvh_build(const double *xyz, int32_t nv, const int32_t *tris,
                            int32_t ntri, bderr_bvh **out, qdc_error *err);
 void bderr_bvh_free(bderr_bvh *b);
+/* A BVH over src's triangles with the coordinates xyz (nv vertices) instead:
+ * src's tree with its boxes recomputed, far cheaper than bderr_bvh_build and
+ * as good while the vertices have moved less than the triangles' size (an
+ * optimized mesh against its input). Queries give the same answers as a
+ * BVH built on xyz. xyz must stay as for bderr_bvh_build; src is only read.
+ * QDC_EINVAL (a NULL argument, a vertex out of [0, nv), a coordinate not
+ * finite), QDC_ENOMEM. */
+qdc_status bderr_bvh_refit(const bderr_bvh *src, const double *xyz, int32_t nv,
+                           bderr_bvh **out, qdc_error *err);
 
 /* Closest point on the surface to p: distance, the point and the triangle index.
  * cp and tri may be NULL. A BVH with no triangles returns +inf. */
@@ -28,6 +42,12 @@ double bderr_bvh_closest(const bderr_bvh *b, const double p[3], double cp[3],
  * close to that triangle. */
 double bderr_bvh_closest_near(const bderr_bvh *b, const double p[3], int32_t near,
                               double cp[3], int32_t *tri);
+
+/* The number of triangles of b (0 if b is NULL). */
+int32_t bderr_bvh_size(const bderr_bvh *b);
+/* The position of the caller's triangle tri among b's leaves: triangles close
+ * in position are close in space. -1 if tri is out of range. */
+int32_t bderr_bvh_position(const bderr_bvh *b, int32_t tri);
 
 /* Exact closest point on triangle (a,b,c) to p (Ericson 5.1.5); returns the distance. */
 double bderr_point_triangle(const double p[3], const double a[3], const double b[3],

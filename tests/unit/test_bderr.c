@@ -163,6 +163,55 @@ TEST(bvh_matches_brute_force)
     free(t);
 }
 
+TEST(bvh_refit_matches_brute_force)
+{
+    enum { NT = 500, NQ = 1000 };
+    double *x = malloc(9 * NT * sizeof(double)), *y = malloc(9 * NT * sizeof(double));
+    int32_t *t = malloc(3 * NT * sizeof(int32_t));
+    bderr_bvh *b = NULL, *r = NULL;
+    qdc_error err;
+
+    ASSERT_TRUE(x && y && t);
+    for (int i = 0; i < NT; i++) {
+        double o[3] = {urand(), urand(), urand()};
+        for (int v = 0; v < 3; v++) {
+            for (int d = 0; d < 3; d++) {
+                x[9 * i + 3 * v + d] = o[d] + 0.1 * urand();
+                /* moved by up to 0.2: boxes of the old tree no longer fit */
+                y[9 * i + 3 * v + d] = x[9 * i + 3 * v + d] + 0.2 * (urand() - 0.5);
+            }
+            t[3 * i + v] = 3 * i + v;
+        }
+    }
+    ASSERT_OK(bderr_bvh_build(x, 3 * NT, t, NT, &b, &err));
+    ASSERT_OK(bderr_bvh_refit(b, y, 3 * NT, &r, &err));
+    for (int q = 0; q < NQ; q++) {
+        double p[3] = {2 * urand() - 0.5, 2 * urand() - 0.5, 2 * urand() - 0.5};
+        double best = INFINITY;
+        int32_t tri;
+        for (int i = 0; i < NT; i++)
+            best = fmin(best, bderr_point_triangle(p, y + 9 * i, y + 9 * i + 3,
+                                                   y + 9 * i + 6, NULL));
+        ASSERT_NEAR(bderr_bvh_closest(r, p, NULL, &tri), best, 0);
+        ASSERT_NEAR(
+            bderr_point_triangle(p, y + 9 * tri, y + 9 * tri + 3, y + 9 * tri + 6, NULL),
+            best, 0);
+        ASSERT_NEAR(bderr_bvh_closest_near(r, p, q % NT, NULL, NULL), best, 0);
+    }
+    ASSERT_EQ_INT(bderr_bvh_position(r, 7), bderr_bvh_position(b, 7));
+    ASSERT_EQ_INT(bderr_bvh_position(r, NT), -1);
+    ASSERT_EQ_INT(bderr_bvh_size(r), NT);
+    bderr_bvh_free(r);
+    y[4] = NAN; /* a coordinate the refit must refuse */
+    ASSERT_EQ_INT(bderr_bvh_refit(b, y, 3 * NT, &r, &err), QDC_EINVAL);
+    ASSERT_TRUE(r == NULL);
+    ASSERT_EQ_INT(bderr_bvh_refit(b, y, 2, &r, &err), QDC_EINVAL); /* indices past nv */
+    bderr_bvh_free(b);
+    free(x);
+    free(y);
+    free(t);
+}
+
 TEST(bvh_edge_cases)
 {
     const double x[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0}, p[3] = {0, 0, 1},
@@ -248,22 +297,42 @@ TEST(hausdorff_translated_cube)
     free(tb);
 }
 
-TEST(parallel_planes_mean_rms)
+/* Two unit squares at distance PLANES_D: every sample is exactly that far. */
+#define PLANES_D 0.125
+static const double sq_a[12] = {0, 0, PLANES_D, 1, 0, PLANES_D,
+                                1, 1, PLANES_D, 0, 1, PLANES_D};
+static const double sq_b[12] = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0};
+static const int32_t sq_t[6] = {0, 1, 2, 0, 2, 3};
+
+/* bderr_surfaces of the two squares with that many samples a side, checked
+ * (a failure marks the calling test failed). */
+static void planes_case(int64_t samples)
 {
-    /* two unit squares at distance d: every sample is exactly d away */
-    const double d = 0.125;
-    const double xa[12] = {0, 0, d, 1, 0, d, 1, 1, d, 0, 1, d};
-    const double xb[12] = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0};
-    const int32_t t[6] = {0, 1, 2, 0, 2, 3};
     bderr_result r;
     qdc_error err;
 
-    ASSERT_OK(bderr_surfaces(xa, 4, t, 2, xb, 4, t, 2, 5000, 7, &r, &err));
-    ASSERT_NEAR(r.hausdorff, d, 1e-15);
-    ASSERT_NEAR(r.mean, d, 1e-15);
-    ASSERT_NEAR(r.rms, d, 1e-15);
-    ASSERT_NEAR(r.mean_rel, d / sqrt(2), 1e-15);
-    ASSERT_EQ_INT(r.n_samples, 2 * (4 + 2 + 5000));
+    ASSERT_OK(bderr_surfaces(sq_a, 4, sq_t, 2, sq_b, 4, sq_t, 2, samples, 7, &r, &err));
+    ASSERT_NEAR(r.hausdorff, PLANES_D, 1e-15);
+    ASSERT_NEAR(r.vertex_max, PLANES_D, 1e-15);
+    ASSERT_NEAR(r.mean, PLANES_D, 1e-12);
+    ASSERT_NEAR(r.rms, PLANES_D, 1e-12);
+    ASSERT_NEAR(r.mean_rel, PLANES_D / sqrt(2), 1e-12);
+    ASSERT_EQ_INT(r.n_samples, 2 * (4 + 2 + samples));
+}
+
+TEST(parallel_planes_mean_rms)
+{
+    planes_case(5000);
+}
+
+/* Past BDERR_SORT_MAX samples a side, the samples are measured as they are
+ * drawn: the same figures. */
+TEST(many_samples_in_drawing_order)
+{
+#if defined(__SANITIZE_ADDRESS__)
+    SKIP("16.8M samples: too slow under the sanitizers");
+#endif
+    planes_case(BDERR_SORT_MAX);
 }
 
 TEST(deterministic_and_thread_independent)
@@ -293,6 +362,64 @@ TEST(deterministic_and_thread_independent)
     free(xb);
     free(ta);
     free(tb);
+}
+
+/* The same triangles on both sides (a result and its input: A's tree is then
+ * B's refitted) give what an A numbered otherwise gives (its tree built: the
+ * same samples, measured in another order), and the largest distance of A's
+ * vertices is the brute-force one. */
+TEST(shared_triangles_same_as_copies)
+{
+    double *xa, *xb, *xp, vmax = 0;
+    int32_t nva, nvb, nta, ntb, *ta, *tb, *tp;
+    bderr_result r1, r2, r3;
+    qdc_error err;
+
+    cube_surface(7, 0.0, &xa, &nva, &ta, &nta);
+    cube_surface(7, 0.0, &xb, &nvb, &tb, &ntb);
+    for (int32_t i = 0; i < nva; i++) /* bumped and slid along the faces */
+        for (int d = 0; d < 3; d++)
+            xa[3 * i + d] *= 1 + 0.04 * sin(7 * xa[3 * i + (d + 1) % 3] + d);
+    xp = malloc(3 * (size_t)nva * sizeof(double)); /* A, its vertices reversed */
+    tp = malloc(3 * (size_t)nta * sizeof(int32_t));
+    ASSERT_TRUE(xp && tp);
+    for (int32_t i = 0; i < nva; i++)
+        memcpy(xp + 3 * (size_t)(nva - 1 - i), xa + 3 * (size_t)i, 3 * sizeof(double));
+    for (int32_t i = 0; i < 3 * nta; i++)
+        tp[i] = nva - 1 - ta[i];
+    ASSERT_OK(bderr_surfaces(xa, nva, ta, nta, xb, nvb, tb, ntb, 30000, 5, &r1, &err));
+    ASSERT_OK(bderr_surfaces(xp, nva, tp, nta, xb, nvb, tb, ntb, 30000, 5, &r2, &err));
+    ASSERT_NEAR(r1.hausdorff, r2.hausdorff, 0);
+    ASSERT_NEAR(r1.h_a_to_b, r2.h_a_to_b, 0);
+    ASSERT_NEAR(r1.h_b_to_a, r2.h_b_to_a, 0);
+    ASSERT_NEAR(r1.vertex_max, r2.vertex_max, 0);
+    ASSERT_NEAR(r1.mean, r2.mean, 1e-12 * r2.mean);
+    ASSERT_NEAR(r1.rms, r2.rms, 1e-12 * r2.rms);
+    ASSERT_TRUE(r1.hausdorff > 0.01 && r1.hausdorff < 0.05);
+    for (int32_t i = 0; i < nva; i++) {
+        double best = INFINITY;
+        for (int32_t k = 0; k < ntb; k++)
+            best = fmin(best, bderr_point_triangle(xa + 3 * i, xb + 3 * tb[3 * k],
+                                                   xb + 3 * tb[3 * k + 1],
+                                                   xb + 3 * tb[3 * k + 2], NULL));
+        vmax = fmax(vmax, best);
+    }
+    ASSERT_NEAR(r1.vertex_max, vmax, 0);
+    /* one list or two equal ones: the same bytes, at any thread count */
+#ifdef _OPENMP
+    omp_set_num_threads(1);
+#endif
+    ASSERT_OK(bderr_surfaces(xa, nva, tb, ntb, xb, nvb, tb, ntb, 30000, 5, &r3, &err));
+#ifdef _OPENMP
+    omp_set_num_threads(omp_get_num_procs());
+#endif
+    ASSERT_TRUE(memcmp(&r1, &r3, sizeof r1) == 0);
+    free(xa);
+    free(xb);
+    free(xp);
+    free(ta);
+    free(tb);
+    free(tp);
 }
 
 TEST(surfaces_bad_input)
@@ -450,8 +577,10 @@ TEST(allocation_failures)
 }
 
 TEST_MAIN("bderr", T(point_triangle_regions), T(point_triangle_degenerate),
-          T(point_triangle_vs_sampling), T(bvh_matches_brute_force), T(bvh_edge_cases),
+          T(point_triangle_vs_sampling), T(bvh_matches_brute_force),
+          T(bvh_refit_matches_brute_force), T(bvh_edge_cases),
           T(hausdorff_translated_cube), T(parallel_planes_mean_rms),
-          T(deterministic_and_thread_independent), T(surfaces_bad_input),
+          T(many_samples_in_drawing_order), T(deterministic_and_thread_independent),
+          T(shared_triangles_same_as_copies), T(surfaces_bad_input),
           T(meshes_boundary_faces), T(meshes_big_grid_speed), T(dev_meshes),
           T(allocation_failures))
