@@ -143,6 +143,30 @@ double tmesh_quality(const tmesh *tm, const int32_t v[4], double floor4)
     return q;
 }
 
+double tmesh_quality_above(const tmesh *tm, const int32_t v[4], double floor4,
+                           double qneed)
+{
+    const double *p0 = tm->xyz + 3 * (size_t)v[0], *p1 = tm->xyz + 3 * (size_t)v[1];
+    const double *p2 = tm->xyz + 3 * (size_t)v[2], *p3 = tm->xyz + 3 * (size_t)v[3];
+    metric_parts pt;
+    double q;
+
+    metric_parts_for(OPT_METRIC_MIMR, p0, p1, p2, p3, &pt);
+    /* the cube of the mean ratio, a few roundings from the cube of
+     * tmesh_quality's: below qneed^3 by far more than those, the mean ratio
+     * is below qneed (and a tet inverted in floating point has one <= 0) */
+    if (qneed > 0.0 &&
+        metric_mean_ratio_cubed(&pt) < qneed * qneed * qneed * (1.0 - 1e-9))
+        return -4.0;
+    if (exact_orient3d(p0, p1, p2, p3) <= 0)
+        return -2.0;
+    q = metric_mean_ratio(&pt);
+    if (q < floor4 && tm->vcons[v[0]] && tm->vcons[v[1]] && tm->vcons[v[2]] &&
+        tm->vcons[v[3]])
+        return -3.0;
+    return q;
+}
+
 /* Face adjacency by matching sorted face keys among the faces whose lowest
  * vertex is the same (a counting sort by that vertex; buckets hold ~24 faces). */
 static qdc_status match_faces(tmesh *tm, int32_t nt, qdc_error *err)
