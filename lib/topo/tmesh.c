@@ -126,23 +126,6 @@ void tmesh_free(tmesh *tm)
     qdc_free(tm);
 }
 
-double tmesh_quality(const tmesh *tm, const int32_t v[4], double floor4)
-{
-    const double *p0 = tm->xyz + 3 * (size_t)v[0], *p1 = tm->xyz + 3 * (size_t)v[1];
-    const double *p2 = tm->xyz + 3 * (size_t)v[2], *p3 = tm->xyz + 3 * (size_t)v[3];
-    metric_parts pt;
-    double q;
-
-    if (exact_orient3d(p0, p1, p2, p3) <= 0)
-        return -2.0;
-    metric_parts_for(OPT_METRIC_MIMR, p0, p1, p2, p3, &pt);
-    q = metric_mean_ratio(&pt);
-    if (q < floor4 && tm->vcons[v[0]] && tm->vcons[v[1]] && tm->vcons[v[2]] &&
-        tm->vcons[v[3]])
-        return -3.0;
-    return q;
-}
-
 double tmesh_quality_above(const tmesh *tm, const int32_t v[4], double floor4,
                            double qneed)
 {
@@ -165,6 +148,11 @@ double tmesh_quality_above(const tmesh *tm, const int32_t v[4], double floor4,
         tm->vcons[v[3]])
         return -3.0;
     return q;
+}
+
+double tmesh_quality(const tmesh *tm, const int32_t v[4], double floor4)
+{
+    return tmesh_quality_above(tm, v, floor4, 0.0); /* no threshold: no filter */
 }
 
 /* Face adjacency by matching sorted face keys among the faces whose lowest
