@@ -27,6 +27,7 @@ void topo_params_default(topo_params *p)
     p->qcontract = 0.3;
     p->bound.hausd = 0.0;
     p->bound.cos_feature = 0.8660254037844387; /* 30 degrees */
+    p->recheck = 0;
 }
 
 typedef struct {
@@ -461,7 +462,7 @@ qdc_status topo_improve(tmesh *tm, const topo_params *p, topo_stats *st,
     int64_t ops = 0, max_ops = p->max_ops > 0 ? p->max_ops : 4 * (int64_t)tm->nlive;
     /* the boundary operations read more than the memo follows (the stars of
      * the ring's vertices, the surface's deviation): no memo under a bound */
-    memo mo = {0}, *use = p->bound.hausd > 0 ? NULL : &mo;
+    memo mo = {0}, *use = p->bound.hausd > 0 || p->recheck ? NULL : &mo;
 
     if (!st)
         st = &local;
