@@ -4,6 +4,7 @@
 #include "topo/topo.h"
 
 #include "core/tet.h"
+#include "geom/metric_int.h"
 #include "topo/contract.h"
 #include "topo/insert.h"
 
@@ -28,6 +29,7 @@ void topo_params_default(topo_params *p)
     p->bound.hausd = 0.0;
     p->bound.cos_feature = 0.8660254037844387; /* 30 degrees */
     p->recheck = 0;
+    p->akeep = 0.0;
 }
 
 typedef struct {
@@ -258,6 +260,38 @@ static qdc_status memo_applied(memo *mo, const tmesh *tm, const int32_t *ids, in
     return QDC_OK;
 }
 
+/* The smallest dihedral angle (degrees) of the n tets tv[0..n) (4 each). */
+static double min_angle(const tmesh *tm, const int32_t (*tv)[4], int n)
+{
+    double m = 180.0;
+
+    for (int j = 0; j < n; j++) {
+        double a0, a1;
+        metric_dihedral_range(
+            tm->xyz + 3 * (size_t)tv[j][0], tm->xyz + 3 * (size_t)tv[j][1],
+            tm->xyz + 3 * (size_t)tv[j][2], tm->xyz + 3 * (size_t)tv[j][3], &a0, &a1);
+        m = fmin(m, a0);
+    }
+    return m;
+}
+
+/* 1 when candidate c keeps the smallest dihedral angle: its new tets' is at
+ * least akeep degrees or at least its old tets'. */
+static int keeps_angle(const tmesh *tm, const flip_cand *c, double akeep)
+{
+    int32_t old[2 * FLIP_MAXRING][4];
+    double anew;
+
+    if (!(akeep > 0.0))
+        return 1;
+    anew = min_angle(tm, (const int32_t(*)[4])c->newt, c->nnew);
+    if (anew >= akeep)
+        return 1;
+    for (int o = 0; o < c->nold; o++)
+        memcpy(old[o], tm->tv + 4 * (size_t)c->old[o], sizeof old[o]);
+    return anew >= min_angle(tm, (const int32_t(*)[4])old, c->nold);
+}
+
 /* The best improving flip of tet t's edges and faces; 1 if there is one. */
 static int best_flip(const tmesh *tm, int32_t t, const topo_params *p, memo *mo,
                      flip_cand *best)
@@ -274,7 +308,7 @@ static int best_flip(const tmesh *tm, int32_t t, const topo_params *p, memo *mo,
         if (!flip_edge_eval(tm, t, e, p->maxring, p->floor4, p->margin, &c)) {
             if (mo)
                 edge_fail(mo, lo, hi);
-        } else if (!have || better(&c, best)) {
+        } else if ((!have || better(&c, best)) && keeps_angle(tm, &c, p->akeep)) {
             *best = c;
             have = 1;
         }
@@ -295,12 +329,12 @@ static int best_flip(const tmesh *tm, int32_t t, const topo_params *p, memo *mo,
     }
     for (int f = 0; f < 4; f++) {
         if (flip_23_eval(tm, t, f, p->floor4, p->margin, &c) &&
-            (!have || better(&c, best))) {
+            (!have || better(&c, best)) && keeps_angle(tm, &c, p->akeep)) {
             *best = c;
             have = 1;
         }
         if (flip_multiface_eval(tm, t, f, p->maxring, p->floor4, p->margin, &c) &&
-            (!have || better(&c, best))) {
+            (!have || better(&c, best)) && keeps_angle(tm, &c, p->akeep)) {
             *best = c;
             have = 1;
         }

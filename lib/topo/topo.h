@@ -33,6 +33,9 @@ typedef struct {
     double qcontract;
     flip_bound bound; /* hausd > 0 and a surface attached: boundary flips and
                        * peeling (flip.h) too; hausd 0 (default): none */
+    double akeep;     /* > 0: a flip must also leave its new tets' smallest
+                       * dihedral angle at least this (degrees) or at least
+                       * its old tets'; 0 (default): no such condition */
     int recheck;      /* 1: evaluate every queued tet and edge again, even one
                        * whose failure nothing has changed since (0, default:
                        * skipped, the same result sooner; 1 is for tests) */
