@@ -150,12 +150,62 @@ static qdc_status take_surface(mesh_t *m, topo_surface *sf, qdc_error *err)
     return st;
 }
 
+/* A tet's key: its vertices sorted, mixed into 64 bits. */
+static uint64_t tet_hash(const int32_t *t)
+{
+    int32_t k[4] = {t[0], t[1], t[2], t[3]};
+    uint64_t h = 0x243F6A8885A308D3ull;
+
+    for (int x = 1; x < 4; x++)
+        for (int y = x; y > 0 && k[y - 1] > k[y]; y--) {
+            int32_t w = k[y];
+            k[y] = k[y - 1];
+            k[y - 1] = w;
+        }
+    for (int i = 0; i < 4; i++) {
+        h ^= (uint64_t)(uint32_t)k[i];
+        h *= 0x9E3779B97F4A7C15ull;
+        h ^= h >> 29;
+    }
+    return h;
+}
+
+/* act[v] (nv entries) = 1 for each vertex whose tets a round of flips
+ * changed (the sum of its tets' keys before and after differ) and for the
+ * vertices of the tets around those; else 0. QDC_ENOMEM. */
+static qdc_status mark_active(int32_t nv, const int32_t *old, int32_t nold,
+                              const int32_t *tets, int32_t nt, uint8_t *act,
+                              qdc_error *err)
+{
+    uint64_t *h = qdc_calloc((size_t)nv + 1, sizeof *h);
+
+    if (!h)
+        return qdc_fail(err, QDC_ENOMEM, "out of memory");
+    for (int32_t t = 0; t < nold; t++)
+        for (int i = 0; i < 4; i++)
+            h[old[4 * (size_t)t + i]] += tet_hash(old + 4 * (size_t)t);
+    for (int32_t t = 0; t < nt; t++)
+        for (int i = 0; i < 4; i++)
+            h[tets[4 * (size_t)t + i]] -= tet_hash(tets + 4 * (size_t)t);
+    for (int32_t v = 0; v < nv; v++)
+        act[v] = h[v] != 0;
+    for (int32_t t = 0; t < nt; t++) {
+        const int32_t *tt = tets + 4 * (size_t)t;
+        if ((act[tt[0]] | act[tt[1]] | act[tt[2]] | act[tt[3]]) & 1)
+            for (int i = 0; i < 4; i++)
+                act[tt[i]] |= 2;
+    }
+    qdc_free(h);
+    return QDC_OK;
+}
+
 /* One round of flips on m: the tets oriented from the connectivity (mesh_orient:
  * tets written in the other order are flipped for lib/topo and written back so),
  * improved, and m's tets and regions replaced when a flip was made. hausd > 0:
  * boundary flips and peeling within it too, m's triangles brought up to date. */
 static qdc_status flip_round(mesh_t *m, const opt_options *o, int insert, double hausd,
-                             spend *sp, topo_stats *ts, topo_surface *sf, qdc_error *err)
+                             spend *sp, uint8_t *act, topo_stats *ts, topo_surface *sf,
+                             qdc_error *err)
 {
     uint8_t *flip = qdc_malloc((size_t)m->nt);
     int32_t *tv = qdc_mallocn(4 * (size_t)m->nt, sizeof *tv), *tets = NULL,
@@ -202,6 +252,11 @@ static qdc_status flip_round(mesh_t *m, const opt_options *o, int insert, double
         goto out;
     if (hausd > 0) {
         st = take_surface(m, sf, err);
+        if (st != QDC_OK)
+            goto out;
+    }
+    if (act && ts->insertions + ts->contractions == 0) {
+        st = mark_active(m->nv, m->tets, m->nt, tets, nt, act, err);
         if (st != QDC_OK)
             goto out;
     }
@@ -441,7 +496,7 @@ static qdc_status full_round(mesh_t *m, opt_options *o, double hausd, spend *sp,
         mesh_free(keep);
         return st;
     }
-    st = flip_round(m, o, 1, hausd, sp, &ts, sf, err);
+    st = flip_round(m, o, 1, hausd, sp, NULL, &ts, sf, err);
     if (st == QDC_OK && ts.insertions + ts.contractions > 0) {
         count_round(&acc, &ts);
         acc.topo_tris_removed += sf->removed;
@@ -544,6 +599,34 @@ static qdc_status first_round(mesh_t *m, const opt_options *opts, opt_options *o
     return QDC_OK;
 }
 
+/* A round's smoothing (within the run's bound, spend.h); with act, only the
+ * vertices act marks move (the others held: m->fixed lent meanwhile). */
+static qdc_status round_smooth(mesh_t *m, opt_options *o, spend *sp, const uint8_t *act,
+                               opt_result *r, qdc_error *err)
+{
+    uint8_t *keep = m->fixed, *held = NULL;
+    qdc_status st;
+
+    if (act) {
+        held = qdc_malloc((size_t)m->nv + 1);
+        if (!held)
+            return qdc_fail(err, QDC_ENOMEM, "out of memory");
+        for (int32_t v = 0; v < m->nv; v++)
+            held[v] = (uint8_t)((keep && keep[v]) || !act[v]);
+        m->fixed = held;
+    }
+    st = spend_begin(sp, m, o, err);
+    if (st == QDC_OK) {
+        st = opt_run_smooth(m, o, r, err);
+        spend_end(sp, m);
+    }
+    if (act) {
+        m->fixed = keep;
+        qdc_free(held);
+    }
+    return st;
+}
+
 static qdc_status topology_run(mesh_t *m, const opt_options *opts, opt_result *res,
                                qdc_error *err)
 {
@@ -554,18 +637,25 @@ static qdc_status topology_run(mesh_t *m, const opt_options *opts, opt_result *r
     round_progress rp = {opts->progress, opts->progress_ctx, 0, 0.0};
     topo_surface sf = {0};
     double hausd = 0.0;
+    uint8_t *act;
     spend sp;
     qdc_status st;
 
     o.topology = OPT_TOPOLOGY_NONE;
+    act = qdc_malloc((size_t)m->nv + 1);
+    if (!act)
+        return qdc_fail(err, QDC_ENOMEM, "out of memory");
     st = spend_new(m, opts, &sp, err);
-    if (st != QDC_OK)
+    if (st != QDC_OK) {
+        qdc_free(act);
         return st;
+    }
     st = first_round(m, opts, &o, &sp, &first, &hausd, err);
     if (st != QDC_OK) {
         if (res)
             *res = first;
         spend_free(&sp);
+        qdc_free(act);
         return st;
     }
     last = first;
@@ -577,7 +667,7 @@ static qdc_status topology_run(mesh_t *m, const opt_options *opts, opt_result *r
         opt_result r;
         if (last.outcome == OPT_STOPPED)
             break; /* cancelled, out of time or the solver in trouble */
-        st = flip_round(m, &o, 0, hausd, &sp, &ts, &sf, err);
+        st = flip_round(m, &o, 0, hausd, &sp, act, &ts, &sf, err);
         if (st != QDC_OK)
             break;
         if (round_ops(&ts) == 0)
@@ -587,11 +677,7 @@ static qdc_status topology_run(mesh_t *m, const opt_options *opts, opt_result *r
         first.topo_tris_added += sf.added;
         if (round_begin(m, opts, &o, &ts, ++record, t0, &rp, &last, &st, err))
             break;
-        st = spend_begin(&sp, m, &o, err);
-        if (st != QDC_OK)
-            break;
-        st = opt_run_smooth(m, &o, &r, err);
-        spend_end(&sp, m);
+        st = round_smooth(m, &o, &sp, round > 0 ? act : NULL, &r, err);
         if (st != QDC_OK)
             break; /* m is the flipped mesh, valid */
         /* the round's records were numbered on from the topology record
@@ -616,6 +702,7 @@ static qdc_status topology_run(mesh_t *m, const opt_options *opts, opt_result *r
     }
     merge_result(&last, &first, m->nt, m->nv, record, qdc_now() - t0);
     spend_free(&sp);
+    qdc_free(act);
     if (res)
         *res = last;
     return st;
