@@ -199,6 +199,19 @@ static qdc_status mark_active(int32_t nv, const int32_t *old, int32_t nold,
     return QDC_OK;
 }
 
+/* The flips' parameters for a round of o (insert: full's round). */
+static void round_params(const opt_options *o, int insert, double hausd, topo_params *p)
+{
+    topo_params_default(p);
+    p->qgoal = TOPO_QGOAL;
+    p->insert = insert;
+    p->contract = insert;
+    p->qinsert = TOPO_QINSERT;
+    p->akeep = TOPO_AKEEP;
+    p->bound.hausd = hausd;
+    p->bound.cos_feature = cos(o->feature_angle * (3.14159265358979323846 / 180.0));
+}
+
 /* One round of flips on m: the tets oriented from the connectivity (mesh_orient:
  * tets written in the other order are flipped for lib/topo and written back so),
  * improved, and m's tets and regions replaced when a flip was made. hausd > 0:
@@ -230,14 +243,7 @@ static qdc_status flip_round(mesh_t *m, const opt_options *o, int insert, double
             tv[4 * (size_t)t] = m->tets[4 * (size_t)t + 1];
             tv[4 * (size_t)t + 1] = m->tets[4 * (size_t)t];
         }
-    topo_params_default(&p);
-    p.qgoal = TOPO_QGOAL;
-    p.insert = insert;
-    p.contract = insert;
-    p.qinsert = TOPO_QINSERT;
-    p.akeep = TOPO_AKEEP;
-    p.bound.hausd = hausd;
-    p.bound.cos_feature = cos(o->feature_angle * (3.14159265358979323846 / 180.0));
+    round_params(o, insert, hausd, &p);
     sf->ntri = m->ntri;
     sf->tris = m->tris;
     sf->refs = m->tri_ref;
