@@ -71,10 +71,10 @@ static int ring_dp(const tmesh *tm, int32_t a, int32_t b, const int32_t *ring, i
                 double q1, q2, m, s;
                 if (bk[x][z] < 0 || bk[z][y] < 0)
                     continue;
-                q1 = tmesh_quality(tm, up, floor4);
+                q1 = tmesh_quality_above(tm, up, floor4, qneed);
                 if (q1 < -1.0 || !(q1 > qneed))
                     continue;
-                q2 = tmesh_quality(tm, dn, floor4);
+                q2 = tmesh_quality_above(tm, dn, floor4, qneed);
                 if (q2 < -1.0 || !(q2 > qneed))
                     continue;
                 m = fmin(fmin(q1, q2), fmin(bmin[x][z], bmin[z][y]));
@@ -480,7 +480,7 @@ int flip_23_eval(const tmesh *tm, int32_t t, int f, double floor4, double margin
         int32_t nt[3][4] = {{e, f2, f1, d}, {f0, e, f1, d}, {f0, f2, e, d}};
         c->qmin_new = INFINITY;
         for (int s = 0; s < 3; s++) {
-            double q = tmesh_quality(tm, nt[s], floor4);
+            double q = tmesh_quality_above(tm, nt[s], floor4, qneed);
             if (q < -1.0 || !(q > qneed))
                 return 0;
             qsum += q;
@@ -579,17 +579,21 @@ static int edge_constrained(const tmesh *tm, int32_t t, int32_t x, int32_t y)
 }
 
 /* The smallest quality of the ring's tets around ab (below -1 if one is not
- * allowed), and their sum. */
+ * allowed), and their sum; with have, a value below beat as soon as one tet is
+ * (the ring cannot be picked then, whatever its sum). */
 static double ring_quality(const tmesh *tm, int32_t a, int32_t b, const int32_t *ring,
-                           int n, double floor4, double *sum)
+                           int n, double floor4, int have, double beat, double *sum)
 {
     double m = INFINITY;
 
     *sum = 0.0;
     for (int k = 0; k < n; k++) {
         int32_t v[4] = {a, b, ring[k], ring[(k + 1) % n]};
-        double q = tmesh_quality(tm, v, floor4);
+        double q = have && beat > 0.0 ? tmesh_quality_above(tm, v, floor4, beat)
+                                      : tmesh_quality(tm, v, floor4);
         if (q < -1.0)
+            return q;
+        if (have && q < beat)
             return q;
         *sum += q;
         if (q < m)
@@ -640,7 +644,7 @@ int flip_multiface_eval(const tmesh *tm, int32_t t, int f, int maxring, double f
                 len = disk_ring(s, n + 1, ring);
                 if (!len)
                     continue;
-                q = ring_quality(tm, a, b, ring, len, floor4, &sum);
+                q = ring_quality(tm, a, b, ring, len, floor4, have, pick_q, &sum);
                 if (!have || q > pick_q || (q == pick_q && sum > pick_sum)) {
                     pick = cand;
                     pick_q = q;

@@ -126,21 +126,33 @@ void tmesh_free(tmesh *tm)
     qdc_free(tm);
 }
 
-double tmesh_quality(const tmesh *tm, const int32_t v[4], double floor4)
+double tmesh_quality_above(const tmesh *tm, const int32_t v[4], double floor4,
+                           double qneed)
 {
     const double *p0 = tm->xyz + 3 * (size_t)v[0], *p1 = tm->xyz + 3 * (size_t)v[1];
     const double *p2 = tm->xyz + 3 * (size_t)v[2], *p3 = tm->xyz + 3 * (size_t)v[3];
     metric_parts pt;
     double q;
 
+    metric_parts_for(OPT_METRIC_MIMR, p0, p1, p2, p3, &pt);
+    /* the cube of the mean ratio, a few roundings from the cube of
+     * tmesh_quality's: below qneed^3 by far more than those, the mean ratio
+     * is below qneed (and a tet inverted in floating point has one <= 0) */
+    if (qneed > 0.0 &&
+        metric_mean_ratio_cubed(&pt) < qneed * qneed * qneed * (1.0 - 1e-9))
+        return -4.0;
     if (exact_orient3d(p0, p1, p2, p3) <= 0)
         return -2.0;
-    metric_parts_for(OPT_METRIC_MIMR, p0, p1, p2, p3, &pt);
     q = metric_mean_ratio(&pt);
     if (q < floor4 && tm->vcons[v[0]] && tm->vcons[v[1]] && tm->vcons[v[2]] &&
         tm->vcons[v[3]])
         return -3.0;
     return q;
+}
+
+double tmesh_quality(const tmesh *tm, const int32_t v[4], double floor4)
+{
+    return tmesh_quality_above(tm, v, floor4, 0.0); /* no threshold: no filter */
 }
 
 /* Face adjacency by matching sorted face keys among the faces whose lowest
@@ -920,24 +932,45 @@ qdc_status tmesh_set_surface(tmesh *tm, int32_t ntri, const int32_t *tris,
     return QDC_OK;
 }
 
+/* Slots of the set of tets found, a power of two at least twice the largest
+ * cap asked for (256), so that a probe ends soon: the linear search of the
+ * list it replaces cost 7% of a flips run on the 100k-tet bone-lowq. */
+enum { STAR_SET = 512 };
+
+/* 1 when u was in the set (open addressing), else 0 and u added. */
+static int star_seen(int32_t *set, int32_t u)
+{
+    uint32_t h = ((uint32_t)u * 2654435761u) >> 23; /* 9 bits: STAR_SET */
+
+    while (set[h] >= 0) {
+        if (set[h] == u)
+            return 1;
+        h = (h + 1) & (STAR_SET - 1);
+    }
+    set[h] = u;
+    return 0;
+}
+
 int tmesh_star(const tmesh *tm, int32_t t0, int32_t v, int32_t *out, int cap)
 {
+    int32_t set[STAR_SET];
     int n = 0;
 
     if (cap < 1)
         return -1;
+    if (cap > STAR_SET / 2)
+        cap = STAR_SET / 2; /* no caller asks for more */
+    memset(set, 0xff, sizeof set);
     out[n++] = t0;
+    star_seen(set, t0);
     for (int k = 0; k < n; k++) {
         int lv = tmesh_local(tm, out[k], v);
         for (int i = 0; i < 4; i++) {
             int32_t nb = tm->adj[4 * (size_t)out[k] + i], u;
-            int dup = 0;
             if (i == lv || nb < 0)
                 continue;
             u = nb / 4;
-            for (int j = 0; j < n && !dup; j++)
-                dup = out[j] == u;
-            if (dup)
+            if (star_seen(set, u))
                 continue;
             if (n == cap)
                 return -1;

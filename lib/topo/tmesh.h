@@ -84,6 +84,13 @@ qdc_status tmesh_export(const tmesh *tm, int32_t *nt, int32_t **tets, int32_t **
  * Stellar's MIN4BOUNDQUAL). */
 double tmesh_quality(const tmesh *tm, const int32_t v[4], double floor4);
 
+/* As tmesh_quality when that is above qneed (> 0); else a value at most qneed
+ * (found without the exact predicate or the cube root when floating point
+ * shows the mean ratio is clearly below qneed). A caller that wants only tets
+ * above qneed gets the same answers as from tmesh_quality, sooner. */
+double tmesh_quality_above(const tmesh *tm, const int32_t v[4], double floor4,
+                           double qneed);
+
 /* Replace the live tets old[0..nold) (one tag, a connected cavity) by the nnew
  * tets newt (positive, the same outer faces), which take that tag; new_ids (may
  * be NULL) receives their slots. The change is journaled: tmesh_commit keeps it,

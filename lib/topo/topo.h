@@ -33,6 +33,12 @@ typedef struct {
     double qcontract;
     flip_bound bound; /* hausd > 0 and a surface attached: boundary flips and
                        * peeling (flip.h) too; hausd 0 (default): none */
+    double akeep;     /* > 0: a flip must also leave its new tets' smallest
+                       * dihedral angle at least this (degrees) or at least
+                       * its old tets'; 0 (default): no such condition */
+    int recheck;      /* 1: evaluate every queued tet and edge again, even one
+                       * whose failure nothing has changed since (0, default:
+                       * skipped, the same result sooner; 1 is for tests) */
 } topo_params;
 
 /* What the runs did. */
@@ -71,7 +77,8 @@ typedef struct {
 } topo_surface;
 
 /* maxring 10, qgoal 0.6, margin 1e-3, floor4 0.1, rounds 3, max_ops 0, insert 0,
- * qinsert 0.15, imargin 0.05, iangle 1, contract 0, qcontract 0.3, no bound. */
+ * qinsert 0.15, imargin 0.05, iangle 1, contract 0, qcontract 0.3, no bound,
+ * recheck 0. */
 void topo_params_default(topo_params *p);
 
 /* Improve tm in place with flips (see above). cancel (may be NULL) is polled

@@ -785,6 +785,73 @@ TEST(driver_is_deterministic)
     mesh_free(m);
 }
 
+/* Skipping the tets and edges whose failed evaluation nothing has changed
+ * since gives the same tets as evaluating them all again, in fewer visits. */
+TEST(driver_skips_only_what_cannot_change)
+{
+    const int n = 7;
+    mesh_t *m = tm_grid(n, MESH_WITH_REGION);
+    int32_t nt[2], *tv[2] = {NULL, NULL}, *rg[2] = {NULL, NULL};
+    topo_params p;
+    topo_stats st[2];
+
+    ASSERT_TRUE(m);
+    tm_perturb(m, n, 0.3, 5);
+    topo_params_default(&p);
+    p.qgoal = 0.9;
+    for (int r = 0; r < 2; r++) {
+        p.recheck = r;
+        ASSERT_OK(topo_flip_arrays(m->nv, m->xyz, m->nt, m->tets, m->region, NULL, &p,
+                                   NULL, &nt[r], &tv[r], &rg[r], &st[r], NULL));
+    }
+    ASSERT_TRUE(st[0].edge_removals + st[0].flips23 + st[0].multiface > 50);
+    ASSERT_EQ_INT(st[0].edge_removals, st[1].edge_removals);
+    ASSERT_EQ_INT(st[0].multiface, st[1].multiface);
+    ASSERT_EQ_INT(nt[0], nt[1]);
+    ASSERT_TRUE(!memcmp(tv[0], tv[1], 16 * (size_t)nt[0]));
+    ASSERT_TRUE(!memcmp(rg[0], rg[1], 4 * (size_t)nt[0]));
+    ASSERT_TRUE(st[0].visits < st[1].visits);
+    for (int r = 0; r < 2; r++) {
+        qdc_free(tv[r]);
+        qdc_free(rg[r]);
+    }
+    mesh_free(m);
+}
+
+/* With akeep, each flip's new tets have a smallest dihedral angle at least
+ * that of the tets it removed or akeep: so, by induction over the flips, the
+ * mesh's smallest angle never falls below the least of its first and akeep;
+ * without, the same flips on the same mesh take it lower. */
+TEST(driver_keeps_the_smallest_angle)
+{
+    const int n = 7;
+    mesh_t *m = tm_grid(n, MESH_WITH_REGION);
+    double a0 = 0.0, a1[2] = {0.0, 0.0};
+    topo_params p;
+    topo_stats st;
+
+    ASSERT_TRUE(m);
+    tm_perturb(m, n, 0.15, 5);
+    topo_params_default(&p);
+    p.qgoal = 1.0; /* every tet queued, a small margin: flips that lower the
+                    * smallest angle are among those taken without akeep */
+    p.margin = 1e-6;
+    for (int r = 0; r < 2; r++) {
+        tmesh *tm = NULL;
+        ASSERT_OK(tmesh_new(m->nv, m->xyz, m->nt, m->tets, m->region, NULL, &tm, NULL));
+        a0 = min_dihedral_from(tm, 0);
+        p.akeep = r ? 60.0 : 0.0; /* above every angle of the input */
+        ASSERT_OK(topo_improve(tm, &p, &st, NULL));
+        ASSERT_TRUE(st.edge_removals + st.flips23 + st.multiface > 20);
+        ASSERT_TRUE(consistent(tm));
+        a1[r] = min_dihedral_from(tm, 0);
+        tmesh_free(tm);
+    }
+    ASSERT_TRUE(a1[1] >= a0);
+    ASSERT_TRUE(a1[0] < a0);
+    mesh_free(m);
+}
+
 static int cmp3(const void *x, const void *y)
 {
     const int32_t *a = x, *b = y;
@@ -1354,6 +1421,7 @@ TEST_MAIN("topo", T(contraction_keeps_the_volume_exactly),
           T(export_keeps_the_callers_vertex_order), T(mixed_tag_shell_blocks_removal),
           T(non_convex_ring_refused), T(four_boundary_corner_floor),
           T(rollback_restores_exactly), T(random_flips_keep_invariants),
-          T(driver_is_deterministic), T(opt_run_flips_keeps_the_model),
+          T(driver_is_deterministic), T(driver_skips_only_what_cannot_change),
+          T(driver_keeps_the_smallest_angle), T(opt_run_flips_keeps_the_model),
           T(opt_run_flips_leaves_inverted_input_alone),
           T(flips_allocation_failures_are_clean))
