@@ -1,7 +1,8 @@
 #!/bin/sh
 # make.sh - regenerate the files of tests/data/real (see README.md) with the
 # tools that write them: gmsh (the gmsh Debian package, 4.8), meshio (python3-meshio,
-# 5.0), netgen (python3-netgen) and tetgen (the tetgen package, 1.6). Run from anywhere:
+# 5.0), netgen (python3-netgen), tetgen (the tetgen package, 1.6) and dolfinx
+# (python3-dolfinx 0.5). Run from anywhere:
 #   sh tests/data/real/make.sh
 # Each file is stored gzip-compressed (gzip -n: no name or time, so a rerun with the
 # same tool versions gives the same bytes).
@@ -10,6 +11,12 @@ here=$(cd "$(dirname "$0")" && pwd)
 tmp=$(mktemp -d "${TMPDIR:-/tmp}/qdc-real.XXXXXX")
 trap 'rm -rf "$tmp"' EXIT
 cd "$tmp"
+# need MODULE PACKAGE: stop, naming the Debian package, when python3 lacks MODULE
+need() {
+    /usr/bin/python3 -c "import $1" 2> /dev/null && return
+    echo "make.sh: the Python module $1 is missing: install the Debian package $2" >&2
+    exit 1
+}
 
 # A unit box holding a sphere: two volumes, 7 surfaces, physical names for both
 # volumes, two boundary groups, a curve and a point (line and point elements).
@@ -286,13 +293,50 @@ mesh.SecondOrder()
 mesh.Save("netgen_p2.vol")
 EOF
 
+# dolfinx 0.5 (python3-dolfinx; one MPI process): a unit box cut into 6 x 6 x 6
+# x 6 tets (create_box), its inner vertices moved at random (seeded), cell tags
+# (2 within 0.3 of the centre, else 1) and facet tags (10 at x = 0, 11 at
+# x = 1, 12 elsewhere on the boundary), written by XDMFFile: write_mesh, then
+# write_meshtags of each (HDF5 heavy data: dolfinx.h5 beside dolfinx.xdmf).
+need dolfinx python3-dolfinx
+/usr/bin/python3 - <<'EOF'
+from mpi4py import MPI
+import numpy as np
+import dolfinx, dolfinx.io, dolfinx.mesh
+comm = MPI.COMM_WORLD
+mesh = dolfinx.mesh.create_box(comm, [np.array([0.0, 0.0, 0.0]), np.array([1.0, 1.0, 1.0])],
+                               [6, 6, 6], dolfinx.mesh.CellType.tetrahedron)
+mesh.name = "mesh"
+x = mesh.geometry.x
+inside = np.all((x > 1e-9) & (x < 1 - 1e-9), axis=1)
+x[inside] += np.random.default_rng(1).uniform(-0.04, 0.04, (int(inside.sum()), 3))
+tdim = mesh.topology.dim
+cells = np.arange(mesh.topology.index_map(tdim).size_local, dtype=np.int32)
+mid = dolfinx.mesh.compute_midpoints(mesh, tdim, cells)
+inner = np.linalg.norm(mid - 0.5, axis=1) < 0.3
+ct = dolfinx.mesh.meshtags(mesh, tdim, cells, np.where(inner, 2, 1).astype(np.int32))
+ct.name = "cell_tags"
+mesh.topology.create_connectivity(tdim - 1, tdim)
+mesh.topology.create_connectivity(tdim - 1, 0)
+bf = np.sort(dolfinx.mesh.exterior_facet_indices(mesh.topology)).astype(np.int32)
+fx = dolfinx.mesh.compute_midpoints(mesh, tdim - 1, bf)[:, 0]
+fv = np.where(np.isclose(fx, 0.0), 10, np.where(np.isclose(fx, 1.0), 11, 12)).astype(np.int32)
+ft = dolfinx.mesh.meshtags(mesh, tdim - 1, bf, fv)
+ft.name = "facet_tags"
+with dolfinx.io.XDMFFile(comm, "dolfinx.xdmf", "w") as f:
+    f.write_mesh(mesh)
+    f.write_meshtags(ct)
+    f.write_meshtags(ft)
+EOF
+
 for f in gmsh41.msh gmsh41_bin.msh gmsh22.msh gmsh22_bin.msh gmsh40.msh gmsh.vtk gmsh.mesh meshio_zlib.vtu \
     meshio_ascii.vtu meshio_bin.vtk meshio_ascii.vtk vtk_appended_zlib.vtu tetgen.node \
     tetgen.ele dolfin.xml meshio.inp calculix.inp meshio.vol meshio.meshb periodic41.msh \
     periodic41_bin.msh periodic40.msh periodic22.msh periodic22_bin.msh gmsh41_p2.msh gmsh_p2.inp \
     gmsh_msh1.msh gmsh.bdf gmsh_free.bdf gmsh_large.bdf gmsh.unv meshio_free.bdf meshio_small.nas \
     meshio_large.bdf meshio.xdmf meshio_p2.xdmf meshio_h5.xdmf meshio_h5.h5 meshio.med meshio_tri.med \
-    gmsh_p2.bdf gmsh_large_p2.bdf gmsh_p2.unv meshio_p2.bdf netgen_p2.vol; do
+    gmsh_p2.bdf gmsh_large_p2.bdf gmsh_p2.unv meshio_p2.bdf netgen_p2.vol \
+    dolfinx.xdmf dolfinx.h5; do
     gzip -n -9 -c "$f" > "$here/$f.gz"
 done
 ls -l "$here"
