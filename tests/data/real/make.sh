@@ -1,8 +1,8 @@
 #!/bin/sh
 # make.sh - regenerate the files of tests/data/real (see README.md) with the
 # tools that write them: gmsh (the gmsh Debian package, 4.8), meshio (python3-meshio,
-# 5.0), netgen (python3-netgen), tetgen (the tetgen package, 1.6) and dolfinx
-# (python3-dolfinx 0.5). Run from anywhere:
+# 5.0), netgen (python3-netgen), tetgen (the tetgen package, 1.6), dolfinx
+# (python3-dolfinx 0.5) and VTK (python3-vtk9 9.1). Run from anywhere:
 #   sh tests/data/real/make.sh
 # Each file is stored gzip-compressed (gzip -n: no name or time, so a rerun with the
 # same tool versions gives the same bytes).
@@ -293,6 +293,45 @@ mesh.SecondOrder()
 mesh.Save("netgen_p2.vol")
 EOF
 
+# VTK's own writers (python3-vtk9): the Gmsh mesh's tets and boundary
+# triangles with a point array (temperature, Float64) and a cell array
+# (material, Int32), written by vtkXMLUnstructuredGridWriter with its
+# defaults (appended data, zlib) and by vtkUnstructuredGridWriter (legacy,
+# binary).
+need vtk python3-vtk9
+/usr/bin/python3 - <<'EOF'
+import meshio
+import numpy as np
+import vtk
+from vtk.util.numpy_support import numpy_to_vtk
+m = meshio.read("gmsh41.msh")
+tets, tris, pts = m.cells_dict["tetra"], m.cells_dict["triangle"], m.points
+grid = vtk.vtkUnstructuredGrid()
+vp = vtk.vtkPoints()
+vp.SetData(numpy_to_vtk(np.ascontiguousarray(pts, dtype=np.float64), deep=True))
+grid.SetPoints(vp)
+for kind, cs in ((vtk.VTK_TETRA, tets), (vtk.VTK_TRIANGLE, tris)):
+    for c in cs:
+        grid.InsertNextCell(kind, len(c), [int(i) for i in c])
+t = numpy_to_vtk(300 + 10 * pts[:, 0] + pts[:, 1] * pts[:, 2], deep=True)
+t.SetName("temperature")
+grid.GetPointData().AddArray(t)
+mat = np.concatenate([m.cell_data_dict["gmsh:physical"]["tetra"],
+                      m.cell_data_dict["gmsh:physical"]["triangle"]]).astype(np.int32)
+a = numpy_to_vtk(mat, deep=True, array_type=vtk.VTK_INT)
+a.SetName("material")
+grid.GetCellData().AddArray(a)
+w = vtk.vtkXMLUnstructuredGridWriter()
+w.SetFileName("vtk_xml.vtu")
+w.SetInputData(grid)
+w.Write()
+w = vtk.vtkUnstructuredGridWriter()
+w.SetFileName("vtk_legacy_bin.vtk")
+w.SetFileTypeToBinary()
+w.SetInputData(grid)
+w.Write()
+EOF
+
 # dolfinx 0.5 (python3-dolfinx; one MPI process): a unit box cut into 6 x 6 x 6
 # x 6 tets (create_box), its inner vertices moved at random (seeded), cell tags
 # (2 within 0.3 of the centre, else 1) and facet tags (10 at x = 0, 11 at
@@ -336,7 +375,7 @@ for f in gmsh41.msh gmsh41_bin.msh gmsh22.msh gmsh22_bin.msh gmsh40.msh gmsh.vtk
     gmsh_msh1.msh gmsh.bdf gmsh_free.bdf gmsh_large.bdf gmsh.unv meshio_free.bdf meshio_small.nas \
     meshio_large.bdf meshio.xdmf meshio_p2.xdmf meshio_h5.xdmf meshio_h5.h5 meshio.med meshio_tri.med \
     gmsh_p2.bdf gmsh_large_p2.bdf gmsh_p2.unv meshio_p2.bdf netgen_p2.vol \
-    dolfinx.xdmf dolfinx.h5; do
+    dolfinx.xdmf dolfinx.h5 vtk_xml.vtu vtk_legacy_bin.vtk; do
     gzip -n -9 -c "$f" > "$here/$f.gz"
 done
 ls -l "$here"
