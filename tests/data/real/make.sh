@@ -2,7 +2,7 @@
 # make.sh - regenerate the files of tests/data/real (see README.md) with the
 # tools that write them: gmsh (the gmsh Debian package, 4.8), meshio (python3-meshio,
 # 5.0), netgen (python3-netgen), tetgen (the tetgen package, 1.6), dolfinx
-# (python3-dolfinx 0.5) and VTK (python3-vtk9 9.1). Run from anywhere:
+# (python3-dolfinx 0.5), VTK (python3-vtk9 9.1) and FreeFEM (freefem++ 4.11). Run from anywhere:
 #   sh tests/data/real/make.sh
 # Each file is stored gzip-compressed (gzip -n: no name or time, so a rerun with the
 # same tool versions gives the same bytes).
@@ -332,6 +332,24 @@ w.SetInputData(grid)
 w.Write()
 EOF
 
+# FreeFEM (the freefem++ and libfreefem++ packages; Debian 12's FreeFem++
+# looks for its plugins elsewhere than libfreefem++ puts them: FF_LOADPATH):
+# cube(6, 6, 6) with face labels 1-6 and region 7, its inside moved by
+# movemesh, saved by savemesh as Medit ASCII and binary (FreeFEM writes no 3D
+# mesh in its own .msh format: "PB Write error").
+command -v FreeFem++ > /dev/null ||
+    { echo "make.sh: FreeFem++ is missing: install the Debian packages freefem++ and libfreefem++" >&2; exit 1; }
+cat > box.edp <<'EOF'
+load "msh3"
+int[int] lab = [1, 2, 3, 4, 5, 6];
+mesh3 Th = cube(6, 6, 6, label = lab, region = 7);
+func b = sin(pi * x) * sin(pi * y) * sin(pi * z);
+Th = movemesh(Th, [x + 0.06 * b * cos(3 * y), y + 0.06 * b * sin(2 * z), z - 0.05 * b * cos(2 * x)]);
+savemesh(Th, "freefem.mesh");
+savemesh(Th, "freefem.meshb");
+EOF
+FF_LOADPATH=${FF_LOADPATH:-/usr/lib/freefem++} FreeFem++ -nw -ns box.edp > /dev/null
+
 # dolfinx 0.5 (python3-dolfinx; one MPI process): a unit box cut into 6 x 6 x 6
 # x 6 tets (create_box), its inner vertices moved at random (seeded), cell tags
 # (2 within 0.3 of the centre, else 1) and facet tags (10 at x = 0, 11 at
@@ -375,7 +393,7 @@ for f in gmsh41.msh gmsh41_bin.msh gmsh22.msh gmsh22_bin.msh gmsh40.msh gmsh.vtk
     gmsh_msh1.msh gmsh.bdf gmsh_free.bdf gmsh_large.bdf gmsh.unv meshio_free.bdf meshio_small.nas \
     meshio_large.bdf meshio.xdmf meshio_p2.xdmf meshio_h5.xdmf meshio_h5.h5 meshio.med meshio_tri.med \
     gmsh_p2.bdf gmsh_large_p2.bdf gmsh_p2.unv meshio_p2.bdf netgen_p2.vol \
-    dolfinx.xdmf dolfinx.h5 vtk_xml.vtu vtk_legacy_bin.vtk; do
+    dolfinx.xdmf dolfinx.h5 vtk_xml.vtu vtk_legacy_bin.vtk freefem.mesh freefem.meshb; do
     gzip -n -9 -c "$f" > "$here/$f.gz"
 done
 ls -l "$here"
