@@ -786,9 +786,10 @@ static qdc_status tags_hdf(xd *x, const xtag *t, int parent, const char *p,
     if (x->pend[base].set && x->pend[base + 1].set)
         return QDC_OK;
     st = item_read(x, t, &it, err);
-    /* dolfinx (0.5) writes its MeshTags values with no NumberType: read as
-     * integers, qdc-h5 refusing a dataset of another class */
-    if (st == QDC_OK && k == base + 1 && !it.typed)
+    /* dolfinx (0.5) writes its MeshTags values with no NumberType: in a grid
+     * with a Topology of its own, read as integers (qdc-h5 refusing a
+     * dataset of another class) */
+    if (st == QDC_OK && k == base + 1 && !it.typed && x->ts_topo)
         it.integer = 1;
     if (st != QDC_OK || !it.integer || it.n > INT32_MAX ||
         (k == base && it.n % x->ts_topo))

@@ -2,7 +2,8 @@
 # make.sh - regenerate the files of tests/data/real (see README.md) with the
 # tools that write them: gmsh (the gmsh Debian package, 4.8), meshio (python3-meshio,
 # 5.0), netgen (python3-netgen), tetgen (the tetgen package, 1.6), dolfinx
-# (python3-dolfinx 0.5), VTK (python3-vtk9 9.1) and FreeFEM (freefem++ 4.11). Run from anywhere:
+# (python3-dolfinx 0.5), DOLFIN (python3-dolfin 2019.2), VTK (python3-vtk9 9.1)
+# and FreeFEM (freefem++ 4.11). Run from anywhere:
 #   sh tests/data/real/make.sh
 # Each file is stored gzip-compressed (gzip -n: no name or time, so a rerun with the
 # same tool versions gives the same bytes).
@@ -350,6 +351,29 @@ savemesh(Th, "freefem.meshb");
 EOF
 FF_LOADPATH=${FF_LOADPATH:-/usr/lib/freefem++} FreeFem++ -nw -ns box.edp > /dev/null
 
+# DOLFIN (legacy FEniCS, python3-dolfin 2019.2): BoxMesh 6 x 6 x 6, its
+# inner vertices moved at random (seeded), a MeshFunction "region" (2 within
+# 0.3 of the centre, else 1); XDMFFile.write of the mesh and of the
+# MeshFunction (HDF5: dolfin_h5.h5) and File("dolfin_legacy.xml") << mesh.
+need dolfin python3-dolfin
+/usr/bin/python3 - <<'EOF'
+import numpy as np
+import dolfin
+mesh = dolfin.BoxMesh(dolfin.Point(0, 0, 0), dolfin.Point(1, 1, 1), 6, 6, 6)
+x = mesh.coordinates()
+inside = np.all((x > 1e-9) & (x < 1 - 1e-9), axis=1)
+x[inside] += np.random.default_rng(1).uniform(-0.04, 0.04, (int(inside.sum()), 3))
+mf = dolfin.MeshFunction("size_t", mesh, 3, 1)
+for c in dolfin.cells(mesh):
+    if (c.midpoint() - dolfin.Point(0.5, 0.5, 0.5)).norm() < 0.3:
+        mf[c] = 2
+mf.rename("region", "region")
+with dolfin.XDMFFile(mesh.mpi_comm(), "dolfin_h5.xdmf") as f:
+    f.write(mesh)
+    f.write(mf)
+dolfin.File("dolfin_legacy.xml") << mesh
+EOF
+
 # dolfinx 0.5 (python3-dolfinx; one MPI process): a unit box cut into 6 x 6 x 6
 # x 6 tets (create_box), its inner vertices moved at random (seeded), cell tags
 # (2 within 0.3 of the centre, else 1) and facet tags (10 at x = 0, 11 at
@@ -393,7 +417,8 @@ for f in gmsh41.msh gmsh41_bin.msh gmsh22.msh gmsh22_bin.msh gmsh40.msh gmsh.vtk
     gmsh_msh1.msh gmsh.bdf gmsh_free.bdf gmsh_large.bdf gmsh.unv meshio_free.bdf meshio_small.nas \
     meshio_large.bdf meshio.xdmf meshio_p2.xdmf meshio_h5.xdmf meshio_h5.h5 meshio.med meshio_tri.med \
     gmsh_p2.bdf gmsh_large_p2.bdf gmsh_p2.unv meshio_p2.bdf netgen_p2.vol \
-    dolfinx.xdmf dolfinx.h5 vtk_xml.vtu vtk_legacy_bin.vtk freefem.mesh freefem.meshb; do
+    dolfinx.xdmf dolfinx.h5 vtk_xml.vtu vtk_legacy_bin.vtk freefem.mesh freefem.meshb \
+    dolfin_legacy.xml dolfin_h5.xdmf dolfin_h5.h5; do
     gzip -n -9 -c "$f" > "$here/$f.gz"
 done
 ls -l "$here"
