@@ -7,7 +7,9 @@
  * 0-based; Geometry XYZ, "N 3". Its cell attributes: the first scalar one of
  * integers (Int, UInt, Char, UChar) is the region (one named "region",
  * "gmsh:physical", "cell_tags" or "name_to_read" first), as DOLFIN's
- * MeshFunction and meshio's cell data write them. Grids after the mesh that
+ * MeshFunction and meshio's cell data write them (DOLFIN 2019 gives its
+ * MeshFunction in HDF5 no NumberType: not taken, as a DG0 Function's float
+ * values look the same). Grids after the mesh that
  * share its geometry (dolfinx MeshTags: an xi:include of the Geometry) with
  * Tetrahedron topology and an integer cell attribute (in HDF5 one with no
  * NumberType too, as dolfinx 0.5 writes it) give the region of the tets they
