@@ -7,10 +7,13 @@
  * 0-based; Geometry XYZ, "N 3". Its cell attributes: the first scalar one of
  * integers (Int, UInt, Char, UChar) is the region (one named "region",
  * "gmsh:physical", "cell_tags" or "name_to_read" first), as DOLFIN's
- * MeshFunction and meshio's cell data write them. Grids after the mesh that
+ * MeshFunction and meshio's cell data write them (DOLFIN 2019 gives its
+ * MeshFunction in HDF5 no NumberType: not taken, as a DG0 Function's float
+ * values look the same). Grids after the mesh that
  * share its geometry (dolfinx MeshTags: an xi:include of the Geometry) with
- * Tetrahedron topology and an integer cell attribute give the region of the
- * tets they list; the first such grid with Triangle topology (facet tags)
+ * Tetrahedron topology and an integer cell attribute (in HDF5 one with no
+ * NumberType too, as dolfinx 0.5 writes it) give the region of the tets they
+ * list; the first such grid with Triangle topology (facet tags)
  * gives the boundary triangles, its values their refs; in any order. Other
  * attributes, grids and elements are kept by a spliced
  * write, which rewrites only the numbers of the Geometry's DataItem.
@@ -70,6 +73,7 @@ typedef struct {
     int64_t dims[4], n; /* the dimensions and their product */
     int ndims;
     int integer; /* NumberType Int, UInt, Char, UChar */
+    int typed;   /* NumberType or DataType given (else Float, XDMF's default) */
     int hdf;     /* Format="HDF" (not in X_PLAIN) */
 } item;
 
@@ -350,7 +354,7 @@ static qdc_status item_read(xd *x, const xtag *t, item *it, qdc_error *err)
 {
     char fmt[16], type[16], kind[16], dims[96];
     qdc_status st;
-    const char *p;
+    const char *p, *p_end;
 
     memset(it, 0, sizeof *it);
     st = attr_text(x, t, "Format", NULL, "XML", fmt, sizeof fmt, err);
@@ -379,6 +383,8 @@ static qdc_status item_read(xd *x, const xtag *t, item *it, qdc_error *err)
         return fail_txt(err, QDC_EFORMAT, &x->s, t->at,
                         "XDMF: DataItem Format %s: only XML (inline) and HDF are read",
                         fmt);
+    it->typed = xattr(t->a, t->ae, "NumberType", &p, &p_end) ||
+                xattr(t->a, t->ae, "DataType", &p, &p_end);
     it->integer = strcasecmp(type, "Int") == 0 || strcasecmp(type, "UInt") == 0 ||
                   strcasecmp(type, "Char") == 0 || strcasecmp(type, "UChar") == 0;
     if (!it->integer && strcasecmp(type, "Float") != 0)
@@ -782,6 +788,11 @@ static qdc_status tags_hdf(xd *x, const xtag *t, int parent, const char *p,
     if (x->pend[base].set && x->pend[base + 1].set)
         return QDC_OK;
     st = item_read(x, t, &it, err);
+    /* dolfinx (0.5) writes its MeshTags values with no NumberType: in a grid
+     * with a Topology of its own, read as integers (qdc-h5 refusing a
+     * dataset of another class) */
+    if (st == QDC_OK && k == base + 1 && !it.typed && x->ts_topo)
+        it.integer = 1;
     if (st != QDC_OK || !it.integer || it.n > INT32_MAX ||
         (k == base && it.n % x->ts_topo))
         return st;

@@ -10,7 +10,9 @@
 # in HDF5 (meshio's default): read from the .h5 beside it, written back as
 # the .xdmf (only the .h5 name changed) and a copy of the .h5 (only the
 # geometry dataset changed); refusals: .h5 missing, a path out of the
-# folder, a dataset of another shape than the XDMF says.
+# folder, a dataset of another shape than the XDMF says. dolfinx 0.5's own
+# XDMF+HDF5 (tests/data/real/dolfinx.*): cell and facet tags read, only the
+# geometry dataset changed.
 . "$(dirname "$0")/../lib.sh"
 REAL=$ROOT/tests/data/real
 cd "$TMP" || exit 1
@@ -23,7 +25,8 @@ tally() { # FILE NAME: FILE's ok/FAIL lines shown and counted
     grep -q '^FAIL' "$1" && NFAIL=$((NFAIL + 1))
     grep -q '^ok' "$1" || fail "$2" "$(tail -2 "$1")"
 }
-for f in meshio.med meshio_tri.med meshio_h5.h5 meshio_h5.xdmf; do
+for f in meshio.med meshio_tri.med meshio_h5.h5 meshio_h5.xdmf dolfinx.xdmf dolfinx.h5 \
+    dolfin_h5.xdmf dolfin_h5.h5; do
     gzip -dc "$REAL/$f.gz" > "$f"
 done
 
@@ -165,6 +168,43 @@ sys.exit(0 if np.array_equal(got, want) and n > 0 else 1)' > tris.out 2>> err; t
 else
     pass "hdf5: dolfinx MeshTags in HDF5 # SKIP python3-h5py missing ($(tail -1 err))"
 fi
+
+# dolfinx 0.5's own file (tests/data/real/dolfinx.xdmf and .h5: write_mesh,
+# then write_meshtags of cell tags and of facet tags, whose values carry no
+# NumberType): cell tags 1 and 2 as the regions, the 432 facet tags (10, 11,
+# 12) as boundary triangles; optimized, the XML changes only in the .h5
+# name and the .h5 only in Mesh/mesh/geometry
+if "$BIN/qdc" convert dolfinx.xdmf dfx.mesh --quiet 2> err &&
+    [ "$(awk '/^Tetrahedra/{f=1; getline; next} f && NF == 5 {print $5} /^End/{f=0}' dfx.mesh |
+        sort | uniq -c | awk '{printf "%s:%s ", $2, $1}')" = "1:1147 2:149 " ] &&
+    [ "$(awk '/^Triangles/{f=1; getline; next} f && NF == 4 {print $4} /^Tetra/{f=0}' dfx.mesh |
+        sort | uniq -c | awk '{printf "%s:%s ", $2, $1}')" = "10:72 11:72 12:288 " ]; then
+    pass "hdf5: dolfinx.xdmf (dolfinx 0.5): cell tags 1/2 as regions, 432 facet tags 10/11/12 as refs"
+else
+    fail "hdf5: dolfinx.xdmf tags" "$(head -2 err) $(grep -A1 -E '^(Tetrahedra|Triangles)' dfx.mesh)"
+fi
+# pair_roundtrip BASE OUT WHO: BASE.xdmf converted to OUT's name gives the
+# same .h5; optimized into OUT.xdmf, the XML changes only in the .h5 name
+# and the .h5 only in Mesh/mesh/geometry
+pair_roundtrip() {
+    if "$BIN/qdc" convert "$1.xdmf" "$2s.xdmf" --quiet 2> err && cmp -s "$1.h5" "$2s.h5" &&
+        "$BIN/qdc" optimize "$1.xdmf" "$2.xdmf" --quiet --max-iter 5 2>> err &&
+        sed "s/$1\\.h5:/$2.h5:/g" "$1.xdmf" | cmp -s - "$2.xdmf"; then
+        if "$PY" -c 'import h5py' 2> /dev/null; then
+            "$PY" "$ROOT/tests/tools/medcoo.py" "$1.h5" "$2.h5" "hdf5: $2.h5 ($3)" \
+                Mesh/mesh/geometry > chk 2>&1
+            tally chk "hdf5: h5py check of $2.h5"
+        else
+            pass "hdf5: $2.h5 compared # SKIP python3-h5py missing"
+        fi
+    else
+        fail "hdf5: $1.xdmf round trip" "$(head -3 err)"
+    fi
+}
+pair_roundtrip dolfinx dfxout dolfinx
+# DOLFIN's own XDMF+HDF5 (tests/data/real/dolfin_h5.*: the mesh and a
+# MeshFunction)
+pair_roundtrip dolfin_h5 dfo DOLFIN
 
 want_rc= # the exit status a refusal must have, if set
 check_refused() { # name, expected text in the message, command...

@@ -424,6 +424,18 @@ def vtu(b):
         return f
     off = int(attr(t, b"offset").strip())
     s = app_data + off
+    if attr(re.compile(rb"<AppendedData[^>]*>").search(b, app).group(0),
+            b"encoding") == b"base64":
+        # VTK's default: each array base64 (header and data encoded
+        # apart), up to the next array's offset or the end of the data
+        offs = [int(o) for o in re.findall(rb'\soffset\s*=\s*"\s*(\d+)\s*"', b[:app])]
+        nxt = [o for o in offs if o > off]
+        e = app_data + min(nxt) if nxt else b.index(b"<", s)
+        while b[e - 1:e].isspace():
+            e -= 1
+        f.ranges.append((s, e))
+        f.block = ("b64", s, e, hsz, word, zl, kind)
+        return f
     if zl:
         nb = struct.unpack_from(word, b, s)[0]
         sizes = struct.unpack_from(word[0] + word[1] * (3 + nb), b, s)

@@ -131,25 +131,29 @@ TEST(the_form_is_made_in_place)
     "Format=\"HDF\">d.h5:/Mesh/topology</DataItem></Topology>"                           \
     "<Geometry GeometryType=\"XYZ\"><DataItem Dimensions=\"5 3\" Format=\"HDF\">"        \
     "d.h5:/Mesh/geometry</DataItem></Geometry></Grid>"
-#define DX_SHARED                                                                        \
-    "<xi:include xpointer=\"xpointer(/Xdmf/Domain/Grid[@GridType='Uniform'][1]/"         \
-    "Geometry)\" />"
-#define DX_CELLS                                                                         \
-    "<Grid Name=\"cells\" GridType=\"Uniform\">" DX_SHARED                               \
+#define DX_SHARED_AT(grid)                                                               \
+    "<xi:include xpointer=\"xpointer(/Xdmf/Domain/" grid "/Geometry)\" />"
+#define DX_SHARED DX_SHARED_AT("Grid[@GridType='Uniform'][1]")
+#define DX_INT "NumberType=\"Int\" "
+/* shared as sh, the values' DataItem attributes vt before Format */
+#define DX_CELLS_AS(sh, vt)                                                              \
+    "<Grid Name=\"cells\" GridType=\"Uniform\">" sh                                      \
     "<Topology TopologyType=\"Tetrahedron\" NumberOfElements=\"2\" "                     \
     "NodesPerElement=\"4\"><DataItem Dimensions=\"2 4\" NumberType=\"Int\" "             \
     "Format=\"HDF\">d.h5:/Tags/cells/topology</DataItem></Topology>"                     \
     "<Attribute Name=\"cells\" AttributeType=\"Scalar\" Center=\"Cell\"><DataItem "      \
-    "Dimensions=\"2 1\" NumberType=\"Int\" Format=\"HDF\">d.h5:/Tags/cells/Values"       \
+    "Dimensions=\"2 1\" " vt "Format=\"HDF\">d.h5:/Tags/cells/Values"                    \
     "</DataItem></Attribute></Grid>"
-#define DX_FACETS                                                                        \
-    "<Grid Name=\"facets\" GridType=\"Uniform\">" DX_SHARED                              \
+#define DX_FACETS_AS(sh, vt)                                                             \
+    "<Grid Name=\"facets\" GridType=\"Uniform\">" sh                                     \
     "<Topology TopologyType=\"Triangle\" NumberOfElements=\"2\" "                        \
     "NodesPerElement=\"3\"><DataItem Dimensions=\"2 3\" NumberType=\"Int\" "             \
     "Format=\"HDF\">d.h5:/Tags/facets/topology</DataItem></Topology>"                    \
     "<Attribute Name=\"facets\" AttributeType=\"Scalar\" Center=\"Cell\"><DataItem "     \
-    "Dimensions=\"2 1\" NumberType=\"Int\" Format=\"HDF\">d.h5:/Tags/facets/Values"      \
+    "Dimensions=\"2 1\" " vt "Format=\"HDF\">d.h5:/Tags/facets/Values"                   \
     "</DataItem></Attribute></Grid>"
+#define DX_CELLS DX_CELLS_AS(DX_SHARED, DX_INT)
+#define DX_FACETS DX_FACETS_AS(DX_SHARED, DX_INT)
 static const char dx[] = DX_HEAD DX_CELLS DX_FACETS "</Domain></Xdmf>\n";
 static const char dx2[] = DX_HEAD DX_FACETS DX_CELLS "</Domain></Xdmf>\n";
 
@@ -223,6 +227,17 @@ TEST(dolfinx_meshtags_in_hdf5_as_regions)
 TEST(facet_tags_first_and_cell_tags_after_them)
 {
     check_meshtags(dx2);
+}
+
+/* As dolfinx 0.5's XDMFFile.write_meshtags writes them: the geometry
+ * shared as /Xdmf/Domain/Grid/Geometry, the values with no NumberType
+ * (XDMF's default is Float; the dataset is int32): read as integers. */
+static const char dx05[] = DX_HEAD DX_CELLS_AS(DX_SHARED_AT("Grid"), "")
+    DX_FACETS_AS(DX_SHARED_AT("Grid"), "") "</Domain></Xdmf>\n";
+
+TEST(dolfinx_05_meshtags_with_untyped_values)
+{
+    check_meshtags(dx05);
 }
 
 /* A facet tag grid whose triangle names a vertex the mesh lacks: refused. */
@@ -319,6 +334,7 @@ TEST(references_out_of_the_folder_are_refused)
 TEST_MAIN("xdmf_h5", T(refs_list_the_mesh_datasets), T(framed_read_and_spliced_write),
           T(the_form_is_made_in_place), T(dolfinx_meshtags_in_hdf5_as_regions),
           T(facet_tags_first_and_cell_tags_after_them),
+          T(dolfinx_05_meshtags_with_untyped_values),
           T(a_facet_tag_off_the_mesh_is_refused),
           T(a_geometry_frame_of_another_size_is_refused),
           T(rename_changes_only_the_file_names),

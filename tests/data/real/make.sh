@@ -1,7 +1,9 @@
 #!/bin/sh
 # make.sh - regenerate the files of tests/data/real (see README.md) with the
 # tools that write them: gmsh (the gmsh Debian package, 4.8), meshio (python3-meshio,
-# 5.0), netgen (python3-netgen) and tetgen (the tetgen package, 1.6). Run from anywhere:
+# 5.0), netgen (python3-netgen), tetgen (the tetgen package, 1.6), dolfinx
+# (python3-dolfinx 0.5), DOLFIN (python3-dolfin 2019.2), VTK (python3-vtk9 9.1)
+# and FreeFEM (freefem++ 4.11). Run from anywhere:
 #   sh tests/data/real/make.sh
 # Each file is stored gzip-compressed (gzip -n: no name or time, so a rerun with the
 # same tool versions gives the same bytes).
@@ -10,6 +12,12 @@ here=$(cd "$(dirname "$0")" && pwd)
 tmp=$(mktemp -d "${TMPDIR:-/tmp}/qdc-real.XXXXXX")
 trap 'rm -rf "$tmp"' EXIT
 cd "$tmp"
+# need MODULE PACKAGE: stop, naming the Debian package, when python3 lacks MODULE
+need() {
+    /usr/bin/python3 -c "import $1" 2> /dev/null && return
+    echo "make.sh: the Python module $1 is missing: install the Debian package $2" >&2
+    exit 1
+}
 
 # A unit box holding a sphere: two volumes, 7 surfaces, physical names for both
 # volumes, two boundary groups, a curve and a point (line and point elements).
@@ -286,13 +294,131 @@ mesh.SecondOrder()
 mesh.Save("netgen_p2.vol")
 EOF
 
+# VTK's own writers (python3-vtk9): the Gmsh mesh's tets and boundary
+# triangles with a point array (temperature, Float64) and a cell array
+# (material, Int32), written by vtkXMLUnstructuredGridWriter with its
+# defaults (appended data, zlib) and by vtkUnstructuredGridWriter (legacy,
+# binary).
+need vtk python3-vtk9
+/usr/bin/python3 - <<'EOF'
+import meshio
+import numpy as np
+import vtk
+from vtk.util.numpy_support import numpy_to_vtk
+m = meshio.read("gmsh41.msh")
+tets, tris, pts = m.cells_dict["tetra"], m.cells_dict["triangle"], m.points
+grid = vtk.vtkUnstructuredGrid()
+vp = vtk.vtkPoints()
+vp.SetData(numpy_to_vtk(np.ascontiguousarray(pts, dtype=np.float64), deep=True))
+grid.SetPoints(vp)
+for kind, cs in ((vtk.VTK_TETRA, tets), (vtk.VTK_TRIANGLE, tris)):
+    for c in cs:
+        grid.InsertNextCell(kind, len(c), [int(i) for i in c])
+t = numpy_to_vtk(300 + 10 * pts[:, 0] + pts[:, 1] * pts[:, 2], deep=True)
+t.SetName("temperature")
+grid.GetPointData().AddArray(t)
+mat = np.concatenate([m.cell_data_dict["gmsh:physical"]["tetra"],
+                      m.cell_data_dict["gmsh:physical"]["triangle"]]).astype(np.int32)
+a = numpy_to_vtk(mat, deep=True, array_type=vtk.VTK_INT)
+a.SetName("material")
+grid.GetCellData().AddArray(a)
+w = vtk.vtkXMLUnstructuredGridWriter()
+w.SetFileName("vtk_xml.vtu")
+w.SetInputData(grid)
+w.Write()
+w = vtk.vtkUnstructuredGridWriter()
+w.SetFileName("vtk_legacy_bin.vtk")
+w.SetFileTypeToBinary()
+w.SetInputData(grid)
+w.Write()
+EOF
+
+# FreeFEM (the freefem++ and libfreefem++ packages; Debian 12's FreeFem++
+# looks for its plugins elsewhere than libfreefem++ puts them: FF_LOADPATH):
+# cube(6, 6, 6) with face labels 1-6 and region 7, its inside moved by
+# movemesh, saved by savemesh as Medit ASCII and binary (FreeFEM writes no 3D
+# mesh in its own .msh format: "PB Write error").
+command -v FreeFem++ > /dev/null ||
+    { echo "make.sh: FreeFem++ is missing: install the Debian packages freefem++ and libfreefem++" >&2; exit 1; }
+cat > box.edp <<'EOF'
+load "msh3"
+int[int] lab = [1, 2, 3, 4, 5, 6];
+mesh3 Th = cube(6, 6, 6, label = lab, region = 7);
+func b = sin(pi * x) * sin(pi * y) * sin(pi * z);
+Th = movemesh(Th, [x + 0.06 * b * cos(3 * y), y + 0.06 * b * sin(2 * z), z - 0.05 * b * cos(2 * x)]);
+savemesh(Th, "freefem.mesh");
+savemesh(Th, "freefem.meshb");
+EOF
+FF_LOADPATH=${FF_LOADPATH:-/usr/lib/freefem++} FreeFem++ -nw -ns box.edp > /dev/null
+
+# DOLFIN (legacy FEniCS, python3-dolfin 2019.2): BoxMesh 6 x 6 x 6, its
+# inner vertices moved at random (seeded), a MeshFunction "region" (2 within
+# 0.3 of the centre, else 1); XDMFFile.write of the mesh and of the
+# MeshFunction (HDF5: dolfin_h5.h5) and File("dolfin_legacy.xml") << mesh.
+need dolfin python3-dolfin
+/usr/bin/python3 - <<'EOF'
+import numpy as np
+import dolfin
+mesh = dolfin.BoxMesh(dolfin.Point(0, 0, 0), dolfin.Point(1, 1, 1), 6, 6, 6)
+x = mesh.coordinates()
+inside = np.all((x > 1e-9) & (x < 1 - 1e-9), axis=1)
+x[inside] += np.random.default_rng(1).uniform(-0.04, 0.04, (int(inside.sum()), 3))
+mf = dolfin.MeshFunction("size_t", mesh, 3, 1)
+for c in dolfin.cells(mesh):
+    if (c.midpoint() - dolfin.Point(0.5, 0.5, 0.5)).norm() < 0.3:
+        mf[c] = 2
+mf.rename("region", "region")
+with dolfin.XDMFFile(mesh.mpi_comm(), "dolfin_h5.xdmf") as f:
+    f.write(mesh)
+    f.write(mf)
+dolfin.File("dolfin_legacy.xml") << mesh
+EOF
+
+# dolfinx 0.5 (python3-dolfinx; one MPI process): a unit box cut into 6 x 6 x 6
+# x 6 tets (create_box), its inner vertices moved at random (seeded), cell tags
+# (2 within 0.3 of the centre, else 1) and facet tags (10 at x = 0, 11 at
+# x = 1, 12 elsewhere on the boundary), written by XDMFFile: write_mesh, then
+# write_meshtags of each (HDF5 heavy data: dolfinx.h5 beside dolfinx.xdmf).
+need dolfinx python3-dolfinx
+/usr/bin/python3 - <<'EOF'
+from mpi4py import MPI
+import numpy as np
+import dolfinx, dolfinx.io, dolfinx.mesh
+comm = MPI.COMM_WORLD
+mesh = dolfinx.mesh.create_box(comm, [np.array([0.0, 0.0, 0.0]), np.array([1.0, 1.0, 1.0])],
+                               [6, 6, 6], dolfinx.mesh.CellType.tetrahedron)
+mesh.name = "mesh"
+x = mesh.geometry.x
+inside = np.all((x > 1e-9) & (x < 1 - 1e-9), axis=1)
+x[inside] += np.random.default_rng(1).uniform(-0.04, 0.04, (int(inside.sum()), 3))
+tdim = mesh.topology.dim
+cells = np.arange(mesh.topology.index_map(tdim).size_local, dtype=np.int32)
+mid = dolfinx.mesh.compute_midpoints(mesh, tdim, cells)
+inner = np.linalg.norm(mid - 0.5, axis=1) < 0.3
+ct = dolfinx.mesh.meshtags(mesh, tdim, cells, np.where(inner, 2, 1).astype(np.int32))
+ct.name = "cell_tags"
+mesh.topology.create_connectivity(tdim - 1, tdim)
+mesh.topology.create_connectivity(tdim - 1, 0)
+bf = np.sort(dolfinx.mesh.exterior_facet_indices(mesh.topology)).astype(np.int32)
+fx = dolfinx.mesh.compute_midpoints(mesh, tdim - 1, bf)[:, 0]
+fv = np.where(np.isclose(fx, 0.0), 10, np.where(np.isclose(fx, 1.0), 11, 12)).astype(np.int32)
+ft = dolfinx.mesh.meshtags(mesh, tdim - 1, bf, fv)
+ft.name = "facet_tags"
+with dolfinx.io.XDMFFile(comm, "dolfinx.xdmf", "w") as f:
+    f.write_mesh(mesh)
+    f.write_meshtags(ct)
+    f.write_meshtags(ft)
+EOF
+
 for f in gmsh41.msh gmsh41_bin.msh gmsh22.msh gmsh22_bin.msh gmsh40.msh gmsh.vtk gmsh.mesh meshio_zlib.vtu \
     meshio_ascii.vtu meshio_bin.vtk meshio_ascii.vtk vtk_appended_zlib.vtu tetgen.node \
     tetgen.ele dolfin.xml meshio.inp calculix.inp meshio.vol meshio.meshb periodic41.msh \
     periodic41_bin.msh periodic40.msh periodic22.msh periodic22_bin.msh gmsh41_p2.msh gmsh_p2.inp \
     gmsh_msh1.msh gmsh.bdf gmsh_free.bdf gmsh_large.bdf gmsh.unv meshio_free.bdf meshio_small.nas \
     meshio_large.bdf meshio.xdmf meshio_p2.xdmf meshio_h5.xdmf meshio_h5.h5 meshio.med meshio_tri.med \
-    gmsh_p2.bdf gmsh_large_p2.bdf gmsh_p2.unv meshio_p2.bdf netgen_p2.vol; do
+    gmsh_p2.bdf gmsh_large_p2.bdf gmsh_p2.unv meshio_p2.bdf netgen_p2.vol \
+    dolfinx.xdmf dolfinx.h5 vtk_xml.vtu vtk_legacy_bin.vtk freefem.mesh freefem.meshb \
+    dolfin_legacy.xml dolfin_h5.xdmf dolfin_h5.h5; do
     gzip -n -9 -c "$f" > "$here/$f.gz"
 done
 ls -l "$here"
