@@ -215,9 +215,10 @@ qdc_status meshio_xdmf_h5_rename(const char *buf, size_t len, const char *file,
  * .xml, .inp, .vol) and its
  * connectivity, regions, triangles and refs are unchanged since reading
  * (checked by a hash; the fixed flags are not part of it). Text numbers are
- * printed with %.17g (an unmoved coordinate keeps its original text); binary
- * values are overwritten in their own width and byte order: float32 stays
- * float32. Values derived from the coordinates are recomputed: Gmsh 4.x
+ * printed with %.17g (an unmoved coordinate keeps its original text), in a
+ * float32 field (VTK `float`, VTU Float32 ascii) as the float32 value with
+ * %.9g; binary values are overwritten in their own width and byte order:
+ * float32 stays float32. Values derived from the coordinates are recomputed: Gmsh 4.x
  * $Entities bounding boxes (each bound shifted by how far the bound of the
  * entity's nodes, closure included, moved) and VTU Points RangeMin/RangeMax
  * (the range of the point norms); unchanged ones keep their bytes. VTU Points under zlib

@@ -133,7 +133,9 @@ size_t meshio_source_bytes(const mesh_t *m, int *float32)
 
     if (float32)
         *float32 =
-            s && (s->r.kind == SRC_BIN || s->r.kind == SRC_BLOCK) && s->r.width == 4;
+            s &&
+            (s->r.kind == SRC_BIN || s->r.kind == SRC_BLOCK || s->r.kind == SRC_TEXT) &&
+            s->r.width == 4;
     if (!s)
         return 0;
     return sizeof *s + (s->buf ? s->len : 0) + s->ele_len +
@@ -473,11 +475,20 @@ static size_t token_end(const source *s, size_t p)
 }
 
 /* The text of x in place of the token [t, te) into out (36 bytes): its
- * length, or 0 if the token itself reads as x (and is kept). */
-static int number_text(const char *t, const char *te, double x, char *out)
+ * length, or 0 if the token itself reads as x (and is kept). In a field
+ * declared float32 (f32: VTK's `float`, VTU's Float32, written as text) x is
+ * rounded to float32 and written with the 9 digits that read back as it, so
+ * that every reader sees the value qdc wrote, as in a binary float32 field. */
+static int number_text(const char *t, const char *te, double x, int f32, char *out)
 {
     double old;
+    float f = (float)x;
 
+    if (f32 && isfinite(f)) {
+        if (parse_double(t, te, &old) == 0 && (float)old == f)
+            return 0;
+        return snprintf(out, 36, "%.9g", (double)f);
+    }
     if (parse_double(t, te, &old) == 0 && memcmp(&old, &x, sizeof x) == 0)
         return 0;
     return numfmt_g17(x, out);
@@ -487,7 +498,7 @@ static int number_text(const char *t, const char *te, double x, char *out)
 static void put_number(wbuf *w, const char *t, const char *te, double x)
 {
     char buf[36];
-    int n = number_text(t, te, x, buf);
+    int n = number_text(t, te, x, 0, buf);
 
     if (n > 0)
         wb_put(w, buf, (size_t)n);
@@ -526,7 +537,7 @@ static void coord_texts(const source *s, const double *xyz, int32_t v, coord_tex
         if (c[a].te == c[a].t)
             return;
         c[a].n = number_text(s->buf + c[a].t, s->buf + c[a].te,
-                             xyz[3 * (size_t)v + (size_t)a], c[a].txt);
+                             xyz[3 * (size_t)v + (size_t)a], s->r.width == 4, c[a].txt);
     }
 }
 

@@ -357,14 +357,14 @@ def vtk(b):
     m = re.search(rb"\nPOINTS\s+(\d+)\s+(\w+)[^\n]*\n", b)
     n, t = int(m.group(1)), m.group(2)
     binary = re.search(rb"^BINARY", b.split(b"\n", 3)[2]) is not None
+    w = 4 if t == b"float" else 8
+    f.width = w
     if not binary:
         it = tokens(b, m.end(), False)
         for _ in range(3 * n):
             s, e = next(it)
             f.coords.append((s, e, "text"))
         return f
-    w = 4 if t == b"float" else 8
-    f.width = w
     for i in range(3 * n):
         f.coords.append((m.end() + w * i, m.end() + w * (i + 1), ">f%d" % w))
     return f
@@ -555,10 +555,15 @@ def real(t, kind):
 
 
 def values(b, f):
+    """The coordinates as a reader takes them: the text of a float32 field
+    (VTK's `float`, VTU's Float32 as ascii) rounded to float32."""
     vals = []
     for s, e, kind in f.coords:
-        vals.append(real(b[s:e], kind) if kind in ("text", "nastran", "fortran")
-                    else np.frombuffer(b[s:e], kind)[0])
+        if kind in ("text", "nastran", "fortran"):
+            x = real(b[s:e], kind)
+            vals.append(float(np.float32(x)) if kind == "text" and f.width == 4 else x)
+        else:
+            vals.append(np.frombuffer(b[s:e], kind)[0])
     if not f.coords:
         vals = block_values(b, f.block)
     return np.array(vals, dtype=float)

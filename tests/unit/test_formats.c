@@ -1122,6 +1122,38 @@ TEST(fuzz_replay)
     ASSERT_EQ_INT(bad, 0);
 }
 
+/* Text in a float32 field (VTK's `float`) gets the float32 value with the 9
+ * digits that read back as it; in a `double` field all 17; an unmoved
+ * coordinate keeps its token. */
+TEST(vtk_ascii_float32_points)
+{
+    static const char *types[2] = {"float", "double"};
+    static const char *want[2] = {"\n0.100000001 0 0\n", "\n0.10000000000000001 0 0\n"};
+    meshio_options o = {.log = NULL, .log_ctx = NULL, .source = 1};
+    char vtk[400];
+    qdc_error err;
+
+    for (int k = 0; k < 2; k++) {
+        mesh_t *m, *b;
+        sink s = {0};
+        int n = snprintf(vtk, sizeof vtk,
+                         "# vtk DataFile Version 2.0\nx\nASCII\nDATASET "
+                         "UNSTRUCTURED_GRID\nPOINTS 4 %s\n0.5 0 0\n1 0 0\n0 1 0\n0 0 "
+                         "1\nCELLS 1 5\n4 0 1 2 3\nCELL_TYPES 1\n10\n",
+                         types[k]);
+        ASSERT_OK(meshio_read_ex(vtk, (size_t)n, MESHIO_AUTO, &o, &m, &err));
+        m->xyz[0] = 0.1;
+        ASSERT_OK(meshio_write(m, MESHIO_AUTO, sink_write, &s, &err));
+        ASSERT_EQ_INT(sink_write(&s, "", 1), 0); /* a C string for strstr */
+        ASSERT_TRUE(strstr(s.b, want[k]) != NULL);
+        ASSERT_TRUE(strstr(s.b, "\n1 0 0\n0 1 0\n0 0 1\n") != NULL);
+        ASSERT_OK(meshio_read(s.b, s.n - 1, MESHIO_AUTO, &b, &err));
+        ASSERT_TRUE(k ? b->xyz[0] == 0.1 : (float)b->xyz[0] == 0.1f);
+        mesh_free(b);
+        mesh_free(m);
+        free(s.b);
+    }
+}
 TEST_MAIN("formats", T(roundtrip_all_tags), T(roundtrip_no_tags), T(roundtrip_empty),
           T(roundtrip_files), T(gmsh41_tags_out_of_order_and_skipped_types),
           T(gmsh_entity_tags_without_physicals), T(gmsh22_binary_and_40),
@@ -1130,4 +1162,5 @@ TEST_MAIN("formats", T(roundtrip_all_tags), T(roundtrip_no_tags), T(roundtrip_em
           T(gmsh_periodic_held), T(vtk51_layout_and_field_data), T(vtu_inline_base64),
           T(names_sniffing_media_types), T(dev_speed_ascii),
           T(gmsh41_binary_1m_tets_speed), T(new_formats_1m_tets_speed), T(msh1),
-          T(vtk9_field_metadata), T(abaqus_missing_coordinates), T(fuzz_replay))
+          T(vtk9_field_metadata), T(abaqus_missing_coordinates),
+          T(vtk_ascii_float32_points), T(fuzz_replay))
