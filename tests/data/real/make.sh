@@ -3,7 +3,7 @@
 # tools that write them: gmsh (the gmsh Debian package, 4.8), meshio (python3-meshio,
 # 5.0), netgen (python3-netgen), tetgen (the tetgen package, 1.6), dolfinx
 # (python3-dolfinx 0.5), DOLFIN (python3-dolfin 2019.2), VTK (python3-vtk9 9.1)
-# and FreeFEM (freefem++ 4.11). Run from anywhere:
+# FreeFEM (freefem++ 4.11) and GetFEM (python3-getfem 5.4). Run from anywhere:
 #   sh tests/data/real/make.sh
 # Each file is stored gzip-compressed (gzip -n: no name or time, so a rerun with the
 # same tool versions gives the same bytes).
@@ -410,6 +410,27 @@ with dolfinx.io.XDMFFile(comm, "dolfinx.xdmf", "w") as f:
     f.write_meshtags(ft)
 EOF
 
+# GetFEM's own writers (python3-getfem): its regular simplex mesh of the unit
+# cube (5 x 5 x 5 cells, 750 tets), the inner vertices moved at random, with a
+# P1 field; Mesh.export_to_vtu (VTU, ascii) and MeshFem.export_to_vtk (legacy
+# VTK 2.0 ASCII, `float` coordinates with 6 digits, the field as POINT_DATA).
+need getfem python3-getfem
+/usr/bin/python3 - <<'EOF'
+import getfem as gf
+import numpy as np
+s = np.linspace(0.0, 1.0, 6)
+m = gf.Mesh("regular simplices", s, s, s)
+p = m.pts()
+inner = np.all((p > 1e-9) & (p < 1 - 1e-9), axis=0)
+p[:, inner] += np.random.default_rng(1).uniform(-0.06, 0.06, (3, int(inner.sum())))
+m.set_pts(p)
+mf = gf.MeshFem(m, 1)
+mf.set_classical_fem(1)
+x = mf.basic_dof_nodes()
+m.export_to_vtu("getfem.vtu", "ascii")
+mf.export_to_vtk("getfem_field.vtk", "ascii", np.sin(x[0]) + x[1] * x[2], "u")
+EOF
+
 for f in gmsh41.msh gmsh41_bin.msh gmsh22.msh gmsh22_bin.msh gmsh40.msh gmsh.vtk gmsh.mesh meshio_zlib.vtu \
     meshio_ascii.vtu meshio_bin.vtk meshio_ascii.vtk vtk_appended_zlib.vtu tetgen.node \
     tetgen.ele dolfin.xml meshio.inp calculix.inp meshio.vol meshio.meshb periodic41.msh \
@@ -418,7 +439,7 @@ for f in gmsh41.msh gmsh41_bin.msh gmsh22.msh gmsh22_bin.msh gmsh40.msh gmsh.vtk
     meshio_large.bdf meshio.xdmf meshio_p2.xdmf meshio_h5.xdmf meshio_h5.h5 meshio.med meshio_tri.med \
     gmsh_p2.bdf gmsh_large_p2.bdf gmsh_p2.unv meshio_p2.bdf netgen_p2.vol \
     dolfinx.xdmf dolfinx.h5 vtk_xml.vtu vtk_legacy_bin.vtk freefem.mesh freefem.meshb \
-    dolfin_legacy.xml dolfin_h5.xdmf dolfin_h5.h5; do
+    dolfin_legacy.xml dolfin_h5.xdmf dolfin_h5.h5 getfem.vtu getfem_field.vtk; do
     gzip -n -9 -c "$f" > "$here/$f.gz"
 done
 ls -l "$here"
