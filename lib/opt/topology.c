@@ -33,7 +33,14 @@
  * TOPO_GAIN in mean ratio with no rise of the minimum, ends the run. Measured
  * on the 100k-tet bone-lowq of scripts/corpus.py (one thread): after rounds 1-4
  * mean ratio 0.7071, 0.7180, 0.7211, 0.7222 at 3.6, 4.8, 6.0, 7.1 CPU s (the
- * smoother alone: 0.5811 in 1.6 s); the fourth is not worth its second. */
+ * smoother alone: 0.5811 in 1.6 s); the fourth is not worth its second.
+ * The third is worth keeping even when the second's flips were few: on the
+ * 100k-tet meshes of scripts/corpus.py --seed 1 (flips), the third round took
+ * the mean ratio / smallest dihedral from 0.8176 / 20.73 to 0.8207 / 20.73 on
+ * ball-scan (second round's flips: 251 tets fewer, 0.3%), 0.8057 / 15.87 to
+ * 0.8100 / 15.95 on ball-lowq (0.4%), 0.7266 to 0.7310 on bone-lowq (0.9%),
+ * 0.9028 / 38.83 to 0.9031 / 39.16 on part-cad (0.06%): a stop on a small
+ * second round would have cost each mesh either mean ratio or its angle. */
 enum { TOPO_ROUNDS = 3 };
 #define TOPO_GAIN 1e-3
 
