@@ -84,11 +84,20 @@ gzip -dc "$ROOT/tests/data/real/tetgen.node.gz" > "$TMP/tetgen.node"
 gzip -dc "$ROOT/tests/data/real/tetgen.ele.gz" > "$TMP/tetgen.ele"
 # MED goes through qdc-h5, which reads HDF5 from a plain file
 gzip -dc "$ROOT/tests/data/real/meshio.med.gz" > "$TMP/meshio.med"
+# XDMF whose data is in HDF5 (meshio, DOLFIN, dolfinx): the .h5 is read only
+# from a plain file beside the .xdmf, so both are unpacked
+pairs=
+for h5 in "$ROOT"/tests/data/real/*.h5.gz; do
+    b=$(basename "$h5" .h5.gz)
+    gzip -dc "$h5" > "$TMP/$b.h5"
+    gzip -dc "$ROOT/tests/data/real/$b.xdmf.gz" > "$TMP/$b.xdmf"
+    pairs="$pairs $TMP/$b.xdmf"
+done
 for in in "$TMP/c/part-cad.mesh" "$TMP/c/ball-lowq.mesh" "$ROOT"/tests/data/real/*.gz "$TMP/tetgen.ele" \
-    "$TMP/meshio.med"; do
-    # tetgen and MED: above; meshio_h5.xdmf keeps its data in meshio_h5.h5,
-    # which is read only from a plain file beside it (tests/e2e/hdf5.sh)
-    case $in in *tetgen.*.gz | *.med.gz | *meshio_h5.*) continue ;; esac
+    "$TMP/meshio.med" $pairs; do
+    # tetgen, MED and the XDMF+HDF5 pairs: above
+    case $in in *tetgen.*.gz | *.med.gz | *.h5.gz) continue ;; esac
+    case $in in *.xdmf.gz) [ -e "${in%.xdmf.gz}.h5.gz" ] && continue ;; esac
     name=$(basename "$in")
     if ! "$BIN/qdc" optimize "$in" "$TMP/d.${name%.gz}" --report "$TMP/d.json" --quiet 2> "$TMP/err"; then
         fail "hausd: default on $name" "exit: $(tail -2 "$TMP/err")"
