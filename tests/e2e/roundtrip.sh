@@ -27,7 +27,7 @@ meshio_bin.vtk meshio_ascii.vtk vtk_appended_zlib.vtu tetgen.node dolfin.xml mes
 meshio.vol meshio.meshb gmsh_msh1.msh gmsh41_p2.msh gmsh_p2.inp gmsh.bdf gmsh_free.bdf gmsh_large.bdf
 gmsh.unv meshio_free.bdf meshio_small.nas meshio_large.bdf meshio.xdmf meshio_p2.xdmf gmsh_p2.bdf
 gmsh_large_p2.bdf gmsh_p2.unv meshio_p2.bdf netgen_p2.vol vtk_xml.vtu vtk_legacy_bin.vtk
-freefem.mesh freefem.meshb dolfin_legacy.xml getfem.vtu getfem_field.vtk"
+freefem.mesh freefem.meshb dolfin2019.xml getfem.vtu getfem_field.vtk"
 for f in $files; do
     base=${f%%.*}
     ext=${f#*.}

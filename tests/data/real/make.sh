@@ -354,7 +354,7 @@ FF_LOADPATH=${FF_LOADPATH:-/usr/lib/freefem++} FreeFem++ -nw -ns box.edp > /dev/
 # DOLFIN (legacy FEniCS, python3-dolfin 2019.2): BoxMesh 6 x 6 x 6, its
 # inner vertices moved at random (seeded), a MeshFunction "region" (2 within
 # 0.3 of the centre, else 1); XDMFFile.write of the mesh and of the
-# MeshFunction (HDF5: dolfin_h5.h5) and File("dolfin_legacy.xml") << mesh.
+# MeshFunction (HDF5: dolfin_h5.h5) and File("dolfin2019.xml") << mesh.
 need dolfin python3-dolfin
 /usr/bin/python3 - <<'EOF'
 import numpy as np
@@ -371,7 +371,7 @@ mf.rename("region", "region")
 with dolfin.XDMFFile(mesh.mpi_comm(), "dolfin_h5.xdmf") as f:
     f.write(mesh)
     f.write(mf)
-dolfin.File("dolfin_legacy.xml") << mesh
+dolfin.File("dolfin2019.xml") << mesh
 EOF
 
 # dolfinx 0.5 (python3-dolfinx; one MPI process): a unit box cut into 6 x 6 x 6
@@ -439,7 +439,7 @@ for f in gmsh41.msh gmsh41_bin.msh gmsh22.msh gmsh22_bin.msh gmsh40.msh gmsh.vtk
     meshio_large.bdf meshio.xdmf meshio_p2.xdmf meshio_h5.xdmf meshio_h5.h5 meshio.med meshio_tri.med \
     gmsh_p2.bdf gmsh_large_p2.bdf gmsh_p2.unv meshio_p2.bdf netgen_p2.vol \
     dolfinx.xdmf dolfinx.h5 vtk_xml.vtu vtk_legacy_bin.vtk freefem.mesh freefem.meshb \
-    dolfin_legacy.xml dolfin_h5.xdmf dolfin_h5.h5 getfem.vtu getfem_field.vtk; do
+    dolfin2019.xml dolfin_h5.xdmf dolfin_h5.h5 getfem.vtu getfem_field.vtk; do
     gzip -n -9 -c "$f" > "$here/$f.gz"
 done
 ls -l "$here"
