@@ -7,8 +7,9 @@
  * widen exactly) so one reader serves all value types and encodings; indices,
  * offsets and cell types are then checked to be integers in range. Cells of
  * type 10 become tets and of type 5 surface triangles, others are skipped and
- * counted for a note. The region is the cell array "region", "gmsh:physical" or
- * "medit:ref" (in that order of preference), vref the point array "medit:ref".
+ * counted for a note. The region is the cell array "region", "gmsh:physical",
+ * "medit:ref" or "MeshDomain" (CGAL's subdomain index, as Float64; in that order of
+ * preference), vref the point array "medit:ref".
  * Legacy binary data are big-endian; XML data follow byte_order. */
 #include "io/format.h"
 #include "io/gz.h"
@@ -166,7 +167,7 @@ typedef struct {
     double *offs;  /* nc + 1 offsets into conn, or NULL for the legacy list */
     double *types; /* nc cell types */
     double *creg;  /* nc region values, or NULL */
-    int creg_prio; /* 0 region, 1 gmsh:physical, 2 medit:ref */
+    int creg_prio; /* 0 region, 1 gmsh:physical, 2 medit:ref, 3 MeshDomain */
     double *vref;  /* nv, or NULL */
 } cells;
 
@@ -182,9 +183,10 @@ static void cells_free(cells *c)
 
 static int region_prio(const char *name, size_t n)
 {
-    static const char *const names[] = {"region", "gmsh:physical", "medit:ref"};
+    static const char *const names[] = {"region", "gmsh:physical", "medit:ref",
+                                        "MeshDomain"};
 
-    for (int i = 0; i < 3; i++)
+    for (int i = 0; i < 4; i++)
         if (strlen(names[i]) == n && memcmp(name, names[i], n) == 0)
             return i;
     return PRIO_NONE;

@@ -944,6 +944,34 @@ TEST(vtu_inline_base64)
     mesh_free(m);
 }
 
+/* CGAL's output_to_vtu: `type =` with a blank, the subdomain index as the Float64
+ * cell array "MeshDomain": the region (it was read as one region, so the
+ * interface between subdomains moved freely). */
+TEST(vtu_cgal_meshdomain_is_the_region)
+{
+    mesh_t *m;
+    qdc_error err;
+
+    ASSERT_OK(
+        read_str("<VTKFile type=\"UnstructuredGrid\" version=\"0.1\"><UnstructuredGrid>"
+                 "<Piece NumberOfPoints=\"5\" NumberOfCells=\"2\"><Points><DataArray "
+                 "type =\"Float64\" NumberOfComponents=\"3\" format=\"ascii\">0 0 0 "
+                 "1 0 0 0 1 0 0 0 1 1 1 1</DataArray></Points><Cells><DataArray "
+                 "Name=\"connectivity\" format=\"ascii\" type=\"UInt64\">0 1 2 3 1 2 "
+                 "3 4</DataArray><DataArray Name=\"offsets\" format=\"ascii\" "
+                 "type=\"UInt64\">4 8</DataArray><DataArray Name=\"types\" "
+                 "format=\"ascii\" type=\"UInt8\">10 10</DataArray></Cells><CellData "
+                 "Scalars=\"MeshDomain\"><DataArray type=\"Float64\" "
+                 "Name=\"MeshDomain\" format=\"ascii\">1 2 </DataArray></CellData>"
+                 "</Piece></UnstructuredGrid></VTKFile>\n",
+                 MESHIO_AUTO, &m, &err));
+    ASSERT_EQ_INT(m->nt, 2);
+    ASSERT_TRUE(m->region != NULL);
+    ASSERT_EQ_INT(m->region[0], 1);
+    ASSERT_EQ_INT(m->region[1], 2);
+    mesh_free(m);
+}
+
 /* ---- names ---- */
 
 TEST(names_sniffing_media_types)
@@ -1160,7 +1188,7 @@ TEST_MAIN("formats", T(roundtrip_all_tags), T(roundtrip_no_tags), T(roundtrip_em
           T(dolfin_abaqus_netgen), T(meshb_versions_and_byte_order),
           T(gmsh_errors_say_where), T(gmsh_binary_bad_record_after_good_ones),
           T(gmsh_periodic_held), T(vtk51_layout_and_field_data), T(vtu_inline_base64),
-          T(names_sniffing_media_types), T(dev_speed_ascii),
-          T(gmsh41_binary_1m_tets_speed), T(new_formats_1m_tets_speed), T(msh1),
-          T(vtk9_field_metadata), T(abaqus_missing_coordinates),
-          T(vtk_ascii_float32_points), T(fuzz_replay))
+          T(vtu_cgal_meshdomain_is_the_region), T(names_sniffing_media_types),
+          T(dev_speed_ascii), T(gmsh41_binary_1m_tets_speed),
+          T(new_formats_1m_tets_speed), T(msh1), T(vtk9_field_metadata),
+          T(abaqus_missing_coordinates), T(vtk_ascii_float32_points), T(fuzz_replay))

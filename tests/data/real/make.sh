@@ -3,7 +3,8 @@
 # tools that write them: gmsh (the gmsh Debian package, 4.8), meshio (python3-meshio,
 # 5.0), netgen (python3-netgen), tetgen (the tetgen package, 1.6), dolfinx
 # (python3-dolfinx 0.5), DOLFIN (python3-dolfin 2019.2), VTK (python3-vtk9 9.1)
-# FreeFEM (freefem++ 4.11) and GetFEM (python3-getfem 5.4). Run from anywhere:
+# FreeFEM (freefem++ 4.11), GetFEM (python3-getfem 5.4) and CGAL (libcgal-dev
+# 5.5, with g++). Run from anywhere:
 #   sh tests/data/real/make.sh
 # Each file is stored gzip-compressed (gzip -n: no name or time, so a rerun with the
 # same tool versions gives the same bytes).
@@ -431,6 +432,18 @@ m.export_to_vtu("getfem.vtu", "ascii")
 mf.export_to_vtk("getfem_field.vtk", "ascii", np.sin(x[0]) + x[1] * x[2], "u")
 EOF
 
+# CGAL (the libcgal-dev package, 5.5, header-only, and g++): cgal_mesh.cpp meshes
+# a ball of radius 0.5 holding a smaller ball off its centre (two regions,
+# labels 2 and 1) with Mesh_3 (make_mesh_3 of a Labeled_mesh_domain_3, its
+# defaults: perturbation and exudation) and writes it with CGAL's own writers:
+# output_to_medit without and with rebinding and patches, output_to_vtu binary
+# and ascii. Mesh_3 orders by addresses: a rerun gives another mesh of the same
+# size (about 640 vertices, 2300 tets), not the same bytes.
+command -v g++ > /dev/null && [ -f /usr/include/CGAL/make_mesh_3.h ] ||
+    { echo "make.sh: CGAL or g++ is missing: install the Debian packages libcgal-dev and g++" >&2; exit 1; }
+g++ -O1 -std=c++17 -DCGAL_NDEBUG -o cgal_mesh "$here/cgal_mesh.cpp" -lgmp -lmpfr
+./cgal_mesh
+
 for f in gmsh41.msh gmsh41_bin.msh gmsh22.msh gmsh22_bin.msh gmsh40.msh gmsh.vtk gmsh.mesh meshio_zlib.vtu \
     meshio_ascii.vtu meshio_bin.vtk meshio_ascii.vtk vtk_appended_zlib.vtu tetgen.node \
     tetgen.ele dolfin.xml meshio.inp calculix.inp meshio.vol meshio.meshb periodic41.msh \
@@ -439,7 +452,8 @@ for f in gmsh41.msh gmsh41_bin.msh gmsh22.msh gmsh22_bin.msh gmsh40.msh gmsh.vtk
     meshio_large.bdf meshio.xdmf meshio_p2.xdmf meshio_h5.xdmf meshio_h5.h5 meshio.med meshio_tri.med \
     gmsh_p2.bdf gmsh_large_p2.bdf gmsh_p2.unv meshio_p2.bdf netgen_p2.vol \
     dolfinx.xdmf dolfinx.h5 vtk_xml.vtu vtk_legacy_bin.vtk freefem.mesh freefem.meshb \
-    dolfin2019.xml dolfin_h5.xdmf dolfin_h5.h5 getfem.vtu getfem_field.vtk; do
+    dolfin2019.xml dolfin_h5.xdmf dolfin_h5.h5 getfem.vtu getfem_field.vtk \
+    cgal.mesh cgal_patches.mesh cgal.vtu cgal_ascii.vtu; do
     gzip -n -9 -c "$f" > "$here/$f.gz"
 done
 ls -l "$here"
