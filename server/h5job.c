@@ -140,13 +140,43 @@ static void h5_spec(const meshio_xdmf_h5 *h, int k, char *s, size_t cap)
         snprintf(s + n, cap - n, ":%s", h->set[k].path);
 }
 
+/* The input of job id as meshio reads it (H5JOB_FRAMES): qdc-h5's frames in
+ * fr read after room for the XML xml[0..xlen), which is filled in place (as
+ * the CLI does: no copy of the frames). */
+static void h5_xdmf_form(const qdcd *q, const char *id, const char *xml, size_t xlen,
+                         const char *fr, h5job_outcome *out)
+{
+    char path[4300];
+    size_t n = 0;
+    char *in = file_read_after(fr, meshio_xdmf_h5_room(xlen), &n);
+    qdc_error e;
+    qdc_status st;
+
+    unlink(fr);
+    if (!in) {
+        h5_internal(out, "qdc-h5 left no frames");
+        return;
+    }
+    qdc_error_clear(&e);
+    st = meshio_xdmf_h5_fill(in, n, xml, xlen, &e);
+    job_path(q, id, H5JOB_FRAMES, path, sizeof path);
+    if (st == QDC_OK)
+        st = meshio_save_bytes(path, in, n, &e);
+    free(in);
+    if (st != QDC_OK) {
+        out->status = st == QDC_EIO ? 500 : 400;
+        out->slug = st == QDC_EIO ? "internal" : "malformed-mesh";
+        snprintf(out->detail, sizeof out->detail, "%s", e.msg);
+    }
+}
+
 void h5job_xdmf(const qdcd *q, const char *id, const char *frames, const char *res,
                 double deadline, const atomic_int *cancel, h5job_outcome *out)
 {
     char xp[4200], h5[4200], fr[4300], spec[7][1200];
     char *args[12];
-    size_t xlen = 0, flen = 0, inlen = 0;
-    char *xml, *raw = NULL, *in = NULL;
+    size_t xlen = 0;
+    char *xml;
     meshio_xdmf_h5 h;
     qdc_error e;
     int k = 0, geom = -1;
@@ -200,24 +230,6 @@ void h5job_xdmf(const qdcd *q, const char *id, const char *frames, const char *r
         unlink(fr);
         return;
     }
-    raw = file_read_all(fr, &flen);
-    unlink(fr);
-    if (!raw) {
-        free(xml);
-        h5_internal(out, "qdc-h5 left no frames");
-        return;
-    }
-    qdc_error_clear(&e);
-    qdc_status st = meshio_xdmf_h5_input(xml, xlen, raw, flen, &in, &inlen, &e);
+    h5_xdmf_form(q, id, xml, xlen, fr, out);
     free(xml);
-    free(raw);
-    job_path(q, id, H5JOB_FRAMES, fr, sizeof fr);
-    if (st == QDC_OK)
-        st = meshio_save_bytes(fr, in, inlen, &e);
-    qdc_free(in);
-    if (st != QDC_OK) {
-        out->status = st == QDC_EIO ? 500 : 400;
-        out->slug = st == QDC_EIO ? "internal" : "malformed-mesh";
-        snprintf(out->detail, sizeof out->detail, "%s", e.msg);
-    }
 }

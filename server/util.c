@@ -6,6 +6,7 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <libgen.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -194,25 +195,31 @@ int file_write_atomic(const char *path, const void *data, size_t len)
 
 char *file_read_all(const char *path, size_t *len)
 {
+    return file_read_after(path, 0, len);
+}
+
+char *file_read_after(const char *path, size_t room, size_t *len)
+{
     FILE *f = fopen(path, "rb");
     char *buf = NULL;
     long n;
 
     if (!f)
         return NULL;
-    if (fseek(f, 0, SEEK_END) || (n = ftell(f)) < 0 || fseek(f, 0, SEEK_SET))
+    if (fseek(f, 0, SEEK_END) || (n = ftell(f)) < 0 || fseek(f, 0, SEEK_SET) ||
+        (size_t)n > SIZE_MAX - 1 - room)
         goto out;
-    buf = malloc((size_t)n + 1);
+    buf = malloc(room + (size_t)n + 1);
     if (!buf)
         goto out;
-    if (fread(buf, 1, (size_t)n, f) != (size_t)n) {
+    if (fread(buf + room, 1, (size_t)n, f) != (size_t)n) {
         free(buf);
         buf = NULL;
         goto out;
     }
-    buf[n] = 0;
+    buf[room + (size_t)n] = 0;
     if (len)
-        *len = (size_t)n;
+        *len = room + (size_t)n;
 out:
     fclose(f);
     return buf;

@@ -30,6 +30,8 @@ int file_write_atomic(const char *path, const void *data, size_t len);
 int fsync_parent(const char *path);
 /* Whole file into a malloc'd NUL-terminated buffer; NULL on failure. */
 char *file_read_all(const char *path, size_t *len);
+/* The same after room bytes left for the caller (not set): *len counts them. */
+char *file_read_after(const char *path, size_t room, size_t *len);
 /* mkdir -p for one level below an existing parent; 0 if it exists. */
 int dir_ensure(const char *path);
 /* Remove the entries of a directory: files, and subdirectories down to
