@@ -14,7 +14,8 @@
  * Tetrahedron topology and an integer cell attribute (in HDF5 one with no
  * NumberType too, as dolfinx 0.5 writes it) give the region of the tets they
  * list; the first such grid with Triangle topology (facet tags)
- * gives the boundary triangles, its values their refs; in any order. Other
+ * gives the boundary triangles, its values their refs (each must be a face of
+ * a tet: on the boundary, or between two tets, kept as it is); in any order. Other
  * attributes, grids and elements are kept by a spliced
  * write, which rewrites only the numbers of the Geometry's DataItem.
  *
@@ -42,6 +43,7 @@
  * shares its geometry, and the first of triangles, whichever comes first)
  * are listed too ("tagtopo", "tagvals"; "tritopo", "trivals") and applied
  * as inline tags are. */
+#include "core/tet.h"
 #include "io/format.h"
 
 #include <string.h>
@@ -689,6 +691,24 @@ static int cmp_key4(const void *a, const void *b)
     return 0;
 }
 
+/* The order of three sorted corners (a facet tag triangle's key). */
+static int cmp_key3(const int32_t *p, const int32_t *q)
+{
+    for (int k = 0; k < 3; k++)
+        if (p[k] != q[k])
+            return p[k] < q[k] ? -1 : 1;
+    return 0;
+}
+
+/* qsort's order of facet tag keys: sorted corners, then the index. */
+static int cmp_tri(const void *a, const void *b)
+{
+    const int32_t *p = a, *q = b;
+    int c = cmp_key3(p, q);
+
+    return c ? c : (p[3] > q[3]) - (p[3] < q[3]);
+}
+
 static void sort4(int32_t *k)
 {
     for (int i = 1; i < 4; i++)
@@ -1102,6 +1122,62 @@ static qdc_status heavy_fill(xd *x, qdc_error *err)
     return QDC_OK;
 }
 
+/* Every facet tag triangle is a face of a tet (dolfinx MeshTags of dimension
+ * 2 list the mesh's own facets): a triangle on the boundary, or between two
+ * tets (an interface or an inner surface, kept as it is, as Medit's and
+ * Gmsh's triangles are). A triangle that is no face of any tet is refused,
+ * named. The triangles' sorted corners with their index, searched for each
+ * face of each tet. */
+static qdc_status facets_are_faces(const xd *x, qdc_error *err)
+{
+    size_t n = (size_t)x->nftri;
+    int32_t *keys = qdc_mallocn(4 * n + 1, sizeof(int32_t));
+    uint8_t *hit = qdc_calloc(n + 1, 1);
+    qdc_status st = QDC_OK;
+
+    if (!keys || !hit) {
+        qdc_free(keys);
+        qdc_free(hit);
+        return qdc_fail(err, QDC_ENOMEM, "out of memory for %zu facet tags", n);
+    }
+    for (size_t i = 0; i < n; i++) {
+        tet_sort3(x->ftris[3 * i], x->ftris[3 * i + 1], x->ftris[3 * i + 2],
+                  keys + 4 * i);
+        keys[4 * i + 3] = (int32_t)i;
+    }
+    qsort(keys, n, 4 * sizeof(int32_t), cmp_tri);
+    for (int64_t e = 0; e < x->nt; e++)
+        for (int f = 0; f < 4; f++) {
+            const int32_t *c = x->conn + x->nodes * e;
+            int32_t k[3];
+            size_t a = 0, b = n;
+            tet_sort3(c[tet_face_of[f][0]], c[tet_face_of[f][1]], c[tet_face_of[f][2]],
+                      k);
+            while (a < b) { /* the first triangle with these corners */
+                size_t mid = a + (b - a) / 2;
+                if (cmp_key3(keys + 4 * mid, k) < 0)
+                    a = mid + 1;
+                else
+                    b = mid;
+            }
+            for (; a < n && cmp_key3(keys + 4 * a, k) == 0; a++)
+                hit[keys[4 * a + 3]] = 1;
+        }
+    for (size_t i = 0; i < n && st == QDC_OK; i++)
+        if (!hit[i]) {
+            st =
+                qdc_fail(err, QDC_EPARSE,
+                         "XDMF: facet tag triangle %zu (vertices %d %d %d) is no face of "
+                         "a tetrahedron",
+                         i, (int)x->ftris[3 * i], (int)x->ftris[3 * i + 1],
+                         (int)x->ftris[3 * i + 2]);
+            set_index(err, "triangle", (int64_t)i);
+        }
+    qdc_free(keys);
+    qdc_free(hit);
+    return st;
+}
+
 /* The mesh from what was read: indices checked, corners and mid-edge nodes
  * apart. */
 static qdc_status xd_mesh(xd *x, mesh_t **out, qdc_error *err)
@@ -1129,6 +1205,11 @@ static qdc_status xd_mesh(xd *x, mesh_t **out, qdc_error *err)
                       (long long)(bad / 3), (int)x->ftris[bad], (long long)x->nv);
         set_index(err, "triangle", bad / 3);
         return st;
+    }
+    if (x->nftri > 0 && x->conn) {
+        st = facets_are_faces(x, err);
+        if (st != QDC_OK)
+            return st;
     }
     if (x->region && x->nreg != x->nt) {
         txt_locate(&x->s, x->reg_at);

@@ -100,6 +100,35 @@ TEST(boundary_triangles_and_node_families)
     free(s.b);
 }
 
+/* A TR3 that is no face of a tet (a c e: a shell element of its own, which
+ * MED holds beside the volume) and one between the two tets (b c d) are kept
+ * as they are, with their families, and written back unchanged: unlike
+ * XDMF's facet tags (the mesh's own facets, test_xdmf), MED's triangles are
+ * elements of their own, as Medit's are. */
+TEST(triangles_off_the_boundary_kept)
+{
+    sink s = {0}, w = {0};
+    mesh_t *m;
+    qdc_error err;
+    meshio_options o = {.source = 1};
+    const int64_t tr3[6] = {1, 3, 5, 2, 3, 4}, f3[2] = {-21, -22};
+    static const int32_t tris[6] = {0, 2, 4, 1, 2, 3};
+
+    two_tets(&s, 4, 1);
+    put_frame(&s, "tr3", 'i', tr3, 6);
+    put_frame(&s, "tr3_fam", 'i', f3, 2);
+    ASSERT_OK(meshio_read_ex(s.b, s.n, MESHIO_MED, &o, &m, &err));
+    ASSERT_EQ_INT(m->ntri, 2);
+    ASSERT_TRUE(memcmp(m->tris, tris, sizeof tris) == 0);
+    ASSERT_TRUE(m->tri_ref && m->tri_ref[0] == -21 && m->tri_ref[1] == -22);
+    ASSERT_OK(meshio_write(m, MESHIO_MED, sink_write, &w, &err));
+    ASSERT_EQ_INT((int)w.n, (int)s.n);
+    ASSERT_TRUE(memcmp(w.b, s.b, s.n) == 0);
+    free(w.b);
+    mesh_free(m);
+    free(s.b);
+}
+
 TEST(second_order)
 {
     const double xyz[30] = {0,   0, 0, 1,   0, 0, 0, 1,   0,   0, 0,   1, 0.5, 0,  0, 0.5,
@@ -162,4 +191,4 @@ TEST(refusals)
 }
 
 TEST_MAIN("med", T(two_tets_with_families), T(boundary_triangles_and_node_families),
-          T(second_order), T(refusals))
+          T(triangles_off_the_boundary_kept), T(second_order), T(refusals))

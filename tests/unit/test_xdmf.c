@@ -265,31 +265,53 @@ TEST(truncated)
     }
 }
 
-/* dolfinx's facet tags grid (triangles, before the cell tags grid here):
- * the boundary triangles, its values their refs; the cell tags still the
- * regions; written back unmoved, the same bytes. */
-TEST(facet_tags_as_boundary_triangles)
+/* dolfinx with a facet tags grid before the cell tags grid: the triangles
+ * tris (two lines of corners) with the values 7 and 8 (a new string, free). */
+static char *with_facets(const char *tris)
 {
-    static const char facets[] =
+    char facets[1200];
+
+    snprintf(
+        facets, sizeof facets,
         "    <Grid Name=\"facets\" GridType=\"Uniform\">\n"
-        "      <xi:include xpointer=\"xpointer(/Xdmf/Domain/Grid[@GridType='Uniform'][1]/"
-        "Geometry)\" />\n"
+        "      <xi:include xpointer=\"xpointer(/Xdmf/Domain/"
+        "Grid[@GridType='Uniform'][1]/Geometry)\" />\n"
         "      <Topology TopologyType=\"Triangle\" NumberOfElements=\"2\" "
         "NodesPerElement=\"3\">\n"
         "        <DataItem Dimensions=\"2 3\" NumberType=\"Int\" Format=\"XML\">\n"
-        "          0 2 1\n          1 2 4\n        </DataItem>\n"
+        "%s        </DataItem>\n"
         "      </Topology>\n"
         "      <Attribute Name=\"facets\" AttributeType=\"Scalar\" Center=\"Cell\">\n"
         "        <DataItem Dimensions=\"2\" NumberType=\"Int\" Format=\"XML\">\n"
         "          7\n          8\n        </DataItem>\n"
         "      </Attribute>\n"
         "    </Grid>\n"
-        "    <Grid Name=\"cells\"";
+        "    <Grid Name=\"cells\"",
+        tris);
+    return replaced(dolfinx, "    <Grid Name=\"cells\"", facets);
+}
+
+/* 1 when m, unmoved, is written back as doc's very bytes. */
+static int written_back_same(const mesh_t *m, const char *doc)
+{
+    sink s = {0};
+    qdc_error err;
+    int same = meshio_write(m, MESHIO_AUTO, sink_write, &s, &err) == QDC_OK &&
+               s.n == strlen(doc) && memcmp(s.b, doc, s.n) == 0;
+
+    free(s.b);
+    return same;
+}
+
+/* dolfinx's facet tags grid (triangles, before the cell tags grid here):
+ * the boundary triangles, its values their refs; the cell tags still the
+ * regions; written back unmoved, the same bytes. */
+TEST(facet_tags_as_boundary_triangles)
+{
     static const int32_t tris[6] = {0, 2, 1, 1, 2, 4};
-    char *doc = replaced(dolfinx, "    <Grid Name=\"cells\"", facets);
+    char *doc = with_facets("          0 2 1\n          1 2 4\n");
     mesh_t *m;
     qdc_error err;
-    sink s = {0};
 
     ASSERT_TRUE(doc != NULL);
     ASSERT_OK(rd(doc, &m, &err));
@@ -299,14 +321,42 @@ TEST(facet_tags_as_boundary_triangles)
     ASSERT_TRUE(memcmp(m->tris, tris, sizeof tris) == 0);
     ASSERT_EQ_INT(m->tri_ref[0], 7);
     ASSERT_EQ_INT(m->tri_ref[1], 8);
-    ASSERT_OK(meshio_write(m, MESHIO_AUTO, sink_write, &s, &err));
-    ASSERT_EQ_INT((long long)s.n, (long long)strlen(doc));
-    ASSERT_TRUE(memcmp(s.b, doc, s.n) == 0);
-    free(s.b);
+    ASSERT_TRUE(written_back_same(m, doc));
     mesh_free(m);
+    free(doc);
+}
+
+/* Facet tags are the mesh's own faces: one between the two tets (the
+ * interface of regions 10 and 20) is kept with its value, unchanged, as Medit's
+ * and Gmsh's triangles are; a triangle that is no face of a tet is refused,
+ * named (it was taken silently). */
+TEST(facet_tags_off_the_boundary)
+{
+    char *doc = with_facets("          0 2 1\n          3 1 2\n");
+    mesh_t *m = NULL;
+    qdc_error err;
+
+    ASSERT_TRUE(doc != NULL);
+    ASSERT_OK(rd(doc, &m, &err));
+    ASSERT_TRUE(is_two_tets(m, 10, 20));
+    ASSERT_EQ_INT(m->ntri, 2);
+    ASSERT_EQ_INT(m->tris[3], 3);
+    ASSERT_EQ_INT(m->tri_ref[1], 8);
+    ASSERT_TRUE(written_back_same(m, doc));
+    mesh_free(m);
+    free(doc);
+    /* 0 1 4: no tet has these corners */
+    doc = with_facets("          0 2 1\n          0 1 4\n");
+    ASSERT_TRUE(doc != NULL);
+    m = NULL;
+    ASSERT_EQ_INT(rd(doc, &m, &err), QDC_EPARSE);
+    ASSERT_TRUE(m == NULL);
+    ASSERT_TRUE(strstr(err.msg, "facet tag triangle 1 (vertices 0 1 4) is no face of a "
+                                "tetrahedron") != NULL);
+    ASSERT_EQ_INT(err.index, 1);
     free(doc);
 }
 
 TEST_MAIN("xdmf", T(three_forms_read), T(spliced_geometry_only), T(second_order),
           T(writer_roundtrip), T(refusals_say_where), T(truncated),
-          T(facet_tags_as_boundary_triangles))
+          T(facet_tags_as_boundary_triangles), T(facet_tags_off_the_boundary))
