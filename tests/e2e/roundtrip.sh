@@ -10,7 +10,8 @@
 # own writers (XML appended base64 zlib, legacy 5.1 binary), FreeFEM's savemesh
 # (Medit ASCII and binary GMF version 2), DOLFIN's own XML and CGAL's Mesh_3
 # writers (Medit version 1, each surface facet twice or with patches; VTU raw
-# appended and ascii) from tests/data/real. tests/tools/splicecheck.py masks the coordinate
+# appended and ascii) and mmg3d's own Medit output (ASCII and binary) from
+# tests/data/real. tests/tools/splicecheck.py masks the coordinate
 # fields with its own parsers and compares the rest byte for byte, then reads
 # both files with meshio (same cells, cell/point/field data) and compares the
 # coordinates with qdc's own Medit output of the same run.
@@ -29,7 +30,7 @@ meshio.vol meshio.meshb gmsh_msh1.msh gmsh41_p2.msh gmsh_p2.inp gmsh.bdf gmsh_fr
 gmsh.unv meshio_free.bdf meshio_small.nas meshio_large.bdf meshio.xdmf meshio_p2.xdmf gmsh_p2.bdf
 gmsh_large_p2.bdf gmsh_p2.unv meshio_p2.bdf netgen_p2.vol vtk_xml.vtu vtk_legacy_bin.vtk
 freefem.mesh freefem.meshb dolfin2019.xml getfem.vtu getfem_field.vtk cgal.mesh cgal_patches.mesh
-cgal.vtu cgal_ascii.vtu"
+cgal.vtu cgal_ascii.vtu mmg.mesh mmg.meshb"
 for f in $files; do
     base=${f%%.*}
     ext=${f#*.}

@@ -3,8 +3,9 @@
 # tools that write them: gmsh (the gmsh Debian package, 4.8), meshio (python3-meshio,
 # 5.0), netgen (python3-netgen), tetgen (the tetgen package, 1.6), dolfinx
 # (python3-dolfinx 0.5), DOLFIN (python3-dolfin 2019.2), VTK (python3-vtk9 9.1)
-# FreeFEM (freefem++ 4.11), GetFEM (python3-getfem 5.4) and CGAL (libcgal-dev
-# 5.5, with g++). Run from anywhere:
+# FreeFEM (freefem++ 4.11), GetFEM (python3-getfem 5.4), CGAL (libcgal-dev
+# 5.5, with g++) and mmg (mmg3d_O3 5.8 built from source; skipped if absent).
+# Run from anywhere:
 #   sh tests/data/real/make.sh
 # Each file is stored gzip-compressed (gzip -n: no name or time, so a rerun with the
 # same tool versions gives the same bytes).
@@ -444,6 +445,23 @@ command -v g++ > /dev/null && [ -f /usr/include/CGAL/make_mesh_3.h ] ||
 g++ -O1 -std=c++17 -DCGAL_NDEBUG -o cgal_mesh "$here/cgal_mesh.cpp" -lgmp -lmpfr
 ./cgal_mesh
 
+# mmg (mmg3d_O3 5.8, no Debian package: built from source, github.com/MmgTools/mmg,
+# with cmake; MMG3D names the program, else mmg3d_O3 on PATH): gmsh.mesh
+# remeshed (-hmax 0.25 -hausd 0.03) and written by mmg itself as Medit ASCII
+# and binary, with its own keywords (Corners, RequiredVertices, Ridges,
+# Normals, NormalAtVertices, Tangents, TangentAtVertices). Skipped, saying so,
+# when mmg3d_O3 is absent (the files already here are kept).
+mmg=${MMG3D:-mmg3d_O3}
+have_mmg=0
+if command -v "$mmg" > /dev/null; then
+    "$mmg" -v -1 -in gmsh.mesh -out mmg.mesh -hmax 0.25 -hausd 0.03 > /dev/null
+    "$mmg" -v -1 -in gmsh.mesh -out mmg.meshb -hmax 0.25 -hausd 0.03 > /dev/null
+    have_mmg=1
+else
+    echo "make.sh: $mmg not found: mmg.mesh and mmg.meshb not remade (build mmg from github.com/MmgTools/mmg, set MMG3D)" >&2
+fi
+
+[ $have_mmg = 1 ] && mmgfiles="mmg.mesh mmg.meshb" || mmgfiles=
 for f in gmsh41.msh gmsh41_bin.msh gmsh22.msh gmsh22_bin.msh gmsh40.msh gmsh.vtk gmsh.mesh meshio_zlib.vtu \
     meshio_ascii.vtu meshio_bin.vtk meshio_ascii.vtk vtk_appended_zlib.vtu tetgen.node \
     tetgen.ele dolfin.xml meshio.inp calculix.inp meshio.vol meshio.meshb periodic41.msh \
@@ -453,7 +471,7 @@ for f in gmsh41.msh gmsh41_bin.msh gmsh22.msh gmsh22_bin.msh gmsh40.msh gmsh.vtk
     gmsh_p2.bdf gmsh_large_p2.bdf gmsh_p2.unv meshio_p2.bdf netgen_p2.vol \
     dolfinx.xdmf dolfinx.h5 vtk_xml.vtu vtk_legacy_bin.vtk freefem.mesh freefem.meshb \
     dolfin2019.xml dolfin_h5.xdmf dolfin_h5.h5 getfem.vtu getfem_field.vtk \
-    cgal.mesh cgal_patches.mesh cgal.vtu cgal_ascii.vtu; do
+    cgal.mesh cgal_patches.mesh cgal.vtu cgal_ascii.vtu $mmgfiles; do
     gzip -n -9 -c "$f" > "$here/$f.gz"
 done
 ls -l "$here"
