@@ -573,9 +573,9 @@ static void med_write(const char *in, const char *out)
     free(b);
 }
 
-/* XDMF's heavy data: the datasets specs name ("NAME:T:DIMS:PATH", T 'f' or
- * 'i', DIMS "356x3" as the XDMF gives them), each checked to have that
- * shape, framed as NAME on stdout. */
+/* XDMF's heavy data: the datasets specs name ("NAME:T:DIMS:PATH", T 'f',
+ * 'i' or 'a', either, framed as the dataset's class; DIMS "356x3" as the XDMF
+ * gives them), each checked to have that shape, framed as NAME on stdout. */
 static void h5_read(const char *fname, int nspec, char **spec)
 {
     const char *file = shown ? shown : fname;
@@ -598,7 +598,8 @@ static void h5_read(const char *fname, int nspec, char **spec)
         H5T_class_t cls;
         c2 = c1 ? strchr(c1 + 1, ':') : NULL;
         c3 = c2 ? strchr(c2 + 1, ':') : NULL;
-        if (!c3 || c1 - p > 16 || c2 != c1 + 2 || (c1[1] != 'f' && c1[1] != 'i'))
+        if (!c3 || c1 - p > 16 || c2 != c1 + 2 ||
+            (c1[1] != 'f' && c1[1] != 'i' && c1[1] != 'a'))
             die("bad dataset spec %s (NAME:T:DIMS:PATH)", p);
         snprintf(name, sizeof name, "%.*s", (int)(c1 - p), p);
         for (const char *q = c2 + 1; q < c3 && nd < 4; nd++) {
@@ -636,7 +637,9 @@ static void h5_read(const char *fname, int nspec, char **spec)
                 c1[1] == 'i' ? " (integers)" : "");
         H5Tclose(ty);
         H5Sclose(sp);
-        stream_rows(d, path, values_of(d, path), rank, dims, name, c1[1]);
+        /* 'a': the frame's type says the class (integers 'i', else 'f') */
+        stream_rows(d, path, values_of(d, path), rank, dims, name,
+                    c1[1] != 'a' ? c1[1] : cls == H5T_INTEGER ? 'i' : 'f');
         H5Dclose(d);
     }
     H5Fclose(f);

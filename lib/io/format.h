@@ -56,8 +56,9 @@ typedef struct {
 } h5_frame;
 extern const char h5_magic[8];
 /* The frames of buf[0..len) (h5_magic first): fr[k] (count of them) gets
- * the one named names[k], which must be of type types[k]; others are
- * skipped. QDC_EPARSE, the message starting with what ("MED"). */
+ * the one named names[k], which must be of type types[k] ('?': 'f' or 'i',
+ * whichever the dataset holds); others are skipped. QDC_EPARSE, the message starting with
+ * what ("MED"). */
 qdc_status h5_frames(const char *buf, size_t len, const char *what,
                      const char *const *names, const char *types, int count, h5_frame *fr,
                      qdc_error *err);

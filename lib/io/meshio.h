@@ -175,7 +175,9 @@ typedef struct {
         char name[16];   /* the frame qdc-h5 gives it as: "geometry", "topology",
                             "region"; a dolfinx MeshTags grid's "tagtopo",
                             "tagvals" (tets), "tritopo", "trivals" (facets) */
-        char type;       /* 'f' float64, 'i' int64 */
+        char type;       /* 'f' float64, 'i' int64, 'a' either, as the dataset
+                            holds (an attribute with no NumberType; qdc-h5
+                            frames it 'i' or 'f', so it reports the class) */
         char path[1024]; /* the dataset ("/data0") */
         int ndims;       /* the shape the XML gives it */
         int64_t dims[4];

@@ -56,7 +56,7 @@ qdc_status h5_frames(const char *buf, size_t len, const char *what,
             if (strncmp((const char *)h, names[k], 16) == 0)
                 break;
         if (k < count) {
-            if (fr[k].type || h[16] != types[k])
+            if (fr[k].type || (h[16] != types[k] && (types[k] != '?' || h[16] == 'b')))
                 return fail_bin(err, QDC_EPARSE, (int64_t)pos,
                                 "%s: frame %s twice or of the wrong type", what,
                                 names[k]);

@@ -8,8 +8,9 @@
  * integers (Int, UInt, Char, UChar) is the region (one named "region",
  * "gmsh:physical", "cell_tags" or "name_to_read" first), as DOLFIN's
  * MeshFunction and meshio's cell data write them (DOLFIN 2019 gives its
- * MeshFunction in HDF5 no NumberType: not taken, as a DG0 Function's float
- * values look the same). Grids after the mesh that
+ * MeshFunction in HDF5 no NumberType, as a DG0 Function's float values: such
+ * a dataset is asked of qdc-h5 as either class, 'a', and is the region if it
+ * holds integers, after any typed one). Grids after the mesh that
  * share its geometry (dolfinx MeshTags: an xi:include of the Geometry) with
  * Tetrahedron topology and an integer cell attribute (in HDF5 one with no
  * NumberType too, as dolfinx 0.5 writes it) give the region of the tets they
@@ -563,6 +564,20 @@ static void pend_set(xd *x, int k, const char *p, const char *pe, const item *it
 /* A DataItem in the mesh grid's Topology, Geometry or a cell Attribute;
  * *read 1 if its values and end tag were read. HDF heavy data: [rp, rpe) is
  * its dataset (its text and end tag already read), else rp is NULL. */
+/* The rank of the open scalar cell attribute's item it as the region, -1 if
+ * it is none or no better than the region taken: integers, or (rp, in HDF5)
+ * no NumberType at all, as DOLFIN writes its MeshFunction (qdc-h5 reports
+ * the dataset's class: integers are the region, floats, a DG0 Function's
+ * values, are not; heavy_fill). Typed integers first, then by name. */
+static int region_candidate(const xd *x, const item *it, const char *rp)
+{
+    int rank = it->integer ? 16 + x->attr_rank : x->attr_rank;
+
+    if ((!it->integer && (!rp || it->typed)) || !x->attr_cell_int)
+        return -1;
+    return !have_region(x) || rank > x->region_rank ? rank : -1;
+}
+
 static qdc_status mesh_item(xd *x, const xtag *t, int parent, const char *rp,
                             const char *rpe, int *read, qdc_error *err)
 {
@@ -575,8 +590,7 @@ static qdc_status mesh_item(xd *x, const xtag *t, int parent, const char *rp,
     st = item_read(x, t, &it, err);
     if (st != QDC_OK)
         return st;
-    *read = parent != K_ATTR || (it.integer && x->attr_cell_int &&
-                                 (!have_region(x) || x->attr_rank > x->region_rank));
+    *read = parent != K_ATTR || region_candidate(x, &it, rp) >= 0;
     if (parent == K_GEOM) {
         if (x->nv >= 0)
             return fail_txt(err, QDC_EFORMAT, &x->s, t->at,
@@ -633,13 +647,12 @@ static qdc_status mesh_item(xd *x, const xtag *t, int parent, const char *rp,
         return item_values(x, it.n, NULL, x->conn, 0, INT32_MAX, NULL, err);
     }
     /* a scalar cell attribute: integers become the region */
-    if (it.integer && x->attr_cell_int &&
-        (!have_region(x) || x->attr_rank > x->region_rank)) {
+    if (region_candidate(x, &it, rp) >= 0) {
         qdc_free(x->region);
         x->region = NULL;
         x->pend[H_REG].set = 0;
         x->nreg = it.n;
-        x->region_rank = x->attr_rank;
+        x->region_rank = region_candidate(x, &it, rp);
         x->reg_at = t->at;
         if (rp) {
             pend_set(x, H_REG, rp, rpe, &it);
@@ -1063,6 +1076,8 @@ static qdc_status heavy_fill(xd *x, qdc_error *err)
                                       ? 64
                                       : x->pend[k].pe - x->pend[k].p),
                             x->pend[k].p, (unsigned long long)f->n, (long long)n);
+        if (k == H_REG && f->type == 'f') /* an untyped attribute of floats */
+            continue;
         if (k == H_GEOM) {
             x->xyz = qdc_mallocn((size_t)n + 1, sizeof(double));
             if (!x->xyz)
@@ -1293,7 +1308,7 @@ static qdc_status xd_open(xd *x, const char *buf, size_t len, qdc_error *err)
         x->s = txt_init(buf, len, 0);
         return QDC_OK;
     }
-    st = h5_frames(buf, len, "XDMF", names, "fiiiiiib", H_COUNT + 1, fr, err);
+    st = h5_frames(buf, len, "XDMF", names, "fi?iiiib", H_COUNT + 1, fr, err);
     if (st != QDC_OK)
         return st;
     if (!fr[H_COUNT].type)
@@ -1380,7 +1395,7 @@ qdc_status meshio_xdmf_h5_refs(const char *buf, size_t len, meshio_xdmf_h5 *h,
         }
         copy_span(h->file, sizeof h->file, x.h5f, x.h5fe);
         snprintf(h->set[h->n].name, sizeof h->set[0].name, "%s", h5_names[k]);
-        h->set[h->n].type = k == H_GEOM ? 'f' : 'i';
+        h->set[h->n].type = k == H_GEOM ? 'f' : pd->it.integer ? 'i' : 'a';
         copy_span(h->set[h->n].path, sizeof h->set[0].path, pd->p, pd->pe);
         h->set[h->n].ndims = pd->it.ndims;
         memcpy(h->set[h->n].dims, pd->it.dims, sizeof pd->it.dims);

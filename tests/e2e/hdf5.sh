@@ -205,6 +205,33 @@ pair_roundtrip dolfinx dfxout dolfinx
 # DOLFIN's own XDMF+HDF5 (tests/data/real/dolfin_h5.*: the mesh and a
 # MeshFunction)
 pair_roundtrip dolfin_h5 dfo DOLFIN
+# Its MeshFunction (uint64, no NumberType: qdc-h5 reports the dataset's
+# class) is the region: 148 tets of 2, 1148 of 1; the same values as float64
+# (a DG0 Function's look the same in the XML) are no region, the file read
+tetrefs() { awk '/^Tetrahedra/{f=1; getline; next} f && NF == 5 {print $5} /^End/{f=0}' "$1" |
+    sort | uniq -c | awk '{printf "%s:%s ", $2, $1}'; }
+if "$BIN/qdc" convert dolfin_h5.xdmf dfr.mesh --quiet 2> err &&
+    [ "$(tetrefs dfr.mesh)" = "1:1148 2:148 " ]; then
+    pass "hdf5: dolfin_h5.xdmf (DOLFIN 2019): its uint64 MeshFunction with no NumberType as the regions"
+else
+    fail "hdf5: DOLFIN MeshFunction as regions" "$(head -2 err) $(tetrefs dfr.mesh)"
+fi
+if "$PY" -c 'import h5py' 2> /dev/null; then
+    mkdir -p dff && sed 's/dolfin_h5\.h5:/f.h5:/g' dolfin_h5.xdmf > dff/f.xdmf &&
+        "$PY" -c 'import h5py, numpy as np, shutil, sys
+shutil.copy("dolfin_h5.h5", "dff/f.h5")
+with h5py.File("dff/f.h5", "r+") as f:
+    v = f["MeshFunction/0/values"][...].astype(np.float64) + 0.5
+    del f["MeshFunction/0/values"]
+    f["MeshFunction/0/values"] = v'
+    if "$BIN/qdc" convert dff/f.xdmf dff.mesh --quiet 2> err && [ "$(tetrefs dff.mesh)" = "0:1296 " ]; then
+        pass "hdf5: the same MeshFunction as float64: no region, the file read"
+    else
+        fail "hdf5: float MeshFunction" "$(head -2 err) $(tetrefs dff.mesh)"
+    fi
+else
+    pass "hdf5: float MeshFunction # SKIP python3-h5py missing"
+fi
 
 want_rc= # the exit status a refusal must have, if set
 check_refused() { # name, expected text in the message, command...

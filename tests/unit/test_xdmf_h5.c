@@ -4,7 +4,8 @@
  * frame's values changed (the form also made in place, after the frames),
  * dolfinx MeshTags grids in HDF5 (cell tags as regions, facet tags as
  * boundary triangles with refs, in either order; a facet off the mesh
- * refused), the
+ * refused), DOLFIN's MeshFunction with no NumberType a region when its
+ * dataset holds integers, the
  * XML renamed to another .h5 file, and the references refused (absolute,
  * "..", two files, a plain read). */
 #include "testio.h"
@@ -331,7 +332,74 @@ TEST(references_out_of_the_folder_are_refused)
     ASSERT_TRUE(strstr(e.msg, "qdc command") != NULL);
 }
 
-TEST_MAIN("xdmf_h5", T(refs_list_the_mesh_datasets), T(framed_read_and_spliced_write),
+/* DOLFIN's MeshFunction in the mesh's own grid: HDF5 values with no
+ * NumberType (XDMF's default is Float). qdc-h5 is asked for either class
+ * ('a') and frames integers as 'i', floats as 'f': integers are the region,
+ * floats (a DG0 Function's values) are not, and the file is read either way;
+ * a typed integer attribute is preferred to it. */
+TEST(dolfin_meshfunction_by_the_dataset_class)
+{
+    static const char dolfin[] =
+        "<Xdmf Version=\"3.0\"><Domain><Grid Name=\"mesh\">"
+        "<Topology NumberOfElements=\"1\" TopologyType=\"Tetrahedron\"><DataItem "
+        "Dimensions=\"1 4\" NumberType=\"UInt\" Format=\"HDF\">m.h5:/t</DataItem>"
+        "</Topology><Geometry GeometryType=\"XYZ\"><DataItem Dimensions=\"4 3\" "
+        "Format=\"HDF\">m.h5:/g</DataItem></Geometry>"
+        "<Attribute Name=\"f\" AttributeType=\"Scalar\" Center=\"Cell\"><DataItem "
+        "Dimensions=\"1 1\" Format=\"HDF\">m.h5:/f</DataItem></Attribute>"
+        "%s</Grid></Domain></Xdmf>\n";
+    static const char typed[] =
+        "<Attribute Name=\"other\" AttributeType=\"Scalar\" Center=\"Cell\"><DataItem "
+        "Dimensions=\"1\" DataType=\"Int\" Format=\"HDF\">m.h5:/o</DataItem>"
+        "</Attribute>";
+    static const double g[12] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1}, rf[1] = {7.5};
+    static const int64_t t[4] = {0, 1, 2, 3}, ri[1] = {7};
+    char doc[1400];
+    meshio_xdmf_h5 h;
+
+    snprintf(doc, sizeof doc, dolfin, typed);
+    ASSERT_OK(meshio_xdmf_h5_refs(doc, strlen(doc), &h, NULL));
+    ASSERT_EQ_INT(h.n, 3);
+    ASSERT_TRUE(!strcmp(h.set[2].name, "region") && !strcmp(h.set[2].path, "/o"));
+    ASSERT_EQ_INT(h.set[2].type, 'i');
+    snprintf(doc, sizeof doc, dolfin, "");
+    ASSERT_OK(meshio_xdmf_h5_refs(doc, strlen(doc), &h, NULL));
+    ASSERT_EQ_INT(h.n, 3);
+    ASSERT_TRUE(!strcmp(h.set[2].name, "region") && !strcmp(h.set[2].path, "/f"));
+    ASSERT_EQ_INT(h.set[2].type, 'a');
+    for (int k = 0; k < 2; k++) {
+        static sink fr, out;
+        char *in = NULL;
+        size_t in_len = 0;
+        mesh_t *m = NULL;
+        meshio_options mo = {.source = 1};
+        fr.n = 0;
+        sink_write(&fr, "QDCH5v1\n", 8);
+        put_frame(&fr, "topology", 'i', t, 4);
+        put_frame(&fr, "geometry", 'f', g, 12);
+        if (k == 0)
+            put_frame(&fr, "region", 'i', ri, 1);
+        else
+            put_frame(&fr, "region", 'f', rf, 1);
+        ASSERT_OK(meshio_xdmf_h5_input(doc, strlen(doc), fr.b, fr.n, &in, &in_len, NULL));
+        ASSERT_OK(meshio_read_ex(in, in_len, MESHIO_XDMF, &mo, &m, NULL));
+        ASSERT_EQ_INT(m->nt, 1);
+        if (k == 0) {
+            ASSERT_TRUE(m->region != NULL);
+            ASSERT_EQ_INT(m->region[0], 7);
+        } else {
+            ASSERT_TRUE(m->region == NULL);
+        }
+        out.n = 0;
+        ASSERT_OK(meshio_write(m, MESHIO_XDMF, sink_write, &out, NULL));
+        ASSERT_TRUE(out.n == in_len && memcmp(out.b, in, in_len) == 0);
+        mesh_free(m);
+        qdc_free(in);
+    }
+}
+
+TEST_MAIN("xdmf_h5", T(refs_list_the_mesh_datasets),
+          T(dolfin_meshfunction_by_the_dataset_class), T(framed_read_and_spliced_write),
           T(the_form_is_made_in_place), T(dolfinx_meshtags_in_hdf5_as_regions),
           T(facet_tags_first_and_cell_tags_after_them),
           T(dolfinx_05_meshtags_with_untyped_values),
