@@ -4,7 +4,8 @@
  * schedule (Klingner and Shewchuk 2007): smooth; then flips, worst tets first;
  * then smooth again where the flips opened room, a few rounds while the
  * quality rises; for full, one more round with edge contraction and vertex
- * insertion, kept when better. With flips the vertex set never changes (point
+ * insertion, kept when better (and with --boundary fixed, the first round
+ * starts with splits of the long interior edges). With flips the vertex set never changes (point
  * data stays valid); boundary triangles and region tags come back as sets
  * exactly as they went in, unless the user gave --hausd (boundary flips and
  * peeling within it); new tets are written in the vertex order convention of
@@ -88,6 +89,49 @@ enum { TOPO_ROUNDS = 3 };
  * ball-scan and part-cad within 0.001 of each other. (The default bound keeps
  * its first run whole: its reruns widen it where tets stay inverted.) */
 #define TOPO_FIRST_SHARE 0.25
+
+/* --topology full --boundary fixed: the first round of flips starts with
+ * interior edge splits (split.h), the unconstrained edges longer than this
+ * times the mean size of their ends split at their midpoints, so that the
+ * smoothing and the flips of every round place and connect the new vertices.
+ * With the boundary fixed (as mmg3d -nosurf keeps it) a scanned shape's fine
+ * surface stays against a coarse interior: the tets at the boundary are long
+ * (issue #31: on the 100k-tet ball-scan of scripts/corpus.py --seed 1, mean
+ * ratio of the tets with 3 boundary corners 0.720 against mmg3d -optim
+ * -nosurf's 0.756, which splits such edges, and 26% of the tets against 17%).
+ * --topology full --boundary fixed, mean ratio / smallest dihedral / CPU s,
+ * one run each at load 5-7: without splits ball-scan 0.8099 / 14.63 / 7.8,
+ * ball-lowq 0.7843 / 0.83 / 14.2; splits in full's round only (1.3) 0.8158 /
+ * 20.75 / 8.9 and 0.7904 / 0.85 / 14.3; in the first round at 1.3 0.8284 /
+ * 23.07 / 21.3 and 0.8061 / 0.86 / 23.1 (twice the tets: the CPU of mmg
+ * twice over); 1.45 0.8277 / 19.07 / 13.5 and 0.7999 / 0.82 / 17.4; 1.6
+ * 0.8207 / 21.97 / 9.4 and 0.7940 / 0.87 / 12.3 (mmg3d -optim -nosurf
+ * 0.816 / 11.37 / 8.7 and 0.793 / 0.34 / 13.4). Not under the default
+ * boundary, whose full already beats mmg's (there the splits took ball-scan
+ * from 0.8207 / 20.73 to 0.8278 / 21.35 in 11.1 CPU s against 6.8). */
+#define TOPO_LSPLIT 1.6
+
+/* What flip_round does besides flips (its insert argument). */
+enum { ROUND_INSERT = 1, ROUND_SPLIT = 2 };
+
+/* The first round's operations besides flips for the run of opts. */
+static int first_ops(const opt_options *opts)
+{
+    return opts->topology == OPT_TOPOLOGY_FULL && opts->boundary == OPT_BOUNDARY_FIXED
+               ? ROUND_SPLIT
+               : 0;
+}
+
+/* *act grown to nv + 1 entries (a round added vertices). QDC_ENOMEM. */
+static qdc_status grow_marks(uint8_t **act, int32_t nv, qdc_error *err)
+{
+    uint8_t *a = qdc_realloc(*act, (size_t)nv + 1);
+
+    if (!a)
+        return qdc_fail(err, QDC_ENOMEM, "out of memory");
+    *act = a;
+    return QDC_OK;
+}
 
 /* The operations of a round of topology. */
 static int64_t round_ops(const topo_stats *ts)
@@ -206,13 +250,16 @@ static qdc_status mark_active(int32_t nv, const int32_t *old, int32_t nold,
     return QDC_OK;
 }
 
-/* The flips' parameters for a round of o (insert: full's round). */
+/* The flips' parameters for a round of o (insert: ROUND_INSERT for full's
+ * round, ROUND_SPLIT for edge splits before the flips). */
 static void round_params(const opt_options *o, int insert, double hausd, topo_params *p)
 {
     topo_params_default(p);
     p->qgoal = TOPO_QGOAL;
-    p->insert = insert;
-    p->contract = insert;
+    p->insert = (insert & ROUND_INSERT) != 0;
+    p->contract = p->insert;
+    p->split = (insert & ROUND_SPLIT) != 0;
+    p->lsplit = TOPO_LSPLIT;
     p->qinsert = TOPO_QINSERT;
     p->akeep = TOPO_AKEEP;
     p->bound.hausd = hausd;
@@ -509,7 +556,7 @@ static qdc_status full_round(mesh_t *m, opt_options *o, double hausd, spend *sp,
         mesh_free(keep);
         return st;
     }
-    st = flip_round(m, o, 1, hausd, sp, NULL, &ts, sf, err);
+    st = flip_round(m, o, ROUND_INSERT, hausd, sp, NULL, &ts, sf, err);
     if (st == QDC_OK && ts.insertions + ts.contractions > 0) {
         count_round(&acc, &ts);
         acc.topo_tris_removed += sf->removed;
@@ -680,7 +727,10 @@ static qdc_status topology_run(mesh_t *m, const opt_options *opts, opt_result *r
         opt_result r;
         if (last.outcome == OPT_STOPPED)
             break; /* cancelled, out of time or the solver in trouble */
-        st = flip_round(m, &o, 0, hausd, &sp, act, &ts, &sf, err);
+        st = flip_round(m, &o, round == 0 ? first_ops(opts) : 0, hausd, &sp, act, &ts, &sf,
+                        err);
+        if (st == QDC_OK && ts.insertions > 0)
+            st = grow_marks(&act, m->nv, err);
         if (st != QDC_OK)
             break;
         if (round_ops(&ts) == 0)

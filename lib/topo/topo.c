@@ -7,6 +7,7 @@
 #include "geom/metric_int.h"
 #include "topo/contract.h"
 #include "topo/insert.h"
+#include "topo/split.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -22,6 +23,9 @@ void topo_params_default(topo_params *p)
     p->max_ops = 0;
     p->insert = 0;
     p->qinsert = 0.15;
+    p->split = 0;
+    p->lsplit = 1.6;
+    p->qsplit = 0.5;
     p->imargin = 0.05;
     p->iangle = 1;
     p->contract = 0;
@@ -510,7 +514,14 @@ qdc_status topo_improve(tmesh *tm, const topo_params *p, topo_stats *st,
     memset(st, 0, sizeof *st);
     st->nt_in = tm->nlive;
     st->nv_in = tm->nv;
-    if (use)
+    if (p->split) {
+        int64_t ns = 0;
+        s = split_long_edges(tm, p->lsplit, p->qsplit, &ns, cancel);
+        st->splits = ns;
+        st->insertions += ns;
+        ops += ns;
+    }
+    if (use && s == QDC_OK)
         s = memo_init(&mo, tm);
     for (int r = 0; r < p->rounds && s == QDC_OK; r++) {
         int64_t before = ops, flips;
@@ -548,6 +559,7 @@ qdc_status topo_flip_arrays(int32_t nv, const double *xyz, int32_t nt,
 
     q.insert = 0;
     q.contract = 0;
+    q.split = 0;
     s = topo_full_arrays(nv, xyz, nt, tets, region, rev, &q, cancel, &n, &x, nt_out,
                          tets_out, region_out, NULL, NULL, st, err);
     qdc_free(x);

@@ -26,6 +26,10 @@ typedef struct {
     int insert;      /* 1: after the flips of a round, vertex insertion (insert.h)
                       * in the tets still below qinsert, worst first */
     double qinsert;  /* tets below this mean ratio get an insertion tried */
+    int split;       /* 1: before the flips, interior edge splits (split.h's
+                      * split_long_edges with lsplit and qsplit) */
+    double lsplit;
+    double qsplit;
     double imargin;  /* an insertion must raise the cavity's minimum by this */
     int iangle;      /* 1: and must not lower its smallest dihedral angle */
     int contract;    /* 1: after the flips of a round, interior edge contraction
@@ -48,7 +52,8 @@ typedef struct {
     int64_t flips23;                   /* 2-3 flips */
     int64_t multiface;                 /* multi-face removals */
     int64_t visits;                    /* tets taken from the queue */
-    int64_t insertions;                /* vertices inserted (insert.h) */
+    int64_t insertions;                /* vertices inserted (insert.h, split.h) */
+    int64_t splits;                    /* of which by edge splits */
     int64_t bflips;                    /* boundary edge flips */
     int64_t peels;                     /* tets peeled off the boundary */
     int64_t contractions;              /* edges contracted */
@@ -77,8 +82,8 @@ typedef struct {
 } topo_surface;
 
 /* maxring 10, qgoal 0.6, margin 1e-3, floor4 0.1, rounds 3, max_ops 0, insert 0,
- * qinsert 0.15, imargin 0.05, iangle 1, contract 0, qcontract 0.3, no bound,
- * recheck 0. */
+ * qinsert 0.15, imargin 0.05, iangle 1, contract 0, qcontract 0.3, split 0,
+ * lsplit 1.6, qsplit 0.5, no bound, recheck 0. */
 void topo_params_default(topo_params *p);
 
 /* Improve tm in place with flips (see above). cancel (may be NULL) is polled
@@ -91,7 +96,7 @@ qdc_status topo_improve(tmesh *tm, const topo_params *p, topo_stats *st,
  * region and rev may be NULL; as tmesh_new), improve it, and hand back the live tets in
  * *tets_out (and their tags in *region_out when region is not NULL), allocated with
  * qdc_malloc for the caller, *nt_out their count. The vertices are not changed
- * (p->insert is ignored). */
+ * (p->insert, p->contract and p->split are ignored). */
 qdc_status topo_flip_arrays(int32_t nv, const double *xyz, int32_t nt,
                             const int32_t *tets, const int32_t *region,
                             const uint8_t *rev, const topo_params *p,

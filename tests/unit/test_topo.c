@@ -10,6 +10,7 @@
 #include "topo/exact.h"
 #include "topo/flip.h"
 #include "topo/insert.h"
+#include "topo/split.h"
 #include "topo/tmesh.h"
 #include "topo/topo.h"
 
@@ -1410,7 +1411,110 @@ TEST(boundary_contraction_keeps_a_flat_face)
     mesh_free(m);
 }
 
-TEST_MAIN("topo", T(contraction_keeps_the_volume_exactly),
+/* The ring of 4 tets around the axis from (0,0,-3) to (0,0,3) over the unit
+ * square's corners (an octahedron, 6V = 4 * 6 = 24, every face on the
+ * boundary but those with the axis): its axis split at (0,0,0) gives 8 tets,
+ * the volume exactly, the boundary faces as they were, and the split undone
+ * gives the mesh back exactly. */
+TEST(edge_split_at_the_midpoint)
+{
+    tmesh *tm = ring_mesh(4, -3, 3, NULL);
+    int32_t ids[2 * SPLIT_MAXRING], nf0, nf1, *f0, *f1;
+    int done = 0, nn = 0;
+    snap s;
+
+    ASSERT_TRUE(tm);
+    ASSERT_NEAR(total_vol6(tm), 24.0, 1e-12);
+    f0 = cons_faces(tm, &nf0);
+    ASSERT_TRUE(f0);
+    ASSERT_TRUE(snap_take(tm, &s));
+    ASSERT_EQ_INT(tmesh_local(tm, 0, 0), 0);
+    ASSERT_EQ_INT(tmesh_local(tm, 0, 1), 1); /* edge 0 of tet 0 is the axis */
+    ASSERT_OK(split_edge(tm, 0, 0, 0.5, &done, ids, &nn));
+    ASSERT_EQ_INT(done, 1);
+    ASSERT_EQ_INT(nn, 8);
+    ASSERT_EQ_INT(tm->nv, 7);
+    ASSERT_EQ_INT(tm->nlive, 8);
+    ASSERT_EQ_INT(tm->vcons[6], 0);
+    ASSERT_NEAR(tm->xyz[18], 0.0, 0);
+    ASSERT_NEAR(tm->xyz[19], 0.0, 0);
+    ASSERT_NEAR(tm->xyz[20], 0.0, 0);
+    ASSERT_TRUE(consistent(tm));
+    ASSERT_NEAR(total_vol6(tm), 24.0, 1e-12);
+    for (int j = 0; j < nn; j++) {
+        ASSERT_TRUE(tmesh_local(tm, ids[j], 6) >= 0);
+        /* each half: the pole, the centre and two unit-square corners */
+        ASSERT_TRUE((tmesh_local(tm, ids[j], 0) >= 0) != (tmesh_local(tm, ids[j], 1) >= 0));
+    }
+    f1 = cons_faces(tm, &nf1);
+    ASSERT_TRUE(f1);
+    ASSERT_EQ_INT(nf1, nf0);
+    ASSERT_TRUE(!memcmp(f0, f1, 20 * (size_t)nf0));
+    split_undo(tm);
+    ASSERT_EQ_INT(tm->nv, 6);
+    ASSERT_TRUE(snap_same(tm, &s));
+    ASSERT_TRUE(consistent(tm));
+    free(f0);
+    free(f1);
+    snap_free(&s);
+    tmesh_free(tm);
+}
+
+/* A constrained edge (a boundary edge of the octahedron) is never split, nor
+ * an edge whose halves would fall under qfrac times the ring's smallest mean
+ * ratio: nothing changed either way. */
+TEST(edge_split_refused_leaves_the_mesh)
+{
+    tmesh *tm = ring_mesh(4, -3, 3, NULL);
+    int32_t ids[2 * SPLIT_MAXRING];
+    int done = 1, nn = 1;
+    snap s;
+
+    ASSERT_TRUE(tm);
+    ASSERT_TRUE(snap_take(tm, &s));
+    ASSERT_TRUE(tm->econs[0] >> 5 & 1); /* edge 23: two square corners */
+    ASSERT_OK(split_edge(tm, 0, 5, 0.0, &done, ids, &nn));
+    ASSERT_EQ_INT(done, 0);
+    ASSERT_EQ_INT(nn, 0);
+    ASSERT_OK(split_edge(tm, 0, 0, 10.0, &done, ids, &nn));
+    ASSERT_EQ_INT(done, 0);
+    ASSERT_EQ_INT(tm->nv, 6);
+    ASSERT_TRUE(snap_same(tm, &s));
+    snap_free(&s);
+    tmesh_free(tm);
+}
+
+/* The pass splits an edge only when it is long against the sizes of its ends
+ * (a vertex on the boundary: the mean of its boundary edges). The octahedron
+ * of height 6: the axis is 6 long, its ends' size sqrt(10) (their boundary
+ * edges to the square), 6 / sqrt(10) = 1.90 > 1.6: split once (its halves,
+ * 3 / sqrt(10) < 1, stay). Of height 2: 2 / sqrt(2) = 1.41: none. */
+TEST(split_pass_splits_only_the_long_edges)
+{
+    tmesh *tall = ring_mesh(4, -3, 3, NULL), *flat = ring_mesh(4, -1, 1, NULL);
+    int64_t n = -1;
+
+    ASSERT_TRUE(tall && flat);
+    ASSERT_OK(split_long_edges(tall, 1.6, 0.5, &n, NULL));
+    ASSERT_EQ_INT(n, 1);
+    ASSERT_EQ_INT(tall->nlive, 8);
+    ASSERT_TRUE(consistent(tall));
+    ASSERT_NEAR(total_vol6(tall), 24.0, 1e-12);
+    ASSERT_OK(split_long_edges(tall, 1.6, 0.5, &n, NULL));
+    ASSERT_EQ_INT(n, 0); /* the halves are not long */
+    ASSERT_OK(split_long_edges(flat, 1.6, 0.5, &n, NULL));
+    ASSERT_EQ_INT(n, 0);
+    ASSERT_EQ_INT(flat->nlive, 4);
+    ASSERT_OK(split_long_edges(flat, 1.3, 0.5, &n, NULL));
+    ASSERT_EQ_INT(n, 1); /* 1.41 > 1.3 */
+    ASSERT_TRUE(consistent(flat));
+    tmesh_free(tall);
+    tmesh_free(flat);
+}
+
+TEST_MAIN("topo", T(edge_split_at_the_midpoint), T(edge_split_refused_leaves_the_mesh),
+          T(split_pass_splits_only_the_long_edges),
+          T(contraction_keeps_the_volume_exactly),
           T(boundary_contraction_keeps_a_flat_face), T(boundary_flip_2_2_coplanar),
           T(peeling_a_flat_boundary_tet), T(driver_writes_the_new_boundary_triangles),
           T(driver_spends_one_bound), T(insertion_in_a_bad_tet),
