@@ -87,15 +87,22 @@ static void clamp_boundary(const ctx_t *c, double *y)
             slide_clamp(c->x0, v, c->hbound, y + 3 * (size_t)v);
 }
 
-/* Whether a trial spoils tet tt: it folds or flattens a tet usable at x or, on a valid
- * mesh, takes a tet below the worst mean ratio at x, whose cube is qfloor3
- * (the worst tet of the mesh never gets worse, so the global phase's work is
- * kept). */
-static int spoils(const ctx_t *c, const double *y, const int32_t *tt, double qfloor3)
+/* Whether a trial y spoils tet tt, unusable at y if ybad: it folds or flattens a tet
+ * usable at x or, on a valid mesh, takes a tet below the worst mean ratio at x, whose
+ * cube is qfloor3 (the worst tet of the mesh never gets worse, so the global phase's work
+ * is kept). */
+static int spoils_at(const ctx_t *c, int ybad, const double *y, const int32_t *tt,
+                     double qfloor3)
 {
-    if (geom_tet_bad(y, tt))
+    if (ybad)
         return !geom_tet_bad(c->x, tt);
     return qfloor3 > 0 && ctx_tet_eta3(y, tt) < qfloor3;
+}
+
+/* The same, ybad (whether tt is unusable at y) not known yet. */
+static int spoils(const ctx_t *c, const double *y, const int32_t *tt, double qfloor3)
+{
+    return spoils_at(c, geom_tet_bad(y, tt), y, tt, qfloor3);
 }
 
 /* c->trial of vertex v: its share vfac[v] of the step s, then onto its
@@ -150,8 +157,9 @@ static void feasible_trial(ctx_t *c, double s, int32_t ninv_x, double qfloor3)
 #pragma omp parallel for reduction(+ : folds, ninv) schedule(static)
     for (int32_t t = 0; t < tp->nt; t++) {
         const int32_t *tt = tp->tets + 4 * (size_t)t;
-        int bad = spoils(c, c->trial, tt, qfloor3);
-        ninv += geom_tet_bad(c->trial, tt);
+        int ybad = geom_tet_bad(c->trial, tt),
+            bad = spoils_at(c, ybad, c->trial, tt, qfloor3);
+        ninv += ybad;
         folds += bad;
         if (bad)
             ctx_mark_corners(c, tt);
