@@ -5,14 +5,13 @@
  * then smooth again where the flips opened room, a few rounds while the
  * quality rises; for full, one more round with edge contraction and vertex
  * insertion, kept when better (and with --boundary fixed, the first round
- * starts with splits of the long interior edges). With flips the vertex set never changes (point
- * data stays valid); boundary triangles and region tags come back as sets
- * exactly as they went in, unless the user gave --hausd (boundary flips and
- * peeling within it); new tets are written in the vertex order convention of
- * the tets they replace. m's coordinates, tets, regions and tet count are replaced by the
- * result; res->tets_in/out and the topo_* counts filled, res->before the
- * input's record, res->after the result's. The top of the run: it calls only
- * the files below it. */
+ * starts with splits of the long interior edges). With flips the vertex set never changes
+ * (point data stays valid); boundary triangles and region tags come back as sets exactly
+ * as they went in, unless the user gave --hausd (boundary flips and peeling within it);
+ * new tets are written in the vertex order convention of the tets they replace. m's
+ * coordinates, tets, regions and tet count are replaced by the result; res->tets_in/out
+ * and the topo_* counts filled, res->before the input's record, res->after the result's.
+ * The top of the run: it calls only the files below it. */
 #include "opt/opt.h"
 
 #include "core/base_int.h"
@@ -439,10 +438,13 @@ static int round_report(void *ctx, const opt_progress *p)
     return rp->fn(rp->ctx, &q);
 }
 
-/* The operations of one round of flips, added to the run's counts. */
-static void count_round(opt_result *acc, const topo_stats *ts)
+/* The operations of one round of flips and the boundary triangles it
+ * removed and added (sf), added to the run's counts. */
+static void count_round(opt_result *acc, const topo_stats *ts, const topo_surface *sf)
 {
     acc->topo_rounds++;
+    acc->topo_tris_removed += sf->removed;
+    acc->topo_tris_added += sf->added;
     acc->topo_edge_removals += ts->edge_removals;
     acc->topo_flips23 += ts->flips23;
     acc->topo_multiface += ts->multiface;
@@ -572,9 +574,7 @@ static qdc_status full_round(mesh_t *m, opt_options *o, double hausd, spend *sp,
     }
     st = flip_round(m, o, ROUND_INSERT, hausd, sp, NULL, &ts, sf, err);
     if (st == QDC_OK && ts.insertions + ts.contractions > 0) {
-        count_round(&acc, &ts);
-        acc.topo_tris_removed += sf->removed;
-        acc.topo_tris_added += sf->added;
+        count_round(&acc, &ts, sf);
         o->progress = NULL; /* a trial: its records would not be the result's */
         st = spend_begin(sp, m, o, err);
         if (st == QDC_OK) {
@@ -761,17 +761,15 @@ static qdc_status topology_run(mesh_t *m, const opt_options *opts, opt_result *r
         opt_result r;
         if (last.outcome == OPT_STOPPED)
             break; /* cancelled, out of time or the solver in trouble */
-        st = flip_round(m, &o, round == 0 ? first_ops(opts) : 0, hausd, &sp, act, &ts, &sf,
-                        err);
+        st = flip_round(m, &o, round == 0 ? first_ops(opts) : 0, hausd, &sp, act, &ts,
+                        &sf, err);
         if (st == QDC_OK && ts.insertions > 0)
             st = grow_marks(&act, m->nv, err);
         if (st != QDC_OK)
             break;
         if (round_ops(&ts) == 0)
             break;
-        count_round(&first, &ts);
-        first.topo_tris_removed += sf.removed;
-        first.topo_tris_added += sf.added;
+        count_round(&first, &ts, &sf);
         if (round_begin(m, opts, &o, &ts, ++record, t0, &rp, &last, &st, err))
             break;
         st = round_smooth(m, &o, &sp, round > 0 ? act : NULL,

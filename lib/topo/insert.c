@@ -107,7 +107,8 @@ static double star_min(tmesh *tm, const double p[3], int32_t (*newt)[4], int nne
     for (int j = 0; j < nnew; j++) {
         metric_parts pt;
         metric_parts_for(OPT_METRIC_MIMR, tm->xyz + 3 * (size_t)newt[j][0],
-                         tm->xyz + 3 * (size_t)newt[j][1], tm->xyz + 3 * (size_t)newt[j][2],
+                         tm->xyz + 3 * (size_t)newt[j][1],
+                         tm->xyz + 3 * (size_t)newt[j][2],
                          tm->xyz + 3 * (size_t)newt[j][3], &pt);
         q3[j] = metric_mean_ratio_cubed(&pt);
         if (q3[j] < t3)

@@ -56,7 +56,8 @@ qdc_status split_edge(tmesh *tm, int32_t t, int e, double qfrac, int *done,
         tm->nv--;
         return QDC_OK;
     }
-    st = tmesh_replace(tm, ring, nr, (const int32_t(*)[4])newt, 2 * nr, new_ids, &applied);
+    st =
+        tmesh_replace(tm, ring, nr, (const int32_t(*)[4])newt, 2 * nr, new_ids, &applied);
     if (st != QDC_OK || !applied) {
         tm->nv--;
         return st;
@@ -73,9 +74,9 @@ void split_undo(tmesh *tm)
 }
 
 typedef struct {
-    double r;     /* length over the mean size of its ends */
-    int32_t a, b; /* a < b */
-    int32_t t;    /* a tet of the edge, */
+    double r;       /* length over the mean size of its ends */
+    int32_t a, b;   /* a < b */
+    int32_t t;      /* a tet of the edge, */
     uint32_t stamp; /* as it was */
     int e;
 } cand;

@@ -30,10 +30,10 @@ typedef struct {
                       * split_long_edges with lsplit and qsplit) */
     double lsplit;
     double qsplit;
-    double imargin;  /* an insertion must raise the cavity's minimum by this */
-    int iangle;      /* 1: and must not lower its smallest dihedral angle */
-    int contract;    /* 1: after the flips of a round, interior edge contraction
-                      * (contract.h) in the tets still below qcontract */
+    double imargin; /* an insertion must raise the cavity's minimum by this */
+    int iangle;     /* 1: and must not lower its smallest dihedral angle */
+    int contract;   /* 1: after the flips of a round, interior edge contraction
+                     * (contract.h) in the tets still below qcontract */
     double qcontract;
     flip_bound bound; /* hausd > 0 and a surface attached: boundary flips and
                        * peeling (flip.h) too; hausd 0 (default): none */

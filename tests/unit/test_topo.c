@@ -1444,7 +1444,8 @@ TEST(edge_split_at_the_midpoint)
     for (int j = 0; j < nn; j++) {
         ASSERT_TRUE(tmesh_local(tm, ids[j], 6) >= 0);
         /* each half: the pole, the centre and two unit-square corners */
-        ASSERT_TRUE((tmesh_local(tm, ids[j], 0) >= 0) != (tmesh_local(tm, ids[j], 1) >= 0));
+        ASSERT_TRUE((tmesh_local(tm, ids[j], 0) >= 0) !=
+                    (tmesh_local(tm, ids[j], 1) >= 0));
     }
     f1 = cons_faces(tm, &nf1);
     ASSERT_TRUE(f1);
