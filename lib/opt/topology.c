@@ -297,6 +297,8 @@ static qdc_status flip_round(mesh_t *m, const opt_options *o, int insert, double
             tv[4 * (size_t)t + 1] = m->tets[4 * (size_t)t];
         }
     round_params(o, insert, hausd, &p);
+    p.nkeep = m->ntri; /* triangles inside the mesh too: a user's inner surface */
+    p.keep = m->tris;
     sf->ntri = m->ntri;
     sf->tris = m->tris;
     sf->refs = m->tri_ref;

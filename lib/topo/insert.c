@@ -59,7 +59,9 @@ static int cavity(const tmesh *tm, int32_t t, int32_t old[INS_OLD])
 
 /* The star of vertex v over the outer faces of the cavity old (each tet with
  * the vertex opposite an outer face replaced by v). Returns the tet count, or
- * -1 when there are more than INS_NEW. */
+ * -1 when there are more than INS_NEW or when a constrained face lies between
+ * two tets of the cavity (a kept inner surface it wrapped round: the star
+ * would remove it). */
 static int star(const tmesh *tm, const int32_t *old, int nold, int32_t v,
                 int32_t newt[INS_NEW][4], int32_t from[INS_NEW])
 {
@@ -70,6 +72,8 @@ static int star(const tmesh *tm, const int32_t *old, int nold, int32_t v,
             int32_t a = tm->adj[4 * (size_t)old[o] + i], in = 0;
             for (int k = 0; k < nold && a >= 0; k++)
                 in |= old[k] == a / 4;
+            if (in && (tm->fcons[old[o]] >> i & 1))
+                return -1;
             if (in)
                 continue;
             if (n == INS_NEW)

@@ -857,14 +857,60 @@ typedef struct {
     int32_t i;
 } tri_key;
 
-static int tri_key_cmp(const void *x, const void *y)
+/* Order of triangle keys alone (tmesh_keep_tris). */
+static int tri_key_only(const void *x, const void *y)
 {
     const tri_key *a = x, *b = y;
 
     for (int s = 0; s < 3; s++)
         if (a->k[s] != b->k[s])
             return a->k[s] < b->k[s] ? -1 : 1;
-    return a->i < b->i ? -1 : a->i > b->i;
+    return 0;
+}
+
+static int tri_key_cmp(const void *x, const void *y)
+{
+    const tri_key *a = x, *b = y;
+    int c = tri_key_only(x, y);
+
+    return c ? c : a->i < b->i ? -1 : a->i > b->i;
+}
+
+qdc_status tmesh_keep_tris(tmesh *tm, int32_t ntri, const int32_t *tris)
+{
+    tri_key *keys;
+    int any = 0;
+
+    if (ntri <= 0)
+        return QDC_OK;
+    keys = qdc_mallocn((size_t)ntri, sizeof *keys);
+    if (!keys)
+        return QDC_ENOMEM;
+    for (int32_t s = 0; s < ntri; s++) {
+        tet_sort3(tris[3 * (size_t)s], tris[3 * (size_t)s + 1], tris[3 * (size_t)s + 2],
+                  keys[s].k);
+        keys[s].i = s;
+    }
+    qsort(keys, (size_t)ntri, sizeof *keys, tri_key_only);
+    for (int32_t t = 0; t < tm->hi; t++)
+        for (int i = 0; i < 4; i++) {
+            const int32_t *tt = tm->tv + 4 * (size_t)t;
+            int32_t nb = tm->adj[4 * (size_t)t + i];
+            tri_key want;
+            if (tt[0] < 0 || nb < 0 || (tm->fcons[t] >> i & 1))
+                continue;
+            face_key(tt, i, want.k);
+            want.i = 0;
+            if (!bsearch(&want, keys, (size_t)ntri, sizeof *keys, tri_key_only))
+                continue;
+            tm->fcons[t] |= (uint8_t)(1u << i);
+            tm->fcons[nb / 4] |= (uint8_t)(1u << (nb % 4));
+            for (int s = 0; s < 3; s++)
+                tm->vcons[tt[tet_face_of[i][s]]] = 1;
+            any = 1;
+        }
+    qdc_free(keys);
+    return any ? mark_edges(tm, tm->hi) : QDC_OK;
 }
 
 /* 1 when (p, q, r) is (x, y, z) rotated. */
@@ -1017,6 +1063,11 @@ int tmesh_check(const tmesh *tm, int32_t *ninv, char *why, size_t n)
                     return -1;
                 }
                 want = tm->tag[nb / 4] != tm->tag[t];
+                /* a face inside a region kept as the user's (tmesh_keep_tris):
+                 * constrained on both sides */
+                if (!want && (tm->fcons[t] >> i & 1) &&
+                    (tm->fcons[nb / 4] >> (nb % 4) & 1))
+                    want = 1;
             }
             if ((tm->fcons[t] >> i & 1) != want) {
                 snprintf(why, n, "tet %ld face %d: constraint bit wrong", (long)t, i);

@@ -8,11 +8,11 @@
  * orders it (core/tet.h). Edge e of a tet joins local vertices tmesh_edge[e]
  * (01 02 03 12 13 23, the order of metric_dihedrals).
  * Constrained: a boundary face (of one tet), a face between tets of different
- * tags, and every edge of such a face. Operations never remove a constrained face
- * or edge, so the boundary triangles and the interfaces stay as they are; the
- * one exception is tmesh_replace_surface (boundary flips and peeling under a
- * Hausdorff bound), which needs the surface given by tmesh_set_surface.
- * Thread safety: a tmesh is used by one thread at a time. */
+ * tags, a face the caller keeps (tmesh_keep_tris), and every edge of such a face.
+ * Operations never remove a constrained face or edge, so the boundary triangles and the
+ * interfaces stay as they are; the one exception is tmesh_replace_surface (boundary flips
+ * and peeling under a Hausdorff bound), which needs the surface given by
+ * tmesh_set_surface. Thread safety: a tmesh is used by one thread at a time. */
 #ifndef QDC_TMESH_H
 #define QDC_TMESH_H
 
@@ -72,6 +72,14 @@ qdc_status tmesh_new(int32_t nv, const double *xyz, int32_t nt, const int32_t *t
                      const int32_t *region, const uint8_t *rev, tmesh **out,
                      qdc_error *err);
 void tmesh_free(tmesh *tm);
+
+/* Constrain the faces of tm that are among the ntri triangles tris (3 each, in
+ * any order; a triangle that is no face of tm, or is already constrained, is
+ * passed over), on both sides, with their edges and vertices, as the boundary
+ * is: a surface the user gave inside a region (an embedded surface, facet tags
+ * between tets of one tag) then stays face for face. Call before any operation.
+ * QDC_ENOMEM. */
+qdc_status tmesh_keep_tris(tmesh *tm, int32_t ntri, const int32_t *tris);
 
 /* The live tets in slot order, each in the caller's vertex order (rev): *tets
  * (4 each) and *region (may be NULL, then not written) allocated with qdc_malloc

@@ -34,6 +34,8 @@ void topo_params_default(topo_params *p)
     p->bound.cos_feature = 0.8660254037844387; /* 30 degrees */
     p->recheck = 0;
     p->akeep = 0.0;
+    p->nkeep = 0;
+    p->keep = NULL;
 }
 
 /* The queue is by exact quality. Quantized (16 or 64 bands of mean ratio,
@@ -731,6 +733,9 @@ qdc_status topo_full_arrays(int32_t nv, const double *xyz, int32_t nt,
 {
     tmesh *tm = NULL;
     qdc_status s = tmesh_new(nv, xyz, nt, tets, region, rev, &tm, err);
+
+    if (s == QDC_OK && p->nkeep > 0 && tmesh_keep_tris(tm, p->nkeep, p->keep) != QDC_OK)
+        s = qdc_fail(err, QDC_ENOMEM, "out of memory");
 
     if (sf) {
         sf->tris_out = NULL;

@@ -35,14 +35,16 @@ typedef struct {
     int contract;   /* 1: after the flips of a round, interior edge contraction
                      * (contract.h) in the tets still below qcontract */
     double qcontract;
-    flip_bound bound; /* hausd > 0 and a surface attached: boundary flips and
-                       * peeling (flip.h) too; hausd 0 (default): none */
-    double akeep;     /* > 0: a flip must also leave its new tets' smallest
-                       * dihedral angle at least this (degrees) or at least
-                       * its old tets'; 0 (default): no such condition */
-    int recheck;      /* 1: evaluate every queued tet and edge again, even one
-                       * whose failure nothing has changed since (0, default:
-                       * skipped, the same result sooner; 1 is for tests) */
+    flip_bound bound;    /* hausd > 0 and a surface attached: boundary flips and
+                          * peeling (flip.h) too; hausd 0 (default): none */
+    double akeep;        /* > 0: a flip must also leave its new tets' smallest
+                          * dihedral angle at least this (degrees) or at least
+                          * its old tets'; 0 (default): no such condition */
+    int32_t nkeep;       /* triangles (3 each) whose faces inside the mesh stay */
+    const int32_t *keep; /* (tmesh_keep_tris); 0, NULL (default): none */
+    int recheck;         /* 1: evaluate every queued tet and edge again, even one
+                          * whose failure nothing has changed since (0, default:
+                          * skipped, the same result sooner; 1 is for tests) */
 } topo_params;
 
 /* What the runs did. */

@@ -260,4 +260,72 @@ print("ok" if 0 < b and h <= b * (1 + 1e-9) else "over", h, b)' "$TMP/g1.json")
         fail "$n: determinism" "outputs differ"
     fi
 done
+
+# an inner surface (300 faces inside the thin bone, one region, given as
+# triangles of ref 99, as an embedded surface or facet tags are): flips and
+# full keep every one of them a face between two tets (before that rule,
+# flips left 165 of the 300 with no tets under them, full 167)
+cat > "$TMP/inner.py" << 'PY'
+import sys
+import numpy as np
+
+def read(path):
+    tok = open(path).read().split()
+    i, out = 0, {}
+    while i < len(tok):
+        k = tok[i]
+        w = {"Vertices": 4, "Tetrahedra": 5, "Triangles": 4}.get(k)
+        if w and tok[i + 1].isdigit():
+            n = int(tok[i + 1])
+            out[k] = np.array(tok[i + 2:i + 2 + w * n], dtype=float).reshape(n, w)
+            i += 2 + w * n
+        else:
+            i += 1
+    return out
+
+def inner_faces(t):
+    f = {}
+    for tt in t.tolist():
+        for o in range(4):
+            k = tuple(sorted(tt[:o] + tt[o + 1:]))
+            f[k] = f.get(k, 0) + 1
+    return f
+
+if sys.argv[1] == "make":
+    m = read(sys.argv[2])
+    t = m["Tetrahedra"][:, :4].astype(np.int64)
+    two = sorted(k for k, c in inner_faces(t).items() if c == 2)
+    pick = np.random.default_rng(7).choice(len(two), 300, replace=False)
+    with open(sys.argv[3], "w") as o:
+        o.write("MeshVersionFormatted 2\nDimension 3\nVertices\n%d\n" % len(m["Vertices"]))
+        for x in m["Vertices"]:
+            o.write("%.17g %.17g %.17g %d\n" % tuple(x))
+        o.write("Tetrahedra\n%d\n" % len(t))
+        for x in m["Tetrahedra"].astype(np.int64):
+            o.write("%d %d %d %d %d\n" % tuple(x))
+        o.write("Triangles\n300\n")
+        for k in pick:
+            o.write("%d %d %d 99\n" % two[k])
+        o.write("End\n")
+else:
+    m = read(sys.argv[2])
+    f = inner_faces(m["Tetrahedra"][:, :4].astype(np.int64))
+    tr = m.get("Triangles", np.zeros((0, 4)))
+    mine = [tuple(sorted(x)) for x in tr[tr[:, 3] == 99][:, :3].astype(np.int64).tolist()]
+    print(len(mine), sum(1 for k in mine if f.get(k) != 2))
+PY
+"$PY" "$TMP/inner.py" make "$TMP/c/bone-lowq.mesh" "$TMP/inner.mesh"
+for mode in flips full; do
+    if ! "$BIN/qdc" optimize --quiet --topology $mode "$TMP/inner.mesh" "$TMP/inner_$mode.mesh" \
+        2> "$TMP/err"; then
+        fail "topology $mode: inner surface" "exit: $(tail -2 "$TMP/err")"
+        continue
+    fi
+    set -- $("$PY" "$TMP/inner.py" check "$TMP/inner_$mode.mesh")
+    if [ "$1" = 300 ] && [ "$2" = 0 ]; then
+        pass "topology $mode: an inner surface of 300 triangles kept, each between two tets"
+    else
+        fail "topology $mode: inner surface" "$1 triangles of ref 99 out, $2 not between two tets"
+    fi
+done
 exit $((NFAIL > 0))

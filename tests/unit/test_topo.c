@@ -1513,7 +1513,100 @@ TEST(split_pass_splits_only_the_long_edges)
     tmesh_free(flat);
 }
 
-TEST_MAIN("topo", T(edge_split_at_the_midpoint), T(edge_split_refused_leaves_the_mesh),
+/* A face inside one region that the caller keeps (tmesh_keep_tris) is
+ * constrained on both sides, with its edges and corners: in the 3-ring around
+ * the z axis, keeping the face (0,1,3) between tets 0 and 1 blocks the removal
+ * of the axis that the same ring allows without it; a triangle that is no face
+ * is passed over. */
+TEST(kept_inner_face_blocks_removal)
+{
+    const int32_t tri[6] = {3, 0, 1, 2, 3, 4}; /* a face, and the ring's triangle */
+    tmesh *tm = ring_mesh(3, -1, 1, NULL);
+    flip_cand c;
+
+    ASSERT_TRUE(tm);
+    ASSERT_EQ_INT(flip_edge_eval(tm, 0, 0, 10, 0.0, -INFINITY, &c), 1);
+    ASSERT_EQ_INT(tm->fcons[0] >> 2 & 1, 0);
+    ASSERT_OK(tmesh_keep_tris(tm, 2, tri));
+    ASSERT_EQ_INT(tm->fcons[0] >> 2 & 1, 1); /* tet 0 (0,1,2,3): face opposite 2 */
+    ASSERT_EQ_INT(tm->fcons[1] >> 3 & 1, 1); /* tet 1 (0,1,3,4): face opposite 4 */
+    ASSERT_EQ_INT(tm->fcons[2] >> 2 & 1, 0); /* tet 2 (0,1,4,2): (0,1,2) not kept */
+    ASSERT_EQ_INT(tm->econs[0] & 1, 1);      /* the axis, an edge of the kept face */
+    ASSERT_EQ_INT(tm->vcons[0] + tm->vcons[1] + tm->vcons[3], 3);
+    ASSERT_TRUE(consistent(tm));
+    ASSERT_EQ_INT(flip_edge_eval(tm, 0, 0, 10, 0.0, -INFINITY, &c), 0);
+    tmesh_free(tm);
+}
+
+/* The live tets of tm that have the three vertices of tri. */
+static int tets_on(const tmesh *tm, const int32_t *tri)
+{
+    int n = 0;
+    for (int32_t t = 0; t < tm->hi; t++) {
+        int k = 0;
+        for (int s = 0; s < 3 && tm->tv[4 * t] >= 0; s++)
+            k += tmesh_local(tm, t, tri[s]) >= 0;
+        n += k == 3;
+    }
+    return n;
+}
+
+/* The faces of the perturbed grid in its middle plane y = 1/2 (inside a region:
+ * a surface the user gave, as an embedded surface or facet tags): kept face
+ * for face through flips, insertion and contraction when kept (each still
+ * between two tets), some of them gone when not. */
+TEST(driver_keeps_an_inner_surface)
+{
+    const int n = 6;
+    mesh_t *m = tm_grid(n, MESH_WITH_REGION);
+    int32_t tri[3 * 6 * 6 * 4];
+    int ntri = 0, lost[2] = {0, 0};
+    topo_params p;
+    topo_stats st;
+
+    ASSERT_TRUE(m);
+    for (int32_t t = 0; t < m->nt; t++)
+        for (int i = 0; i < 4; i++) {
+            int32_t f[3];
+            int on = 1, dup = 0;
+            for (int s = 0; s < 3; s++) {
+                f[s] = m->tets[4 * t + tet_face_of[i][s]];
+                on &= (f[s] / (n + 1)) % (n + 1) == n / 2;
+            }
+            tet_sort3(f[0], f[1], f[2], f);
+            for (int k = 0; k < ntri && on && !dup; k++)
+                dup = !memcmp(tri + 3 * k, f, sizeof f);
+            if (on && !dup && ntri < 6 * 6 * 4) {
+                memcpy(tri + 3 * ntri, f, sizeof f);
+                ntri++;
+            }
+        }
+    ASSERT_EQ_INT(ntri, 2 * n * n); /* two triangles per square of the plane */
+    tm_perturb(m, n, 0.3, 5);
+    topo_params_default(&p);
+    p.qgoal = 0.9;
+    p.insert = p.contract = 1;
+    p.qinsert = 0.5;
+    p.imargin = 1e-3;
+    for (int keep = 0; keep < 2; keep++) {
+        tmesh *tm = NULL;
+        ASSERT_OK(tmesh_new(m->nv, m->xyz, m->nt, m->tets, m->region, NULL, &tm, NULL));
+        if (keep)
+            ASSERT_OK(tmesh_keep_tris(tm, ntri, tri));
+        ASSERT_OK(topo_improve(tm, &p, &st, NULL));
+        ASSERT_TRUE(st.edge_removals + st.flips23 + st.insertions > 0);
+        ASSERT_TRUE(consistent(tm));
+        for (int k = 0; k < ntri; k++)
+            lost[keep] += tets_on(tm, tri + 3 * k) != 2;
+        tmesh_free(tm);
+    }
+    ASSERT_TRUE(lost[0] > 0);
+    ASSERT_EQ_INT(lost[1], 0);
+    mesh_free(m);
+}
+
+TEST_MAIN("topo", T(kept_inner_face_blocks_removal), T(driver_keeps_an_inner_surface),
+          T(edge_split_at_the_midpoint), T(edge_split_refused_leaves_the_mesh),
           T(split_pass_splits_only_the_long_edges),
           T(contraction_keeps_the_volume_exactly),
           T(boundary_contraction_keeps_a_flat_face), T(boundary_flip_2_2_coplanar),
