@@ -838,12 +838,82 @@ static qdc_status build_adjacency(mesh_topo *tp)
     return QDC_OK;
 }
 
-/* The boundary faces (no neighbour) and the interfaces between regions (each
- * once, from the tet of lower index) into tp, in tet order, and their vertices'
- * flags. 64 ranges of tets, each counted, then written, by one thread
- * (serial, the two passes took 0.22 s of setup at 5M tets). */
+/* A boundary triangle and its sorted vertices, for the order of mesh_faces. */
+typedef struct {
+    int32_t s[3];
+    int32_t tri[3];
+} sorted_tri;
+
+static int sorted_tri_cmp(const void *a, const void *b)
+{
+    const int32_t *x = ((const sorted_tri *)a)->s, *y = ((const sorted_tri *)b)->s;
+
+    for (int k = 0; k < 3; k++)
+        if (x[k] != y[k])
+            return x[k] < y[k] ? -1 : 1;
+    return 0;
+}
+
+/* The input's triangles (m->tris) as sorted keys, and a mark on their
+ * vertices: a face inside one region that is among them is a surface the user
+ * gave (an embedded surface, facet tags) and is taken as an interface. */
+typedef struct {
+    int32_t n;
+    sorted_tri *key;
+    uint8_t *mark;
+} tri_set;
+
+static qdc_status tri_set_build(const mesh_t *m, tri_set *ts)
+{
+    ts->n = 0;
+    ts->key = NULL;
+    ts->mark = NULL;
+    if (m->ntri <= 0 || !m->tris)
+        return QDC_OK;
+    ts->key = qdc_mallocn((size_t)m->ntri, sizeof *ts->key);
+    ts->mark = qdc_calloc((size_t)m->nv, 1);
+    if (!ts->key || !ts->mark)
+        return QDC_ENOMEM;
+    for (int32_t i = 0; i < m->ntri; i++) {
+        const int32_t *tr = m->tris + 3 * (size_t)i;
+        if (tr[0] < 0 || tr[0] >= m->nv || tr[1] < 0 || tr[1] >= m->nv || tr[2] < 0 ||
+            tr[2] >= m->nv)
+            continue;
+        tet_sort3(tr[0], tr[1], tr[2], ts->key[ts->n].s);
+        for (int k = 0; k < 3; k++)
+            ts->mark[tr[k]] = 1;
+        ts->n++;
+    }
+    qsort(ts->key, (size_t)ts->n, sizeof *ts->key, sorted_tri_cmp);
+    return QDC_OK;
+}
+
+static void tri_set_free(tri_set *ts)
+{
+    qdc_free(ts->key);
+    qdc_free(ts->mark);
+}
+
+/* 1 when face f of tet tt is one of ts's triangles. */
+static int tri_set_has(const tri_set *ts, const int32_t *tt, int f)
+{
+    int32_t a = tt[tet_face_of[f][0]], b = tt[tet_face_of[f][1]],
+            c = tt[tet_face_of[f][2]];
+    sorted_tri k;
+
+    if (ts->n == 0 || !ts->mark[a] || !ts->mark[b] || !ts->mark[c])
+        return 0;
+    tet_sort3(a, b, c, k.s);
+    return bsearch(&k, ts->key, (size_t)ts->n, sizeof *ts->key, sorted_tri_cmp) != NULL;
+}
+
+/* The boundary faces (no neighbour) and the interfaces between regions or
+ * given as the input's triangles (ts; each once, from the tet of lower index) into tp, in
+ * tet order, and their vertices' flags. 64 ranges of tets, each counted, then written, by
+ * one thread (serial, the two passes took 0.22 s of setup at 5M tets). */
 #define FACE_RANGES 64
-static qdc_status collect_faces(const mesh_t *m, mesh_topo *tp, const int32_t *nbr)
+static qdc_status collect_faces(const mesh_t *m, mesh_topo *tp, const int32_t *nbr,
+                                const tri_set *ts)
 {
     int32_t cnt[2 * FACE_RANGES] = {0};
 
@@ -857,8 +927,9 @@ static qdc_status collect_faces(const mesh_t *m, mesh_topo *tp, const int32_t *n
                 for (int f = 0; f < 4; f++) {
                     int32_t o = nbr[4 * (size_t)t + f];
                     int is_b = o < 0;
-                    int is_i = !is_b && m->region && o > 4 * t &&
-                               m->region[t] != m->region[o >> 2];
+                    int is_i = !is_b && o > 4 * t &&
+                               ((m->region && m->region[t] != m->region[o >> 2]) ||
+                                tri_set_has(ts, tp->tets + 4 * (size_t)t, f));
                     if (!is_b && !is_i)
                         continue;
                     if (pass == 1) {
@@ -971,7 +1042,13 @@ qdc_status mesh_topo_build(const mesh_t *m, mesh_topo **out, qdc_error *err)
     st = build_adjacency(tp);
     if (st != QDC_OK)
         goto fail;
-    st = collect_faces(m, tp, nbr);
+    {
+        tri_set ts;
+        st = tri_set_build(m, &ts);
+        if (st == QDC_OK)
+            st = collect_faces(m, tp, nbr, &ts);
+        tri_set_free(&ts);
+    }
     if (st != QDC_OK)
         goto fail;
     for (int32_t v = 0; v < m->nv; v++) {
@@ -1025,22 +1102,6 @@ void mesh_faces_free(mesh_faces *f)
     qdc_free(f->flip);
     qdc_free(f->tris);
     qdc_free(f);
-}
-
-/* A boundary triangle and its sorted vertices, for the order of mesh_faces. */
-typedef struct {
-    int32_t s[3];
-    int32_t tri[3];
-} sorted_tri;
-
-static int sorted_tri_cmp(const void *a, const void *b)
-{
-    const int32_t *x = ((const sorted_tri *)a)->s, *y = ((const sorted_tri *)b)->s;
-
-    for (int k = 0; k < 3; k++)
-        if (x[k] != y[k])
-            return x[k] < y[k] ? -1 : 1;
-    return 0;
 }
 
 qdc_status mesh_faces_of_topo(const mesh_topo *tp, const int32_t *tets,

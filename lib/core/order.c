@@ -186,6 +186,18 @@ mesh_t *mesh_order_apply(const mesh_t *m, const mesh_order *o)
         if (m->region)
             p->region[t] = m->region[s];
     }
+    /* the triangles (renumbered; an index out of range as -1): a face inside
+     * a region among them is a surface the user gave (mesh_topo_build) */
+    if (m->ntri > 0 && m->tris) {
+        if (mesh_set_tris(p, m->ntri, 0) != QDC_OK) {
+            mesh_free(p);
+            return NULL;
+        }
+        for (size_t k = 0; k < 3 * (size_t)m->ntri; k++) {
+            int32_t v = m->tris[k];
+            p->tris[k] = v >= 0 && v < m->nv ? o->vnew[v] : -1;
+        }
+    }
     return p;
 }
 

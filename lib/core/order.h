@@ -21,9 +21,9 @@ typedef struct {
  * keys at 0, an order still valid). QDC_ENOMEM, or QDC_EINVAL for an index out
  * of range. */
 qdc_status mesh_order_build(const mesh_t *m, mesh_order *o);
-/* A copy of m's coordinates, tets, regions and fixed flags in the new
- * numbering (vertex refs, triangles and the source are not copied); NULL if
- * out of memory. */
+/* A copy of m's coordinates, tets, regions, fixed flags and triangles (not
+ * their refs) in the new numbering (vertex refs and the source are not
+ * copied); NULL if out of memory. */
 mesh_t *mesh_order_apply(const mesh_t *m, const mesh_order *o);
 /* mesh_order_apply, moving m's tets and regions instead of copying them:
  * m holds NULL in their place until mesh_order_give_back (its coordinates,
