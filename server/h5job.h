@@ -13,7 +13,7 @@
 /* What the worker leaves beside the upload: the mesh as qdc-h5 read it, the
  * source of the job's results. A MED job's: the framed form of
  * lib/io/meshio_med.c, read as MED; an XDMF+HDF5 job's: the XML and the
- * frames of its datasets (meshio_xdmf_h5_input), read as XDMF. */
+ * frames of its datasets (meshio_xdmf_h5_fill), read as XDMF. */
 #define H5JOB_FRAMES "input.frames"
 /* An XDMF+HDF5 job's two files (upload.c stores them so): the XML, whose
  * references name JOB_INPUT_H5, and the .h5 file as it was sent. */
