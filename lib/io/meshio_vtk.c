@@ -203,15 +203,6 @@ static inline int is_int32(double x)
     return int_in(x, INT32_MIN, INT32_MAX);
 }
 
-/* 1 if every a[i] is an integer in [lo, hi]. */
-static int all_in(const double *a, int64_t n, double lo, double hi)
-{
-    for (int64_t i = 0; i < n; i++)
-        if (!int_in(a[i], lo, hi))
-            return 0;
-    return 1;
-}
-
 /* Where cell i's points are: conn[*a .. *a + *k). The legacy list (no
  * offsets) is walked with *pos. -1 if the list ends inside a cell. */
 static int cell_span(const cells *c, int64_t i, int64_t *pos, int64_t *a, int64_t *k)
@@ -268,18 +259,38 @@ static qdc_status mixed_order(const char *fmtname, int64_t i, qdc_error *err)
     return QDC_EFORMAT;
 }
 
-/* One walk over the cells: without fill, every check and the counts of
- * tets and triangles (*nt, *ntri) and skipped types (sk); with fill (arrays
- * sized by the first walk), their points and regions. Point indices and
- * regions are checked for the whole array at once; only if that fails, per
- * cell (so the error names the first bad cell as before). */
+/* Room for the cells a walk keeps: tets and triangles, at most nc of each
+ * (the limits' worth), their regions; mid-edge nodes once a second-order tet
+ * is seen. Pages the walk never writes are never touched. */
+typedef struct {
+    int64_t tcap, tricap;
+} cells_room;
+
+static qdc_status cells_alloc(const cells *c, parsed *pm, cells_room *r, qdc_error *err)
+{
+    r->tcap = c->nc < MESH_MAX_TETS ? c->nc : MESH_MAX_TETS;
+    r->tricap = c->nc < INT32_MAX / 3 ? c->nc : INT32_MAX / 3;
+    pm->tets = qdc_mallocn((size_t)r->tcap * 4 + 1, sizeof(int32_t));
+    pm->tris = qdc_mallocn((size_t)r->tricap * 3 + 1, sizeof(int32_t));
+    if (c->creg) {
+        pm->region = qdc_mallocn((size_t)r->tcap + 1, sizeof(int32_t));
+        pm->tri_ref = qdc_mallocn((size_t)r->tricap + 1, sizeof(int32_t));
+    }
+    if (!pm->tets || !pm->tris || (c->creg && (!pm->region || !pm->tri_ref)))
+        return qdc_fail(err, QDC_ENOMEM, "out of memory for %lld cells",
+                        (long long)c->nc);
+    return QDC_OK;
+}
+
+/* One walk over the cells: every check, the counts of tets and triangles
+ * (*nt, *ntri) and skipped types (sk), and the kept cells' points and regions
+ * into fill (arrays from cells_alloc; cells past their room are counted, not
+ * stored: the caller then fails on the limit). */
 static qdc_status cells_walk(const cells *c, const char *fmtname, parsed *fill,
-                             skipped *sk, int64_t *nt, int64_t *ntri, int64_t *n10,
-                             qdc_error *err)
+                             const cells_room *r, skipped *sk, int64_t *nt, int64_t *ntri,
+                             int64_t *n10, qdc_error *err)
 {
     int64_t pos = 0, n4 = 0, n3 = 0, nq = 0;
-    int idx_ok = fill || all_in(c->conn, c->nconn, 0, (double)c->nv - 1);
-    int reg_ok = fill || !c->creg || all_in(c->creg, c->nc, INT32_MIN, INT32_MAX);
 
     for (int64_t i = 0; i < c->nc; i++) {
         int64_t a, k, type;
@@ -292,6 +303,12 @@ static qdc_status cells_walk(const cells *c, const char *fmtname, parsed *fill,
         if ((type == 24 || type == 71) && k == 10) {
             if (n4 > nq)
                 return mixed_order(fmtname, i, err);
+            if (!fill->mid) { /* the first tet: all are second-order */
+                fill->mid = qdc_mallocn((size_t)r->tcap * 6 + 1, sizeof(int32_t));
+                if (!fill->mid)
+                    return qdc_fail(err, QDC_ENOMEM, "out of memory for %lld cells",
+                                    (long long)c->nc);
+            }
             k = 4;
             nq++;
         } else if (type == 24 || type == 71) { /* corners alone would break them */
@@ -307,20 +324,18 @@ static qdc_status cells_walk(const cells *c, const char *fmtname, parsed *fill,
         } else if (type == 10 && nq) {
             return mixed_order(fmtname, i, err);
         } else if (!((type == 10 && k == 4) || (type == 5 && k == 3))) {
-            if (!fill)
-                skip_count(sk, type, 1);
+            skip_count(sk, type, 1);
             continue;
         }
-        if (!idx_ok &&
-            check_points(c, fmtname, i, a, nq && k == 4 ? 10 : k, err) != QDC_OK)
+        if (check_points(c, fmtname, i, a, nq && k == 4 ? 10 : k, err) != QDC_OK)
             return QDC_EPARSE;
-        if (!reg_ok && !is_int32(c->creg[i])) {
+        if (c->creg && !is_int32(c->creg[i])) {
             qdc_fail(err, QDC_EPARSE, "%s: cell %lld: region %.17g is not an int32",
                      fmtname, (long long)i, c->creg[i]);
             set_index(err, "cell", i);
             return QDC_EPARSE;
         }
-        if (fill) {
+        if (k == 4 ? n4 < r->tcap : n3 < r->tricap) {
             int32_t *dst = k == 4 ? fill->tets + 4 * n4 : fill->tris + 3 * n3;
             for (int64_t j = 0; j < k; j++)
                 dst[j] = (int32_t)c->conn[a + j];
@@ -341,26 +356,12 @@ static qdc_status cells_walk(const cells *c, const char *fmtname, parsed *fill,
     return QDC_OK;
 }
 
-/* Arrays for nt tets and ntri triangles (and their regions). */
-static qdc_status cells_alloc(const cells *c, parsed *pm, int64_t nt, int64_t ntri,
-                              int64_t n10, const char *fmtname, qdc_error *err)
+/* *p (n32 int32s' room) cut to n used ones; kept as is if that fails. */
+static void shrink32(int32_t **p, int64_t n)
 {
-    if (nt > MESH_MAX_TETS || ntri > INT32_MAX / 3)
-        return qdc_fail(err, QDC_ETOOBIG, "%s: %lld tets exceed the limit", fmtname,
-                        (long long)nt);
-    pm->tets = qdc_mallocn((size_t)nt * 4 + 1, sizeof(int32_t));
-    pm->tris = qdc_mallocn((size_t)ntri * 3 + 1, sizeof(int32_t));
-    if (c->creg) {
-        pm->region = qdc_mallocn((size_t)nt + 1, sizeof(int32_t));
-        pm->tri_ref = qdc_mallocn((size_t)ntri + 1, sizeof(int32_t));
-    }
-    if (n10)
-        pm->mid = qdc_mallocn((size_t)nt * 6 + 1, sizeof(int32_t));
-    if (!pm->tets || !pm->tris || (c->creg && (!pm->region || !pm->tri_ref)) ||
-        (n10 && !pm->mid))
-        return qdc_fail(err, QDC_ENOMEM, "out of memory for %lld cells",
-                        (long long)c->nc);
-    return QDC_OK;
+    int32_t *q = *p ? qdc_realloc(*p, ((size_t)n + 1) * sizeof(int32_t)) : NULL;
+    if (q)
+        *p = q;
 }
 
 /* The point array medit:ref, if any, as vertex refs. */
@@ -389,6 +390,7 @@ static qdc_status cells_mesh(cells *c, const char *fmtname, const meshio_options
 {
     parsed pm;
     skipped sk;
+    cells_room room;
     int64_t nt = 0, ntri = 0, n10 = 0;
     qdc_status st;
 
@@ -396,11 +398,19 @@ static qdc_status cells_mesh(cells *c, const char *fmtname, const meshio_options
     parsed_init(&pm);
     if (!c->types && c->nc)
         return qdc_fail(err, QDC_EPARSE, "%s: no cell types", fmtname);
-    st = cells_walk(c, fmtname, NULL, &sk, &nt, &ntri, &n10, err);
+    st = cells_alloc(c, &pm, &room, err);
     if (st == QDC_OK)
-        st = cells_alloc(c, &pm, nt, ntri, n10, fmtname, err);
-    if (st == QDC_OK)
-        st = cells_walk(c, fmtname, &pm, NULL, &nt, &ntri, &n10, err);
+        st = cells_walk(c, fmtname, &pm, &room, &sk, &nt, &ntri, &n10, err);
+    if (st == QDC_OK && (nt > MESH_MAX_TETS || ntri > INT32_MAX / 3))
+        st = qdc_fail(err, QDC_ETOOBIG, "%s: %lld tets exceed the limit", fmtname,
+                      (long long)nt);
+    if (st == QDC_OK) {
+        shrink32(&pm.tets, 4 * nt);
+        shrink32(&pm.tris, 3 * ntri);
+        shrink32(&pm.region, nt);
+        shrink32(&pm.tri_ref, ntri);
+        shrink32(&pm.mid, n10 ? 6 * nt : 0);
+    }
     if (st == QDC_OK)
         st = cells_vref(c, fmtname, &pm, err);
     if (st == QDC_OK) {
