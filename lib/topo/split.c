@@ -69,8 +69,7 @@ qdc_status split_edge(tmesh *tm, int32_t t, int e, double qfrac, int *done,
 
 void split_undo(tmesh *tm)
 {
-    tmesh_rollback(tm);
-    tm->nv--;
+    insert_undo(tm); /* the same undo: the journal, then the vertex added last */
 }
 
 typedef struct {
