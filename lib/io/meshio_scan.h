@@ -303,13 +303,17 @@ static inline int parse_fortran_real(const char *t, const char *te, double *out)
     }
     if (n + 2 > sizeof tmp)
         return -1;
-    for (size_t i = 0; i < n; i++) {
+    /* one exponent marker at most: a second is left as it is and fails the
+     * syntax check, so tmp holds n + 1 characters at most */
+    for (size_t i = 0, marked = 0; i < n; i++) {
         char c = t[i];
-        if (c == 'D' || c == 'd') {
+        if ((c == 'D' || c == 'd') && !marked) {
             c = 'e';
-        } else if ((c == '+' || c == '-') && i > 0 &&
+            marked = 1;
+        } else if ((c == '+' || c == '-') && i > 0 && !marked &&
                    ((t[i - 1] >= '0' && t[i - 1] <= '9') || t[i - 1] == '.')) {
             tmp[k++] = 'e';
+            marked = 1;
         }
         tmp[k++] = c;
     }

@@ -175,6 +175,13 @@ TEST(bdf_refusals)
             "not finite");
     refused(small, MESHIO_BDF, "1.      1.      1.", "1.      1.x     1.", QDC_EPARSE, 9,
             "expected a number, got '1.x'");
+    /* two exponents, and a free field long enough that each would have
+     * overrun the buffer the reader rewrites the number in */
+    refused(freef, MESHIO_BDF, "GRID,40,,0.,0.,1.", "GRID,40,,0.,0.,1.-3-4", QDC_EPARSE,
+            6, "expected a number, got '1.-3-4'");
+    refused(freef, MESHIO_BDF, "GRID,40,,0.,0.,1.",
+            "GRID,40,,0.,0.,1.-1-2-3-4-5-6-7-8-9-1-2-3-4-5-6-7-8-9-1-2-3-4-5-6-7-8",
+            QDC_EPARSE, 6, "expected a number");
     refused(small, MESHIO_BDF, "GRID    30", "GRID    10", QDC_EPARSE, 7,
             "GRID 10 appears twice");
     refused(small, MESHIO_BDF, "30      40\nCTRIA3", "30      40      60\nCTRIA3",
