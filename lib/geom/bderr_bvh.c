@@ -2,6 +2,7 @@
  * closest-point queries (bderr_int.h): the boundary error and the sliding
  * boundary mode. */
 #include "geom/bderr_int.h"
+#include "geom/vec3.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -9,18 +10,6 @@
 
 /* ------------------------------------------------------------------------ */
 /* Small vector helpers                                                      */
-
-static void sub3(double r[3], const double a[3], const double b[3])
-{
-    r[0] = a[0] - b[0];
-    r[1] = a[1] - b[1];
-    r[2] = a[2] - b[2];
-}
-
-static double dot3(const double a[3], const double b[3])
-{
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
 
 /* r = a + s * d */
 static void axpy3(double r[3], const double a[3], double s, const double d[3])
@@ -34,8 +23,8 @@ static double dist2(const double a[3], const double b[3])
 {
     double d[3];
 
-    sub3(d, a, b);
-    return dot3(d, d);
+    vec3_sub(a, b, d);
+    return vec3_dot(d, d);
 }
 
 /* ------------------------------------------------------------------------ */
@@ -47,10 +36,10 @@ static double closest_on_segment(const double p[3], const double a[3], const dou
 {
     double ab[3], ap[3], len2, t;
 
-    sub3(ab, b, a);
-    sub3(ap, p, a);
-    len2 = dot3(ab, ab);
-    t = len2 > 0 ? dot3(ap, ab) / len2 : 0;
+    vec3_sub(b, a, ab);
+    vec3_sub(p, a, ap);
+    len2 = vec3_dot(ab, ab);
+    t = len2 > 0 ? vec3_dot(ap, ab) / len2 : 0;
     t = t < 0 ? 0 : t > 1 ? 1 : t;
     axpy3(q, a, t, ab);
     return dist2(p, q);
@@ -67,18 +56,18 @@ static double closest_on_triangle(const double p[3], const double a[3], const do
     double ab[3], ac[3], ap[3], bp[3], cp[3], bc[3];
     double d1, d2, d3, d4, d5, d6, va, vb, vc, den, v, w;
 
-    sub3(ab, b, a);
-    sub3(ac, c, a);
-    sub3(ap, p, a);
-    d1 = dot3(ab, ap);
-    d2 = dot3(ac, ap);
+    vec3_sub(b, a, ab);
+    vec3_sub(c, a, ac);
+    vec3_sub(p, a, ap);
+    d1 = vec3_dot(ab, ap);
+    d2 = vec3_dot(ac, ap);
     if (d1 <= 0 && d2 <= 0) {
         memcpy(q, a, 3 * sizeof(double));
         return dist2(p, q);
     }
-    sub3(bp, p, b);
-    d3 = dot3(ab, bp);
-    d4 = dot3(ac, bp);
+    vec3_sub(p, b, bp);
+    d3 = vec3_dot(ab, bp);
+    d4 = vec3_dot(ac, bp);
     if (d3 >= 0 && d4 <= d3) {
         memcpy(q, b, 3 * sizeof(double));
         return dist2(p, q);
@@ -88,9 +77,9 @@ static double closest_on_triangle(const double p[3], const double a[3], const do
         axpy3(q, a, d1 / (d1 - d3), ab);
         return dist2(p, q);
     }
-    sub3(cp, p, c);
-    d5 = dot3(ab, cp);
-    d6 = dot3(ac, cp);
+    vec3_sub(p, c, cp);
+    d5 = vec3_dot(ab, cp);
+    d6 = vec3_dot(ac, cp);
     if (d6 >= 0 && d5 <= d6) {
         memcpy(q, c, 3 * sizeof(double));
         return dist2(p, q);
@@ -102,7 +91,7 @@ static double closest_on_triangle(const double p[3], const double a[3], const do
     }
     va = d3 * d6 - d5 * d4;
     if (va <= 0 && d4 - d3 >= 0 && d5 - d6 >= 0 && (d4 - d3) + (d5 - d6) > 0) {
-        sub3(bc, c, b);
+        vec3_sub(c, b, bc);
         axpy3(q, b, (d4 - d3) / ((d4 - d3) + (d5 - d6)), bc);
         return dist2(p, q);
     }

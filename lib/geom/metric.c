@@ -1,30 +1,12 @@
 /* metric.c - per-tet quality metrics (paper Sec. 3.1, docs/method.md §2-§3). */
 #include "core/tet.h"
 #include "geom/metric_int.h"
+#include "geom/vec3.h"
 
 #include <math.h>
 #include <string.h>
 
 #define SQRT2 1.4142135623730951
-
-static void sub3(const double *a, const double *b, double *o)
-{
-    o[0] = a[0] - b[0];
-    o[1] = a[1] - b[1];
-    o[2] = a[2] - b[2];
-}
-
-static void cross3(const double *a, const double *b, double *o)
-{
-    o[0] = a[1] * b[2] - a[2] * b[1];
-    o[1] = a[2] * b[0] - a[0] * b[2];
-    o[2] = a[0] * b[1] - a[1] * b[0];
-}
-
-static double dot3(const double *a, const double *b)
-{
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
 
 /* Volume and squared edge lengths: all that MIMR and MIVL need. */
 static void parts_basic(const double *p0, const double *p1, const double *p2,
@@ -32,16 +14,16 @@ static void parts_basic(const double *p0, const double *p1, const double *p2,
 {
     double e01[3], e02[3], e03[3], e12[3], e13[3], e23[3], n1[3];
 
-    sub3(p1, p0, e01);
-    sub3(p2, p0, e02);
-    sub3(p3, p0, e03);
-    sub3(p2, p1, e12);
-    sub3(p3, p1, e13);
-    sub3(p3, p2, e23);
-    cross3(e02, e03, n1); /* face 0 2 3 */
-    out->vol = dot3(e01, n1) / 6.0;
-    out->l2sum = dot3(e01, e01) + dot3(e02, e02) + dot3(e03, e03) + dot3(e12, e12) +
-                 dot3(e13, e13) + dot3(e23, e23);
+    vec3_sub(p1, p0, e01);
+    vec3_sub(p2, p0, e02);
+    vec3_sub(p3, p0, e03);
+    vec3_sub(p2, p1, e12);
+    vec3_sub(p3, p1, e13);
+    vec3_sub(p3, p2, e23);
+    vec3_cross(e02, e03, n1); /* face 0 2 3 */
+    out->vol = vec3_dot(e01, n1) / 6.0;
+    out->l2sum = vec3_dot(e01, e01) + vec3_dot(e02, e02) + vec3_dot(e03, e03) +
+                 vec3_dot(e12, e12) + vec3_dot(e13, e13) + vec3_dot(e23, e23);
     out->adj2 = 0.0;
 }
 
@@ -51,18 +33,18 @@ void metric_parts_of(const double *p0, const double *p1, const double *p2,
     double e01[3], e02[3], e03[3], e12[3], e13[3], n[4][3];
 
     parts_basic(p0, p1, p2, p3, out);
-    sub3(p1, p0, e01);
-    sub3(p2, p0, e02);
-    sub3(p3, p0, e03);
-    sub3(p2, p1, e12);
-    sub3(p3, p1, e13);
-    cross3(e12, e13, n[0]);
-    cross3(e02, e03, n[1]);
-    cross3(e01, e03, n[2]);
-    cross3(e01, e02, n[3]);
+    vec3_sub(p1, p0, e01);
+    vec3_sub(p2, p0, e02);
+    vec3_sub(p3, p0, e03);
+    vec3_sub(p2, p1, e12);
+    vec3_sub(p3, p1, e13);
+    vec3_cross(e12, e13, n[0]);
+    vec3_cross(e02, e03, n[1]);
+    vec3_cross(e01, e03, n[2]);
+    vec3_cross(e01, e02, n[3]);
     /* |n|^2 = 4 area^2, so 4 * sum area^2 = sum |n|^2 */
     for (int f = 0; f < 4; f++)
-        out->adj2 += dot3(n[f], n[f]);
+        out->adj2 += vec3_dot(n[f], n[f]);
 }
 
 void metric_parts_for(opt_metric m, const double *p0, const double *p1, const double *p2,
@@ -152,9 +134,9 @@ double metric_qt_grad(opt_metric m, const double *p12, int a, double delta, doub
         f0 = p[fi[0]];
         f1 = p[fi[1]];
         f2 = p[fi[2]];
-        sub3(f1, f0, e1);
-        sub3(f2, f0, e2);
-        cross3(e1, e2, nf);
+        vec3_sub(f1, f0, e1);
+        vec3_sub(f2, f0, e2);
+        vec3_cross(e1, e2, nf);
         for (int k = 0; k < 3; k++)
             dvol[k] = -nf[k] / 6.0;
     }
@@ -189,11 +171,11 @@ double metric_qt_grad(opt_metric m, const double *p12, int a, double delta, doub
                 b = v0;
                 c = v1;
             }
-            sub3(p[b], p[a], e1);
-            sub3(p[c], p[a], e2);
-            cross3(e1, e2, n);
-            sub3(p[b], p[c], bc);
-            cross3(bc, n, t);
+            vec3_sub(p[b], p[a], e1);
+            vec3_sub(p[c], p[a], e2);
+            vec3_cross(e1, e2, n);
+            vec3_sub(p[b], p[c], bc);
+            vec3_cross(bc, n, t);
             for (int k = 0; k < 3; k++)
                 dadj[k] += 2.0 * t[k];
         }
@@ -224,20 +206,20 @@ double metric_qt_hess_face(opt_metric m, const double *pa, const double *f0,
         q;
     double al, be, cv, iA, ih, cvv;
 
-    sub3(f1, f0, e1);
-    sub3(f2, f0, e2);
-    sub3(pa, f0, d0);
-    sub3(pa, f1, d1);
-    sub3(pa, f2, d2);
-    cross3(e1, e2, dV);
+    vec3_sub(f1, f0, e1);
+    vec3_sub(f2, f0, e2);
+    vec3_sub(pa, f0, d0);
+    vec3_sub(pa, f1, d1);
+    vec3_sub(pa, f2, d2);
+    vec3_cross(e1, e2, dV);
     for (int k = 0; k < 3; k++) {
         dV[k] *= -1.0 / 6.0;
         dA[k] = 2.0 * (d0[k] + d1[k] + d2[k]);
     }
-    V = dot3(dV, d0);
-    A = dot3(d0, d0) + dot3(d1, d1) + dot3(d2, d2) + dot3(e1, e1) + dot3(e2, e2) +
-        (e2[0] - e1[0]) * (e2[0] - e1[0]) + (e2[1] - e1[1]) * (e2[1] - e1[1]) +
-        (e2[2] - e1[2]) * (e2[2] - e1[2]);
+    V = vec3_dot(dV, d0);
+    A = vec3_dot(d0, d0) + vec3_dot(d1, d1) + vec3_dot(d2, d2) + vec3_dot(e1, e1) +
+        vec3_dot(e2, e2) + (e2[0] - e1[0]) * (e2[0] - e1[0]) +
+        (e2[1] - e1[1]) * (e2[1] - e1[1]) + (e2[2] - e1[2]) * (e2[2] - e1[2]);
     vl[0] = V;
     vl[1] = A;
     if (m == OPT_METRIC_MIVL) {
@@ -353,16 +335,16 @@ static int face_area_vectors(const double *p0, const double *p1, const double *p
     double ab[3], ac[3], ad[3];
     int degenerate = 0;
 
-    sub3(p1, p0, ab);
-    sub3(p2, p0, ac);
-    sub3(p3, p0, ad);
-    cross3(ac, ad, g[1]);
-    cross3(ad, ab, g[2]);
-    cross3(ab, ac, g[3]);
+    vec3_sub(p1, p0, ab);
+    vec3_sub(p2, p0, ac);
+    vec3_sub(p3, p0, ad);
+    vec3_cross(ac, ad, g[1]);
+    vec3_cross(ad, ab, g[2]);
+    vec3_cross(ab, ac, g[3]);
     for (int k = 0; k < 3; k++)
         g[0][k] = -(g[1][k] + g[2][k] + g[3][k]);
     for (int f = 0; f < 4; f++) {
-        len[f] = sqrt(dot3(g[f], g[f]));
+        len[f] = sqrt(vec3_dot(g[f], g[f]));
         degenerate |= !(len[f] > 0.0);
     }
     return degenerate;
@@ -371,7 +353,7 @@ static int face_area_vectors(const double *p0, const double *p1, const double *p
 static double dihedral_cos(double g[4][3], const double len[4], int e)
 {
     int k = dihedral_opp[e][0], l = dihedral_opp[e][1];
-    double c = -dot3(g[k], g[l]) / (len[k] * len[l]);
+    double c = -vec3_dot(g[k], g[l]) / (len[k] * len[l]);
     return c > 1.0 ? 1.0 : (c < -1.0 ? -1.0 : c);
 }
 
@@ -391,7 +373,7 @@ void metric_dihedral_cos_range(const double *p0, const double *p1, const double 
         il[f] = 1.0 / len[f];
     for (int e = 0; e < 6; e++) {
         int k = dihedral_opp[e][0], l = dihedral_opp[e][1];
-        double c = -dot3(g[k], g[l]) * il[k] * il[l];
+        double c = -vec3_dot(g[k], g[l]) * il[k] * il[l];
         lo = c < lo ? c : lo;
         hi = c > hi ? c : hi;
     }
@@ -434,16 +416,16 @@ double metric_dihedral_sines_eta3(const double *p0, const double *p1, const doub
     double g[4][3], len[4], il[4], ad[3], det, l2sum = 0.0;
 
     face_area_vectors(p0, p1, p2, p3, g, len);
-    sub3(p3, p0, ad);
-    det = dot3(g[3], ad); /* 6 V */
+    vec3_sub(p3, p0, ad);
+    det = vec3_dot(g[3], ad); /* 6 V */
     for (int f = 0; f < 4; f++)
         il[f] = len[f] > 0.0 ? 1.0 / len[f] : 0.0;
     for (int e = 0; e < 6; e++) {
         int k = dihedral_opp[e][0], l = dihedral_opp[e][1];
         double d[3];
         double l2;
-        sub3(p[ends[e][1]], p[ends[e][0]], d);
-        l2 = dot3(d, d);
+        vec3_sub(p[ends[e][1]], p[ends[e][0]], d);
+        l2 = vec3_dot(d, d);
         l2sum += l2;
         /* sin = 3 V l / (2 A_k A_l) with |g| = 2 A; 0 on a degenerate face */
         s[e] = det * sqrt(l2) * il[k] * il[l];
@@ -465,10 +447,10 @@ double metric_alpha_opt(opt_metric m, const double *f0, const double *f1,
 {
     double e01[3], e02[3], e12[3], F;
 
-    sub3(f1, f0, e01);
-    sub3(f2, f0, e02);
-    sub3(f2, f1, e12);
-    F = dot3(e01, e01) + dot3(e02, e02) + dot3(e12, e12);
+    vec3_sub(f1, f0, e01);
+    vec3_sub(f2, f0, e02);
+    vec3_sub(f2, f1, e12);
+    F = vec3_dot(e01, e01) + vec3_dot(e02, e02) + vec3_dot(e12, e12);
     if (m != OPT_METRIC_MICN)
         return sqrt(2.0 * F / 9.0); /* MIMR, MIVL: alpha^2 = N0 / (2 N2) */
     {
@@ -478,9 +460,9 @@ double metric_alpha_opt(opt_metric m, const double *f0, const double *f1,
         double pc[3], n[3], len, p[3];
         metric_parts a0, a1;
         double N0, N2, C0, C2;
-        cross3(e01, e02,
-               n); /* this face ordering: normal points away from the free vertex */
-        len = sqrt(dot3(n, n));
+        vec3_cross(e01, e02,
+                   n); /* this face ordering: normal points away from the free vertex */
+        len = sqrt(vec3_dot(n, n));
         if (!(len > 0.0))
             return 0.0;
         for (int k = 0; k < 3; k++) {

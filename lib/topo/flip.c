@@ -4,6 +4,7 @@
 
 #include "core/tet.h"
 #include "geom/bderr_int.h"
+#include "geom/vec3.h"
 
 #include <math.h>
 #include <string.h>
@@ -202,25 +203,6 @@ int flip_edge_eval(const tmesh *tm, int32_t t, int e, int maxring, double floor4
     return 1;
 }
 
-static void sub3(const double *p, const double *q, double *r)
-{
-    r[0] = p[0] - q[0];
-    r[1] = p[1] - q[1];
-    r[2] = p[2] - q[2];
-}
-
-static void cross3(const double *u, const double *v, double *r)
-{
-    r[0] = u[1] * v[2] - u[2] * v[1];
-    r[1] = u[2] * v[0] - u[0] * v[2];
-    r[2] = u[0] * v[1] - u[1] * v[0];
-}
-
-static double dot3(const double *u, const double *v)
-{
-    return u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
-}
-
 /* The distance from p to the triangle (a, b, c). */
 static double point_tri(const double *p, const double *a, const double *b,
                         const double *c)
@@ -248,36 +230,36 @@ static double quad_dev(const tmesh *tm, int32_t a, int32_t b, int32_t c, int32_t
     double ab[3], cd[3], ac[3], ad[3], ca[3], cb[3], n[3], w[3], n1[3], n2[3], ba[3],
         bd[3], s1, s2, s3, s4, l1, l2, hn, ho, slab;
 
-    sub3(pb, pa, ab);
-    sub3(pd, pc, cd);
-    sub3(pc, pa, ac);
-    sub3(pd, pa, ad);
-    sub3(pa, pc, ca);
-    sub3(pb, pc, cb);
+    vec3_sub(pb, pa, ab);
+    vec3_sub(pd, pc, cd);
+    vec3_sub(pc, pa, ac);
+    vec3_sub(pd, pa, ad);
+    vec3_sub(pa, pc, ca);
+    vec3_sub(pb, pc, cb);
     /* ab and cd crossing seen along n = ab x cd (a convex quad): each surface
      * is a graph over the quad along n, so each point of one is within the
      * slab width |ac . n| / |n| = 6V / |ab x cd| of the other */
-    cross3(ab, cd, n);
-    cross3(ab, ac, w);
-    s1 = dot3(w, n);
-    cross3(ab, ad, w);
-    s2 = dot3(w, n);
-    cross3(cd, ca, w);
-    s3 = dot3(w, n);
-    cross3(cd, cb, w);
-    s4 = dot3(w, n);
-    slab = s1 * s2 < 0.0 && s3 * s4 < 0.0 && dot3(n, n) > 0.0
-               ? fabs(dot3(ac, n)) / sqrt(dot3(n, n))
+    vec3_cross(ab, cd, n);
+    vec3_cross(ab, ac, w);
+    s1 = vec3_dot(w, n);
+    vec3_cross(ab, ad, w);
+    s2 = vec3_dot(w, n);
+    vec3_cross(cd, ca, w);
+    s3 = vec3_dot(w, n);
+    vec3_cross(cd, cb, w);
+    s4 = vec3_dot(w, n);
+    slab = s1 * s2 < 0.0 && s3 * s4 < 0.0 && vec3_dot(n, n) > 0.0
+               ? fabs(vec3_dot(ac, n)) / sqrt(vec3_dot(n, n))
                : INFINITY;
     if (convex && slab == INFINITY)
         return -1.0;
-    sub3(pa, pb, ba);
-    sub3(pd, pb, bd);
-    cross3(ab, ac, n1);
-    cross3(ba, bd, n2);
-    l1 = sqrt(dot3(n1, n1));
-    l2 = sqrt(dot3(n2, n2));
-    if (!(l1 > 0.0 && l2 > 0.0) || dot3(n1, n2) < cos_feature * l1 * l2)
+    vec3_sub(pa, pb, ba);
+    vec3_sub(pd, pb, bd);
+    vec3_cross(ab, ac, n1);
+    vec3_cross(ba, bd, n2);
+    l1 = sqrt(vec3_dot(n1, n1));
+    l2 = sqrt(vec3_dot(n2, n2));
+    if (!(l1 > 0.0 && l2 > 0.0) || vec3_dot(n1, n2) < cos_feature * l1 * l2)
         return -1.0;
     /* new to old (acd and bcd alike), old to new (abc and abd alike) */
     hn = fmin(point_tri(pd, pa, pb, pc), point_tri(pc, pa, pb, pd));
