@@ -124,6 +124,9 @@ static void advise(const report_t *r, outcome_t *o)
     const opt_options *op = r->options;
     int topo = op ? (int)op->topology : -1;
     int at_bound = o->bound_rel > 0 && o->moved_rel >= OUTCOME_BOUND_FRAC * o->bound_rel;
+    /* the surface's sharp edges, the input's when measured */
+    const report_quality *sq =
+        r->before && r->before->n_surf_lt5 >= 0 ? r->before : r->after;
 
     if (o->n_inverted > 0)
         warn(o, "%d tets are left inverted", (int)o->n_inverted);
@@ -150,6 +153,13 @@ static void advise(const report_t *r, outcome_t *o)
         suggest(o,
                 "try --boundary slide: fixed boundary vertices keep the tets along the "
                 "boundary as they are");
+    if (sq && sq->n_surf_lt5 > 0 && o->n_small > 0)
+        suggest(o,
+                "%d edges of the %s surface have a solid angle under 5° (smallest "
+                "%.2g°): a tet on such an edge has no larger dihedral angle there while "
+                "the surface is kept",
+                (int)sq->n_surf_lt5, sq == r->before ? "input's" : "result's",
+                sq->surf_angle_min);
     if (r->run &&
         (r->run->stop == OPT_STOP_TIME_LIMIT || r->run->stop == OPT_STOP_CANCELLED))
         suggest(o, "the run was stopped (%s) before it converged: give it more time",

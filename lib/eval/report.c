@@ -6,11 +6,13 @@
 #include "core/mesh_int.h"
 #include "core/tet.h"
 #include "geom/metric_int.h"
+#include "geom/vec3.h"
 #include "opt/opt_int.h"
 
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 const int report_dmin_thresholds[4] = {5, 15, 30, 40};
@@ -95,6 +97,147 @@ static void add_tet(report_quality *q, const tet_measure *o, int32_t t, scan_sum
         q->n_dmin_lt[k] += o->amin < report_dmin_thresholds[k];
         q->n_dmax_gt[k] += o->amax > report_dmax_thresholds[k];
     }
+}
+
+/* A boundary triangle's edge (lo, hi), from its vertex k to k + 1. */
+typedef struct {
+    int32_t lo, hi, tri, k;
+} half_edge;
+
+static int half_edge_cmp(const void *x, const void *y)
+{
+    const half_edge *a = x, *b = y;
+
+    if (a->lo != b->lo)
+        return a->lo < b->lo ? -1 : 1;
+    if (a->hi != b->hi)
+        return a->hi < b->hi ? -1 : 1;
+    return a->tri < b->tri ? -1 : a->tri > b->tri;
+}
+
+/* The solid's angle in degrees at edge (a, b) of triangles (a, b, c) and
+ * (b, a, d), both oriented outward when out > 0 (inward when out < 0), or -1
+ * when either is degenerate. */
+static double edge_angle(const double *xyz, int32_t a, int32_t b, int32_t c, int32_t d,
+                         double out)
+{
+    const double *pa = xyz + 3 * (size_t)a, *pb = xyz + 3 * (size_t)b;
+    double ab[3], ac[3], ad[3], ba[3], bd[3], n1[3], n2[3], l1, l2, cs, phi;
+
+    vec3_sub(pb, pa, ab);
+    vec3_sub(xyz + 3 * (size_t)c, pa, ac);
+    vec3_sub(xyz + 3 * (size_t)d, pa, ad);
+    vec3_sub(pa, pb, ba);
+    vec3_sub(xyz + 3 * (size_t)d, pb, bd);
+    vec3_cross(ab, ac, n1);
+    vec3_cross(ba, bd, n2);
+    l1 = sqrt(vec3_dot(n1, n1));
+    l2 = sqrt(vec3_dot(n2, n2));
+    if (!(l1 > 0.0 && l2 > 0.0))
+        return -1.0;
+    cs = vec3_dot(n1, n2) / (l1 * l2);
+    phi = acos(cs < -1.0 ? -1.0 : cs > 1.0 ? 1.0 : cs) * (180.0 / 3.14159265358979323846);
+    /* convex at the edge when d is on the inner side of (a, b, c)'s plane */
+    return vec3_dot(ad, n1) * out < 0.0 ? 180.0 - phi : 180.0 + phi;
+}
+
+static int32_t find_root(int32_t *up, int32_t i)
+{
+    while (up[i] != i)
+        i = up[i] = up[up[i]];
+    return i;
+}
+
+/* q->surf_angle_min and q->n_surf_lt5 from f's boundary triangles: each edge
+ * that two of them share (an edge of more is not a manifold's: passed over).
+ * The triangles are in their tets' vertex order: within one closed surface
+ * all outward or all inward, as the sign of the volume it encloses tells
+ * (the pieces of a mesh may be oriented each its own way). QDC_ENOMEM. */
+static qdc_status surface_angles(const mesh_t *m, const mesh_faces *f, report_quality *q)
+{
+    const int32_t *tr = f->tris;
+    const double *o = m->xyz + 3 * (size_t)tr[0];
+    size_t n = 3 * (size_t)f->ntri;
+    half_edge *he = qdc_mallocn(n, sizeof *he);
+    int32_t *up = qdc_mallocn((size_t)f->ntri, sizeof *up);
+    double *vol = qdc_calloc((size_t)f->ntri, sizeof *vol);
+
+    q->surf_angle_min = 360.0;
+    q->n_surf_lt5 = 0;
+    if (!he || !up || !vol) {
+        qdc_free(he);
+        qdc_free(up);
+        qdc_free(vol);
+        return QDC_ENOMEM;
+    }
+    for (int32_t i = 0; i < f->ntri; i++) {
+        up[i] = i;
+        for (int k = 0; k < 3; k++) {
+            int32_t a = tr[3 * i + k], b = tr[3 * i + (k + 1) % 3];
+            he[3 * (size_t)i + k] = (half_edge){a < b ? a : b, a < b ? b : a, i, k};
+        }
+    }
+    qsort(he, n, sizeof *he, half_edge_cmp);
+    for (size_t i = 0; i + 1 < n; i++) /* the pieces of the surface */
+        if (he[i].lo == he[i + 1].lo && he[i].hi == he[i + 1].hi)
+            up[find_root(up, he[i].tri)] = find_root(up, he[i + 1].tri);
+    for (int32_t i = 0; i < f->ntri; i++) {
+        double u[3], v[3], w[3], x[3];
+        vec3_sub(m->xyz + 3 * (size_t)tr[3 * i], o, u);
+        vec3_sub(m->xyz + 3 * (size_t)tr[3 * i + 1], o, v);
+        vec3_sub(m->xyz + 3 * (size_t)tr[3 * i + 2], o, w);
+        vec3_cross(v, w, x);
+        vol[find_root(up, i)] += vec3_dot(u, x);
+    }
+    for (size_t i = 0, j; i < n; i = j) {
+        for (j = i + 1; j < n && he[j].lo == he[i].lo && he[j].hi == he[i].hi; j++)
+            ;
+        if (j - i == 2) {
+            const int32_t *t1 = tr + 3 * (size_t)he[i].tri,
+                          *t2 = tr + 3 * (size_t)he[i + 1].tri;
+            int k1 = he[i].k, k2 = he[i + 1].k;
+            double ang = edge_angle(m->xyz, t1[k1], t1[(k1 + 1) % 3], t1[(k1 + 2) % 3],
+                                    t2[(k2 + 2) % 3], vol[find_root(up, he[i].tri)]);
+            if (ang >= 0.0 && ang < q->surf_angle_min)
+                q->surf_angle_min = ang;
+            q->n_surf_lt5 += ang >= 0.0 && ang < 5.0;
+        }
+    }
+    qdc_free(he);
+    qdc_free(up);
+    qdc_free(vol);
+    return QDC_OK;
+}
+
+/* surface_angles of f's triangles, or of m's boundary found here when f is
+ * NULL (a run that changed the tets, or no run); -1 when m's faces cannot be
+ * found (a face of three tets). QDC_ENOMEM. */
+static qdc_status surface_of(const mesh_t *m, const mesh_faces *f, report_quality *q)
+{
+    mesh_topo *tp = NULL;
+    mesh_faces *own = NULL;
+    qdc_status st;
+
+    q->surf_angle_min = -1.0;
+    q->n_surf_lt5 = -1;
+    if (!f) {
+        st = mesh_topo_build(m, &tp, NULL);
+        if (st == QDC_OK)
+            st = mesh_faces_of_topo(tp, m->tets, NULL, NULL, &own);
+        mesh_topo_free(tp);
+        if (st != QDC_OK)
+            return st == QDC_ENOMEM ? st : QDC_OK;
+        f = own;
+    }
+    if (f->ntri == 0) {
+        q->surf_angle_min = 360.0;
+        q->n_surf_lt5 = 0;
+        st = QDC_OK;
+    } else {
+        st = surface_angles(m, f, q);
+    }
+    mesh_faces_free(own);
+    return st;
 }
 
 qdc_status report_quality_compute(const mesh_t *m, report_quality *q, qdc_error *err)
@@ -195,7 +338,7 @@ qdc_status report_quality_faces(const mesh_t *m, const mesh_faces *f, report_qua
     q->cn_mean = acc.nvalid ? acc.cnsum / acc.nvalid : 0.0;
     if (!f)
         qdc_free(flip);
-    return QDC_OK;
+    return surface_of(m, f, q);
 }
 
 /* ---- a small buffered JSON writer ------------------------------------------ */
@@ -322,6 +465,10 @@ static void write_quality(jw *w, const char *k, const report_quality *q)
     jw_num(w, "condition_number_max", q->cn_max);
     jw_num(w, "dihedral_min", q->dih_min);
     jw_num(w, "dihedral_max", q->dih_max);
+    if (q->n_surf_lt5 >= 0) {
+        jw_num(w, "surface_angle_min", q->surf_angle_min);
+        jw_int(w, "n_surface_edges_lt_5", q->n_surf_lt5);
+    }
     for (int i = 0; i < 4; i++) {
         snprintf(key, sizeof key, "n_dmin_lt_%d", report_dmin_thresholds[i]);
         jw_int(w, key, q->n_dmin_lt[i]);

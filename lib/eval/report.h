@@ -26,6 +26,13 @@ typedef struct {
     int32_t worst_tet;              /* the (first) tet of q_min, from 0 */
     double worst_centroid[3];       /* its centroid */
     double diag;                    /* bounding-box diagonal */
+    /* The solid's angle at each boundary edge (two boundary triangles on it):
+     * a tet on that edge has no larger dihedral angle there, so with the
+     * surface kept it bounds the smallest dihedral any mesh can reach.
+     * Measured when the boundary is known (report_quality_faces with faces),
+     * else surf_angle_min -1 and n_surf_lt5 -1. */
+    double surf_angle_min; /* degrees; 360 for no two-triangle edge */
+    int32_t n_surf_lt5;    /* boundary edges with a solid angle under 5 deg */
 } report_quality;
 
 extern const int report_dmin_thresholds[4]; /* 5, 15, 30, 40 */

@@ -65,8 +65,12 @@ TEST(bad_result_warned)
     ASSERT_EQ_INT(out.n_warnings, 2);
     ASSERT_TRUE(has(out.warnings[0], "1 tets (50%, over 0.1%) are left with a dihedral"));
     ASSERT_TRUE(has(out.warnings[1], "the worst tet's mean ratio is +0.0"));
-    ASSERT_EQ_INT(out.n_suggestions, 1);
+    ASSERT_EQ_INT(out.n_suggestions, 2);
     ASSERT_TRUE(has(out.suggestions[0], "try --topology flips (or --topology full)"));
+    /* the flat tet's three base edges are edges of the surface */
+    ASSERT_TRUE(has(out.suggestions[1],
+                    "3 edges of the input's surface have a solid angle "
+                    "under 5° (smallest 0.2°)"));
     ASSERT_TRUE(has(out.left_bad, "worst tet 1 (from 0) at (10.5, 0.2887, 0.00025)"));
     ASSERT_TRUE(has(out.summary, out.improved) && has(out.summary, out.left_bad));
     ASSERT_EQ_INT(out.boundary[0], 0); /* neither measured nor bounded */
@@ -83,9 +87,10 @@ TEST(bad_result_warned)
         o.topology = OPT_TOPOLOGY_FLIPS;
         report_t r2 = {&q, &q, &res, &o, &b};
         ASSERT_OK(outcome_compute(&r2, &out));
-        ASSERT_EQ_INT(out.n_suggestions, 2);
+        ASSERT_EQ_INT(out.n_suggestions, 3);
         ASSERT_TRUE(has(out.suggestions[0], "try --topology full"));
         ASSERT_TRUE(has(out.suggestions[1], "looser --hausd, e.g. --hausd 0.4%"));
+        ASSERT_TRUE(has(out.suggestions[2], "3 edges of the input's surface"));
         ASSERT_TRUE(has(out.boundary,
                         "boundary moved 0.19% of the diagonal, 95% of its bound (0.2%)"));
     }
@@ -113,5 +118,35 @@ TEST(good_result_quiet)
     mesh_free(m);
 }
 
+/* Each tet alone: every edge is an edge of the surface, and the solid's angle
+ * there is the tet's dihedral angle. The flat tet's base edges: atan(h / r),
+ * r the inradius of its base; the regular tet's edges: acos(1/3). The same
+ * with every tet in the other vertex order (the triangles inward). */
+TEST(surface_edges_bound_the_dihedral)
+{
+    const double r = 0.28867513459481287, deg = 180 / 3.14159265358979323846;
+    for (int mirror = 0; mirror < 2; mirror++) {
+        for (int k = 0; k < 2; k++) {
+            double h = k ? 0.8 : 0.001;
+            mesh_t *m = two_tets(h);
+            report_quality q;
+            ASSERT_TRUE(m);
+            for (int t = 0; t < 2 && mirror; t++) {
+                int32_t v = m->tets[4 * t];
+                m->tets[4 * t] = m->tets[4 * t + 1];
+                m->tets[4 * t + 1] = v;
+            }
+            ASSERT_OK(report_quality_compute(m, &q, NULL));
+            ASSERT_EQ_INT(q.n_surf_lt5, k ? 0 : 3);
+            /* h = 0.8: the base edges' 70.16 deg, under the regular tet's 70.53 */
+            ASSERT_NEAR(q.surf_angle_min, atan(h / r) * deg, 1e-9);
+            ASSERT_TRUE(atan(h / r) * deg < acos(1.0 / 3) * deg);
+            /* no tet has a smaller dihedral than the surface allows at its edges */
+            ASSERT_TRUE(q.dih_min <= q.surf_angle_min + 1e-9);
+            mesh_free(m);
+        }
+    }
+}
+
 TEST_MAIN("outcome", T(worst_tet_and_centroid), T(bad_result_warned),
-          T(good_result_quiet))
+          T(good_result_quiet), T(surface_edges_bound_the_dihedral))
