@@ -1030,6 +1030,10 @@ static void quality_print(const char *in, const report_quality *q, const char *r
            (int)q->n_dmax_gt[1], (int)q->n_dmax_gt[2], (int)q->n_dmax_gt[3]);
     printf("volume-length: mean %.4f min %+.4f; condition number: mean %.4f max %.4g\n",
            q->vl_mean, q->vl_min, q->cn_mean, q->cn_max);
+    if (q->n_surf_lt5 >= 0)
+        printf("surface: smallest solid angle at an edge %.2f deg (%d edges under 5: no "
+               "tet on one has a larger dihedral there)\n",
+               q->surf_angle_min, (int)q->n_surf_lt5);
     if (ref)
         printf("boundary error vs %s: Hausdorff %.6g (%.3g%% of diagonal), mean %.3g, "
                "RMS %.3g\n",

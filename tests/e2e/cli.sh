@@ -40,6 +40,13 @@ then pass "cli.quality agrees with tools/quality.py"; else fail "cli.quality agr
 n=$($PY -c "import json; q=json.load(open('$TMP/q.json'))['after']; print(sum(q['dihedral_histogram']) == 6*q['n_tets'])")
 [ "$n" = True ] && pass "cli.histogram covers 6 angles per tet" || fail "cli.histogram" "sum != 6 nt"
 
+# the solid's angle at the surface's edges: a cube's 90 degrees at its 12 edges
+cube=$(devmesh cube_h0.1_good)
+a=$("$BIN/qdc" quality "$cube" --json | $PY -c "import json,sys; q=json.load(sys.stdin)['after']; print(abs(q['surface_angle_min'] - 90) < 1e-6 and q['n_surface_edges_lt_5'] == 0 and q['dihedral_min'] <= q['surface_angle_min'])")
+t=$("$BIN/qdc" quality "$cube" | grep -c '^surface: smallest solid angle at an edge 90.00 deg (0 edges under 5')
+[ "$a" = True ] && [ "$t" = 1 ] && pass "cli.quality surface angle 90 on a cube" ||
+    fail "cli.quality surface angle" "json check $a, text lines $t"
+
 # bad input: one line, file:line, exit code 2, no crash
 printf 'MeshVersionFormatted 2\nDimension 3\nVertices\n2\n0 0 0 1\n1 0 nan 1\nEnd\n' > "$TMP/bad.mesh"
 "$BIN/qdc" optimize "$TMP/bad.mesh" "$TMP/x.mesh" 2>"$TMP/err"
