@@ -524,6 +524,9 @@ TEST(allocation_failures)
             qdc_fault_set(0);
             if (st == QDC_OK)
                 break;
+            if (st != QDC_ENOMEM)
+                printf("  # %s, allocation %ld failing: %s\n",
+                       meshio_format_name((meshio_format)f), n, err.msg);
             ASSERT_EQ_INT(st, QDC_ENOMEM);
             ASSERT_TRUE(b == NULL);
         }
@@ -541,6 +544,9 @@ TEST(allocation_failures)
             qdc_fault_set(0);
             if (st == QDC_OK)
                 break;
+            if (st != QDC_ENOMEM)
+                printf("  # %s, allocation %ld failing: %s\n",
+                       meshio_format_name((meshio_format)f), n, err.msg);
             ASSERT_EQ_INT(st, QDC_ENOMEM);
             ASSERT_TRUE(b == NULL);
         }

@@ -291,6 +291,25 @@ static inline double read_1m_tets(meshio_format f, double limit)
 /* Abaqus, Netgen, Nastran and I-DEAS have no writer of qdc's own (they are
  * written only spliced): m as meshio lays them out (Netgen's materials:
  * m->region), Nastran with free-field GRIDs, I-DEAS as Gmsh does. */
+/* One frame of what qdc-h5 prints: a 32-byte header (name, type 'f' or 'i',
+ * the count, little-endian) and n 8-byte values. */
+static inline void put_frame(sink *s, const char *name, char type, const void *v,
+                             uint64_t n)
+{
+    unsigned char h[32] = {0};
+
+    memcpy(h, name, strlen(name));
+    h[16] = (unsigned char)type;
+    for (int k = 0; k < 8; k++)
+        h[24 + k] = (unsigned char)(n >> (8 * k));
+    sink_write(s, h, sizeof h);
+    sink_write(s, v, (size_t)n * 8);
+}
+
+/* A region as a tag the formats of write_other all take (0 to 9999999: a
+ * Nastran PID, a Gmsh 1 physical tag, an I-DEAS group fit). */
+#define OTHER_TAG(m, t) ((m)->region[t] < 0 ? 1 : (m)->region[t] % 10000000)
+
 static inline void write_other(const mesh_t *m, meshio_format f, sink *s)
 {
     char line[1100]; /* three %22.16f of up to 1e308 */
@@ -314,7 +333,7 @@ static inline void write_other(const mesh_t *m, meshio_format f, sink *s)
             OUT("GRID,%d,,%.17g,%.17g,%.17g\n", i + 1, m->xyz[3 * i], m->xyz[3 * i + 1],
                 m->xyz[3 * i + 2]);
         for (int32_t t = 0; t < m->nt; t++)
-            OUT("CTETRA  %-8d%-8d%-8d%-8d%-8d%-8d\n", t + 1, m->region[t],
+            OUT("CTETRA  %-8d%-8d%-8d%-8d%-8d%-8d\n", t + 1, OTHER_TAG(m, t),
                 m->tets[4 * t] + 1, m->tets[4 * t + 1] + 1, m->tets[4 * t + 2] + 1,
                 m->tets[4 * t + 3] + 1);
         OUT("ENDDATA\n");
@@ -334,9 +353,47 @@ static inline void write_other(const mesh_t *m, meshio_format f, sink *s)
         OUT("    -1\n    -1\n  2412\n");
         for (int32_t t = 0; t < m->nt; t++)
             OUT("%10d%10d%10d%10d%10d%10d\n%10d%10d%10d%10d\n", t + 1, 111, 1,
-                m->region[t], 7, 4, m->tets[4 * t] + 1, m->tets[4 * t + 1] + 1,
+                OTHER_TAG(m, t), 7, 4, m->tets[4 * t] + 1, m->tets[4 * t + 1] + 1,
                 m->tets[4 * t + 2] + 1, m->tets[4 * t + 3] + 1);
         OUT("    -1\n");
+    } else if (f == MESHIO_MED) { /* qdc-h5's frames: coordinates, 1-based te4 */
+        int64_t *te = malloc(4 * (size_t)m->nt * sizeof *te + 1);
+        if (!te)
+            return;
+        for (size_t i = 0; i < 4 * (size_t)m->nt; i++)
+            te[i] = m->tets[i] + 1;
+        sink_write(s, "QDCH5v1\n", 8);
+        put_frame(s, "coords", 'f', m->xyz, 3 * (uint64_t)m->nv);
+        put_frame(s, "te4", 'i', te, 4 * (uint64_t)m->nt);
+        free(te);
+    } else if (f == MESHIO_XDMF) { /* XDMF 3, the data inline */
+        OUT("<Xdmf Version=\"3.0\"><Domain><Grid Name=\"g\"><Geometry "
+            "GeometryType=\"XYZ\">"
+            "<DataItem DataType=\"Float\" Dimensions=\"%d 3\" Format=\"XML\" "
+            "Precision=\"8\">\n",
+            m->nv);
+        for (int32_t i = 0; i < m->nv; i++)
+            OUT("%.17g %.17g %.17g\n", m->xyz[3 * i], m->xyz[3 * i + 1],
+                m->xyz[3 * i + 2]);
+        OUT("</DataItem></Geometry><Topology TopologyType=\"Tetrahedron\" "
+            "NumberOfElements=\"%d\" NodesPerElement=\"4\"><DataItem DataType=\"Int\" "
+            "Dimensions=\"%d 4\" Format=\"XML\" Precision=\"4\">\n",
+            m->nt, m->nt);
+        for (int32_t t = 0; t < m->nt; t++)
+            OUT("%d %d %d %d\n", m->tets[4 * t], m->tets[4 * t + 1], m->tets[4 * t + 2],
+                m->tets[4 * t + 3]);
+        OUT("</DataItem></Topology></Grid></Domain></Xdmf>\n");
+    } else if (f == MESHIO_MSH1) { /* Gmsh 1: $NOD, $ELM with type 4 (tags >= 0) */
+        OUT("$NOD\n%d\n", m->nv);
+        for (int32_t i = 0; i < m->nv; i++)
+            OUT("%d %.17g %.17g %.17g\n", i + 1, m->xyz[3 * i], m->xyz[3 * i + 1],
+                m->xyz[3 * i + 2]);
+        OUT("$ENDNOD\n$ELM\n%d\n", m->nt);
+        for (int32_t t = 0; t < m->nt; t++)
+            OUT("%d 4 %d %d 4 %d %d %d %d\n", t + 1, OTHER_TAG(m, t), 1,
+                m->tets[4 * t] + 1, m->tets[4 * t + 1] + 1, m->tets[4 * t + 2] + 1,
+                m->tets[4 * t + 3] + 1);
+        OUT("$ENDELM\n");
     } else {
         OUT("mesh3d\ndimension\n3\ngeomtype\n0\n\nsurfaceelements\n0\n\nvolumeelements\n%"
             "d\n",
@@ -644,21 +701,6 @@ static inline char *replaced(const char *doc, const char *from, const char *to)
     strcpy(d + (at - doc), to);
     strcat(d, at + strlen(from));
     return d;
-}
-
-/* One frame of what qdc-h5 prints: a 32-byte header (name, type 'f' or 'i',
- * the count, little-endian) and n 8-byte values. */
-static inline void put_frame(sink *s, const char *name, char type, const void *v,
-                             uint64_t n)
-{
-    unsigned char h[32] = {0};
-
-    memcpy(h, name, strlen(name));
-    h[16] = (unsigned char)type;
-    for (int k = 0; k < 8; k++)
-        h[24 + k] = (unsigned char)(n >> (8 * k));
-    sink_write(s, h, sizeof h);
-    sink_write(s, v, (size_t)n * 8);
 }
 
 #endif
