@@ -701,6 +701,11 @@ static qdc_status vtk_values(vtk *v, const char *what, int64_t n, vtype t, int f
         double x;
         const char *te;
         char q[32];
+        int64_t u;
+        if (out && out->a && txt_uint_fast(s, 0, INT32_MAX, &u)) {
+            out->a->v[i] = (int32_t)u; /* what parse_double would give */
+            continue;
+        }
         skip_ws(s);
         te = tok_end(s, s->p);
         if (v->voff && i % 3 == 0)
@@ -1769,6 +1774,11 @@ static qdc_status vtu_ascii(vtu *x, const xtag *t, int64_t n, int finite, vsink 
         double y;
         const char *te, *lim = data_end(x, s->p);
         char q[32];
+        int64_t u;
+        if (out && out->a && txt_uint_fast(s, 0, INT32_MAX, &u)) {
+            out->a->v[i] = (int32_t)u; /* digits, then white space: no '<' */
+            continue;
+        }
         skip_ws(s);
         if (rec && i % 3 == 0)
             rec->off[i / 3] = (uint64_t)(s->p - s->base);
