@@ -3,14 +3,15 @@
  * (ascii, inline base64 and appended raw/base64 DataArrays, no compression).
  *
  * Reference: "VTK File Formats" (VTK User's Guide, ch. 19 and the 5.1 notes).
- * Every array is read into doubles (integers up to 2^53 are exact, floats
- * widen exactly) so one reader serves all value types and encodings; indices,
- * offsets and cell types are then checked to be integers in range. Cells of
- * type 10 become tets and of type 5 surface triangles, others are skipped and
- * counted for a note. The region is the cell array "region", "gmsh:physical",
- * "medit:ref" or "MeshDomain" (CGAL's subdomain index, as Float64; in that order of
- * preference), vref the point array "medit:ref".
- * Legacy binary data are big-endian; XML data follow byte_order. */
+ * Coordinates and offsets are read into doubles (integers up to 2^53 are
+ * exact, floats widen exactly), connectivity, cell types, regions and vertex
+ * refs straight into int32s (see iarr), so one reader serves all value types
+ * and encodings; indices, offsets and cell types are then checked to be
+ * integers in range. Cells of type 10 become tets and of type 5 surface
+ * triangles, others are skipped and counted for a note. The region is the cell array
+ * "region", "gmsh:physical", "medit:ref" or "MeshDomain" (CGAL's subdomain index, as
+ * Float64; in that order of preference), vref the point array "medit:ref". Legacy binary
+ * data are big-endian; XML data follow byte_order. */
 #include "io/format.h"
 #include "io/gz.h"
 
@@ -105,41 +106,46 @@ static inline double f64_of(uint64_t u)
             out[i] = (EXPR);                                                             \
     } while (0)
 
+/* The loop for each type: NARROW for the types whose values are all int32s,
+ * WIDE for the others (each given the value of element i of b). */
+#define DECODE_EACH_TYPE(NARROW, WIDE)                                                   \
+    switch (t) {                                                                         \
+    case T_I8:                                                                           \
+        NARROW((int8_t)b[i]);                                                            \
+        break;                                                                           \
+    case T_U8:                                                                           \
+        NARROW(b[i]);                                                                    \
+        break;                                                                           \
+    case T_I16:                                                                          \
+        NARROW((int16_t)ld16(b + 2 * i, swap));                                          \
+        break;                                                                           \
+    case T_U16:                                                                          \
+        NARROW(ld16(b + 2 * i, swap));                                                   \
+        break;                                                                           \
+    case T_I32:                                                                          \
+        NARROW((int32_t)ld32(b + 4 * i, swap));                                          \
+        break;                                                                           \
+    case T_U32:                                                                          \
+        WIDE(ld32(b + 4 * i, swap));                                                     \
+        break;                                                                           \
+    case T_I64:                                                                          \
+        WIDE((double)(int64_t)ld64(b + 8 * i, swap));                                    \
+        break;                                                                           \
+    case T_U64:                                                                          \
+        WIDE((double)ld64(b + 8 * i, swap));                                             \
+        break;                                                                           \
+    case T_F32:                                                                          \
+        WIDE(f32_of(ld32(b + 4 * i, swap)));                                             \
+        break;                                                                           \
+    case T_F64:                                                                          \
+        WIDE(f64_of(ld64(b + 8 * i, swap)));                                             \
+        break;                                                                           \
+    }
+
 static inline __attribute__((always_inline)) void
 decode_swap(const unsigned char *b, int64_t n, vtype t, int swap, double *out)
 {
-    switch (t) {
-    case T_I8:
-        DECODE((int8_t)b[i]);
-        break;
-    case T_U8:
-        DECODE(b[i]);
-        break;
-    case T_I16:
-        DECODE((int16_t)ld16(b + 2 * i, swap));
-        break;
-    case T_U16:
-        DECODE(ld16(b + 2 * i, swap));
-        break;
-    case T_I32:
-        DECODE((int32_t)ld32(b + 4 * i, swap));
-        break;
-    case T_U32:
-        DECODE(ld32(b + 4 * i, swap));
-        break;
-    case T_I64:
-        DECODE((double)(int64_t)ld64(b + 8 * i, swap));
-        break;
-    case T_U64:
-        DECODE((double)ld64(b + 8 * i, swap));
-        break;
-    case T_F32:
-        DECODE(f32_of(ld32(b + 4 * i, swap)));
-        break;
-    case T_F64:
-        DECODE(f64_of(ld64(b + 8 * i, swap)));
-        break;
-    }
+    DECODE_EACH_TYPE(DECODE, DECODE)
 }
 
 /* n values of type t from bytes b (big-endian if big) into out. The swap
@@ -153,32 +159,195 @@ static void decode_values(const unsigned char *b, int64_t n, vtype t, int big,
         decode_swap(b, n, t, 0, out);
 }
 
+/* x is an integer in [lo, hi], bounds within int32 (NaN is not). */
+static inline int int_in(double x, double lo, double hi)
+{
+    return x >= lo && x <= hi && (double)(int32_t)x == x;
+}
+
+static inline int is_int32(double x)
+{
+    return int_in(x, INT32_MIN, INT32_MAX);
+}
+
+/* An integer array (connectivity, cell types, regions, vertex refs) as
+ * int32s, without a double array in between: a value that is not an int32
+ * (1.5, 3e9, from a float or 64-bit type or text) is INT32_MIN in v, outside
+ * every range checked, and its double is in odd (in index order) for the
+ * message that names it. */
+typedef struct {
+    int64_t i;
+    double x;
+} oddval;
+
+typedef struct {
+    int32_t *v;
+    int64_t n;
+    oddval *odd;
+    size_t nodd, cap;
+} iarr;
+
+static void iarr_free(iarr *a)
+{
+    qdc_free(a->v);
+    qdc_free(a->odd);
+    memset(a, 0, sizeof *a);
+}
+
+static qdc_status iarr_alloc(iarr *a, int64_t n, qdc_error *err)
+{
+    iarr_free(a);
+    a->v = qdc_mallocn((size_t)n + 1, sizeof(int32_t));
+    a->n = n;
+    if (!a->v)
+        return qdc_fail(err, QDC_ENOMEM, "out of memory for %lld values", (long long)n);
+    return QDC_OK;
+}
+
+/* Value i is x, which is not an int32: -1 if out of memory. */
+static int odd_put(iarr *a, int64_t i, double x)
+{
+    if (a->nodd == a->cap) {
+        size_t cap = a->cap ? 2 * a->cap : 16;
+        oddval *o = qdc_realloc(a->odd, cap * sizeof *o);
+        if (!o)
+            return -1;
+        a->odd = o;
+        a->cap = cap;
+    }
+    a->odd[a->nodd].i = i;
+    a->odd[a->nodd++].x = x;
+    a->v[i] = INT32_MIN;
+    return 0;
+}
+
+/* Value i as the double it was read as. */
+static double iarr_at(const iarr *a, int64_t i)
+{
+    size_t lo = 0, hi = a->nodd;
+
+    if (a->v[i] != INT32_MIN)
+        return a->v[i];
+    while (lo < hi) {
+        size_t mid = lo + (hi - lo) / 2;
+        if (a->odd[mid].i < i)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    return lo < a->nodd && a->odd[lo].i == i ? a->odd[lo].x : INT32_MIN;
+}
+
+/* Value i is an int32 (an INT32_MIN read as such is one). */
+static inline int iarr_ok(const iarr *a, int64_t i)
+{
+    return a->v[i] != INT32_MIN || is_int32(iarr_at(a, i));
+}
+
+/* Value i from the double x: -1 if out of memory. */
+static inline int iarr_put(iarr *a, int64_t i, double x)
+{
+    if (!is_int32(x))
+        return odd_put(a, i, x);
+    a->v[i] = (int32_t)x;
+    return 0;
+}
+
+/* One loop per type and byte order, as in decode_swap: types whose every
+ * value is an int32 store it; the others go through a double, checked to be
+ * finite (the first that is not ends the loop). */
+#define DECODE_INT(EXPR)                                                                 \
+    do {                                                                                 \
+        for (int64_t i = 0; i < n; i++)                                                  \
+            v[i] = (EXPR);                                                               \
+    } while (0)
+#define DECODE_WIDE(EXPR)                                                                \
+    do {                                                                                 \
+        for (int64_t i = 0; i < n; i++) {                                                \
+            double x = (EXPR);                                                           \
+            if (is_int32(x))                                                             \
+                v[i] = (int32_t)x;                                                       \
+            else if (!isfinite(x))                                                       \
+                return i;                                                                \
+            else if (odd_put(a, i, x) != 0)                                              \
+                return -1;                                                               \
+        }                                                                                \
+    } while (0)
+
+static inline __attribute__((always_inline)) int64_t
+decode_int_swap(const unsigned char *b, int64_t n, vtype t, int swap, iarr *a)
+{
+    int32_t *v = a->v;
+
+    DECODE_EACH_TYPE(DECODE_INT, DECODE_WIDE)
+    return n;
+}
+
+/* n values of type t from bytes b (big-endian if big) into a (room for n):
+ * the index of the first that is not finite, n if none, -1 if out of
+ * memory. */
+static int64_t decode_ints(const unsigned char *b, int64_t n, vtype t, int big, iarr *a)
+{
+    return big != HOST_BIG ? decode_int_swap(b, n, t, 1, a)
+                           : decode_int_swap(b, n, t, 0, a);
+}
+
+/* Where a reader puts the values of an array: doubles (d) or an iarr (a). */
+typedef struct {
+    double *d;
+    iarr *a;
+} vsink;
+
+/* n values of type t from bytes b into k: the index of the first that is
+ * not finite, n if none, -1 if out of memory. */
+static int64_t sink_decode(vsink *k, const unsigned char *b, int64_t n, vtype t, int big)
+{
+    int64_t i = 0;
+
+    if (k->a)
+        return decode_ints(b, n, t, big, k->a);
+    decode_values(b, n, t, big, k->d);
+    while (i < n && isfinite(k->d[i]))
+        i++;
+    return i;
+}
+
+/* Value i is x: -1 if out of memory. */
+static inline int sink_put(vsink *k, int64_t i, double x)
+{
+    if (k->a)
+        return iarr_put(k->a, i, x);
+    k->d[i] = x;
+    return 0;
+}
+
 /* ------------------------------------------------------------------------ */
 /* From arrays to a mesh (both formats)                                      */
 
 enum { PRIO_NONE = 99 };
 
-/* Cell and point arrays a reader collected, all as doubles. */
+/* Cell and point arrays a reader collected (an iarr's v is NULL until
+ * read). */
 typedef struct {
     int64_t nv, nc;
-    double *xyz;  /* 3 nv */
-    double *conn; /* connectivity */
+    double *xyz; /* 3 nv */
+    iarr conn;   /* connectivity */
     int64_t nconn;
     double *offs;  /* nc + 1 offsets into conn, or NULL for the legacy list */
-    double *types; /* nc cell types */
-    double *creg;  /* nc region values, or NULL */
+    iarr types;    /* nc cell types */
+    iarr creg;     /* nc region values, or none */
     int creg_prio; /* 0 region, 1 gmsh:physical, 2 medit:ref, 3 MeshDomain */
-    double *vref;  /* nv, or NULL */
+    iarr vref;     /* nv, or none */
 } cells;
 
 static void cells_free(cells *c)
 {
     qdc_free(c->xyz);
-    qdc_free(c->conn);
+    iarr_free(&c->conn);
     qdc_free(c->offs);
-    qdc_free(c->types);
-    qdc_free(c->creg);
-    qdc_free(c->vref);
+    iarr_free(&c->types);
+    iarr_free(&c->creg);
+    iarr_free(&c->vref);
 }
 
 static int region_prio(const char *name, size_t n)
@@ -192,22 +361,11 @@ static int region_prio(const char *name, size_t n)
     return PRIO_NONE;
 }
 
-/* x is an integer in [lo, hi], bounds within int32 (NaN is not). */
-static inline int int_in(double x, double lo, double hi)
-{
-    return x >= lo && x <= hi && (double)(int32_t)x == x;
-}
-
-static inline int is_int32(double x)
-{
-    return int_in(x, INT32_MIN, INT32_MAX);
-}
-
 /* Where cell i's points are: conn[*a .. *a + *k). The legacy list (no
  * offsets) is walked with *pos. -1 if the list ends inside a cell. */
 static int cell_span(const cells *c, int64_t i, int64_t *pos, int64_t *a, int64_t *k)
 {
-    double kd;
+    int32_t kd;
 
     if (c->offs) {
         *a = (int64_t)c->offs[i];
@@ -216,13 +374,13 @@ static int cell_span(const cells *c, int64_t i, int64_t *pos, int64_t *a, int64_
     }
     if (*pos >= c->nconn)
         return -1;
-    kd = c->conn[*pos];
+    kd = c->conn.v[*pos];
     if (kd == 4) /* the common sizes as constants: the next cell's position */
         *k = 4;  /* is predicted, not waited for */
     else if (kd == 3)
         *k = 3;
-    else if (is_int32(kd) && kd >= 0)
-        *k = (int64_t)kd;
+    else if (kd >= 0) /* not an odd value (INT32_MIN) */
+        *k = kd;
     else
         return -1;
     *a = *pos + 1;
@@ -236,11 +394,11 @@ static qdc_status check_points(const cells *c, const char *fmtname, int64_t i, i
                                int64_t k, qdc_error *err)
 {
     for (int64_t j = 0; j < k; j++) {
-        double v = c->conn[a + j];
-        if (!int_in(v, 0, (double)c->nv - 1)) {
+        int32_t v = c->conn.v[a + j];
+        if (v < 0 || v >= c->nv) {
             qdc_fail(err, QDC_EPARSE,
                      "%s: cell %lld: point index %.17g out of range [0, %lld]", fmtname,
-                     (long long)i, v, (long long)c->nv - 1);
+                     (long long)i, iarr_at(&c->conn, a + j), (long long)c->nv - 1);
             set_index(err, "cell", i);
             return QDC_EPARSE;
         }
@@ -272,11 +430,11 @@ static qdc_status cells_alloc(const cells *c, parsed *pm, cells_room *r, qdc_err
     r->tricap = c->nc < INT32_MAX / 3 ? c->nc : INT32_MAX / 3;
     pm->tets = qdc_mallocn((size_t)r->tcap * 4 + 1, sizeof(int32_t));
     pm->tris = qdc_mallocn((size_t)r->tricap * 3 + 1, sizeof(int32_t));
-    if (c->creg) {
+    if (c->creg.v) {
         pm->region = qdc_mallocn((size_t)r->tcap + 1, sizeof(int32_t));
         pm->tri_ref = qdc_mallocn((size_t)r->tricap + 1, sizeof(int32_t));
     }
-    if (!pm->tets || !pm->tris || (c->creg && (!pm->region || !pm->tri_ref)))
+    if (!pm->tets || !pm->tris || (c->creg.v && (!pm->region || !pm->tri_ref)))
         return qdc_fail(err, QDC_ENOMEM, "out of memory for %lld cells",
                         (long long)c->nc);
     return QDC_OK;
@@ -297,7 +455,7 @@ static qdc_status cells_walk(const cells *c, const char *fmtname, parsed *fill,
         if (cell_span(c, i, &pos, &a, &k) != 0)
             return qdc_fail(err, QDC_EPARSE,
                             "%s: CELLS list ends inside a cell (wrong counts)", fmtname);
-        type = is_int32(c->types[i]) ? (int64_t)c->types[i] : -1;
+        type = c->types.v[i]; /* an odd value is INT32_MIN: skipped as negative */
         /* VTK_QUADRATIC_TETRA (24) and a Lagrange tetra (71) of order 2 list
          * their mid-edge nodes in the order of mesh_p2_edges */
         if ((type == 24 || type == 71) && k == 10) {
@@ -329,21 +487,19 @@ static qdc_status cells_walk(const cells *c, const char *fmtname, parsed *fill,
         }
         if (check_points(c, fmtname, i, a, nq && k == 4 ? 10 : k, err) != QDC_OK)
             return QDC_EPARSE;
-        if (c->creg && !is_int32(c->creg[i])) {
+        if (c->creg.v && !iarr_ok(&c->creg, i)) {
             qdc_fail(err, QDC_EPARSE, "%s: cell %lld: region %.17g is not an int32",
-                     fmtname, (long long)i, c->creg[i]);
+                     fmtname, (long long)i, iarr_at(&c->creg, i));
             set_index(err, "cell", i);
             return QDC_EPARSE;
         }
         if (k == 4 ? n4 < r->tcap : n3 < r->tricap) {
             int32_t *dst = k == 4 ? fill->tets + 4 * n4 : fill->tris + 3 * n3;
-            for (int64_t j = 0; j < k; j++)
-                dst[j] = (int32_t)c->conn[a + j];
+            memcpy(dst, c->conn.v + a, (size_t)k * sizeof(int32_t));
             if (nq && k == 4)
-                for (int64_t j = 0; j < 6; j++)
-                    fill->mid[6 * n4 + j] = (int32_t)c->conn[a + 4 + j];
-            if (c->creg)
-                *(k == 4 ? &fill->region[n4] : &fill->tri_ref[n3]) = (int32_t)c->creg[i];
+                memcpy(fill->mid + 6 * n4, c->conn.v + a + 4, 6 * sizeof(int32_t));
+            if (c->creg.v)
+                *(k == 4 ? &fill->region[n4] : &fill->tri_ref[n3]) = c->creg.v[i];
         }
         if (k == 4)
             n4++;
@@ -364,24 +520,23 @@ static void shrink32(int32_t **p, int64_t n)
         *p = q;
 }
 
-/* The point array medit:ref, if any, as vertex refs. */
-static qdc_status cells_vref(const cells *c, const char *fmtname, parsed *pm,
-                             qdc_error *err)
+/* The point array medit:ref, if any, as vertex refs (moved into pm). */
+static qdc_status cells_vref(cells *c, const char *fmtname, parsed *pm, qdc_error *err)
 {
-    if (!c->vref)
+    if (!c->vref.v)
         return QDC_OK;
-    for (int64_t i = 0; i < c->nv; i++)
-        if (!is_int32(c->vref[i])) {
-            qdc_fail(err, QDC_EPARSE, "%s: point %lld: medit:ref %.17g is not an int32",
-                     fmtname, (long long)i, c->vref[i]);
-            set_index(err, "vertex", i);
-            return QDC_EPARSE;
-        }
-    pm->vref = qdc_mallocn((size_t)c->nv + 1, sizeof(int32_t));
-    if (!pm->vref)
-        return qdc_fail(err, QDC_ENOMEM, "out of memory");
-    for (int64_t i = 0; i < c->nv; i++)
-        pm->vref[i] = (int32_t)c->vref[i];
+    if (c->vref.n != c->nv) /* POINT_DATA 0 before the POINTS */
+        return qdc_fail(err, QDC_EPARSE, "%s: medit:ref has %lld values for %lld points",
+                        fmtname, (long long)c->vref.n, (long long)c->nv);
+    if (c->vref.nodd) { /* the first value that is not an int32 */
+        int64_t i = c->vref.odd[0].i;
+        qdc_fail(err, QDC_EPARSE, "%s: point %lld: medit:ref %.17g is not an int32",
+                 fmtname, (long long)i, c->vref.odd[0].x);
+        set_index(err, "vertex", i);
+        return QDC_EPARSE;
+    }
+    pm->vref = c->vref.v;
+    c->vref.v = NULL;
     return QDC_OK;
 }
 
@@ -396,8 +551,12 @@ static qdc_status cells_mesh(cells *c, const char *fmtname, const meshio_options
 
     memset(&sk, 0, sizeof sk);
     parsed_init(&pm);
-    if (!c->types && c->nc)
+    if (!c->types.v && c->nc)
         return qdc_fail(err, QDC_EPARSE, "%s: no cell types", fmtname);
+    if (c->creg.v && c->creg.n != c->nc) /* CELL_DATA 0 before the CELLS */
+        return qdc_fail(err, QDC_EPARSE,
+                        "%s: the region array has %lld values for %lld cells", fmtname,
+                        (long long)c->creg.n, (long long)c->nc);
     st = cells_alloc(c, &pm, &room, err);
     if (st == QDC_OK)
         st = cells_walk(c, fmtname, &pm, &room, &sk, &nt, &ntri, &n10, err);
@@ -510,7 +669,7 @@ static qdc_status data_start(vtk *v, qdc_error *err)
 /* n values of type t; into out if not NULL (else checked and dropped).
  * finite: NaN/Inf are errors. */
 static qdc_status vtk_values(vtk *v, const char *what, int64_t n, vtype t, int finite,
-                             double *out, qdc_error *err)
+                             vsink *out, qdc_error *err)
 {
     txt *s = &v->s;
     qdc_status st = data_start(v, err);
@@ -527,12 +686,13 @@ static qdc_status vtk_values(vtk *v, const char *what, int64_t n, vtype t, int f
         for (int64_t i = 0; v->voff && i < n; i += 3)
             v->voff[i / 3] = off + (uint64_t)i * (uint64_t)vsize[t];
         if (out) {
-            decode_values(v->b + off, n, t, 1, out);
-            for (int64_t i = 0; finite && i < n; i++)
-                if (!isfinite(out[i]))
-                    return fail_bin(
-                        err, QDC_EPARSE, (int64_t)(off + (size_t)i * (size_t)vsize[t]),
-                        "%s: value %lld is not finite (NaN/Inf)", what, (long long)i);
+            int64_t i = sink_decode(out, v->b + off, n, t, 1);
+            if (i < 0)
+                return qdc_fail(err, QDC_ENOMEM, "out of memory for %s", what);
+            if (finite && i < n)
+                return fail_bin(
+                    err, QDC_EPARSE, (int64_t)(off + (size_t)i * (size_t)vsize[t]),
+                    "%s: value %lld is not finite (NaN/Inf)", what, (long long)i);
         }
         s->p += (size_t)n * (size_t)vsize[t];
         return QDC_OK;
@@ -541,6 +701,11 @@ static qdc_status vtk_values(vtk *v, const char *what, int64_t n, vtype t, int f
         double x;
         const char *te;
         char q[32];
+        int64_t u;
+        if (out && out->a && txt_uint_fast(s, 0, INT32_MAX, &u)) {
+            out->a->v[i] = (int32_t)u; /* what parse_double would give */
+            continue;
+        }
         skip_ws(s);
         te = tok_end(s, s->p);
         if (v->voff && i % 3 == 0)
@@ -555,8 +720,8 @@ static qdc_status vtk_values(vtk *v, const char *what, int64_t n, vtype t, int f
                                 what, quote_tok(q, s, s->p, te));
             s->p = te;
         }
-        if (out)
-            out[i] = x;
+        if (out && sink_put(out, i, x) != 0)
+            return qdc_fail(err, QDC_ENOMEM, "out of memory for %s", what);
     }
     return QDC_OK;
 }
@@ -615,29 +780,29 @@ static qdc_status vtk_attr_array(vtk *v, const char *name, size_t nlen, int64_t 
 {
     int prio = v->attr == 1 && ncomp == 1 ? region_prio(name, nlen) : PRIO_NONE;
     int vref = v->attr == 2 && ncomp == 1 && region_prio(name, nlen) == 2;
-    double *dst = NULL;
+    int keep = prio < v->c.creg_prio || vref;
+    iarr dst;
+    vsink k = {NULL, &dst};
     int64_t n = v->attr_n * ncomp;
     qdc_status st;
 
+    memset(&dst, 0, sizeof dst);
     if (ncomp && (uint64_t)v->attr_n > (uint64_t)(v->s.end - v->s.p) / (uint64_t)ncomp)
         return fail_txt(err, QDC_EPARSE, &v->s, v->s.p,
                         "%.*s: %lld tuples do not fit in the bytes left",
                         (int)(nlen > 32 ? 32 : nlen), name, (long long)v->attr_n);
-    if ((prio < v->c.creg_prio) || vref) {
-        dst = alloc_values(n, err);
-        if (!dst)
-            return QDC_ENOMEM;
-    }
-    st = vtk_values(v, "attribute", n, t, dst != NULL, dst, err);
-    if (st != QDC_OK || !dst) {
-        qdc_free(dst);
+    if (keep && iarr_alloc(&dst, n, err) != QDC_OK)
+        return QDC_ENOMEM;
+    st = vtk_values(v, "attribute", n, t, keep, keep ? &k : NULL, err);
+    if (st != QDC_OK || !keep) {
+        iarr_free(&dst);
         return st;
     }
     if (vref) {
-        qdc_free(v->c.vref);
+        iarr_free(&v->c.vref);
         v->c.vref = dst;
     } else {
-        qdc_free(v->c.creg);
+        iarr_free(&v->c.creg);
         v->c.creg = dst;
         v->c.creg_prio = prio;
     }
@@ -667,8 +832,10 @@ static qdc_status vtk_points(vtk *v, const char *w, qdc_error *err)
         st = srcrec_alloc(r, v->c.nv, err);
         v->voff = r->off;
     }
-    if (st == QDC_OK)
-        st = vtk_values(v, "POINTS: coordinate", 3 * v->c.nv, t, 1, v->c.xyz, err);
+    if (st == QDC_OK) {
+        vsink k = {v->c.xyz, NULL};
+        st = vtk_values(v, "POINTS: coordinate", 3 * v->c.nv, t, 1, &k, err);
+    }
     v->voff = NULL;
     return st;
 }
@@ -693,8 +860,10 @@ static qdc_status vtk_offsets51(vtk *v, const char *w, int64_t c, vtype *t,
         st = vtk_fits(v, "OFFSETS", c, *t, err);
     if (st == QDC_OK && !(v->c.offs = alloc_values(c, err)))
         st = QDC_ENOMEM;
-    if (st == QDC_OK)
-        st = vtk_values(v, "OFFSETS", c, *t, 1, v->c.offs, err);
+    if (st == QDC_OK) {
+        vsink k = {v->c.offs, NULL};
+        st = vtk_values(v, "OFFSETS", c, *t, 1, &k, err);
+    }
     if (st != QDC_OK)
         return st;
     next_word(v, &tw, &tn);
@@ -710,9 +879,10 @@ static qdc_status vtk_cells(vtk *v, const char *w, qdc_error *err)
 {
     int64_t c, c2;
     vtype t = T_I32;
+    vsink k = {NULL, &v->c.conn};
     qdc_status st;
 
-    if (v->c.types || v->c.conn)
+    if (v->c.types.v || v->c.conn.v)
         return fail_txt(err, QDC_EPARSE, &v->s, w, "CELLS after CELL_TYPES or twice");
     st = vtk_count(v, "CELLS", 1, INT64_MAX, &c, err);
     if (st == QDC_OK)
@@ -726,10 +896,10 @@ static qdc_status vtk_cells(vtk *v, const char *w, qdc_error *err)
         v->c.nc = c;
     if (st == QDC_OK)
         st = vtk_fits(v, "CELLS", v->c.nconn, t, err);
-    if (st == QDC_OK && !(v->c.conn = alloc_values(v->c.nconn, err)))
-        st = QDC_ENOMEM;
     if (st == QDC_OK)
-        st = vtk_values(v, "CELLS", v->c.nconn, t, 1, v->c.conn, err);
+        st = iarr_alloc(&v->c.conn, v->c.nconn, err);
+    if (st == QDC_OK)
+        st = vtk_values(v, "CELLS", v->c.nconn, t, 1, &k, err);
     if (st == QDC_OK && v->c.offs)
         st = check_offsets(v->c.offs, v->c.nc, v->c.nconn, "vtk", err);
     return st;
@@ -739,11 +909,12 @@ static qdc_status vtk_cell_types(vtk *v, const char *w, qdc_error *err)
 {
     txt *s = &v->s;
     int64_t c;
+    vsink k = {NULL, &v->c.types};
     qdc_status st;
 
-    if (!v->c.conn)
+    if (!v->c.conn.v)
         return fail_txt(err, QDC_EPARSE, s, w, "CELL_TYPES before CELLS");
-    if (v->c.types)
+    if (v->c.types.v)
         return fail_txt(err, QDC_EPARSE, s, w, "duplicate CELL_TYPES");
     st = vtk_count(v, "CELL_TYPES", 1, INT64_MAX, &c, err);
     if (st == QDC_OK && c != v->c.nc)
@@ -751,9 +922,9 @@ static qdc_status vtk_cell_types(vtk *v, const char *w, qdc_error *err)
                       (long long)c, (long long)v->c.nc);
     if (st == QDC_OK)
         st = vtk_fits(v, "CELL_TYPES", c, T_I32, err);
-    if (st == QDC_OK && !(v->c.types = alloc_values(c, err)))
-        st = QDC_ENOMEM;
-    return st == QDC_OK ? vtk_values(v, "CELL_TYPES", c, T_I32, 1, v->c.types, err) : st;
+    if (st == QDC_OK)
+        st = iarr_alloc(&v->c.types, c, err);
+    return st == QDC_OK ? vtk_values(v, "CELL_TYPES", c, T_I32, 1, &k, err) : st;
 }
 
 /* CELL_DATA or POINT_DATA (cell): the attribute arrays that follow. */
@@ -1583,7 +1754,7 @@ static qdc_status vtu_bytes(vtu *x, const xtag *t, int appended, size_t want, sr
 
 /* The n values of an ascii DataArray into out (NULL: skip); finite: NaN
  * and infinities are errors. rec (Points only): where each vertex starts. */
-static qdc_status vtu_ascii(vtu *x, const xtag *t, int64_t n, int finite, double *out,
+static qdc_status vtu_ascii(vtu *x, const xtag *t, int64_t n, int finite, vsink *out,
                             srcrec *rec, qdc_error *err)
 {
     txt *s = &x->s;
@@ -1603,6 +1774,11 @@ static qdc_status vtu_ascii(vtu *x, const xtag *t, int64_t n, int finite, double
         double y;
         const char *te, *lim = data_end(x, s->p);
         char q[32];
+        int64_t u;
+        if (out && out->a && txt_uint_fast(s, 0, INT32_MAX, &u)) {
+            out->a->v[i] = (int32_t)u; /* digits, then white space: no '<' */
+            continue;
+        }
         skip_ws(s);
         if (rec && i % 3 == 0)
             rec->off[i / 3] = (uint64_t)(s->p - s->base);
@@ -1619,8 +1795,8 @@ static qdc_status vtu_ascii(vtu *x, const xtag *t, int64_t n, int finite, double
         if (st != QDC_OK)
             return st;
         s->p = te;
-        if (out)
-            out[i] = y;
+        if (out && sink_put(out, i, y) != 0)
+            return qdc_fail(err, QDC_ENOMEM, "out of memory for a VTU array");
     }
     return QDC_OK;
 }
@@ -1628,7 +1804,7 @@ static qdc_status vtu_ascii(vtu *x, const xtag *t, int64_t n, int finite, double
 /* The data of one DataArray with n values of type t into out (NULL: skip).
  * rec (Points only): where the coordinates are. */
 static qdc_status vtu_array(vtu *x, const xtag *t, int64_t n, vtype vt, int finite,
-                            double *out, srcrec *rec, qdc_error *err)
+                            vsink *out, srcrec *rec, qdc_error *err)
 {
     const char *fv, *fe;
     txt *s = &x->s;
@@ -1659,18 +1835,16 @@ static qdc_status vtu_array(vtu *x, const xtag *t, int64_t n, vtype vt, int fini
                         (int)(fe - fv > 16 ? 16 : fe - fv), fv);
     st = vtu_bytes(x, t, appended, want, rec, &data, &tmp, err);
     if (st == QDC_OK && out) {
-        decode_values(data, n, vt, x->big, out);
-        for (int64_t i = 0; finite && i < n && st == QDC_OK; i++) {
-            if (isfinite(out[i]))
-                continue;
-            if (appended && !x->app_base64 && !x->zlib) /* raw: the value's bytes */
-                st = fail_bin(err, QDC_EPARSE,
-                              (const char *)data - s->base + i * vsize[vt],
-                              "VTU: value %lld is not finite (NaN/Inf)", (long long)i);
-            else /* base64 or zlib: the DataArray's tag */
-                st = fail_txt(err, QDC_EPARSE, s, t->name,
-                              "VTU: value %lld is not finite (NaN/Inf)", (long long)i);
-        }
+        int64_t i = sink_decode(out, data, n, vt, x->big);
+        if (i < 0)
+            st = qdc_fail(err, QDC_ENOMEM, "out of memory for a VTU array");
+        else if (finite && i < n && appended && !x->app_base64 && !x->zlib)
+            st = fail_bin(err, QDC_EPARSE, /* the value's bytes */
+                          (const char *)data - s->base + i * vsize[vt],
+                          "VTU: value %lld is not finite (NaN/Inf)", (long long)i);
+        else if (finite && i < n) /* base64 or zlib: the DataArray's tag */
+            st = fail_txt(err, QDC_EPARSE, s, t->name,
+                          "VTU: value %lld is not finite (NaN/Inf)", (long long)i);
     }
     qdc_free(tmp);
     return st;
@@ -1716,76 +1890,103 @@ static qdc_status vtu_note_range(vtu *x, const xtag *t, qdc_error *err)
     return st;
 }
 
-/* Which of our arrays (*dst, NULL if none) a DataArray named [nv, ne) with
- * ncomp components in section sec is, and its value count *n (-1: the
+/* One of our arrays: doubles (*d: the points, the offsets) or an iarr (a). */
+typedef struct {
+    double **d;
+    iarr *a;
+} vdst;
+
+/* Which of our arrays (dst, none if both NULL) a DataArray named [nv, ne)
+ * with ncomp components in section sec is, and its value count *n (-1: the
  * connectivity, sized by the offsets); *prio its region priority. */
 static qdc_status vtu_target(vtu *x, const xtag *t, int sec, const char *nv,
-                             const char *ne, int64_t ncomp, double **offs_end,
-                             double ***dst, int64_t *n, int *prio, qdc_error *err)
+                             const char *ne, int64_t ncomp, double **offs_end, vdst *dst,
+                             int64_t *n, int *prio, qdc_error *err)
 {
     size_t l = (size_t)(ne - nv);
 
-    *dst = NULL;
+    dst->d = NULL;
+    dst->a = NULL;
     *prio = PRIO_NONE;
     if (sec == SEC_POINTS) {
         if (ncomp != 3)
             return fail_txt(err, QDC_EPARSE, &x->s, t->name,
                             "VTU: Points need 3 components");
-        *dst = &x->c.xyz;
+        dst->d = &x->c.xyz;
         *n = 3 * x->c.nv;
         return x->rec && !x->c.xyz ? vtu_note_range(x, t, err) : QDC_OK;
     }
     if (sec == SEC_CELLS) {
         if (l == 12 && memcmp(nv, "connectivity", 12) == 0)
-            *dst = &x->c.conn;
+            dst->a = &x->c.conn;
         else if (l == 7 && memcmp(nv, "offsets", 7) == 0)
-            *dst = offs_end;
+            dst->d = offs_end;
         else if (l == 5 && memcmp(nv, "types", 5) == 0)
-            *dst = &x->c.types;
-        *n = *dst == &x->c.conn ? -1 : x->c.nc;
+            dst->a = &x->c.types;
+        *n = dst->a == &x->c.conn ? -1 : x->c.nc;
     } else if (sec == SEC_CELLDATA) {
         *prio = ncomp == 1 ? region_prio(nv, l) : PRIO_NONE;
         if (*prio < x->c.creg_prio)
-            *dst = &x->c.creg;
+            dst->a = &x->c.creg;
         *n = ncomp * x->c.nc;
     } else {
         if (ncomp == 1 && region_prio(nv, l) == 2)
-            *dst = &x->c.vref;
+            dst->a = &x->c.vref;
         *n = ncomp * x->c.nv;
     }
     return QDC_OK;
 }
 
-/* The n values of DataArray t (type vt) into a new *dst (replacing a region
- * array of lower priority); offsets checked to increase from 0. */
-static qdc_status vtu_store(vtu *x, const xtag *t, double **dst, int64_t n, vtype vt,
+/* The offsets (the ends of the cells) increase from 0. */
+static qdc_status vtu_check_ends(vtu *x, const xtag *t, const double *a, int64_t n,
+                                 qdc_error *err)
+{
+    for (int64_t i = 0; i < n; i++)
+        if (!(a[i] >= 0 && a[i] <= 4e18 && (double)(int64_t)a[i] == a[i] &&
+              (i == 0 || a[i] >= a[i - 1])))
+            return fail_txt(err, QDC_EPARSE, &x->s, t->name,
+                            "VTU: offsets not increasing from 0");
+    return QDC_OK;
+}
+
+/* The n values of DataArray t (type vt) into a new array at dst (replacing
+ * a region array of lower priority); offsets checked to increase from 0. */
+static qdc_status vtu_store(vtu *x, const xtag *t, const vdst *dst, int64_t n, vtype vt,
                             int prio, double **offs_end, qdc_error *err)
 {
-    double *a = alloc_values(n, err);
-    qdc_status st;
+    iarr ia;
+    vsink k = {NULL, NULL};
+    int pts = dst->d == &x->c.xyz;
+    qdc_status st = QDC_OK;
 
-    if (!a)
-        return QDC_ENOMEM;
-    if (dst == &x->c.xyz && x->rec && vt != T_F32 && vt != T_F64)
+    memset(&ia, 0, sizeof ia);
+    if (dst->a) {
+        st = iarr_alloc(&ia, n, err);
+        k.a = &ia;
+    } else if (!(k.d = alloc_values(n, err))) {
+        st = QDC_ENOMEM;
+    }
+    if (st != QDC_OK)
+        return st;
+    if (pts && x->rec && vt != T_F32 && vt != T_F64)
         srcrec_refuse(x->rec, "VTU Points of an integer type");
-    st = vtu_array(x, t, n, vt, 1, a,
-                   dst == &x->c.xyz && x->rec && !x->rec->why ? x->rec : NULL, err);
+    st =
+        vtu_array(x, t, n, vt, 1, &k, pts && x->rec && !x->rec->why ? x->rec : NULL, err);
     if (st != QDC_OK) {
-        qdc_free(a);
+        qdc_free(k.d);
+        iarr_free(&ia);
         return st;
     }
-    qdc_free(*dst);
-    *dst = a;
-    if (dst == &x->c.creg)
-        x->c.creg_prio = prio;
-    if (dst == offs_end) {
-        for (int64_t i = 0; i < n; i++)
-            if (!(a[i] >= 0 && a[i] <= 4e18 && (double)(int64_t)a[i] == a[i] &&
-                  (i == 0 || a[i] >= a[i - 1])))
-                return fail_txt(err, QDC_EPARSE, &x->s, t->name,
-                                "VTU: offsets not increasing from 0");
+    if (dst->a) {
+        iarr_free(dst->a);
+        *dst->a = ia;
+    } else {
+        qdc_free(*dst->d);
+        *dst->d = k.d;
     }
-    return QDC_OK;
+    if (dst->a == &x->c.creg)
+        x->c.creg_prio = prio;
+    return dst->d == offs_end ? vtu_check_ends(x, t, k.d, n, err) : QDC_OK;
 }
 
 static qdc_status vtu_dataarray(vtu *x, const xtag *t, int sec, double **offs_end,
@@ -1794,7 +1995,7 @@ static qdc_status vtu_dataarray(vtu *x, const xtag *t, int sec, double **offs_en
     const char *nv, *ne, *tv, *te;
     int64_t ncomp = 1, n = 0;
     vtype vt;
-    double **dst;
+    vdst dst;
     int prio;
     qdc_status st;
 
@@ -1823,15 +2024,15 @@ static qdc_status vtu_dataarray(vtu *x, const xtag *t, int sec, double **offs_en
         n = x->c.nc ? (int64_t)(*offs_end)[x->c.nc - 1] : 0;
         x->c.nconn = n;
     }
-    if (dst && *dst && dst != &x->c.creg)
+    if ((dst.d && *dst.d) || (dst.a && dst.a->v && dst.a != &x->c.creg))
         return fail_txt(err, QDC_EPARSE, &x->s, t->name, "VTU: duplicate DataArray");
     /* zlib inflates at most 1032 to 1 */
     if ((uint64_t)n > (uint64_t)(x->s.end - x->s.base) * (x->zlib ? 1032 : 1))
         return fail_txt(err, QDC_EPARSE, &x->s, t->name,
                         "VTU: %lld values cannot fit in the input", (long long)n);
-    if (!dst) /* not ours: its text or base64 is passed over with the tags */
+    if (!dst.d && !dst.a) /* not ours: its text or base64 is passed over with the tags */
         return QDC_OK;
-    return vtu_store(x, t, dst, n, vt, prio, offs_end, err);
+    return vtu_store(x, t, &dst, n, vt, prio, offs_end, err);
 }
 
 /* With a record: where an appended DataArray's offset="" value is, and the
@@ -2064,7 +2265,7 @@ static qdc_status vtu_cells(vtu *x, double **offs_end, qdc_error *err)
         if (st == QDC_OK)
             x->s = here;
     }
-    if (st == QDC_OK && x->c.nc && (!*offs_end || !x->c.conn || !x->c.types))
+    if (st == QDC_OK && x->c.nc && (!*offs_end || !x->c.conn.v || !x->c.types.v))
         st = fail_txt(err, QDC_EPARSE, &x->s, x->s.p,
                       "VTU: Cells need connectivity, offsets and types");
     if (st != QDC_OK)

@@ -890,6 +890,7 @@ static qdc_status block_zlib(const srcrec *r, const unsigned char *raw, size_t r
 {
     int hsz = r->hdr8 ? 8 : 4;
     size_t bs = (size_t)r->zhdr[1], nb = (size_t)r->zhdr[0];
+    size_t blk = bs < raw_n ? bs : raw_n; /* a one-block header may claim 2 GB blocks */
     qdc_status st = QDC_OK;
 
     if (bs == 0 || nb == 0 || nb > (raw_n + bs - 1) / bs + 1 ||
@@ -897,14 +898,14 @@ static qdc_status block_zlib(const srcrec *r, const unsigned char *raw, size_t r
         return qdc_fail(err, QDC_EINTERNAL, "source: zlib header does not fit");
     *hn = (3 + nb) * (size_t)hsz;
     *hdr = qdc_malloc(*hn);
-    *data = qdc_malloc(nb * compressBound((uLong)bs) + 1);
+    *data = qdc_malloc(nb * compressBound((uLong)blk) + 1);
     if (!*hdr || !*data)
         return qdc_fail(err, QDC_ENOMEM, "out of memory for the Points block");
     for (size_t k = 0; k < 3; k++)
         put_word(*hdr + k * (size_t)hsz, r->zhdr[k], hsz, r->big);
     for (size_t k = 0; k < nb && st == QDC_OK; k++) {
         size_t a = k * bs, len = k + 1 < nb ? bs : raw_n - a;
-        uLongf cn = compressBound((uLong)bs);
+        uLongf cn = compressBound((uLong)blk);
         if (compress2(*data + *dn, &cn, raw + a, (uLong)len, Z_DEFAULT_COMPRESSION) !=
             Z_OK)
             st = qdc_fail(err, QDC_EINTERNAL, "zlib: cannot compress the Points");

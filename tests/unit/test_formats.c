@@ -744,6 +744,74 @@ TEST(vtk51_layout_and_field_data)
     mesh_free(m);
 }
 
+/* Connectivity, cell types and regions are read as int32s, yet a value that
+ * is not one (1.5, 3e9, 2^40, from a float or 64-bit type) is still named
+ * in the message: a skipped cell (a quad here) may hold any, a kept one may
+ * not, and INT32_MIN is a region like any other. Text and big-endian binary. */
+TEST(vtk_integer_arrays_name_odd_values)
+{
+    static const char *const cases[4][3] = {
+        /* the tet's and the quad's points, their regions, the message */
+        {"0 1 2 3 0 1.5 2 4", "-2147483648 7", NULL},
+        {"0 1 2 3 0 1 2 4", "1 2.5e-1", NULL},
+        {"0 2.5 2 3 0 1 2 4", "1 2", "vtk: cell 0: point index 2.5 out of range [0, 4]"},
+        {"0 1 2 3 0 1 2 4", "3e9 1", "vtk: cell 0: region 3000000000 is not an int32"}};
+    char doc[600], bin[400];
+    size_t n, at;
+    mesh_t *m;
+    qdc_error err;
+
+    for (int i = 0; i < 4; i++) {
+        snprintf(doc, sizeof doc,
+                 "# vtk DataFile Version 5.1\nt\nASCII\nDATASET UNSTRUCTURED_GRID\n"
+                 "POINTS 5 double\n0 0 0 1 0 0 0 1 0 0 0 1 1 1 1\n"
+                 "CELLS 3 8\nOFFSETS double\n0 4 8\nCONNECTIVITY double\n%s\n"
+                 "CELL_TYPES 2\n10 9\nCELL_DATA 2\nSCALARS region double 1\n"
+                 "LOOKUP_TABLE default\n%s\n",
+                 cases[i][0], cases[i][1]);
+        if (cases[i][2]) {
+            ASSERT_EQ_INT(read_str(doc, MESHIO_AUTO, &m, &err), QDC_EPARSE);
+            ASSERT_TRUE(strcmp(err.msg, cases[i][2]) == 0);
+            ASSERT_EQ_INT(err.index, 0);
+            continue;
+        }
+        ASSERT_OK(read_str(doc, MESHIO_AUTO, &m, &err));
+        ASSERT_EQ_INT(m->nt, 1);
+        ASSERT_EQ_INT(m->tets[3], 3);
+        ASSERT_TRUE(m->region[0] == (i == 0 ? INT32_MIN : 1));
+        mesh_free(m);
+    }
+    /* 4 points (12 zero floats: only the indices matter), one tet */
+    n = (size_t)snprintf(bin, sizeof bin,
+                         "# vtk DataFile Version 5.1\nt\nBINARY\nDATASET "
+                         "UNSTRUCTURED_GRID\nPOINTS 4 float\n");
+    memset(bin + n, 0, 48);
+    n += 48;
+    n += (size_t)snprintf(bin + n, sizeof bin - n, "\nCELLS 2 4\nOFFSETS vtktypeint64\n");
+    for (int k = 0; k < 2; k++, n += 8) {
+        memset(bin + n, 0, 8);
+        bin[n + 7] = (char)(4 * k);
+    }
+    n += (size_t)snprintf(bin + n, sizeof bin - n, "\nCONNECTIVITY vtktypeint64\n");
+    for (int k = 0; k < 4; k++, n += 8) {
+        memset(bin + n, 0, 8);
+        bin[n + 7] = (char)k;
+    }
+    at = n - 8;
+    bin[at + 2] = 1; /* the last index: 3 + 2^40 */
+    n += (size_t)snprintf(bin + n, sizeof bin - n, "\nCELL_TYPES 1\n");
+    memcpy(bin + n, "\0\0\0\12\n", 5); /* 10 */
+    n += 5;
+    ASSERT_EQ_INT(meshio_read(bin, n, MESHIO_AUTO, &m, &err), QDC_EPARSE);
+    ASSERT_TRUE(strcmp(err.msg, "vtk: cell 0: point index 1099511627779 out of range "
+                                "[0, 3]") == 0);
+    bin[at + 2] = 0;
+    ASSERT_OK(meshio_read(bin, n, MESHIO_AUTO, &m, &err));
+    ASSERT_EQ_INT(m->nt, 1);
+    ASSERT_EQ_INT(m->tets[3], 3);
+    mesh_free(m);
+}
+
 /* MSH 1: node numbers mapped, physical tags as regions and triangle refs,
  * other elements skipped with a note, a 10-node tet refused; read as any
  * Gmsh file and written back spliced only. */
@@ -1187,7 +1255,8 @@ TEST_MAIN("formats", T(roundtrip_all_tags), T(roundtrip_no_tags), T(roundtrip_em
           T(gmsh_entity_tags_without_physicals), T(gmsh22_binary_and_40),
           T(dolfin_abaqus_netgen), T(meshb_versions_and_byte_order),
           T(gmsh_errors_say_where), T(gmsh_binary_bad_record_after_good_ones),
-          T(gmsh_periodic_held), T(vtk51_layout_and_field_data), T(vtu_inline_base64),
+          T(gmsh_periodic_held), T(vtk51_layout_and_field_data),
+          T(vtk_integer_arrays_name_odd_values), T(vtu_inline_base64),
           T(vtu_cgal_meshdomain_is_the_region), T(names_sniffing_media_types),
           T(dev_speed_ascii), T(gmsh41_binary_1m_tets_speed),
           T(new_formats_1m_tets_speed), T(msh1), T(vtk9_field_metadata),
