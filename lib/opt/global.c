@@ -348,9 +348,17 @@ static qdc_status iterate(ctx_t *c, opt_result *res, opt_progress *r, int *stepp
     /* q~ at x_k with one global delta (docs/method.md §2): the delta of x_k is
      * the evaluation's that ended setup or the last iteration (x_k has not
      * moved since), the smallest metric argument of the same parts; with it,
-     * what the line search needs of x_k, in the same pass */
+     * what the line search needs of x_k, in the same pass, which that
+     * evaluation took already when its objective needed one (delta > 0: a
+     * tangled mesh) */
     delta = c->eta_delta;
-    f0 = encode_objective_scan(tp, c->x, o->metric, delta, c->qt, &at);
+    if (c->xscan_ok) {
+        f0 = c->xscan_f;
+        at = c->xscan;
+    } else {
+        f0 = encode_objective_scan(tp, c->x, o->metric, delta, c->qt, &at);
+    }
+    c->xscan_ok = 0;
     if (literal || o->weights == OPT_WEIGHTS_PAPER)
         encode_paper(tp, c->x, o->metric, c->qt, c->qval, c->d);
     else
@@ -386,7 +394,7 @@ static qdc_status iterate(ctx_t *c, opt_result *res, opt_progress *r, int *stepp
         folded = count_folds(tp, c->x, c->trial, &ninv_t);
     }
     move = apply_step(c, step);
-    c->eta_delta = ctx_evaluate(c, c->x, r, c->eta);
+    ctx_evaluate_x(c, r);
     r->n_folded = folded;
     r->step = step;
     r->max_move = sqrt(move) / c->lbar;
