@@ -34,8 +34,11 @@ void ctx_log(const ctx_t *c, int level, const char *fmt, ...)
 /* Quality record of x (normalized coordinates; mean ratio and angles are
  * scale-invariant) in one pass over the tets, then the objective with the
  * delta of x, which is returned. eta (nt entries, may be NULL) receives each
- * tet's mean ratio for the finishing pass. */
-double ctx_evaluate(const ctx_t *c, const double *x, opt_progress *r, double *eta_out)
+ * tet's mean ratio for the finishing pass. When the objective takes a pass of
+ * its own, qt and sc (may be NULL) receive what encode_objective_scan finds
+ * in it, and *scanned is 1 (else 0). */
+static double evaluate(const ctx_t *c, const double *x, opt_progress *r, double *eta_out,
+                       double *qt, encode_scan *sc, int *scanned)
 {
     const mesh_topo *tp = c->tp;
     const opt_metric m = c->o->metric;
@@ -95,11 +98,25 @@ double ctx_evaluate(const ctx_t *c, const double *x, opt_progress *r, double *et
     r->n_inverted = ninv;
     r->n_degenerate = ndeg;
     delta = metric_delta(amin, c->eps);
-    r->objective =
-        fuse && delta == 0.0 ? obj : encode_objective(tp, x, m, delta, NULL, NULL);
+    *scanned = !(fuse && delta == 0.0);
+    /* (encode_objective_scan's sum is encode_objective's, bit for bit) */
+    r->objective = *scanned ? encode_objective_scan(tp, x, m, delta, qt, sc) : obj;
     r->elapsed = qdc_now() - c->t0;
     r->solver = c->sol ? (int)solve_kind(c->sol) : 0;
     return delta;
+}
+
+double ctx_evaluate(const ctx_t *c, const double *x, opt_progress *r, double *eta_out)
+{
+    int scanned;
+
+    return evaluate(c, x, r, eta_out, NULL, NULL, &scanned);
+}
+
+void ctx_evaluate_x(ctx_t *c, opt_progress *r)
+{
+    c->eta_delta = evaluate(c, c->x, r, c->eta, c->qt, &c->xscan, &c->xscan_ok);
+    c->xscan_f = r->objective;
 }
 
 /* Mean ratio of every tet into eta and the fields of r that the choice of

@@ -7,6 +7,7 @@
 #define QDC_CTX_H
 
 #include "core/mesh_int.h"
+#include "opt/encode.h"
 #include "opt/opt.h"
 #include "opt/slide.h"
 #include "opt/solve.h"
@@ -44,7 +45,12 @@ typedef struct {
     double *qt, *qval, *d;
     uint8_t *fslot; /* encode_face_slots (NULL: searched) */
     double *eta; /* nt: mean ratio per tet at the x of the last evaluate() that asked */
-    double eta_delta;   /* and the delta of that x */
+    double eta_delta; /* and the delta of that x */
+    /* ctx_evaluate_x's pass for the objective at x, eta_delta (when it took
+     * one): q~ per tet in qt, its sum and what encode_objective_scan found */
+    int xscan_ok;
+    double xscan_f;
+    encode_scan xscan;
     double mu_factor;   /* omega_B^2 once harmonic guidance is on and mu_scaled */
     const double *bref; /* targets of the boundary rows: x0 (lsq) or x_k (slide) */
     slide_ctx *sl;      /* slide mode only */
@@ -66,6 +72,11 @@ void ctx_free(ctx_t *c);
 /* The quality record of x into r, each tet's mean ratio into eta_out (may be
  * NULL); returns the delta of x. */
 double ctx_evaluate(const ctx_t *c, const double *x, opt_progress *r, double *eta_out);
+/* ctx_evaluate of c->x into r and c->eta, its delta into c->eta_delta; where
+ * the objective takes a pass of its own (delta > 0, or micn), that pass also
+ * leaves q~ per tet in c->qt and c->xscan* (c->xscan_ok): what the next
+ * global iteration starts from at this x. */
+void ctx_evaluate_x(ctx_t *c, opt_progress *r);
 /* Each tet's mean ratio into eta and the fields of r the best-iterate rule
  * reads; returns the delta of x. */
 double ctx_scan_light(const ctx_t *c, const double *x, double *eta, opt_progress *r);

@@ -20,18 +20,19 @@ static void tet_points(const mesh_topo *tp, const double *x, int32_t t, double p
  * number of threads or their timing. */
 #define ENCODE_CHUNKS 256
 
-double encode_objective(const mesh_topo *tp, const double *x, opt_metric m, double delta,
-                        double *qt, int32_t *n_nonpos)
+/* The objective's pass, with sc (may be NULL) filled too. */
+static double objective_pass(const mesh_topo *tp, const double *x, opt_metric m,
+                             double delta, double *qt, int32_t *n_nonpos, encode_scan *sc)
 {
-    double part[ENCODE_CHUNKS], sum = 0.0;
-    int32_t badc[ENCODE_CHUNKS], bad = 0;
+    double part[ENCODE_CHUNKS], emin[ENCODE_CHUNKS], sum = 0.0;
+    int32_t badc[ENCODE_CHUNKS], unus[ENCODE_CHUNKS], bad = 0;
 
 #pragma omp parallel for schedule(static)
     for (int c = 0; c < ENCODE_CHUNKS; c++) {
         int32_t t0 = qdc_part(tp->nt, c, ENCODE_CHUNKS);
         int32_t t1 = qdc_part(tp->nt, c + 1, ENCODE_CHUNKS);
-        double s = 0.0;
-        int32_t b = 0;
+        double s = 0.0, e3 = INFINITY;
+        int32_t b = 0, u = 0;
         for (int32_t t = t0; t < t1; t++) {
             double p[4][3], q;
             metric_parts pt;
@@ -42,34 +43,44 @@ double encode_objective(const mesh_topo *tp, const double *x, opt_metric m, doub
             if (qt)
                 qt[t] = q;
             s += q;
+            if (sc) { /* every metric's parts hold MIVL's vol and l2sum */
+                double e = metric_mean_ratio_cubed(&pt);
+                e3 = e < e3 ? e : e3;
+                u += geom_tet_bad(x, tp->tets + 4 * (size_t)t);
+            }
         }
         part[c] = s;
         badc[c] = b;
+        emin[c] = e3;
+        unus[c] = u;
+    }
+    if (sc) {
+        sc->eta3_min = INFINITY;
+        sc->n_bad = 0;
     }
     for (int c = 0; c < ENCODE_CHUNKS; c++) {
         sum += part[c];
         bad += badc[c];
+        if (sc) {
+            sc->eta3_min = emin[c] < sc->eta3_min ? emin[c] : sc->eta3_min;
+            sc->n_bad += unus[c];
+        }
     }
     if (n_nonpos)
         *n_nonpos = bad;
     return sum;
 }
 
-double encode_min_arg(const mesh_topo *tp, const double *x, opt_metric m)
+double encode_objective(const mesh_topo *tp, const double *x, opt_metric m, double delta,
+                        double *qt, int32_t *n_nonpos)
 {
-    double smin = INFINITY;
+    return objective_pass(tp, x, m, delta, qt, n_nonpos, NULL);
+}
 
-#pragma omp parallel for reduction(min : smin) schedule(static)
-    for (int32_t t = 0; t < tp->nt; t++) {
-        double p[4][3], s;
-        metric_parts pt;
-        tet_points(tp, x, t, p);
-        metric_parts_for(m, p[0], p[1], p[2], p[3], &pt);
-        s = metric_arg(m, &pt);
-        if (s < smin)
-            smin = s;
-    }
-    return smin;
+double encode_objective_scan(const mesh_topo *tp, const double *x, opt_metric m,
+                             double delta, double *qt, encode_scan *sc)
+{
+    return objective_pass(tp, x, m, delta, qt, NULL, sc);
 }
 
 int32_t encode_slot(const mesh_topo *tp, int32_t i, int32_t j)

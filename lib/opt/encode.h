@@ -15,8 +15,18 @@
 double encode_objective(const mesh_topo *tp, const double *x, opt_metric m, double delta,
                         double *qt, int32_t *n_nonpos);
 
-/* Smallest metric argument (vol or sigma) over all tets: the input of metric_delta. */
-double encode_min_arg(const mesh_topo *tp, const double *x, opt_metric m);
+/* What encode_objective_scan finds at x besides: the smallest mean ratio
+ * cubed (ctx_tet_eta3's value, signed) and the count of unusable tets
+ * (geom_tet_bad of core/tet.h). */
+typedef struct {
+    double eta3_min;
+    int32_t n_bad;
+} encode_scan;
+
+/* encode_objective (the same sum, bit for bit) and *sc, in the one pass over
+ * the tets: the global iteration's line search needs both at x. */
+double encode_objective_scan(const mesh_topo *tp, const double *x, opt_metric m,
+                             double delta, double *qt, encode_scan *sc);
 
 /* Optimal-position averaging (docs/method.md §4, default): row i of Q is
  * v_i - sum_t c_ti bary(face opposite i in t), c_ti = qt_t / sum_{s in T(i)} qt_s,

@@ -138,8 +138,11 @@ static void place_vertex(ctx_t *c, int32_t v, double s)
  * but per vertex: the rest of the mesh keeps its whole step. A vertex held at
  * c->x can still leave a neighbour tet folded by its other corners, which are
  * then held in the next round; with every vertex held the trial is c->x,
- * which folds nothing, so the rounds end. */
-static void feasible_trial(ctx_t *c, double s, int32_t ninv_x, double qfloor3)
+ * which folds nothing, so the rounds end. Returns 1 if the trial may fold
+ * a tet usable at c->x (the whole step taken on a tangled mesh), 0 if it
+ * folds none: every tet a round left spoiling had its corners moved and was
+ * looked at again. */
+static int feasible_trial(ctx_t *c, double s, int32_t ninv_x, double qfloor3)
 {
     const mesh_topo *tp = c->tp;
     int32_t nv = c->nv, folds = 0, ninv = 0;
@@ -176,7 +179,7 @@ static void feasible_trial(ctx_t *c, double s, int32_t ninv_x, double qfloor3)
     if (!folds || (ninv_x > 0 && ninv <= ninv_x && c->o->boundary == OPT_BOUNDARY_LSQ)) {
         if (folds)
             memset(c->vmark, 0, (size_t)nv);
-        return;
+        return folds > 0;
     }
     /* Then only the marked vertices move back, and only their tets can
      * change: each round looks at those alone (a whole-mesh scan per round
@@ -189,10 +192,10 @@ static void feasible_trial(ctx_t *c, double s, int32_t ninv_x, double qfloor3)
                 c->vlist[n++] = v;
             }
         if (!n)
-            return;
+            return 0;
         if (round > 64) { /* cannot happen (see above); never loop for ever */
             memcpy(c->trial, c->x, 3 * (size_t)nv * sizeof(double));
-            return;
+            return 0;
         }
         /* in parallel: a vertex writes only its own trial position, and the
          * marks are a set (measured on a thin bone of 100k tets, where half
@@ -216,7 +219,7 @@ static void feasible_trial(ctx_t *c, double s, int32_t ninv_x, double qfloor3)
             }
         }
         if (!again)
-            return;
+            return 0;
     }
 }
 
@@ -286,24 +289,20 @@ static int all_finite(const double *x, size_t n)
  * boundary vertices the accepted steps folded 26-331 tets. So a trial
  * is accepted only if it folds no valid tet while the mesh is valid,
  * and never raises the inverted count of a tangled one. Returns the step
- * taken (0: none), its trial in c->trial. */
-static double line_search(ctx_t *c, double delta, double f0)
+ * taken (0: none), its trial in c->trial; *may_fold as feasible_trial
+ * returned for it. at: the worst mean ratio (cubed) and the unusable tets at
+ * c->x, found with f0. */
+static double line_search(ctx_t *c, double delta, double f0, const encode_scan *at,
+                          int *may_fold)
 {
     const opt_options *o = c->o;
     const mesh_topo *tp = c->tp;
-    double step = 1.0;
+    double step = 1.0, qfloor3 = at->eta3_min;
     int h;
-    int32_t ninv_x = 0;
-    double qfloor3 = INFINITY;
-#pragma omp parallel for reduction(min : qfloor3) reduction(+ : ninv_x) schedule(static)
-    for (int32_t e = 0; e < tp->nt; e++) {
-        const int32_t *tt = tp->tets + 4 * (size_t)e;
-        double q = ctx_tet_eta3(c->x, tt);
-        qfloor3 = q < qfloor3 ? q : qfloor3;
-        ninv_x += geom_tet_bad(c->x, tt);
-    }
+    int32_t ninv_x = at->n_bad;
+
     for (h = 0; h <= o->ls_halvings; h++) {
-        feasible_trial(c, step, ninv_x, qfloor3);
+        *may_fold = feasible_trial(c, step, ninv_x, qfloor3);
         if (encode_objective(tp, c->trial, o->metric, delta, NULL, NULL) < f0)
             break;
         step *= 0.5;
@@ -341,13 +340,25 @@ static qdc_status iterate(ctx_t *c, opt_result *res, opt_progress *r, int *stepp
     size_t n3 = 3 * (size_t)c->nv;
     int literal = o->mode == OPT_MODE_LITERAL;
     double t = qdc_now(), delta, f0, mu, step = 1.0, move;
-    int cg = 0;
+    int cg = 0, may_fold = 1;
     int32_t folded = 0;
+    encode_scan at;
     qdc_status st;
 
-    /* q~ at x_k with one global delta (docs/method.md §2) */
-    delta = metric_delta(encode_min_arg(tp, c->x, o->metric), c->eps);
-    f0 = encode_objective(tp, c->x, o->metric, delta, c->qt, NULL);
+    /* q~ at x_k with one global delta (docs/method.md §2): the delta of x_k is
+     * the evaluation's that ended setup or the last iteration (x_k has not
+     * moved since), the smallest metric argument of the same parts; with it,
+     * what the line search needs of x_k, in the same pass, which that
+     * evaluation took already when its objective needed one (delta > 0: a
+     * tangled mesh) */
+    delta = c->eta_delta;
+    if (c->xscan_ok) {
+        f0 = c->xscan_f;
+        at = c->xscan;
+    } else {
+        f0 = encode_objective_scan(tp, c->x, o->metric, delta, c->qt, &at);
+    }
+    c->xscan_ok = 0;
     if (literal || o->weights == OPT_WEIGHTS_PAPER)
         encode_paper(tp, c->x, o->metric, c->qt, c->qval, c->d);
     else
@@ -367,7 +378,7 @@ static qdc_status iterate(ctx_t *c, opt_result *res, opt_progress *r, int *stepp
         return qdc_fail(err, QDC_ESOLVE, "linear solve returned a non-finite value");
     t = qdc_now();
     if (!literal)
-        step = line_search(c, delta, f0);
+        step = line_search(c, delta, f0, &at, &may_fold);
     res->t_linesearch += qdc_now() - t;
     if (literal) {
         for (size_t q = 0; q < n3; q++)
@@ -376,12 +387,14 @@ static qdc_status iterate(ctx_t *c, opt_result *res, opt_progress *r, int *stepp
     } else if (step == 0.0) {
         memcpy(c->trial, c->x, n3 * sizeof(double));
     } /* else c->trial holds the accepted feasible trial */
-    {
+    /* a trial the line search found fold-free is not scanned again (a whole
+     * scan, two orientations per tet, each iteration) */
+    if (step > 0.0 && may_fold) {
         int32_t ninv_t;
-        folded = step > 0.0 ? count_folds(tp, c->x, c->trial, &ninv_t) : 0;
+        folded = count_folds(tp, c->x, c->trial, &ninv_t);
     }
     move = apply_step(c, step);
-    c->eta_delta = ctx_evaluate(c, c->x, r, c->eta);
+    ctx_evaluate_x(c, r);
     r->n_folded = folded;
     r->step = step;
     r->max_move = sqrt(move) / c->lbar;

@@ -86,7 +86,7 @@ static qdc_status run_setup(ctx_t *c, mesh_t *m, const opt_options *o,
             (int)m->nv, (int)tp->nb, (int)m->nt, opt_solver_name(res->solver),
             res->solver_flops);
     res->t_setup = qdc_now() - c->t0;
-    c->eta_delta = ctx_evaluate(c, c->x, r, c->eta);
+    ctx_evaluate_x(c, r);
     r->phase = "input";
     c->input = c->best = *r;
     res->before = *r;

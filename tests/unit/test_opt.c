@@ -2,8 +2,10 @@
  * untangles, never returns a worse mesh, respects locked vertices and tags,
  * stops on cancel. */
 #include "core/mesh_int.h"
+#include "core/tet.h"
 #include "geom/metric_int.h"
 #include "opt/angle.h"
+#include "opt/encode.h"
 #include "opt/finish.h"
 #include "opt/opt_int.h"
 #include "opt/untangle.h"
@@ -844,6 +846,51 @@ TEST(untangling_does_not_depend_on_the_thread_count)
     free(ref);
 }
 
+/* The objective's pass that also does the line search's scan
+ * (encode_objective_scan): its sum and q~ per tet bit for bit
+ * encode_objective's, its smallest mean ratio cubed and unusable count those
+ * of a tet-by-tet check, on a tangled grid (delta > 0) and a valid one. */
+TEST(objective_scan_matches_the_separate_passes)
+{
+    for (int k = 0; k < 2; k++) {
+        grid_case g;
+        double e3 = INFINITY, vmin = INFINITY, delta, f0, f1, *qt0, *qt1;
+        int32_t nbad = 0;
+        encode_scan sc;
+        ASSERT_TRUE(grid_case_new(&g, 6, k ? 1.6 : 0.3, 5));
+        for (int32_t t = 0; t < g.tp->nt; t++) {
+            const int32_t *tt = g.tp->tets + 4 * (size_t)t;
+            const double *x = g.m->xyz;
+            metric_parts pt;
+            metric_parts_for(OPT_METRIC_MIVL, x + 3 * tt[0], x + 3 * tt[1], x + 3 * tt[2],
+                             x + 3 * tt[3], &pt);
+            e3 = fmin(e3, metric_mean_ratio_cubed(&pt));
+            vmin = fmin(vmin, pt.vol);
+            nbad += geom_tet_bad(x, tt);
+        }
+        delta = metric_delta(vmin, metric_eps(OPT_METRIC_MIVL, 1.0 / g.n, 0.01));
+        qt0 = malloc((size_t)g.tp->nt * sizeof(double));
+        qt1 = malloc((size_t)g.tp->nt * sizeof(double));
+        ASSERT_TRUE(qt0 && qt1);
+        f0 = encode_objective(g.tp, g.m->xyz, OPT_METRIC_MIVL, delta, qt0, NULL);
+        f1 = encode_objective_scan(g.tp, g.m->xyz, OPT_METRIC_MIVL, delta, qt1, &sc);
+        printf("  # %s grid: delta %.3g, %d unusable, smallest mean ratio cubed %.4g\n",
+               k ? "tangled" : "valid", delta, (int)sc.n_bad, sc.eta3_min);
+        ASSERT_TRUE(isfinite(f0) && f0 == f1);
+        ASSERT_TRUE(memcmp(qt0, qt1, (size_t)g.tp->nt * sizeof(double)) == 0);
+        ASSERT_TRUE(sc.eta3_min == e3);
+        ASSERT_EQ_INT(sc.n_bad, nbad);
+        ASSERT_EQ_INT(sc.n_bad, mesh_count_inverted(g.tp, g.m->xyz));
+        if (k)
+            ASSERT_TRUE(delta > 0.0 && sc.n_bad > 20 && sc.eta3_min < 0.0);
+        else
+            ASSERT_TRUE(sc.n_bad == 0 && sc.eta3_min > 0.0);
+        free(qt0);
+        free(qt1);
+        grid_case_free(&g);
+    }
+}
+
 TEST_MAIN("opt", T(fixed_boundary_untangles_without_folding),
           T(result_does_not_depend_on_vertex_numbering),
           T(sliding_vertex_takes_a_tangent_newton_step_in_a_good_star),
@@ -862,4 +909,5 @@ TEST_MAIN("opt", T(fixed_boundary_untangles_without_folding),
           T(untangling_slides_boundary_vertices_on_their_faces),
           T(allocation_failures_are_clean),
           T(finishing_sweeps_do_not_depend_on_the_thread_count),
-          T(untangling_does_not_depend_on_the_thread_count))
+          T(untangling_does_not_depend_on_the_thread_count),
+          T(objective_scan_matches_the_separate_passes))
