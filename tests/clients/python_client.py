@@ -242,7 +242,9 @@ except QdcError as e:
 a = c.submit(MESH, {"max_iter": 1}, idempotency_key="py-%d" % os.getpid())
 b = c.submit(MESH, {"max_iter": 1}, idempotency_key="py-%d" % os.getpid())
 check("same Idempotency-Key: same job", a["id"] == b["id"], "%s %s" % (a["id"], b["id"]))
-big = c.submit(os.environ["BIG"], {"max_iter": 1000})
+# no early stop (stall, tol_move 0): a run of 1000 global iterations, which
+# the cancel stops, however late it comes on a busy machine
+big = c.submit(os.environ["BIG"], {"max_iter": 1000, "stall": 0, "tol_move": 0})
 c.cancel(big)
 try:
     c.wait(big)
