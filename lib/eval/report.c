@@ -5,6 +5,7 @@
 
 #include "core/mesh_int.h"
 #include "core/tet.h"
+#include "core/tri_edges.h"
 #include "geom/metric_int.h"
 #include "geom/vec3.h"
 #include "opt/opt_int.h"
@@ -99,22 +100,6 @@ static void add_tet(report_quality *q, const tet_measure *o, int32_t t, scan_sum
     }
 }
 
-/* A boundary triangle's edge (lo, hi), from its vertex k to k + 1. */
-typedef struct {
-    int32_t lo, hi, tri, k;
-} half_edge;
-
-static int half_edge_cmp(const void *x, const void *y)
-{
-    const half_edge *a = x, *b = y;
-
-    if (a->lo != b->lo)
-        return a->lo < b->lo ? -1 : 1;
-    if (a->hi != b->hi)
-        return a->hi < b->hi ? -1 : 1;
-    return a->tri < b->tri ? -1 : a->tri > b->tri;
-}
-
 /* The solid's angle in degrees at edge (a, b) of triangles (a, b, c) and
  * (b, a, d), both oriented outward when out > 0 (inward when out < 0), or -1
  * when either is degenerate. */
@@ -158,26 +143,20 @@ static qdc_status surface_angles(const mesh_t *m, const mesh_faces *f, report_qu
     const int32_t *tr = f->tris;
     const double *o = m->xyz + 3 * (size_t)tr[0];
     size_t n = 3 * (size_t)f->ntri;
-    half_edge *he = qdc_mallocn(n, sizeof *he);
+    tri_edge *he = NULL;
     int32_t *up = qdc_mallocn((size_t)f->ntri, sizeof *up);
     double *vol = qdc_calloc((size_t)f->ntri, sizeof *vol);
 
     q->surf_angle_min = 360.0;
     q->n_surf_lt5 = 0;
-    if (!he || !up || !vol) {
+    if (tri_edges_sorted(tr, f->ntri, m->nv, &he) != QDC_OK || !up || !vol) {
         qdc_free(he);
         qdc_free(up);
         qdc_free(vol);
         return QDC_ENOMEM;
     }
-    for (int32_t i = 0; i < f->ntri; i++) {
+    for (int32_t i = 0; i < f->ntri; i++)
         up[i] = i;
-        for (int k = 0; k < 3; k++) {
-            int32_t a = tr[3 * i + k], b = tr[3 * i + (k + 1) % 3];
-            he[3 * (size_t)i + k] = (half_edge){a < b ? a : b, a < b ? b : a, i, k};
-        }
-    }
-    qsort(he, n, sizeof *he, half_edge_cmp);
     for (size_t i = 0; i + 1 < n; i++) /* the pieces of the surface */
         if (he[i].lo == he[i + 1].lo && he[i].hi == he[i + 1].hi)
             up[find_root(up, he[i].tri)] = find_root(up, he[i + 1].tri);
@@ -190,8 +169,7 @@ static qdc_status surface_angles(const mesh_t *m, const mesh_faces *f, report_qu
         vol[find_root(up, i)] += vec3_dot(u, x);
     }
     for (size_t i = 0, j; i < n; i = j) {
-        for (j = i + 1; j < n && he[j].lo == he[i].lo && he[j].hi == he[i].hi; j++)
-            ;
+        j = tri_edges_run(he, n, i);
         if (j - i == 2) {
             const int32_t *t1 = tr + 3 * (size_t)he[i].tri,
                           *t2 = tr + 3 * (size_t)he[i + 1].tri;

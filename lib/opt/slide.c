@@ -2,6 +2,7 @@
 #include "opt/slide.h"
 
 #include "core/tet.h"
+#include "core/tri_edges.h"
 #include "geom/bderr_int.h"
 
 #include <math.h>
@@ -30,59 +31,6 @@ struct slide_ctx {
     double lift; /* > 0: curved-surface vertices slide, within this of the surface */
 };
 
-typedef struct {
-    int32_t a, b; /* a < b */
-    int32_t f;    /* face index: 0..nbf-1 boundary, nbf.. interface */
-} edge_rec;
-
-static int edge_less(const edge_rec *p, const edge_rec *q)
-{
-    if (p->a != q->a)
-        return p->a < q->a;
-    if (p->b != q->b)
-        return p->b < q->b;
-    return p->f < q->f;
-}
-
-/* e[0..ne) sorted by (a, b, f), a in [0, nv): a counting sort by a, then
- * each small bucket insertion-sorted (qsort took 0.25 s of setup on a
- * surface of 833k triangles). 0 if out of memory. */
-static int sort_edges(edge_rec *e, size_t ne, int32_t nv)
-{
-    size_t *start = qdc_calloc((size_t)nv + 2, sizeof(size_t));
-    edge_rec *tmp = qdc_mallocn(ne + 1, sizeof *tmp);
-
-    if (!start || !tmp) {
-        qdc_free(start);
-        qdc_free(tmp);
-        return 0;
-    }
-    for (size_t i = 0; i < ne; i++)
-        start[e[i].a + 2]++;
-    for (int32_t v = 0; v < nv; v++)
-        start[v + 2] += start[v + 1];
-    for (size_t i = 0; i < ne; i++)
-        tmp[start[e[i].a + 1]++] = e[i];
-    /* now bucket v is tmp[start[v] .. start[v + 1]) */
-    for (int32_t v = 0; v < nv; v++) {
-        edge_rec *b = tmp + start[v];
-        size_t n = start[v + 1] - start[v];
-        for (size_t i = 1; i < n; i++) {
-            edge_rec key = b[i];
-            size_t j = i;
-            while (j > 0 && edge_less(&key, &b[j - 1])) {
-                b[j] = b[j - 1];
-                j--;
-            }
-            b[j] = key;
-        }
-    }
-    memcpy(e, tmp, ne * sizeof *e);
-    qdc_free(start);
-    qdc_free(tmp);
-    return 1;
-}
-
 static void face_normal(const double *x, const int32_t *f, double n[3])
 {
     const double *a = x + 3 * (size_t)f[0], *b = x + 3 * (size_t)f[1],
@@ -110,36 +58,24 @@ static qdc_status find_features(slide_ctx *s, const mesh_topo *tp, const double 
                                 double feature_angle, int32_t *deg)
 {
     size_t ne = 3 * (size_t)tp->nbf;
-    edge_rec *e = qdc_mallocn(ne + 1, sizeof *e);
+    tri_edge *e = NULL;
     int32_t *pairs = NULL, np = 0;
     double cosmax = cos(feature_angle * 3.14159265358979323846 / 180.0);
 
-    if (!e)
+    if (tri_edges_sorted(tp->bfaces, tp->nbf, tp->nv, &e) != QDC_OK)
         return QDC_ENOMEM;
-    for (int32_t f = 0; f < tp->nbf; f++)
-        for (int k = 0; k < 3; k++) {
-            int32_t a = tp->bfaces[3 * (size_t)f + k],
-                    b = tp->bfaces[3 * (size_t)f + (k + 1) % 3];
-            edge_rec *r = e + 3 * (size_t)f + k;
-            r->a = a < b ? a : b;
-            r->b = a < b ? b : a;
-            r->f = f;
-        }
     pairs = qdc_mallocn(ne + 1, 2 * sizeof(int32_t));
-    if (!pairs || !sort_edges(e, ne, tp->nv)) {
-        qdc_free(pairs);
+    if (!pairs) {
         qdc_free(e);
         return QDC_ENOMEM;
     }
     for (size_t i = 0; i < ne;) {
-        size_t j = i + 1;
+        size_t j = tri_edges_run(e, ne, i);
         int feature;
-        while (j < ne && e[j].a == e[i].a && e[j].b == e[i].b)
-            j++;
         if (j - i == 2) {
             double n1[3], n2[3];
-            face_normal(x0, tp->bfaces + 3 * (size_t)e[i].f, n1);
-            face_normal(x0, tp->bfaces + 3 * (size_t)e[i + 1].f, n2);
+            face_normal(x0, tp->bfaces + 3 * (size_t)e[i].tri, n1);
+            face_normal(x0, tp->bfaces + 3 * (size_t)e[i + 1].tri, n2);
             normalize(n1);
             normalize(n2);
             feature = n1[0] * n2[0] + n1[1] * n2[1] + n1[2] * n2[2] < cosmax;
@@ -147,11 +83,11 @@ static qdc_status find_features(slide_ctx *s, const mesh_topo *tp, const double 
             feature = 1; /* non-manifold surface edge: keep it as a feature */
         }
         if (feature) {
-            pairs[2 * np] = e[i].a;
-            pairs[2 * np + 1] = e[i].b;
+            pairs[2 * np] = e[i].lo;
+            pairs[2 * np + 1] = e[i].hi;
             np++;
-            deg[e[i].a]++;
-            deg[e[i].b]++;
+            deg[e[i].lo]++;
+            deg[e[i].hi]++;
         }
         i = j;
     }

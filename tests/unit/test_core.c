@@ -2,6 +2,7 @@
 #include "core/mesh_int.h"
 #include "core/order.h"
 #include "core/tet.h"
+#include "core/tri_edges.h"
 #include "geom/metric_int.h"
 #include "opt/encode.h"
 #include "opt/solve.h"
@@ -690,7 +691,47 @@ TEST(flat_tets_are_degenerate_at_every_scale)
     }
 }
 
-TEST_MAIN("core", T(flat_tets_are_degenerate_at_every_scale),
+/* A tet's four faces, a fin on its edge (0, 1) and a triangle with a repeated
+ * vertex: every edge paired with the triangles that have it, in order. */
+TEST(triangle_edges_pair_up_in_order)
+{
+    static const int32_t tris[] = {1, 2, 3, 0, 3, 2, 0, 1, 3, 0, 2, 1, 1, 0, 4, 5, 5, 6};
+    /* the runs: (lo, hi, count) in sorted order */
+    static const int32_t runs[][3] = {{0, 1, 3}, {0, 2, 2}, {0, 3, 2}, {0, 4, 1},
+                                      {1, 2, 2}, {1, 3, 2}, {1, 4, 1}, {2, 3, 2},
+                                      {5, 5, 1}, {5, 6, 2}};
+    tri_edge *e = NULL;
+    size_t n = 18, i = 0, r = 0;
+
+    ASSERT_OK(tri_edges_sorted(tris, 6, 7, &e));
+    for (size_t j = 0; j < n; j++) {
+        int32_t a = tris[3 * e[j].tri + e[j].k],
+                b = tris[3 * e[j].tri + (e[j].k + 1) % 3];
+        ASSERT_EQ_INT(e[j].lo, a < b ? a : b);
+        ASSERT_EQ_INT(e[j].hi, a < b ? b : a);
+        if (j > 0 && e[j].lo == e[j - 1].lo && e[j].hi == e[j - 1].hi)
+            ASSERT_TRUE(e[j].tri > e[j - 1].tri ||
+                        (e[j].tri == e[j - 1].tri && e[j].k > e[j - 1].k));
+    }
+    for (; i < n; r++) {
+        size_t j = tri_edges_run(e, n, i);
+        ASSERT_TRUE(r < 10);
+        ASSERT_EQ_INT(e[i].lo, runs[r][0]);
+        ASSERT_EQ_INT(e[i].hi, runs[r][1]);
+        ASSERT_EQ_INT((int32_t)(j - i), runs[r][2]);
+        i = j;
+    }
+    ASSERT_EQ_INT((int32_t)r, 10);
+    ASSERT_EQ_INT(e[0].tri, 2); /* (0, 1): the tet's faces 2 and 3, then the fin */
+    ASSERT_EQ_INT(e[2].tri, 4);
+    qdc_free(e);
+    ASSERT_OK(tri_edges_sorted(tris, 0, 7, &e));
+    ASSERT_TRUE(e != NULL);
+    qdc_free(e);
+}
+
+TEST_MAIN("core", T(triangle_edges_pair_up_in_order),
+          T(flat_tets_are_degenerate_at_every_scale),
           T(hessian_matches_finite_differences_of_the_gradient),
           T(dihedral_sines_are_the_sines_of_the_angles),
           T(cubed_mean_ratio_orders_like_the_mean_ratio), T(regular_tet_metrics_are_one),
