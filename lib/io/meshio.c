@@ -494,24 +494,49 @@ static qdc_status emit_payload(const void *arg, qdc_write_fn fn, void *ctx,
     return fn(ctx, p->bytes, p->len) == 0 ? QDC_OK : QDC_EIO;
 }
 
-/* path with its extension replaced by ext (".node"); a new string. */
+/* path with its extension replaced by ext (".node"), a .gz kept after it
+ * (x.ele.gz -> x.node.gz: the two files compressed alike); a new string. */
 static char *with_ext(const char *path, const char *ext)
 {
     const char *e = file_path_ext(path);
-    size_t keep = strlen(path);
+    size_t len = strlen(path), keep = len, gz = file_path_gz(path) ? 3 : 0;
+    size_t n = e ? (size_t)(path + len - gz - e) : 0; /* the extension's length */
     char *s;
 
-    if (e && (strcasecmp(e, "node") == 0 || strcasecmp(e, "ele") == 0))
+    if ((n == 4 && strncasecmp(e, "node", 4) == 0) ||
+        (n == 3 && strncasecmp(e, "ele", 3) == 0))
         keep = (size_t)(e - 1 - path);
-    s = qdc_malloc(keep + strlen(ext) + 1);
+    else
+        gz = 0; /* no TetGen extension: ext appended to the whole name */
+    s = qdc_malloc(keep + strlen(ext) + gz + 1);
     if (!s)
         return NULL;
     memcpy(s, path, keep);
     strcpy(s + keep, ext);
+    if (gz)
+        strcat(s, path + len - gz);
     return s;
 }
 
-static qdc_status load_tetgen(const char *path, int keep, mesh_t **out, qdc_error *err)
+/* The file at path, decompressed when it is gzip (within o's budget). */
+static qdc_status slurp_unzipped(const char *path, const meshio_options *o, char **buf,
+                                 size_t *len, qdc_error *err)
+{
+    char *plain = NULL;
+    size_t plen = 0;
+    qdc_status st = meshio_slurp(path, buf, len, err);
+
+    if (st != QDC_OK || !gz_is_gzip(*buf, *len))
+        return st;
+    st = meshio_gunzip(*buf, *len, o, &plain, &plen, err);
+    qdc_free(*buf);
+    *buf = plain;
+    *len = plen;
+    return st;
+}
+
+static qdc_status load_tetgen(const char *path, const meshio_options *o, int keep,
+                              mesh_t **out, qdc_error *err)
 {
     char *np = with_ext(path, ".node"), *ep = with_ext(path, ".ele");
     char *nb = NULL, *eb = NULL;
@@ -521,9 +546,9 @@ static qdc_status load_tetgen(const char *path, int keep, mesh_t **out, qdc_erro
     if (!np || !ep)
         st = qdc_fail(err, QDC_ENOMEM, "out of memory");
     else
-        st = meshio_slurp(np, &nb, &nl, err);
+        st = slurp_unzipped(np, o, &nb, &nl, err);
     if (st == QDC_OK)
-        st = meshio_slurp(ep, &eb, &el, err);
+        st = slurp_unzipped(ep, o, &eb, &el, err);
     if (st == QDC_OK) {
         srcrec rec;
         srcrec_init(&rec);
@@ -575,7 +600,7 @@ qdc_status meshio_load_ex(const char *path, meshio_format fmt, const meshio_opti
         qdc_free(np);
     }
     if (fmt == MESHIO_TETGEN)
-        return load_tetgen(path, keep, out, err);
+        return load_tetgen(path, o, keep, out, err);
     st = meshio_slurp(path, &buf, &len, err);
     if (st == QDC_OK)
         st = read_buf(buf, len, 1, fmt, o, keep, out, err); /* takes buf */

@@ -665,7 +665,7 @@ TEST(splice_save_format)
 }
 
 /* TetGen files (0-based, comments, attributes) saved back: the .node with the
- * moved coordinates only, the .ele unchanged. */
+ * moved coordinates only, the .ele unchanged; the same gzip-compressed. */
 TEST(splice_tetgen_files)
 {
     const char *node = "# nodes\n4 3 1 1\n0 0 0 0 0.5 7 # first\n1 1 0 0 0.5 8\n"
@@ -698,6 +698,31 @@ TEST(splice_tetgen_files)
     ASSERT_TRUE(b && n == strlen(ele) && memcmp(b, ele, n) == 0);
     qdc_free(b);
     mesh_free(m);
+    /* compressed, the two alike: either name finds the other, and a save as
+     * .gz writes both so */
+    snprintf(path, sizeof path, "gzip '%s/out.node' '%s/out.ele'", dir, dir);
+    ASSERT_EQ_INT(system(path), 0);
+    for (int k = 0; k < 2; k++) {
+        mesh_t *r = NULL;
+        snprintf(path, sizeof path, "%s/out.%s.gz", dir, k ? "node" : "ele");
+        ASSERT_OK(meshio_load(path, MESHIO_AUTO, &r, &err));
+        ASSERT_EQ_INT(meshio_source_format(r), MESHIO_TETGEN);
+        ASSERT_EQ_INT(r->nt, 1);
+        ASSERT_NEAR(r->xyz[11], 0.25, 0.0);
+        if (k)
+            mesh_free(r);
+        else
+            m = r;
+    }
+    snprintf(path, sizeof path, "%s/gz.ele.gz", dir);
+    ASSERT_OK(meshio_save(path, MESHIO_AUTO, m, &err));
+    mesh_free(m);
+    snprintf(path, sizeof path, "gunzip '%s/gz.node.gz' '%s/gz.ele.gz'", dir, dir);
+    ASSERT_EQ_INT(system(path), 0);
+    snprintf(path, sizeof path, "%s/gz.node", dir);
+    b = read_file(path, &n);
+    ASSERT_TRUE(b && n == strlen(want) && memcmp(b, want, n) == 0);
+    qdc_free(b);
     snprintf(path, sizeof path, "rm -rf '%s'", dir);
     ASSERT_EQ_INT(system(path), 0);
 }
