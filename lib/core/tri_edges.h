@@ -20,7 +20,7 @@ typedef struct {
 /* The 3 * ntri edges of tris (ntri triangles of vertices in [0, nv)) sorted
  * by (lo, hi, tri, k), into *out (qdc_free it); a counting sort by lo, each
  * vertex's few edges then sorted in place (qsort took 0.25 s on a surface of
- * 833k triangles). QDC_ENOMEM (*out NULL). */
+ * 833k triangles), the buckets in parallel. QDC_ENOMEM (*out NULL). */
 qdc_status tri_edges_sorted(const int32_t *tris, int32_t ntri, int32_t nv,
                             tri_edge **out);
 
