@@ -150,7 +150,11 @@ static int better(const flip_cand *x, const flip_cand *y)
  * would skip next to nothing: on the 100k-tet ball-scan (flips) the smoothing
  * after the first round moved 9300 of the 18244 vertices and left 1 vertex in
  * no tet with a moved one, after the second (only the vertices near the flips
- * free) 8936 and 15; no failed tet could have been kept (2 in full's round). */
+ * free) 8936 and 15; no failed tet could have been kept (2 in full's round).
+ * Within a call it is kept across the insertions and contractions between the
+ * flip passes (each stamps as a flip does: it replaces tets by tets on their
+ * vertices, and moves none): before, each of those passes forgot it, and the
+ * next flip pass evaluated every queued tet again. */
 typedef struct {
     uint32_t epoch; /* operations applied so far, + 1 */
     uint32_t *vchg; /* vertex: the epoch of its last change (nv entries) */
@@ -278,6 +282,23 @@ static qdc_status memo_applied(memo *mo, const tmesh *tm, const int32_t *ids, in
     return QDC_OK;
 }
 
+/* The vertices of the live tets old[0..n) (before an operation removes them)
+ * into vs (4n entries). */
+static void memo_collect(const tmesh *tm, const int32_t *old, int n, int32_t *vs)
+{
+    for (int o = 0; o < n; o++)
+        memcpy(vs + 4 * o, tm->tv + 4 * (size_t)old[o], 4 * sizeof *vs);
+}
+
+/* After memo_applied: the vertices vs[0..n) stamped with its epoch too (those
+ * of the tets an operation removed, a vertex that went among them). */
+static void memo_stamp(memo *mo, const int32_t *vs, int n)
+{
+    for (int i = 0; i < n; i++)
+        if (vs[i] >= 0 && vs[i] < mo->nv)
+            mo->vchg[vs[i]] = mo->epoch;
+}
+
 /* The smallest dihedral angle (degrees) of the n tets tv[0..n) (4 each). */
 static double min_angle(const tmesh *tm, const int32_t (*tv)[4], int n)
 {
@@ -373,9 +394,12 @@ static qdc_status queue_below(const tmesh *tm, heap *h, double q)
 }
 
 /* Vertex insertion in the live tets below qinsert, worst first (queued once);
- * the new tets are not revisited. Adds the insertions to *ops and st. */
-static qdc_status insert_pass(tmesh *tm, const topo_params *p, heap *h, topo_stats *st,
-                              int64_t *ops, int64_t max_ops, const atomic_int *cancel)
+ * the new tets are not revisited. Adds the insertions to *ops and st; mo (NULL:
+ * none) is told each as a flip's change (a star replaces a cavity, every
+ * vertex of which it holds; the new vertex is past mo's and never skipped). */
+static qdc_status insert_pass(tmesh *tm, const topo_params *p, heap *h, memo *mo,
+                              topo_stats *st, int64_t *ops, int64_t max_ops,
+                              const atomic_int *cancel)
 {
     qdc_status s = QDC_OK;
 
@@ -394,15 +418,20 @@ static qdc_status insert_pass(tmesh *tm, const topo_params *p, heap *h, topo_sta
         tmesh_commit(tm);
         (*ops)++;
         st->insertions++;
+        if (mo)
+            s = memo_applied(mo, tm, ids, nn);
     }
     return s;
 }
 
 /* Edge contraction in the live tets below qcontract, worst first (queued
  * once): each tet's best contraction of its edges (of its boundary edges too
- * under a bound). Adds to *ops and st. */
-static qdc_status contract_pass(tmesh *tm, const topo_params *p, heap *h, topo_stats *st,
-                                int64_t *ops, int64_t max_ops, const atomic_int *cancel)
+ * under a bound). Adds to *ops and st; mo (NULL: none) is told each as a
+ * flip's change, the vertices of the tets removed stamped too (no vertex
+ * moves: the one that goes is in no tet after). */
+static qdc_status contract_pass(tmesh *tm, const topo_params *p, heap *h, memo *mo,
+                                topo_stats *st, int64_t *ops, int64_t max_ops,
+                                const atomic_int *cancel)
 {
     qdc_status s = QDC_OK;
 
@@ -410,6 +439,7 @@ static qdc_status contract_pass(tmesh *tm, const topo_params *p, heap *h, topo_s
     while (s == QDC_OK && h->n > 0 && *ops < max_ops) {
         qent e = heap_pop(h);
         contract_cand best, c;
+        int32_t ids[CONTRACT_MAX], vs[4 * CONTRACT_MAX];
         int have = 0, applied = 0;
         if (cancel && atomic_load(cancel))
             return QDC_ECANCEL;
@@ -426,19 +456,24 @@ static qdc_status contract_pass(tmesh *tm, const topo_params *p, heap *h, topo_s
             }
         if (!have)
             continue;
+        memo_collect(tm, best.old, best.nold, vs);
         if (best.bnd)
             s = tmesh_replace_surface(tm, best.old, best.nold,
                                       (const int32_t(*)[4])best.newt, best.nnew, best.dev,
-                                      NULL, &applied);
+                                      ids, &applied);
         else
             s = tmesh_replace(tm, best.old, best.nold, (const int32_t(*)[4])best.newt,
-                              best.nnew, NULL, &applied);
+                              best.nnew, ids, &applied);
         if (s != QDC_OK || !applied)
             continue;
         tmesh_commit(tm);
         (*ops)++;
         st->contractions++;
         st->bcontractions += best.bnd;
+        if (mo) {
+            s = memo_applied(mo, tm, ids, best.nnew);
+            memo_stamp(mo, vs, 4 * best.nold);
+        }
     }
     return s;
 }
@@ -531,18 +566,12 @@ qdc_status topo_improve(tmesh *tm, const topo_params *p, topo_stats *st,
     if (use && s == QDC_OK)
         s = memo_init(&mo, tm);
     for (int r = 0; r < p->rounds && s == QDC_OK; r++) {
-        int64_t before = ops, flips;
+        int64_t before = ops;
         s = flip_pass(tm, p, &h, use, st, &ops, max_ops, cancel);
-        flips = ops - before;
         if (s == QDC_OK && p->contract)
-            s = contract_pass(tm, p, &h, st, &ops, max_ops, cancel);
+            s = contract_pass(tm, p, &h, use, st, &ops, max_ops, cancel);
         if (s == QDC_OK && p->insert)
-            s = insert_pass(tm, p, &h, st, &ops, max_ops, cancel);
-        if (use && ops - before > flips) {
-            /* contraction moves a vertex, insertion adds one: forget all */
-            memo_free(&mo);
-            s = s == QDC_OK ? memo_init(&mo, tm) : s;
-        }
+            s = insert_pass(tm, p, &h, use, st, &ops, max_ops, cancel);
         if (s != QDC_OK || ops == before || ops >= max_ops)
             break;
     }

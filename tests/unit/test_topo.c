@@ -819,6 +819,54 @@ TEST(driver_skips_only_what_cannot_change)
     mesh_free(m);
 }
 
+/* The same with insertion and contraction between the flip passes (the
+ * skips carried across them): the same vertices and tets as evaluating every
+ * queued tet again, in fewer visits. */
+TEST(driver_skips_across_insertions_and_contractions)
+{
+    const int n = 7;
+    mesh_t *m = tm_grid(n, MESH_WITH_REGION);
+    int32_t nt[2], nv[2], *tv[2] = {NULL, NULL}, *rg[2] = {NULL, NULL};
+    int32_t *vmap[2] = {NULL, NULL};
+    double *xo[2] = {NULL, NULL};
+    topo_params p;
+    topo_stats st[2];
+
+    ASSERT_TRUE(m);
+    tm_perturb(m, n, 0.35, 7);
+    topo_params_default(&p);
+    p.qgoal = 0.9;
+    p.insert = 1;
+    p.contract = 1;
+    p.qinsert = 0.6;
+    p.qcontract = 0.7;
+    p.imargin = 1e-3;
+    for (int r = 0; r < 2; r++) {
+        p.recheck = r;
+        ASSERT_OK(topo_full_arrays(m->nv, m->xyz, m->nt, m->tets, m->region, NULL, &p,
+                                   NULL, &nv[r], &xo[r], &nt[r], &tv[r], &rg[r], &vmap[r],
+                                   NULL, &st[r], NULL));
+    }
+    ASSERT_TRUE(st[0].insertions > 0 && st[0].contractions > 0);
+    ASSERT_EQ_INT(st[0].insertions, st[1].insertions);
+    ASSERT_EQ_INT(st[0].contractions, st[1].contractions);
+    ASSERT_EQ_INT(st[0].edge_removals, st[1].edge_removals);
+    ASSERT_EQ_INT(st[0].multiface, st[1].multiface);
+    ASSERT_EQ_INT(nv[0], nv[1]);
+    ASSERT_EQ_INT(nt[0], nt[1]);
+    ASSERT_TRUE(!memcmp(xo[0], xo[1], 24 * (size_t)nv[0]));
+    ASSERT_TRUE(!memcmp(tv[0], tv[1], 16 * (size_t)nt[0]));
+    ASSERT_TRUE(!memcmp(rg[0], rg[1], 4 * (size_t)nt[0]));
+    ASSERT_TRUE(st[0].visits < st[1].visits);
+    for (int r = 0; r < 2; r++) {
+        qdc_free(tv[r]);
+        qdc_free(rg[r]);
+        qdc_free(xo[r]);
+        qdc_free(vmap[r]);
+    }
+    mesh_free(m);
+}
+
 /* With akeep, each flip's new tets have a smallest dihedral angle at least
  * that of the tets it removed or akeep: so, by induction over the flips, the
  * mesh's smallest angle never falls below the least of its first and akeep;
@@ -1620,6 +1668,7 @@ TEST_MAIN("topo", T(kept_inner_face_blocks_removal), T(driver_keeps_an_inner_sur
           T(non_convex_ring_refused), T(four_boundary_corner_floor),
           T(rollback_restores_exactly), T(random_flips_keep_invariants),
           T(driver_is_deterministic), T(driver_skips_only_what_cannot_change),
+          T(driver_skips_across_insertions_and_contractions),
           T(driver_keeps_the_smallest_angle), T(opt_run_flips_keeps_the_model),
           T(opt_run_flips_leaves_inverted_input_alone),
           T(flips_allocation_failures_are_clean))
