@@ -976,6 +976,42 @@ TEST(opt_run_flips_keeps_the_model)
     mesh_free(m);
 }
 
+/* What the rounds of --topology flips rely on to orient the tets once per
+ * round (lib/opt/topology.c, orient_memo_get): a flip mesh_orient found stays
+ * its answer after the vertices move, as long as every tet is positive
+ * under it (written orders mixed, then every tet reversed). */
+TEST(orientation_found_again_while_positive)
+{
+    const int n = 4;
+    mesh_t *m = tm_grid(n, 0);
+    uint8_t *f0, *f1;
+    mesh_orientation mo;
+
+    ASSERT_TRUE(m);
+    f0 = malloc((size_t)m->nt);
+    f1 = malloc((size_t)m->nt);
+    ASSERT_TRUE(f0 && f1);
+    for (int pass = 0; pass < 2; pass++) {
+        for (int32_t t = 0; t < m->nt; t++)
+            if (pass == 1 || t % 3 == 0) {
+                int32_t x = m->tets[4 * t];
+                m->tets[4 * t] = m->tets[4 * t + 1];
+                m->tets[4 * t + 1] = x;
+            }
+        ASSERT_OK(mesh_orient(m, f0, &mo, NULL));
+        tm_perturb(m, n, 0.2, 3 + (uint64_t)pass);
+        for (int32_t t = 0; t < m->nt; t++) {
+            double d = geom_tet_vol6(m->xyz, m->tets + 4 * t);
+            ASSERT_TRUE(f0[t] ? d < 0 : d > 0);
+        }
+        ASSERT_OK(mesh_orient(m, f1, &mo, NULL));
+        ASSERT_TRUE(!memcmp(f0, f1, (size_t)m->nt));
+    }
+    free(f0);
+    free(f1);
+    mesh_free(m);
+}
+
 /* Inverted input tets (all vertices fixed, so nothing untangles them) are left
  * as they are: no cavity holds one, and no new tet is inverted. */
 TEST(opt_run_flips_leaves_inverted_input_alone)
@@ -1670,5 +1706,6 @@ TEST_MAIN("topo", T(kept_inner_face_blocks_removal), T(driver_keeps_an_inner_sur
           T(driver_is_deterministic), T(driver_skips_only_what_cannot_change),
           T(driver_skips_across_insertions_and_contractions),
           T(driver_keeps_the_smallest_angle), T(opt_run_flips_keeps_the_model),
+          T(orientation_found_again_while_positive),
           T(opt_run_flips_leaves_inverted_input_alone),
           T(flips_allocation_failures_are_clean))
