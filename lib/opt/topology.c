@@ -249,6 +249,50 @@ static qdc_status mark_active(int32_t nv, const int32_t *old, int32_t nold,
     return QDC_OK;
 }
 
+/* mesh_orient's flip of m's tets, kept from one call to the next while m's
+ * tets stay those it was found for (nt < 0: none kept). */
+typedef struct {
+    uint8_t *flip;
+    int32_t nt;
+} orient_memo;
+
+/* flip (m->nt bytes) = mesh_orient's for m (its statuses): om's when every
+ * tet is positive under it (the smoothing since moved the vertices, not the
+ * tets), for then mesh_orient finds it again (it is an orientation of these
+ * tets' connectivity, and every component, all positive under it, keeps it
+ * by the majority rule); else mesh_orient's, kept in om. Each round of flips
+ * after the first orients the tets its record oriented: on the 1M-tet
+ * ball-scan of scripts/corpus.py mesh_orient was 0.5-0.7 CPU s of each. */
+static qdc_status orient_memo_get(const mesh_t *m, orient_memo *om, uint8_t *flip,
+                                  qdc_error *err)
+{
+    mesh_orientation mo;
+    int32_t bad = 0;
+    qdc_status st;
+
+    if (om->nt == m->nt) {
+#pragma omp parallel for reduction(+ : bad) schedule(static)
+        for (int32_t t = 0; t < m->nt; t++) {
+            double d = geom_tet_vol6(m->xyz, m->tets + 4 * (size_t)t);
+            bad += om->flip[t] ? !(d < 0) : !(d > 0);
+        }
+        if (bad == 0) {
+            memcpy(flip, om->flip, (size_t)m->nt);
+            return QDC_OK;
+        }
+    }
+    st = mesh_orient(m, flip, &mo, err);
+    if (st == QDC_OK) {
+        uint8_t *f = qdc_realloc(om->flip, (size_t)m->nt + 1);
+        if (!f)
+            return qdc_fail(err, QDC_ENOMEM, "out of memory");
+        memcpy(f, flip, (size_t)m->nt);
+        om->flip = f;
+        om->nt = m->nt;
+    }
+    return st;
+}
+
 /* The flips' parameters for a round of o (insert: ROUND_INSERT for full's
  * round, ROUND_SPLIT for edge splits before the flips). */
 static void round_params(const opt_options *o, int insert, double hausd, topo_params *p)
@@ -270,15 +314,14 @@ static void round_params(const opt_options *o, int insert, double hausd, topo_pa
  * improved, and m's tets and regions replaced when a flip was made. hausd > 0:
  * boundary flips and peeling within it too, m's triangles brought up to date. */
 static qdc_status flip_round(mesh_t *m, const opt_options *o, int insert, double hausd,
-                             spend *sp, uint8_t *act, topo_stats *ts, topo_surface *sf,
-                             qdc_error *err)
+                             spend *sp, uint8_t *act, orient_memo *om, topo_stats *ts,
+                             topo_surface *sf, qdc_error *err)
 {
     uint8_t *flip = qdc_malloc((size_t)m->nt);
     int32_t *tv = qdc_mallocn(4 * (size_t)m->nt, sizeof *tv), *tets = NULL,
             *region = NULL, *vmap = NULL;
     int32_t nt = 0, nv = 0;
     double *xyz = NULL;
-    mesh_orientation mo;
     topo_params p;
     qdc_status st;
 
@@ -287,7 +330,7 @@ static qdc_status flip_round(mesh_t *m, const opt_options *o, int insert, double
         st = qdc_fail(err, QDC_ENOMEM, "out of memory");
         goto out;
     }
-    st = mesh_orient(m, flip, &mo, err);
+    st = orient_memo_get(m, om, flip, err);
     if (st != QDC_OK)
         goto out;
     memcpy(tv, m->tets, 4 * (size_t)m->nt * sizeof *tv);
@@ -333,6 +376,7 @@ static qdc_status flip_round(mesh_t *m, const opt_options *o, int insert, double
     qdc_free(m->tets);
     m->tets = tets;
     tets = NULL;
+    om->nt = -1; /* other tets */
     if (m->region) {
         qdc_free(m->region);
         m->region = region;
@@ -354,18 +398,17 @@ out:
 
 /* The record of the mesh after a round of flips (phase "topology"), each tet
  * signed under the connectivity's orientation. */
-static qdc_status flip_record(const mesh_t *m, int iteration, double t0, opt_progress *r,
-                              qdc_error *err)
+static qdc_status flip_record(const mesh_t *m, orient_memo *om, int iteration, double t0,
+                              opt_progress *r, qdc_error *err)
 {
     double sum = 0.0, sq = 0.0;
     uint8_t *flip = qdc_malloc((size_t)m->nt);
-    mesh_orientation mo;
     qdc_status st;
 
     memset(r, 0, sizeof *r);
     if (!flip)
         return qdc_fail(err, QDC_ENOMEM, "out of memory");
-    st = mesh_orient(m, flip, &mo, err);
+    st = orient_memo_get(m, om, flip, err);
     if (st != QDC_OK) {
         qdc_free(flip);
         return st;
@@ -544,8 +587,8 @@ static void swap_model(mesh_t *a, mesh_t *b)
  * 100k-tet bone-lowq of scripts/corpus.py, insertion and contraction inside
  * every round ended at 0.7238 mean ratio against 0.7289 for flips. */
 static qdc_status full_round(mesh_t *m, opt_options *o, double hausd, spend *sp,
-                             topo_surface *sf, opt_result *first, opt_result *last,
-                             int *record, qdc_error *err)
+                             orient_memo *om, topo_surface *sf, opt_result *first,
+                             opt_result *last, int *record, qdc_error *err)
 {
     mesh_t *keep;
     opt_result r, acc = *first;
@@ -561,7 +604,7 @@ static qdc_status full_round(mesh_t *m, opt_options *o, double hausd, spend *sp,
      * flips and the copies (on the 100k-tet part-cad and two-region of
      * scripts/corpus.py --seed 1, about a tenth of full's CPU). */
     round_params(o, 1, hausd, &p);
-    st = hausd > 0 ? QDC_OK : flip_record(m, 0, 0.0, &pr, err);
+    st = hausd > 0 ? QDC_OK : flip_record(m, om, 0, 0.0, &pr, err);
     if (st != QDC_OK)
         return st;
     if (hausd <= 0 && pr.n_inverted == 0 && pr.q_min >= fmax(p.qinsert, p.qcontract))
@@ -574,7 +617,7 @@ static qdc_status full_round(mesh_t *m, opt_options *o, double hausd, spend *sp,
         mesh_free(keep);
         return st;
     }
-    st = flip_round(m, o, ROUND_INSERT, hausd, sp, NULL, &ts, sf, err);
+    st = flip_round(m, o, ROUND_INSERT, hausd, sp, NULL, om, &ts, sf, err);
     if (st == QDC_OK && ts.insertions + ts.contractions > 0) {
         count_round(&acc, &ts, sf);
         o->progress = NULL; /* a trial: its records would not be the result's */
@@ -597,6 +640,7 @@ static qdc_status full_round(mesh_t *m, opt_options *o, double hausd, spend *sp,
     }
     /* not better, or the trial failed: m as it was, valid */
     swap_model(m, keep);
+    om->nt = -1;
     mesh_free(keep);
     spend_free(sp);
     *sp = was;
@@ -609,12 +653,13 @@ static qdc_status full_round(mesh_t *m, opt_options *o, double hausd, spend *sp,
  * when the run stops here: *st says why if it failed, else last's outcome
  * (cancelled, out of time). */
 static int round_begin(const mesh_t *m, const opt_options *opts, opt_options *o,
-                       const topo_stats *ts, int record, double t0, round_progress *rp,
-                       opt_result *last, qdc_status *st, qdc_error *err)
+                       orient_memo *om, const topo_stats *ts, int record, double t0,
+                       round_progress *rp, opt_result *last, qdc_status *st,
+                       qdc_error *err)
 {
     opt_progress pr;
 
-    *st = flip_record(m, record, t0, &pr, err);
+    *st = flip_record(m, om, record, t0, &pr, err);
     if (*st != QDC_OK)
         return 1;
     pr.operations =
@@ -734,6 +779,7 @@ static qdc_status topology_run(mesh_t *m, const opt_options *opts, opt_result *r
     topo_surface sf = {0};
     double hausd = 0.0;
     uint8_t *act;
+    orient_memo om = {NULL, -1};
     spend sp;
     qdc_status st;
 
@@ -758,21 +804,19 @@ static qdc_status topology_run(mesh_t *m, const opt_options *opts, opt_result *r
     first.tets_in = m->nt;
     first.verts_in = m->nv;
     record = first.last_record;
-    for (int round = 0; round < TOPO_ROUNDS && !stopped; round++) {
+    /* (a stopped run: cancelled, out of time or the solver in trouble) */
+    for (int round = 0; round < TOPO_ROUNDS && !stopped && last.outcome != OPT_STOPPED;
+         round++) {
         topo_stats ts;
         opt_result r;
-        if (last.outcome == OPT_STOPPED)
-            break; /* cancelled, out of time or the solver in trouble */
-        st = flip_round(m, &o, round == 0 ? first_ops(opts) : 0, hausd, &sp, act, &ts,
-                        &sf, err);
+        st = flip_round(m, &o, round == 0 ? first_ops(opts) : 0, hausd, &sp, act, &om,
+                        &ts, &sf, err);
         if (st == QDC_OK && ts.insertions > 0)
             st = grow_marks(&act, m->nv, err);
-        if (st != QDC_OK)
-            break;
-        if (round_ops(&ts) == 0)
+        if (st != QDC_OK || round_ops(&ts) == 0)
             break;
         count_round(&first, &ts, &sf);
-        if (round_begin(m, opts, &o, &ts, ++record, t0, &rp, &last, &st, err))
+        if (round_begin(m, opts, &o, &om, &ts, ++record, t0, &rp, &last, &st, err))
             break;
         st = round_smooth(m, &o, &sp, round > 0 ? act : NULL,
                           opts->topology == OPT_TOPOLOGY_FLIPS, &r, err);
@@ -789,7 +833,7 @@ static qdc_status topology_run(mesh_t *m, const opt_options *opts, opt_result *r
     }
     if (st == QDC_OK && opts->topology == OPT_TOPOLOGY_FULL &&
         last.outcome != OPT_STOPPED)
-        st = full_round(m, &o, hausd, &sp, &sf, &first, &last, &record, err);
+        st = full_round(m, &o, hausd, &sp, &om, &sf, &first, &last, &record, err);
     if (st != QDC_OK) {
         /* m is the valid mesh of the round before (flip_round replaces the
          * tets only when it succeeds, a failed smoothing leaves m as it was):
@@ -801,6 +845,7 @@ static qdc_status topology_run(mesh_t *m, const opt_options *opts, opt_result *r
     merge_result(&last, &first, m->nt, m->nv, record, qdc_now() - t0);
     spend_free(&sp);
     qdc_free(act);
+    qdc_free(om.flip);
     if (res)
         *res = last;
     return st;

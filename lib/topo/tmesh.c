@@ -571,20 +571,26 @@ static qdc_status constrain_edge(tmesh *tm, int32_t t0, int32_t u, int32_t w)
 }
 
 /* 1 when (u, w) is no edge of the cavity old but an edge of a tet around u
- * outside it; with x >= 0 the same for the face (u, w, x). */
+ * outside it; with x >= 0 the same for the face (u, w, x). The cavity's edges
+ * (most of a new tet's) are answered before u's star is walked (it was walked
+ * first, then the edge often found in the cavity: on the 1M-tet ball-scan of
+ * scripts/corpus.py, --topology flips' first round of flips took 14.7 CPU s
+ * with the walk first, 11.6 without). */
 static int new_edge_taken(const tmesh *tm, const int32_t *old, int nold, int32_t u,
                           int32_t w, int32_t x)
 {
     int32_t star[256];
-    int n = -1;
+    int n = -1, first = -1;
 
     for (int o = 0; o < nold; o++)
         if (tmesh_local(tm, old[o], u) >= 0) {
             if (x < 0 && tmesh_local(tm, old[o], w) >= 0)
                 return 0; /* an edge of the cavity */
-            if (n < 0)
-                n = tmesh_star(tm, old[o], u, star, 256);
+            if (first < 0)
+                first = o;
         }
+    if (first >= 0)
+        n = tmesh_star(tm, old[first], u, star, 256);
     if (n >= 0 && n != tm->vdeg[u])
         return 1; /* a pinched star: its other piece may hold the edge */
     for (int k = 0; k < n; k++)

@@ -819,6 +819,54 @@ TEST(driver_skips_only_what_cannot_change)
     mesh_free(m);
 }
 
+/* The same with insertion and contraction between the flip passes (the
+ * skips carried across them): the same vertices and tets as evaluating every
+ * queued tet again, in fewer visits. */
+TEST(driver_skips_across_insertions_and_contractions)
+{
+    const int n = 7;
+    mesh_t *m = tm_grid(n, MESH_WITH_REGION);
+    int32_t nt[2], nv[2], *tv[2] = {NULL, NULL}, *rg[2] = {NULL, NULL};
+    int32_t *vmap[2] = {NULL, NULL};
+    double *xo[2] = {NULL, NULL};
+    topo_params p;
+    topo_stats st[2];
+
+    ASSERT_TRUE(m);
+    tm_perturb(m, n, 0.35, 7);
+    topo_params_default(&p);
+    p.qgoal = 0.9;
+    p.insert = 1;
+    p.contract = 1;
+    p.qinsert = 0.6;
+    p.qcontract = 0.7;
+    p.imargin = 1e-3;
+    for (int r = 0; r < 2; r++) {
+        p.recheck = r;
+        ASSERT_OK(topo_full_arrays(m->nv, m->xyz, m->nt, m->tets, m->region, NULL, &p,
+                                   NULL, &nv[r], &xo[r], &nt[r], &tv[r], &rg[r], &vmap[r],
+                                   NULL, &st[r], NULL));
+    }
+    ASSERT_TRUE(st[0].insertions > 0 && st[0].contractions > 0);
+    ASSERT_EQ_INT(st[0].insertions, st[1].insertions);
+    ASSERT_EQ_INT(st[0].contractions, st[1].contractions);
+    ASSERT_EQ_INT(st[0].edge_removals, st[1].edge_removals);
+    ASSERT_EQ_INT(st[0].multiface, st[1].multiface);
+    ASSERT_EQ_INT(nv[0], nv[1]);
+    ASSERT_EQ_INT(nt[0], nt[1]);
+    ASSERT_TRUE(!memcmp(xo[0], xo[1], 24 * (size_t)nv[0]));
+    ASSERT_TRUE(!memcmp(tv[0], tv[1], 16 * (size_t)nt[0]));
+    ASSERT_TRUE(!memcmp(rg[0], rg[1], 4 * (size_t)nt[0]));
+    ASSERT_TRUE(st[0].visits < st[1].visits);
+    for (int r = 0; r < 2; r++) {
+        qdc_free(tv[r]);
+        qdc_free(rg[r]);
+        qdc_free(xo[r]);
+        qdc_free(vmap[r]);
+    }
+    mesh_free(m);
+}
+
 /* With akeep, each flip's new tets have a smallest dihedral angle at least
  * that of the tets it removed or akeep: so, by induction over the flips, the
  * mesh's smallest angle never falls below the least of its first and akeep;
@@ -925,6 +973,42 @@ TEST(opt_run_flips_keeps_the_model)
     mesh_topo_free(t0);
     mesh_topo_free(t1);
     mesh_free(m0);
+    mesh_free(m);
+}
+
+/* What the rounds of --topology flips rely on to orient the tets once per
+ * round (lib/opt/topology.c, orient_memo_get): a flip mesh_orient found stays
+ * its answer after the vertices move, as long as every tet is positive
+ * under it (written orders mixed, then every tet reversed). */
+TEST(orientation_found_again_while_positive)
+{
+    const int n = 4;
+    mesh_t *m = tm_grid(n, 0);
+    uint8_t *f0, *f1;
+    mesh_orientation mo;
+
+    ASSERT_TRUE(m);
+    f0 = malloc((size_t)m->nt);
+    f1 = malloc((size_t)m->nt);
+    ASSERT_TRUE(f0 && f1);
+    for (int pass = 0; pass < 2; pass++) {
+        for (int32_t t = 0; t < m->nt; t++)
+            if (pass == 1 || t % 3 == 0) {
+                int32_t x = m->tets[4 * t];
+                m->tets[4 * t] = m->tets[4 * t + 1];
+                m->tets[4 * t + 1] = x;
+            }
+        ASSERT_OK(mesh_orient(m, f0, &mo, NULL));
+        tm_perturb(m, n, 0.2, 3 + (uint64_t)pass);
+        for (int32_t t = 0; t < m->nt; t++) {
+            double d = geom_tet_vol6(m->xyz, m->tets + 4 * t);
+            ASSERT_TRUE(f0[t] ? d < 0 : d > 0);
+        }
+        ASSERT_OK(mesh_orient(m, f1, &mo, NULL));
+        ASSERT_TRUE(!memcmp(f0, f1, (size_t)m->nt));
+    }
+    free(f0);
+    free(f1);
     mesh_free(m);
 }
 
@@ -1620,6 +1704,8 @@ TEST_MAIN("topo", T(kept_inner_face_blocks_removal), T(driver_keeps_an_inner_sur
           T(non_convex_ring_refused), T(four_boundary_corner_floor),
           T(rollback_restores_exactly), T(random_flips_keep_invariants),
           T(driver_is_deterministic), T(driver_skips_only_what_cannot_change),
+          T(driver_skips_across_insertions_and_contractions),
           T(driver_keeps_the_smallest_angle), T(opt_run_flips_keeps_the_model),
+          T(orientation_found_again_while_positive),
           T(opt_run_flips_leaves_inverted_input_alone),
           T(flips_allocation_failures_are_clean))
