@@ -403,6 +403,128 @@ static int orient_uniform(const mesh_t *m, const int32_t *nbr, uint8_t *flip,
     return 1;
 }
 
+/* The root of x in the union-find forest up (every link from a larger index
+ * to a smaller, so a root is its tree's smallest index), halving the path;
+ * safe while other threads link and halve (relaxed atomics: a pointer only
+ * ever moves to an ancestor). */
+static int32_t uf_find(int32_t *up, int32_t x)
+{
+    for (;;) {
+        int32_t p = __atomic_load_n(&up[x], __ATOMIC_RELAXED), g;
+        if (p == x)
+            return x;
+        g = __atomic_load_n(&up[p], __ATOMIC_RELAXED);
+        if (g != p)
+            __atomic_store_n(&up[x], g, __ATOMIC_RELAXED);
+        x = g;
+    }
+}
+
+/* a and b into one tree: the larger root linked under the smaller. */
+static void uf_unite(int32_t *up, int32_t a, int32_t b)
+{
+    for (;;) {
+        int32_t t;
+        a = uf_find(up, a);
+        b = uf_find(up, b);
+        if (a == b)
+            return;
+        if (a < b) {
+            t = a;
+            a = b;
+            b = t;
+        }
+        t = a;
+        if (__atomic_compare_exchange_n(&up[a], &t, b, 0, __ATOMIC_RELAXED,
+                                        __ATOMIC_RELAXED))
+            return;
+    }
+}
+
+/* The number of t's component once each root r holds -1 - its number and
+ * every other tet its root. */
+static int32_t comp_of(const int32_t *up, int32_t t)
+{
+    return up[t] < 0 ? -1 - up[t] : -1 - up[up[t]];
+}
+
+/* orient_tets where every pair of face neighbours is oriented alike as
+ * written (a tangled mesh whose connectivity is as a mesher wrote it): the
+ * walk would flip nothing but each component's minority, so the components
+ * are found by a parallel union-find (the partition, and each tree's root,
+ * its smallest tet, do not depend on the threads) and each takes its
+ * majority sign. The same flip and counts as the walk, which was serial:
+ * 0.55 s of a tangled 4M-tet run's setup. QDC_ENOMEM. */
+static qdc_status orient_alike(const mesh_t *m, const int32_t *nbr, uint8_t *flip,
+                               mesh_orientation *o)
+{
+    int32_t nt = m->nt, *up = qdc_mallocn((size_t)nt + 1, sizeof(int32_t)), *cnt;
+    int32_t ncomp = 0, flipped = 0;
+
+    if (!up)
+        return QDC_ENOMEM;
+#pragma omp parallel for schedule(static)
+    for (int32_t t = 0; t < nt; t++) {
+        double d = tet_det(m->xyz, m->tets + 4 * (size_t)t);
+        up[t] = t;
+        flip[t] = d > 0 ? 1 : d < 0 ? 2 : 0; /* the sign, for now */
+    }
+#pragma omp parallel for schedule(dynamic, 4096)
+    for (int32_t t = 0; t < nt; t++)
+        for (int f = 0; f < 4; f++)
+            if (nbr[4 * (size_t)t + f] > 4 * t + f)
+                uf_unite(up, t, nbr[4 * (size_t)t + f] >> 2);
+#pragma omp parallel for schedule(static)
+    for (int32_t t = 0; t < nt; t++)
+        up[t] = uf_find(up, t);
+    /* the roots numbered in order (a root comes before the rest of its tree),
+     * as -1 - number; each tet's sign counted into its component's */
+    for (int32_t t = 0; t < nt; t++)
+        if (up[t] == t)
+            up[t] = -1 - ncomp++;
+    cnt = qdc_calloc(2 * (size_t)ncomp, sizeof(int32_t));
+    if (!cnt) {
+        qdc_free(up);
+        return QDC_ENOMEM;
+    }
+    for (int32_t t = 0; t < nt; t++)
+        if (flip[t])
+            cnt[2 * (size_t)comp_of(up, t) + flip[t] - 1]++;
+    memset(o, 0, sizeof *o);
+    o->components = ncomp;
+    for (int32_t c = 0; c < ncomp; c++) {
+        int32_t npos = cnt[2 * (size_t)c], nneg = cnt[2 * (size_t)c + 1];
+        o->inverted += nneg > npos ? npos : nneg;
+    }
+#pragma omp parallel for reduction(+ : flipped) schedule(static)
+    for (int32_t t = 0; t < nt; t++) {
+        int32_t c = comp_of(up, t);
+        flip[t] = cnt[2 * (size_t)c + 1] > cnt[2 * (size_t)c];
+        flipped += flip[t];
+    }
+    o->flipped = flipped;
+    qdc_free(cnt);
+    qdc_free(up);
+    return QDC_OK;
+}
+
+/* 1 when every pair of face neighbours is oriented alike as written. */
+static int all_alike(const mesh_t *m, const int32_t *nbr)
+{
+    int32_t unlike = 0;
+
+#pragma omp parallel for reduction(+ : unlike) schedule(static)
+    for (int32_t t = 0; t < m->nt; t++)
+        for (int f = 0; f < 4; f++) {
+            int32_t other = nbr[4 * (size_t)t + f];
+            if (other > 4 * t + f &&
+                !faces_opposite(m->tets + 4 * (size_t)t, f,
+                                m->tets + 4 * (size_t)(other >> 2), other & 3))
+                unlike++;
+        }
+    return unlike == 0;
+}
+
 /* docs/method.md §1: the orientation comes from the connectivity. Walk each
  * connected component across shared faces (nbr from match_faces), giving every
  * tet the orientation that agrees with the tet it was reached from; a tet
@@ -425,6 +547,11 @@ static qdc_status orient_tets(const mesh_t *m, const int32_t *nbr, uint8_t *flip
         qdc_free(queue);
         qdc_free(seen);
         return QDC_ENOMEM;
+    }
+    if (all_alike(m, nbr)) {
+        qdc_free(queue);
+        qdc_free(seen);
+        return orient_alike(m, nbr, flip, o);
     }
     for (int32_t t0 = 0; t0 < nt && st == QDC_OK; t0++) {
         int32_t head = 0, tail = 0, npos = 0, nneg = 0;
