@@ -403,41 +403,58 @@ static int orient_uniform(const mesh_t *m, const int32_t *nbr, uint8_t *flip,
     return 1;
 }
 
-/* The root of x in the union-find forest up (every link from a larger index
- * to a smaller, so a root is its tree's smallest index), halving the path;
- * safe while other threads link and halve (relaxed atomics: a pointer only
- * ever moves to an ancestor). */
-static int32_t uf_find(int32_t *up, int32_t x)
+/* A union-find forest over the tets with the parity of each link: up[x] =
+ * parent << 1 | parity, where the parity is 1 when x and its parent are
+ * oriented unlike as written. Every link goes from a larger index to a
+ * smaller, so a root is its tree's smallest tet. Safe while other threads
+ * link and halve (relaxed atomics: a pointer only ever moves to an ancestor,
+ * with the parity of the path it skips). */
+static int32_t uf_find(uint32_t *up, int32_t x, unsigned *par)
 {
+    unsigned p = 0;
+
     for (;;) {
-        int32_t p = __atomic_load_n(&up[x], __ATOMIC_RELAXED), g;
-        if (p == x)
+        uint32_t ux = __atomic_load_n(&up[x], __ATOMIC_RELAXED), uy;
+        int32_t y = (int32_t)(ux >> 1), g;
+        if (y == x) {
+            *par = p;
             return x;
-        g = __atomic_load_n(&up[p], __ATOMIC_RELAXED);
-        if (g != p)
-            __atomic_store_n(&up[x], g, __ATOMIC_RELAXED);
+        }
+        uy = __atomic_load_n(&up[y], __ATOMIC_RELAXED);
+        g = (int32_t)(uy >> 1);
+        if (g == y) { /* y was a root */
+            p ^= ux & 1;
+            x = y;
+            continue;
+        }
+        __atomic_store_n(&up[x], (uint32_t)g << 1 | ((ux ^ uy) & 1), __ATOMIC_RELAXED);
+        p ^= (ux ^ uy) & 1;
         x = g;
     }
 }
 
-/* a and b into one tree: the larger root linked under the smaller. */
-static void uf_unite(int32_t *up, int32_t a, int32_t b)
+/* a and b, of parity w (1: oriented unlike as written), into one tree: the
+ * larger root linked under the smaller. 0 when they already are in one tree
+ * with the other parity (the connectivity cannot be oriented). */
+static int uf_unite(uint32_t *up, int32_t a, int32_t b, unsigned w)
 {
     for (;;) {
-        int32_t t;
-        a = uf_find(up, a);
-        b = uf_find(up, b);
+        unsigned pa, pb;
+        uint32_t root;
+        a = uf_find(up, a, &pa);
+        b = uf_find(up, b, &pb);
+        w ^= pa ^ pb; /* now the parity of the roots a and b */
         if (a == b)
-            return;
+            return w == 0;
         if (a < b) {
-            t = a;
+            int32_t t = a;
             a = b;
             b = t;
         }
-        t = a;
-        if (__atomic_compare_exchange_n(&up[a], &t, b, 0, __ATOMIC_RELAXED,
-                                        __ATOMIC_RELAXED))
-            return;
+        root = (uint32_t)a << 1;
+        if (__atomic_compare_exchange_n(&up[a], &root, (uint32_t)b << 1 | w, 0,
+                                        __ATOMIC_RELAXED, __ATOMIC_RELAXED))
+            return 1;
     }
 }
 
@@ -448,37 +465,67 @@ static int32_t comp_of(const int32_t *up, int32_t t)
     return up[t] < 0 ? -1 - up[t] : -1 - up[up[t]];
 }
 
-/* orient_tets where every pair of face neighbours is oriented alike as
- * written (a tangled mesh whose connectivity is as a mesher wrote it): the
- * walk would flip nothing but each component's minority, so the components
- * are found by a parallel union-find (the partition, and each tree's root,
- * its smallest tet, do not depend on the threads) and each takes its
- * majority sign. The same flip and counts as the walk, which was serial:
- * 0.55 s of a tangled 4M-tet run's setup. QDC_ENOMEM. */
-static qdc_status orient_alike(const mesh_t *m, const int32_t *nbr, uint8_t *flip,
-                               mesh_orientation *o)
+/* Each tet's flip before the majority (its parity to its component's
+ * smallest tet, which the walk starts from) into flip, its root into up.
+ * 0 if the connectivity cannot be oriented. */
+static int orient_forest(const mesh_t *m, const int32_t *nbr, uint32_t *up, uint8_t *flip)
+{
+    int32_t nt = m->nt, bad = 0;
+
+#pragma omp parallel for schedule(static)
+    for (int32_t t = 0; t < nt; t++)
+        up[t] = (uint32_t)t << 1;
+#pragma omp parallel for reduction(| : bad) schedule(dynamic, 4096)
+    for (int32_t t = 0; t < nt; t++)
+        for (int f = 0; f < 4; f++) {
+            int32_t other = nbr[4 * (size_t)t + f];
+            if (other > 4 * t + f &&
+                !uf_unite(up, t, other >> 2,
+                          !faces_opposite(m->tets + 4 * (size_t)t, f,
+                                          m->tets + 4 * (size_t)(other >> 2), other & 3)))
+                bad = 1;
+        }
+    if (bad)
+        return 0;
+        /* every tet linked straight to its root (while others still walk), then
+         * the parity taken out */
+#pragma omp parallel for schedule(static)
+    for (int32_t t = 0; t < nt; t++) {
+        unsigned par;
+        int32_t r = uf_find(up, t, &par);
+        __atomic_store_n(&up[t], (uint32_t)r << 1 | par, __ATOMIC_RELAXED);
+    }
+#pragma omp parallel for schedule(static)
+    for (int32_t t = 0; t < nt; t++) {
+        flip[t] = up[t] & 1;
+        up[t] >>= 1;
+    }
+    return 1;
+}
+
+/* orient_tets in parallel: the components and each tet's orientation within
+ * its own by a union-find with parities (the partition, the roots and the
+ * parities do not depend on the threads), then each component takes the
+ * sign most of its tets have. The same flip and counts as the serial walk,
+ * which was 1.0 s of main-thread-only time in a tangled 4M-tet run's setup.
+ * 0 (flip undefined) where the connectivity cannot be oriented: the walk
+ * then finds the tets to name. QDC_ENOMEM. */
+static qdc_status orient_parallel(const mesh_t *m, const int32_t *nbr, uint8_t *flip,
+                                  mesh_orientation *o, int *ok)
 {
     int32_t nt = m->nt, *up = qdc_mallocn((size_t)nt + 1, sizeof(int32_t)), *cnt;
     int32_t ncomp = 0, flipped = 0;
 
+    *ok = 0;
     if (!up)
         return QDC_ENOMEM;
-#pragma omp parallel for schedule(static)
-    for (int32_t t = 0; t < nt; t++) {
-        double d = tet_det(m->xyz, m->tets + 4 * (size_t)t);
-        up[t] = t;
-        flip[t] = d > 0 ? 1 : d < 0 ? 2 : 0; /* the sign, for now */
+    if (!orient_forest(m, nbr, (uint32_t *)up, flip)) {
+        qdc_free(up);
+        return QDC_OK;
     }
-#pragma omp parallel for schedule(dynamic, 4096)
-    for (int32_t t = 0; t < nt; t++)
-        for (int f = 0; f < 4; f++)
-            if (nbr[4 * (size_t)t + f] > 4 * t + f)
-                uf_unite(up, t, nbr[4 * (size_t)t + f] >> 2);
-#pragma omp parallel for schedule(static)
-    for (int32_t t = 0; t < nt; t++)
-        up[t] = uf_find(up, t);
     /* the roots numbered in order (a root comes before the rest of its tree),
-     * as -1 - number; each tet's sign counted into its component's */
+     * as -1 - number; each tet's sign under its flip counted into its
+     * component's */
     for (int32_t t = 0; t < nt; t++)
         if (up[t] == t)
             up[t] = -1 - ncomp++;
@@ -487,9 +534,13 @@ static qdc_status orient_alike(const mesh_t *m, const int32_t *nbr, uint8_t *fli
         qdc_free(up);
         return QDC_ENOMEM;
     }
-    for (int32_t t = 0; t < nt; t++)
+    for (int32_t t = 0; t < nt; t++) {
+        double d = tet_det(m->xyz, m->tets + 4 * (size_t)t);
         if (flip[t])
-            cnt[2 * (size_t)comp_of(up, t) + flip[t] - 1]++;
+            d = -d;
+        if (d != 0)
+            cnt[2 * (size_t)comp_of(up, t) + (d < 0)]++;
+    }
     memset(o, 0, sizeof *o);
     o->components = ncomp;
     for (int32_t c = 0; c < ncomp; c++) {
@@ -499,30 +550,14 @@ static qdc_status orient_alike(const mesh_t *m, const int32_t *nbr, uint8_t *fli
 #pragma omp parallel for reduction(+ : flipped) schedule(static)
     for (int32_t t = 0; t < nt; t++) {
         int32_t c = comp_of(up, t);
-        flip[t] = cnt[2 * (size_t)c + 1] > cnt[2 * (size_t)c];
+        flip[t] ^= cnt[2 * (size_t)c + 1] > cnt[2 * (size_t)c];
         flipped += flip[t];
     }
     o->flipped = flipped;
     qdc_free(cnt);
     qdc_free(up);
+    *ok = 1;
     return QDC_OK;
-}
-
-/* 1 when every pair of face neighbours is oriented alike as written. */
-static int all_alike(const mesh_t *m, const int32_t *nbr)
-{
-    int32_t unlike = 0;
-
-#pragma omp parallel for reduction(+ : unlike) schedule(static)
-    for (int32_t t = 0; t < m->nt; t++)
-        for (int f = 0; f < 4; f++) {
-            int32_t other = nbr[4 * (size_t)t + f];
-            if (other > 4 * t + f &&
-                !faces_opposite(m->tets + 4 * (size_t)t, f,
-                                m->tets + 4 * (size_t)(other >> 2), other & 3))
-                unlike++;
-        }
-    return unlike == 0;
 }
 
 /* docs/method.md §1: the orientation comes from the connectivity. Walk each
@@ -534,7 +569,7 @@ static int all_alike(const mesh_t *m, const int32_t *nbr)
  * (DOLFIN sorts them, GetFEM mixes them) is valid when it is, and a tangled
  * mesh keeps the orientation of its majority. flip[t] = 1 when tet t must have
  * two vertices swapped to be positive under that orientation. */
-static qdc_status orient_tets(const mesh_t *m, const int32_t *nbr, uint8_t *flip,
+static qdc_status orient_walk(const mesh_t *m, const int32_t *nbr, uint8_t *flip,
                               mesh_orientation *o, qdc_error *err)
 {
     int32_t nt = m->nt;
@@ -547,11 +582,6 @@ static qdc_status orient_tets(const mesh_t *m, const int32_t *nbr, uint8_t *flip
         qdc_free(queue);
         qdc_free(seen);
         return QDC_ENOMEM;
-    }
-    if (all_alike(m, nbr)) {
-        qdc_free(queue);
-        qdc_free(seen);
-        return orient_alike(m, nbr, flip, o);
     }
     for (int32_t t0 = 0; t0 < nt && st == QDC_OK; t0++) {
         int32_t head = 0, tail = 0, npos = 0, nneg = 0;
@@ -611,6 +641,19 @@ static qdc_status orient_tets(const mesh_t *m, const int32_t *nbr, uint8_t *flip
     qdc_free(queue);
     qdc_free(seen);
     return st;
+}
+
+/* orient_tets: in parallel, or by the walk where the connectivity cannot be
+ * oriented (the walk names the tets in its error). */
+static qdc_status orient_tets(const mesh_t *m, const int32_t *nbr, uint8_t *flip,
+                              mesh_orientation *o, qdc_error *err)
+{
+    int ok;
+    qdc_status st = orient_parallel(m, nbr, flip, o, &ok);
+
+    if (st != QDC_OK || ok)
+        return st;
+    return orient_walk(m, nbr, flip, o, err);
 }
 
 /* Swap the first two vertices of each flipped tet of tets (in place), and
@@ -699,6 +742,26 @@ qdc_status mesh_orient(const mesh_t *m, uint8_t *flip, mesh_orientation *o,
     st = match_faces(m->nv, m->nt, m->tets, nbr, err);
     if (st == QDC_OK)
         st = orient_tets(m, nbr, flip, o, err);
+    qdc_free(nbr);
+    return st;
+}
+
+qdc_status mesh_orient_walk(const mesh_t *m, uint8_t *flip, mesh_orientation *o,
+                            qdc_error *err)
+{
+    mesh_check chk;
+    int32_t *nbr = NULL;
+    qdc_status st;
+
+    st = validate_basic(m, &chk, err);
+    if (st != QDC_OK)
+        return st;
+    nbr = qdc_mallocn((size_t)m->nt * 4, sizeof(int32_t));
+    if (!nbr)
+        return QDC_ENOMEM;
+    st = match_faces(m->nv, m->nt, m->tets, nbr, err);
+    if (st == QDC_OK)
+        st = orient_walk(m, nbr, flip, o, err);
     qdc_free(nbr);
     return st;
 }

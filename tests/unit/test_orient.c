@@ -344,42 +344,41 @@ static mesh_t *three_grids(void)
     return m;
 }
 
-/* Where every neighbour pair is oriented alike as written, the components
- * are found in parallel (a union-find): the same flips and counts at 1 and 2
- * threads, and those of the walk, which a tet written the other way forces
- * (that tet's flip turned, nothing else). */
-TEST(alike_components_agree_with_the_walk)
+/* mesh_orient finds the components and each tet's orientation in parallel
+ * (a union-find with parities): the same flips and counts at 1 and 2 threads
+ * as the serial walk, on three pieces (one tangled, one written negative and
+ * tangled), with tets written the other way here and there, and sorted as
+ * DOLFIN writes them. */
+TEST(parallel_orientation_agrees_with_the_walk)
 {
-    mesh_t *m = three_grids();
-    uint8_t *f1 = calloc((size_t)m->nt, 1), *f2 = calloc((size_t)m->nt, 1);
-    mesh_orientation o1, o2, ow;
-    mesh_check chk;
-    int32_t k = 17, nneg = 0;
-    for (int32_t t = 0; t < m->nt; t++)
-        nneg += det4(m, m->tets + 4 * (size_t)t) < 0;
-    omp_set_num_threads(1);
-    ASSERT_OK(mesh_orient(m, f1, &o1, NULL));
-    omp_set_num_threads(2);
-    ASSERT_OK(mesh_orient(m, f2, &o2, NULL));
-    ASSERT_TRUE(memcmp(f1, f2, (size_t)m->nt) == 0);
-    ASSERT_TRUE(memcmp(&o1, &o2, sizeof o1) == 0);
-    ASSERT_EQ_INT(o1.components, 3);
-    ASSERT_EQ_INT(o1.flipped, m->nt / 3);
-    ASSERT_TRUE(o1.inverted > 0 && o1.inverted < nneg);
-    ASSERT_OK(mesh_validate(m, &chk, NULL));
-    ASSERT_EQ_INT(chk.n_components, 3);
-    ASSERT_EQ_INT(chk.n_inverted, o1.inverted);
-    swap01(m->tets + 4 * (size_t)k); /* now the walk */
-    ASSERT_OK(mesh_orient(m, f2, &ow, NULL));
-    ASSERT_EQ_INT(ow.components, o1.components);
-    ASSERT_EQ_INT(ow.inverted, o1.inverted);
-    ASSERT_EQ_INT(ow.flipped, o1.flipped - f1[k] + !f1[k]);
-    for (int32_t t = 0; t < m->nt; t++)
-        ASSERT_EQ_INT(f2[t], t == k ? !f1[t] : f1[t]);
-    omp_set_num_threads(omp_get_num_procs());
-    free(f1);
-    free(f2);
-    mesh_free(m);
+    for (int c = 0; c < 3; c++) {
+        mesh_t *m = three_grids();
+        uint8_t *fw = calloc((size_t)m->nt, 1), *fp = calloc((size_t)m->nt, 1);
+        mesh_orientation ow, op;
+        if (c == 1)
+            for (int32_t t = 5; t < m->nt; t += 7)
+                swap01(m->tets + 4 * (size_t)t);
+        if (c == 2)
+            sort_tets(m);
+        ASSERT_OK(mesh_orient_walk(m, fw, &ow, NULL));
+        ASSERT_EQ_INT(ow.components, 3);
+        ASSERT_TRUE(ow.inverted > 0);
+        for (int n = 1; n <= 2; n++) {
+            omp_set_num_threads(n);
+            memset(fp, 7, (size_t)m->nt);
+            ASSERT_OK(mesh_orient(m, fp, &op, NULL));
+            ASSERT_TRUE(memcmp(fw, fp, (size_t)m->nt) == 0);
+            ASSERT_EQ_INT(op.components, ow.components);
+            ASSERT_EQ_INT(op.flipped, ow.flipped);
+            ASSERT_EQ_INT(op.inverted, ow.inverted);
+        }
+        omp_set_num_threads(omp_get_num_procs());
+        if (c == 0)
+            ASSERT_EQ_INT(ow.flipped, m->nt / 3);
+        free(fw);
+        free(fp);
+        mesh_free(m);
+    }
 }
 
 /* The quality report (its scan of the tets in ranges, its surface angles)
@@ -404,4 +403,5 @@ TEST_MAIN("orient", T(two_tets_either_vertex_order), T(dolfin_sorted_grid_is_val
           T(tangled_component_keeps_its_majority),
           T(non_orientable_connectivity_is_an_error),
           T(topo_shortcut_agrees_with_the_walk), T(run_faces_are_the_reports_own),
-          T(alike_components_agree_with_the_walk), T(report_same_at_any_thread_count))
+          T(parallel_orientation_agrees_with_the_walk),
+          T(report_same_at_any_thread_count))
