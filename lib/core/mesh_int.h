@@ -60,4 +60,10 @@ qdc_status mesh_faces_of_topo(const mesh_topo *tp, const int32_t *tets,
  * (geom_tet_bad of core/tet.h: the count every pass compares). */
 int32_t mesh_count_inverted(const mesh_topo *t, const double *xyz);
 
+/* mesh_orient by the serial walk of docs/method.md §1 alone (mesh_orient
+ * finds the same in parallel, and walks only to name the tets of a
+ * connectivity that cannot be oriented): for the tests that compare them. */
+qdc_status mesh_orient_walk(const mesh_t *m, uint8_t *flip, mesh_orientation *o,
+                            qdc_error *err);
+
 #endif

@@ -39,13 +39,18 @@ static int32_t local_region(const mesh_topo *tp, const double *x, int rings, int
     if (!list)
         return -1;
     memset(lev, -1, (size_t)tp->nv);
+    /* the unusable tets' corners, found in parallel and listed in vertex
+     * order: each ring is a set, so the order of the list changes nothing
+     * (the serial scan was 0.33 s of main-thread-only time over the local
+     * rounds of a tangled 4M-tet run) */
+#pragma omp parallel for schedule(static)
     for (int32_t t = 0; t < tp->nt; t++)
         if (geom_tet_bad(x, tets + 4 * (size_t)t))
             for (int k = 0; k < 4; k++)
-                if (lev[tets[4 * (size_t)t + k]] < 0) {
-                    lev[tets[4 * (size_t)t + k]] = 0;
-                    list[nl++] = tets[4 * (size_t)t + k];
-                }
+                __atomic_store_n(&lev[tets[4 * (size_t)t + k]], 0, __ATOMIC_RELAXED);
+    for (int32_t v = 0; v < tp->nv; v++)
+        if (lev[v] == 0)
+            list[nl++] = v;
     /* list[inner, end) is ring `ring`: its neighbours not reached yet are the next */
     for (int ring = 0; ring < rings; ring++) {
         int32_t end = nl;
@@ -107,11 +112,13 @@ static mesh_t *local_mesh(const ctx_t *c, const uint8_t *region, const uint8_t *
     int32_t nv = 0, t2 = 0;
     mesh_t *s;
 
+#pragma omp parallel for schedule(static)
     for (int32_t v = 0; v < c->nv; v++)
         map[v] = -1;
+#pragma omp parallel for schedule(static)
     for (int32_t t = 0; t < c->nt; t++)
         for (int k = 0; region[t] && k < 4; k++)
-            map[tets[4 * (size_t)t + k]] = 0;
+            __atomic_store_n(&map[tets[4 * (size_t)t + k]], 0, __ATOMIC_RELAXED);
     for (int32_t v = 0; v < c->nv; v++)
         map[v] = map[v] == 0 ? nv++ : -1;
     s = mesh_new(nv, nt, MESH_WITH_FIXED | (c->region ? MESH_WITH_REGION : 0));

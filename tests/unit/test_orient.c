@@ -9,6 +9,7 @@
 #include "testmesh.h"
 
 #include <math.h>
+#include <omp.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -320,8 +321,87 @@ TEST(run_faces_are_the_reports_own)
     }
 }
 
+/* Three grids side by side, not touching (three components): the first
+ * tangled, the second written negative and tangled, the third plain. */
+static mesh_t *three_grids(void)
+{
+    mesh_t *g = tm_grid(3, 0);
+    mesh_t *m = mesh_new(3 * g->nv, 3 * g->nt, 0);
+    tm_perturb(g, 3, 0.2, 11);
+    for (int c = 0; c < 3; c++) {
+        for (int32_t v = 0; v < g->nv; v++)
+            for (int k = 0; k < 3; k++)
+                m->xyz[3 * (c * g->nv + v) + k] =
+                    g->xyz[3 * v + k] + (k == 0 ? 3.0 * c : 0);
+        for (int32_t i = 0; i < 4 * g->nt; i++)
+            m->tets[4 * c * g->nt + i] = g->tets[i] + c * g->nv;
+    }
+    for (int32_t t = g->nt; t < 2 * g->nt; t++)
+        swap01(m->tets + 4 * (size_t)t);
+    m->xyz[3 * 21] += 0.9;
+    m->xyz[3 * (g->nv + 42) + 1] -= 0.8;
+    mesh_free(g);
+    return m;
+}
+
+/* mesh_orient finds the components and each tet's orientation in parallel
+ * (a union-find with parities): the same flips and counts at 1 and 2 threads
+ * as the serial walk, on three pieces (one tangled, one written negative and
+ * tangled), with tets written the other way here and there, and sorted as
+ * DOLFIN writes them. */
+TEST(parallel_orientation_agrees_with_the_walk)
+{
+    for (int c = 0; c < 3; c++) {
+        mesh_t *m = three_grids();
+        uint8_t *fw = calloc((size_t)m->nt, 1), *fp = calloc((size_t)m->nt, 1);
+        mesh_orientation ow, op;
+        if (c == 1)
+            for (int32_t t = 5; t < m->nt; t += 7)
+                swap01(m->tets + 4 * (size_t)t);
+        if (c == 2)
+            sort_tets(m);
+        ASSERT_OK(mesh_orient_walk(m, fw, &ow, NULL));
+        ASSERT_EQ_INT(ow.components, 3);
+        ASSERT_TRUE(ow.inverted > 0);
+        for (int n = 1; n <= 2; n++) {
+            omp_set_num_threads(n);
+            memset(fp, 7, (size_t)m->nt);
+            ASSERT_OK(mesh_orient(m, fp, &op, NULL));
+            ASSERT_TRUE(memcmp(fw, fp, (size_t)m->nt) == 0);
+            ASSERT_EQ_INT(op.components, ow.components);
+            ASSERT_EQ_INT(op.flipped, ow.flipped);
+            ASSERT_EQ_INT(op.inverted, ow.inverted);
+        }
+        omp_set_num_threads(omp_get_num_procs());
+        if (c == 0)
+            ASSERT_EQ_INT(ow.flipped, m->nt / 3);
+        free(fw);
+        free(fp);
+        mesh_free(m);
+    }
+}
+
+/* The quality report (its scan of the tets in ranges, its surface angles)
+ * has the same bits at 1 and 2 threads, on a tangle of three pieces. */
+TEST(report_same_at_any_thread_count)
+{
+    mesh_t *m = three_grids();
+    report_quality q1, q2;
+    omp_set_num_threads(1);
+    ASSERT_OK(report_quality_compute(m, &q1, NULL));
+    omp_set_num_threads(2);
+    ASSERT_OK(report_quality_compute(m, &q2, NULL));
+    omp_set_num_threads(omp_get_num_procs());
+    ASSERT_TRUE(memcmp(&q1, &q2, sizeof q1) == 0);
+    ASSERT_TRUE(q1.n_inverted > 0);
+    ASSERT_TRUE(q1.n_surf_lt5 >= 0 && q1.surf_angle_min > 0 && q1.surf_angle_min < 360);
+    mesh_free(m);
+}
+
 TEST_MAIN("orient", T(two_tets_either_vertex_order), T(dolfin_sorted_grid_is_valid),
           T(all_inverted_components_each_flip_whole),
           T(tangled_component_keeps_its_majority),
           T(non_orientable_connectivity_is_an_error),
-          T(topo_shortcut_agrees_with_the_walk), T(run_faces_are_the_reports_own))
+          T(topo_shortcut_agrees_with_the_walk), T(run_faces_are_the_reports_own),
+          T(parallel_orientation_agrees_with_the_walk),
+          T(report_same_at_any_thread_count))
