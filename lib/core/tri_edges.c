@@ -55,8 +55,8 @@ qdc_status tri_edges_sorted(const int32_t *tris, int32_t ntri, int32_t nv, tri_e
             int32_t lo = a < b ? a : b;
             e[start[lo + 1]++] = (tri_edge){lo, a < b ? b : a, i, k};
         }
-    /* now vertex v's bucket is e[start[v] .. start[v + 1]): each sorted on
-     * its own, in parallel (the same order at any thread count) */
+        /* now vertex v's bucket is e[start[v] .. start[v + 1]): each sorted on
+         * its own, in parallel (the same order at any thread count) */
 #pragma omp parallel for schedule(dynamic, 4096)
     for (int32_t v = 0; v < nv; v++)
         sort_bucket(e + start[v], start[v + 1] - start[v]);
