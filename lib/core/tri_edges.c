@@ -49,16 +49,16 @@ qdc_status tri_edges_sorted(const int32_t *tris, int32_t ntri, int32_t nv, tri_e
         }
     for (int32_t v = 0; v < nv; v++)
         start[v + 2] += start[v + 1];
-    for (int32_t i = 0; i < ntri; i++)
+    for (int32_t i = 0; i < ntri; i++) {
         for (int k = 0; k < 3; k++) {
             int32_t a = tris[3 * (size_t)i + k], b = tris[3 * (size_t)i + (k + 1) % 3];
             int32_t lo = a < b ? a : b;
             e[start[lo + 1]++] = (tri_edge){lo, a < b ? b : a, i, k};
         }
-        /* now vertex v's bucket is e[start[v] .. start[v + 1]): each sorted on
-         * its own, in parallel (the same order at any thread count) */
+    }
+    /* now vertex v's bucket is e[start[v] .. start[v + 1]) */
 #pragma omp parallel for schedule(dynamic, 4096)
-    for (int32_t v = 0; v < nv; v++)
+    for (int32_t v = 0; v < nv; v++) /* each bucket on its own: any thread count */
         sort_bucket(e + start[v], start[v + 1] - start[v]);
     qdc_free(start);
     *out = e;
