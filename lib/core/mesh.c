@@ -726,27 +726,9 @@ static uint8_t canon_tet(int32_t *tt, int32_t *nb, int flip)
 
 static qdc_status validate_basic(const mesh_t *m, mesh_check *c, qdc_error *err);
 
-qdc_status mesh_orient(const mesh_t *m, uint8_t *flip, mesh_orientation *o,
-                       qdc_error *err)
-{
-    mesh_check chk;
-    int32_t *nbr = NULL;
-    qdc_status st;
-
-    st = validate_basic(m, &chk, err);
-    if (st != QDC_OK)
-        return st;
-    nbr = qdc_mallocn((size_t)m->nt * 4, sizeof(int32_t));
-    if (!nbr)
-        return QDC_ENOMEM;
-    st = match_faces(m->nv, m->nt, m->tets, nbr, err);
-    if (st == QDC_OK)
-        st = orient_tets(m, nbr, flip, o, err);
-    qdc_free(nbr);
-    return st;
-}
-
-qdc_status mesh_orient_walk(const mesh_t *m, uint8_t *flip, mesh_orientation *o,
+/* The faces matched, then the tets oriented by the parallel union-find, or by
+ * the walk when walk is 1. */
+static qdc_status orient_by(const mesh_t *m, uint8_t *flip, mesh_orientation *o, int walk,
                             qdc_error *err)
 {
     mesh_check chk;
@@ -761,9 +743,21 @@ qdc_status mesh_orient_walk(const mesh_t *m, uint8_t *flip, mesh_orientation *o,
         return QDC_ENOMEM;
     st = match_faces(m->nv, m->nt, m->tets, nbr, err);
     if (st == QDC_OK)
-        st = orient_walk(m, nbr, flip, o, err);
+        st = walk ? orient_walk(m, nbr, flip, o, err) : orient_tets(m, nbr, flip, o, err);
     qdc_free(nbr);
     return st;
+}
+
+qdc_status mesh_orient(const mesh_t *m, uint8_t *flip, mesh_orientation *o,
+                       qdc_error *err)
+{
+    return orient_by(m, flip, o, 0, err);
+}
+
+qdc_status mesh_orient_walk(const mesh_t *m, uint8_t *flip, mesh_orientation *o,
+                            qdc_error *err)
+{
+    return orient_by(m, flip, o, 1, err);
 }
 
 qdc_status mesh_reorient(mesh_t *m, mesh_orientation *o, qdc_error *err)
