@@ -17,6 +17,9 @@ static const struct {
      "write the report: quality before and after, 1-degree dihedral histograms, "
      "counts of bad angles, boundary error, timings"},
     {"quiet", NULL, OPT_G_EVERYDAY, "no progress output"},
+    {"threads", "N", OPT_G_EVERYDAY,
+     "threads for the reading, the run and the report, 1 to 1024 (default: "
+     "OMP_NUM_THREADS, else every core); the same result whatever the count"},
     {"fix", "FILE", OPT_G_BOUNDARY,
      "vertices that must not move: 0-based indices, whitespace or comma separated, "
      "'#' comments"},

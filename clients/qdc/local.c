@@ -5,6 +5,7 @@
 
 #include <errno.h>
 #include <math.h>
+#include <omp.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -574,7 +575,12 @@ static int optimize_option(optimize_args *x, const char *a, const char *v)
         x->fix_path = v;
     else if (!strcmp(a, "--reorient"))
         bad = on_off(v, &x->reorient);
-    else {
+    else if (!strcmp(a, "--threads")) {
+        char *end;
+        long n = strtol(v, &end, 10);
+        bad = !*v || *end || n < 1 || n > 1024;
+        x->o.threads = bad ? 0 : (int)n;
+    } else {
         char near[64];
         if (cli_optimize_suggest(a, near, sizeof near))
             fprintf(stderr,
@@ -792,6 +798,8 @@ int cli_optimize(int argc, char **argv)
 
     if (rc >= 0)
         return rc;
+    if (x.o.threads > 0) /* the reading and the report too, not only the run */
+        omp_set_num_threads(x.o.threads);
     if (read_only_out(x.out, x.fout))
         return CLI_EINPUT;
     rc = CLI_OK;

@@ -98,4 +98,22 @@ printf '3 99999999\n' > "$TMP/badfix.txt"
 "$BIN/qdc" optimize "$in" "$TMP/fx.mesh" --quiet --fix "$TMP/badfix.txt" 2>"$TMP/err"
 [ $? -eq 2 ] && grep -q "badfix.txt:1:" "$TMP/err" && pass "cli.--fix bad index: exit 2 with file:line" ||
     fail "cli.--fix bad index" "$(cat "$TMP/err")"
+# --threads: the same bytes from 1 and 2 threads; a count out of range is a
+# usage error that writes nothing
+for th in 1 2; do
+    "$BIN/qdc" optimize "$in" "$TMP/th$th.mesh" --quiet --threads $th 2> "$TMP/err" ||
+        fail "cli.--threads $th" "exit $?: $(cat "$TMP/err")"
+done
+cmp -s "$TMP/th1.mesh" "$TMP/th2.mesh" && pass "cli.--threads 1 and 2: the same bytes" ||
+    fail "cli.--threads" "1 and 2 threads differ"
+for bad in 0 1025 two; do
+    "$BIN/qdc" optimize "$in" "$TMP/thb.mesh" --quiet --threads $bad 2> "$TMP/err"
+    rc=$?
+    if [ $rc -eq 1 ] && grep -q "bad value '$bad' for --threads" "$TMP/err" &&
+        [ ! -e "$TMP/thb.mesh" ]; then
+        pass "cli.--threads $bad: usage error, nothing written"
+    else
+        fail "cli.--threads $bad" "exit $rc: $(cat "$TMP/err")"
+    fi
+done
 exit 0
