@@ -786,6 +786,19 @@ TEST(driver_is_deterministic)
     mesh_free(m);
 }
 
+/* Runs r = 0 (skips) and 1 (recheck) made the same flips and the same tets
+ * and tags, the first in fewer visits (a failure marks the test failed). */
+static void same_as_recheck(const topo_stats st[2], const int32_t nt[2],
+                            int32_t *const tv[2], int32_t *const rg[2])
+{
+    ASSERT_EQ_INT(st[0].edge_removals, st[1].edge_removals);
+    ASSERT_EQ_INT(st[0].multiface, st[1].multiface);
+    ASSERT_EQ_INT(nt[0], nt[1]);
+    ASSERT_TRUE(!memcmp(tv[0], tv[1], 16 * (size_t)nt[0]));
+    ASSERT_TRUE(!memcmp(rg[0], rg[1], 4 * (size_t)nt[0]));
+    ASSERT_TRUE(st[0].visits < st[1].visits);
+}
+
 /* Skipping the tets and edges whose failed evaluation nothing has changed
  * since gives the same tets as evaluating them all again, in fewer visits. */
 TEST(driver_skips_only_what_cannot_change)
@@ -806,12 +819,7 @@ TEST(driver_skips_only_what_cannot_change)
                                    NULL, &nt[r], &tv[r], &rg[r], &st[r], NULL));
     }
     ASSERT_TRUE(st[0].edge_removals + st[0].flips23 + st[0].multiface > 50);
-    ASSERT_EQ_INT(st[0].edge_removals, st[1].edge_removals);
-    ASSERT_EQ_INT(st[0].multiface, st[1].multiface);
-    ASSERT_EQ_INT(nt[0], nt[1]);
-    ASSERT_TRUE(!memcmp(tv[0], tv[1], 16 * (size_t)nt[0]));
-    ASSERT_TRUE(!memcmp(rg[0], rg[1], 4 * (size_t)nt[0]));
-    ASSERT_TRUE(st[0].visits < st[1].visits);
+    same_as_recheck(st, nt, tv, rg);
     for (int r = 0; r < 2; r++) {
         qdc_free(tv[r]);
         qdc_free(rg[r]);
@@ -850,14 +858,9 @@ TEST(driver_skips_across_insertions_and_contractions)
     ASSERT_TRUE(st[0].insertions > 0 && st[0].contractions > 0);
     ASSERT_EQ_INT(st[0].insertions, st[1].insertions);
     ASSERT_EQ_INT(st[0].contractions, st[1].contractions);
-    ASSERT_EQ_INT(st[0].edge_removals, st[1].edge_removals);
-    ASSERT_EQ_INT(st[0].multiface, st[1].multiface);
     ASSERT_EQ_INT(nv[0], nv[1]);
-    ASSERT_EQ_INT(nt[0], nt[1]);
     ASSERT_TRUE(!memcmp(xo[0], xo[1], 24 * (size_t)nv[0]));
-    ASSERT_TRUE(!memcmp(tv[0], tv[1], 16 * (size_t)nt[0]));
-    ASSERT_TRUE(!memcmp(rg[0], rg[1], 4 * (size_t)nt[0]));
-    ASSERT_TRUE(st[0].visits < st[1].visits);
+    same_as_recheck(st, nt, tv, rg);
     for (int r = 0; r < 2; r++) {
         qdc_free(tv[r]);
         qdc_free(rg[r]);
