@@ -253,7 +253,10 @@ export async function rerunChecks(page, id, h) {
     const recs = (await h.apiJSON('/v1/jobs/' + id + '/progress?after=-1')).body.records;
     const report = (await h.apiJSON('/v1/jobs/' + id + '/report')).body;
     const starts = recs.map((r, i) => (r.phase === 'rerun' ? i : -1)).filter((i) => i >= 0);
-    await page.waitForFunction(() => !document.getElementById('chart-notes').hidden, null, { timeout: 10000 }).catch(() => {});
+    // the rerun notes come with the progress records, the kept one only once
+    // the report is in: wait for that one
+    await page.waitForFunction(() => !document.getElementById('chart-notes').hidden && document.querySelector('#chart-notes li.kept'),
+        null, { timeout: 30000 }).catch(() => {});
     const notes = await page.$$eval('#chart-notes li', (ls) => ls.map((l) => [l.className, l.textContent]));
     const reruns = notes.filter(([c]) => c === 'rerun');
     const kept = notes.find(([c]) => c === 'kept');
