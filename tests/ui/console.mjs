@@ -570,7 +570,7 @@ try {
         await view3dChecks(page, id4, h, URL, authH);
         await ariaChecks(page, h);
         await page.evaluate(() => document.getElementById('hist-log').click());
-        await sleep(300);
+        await page.waitForFunction(() => document.getElementById('hist').dataset.log === '1', null, { timeout: 10000 }).catch(() => {});
         if (env.UI_SHOTS) await page.screenshot({ path: path.join(env.UI_SHOTS, 'ui-job.png'), fullPage: true });
 
         // a run that starts again from the input: the chart says where and why
@@ -653,7 +653,8 @@ try {
         await page.click(rowSel(id3) + ' button[data-act="delete"]');
         const asked = await page.waitForSelector('#confirm-dialog[open]', { timeout: 3000 }).then(() => page.textContent('#confirm-text')).catch(() => '');
         await page.click('#confirm-dialog button[value="cancel"]');
-        await sleep(300);
+        // the dialog's close is what the page acts on (a delete only on "ok")
+        await page.waitForFunction(() => !document.getElementById('confirm-dialog').open, null, { timeout: 5000 }).catch(() => {});
         const kept = (await apiJSON('/v1/jobs/' + id3)).status;
         check(asked.includes(id3.slice(0, 8)) && kept === 200 && (await page.$(rowSel(id3))) !== null,
             'list: Delete asks first ("' + asked.slice(0, 60) + '…"); "Keep it" keeps the job', asked + ' ' + kept);
