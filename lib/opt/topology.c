@@ -254,7 +254,21 @@ static qdc_status mark_active(int32_t nv, const int32_t *old, int32_t nold,
 typedef struct {
     uint8_t *flip;
     int32_t nt;
+    int pos; /* every tet positive under flip at the last orient_memo_get */
 } orient_memo;
+
+/* 1 when every tet of m is positive under flip (none inverted or flat). */
+static int orient_positive(const mesh_t *m, const uint8_t *flip)
+{
+    int32_t bad = 0;
+
+#pragma omp parallel for reduction(+ : bad) schedule(static)
+    for (int32_t t = 0; t < m->nt; t++) {
+        double d = geom_tet_vol6(m->xyz, m->tets + 4 * (size_t)t);
+        bad += flip[t] ? !(d < 0) : !(d > 0);
+    }
+    return bad == 0;
+}
 
 /* flip (m->nt bytes) = mesh_orient's for m (its statuses): om's when every
  * tet is positive under it (the smoothing since moved the vertices, not the
@@ -278,10 +292,12 @@ static qdc_status orient_memo_get(const mesh_t *m, orient_memo *om, uint8_t *fli
         }
         if (bad == 0) {
             memcpy(flip, om->flip, (size_t)m->nt);
+            om->pos = 1;
             return QDC_OK;
         }
     }
     st = mesh_orient(m, flip, &mo, err);
+    om->pos = st == QDC_OK && orient_positive(m, flip);
     if (st == QDC_OK) {
         uint8_t *f = qdc_realloc(om->flip, (size_t)m->nt + 1);
         if (!f)
@@ -291,6 +307,28 @@ static qdc_status orient_memo_get(const mesh_t *m, orient_memo *om, uint8_t *fli
         om->nt = m->nt;
     }
     return st;
+}
+
+/* After a round of flips that replaced m's tets: om holds the orientation of
+ * the new tets when the round's input had every tet positive under its own
+ * (om->pos), else nothing. The new tets are positive under the orientation they
+ * inherit (the exact predicate), the others as they were, so every tet is
+ * positive: the flip is each tet's sign, and mesh_orient would find the same
+ * (orient_memo_get checks it, and calls mesh_orient where a sign is 0). On the
+ * 1M-tet ball-scan of scripts/corpus.py mesh_orient after each round was
+ * 0.5 s; this pass is parallel and a fraction of it. */
+static void orient_carry(const mesh_t *m, orient_memo *om)
+{
+    uint8_t *f = om->pos ? qdc_realloc(om->flip, (size_t)m->nt + 1) : NULL;
+
+    om->nt = -1;
+    if (!f)
+        return; /* mesh_orient the next time (out of memory: om as it was) */
+    om->flip = f;
+#pragma omp parallel for schedule(static)
+    for (int32_t t = 0; t < m->nt; t++)
+        f[t] = geom_tet_vol6(m->xyz, m->tets + 4 * (size_t)t) < 0;
+    om->nt = m->nt;
 }
 
 /* The flips' parameters for a round of o (insert: ROUND_INSERT for full's
@@ -376,13 +414,13 @@ static qdc_status flip_round(mesh_t *m, const opt_options *o, int insert, double
     qdc_free(m->tets);
     m->tets = tets;
     tets = NULL;
-    om->nt = -1; /* other tets */
     if (m->region) {
         qdc_free(m->region);
         m->region = region;
         region = NULL;
     }
     m->nt = nt;
+    orient_carry(m, om); /* other tets */
 out:
     qdc_free(flip);
     qdc_free(tv);
@@ -396,23 +434,45 @@ out:
     return st;
 }
 
+/* Tet t's mean ratio signed under flip, into q[t], and its smallest and
+ * largest dihedral angles (NAN for an inverted tet) into a[2t], a[2t + 1]. */
+static void tet_record(const mesh_t *m, const uint8_t *flip, int32_t t, double *q,
+                       double *a)
+{
+    const int32_t *tt = m->tets + 4 * (size_t)t;
+    int s0 = flip[t] ? 1 : 0, s1 = 1 - s0;
+    const double *p0 = m->xyz + 3 * (size_t)tt[s0], *p1 = m->xyz + 3 * (size_t)tt[s1];
+    const double *p2 = m->xyz + 3 * (size_t)tt[2], *p3 = m->xyz + 3 * (size_t)tt[3];
+    metric_parts pt;
+
+    metric_parts_for(OPT_METRIC_MIMR, p0, p1, p2, p3, &pt);
+    q[t] = metric_mean_ratio(&pt);
+    if (geom_tet_inverted(pt.vol))
+        a[2 * (size_t)t] = a[2 * (size_t)t + 1] = NAN;
+    else
+        metric_dihedral_range(p0, p1, p2, p3, &a[2 * (size_t)t], &a[2 * (size_t)t + 1]);
+}
+
 /* The record of the mesh after a round of flips (phase "topology"), each tet
- * signed under the connectivity's orientation. */
+ * signed under the connectivity's orientation: the tets measured in parallel,
+ * summed in their order (the same figures whatever the thread count). */
 static qdc_status flip_record(const mesh_t *m, orient_memo *om, int iteration, double t0,
                               opt_progress *r, qdc_error *err)
 {
     double sum = 0.0, sq = 0.0;
     uint8_t *flip = qdc_malloc((size_t)m->nt);
+    double *q = qdc_mallocn((size_t)m->nt + 1, sizeof *q),
+           *a = qdc_mallocn(2 * (size_t)m->nt + 1, sizeof *a);
     qdc_status st;
 
     memset(r, 0, sizeof *r);
-    if (!flip)
-        return qdc_fail(err, QDC_ENOMEM, "out of memory");
-    st = orient_memo_get(m, om, flip, err);
-    if (st != QDC_OK) {
-        qdc_free(flip);
-        return st;
-    }
+    st = flip && q && a ? orient_memo_get(m, om, flip, err)
+                        : qdc_fail(err, QDC_ENOMEM, "out of memory");
+    if (st != QDC_OK)
+        goto out;
+#pragma omp parallel for schedule(static)
+    for (int32_t t = 0; t < m->nt; t++)
+        tet_record(m, flip, t, q, a);
     r->iteration = iteration;
     r->phase = "topology";
     r->n_tets = m->nt;
@@ -420,36 +480,29 @@ static qdc_status flip_record(const mesh_t *m, orient_memo *om, int iteration, d
     r->dih_min = 180.0;
     r->dih_max = 0.0;
     for (int32_t t = 0; t < m->nt; t++) {
-        const int32_t *tt = m->tets + 4 * (size_t)t;
-        int s0 = flip[t] ? 1 : 0, s1 = 1 - s0;
-        const double *p0 = m->xyz + 3 * (size_t)tt[s0], *p1 = m->xyz + 3 * (size_t)tt[s1];
-        const double *p2 = m->xyz + 3 * (size_t)tt[2], *p3 = m->xyz + 3 * (size_t)tt[3];
-        metric_parts pt;
-        double q, a0, a1;
-        metric_parts_for(OPT_METRIC_MIMR, p0, p1, p2, p3, &pt);
-        q = metric_mean_ratio(&pt);
-        sum += q;
-        sq += q * q;
-        if (q < r->q_min)
-            r->q_min = q;
-        if (geom_tet_inverted(pt.vol)) {
+        sum += q[t];
+        sq += q[t] * q[t];
+        if (q[t] < r->q_min)
+            r->q_min = q[t];
+        if (isnan(a[2 * (size_t)t])) {
             r->n_inverted++;
             continue;
         }
-        metric_dihedral_range(p0, p1, p2, p3, &a0, &a1);
-        if (a0 < r->dih_min)
-            r->dih_min = a0;
-        if (a1 > r->dih_max)
-            r->dih_max = a1;
+        if (a[2 * (size_t)t] < r->dih_min)
+            r->dih_min = a[2 * (size_t)t];
+        if (a[2 * (size_t)t + 1] > r->dih_max)
+            r->dih_max = a[2 * (size_t)t + 1];
     }
     r->q_mean = sum / m->nt;
     r->q_std = sqrt(fmax(0.0, sq / m->nt - r->q_mean * r->q_mean));
     r->elapsed = qdc_now() - t0;
+out:
     qdc_free(flip);
-    return QDC_OK;
+    qdc_free(q);
+    qdc_free(a);
+    return st;
 }
 
-/* The seconds and iterations of run r added to those of acc. */
 static void add_run(opt_result *acc, const opt_result *r)
 {
     acc->iterations += r->iterations;
@@ -779,7 +832,7 @@ static qdc_status topology_run(mesh_t *m, const opt_options *opts, opt_result *r
     topo_surface sf = {0};
     double hausd = 0.0;
     uint8_t *act;
-    orient_memo om = {NULL, -1};
+    orient_memo om = {NULL, -1, 0};
     spend sp;
     qdc_status st;
 
