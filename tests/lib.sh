@@ -5,6 +5,10 @@ BIN=${BIN:-$ROOT/build/rel}
 DEV=${DEV:-$ROOT/tests/data/dev}
 QUALITY=${QUALITY:-$ROOT/tests/tools/evaluate.py}
 PY=/usr/bin/python3
+# tests/tools for the scripts' inline Python, which reads and writes Medit with
+# tests/tools/meditio.py: sys.path.insert(0, os.environ["QDC_TOOLS"])
+QDC_TOOLS=$ROOT/tests/tools
+export QDC_TOOLS
 TMP=$(mktemp -d "${TMPDIR:-/tmp}/qdc-test.XXXXXX")
 trap 'rm -rf "$TMP"' EXIT
 NFAIL=0

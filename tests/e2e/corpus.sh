@@ -12,12 +12,12 @@ fi
 
 # share MESH: boundary vertices / vertices
 cat > "$TMP/share.py" << 'PYEOF'
-import sys
+import os, sys
 import numpy as np
-tok = open(sys.argv[1]).read().split()
-i = tok.index("Vertices"); nv = int(tok[i + 1])
-i = tok.index("Tetrahedra"); nt = int(tok[i + 1])
-t = np.array(tok[i + 2:i + 2 + 5 * nt], int).reshape(nt, 5)[:, :4] - 1
+sys.path.insert(0, os.environ["QDC_TOOLS"])
+import meditio
+m = meditio.read(sys.argv[1])
+nv, t = len(m.vertices), m.tets
 f = np.sort(np.vstack([t[:, [1, 2, 3]], t[:, [0, 2, 3]], t[:, [0, 1, 3]], t[:, [0, 1, 2]]]), axis=1)
 u, c = np.unique(f, axis=0, return_counts=True)
 print("%.4f" % (len(np.unique(u[c == 1])) / nv))

@@ -12,16 +12,8 @@ import math, sys
 sys.path.insert(0, sys.argv[1])
 import numpy as np
 import evaluate as ev
+from meditio import write
 tmp = sys.argv[2]
-def write(path, x, t):
-    with open(path, "w") as f:
-        f.write("MeshVersionFormatted 2\nDimension 3\nVertices\n%d\n" % len(x))
-        for p in x:
-            f.write("%.17g %.17g %.17g 0\n" % tuple(p))
-        f.write("Tetrahedra\n%d\n" % len(t))
-        for q in t:
-            f.write("%d %d %d %d 1\n" % tuple(np.asarray(q) + 1))
-        f.write("End\n")
 bad = []
 def check(name, got, want, tol=1e-12):
     if not abs(got - want) <= tol:

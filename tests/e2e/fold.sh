@@ -30,19 +30,16 @@ else
     fail "$name: repaired within 3 rings" "$(grep -E 'local|again' "$TMP/err" | head -4)"
 fi
 set -- $("$PY" - "$TMP/in.mesh" "$TMP/o.mesh" "$TMP/r.json" "$QUALITY" <<'PYEOF'
-import json, subprocess, sys
+import json, os, subprocess, sys
 src, out, rep, quality = sys.argv[1:5]
 q = lambda p: json.loads(subprocess.run([sys.executable, quality, p], capture_output=True,
                                         text=True, check=True).stdout)
 import numpy as np
+sys.path.insert(0, os.environ["QDC_TOOLS"])
+import meditio
 def read(p):
-    w = open(p).read().split()
-    i = w.index("Vertices")
-    n = int(w[i + 1])
-    x = np.array(w[i + 2:i + 2 + 4 * n], float).reshape(n, 4)[:, :3]
-    i = w.index("Tetrahedra")
-    m = int(w[i + 1])
-    return x, np.array(w[i + 2:i + 2 + 5 * m], np.int64).reshape(m, 5)[:, :4] - 1
+    m = meditio.read(p)
+    return m.vertices, m.tets
 qi, qo, r = q(src), q(out), json.load(open(rep))
 be = r["boundary_error"]
 x0, t = read(src)

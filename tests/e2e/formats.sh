@@ -46,13 +46,14 @@ IN=$(devmesh cube_h0.1_good)
 
 # Gmsh writes its formats from the dev mesh, regions by octant as physical groups.
 cat > "$TMP/gmsh_write.py" <<'EOF'
-import sys, json, gmsh
+import os, sys, json, gmsh
+sys.path.insert(0, os.environ["QDC_TOOLS"])
+import meditio
 src, out = sys.argv[1], sys.argv[2]
-toks = open(src).read().split()
-i = toks.index("Vertices"); nv = int(toks[i + 1])
-xyz = [tuple(float(t) for t in toks[i + 2 + 4 * k: i + 5 + 4 * k]) for k in range(nv)]
-i = toks.index("Tetrahedra"); nt = int(toks[i + 1])
-tets = [tuple(int(t) for t in toks[i + 2 + 5 * k: i + 6 + 5 * k]) for k in range(nt)]
+m = meditio.read(src)
+xyz = [tuple(p) for p in m.vertices.tolist()]
+tets = [tuple(t) for t in (m.tets + 1).tolist()]
+nv = len(xyz)
 def region(t):
     c = [sum(xyz[v - 1][a] for v in t) / 4 for a in range(3)]
     return 11 + (c[0] > 0) + 2 * (c[1] > 0)

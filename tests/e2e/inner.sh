@@ -11,8 +11,10 @@
 . "$(dirname "$0")/../lib.sh"
 
 cat > "$TMP/plane.py" << 'PY'
-import sys
+import os, sys
 import numpy as np
+sys.path.insert(0, os.environ["QDC_TOOLS"])
+import meditio
 n = 8
 rng = np.random.default_rng(3)
 idx = lambda i, j, k: i + (n + 1) * (j + (n + 1) * k)
@@ -47,34 +49,17 @@ for t in tets:
 yv = lambda v: (v // (n + 1)) % (n + 1)
 plane = [fs[0] for k, fs in sorted(faces.items()) if len(fs) == 2 and all(yv(v) == n // 2 for v in k)]
 bnd = [fs[0] for k, fs in sorted(faces.items()) if len(fs) == 1]
-with open(sys.argv[1], "w") as o:
-    o.write("MeshVersionFormatted 2\nDimension 3\nVertices\n%d\n" % len(x))
-    for p in x:
-        o.write("%.17g %.17g %.17g 0\n" % tuple(p))
-    o.write("Tetrahedra\n%d\n" % len(tets))
-    for t in tets:
-        o.write("%d %d %d %d 1\n" % tuple(v + 1 for v in t))
-    o.write("Triangles\n%d\n" % (len(bnd) + len(plane)))
-    for f in bnd:
-        o.write("%d %d %d 1\n" % tuple(v + 1 for v in f))
-    for f in plane:
-        o.write("%d %d %d 5\n" % tuple(v + 1 for v in f))
-    o.write("End\n")
+meditio.write(sys.argv[1], x, tets, bnd + plane, triangle_refs=[1] * len(bnd) + [5] * len(plane))
 PY
 cat > "$TMP/check.py" << 'PY'
-import sys
+import os, sys
 import numpy as np
+sys.path.insert(0, os.environ["QDC_TOOLS"])
+import meditio
 
-def block(tok, key, w):
-    i = tok.index(key)
-    n = int(tok[i + 1])
-    return np.array(tok[i + 2:i + 2 + w * n], dtype=float).reshape(n, w)
-
-tok = open(sys.argv[1]).read().split()
-x = block(tok, "Vertices", 4)[:, :3]
-t = block(tok, "Tetrahedra", 5)[:, :4].astype(np.int64) - 1
-tr = block(tok, "Triangles", 4).astype(np.int64)
-mine = tr[tr[:, 3] == 5][:, :3] - 1
+m = meditio.read(sys.argv[1])
+x, t = m.vertices, m.tets
+mine = m.triangles[m.triangle_refs == 5]
 faces = {}
 for tt in t.tolist():
     for o in range(4):

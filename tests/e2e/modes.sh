@@ -19,17 +19,16 @@ for spec in cube_h0.1_good:1e-4 bracket_h0.1_good:1e-4 sphere_h0.1_good:5e-3 tor
     fi
     why=$($PY - "$TMP/$name.fixed.json" "$TMP/$name.slide.json" "$hmax" \
         "$TMP/$name.fixed.mesh" "$TMP/$name.slide.mesh" <<'PYEOF'
-import json, sys
+import json, os, sys
 import numpy as np
+sys.path.insert(0, os.environ["QDC_TOOLS"])
+import meditio
 f, s, hmax = json.load(open(sys.argv[1])), json.load(open(sys.argv[2])), float(sys.argv[3])
 
 def boundary_tet_quality(path):
     """Mean of the mean ratio over tets with a vertex on the boundary."""
-    t = open(path).read().split()
-    i = t.index("Vertices"); n = int(t[i + 1])
-    X = np.array(t[i + 2: i + 2 + 4 * n], float).reshape(n, 4)[:, :3]
-    j = t.index("Tetrahedra"); m = int(t[j + 1])
-    T = np.array(t[j + 2: j + 2 + 5 * m], int).reshape(m, 5)[:, :4] - 1
+    m = meditio.read(path)
+    X, T, n = m.vertices, m.tets, len(m.vertices)
     F = np.sort(np.concatenate([T[:, [1, 2, 3]], T[:, [0, 2, 3]], T[:, [0, 1, 3]], T[:, [0, 1, 2]]]), 1)
     _, inv, cnt = np.unique(F, axis=0, return_inverse=True, return_counts=True)
     onb = np.zeros(n, bool); onb[F[cnt[inv] == 1].ravel()] = True
@@ -87,35 +86,23 @@ fi
 # tets by the sign of their centroid's x.
 in=$(devmesh cube_h0.1_lowq)
 $PY - "$in" "$TMP/regions.mesh" <<'PYEOF'
-import sys
-t = open(sys.argv[1]).read().split("\n")
-out, i, verts = [], 0, []
-while i < len(t):
-    line = t[i].strip()
-    out.append(t[i])
-    if line == "Vertices":
-        n = int(t[i + 1]); out.append(t[i + 1])
-        for k in range(n):
-            out.append(t[i + 2 + k]); verts.append([float(x) for x in t[i + 2 + k].split()[:3]])
-        i += n + 2; continue
-    if line == "Tetrahedra":
-        n = int(t[i + 1]); out.append(t[i + 1])
-        for k in range(n):
-            w = t[i + 2 + k].split()
-            cx = sum(verts[int(w[j]) - 1][0] for j in range(4)) / 4
-            out.append(" ".join(w[:4] + ["1" if cx < 0 else "2"]))
-        i += n + 2; continue
-    i += 1
-open(sys.argv[2], "w").write("\n".join(out))
+import os, sys
+sys.path.insert(0, os.environ["QDC_TOOLS"])
+import meditio
+m = meditio.read(sys.argv[1])
+x = m.vertices[:, 0].tolist()
+m.tet_refs = [1 if sum(x[v] for v in t) / 4 < 0 else 2 for t in m.tets.tolist()]
+m.write(sys.argv[2])
 PYEOF
 for mode in lsq fixed slide; do
     if "$BIN/qdc" optimize "$TMP/regions.mesh" "$TMP/regions.$mode.mesh" --boundary "$mode" --quiet; then
         same=$($PY - "$TMP/regions.mesh" "$TMP/regions.$mode.mesh" <<'PYEOF'
-import sys
+import os, sys
+sys.path.insert(0, os.environ["QDC_TOOLS"])
+import meditio
 def tets(p):
-    t = open(p).read().split()
-    i = t.index("Tetrahedra"); n = int(t[i + 1])
-    return t[i + 2: i + 2 + 5 * n]
+    m = meditio.read(p)
+    return m.tets.tolist(), m.tet_refs.tolist()
 print(tets(sys.argv[1]) == tets(sys.argv[2]))
 PYEOF
 )

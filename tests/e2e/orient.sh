@@ -46,15 +46,13 @@ tets() { sed -n '/^Tetrahedra/,/^End/p' "$1"; }
 # from IN to OUT. Written without the library: numpy.
 folded() {
     "$PY" - "$1" "$2" << 'EOF'
-import sys
+import os, sys
 import numpy as np
+sys.path.insert(0, os.environ["QDC_TOOLS"])
+import meditio
 def load(p):
-    L = open(p).read().split()
-    i = L.index("Vertices"); nv = int(L[i + 1])
-    x = np.array(L[i + 2:i + 2 + 4 * nv], float).reshape(nv, 4)[:, :3]
-    j = L.index("Tetrahedra"); nt = int(L[j + 1])
-    t = np.array(L[j + 2:j + 2 + 5 * nt], int).reshape(nt, 5)[:, :4] - 1
-    return x, t
+    m = meditio.read(p)
+    return m.vertices, m.tets
 def vol(x, t):
     a, b, c, d = (x[t[:, k]] for k in range(4))
     return np.einsum("ij,ij->i", b - a, np.cross(c - a, d - a))
@@ -103,13 +101,12 @@ n=$(folded "$TMP/sorted.mesh" "$TMP/sorted.out.mesh")
 # --reorient on: the tets are written in their positive vertex order instead
 "$BIN/qdc" optimize "$TMP/sorted.mesh" "$TMP/re.mesh" --reorient on > "$TMP/re.log" 2>&1
 npos=$("$PY" - "$TMP/re.mesh" << 'EOF'
-import sys
+import os, sys
 import numpy as np
-L = open(sys.argv[1]).read().split()
-i = L.index("Vertices"); nv = int(L[i + 1])
-x = np.array(L[i + 2:i + 2 + 4 * nv], float).reshape(nv, 4)[:, :3]
-j = L.index("Tetrahedra"); nt = int(L[j + 1])
-t = np.array(L[j + 2:j + 2 + 5 * nt], int).reshape(nt, 5)[:, :4] - 1
+sys.path.insert(0, os.environ["QDC_TOOLS"])
+import meditio
+m = meditio.read(sys.argv[1])
+x, t = m.vertices, m.tets
 a, b, c, d = (x[t[:, k]] for k in range(4))
 print(int((np.einsum("ij,ij->i", b - a, np.cross(c - a, d - a)) > 0).sum()))
 EOF

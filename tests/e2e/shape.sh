@@ -104,28 +104,22 @@ run_default sample-cube "$ROOT/tests/data/sample/cube.mesh" 1
 # dihedral angles 45, 60 and 90 degrees. Sliding used to trade its 45 degrees
 # for the mean (FreeFEM's cube: 45 -> 39.3); the default keeps them.
 "$PY" - "$TMP/kuhn.mesh" << 'PYEOF'
-import sys, itertools
+import os, sys, itertools
+sys.path.insert(0, os.environ["QDC_TOOLS"])
+import meditio
 n = 6
-idx = lambda i, j, k: 1 + i + (n + 1) * (j + (n + 1) * k)
-with open(sys.argv[1], "w") as f:
-    f.write("MeshVersionFormatted 2\nDimension 3\nVertices\n%d\n" % (n + 1) ** 3)
-    for k in range(n + 1):
-        for j in range(n + 1):
-            for i in range(n + 1):
-                f.write("%.17g %.17g %.17g 0\n" % (i / n, j / n, k / n))
-    tets = []
-    for i, j, k in itertools.product(range(n), repeat=3):
-        for p in itertools.permutations(range(3)):
-            c = [i, j, k]
-            path = [idx(*c)]
-            for ax in p:
-                c[ax] += 1
-                path.append(idx(*c))
-            tets.append(path)
-    f.write("Tetrahedra\n%d\n" % len(tets))
-    for t in tets:
-        f.write("%d %d %d %d 1\n" % tuple(t))
-    f.write("End\n")
+idx = lambda i, j, k: i + (n + 1) * (j + (n + 1) * k)
+x = [(i / n, j / n, k / n) for k in range(n + 1) for j in range(n + 1) for i in range(n + 1)]
+tets = []
+for i, j, k in itertools.product(range(n), repeat=3):
+    for p in itertools.permutations(range(3)):
+        c = [i, j, k]
+        path = [idx(*c)]
+        for ax in p:
+            c[ax] += 1
+            path.append(idx(*c))
+        tets.append(path)
+meditio.write(sys.argv[1], x, tets)
 PYEOF
 run_default structured-cube "$TMP/kuhn.mesh" 1
 

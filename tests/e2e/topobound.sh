@@ -26,29 +26,14 @@ if ! "$PY" "$ROOT/scripts/corpus.py" "$TMP/c" --tets 20000 --seed 3 --only bone-
 fi
 
 cat > "$TMP/lib.py" << 'PY'
+import os, sys
 import numpy as np
+sys.path.insert(0, os.environ["QDC_TOOLS"])
+import meditio
 
 def medit(path):
-    tok = open(path).read().split()
-    i, x, t, tri, tref = 0, None, None, np.zeros((0, 3), np.int64), np.zeros(0, np.int64)
-    while i < len(tok):
-        k = tok[i]
-        if k == "Vertices":
-            n = int(tok[i + 1])
-            x = np.array(tok[i + 2:i + 2 + 4 * n], dtype=float).reshape(n, 4)[:, :3]
-            i += 2 + 4 * n
-        elif k == "Tetrahedra":
-            n = int(tok[i + 1])
-            t = np.array(tok[i + 2:i + 2 + 5 * n], dtype=np.int64).reshape(n, 5)[:, :4] - 1
-            i += 2 + 5 * n
-        elif k == "Triangles":
-            n = int(tok[i + 1])
-            a = np.array(tok[i + 2:i + 2 + 4 * n], dtype=np.int64).reshape(n, 4)
-            tri, tref = a[:, :3] - 1, a[:, 3]
-            i += 2 + 4 * n
-        else:
-            i += 1
-    return x, t, tri, tref
+    m = meditio.read(path)
+    return m.vertices, m.tets, m.triangles, m.triangle_refs
 
 def outward(x, t):
     """{sorted face: the face oriented outward} of the faces of one tet"""
@@ -74,21 +59,11 @@ PY
 import sys
 sys.path.insert(0, sys.argv[3])
 import numpy as np
-from lib import medit, outward
+from lib import medit, meditio, outward
 x, t, _, _ = medit(sys.argv[1])
-f = list(outward(x, t).values())
-with open(sys.argv[2], "w") as o:
-    o.write("MeshVersionFormatted 2\nDimension 3\nVertices\n%d\n" % len(x))
-    for p in x:
-        o.write("%.17g %.17g %.17g 0\n" % tuple(p))
-    o.write("Tetrahedra\n%d\n" % len(t))
-    for tt in t:
-        o.write("%d %d %d %d 1\n" % tuple(tt + 1))
-    o.write("Triangles\n%d\n" % len(f))
-    for a, b, c in f:
-        n = np.cross(x[b] - x[a], x[c] - x[a])
-        o.write("%d %d %d %d\n" % (a + 1, b + 1, c + 1, 1 if n[0] >= 0 else 2))
-    o.write("End\n")
+f = np.array(list(outward(x, t).values()))
+n = np.cross(x[f[:, 1]] - x[f[:, 0]], x[f[:, 2]] - x[f[:, 0]])
+meditio.write(sys.argv[2], x, t, f, triangle_refs=np.where(n[:, 0] >= 0, 1, 2))
 PY
 
 cat > "$TMP/check.py" << 'PY'

@@ -34,31 +34,14 @@ d = json.load(sys.stdin); print(d["n_inverted"], "%.4f" % d["eta_mean"], "%.3f" 
 
 # compare IN NONE FLIPS: prints "ok" or what differs
 cat > "$TMP/compare.py" << 'PY'
-import sys
+import os, sys
 import numpy as np
+sys.path.insert(0, os.environ["QDC_TOOLS"])
+import meditio
 
 def medit(path):
-    tok = open(path).read().split()
-    i, x, t, r = 0, None, None, None
-    while i < len(tok):
-        k = tok[i]
-        if k == "Vertices":
-            n = int(tok[i + 1])
-            a = np.array(tok[i + 2:i + 2 + 4 * n], dtype=float).reshape(n, 4)
-            x = a[:, :3]
-            i += 2 + 4 * n
-        elif k == "Tetrahedra":
-            n = int(tok[i + 1])
-            a = np.array(tok[i + 2:i + 2 + 5 * n], dtype=np.int64).reshape(n, 5)
-            t, r = a[:, :4] - 1, a[:, 4]
-            i += 2 + 5 * n
-        elif k in ("Triangles", "Edges", "Corners", "RequiredVertices", "Ridges"):
-            n = int(tok[i + 1])
-            w = {"Triangles": 4, "Edges": 3}.get(k, 1)
-            i += 2 + w * n
-        else:
-            i += 1
-    return x, t, r
+    m = meditio.read(path)
+    return m.vertices, m.tets, m.tet_refs
 
 def faces(t, r):
     """{sorted face: sorted tuple of the regions on its sides} of constrained faces"""
@@ -204,17 +187,14 @@ if ! "$PY" "$ROOT/scripts/corpus.py" "$TMP/t" --tets 5000 --seed 1 --tangle-frac
 fi
 in=$TMP/tangled.mesh
 "$PY" - "$TMP/t/bone-lowq-tangled.mesh" "$in" << 'PY'
-import sys
-lines = open(sys.argv[1]).read().split("\n")
-i = lines.index("Vertices")
-x = [float(l.split()[0]) for l in lines[i + 2:i + 2 + int(lines[i + 1])]]
+import os, sys
+sys.path.insert(0, os.environ["QDC_TOOLS"])
+import meditio
+m = meditio.read(sys.argv[1])
+x = m.vertices[:, 0].tolist()
 mid = sorted(x)[len(x) // 2]
-j = lines.index("Tetrahedra")
-for k in range(j + 2, j + 2 + int(lines[j + 1])):
-    t = lines[k].split()[:4]
-    west = sum(x[int(v) - 1] for v in t) < 4 * mid
-    lines[k] = " ".join(t + ["2" if west else "1"])
-open(sys.argv[2], "w").write("\n".join(lines))
+m.tet_refs = [2 if sum(x[v] for v in t) < 4 * mid else 1 for t in m.tets.tolist()]
+m.write(sys.argv[2])
 PY
 set -- $(q "$in")
 ninv=$1 imean=$2
@@ -266,22 +246,10 @@ done
 # full keep every one of them a face between two tets (before that rule,
 # flips left 165 of the 300 with no tets under them, full 167)
 cat > "$TMP/inner.py" << 'PY'
-import sys
+import os, sys
 import numpy as np
-
-def read(path):
-    tok = open(path).read().split()
-    i, out = 0, {}
-    while i < len(tok):
-        k = tok[i]
-        w = {"Vertices": 4, "Tetrahedra": 5, "Triangles": 4}.get(k)
-        if w and tok[i + 1].isdigit():
-            n = int(tok[i + 1])
-            out[k] = np.array(tok[i + 2:i + 2 + w * n], dtype=float).reshape(n, w)
-            i += 2 + w * n
-        else:
-            i += 1
-    return out
+sys.path.insert(0, os.environ["QDC_TOOLS"])
+import meditio
 
 def inner_faces(t):
     f = {}
@@ -292,26 +260,16 @@ def inner_faces(t):
     return f
 
 if sys.argv[1] == "make":
-    m = read(sys.argv[2])
-    t = m["Tetrahedra"][:, :4].astype(np.int64)
-    two = sorted(k for k, c in inner_faces(t).items() if c == 2)
+    m = meditio.read(sys.argv[2])
+    two = sorted(k for k, c in inner_faces(m.tets).items() if c == 2)
     pick = np.random.default_rng(7).choice(len(two), 300, replace=False)
-    with open(sys.argv[3], "w") as o:
-        o.write("MeshVersionFormatted 2\nDimension 3\nVertices\n%d\n" % len(m["Vertices"]))
-        for x in m["Vertices"]:
-            o.write("%.17g %.17g %.17g %d\n" % tuple(x))
-        o.write("Tetrahedra\n%d\n" % len(t))
-        for x in m["Tetrahedra"].astype(np.int64):
-            o.write("%d %d %d %d %d\n" % tuple(x))
-        o.write("Triangles\n300\n")
-        for k in pick:
-            o.write("%d %d %d 99\n" % two[k])
-        o.write("End\n")
+    meditio.write(sys.argv[3], m.vertices, m.tets, [two[k] for k in pick], m.vertex_refs,
+                  m.tet_refs, [99] * 300)
 else:
-    m = read(sys.argv[2])
-    f = inner_faces(m["Tetrahedra"][:, :4].astype(np.int64))
-    tr = m.get("Triangles", np.zeros((0, 4)))
-    mine = [tuple(sorted(x)) for x in tr[tr[:, 3] == 99][:, :3].astype(np.int64).tolist()]
+    m = meditio.read(sys.argv[2])
+    f = inner_faces(m.tets)
+    tr = m.triangles[m.triangle_refs == 99]
+    mine = [tuple(sorted(x)) for x in tr.tolist()]
     print(len(mine), sum(1 for k in mine if f.get(k) != 2))
 PY
 "$PY" "$TMP/inner.py" make "$TMP/c/bone-lowq.mesh" "$TMP/inner.mesh"

@@ -13,39 +13,28 @@
 
 QDC=$BIN/qdc
 cat > "$TMP/h.py" << 'EOF'
-import sys
-
-def read_medit(path):
-    toks = open(path).read().split()
-    i = toks.index("Vertices"); nv = int(toks[i + 1])
-    xyz = [toks[i + 2 + 4 * k: i + 5 + 4 * k] for k in range(nv)]
-    i = toks.index("Tetrahedra"); nt = int(toks[i + 1])
-    tets = [toks[i + 2 + 5 * k: i + 7 + 5 * k] for k in range(nt)]
-    return xyz, tets
+import os, sys
+sys.path.insert(0, os.environ["QDC_TOOLS"])
+import meditio
 
 def regions(src, out):
     """src with tet refs 1..4 by the quadrant of the tet's centroid."""
-    xyz, tets = read_medit(src)
-    with open(out, "w") as f:
-        f.write("MeshVersionFormatted 2\nDimension 3\nVertices\n%d\n" % len(xyz))
-        f.writelines("%s %s %s 0\n" % tuple(v) for v in xyz)
-        f.write("Tetrahedra\n%d\n" % len(tets))
-        for t in tets:
-            c = [sum(float(xyz[int(v) - 1][a]) for v in t[:4]) / 4 for a in range(2)]
-            f.write("%s %s %s %s %d\n" % (*t[:4], 1 + (c[0] > 0.5) + 2 * (c[1] > 0.5)))
-        f.write("End\n")
+    m = meditio.read(src)
+    c = m.vertices[m.tets].mean(axis=1)
+    meditio.write(out, m.vertices, m.tets, tet_refs=1 + (c[:, 0] > 0.5) + 2 * (c[:, 1] > 0.5))
 
 def same(a, b):
     """Same vertex and tet counts, same tets with the same tags, in order."""
-    xa, ta = read_medit(a)
-    xb, tb = read_medit(b)
+    ma, mb = meditio.read(a), meditio.read(b)
+    xa, ta, ra = ma.vertices, ma.tets, ma.tet_refs
+    xb, tb, rb = mb.vertices, mb.tets, mb.tet_refs
     if len(xa) != len(xb) or len(ta) != len(tb):
         sys.exit("%d/%d vertices, %d/%d tets" % (len(xa), len(xb), len(ta), len(tb)))
-    if [t[:4] for t in ta] != [t[:4] for t in tb]:
+    if not (ta == tb).all():
         sys.exit("connectivity differs")
-    if [t[4] for t in ta] != [t[4] for t in tb]:
+    if not (ra == rb).all():
         sys.exit("tags differ")
-    print(len(xa), "vertices,", len(ta), "tets, tags", sorted(set(t[4] for t in ta)))
+    print(len(xa), "vertices,", len(ta), "tets, tags", sorted(set(str(r) for r in ra.tolist())))
 
 def point_element(src, out):
     """A MSH 2.2 file with one more element: a point (type 15), which qdc skips."""

@@ -17,35 +17,19 @@
                                              something to optimize
 """
 import json
+import os
 import struct
 import sys
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tools"))
+import meditio  # noqa: E402
 
 MAGIC = b"QDCMESH\0"
 
 
 def read_medit(path):
-    toks = open(path).read().replace("#", " # ").split()
-    xyz, tets, reg = [], [], []
-    i = 0
-    while i < len(toks):
-        t = toks[i]
-        if t == "Vertices":
-            n = int(toks[i + 1])
-            i += 2
-            for k in range(n):
-                xyz.append(tuple(float(v) for v in toks[i:i + 3]))
-                i += 4
-            continue
-        if t == "Tetrahedra":
-            n = int(toks[i + 1])
-            i += 2
-            for k in range(n):
-                tets.append(tuple(int(v) - 1 for v in toks[i:i + 4]))
-                reg.append(int(toks[i + 4]))
-                i += 5
-            continue
-        i += 1
-    return xyz, tets, reg
+    m = meditio.read(path)
+    return (m.vertices.tolist(), [tuple(t) for t in m.tets.tolist()], m.tet_refs.tolist())
 
 
 def read_qmesh(path):
@@ -97,14 +81,7 @@ def qmesh_bytes(xyz, tets, reg=None, flags=None):
 
 
 def write_medit(path, xyz, tets, reg):
-    with open(path, "w") as f:
-        f.write("MeshVersionFormatted 2\nDimension 3\n\nVertices\n%d\n" % len(xyz))
-        for v in xyz:
-            f.write("%.17g %.17g %.17g 0\n" % tuple(v))
-        f.write("\nTetrahedra\n%d\n" % len(tets))
-        for t, r in zip(tets, reg):
-            f.write("%d %d %d %d %d\n" % (t[0] + 1, t[1] + 1, t[2] + 1, t[3] + 1, r))
-        f.write("\nEnd\n")
+    meditio.write(path, xyz, tets, tet_refs=reg)
 
 
 def json_text(xyz, tets, reg):

@@ -23,24 +23,20 @@ fi
 # the result must keep
 IN=$TMP/bone.mesh
 "$PY" - "$TMP/c/bone-lowq.mesh" "$IN" << 'PY'
-import sys
+import os, sys
 from collections import Counter
-text = open(sys.argv[1]).read()
-tok = text.split()
-i = tok.index("Tetrahedra")
-n = int(tok[i + 1])
-t = [tuple(int(v) for v in tok[i + 2 + 5 * k:i + 6 + 5 * k]) for k in range(n)]
+sys.path.insert(0, os.environ["QDC_TOOLS"])
+import meditio
+m = meditio.read(sys.argv[1])
+t = [tuple(x) for x in m.tets.tolist()]
 faces = Counter()
 for a, b, c, d in t:
     for f in ((b, c, d), (a, d, c), (a, b, d), (a, c, b)):
         faces[tuple(sorted(f))] += 1
 once = [f for f in (tuple(x) for a, b, c, d in t
         for x in ((b, c, d), (a, d, c), (a, b, d), (a, c, b))) if faces[tuple(sorted(f))] == 1]
-body = text.rstrip()
-assert body.endswith("End")
-tri = "Triangles\n%d\n" % len(once) + "".join(
-    "%d %d %d %d\n" % (f + (1 + k % 3,)) for k, f in enumerate(once))
-open(sys.argv[2], "w").write(body[:-3] + tri + "\nEnd\n")
+m.triangles, m.triangle_refs = once, [1 + k % 3 for k in range(len(once))]
+m.write(sys.argv[2])
 PY
 "$BIN/qdc" convert --quiet "$IN" "$TMP/in.msh" ||
     { fail "server topology: convert" "qdc convert failed"; exit 1; }
@@ -51,17 +47,14 @@ start_qdcd "$TMP/d" --workers 1 ||
 # a hash of the set of triangles with their refs
 counts() {
     "$PY" - "$1" << 'PY'
-import hashlib, sys
-tok = open(sys.argv[1]).read().split()
-c = {}
-for k in ("Vertices", "Tetrahedra", "Triangles"):
-    c[k] = int(tok[tok.index(k) + 1]) if k in tok else 0
-s = []
-if c["Triangles"]:
-    i = tok.index("Triangles") + 2
-    s = sorted(tuple(sorted(tok[i + 4 * k:i + 4 * k + 3])) + (tok[i + 4 * k + 3],)
-               for k in range(c["Triangles"]))
-print(c["Vertices"], c["Tetrahedra"], c["Triangles"],
+import hashlib, os, sys
+sys.path.insert(0, os.environ["QDC_TOOLS"])
+import meditio
+m = meditio.read(sys.argv[1])
+# each triangle as its sorted 1-based indices and its ref, all as text
+s = sorted(tuple(sorted(str(v + 1) for v in f)) + (str(r),)
+           for f, r in zip(m.triangles.tolist(), m.triangle_refs.tolist()))
+print(len(m.vertices), len(m.tets), len(m.triangles),
       hashlib.sha256(repr(s).encode()).hexdigest()[:16])
 PY
 }

@@ -2,9 +2,9 @@
 """evaluate.py - an independent check of qdc's quality numbers.
 
 It shares no code with the C library: numpy for the measures, meshio for
-every format but Medit (read here, so that a Medit file is checked without
-meshio's Medit reader either), scipy's k-d tree to find candidate triangles
-for the boundary distance.
+every format but Medit (read by tests/tools/meditio.py, so that a Medit
+file is checked without meshio's Medit reader either), scipy's k-d tree to
+find candidate triangles for the boundary distance.
 
 usage: evaluate.py MESH [--orig ORIG] [--samples N]
 prints one JSON object:
@@ -34,24 +34,12 @@ import sys
 
 import numpy as np
 
+import meditio
+
 
 def read_medit(path):
-    tok = open(path).read().split()
-    out = {}
-    i = 0
-    while i < len(tok):
-        w = tok[i]
-        if w in ("Vertices", "Tetrahedra", "Triangles"):
-            n = int(tok[i + 1])
-            k = {"Vertices": 4, "Tetrahedra": 5, "Triangles": 4}[w]
-            a = np.array(tok[i + 2:i + 2 + k * n], float).reshape(n, k)
-            out[w] = a
-            i += 2 + k * n
-        else:
-            i += 1
-    x = out["Vertices"][:, :3]
-    t = out["Tetrahedra"][:, :4].astype(np.int64) - 1
-    return x, t
+    m = meditio.read(path)
+    return m.vertices, m.tets
 
 
 def read_any(path):
