@@ -360,6 +360,12 @@ static qdc_status match_faces(int32_t nv, int32_t nt, const int32_t *tets, int32
     return st;
 }
 
+qdc_status mesh_face_pairs(int32_t nv, int32_t nt, const int32_t *tets, int32_t *nbr,
+                           qdc_error *err)
+{
+    return match_faces(nv, nt, tets, nbr, err);
+}
+
 /* 1 when face f of tet tt and face g of tet tu (the same three vertices) run
  * in opposite cyclic orders, i.e. the two tets are oriented alike: two tets of
  * one orientation see their shared face from opposite sides. */

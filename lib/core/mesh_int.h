@@ -46,6 +46,13 @@ typedef struct mesh_topo {
 } mesh_topo;
 
 qdc_status mesh_topo_build(const mesh_t *m, mesh_topo **out, qdc_error *err);
+
+/* For every face 4t+f of the nt tets (f: the face opposite corner f,
+ * tet_face_of), the face 4u+g of the tet u across it, or -1 on the boundary,
+ * into nbr (4*nt), in parallel. QDC_EMESH for a face of 3+ tets or a
+ * duplicate tet (err->index a tet; the first a serial pass meets), QDC_ENOMEM. */
+qdc_status mesh_face_pairs(int32_t nv, int32_t nt, const int32_t *tets, int32_t *nbr,
+                           qdc_error *err);
 void mesh_topo_free(mesh_topo *t);
 
 /* The faces of the mesh tp was built from, as the report reads them

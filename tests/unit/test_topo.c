@@ -260,6 +260,28 @@ TEST(multiface_removal_restores_the_ring)
 
 /* Tets the caller writes in the other vertex order come back so, and the tets
  * that replace them follow the cavity's convention. */
+/* A face of three tets (the triangle 0 1 2 with apexes 3, 4 and 5) and a tet
+ * given twice are not a tmesh: QDC_EMESH naming a tet, nothing allocated. */
+TEST(tmesh_refuses_a_face_of_three_tets)
+{
+    double x[6 * 3] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, -1, 1, 1, 1};
+    int32_t three[12] = {0, 1, 2, 3, 0, 2, 1, 4, 0, 1, 2, 5};
+    int32_t twice[8] = {0, 1, 2, 3, 0, 1, 2, 3};
+    tmesh *tm = NULL;
+    qdc_error err;
+
+    memset(&err, 0, sizeof err);
+    ASSERT_EQ_INT(tmesh_new(6, x, 3, three, NULL, NULL, &tm, &err), QDC_EMESH);
+    ASSERT_TRUE(tm == NULL);
+    ASSERT_TRUE(strstr(err.msg, "shared by 3 tets") != NULL);
+    ASSERT_TRUE(err.index >= 0 && err.index < 3);
+    memset(&err, 0, sizeof err);
+    ASSERT_EQ_INT(tmesh_new(6, x, 2, twice, NULL, NULL, &tm, &err), QDC_EMESH);
+    ASSERT_TRUE(tm == NULL);
+    ASSERT_TRUE(strstr(err.msg, "duplicate tet") != NULL);
+    ASSERT_EQ_INT(err.index, 1);
+}
+
 TEST(export_keeps_the_callers_vertex_order)
 {
     double x[5 * 3] = {0, 0, -1, 0, 0, 1, 1, 0, 0, -0.5, 0.75, 0, -0.5, -0.75, 0};
@@ -1702,7 +1724,7 @@ TEST_MAIN("topo", T(kept_inner_face_blocks_removal), T(driver_keeps_an_inner_sur
           T(insertion_refused_leaves_the_mesh), T(insertion_keeps_the_smallest_angle),
           T(driver_with_insertion), T(orient3d_exact_near_coplanar),
           T(edge_removal_3_2_keeps_volume), T(edge_removal_rings_3_to_8), T(flip_2_3),
-          T(multiface_removal_restores_the_ring),
+          T(multiface_removal_restores_the_ring), T(tmesh_refuses_a_face_of_three_tets),
           T(export_keeps_the_callers_vertex_order), T(mixed_tag_shell_blocks_removal),
           T(non_convex_ring_refused), T(four_boundary_corner_floor),
           T(rollback_restores_exactly), T(random_flips_keep_invariants),
