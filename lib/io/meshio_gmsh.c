@@ -538,10 +538,58 @@ static qdc_status nodes_done(gmsh *g, qdc_error *err)
     return st;
 }
 
+/* The $Nodes errors of a count that does not add up: at the line (4.0 ASCII)
+ * or without one (4.1, whose counts may be binary). */
+#define NODES_MORE "$Nodes: more nodes in the blocks than the %lld announced"
+#define NODES_HOLD "$Nodes: blocks hold %lld nodes, %lld announced"
+
+/* A block of c nodes after the i read so far fits the total announced. */
+static qdc_status nodes_fit(gmsh *g, int64_t i, int64_t c, int64_t total, int at_line,
+                            qdc_error *err)
+{
+    if (c <= total - i)
+        return QDC_OK;
+    return at_line
+               ? fail_txt(err, QDC_EPARSE, &g->s, g->s.p, NODES_MORE, (long long)total)
+               : qdc_fail(err, QDC_EPARSE, NODES_MORE, (long long)total);
+}
+
+/* Node i's coordinates, then its npar parametric ones (read and dropped). */
+static qdc_status node_coords(gmsh *g, int64_t i, int64_t npar, qdc_error *err)
+{
+    qdc_status st = QDC_OK;
+    double x;
+
+    node_at(g, i);
+    for (int a = 0; a < 3 && st == QDC_OK; a++)
+        st = g_real(g, "$Nodes: coordinate", &g->xyz[3 * i + a], err);
+    for (int64_t a = 0; a < npar && st == QDC_OK; a++)
+        st = g_real(g, "$Nodes: parametric coordinate", &x, err);
+    if (st != QDC_OK)
+        set_index(err, "vertex", i);
+    return st;
+}
+
+/* The end of $Nodes after its blocks (st: how they went): i nodes read of the
+ * total announced, the tags checked, the end marker. */
+static qdc_status nodes_close(gmsh *g, qdc_status st, int64_t i, int64_t total,
+                              int at_line, qdc_error *err)
+{
+    if (st == QDC_OK && i != total)
+        st = at_line
+                 ? fail_txt(err, QDC_EPARSE, &g->s, g->s.p, NODES_HOLD, (long long)i,
+                            (long long)total)
+                 : qdc_fail(err, QDC_EPARSE, NODES_HOLD, (long long)i, (long long)total);
+    g->nv = i;
+    if (st == QDC_OK)
+        st = nodes_done(g, err);
+    return st == QDC_OK ? want_end(g, "Nodes", err) : st;
+}
+
 /* $Nodes (4.1): blocks of tags, then coordinates. */
 static qdc_status nodes41(gmsh *g, qdc_error *err)
 {
-    int64_t nblk, total, v, dim, par, c, i = 0;
+    int64_t nblk, total = 0, v, dim, par, c, i = 0;
     qdc_status st;
 
     st = g_count(g, "$Nodes: block count", 4, 16, INT32_MAX, &nblk, err);
@@ -560,39 +608,23 @@ static qdc_status nodes41(gmsh *g, qdc_error *err)
         if (st == QDC_OK)
             st = g_count(g, "$Nodes: nodes in block", 4, 32 + 8 * (uint64_t)(par * dim),
                          INT64_MAX, &c, err);
-        if (st == QDC_OK && c > total - i)
-            st = qdc_fail(err, QDC_EPARSE,
-                          "$Nodes: more nodes in the blocks than the %lld announced",
-                          (long long)total);
+        if (st == QDC_OK)
+            st = nodes_fit(g, i, c, total, 0, err);
         if (st == QDC_OK)
             st = dv_block(g, dim, v, i, c, err);
         for (int64_t j = 0; j < c && st == QDC_OK; j++)
             st = g_int(g, "$Nodes: node tag", 1, INT32_MAX, &g->tags[i + j], err);
-        for (int64_t j = 0; j < c && st == QDC_OK; j++) {
-            double x;
-            node_at(g, i + j);
-            for (int a = 0; a < 3 && st == QDC_OK; a++)
-                st = g_real(g, "$Nodes: coordinate", &g->xyz[3 * (i + j) + a], err);
-            for (int64_t a = 0; a < par * dim && st == QDC_OK; a++)
-                st = g_real(g, "$Nodes: parametric coordinate", &x, err);
-            if (st != QDC_OK)
-                set_index(err, "vertex", i + j);
-        }
+        for (int64_t j = 0; j < c && st == QDC_OK; j++)
+            st = node_coords(g, i + j, par * dim, err);
         i += c;
     }
-    if (st == QDC_OK && i != total)
-        st = qdc_fail(err, QDC_EPARSE, "$Nodes: blocks hold %lld nodes, %lld announced",
-                      (long long)i, (long long)total);
-    g->nv = i;
-    if (st == QDC_OK)
-        st = nodes_done(g, err);
-    return st == QDC_OK ? want_end(g, "Nodes", err) : st;
+    return nodes_close(g, st, i, total, 0, err);
 }
 
 /* $Nodes (4.0 ASCII): blocks "entity dim parametric n", then "tag x y z" lines. */
 static qdc_status nodes40(gmsh *g, qdc_error *err)
 {
-    int64_t nblk, total, v, dim, par, c, i = 0;
+    int64_t nblk, total = 0, v, dim, par, c, i = 0;
     qdc_status st;
 
     st = g_count(g, "$Nodes: block count", 4, 0, INT32_MAX, &nblk, err);
@@ -608,34 +640,20 @@ static qdc_status nodes40(gmsh *g, qdc_error *err)
             st = g_i32(g, "$Nodes: parametric", 0, 1, &par, err);
         if (st == QDC_OK)
             st = g_count(g, "$Nodes: nodes in block", 4, 0, INT64_MAX, &c, err);
-        if (st == QDC_OK && c > total - i)
-            st = fail_txt(err, QDC_EPARSE, &g->s, g->s.p,
-                          "$Nodes: more nodes in the blocks than the %lld announced",
-                          (long long)total);
+        if (st == QDC_OK)
+            st = nodes_fit(g, i, c, total, 1, err);
         if (st == QDC_OK)
             st = dv_block(g, dim, v, i, c, err);
         for (int64_t j = 0; j < c && st == QDC_OK; j++) {
-            double x;
             st = g_int(g, "$Nodes: node tag", 1, INT32_MAX, &g->tags[i + j], err);
             if (st == QDC_OK)
-                node_at(g, i + j);
-            for (int a = 0; a < 3 && st == QDC_OK; a++)
-                st = g_real(g, "$Nodes: coordinate", &g->xyz[3 * (i + j) + a], err);
-            for (int64_t a = 0; a < par * dim && st == QDC_OK; a++)
-                st = g_real(g, "$Nodes: parametric coordinate", &x, err);
-            if (st != QDC_OK)
+                st = node_coords(g, i + j, par * dim, err);
+            else
                 set_index(err, "vertex", i + j);
         }
         i += c;
     }
-    if (st == QDC_OK && i != total)
-        st = fail_txt(err, QDC_EPARSE, &g->s, g->s.p,
-                      "$Nodes: blocks hold %lld nodes, %lld announced", (long long)i,
-                      (long long)total);
-    g->nv = i;
-    if (st == QDC_OK)
-        st = nodes_done(g, err);
-    return st == QDC_OK ? want_end(g, "Nodes", err) : st;
+    return nodes_close(g, st, i, total, 1, err);
 }
 
 /* $Nodes (2.x): "n" on its own line, then "tag x y z" lines (ASCII) or n
@@ -657,16 +675,11 @@ static qdc_status nodes22(gmsh *g, qdc_error *err)
         else
             st = txt_int(&g->s, "$Nodes: node tag", 1, INT32_MAX, &g->tags[i], err);
         if (st == QDC_OK)
-            node_at(g, i);
-        for (int a = 0; a < 3 && st == QDC_OK; a++)
-            st = g_real(g, "$Nodes: coordinate", &g->xyz[3 * i + a], err);
-        if (st != QDC_OK)
+            st = node_coords(g, i, 0, err);
+        else
             set_index(err, "vertex", i);
     }
-    g->nv = total;
-    if (st == QDC_OK)
-        st = nodes_done(g, err);
-    return st == QDC_OK ? want_end(g, "Nodes", err) : st;
+    return nodes_close(g, st, total, total, 1, err);
 }
 
 /* Room for c more elements of kind k. */
