@@ -281,20 +281,12 @@ static qdc_status orient_memo_get(const mesh_t *m, orient_memo *om, uint8_t *fli
                                   qdc_error *err)
 {
     mesh_orientation mo;
-    int32_t bad = 0;
     qdc_status st;
 
-    if (om->nt == m->nt) {
-#pragma omp parallel for reduction(+ : bad) schedule(static)
-        for (int32_t t = 0; t < m->nt; t++) {
-            double d = geom_tet_vol6(m->xyz, m->tets + 4 * (size_t)t);
-            bad += om->flip[t] ? !(d < 0) : !(d > 0);
-        }
-        if (bad == 0) {
-            memcpy(flip, om->flip, (size_t)m->nt);
-            om->pos = 1;
-            return QDC_OK;
-        }
+    if (om->nt == m->nt && orient_positive(m, om->flip)) {
+        memcpy(flip, om->flip, (size_t)m->nt);
+        om->pos = 1;
+        return QDC_OK;
     }
     st = mesh_orient(m, flip, &mo, err);
     om->pos = st == QDC_OK && orient_positive(m, flip);
