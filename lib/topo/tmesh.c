@@ -1,5 +1,6 @@
-/* tmesh.c - the mutable tet mesh of the topology layer: building it (face
- * matching by lowest vertex), cavity replacement with a journal, export, check. */
+/* tmesh.c - the mutable tet mesh of the topology layer: building it (faces
+ * paired by core/mesh.c's matcher), cavity replacement with a journal, export,
+ * check. */
 #include "topo/tmesh.h"
 
 #include "core/mesh_int.h"
@@ -291,10 +292,8 @@ qdc_status tmesh_new(int32_t nv, const double *xyz, int32_t nt, const int32_t *t
     st = mark_edges(tm, nt);
     if (st != QDC_OK)
         goto out;
-        /* each tet's own (the exact predicate and a cube root: about a third of
-         * this function's time at 1M tets, serial) */
 #pragma omp parallel for schedule(static)
-    for (int32_t t = 0; t < nt; t++)
+    for (int32_t t = 0; t < nt; t++) /* in parallel: 0.1 of 0.5 s at 1M tets */
         tm->q[t] = tmesh_quality(tm, tm->tv + 4 * (size_t)t, -INFINITY);
     *out = tm;
     tm = NULL;
