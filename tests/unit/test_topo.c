@@ -258,8 +258,6 @@ TEST(multiface_removal_restores_the_ring)
     tmesh_free(tm);
 }
 
-/* Tets the caller writes in the other vertex order come back so, and the tets
- * that replace them follow the cavity's convention. */
 /* A face of three tets (the triangle 0 1 2 with apexes 3, 4 and 5) and a tet
  * given twice are not a tmesh: QDC_EMESH naming a tet, nothing allocated. */
 TEST(tmesh_refuses_a_face_of_three_tets)
@@ -282,6 +280,8 @@ TEST(tmesh_refuses_a_face_of_three_tets)
     ASSERT_EQ_INT(err.index, 1);
 }
 
+/* Tets the caller writes in the other vertex order come back so, and the tets
+ * that replace them follow the cavity's convention. */
 TEST(export_keeps_the_callers_vertex_order)
 {
     double x[5 * 3] = {0, 0, -1, 0, 0, 1, 1, 0, 0, -0.5, 0.75, 0, -0.5, -0.75, 0};
