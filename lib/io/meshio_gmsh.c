@@ -833,10 +833,14 @@ static int64_t elems_bin_fast(gmsh *g, int k, int64_t type, int64_t cnt, int64_t
     const int nn = kind_nodes(g, k, type), nc = 3 + k;
     const size_t rec = (size_t)w * (size_t)(1 + ntags + nn);
     const unsigned char *p = g->b + boff(g);
-    int32_t *idx = (int32_t *)e->idx.a + e->idx.n;
-    int32_t *phys = (int32_t *)e->phys.a + e->phys.n;
-    int32_t *ent = (int32_t *)e->ent.a + e->ent.n;
+    int32_t *idx, *phys, *ent;
     int64_t j;
+
+    if (cnt <= 0 || !e->idx.a || !e->phys.a || !e->ent.a)
+        return 0; /* nothing to store, or nowhere yet: the checked path reads it */
+    idx = (int32_t *)e->idx.a + e->idx.n;
+    phys = (int32_t *)e->phys.a + e->phys.n;
+    ent = (int32_t *)e->ent.a + e->ent.n;
 
     for (j = 0; j < cnt; j++, p += rec) {
         const unsigned char *q = p + (size_t)w * (size_t)(1 + ntags);
