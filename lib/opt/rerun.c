@@ -1,6 +1,7 @@
-/* rerun.c - the rerun policy of slide mode (docs/method.md §5a): the whole
+/* rerun.c - the rerun policy (docs/method.md §5a): in slide mode the whole
  * run again with squashed ears held, with stuck boundary vertices free, with
- * no fold at the surface; the best result kept. Also opt_run_smooth (opt_run
+ * no fold at the surface; in every mode, while tets stay inverted, with a
+ * wider regularization; the best result kept. Also opt_run_smooth (opt_run
  * without --topology), which runs it in the mesh's space-filling-curve
  * numbering. */
 #include "opt/opt.h"
@@ -189,7 +190,7 @@ static qdc_status hold_ears(mesh_t *m, const opt_options *opts, const mesh_topo 
 /* The rerun with no fold at the surface (keep_surface) from the input xin,
  * pins held, kept if better. */
 static qdc_status run_numbered(mesh_t *m, const opt_options *opts, const mesh_topo *tp,
-                               opt_result *res_out, qdc_error *err);
+                               int wider, opt_result *res_out, qdc_error *err);
 
 static qdc_status rerun_no_fold(mesh_t *m, const opt_options *opts, const mesh_topo *tp,
                                 opt_result *best, const uint8_t *pins, const double *xin,
@@ -225,18 +226,103 @@ static qdc_status rerun_no_fold(mesh_t *m, const opt_options *opts, const mesh_t
         wide.progress_ctx = &rp;
     }
     memcpy(m->xyz, xin, n3 * sizeof(double));
-    st =
-        run_numbered(m, &wide, tp, &r, err); /* not again: its bound is not the default */
+    st = run_numbered(m, &wide, tp, 0, &r,
+                      err); /* not again: its bound is not the default */
     numbered_on(&r, rp.offset);
     if (st == QDC_OK)
         keep_better(best, &r, xbest, m->xyz, n3);
     return st;
 }
 
+/* Tets still inverted after the run and its reruns: the run again from the
+ * input xin (pins held) with Escobar's regularization RERUN_EPS_WIDER times
+ * wider, then that again, each kept only if better (fewer inverted tets
+ * first). The softer barrier lets through a vertex that a tangle pushed
+ * beyond the boundary of the shape, which the default's cannot bring back:
+ * on the torus of scripts/corpus.py --tets 20000 --seed 7 --tangle-frac 0.05
+ * (507 tets inverted, 81 interior vertices pushed) the default left 3 tets
+ * inverted in every mode, around one such vertex 1.8 edges from where the
+ * untangled mesh has it and its neighbours dragged along, no place for any
+ * of them alone opening its star; with eps_rel 1e-2 none (1e-1 with the
+ * boundary fixed). Not the default: eps also sets where the smoothing of a
+ * valid mesh starts regularizing its slivers. */
+#define RERUN_EPS_WIDER 10.0
+#define RERUN_EPS_STEPS 2
+
+static qdc_status rerun_wider(mesh_t *m, const opt_options *opts, const mesh_topo *tp,
+                              opt_result *best, const uint8_t *pins, const double *xin,
+                              double *xbest, qdc_error *err)
+{
+    opt_options wide = *opts;
+    qdc_status st = QDC_OK;
+
+    /* only after a run that untangled some of its input */
+    if (best->after.n_inverted >= best->before.n_inverted)
+        return QDC_OK;
+    /* under the default bound, with the boundary within the bound of the
+     * last slide rerun (rerun_no_fold): on that torus 0 tets left at 1e-2
+     * (mean ratio 0.6303) where the default bound needed 1e-1 (0.6108) */
+    if (opts->boundary == OPT_BOUNDARY_SLIDE && opts->hausd <= 0 &&
+        opts->hausd_rel == OPT_HAUSD_AUTO)
+        wide.hausd_rel = OPT_HAUSD_STUCK;
+    for (int k = 0;
+         k < RERUN_EPS_STEPS && st == QDC_OK && best->after.n_inverted > 0 &&
+         best->outcome == OPT_CONVERGED && wide.eps_rel * RERUN_EPS_WIDER <= 1.0;
+         k++) {
+        wide.eps_rel *= RERUN_EPS_WIDER;
+        rerun_log(opts, "%d tets left inverted: again from the input with eps_rel %g%s",
+                  (int)best->after.n_inverted, wide.eps_rel,
+                  wide.hausd_rel == OPT_HAUSD_STUCK && opts->hausd_rel != OPT_HAUSD_STUCK
+                      ? " and the boundary within 0.01 of the diagonal"
+                      : "");
+        st = rerun_from_input(m, &wide, tp, best, pins, NULL, 0, xin, xbest, err);
+    }
+    return st;
+}
+
+/* The reruns of slide mode after its first run (best, xbest): ears held,
+ * stuck boundary vertices free, no fold at the surface; *sq, *stk and *loose
+ * the masks (freed by the caller). */
+static qdc_status slide_reruns(mesh_t *m, const opt_options *opts, const mesh_topo *tp,
+                               opt_result *best, uint8_t *pins, uint8_t **sq,
+                               uint8_t **stk, uint8_t **loose, const double *xin,
+                               double *xbest, qdc_error *err)
+{
+    /* Slide squashed some smooth ears (measured on bunny_tangled-low_10k: an ear
+     * of mean ratio 0.061 ended at 1e-10): run again with their corners held,
+     * and again while a run squashes ears it did not hold (at most 3 reruns);
+     * keep the best result. Only for tangled inputs: on a valid one hold_back
+     * already keeps every tet above the input's worst, and the reruns changed
+     * no result (measured 2026-11-25 on the 21 dev meshes and the 12 meshes of
+     * scripts/corpus.py at 20k tets: identical quality) while taking up to 5x
+     * the time (bone-lowq, 20k tets: 5.1 s against 1.05 s). */
+    qdc_status st = hold_ears(m, opts, tp, best, pins, *loose, sq, stk, xin, xbest, err);
+
+    /* Inverted tets left where the tangle reaches the boundary: once more with
+     * the boundary vertices around them free (stuck_boundary), ears held as
+     * before; kept only if better (fewer inverted tets first). */
+    if (st == QDC_OK && *stk && best->outcome == OPT_CONVERGED &&
+        best->after.n_inverted > 0) {
+        *loose = *stk;
+        *stk = NULL;
+        st = free_stuck(m, opts, tp, best, pins, *loose, xin, xbest, err);
+    }
+    /* Tets still left inverted (measured on tangled thin bones of
+     * scripts/corpus.py at 100k-200k tets, where the finishing pass had traded
+     * them in at the surface): once more with no fold at the surface allowed
+     * (finish.h, keep_surface), the ears held, the boundary sliding (with the
+     * stuck vertices free, the 100k bone kept its inverted tet); kept only if
+     * better. Not on every run: on the tangled 1M-tet ball the rule left 17
+     * tets inverted where the run without it leaves none. */
+    if (st == QDC_OK && best->outcome == OPT_CONVERGED && best->after.n_inverted > 0)
+        st = rerun_no_fold(m, opts, tp, best, pins, xin, xbest, err);
+    return st;
+}
+
 /* opt_run in the mesh's own numbering, on m's topology tp (NULL: each run
- * builds its own). */
+ * builds its own); wider: rerun_wider allowed. */
 static qdc_status run_numbered(mesh_t *m, const opt_options *opts, const mesh_topo *tp,
-                               opt_result *res_out, qdc_error *err)
+                               int wider, opt_result *res_out, qdc_error *err)
 {
     uint8_t *pins = NULL, *sq = NULL, *stk = NULL, *loose = NULL;
     double *xin = NULL, *xbest = NULL;
@@ -244,6 +330,7 @@ static qdc_status run_numbered(mesh_t *m, const opt_options *opts, const mesh_to
     opt_options dflt;
     qdc_status st;
     size_t n3 = 3 * (size_t)(m && m->nv > 0 ? m->nv : 0);
+    int slide;
 
     memset(&best, 0, sizeof best);
     best.outcome = OPT_FAILED;
@@ -251,8 +338,9 @@ static qdc_status run_numbered(mesh_t *m, const opt_options *opts, const mesh_to
         opt_defaults(&dflt);
         opts = &dflt;
     }
-    if (opts->boundary != OPT_BOUNDARY_SLIDE)
+    if (n3 == 0) /* no mesh or no vertex: the run says why */
         return opt_run_once(m, opts, tp, NULL, NULL, NULL, NULL, 0, res_out, err);
+    slide = opts->boundary == OPT_BOUNDARY_SLIDE;
     xin = qdc_mallocn(n3 + 1, sizeof(double));
     xbest = qdc_mallocn(n3 + 1, sizeof(double));
     pins = qdc_calloc(n3 / 3 + 1, 1);
@@ -263,40 +351,18 @@ static qdc_status run_numbered(mesh_t *m, const opt_options *opts, const mesh_to
         goto out;
     }
     memcpy(xin, m->xyz, n3 * sizeof(double));
-    st = opt_run_once(m, opts, tp, NULL, NULL, &sq, &stk, 0, &best, err);
+    st = opt_run_once(m, opts, tp, NULL, NULL, slide ? &sq : NULL, slide ? &stk : NULL, 0,
+                      &best, err);
     if (st != QDC_OK) {
         if (res_out)
             *res_out = best;
         goto out;
     }
     memcpy(xbest, m->xyz, n3 * sizeof(double));
-    /* Slide squashed some smooth ears (measured on bunny_tangled-low_10k: an ear
-     * of mean ratio 0.061 ended at 1e-10): run again with their corners held,
-     * and again while a run squashes ears it did not hold (at most 3 reruns);
-     * keep the best result. Only for tangled inputs: on a valid one hold_back
-     * already keeps every tet above the input's worst, and the reruns changed
-     * no result (measured 2026-11-25 on the 21 dev meshes and the 12 meshes of
-     * scripts/corpus.py at 20k tets: identical quality) while taking up to 5x
-     * the time (bone-lowq, 20k tets: 5.1 s against 1.05 s). */
-    st = hold_ears(m, opts, tp, &best, pins, loose, &sq, &stk, xin, xbest, err);
-    /* Inverted tets left where the tangle reaches the boundary: once more with
-     * the boundary vertices around them free (stuck_boundary), ears held as
-     * before; kept only if better (fewer inverted tets first). */
-    if (st == QDC_OK && stk && best.outcome == OPT_CONVERGED &&
-        best.after.n_inverted > 0) {
-        loose = stk;
-        stk = NULL;
-        st = free_stuck(m, opts, tp, &best, pins, loose, xin, xbest, err);
-    }
-    /* Tets still left inverted (measured on tangled thin bones of
-     * scripts/corpus.py at 100k-200k tets, where the finishing pass had traded
-     * them in at the surface): once more with no fold at the surface allowed
-     * (finish.h, keep_surface), the ears held, the boundary sliding (with the
-     * stuck vertices free, the 100k bone kept its inverted tet); kept only if
-     * better. Not on every run: on the tangled 1M-tet ball the rule left 17
-     * tets inverted where the run without it leaves none. */
-    if (st == QDC_OK && best.outcome == OPT_CONVERGED && best.after.n_inverted > 0)
-        st = rerun_no_fold(m, opts, tp, &best, pins, xin, xbest, err);
+    if (slide)
+        st = slide_reruns(m, opts, tp, &best, pins, &sq, &stk, &loose, xin, xbest, err);
+    if (st == QDC_OK && wider)
+        st = rerun_wider(m, opts, tp, &best, pins, xin, xbest, err);
     /* a failed rerun leaves the best result so far */
     memcpy(m->xyz, xbest, n3 * sizeof(double));
     st = QDC_OK;
@@ -328,13 +394,13 @@ static mesh_topo *shared_topo(const mesh_t *m, double *t)
 /* run_numbered of m on one topology built for it and all its reruns: the
  * building counted in the setup time, the faces handed out if asked for
  * (in the numbering told, vold: see mesh_faces_of_topo). */
-static qdc_status run_shared(mesh_t *m, const opt_options *opts, opt_result *res,
-                             const int32_t *told, const int32_t *vold, mesh_faces **faces,
-                             qdc_error *err)
+static qdc_status run_shared(mesh_t *m, const opt_options *opts, int wider,
+                             opt_result *res, const int32_t *told, const int32_t *vold,
+                             mesh_faces **faces, qdc_error *err)
 {
     double t;
     mesh_topo *tp = shared_topo(m, &t);
-    qdc_status st = run_numbered(m, opts, tp, res, err);
+    qdc_status st = run_numbered(m, opts, tp, wider, res, err);
 
     if (res && tp) {
         res->t_setup += t;
@@ -351,18 +417,18 @@ static qdc_status run_shared(mesh_t *m, const opt_options *opts, opt_result *res
  * (core/order.h): measured on an 800k-tet ball whose vertices came in random
  * order, 7.7 -> 5.7 s, the global phase 40% faster. A failure that names a
  * vertex or tet is found again in the caller's numbering, for its message. */
-static qdc_status run_smooth(mesh_t *m, const opt_options *opts, opt_result *res,
-                             mesh_faces **faces, qdc_error *err)
+static qdc_status run_smooth(mesh_t *m, const opt_options *opts, int wider,
+                             opt_result *res, mesh_faces **faces, qdc_error *err)
 {
     mesh_order ord;
     mesh_t *pm;
     qdc_status st;
 
     if (!m || m->nv <= 0 || m->nt <= 0 || !m->xyz || !m->tets)
-        return run_numbered(m, opts, NULL, res, err);
+        return run_numbered(m, opts, NULL, wider, res, err);
     st = mesh_order_build(m, &ord);
     if (st == QDC_EINVAL)
-        return run_shared(m, opts, res, NULL, NULL, faces, err);
+        return run_shared(m, opts, wider, res, NULL, NULL, faces, err);
     pm = st == QDC_OK ? mesh_order_take(m, &ord) : NULL;
     if (!pm) {
         mesh_order_free(&ord);
@@ -370,27 +436,33 @@ static qdc_status run_smooth(mesh_t *m, const opt_options *opts, opt_result *res
             memset(res, 0, sizeof *res);
         return qdc_fail(err, QDC_ENOMEM, "out of memory");
     }
-    st = run_shared(pm, opts, res, ord.told, ord.vold, faces, err);
+    st = run_shared(pm, opts, wider, res, ord.told, ord.vold, faces, err);
     mesh_order_give_back(&ord, pm, m);
     if (st == QDC_OK)
         mesh_order_restore_xyz(&ord, pm, m);
     mesh_free(pm);
     mesh_order_free(&ord);
     if (st != QDC_OK && err && err->index >= 0)
-        st = run_numbered(m, opts, NULL, res, err);
+        st = run_numbered(m, opts, NULL, wider, res, err);
     return st;
 }
 
 qdc_status opt_run_smooth(mesh_t *m, const opt_options *opts, opt_result *res,
                           qdc_error *err)
 {
-    return run_smooth(m, opts, res, NULL, err);
+    return run_smooth(m, opts, 1, res, NULL, err);
+}
+
+qdc_status opt_run_smooth_round(mesh_t *m, const opt_options *opts, opt_result *res,
+                                qdc_error *err)
+{
+    return run_smooth(m, opts, 0, res, NULL, err);
 }
 
 qdc_status opt_run_smooth_faces(mesh_t *m, const opt_options *opts, opt_result *res,
                                 mesh_faces **faces, qdc_error *err)
 {
-    qdc_status st = run_smooth(m, opts, res, faces, err);
+    qdc_status st = run_smooth(m, opts, 1, res, faces, err);
 
     if (st != QDC_OK) {
         mesh_faces_free(*faces);

@@ -668,7 +668,7 @@ static qdc_status full_round(mesh_t *m, opt_options *o, double hausd, spend *sp,
         o->progress = NULL; /* a trial: its records would not be the result's */
         st = spend_begin(sp, m, o, err);
         if (st == QDC_OK) {
-            st = opt_run_smooth(m, o, &r, err);
+            st = opt_run_smooth_round(m, o, &r, err);
             spend_end(sp, m);
         }
         if (st == QDC_OK && r.outcome != OPT_STOPPED &&
@@ -802,7 +802,7 @@ static qdc_status round_smooth(mesh_t *m, opt_options *o, spend *sp, const uint8
         o->max_iter = TOPO_HELD_ITERS;
     st = spend_begin(sp, m, o, err);
     if (st == QDC_OK) {
-        st = opt_run_smooth(m, o, r, err);
+        st = opt_run_smooth_round(m, o, r, err);
         spend_end(sp, m);
     }
     o->max_iter = iters;
