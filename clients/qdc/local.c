@@ -753,6 +753,29 @@ static void print_outcome(const report_t *r)
         fprintf(stderr, "qdc: suggestion: %s\n", o.suggestions[i]);
 }
 
+/* --topology changes the tets, and OUT in a format qdc writes only over its
+ * source (Abaqus, Netgen, MSH 1, Nastran, UNV, MED: meshio_has_writer) could
+ * not be written after the run: said before it, and 1 (the run was the whole
+ * wait, then exit 4). */
+static int topology_out(const optimize_args *x, const mesh_t *m)
+{
+    meshio_format f;
+
+    if (x->o.topology == OPT_TOPOLOGY_NONE)
+        return 0;
+    f = meshio_save_format(x->out, x->fout, m);
+    if (f == MESHIO_AUTO || meshio_has_writer(f))
+        return 0;
+    fprintf(stderr,
+            "qdc: %s: %s is written only as the input file with new coordinates, and "
+            "--topology %s changes the tets: name OUT in a format qdc writes (.mesh, "
+            ".meshb, .msh, .vtk, .vtu, .json, .qmesh, .xml) or give --out-format; "
+            "nothing was done\n",
+            x->out, meshio_format_name(f) ? meshio_format_name(f) : "?",
+            opt_topology_name(x->o.topology));
+    return 1;
+}
+
 /* The outcome and --report FILE.json: quality of the input (orig, NULL without
  * --report) and of the result (m), the boundary error between them, the run.
  * faces (may be NULL): the input's faces as the run found them (opt_run_faces);
@@ -828,6 +851,10 @@ int cli_optimize(int argc, char **argv)
     }
     if (x.fix_path && (rc = load_fix(x.fix_path, m)) != CLI_OK)
         goto out;
+    if (topology_out(&x, m)) {
+        rc = CLI_EUSAGE;
+        goto out;
+    }
     orig = x.report_path ? mesh_dup(m) : NULL;
     if (x.report_path && !orig) {
         fprintf(stderr, "qdc: out of memory\n");

@@ -286,4 +286,28 @@ for mode in flips full; do
         fail "topology $mode: inner surface" "$1 triangles of ref 99 out, $2 not between two tets"
     fi
 done
+
+# A format qdc writes only over its source (Nastran, Abaqus, UNV, MSH 1,
+# Netgen, MED) cannot hold the new tets: said before the run (exit 1, nothing
+# written, no progress record), where it used to run in full and then exit 4.
+# With --out-format the same file is written in another format.
+for f in gmsh.bdf.gz meshio.inp.gz gmsh.unv.gz; do
+    n="topology flips: $f back in its own format"
+    out="$TMP/o_$f"
+    "$BIN/qdc" optimize "$ROOT/tests/data/real/$f" "$out" --topology flips > /dev/null \
+        2> "$TMP/err"
+    rc=$?
+    if [ "$rc" = 1 ] && [ ! -e "$out" ] && grep -q "changes the tets.*nothing was done" \
+        "$TMP/err" && ! grep -q "^global" "$TMP/err"; then
+        pass "$n: refused before the run"
+    else
+        fail "$n" "exit $rc, output $([ -e "$out" ] && echo written || echo absent): $(tail -1 "$TMP/err")"
+    fi
+done
+if "$BIN/qdc" optimize "$ROOT/tests/data/real/gmsh.bdf.gz" "$TMP/o.bdf" --topology flips \
+    --out-format vtu --quiet 2> "$TMP/err" && head -c 40 "$TMP/o.bdf" | grep -q "<?xml"; then
+    pass "topology flips: a Nastran input written as VTU with --out-format"
+else
+    fail "topology flips: --out-format vtu" "$(tail -1 "$TMP/err")"
+fi
 exit $((NFAIL > 0))
