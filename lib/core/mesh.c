@@ -254,6 +254,17 @@ static int match_bucket(face_rec *b, int n, const int32_t *tets, int32_t *nbr,
             nbr[b[i].id] = b[i + 1].id;
             nbr[b[i + 1].id] = b[i].id;
         } else {
+            /* a tet given twice inside the mesh: its face and its twin's, and
+             * the neighbour's, three in all; said as the duplicate it is */
+            for (int k = i; k < j; k++)
+                for (int l = k + 1; l < j; l++)
+                    if (tets[b[k].id] == tets[b[l].id]) {
+                        if (pair) {
+                            pair[0] = b[k].id >> 2;
+                            pair[1] = b[l].id >> 2;
+                        }
+                        return 1;
+                    }
             if (pair) {
                 pair[0] = i;
                 pair[1] = j - i;

@@ -584,6 +584,25 @@ TEST(validation_errors)
         mesh_free(b);
     }
     mesh_free(m);
+    /* a tet given twice inside the mesh: the star numbered from its centre (0),
+     * so that the first faces matched are inner ones, each of three tets (the
+     * tet, its twin, the neighbour): said as the duplicate, not as a face of
+     * three tets */
+    {
+        static const int32_t tets[5][4] = {
+            {0, 2, 3, 4}, {1, 0, 3, 4}, {1, 2, 0, 4}, {1, 2, 3, 0}, {4, 3, 2, 0}};
+        m = mesh_new(5, 5, 0);
+        for (int a = 0; a < 4; a++)
+            for (int k = 0; k < 3; k++) {
+                m->xyz[3 * (a + 1) + k] = REG[a][k];
+                m->xyz[k] += REG[a][k] / 4;
+            }
+        memcpy(m->tets, tets, sizeof tets);
+        ASSERT_EQ_INT(mesh_validate(m, NULL, &e), QDC_EMESH);
+        ASSERT_TRUE(strstr(e.msg, "tets 0 and 4 have the same four vertices") != NULL);
+        ASSERT_EQ_INT(e.index, 4);
+        mesh_free(m);
+    }
 }
 
 TEST(dihedral_sines_are_the_sines_of_the_angles)
