@@ -10,6 +10,7 @@
 #include "opt/ctx.h"
 #include "opt/run.h"
 
+#include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -43,7 +44,19 @@ static void numbered_on(opt_result *r, int offset)
     r->best_iteration += offset;
 }
 
-/* run_once again after the run prev, its progress records numbered on. */
+/* Whether a rerun may follow the runs so far (best): the last one ended
+ * as it should (not stopped: cancelled, out of time, solver trouble) and a
+ * time limit, which is the whole call's, has time left (measured: a 20k-tet
+ * tangled torus with --time-limit 3 took 7.9 s through its reruns, each of
+ * which had the whole limit to itself). */
+static int rerun_allowed(const opt_options *opts, const opt_result *best)
+{
+    return best->outcome == OPT_CONVERGED &&
+           (opts->time_limit <= 0 || best->t_total < opts->time_limit);
+}
+
+/* run_once again after the run prev, its progress records numbered on, with
+ * what is left of the time limit. */
 static qdc_status run_again(mesh_t *m, const opt_options *opts, const mesh_topo *tp,
                             const opt_result *prev, const uint8_t *pins,
                             const uint8_t *loose, uint8_t **squashed, uint8_t **stuck,
@@ -60,6 +73,8 @@ static qdc_status run_again(mesh_t *m, const opt_options *opts, const mesh_topo 
         o2.progress = rerun_report;
         o2.progress_ctx = &rp;
     }
+    if (opts->time_limit > 0)
+        o2.time_limit = fmax(opts->time_limit - prev->t_total, 1e-3);
     st = opt_run_once(m, &o2, tp, pins, loose, squashed, stuck, keep_surface, r, err);
     numbered_on(r, rp.offset);
     return st;
@@ -162,8 +177,8 @@ static qdc_status hold_ears(mesh_t *m, const opt_options *opts, const mesh_topo 
     qdc_status st = QDC_OK;
     opt_result r;
 
-    for (int round = 0; round < 3 && *sq && best->before.n_inverted > 0 &&
-                        best->outcome == OPT_CONVERGED;
+    for (int round = 0;
+         round < 3 && *sq && best->before.n_inverted > 0 && rerun_allowed(opts, best);
          round++) {
         int32_t added = 0, held = 0;
         for (int32_t v = 0; v < m->nv; v++) {
@@ -210,7 +225,7 @@ static qdc_status rerun_no_fold(mesh_t *m, const opt_options *opts, const mesh_t
      * reports (a tangled 100k-tet scanned bone of scripts/corpus.py kept 1
      * tet inverted with only the vertices around it freed to 1e-2, none with
      * the whole boundary so bound); kept only if better. */
-    if (st != QDC_OK || best->outcome != OPT_CONVERGED || best->after.n_inverted == 0 ||
+    if (st != QDC_OK || !rerun_allowed(opts, best) || best->after.n_inverted == 0 ||
         opts->hausd > 0 || opts->hausd_rel != OPT_HAUSD_AUTO)
         return st;
     rerun_log(opts,
@@ -219,6 +234,8 @@ static qdc_status rerun_no_fold(mesh_t *m, const opt_options *opts, const mesh_t
               (int)best->after.n_inverted, OPT_HAUSD_STUCK);
     wide = *opts;
     wide.hausd_rel = OPT_HAUSD_STUCK;
+    if (opts->time_limit > 0)
+        wide.time_limit = fmax(opts->time_limit - best->t_total, 1e-3);
     rp = (rerun_progress){opts->progress, opts->progress_ctx, best->last_record + 1,
                           best->t_total};
     if (opts->progress) {
@@ -265,9 +282,8 @@ static qdc_status rerun_wider(mesh_t *m, const opt_options *opts, const mesh_top
     if (opts->boundary == OPT_BOUNDARY_SLIDE && opts->hausd <= 0 &&
         opts->hausd_rel == OPT_HAUSD_AUTO)
         wide.hausd_rel = OPT_HAUSD_STUCK;
-    for (int k = 0;
-         k < RERUN_EPS_STEPS && st == QDC_OK && best->after.n_inverted > 0 &&
-         best->outcome == OPT_CONVERGED && wide.eps_rel * RERUN_EPS_WIDER <= 1.0;
+    for (int k = 0; k < RERUN_EPS_STEPS && st == QDC_OK && best->after.n_inverted > 0 &&
+                    rerun_allowed(opts, best) && wide.eps_rel * RERUN_EPS_WIDER <= 1.0;
          k++) {
         wide.eps_rel *= RERUN_EPS_WIDER;
         rerun_log(opts, "%d tets left inverted: again from the input with eps_rel %g%s",
@@ -301,8 +317,7 @@ static qdc_status slide_reruns(mesh_t *m, const opt_options *opts, const mesh_to
     /* Inverted tets left where the tangle reaches the boundary: once more with
      * the boundary vertices around them free (stuck_boundary), ears held as
      * before; kept only if better (fewer inverted tets first). */
-    if (st == QDC_OK && *stk && best->outcome == OPT_CONVERGED &&
-        best->after.n_inverted > 0) {
+    if (st == QDC_OK && *stk && rerun_allowed(opts, best) && best->after.n_inverted > 0) {
         *loose = *stk;
         *stk = NULL;
         st = free_stuck(m, opts, tp, best, pins, *loose, xin, xbest, err);
@@ -314,7 +329,7 @@ static qdc_status slide_reruns(mesh_t *m, const opt_options *opts, const mesh_to
      * stuck vertices free, the 100k bone kept its inverted tet); kept only if
      * better. Not on every run: on the tangled 1M-tet ball the rule left 17
      * tets inverted where the run without it leaves none. */
-    if (st == QDC_OK && best->outcome == OPT_CONVERGED && best->after.n_inverted > 0)
+    if (st == QDC_OK && rerun_allowed(opts, best) && best->after.n_inverted > 0)
         st = rerun_no_fold(m, opts, tp, best, pins, xin, xbest, err);
     return st;
 }
@@ -359,6 +374,12 @@ static qdc_status run_numbered(mesh_t *m, const opt_options *opts, const mesh_to
         goto out;
     }
     memcpy(xbest, m->xyz, n3 * sizeof(double));
+    /* under a time limit, reruns from the input only when one would have as
+     * long as the first run took: cut short, it costs its setup and passes
+     * for nothing (with a limit of 45% of the whole run, the first run at
+     * 40%, a rerun started in the last 5% took the call to 69% of it) */
+    if (opts->time_limit > 0 && opts->time_limit - best.t_total < best.t_total)
+        slide = wider = 0;
     if (slide)
         st = slide_reruns(m, opts, tp, &best, pins, &sq, &stk, &loose, xin, xbest, err);
     if (st == QDC_OK && wider)
