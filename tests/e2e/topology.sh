@@ -304,6 +304,16 @@ for f in gmsh.bdf.gz meshio.inp.gz gmsh.unv.gz; do
         fail "$n" "exit $rc, output $([ -e "$out" ] && echo written || echo absent): $(tail -1 "$TMP/err")"
     fi
 done
+# qdc submit -o likewise, before anything is sent (no server listens here:
+# sent, it would fail to connect, exit 12)
+"$BIN/qdc" submit "$ROOT/tests/data/real/gmsh.bdf.gz" -o "$TMP/s.bdf" --topology full \
+    --server http://127.0.0.1:9 > /dev/null 2> "$TMP/err"
+rc=$?
+if [ "$rc" = 1 ] && grep -q "changes the tets.*nothing was sent" "$TMP/err"; then
+    pass "topology full: qdc submit -o out.bdf refused before sending"
+else
+    fail "topology full: qdc submit -o out.bdf" "exit $rc: $(tail -1 "$TMP/err")"
+fi
 if "$BIN/qdc" optimize "$ROOT/tests/data/real/gmsh.bdf.gz" "$TMP/o.bdf" --topology flips \
     --out-format vtu --quiet 2> "$TMP/err" && head -c 40 "$TMP/o.bdf" | grep -q "<?xml"; then
     pass "topology flips: a Nastran input written as VTU with --out-format"
