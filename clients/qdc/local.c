@@ -753,26 +753,19 @@ static void print_outcome(const report_t *r)
         fprintf(stderr, "qdc: suggestion: %s\n", o.suggestions[i]);
 }
 
-/* --topology changes the tets, and OUT in a format qdc writes only over its
- * source (Abaqus, Netgen, MSH 1, Nastran, UNV, MED: meshio_has_writer) could
- * not be written after the run: said before it, and 1 (the run was the whole
- * wait, then exit 4). */
-static int topology_out(const optimize_args *x, const mesh_t *m)
+int cli_topology_out_refused(const char *out, meshio_format fout, const mesh_t *m,
+                             const char *topology, const char *what)
 {
-    meshio_format f;
+    meshio_format f = meshio_save_format(out, fout, m);
 
-    if (x->o.topology == OPT_TOPOLOGY_NONE)
-        return 0;
-    f = meshio_save_format(x->out, x->fout, m);
     if (f == MESHIO_AUTO || meshio_has_writer(f))
         return 0;
     fprintf(stderr,
             "qdc: %s: %s is written only as the input file with new coordinates, and "
             "--topology %s changes the tets: name OUT in a format qdc writes (.mesh, "
             ".meshb, .msh, .vtk, .vtu, .json, .qmesh, .xml) or give --out-format; "
-            "nothing was done\n",
-            x->out, meshio_format_name(f) ? meshio_format_name(f) : "?",
-            opt_topology_name(x->o.topology));
+            "nothing was %s\n",
+            out, meshio_format_name(f) ? meshio_format_name(f) : "?", topology, what);
     return 1;
 }
 
@@ -851,7 +844,11 @@ int cli_optimize(int argc, char **argv)
     }
     if (x.fix_path && (rc = load_fix(x.fix_path, m)) != CLI_OK)
         goto out;
-    if (topology_out(&x, m)) {
+    /* said before the run: written only over its source, OUT could not be
+     * written after it (the run was the whole wait, then exit 4) */
+    if (x.o.topology != OPT_TOPOLOGY_NONE &&
+        cli_topology_out_refused(x.out, x.fout, m, opt_topology_name(x.o.topology),
+                                 "done")) {
         rc = CLI_EUSAGE;
         goto out;
     }

@@ -822,28 +822,22 @@ static int out_format_ok(const args *a)
     return 0;
 }
 
-/* submit -o OUT with --topology flips|full: OUT in a format qdc writes only
- * over its source (Abaqus, Netgen, MSH 1, Nastran, UNV, MED) cannot hold the
- * job's new tets; said once the input is read, before the job is sent (the
- * job used to run and the download then fail). 1 if refused. */
+/* submit -o OUT with --topology flips|full (in the query): OUT checked once
+ * the input is read, before the job is sent (it used to run, and the
+ * download then fail). 1 if refused. */
 static int topology_out_refused(const args *a, const mesh_t *m)
 {
     const char *q = a->query.buf;
-    meshio_format f;
+    const char *topo = !q                            ? NULL
+                       : strstr(q, "topology=flips") ? "flips"
+                       : strstr(q, "topology=full")  ? "full"
+                                                     : NULL;
 
-    if (!a->out || !q || (!strstr(q, "topology=flips") && !strstr(q, "topology=full")))
-        return 0;
-    f = meshio_save_format(
-        a->out, a->out_format ? meshio_format_from_name(a->out_format) : MESHIO_AUTO, m);
-    if (f == MESHIO_AUTO || meshio_has_writer(f))
-        return 0;
-    fprintf(stderr,
-            "qdc: %s: %s is written only as the input file with new coordinates, and "
-            "--topology changes the tets: name OUT in a format qdc writes (.mesh, "
-            ".meshb, .msh, .vtk, .vtu, .json, .qmesh, .xml) or give --out-format; "
-            "nothing was sent\n",
-            a->out, meshio_format_name(f) ? meshio_format_name(f) : "?");
-    return 1;
+    return a->out && topo &&
+           cli_topology_out_refused(a->out,
+                                    a->out_format ? meshio_format_from_name(a->out_format)
+                                                  : MESHIO_AUTO,
+                                    m, topo, "sent");
 }
 
 /* Writes len bytes to path (meshio_save_bytes: a file atomically, a pipe or

@@ -243,34 +243,30 @@ static int match_bucket(face_rec *b, int n, const int32_t *tets, int32_t *nbr,
             j++;
         if (j - i == 1) {
             nbr[b[i].id] = -1;
-        } else if (j - i == 2 && tets[b[i].id] == tets[b[i + 1].id]) {
-            /* the vertices opposite the shared face agree: one tet twice */
-            if (pair) {
-                pair[0] = b[i].id >> 2;
-                pair[1] = b[i + 1].id >> 2;
-            }
-            return 1;
-        } else if (j - i == 2) {
-            nbr[b[i].id] = b[i + 1].id;
-            nbr[b[i + 1].id] = b[i].id;
-        } else {
-            /* a tet given twice inside the mesh: its face and its twin's, and
-             * the neighbour's, three in all; said as the duplicate it is */
-            for (int k = i; k < j; k++)
-                for (int l = k + 1; l < j; l++)
-                    if (tets[b[k].id] == tets[b[l].id]) {
-                        if (pair) {
-                            pair[0] = b[k].id >> 2;
-                            pair[1] = b[l].id >> 2;
-                        }
-                        return 1;
+            i = j;
+            continue;
+        }
+        /* two of the face's tets with the same opposite vertex: one tet
+         * given twice (on the boundary the face has those two; inside, the
+         * neighbour too, three in all): said as the duplicate it is */
+        for (int k = i; k < j; k++)
+            for (int l = k + 1; l < j; l++)
+                if (tets[b[k].id] == tets[b[l].id]) {
+                    if (pair) {
+                        pair[0] = b[k].id >> 2;
+                        pair[1] = b[l].id >> 2;
                     }
+                    return 1;
+                }
+        if (j - i > 2) {
             if (pair) {
                 pair[0] = i;
                 pair[1] = j - i;
             }
             return 2;
         }
+        nbr[b[i].id] = b[i + 1].id;
+        nbr[b[i + 1].id] = b[i].id;
         i = j;
     }
     return 0;

@@ -55,6 +55,14 @@ static int rerun_allowed(const opt_options *opts, const opt_result *best)
            (opts->time_limit <= 0 || best->t_total < opts->time_limit);
 }
 
+/* What a time limit leaves to a rerun after the runs so far (best): the
+ * limit less their time (at least a millisecond: rerun_allowed decides
+ * whether one starts); 0 (none) stays 0. */
+static double limit_left(const opt_options *opts, const opt_result *best)
+{
+    return opts->time_limit > 0 ? fmax(opts->time_limit - best->t_total, 1e-3) : 0.0;
+}
+
 /* run_once again after the run prev, its progress records numbered on, with
  * what is left of the time limit. */
 static qdc_status run_again(mesh_t *m, const opt_options *opts, const mesh_topo *tp,
@@ -73,8 +81,7 @@ static qdc_status run_again(mesh_t *m, const opt_options *opts, const mesh_topo 
         o2.progress = rerun_report;
         o2.progress_ctx = &rp;
     }
-    if (opts->time_limit > 0)
-        o2.time_limit = fmax(opts->time_limit - prev->t_total, 1e-3);
+    o2.time_limit = limit_left(opts, prev);
     st = opt_run_once(m, &o2, tp, pins, loose, squashed, stuck, keep_surface, r, err);
     numbered_on(r, rp.offset);
     return st;
@@ -234,8 +241,7 @@ static qdc_status rerun_no_fold(mesh_t *m, const opt_options *opts, const mesh_t
               (int)best->after.n_inverted, OPT_HAUSD_STUCK);
     wide = *opts;
     wide.hausd_rel = OPT_HAUSD_STUCK;
-    if (opts->time_limit > 0)
-        wide.time_limit = fmax(opts->time_limit - best->t_total, 1e-3);
+    wide.time_limit = limit_left(opts, best);
     rp = (rerun_progress){opts->progress, opts->progress_ctx, best->last_record + 1,
                           best->t_total};
     if (opts->progress) {
@@ -272,25 +278,29 @@ static qdc_status rerun_wider(mesh_t *m, const opt_options *opts, const mesh_top
 {
     opt_options wide = *opts;
     qdc_status st = QDC_OK;
+    /* under the default bound, with the boundary within the bound of the
+     * last slide rerun (rerun_no_fold): on that torus 0 tets left at 1e-2
+     * (mean ratio 0.6303) where the default bound needed 1e-1 (0.6108) */
+    int widened = opts->boundary == OPT_BOUNDARY_SLIDE && opts->hausd <= 0 &&
+                  opts->hausd_rel == OPT_HAUSD_AUTO;
 
     /* only after a run that untangled some of its input */
     if (best->after.n_inverted >= best->before.n_inverted)
         return QDC_OK;
-    /* under the default bound, with the boundary within the bound of the
-     * last slide rerun (rerun_no_fold): on that torus 0 tets left at 1e-2
-     * (mean ratio 0.6303) where the default bound needed 1e-1 (0.6108) */
-    if (opts->boundary == OPT_BOUNDARY_SLIDE && opts->hausd <= 0 &&
-        opts->hausd_rel == OPT_HAUSD_AUTO)
+    if (widened)
         wide.hausd_rel = OPT_HAUSD_STUCK;
     for (int k = 0; k < RERUN_EPS_STEPS && st == QDC_OK && best->after.n_inverted > 0 &&
                     rerun_allowed(opts, best) && wide.eps_rel * RERUN_EPS_WIDER <= 1.0;
          k++) {
         wide.eps_rel *= RERUN_EPS_WIDER;
-        rerun_log(opts, "%d tets left inverted: again from the input with eps_rel %g%s",
-                  (int)best->after.n_inverted, wide.eps_rel,
-                  wide.hausd_rel == OPT_HAUSD_STUCK && opts->hausd_rel != OPT_HAUSD_STUCK
-                      ? " and the boundary within 0.01 of the diagonal"
-                      : "");
+        if (widened)
+            rerun_log(opts,
+                      "%d tets left inverted: again from the input with eps_rel %g and "
+                      "the boundary within %g of the diagonal",
+                      (int)best->after.n_inverted, wide.eps_rel, OPT_HAUSD_STUCK);
+        else
+            rerun_log(opts, "%d tets left inverted: again from the input with eps_rel %g",
+                      (int)best->after.n_inverted, wide.eps_rel);
         st = rerun_from_input(m, &wide, tp, best, pins, NULL, 0, xin, xbest, err);
     }
     return st;

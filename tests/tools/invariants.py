@@ -16,36 +16,20 @@ inverted count (tests/tools/evaluate.py), the boundary Hausdorff distance
     regions as sets of coordinate triples (any vertex numbering), each region's
     volume within 1e-9.
 """
-import json
 import os
-import subprocess
 import sys
 
 import numpy as np
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, HERE)
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import evaluate as ev  # noqa: E402
 import meditio  # noqa: E402
 
 
-def volumes(x, t):
-    a, b, c, d = x[t[:, 0]], x[t[:, 1]], x[t[:, 2]], x[t[:, 3]]
-    return np.einsum("ij,ij->i", np.cross(b - a, c - a), d - a) / 6.0
-
-
-def all_faces(t):
-    return np.concatenate([t[:, [1, 2, 3]], t[:, [0, 2, 3]], t[:, [0, 1, 3]], t[:, [0, 1, 2]]])
-
-
-def boundary_faces(t):
-    fs = np.sort(all_faces(t), axis=1)
-    u, cnt = np.unique(fs, axis=0, return_counts=True)
-    return u[cnt == 1]
-
-
 def interface_faces(t, reg):
-    fs = np.sort(all_faces(t), axis=1)
-    rr = np.concatenate([reg] * 4)
+    """Faces shared by two tets of different regions."""
+    fs = np.sort(t[:, ev.FACES].reshape(-1, 3), axis=1)
+    rr = np.repeat(reg, 4)
     o = np.lexsort(fs.T[::-1])
     fs, rr = fs[o], rr[o]
     same = np.all(fs[1:] == fs[:-1], axis=1)
@@ -53,13 +37,8 @@ def interface_faces(t, reg):
 
 
 def geometric(x, faces):
+    """Faces as a set of coordinate triples (any vertex numbering)."""
     return set(tuple(sorted(tuple(x[v]) for v in f)) for f in faces)
-
-
-def evaluate(path, *extra):
-    out = subprocess.run([sys.executable, os.path.join(HERE, "evaluate.py"), path, *extra,
-                          "--samples", "2000"], capture_output=True, text=True, check=True)
-    return json.loads(out.stdout)
 
 
 def main():
@@ -68,7 +47,7 @@ def main():
         return 2
     inp, out, mode = sys.argv[1], sys.argv[2], " ".join(sys.argv[3:])
     a, b = meditio.read(inp), meditio.read(out)
-    ea, eb = evaluate(inp), evaluate(out, "--orig", inp)
+    ea, eb = ev.evaluate(inp, samples=2000), ev.evaluate(out, inp, samples=2000)
     topo = "flips" in mode or "full" in mode
     bad = []
     if eb["n_inverted"] > (0 if topo else ea["n_inverted"]):
@@ -86,16 +65,16 @@ def main():
     if ra != rb:
         bad.append("region tags %s -> %s" % (sorted(ra), sorted(rb)))
     if "fixed" in mode:
-        ga = geometric(a.vertices, boundary_faces(a.tets))
-        gb = geometric(b.vertices, boundary_faces(b.tets))
+        ga = geometric(a.vertices, ev.boundary_tris(a.tets))
+        gb = geometric(b.vertices, ev.boundary_tris(b.tets))
         if ga != gb:
             bad.append("boundary triangles changed (%d gone, %d new)" % (len(ga - gb), len(gb - ga)))
         if len(ra) > 1 and (geometric(a.vertices, interface_faces(a.tets, a.tet_refs)) !=
                             geometric(b.vertices, interface_faces(b.tets, b.tet_refs))):
             bad.append("faces between regions changed")
         for r in sorted(ra):
-            va = abs(volumes(a.vertices, a.tets[a.tet_refs == r]).sum())
-            vb = abs(volumes(b.vertices, b.tets[b.tet_refs == r]).sum())
+            va = abs(ev.signed_vol6(a.vertices, a.tets[a.tet_refs == r]).sum()) / 6
+            vb = abs(ev.signed_vol6(b.vertices, b.tets[b.tet_refs == r]).sum()) / 6
             if abs(va - vb) > 1e-9 * max(va, 1e-300):
                 bad.append("region %d volume %.12g -> %.12g" % (r, va, vb))
     print("%-28s %-30s in %.4f/%.2f inv %d -> out %.4f/%.2f inv %d H %.2e  %s" % (
