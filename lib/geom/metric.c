@@ -392,20 +392,34 @@ void metric_dihedral_range(const double *p0, const double *p1, const double *p2,
     *amax = acos(cmin) * RAD2DEG;
 }
 
+unsigned metric_dihedral_cosines(const double *p0, const double *p1, const double *p2,
+                                 const double *p3, double c[6])
+{
+    double g[4][3], len[4];
+    unsigned flat = 0;
+
+    face_area_vectors(p0, p1, p2, p3, g, len);
+    for (int e = 0; e < 6; e++) {
+        int k = dihedral_opp[e][0], l = dihedral_opp[e][1];
+        if (!(len[k] > 0.0) || !(len[l] > 0.0)) {
+            flat |= 1u << e;
+            c[e] = e & 1 ? -1.0 : 1.0;
+        } else {
+            c[e] = dihedral_cos(g, len, e);
+        }
+    }
+    return flat;
+}
+
 int metric_dihedrals(const double *p0, const double *p1, const double *p2,
                      const double *p3, double ang[6])
 {
-    double g[4][3], len[4];
-    int degenerate = face_area_vectors(p0, p1, p2, p3, g, len);
+    double c[6];
+    unsigned flat = metric_dihedral_cosines(p0, p1, p2, p3, c);
 
-    for (int e = 0; e < 6; e++) {
-        int k = dihedral_opp[e][0], l = dihedral_opp[e][1];
-        if (!(len[k] > 0.0) || !(len[l] > 0.0))
-            ang[e] = e & 1 ? 180.0 : 0.0;
-        else
-            ang[e] = acos(dihedral_cos(g, len, e)) * RAD2DEG;
-    }
-    return degenerate;
+    for (int e = 0; e < 6; e++)
+        ang[e] = flat >> e & 1 ? (e & 1 ? 180.0 : 0.0) : acos(c[e]) * RAD2DEG;
+    return flat != 0;
 }
 
 double metric_dihedral_sines_eta3(const double *p0, const double *p1, const double *p2,

@@ -78,6 +78,11 @@ double metric_vol_length(const metric_parts *p);
  * gives 0 and 180 for its angles. Returns 0, or 1 if a face is degenerate. */
 int metric_dihedrals(const double *p0, const double *p1, const double *p2,
                      const double *p3, double ang[6]);
+/* Their cosines, clamped to [-1, 1] (acos(c[e]) * 180 / pi is metric_dihedrals'
+ * angle); returns a mask of the edges whose angle a degenerate face sets (bit
+ * e: c[e] is then 1 or -1 and the angle exactly 0 or 180). */
+unsigned metric_dihedral_cosines(const double *p0, const double *p1, const double *p2,
+                                 const double *p3, double c[6]);
 
 /* Signed sines of the 6 dihedral angles (edges 01 02 03 12 13 23),
  * 3 V l_ij / (2 A_k A_l) (no acos needed), negative on an inverted

@@ -148,5 +148,104 @@ TEST(surface_edges_bound_the_dihedral)
     }
 }
 
+/* Each tet's 6 dihedral angles (edges 01 02 03 12 13 23) in degrees by a
+ * formula of the test's own, not the scan's: at edge (i, j), the angle
+ * between the other two corners' offsets with their parts along the edge
+ * taken out, by atan2. */
+static void angles_atan2(const double *x, double ang[6])
+{
+    static const int ends[6][4] = {{0, 1, 2, 3}, {0, 2, 1, 3}, {0, 3, 1, 2},
+                                   {1, 2, 0, 3}, {1, 3, 0, 2}, {2, 3, 0, 1}};
+    for (int e = 0; e < 6; e++) {
+        const double *pi = x + 3 * ends[e][0], *pj = x + 3 * ends[e][1];
+        const double *pk = x + 3 * ends[e][2], *pl = x + 3 * ends[e][3];
+        double d[3], u[3], v[3], dd = 0, du = 0, dv = 0, cr[3], dot;
+        for (int k = 0; k < 3; k++) {
+            d[k] = pj[k] - pi[k];
+            u[k] = pk[k] - pi[k];
+            v[k] = pl[k] - pi[k];
+            dd += d[k] * d[k];
+            du += d[k] * u[k];
+            dv += d[k] * v[k];
+        }
+        for (int k = 0; k < 3; k++) {
+            u[k] -= du / dd * d[k];
+            v[k] -= dv / dd * d[k];
+        }
+        cr[0] = u[1] * v[2] - u[2] * v[1];
+        cr[1] = u[2] * v[0] - u[0] * v[2];
+        cr[2] = u[0] * v[1] - u[1] * v[0];
+        dot = u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
+        ang[e] = atan2(sqrt(cr[0] * cr[0] + cr[1] * cr[1] + cr[2] * cr[2]), dot) *
+                 (180.0 / 3.14159265358979323846);
+    }
+}
+
+/* The histogram has every angle in its whole-degree bin: 2000 tets of random
+ * shapes (separate vertices), checked against angles found another way
+ * (angles within 1e-6 degree of a whole one, where rounding decides, left
+ * out of the count on both sides), and a flat tet's 0 and 180 degrees in the
+ * first and last bins. */
+TEST(dihedral_histogram_bins_each_angle)
+{
+    enum { NT = 2000 };
+    mesh_t *m = mesh_new(4 * NT, NT, 0);
+    report_quality q;
+    int64_t want[REPORT_HIST_BINS] = {0}, near_whole = 0;
+    uint64_t s = 12345;
+    ASSERT_TRUE(m);
+    for (int t = 0; t < NT; t++) {
+        double *x = m->xyz + 12 * (size_t)t, ang[6], vol, a[3], b[3], c[3];
+        for (int i = 0; i < 12; i++) {
+            s = s * 6364136223846793005ULL + 1442695040888963407ULL;
+            x[i] = (double)(s >> 11) / 9007199254740992.0;
+        }
+        for (int d = 0; d < 3; d++) {
+            a[d] = x[3 + d] - x[d];
+            b[d] = x[6 + d] - x[d];
+            c[d] = x[9 + d] - x[d];
+        }
+        vol = a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) +
+              a[2] * (b[0] * c[1] - b[1] * c[0]);
+        for (int k = 0; k < 4; k++) /* positive: the scan's orientation of a lone tet */
+            m->tets[4 * t + k] = 4 * t + (vol < 0 && k < 2 ? 1 - k : k);
+        angles_atan2(x, ang);
+        for (int e = 0; e < 6; e++) {
+            double ae = ang[e];
+            if (fabs(ae - floor(ae + 0.5)) < 1e-6)
+                near_whole++;
+            else
+                want[(int)ae]++;
+        }
+    }
+    ASSERT_OK(report_quality_compute(m, &q, NULL));
+    ASSERT_EQ_INT(q.n_inverted, 0);
+    {
+        int64_t got = 0, total = 0;
+        for (int b = 0; b < REPORT_HIST_BINS; b++) {
+            total += q.hist[b];
+            if (near_whole == 0)
+                ASSERT_EQ_INT((int)q.hist[b], (int)want[b]);
+            got += q.hist[b] == want[b];
+        }
+        ASSERT_EQ_INT((int)total, 6 * NT);
+        ASSERT_EQ_INT((int)near_whole, 0); /* the seed gives none: the check is whole */
+        ASSERT_EQ_INT((int)got, REPORT_HIST_BINS);
+    }
+    mesh_free(m);
+    m = two_tets(0.0);
+    ASSERT_TRUE(m);
+    ASSERT_OK(report_quality_compute(m, &q, NULL));
+    /* the regular tet: six 70.53 deg; the flat one: 0 deg at its base edges,
+     * 180 at the apex edges (in the last bin) */
+    ASSERT_EQ_INT((int)q.hist[70], 6);
+    ASSERT_EQ_INT((int)q.hist[0], 3);
+    ASSERT_EQ_INT((int)q.hist[REPORT_HIST_BINS - 1], 3);
+    ASSERT_EQ_INT((int)(q.dih_max * 1e6), (int)(180.0 * 1e6));
+    ASSERT_EQ_INT((int)(q.dih_min * 1e6), 0);
+    mesh_free(m);
+}
+
 TEST_MAIN("outcome", T(worst_tet_and_centroid), T(bad_result_warned),
-          T(good_result_quiet), T(surface_edges_bound_the_dihedral))
+          T(good_result_quiet), T(surface_edges_bound_the_dihedral),
+          T(dihedral_histogram_bins_each_angle))
