@@ -214,13 +214,20 @@ void ctx_set_stop(opt_result *res, opt_stop s)
     snprintf(res->stop_reason, sizeof res->stop_reason, "%s", opt_stop_name(s));
 }
 
-int ctx_should_stop(const ctx_t *c, opt_result *res)
+int ctx_should_stop(ctx_t *c, opt_result *res)
 {
+    double now;
+
     if (c->o->cancel && atomic_load(c->o->cancel)) {
         ctx_set_stop(res, OPT_STOP_CANCELLED);
         return 1;
     }
-    if (c->o->time_limit > 0 && qdc_now() - c->t0 > c->o->time_limit) {
+    if (c->o->time_limit <= 0)
+        return 0;
+    now = qdc_now();
+    c->t_unit = c->t_check > 0 ? now - c->t_check : 0.0;
+    c->t_check = now;
+    if (now - c->t0 + c->t_unit > c->o->time_limit) {
         ctx_set_stop(res, OPT_STOP_TIME_LIMIT);
         return 1;
     }

@@ -56,6 +56,7 @@ typedef struct {
     slide_ctx *sl;      /* slide mode only */
     solve_ctx *sol;
     double t0;
+    double t_check, t_unit; /* the last ctx_should_stop, the time since the one before */
     opt_progress input, best;
     int best_it;
     int last_record; /* number of the last progress record */
@@ -91,8 +92,11 @@ void ctx_consider(ctx_t *c, const double *x, const opt_progress *r);
 int ctx_report(ctx_t *c, opt_progress *r);
 /* The reason the run stops (its name into res->stop_reason). */
 void ctx_set_stop(opt_result *res, opt_stop s);
-/* Cancelled or out of time: sets the reason, returns 1. */
-int ctx_should_stop(const ctx_t *c, opt_result *res);
+/* Cancelled or out of time: sets the reason, returns 1. Out of time also when
+ * the work since the last call, done once more, would end past the limit:
+ * each loop calls it once a unit of work (an iteration, a sweep), and a
+ * 1M-tet iteration is 0.7 s, which the limit was overrun by. */
+int ctx_should_stop(ctx_t *c, opt_result *res);
 /* The record of a finishing or angle pass, whose result is in c->trial:
  * copied to c->x, evaluated, numbered *next (then incremented). */
 void ctx_pass_record(ctx_t *c, opt_progress *r, int *next, const char *phase);

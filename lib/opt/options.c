@@ -231,7 +231,9 @@ static const opt_desc table[] = {
      "(vertices added and removed inside, boundary triangles and region tags kept)",
      OPT_G_EVERYDAY, topology_say},
     {"time_limit", OPT_T_REAL, OFF(time_limit), 0, 1e9, 0, NULL, 0,
-     "seconds, then the best mesh so far (0: none)", OPT_G_EVERYDAY, NULL},
+     "seconds of optimizing, then the best mesh so far: no iteration or sweep is "
+     "started that would end past them (0: none)",
+     OPT_G_EVERYDAY, NULL},
 };
 #define N_TABLE (sizeof table / sizeof table[0])
 

@@ -204,6 +204,44 @@ TEST(cancel_from_progress_callback)
     mesh_free(m);
 }
 
+/* Each global iteration's record waits 0.2 s of wall time: iterations of a
+ * known length, whatever the machine's load. */
+static int slow_records(void *ctx, const opt_progress *p)
+{
+    int *count = ctx;
+    double t0 = omp_get_wtime();
+    (*count)++;
+    if (p->iteration > 0 && strcmp(p->phase, "global") == 0)
+        while (omp_get_wtime() - t0 < 0.2)
+            ;
+    return 0;
+}
+
+/* --time-limit is not overrun by a whole iteration: with 0.2 s iterations and
+ * a 0.5 s limit the run stops after the second (the third would end at 0.6 s,
+ * past the limit, and used to be run: 0.6 s). */
+TEST(time_limit_not_overrun_by_an_iteration)
+{
+    int n = 5, calls = 0;
+    mesh_t *m = tm_grid(n, 0);
+    opt_options o;
+    opt_result r;
+    tm_perturb(m, n, 0.4, 4);
+    opt_defaults(&o);
+    o.max_iter = 100;
+    o.stall = 0;
+    o.tol_move = 0;
+    o.finish = 0;
+    o.time_limit = 0.5;
+    o.progress = slow_records;
+    o.progress_ctx = &calls;
+    ASSERT_OK(opt_run(m, &o, &r, NULL));
+    ASSERT_TRUE(strcmp(r.stop_reason, "time-limit") == 0);
+    ASSERT_TRUE(r.iterations >= 2);
+    ASSERT_TRUE(r.t_total <= o.time_limit);
+    mesh_free(m);
+}
+
 TEST(cancel_flag_before_start)
 {
     int n = 3;
@@ -903,9 +941,9 @@ TEST_MAIN("opt", T(fixed_boundary_untangles_without_folding),
           T(literal_mode_is_safe_and_reported),
           T(fixed_boundary_and_user_locks_do_not_move),
           T(regions_and_connectivity_untouched), T(cancel_from_progress_callback),
-          T(cancel_flag_before_start), T(solvers_and_metrics_all_work),
-          T(harmonic_guidance_runs), T(bad_options_and_bad_mesh_rejected),
-          T(max_min_volume_untangles_a_grid),
+          T(cancel_flag_before_start), T(time_limit_not_overrun_by_an_iteration),
+          T(solvers_and_metrics_all_work), T(harmonic_guidance_runs),
+          T(bad_options_and_bad_mesh_rejected), T(max_min_volume_untangles_a_grid),
           T(untangling_slides_boundary_vertices_on_their_faces),
           T(allocation_failures_are_clean),
           T(finishing_sweeps_do_not_depend_on_the_thread_count),
