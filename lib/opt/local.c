@@ -275,16 +275,18 @@ out:
  * tets' boundary corners free to leave their surface within the bound (the
  * default's: OPT_HAUSD_STUCK). *big if the region is not local. */
 static qdc_status local_rings_round(ctx_t *c, opt_result *res, opt_progress *r, int *next,
-                                    int rings, int *big)
+                                    int rings, int *big, int *fewer)
 {
     double wide = c->autob && OPT_HAUSD_STUCK > c->hbound ? OPT_HAUSD_STUCK : c->hbound;
     qdc_status st = QDC_OK;
+    int32_t was = c->best.n_inverted;
 
     if (c->best.n_inverted > 0 && res->stop != OPT_STOP_CANCELLED)
         st = local_round(c, res, r, next, rings, c->hbound, 0, big);
     if (st == QDC_OK && wide > 0 && (c->sl || wide > c->hbound) && !*big &&
         c->best.n_inverted > 0 && res->stop != OPT_STOP_CANCELLED)
         st = local_round(c, res, r, next, rings, wide, c->sl != NULL, big);
+    *fewer = c->best.n_inverted < was;
     return st;
 }
 
@@ -296,7 +298,15 @@ qdc_status local_pass(ctx_t *c, opt_result *res, opt_progress *r, int *next)
     if (!c->repair)
         return QDC_OK;
     for (size_t i = 0; i < sizeof local_rings / sizeof local_rings[0] && !big; i++) {
-        st = local_rings_round(c, res, r, next, local_rings[i], &big);
+        int fewer = 1, fewer_k;
+        st = local_rings_round(c, res, r, next, local_rings[i], &big, &fewer);
+        /* no tet untangled at this ring count: the next, twice as wide, did
+         * not untangle any either on the tangled meshes tried (a 13k-tet
+         * two-region box of scripts/corpus.py, seed 31, --tangle-frac 0.08:
+         * 42 rounds of up to the whole mesh, 5 tets left inverted all the
+         * same); the reruns from the input take over */
+        if (st == QDC_OK && !fewer && !big && c->best.n_inverted > 0)
+            break;
         /* too many tets at this ring count (at 4M tets of a cube of
          * scripts/corpus.py, 137k within 6 rings of 2 tets, where 3 rings
          * had 10k): the largest count between the last and this one that is
@@ -304,7 +314,7 @@ qdc_status local_pass(ctx_t *c, opt_result *res, opt_progress *r, int *next)
         for (int k = local_rings[i] - 1, done = 0;
              st == QDC_OK && big && !done && i > 0 && k > local_rings[i - 1]; k--) {
             int over = 0;
-            st = local_rings_round(c, res, r, next, k, &over);
+            st = local_rings_round(c, res, r, next, k, &over, &fewer_k);
             done = !over; /* the last round this pass makes (big stays set) */
         }
     }
