@@ -557,12 +557,14 @@ void slide_clamp(const double *x0, int32_t v, double r, double p[3])
             p[k] = o[k] + d[k] * (r / n);
 }
 
-void slide_release(slide_ctx *s, int32_t v)
+void slide_release(slide_ctx *s, int32_t v, int unbounded)
 {
     if (s->kind[v] == SLIDE_CORNER && s->on_iface[v])
         return;
     s->loose[v] = 1;
-    if (s->bound > 0) { /* free in space, within the bound of its input position */
+    if (s->bound > 0 &&
+        !(unbounded &&
+          s->on_iface[v])) { /* free in space, within the bound of its input position */
         s->kind[v] = SLIDE_SURFACE;
         s->flat[v] = 0;
     } else {

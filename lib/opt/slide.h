@@ -27,8 +27,11 @@ int32_t slide_n_feature_edges(const slide_ctx *s);
 /* v moves freely from now on (a run that leaves tets inverted where sliding
  * cannot undo them frees the boundary vertices around them): as an interior
  * vertex without a bound, anywhere within the bound of its input position
- * with one (slide_set_bound first), so the bound still holds. */
-void slide_release(slide_ctx *s, int32_t v);
+ * with one (slide_set_bound first), so the bound still holds. unbounded: an
+ * interface vertex (on no boundary face) moves as an interior vertex even
+ * under a bound (a corner of a tet inverted where the input's interface is
+ * folded: see local.c). */
+void slide_release(slide_ctx *s, int32_t v, int unbounded);
 /* The freed vertices' bound instead, if larger than the bound. */
 void slide_set_loose_bound(slide_ctx *s, double r);
 

@@ -205,8 +205,8 @@ TEST(freed_vertices_keep_the_bound)
     ASSERT_OK(mesh_topo_build(m, &tp, NULL));
     ASSERT_OK(slide_new(tp, m->xyz, 30.0, &s, NULL));
     slide_set_bound(s, 0.01);
-    slide_release(s, vf);
-    slide_release(s, vc);
+    slide_release(s, vf, 1); /* unbounded: only for interface vertices */
+    slide_release(s, vc, 0);
     ASSERT_TRUE(slide_lifts(s, vf) && slide_lifts(s, vc));
     slide_project(s, vf, p, q);
     d = sqrt((q[0] - 0.5) * (q[0] - 0.5) + (q[1] - 0.5) * (q[1] - 0.5) + q[2] * q[2]);
@@ -216,11 +216,45 @@ TEST(freed_vertices_keep_the_bound)
     ASSERT_NEAR(sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2]), 0.01, 1e-12);
     slide_free(s);
     ASSERT_OK(slide_new(tp, m->xyz, 30.0, &s, NULL));
-    slide_release(s, vf);
+    slide_release(s, vf, 0);
     ASSERT_EQ_INT(slide_kind(s, vf), SLIDE_INTERIOR);
     slide_project(s, vf, p, q);
     ASSERT_NEAR(q[2], 0.3, 0.0);
     slide_free(s);
+    mesh_topo_free(tp);
+    mesh_free(m);
+}
+
+/* An interface vertex on no boundary face released unbounded (a corner of a
+ * tet left inverted on a folded interface) moves as an interior vertex even
+ * under a bound; released bounded it stays within the bound. */
+TEST(interface_vertex_released_unbounded_moves_freely)
+{
+    int n = 2;
+    mesh_t *m = tm_grid(n, MESH_WITH_REGION);
+    mesh_topo *tp = NULL;
+    slide_ctx *s = NULL;
+    int32_t vi = 1 + 3 * (1 + 3 * 1); /* (0.5, 0.5, 0.5): on the interface x = 0.5 */
+    double p[3] = {0.8, 0.4, 0.6}, q[3];
+    ASSERT_TRUE(m);
+    ASSERT_OK(mesh_topo_build(m, &tp, NULL));
+    ASSERT_TRUE((tp->vflag[vi] & MESH_V_INTERFACE) && !(tp->vflag[vi] & MESH_V_BOUNDARY));
+    for (int unbounded = 0; unbounded < 2; unbounded++) {
+        ASSERT_OK(slide_new(tp, m->xyz, 30.0, &s, NULL));
+        slide_set_bound(s, 0.01);
+        slide_release(s, vi, unbounded);
+        slide_project(s, vi, p, q);
+        if (unbounded) {
+            ASSERT_EQ_INT(slide_kind(s, vi), SLIDE_INTERIOR);
+            for (int k = 0; k < 3; k++)
+                ASSERT_NEAR(q[k], p[k], 0.0);
+        } else {
+            double d = sqrt((q[0] - 0.5) * (q[0] - 0.5) + (q[1] - 0.5) * (q[1] - 0.5) +
+                            (q[2] - 0.5) * (q[2] - 0.5));
+            ASSERT_NEAR(d, 0.01, 1e-12);
+        }
+        slide_free(s);
+    }
     mesh_topo_free(tp);
     mesh_free(m);
 }
@@ -305,6 +339,7 @@ TEST(no_tet_is_flattened_in_any_boundary_mode)
 }
 
 TEST_MAIN("slide", T(freed_vertices_keep_the_bound),
+          T(interface_vertex_released_unbounded_moves_freely),
           T(no_tet_is_flattened_in_any_boundary_mode),
           T(cube_features_are_its_12_edges_and_8_corners),
           T(projection_onto_face_line_and_corner), T(bvh_picks_the_closest_triangle),
