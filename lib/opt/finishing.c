@@ -277,6 +277,17 @@ static qdc_status lsq_angle_pass(ctx_t *c, const uint8_t *movable, opt_result *r
     return st;
 }
 
+typedef struct {
+    ctx_t *c;
+    opt_result *res;
+} stop_arg;
+
+static int stop_asked(void *arg)
+{
+    stop_arg *a = arg;
+    return ctx_should_stop(a->c, a->res);
+}
+
 /* Inverted tets the finishing pass left: the max-min volume untangling of
  * their interior vertices (untangle.h) from the best iterate, kept through the
  * best-iterate rule (fewer inverted tets first). */
@@ -285,9 +296,11 @@ static qdc_status untangle_pass(ctx_t *c, const uint8_t *movable, opt_result *re
 {
     int32_t ninv;
     qdc_status st;
+    stop_arg sa = {c, res};
 
     memcpy(c->trial, c->xbest, 3 * (size_t)c->nv * sizeof(double));
-    st = finish_untangle(c->tp, movable, c->sl, c->trial, c->lbar, &ninv);
+    st =
+        finish_untangle(c->tp, movable, c->sl, c->trial, c->lbar, stop_asked, &sa, &ninv);
     if (st != QDC_OK || ninv >= c->best.n_inverted)
         return st;
     ctx_pass_record(c, r, next, "untangle");

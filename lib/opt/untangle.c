@@ -150,7 +150,7 @@ static void untangle_set(const mesh_topo *tp, const uint8_t *movable, const slid
 
 qdc_status finish_untangle(const mesh_topo *tp, const uint8_t *movable,
                            const slide_ctx *sl, double *x, double lbar,
-                           int32_t *n_inverted)
+                           int (*stop)(void *), void *stop_ctx, int32_t *n_inverted)
 {
     uint8_t *near = qdc_mallocn((size_t)tp->nv + 1, 1);
     uint8_t *bad = qdc_mallocn((size_t)tp->nt + 1, 1);
@@ -170,7 +170,7 @@ qdc_status finish_untangle(const mesh_topo *tp, const uint8_t *movable,
     /* classes in turn (Gauss-Seidel), the vertices of a class at once: no two
      * share a tet, so each reads only positions no other moves (the same
      * bytes at any thread count) */
-    for (int s = 0; s < UNTANGLE_SWEEPS; s++) {
+    for (int s = 0; s < UNTANGLE_SWEEPS && !(stop && stop(stop_ctx)); s++) {
         int32_t moves = 0;
         for (int32_t c = 0; c < ncol; c++)
 #pragma omp parallel for reduction(+ : moves) schedule(dynamic, 16) if (c < COLOUR_SHARED)

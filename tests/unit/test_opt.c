@@ -674,7 +674,8 @@ TEST(max_min_volume_untangles_a_grid)
     ASSERT_TRUE(grid_case_new(&g, 6, 1.6, 5));
     before = mesh_count_inverted(g.tp, g.m->xyz);
     ASSERT_TRUE(before > 20);
-    ASSERT_OK(finish_untangle(g.tp, g.movable, NULL, g.m->xyz, 1.0 / g.n, &after));
+    ASSERT_OK(
+        finish_untangle(g.tp, g.movable, NULL, g.m->xyz, 1.0 / g.n, NULL, NULL, &after));
     printf("  # inverted tets %d -> %d\n", (int)before, (int)after);
     ASSERT_EQ_INT(after, mesh_count_inverted(g.tp, g.m->xyz));
     ASSERT_TRUE(after < before / 3);
@@ -712,7 +713,7 @@ TEST(untangling_slides_boundary_vertices_on_their_faces)
         for (int32_t w = 0; w < m->nv; w++)
             movable[w] = c == 1 ? slide_kind(sl, w) != SLIDE_CORNER
                                 : !(tp->vflag[w] & MESH_V_BOUNDARY);
-        ASSERT_OK(finish_untangle(tp, movable, c == 1 ? sl : NULL, m->xyz, h,
+        ASSERT_OK(finish_untangle(tp, movable, c == 1 ? sl : NULL, m->xyz, h, NULL, NULL,
                                   c == 1 ? &after : &held));
         ASSERT_EQ_INT(c == 1 ? after : held, mesh_count_inverted(tp, m->xyz));
         for (int32_t w = 0; w < m->nv; w++) {
@@ -872,7 +873,8 @@ TEST(untangling_does_not_depend_on_the_thread_count)
         n3 = 3 * (size_t)g.m->nv;
         before = mesh_count_inverted(g.tp, g.m->xyz);
         omp_set_num_threads(threads[i]);
-        ASSERT_OK(finish_untangle(g.tp, g.movable, sl, g.m->xyz, 1.0 / g.n, &after));
+        ASSERT_OK(finish_untangle(g.tp, g.movable, sl, g.m->xyz, 1.0 / g.n, NULL, NULL,
+                                  &after));
         omp_set_num_threads(saved);
         printf("  # %d threads: inverted tets %d -> %d\n", threads[i], (int)before,
                (int)after);
