@@ -249,6 +249,23 @@ static void local_run(const ctx_t *c, mesh_t *s, const uint8_t *loose, double bo
           r.outcome != OPT_FAILED;
 }
 
+/* The farthest move so far (xbest from the input) of a bounded vertex the
+ * region frees: the region's bound is what the run's bound has left. */
+static double bound_used(const ctx_t *c, const int8_t *lev, const uint8_t *hold)
+{
+    double used = 0.0;
+
+    for (size_t v = 0; v < (size_t)c->nv; v++)
+        if (lev[v] >= 0 && !hold[v] && bounded(c, (int32_t)v)) {
+            double d = 0;
+            for (int k = 0; k < 3; k++)
+                d += (c->xbest[3 * v + k] - c->x0[3 * v + k]) *
+                     (c->xbest[3 * v + k] - c->x0[3 * v + k]);
+            used = sqrt(d) > used ? sqrt(d) : used;
+        }
+    return used;
+}
+
 /* One round at `rings` with the bound `bound` (normalized units): the region
  * optimized and put into c->trial, recorded (phase "local") and considered. */
 static qdc_status local_round(ctx_t *c, opt_result *res, opt_progress *r, int *next,
@@ -279,16 +296,7 @@ static qdc_status local_round(ctx_t *c, opt_result *res, opt_progress *r, int *n
                 (int)nt, rings, (int)was);
         goto out;
     }
-    /* the region's bound is measured from xbest: what the bound has left
-     * after the farthest move so far of a bounded free vertex */
-    for (size_t v = 0; v < nv; v++)
-        if (lev[v] >= 0 && !hold[v] && bounded(c, (int32_t)v)) {
-            double d = 0;
-            for (int k = 0; k < 3; k++)
-                d += (c->xbest[3 * v + k] - c->x0[3 * v + k]) *
-                     (c->xbest[3 * v + k] - c->x0[3 * v + k]);
-            used = sqrt(d) > used ? sqrt(d) : used;
-        }
+    used = bound_used(c, lev, hold);
     s = local_mesh(c, region, hold, lev, bound > 0 && used >= 0.9 * bound, nt, map);
     if (!s)
         goto out;
