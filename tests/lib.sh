@@ -14,6 +14,14 @@ trap 'rm -rf "$TMP"' EXIT
 NFAIL=0
 pass() { echo "ok - $1"; }
 fail() { echo "FAIL - $1: $2"; NFAIL=$((NFAIL + 1)); }
+# verdict NAME WHY: pass "NAME: figures" when WHY is "ok figures" (what a
+# check script printed), else fail NAME with WHY as the reason
+verdict() {
+    case $2 in
+    ok*) pass "$1: ${2#ok }" ;;
+    *) fail "$1" "$2" ;;
+    esac
+}
 # check NAME COMMAND...: pass if the command exits 0
 check() {
     name=$1; shift

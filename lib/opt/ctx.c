@@ -207,6 +207,11 @@ const char *opt_stop_name(opt_stop s)
     return (unsigned)s < sizeof stop_names / sizeof stop_names[0] ? stop_names[s] : "?";
 }
 
+double ctx_time_left(double limit, double spent)
+{
+    return limit > 0 ? fmax(limit - spent, 1e-3) : 0.0;
+}
+
 /* The reason a run stops: the enum decides, the name is for reports. */
 void ctx_set_stop(opt_result *res, opt_stop s)
 {

@@ -90,6 +90,9 @@ int ctx_eligible(const ctx_t *c, const opt_progress *r);
 void ctx_consider(ctx_t *c, const double *x, const opt_progress *r);
 /* Send r to the progress callback; nonzero: the caller asked to stop. */
 int ctx_report(ctx_t *c, opt_progress *r);
+/* What a time limit (0: none, which stays 0) leaves after `spent` seconds: at
+ * least a millisecond (whether to start at all is the caller's decision). */
+double ctx_time_left(double limit, double spent);
 /* The reason the run stops (its name into res->stop_reason). */
 void ctx_set_stop(opt_result *res, opt_stop s);
 /* Cancelled or out of time: sets the reason, returns 1. Out of time also when

@@ -170,7 +170,8 @@ static int32_t local_loose(const ctx_t *c, const int8_t *lev, const uint8_t *hol
          * two-region box of scripts/corpus.py, seed 31, --tangle-frac 0.08:
          * 5 tets left inverted, whose interface corners the tangle had
          * moved 1.4-1.6 edges) */
-        loose[w] = c->tp->vflag[v] & MESH_V_BOUNDARY ? 1 : 2;
+        loose[w] =
+            c->tp->vflag[v] & MESH_V_BOUNDARY ? SLIDE_LOOSE : SLIDE_LOOSE_UNBOUNDED;
         n++;
     }
     return n;
@@ -240,8 +241,7 @@ static void local_run(const ctx_t *c, mesh_t *s, const uint8_t *loose, double bo
     o.progress = NULL;
     o.progress_ctx = NULL;
     o.log = NULL;
-    if (o.time_limit > 0) /* what the run has left */
-        o.time_limit = fmax(o.time_limit - (qdc_now() - c->t0), 1e-3);
+    o.time_limit = ctx_time_left(o.time_limit, qdc_now() - c->t0); /* the run's rest */
     o.hausd = bound;
     o.hausd_rel = 0;
     memset(&e, 0, sizeof e);
@@ -348,18 +348,16 @@ out:
  * tets' boundary corners free to leave their surface within the bound (the
  * default's: OPT_HAUSD_STUCK). *big if the region is not local. */
 static qdc_status local_rings_round(ctx_t *c, opt_result *res, opt_progress *r, int *next,
-                                    int rings, int *big, int *fewer)
+                                    int rings, int *big)
 {
     double wide = c->autob && OPT_HAUSD_STUCK > c->hbound ? OPT_HAUSD_STUCK : c->hbound;
     qdc_status st = QDC_OK;
-    int32_t was = c->best.n_inverted;
 
     if (c->best.n_inverted > 0 && !ctx_should_stop(c, res))
         st = local_round(c, res, r, next, rings, c->hbound, 0, 0, big);
     if (st == QDC_OK && wide > 0 && (c->sl || wide > c->hbound) && !*big &&
         c->best.n_inverted > 0 && !ctx_should_stop(c, res))
         st = local_round(c, res, r, next, rings, wide, c->sl != NULL, 0, big);
-    *fewer = c->best.n_inverted < was;
     return st;
 }
 
@@ -371,14 +369,14 @@ qdc_status local_pass(ctx_t *c, opt_result *res, opt_progress *r, int *next)
     if (!c->repair)
         return QDC_OK;
     for (size_t i = 0; i < sizeof local_rings / sizeof local_rings[0] && !big; i++) {
-        int fewer = 1, fewer_k;
-        st = local_rings_round(c, res, r, next, local_rings[i], &big, &fewer);
+        int32_t was = c->best.n_inverted;
+        st = local_rings_round(c, res, r, next, local_rings[i], &big);
         /* no tet untangled at this ring count: the next, twice as wide, did
          * not untangle any either on the tangled meshes tried (a 13k-tet
          * two-region box of scripts/corpus.py, seed 31, --tangle-frac 0.08:
          * 42 rounds of up to the whole mesh, 5 tets left inverted all the
          * same); the reruns from the input take over */
-        if (st == QDC_OK && !fewer && !big && c->best.n_inverted > 0)
+        if (st == QDC_OK && !big && c->best.n_inverted > 0 && c->best.n_inverted >= was)
             break;
         /* too many tets at this ring count (at 4M tets of a cube of
          * scripts/corpus.py, 137k within 6 rings of 2 tets, where 3 rings
@@ -387,7 +385,7 @@ qdc_status local_pass(ctx_t *c, opt_result *res, opt_progress *r, int *next)
         for (int k = local_rings[i] - 1, done = 0;
              st == QDC_OK && big && !done && i > 0 && k > local_rings[i - 1]; k--) {
             int over = 0;
-            st = local_rings_round(c, res, r, next, k, &over, &fewer_k);
+            st = local_rings_round(c, res, r, next, k, &over);
             done = !over; /* the last round this pass makes (big stays set) */
         }
     }

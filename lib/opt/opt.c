@@ -58,7 +58,7 @@ static qdc_status run_setup(ctx_t *c, mesh_t *m, const opt_options *o,
     bound = c->hbound;
     for (int32_t v = 0; loose && c->sl && v < c->nv; v++)
         if (loose[v] && !(tp->vflag[v] & MESH_V_FIXED)) {
-            slide_release(c->sl, v, loose[v] == 2);
+            slide_release(c->sl, v, loose[v] == SLIDE_LOOSE_UNBOUNDED);
             c->locked[v] = 0;
             c->bw2[v] = 1.0;
             nloose++;

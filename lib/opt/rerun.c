@@ -60,7 +60,7 @@ static int rerun_allowed(const opt_options *opts, const opt_result *best)
  * whether one starts); 0 (none) stays 0. */
 static double limit_left(const opt_options *opts, const opt_result *best)
 {
-    return opts->time_limit > 0 ? fmax(opts->time_limit - best->t_total, 1e-3) : 0.0;
+    return ctx_time_left(opts->time_limit, best->t_total);
 }
 
 /* run_once again after the run prev, its progress records numbered on, with
@@ -293,14 +293,12 @@ static qdc_status rerun_wider(mesh_t *m, const opt_options *opts, const mesh_top
                     rerun_allowed(opts, best) && wide.eps_rel * RERUN_EPS_WIDER <= 1.0;
          k++) {
         wide.eps_rel *= RERUN_EPS_WIDER;
+        char also[64] = "";
         if (widened)
-            rerun_log(opts,
-                      "%d tets left inverted: again from the input with eps_rel %g and "
-                      "the boundary within %g of the diagonal",
-                      (int)best->after.n_inverted, wide.eps_rel, OPT_HAUSD_STUCK);
-        else
-            rerun_log(opts, "%d tets left inverted: again from the input with eps_rel %g",
-                      (int)best->after.n_inverted, wide.eps_rel);
+            snprintf(also, sizeof also, " and the boundary within %g of the diagonal",
+                     OPT_HAUSD_STUCK);
+        rerun_log(opts, "%d tets left inverted: again from the input with eps_rel %g%s",
+                  (int)best->after.n_inverted, wide.eps_rel, also);
         st = rerun_from_input(m, &wide, tp, best, pins, NULL, 0, xin, xbest, err);
     }
     return st;
@@ -437,7 +435,7 @@ static qdc_status run_shared(mesh_t *m, const opt_options *opts, int wider,
     /* the limit counts the building too (0.3-0.6 s of a 1M-tet run) */
     if (opts && opts->time_limit > 0) {
         o = *opts;
-        o.time_limit = fmax(o.time_limit - t, 1e-3);
+        o.time_limit = ctx_time_left(o.time_limit, t);
         opts = &o;
     }
     st = run_numbered(m, opts, tp, wider, res, err);

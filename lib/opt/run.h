@@ -9,7 +9,8 @@
 /* One optimization of m (opts NULL: the defaults) on m's topology tp (built
  * once for a run and its reruns; NULL: the run builds its own). pins (nv flags, may be
  * NULL): extra vertices that keep their input position; loose (may be NULL):
- * sliding vertices that move freely. In slide mode *squashed (if not NULL)
+ * sliding vertices that move freely (SLIDE_LOOSE, or SLIDE_LOOSE_UNBOUNDED:
+ * slide_release). In slide mode *squashed (if not NULL)
  * receives the corners of the ears this run squashed, and *stuck (if not
  * NULL) the boundary vertices around tets left inverted (hold.h); else NULL.
  * keep_surface: the finishing sweeps fold no tet at the surface (finish.h). */

@@ -32,6 +32,9 @@ int32_t slide_n_feature_edges(const slide_ctx *s);
  * under a bound (a corner of a tet inverted where the input's interface is
  * folded: see local.c). */
 void slide_release(slide_ctx *s, int32_t v, int unbounded);
+/* A loose mask's values (run.h: opt_run_once's loose): released within the
+ * bound, or unbounded as above. */
+enum { SLIDE_LOOSE = 1, SLIDE_LOOSE_UNBOUNDED = 2 };
 /* The freed vertices' bound instead, if larger than the bound. */
 void slide_set_loose_bound(slide_ctx *s, double r);
 

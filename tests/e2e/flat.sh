@@ -38,10 +38,7 @@ print("; ".join(why) if why else "ok inverted %d -> %d, none flat, worst usable 
       % (qi["n_inverted"], qo["n_inverted"], qo["eta_min_valid"], qi["eta_min_valid"]))
 EOF
 )
-case $why in
-ok*) pass "flat: bone-scan-tangled 100k: ${why#ok }" ;;
-*) fail "flat: bone-scan-tangled 100k" "$why" ;;
-esac
+verdict "flat: bone-scan-tangled 100k" "$why"
 # (progress records of candidates a pass did not keep may count flat tets)
 if grep '^qdc: .*mean ratio' "$TMP/err" | grep -q "degenerate"; then
     fail "flat: summary line" "$(grep '^qdc: .*mean ratio' "$TMP/err" | tail -1)"

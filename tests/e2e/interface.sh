@@ -70,8 +70,5 @@ print("; ".join(why) if why else
                                                        qa["eta_mean"], qb["eta_mean"]))
 EOF
 )
-    case $why in
-    ok*) pass "interface: $mode: ${why#ok }" ;;
-    *) fail "interface: $mode" "$why" ;;
-    esac
+    verdict "interface: $mode" "$why"
 done

@@ -45,10 +45,7 @@ print("; ".join(why) if why else "ok inverted %d -> 0, mean ratio %.4f -> %.4f"
       % (qi["n_inverted"], qi["eta_mean"], qo["eta_mean"]))
 EOF
 )
-    case $why in
-    ok*) pass "pushed: $mode: ${why#ok }" ;;
-    *) fail "pushed: $mode" "$why" ;;
-    esac
+    verdict "pushed: $mode" "$why"
 done
 # --time-limit is the whole call's: the reruns share it. Each used to have
 # all of it, so a limit that the first run kept to took as long as no limit

@@ -36,10 +36,7 @@ print("; ".join(why) if why else "ok inverted %d -> 0, mean ratio %.4f -> %.4f"
       % (qa["n_inverted"], qa["eta_mean"], qb["eta_mean"]))
 EOF2
 )
-case $why in
-ok*) pass "restart: graded-box-tangled --boundary fixed: ${why#ok }" ;;
-*) fail "restart: graded-box-tangled --boundary fixed" "$why" ;;
-esac
+verdict "restart: graded-box-tangled --boundary fixed" "$why"
 if grep -q "neighbours' mean" "$TMP/err" && ! grep -q "again from the input" "$TMP/err"; then
     pass "restart: repaired by the restarted round, no rerun from the input"
 else

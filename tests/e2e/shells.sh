@@ -51,8 +51,5 @@ print("; ".join(why) if why else "ok smallest dihedral %.2f -> %.2f, worst mean 
       % (qi["dihedral_min"], qo["dihedral_min"], qi["eta_min"], qo["eta_min"]))
 EOF
 )
-case $why in
-ok*) pass "shells: bone-scan (20k tets): ${why#ok }" ;;
-*) fail "shells: bone-scan (20k tets)" "$why" ;;
-esac
+verdict "shells: bone-scan (20k tets)" "$why"
 exit 0
