@@ -4,13 +4,18 @@
  * Each reader takes (buf, len), checks every count against the bytes left
  * before allocating, every index against the vertex count, rejects NaN/Inf,
  * and says where (line:column) a problem is. What qdc does not use (DOLFIN
- * domains and mesh functions, Abaqus sets, materials and steps, Netgen
- * surface elements of other kinds, edge segments, materials, geometry) is
- * skipped when reading and kept byte for byte by a spliced write, which is
- * the only way to write Abaqus and Netgen files (no writer of qdc's own:
- * meshio_write refuses them for a mesh without a source of that format).
- * DOLFIN gets a writer: vertices and tetrahedra (regions and triangles have
- * no place in its plain mesh file). */
+ * domains and mesh functions, Abaqus *ELSET and *NSET blocks, materials and
+ * steps, Netgen surface elements of other kinds, edge segments, materials,
+ * geometry) is skipped when reading and kept byte for byte by a spliced
+ * write. Each format also has a writer of qdc's own, for a mesh whose tets
+ * changed or that was read from another format: DOLFIN vertices and
+ * tetrahedra (regions and triangles have no place in its plain mesh file);
+ * Abaqus *NODE, the tets grouped by region as ELSET=REGION_<n> and the
+ * triangles by ref as ELSET=SURFACE_<n> (which the reader maps back to n);
+ * Netgen surface elements (ref as bc number, domin/domout from the tets),
+ * volume elements (region as material) and points. Second-order tets are
+ * written by both (C3D10 with STRI65 triangles; 10- and 6-point elements).
+ * Vertex refs and fixed flags are written by none of the three. */
 #include "io/format.h"
 
 /* Move the scanner to `to`, counting the lines passed. */
@@ -609,17 +614,26 @@ static qdc_status write_dolfin(const mesh_t *m, meshio_format fmt, int part, wbu
 
 enum { INP_SETS = 1024 };
 
+/* The ELSET names of one kind of element (tets, triangles) in the order
+ * first seen: an element's region or ref is the 1-based position of its
+ * set, 0 without one (inp_numbered may then renumber them). */
+typedef struct {
+    const char *set[INP_SETS];
+    size_t setl[INP_SETS];
+    int n;
+} inp_sets;
+
 typedef struct {
     vec xyz, tags, off; /* double x3, int64, uint64 x3 (when recording) */
     vec at;             /* uint64: byte offset of each node's line (errors) */
     vec tets, reg;      /* int32 x4, int32 */
     vec mid;            /* int32 x6: C3D10's mid-edge nodes (mesh_p2_edges order) */
+    vec tris, ref;      /* int32 x3 (corners), int32: the triangles' */
     int order;          /* tets read: 0 none yet, 1 C3D4, 2 C3D10 */
+    int tri_nodes;      /* nodes of the triangles of this *ELEMENT: 3 or 6 */
     tagmap tm;
     int64_t tm_n; /* nodes in tm; -1 when not built */
-    const char *set[INP_SETS];
-    size_t setl[INP_SETS];
-    int nset;
+    inp_sets tet_sets, tri_sets;
     int64_t skipped;
     char skipped_types[64];
 } inp;
@@ -633,6 +647,8 @@ static void inp_free(inp *a)
     vec_free(&a->tets);
     vec_free(&a->reg);
     vec_free(&a->mid);
+    vec_free(&a->tris);
+    vec_free(&a->ref);
     tagmap_free(&a->tm);
 }
 
@@ -715,7 +731,28 @@ static int inp_tet_type(const char *t, const char *te)
     return 0;
 }
 
-enum { INP_SKIP, INP_NODE, INP_TET, INP_OTHER };
+/* Triangle element type [t, te): its node count, 3 or 6 (the corners
+ * first, then the mid-edge nodes, which are not read), 0 if not one. Shells,
+ * membranes, surface, rigid and plane elements: what Abaqus, CalculiX,
+ * Gmsh (CPS3, CPS6) and meshio (R3D3) write for boundary triangles. */
+static int inp_tri_type(const char *t, const char *te)
+{
+    static const char *const three[] = {"S3",   "S3R",  "S3RS", "STRI3",  "CPS3", "CPE3",
+                                        "CAX3", "M3D3", "R3D3", "SFM3D3", "DS3"};
+    static const char *const six[] = {"S6",   "STRI65", "CPS6",   "CPE6",
+                                      "CAX6", "M3D6",   "SFM3D6", "DS6"};
+    size_t n = (size_t)(te - t);
+
+    for (size_t i = 0; i < sizeof three / sizeof three[0]; i++)
+        if (strlen(three[i]) == n && strncasecmp(t, three[i], n) == 0)
+            return 3;
+    for (size_t i = 0; i < sizeof six / sizeof six[0]; i++)
+        if (strlen(six[i]) == n && strncasecmp(t, six[i], n) == 0)
+            return 6;
+    return 0;
+}
+
+enum { INP_SKIP, INP_NODE, INP_TET, INP_TRI, INP_OTHER };
 
 static qdc_status inp_node(txt *s, const char *p, const char *eol, inp *a, srcrec *rec,
                            qdc_error *err)
@@ -787,22 +824,18 @@ static qdc_status inp_map(const txt *s, inp *a, qdc_error *err)
     return st;
 }
 
-/* One C3D4 element: "id, n1, n2, n3, n4", or C3D10: "id, n1, ..., n10", the
- * mid-edge nodes of edges 12, 23, 31, 14, 24, 34 (the Abaqus manual's node
- * ordering; mesh_p2_edges), continued on the next line after a trailing
- * comma; *pp and *peol move with it. */
-static qdc_status inp_tet(txt *s, const char **pp, const char **peol, inp *a, int32_t reg,
-                          qdc_error *err)
+/* The element number and the nn - 1 nodes of one element (of type name),
+ * continued on the next line after a trailing comma (*pp and *peol move
+ * with it); the nodes as vertex indices in idx. kind and index name the
+ * element in an error. */
+static qdc_status inp_numbers(txt *s, const char **pp, const char **peol, inp *a, int nn,
+                              const char *name, const char *kind, int64_t index,
+                              int32_t *idx, qdc_error *err)
 {
     const char *p = *pp, *eol = *peol, *t = p, *te;
-    const int nn = a->order == 2 ? 11 : 5;
     int64_t v[11];
-    int32_t idx[10];
-    qdc_status st = QDC_OK;
+    qdc_status st = inp_map(s, a, err); /* nodes may have been added since */
 
-    st = inp_map(s, a, err); /* nodes may have been added since the last element */
-    if (st != QDC_OK)
-        return st;
     for (int k = 0; k < nn && st == QDC_OK; k++) {
         while (!inp_field(&p, eol, &t, &te)) {
             /* continued after a trailing comma */
@@ -811,8 +844,8 @@ static qdc_status inp_tet(txt *s, const char **pp, const char **peol, inp *a, in
                 q--;
             if (q == s->p || q[-1] != ',' || eol >= s->end)
                 return fail_txt(err, QDC_EPARSE, s, eol,
-                                "*ELEMENT: a %s element needs %d numbers, got %d",
-                                nn == 11 ? "C3D10" : "C3D4", nn, k);
+                                "*ELEMENT: a %s element needs %d numbers, got %d", name,
+                                nn, k);
             adv(s, eol + 1);
             p = s->p;
             eol = memchr(p, '\n', (size_t)(s->end - p));
@@ -827,12 +860,28 @@ static qdc_status inp_tet(txt *s, const char **pp, const char **peol, inp *a, in
                 fail_txt(err, QDC_EPARSE, s, t,
                          "*ELEMENT: element %lld: unknown node %lld", (long long)v[0],
                          (long long)v[k]);
-                set_index(err, "tet", (int64_t)a->reg.n);
+                set_index(err, kind, index);
                 return QDC_EPARSE;
             }
             idx[k - 1] = (int32_t)i;
         }
     }
+    *pp = p;
+    *peol = eol;
+    return st;
+}
+
+/* One C3D4 element: "id, n1, n2, n3, n4", or C3D10: "id, n1, ..., n10", the
+ * mid-edge nodes of edges 12, 23, 31, 14, 24, 34 (the Abaqus manual's node
+ * ordering; mesh_p2_edges); *pp and *peol move past it. */
+static qdc_status inp_tet(txt *s, const char **pp, const char **peol, inp *a, int32_t reg,
+                          qdc_error *err)
+{
+    const int nn = a->order == 2 ? 11 : 5;
+    int32_t idx[10];
+    qdc_status st = inp_numbers(s, pp, peol, a, nn, nn == 11 ? "C3D10" : "C3D4", "tet",
+                                (int64_t)a->reg.n, idx, err);
+
     if (st != QDC_OK)
         return st;
     if ((int64_t)a->reg.n >= MESH_MAX_TETS)
@@ -847,28 +896,96 @@ static qdc_status inp_tet(txt *s, const char **pp, const char **peol, inp *a, in
         a->mid.n += 6;
     }
     ((int32_t *)a->reg.a)[a->reg.n++] = reg;
-    *pp = p;
-    *peol = eol;
     return QDC_OK;
 }
 
-/* The region of an ELSET name: its 1-based position among those seen. */
-static qdc_status inp_set(txt *s, inp *a, const char *v, const char *ve, int32_t *reg,
+/* One triangle element of 3 or 6 nodes: its corners, with ref. */
+static qdc_status inp_tri(txt *s, const char **pp, const char **peol, inp *a, int32_t ref,
                           qdc_error *err)
 {
-    for (int i = 0; i < a->nset; i++)
-        if (a->setl[i] == (size_t)(ve - v) &&
-            strncasecmp(a->set[i], v, a->setl[i]) == 0) {
+    int32_t idx[6];
+    qdc_status st = inp_numbers(s, pp, peol, a, a->tri_nodes + 1, "triangle", "triangle",
+                                (int64_t)a->ref.n, idx, err);
+
+    if (st != QDC_OK)
+        return st;
+    if ((int64_t)a->ref.n >= INT32_MAX / 3)
+        return fail_txt(err, QDC_ETOOBIG, s, s->bol, "more than %d triangles",
+                        INT32_MAX / 3);
+    if (vec_grow(&a->tris, 3) != 0 || vec_grow(&a->ref, 1) != 0)
+        return qdc_fail(err, QDC_ENOMEM, "out of memory for the triangles");
+    memcpy((int32_t *)a->tris.a + a->tris.n, idx, 3 * sizeof(int32_t));
+    a->tris.n += 3;
+    ((int32_t *)a->ref.a)[a->ref.n++] = ref;
+    return QDC_OK;
+}
+
+/* The number of an ELSET name of set list l: its 1-based position among
+ * those seen (what names the elements of a kind). */
+static qdc_status inp_set(txt *s, inp_sets *l, const char *what, const char *v,
+                          const char *ve, int32_t *reg, qdc_error *err)
+{
+    for (int i = 0; i < l->n; i++)
+        if (l->setl[i] == (size_t)(ve - v) &&
+            strncasecmp(l->set[i], v, l->setl[i]) == 0) {
             *reg = i + 1;
             return QDC_OK;
         }
-    if (a->nset == INP_SETS)
-        return fail_txt(err, QDC_ETOOBIG, s, v, "more than %d element sets of tets",
-                        INP_SETS);
-    a->set[a->nset] = v;
-    a->setl[a->nset++] = (size_t)(ve - v);
-    *reg = a->nset;
+    if (l->n == INP_SETS)
+        return fail_txt(err, QDC_ETOOBIG, s, v, "more than %d element sets of %s",
+                        INP_SETS, what);
+    l->set[l->n] = v;
+    l->setl[l->n++] = (size_t)(ve - v);
+    *reg = l->n;
     return QDC_OK;
+}
+
+/* The number n that name [v, ve) holds when it is prefix (case-insensitive)
+ * and then n as qdc's writer spells it: decimal digits without a leading
+ * zero, "M" and the digits for a negative n ("REGION_12", "SURFACE_M3").
+ * 1 and *n if so, else 0. */
+static int inp_name_number(const char *v, const char *ve, const char *prefix, int32_t *n)
+{
+    size_t pl = strlen(prefix);
+    int neg = 0;
+    int64_t x = 0;
+
+    if ((size_t)(ve - v) <= pl || strncasecmp(v, prefix, pl) != 0)
+        return 0;
+    v += pl;
+    if (*v == 'M' || *v == 'm') {
+        neg = 1;
+        v++;
+    }
+    if (v == ve || ve - v > 10 || *v < '0' || *v > '9' ||
+        (*v == '0' && (neg || ve - v > 1)))
+        return 0;
+    for (; v < ve; v++) {
+        if (*v < '0' || *v > '9')
+            return 0;
+        x = 10 * x + (*v - '0');
+    }
+    x = neg ? -x : x;
+    if (x < INT32_MIN || x > INT32_MAX)
+        return 0;
+    *n = (int32_t)x;
+    return 1;
+}
+
+/* If every set of l is named prefix and a number (inp_name_number: the
+ * names qdc's writer gives), the numbers of the n elements num[] (1-based
+ * set positions, 0 for none) become those numbers; else they stay the
+ * positions. An element without a set keeps 0. */
+static void inp_numbered(const inp_sets *l, const char *prefix, int32_t *num, size_t n)
+{
+    int32_t val[INP_SETS];
+
+    for (int i = 0; i < l->n; i++)
+        if (!inp_name_number(l->set[i], l->set[i] + l->setl[i], prefix, &val[i]))
+            return;
+    for (size_t i = 0; i < n; i++)
+        if (num[i] > 0)
+            num[i] = val[num[i] - 1];
 }
 
 /* Remember an element type skipped, for the note: printable ASCII, the
@@ -929,7 +1046,13 @@ static qdc_status inp_keyword(txt *s, const char *p, const char *eol, inp *a, in
             *mode = INP_TET;
             *reg = 0;
             if (inp_param(ke, eol, "ELSET", &v, &ve))
-                return inp_set(s, a, v, ve, reg, err);
+                return inp_set(s, &a->tet_sets, "tets", v, ve, reg, err);
+        } else if ((tt = inp_tri_type(v, ve)) != 0) {
+            a->tri_nodes = tt;
+            *mode = INP_TRI;
+            *reg = 0;
+            if (inp_param(ke, eol, "ELSET", &v, &ve))
+                return inp_set(s, &a->tri_sets, "triangles", v, ve, reg, err);
         } else {
             *mode = INP_OTHER;
             skipped_type(a, v, ve);
@@ -954,7 +1077,7 @@ static qdc_status read_abaqus(const char *buf, size_t len, const meshio_options 
     memset(&a, 0, sizeof a);
     a.xyz.size = sizeof(double);
     a.tags.size = a.off.size = a.at.size = sizeof(int64_t);
-    a.tets.size = a.reg.size = a.mid.size = sizeof(int32_t);
+    a.tets.size = a.reg.size = a.mid.size = a.tris.size = a.ref.size = sizeof(int32_t);
     a.tm_n = -1;
     while (s.p < s.end && st == QDC_OK) {
         const char *eol = memchr(s.p, '\n', (size_t)(s.end - s.p)), *p = s.p;
@@ -974,6 +1097,8 @@ static qdc_status read_abaqus(const char *buf, size_t len, const meshio_options 
             st = inp_node(&s, p, eol, &a, rec, err);
         } else if (mode == INP_TET) {
             st = inp_tet(&s, &p, &eol, &a, reg, err);
+        } else if (mode == INP_TRI) {
+            st = inp_tri(&s, &p, &eol, &a, reg, err);
         } else if (mode == INP_OTHER) {
             a.skipped++;
         }
@@ -1001,13 +1126,18 @@ static qdc_status read_abaqus(const char *buf, size_t len, const meshio_options 
         pm.xyz = a.xyz.a;
         pm.nt = (int64_t)a.reg.n;
         pm.tets = a.tets.a;
-        pm.region = a.nset ? a.reg.a : NULL;
+        pm.region = a.tet_sets.n ? a.reg.a : NULL;
         pm.mid = a.order == 2 ? a.mid.a : NULL;
+        pm.ntri = (int64_t)a.ref.n;
+        pm.tris = a.tris.a;
+        pm.tri_ref = a.tri_sets.n ? a.ref.a : NULL;
+        inp_numbered(&a.tet_sets, "REGION_", a.reg.a, a.reg.n);
+        inp_numbered(&a.tri_sets, "SURFACE_", a.ref.a, a.ref.n);
         st = parsed_mesh(&pm, out, err);
         if (a.skipped)
             note(o,
-                 "abaqus: skipped %lld elements of other types (%s): only C3D4 and C3D10 "
-                 "are read",
+                 "abaqus: skipped %lld elements of other types (%s): only C3D4, C3D10 "
+                 "and triangles are read",
                  (long long)a.skipped, a.skipped_types);
     }
     inp_free(&a);
@@ -1286,6 +1416,345 @@ static qdc_status read_netgen(const char *buf, size_t len, const meshio_options 
     return st;
 }
 
+/* ------------------------------------------------------------------------ */
+/* Writing Abaqus and Netgen                                                 */
+
+/* A face of a tet: its corners sorted, and the tet. */
+typedef struct {
+    int32_t v[3];
+    int32_t t;
+} fe_face;
+
+static void sort3(int32_t *v)
+{
+    int32_t x;
+
+    if (v[0] > v[1]) {
+        x = v[0], v[0] = v[1], v[1] = x;
+    }
+    if (v[1] > v[2]) {
+        x = v[1], v[1] = v[2], v[2] = x;
+    }
+    if (v[0] > v[1]) {
+        x = v[0], v[0] = v[1], v[1] = x;
+    }
+}
+
+static int fe_face_cmp(const void *x, const void *y)
+{
+    const fe_face *a = x, *b = y;
+
+    for (int k = 0; k < 3; k++)
+        if (a->v[k] != b->v[k])
+            return a->v[k] < b->v[k] ? -1 : 1;
+    return (a->t > b->t) - (a->t < b->t);
+}
+
+/* The faces of m's tets (4 nt), sorted; NULL with err on failure. */
+static fe_face *fe_faces(const mesh_t *m, qdc_error *err)
+{
+    fe_face *f = qdc_mallocn(4 * (size_t)m->nt + 1, sizeof *f);
+
+    if (!f) {
+        qdc_fail(err, QDC_ENOMEM, "out of memory for the faces of %d tets", (int)m->nt);
+        return NULL;
+    }
+    for (int32_t t = 0; t < m->nt; t++)
+        for (int k = 0; k < 4; k++) {
+            fe_face *e = &f[4 * (size_t)t + (size_t)k];
+            for (int j = 0, n = 0; j < 4; j++)
+                if (j != k)
+                    e->v[n++] = m->tets[4 * (size_t)t + (size_t)j];
+            sort3(e->v);
+            e->t = t;
+        }
+    qsort(f, 4 * (size_t)m->nt, sizeof *f, fe_face_cmp);
+    return f;
+}
+
+/* The tets (two at most) that have triangle tri as a face: their count,
+ * the tets in t[]. */
+static int fe_face_tets(const mesh_t *m, const fe_face *f, const int32_t *tri,
+                        int32_t t[2])
+{
+    fe_face want;
+    size_t lo = 0, hi = 4 * (size_t)m->nt;
+    int n = 0;
+
+    memcpy(want.v, tri, sizeof want.v);
+    sort3(want.v);
+    want.t = -1;
+    while (lo < hi) { /* the first face not before want */
+        size_t mid = lo + (hi - lo) / 2;
+        if (fe_face_cmp(&f[mid], &want) < 0)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    for (; lo < 4 * (size_t)m->nt && n < 2 && memcmp(f[lo].v, want.v, sizeof want.v) == 0;
+         lo++)
+        t[n++] = f[lo].t;
+    return n;
+}
+
+/* The mid-edge node of edge (x, y) of tet t (a second-order mesh), -1 if
+ * the tet has no such edge. */
+static int32_t fe_mid(const mesh_t *m, int32_t t, int32_t x, int32_t y)
+{
+    const int32_t *v = m->tets + 4 * (size_t)t;
+
+    for (int e = 0; e < 6; e++) {
+        int32_t a = v[mesh_p2_edges[e][0]], b = v[mesh_p2_edges[e][1]];
+        if ((a == x && b == y) || (a == y && b == x))
+            return m->mid[6 * (size_t)t + (size_t)e];
+    }
+    return -1;
+}
+
+/* The mid-edge nodes of triangle tri's edges 01, 12, 20 in mid[3], from a
+ * tet it is a face of (f: fe_faces); 0 if it is the face of none. */
+static int fe_tri_mid(const mesh_t *m, const fe_face *f, const int32_t *tri,
+                      int32_t mid[3])
+{
+    int32_t t[2];
+
+    if (fe_face_tets(m, f, tri, t) == 0)
+        return 0;
+    for (int e = 0; e < 3; e++)
+        mid[e] = fe_mid(m, t[0], tri[e], tri[(e + 1) % 3]);
+    return mid[0] >= 0 && mid[1] >= 0 && mid[2] >= 0;
+}
+
+static int cmp_u64(const void *x, const void *y)
+{
+    uint64_t a = *(const uint64_t *)x, b = *(const uint64_t *)y;
+
+    return (a > b) - (a < b);
+}
+
+/* 0..n-1 ordered by key[] (ascending; in order within a key, and all in
+ * order if key is NULL) in the low 32 bits of a new array (qdc_free);
+ * NULL with err on failure. */
+static uint64_t *fe_order(const int32_t *key, int32_t n, qdc_error *err)
+{
+    uint64_t *o = qdc_mallocn((size_t)n + 1, sizeof *o);
+
+    if (!o) {
+        qdc_fail(err, QDC_ENOMEM, "out of memory for the order of %d elements", (int)n);
+        return NULL;
+    }
+    for (int32_t i = 0; i < n; i++)
+        o[i] = (key ? (uint64_t)((int64_t)key[i] - INT32_MIN) << 32 : 0) | (uint32_t)i;
+    if (key)
+        qsort(o, (size_t)n, sizeof *o, cmp_u64);
+    return o;
+}
+
+/* An ELSET name of qdc's: prefix and n, "M" before a negative n's digits
+ * (inp_name_number reads it back). */
+static void inp_set_name(wbuf *w, const char *prefix, int32_t n)
+{
+    wb_str(w, prefix);
+    if (n < 0)
+        wb_str(w, "M");
+    wb_int(w, n < 0 ? -(int64_t)n : n);
+}
+
+/* The tets: one *ELEMENT block per region (ascending), ELSET=REGION_<n>
+ * (none without regions); tet t is element t + 1. */
+static qdc_status inp_write_tets(const mesh_t *m, wbuf *w, qdc_error *err)
+{
+    uint64_t *o = fe_order(m->region, m->nt, err);
+
+    if (!o)
+        return err->status;
+    for (int32_t k = 0; k < m->nt; k++) {
+        int32_t t = (int32_t)(uint32_t)o[k], prev = (int32_t)(uint32_t)o[k ? k - 1 : 0];
+        if (k == 0 || (m->region && m->region[t] != m->region[prev])) {
+            wb_str(w, m->mid ? "*ELEMENT, TYPE=C3D10" : "*ELEMENT, TYPE=C3D4");
+            if (m->region) {
+                wb_str(w, ", ELSET=");
+                inp_set_name(w, "REGION_", m->region[t]);
+            }
+            wb_str(w, "\n");
+        }
+        wb_int(w, (int64_t)t + 1);
+        wb_str(w, ", ");
+        wb_ints(w, m->tets + 4 * (size_t)t, 4, 1, ", ", m->mid ? ", " : "\n");
+        if (m->mid) /* C3D10's node order is mesh_p2_edges' */
+            wb_ints(w, m->mid + 6 * (size_t)t, 6, 1, ", ", "\n");
+    }
+    qdc_free(o);
+    return QDC_OK;
+}
+
+/* The triangles: one *ELEMENT block per ref (ascending), ELSET=SURFACE_<n>
+ * (none without refs), S3, or STRI65 in a second-order mesh whose
+ * triangles are all faces of its tets (their mid-edge nodes the tets');
+ * triangle i is element nt + i + 1. */
+static qdc_status inp_write_tris(const mesh_t *m, wbuf *w, qdc_error *err)
+{
+    fe_face *f = m->mid ? fe_faces(m, err) : NULL;
+    int32_t *mid = m->mid ? qdc_mallocn(3 * (size_t)m->ntri + 1, sizeof *mid) : NULL;
+    uint64_t *o = (!m->mid || (f && mid)) ? fe_order(m->tri_ref, m->ntri, err) : NULL;
+    int six = m->mid != NULL;
+
+    if (!o || (m->mid && (!f || !mid))) {
+        qdc_free(f);
+        qdc_free(mid);
+        qdc_free(o);
+        return o ? qdc_fail(err, QDC_ENOMEM, "out of memory for the triangles")
+                 : err->status;
+    }
+    for (int32_t i = 0; six && i < m->ntri; i++)
+        six = fe_tri_mid(m, f, m->tris + 3 * (size_t)i, mid + 3 * (size_t)i);
+    for (int32_t k = 0; k < m->ntri; k++) {
+        int32_t i = (int32_t)(uint32_t)o[k], prev = (int32_t)(uint32_t)o[k ? k - 1 : 0];
+        if (k == 0 || (m->tri_ref && m->tri_ref[i] != m->tri_ref[prev])) {
+            wb_str(w, six ? "*ELEMENT, TYPE=STRI65" : "*ELEMENT, TYPE=S3");
+            if (m->tri_ref) {
+                wb_str(w, ", ELSET=");
+                inp_set_name(w, "SURFACE_", m->tri_ref[i]);
+            }
+            wb_str(w, "\n");
+        }
+        wb_int(w, (int64_t)m->nt + i + 1);
+        wb_str(w, ", ");
+        wb_ints(w, m->tris + 3 * (size_t)i, 3, 1, ", ", six ? ", " : "\n");
+        if (six)
+            wb_ints(w, mid + 3 * (size_t)i, 3, 1, ", ", "\n");
+    }
+    qdc_free(f);
+    qdc_free(mid);
+    qdc_free(o);
+    return QDC_OK;
+}
+
+/* Abaqus/CalculiX: *HEADING, *NODE (numbered from 1), the tets and the
+ * triangles (inp_write_tets, inp_write_tris). Vertex refs and fixed flags
+ * are not written. */
+static qdc_status write_abaqus(const mesh_t *m, meshio_format fmt, int part, wbuf *w,
+                               qdc_error *err)
+{
+    qdc_status st;
+
+    (void)fmt;
+    (void)part;
+    wb_str(w, "*HEADING\nwritten by qdc\n*NODE\n");
+    for (int32_t i = 0; i < m->nv; i++) {
+        wb_int(w, (int64_t)i + 1);
+        wb_str(w, ", ");
+        wb_reals(w, m->xyz + 3 * (size_t)i, 3, ", ", "\n");
+    }
+    st = inp_write_tets(m, w, err);
+    if (st == QDC_OK && m->ntri > 0)
+        st = inp_write_tris(m, w, err);
+    return st;
+}
+
+/* The domains on either side of triangle tri as Netgen gives them (the
+ * triangle's normal, right-handed, points from domin into domout): the
+ * materials (region, 1 without) of the tets it is a face of, 0 for none. */
+static void vol_sides(const mesh_t *m, const fe_face *f, const int32_t *tri,
+                      int32_t side[2])
+{
+    int32_t t[2];
+    int n = fe_face_tets(m, f, tri, t), taken[2] = {0, 0};
+    const double *a = m->xyz + 3 * (size_t)tri[0], *b = m->xyz + 3 * (size_t)tri[1],
+                 *c = m->xyz + 3 * (size_t)tri[2];
+    double u[3], v[3], nrm[3];
+
+    for (int k = 0; k < 3; k++) {
+        u[k] = b[k] - a[k];
+        v[k] = c[k] - a[k];
+    }
+    nrm[0] = u[1] * v[2] - u[2] * v[1];
+    nrm[1] = u[2] * v[0] - u[0] * v[2];
+    nrm[2] = u[0] * v[1] - u[1] * v[0];
+    side[0] = side[1] = 0;
+    for (int k = 0; k < n; k++) {
+        const int32_t *tv = m->tets + 4 * (size_t)t[k];
+        double dot = 0;
+        int s;
+        for (int j = 0; j < 4; j++)
+            if (tv[j] != tri[0] && tv[j] != tri[1] && tv[j] != tri[2])
+                for (int q = 0; q < 3; q++)
+                    dot += nrm[q] * (m->xyz[3 * (size_t)tv[j] + (size_t)q] - a[q]);
+        s = dot > 0; /* the tet is on the side the normal points to: domout */
+        if (taken[s])
+            s = !s;
+        taken[s] = 1;
+        side[s] = m->region ? m->region[t[k]] : 1;
+    }
+}
+
+/* surfaceelements: "surfnr bcnr domin domout np p1 .. pnp", surface 1,
+ * the ref as bc number, 6 points (corners, then the mid-edge nodes of edges
+ * 12 02 01 as Netgen lists them) in a second-order mesh where the triangle
+ * is a tet's face. */
+static void vol_write_tris(const mesh_t *m, const fe_face *f, wbuf *w)
+{
+    wb_str(w, "# surfnr    bcnr   domin  domout      np      p1      p2      p3\n"
+              "surfaceelements\n");
+    wb_int(w, m->ntri);
+    wb_str(w, "\n");
+    for (int32_t i = 0; i < m->ntri; i++) {
+        const int32_t *tri = m->tris + 3 * (size_t)i;
+        int32_t side[2], mid[3];
+        int six = m->mid && fe_tri_mid(m, f, tri, mid);
+        vol_sides(m, f, tri, side);
+        wb_str(w, "1 ");
+        wb_int(w, m->tri_ref ? m->tri_ref[i] : 0);
+        wb_str(w, " ");
+        wb_ints(w, side, 2, 0, " ", six ? " 6 " : " 3 ");
+        wb_ints(w, tri, 3, 1, " ", six ? " " : "\n");
+        if (six) {
+            int32_t nm[3] = {mid[1], mid[2], mid[0]};
+            wb_ints(w, nm, 3, 1, " ", "\n");
+        }
+    }
+}
+
+/* Netgen mesh3d as Netgen writes it: surfaceelements (vol_write_tris),
+ * volumeelements "matnr np p1 .. pnp" (the region, 1 without; 10 points
+ * for a second-order tet, mid-edge nodes of edges 01 02 03 12 13 23),
+ * edgesegmentsgi2 (none), points. Vertex refs and fixed flags are not
+ * written. */
+static qdc_status write_netgen(const mesh_t *m, meshio_format fmt, int part, wbuf *w,
+                               qdc_error *err)
+{
+    static const int edge[6] = {0, 2, 3, 1, 4, 5}; /* Netgen's to mesh_p2_edges */
+    fe_face *f = m->ntri > 0 ? fe_faces(m, err) : NULL;
+
+    (void)fmt;
+    (void)part;
+    if (m->ntri > 0 && !f)
+        return err->status;
+    wb_str(w, "mesh3d\ndimension\n3\ngeomtype\n0\n\n");
+    vol_write_tris(m, f, w);
+    qdc_free(f);
+    wb_str(w, "\n#  matnr      np      p1      p2      p3      p4\nvolumeelements\n");
+    wb_int(w, m->nt);
+    wb_str(w, "\n");
+    for (int32_t t = 0; t < m->nt; t++) {
+        wb_int(w, m->region ? m->region[t] : 1);
+        wb_str(w, m->mid ? " 10 " : " 4 ");
+        wb_ints(w, m->tets + 4 * (size_t)t, 4, 1, " ", m->mid ? " " : "\n");
+        for (int j = 0; m->mid && j < 6; j++) {
+            wb_int(w, (int64_t)m->mid[6 * (size_t)t + (size_t)edge[j]] + 1);
+            wb_str(w, j < 5 ? " " : "\n");
+        }
+    }
+    wb_str(w,
+           "\nedgesegmentsgi2\n0\n\n#          X             Y             Z\npoints\n");
+    wb_int(w, m->nv);
+    wb_str(w, "\n");
+    for (int32_t i = 0; i < m->nv; i++)
+        wb_reals(w, m->xyz + 3 * (size_t)i, 3, " ", "\n");
+    wb_str(w, "\nendmesh\n");
+    return QDC_OK;
+}
+
 /* An XML document whose first element, within 1 kB, is a dolfin. */
 static meshio_format sniff_dolfin(const char *buf, size_t len, size_t i)
 {
@@ -1337,24 +1806,26 @@ const meshio_fmt fmt_dolfin = {
 const meshio_fmt fmt_abaqus = {
     .name = "abaqus",
     .aliases = "calculix inp",
-    .about =
-        "Abaqus/CalculiX .inp: *NODE, *ELEMENT TYPE=C3D4 or C3D10, ELSETs as regions "
-        "(written only spliced)",
+    .about = "Abaqus/CalculiX .inp: *NODE, *ELEMENT TYPE=C3D4 or C3D10, ELSETs as "
+             "regions, triangle elements (S3, CPS3, R3D3...) kept",
     .ext = "inp",
     .input = "input.inp",
     .sniff = sniff_abaqus,
     .read = read_abaqus,
+    .write = write_abaqus,
     .splices = 1,
+    .p2 = 1,
 };
 
 const meshio_fmt fmt_netgen = {
     .name = "netgen",
     .aliases = "vol",
-    .about = "Netgen .vol mesh3d: materials as regions, surface elements kept "
-             "(written only spliced)",
+    .about = "Netgen .vol mesh3d: materials as regions, surface elements kept",
     .ext = "vol",
     .input = "input.vol",
     .sniff = sniff_netgen,
     .read = read_netgen,
+    .write = write_netgen,
     .splices = 1,
+    .p2 = 1,
 };
