@@ -1,5 +1,4 @@
-/* meshio_bdf.c - Nastran bulk data (.bdf, .nas): read, and written back only
- * as the input with new coordinates (spliced).
+/* meshio_bdf.c - Nastran bulk data (.bdf, .nas): read and written.
  *
  * A card is a line and its continuation lines (first character '+', '*' or
  * ','; '$' starts a comment). Its fields are fixed (small: 8 characters,
@@ -13,7 +12,18 @@
  * back unchanged: only the GRID coordinate fields are rewritten, each in its
  * own width (splice.c, SRC_FIELD). Reals take Nastran's short forms, "1.-3"
  * (1e-3) and "-.5+2" (-50), and the D exponent. Lines before BEGIN BULK
- * (executive and case control) and after ENDDATA are skipped. */
+ * (executive and case control) and after ENDDATA are skipped. A PID may be
+ * negative or blank (0). A file of no GRID card is refused unless it is an
+ * empty bulk section: BEGIN BULK, ENDDATA and nothing after (an empty mesh).
+ * Written (a mesh whose tets changed, or another format's), free field:
+ * "BEGIN BULK", GRID,ID,,X1,X2,X3 with IDs 1..nv and each coordinate as
+ * %.17g with a decimal point added where it has none ("1.", "1.e-05": it
+ * reads back bit for bit; a free field of up to 24 characters), CTETRA,EID,
+ * PID,G1-G4 (10-node: G1-G6 then "+,G7,G8,G9,G10", G5-G10 the mid-side
+ * nodes in the order above), PID the region (blank without regions), then
+ * CTRIA3,EID,PID,G1-G3 with PID the triangle's ref (blank without), EIDs
+ * numbered on from the tets, "ENDDATA". No property cards (PSOLID, PSHELL):
+ * Gmsh and meshio read the file without them. */
 #include "io/format.h"
 
 #include <stdio.h>
@@ -38,6 +48,7 @@ typedef struct {
     const char *other_name; /* the first of them */
     size_t other_len;
     int blank_field; /* a coordinate field past its line's end */
+    int empty_bulk;  /* BEGIN BULK, ENDDATA, nothing but comments after */
 } bdf;
 
 /* Line [*bol, *eol) at p (the '\n' and a '\r' before it not included). */
@@ -219,7 +230,7 @@ static qdc_status bdf_element(bdf *b, int n, const char *at, qdc_error *err)
     snprintf(what[2], sizeof what[2], "%s: node", name);
     st = field_int(b, 0, what[0], 1, INT64_MAX, -1, &eid, err);
     if (st == QDC_OK)
-        st = field_int(b, 1, what[1], 0, INT32_MAX, 0, &pid, err);
+        st = field_int(b, 1, what[1], INT32_MIN, INT32_MAX, 0, &pid, err);
     for (int k = last; k < b->nf && st == QDC_OK; k++)
         if (b->f[k].t != b->f[k].te)
             return fail_txt(err, QDC_EFORMAT, &b->s, at_field(b, k),
@@ -272,6 +283,20 @@ static int is_cont(const char *p, const char *end)
     return q - p >= 8 && q < end && *q != '\n' && *q != '\r';
 }
 
+/* 1 if the lines after eol are blank or '$' comments. */
+static int only_comments(const txt *s, const char *eol)
+{
+    const char *p = eol < s->end ? eol + 1 : s->end;
+
+    while (p < s->end) {
+        const char *e = line_end(s, p);
+        if (*p != '$' && trim_end(p, e) != p)
+            return 0;
+        p = e + 1;
+    }
+    return 1;
+}
+
 /* CTETRA, or "CTETRA_", meshio 5.0's name for the 10-node one (its writer
  * puts it in the file). */
 static int is_ctetra(const char *name, size_t n)
@@ -320,8 +345,10 @@ static qdc_status bdf_cards(bdf *b, qdc_error *err)
             continue;
         }
         card_name(p, eol, &nte, &large);
-        if (word_is(p, (size_t)(nte - p), "ENDDATA"))
+        if (word_is(p, (size_t)(nte - p), "ENDDATA")) {
+            b->empty_bulk = bulk != NULL && only_comments(s, eol);
             break;
+        }
         if (word_is(p, (size_t)(nte - p), "GRID") || is_ctetra(p, (size_t)(nte - p)) ||
             word_is(p, (size_t)(nte - p), "CTRIA3") ||
             word_is(p, (size_t)(nte - p), "CTRIA6")) {
@@ -364,7 +391,7 @@ static qdc_status read_bdf(const char *buf, size_t len, const meshio_options *o,
     lab_init(&b.l, "GRID", "CTETRA", "CTRIA3");
     b.s = txt_init(buf, len, 0);
     st = bdf_cards(&b, err);
-    if (st == QDC_OK && b.l.tags.n == 0)
+    if (st == QDC_OK && b.l.tags.n == 0 && !b.empty_bulk)
         st = qdc_fail(err, QDC_EPARSE, "not a Nastran bulk data file: no GRID card");
     if (st == QDC_OK)
         st = lab_mesh(&b.l, &b.s, MESHIO_BDF, rec, out, err);
@@ -378,6 +405,71 @@ static qdc_status read_bdf(const char *buf, size_t len, const meshio_options *o,
              b.other_name);
     lab_free(&b.l);
     return st;
+}
+
+/* A real as a free field: %.17g, with a decimal point if it has none. */
+static void bdf_real(wbuf *w, double x)
+{
+    char t[40];
+    int n = numfmt_g17(x, t), e = n;
+
+    if (memchr(t, '.', (size_t)n)) {
+        wb_put(w, t, (size_t)n);
+        return;
+    }
+    for (int k = 0; k < n; k++)
+        if (t[k] == 'e')
+            e = k;
+    wb_put(w, t, (size_t)e);
+    wb_str(w, ".");
+    wb_put(w, t + e, (size_t)(n - e));
+}
+
+/* ",PID" of element t: blank without tags. */
+static void bdf_pid(wbuf *w, const int32_t *tag, int32_t t)
+{
+    wb_str(w, ",");
+    if (tag)
+        wb_int(w, tag[t]);
+}
+
+static qdc_status write_bdf(const mesh_t *m, meshio_format fmt, int part, wbuf *w,
+                            qdc_error *err)
+{
+    (void)fmt;
+    (void)part;
+    (void)err;
+    wb_str(w, "$ Nastran bulk data written by qdc\nBEGIN BULK\n");
+    for (int32_t i = 0; i < m->nv; i++) {
+        wb_str(w, "GRID,");
+        wb_int(w, (int64_t)i + 1);
+        wb_str(w, ",");
+        for (int k = 0; k < 3; k++) {
+            wb_str(w, ",");
+            bdf_real(w, m->xyz[3 * (size_t)i + (size_t)k]);
+        }
+        wb_str(w, "\n");
+    }
+    for (int32_t t = 0; t < m->nt; t++) {
+        wb_str(w, "CTETRA,");
+        wb_int(w, (int64_t)t + 1);
+        bdf_pid(w, m->region, t);
+        wb_str(w, ",");
+        wb_ints(w, m->tets + 4 * (size_t)t, 4, 1, ",", m->mid ? "," : "\n");
+        if (m->mid) { /* G5-G10: edges 12 23 31 14 24 34, mesh_p2_edges' order */
+            wb_ints(w, m->mid + 6 * (size_t)t, 2, 1, ",", "\n+,");
+            wb_ints(w, m->mid + 6 * (size_t)t + 2, 4, 1, ",", "\n");
+        }
+    }
+    for (int32_t t = 0; t < m->ntri; t++) {
+        wb_str(w, "CTRIA3,");
+        wb_int(w, (int64_t)m->nt + t + 1);
+        bdf_pid(w, m->tri_ref, t);
+        wb_str(w, ",");
+        wb_ints(w, m->tris + 3 * (size_t)t, 3, 1, ",", "\n");
+    }
+    wb_str(w, "ENDDATA\n");
+    return QDC_OK;
 }
 
 /* A '$' comment ("$ ", "$$", "$-": Gmsh's sections are "$Name"), or a first
@@ -401,11 +493,12 @@ static meshio_format sniff_bdf(const char *buf, size_t len, size_t i)
 const meshio_fmt fmt_bdf = {
     .name = "bdf",
     .aliases = "nas nastran",
-    .about = "Nastran bulk data: GRID, CTETRA (4 or 10 nodes), CTRIA3/6 (written only "
-             "spliced)",
+    .about = "Nastran bulk data: GRID, CTETRA (4 or 10 nodes), CTRIA3/6",
     .ext = "bdf",
     .input = "input.bdf",
     .sniff = sniff_bdf,
     .read = read_bdf,
+    .write = write_bdf,
     .splices = 1,
+    .p2 = 1,
 };

@@ -1,5 +1,4 @@
-/* meshio_msh1.c - Gmsh MSH 1 ($NOD/$ENDNOD, $ELM/$ENDELM): read, and written
- * back only as the input with new coordinates (spliced).
+/* meshio_msh1.c - Gmsh MSH 1 ($NOD/$ENDNOD, $ELM/$ENDELM): read and written.
  *
  * "$NOD", the node count, "number x y z" per node (numbers in any order, not
  * necessarily contiguous), "$ENDNOD"; "$ELM", the element count, "number type
@@ -9,9 +8,17 @@
  * with its physical tag as tri_ref; others are skipped with a note, type 11
  * (10-node tetrahedron) refused. Other sections ($PhysicalNames...) are
  * skipped, kept by a spliced write. A .msh file is Gmsh's whichever version
- * it holds: the Gmsh reader hands "$NOD" to this one. */
+ * it holds: the Gmsh reader hands "$NOD" to this one. Physical tags may be
+ * negative (Gmsh reads them with %d); elementary tags are >= 0.
+ * Written (a mesh whose tets changed, or another format's): nodes 1..nv with
+ * %.17g coordinates, the tets as type 4 (physical tag the region, 0 without
+ * one; elementary tag the region's rank among the distinct regions, from 1,
+ * so Gmsh makes one volume per region), then the triangles as type 2 (the
+ * same with tri_ref), numbered on from the tets. Second-order tets are not
+ * written (type 11 is not read): such a mesh is written only spliced. */
 #include "io/format.h"
 
+#include <stdlib.h>
 #include <string.h>
 #include <strings.h>
 
@@ -131,7 +138,7 @@ static qdc_status msh1_element(msh1 *g, const meshio_options *o, qdc_error *err)
     if (st == QDC_OK)
         st = txt_int(s, "$ELM: element type", 1, 1000, &type, err);
     if (st == QDC_OK)
-        st = txt_int(s, "$ELM: physical tag", 0, INT32_MAX, &phys, err);
+        st = txt_int(s, "$ELM: physical tag", INT32_MIN, INT32_MAX, &phys, err);
     if (st == QDC_OK)
         st = txt_int(s, "$ELM: elementary tag", 0, INT32_MAX, &ent, err);
     if (st == QDC_OK)
@@ -262,6 +269,88 @@ static qdc_status read_msh1(const char *buf, size_t len, const meshio_options *o
     return st;
 }
 
+static int cmp_i32(const void *a, const void *b)
+{
+    int32_t x = *(const int32_t *)a, y = *(const int32_t *)b;
+
+    return (x > y) - (x < y);
+}
+
+/* The distinct values of tag[n] (NULL: the single value 0), sorted, in *u
+ * (qdc_free), their count in *nu; -1 out of memory. */
+static int msh1_distinct(const int32_t *tag, int32_t n, int32_t **u, size_t *nu)
+{
+    *nu = 0;
+    *u = qdc_mallocn((size_t)n + 1, sizeof(int32_t));
+    if (!*u)
+        return -1;
+    if (!tag || !n) {
+        (*u)[(*nu)++] = 0;
+        return 0;
+    }
+    memcpy(*u, tag, (size_t)n * sizeof(int32_t));
+    qsort(*u, (size_t)n, sizeof(int32_t), cmp_i32);
+    for (int32_t i = 0; i < n; i++)
+        if (!*nu || (*u)[*nu - 1] != (*u)[i])
+            (*u)[(*nu)++] = (*u)[i];
+    return 0;
+}
+
+/* Elements first..first+n-1 of type (4 or 2, k nodes): "number type
+ * physical elementary k nodes...", the elementary tag the rank of the
+ * physical one in u[nu]. */
+static void msh1_write_elems(wbuf *w, int64_t first, const char *type, const int32_t *v,
+                             int k, const int32_t *tag, int32_t n, const int32_t *u,
+                             size_t nu)
+{
+    for (int32_t t = 0; t < n; t++) {
+        int32_t x = tag ? tag[t] : 0;
+        const int32_t *p = bsearch(&x, u, nu, sizeof(int32_t), cmp_i32);
+        wb_int(w, first + t);
+        wb_str(w, type);
+        wb_int(w, x);
+        wb_str(w, " ");
+        wb_int(w, p ? p - u + 1 : 1);
+        wb_str(w, k == 4 ? " 4 " : " 3 ");
+        wb_ints(w, v + (size_t)k * (size_t)t, k, 1, " ", "\n");
+    }
+}
+
+static qdc_status write_msh1(const mesh_t *m, meshio_format fmt, int part, wbuf *w,
+                             qdc_error *err)
+{
+    int32_t *u[2] = {NULL, NULL};
+    size_t nu[2];
+    qdc_status st = QDC_OK;
+
+    (void)fmt;
+    (void)part;
+    if (msh1_distinct(m->region, m->nt, &u[0], &nu[0]) != 0 ||
+        msh1_distinct(m->tri_ref, m->ntri, &u[1], &nu[1]) != 0) {
+        st = qdc_fail(err, QDC_ENOMEM, "out of memory for the Gmsh entities");
+        goto out;
+    }
+    wb_str(w, "$NOD\n");
+    wb_int(w, m->nv);
+    wb_str(w, "\n");
+    for (int32_t i = 0; i < m->nv; i++) {
+        wb_int(w, (int64_t)i + 1);
+        wb_str(w, " ");
+        wb_reals(w, m->xyz + 3 * (size_t)i, 3, " ", "\n");
+    }
+    wb_str(w, "$ENDNOD\n$ELM\n");
+    wb_int(w, (int64_t)m->nt + m->ntri);
+    wb_str(w, "\n");
+    msh1_write_elems(w, 1, " 4 ", m->tets, 4, m->region, m->nt, u[0], nu[0]);
+    msh1_write_elems(w, (int64_t)m->nt + 1, " 2 ", m->tris, 3, m->tri_ref, m->ntri, u[1],
+                     nu[1]);
+    wb_str(w, "$ENDELM\n");
+out:
+    qdc_free(u[0]);
+    qdc_free(u[1]);
+    return st;
+}
+
 /* "$NOD" first. */
 static meshio_format sniff_msh1(const char *buf, size_t len, size_t i)
 {
@@ -271,11 +360,12 @@ static meshio_format sniff_msh1(const char *buf, size_t len, size_t i)
 const meshio_fmt fmt_msh1 = {
     .name = "msh1",
     .aliases = "gmsh1",
-    .about = "Gmsh MSH 1 ($NOD, $ELM; written only spliced)",
+    .about = "Gmsh MSH 1 ($NOD, $ELM)",
     .ext = "msh",
     .input = "input.msh",
     .family = MESHIO_GMSH41,
     .sniff = sniff_msh1,
     .read = read_msh1,
+    .write = write_msh1,
     .splices = 1,
 };

@@ -1,5 +1,4 @@
-/* meshio_unv.c - I-DEAS universal files (.unv): read, and written back only as
- * the input with new coordinates (spliced).
+/* meshio_unv.c - I-DEAS universal files (.unv): read and written.
  *
  * A file is a series of datasets, each between two lines "    -1", its number
  * on the first line after the opening one. Read: 2411 (nodes: label, export
@@ -17,9 +16,22 @@
  * triangles; others skipped with a note.
  * Every other dataset (2467/2477 groups, units 164, coordinate systems
  * 2420...) is kept; a spliced write rewrites only the 25-column coordinate
- * fields, in the same form (splice.c, SRC_FIELD with FIELD_EXP). */
+ * fields, in the same form (splice.c, SRC_FIELD with FIELD_EXP).
+ * Integers are read as blank-separated tokens (as Gmsh reads them), the
+ * property numbers may be negative.
+ * Written (a mesh whose tets changed, or another format's), as Gmsh writes
+ * the format: 2411 with labels 1..nv (systems 1 1, color 11) and the
+ * coordinates as 3D25.16 (17 significant digits: they read back bit for
+ * bit); 2412 with the tets as FE 111 (118 for second-order tets, its nodes
+ * in the order above), physical and material property both the region (0
+ * without), color 7, then the triangles as FE 91 (thin shell linear
+ * triangle) with both properties their ref, labels numbered on from the
+ * tets. Integers are I10; one that fills its 10 columns (beyond 999999999
+ * or below -99999999) is written after a blank, wider, so that token
+ * readers (qdc, Gmsh) still read it. */
 #include "io/format.h"
 
+#include <stdio.h>
 #include <string.h>
 
 typedef struct {
@@ -160,8 +172,11 @@ static qdc_status unv_elements(unv *u, qdc_error *err)
         skip_ws(s);
         at = s->p;
         for (int k = 0; k < 6 && st == QDC_OK; k++)
-            st = txt_int(s, what[k], k == 5 || k == 0 ? 1 : 0, k == 5 ? 1000 : INT32_MAX,
-                         &r[k], err);
+            st = txt_int(s, what[k],
+                         k == 5 || k == 0   ? 1
+                         : k == 2 || k == 3 ? INT32_MIN
+                                            : 0,
+                         k == 5 ? 1000 : INT32_MAX, &r[k], err);
         if (st != QDC_OK)
             break;
         tet = r[1] == 111 || r[1] == 118;
@@ -245,6 +260,80 @@ static qdc_status read_unv(const char *buf, size_t len, const meshio_options *o,
     return st;
 }
 
+/* v as I10: right-aligned in 10 columns, or after a blank if it fills them. */
+static void unv_i10(wbuf *w, int64_t v)
+{
+    static const char pad[] = "          ";
+    int n = 1;
+
+    for (int64_t a = v < 0 ? -v : v; a >= 10; a /= 10)
+        n++;
+    n += v < 0;
+    wb_put(w, pad, n < 10 ? (size_t)(10 - n) : 1);
+    wb_int(w, v);
+}
+
+/* Record 1 of a 2412 element and its nodes, 8 a line. */
+static void unv_element(wbuf *w, int64_t label, int fe, int32_t tag, const int32_t *g,
+                        int n)
+{
+    const int64_t r[6] = {label, fe, tag, tag, 7, n};
+
+    for (int k = 0; k < 6; k++)
+        unv_i10(w, r[k]);
+    for (int k = 0; k < n; k++) {
+        wb_str(w, k % 8 == 0 ? "\n" : "");
+        unv_i10(w, (int64_t)g[k] + 1);
+    }
+    wb_str(w, "\n");
+}
+
+static void unv_coords(wbuf *w, const double *x)
+{
+    char t[3 * 40];
+    int n = 0;
+
+    for (int k = 0; k < 3; k++)
+        n += snprintf(t + n, sizeof t - (size_t)n, "%25.16E", x[k]);
+    for (int k = 0; k < n; k++)
+        t[k] = t[k] == 'E' ? 'D' : t[k];
+    wb_put(w, t, (size_t)n);
+    wb_str(w, "\n");
+}
+
+static qdc_status write_unv(const mesh_t *m, meshio_format fmt, int part, wbuf *w,
+                            qdc_error *err)
+{
+    static const int tet10[10] = {0, 4, 1, 5, 2, 6, 7, 8, 9, 3}; /* node_slot's */
+    int32_t g[10];
+
+    (void)fmt;
+    (void)part;
+    (void)err;
+    wb_str(w, "    -1\n  2411\n");
+    for (int32_t i = 0; i < m->nv; i++) {
+        unv_i10(w, (int64_t)i + 1);
+        wb_str(w, "         1         1        11\n");
+        unv_coords(w, m->xyz + 3 * (size_t)i);
+    }
+    wb_str(w, "    -1\n    -1\n  2412\n");
+    for (int32_t t = 0; t < m->nt; t++) {
+        int32_t all[10];
+        memcpy(all, m->tets + 4 * (size_t)t, 4 * sizeof(int32_t));
+        if (m->mid) /* corner, mid-edge, corner... (node_slot's inverse) */
+            memcpy(all + 4, m->mid + 6 * (size_t)t, 6 * sizeof(int32_t));
+        for (int k = 0; k < (m->mid ? 10 : 4); k++)
+            g[k] = m->mid ? all[tet10[k]] : all[k];
+        unv_element(w, (int64_t)t + 1, m->mid ? 118 : 111, m->region ? m->region[t] : 0,
+                    g, m->mid ? 10 : 4);
+    }
+    for (int32_t t = 0; t < m->ntri; t++)
+        unv_element(w, (int64_t)m->nt + t + 1, 91, m->tri_ref ? m->tri_ref[t] : 0,
+                    m->tris + 3 * (size_t)t, 3);
+    wb_str(w, "    -1\n");
+    return QDC_OK;
+}
+
 /* "-1" alone on the first line, then a dataset number. */
 static meshio_format sniff_unv(const char *buf, size_t len, size_t i)
 {
@@ -261,11 +350,12 @@ static meshio_format sniff_unv(const char *buf, size_t len, size_t i)
 const meshio_fmt fmt_unv = {
     .name = "unv",
     .aliases = "ideas",
-    .about = "I-DEAS universal: datasets 2411, 2412, tets FE 111 and 118 (written only "
-             "spliced)",
+    .about = "I-DEAS universal: datasets 2411, 2412, tets FE 111 and 118",
     .ext = "unv",
     .input = "input.unv",
     .sniff = sniff_unv,
     .read = read_unv,
+    .write = write_unv,
     .splices = 1,
+    .p2 = 1,
 };
