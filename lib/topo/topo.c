@@ -10,6 +10,7 @@
 #include "topo/split.h"
 
 #include <math.h>
+#include <omp.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -134,13 +135,17 @@ static qdc_status heap_push(heap *h, const tmesh *tm, int32_t t)
     return QDC_OK;
 }
 
-static qent heap_pop(heap *h)
+/* The first entry; *from its index in s, or SIZE_MAX (from the heap). */
+static qent heap_pop(heap *h, size_t *from)
 {
     qent top, last;
     size_t i = 0;
 
-    if (h->si < h->sn && (h->n == 0 || !before(&h->a[0], &h->s[h->si])))
+    *from = SIZE_MAX;
+    if (h->si < h->sn && (h->n == 0 || !before(&h->a[0], &h->s[h->si]))) {
+        *from = h->si;
         return h->s[h->si++];
+    }
     top = h->a[0];
     last = h->a[--h->n];
 
@@ -281,11 +286,20 @@ static void edge_fail(memo *mo, int32_t a, int32_t b)
     }
 }
 
-/* 1 when t's flips failed and nothing they read changed since. */
-static int memo_skip(const memo *mo, const tmesh *tm, int32_t t)
+/* The edges of t in mask (best_flip's efail) recorded as not removable. */
+static void memo_fail_edges(memo *mo, const tmesh *tm, int32_t t, unsigned mask)
 {
-    uint32_t at = t < mo->cap ? mo->fail[t] : 0;
+    for (int e = 0; e < 6; e++)
+        if (mask & 1u << e) {
+            int32_t a = tm->tv[4 * (size_t)t + tmesh_edge[e][0]],
+                    b = tm->tv[4 * (size_t)t + tmesh_edge[e][1]];
+            edge_fail(mo, a < b ? a : b, a < b ? b : a);
+        }
+}
 
+/* 1 when nothing the flips of t read changed since epoch at (> 0). */
+static int memo_same(const memo *mo, const tmesh *tm, int32_t t, uint32_t at)
+{
     if (at == 0)
         return 0;
     for (int i = 0; i < 4; i++) {
@@ -296,6 +310,12 @@ static int memo_skip(const memo *mo, const tmesh *tm, int32_t t)
             return 0;
     }
     return 1;
+}
+
+/* 1 when t's flips failed and nothing they read changed since. */
+static int memo_skip(const memo *mo, const tmesh *tm, int32_t t)
+{
+    return memo_same(mo, tm, t, t < mo->cap ? mo->fail[t] : 0);
 }
 
 /* An operation applied: its new tets ids[0..n) start unevaluated, their
@@ -371,13 +391,16 @@ static int keeps_angle(const tmesh *tm, const flip_cand *c, double akeep)
     return anew >= min_angle(tm, (const int32_t(*)[4])old, c->nold);
 }
 
-/* The best improving flip of tet t's edges and faces; 1 if there is one. */
-static int best_flip(const tmesh *tm, int32_t t, const topo_params *p, memo *mo,
-                     flip_cand *best)
+/* The best improving flip of tet t's edges and faces; 1 if there is one.
+ * Reads mo (may be NULL) only: bit e of *efail is set for each edge e found
+ * not removable, for the caller to record (memo_fail_edges). */
+static int best_flip(const tmesh *tm, int32_t t, const topo_params *p, const memo *mo,
+                     flip_cand *best, unsigned *efail)
 {
     flip_cand c;
     int have = 0;
 
+    *efail = 0;
     for (int e = 0; e < 6; e++) {
         int32_t a = tm->tv[4 * (size_t)t + tmesh_edge[e][0]],
                 b = tm->tv[4 * (size_t)t + tmesh_edge[e][1]], lo = a < b ? a : b,
@@ -385,8 +408,7 @@ static int best_flip(const tmesh *tm, int32_t t, const topo_params *p, memo *mo,
         if (mo && edge_failed(mo, lo, hi))
             continue;
         if (!flip_edge_eval(tm, t, e, p->maxring, p->floor4, p->margin, &c)) {
-            if (mo)
-                edge_fail(mo, lo, hi);
+            *efail |= 1u << e;
         } else if ((!have || better(&c, best)) && keeps_angle(tm, &c, p->akeep)) {
             *best = c;
             have = 1;
@@ -449,7 +471,8 @@ static qdc_status insert_pass(tmesh *tm, const topo_params *p, heap *h, memo *mo
 
     s = queue_below(tm, h, p->qinsert);
     while (s == QDC_OK && heap_size(h) > 0 && *ops < max_ops) {
-        qent e = heap_pop(h);
+        size_t from;
+        qent e = heap_pop(h, &from);
         int32_t ids[32];
         int done = 0, nn = 0;
         if (cancel && atomic_load(cancel))
@@ -481,7 +504,8 @@ static qdc_status contract_pass(tmesh *tm, const topo_params *p, heap *h, memo *
 
     s = queue_below(tm, h, p->qcontract);
     while (s == QDC_OK && heap_size(h) > 0 && *ops < max_ops) {
-        qent e = heap_pop(h);
+        size_t from;
+        qent e = heap_pop(h, &from);
         contract_cand best, c;
         int32_t ids[CONTRACT_MAX], vs[4 * CONTRACT_MAX];
         int have = 0, applied = 0;
@@ -538,28 +562,173 @@ static void count_flip(topo_stats *st, const flip_cand *c)
     }
 }
 
+/* Evaluation ahead of the queue, on every thread: the flips of the tets a
+ * pass will take next (the next PRE_WINDOW of its sorted queue, and the tets
+ * made since, in the heap, that come before the last of those) are found at
+ * once, each read from the mesh as it stands (best_flip reads the mesh and the
+ * memo only), and the pass takes a tet's result when nothing it read has
+ * changed since (the memo's test for skipping a failed tet, memo_same), else
+ * evaluates it again: the same flips in the same order as one thread
+ * evaluating each tet in its turn, whatever the thread count. */
+enum { PRE_WINDOW = 1024, PRE_POOL = 4096 };
+
+typedef struct {
+    flip_cand c;
+    int32_t t;
+    uint32_t stamp; /* t's when evaluated */
+    uint32_t at;    /* the memo's epoch then */
+    int have;
+    unsigned efail;
+} pre_ent;
+
+typedef struct {
+    pre_ent *e;    /* PRE_POOL entries, or NULL: no evaluation ahead */
+    int32_t n;     /* entries in use */
+    int32_t *slot; /* per tet slot: its entry, or -1 (scap slots) */
+    int32_t scap;
+    int32_t *bfs;  /* PRE_POOL: heap indices to visit */
+    size_t until;  /* the sorted queue's entries before this were taken in */
+    int64_t since; /* pops since the last fill */
+    int64_t used;  /* results taken */
+} pre_win;
+
+static void pre_free(pre_win *pw)
+{
+    qdc_free(pw->e);
+    qdc_free(pw->slot);
+    qdc_free(pw->bfs);
+}
+
+/* Tet q->t a target of the fill, if live, unchanged and not skipped. */
+static void pre_take(const tmesh *tm, const memo *mo, const qent *q, pre_win *pw)
+{
+    if (pw->n == PRE_POOL || tm->tv[4 * (size_t)q->t] < 0 ||
+        tm->stamp[q->t] != q->stamp || pw->slot[q->t] >= 0 || memo_skip(mo, tm, q->t))
+        return;
+    pw->slot[q->t] = pw->n;
+    pw->e[pw->n].t = q->t;
+    pw->e[pw->n++].stamp = q->stamp;
+}
+
+/* The heap's entries before bound (NULL: any), from the top, into the pool. */
+static void pre_take_heap(const tmesh *tm, const memo *mo, const heap *h,
+                          const qent *bound, pre_win *pw)
+{
+    size_t nb = 0;
+
+    if (h->n > 0)
+        pw->bfs[nb++] = 0;
+    for (size_t k = 0; k < nb && pw->n < PRE_POOL; k++) {
+        size_t i = (size_t)pw->bfs[k];
+        if (bound && !before(&h->a[i], bound))
+            continue;
+        pre_take(tm, mo, &h->a[i], pw);
+        for (size_t c = 2 * i + 1; c <= 2 * i + 2 && c < h->n && nb < PRE_POOL; c++)
+            pw->bfs[nb++] = (int32_t)c;
+    }
+}
+
+/* A new pool: the sorted queue's entries from `from` on, the heap's before
+ * the last of them, evaluated in parallel. QDC_ENOMEM. */
+static qdc_status pre_fill(const tmesh *tm, const topo_params *p, const memo *mo,
+                           const heap *h, size_t from, pre_win *pw)
+{
+    size_t end = h->sn - from < PRE_WINDOW ? h->sn : from + PRE_WINDOW;
+
+    for (int32_t k = 0; k < pw->n; k++)
+        pw->slot[pw->e[k].t] = -1;
+    pw->n = 0;
+    if (tm->cap > pw->scap) {
+        int32_t *g = qdc_realloc(pw->slot, (size_t)tm->cap * sizeof *g);
+        if (!g)
+            return QDC_ENOMEM;
+        for (int32_t t = pw->scap; t < tm->cap; t++)
+            g[t] = -1;
+        pw->slot = g;
+        pw->scap = tm->cap;
+    }
+    for (size_t i = from; i < end; i++)
+        pre_take(tm, mo, &h->s[i], pw);
+    pre_take_heap(tm, mo, h, end > from ? &h->s[end - 1] : NULL, pw);
+#pragma omp parallel for schedule(dynamic, 8)
+    for (int32_t k = 0; k < pw->n; k++) {
+        pre_ent *x = &pw->e[k];
+        x->have = best_flip(tm, x->t, p, mo, &x->c, &x->efail);
+        x->at = mo->epoch;
+    }
+    pw->until = end;
+    pw->since = 0;
+    return QDC_OK;
+}
+
+/* The best flip of t, queue entry `from` (SIZE_MAX: from the heap), into *c
+ * (*have): the pool's result when still good, else evaluated now; a new pool
+ * first when the pass reached the end of the sorted queue's part, or missed
+ * the pool well after its fill. The failures are recorded in mo (may be
+ * NULL). QDC_ENOMEM. */
+static qdc_status pass_eval(const tmesh *tm, const topo_params *p, memo *mo,
+                            const heap *h, size_t from, int32_t t, pre_win *pw,
+                            flip_cand *c, int *have)
+{
+    unsigned efail = 0;
+    int32_t k = -1;
+
+    if (pw->e) {
+        k = t < pw->scap ? pw->slot[t] : -1;
+        if ((from != SIZE_MAX && from >= pw->until) ||
+            (k < 0 && pw->since++ >= PRE_WINDOW / 4)) {
+            qdc_status s = pre_fill(tm, p, mo, h, from != SIZE_MAX ? from : h->si, pw);
+            if (s != QDC_OK)
+                return s;
+            k = t < pw->scap ? pw->slot[t] : -1;
+        }
+    }
+    if (k >= 0 && pw->e[k].stamp == tm->stamp[t] && memo_same(mo, tm, t, pw->e[k].at)) {
+        *have = pw->e[k].have;
+        efail = pw->e[k].efail;
+        if (*have)
+            *c = pw->e[k].c;
+        pw->used++;
+    } else {
+        *have = best_flip(tm, t, p, mo, c, &efail);
+    }
+    if (mo)
+        memo_fail_edges(mo, tm, t, efail);
+    return QDC_OK;
+}
+
 /* The flips of one pass: the live tets below qgoal, worst first, each given
  * its best flip; the new tets below qgoal queued too. mo (NULL: none) skips
- * tets known to fail. Adds to *ops and st. */
+ * tets known to fail and lets the pass evaluate ahead on every thread. Adds to
+ * *ops and st. */
 static qdc_status flip_pass(tmesh *tm, const topo_params *p, heap *h, memo *mo,
                             topo_stats *st, int64_t *ops, int64_t max_ops,
                             const atomic_int *cancel)
 {
     qdc_status s = queue_below(tm, h, p->qgoal);
+    pre_win pw = {0};
 
+    if (mo && omp_get_max_threads() > 1 &&
+        (!(pw.e = qdc_malloc(PRE_POOL * sizeof *pw.e)) ||
+         !(pw.bfs = qdc_malloc(PRE_POOL * sizeof *pw.bfs))))
+        s = QDC_ENOMEM;
     while (s == QDC_OK && heap_size(h) > 0 && *ops < max_ops) {
-        qent e = heap_pop(h);
+        size_t from;
+        qent e = heap_pop(h, &from);
         flip_cand c;
         int32_t ids[2 * FLIP_MAXRING];
-        int applied = 0;
+        int applied = 0, have = 0;
         if (cancel && atomic_load(cancel))
-            return QDC_ECANCEL;
-        if (tm->tv[4 * (size_t)e.t] < 0 || tm->stamp[e.t] != e.stamp)
+            s = QDC_ECANCEL;
+        if (s != QDC_OK || tm->tv[4 * (size_t)e.t] < 0 || tm->stamp[e.t] != e.stamp)
             continue; /* removed since it was queued */
         if (mo && memo_skip(mo, tm, e.t))
             continue;
         st->visits++;
-        if (!best_flip(tm, e.t, p, mo, &c)) {
+        s = pass_eval(tm, p, mo, h, from, e.t, &pw, &c, &have);
+        if (s != QDC_OK)
+            continue;
+        if (!have) {
             if (mo && e.t < mo->cap)
                 mo->fail[e.t] = mo->epoch;
             continue;
@@ -581,6 +750,8 @@ static qdc_status flip_pass(tmesh *tm, const topo_params *p, heap *h, memo *mo,
             if (tm->q[ids[j]] < p->qgoal)
                 s = heap_push(h, tm, ids[j]);
     }
+    st->ahead += pw.used;
+    pre_free(&pw);
     return s;
 }
 

@@ -6,7 +6,9 @@
  * old tets less over the new: the badness the cavity loses, Netgen's objective),
  * then the larger new minimum, then the smaller canonical vertex ids. The run is
  * serial and ordered by (quality, sorted vertex ids), never by address or hash,
- * so the same mesh and parameters give the same result on any thread count.
+ * so the same mesh and parameters give the same result on any thread count
+ * (the flips of the tets next in the queue are evaluated ahead on every
+ * thread, and each result taken only when nothing it read has changed).
  * Vertices never move and none is made: point data stays valid. */
 #ifndef QDC_TOPO_H
 #define QDC_TOPO_H
@@ -54,6 +56,7 @@ typedef struct {
     int64_t flips23;                   /* 2-3 flips */
     int64_t multiface;                 /* multi-face removals */
     int64_t visits;                    /* tets taken from the queue */
+    int64_t ahead;                     /* of which evaluated ahead, in parallel */
     int64_t insertions;                /* vertices inserted (insert.h, split.h) */
     int64_t splits;                    /* of which by edge splits */
     int64_t bflips;                    /* boundary edge flips */

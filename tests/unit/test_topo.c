@@ -5,6 +5,7 @@
 #include "geom/metric_int.h"
 #include "opt/opt.h"
 #include "testlib.h"
+
 #include "testmesh.h"
 #include "topo/contract.h"
 #include "topo/exact.h"
@@ -13,6 +14,7 @@
 #include "topo/split.h"
 #include "topo/tmesh.h"
 #include "topo/topo.h"
+#include <omp.h>
 
 #include <math.h>
 #include <stdlib.h>
@@ -804,6 +806,68 @@ TEST(driver_is_deterministic)
     for (int r = 0; r < 2; r++) {
         qdc_free(tv[r]);
         qdc_free(rg[r]);
+    }
+    mesh_free(m);
+}
+
+/* One thread and two: the same flips in the same visits, the same tets and
+ * tags; with two, the flips of the tets next in the queue were found ahead
+ * (each taken only while nothing it read had changed), with one none. The
+ * same for a run with insertion and contraction, vertices included. */
+TEST(driver_same_on_one_and_two_threads)
+{
+    const int n = 9;
+    mesh_t *m = tm_grid(n, MESH_WITH_REGION);
+    int32_t nt[2], nv[2], *tv[2] = {NULL, NULL}, *rg[2] = {NULL, NULL};
+    double *xo[2] = {NULL, NULL};
+    int saved = omp_get_max_threads();
+    topo_params p;
+    topo_stats st[2];
+
+    ASSERT_TRUE(m);
+    tm_perturb(m, n, 0.35, 11);
+    topo_params_default(&p);
+    p.qgoal = 0.9;
+    p.qinsert = 0.6;
+    p.qcontract = 0.7;
+    p.imargin = 1e-3;
+    for (int full = 0; full < 2; full++) {
+        p.insert = p.contract = full;
+        for (int r = 0; r < 2; r++) {
+            omp_set_num_threads(1 + r);
+            if (full)
+                ASSERT_OK(topo_full_arrays(m->nv, m->xyz, m->nt, m->tets, m->region, NULL,
+                                           &p, NULL, &nv[r], &xo[r], &nt[r], &tv[r],
+                                           &rg[r], NULL, NULL, &st[r], NULL));
+            else
+                ASSERT_OK(topo_flip_arrays(m->nv, m->xyz, m->nt, m->tets, m->region, NULL,
+                                           &p, NULL, &nt[r], &tv[r], &rg[r], &st[r],
+                                           NULL));
+        }
+        omp_set_num_threads(saved);
+        ASSERT_TRUE(st[0].edge_removals + st[0].flips23 + st[0].multiface > 100);
+        ASSERT_EQ_INT(st[0].ahead, 0);
+        ASSERT_TRUE(st[1].ahead > st[1].visits / 4);
+        ASSERT_EQ_INT(st[0].visits, st[1].visits);
+        ASSERT_EQ_INT(st[0].edge_removals, st[1].edge_removals);
+        ASSERT_EQ_INT(st[0].multiface, st[1].multiface);
+        ASSERT_EQ_INT(st[0].insertions, st[1].insertions);
+        ASSERT_EQ_INT(st[0].contractions, st[1].contractions);
+        ASSERT_EQ_INT(nt[0], nt[1]);
+        ASSERT_TRUE(!memcmp(tv[0], tv[1], 16 * (size_t)nt[0]));
+        ASSERT_TRUE(!memcmp(rg[0], rg[1], 4 * (size_t)nt[0]));
+        if (full) {
+            ASSERT_TRUE(st[0].insertions + st[0].contractions > 0);
+            ASSERT_EQ_INT(nv[0], nv[1]);
+            ASSERT_TRUE(!memcmp(xo[0], xo[1], 24 * (size_t)nv[0]));
+        }
+        for (int r = 0; r < 2; r++) {
+            qdc_free(tv[r]);
+            qdc_free(rg[r]);
+            qdc_free(xo[r]);
+            tv[r] = rg[r] = NULL;
+            xo[r] = NULL;
+        }
     }
     mesh_free(m);
 }
@@ -1728,7 +1792,8 @@ TEST_MAIN("topo", T(kept_inner_face_blocks_removal), T(driver_keeps_an_inner_sur
           T(export_keeps_the_callers_vertex_order), T(mixed_tag_shell_blocks_removal),
           T(non_convex_ring_refused), T(four_boundary_corner_floor),
           T(rollback_restores_exactly), T(random_flips_keep_invariants),
-          T(driver_is_deterministic), T(driver_skips_only_what_cannot_change),
+          T(driver_is_deterministic), T(driver_same_on_one_and_two_threads),
+          T(driver_skips_only_what_cannot_change),
           T(driver_skips_across_insertions_and_contractions),
           T(driver_keeps_the_smallest_angle), T(opt_run_flips_keeps_the_model),
           T(orientation_found_again_while_positive),
