@@ -19,7 +19,7 @@
  * "BEGIN BULK", GRID,ID,,X1,X2,X3 with IDs 1..nv and each coordinate as
  * %.17g with a decimal point added where it has none ("1.", "1.e-05": it
  * reads back bit for bit; a free field of up to 24 characters), CTETRA,EID,
- * PID,G1-G4 (10-node: G1-G6 then "+,G7,G8,G9,G10", G5-G10 the mid-side
+ * PID,G1-G4 (10-node: G1-G6,+ then "+,G7,G8,G9,G10", G5-G10 the mid-side
  * nodes in the order above), PID the region (blank without regions), then
  * CTRIA3,EID,PID,G1-G3 with PID the triangle's ref (blank without), EIDs
  * numbered on from the tets, "ENDDATA". No property cards (PSOLID, PSHELL):
@@ -456,8 +456,9 @@ static qdc_status write_bdf(const mesh_t *m, meshio_format fmt, int part, wbuf *
         bdf_pid(w, m->region, t);
         wb_str(w, ",");
         wb_ints(w, m->tets + 4 * (size_t)t, 4, 1, ",", m->mid ? "," : "\n");
-        if (m->mid) { /* G5-G10: edges 12 23 31 14 24 34, mesh_p2_edges' order */
-            wb_ints(w, m->mid + 6 * (size_t)t, 2, 1, ",", "\n+,");
+        if (m->mid) { /* G5-G10: edges 12 23 31 14 24 34, mesh_p2_edges' order;
+                       * Gmsh reads the second line only after a "+" field */
+            wb_ints(w, m->mid + 6 * (size_t)t, 2, 1, ",", ",+\n+,");
             wb_ints(w, m->mid + 6 * (size_t)t + 2, 4, 1, ",", "\n");
         }
     }

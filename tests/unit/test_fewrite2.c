@@ -193,7 +193,8 @@ TEST(negative_and_zero_tags)
     mesh_free(m);
 }
 
-/* Ten-node tets: Nastran (G5-G10 continued on a '+' line) and I-DEAS (FE
+/* Ten-node tets: Nastran (G5-G10 continued on a '+' line, after a '+'
+ * field that Gmsh needs) and I-DEAS (FE
  * 118) keep the mid-edge nodes; MSH 1 (type 11 not read) refuses them. */
 TEST(second_order)
 {
@@ -216,7 +217,7 @@ TEST(second_order)
         mesh_free(b);
     }
     ASSERT_OK(write_to(m, MESHIO_BDF, &s, &err));
-    ASSERT_TRUE(strstr(s.b, "\nCTETRA,1,4,10,9,8,7,1,2\n+,3,4,5,6\nENDDATA\n"));
+    ASSERT_TRUE(strstr(s.b, "\nCTETRA,1,4,10,9,8,7,1,2,+\n+,3,4,5,6\nENDDATA\n"));
     ASSERT_OK(
         write_to(m, MESHIO_UNV, &s, &err)); /* c0 m01 c1 m12 c2 m02 m03 m13 m23 c3 */
     ASSERT_TRUE(strstr(s.b,
