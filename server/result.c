@@ -183,9 +183,9 @@ static meshio_format upload_mesh_format(const job_rec *j)
 
 /* Whether a job uploaded in format own has its result and input served in
  * format k: every format qdc writes (those without a media type by ?format=
- * name: Gmsh 2.2 binary and 4.0, DOLFIN, Medit binary), and Abaqus and
- * Netgen, which are written only over their own source file, for a job
- * uploaded in them. TetGen is two files. */
+ * name: Gmsh 2.2 binary and 4.0, DOLFIN, Medit binary, Abaqus...), and
+ * MED, which is written only over its own source file, for a job uploaded
+ * in it. TetGen is two files. */
 static int offerable(meshio_format k, meshio_format own)
 {
     return k != MESHIO_TETGEN && (meshio_has_writer(k) || (k != MESHIO_AUTO && k == own));

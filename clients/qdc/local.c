@@ -190,8 +190,8 @@ static int read_only_out(const char *out, meshio_format fout)
         *c = (char)(*c >= 'a' && *c <= 'z' ? *c - 'a' + 'A' : *c);
     fprintf(stderr,
             "qdc: %s: %s is a surface format qdc reads but does not write: name a tet "
-            "mesh (.mesh, .meshb, .msh, .vtk, .vtu, .node, .json, .qmesh, .xml) or give "
-            "--out-format; nothing was done\n",
+            "mesh (.mesh, .meshb, .msh, .vtk, .vtu, .node, .json, .qmesh, .xml, .inp, "
+            ".vol, .bdf, .unv, .xdmf) or give --out-format; nothing was done\n",
             out, upper);
     return 1;
 }
@@ -763,8 +763,8 @@ int cli_topology_out_refused(const char *out, meshio_format fout, const mesh_t *
     fprintf(stderr,
             "qdc: %s: %s is written only as the input file with new coordinates, and "
             "--topology %s changes the tets: name OUT in a format qdc writes (.mesh, "
-            ".meshb, .msh, .vtk, .vtu, .json, .qmesh, .xml) or give --out-format; "
-            "nothing was %s\n",
+            ".meshb, .msh, .vtk, .vtu, .json, .qmesh, .xml, .inp, .vol, .bdf, .unv, "
+            ".xdmf) or give --out-format; nothing was %s\n",
             out, meshio_format_name(f) ? meshio_format_name(f) : "?", topology, what);
     return 1;
 }

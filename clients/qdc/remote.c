@@ -930,8 +930,8 @@ static int download(remote *rm, const char *id, const char *out, const char *out
         }
         if (want == MESHIO_AUTO && lsrc == MESHIO_AUTO) /* a surface's job: Medit */
             want = MESHIO_MEDIT;
-        /* the server writes every format qdc writes, and Abaqus and Netgen
-         * for a job uploaded in them (over the upload) */
+        /* the server writes every format qdc writes, and MED for a job
+         * uploaded in it (over the upload) */
         served = want != MESHIO_TETGEN &&
                  (meshio_has_writer(want) || (want != MESHIO_AUTO && want == job));
         snprintf(path, sizeof path, "/v1/jobs/%s/result?format=%s", id,

@@ -22,10 +22,10 @@ MESHIO_FORMAT(GMSH22_BIN, fmt_gmsh22_bin) /* Gmsh MSH 2.2 binary */
 MESHIO_FORMAT(GMSH40, fmt_gmsh40)         /* Gmsh MSH 4.0 ASCII */
 MESHIO_FORMAT(DOLFIN, fmt_dolfin)         /* DOLFIN legacy XML */
 MESHIO_FORMAT(MESHB, fmt_meshb)           /* Medit binary .meshb */
-MESHIO_FORMAT(ABAQUS, fmt_abaqus)         /* Abaqus/CalculiX .inp (spliced only) */
-MESHIO_FORMAT(NETGEN, fmt_netgen)         /* Netgen .vol (spliced only) */
-MESHIO_FORMAT(MSH1, fmt_msh1)             /* Gmsh MSH 1 (spliced only) */
-MESHIO_FORMAT(BDF, fmt_bdf)               /* Nastran bulk data (spliced only) */
-MESHIO_FORMAT(UNV, fmt_unv)               /* I-DEAS universal (spliced only) */
+MESHIO_FORMAT(ABAQUS, fmt_abaqus)         /* Abaqus/CalculiX .inp */
+MESHIO_FORMAT(NETGEN, fmt_netgen)         /* Netgen .vol */
+MESHIO_FORMAT(MSH1, fmt_msh1)             /* Gmsh MSH 1 */
+MESHIO_FORMAT(BDF, fmt_bdf)               /* Nastran bulk data */
+MESHIO_FORMAT(UNV, fmt_unv)               /* I-DEAS universal */
 MESHIO_FORMAT(XDMF, fmt_xdmf)             /* XDMF 2/3, inline XML data */
 MESHIO_FORMAT(MED, fmt_med)               /* MED, HDF5 via qdc-h5 (spliced only) */

@@ -28,7 +28,7 @@
  * array "region", "gmsh:physical" or "medit:ref" (written as "region"),
  * vref from the point array "medit:ref". Reading accepts either encoding.
  * Formats without a media type are named by ?format= in the daemon; those
- * without a writer of qdc's own (Abaqus, Netgen) are written only as the
+ * without a writer of qdc's own (MED) are written only as the
  * input with new coordinates (spliced): meshio_write refuses them for a
  * mesh without such a source. */
 typedef enum {
@@ -84,7 +84,7 @@ meshio_format meshio_sniff(const char *buf, size_t len);
  * have none: NULL, as for AUTO and out-of-range values. The string is static. */
 const char *meshio_media_type(meshio_format f);
 /* 1 if meshio_write writes f for any mesh (qdc has a writer of its own), 0
- * for Abaqus and Netgen (written only over their own source: spliced), AUTO
+ * for MED (written only over its own source: spliced), AUTO
  * and out-of-range values. TetGen counts: meshio_save writes its two files. */
 int meshio_has_writer(meshio_format f);
 /* The format of a Content-Type or Accept entry: case-insensitive, parameters

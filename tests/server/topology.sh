@@ -123,10 +123,20 @@ for c in "flips:$idf:medit:medit" "gflips:$idg:gmsh:gmsh" "gflips-mesh:$idg:medi
     esac
 done
 
-# Abaqus (written only over its own file) is not offered for a flips job
-code=$(req GET "/v1/jobs/$idf/result?format=abaqus" "$TMP/abq")
-[ "$code" = 400 ] && pass "server topology: ?format=abaqus -> 400" ||
-    fail "server topology: abaqus" "$code $(head -c 200 "$TMP/abq")"
+# Abaqus comes from qdc's own writer (the tets of the flips job, read back
+# by qdc); MED, written only over its own file, is not offered (400)
+code=$(req GET "/v1/jobs/$idf/result?format=abaqus" "$TMP/abq.inp")
+"$BIN/qdc" convert "$TMP/abq.inp" "$TMP/abq.mesh" 2> /dev/null
+a=$(counts "$TMP/abq.mesh" 2> /dev/null)
+b=$(counts "$TMP/flips.mesh")
+if [ "$code" = 200 ] && [ "$a" = "$b" ] && [ "$(quality "$TMP/abq.inp" | cut -d' ' -f1)" = 0 ]; then
+    pass "server topology: ?format=abaqus: qdc's Abaqus writer, the flips job's vertices, tets and triangles ($a)"
+else
+    fail "server topology: abaqus" "$code: '$a' against '$b'"
+fi
+code=$(req GET "/v1/jobs/$idf/result?format=med" "$TMP/med")
+[ "$code" = 400 ] && pass "server topology: ?format=med -> 400" ||
+    fail "server topology: med" "$code $(head -c 200 "$TMP/med")"
 
 # the report counts the tets in and out and the operations; progress has
 # the topology records
