@@ -753,6 +753,29 @@ static void print_outcome(const report_t *r)
         fprintf(stderr, "qdc: suggestion: %s\n", o.suggestions[i]);
 }
 
+/* 1 (said on stderr) when m has second-order tets and OUT's format would
+ * write them only spliced over a source it cannot splice: refused before the
+ * run, which would otherwise end with OUT unwritten (exit 4). */
+static int p2_out_refused(const char *out, meshio_format fout, const mesh_t *m)
+{
+    meshio_format f = meshio_save_format(out, fout, m);
+    const char *why = NULL;
+
+    if (!m->mid || f == MESHIO_AUTO || meshio_splices(m, f, &why) ||
+        meshio_writes_p2(f) || !meshio_format_name(f))
+        return 0;
+    fprintf(
+        stderr,
+        "qdc: %s: %s: second-order (10-node) tets are written only as the input file "
+        "with new coordinates, and here %s (qdc's %s writer writes linear tets): name "
+        "OUT in IN's format or one whose writer writes them (.msh, .vtk, .vtu, .mesh, "
+        ".inp, .vol, .bdf, .unv, .xdmf, .json, .qmesh) or give --out-format; nothing "
+        "was done\n",
+        out, meshio_format_name(f), why ? why : "no source is kept",
+        meshio_format_name(f));
+    return 1;
+}
+
 int cli_topology_out_refused(const char *out, meshio_format fout, const mesh_t *m,
                              const char *topology, const char *what)
 {
@@ -849,6 +872,10 @@ int cli_optimize(int argc, char **argv)
     if (x.o.topology != OPT_TOPOLOGY_NONE &&
         cli_topology_out_refused(x.out, x.fout, m, opt_topology_name(x.o.topology),
                                  "done")) {
+        rc = CLI_EUSAGE;
+        goto out;
+    }
+    if (p2_out_refused(x.out, x.fout, m)) {
         rc = CLI_EUSAGE;
         goto out;
     }

@@ -231,6 +231,11 @@ int meshio_has_writer(meshio_format f)
     return meshio_fmt_of(f) && table[f]->write != NULL;
 }
 
+int meshio_writes_p2(meshio_format f)
+{
+    return meshio_has_writer(f) && table[f]->p2;
+}
+
 /* Does the parameter list [p, e) (";a=b; c=d") hold want ("a=b")? Spaces
  * around ';' and '=' and the case are ignored, quotes around the value too. */
 static int has_param(const char *p, const char *e, const char *want, size_t wn)

@@ -87,6 +87,10 @@ const char *meshio_media_type(meshio_format f);
  * for MED (written only over its own source: spliced), AUTO
  * and out-of-range values. TetGen counts: meshio_save writes its two files. */
 int meshio_has_writer(meshio_format f);
+/* 1 if qdc's writer of f writes second-order tets (mesh_t.mid) with their ten
+ * nodes; 0 for the writers of linear tets (DOLFIN, MSH 1...), which write such
+ * a mesh only spliced over its source, and for formats without a writer. */
+int meshio_writes_p2(meshio_format f);
 /* The format of a Content-Type or Accept entry: case-insensitive, parameters
  * after ';' honoured as above, others (charset, q) ignored; also accepts
  * application/x-gmsh, model/x-gmsh, application/x-vtk, application/x-vtu,

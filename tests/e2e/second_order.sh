@@ -120,6 +120,15 @@ elif grep -q "second-order (10-node) tets are written only as the input" err; th
 else
     fail "second order: convert to DOLFIN XML" "$(head -2 err)"
 fi
+# and qdc optimize says so before the run, which would end with OUT unwritten
+"$BIN/qdc" optimize cylinder.vtk o2.xml > /dev/null 2> err
+rc=$?
+if [ "$rc" = 1 ] && [ ! -e o2.xml ] && grep -q "linear tets).*nothing was done" err &&
+    ! grep -q "^global" err; then
+    pass "second order: optimize to DOLFIN XML refused before the run (exit 1)"
+else
+    fail "second order: optimize to DOLFIN XML" "exit $rc: $(tail -1 err)"
+fi
 # qdc's own Gmsh writer writes type 11: VTK -> MSH 2.2 -> optimized, the
 # same corners' result as from the VTK file
 "$BIN/qdc" convert cylinder.vtk c22.msh --out-format gmsh22 -q 2> /dev/null
