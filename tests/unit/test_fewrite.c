@@ -31,47 +31,6 @@ static const double nasty[15] = {0.0,
 /* The corners of the unit tet and (1, 1, 1). */
 static const double unit[15] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 1, 1, 1};
 
-/* Five vertices (xyz), tets 0 1 2 3 and 4 1 2 3, triangles 1 2 3 (the
- * face the two share) and 0 1 2, regions r0 r1 (with_region), refs f0 f1
- * (ntri 2). */
-static mesh_t *five(const double *xyz, int with_region, int32_t r0, int32_t r1,
-                    int32_t ntri, int32_t f0, int32_t f1)
-{
-    static const int32_t tets[8] = {0, 1, 2, 3, 4, 1, 2, 3}, tris[6] = {1, 2, 3, 0, 1, 2};
-    mesh_t *m = mesh_new(5, 2, with_region ? MESH_WITH_REGION : 0);
-
-    if (!m)
-        return NULL;
-    memcpy(m->xyz, xyz, 15 * sizeof(double));
-    memcpy(m->tets, tets, sizeof tets);
-    if (with_region) {
-        m->region[0] = r0;
-        m->region[1] = r1;
-    }
-    if (ntri && mesh_set_tris(m, ntri, 1) != QDC_OK) {
-        mesh_free(m);
-        return NULL;
-    }
-    if (ntri) {
-        memcpy(m->tris, tris, sizeof tris);
-        m->tri_ref[0] = f0;
-        m->tri_ref[1] = f1;
-    }
-    return m;
-}
-
-/* m written as f into s (NUL-ended). */
-static qdc_status write_to(const mesh_t *m, meshio_format f, sink *s, qdc_error *err)
-{
-    qdc_status st;
-
-    s->n = 0;
-    st = meshio_write(m, f, sink_write, s, err);
-    if (st == QDC_OK && sink_write(s, "", 1) == 0)
-        s->n--;
-    return st;
-}
-
 static qdc_status read_str(const char *s, meshio_format f, mesh_t **m, qdc_error *err)
 {
     return meshio_read(s, strlen(s), f, m, err);
@@ -91,7 +50,7 @@ TEST(writers_declared)
 
 TEST(roundtrip_exact)
 {
-    mesh_t *m = five(nasty, 1, 3, 7, 2, 11, 12), *b;
+    mesh_t *m = five_mesh(nasty, 1, 3, 7, 2, 11, 12), *b;
 
     ASSERT_TRUE(m);
     for (int k = 0; k < 2; k++) {
@@ -112,7 +71,7 @@ TEST(roundtrip_exact)
  * front (region 7 domout); that of 0 1 2 is +z, vertex 3 in front. */
 TEST(written_text)
 {
-    mesh_t *m = five(unit, 1, 3, 7, 2, 11, 12);
+    mesh_t *m = five_mesh(unit, 1, 3, 7, 2, 11, 12);
     sink s = {0};
     qdc_error err;
 
@@ -147,7 +106,7 @@ TEST(written_text)
  * numbers tet t as element t + 1; Netgen keeps the order. */
 TEST(abaqus_groups_by_region)
 {
-    mesh_t *m = five(unit, 1, 9, -4, 2, 5, 2), *b;
+    mesh_t *m = five_mesh(unit, 1, 9, -4, 2, 5, 2), *b;
     sink s = {0};
     qdc_error err;
 
@@ -173,7 +132,7 @@ TEST(abaqus_groups_by_region)
  * a material for every tet, written 1, so the regions come back all 1. */
 TEST(no_regions_no_triangles)
 {
-    mesh_t *m = five(nasty, 0, 0, 0, 0, 0, 0), *b;
+    mesh_t *m = five_mesh(nasty, 0, 0, 0, 0, 0, 0), *b;
     sink s = {0};
     qdc_error err;
 
@@ -193,7 +152,7 @@ TEST(no_regions_no_triangles)
     ASSERT_TRUE(strstr(s.b, "\nsurfaceelements\n0\n"));
     /* triangles without refs: no ELSET, read back as refs 0 */
     mesh_free(m);
-    m = five(unit, 0, 0, 0, 2, 0, 0);
+    m = five_mesh(unit, 0, 0, 0, 2, 0, 0);
     ASSERT_TRUE(m);
     qdc_free(m->tri_ref);
     m->tri_ref = NULL;
@@ -208,7 +167,7 @@ TEST(no_regions_no_triangles)
 /* Negative, zero and extreme tags are held as they are. */
 TEST(negative_and_zero_tags)
 {
-    mesh_t *m = five(nasty, 1, INT32_MIN, 0, 2, -1, INT32_MAX), *b;
+    mesh_t *m = five_mesh(nasty, 1, INT32_MIN, 0, 2, -1, INT32_MAX), *b;
     sink s = {0};
     qdc_error err;
 
@@ -334,7 +293,7 @@ TEST(errors)
         "*ELEMENT, TYPE=S3\n2, 1, 2, 3\n3, 1, 2, 9\n";
     static const char shortl[] = "*NODE\n1, 0, 0, 0\n2, 1, 0, 0\n3, 0, 1, 0\n"
                                  "*ELEMENT, TYPE=STRI65\n2, 1, 2, 3\n";
-    mesh_t *m = five(unit, 1, 1, 2, 2, 1, 2), *b = NULL;
+    mesh_t *m = five_mesh(unit, 1, 1, 2, 2, 1, 2), *b = NULL;
     sink s = {0};
     qdc_error err;
 

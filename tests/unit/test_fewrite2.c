@@ -28,46 +28,6 @@ static const double xyz[15] = {0.0,
                                5.0,
                                9007199254740993.0};
 
-/* Five vertices (the values above), tets 0 1 2 3 and 4 1 2 3, triangles
- * 1 2 3 and 0 1 2, regions r0 r1 (with_region), refs f0 f1 (ntri 2). */
-static mesh_t *five(int with_region, int32_t r0, int32_t r1, int32_t ntri, int32_t f0,
-                    int32_t f1)
-{
-    static const int32_t tets[8] = {0, 1, 2, 3, 4, 1, 2, 3}, tris[6] = {1, 2, 3, 0, 1, 2};
-    mesh_t *m = mesh_new(5, 2, with_region ? MESH_WITH_REGION : 0);
-
-    if (!m)
-        return NULL;
-    memcpy(m->xyz, xyz, sizeof xyz);
-    memcpy(m->tets, tets, sizeof tets);
-    if (with_region) {
-        m->region[0] = r0;
-        m->region[1] = r1;
-    }
-    if (ntri && mesh_set_tris(m, ntri, 1) != QDC_OK) {
-        mesh_free(m);
-        return NULL;
-    }
-    if (ntri) {
-        memcpy(m->tris, tris, sizeof tris);
-        m->tri_ref[0] = f0;
-        m->tri_ref[1] = f1;
-    }
-    return m;
-}
-
-/* m written as f into s (NUL-ended). */
-static qdc_status write_to(const mesh_t *m, meshio_format f, sink *s, qdc_error *err)
-{
-    qdc_status st;
-
-    s->n = 0;
-    st = meshio_write(m, f, sink_write, s, err);
-    if (st == QDC_OK && sink_write(s, "", 1) == 0)
-        s->n--;
-    return st;
-}
-
 TEST(writers_declared)
 {
     meshio_format_info fi;
@@ -82,7 +42,7 @@ TEST(writers_declared)
 
 TEST(roundtrip_exact)
 {
-    mesh_t *m = five(1, 3, 7, 2, 11, 12), *b;
+    mesh_t *m = five_mesh(xyz, 1, 3, 7, 2, 11, 12), *b;
 
     ASSERT_TRUE(m);
     for (int k = 0; k < 3; k++) {
@@ -101,7 +61,7 @@ TEST(roundtrip_exact)
  * reader takes them. */
 TEST(written_text)
 {
-    mesh_t *m = five(1, 3, 7, 2, 11, 12);
+    mesh_t *m = five_mesh(xyz, 1, 3, 7, 2, 11, 12);
     sink s = {0};
     qdc_error err;
 
@@ -136,7 +96,7 @@ TEST(written_text)
 /* No regions, no triangles: read back as none (blank PIDs, physical tags 0). */
 TEST(no_regions_no_triangles)
 {
-    mesh_t *m = five(0, 0, 0, 0, 0, 0), *b;
+    mesh_t *m = five_mesh(xyz, 0, 0, 0, 0, 0, 0), *b;
     sink s = {0};
     qdc_error err;
 
@@ -153,7 +113,7 @@ TEST(no_regions_no_triangles)
     ASSERT_TRUE(strstr(s.b, "\n1 4 0 1 4 1 2 3 4\n2 4 0 1 4 5 2 3 4\n$ENDELM\n"));
     /* regions all 0 are no regions, as in every Gmsh file */
     mesh_free(m);
-    m = five(1, 0, 0, 0, 0, 0);
+    m = five_mesh(xyz, 1, 0, 0, 0, 0, 0);
     ASSERT_TRUE(m);
     for (int k = 0; k < 3; k++) {
         ASSERT_OK(roundtrip(m, fmts[k], &b));
@@ -168,7 +128,7 @@ TEST(no_regions_no_triangles)
  * that fills its 10 columns is written after a blank. */
 TEST(negative_and_zero_tags)
 {
-    mesh_t *m = five(1, INT32_MIN, 0, 2, -1, INT32_MAX), *b;
+    mesh_t *m = five_mesh(xyz, 1, INT32_MIN, 0, 2, -1, INT32_MAX), *b;
     sink s = {0};
     qdc_error err;
 

@@ -703,4 +703,46 @@ static inline char *replaced(const char *doc, const char *from, const char *to)
     return d;
 }
 
+/* Five vertices (xyz), tets 0 1 2 3 and 4 1 2 3, triangles 1 2 3 (the
+ * face the two share) and 0 1 2, regions r0 r1 (with_region), refs f0 f1
+ * (ntri 2). */
+static inline mesh_t *five_mesh(const double *xyz, int with_region, int32_t r0,
+                                int32_t r1, int32_t ntri, int32_t f0, int32_t f1)
+{
+    static const int32_t tets[8] = {0, 1, 2, 3, 4, 1, 2, 3}, tris[6] = {1, 2, 3, 0, 1, 2};
+    mesh_t *m = mesh_new(5, 2, with_region ? MESH_WITH_REGION : 0);
+
+    if (!m)
+        return NULL;
+    memcpy(m->xyz, xyz, 15 * sizeof(double));
+    memcpy(m->tets, tets, sizeof tets);
+    if (with_region) {
+        m->region[0] = r0;
+        m->region[1] = r1;
+    }
+    if (ntri && mesh_set_tris(m, ntri, 1) != QDC_OK) {
+        mesh_free(m);
+        return NULL;
+    }
+    if (ntri) {
+        memcpy(m->tris, tris, sizeof tris);
+        m->tri_ref[0] = f0;
+        m->tri_ref[1] = f1;
+    }
+    return m;
+}
+
+/* m written as f into s (NUL-ended). */
+static inline qdc_status write_to(const mesh_t *m, meshio_format f, sink *s,
+                                  qdc_error *err)
+{
+    qdc_status st;
+
+    s->n = 0;
+    st = meshio_write(m, f, sink_write, s, err);
+    if (st == QDC_OK && sink_write(s, "", 1) == 0)
+        s->n--;
+    return st;
+}
+
 #endif
