@@ -427,8 +427,9 @@ static void classify(slide_ctx *s, const mesh_topo *tp, const double *x0,
     }
 }
 
-qdc_status slide_new(const mesh_topo *tp, const double *x0, double feature_angle,
-                     slide_ctx **out, qdc_error *err)
+/* slide_new, and with project 0 slide_new_kinds. */
+static qdc_status slide_build(const mesh_topo *tp, const double *x0, double feature_angle,
+                              int project, slide_ctx **out, qdc_error *err)
 {
     slide_ctx *s = qdc_calloc(1, sizeof *s);
     int32_t *deg = qdc_calloc((size_t)tp->nv, sizeof(int32_t));
@@ -456,6 +457,11 @@ qdc_status slide_new(const mesh_topo *tp, const double *x0, double feature_angle
     vertex_normals(s, tp, x0);
     classify(s, tp, x0, deg);
     mark_flat(s, tp, x0);
+    if (!project) {
+        qdc_free(deg);
+        *out = s;
+        return QDC_OK;
+    }
     for (int32_t v = 0; v < tp->nv; v++)
         s->near[v] = -1;
     for (int32_t f = 0; f < tp->nbf; f++)
@@ -481,6 +487,18 @@ fail:
     qdc_free(deg);
     slide_free(s);
     return st;
+}
+
+qdc_status slide_new(const mesh_topo *tp, const double *x0, double feature_angle,
+                     slide_ctx **out, qdc_error *err)
+{
+    return slide_build(tp, x0, feature_angle, 1, out, err);
+}
+
+qdc_status slide_new_kinds(const mesh_topo *tp, const double *x0, double feature_angle,
+                           slide_ctx **out, qdc_error *err)
+{
+    return slide_build(tp, x0, feature_angle, 0, out, err);
 }
 
 void slide_free(slide_ctx *s)

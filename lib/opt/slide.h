@@ -19,6 +19,11 @@ typedef struct slide_ctx slide_ctx;
  * feature_angle: degrees between adjacent face normals that makes an edge a feature. */
 qdc_status slide_new(const mesh_topo *tp, const double *x0, double feature_angle,
                      slide_ctx **out, qdc_error *err);
+/* The same context for slide_kind and slide_flat only (the vertices' kinds
+ * and the planar patches): no projection onto the input's triangles, so none
+ * of their search trees (a tenth of a --topology round's setup). */
+qdc_status slide_new_kinds(const mesh_topo *tp, const double *x0, double feature_angle,
+                           slide_ctx **out, qdc_error *err);
 void slide_free(slide_ctx *s);
 
 int slide_kind(const slide_ctx *s, int32_t v);

@@ -83,7 +83,7 @@ static qdc_status classify(spend *s, const mesh_t *m, qdc_error *err)
     qdc_status st = mesh_topo_build(m, &tp, err);
 
     if (st == QDC_OK && s->slide)
-        st = slide_new(tp, m->xyz, s->feature, &sl, err);
+        st = slide_new_kinds(tp, m->xyz, s->feature, &sl, err);
     if (st != QDC_OK)
         goto out;
     for (int32_t v = 0; v < m->nv; v++) {
