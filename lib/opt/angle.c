@@ -86,64 +86,75 @@ static double star_tet_sines(const mesh_topo *tp, const double *x, int32_t k,
     return tmin;
 }
 
-/* Tets of a star whose sines star_sines keeps between its two passes (a
- * larger star computes them again in the second). */
+/* Tets of a star whose sines are kept between the reads of a vertex's ascent
+ * (a larger star's are computed again where they are needed). */
 #define STAR_KEEP 96
 
-/* Smallest dihedral sine of v's star with v at y, the cube of the smallest
- * mean ratio (*qmin) and, if act, the active functions (at most DIH_MAXACT, the
- * smallest). */
-static double star_sines(const mesh_topo *tp, const double *x, int32_t v, const double *y,
-                         double level, int *nbelow, double *qmin, dih_fn *act, int *nact)
+/* Smallest dihedral sine of v's star with v at y, the tets under level
+ * (*nbelow) and the cube of the smallest mean ratio (*qmin); the sines of the
+ * first STAR_KEEP tets into keep[] if not NULL. */
+static double star_scan(const mesh_topo *tp, const double *x, int32_t v, const double *y,
+                        double level, double (*keep)[6], int *nbelow, double *qmin)
 {
     double smin = INFINITY, q = INFINITY;
-    double av[DIH_MAXACT], kept[STAR_KEEP][6];
     int32_t k0 = tp->vt_ptr[v], n_star = tp->vt_ptr[v + 1] - k0;
-    int n = 0, below = 0;
+    int below = 0;
 
     for (int32_t i = 0; i < n_star; i++) {
         double st[6], q3,
-            tmin = star_tet_sines(tp, x, k0 + i, y, act && i < STAR_KEEP ? kept[i] : st,
+            tmin = star_tet_sines(tp, x, k0 + i, y, keep && i < STAR_KEEP ? keep[i] : st,
                                   &q3);
         q = fmin(q, q3);
         smin = fmin(smin, tmin);
         below += tmin < level;
     }
-    for (int32_t i = 0; act && i < n_star; i++) {
-        double p[4][3], st[6], *s = kept[i < STAR_KEEP ? i : 0];
-        if (i >= STAR_KEEP) {
-            star_tet(tp, x, k0 + i, y, p);
-            (void)metric_dihedral_sines_eta3(p[0], p[1], p[2], p[3], st);
-            s = st;
-        }
-        for (int e = 0; e < 6; e++)
-            if (s[e] <= smin + DIH_ACTIVE)
-                act_insert(act, av, &n, DIH_MAXACT, s[e], k0 + i, e);
-    }
-    if (nact)
-        *nact = n;
     *nbelow = below;
     *qmin = q;
     return smin;
 }
 
+/* The active functions of v's star at y (at most DIH_MAXACT, the smallest)
+ * into act, their count returned: smin its smallest sine, keep[] the sines
+ * star_scan kept. */
+static int star_active(const mesh_topo *tp, const double *x, int32_t v, const double *y,
+                       double (*keep)[6], double smin, dih_fn *act)
+{
+    double av[DIH_MAXACT];
+    int32_t k0 = tp->vt_ptr[v], n_star = tp->vt_ptr[v + 1] - k0;
+    int n = 0;
+
+    for (int32_t i = 0; i < n_star; i++) {
+        double st[6], q3, *s = i < STAR_KEEP ? keep[i] : st;
+        if (i >= STAR_KEEP)
+            (void)star_tet_sines(tp, x, k0 + i, y, st, &q3);
+        for (int e = 0; e < 6; e++)
+            if (s[e] <= smin + DIH_ACTIVE)
+                act_insert(act, av, &n, DIH_MAXACT, s[e], k0 + i, e);
+    }
+    return n;
+}
+
 /* A trial position y of v, tested against move_ok's rules on the way:
  * 1 with star_sines' figures in *f1, *nb1, *q1 when its smallest sine stays
  * above fneed, no more than nbmax tets fall under level and its smallest mean
- * ratio cubed is at least qneed; 0 at the first tet that breaks one. Each of
+ * ratio cubed is at least qneed (and the sines in keep[] as star_scan keeps
+ * them, if not NULL); 0 at the first tet that breaks one. Each of
  * the three only gets worse as the star is read, so the answer is the one
  * star_sines' whole figures would give: most trials fail, and early (on the
  * 20k-tet part-cad of scripts/corpus.py, --topology full, 6.6% of the run's
  * instructions saved; reading the active functions' tets first saved none). */
 static int star_trial(const mesh_topo *tp, const double *x, int32_t v, const double *y,
-                      double level, double fneed, int nbmax, double qneed, double *f1,
-                      int *nb1, double *q1)
+                      double level, double fneed, int nbmax, double qneed,
+                      double (*keep)[6], double *f1, int *nb1, double *q1)
 {
     double smin = INFINITY, q = INFINITY;
+    int32_t k0 = tp->vt_ptr[v];
     int below = 0;
 
-    for (int32_t k = tp->vt_ptr[v]; k < tp->vt_ptr[v + 1]; k++) {
-        double s[6], q3, tmin = star_tet_sines(tp, x, k, y, s, &q3);
+    for (int32_t k = k0; k < tp->vt_ptr[v + 1]; k++) {
+        double st[6], q3,
+            tmin = star_tet_sines(tp, x, k, y,
+                                  keep && k - k0 < STAR_KEEP ? keep[k - k0] : st, &q3);
         q = fmin(q, q3);
         smin = fmin(smin, tmin);
         below += tmin < level;
@@ -191,13 +202,14 @@ static double floor_cubed(double qfloor)
  * degrees), no tet under the floor, and the star's smallest mean ratio does
  * not drop unless the star's smallest sine is under relax. 1 if v at y
  * passes, with the star's figures there in *f1, *nb1, *q1; the smallest sine
- * must also rise above fneed (>= f0). */
+ * must also rise above fneed (>= f0); keep: as star_trial's. */
 static int move_ok(const mesh_topo *tp, const double *x, int32_t v, const double *y,
                    double level, double fneed, double f0, int nb0, double q0,
-                   double relax, double qf3, double *f1, int *nb1, double *q1)
+                   double relax, double qf3, double (*keep)[6], double *f1, int *nb1,
+                   double *q1)
 {
     return star_trial(tp, x, v, y, level, fneed, nb0, f0 < relax ? qf3 : fmax(q0, qf3),
-                      f1, nb1, q1);
+                      keep, f1, nb1, q1);
 }
 
 /* Pattern moves (pattern_move): PATTERN_RAND hashed directions besides the
@@ -240,7 +252,7 @@ static void pattern_dir(int32_t v, int it, int k, double d[3])
  * axes both ways and PATTERN_RAND more from a hash of the vertex and the
  * ascent step (runs repeat); steps 0.2, 0.05, 0.0125 mean edge, the largest
  * that lifts the star first, the best direction of it. f0, nb0, q0: the
- * star at v's position, as the ascent found it (star_sines). 1 if v moved. */
+ * star at v's position, as the ascent found it (star_scan). 1 if v moved. */
 static int pattern_move(const mesh_topo *tp, const slide_ctx *sl, double *x, int32_t v,
                         int sliding, double lbar, double target, double relax, double qf3,
                         int it, double f0, int nb0, double q0)
@@ -257,7 +269,7 @@ static int pattern_move(const mesh_topo *tp, const slide_ctx *sl, double *x, int
             if (!(dn > 0.0))
                 continue;
             star_trial_point(sliding ? sl : NULL, v, xv, d, sc / dn, y);
-            if (move_ok(tp, x, v, y, target, fb, f0, nb0, q0, relax, qf3, &f1, &nb1,
+            if (move_ok(tp, x, v, y, target, fb, f0, nb0, q0, relax, qf3, NULL, &f1, &nb1,
                         &q1)) {
                 fb = f1;
                 memcpy(best, y, sizeof best);
@@ -278,15 +290,22 @@ static int32_t dihedral_vertex(const mesh_topo *tp, const slide_ctx *sl, double 
 {
     int sliding = sl && slide_kind(sl, v) != SLIDE_INTERIOR;
     double *xv = x + 3 * (size_t)v, s = 0.02 * lbar, h = 1e-6 * lbar;
-    const double qf3 = floor_cubed(qfloor); /* star_sines gives cubes */
+    const double qf3 = floor_cubed(qfloor); /* star_scan gives cubes */
+    /* the star's sines at v's position, and at the trial position; after a
+     * move by the ascent, the trial's are the star's (read once) */
+    double keep[2][STAR_KEEP][6], (*cur)[6] = keep[0], (*tried)[6] = keep[1], fc = 0.0,
+                                  qc = 0.0;
     int32_t moves = 0;
+    int nbc = 0, known = 0;
 
     for (int it = 0; it < DIH_INNER; it++) {
         dih_fn act[DIH_MAXACT];
-        double g[DIH_MAXACT][3], d[3], dn, y[3], q0, q1, f0, f1;
-        int nact = 0, ok = 0, nb0, nb1;
-        f0 = star_sines(tp, x, v, xv, target, &nb0, &q0, act, &nact);
-        if (!(f0 > 0.0) || nact == 0 || f0 >= target)
+        double g[DIH_MAXACT][3], d[3], dn, y[3], q0 = qc, q1, f0 = fc, f1, (*t)[6];
+        int nact = 0, ok = 0, nb0 = nbc, nb1;
+        if (!known)
+            f0 = star_scan(tp, x, v, xv, target, cur, &nb0, &q0);
+        if (!(f0 > 0.0) || f0 >= target ||
+            (nact = star_active(tp, x, v, xv, cur, f0, act)) == 0)
             break; /* inverted stars are the smooth pass's job */
         for (int i = 0; i < nact; i++) {
             sine_grad(tp, x, xv, act[i], h, g[i]);
@@ -300,8 +319,8 @@ static int32_t dihedral_vertex(const mesh_topo *tp, const slide_ctx *sl, double 
             dn = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
             for (int hv = 0; hv < FINISH_HALVINGS; hv++) {
                 star_trial_point(sliding ? sl : NULL, v, xv, d, s / dn, y);
-                if (move_ok(tp, x, v, y, target, f0, f0, nb0, q0, relax, qf3, &f1, &nb1,
-                            &q1)) {
+                if (move_ok(tp, x, v, y, target, f0, f0, nb0, q0, relax, qf3, tried, &f1,
+                            &nb1, &q1)) {
                     ok = 1;
                     break;
                 }
@@ -313,11 +332,19 @@ static int32_t dihedral_vertex(const mesh_topo *tp, const slide_ctx *sl, double 
                                              qf3, it, f0, nb0, q0)) {
                 moves++;
                 s = 0.02 * lbar;
+                known = 0;
                 continue;
             }
             break;
         }
         memcpy(xv, y, sizeof y);
+        t = cur;
+        cur = tried;
+        tried = t;
+        known = 1;
+        fc = f1;
+        nbc = nb1;
+        qc = q1;
         moves++;
         s = fmin(s * 1.6, 0.1 * lbar);
         if (f1 - f0 < 1e-5)
@@ -503,17 +530,19 @@ static int patch_fns(const mesh_topo *tp, const double *x, const patch_t *pc,
 /* Smallest function value over the patch's tets with its corners at y; the
  * tets with a value below level (*nbelow) and the active functions (within
  * DIH_ACTIVE of the smallest, or 1% of it for mean ratios; k: position in
- * pc->t). */
+ * pc->t). The functions of tet i in fv[i]: computed, or known there already
+ * (patch_trial_ok's, at the same y). */
 static double patch_values(const mesh_topo *tp, const double *x, const patch_t *pc,
-                           const double (*y)[3], double level, int *nbelow, dih_fn *act,
-                           int *nact)
+                           const double (*y)[3], double level, double (*fv)[6], int known,
+                           int *nbelow, dih_fn *act, int *nact)
 {
-    double fmin_ = INFINITY, fv[PATCH_MAXT][6], av[PATCH_ACT], tol;
-    int below = 0, n = 0, nf = 6;
+    double fmin_ = INFINITY, av[PATCH_ACT], tol;
+    int below = 0, n = 0, nf = pc->eta ? 1 : 6;
 
     for (int32_t i = 0; i < pc->nt; i++) {
         double tmin = INFINITY, q3;
-        nf = patch_fns(tp, x, pc, y, i, fv[i], &q3);
+        if (!known)
+            (void)patch_fns(tp, x, pc, y, i, fv[i], &q3);
         for (int e = 0; e < nf; e++)
             tmin = fmin(tmin, fv[i][e]);
         fmin_ = fmin(fmin_, tmin);
@@ -535,10 +564,12 @@ static double patch_values(const mesh_topo *tp, const double *x, const patch_t *
  * than nb0, no mean ratio cubed under qcap. The active functions' tets are
  * tried first and the scan stops at the first tet that breaks a rule: most
  * trials fail there (a full scan per trial was most of the angle pass on 20k-tet
- * meshes). */
+ * meshes). The second pass reads every tet: a trial that passes leaves the
+ * functions of each tet in fv[] (patch_values'). */
 static int patch_trial_ok(const mesh_topo *tp, const double *x, const patch_t *pc,
                           const double (*y)[3], double f0, int nb0, double qcap,
-                          double level, const dih_fn *act, int nact, double *f1)
+                          double level, const dih_fn *act, int nact, double (*fv)[6],
+                          double *f1)
 {
     double lo = INFINITY;
     int below = 0;
@@ -546,7 +577,7 @@ static int patch_trial_ok(const mesh_topo *tp, const double *x, const patch_t *p
     for (int pass = 0; pass < 2; pass++)
         for (int32_t i = 0; i < (pass ? pc->nt : nact); i++) {
             int32_t k = pass ? i : act[i].k;
-            double f[6], q3, tmin = INFINITY;
+            double fo[6], *f = pass ? fv[k] : fo, q3, tmin = INFINITY;
             int nf, first = 1;
             for (int a = 0; a < i && !pass && first; a++)
                 first = act[a].k != k;
@@ -681,11 +712,17 @@ static int32_t patch_ascent(const mesh_topo *tp, const slide_ctx *sl, double *x,
     int32_t moves = 0;
     int dim = 3 * pc->nv;
 
+    /* the tets' functions at the corners' positions, and at a trial's: after a
+     * move, the trial's are the patch's (read once) */
+    double fvs[2][PATCH_MAXT][6], (*cur)[6] = fvs[0], (*tried)[6] = fvs[1], (*sw)[6];
+    int known = 0;
+
     for (int it = 0; it < PATCH_INNER; it++) {
         dih_fn act[PATCH_ACT];
         double g[PATCH_ACT][12], d[12], dn = 0.0, y[4][3], f0, f1 = 0.0;
         int nact = 0, ok = 0, nb0;
-        f0 = patch_values(tp, x, pc, (const double(*)[3])pc->y, level, &nb0, act, &nact);
+        f0 = patch_values(tp, x, pc, (const double(*)[3])pc->y, level, cur, known, &nb0,
+                          act, &nact);
         if (!(f0 > 0.0) || nact == 0)
             break;
         for (int i = 0; i < nact; i++) {
@@ -726,7 +763,8 @@ static int32_t patch_ascent(const mesh_topo *tp, const slide_ctx *sl, double *x,
                                  s / dn, y[j]);
             }
             if (patch_trial_ok(tp, x, pc, (const double(*)[3])y, f0, nb0,
-                               pc->eta ? GEOM_FLAT_ETA3 : qf3, level, act, nact, &f1)) {
+                               pc->eta ? GEOM_FLAT_ETA3 : qf3, level, act, nact, tried,
+                               &f1)) {
                 ok = 1;
                 break;
             }
@@ -735,6 +773,10 @@ static int32_t patch_ascent(const mesh_topo *tp, const slide_ctx *sl, double *x,
         if (!ok)
             break;
         memcpy(pc->y, y, sizeof y);
+        sw = cur;
+        cur = tried;
+        tried = sw;
+        known = 1;
         moves++;
         s = fmin(s * 1.6, 0.1 * lbar);
         if (f1 - f0 < (pc->eta ? 1e-5 * f0 : 1e-6))
