@@ -108,6 +108,14 @@ void h5job_run(const qdcd *q, const char *id, const char *frames, const char *re
              deadline, cancel, out);
 }
 
+void h5job_med_new(const qdcd *q, const char *id, const char *frames, const char *res,
+                   double deadline, const atomic_int *cancel, h5job_outcome *out)
+{
+    char *const wr[] = {"-i", (char *)frames, "med-new", (char *)res, NULL};
+
+    h5_child(q, id, wr, "the MED writer", "MED", deadline, cancel, out);
+}
+
 int h5job_is_xdmf(const qdcd *q, const job_rec *j)
 {
     char p[4200];

@@ -35,6 +35,13 @@ typedef struct {
 void h5job_run(const qdcd *q, const char *id, const char *frames, const char *res,
                double deadline, const atomic_int *cancel, h5job_outcome *out);
 
+/* A MED file of its own written as res (qdc-h5 med-new) from the frames
+ * file frames, which qdc's MED writer wrote for a whole mesh (a result whose
+ * tets changed, or a job uploaded in another format: no splice of an
+ * uploaded MED file); qdc-h5's messages as for h5job_run. */
+void h5job_med_new(const qdcd *q, const char *id, const char *frames, const char *res,
+                   double deadline, const atomic_int *cancel, h5job_outcome *out);
+
 /* Is job j an XDMF+HDF5 job: XDMF with JOB_INPUT_H5 stored with its input
  * (its record says so; a job recorded before it did: the file is there)? */
 int h5job_is_xdmf(const qdcd *q, const job_rec *j);

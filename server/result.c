@@ -75,10 +75,14 @@ static qdc_status fetch_frames(req *r, const job_rec *j)
     return st;
 }
 
-/* m, read from a MED or XDMF+HDF5 job's frames (fmt: MESHIO_MED,
- * MESHIO_XDMF), saved as path: its frames written beside it, and qdc-h5
- * puts their coordinates into a copy of the upload (the .med; an XDMF
- * job's .h5) in a child process (h5job.h). */
+/* m saved as path in fmt (MESHIO_MED, MESHIO_XDMF: an XDMF+HDF5 job's .h5):
+ * its frames written beside it, and qdc-h5, in a child process (h5job.h),
+ * puts their coordinates into a copy of the upload (the .med; the .h5), or,
+ * for a MED mesh that is no splice of an uploaded MED file (new tets, a job
+ * uploaded in another format), makes a new MED file of qdc's writer's
+ * frames. */
+static meshio_format upload_mesh_format(const job_rec *j);
+
 static qdc_status save_h5(req *r, const job_rec *j, const mesh_t *m, meshio_format fmt,
                           const char *path, qdc_error *e)
 {
@@ -90,9 +94,13 @@ static qdc_status save_h5(req *r, const job_rec *j, const mesh_t *m, meshio_form
     st = meshio_save(fr, fmt, m, e);
     if (st != QDC_OK)
         return st;
-    if (fmt == MESHIO_MED)
+    if (fmt == MESHIO_MED && upload_mesh_format(j) == MESHIO_MED &&
+        meshio_source_format(m) == MESHIO_MED && meshio_splices(m, MESHIO_MED, NULL))
         h5job_run(r->q, j->id, fr, path, mono_now() + r->q->cfg.job_time_limit, NULL,
                   &ho);
+    else if (fmt == MESHIO_MED)
+        h5job_med_new(r->q, j->id, fr, path, mono_now() + r->q->cfg.job_time_limit, NULL,
+                      &ho);
     else
         h5job_xdmf(r->q, j->id, fr, path, mono_now() + r->q->cfg.job_time_limit, NULL,
                    &ho);
@@ -183,9 +191,9 @@ static meshio_format upload_mesh_format(const job_rec *j)
 
 /* Whether a job uploaded in format own has its result and input served in
  * format k: every format qdc writes (those without a media type by ?format=
- * name: Gmsh 2.2 binary and 4.0, DOLFIN, Medit binary, Abaqus...), and
- * MED, which is written only over its own source file, for a job uploaded
- * in it. TetGen is two files. */
+ * name: Gmsh 2.2 binary and 4.0, DOLFIN, Medit binary, Abaqus, MED...), and
+ * one written only over its own source file (none today), for a job
+ * uploaded in it. TetGen is two files. */
 static int offerable(meshio_format k, meshio_format own)
 {
     return k != MESHIO_TETGEN && (meshio_has_writer(k) || (k != MESHIO_AUTO && k == own));

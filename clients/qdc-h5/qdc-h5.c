@@ -9,6 +9,12 @@
  *   qdc-h5 [-n NAME] med-write IN.med OUT.med   OUT = IN with its coordinates
  *                                               replaced by the "coords" frame
  *                                               read from stdin
+ *   qdc-h5 med-new OUT.med                      OUT: a new MED file (MED-fichier
+ *                                               4.1's layout) of the whole mesh
+ *                                               framed on stdin (qdc's MED
+ *                                               writer's frames: coords, te4 or
+ *                                               t10, tr3 or tr6, their _fam,
+ *                                               noe_fam, families)
  *
  *   qdc-h5 [-n NAME] h5-read FILE.h5 NAME:T:DIMS:PATH...
  *                       XDMF's heavy data: each dataset PATH, checked to be
@@ -28,7 +34,8 @@
  * MED (Salome, Code_Aster): the first mesh of /ENS_MAA, its first step;
  * NOE/COO (x of every node, then y, then z) and NOE/FAM, MAI/TE4, MAI/T10,
  * MAI/TR3 and MAI/TR6 NOD (node k of every element, then node k + 1;
- * 1-based) and FAM. Frames carry them
+ * 1-based) and FAM, and the families' group names (/FAS/<mesh>: ELEME,
+ * NOEUD) as the "families" frame, lines "NUMBER GROUP". Frames carry them
  * interlaced (x y z a node, the nodes of an element together), as int64 and
  * float64, little-endian. Exit status 0, or 1 with one line "qdc-h5: ..." on
  * stderr. */
@@ -36,13 +43,13 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <hdf5.h>
+#include <sched.h>
+#include <signal.h>
 #include <stdarg.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sched.h>
-#include <signal.h>
 #include <sys/prctl.h>
 #include <sys/resource.h>
 #include <sys/stat.h>
@@ -56,6 +63,8 @@ static const char magic[8] = {'Q', 'D', 'C', 'H', '5', 'v', '1', '\n'};
 
 /* -n NAME, else NULL: what messages call the input file */
 static const char *shown;
+/* a file being made, removed if we die (med-new's) */
+static char *made;
 
 static void die(const char *fmt, ...) __attribute__((noreturn, format(printf, 1, 2)));
 
@@ -68,6 +77,8 @@ static void die(const char *fmt, ...)
     vfprintf(stderr, fmt, ap);
     va_end(ap);
     fputc('\n', stderr);
+    if (made)
+        unlink(made);
     exit(1);
 }
 
@@ -244,8 +255,8 @@ static int h5_oom(void)
  * column's part read by HDF5 straight into a small buffer, interlaced into
  * another and written out, so that no copy of the whole dataset is made
  * (allocating and faulting in two of them took most of the time). */
-static void stream_frame(hid_t d, const char *path, uint64_t n, int cols, const char *name,
-                         char t)
+static void stream_frame(hid_t d, const char *path, uint64_t n, int cols,
+                         const char *name, char t)
 {
     hid_t type = t == 'f' ? H5T_NATIVE_DOUBLE : H5T_NATIVE_INT64;
     hid_t fs = H5Dget_space(d), ms;
@@ -264,7 +275,8 @@ static void stream_frame(hid_t d, const char *path, uint64_t n, int cols, const 
             if (ms < 0 ||
                 H5Sselect_hyperslab(fs, H5S_SELECT_SET, &start, NULL, &cnt, NULL) < 0 ||
                 H5Dread(d, type, ms, fs, H5P_DEFAULT, col + (size_t)c * cnt) < 0)
-                die(h5_oom() ? "out of memory reading dataset %s" : "cannot read dataset %s",
+                die(h5_oom() ? "out of memory reading dataset %s"
+                             : "cannot read dataset %s",
                     path);
         }
         H5Sclose(ms);
@@ -326,7 +338,8 @@ static void stream_rows(hid_t d, const char *path, uint64_t n, int rank,
          * as runs of values, another shape one value at a time */
         ms = H5Screate_simple(rank ? rank : 1, rank ? cnt : &m, NULL);
         if (ms < 0 ||
-            (rank && H5Sselect_hyperslab(fs, H5S_SELECT_SET, start, NULL, cnt, NULL) < 0) ||
+            (rank &&
+             H5Sselect_hyperslab(fs, H5S_SELECT_SET, start, NULL, cnt, NULL) < 0) ||
             H5Dread(d, type, ms, fs, H5P_DEFAULT, buf) < 0)
             die(h5_oom() ? "out of memory reading dataset %s" : "cannot read dataset %s",
                 path);
@@ -364,11 +377,149 @@ static uint64_t med_frame(hid_t f, const char *path, int cols, uint64_t rows,
             cols == 3 && t == 'f' ? "node" : "element");
     if (rows && n / (uint64_t)cols != rows)
         die("%s: %llu families for %llu %s", path, (unsigned long long)n,
-            (unsigned long long)rows, t == 'i' && !strcmp(name, "noe_fam") ? "nodes"
-                                                                          : "elements");
+            (unsigned long long)rows,
+            t == 'i' && !strcmp(name, "noe_fam") ? "nodes" : "elements");
     stream_frame(d, path, n, cols, name, t);
     H5Dclose(d);
     return n / (uint64_t)cols;
+}
+
+/* A growing text (the "families" frame). */
+typedef struct {
+    char *b;
+    size_t n, cap;
+} text;
+
+static void text_put(text *t, const char *s, size_t n)
+{
+    if (t->cap - t->n < n) {
+        while (t->cap - t->n < n)
+            t->cap = t->cap ? 2 * t->cap : 4096;
+        t->b = realloc(t->b, t->cap);
+        if (!t->b)
+            die("out of memory for the families");
+    }
+    memcpy(t->b + t->n, s, n);
+    t->n += n;
+}
+
+/* The names of the links of a group, collected (at most 1 << 20). */
+typedef struct {
+    char **name;
+    size_t n, cap;
+} linklist;
+
+static herr_t collect(hid_t g, const char *name, const H5L_info_t *info, void *ctx)
+{
+    linklist *l = ctx;
+
+    (void)g;
+    (void)info;
+    if (l->n == l->cap) {
+        if (l->cap >= (size_t)1 << 20)
+            return 1;
+        l->cap = l->cap ? 2 * l->cap : 64;
+        l->name = realloc(l->name, l->cap * sizeof *l->name);
+        if (!l->name)
+            die("out of memory for the families");
+    }
+    l->name[l->n] = strdup(name);
+    if (!l->name[l->n])
+        die("out of memory for the families");
+    l->n++;
+    return 0;
+}
+
+/* Each family under group path (ELEME or NOEUD of /FAS/<mesh>) as lines
+ * "NUM GROUP" into t: its NUM attribute, the names of GRO/NOM (fixed-size
+ * names, MED's 80 bytes), their trailing blanks and NULs dropped and other
+ * control bytes made '?', so that a line stays a line. */
+static void families_of(hid_t f, const char *path, text *t)
+{
+    hid_t g = exists(f, path) ? H5Gopen2(f, path, H5P_DEFAULT) : -1;
+    hsize_t idx = 0;
+    linklist l = {NULL, 0, 0};
+
+    if (g < 0)
+        return;
+    H5Literate(g, H5_INDEX_NAME, H5_ITER_INC, &idx, collect, &l);
+    for (size_t i = 0; i < l.n; i++) {
+        hid_t fam = H5Gopen2(g, l.name[i], H5P_DEFAULT), a, d, ty, sp;
+        long long num = 0;
+        size_t size;
+        hssize_t n;
+        char *buf, head[32];
+        free(l.name[i]);
+        if (fam < 0)
+            continue;
+        a = H5Aexists(fam, "NUM") > 0 ? H5Aopen(fam, "NUM", H5P_DEFAULT) : -1;
+        d = H5Lexists(fam, "GRO", H5P_DEFAULT) > 0 &&
+                    H5Lexists(fam, "GRO/NOM", H5P_DEFAULT) > 0
+                ? H5Dopen2(fam, "GRO/NOM", H5P_DEFAULT)
+                : -1;
+        if (a < 0 || H5Aread(a, H5T_NATIVE_LLONG, &num) < 0 || d < 0) {
+            if (a >= 0)
+                H5Aclose(a);
+            if (d >= 0)
+                H5Dclose(d);
+            H5Gclose(fam);
+            continue;
+        }
+        H5Aclose(a);
+        ty = H5Dget_type(d);
+        sp = H5Dget_space(d);
+        size = ty < 0 ? 0 : H5Tget_size(ty);
+        n = sp < 0 ? -1 : H5Sget_simple_extent_npoints(sp);
+        /* MED's names: 80 bytes; a dataset far off that is no group list */
+        if (size == 0 || size > 4096 || n < 0 || n > 100000)
+            die("family %s: its group names are not a list of names", path);
+        buf = xmalloc((size_t)n * size);
+        if (n && H5Dread(d, ty, H5S_ALL, H5S_ALL, H5P_DEFAULT, buf) < 0)
+            die("cannot read the group names of a family under %s", path);
+        for (hssize_t k = 0; k < n; k++) {
+            char *nm = buf + (size_t)k * size;
+            size_t len = size;
+            while (len && (nm[len - 1] == ' ' || nm[len - 1] == '\0'))
+                len--;
+            for (size_t c = 0; c < len; c++)
+                if ((unsigned char)nm[c] < 0x20)
+                    nm[c] = '?';
+            text_put(t, head, (size_t)snprintf(head, sizeof head, "%lld ", num));
+            text_put(t, nm, len);
+            text_put(t, "\n", 1);
+        }
+        free(buf);
+        H5Tclose(ty);
+        H5Sclose(sp);
+        H5Dclose(d);
+        H5Gclose(fam);
+    }
+    free(l.name);
+    H5Gclose(g);
+}
+
+/* The "families" frame of the first mesh (mesh): its element and node
+ * families (/FAS/<mesh>; MED 2's under the mesh's own group), when any has
+ * a group. */
+static void med_families(hid_t f, const char *mesh)
+{
+    static const char *const where[2] = {"/FAS/%s/%s", "/ENS_MAA/%s/FAS/%s"};
+    static const char *const kinds[2] = {"ELEME", "NOEUD"};
+    static const unsigned char zero[8] = {0};
+    char path[700];
+    text t = {NULL, 0, 0};
+
+    for (int w = 0; w < 2 && !t.n; w++)
+        for (int k = 0; k < 2; k++) {
+            snprintf(path, sizeof path, where[w], mesh, kinds[k]);
+            families_of(f, path, &t);
+        }
+    if (!t.n)
+        return;
+    frame("families", 'b', NULL, t.n);
+    put_all(t.b, t.n);
+    put_all(zero, (8 - t.n % 8) % 8);
+    free(t.b);
 }
 
 static void med_read(const char *fname)
@@ -379,7 +530,7 @@ static void med_read(const char *fname)
     static const char *const types[4] = {"TE4", "T10", "TR3", "TR6"};
     static const char *const names[4] = {"te4", "t10", "tr3", "tr6"};
     static const int nodes[4] = {4, 10, 3, 6};
-    char base[1100], path[1200], fam[16];
+    char base[1100], path[1200], fam[16], mesh[256];
     uint64_t nv, ne;
     int dim;
 
@@ -405,6 +556,8 @@ static void med_read(const char *fname)
         snprintf(fam, sizeof fam, "%s_fam", names[k]);
         med_frame(f, path, 1, ne, fam, 'i');
     }
+    first_in(f, "/ENS_MAA", mesh);
+    med_families(f, mesh);
     H5Fclose(f);
     if (fflush(stdout) != 0)
         die("cannot write to standard output: %s", strerror(errno));
@@ -458,27 +611,37 @@ static void copy_file(const char *from, int to)
     close(fd);
 }
 
-/* The values of the frame named want in the framed data of stdin (b, len):
- * a pointer into b and their count. */
-static const unsigned char *stdin_frame(const unsigned char *b, size_t len,
-                                        const char *want, uint64_t *count)
+/* The values of the frame named want of type type in the framed data of
+ * stdin (b, len): a pointer into b and their count; NULL if there is none. */
+static const unsigned char *find_frame(const unsigned char *b, size_t len,
+                                       const char *want, char type, uint64_t *count)
 {
     size_t pos = sizeof magic;
     const unsigned char *vals = NULL;
 
     if (len < sizeof magic || memcmp(b, magic, sizeof magic) != 0)
         die("standard input is not framed data");
+    *count = 0;
     while (len - pos >= 32) {
         uint64_t c = le64(b + pos + 24);
         uint64_t words = b[pos + 16] == 'b' ? c / 8 + (c % 8 != 0) : c;
         if (words > (len - pos - 32) / 8)
             die("a frame runs past the end of the input");
-        if (strncmp((const char *)b + pos, want, 16) == 0 && b[pos + 16] == 'f') {
+        if (strncmp((const char *)b + pos, want, 16) == 0 && b[pos + 16] == type) {
             vals = b + pos + 32;
             *count = c;
         }
         pos += 32 + (size_t)words * 8;
     }
+    return vals;
+}
+
+/* The float64 frame named want of stdin (b, len), which must be there. */
+static const unsigned char *stdin_frame(const unsigned char *b, size_t len,
+                                        const char *want, uint64_t *count)
+{
+    const unsigned char *vals = find_frame(b, len, want, 'f', count);
+
     if (!vals)
         die("no frame %s in the input", want);
     return vals;
@@ -573,6 +736,451 @@ static void med_write(const char *in, const char *out)
     free(b);
 }
 
+/* ------------------------------------------------------------------------ */
+/* med-new: a MED file of its own for a whole mesh                          */
+
+/* What MED-fichier 4.1 writes (MEDfileOpen, MEDmeshCr...), so that Salome,
+ * Code_Aster and Gmsh take the file as one of theirs: integers as int32
+ * (med_int), strings NUL-ended, the version 4.1.0, an HDF5 file of the 1.8
+ * format (superblock 2), the computation step "no step" (NDT = NOR = -1),
+ * profiles MED_NO_PROFILE_INTERNAL. */
+#define MED_PROFILE "MED_NO_PROFILE_INTERNAL"
+#define MED_STEP "-0000000000000000001-0000000000000000001"
+/* MED's geometry codes (med.h: MED_TETRA4 ...) */
+enum { GEO_TR3 = 203, GEO_TR6 = 206, GEO_TE4 = 304, GEO_T10 = 310 };
+/* the length of a group name (MED_LNAME_SIZE) and of a family's (MED_NAME_SIZE) */
+enum { MED_LNAME = 80, MED_NAME = 64 };
+
+static void attr_int(hid_t o, const char *name, int v)
+{
+    hid_t sp = H5Screate(H5S_SCALAR);
+    hid_t a =
+        sp < 0 ? -1 : H5Acreate2(o, name, H5T_STD_I32LE, sp, H5P_DEFAULT, H5P_DEFAULT);
+
+    if (a < 0 || H5Awrite(a, H5T_NATIVE_INT, &v) < 0)
+        die("cannot write attribute %s", name);
+    H5Aclose(a);
+    H5Sclose(sp);
+}
+
+static void attr_real(hid_t o, const char *name, double v)
+{
+    hid_t sp = H5Screate(H5S_SCALAR);
+    hid_t a =
+        sp < 0 ? -1 : H5Acreate2(o, name, H5T_IEEE_F64LE, sp, H5P_DEFAULT, H5P_DEFAULT);
+
+    if (a < 0 || H5Awrite(a, H5T_NATIVE_DOUBLE, &v) < 0)
+        die("cannot write attribute %s", name);
+    H5Aclose(a);
+    H5Sclose(sp);
+}
+
+/* A string attribute as MED writes one: its length and a NUL. */
+static void attr_str(hid_t o, const char *name, const char *v)
+{
+    hid_t ty = H5Tcopy(H5T_C_S1), sp = H5Screate(H5S_SCALAR), a = -1;
+
+    if (ty >= 0 && sp >= 0 && H5Tset_size(ty, strlen(v) + 1) >= 0 &&
+        H5Tset_strpad(ty, H5T_STR_NULLTERM) >= 0)
+        a = H5Acreate2(o, name, ty, sp, H5P_DEFAULT, H5P_DEFAULT);
+    if (a < 0 || H5Awrite(a, ty, v) < 0)
+        die("cannot write attribute %s", name);
+    H5Aclose(a);
+    H5Sclose(sp);
+    H5Tclose(ty);
+}
+
+static hid_t new_group(hid_t at, const char *name)
+{
+    hid_t g = H5Gcreate2(at, name, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+
+    if (g < 0)
+        die("cannot create group %s", name);
+    return g;
+}
+
+/* The frame of int64 values vals, rows of cols (interlaced, as framed),
+ * written as dataset name of group g in MED's order (column 0 of every row,
+ * then column 1...) as int32, a column at a time (a copy of one column, not
+ * of the frame); NBR = rows. Each value checked in [lo, hi]. */
+static void put_ints(hid_t g, const char *name, const unsigned char *vals, uint64_t rows,
+                     int cols, int64_t lo, int64_t hi, const char *what)
+{
+    hsize_t n = (hsize_t)rows * (hsize_t)cols, cnt = rows;
+    hid_t fs = H5Screate_simple(1, &n, NULL), ms = H5Screate_simple(1, &cnt, NULL);
+    hid_t d = fs < 0 ? -1
+                     : H5Dcreate2(g, name, H5T_STD_I32LE, fs, H5P_DEFAULT, H5P_DEFAULT,
+                                  H5P_DEFAULT);
+    int32_t *col = xmalloc((size_t)rows * sizeof *col);
+
+    if (d < 0 || ms < 0)
+        die("cannot create dataset %s", name);
+    for (int c = 0; c < cols; c++) {
+        hsize_t start = (hsize_t)c * rows;
+        for (uint64_t r = 0; r < rows; r++) {
+            int64_t v = (int64_t)le64(vals + 8 * (r * (uint64_t)cols + (uint64_t)c));
+            if (v < lo || v > hi)
+                die("%s %llu: %lld is not in [%lld, %lld]", what,
+                    (unsigned long long)r + 1, (long long)v, (long long)lo,
+                    (long long)hi);
+            col[r] = (int32_t)v;
+        }
+        if (rows &&
+            (H5Sselect_hyperslab(fs, H5S_SELECT_SET, &start, NULL, &cnt, NULL) < 0 ||
+             H5Dwrite(d, H5T_NATIVE_INT32, ms, fs, H5P_DEFAULT, col) < 0))
+            die("cannot write dataset %s", name);
+    }
+    free(col);
+    attr_int(d, "CGT", 1);
+    attr_int(d, "NBR", (int)rows);
+    H5Dclose(d);
+    H5Sclose(ms);
+    H5Sclose(fs);
+}
+
+/* n values of zeros as dataset name (FAM: family 0, where no frame gave
+ * them). */
+static void put_zeros(hid_t g, const char *name, uint64_t n)
+{
+    unsigned char *z = calloc((size_t)n + 1, 8);
+
+    if (!z)
+        die("out of memory for %llu families", (unsigned long long)n);
+    put_ints(g, name, z, n, 1, 0, 0, name);
+    free(z);
+}
+
+/* A group whose links are listed in the order they were made: MED 4 finds
+ * the families of ELEME and NOEUD (and FAMILLE_ZERO) by their position in
+ * that order (in a 4.1 file made without it, MED-fichier 4.1's mdump failed
+ * to read the families; a 3.0 file, meshio's, it reads by name). */
+static hid_t new_ordered_group(hid_t at, const char *name)
+{
+    hid_t pl = H5Pcreate(H5P_GROUP_CREATE), g = -1;
+
+    if (pl >= 0 && H5Pset_link_creation_order(pl, H5P_CRT_ORDER_TRACKED |
+                                                      H5P_CRT_ORDER_INDEXED) >= 0)
+        g = H5Gcreate2(at, name, H5P_DEFAULT, pl, H5P_DEFAULT);
+    if (g < 0)
+        die("cannot create group %s", name);
+    H5Pclose(pl);
+    return g;
+}
+
+/* A group of an entity type (MAI/TE4, NOE) as MED makes it. */
+static hid_t entity_group(hid_t at, const char *name, int geo)
+{
+    hid_t g = new_group(at, name);
+
+    attr_int(g, "CGT", 1);
+    attr_int(g, "CGS", 1);
+    if (geo)
+        attr_int(g, "GEO", geo);
+    attr_str(g, "PFL", MED_PROFILE);
+    return g;
+}
+
+/* A family's group name as MED stores it: 80 bytes, blank-padded. */
+typedef struct {
+    int64_t num;
+    char name[MED_LNAME];
+} famgroup;
+
+static int famgroup_cmp(const void *x, const void *y)
+{
+    const famgroup *a = x, *b = y;
+
+    return (a->num > b->num) - (a->num < b->num);
+}
+
+/* The families of the "families" frame (lines "NUM GROUP", meshio_med.c)
+ * in *out, sorted by number; their count. */
+static size_t parse_families(const unsigned char *t, uint64_t len, famgroup **out)
+{
+    size_t n = 0, lines = 1;
+    const char *p = (const char *)t, *end = p + len;
+    famgroup *fg;
+
+    for (uint64_t i = 0; i < len; i++)
+        lines += t[i] == '\n';
+    fg = xmalloc(lines * sizeof *fg);
+    while (p < end) {
+        const char *eol = memchr(p, '\n', (size_t)(end - p)), *sp;
+        char *e;
+        size_t nl;
+        if (!eol)
+            eol = end;
+        sp = memchr(p, ' ', (size_t)(eol - p));
+        fg[n].num = strtoll(p, &e, 10);
+        nl = sp ? (size_t)(eol - sp - 1) : 0;
+        if (!sp || e != sp || nl == 0 || nl > MED_LNAME || fg[n].num == 0 ||
+            fg[n].num < INT32_MIN || fg[n].num > INT32_MAX)
+            die("families: a line that is no \"NUMBER GROUP\" of an int32 family "
+                "and a name of 1 to %d characters",
+                MED_LNAME);
+        memset(fg[n].name, ' ', MED_LNAME);
+        memcpy(fg[n].name, sp + 1, nl);
+        n++;
+        p = eol < end ? eol + 1 : end;
+    }
+    qsort(fg, n, sizeof *fg, famgroup_cmp);
+    *out = fg;
+    return n;
+}
+
+/* Every nonzero family of the frame fam (n values; where: its dataset)
+ * among the n families of fg, with the sign MED gives its kind (element
+ * families below zero, node families above). */
+static void check_families(const unsigned char *fam, uint64_t n, const famgroup *fg,
+                           size_t nfg, int sign, const char *where)
+{
+    for (uint64_t i = 0; fam && i < n; i++) {
+        famgroup key;
+        key.num = (int64_t)le64(fam + 8 * i);
+        if (key.num == 0)
+            continue;
+        if ((key.num > 0) != (sign > 0))
+            die("%s %llu: family %lld (MED numbers %s families %s zero)", where,
+                (unsigned long long)i + 1, (long long)key.num,
+                sign > 0 ? "node" : "element", sign > 0 ? "above" : "below");
+        if (!bsearch(&key, fg, nfg, sizeof *fg, famgroup_cmp))
+            die("%s %llu: family %lld is not among the families", where,
+                (unsigned long long)i + 1, (long long)key.num);
+    }
+}
+
+/* /FAS/<mesh>: FAMILLE_ZERO, and each family of fg (a run of one number)
+ * under ELEME (below zero) or NOEUD, named FAM_<num>_<first group>, with
+ * its groups as GRO/NOM (80-byte names). */
+static void put_families(hid_t f, const famgroup *fg, size_t n)
+{
+    hid_t fas = new_group(f, "FAS"), mesh = new_group(fas, "mesh"), kind[2] = {-1, -1};
+    hid_t z = new_ordered_group(mesh, "FAMILLE_ZERO");
+
+    attr_int(z, "NUM", 0);
+    H5Gclose(z);
+    for (size_t i = 0, j; i < n; i = j) {
+        int node = fg[i].num > 0;
+        char fname[MED_NAME + 1], gname[MED_LNAME + 1];
+        hsize_t cnt;
+        hid_t fam, gro, arr, sp, d;
+        for (j = i; j < n && fg[j].num == fg[i].num; j++)
+            ;
+        if (kind[node] < 0)
+            kind[node] = new_ordered_group(mesh, node ? "NOEUD" : "ELEME");
+        memcpy(gname, fg[i].name, MED_LNAME);
+        gname[MED_LNAME] = '\0';
+        for (size_t k = MED_LNAME; k > 0 && gname[k - 1] == ' '; k--)
+            gname[k - 1] = '\0';
+        /* a '/' would make a path of it */
+        for (char *c = gname; *c; c++)
+            *c = *c == '/' ? '_' : *c;
+        /* at most 16 + 40 characters of MED's 64; the number makes it unique */
+        snprintf(fname, sizeof fname, "FAM_%lld_%.40s", (long long)fg[i].num, gname);
+        fam = new_group(kind[node], fname);
+        attr_int(fam, "NUM", (int)fg[i].num);
+        gro = new_group(fam, "GRO");
+        attr_int(gro, "NBR", (int)(j - i));
+        cnt = (hsize_t)(j - i);
+        {
+            hsize_t len = MED_LNAME;
+            arr = H5Tarray_create2(H5T_STD_I8LE, 1, &len);
+        }
+        sp = H5Screate_simple(1, &cnt, NULL);
+        d = arr < 0 || sp < 0
+                ? -1
+                : H5Dcreate2(gro, "NOM", arr, sp, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+        {
+            char *names_buf = xmalloc((j - i) * MED_LNAME);
+            for (size_t k = i; k < j; k++)
+                memcpy(names_buf + (k - i) * MED_LNAME, fg[k].name, MED_LNAME);
+            if (d < 0 || H5Dwrite(d, arr, H5S_ALL, H5S_ALL, H5P_DEFAULT, names_buf) < 0)
+                die("cannot write the groups of family %s", fname);
+            free(names_buf);
+        }
+        H5Dclose(d);
+        H5Sclose(sp);
+        H5Tclose(arr);
+        H5Gclose(gro);
+        H5Gclose(fam);
+    }
+    for (int k = 0; k < 2; k++)
+        if (kind[k] >= 0)
+            H5Gclose(kind[k]);
+    H5Gclose(mesh);
+    H5Gclose(fas);
+}
+
+/* OUT: a new MED file (MED-fichier 4.1's layout) of the whole mesh framed on
+ * stdin (meshio_med.c: write_med): one mesh "mesh" of dimension 3, its
+ * nodes (NOE/COO, NOE/FAM), tets (MAI/TE4 or T10), triangles (MAI/TR3 or
+ * TR6) and families (/FAS/mesh). A FAM the frames do not give is written as
+ * family 0. Written beside OUT and renamed over it. */
+static void med_new(const char *out)
+{
+    static const char *const cell[2] = {"te4", "t10"}, *const cfam[2] = {"te4_fam",
+                                                                         "t10_fam"};
+    static const char *const tri[2] = {"tr3", "tr6"}, *const tfam[2] = {"tr3_fam",
+                                                                        "tr6_fam"};
+    static const char *const mtet[2] = {"TE4", "T10"}, *const mtri[2] = {"TR3", "TR6"};
+    static const int tet_nodes[2] = {4, 10}, tri_nodes[2] = {3, 6};
+    static const int tet_geo[2] = {GEO_TE4, GEO_T10}, tri_geo[2] = {GEO_TR3, GEO_TR6};
+    size_t len, nfg = 0;
+    unsigned char *b = slurp_stdin(&len);
+    const unsigned char *xyz, *te[2], *tr[2], *fam, *noe, *ft;
+    uint64_t n, nte[2], ntr[2], nfam, nnoe = 0, nft = 0, nv, nt;
+    famgroup *fg = NULL;
+    char tmp[4200], name[32];
+    hid_t fapl, f, g, meshg, step, noeg, mai, e;
+    double *col;
+    int k;
+
+    xyz = find_frame(b, len, "coords", 'f', &n);
+    if (!xyz || n % 3)
+        die("no coordinates (frame coords) in the input");
+    nv = n / 3;
+    if (nv > INT32_MAX)
+        die("%llu nodes: more than MED's integers hold", (unsigned long long)nv);
+    for (k = 0; k < 2; k++) {
+        te[k] = find_frame(b, len, cell[k], 'i', &nte[k]);
+        tr[k] = find_frame(b, len, tri[k], 'i', &ntr[k]);
+        if (nte[k] % (uint64_t)tet_nodes[k] || ntr[k] % (uint64_t)tri_nodes[k])
+            die("frame %s or %s: not %d or %d nodes an element", cell[k], tri[k],
+                tet_nodes[k], tri_nodes[k]);
+        nte[k] /= (uint64_t)tet_nodes[k];
+        ntr[k] /= (uint64_t)tri_nodes[k];
+    }
+    if (!te[0] == !te[1])
+        die("the input has %s tets: frame te4 or t10, one of them",
+            te[0] ? "both linear and second-order" : "no");
+    if (nte[0] + nte[1] > INT32_MAX || ntr[0] + ntr[1] > INT32_MAX)
+        die("more elements than MED's integers hold");
+    ft = find_frame(b, len, "families", 'b', &nft);
+    if (ft)
+        nfg = parse_families(ft, nft, &fg);
+    noe = find_frame(b, len, "noe_fam", 'i', &nnoe);
+    if (noe && nnoe != nv)
+        die("noe_fam: %llu families for %llu nodes", (unsigned long long)nnoe,
+            (unsigned long long)nv);
+    check_families(noe, nnoe, fg, nfg, 1, "node");
+
+    if (snprintf(tmp, sizeof tmp, "%s.qdc-h5.XXXXXX", out) >= (int)sizeof tmp)
+        die("%s: name too long", out);
+    k = mkstemp(tmp);
+    if (k < 0)
+        die("cannot create a file beside %s: %s", out, strerror(errno));
+    made = tmp;
+    if (fchmod(k, 0644) != 0 || close(k) != 0)
+        die("cannot set up %s: %s", tmp, strerror(errno));
+    fapl = H5Pcreate(H5P_FILE_ACCESS);
+    if (fapl < 0 || H5Pset_libver_bounds(fapl, H5F_LIBVER_V18, H5F_LIBVER_V18) < 0)
+        die("cannot set up an HDF5 file");
+    f = H5Fcreate(tmp, H5F_ACC_TRUNC, H5P_DEFAULT, fapl);
+    H5Pclose(fapl);
+    if (f < 0)
+        die("cannot create %s", tmp);
+    g = new_group(f, "INFOS_GENERALES");
+    attr_int(g, "MAJ", 4);
+    attr_int(g, "MIN", 1);
+    attr_int(g, "REL", 0);
+    H5Gclose(g);
+
+    e = new_group(f, "ENS_MAA");
+    meshg = new_group(e, "mesh");
+    attr_str(meshg, "DES", "written by qdc");
+    attr_int(meshg, "DIM", 3);
+    attr_int(meshg, "ESP", 3);
+    attr_str(meshg, "NOM", "X               Y               Z               ");
+    attr_int(meshg, "NXI", -1);
+    attr_int(meshg, "NXT", -1);
+    attr_int(meshg, "REP", 0); /* cartesian */
+    attr_int(meshg, "SRT", 0); /* MED_SORT_DTIT */
+    attr_int(meshg, "TYP", 0); /* unstructured */
+    attr_str(meshg, "UNI", "                                                ");
+    attr_str(meshg, "UNT", "");
+    step = new_group(meshg, MED_STEP);
+    attr_int(step, "CGT", 1);
+    attr_int(step, "NDT", -1);
+    attr_int(step, "NOR", -1);
+    attr_int(step, "NXI", -1);
+    attr_int(step, "NXT", -1);
+    attr_real(step, "PDT", 0);
+    attr_int(step, "PVI", -1);
+    attr_int(step, "PVT", -1);
+
+    /* NOE/COO: all x, then all y, then all z */
+    noeg = entity_group(step, "NOE", 0);
+    {
+        hsize_t dim = (hsize_t)n;
+        hid_t sp = H5Screate_simple(1, &dim, NULL);
+        hid_t d = sp < 0 ? -1
+                         : H5Dcreate2(noeg, "COO", H5T_IEEE_F64LE, sp, H5P_DEFAULT,
+                                      H5P_DEFAULT, H5P_DEFAULT);
+        col = xmalloc((size_t)n * 8);
+        for (uint64_t v = 0; v < nv; v++)
+            for (int a = 0; a < 3; a++) {
+                uint64_t u = le64(xyz + 8 * (3 * v + (uint64_t)a));
+                memcpy(&col[(uint64_t)a * nv + v], &u, 8);
+            }
+        if (d < 0 ||
+            H5Dwrite(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, col) < 0)
+            die("cannot write the coordinates");
+        free(col);
+        attr_int(d, "CGT", 1);
+        attr_int(d, "NBR", (int)nv);
+        H5Dclose(d);
+        H5Sclose(sp);
+    }
+    if (noe)
+        put_ints(noeg, "FAM", noe, nv, 1, 0, INT32_MAX, "node");
+    else
+        put_zeros(noeg, "FAM", nv);
+    H5Gclose(noeg);
+
+    mai = new_group(step, "MAI");
+    attr_int(mai, "CGT", 1);
+    k = te[1] ? 1 : 0;
+    nt = nte[k];
+    fam = find_frame(b, len, cfam[k], 'i', &nfam);
+    if (fam && nfam != nt)
+        die("%s: %llu families for %llu tets", cfam[k], (unsigned long long)nfam,
+            (unsigned long long)nt);
+    check_families(fam, nfam, fg, nfg, -1, "tet");
+    g = entity_group(mai, mtet[k], tet_geo[k]);
+    put_ints(g, "NOD", te[k], nt, tet_nodes[k], 1, (int64_t)nv, "tet");
+    if (fam)
+        put_ints(g, "FAM", fam, nt, 1, INT32_MIN, 0, "tet");
+    else
+        put_zeros(g, "FAM", nt);
+    H5Gclose(g);
+    for (k = 0; k < 2; k++) {
+        if (!ntr[k])
+            continue;
+        fam = find_frame(b, len, tfam[k], 'i', &nfam);
+        if (fam && nfam != ntr[k])
+            die("%s: %llu families for %llu triangles", tfam[k], (unsigned long long)nfam,
+                (unsigned long long)ntr[k]);
+        snprintf(name, sizeof name, "triangle (%s)", mtri[k]);
+        check_families(fam, nfam, fg, nfg, -1, name);
+        g = entity_group(mai, mtri[k], tri_geo[k]);
+        put_ints(g, "NOD", tr[k], ntr[k], tri_nodes[k], 1, (int64_t)nv, name);
+        if (fam)
+            put_ints(g, "FAM", fam, ntr[k], 1, INT32_MIN, 0, name);
+        else
+            put_zeros(g, "FAM", ntr[k]);
+        H5Gclose(g);
+    }
+    H5Gclose(mai);
+    H5Gclose(step);
+    H5Gclose(meshg);
+    H5Gclose(e);
+    put_families(f, fg, nfg);
+    free(fg);
+    close_copy(f, tmp, out);
+    made = NULL;
+    free(b);
+}
+
 /* XDMF's heavy data: the datasets specs name ("NAME:T:DIMS:PATH", T 'f',
  * 'i' or 'a', either, framed as the dataset's class; DIMS "356x3" as the XDMF
  * gives them), each checked to have that shape, framed as NAME on stdout. */
@@ -639,7 +1247,9 @@ static void h5_read(const char *fname, int nspec, char **spec)
         H5Sclose(sp);
         /* 'a': the frame's type says the class (integers 'i', else 'f') */
         stream_rows(d, path, values_of(d, path), rank, dims, name,
-                    c1[1] != 'a' ? c1[1] : cls == H5T_INTEGER ? 'i' : 'f');
+                    c1[1] != 'a'         ? c1[1]
+                    : cls == H5T_INTEGER ? 'i'
+                                         : 'f');
         H5Dclose(d);
     }
     H5Fclose(f);
@@ -649,8 +1259,7 @@ static void h5_read(const char *fname, int nspec, char **spec)
 
 /* OUT = IN with the dataset path replaced by the float64 frame named fname
  * of stdin (XDMF's geometry: the values in the dataset's own order). */
-static void h5_write(const char *in, const char *out, const char *fname,
-                     const char *path)
+static void h5_write(const char *in, const char *out, const char *fname, const char *path)
 {
     size_t len;
     unsigned char *b = slurp_stdin(&len);
@@ -712,13 +1321,17 @@ int main(int argc, char **argv)
         med_read(argv[2]);
     else if (argc == 4 && strcmp(argv[1], "med-write") == 0)
         med_write(argv[2], argv[3]);
+    else if (argc == 3 && strcmp(argv[1], "med-new") == 0)
+        med_new(argv[2]);
     else if (argc >= 3 && strcmp(argv[1], "h5-read") == 0)
         h5_read(argv[2], argc - 3, argv + 3);
     else if (argc == 6 && strcmp(argv[1], "h5-write") == 0)
         h5_write(argv[2], argv[3], argv[4], argv[5]);
     else
-        die("usage (options: -n NAME, -i FILE, -o FILE, --sandbox BYTES): qdc-h5 [-n NAME] med-read FILE.med > FRAMES | qdc-h5 [-n NAME] "
-            "med-write IN.med OUT.med < FRAMES | qdc-h5 [-n NAME] h5-read FILE.h5 "
+        die("usage (options: -n NAME, -i FILE, -o FILE, --sandbox BYTES): qdc-h5 [-n "
+            "NAME] med-read FILE.med > FRAMES | qdc-h5 [-n NAME] "
+            "med-write IN.med OUT.med < FRAMES | qdc-h5 med-new OUT.med < FRAMES | "
+            "qdc-h5 [-n NAME] h5-read FILE.h5 "
             "NAME:T:DIMS:PATH... > FRAMES | qdc-h5 [-n NAME] h5-write IN.h5 OUT.h5 "
             "FRAME PATH < FRAMES");
     return 0;

@@ -43,16 +43,17 @@ qdc_status cli_save_mesh(const char *out, meshio_format fout, const mesh_t *m,
                          qdc_error *err);
 
 /* With --topology (its name: topology) the tets change, and OUT in a format
- * qdc writes only over its source (Abaqus, Netgen, MSH 1, Nastran, UNV, MED:
- * meshio_has_writer) cannot hold them: said on stderr, ending "nothing was
- * <what>", and 1; else 0. m: the input, read. */
+ * qdc writes only over its source (meshio_has_writer: none today; MED was
+ * until qdc-h5 med-new) cannot hold them: said on stderr, ending "nothing
+ * was <what>", and 1; else 0. m: the input, read. */
 int cli_topology_out_refused(const char *out, meshio_format fout, const mesh_t *m,
                              const char *topology, const char *what);
 
 /* MED (HDF5) through the qdc-h5 child (h5.c). cli_h5_wanted: 1 if path is
  * to be read that way (fin MESHIO_MED, or a file that starts as HDF5 does).
- * cli_h5_read: the mesh (its source kept as mo says); cli_h5_write: m, read
- * by cli_h5_read, written to out as its MED file with the new coordinates. */
+ * cli_h5_read: the mesh (its source kept as mo says); cli_h5_write: m
+ * written to out: the MED file cli_h5_read read it from with the new
+ * coordinates, or, for a mesh that does not splice, a MED file of its own. */
 /* A .gz file or standard input is inflated into a private temporary file
  * first (cli_h5_bytes: 1 if buf is such an HDF5 file; cli_h5_read_bytes: read
  * it, shown as name). */

@@ -1,8 +1,10 @@
 /* h5.c - MED files (HDF5) through the qdc-h5 program, run as a child: libqdc
  * never calls HDF5. Reading: `qdc-h5 med-read FILE`, its standard output read
  * as the mesh (lib/io/meshio_med.c); writing: the mesh written spliced into a
- * pipe to `qdc-h5 med-write SOURCE OUT`. qdc-h5 is found as $QDC_H5, beside
- * this program's own file, or on PATH.
+ * pipe to `qdc-h5 med-write SOURCE OUT`, or, when it does not splice (its
+ * tets changed, it was read from another format), written whole by qdc's
+ * MED writer into a pipe to `qdc-h5 med-new OUT`. qdc-h5 is found as
+ * $QDC_H5, beside this program's own file, or on PATH.
  *
  * A MED file that is not a plain file on disk (gzip-compressed, or standard
  * input) is first inflated, within the limits of every gzip read
@@ -373,6 +375,7 @@ qdc_status cli_h5_write(const char *out, const mesh_t *m, qdc_error *err)
     char *argv[] = {
         (char *)h5_program(prog, sizeof prog),  "-n",        med_source, "med-write",
         med_copy >= 0 ? COPY_PATH : med_source, (char *)out, NULL};
+    char *fresh[] = {argv[0], "-n", (char *)out, "med-new", (char *)out, NULL};
 
     if (!strcmp(out, "-"))
         return qdc_fail(err, QDC_EINVAL,
@@ -381,12 +384,13 @@ qdc_status cli_h5_write(const char *out, const mesh_t *m, qdc_error *err)
         return qdc_fail(err, QDC_EINVAL,
                         "a MED file is written uncompressed (HDF5 has its own "
                         "compression): name it .med");
-    if (!med_source[0] || meshio_source_format(m) != MESHIO_MED ||
-        !meshio_splices(m, MESHIO_MED, NULL))
-        return qdc_fail(err, QDC_EINVAL,
-                        "MED is written only over the MED file the mesh was read from "
-                        "(its coordinates replaced)");
-    return run_input(argv, med_copy, m, MESHIO_MED, err);
+    /* the MED file read, with new coordinates; else (new tets, another
+     * format read, --no-keep-source) a MED file of its own from qdc's
+     * writer's frames (lib/io/meshio_med.c) */
+    if (med_source[0] && meshio_source_format(m) == MESHIO_MED &&
+        meshio_splices(m, MESHIO_MED, NULL))
+        return run_input(argv, med_copy, m, MESHIO_MED, err);
+    return run_input(fresh, -1, m, MESHIO_MED, err);
 }
 
 /* ------------------------------------------------------------------------ */

@@ -191,7 +191,7 @@ static int read_only_out(const char *out, meshio_format fout)
     fprintf(stderr,
             "qdc: %s: %s is a surface format qdc reads but does not write: name a tet "
             "mesh (.mesh, .meshb, .msh, .vtk, .vtu, .node, .json, .qmesh, .xml, .inp, "
-            ".vol, .bdf, .unv, .xdmf) or give --out-format; nothing was done\n",
+            ".vol, .bdf, .unv, .xdmf, .med) or give --out-format; nothing was done\n",
             out, upper);
     return 1;
 }
@@ -769,8 +769,8 @@ static int p2_out_refused(const char *out, meshio_format fout, const mesh_t *m)
         "qdc: %s: %s: second-order (10-node) tets are written only as the input file "
         "with new coordinates, and here %s (qdc's %s writer writes linear tets): name "
         "OUT in IN's format or one whose writer writes them (.msh, .vtk, .vtu, .mesh, "
-        ".inp, .vol, .bdf, .unv, .xdmf, .json, .qmesh) or give --out-format; nothing "
-        "was done\n",
+        ".inp, .vol, .bdf, .unv, .xdmf, .med, .json, .qmesh) or give --out-format; "
+        "nothing was done\n",
         out, meshio_format_name(f), why ? why : "no source is kept",
         meshio_format_name(f));
     return 1;

@@ -930,8 +930,8 @@ static int download(remote *rm, const char *id, const char *out, const char *out
         }
         if (want == MESHIO_AUTO && lsrc == MESHIO_AUTO) /* a surface's job: Medit */
             want = MESHIO_MEDIT;
-        /* the server writes every format qdc writes, and MED for a job
-         * uploaded in it (over the upload) */
+        /* the server writes every format qdc writes (MED: over the upload
+         * of a MED job, else a MED file of its own) */
         served = want != MESHIO_TETGEN &&
                  (meshio_has_writer(want) || (want != MESHIO_AUTO && want == job));
         snprintf(path, sizeof path, "/v1/jobs/%s/result?format=%s", id,
@@ -941,8 +941,15 @@ static int download(remote *rm, const char *id, const char *out, const char *out
             rc = http_fail("result", hr, &r);
             goto out;
         }
-        /* a mesh, or the server sent something else */
-        st = meshio_read(r.body.buf, r.body.len, served ? want : MESHIO_QMESH, &m, &err);
+        /* a mesh, or the server sent something else (MED: an HDF5 file,
+         * which libqdc does not read) */
+        if (served && want == MESHIO_MED)
+            st = cli_h5_bytes(r.body.buf, r.body.len)
+                     ? QDC_OK
+                     : qdc_fail(&err, QDC_EPARSE, "MED: the server sent no HDF5 file");
+        else
+            st = meshio_read(r.body.buf, r.body.len, served ? want : MESHIO_QMESH, &m,
+                             &err);
         if (st != QDC_OK) {
             cli_error("result", &err, st);
             rc = CLI_ENETWORK;

@@ -66,6 +66,16 @@ qdc_status h5_frames(const char *buf, size_t len, const char *what,
 /* The descriptor of f, or NULL (MESHIO_AUTO, out of range). */
 const meshio_fmt *meshio_fmt_of(meshio_format f);
 
+/* The number a group or set name of qdc's writers holds: prefix, then the
+ * decimal digits, "M" before a negative number's ("REGION_12", "SURFACE_M3");
+ * 1 and *n if [v, ve) is such a name, else 0 (meshio_fe.c). */
+int meshio_name_number(const char *v, const char *ve, const char *prefix, int32_t *n);
+/* The mid-edge nodes of second-order m's triangles (edges 01, 12, 20 of
+ * each, 3 ntri into mid), from a tet each is a face of; *all 0 if some
+ * triangle is the face of no tet (mid then partly filled). QDC_ENOMEM with
+ * err (meshio_fe.c). */
+qdc_status meshio_tri_mids(const mesh_t *m, int32_t *mid, int *all, qdc_error *err);
+
 /* TetGen's two buffers, rec NULL or filled (meshio.c loads the pair). */
 qdc_status meshio_tetgen_read2(const char *node, size_t node_len, const char *ele,
                                size_t ele_len, srcrec *rec, mesh_t **out, qdc_error *err);

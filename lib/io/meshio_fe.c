@@ -943,8 +943,8 @@ static qdc_status inp_set(txt *s, inp_sets *l, const char *what, const char *v,
 /* The number n that name [v, ve) holds when it is prefix (case-insensitive)
  * and then n as qdc's writer spells it: decimal digits without a leading
  * zero, "M" and the digits for a negative n ("REGION_12", "SURFACE_M3").
- * 1 and *n if so, else 0. */
-static int inp_name_number(const char *v, const char *ve, const char *prefix, int32_t *n)
+ * 1 and *n if so, else 0. (MED's group names too: meshio_med.c.) */
+int meshio_name_number(const char *v, const char *ve, const char *prefix, int32_t *n)
 {
     size_t pl = strlen(prefix);
     int neg = 0;
@@ -972,7 +972,7 @@ static int inp_name_number(const char *v, const char *ve, const char *prefix, in
     return 1;
 }
 
-/* If every set of l is named prefix and a number (inp_name_number: the
+/* If every set of l is named prefix and a number (meshio_name_number: the
  * names qdc's writer gives), the numbers of the n elements num[] (1-based
  * set positions, 0 for none) become those numbers; else they stay the
  * positions. An element without a set keeps 0. */
@@ -981,7 +981,7 @@ static void inp_numbered(const inp_sets *l, const char *prefix, int32_t *num, si
     int32_t val[INP_SETS];
 
     for (int i = 0; i < l->n; i++)
-        if (!inp_name_number(l->set[i], l->set[i] + l->setl[i], prefix, &val[i]))
+        if (!meshio_name_number(l->set[i], l->set[i] + l->setl[i], prefix, &val[i]))
             return;
     for (size_t i = 0; i < n; i++)
         if (num[i] > 0)
@@ -1525,6 +1525,20 @@ static int fe_tri_mid(const mesh_t *m, const fe_face *f, const int32_t *tri,
     return mid[0] >= 0 && mid[1] >= 0 && mid[2] >= 0;
 }
 
+qdc_status meshio_tri_mids(const mesh_t *m, int32_t *mid, int *all, qdc_error *err)
+{
+    fe_face *f = fe_faces(m, err);
+
+    *all = 0;
+    if (!f)
+        return err ? err->status : QDC_ENOMEM;
+    *all = 1;
+    for (int32_t i = 0; *all && i < m->ntri; i++)
+        *all = fe_tri_mid(m, f, m->tris + 3 * (size_t)i, mid + 3 * (size_t)i);
+    qdc_free(f);
+    return QDC_OK;
+}
+
 static int cmp_u64(const void *x, const void *y)
 {
     uint64_t a = *(const uint64_t *)x, b = *(const uint64_t *)y;
@@ -1551,7 +1565,7 @@ static uint64_t *fe_order(const int32_t *key, int32_t n, qdc_error *err)
 }
 
 /* An ELSET name of qdc's: prefix and n, "M" before a negative n's digits
- * (inp_name_number reads it back). */
+ * (meshio_name_number reads it back). */
 static void inp_set_name(wbuf *w, const char *prefix, int32_t n)
 {
     wb_str(w, prefix);

@@ -1,10 +1,15 @@
 /* meshio_med.c - MED meshes (Salome, Code_Aster: .med, an HDF5 file) as the
- * qdc-h5 program hands them over: read, and written back only spliced.
+ * qdc-h5 program hands them over: read, written back spliced, and written
+ * whole for a mesh that cannot be (its tets changed, or it was read from
+ * another format).
  *
  * libqdc never calls HDF5: the qdc command runs `qdc-h5 med-read FILE`
- * (clients/qdc-h5) and gives this reader what it prints, and writes a result
+ * (clients/qdc-h5) and gives this reader what it prints. A result is written
  * by giving `qdc-h5 med-write IN OUT` the spliced frames (the same bytes with
- * new coordinates), which puts them into a copy of IN. The framed form:
+ * new coordinates), which puts them into a copy of IN, or, when the mesh
+ * does not splice, by giving `qdc-h5 med-new OUT` what write_med frames (the
+ * same frames, for the whole mesh), from which it makes a new MED file. The
+ * framed form:
  *
  *   "QDCH5v1\n", then frames to the end, each: a name of 16 bytes (NUL-padded
  *   ASCII), a type byte ('f' float64, 'i' int64, 'b' bytes), 7 zero bytes,
@@ -17,9 +22,24 @@
  * nodes of edges 12, 23, 31, 14, 24, 34, which is mesh_p2_edges'), and
  * "te4_fam"/"t10_fam" (each tet's family number: its region), "tr3" and
  * "tr6" (the 3 or 6 nodes of each triangle: the boundary triangles, their
- * corners kept) with "tr3_fam"/"tr6_fam" (their refs), and "noe_fam" (each
- * node's family: its ref). Other frames are skipped. A plain HDF5 file is refused with a
- * message saying how MED is read (QDC_EFORMAT). */
+ * corners kept) with "tr3_fam"/"tr6_fam" (their refs), "noe_fam" (each
+ * node's family: its ref), and "families" (bytes: a line "NUMBER GROUP" for
+ * each group of each family of /FAS, the group name's trailing blanks
+ * dropped). Other frames are skipped. A plain HDF5 file is refused with a
+ * message saying how MED is read (QDC_EFORMAT).
+ *
+ * Tags and families. MED numbers element families below zero and node
+ * families above (0: FAMILLE_ZERO, no group), so a region tag cannot be a
+ * tet's family as it is. write_med numbers the families -1, -2... (the
+ * regions in ascending order, then the triangle refs) and 1, 2... (the
+ * vertex refs), each with one group that names its tag as the Abaqus writer
+ * names its sets: REGION_<n>, SURFACE_<n>, NODE_<n>, "M" before a negative
+ * n's digits (REGION_M3); tag 0 is family 0. The reader maps the families
+ * back through those names when every nonzero family of the tets (of the
+ * triangles, of the nodes) has exactly one group of its kind's name; other
+ * groups of a family are ignored (Salome adds a family for each mix of
+ * groups a user makes). Otherwise the family numbers are the tags, as
+ * before these names existed (meshio's material_0, Salome's own groups). */
 #include "io/format.h"
 
 #include <string.h>
@@ -80,6 +100,7 @@ enum {
     F_TR3_FAM,
     F_TR6_FAM,
     F_NOE_FAM,
+    F_FAMILIES,
     F_COUNT
 };
 
@@ -90,16 +111,16 @@ int meshio_is_hdf5(const void *buf, size_t len)
 
 static qdc_status med_frames(const char *buf, size_t len, h5_frame *fr, qdc_error *err)
 {
-    static const char *const names[F_COUNT] = {"coords",  "te4",    "t10", "te4_fam",
-                                               "t10_fam", "tr3",    "tr6", "tr3_fam",
-                                               "tr6_fam", "noe_fam"};
+    static const char *const names[F_COUNT] = {"coords",  "te4",     "t10",     "te4_fam",
+                                               "t10_fam", "tr3",     "tr6",     "tr3_fam",
+                                               "tr6_fam", "noe_fam", "families"};
     qdc_status st;
 
     if (meshio_is_hdf5(buf, len))
         return fail_bin(err, QDC_EFORMAT, 0,
                         "MED: an HDF5 file, read through qdc-h5 (the qdc command and "
                         "qdcd run it)");
-    st = h5_frames(buf, len, "MED", names, "fiiiiiiiii", F_COUNT, fr, err);
+    st = h5_frames(buf, len, "MED", names, "fiiiiiiiiib", F_COUNT, fr, err);
     if (st != QDC_OK)
         return st;
     if (!fr[F_COORDS].type)
@@ -185,6 +206,128 @@ static qdc_status med_extras(const unsigned char *b, const h5_frame *fr, parsed 
     return st;
 }
 
+/* The names of qdc's groups (write_med), by kind: the tets', the
+ * triangles', the nodes'. */
+static const char *const kind_prefix[3] = {"REGION_", "SURFACE_", "NODE_"};
+
+/* A family whose group names a tag of a kind; dup: it has another group of
+ * that kind with another tag. */
+typedef struct {
+    int32_t fam, tag;
+    int kind, dup;
+} famtag;
+
+static int famtag_cmp(const void *x, const void *y)
+{
+    const famtag *a = x, *b = y;
+
+    if (a->kind != b->kind)
+        return a->kind < b->kind ? -1 : 1;
+    return (a->fam > b->fam) - (a->fam < b->fam);
+}
+
+/* The tag group name [v, ve) names (meshio_name_number), spelled as
+ * write_med spells it: in capitals, as MED's names are compared (meshio
+ * calls its groups "surface_3": not ours, read as before). */
+static int med_group_tag(const char *v, const char *ve, const char *prefix, int32_t *tag)
+{
+    size_t n = strlen(prefix);
+
+    return (size_t)(ve - v) > n && memcmp(v, prefix, n) == 0 && v[n] != 'm' &&
+           meshio_name_number(v, ve, prefix, tag);
+}
+
+/* The groups of the "families" frame fr that name a tag (kind_prefix),
+ * sorted by kind and family, into *out (qdc_free), their count in *n.
+ * Lines that are no "NUMBER NAME" of an int32 family are skipped. */
+static qdc_status med_famtags(const unsigned char *b, const h5_frame *fr, famtag **out,
+                              size_t *n, qdc_error *err)
+{
+    const char *p = (const char *)b + fr->at, *end = p + fr->n;
+    size_t lines = 1, k = 0;
+    famtag *t;
+
+    *out = NULL;
+    *n = 0;
+    for (const char *q = p; q < end; q++)
+        lines += *q == '\n';
+    t = qdc_mallocn(lines, sizeof *t);
+    if (!t)
+        return qdc_fail(err, QDC_ENOMEM, "out of memory for %llu MED family groups",
+                        (unsigned long long)lines);
+    while (p < end) {
+        const char *eol = memchr(p, '\n', (size_t)(end - p)), *q = p;
+        int64_t num = 0;
+        int neg = 0, digits = 0;
+        if (!eol)
+            eol = end;
+        if (q < eol && *q == '-') {
+            neg = 1;
+            q++;
+        }
+        for (; q < eol && *q >= '0' && *q <= '9' && digits <= 10; q++, digits++)
+            num = 10 * num + (*q - '0');
+        num = neg ? -num : num;
+        if (digits && digits <= 10 && q < eol && *q == ' ' && num != 0 &&
+            num >= INT32_MIN && num <= INT32_MAX)
+            for (int kd = 0; kd < 3; kd++)
+                if (med_group_tag(q + 1, eol, kind_prefix[kd], &t[k].tag)) {
+                    t[k].fam = (int32_t)num;
+                    t[k].kind = kd;
+                    t[k].dup = 0;
+                    k++;
+                    break;
+                }
+        p = eol < end ? eol + 1 : end;
+    }
+    qsort(t, k, sizeof *t, famtag_cmp);
+    for (size_t i = 1; i < k; i++)
+        if (famtag_cmp(&t[i - 1], &t[i]) == 0 && t[i - 1].tag != t[i].tag)
+            t[i - 1].dup = t[i].dup = 1;
+    *out = t;
+    *n = k;
+    return QDC_OK;
+}
+
+/* v[0..n) (families of a kind) replaced by their tags when each nonzero one
+ * has one group of that kind among t[0..nt); else left as they are. */
+static void med_map(int32_t *v, int64_t n, const famtag *t, size_t nt, int kind)
+{
+    for (int pass = 0; v && nt && pass < 2; pass++)
+        for (int64_t i = 0; i < n; i++) {
+            famtag key = {.fam = v[i], .kind = kind};
+            const famtag *f;
+            if (v[i] == 0)
+                continue;
+            f = bsearch(&key, t, nt, sizeof *t, famtag_cmp);
+            if (!f || f->dup)
+                return; /* pass 0: nothing changed */
+            if (pass)
+                v[i] = f->tag;
+        }
+}
+
+/* pm's regions, triangle refs and vertex refs (read as family numbers)
+ * mapped to the tags their groups name (fr: the "families" frame). */
+static qdc_status med_tags(const unsigned char *b, const h5_frame *fr, parsed *pm,
+                           qdc_error *err)
+{
+    famtag *t;
+    size_t n;
+    qdc_status st;
+
+    if (!fr->type)
+        return QDC_OK;
+    st = med_famtags(b, fr, &t, &n, err);
+    if (st != QDC_OK)
+        return st;
+    med_map(pm->region, pm->nt, t, n, 0);
+    med_map(pm->tri_ref, pm->ntri, t, n, 1);
+    med_map(pm->vref, pm->nv, t, n, 2);
+    qdc_free(t);
+    return QDC_OK;
+}
+
 static qdc_status read_med(const char *buf, size_t len, const meshio_options *o,
                            srcrec *rec, mesh_t **out, qdc_error *err)
 {
@@ -203,10 +346,11 @@ static qdc_status read_med(const char *buf, size_t len, const meshio_options *o,
         return fail_bin(err, QDC_EFORMAT, (int64_t)fr[F_T10].at,
                         "MED: linear (TE4) and second-order (T10) tetrahedra in one "
                         "mesh are not supported");
-    conn = fr[F_T10].n ? F_T10 : F_TE4;
+    /* an empty frame (qdc's writer's of an empty mesh): no tets */
+    conn = fr[F_T10].n || (fr[F_T10].type && !fr[F_TE4].type) ? F_T10 : F_TE4;
     fam = conn == F_T10 ? F_T10_FAM : F_TE4_FAM;
     nodes = conn == F_T10 ? 10 : 4;
-    if (!fr[conn].n)
+    if (!fr[conn].type)
         return fail_bin(err, QDC_EFORMAT, (int64_t)len,
                         "MED: no tetrahedra (TE4 or T10) in the first mesh");
     if (fr[F_COORDS].n % 3 || fr[conn].n % (uint64_t)nodes)
@@ -275,6 +419,8 @@ static qdc_status read_med(const char *buf, size_t len, const meshio_options *o,
         pm.region[e] = (int32_t)f;
     }
     st = med_extras(b, fr, &pm, err);
+    if (st == QDC_OK)
+        st = med_tags(b, &fr[F_FAMILIES], &pm, err);
     if (st != QDC_OK) {
         parsed_free(&pm);
         return st;
@@ -295,6 +441,173 @@ static qdc_status read_med(const char *buf, size_t len, const meshio_options *o,
     return parsed_mesh_move(&pm, out, err);
 }
 
+/* ------------------------------------------------------------------------ */
+/* Writing a whole mesh (qdc-h5 med-new makes the MED file)                  */
+
+static void put_head(wbuf *w, const char *name, char type, uint64_t n)
+{
+    unsigned char h[32] = {0};
+
+    memcpy(h, name, strlen(name));
+    h[16] = (unsigned char)type;
+    put_le64(h + 24, n);
+    wb_put(w, h, sizeof h);
+}
+
+static void put_word(wbuf *w, uint64_t u)
+{
+    unsigned char b[8];
+
+    put_le64(b, u);
+    wb_put(w, b, 8);
+}
+
+static int cmp_i32(const void *x, const void *y)
+{
+    int32_t a = *(const int32_t *)x, b = *(const int32_t *)y;
+
+    return (a > b) - (a < b);
+}
+
+/* The distinct nonzero values of v[0..n) (v NULL: none), ascending, into
+ * *out (qdc_free), their count into *k. */
+static qdc_status med_distinct(const int32_t *v, int64_t n, int32_t **out, int64_t *k,
+                               qdc_error *err)
+{
+    int32_t *s;
+    int64_t j = 0;
+
+    *out = NULL;
+    *k = 0;
+    if (!v)
+        return QDC_OK;
+    s = qdc_mallocn((size_t)n + 1, sizeof *s);
+    if (!s)
+        return qdc_fail(err, QDC_ENOMEM, "out of memory for the MED families");
+    for (int64_t i = 0; i < n; i++)
+        if (v[i] != 0)
+            s[j++] = v[i];
+    qsort(s, (size_t)j, sizeof *s, cmp_i32);
+    *k = 0;
+    for (int64_t i = 0; i < j; i++)
+        if (i == 0 || s[i] != s[i - 1])
+            s[(*k)++] = s[i];
+    *out = s;
+    return QDC_OK;
+}
+
+/* Tag x's family among the k distinct tags s (med_distinct): its position
+ * from 1; 0 for tag 0. */
+static int64_t med_rank(const int32_t *s, int64_t k, int32_t x)
+{
+    const int32_t *f = x ? bsearch(&x, s, (size_t)k, sizeof *s, cmp_i32) : NULL;
+
+    return f ? (int64_t)(f - s) + 1 : 0;
+}
+
+/* The "families" frame's text for the k distinct tags s of kind (prefix):
+ * a line "FAMILY PREFIX<tag>" each, the family sign * (base + position),
+ * appended at *len to t. */
+static void med_family_lines(char *t, size_t *len, const int32_t *s, int64_t k,
+                             int64_t base, int sign, const char *prefix)
+{
+    for (int64_t i = 0; i < k; i++)
+        *len += (size_t)sprintf(
+            t + *len, "%lld %s%s%lld\n", (long long)(sign * (base + i + 1)), prefix,
+            s[i] < 0 ? "M" : "", s[i] < 0 ? -(long long)s[i] : (long long)s[i]);
+}
+
+/* The whole mesh framed for qdc-h5 med-new: the coordinates, the tets (T10
+ * with the mid-edge nodes of a second-order mesh), the triangles (TR6 when
+ * every one is a face of a second-order tet, with the tets' mid-edge nodes;
+ * else TR3), and the families (see the top: element families -1... for the
+ * regions then the refs, node families 1... for the vertex refs, each with
+ * the group that names its tag); a tag array the mesh lacks is no frame
+ * (qdc-h5 writes family 0 for it). */
+static qdc_status write_med(const mesh_t *m, meshio_format fmt, int part, wbuf *w,
+                            qdc_error *err)
+{
+    int32_t *reg = NULL, *ref = NULL, *vr = NULL, *mid = NULL;
+    int64_t nreg = 0, nref = 0, nvr = 0;
+    int p2 = m->mid != NULL, six = 0, per = p2 ? 10 : 4;
+    char *text = NULL;
+    size_t tlen = 0;
+    qdc_status st;
+
+    (void)fmt;
+    (void)part;
+    st = med_distinct(m->region, m->nt, &reg, &nreg, err);
+    if (st == QDC_OK)
+        st = med_distinct(m->tri_ref, m->ntri, &ref, &nref, err);
+    if (st == QDC_OK)
+        st = med_distinct(m->vref, m->nv, &vr, &nvr, err);
+    if (st == QDC_OK && p2 && m->ntri > 0) {
+        mid = qdc_mallocn(3 * (size_t)m->ntri, sizeof *mid);
+        st = mid ? meshio_tri_mids(m, mid, &six, err)
+                 : qdc_fail(err, QDC_ENOMEM, "out of memory for the triangles");
+    }
+    /* a line: a family of 11 characters at most, a space, a prefix of 8,
+     * "M", a tag of 10, a line break */
+    if (st == QDC_OK && nreg + nref + nvr > 0 &&
+        !(text = qdc_mallocn((size_t)(nreg + nref + nvr), 32)))
+        st = qdc_fail(err, QDC_ENOMEM, "out of memory for the MED families");
+    if (st == QDC_OK) {
+        med_family_lines(text, &tlen, reg, nreg, 0, -1, kind_prefix[0]);
+        med_family_lines(text, &tlen, ref, nref, nreg, -1, kind_prefix[1]);
+        med_family_lines(text, &tlen, vr, nvr, 0, 1, kind_prefix[2]);
+        wb_put(w, h5_magic, sizeof h5_magic);
+        put_head(w, "coords", 'f', 3 * (uint64_t)m->nv);
+        for (int64_t i = 0; i < 3 * (int64_t)m->nv; i++) {
+            uint64_t u;
+            memcpy(&u, &m->xyz[i], 8);
+            put_word(w, u);
+        }
+        put_head(w, p2 ? "t10" : "te4", 'i', (uint64_t)per * (uint64_t)m->nt);
+        for (int64_t t = 0; t < m->nt; t++)
+            for (int k = 0; k < per; k++) /* mid: mesh_p2_edges' order, MED's */
+                put_word(w,
+                         (uint64_t)(k < 4 ? m->tets[4 * t + k] : m->mid[6 * t + k - 4]) +
+                             1);
+        if (m->region) {
+            put_head(w, p2 ? "t10_fam" : "te4_fam", 'i', (uint64_t)m->nt);
+            for (int64_t t = 0; t < m->nt; t++)
+                put_word(w, (uint64_t)-med_rank(reg, nreg, m->region[t]));
+        }
+    }
+    if (st == QDC_OK && m->ntri > 0) {
+        put_head(w, six ? "tr6" : "tr3", 'i',
+                 (uint64_t)(six ? 6 : 3) * (uint64_t)m->ntri);
+        for (int64_t i = 0; i < m->ntri; i++)
+            for (int k = 0; k < (six ? 6 : 3); k++)
+                put_word(w,
+                         (uint64_t)(k < 3 ? m->tris[3 * i + k] : mid[3 * i + k - 3]) + 1);
+        if (m->tri_ref) {
+            put_head(w, six ? "tr6_fam" : "tr3_fam", 'i', (uint64_t)m->ntri);
+            for (int64_t i = 0; i < m->ntri; i++) {
+                int64_t r = med_rank(ref, nref, m->tri_ref[i]);
+                put_word(w, (uint64_t)(r ? -(nreg + r) : 0));
+            }
+        }
+    }
+    if (st == QDC_OK && m->vref) {
+        put_head(w, "noe_fam", 'i', (uint64_t)m->nv);
+        for (int64_t i = 0; i < m->nv; i++)
+            put_word(w, (uint64_t)med_rank(vr, nvr, m->vref[i]));
+    }
+    if (st == QDC_OK && tlen) {
+        static const char zero[8] = {0};
+        put_head(w, "families", 'b', tlen);
+        wb_put(w, text, tlen);
+        wb_put(w, zero, (8 - tlen % 8) % 8);
+    }
+    qdc_free(reg);
+    qdc_free(ref);
+    qdc_free(vr);
+    qdc_free(mid);
+    qdc_free(text);
+    return st;
+}
+
 /* What qdc-h5 writes, or an HDF5 file (refused by the reader with how). */
 static meshio_format sniff_med(const char *buf, size_t len, size_t i)
 {
@@ -307,12 +620,13 @@ static meshio_format sniff_med(const char *buf, size_t len, size_t i)
 const meshio_fmt fmt_med = {
     .name = "med",
     .about = "MED (Salome, Code_Aster; HDF5 through qdc-h5): TE4/T10 tetrahedra, "
-             "families as regions, TR3/TR6 boundary triangles, node families as refs "
-             "(written only spliced)",
+             "families as regions, TR3/TR6 boundary triangles, node families as refs",
     .ext = "med",
     .magic = 1,
     .sniff = sniff_med,
     .read = read_med,
+    .write = write_med,   /* frames for qdc-h5 med-new, not the HDF5 file */
     .input = "input.med", /* read by qdcd's qdc-h5 child (server/h5job.h) */
     .splices = 1,
+    .p2 = 1,
 };

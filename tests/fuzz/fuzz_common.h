@@ -21,8 +21,10 @@ static int same(const void *a, const void *b, size_t n)
  * Medit binary keeps what Medit does, triangle refs too; the writers of the
  * formats of other FE tools (Abaqus, Netgen, MSH 1, Nastran, I-DEAS) keep
  * the coordinates, the tets with their tags and the triangles, in an order
- * and a tagging of their own (same_fe); a format without a writer of qdc's
- * own (MED: spliced only) refuses a mesh without a source. */
+ * and a tagging of their own (same_fe); MED's writer (the frames of qdc-h5
+ * med-new) keeps them all in order, its families read back as the tags; a
+ * format without a writer of qdc's own would refuse a mesh without a
+ * source. */
 static int fe_writer(meshio_format f)
 {
     return f == MESHIO_ABAQUS || f == MESHIO_NETGEN || f == MESHIO_MSH1 ||

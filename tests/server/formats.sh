@@ -258,9 +258,9 @@ stop_qdcd || fail "SIGTERM" "exit status $?"
 
 # A DOLFIN XML upload (a format without a media type) is taken by sniffing and
 # optimized; its result and input come in every format qdc writes, those
-# without a media type by name (dolfin, meshb, abaqus...), but not in MED,
-# which qdc writes only over a file of its own: ?format=med is a 400 naming
-# the offered ones, not a dropped connection.
+# without a media type by name (dolfin, meshb, abaqus, med...), but not in
+# TetGen's, which is two files: ?format=tetgen is a 400 naming the offered
+# ones, not a dropped connection.
 start_qdcd "$TMP/x" --workers 1 || { fail "start x" "$(tail -3 "$TMP/x.log")"; exit 1; }
 gzip -dc "$ROOT/tests/data/real/dolfin.xml.gz" > "$TMP/a.xml"
 code=$(req POST /v1/jobs "$TMP/dx" --data-binary "@$TMP/a.xml" -H "Content-Type: application/octet-stream")
@@ -269,18 +269,21 @@ st=$(wait_done "$DX")
 [ "$code" = 202 ] && [ "$st" = succeeded ] && pass "DOLFIN XML upload sniffed and optimized ($st)" ||
     fail "DOLFIN XML upload" "$code $st $(head -c 300 "$TMP/dx")"
 bad=
-for f in med; do
+for f in tetgen; do
     for what in result input; do
         c=$(req GET "/v1/jobs/$DX/$what?format=$f" "$TMP/fx")
         [ "$c" = 400 ] && jq -e '(.offered | length > 0) and (.formats | index("dolfin"))' "$TMP/fx" > /dev/null 2>&1 ||
             bad="$bad $what:$f=$c"
     done
 done
-for f in qmesh medit gmsh vtu dolfin meshb gmsh22-bin gmsh40 abaqus netgen msh1 bdf unv; do
+# MED (qdc-h5 med-new), read back through qdc-h5, where it is built
+med=
+[ -x "$BIN/qdc-h5" ] && med=med
+for f in qmesh medit gmsh vtu dolfin meshb gmsh22-bin gmsh40 abaqus netgen msh1 bdf unv $med; do
     c=$(req GET "/v1/jobs/$DX/result?format=$f" "$TMP/fx")
     [ "$c" = 200 ] && "$BIN/qdc" quality "$TMP/fx" > /dev/null 2>&1 || bad="$bad result:$f=$c"
 done
-[ -z "$bad" ] && pass "a DOLFIN upload: its result in every format qdc writes (by name for dolfin, meshb, gmsh22-bin, gmsh40, abaqus, netgen, msh1, bdf, unv; each read back by qdc quality); med: 400 with the offered list" ||
+[ -z "$bad" ] && pass "a DOLFIN upload: its result in every format qdc writes (by name for dolfin, meshb, gmsh22-bin, gmsh40, abaqus, netgen, msh1, bdf, unv, ${med:-(med: qdc-h5 not built)}; each read back by qdc quality); tetgen: 400 with the offered list" ||
     fail "result formats" "$bad"
 # The upload is kept under the name the format table gives dolfin
 # (job_input_name used to fall back to input.mesh for six formats).

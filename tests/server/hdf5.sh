@@ -3,7 +3,8 @@
 # in a child process (the job's time limit, --child-memory, no network,
 # killed with the daemon) to read the upload, and again to write the result
 # as a copy of it with only NOE/COO changed (h5py compares every other
-# dataset and attribute). A body named MED that is no HDF5 file is a 400 at
+# dataset and attribute), or, for a topology=flips job, as a MED file of
+# qdc's own (read back as the job's VTU result). A body named MED that is no HDF5 file is a 400 at
 # once; an HDF5 file that is no MED, or a MED file cut short, fails its job
 # with a 400 problem saying why; qdc-h5 killed at the job's deadline fails
 # it with a 422 that says so; the daemon lives on. XDMF whose heavy data is
@@ -82,16 +83,24 @@ else
     fail "hdf5: qdc submit meshio.med" "$(tail -3 "$TMP/sub.out")"
 fi
 
-# a run that changed the tets has no MED result (MED is only ever spliced):
-# MED is not among the offered formats (400 naming them), VTU is
+# a run that changed the tets: its MED result is a MED file of qdc's own
+# (qdc-h5 med-new in the worker's child), with a note saying so; read back
+# by qdc it is the job's VTU result: the same vertices, tets and regions,
+# 0 inverted
 if job flips "$TMP/meshio.med" "max_iter=5&topology=flips" && [ "$ST" = succeeded ]; then
     code=$(req GET "/v1/jobs/$ID/result?format=med" "$TMP/flips.med")
     code2=$(req GET "/v1/jobs/$ID/result?format=vtu" "$TMP/flips.vtu")
-    if [ "$code" = 400 ] && jq -e '.offered | index("model/vnd.med") == null' "$TMP/flips.med" \
-        > /dev/null && [ "$code2" = 200 ]; then
-        pass "hdf5: topology=flips on a MED upload: result?format=med 400 (not offered), as VTU 200"
+    "$BIN/qdc" convert "$TMP/flips.med" "$TMP/flips_med.json" --quiet 2> "$TMP/err"
+    "$BIN/qdc" convert "$TMP/flips.vtu" "$TMP/flips_vtu.json" --quiet 2>> "$TMP/err"
+    if [ "$code" = 200 ] && [ "$code2" = 200 ] &&
+        hdr "$TMP/flips.med" Qdc-Note | grep -q "qdc's med writer" &&
+        jq -e --slurpfile v "$TMP/flips_vtu.json" \
+            '.vertices == $v[0].vertices and .tets == $v[0].tets and .regions == $v[0].regions and (.tets | length) != 1228' \
+            "$TMP/flips_med.json" > /dev/null &&
+        "$BIN/qdc" quality "$TMP/flips.med" 2>&1 | grep -q " 0 inverted"; then
+        pass "hdf5: topology=flips on a MED upload: result?format=med by qdc's MED writer ($(jq '.tets | length' "$TMP/flips_med.json") tets), read back as the VTU result, 0 inverted"
     else
-        fail "hdf5: MED result after flips" "$code $(head -c 300 "$TMP/flips.med") vtu $code2"
+        fail "hdf5: MED result after flips" "$code $(head -c 300 "$TMP/flips.med") vtu $code2 $(head -2 "$TMP/err")"
     fi
 else
     fail "hdf5: topology=flips MED job" "$ST $(head -c 400 "$TMP/job.$ID" 2> /dev/null)"

@@ -123,18 +123,18 @@ if grep -q '^gmsh41 ' "$TMP/ids" 2> /dev/null; then
     *) fail "splice: Qdc-Note" "the vtu conversion's note: '$note'" ;;
     esac
     # a format without a media type, by name: qdc's own writer (the CLI's
-    # gmsh41 -> meshb), served as application/octet-stream; MED, which qdc
-    # writes only over a MED file, is not offered for this job (400, with
-    # the formats that are: Abaqus among them, by qdc's own writer)
+    # gmsh41 -> meshb), served as application/octet-stream; TetGen's two
+    # files are not offered (400, with the formats that are: Abaqus and MED
+    # among them, by qdc's own writers)
     c1=$(req GET "/v1/jobs/$id/result?format=meshb" "$TMP/g.meshb")
     "$BIN/qdc" optimize "$TMP/gmsh41.msh" "$TMP/g.cli.meshb" --quiet 2> /dev/null
-    c2=$(req GET "/v1/jobs/$id/result?format=med" "$TMP/g.inp")
+    c2=$(req GET "/v1/jobs/$id/result?format=tetgen" "$TMP/g.inp")
     if [ "$c1" = 200 ] && cmp -s "$TMP/g.meshb" "$TMP/g.cli.meshb" &&
         [ "$(hdr "$TMP/g.meshb" Content-Type)" = application/octet-stream ] && [ "$c2" = 400 ] &&
-        jq -e '(.formats | index("abaqus")) and (.formats | index("med") | not)' "$TMP/g.inp" > /dev/null; then
-        pass "splice: gmsh41 upload, /result?format=meshb: qdc's Medit binary writer (octet-stream), as the CLI's; ?format=med: 400, not offered for a Gmsh upload (abaqus is)"
+        jq -e '(.formats | index("abaqus")) and (.formats | index("med")) and (.formats | index("tetgen") | not)' "$TMP/g.inp" > /dev/null; then
+        pass "splice: gmsh41 upload, /result?format=meshb: qdc's Medit binary writer (octet-stream), as the CLI's; ?format=tetgen: 400, not offered (abaqus and med are)"
     else
-        fail "splice: gmsh41 -> meshb/med" "meshb $c1 $(hdr "$TMP/g.meshb" Content-Type) $(cmp "$TMP/g.meshb" "$TMP/g.cli.meshb" 2>&1 | head -1); med $c2 $(head -c 300 "$TMP/g.inp")"
+        fail "splice: gmsh41 -> meshb/tetgen" "meshb $c1 $(hdr "$TMP/g.meshb" Content-Type) $(cmp "$TMP/g.meshb" "$TMP/g.cli.meshb" 2>&1 | head -1); tetgen $c2 $(head -c 300 "$TMP/g.inp")"
     fi
 fi
 # A binary MSH 4.1 file sent as "model/vnd.gmsh" (the family, no

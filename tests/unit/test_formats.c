@@ -1062,10 +1062,10 @@ TEST(names_sniffing_media_types)
         ASSERT_TRUE(mt != NULL);
         ASSERT_EQ_INT(meshio_format_from_media_type(mt), f);
     }
-    /* qdc writes every format but MED, which it writes only over its own
-     * source */
+    /* qdc writes every format (MED: the frames qdc-h5 med-new makes the
+     * file from) */
     for (int f = 1; f < MESHIO_FORMAT_COUNT; f++)
-        ASSERT_EQ_INT(meshio_has_writer((meshio_format)f), f != MESHIO_MED);
+        ASSERT_EQ_INT(meshio_has_writer((meshio_format)f), 1);
     ASSERT_EQ_INT(meshio_has_writer(MESHIO_AUTO), 0);
     ASSERT_EQ_INT(meshio_has_writer(MESHIO_FORMAT_COUNT), 0);
     ASSERT_EQ_INT(meshio_has_writer((meshio_format)-1), 0);
