@@ -15,6 +15,7 @@ RUNTIME_PKGS="ca-certificates curl libcholmod3 libopenblas0-pthread libmicrohttp
 libjansson4 libsqlite3-0 libpq5 zlib1g libcurl4 libtet1.5 libgomp1 libhdf5-103-1"
 TEST_PKGS="curl tetgen clang clang-format libclang-rt-14-dev jq
 python3 python3-numpy python3-scipy python3-meshio python3-h5py hdf5-tools python3-gmsh python3-netgen python3-yaml gmsh
+libmed-tools
 podman debootstrap runc postgresql chromium"
 case "${1:-}" in
 --build) PKGS=$BUILD_PKGS; shift ;;

@@ -1099,7 +1099,7 @@ function renderDownloads(st) {
     // the upload's own format: the uploaded file with the new coordinates,
     // everything else it holds (names, tags, arrays) kept
     // (topology other than none: new tets, so qdc's own writer in every
-    // format, and MED, written only over the upload, not offered)
+    // format; a format written only over the upload, none today, not offered)
     const own = st.job.mesh.format;
     const newTets = (st.job.options || {}).topology && st.job.options.topology !== 'none';
     const formats = FMT.results.concat(FMT.ownOnly.filter(([f]) => f === own));

@@ -28,4 +28,4 @@ MESHIO_FORMAT(MSH1, fmt_msh1)             /* Gmsh MSH 1 */
 MESHIO_FORMAT(BDF, fmt_bdf)               /* Nastran bulk data */
 MESHIO_FORMAT(UNV, fmt_unv)               /* I-DEAS universal */
 MESHIO_FORMAT(XDMF, fmt_xdmf)             /* XDMF 2/3, inline XML data */
-MESHIO_FORMAT(MED, fmt_med)               /* MED, HDF5 via qdc-h5 (spliced only) */
+MESHIO_FORMAT(MED, fmt_med)               /* MED, HDF5 via qdc-h5 */

@@ -27,10 +27,11 @@
  * VTK: cells of type 10 (tets) and 5 (triangles); region from the cell
  * array "region", "gmsh:physical" or "medit:ref" (written as "region"),
  * vref from the point array "medit:ref". Reading accepts either encoding.
- * Formats without a media type are named by ?format= in the daemon; those
- * without a writer of qdc's own (MED) are written only as the
- * input with new coordinates (spliced): meshio_write refuses them for a
- * mesh without such a source. */
+ * Formats without a media type are named by ?format= in the daemon. Every
+ * format has a writer of qdc's own (MED's writes the frames qdc-h5 med-new
+ * makes a MED file of); a format without one would be written only as the
+ * input with new coordinates (spliced), meshio_write refusing it for a mesh
+ * without such a source. */
 typedef enum {
     MESHIO_AUTO = 0, /* by extension, else by sniffing the content */
 #define MESHIO_FORMAT(id, desc) MESHIO_##id,
@@ -83,9 +84,10 @@ meshio_format meshio_sniff(const char *buf, size_t len);
  * (";encoding=ascii"). TetGen (two files) and the formats after VTU_ASCII
  * have none: NULL, as for AUTO and out-of-range values. The string is static. */
 const char *meshio_media_type(meshio_format f);
-/* 1 if meshio_write writes f for any mesh (qdc has a writer of its own), 0
- * for MED (written only over its own source: spliced), AUTO
- * and out-of-range values. TetGen counts: meshio_save writes its two files. */
+/* 1 if meshio_write writes f for any mesh (qdc has a writer of its own; MED:
+ * the frames of qdc-h5 med-new), 0 for a format written only over its own
+ * source (spliced: none today), AUTO and out-of-range values. TetGen counts:
+ * meshio_save writes its two files. */
 int meshio_has_writer(meshio_format f);
 /* 1 if qdc's writer of f writes second-order tets (mesh_t.mid) with their ten
  * nodes; 0 for the writers of linear tets (DOLFIN, MSH 1...), which write such
