@@ -1355,7 +1355,8 @@ static qdc_status vol_sections(txt *s, vol *g, parsed *pm, srcrec *rec, qdc_erro
                    word_is(t, n, "cd2names") || word_is(t, n, "cd3names")) {
             /* "number name" pairs: a name may be any word, "points" too */
             st = txt_count(s, "names", 2, INT32_MAX, &c, err);
-            for (int64_t i = 0; i < 2 * c && st == QDC_OK; i++) {
+            /* the status first: c is unset when the count did not parse */
+            for (int64_t i = 0; st == QDC_OK && i < 2 * c; i++) {
                 skip_ws(s);
                 s->p = tok_end(s, s->p);
             }
