@@ -471,7 +471,7 @@ qdc_status opt_global_phase(ctx_t *c, opt_result *res, opt_progress *r, int *sto
         } else if (r->max_move < o->tol_move && !pre) {
             ctx_set_stop(res, OPT_STOP_CONVERGED);
             break;
-        } else if (!pre && o->stall > 0 && it >= 3 &&
+        } else if (!pre && o->stall > 0 && it >= (o->stall_early ? 2 : 3) &&
                    (r->n_inverted == 0 || r->n_inverted >= inv_prev[0]) &&
                    o->mode != OPT_MODE_LITERAL &&
                    (gain < o->stall || gain * gain < o->stall * g_prev)) {

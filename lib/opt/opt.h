@@ -109,6 +109,8 @@ typedef struct {
                            * hausd is 0; 0 = none; OPT_HAUSD_AUTO (default): with
                            * slide, the bound OPT_HAUSD_DEFAULT; else none */
     opt_topology topology; /* default NONE */
+    int stall_early;       /* the stall test from the 2nd iteration on, not the 3rd (a
+                            * --topology round's held smoothing, topology.c); default 0 */
     double time_limit;     /* seconds, 0 = none: then OPT_STOPPED with the best mesh */
     int threads;           /* OpenMP threads for this run; 0 = all cores. A server running
                             * several jobs at once should give each 1 (no oversubscription) */
