@@ -158,6 +158,8 @@ struct bderr_bvh {
                         * corners was 72 bytes a triangle: 150 MB on a 5M-tet ball) */
     int32_t *id;       /* caller's index of each triangle, in leaf order */
     int32_t *at;       /* leaf position of each caller's triangle (id's inverse) */
+    int32_t *up;       /* each node's parent (-1 for the root) */
+    int32_t *leaf;     /* the leaf node holding each leaf position */
 };
 
 /* Reorder ix[lo, hi) so ix[k] has the k-th smallest key and no smaller key
@@ -272,6 +274,8 @@ static int bvh_build_node(bvh_builder *bb, int32_t self, int32_t lo, int32_t hi,
         leaf_box(bb, nd, lo, hi);
         nd->a = lo;
         nd->n = hi - lo;
+        for (int32_t i = lo; i < hi; i++)
+            bb->b->leaf[i] = self;
         return depth;
     }
     for (int32_t i = lo; i < hi; i++) {
@@ -289,6 +293,7 @@ static int bvh_build_node(bvh_builder *bb, int32_t self, int32_t lo, int32_t hi,
     mid = lo + (hi - lo) / 2;
     select_kth(bb->ix, bb->key, lo, hi, mid);
     r = self + 1 + bvh_nodes(mid - lo);
+    bb->b->up[self + 1] = bb->b->up[r] = self;
 #pragma omp task shared(dl) if (mid - lo >= BVH_TASK)
     dl = bvh_build_node(bb, self + 1, lo, mid, depth + 1);
     dr = bvh_build_node(bb, r, mid, hi, depth + 1);
@@ -340,10 +345,13 @@ qdc_status bderr_bvh_build(const double *xyz, int32_t nv, const int32_t *tris,
     b->tv = qdc_mallocn(3 * (size_t)ntri + 1, sizeof(int32_t));
     b->id = qdc_mallocn((size_t)ntri + 1, sizeof(int32_t));
     b->at = qdc_mallocn((size_t)ntri + 1, sizeof(int32_t));
+    b->up = qdc_mallocn(2 * (size_t)ntri + 1, sizeof(int32_t));
+    b->leaf = qdc_mallocn((size_t)ntri + 1, sizeof(int32_t));
     cen = qdc_mallocn(3 * (size_t)ntri, sizeof(double));
     memset(&bb, 0, sizeof bb);
     bb.key = qdc_mallocn((size_t)ntri, sizeof(double));
-    if (!b->nodes || !b->tv || !b->id || !b->at || !cen || !bb.key) {
+    if (!b->nodes || !b->tv || !b->id || !b->at || !b->up || !b->leaf || !cen ||
+        !bb.key) {
         st = qdc_fail(err, QDC_ENOMEM, "out of memory for a BVH of %d triangles", ntri);
         goto out;
     }
@@ -362,6 +370,7 @@ qdc_status bderr_bvh_build(const double *xyz, int32_t nv, const int32_t *tris,
         bb.cen = cen;
         bb.ix = b->id;
         b->nnode = bvh_nodes(ntri);
+        b->up[0] = -1;
 #pragma omp parallel
 #pragma omp single
         bb.depth = bvh_build_node(&bb, 0, 0, ntri, 1);
@@ -411,11 +420,15 @@ qdc_status bderr_bvh_refit(const bderr_bvh *src, const double *xyz, int32_t nv,
     b->tv = qdc_mallocn(3 * (size_t)nt + 1, sizeof(int32_t));
     b->id = qdc_mallocn((size_t)nt + 1, sizeof(int32_t));
     b->at = qdc_mallocn((size_t)nt + 1, sizeof(int32_t));
-    if (!b->nodes || !b->tv || !b->id || !b->at) {
+    b->up = qdc_mallocn((size_t)src->nnode + 1, sizeof(int32_t));
+    b->leaf = qdc_mallocn((size_t)nt + 1, sizeof(int32_t));
+    if (!b->nodes || !b->tv || !b->id || !b->at || !b->up || !b->leaf) {
         bderr_bvh_free(b);
         return qdc_fail(err, QDC_ENOMEM, "out of memory for a BVH of %d triangles", nt);
     }
     memcpy(b->nodes, src->nodes, (size_t)src->nnode * sizeof *b->nodes);
+    memcpy(b->up, src->up, (size_t)src->nnode * sizeof(int32_t));
+    memcpy(b->leaf, src->leaf, (size_t)nt * sizeof(int32_t));
     memcpy(b->tv, src->tv, 3 * (size_t)nt * sizeof(int32_t));
     memcpy(b->id, src->id, (size_t)nt * sizeof(int32_t));
     memcpy(b->at, src->at, (size_t)nt * sizeof(int32_t));
@@ -453,6 +466,8 @@ void bderr_bvh_free(bderr_bvh *b)
     qdc_free(b->tv);
     qdc_free(b->id);
     qdc_free(b->at);
+    qdc_free(b->up);
+    qdc_free(b->leaf);
     qdc_free(b);
 }
 
@@ -495,43 +510,33 @@ double bderr_bvh_closest(const bderr_bvh *b, const double p[3], double cp[3],
     return bderr_bvh_closest_near(b, p, -1, cp, tri);
 }
 
-double bderr_bvh_closest_near(const bderr_bvh *b, const double p[3], int32_t near,
-                              double cp[3], int32_t *tri)
+/* The closest triangle to p in the subtree of node root, if closer than
+ * *best (squared; *bt its leaf position, bq its closest point): a depth-first
+ * search, the nearer child first, every box no nearer than *best skipped. */
+static void descend(const bderr_bvh *b, int32_t root, const double p[3], double *best,
+                    int32_t *bt, double bq[3])
 {
     int32_t stack[BVH_STACK];
-    double sd[BVH_STACK], best = INFINITY, q[3], bq[3] = {0, 0, 0};
+    double sd[BVH_STACK], q[3];
     int sp = 0;
-    int32_t bt = -1;
 
-    if (tri)
-        *tri = -1;
-    if (!b || b->ntri == 0)
-        return INFINITY;
-    if (near >= 0 && near < b->ntri) {
-        /* a bound to start from: the search then skips every box farther
-         * than this triangle (a sliding vertex stays near its own faces) */
-        best = leaf_closest(b, b->at[near], p, bq);
-        bt = best == best ? b->at[near] : -1;
-        if (bt < 0)
-            best = INFINITY;
-    }
-    stack[sp] = 0;
-    sd[sp++] = box_dist2(&b->nodes[0], p);
+    stack[sp] = root;
+    sd[sp++] = box_dist2(&b->nodes[root], p);
     while (sp > 0) {
         const bvh_node *nd;
         double dl, dr;
         int32_t l, r;
         sp--;
-        if (sd[sp] >= best)
+        if (sd[sp] >= *best)
             continue;
         nd = &b->nodes[stack[sp]];
         if (nd->n > 0) {
             for (int32_t i = nd->a; i < nd->a + nd->n; i++) {
                 double d = leaf_closest(b, i, p, q);
-                if (d < best) {
-                    best = d;
-                    bt = i;
-                    memcpy(bq, q, sizeof q);
+                if (d < *best) {
+                    *best = d;
+                    *bt = i;
+                    memcpy(bq, q, 3 * sizeof(double));
                 }
             }
             continue;
@@ -548,15 +553,66 @@ double bderr_bvh_closest_near(const bderr_bvh *b, const double p[3], int32_t nea
             dl = dr;
             dr = td;
         }
-        if (dr < best) {
+        if (dr < *best) {
             stack[sp] = r;
             sd[sp++] = dr;
         }
-        if (dl < best) {
+        if (dl < *best) {
             stack[sp] = l;
             sd[sp++] = dl;
         }
     }
+}
+
+/* The distance only (squared), from leaf position pos up: the rest of pos's
+ * leaf, then at each ancestor the subtree beside the path, unless its box is
+ * no nearer than the best so far. Every triangle is in one of those, so the
+ * answer is descend's from the root; when p lies on or near the triangle at
+ * pos (a surface against its own optimized copy) almost every sibling is
+ * skipped at its box, where the search from the root walks down the boxes
+ * that hold p (issue #32: the report's boundary distances were a fifth of
+ * a 100k-tet run's instructions). */
+static double closest_up(const bderr_bvh *b, const double p[3], int32_t pos)
+{
+    double q[3], best = leaf_closest(b, pos, p, q);
+    int32_t node = b->leaf[pos], bt = -1;
+    const bvh_node *lf = &b->nodes[node];
+
+    if (best != best)
+        return NAN;
+    for (int32_t i = lf->a; i < lf->a + lf->n; i++)
+        if (i != pos) {
+            double d = leaf_closest(b, i, p, q);
+            best = d < best ? d : best;
+        }
+    for (int32_t up = b->up[node]; up >= 0; node = up, up = b->up[up]) {
+        int32_t sib = node == up + 1 ? b->nodes[up].a : up + 1;
+        descend(b, sib, p, &best, &bt, q);
+    }
+    return best;
+}
+
+double bderr_bvh_closest_near(const bderr_bvh *b, const double p[3], int32_t near,
+                              double cp[3], int32_t *tri)
+{
+    double best = INFINITY, bq[3] = {0, 0, 0};
+    int32_t bt = -1;
+
+    if (tri)
+        *tri = -1;
+    if (!b || b->ntri == 0)
+        return INFINITY;
+    if (near >= 0 && near < b->ntri && !cp && !tri)
+        return sqrt(closest_up(b, p, b->at[near]));
+    if (near >= 0 && near < b->ntri) {
+        /* a bound to start from: the search then skips every box farther
+         * than this triangle (a sliding vertex stays near its own faces) */
+        best = leaf_closest(b, b->at[near], p, bq);
+        bt = best == best ? b->at[near] : -1;
+        if (bt < 0)
+            best = INFINITY;
+    }
+    descend(b, 0, p, &best, &bt, bq);
     if (bt < 0) /* p had a NaN: every comparison failed */
         return NAN;
     if (cp)
