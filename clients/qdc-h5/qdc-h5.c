@@ -647,11 +647,11 @@ static const unsigned char *stdin_frame(const unsigned char *b, size_t len,
     return vals;
 }
 
-/* A copy of in beside out (its temporary name into tmp), opened read-write. */
-static hid_t open_copy(const char *in, const char *out, char *tmp, size_t size)
+/* A new file beside out, mode 0644, its temporary name into tmp (mkstemp's
+ * template): the descriptor, open for writing. */
+static int temp_beside(const char *out, char *tmp, size_t size)
 {
     int fd;
-    hid_t f;
 
     if (snprintf(tmp, size, "%s.qdc-h5.XXXXXX", out) >= (int)size)
         die("%s: name too long", out);
@@ -660,6 +660,15 @@ static hid_t open_copy(const char *in, const char *out, char *tmp, size_t size)
         die("cannot create a file beside %s: %s", out, strerror(errno));
     if (fchmod(fd, 0644) != 0)
         die("cannot set the mode of %s: %s", tmp, strerror(errno));
+    return fd;
+}
+
+/* A copy of in beside out (its temporary name into tmp), opened read-write. */
+static hid_t open_copy(const char *in, const char *out, char *tmp, size_t size)
+{
+    int fd = temp_beside(out, tmp, size);
+    hid_t f;
+
     copy_file(in, fd);
     if (close(fd) != 0)
         die("cannot write %s: %s", tmp, strerror(errno));
@@ -751,28 +760,26 @@ enum { GEO_TR3 = 203, GEO_TR6 = 206, GEO_TE4 = 304, GEO_T10 = 310 };
 /* the length of a group name (MED_LNAME_SIZE) and of a family's (MED_NAME_SIZE) */
 enum { MED_LNAME = 80, MED_NAME = 64 };
 
-static void attr_int(hid_t o, const char *name, int v)
+/* A scalar attribute: v's value of memory type mt, stored as ft. */
+static void attr_scalar(hid_t o, const char *name, hid_t ft, hid_t mt, const void *v)
 {
     hid_t sp = H5Screate(H5S_SCALAR);
-    hid_t a =
-        sp < 0 ? -1 : H5Acreate2(o, name, H5T_STD_I32LE, sp, H5P_DEFAULT, H5P_DEFAULT);
+    hid_t a = sp < 0 ? -1 : H5Acreate2(o, name, ft, sp, H5P_DEFAULT, H5P_DEFAULT);
 
-    if (a < 0 || H5Awrite(a, H5T_NATIVE_INT, &v) < 0)
+    if (a < 0 || H5Awrite(a, mt, v) < 0)
         die("cannot write attribute %s", name);
     H5Aclose(a);
     H5Sclose(sp);
 }
 
+static void attr_int(hid_t o, const char *name, int v)
+{
+    attr_scalar(o, name, H5T_STD_I32LE, H5T_NATIVE_INT, &v);
+}
+
 static void attr_real(hid_t o, const char *name, double v)
 {
-    hid_t sp = H5Screate(H5S_SCALAR);
-    hid_t a =
-        sp < 0 ? -1 : H5Acreate2(o, name, H5T_IEEE_F64LE, sp, H5P_DEFAULT, H5P_DEFAULT);
-
-    if (a < 0 || H5Awrite(a, H5T_NATIVE_DOUBLE, &v) < 0)
-        die("cannot write attribute %s", name);
-    H5Aclose(a);
-    H5Sclose(sp);
+    attr_scalar(o, name, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, &v);
 }
 
 /* A string attribute as MED writes one: its length and a NUL. */
@@ -1064,13 +1071,9 @@ static void med_new(const char *out)
             (unsigned long long)nv);
     check_families(noe, nnoe, fg, nfg, 1, "node");
 
-    if (snprintf(tmp, sizeof tmp, "%s.qdc-h5.XXXXXX", out) >= (int)sizeof tmp)
-        die("%s: name too long", out);
-    k = mkstemp(tmp);
-    if (k < 0)
-        die("cannot create a file beside %s: %s", out, strerror(errno));
+    k = temp_beside(out, tmp, sizeof tmp);
     made = tmp;
-    if (fchmod(k, 0644) != 0 || close(k) != 0)
+    if (close(k) != 0)
         die("cannot set up %s: %s", tmp, strerror(errno));
     fapl = H5Pcreate(H5P_FILE_ACCESS);
     if (fapl < 0 || H5Pset_libver_bounds(fapl, H5F_LIBVER_V18, H5F_LIBVER_V18) < 0)

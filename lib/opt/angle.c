@@ -135,12 +135,12 @@ static int star_active(const mesh_topo *tp, const double *x, int32_t v, const do
 }
 
 /* A trial position y of v, tested against move_ok's rules on the way:
- * 1 with star_sines' figures in *f1, *nb1, *q1 when its smallest sine stays
+ * 1 with star_scan's figures in *f1, *nb1, *q1 when its smallest sine stays
  * above fneed, no more than nbmax tets fall under level and its smallest mean
  * ratio cubed is at least qneed (and the sines in keep[] as star_scan keeps
  * them, if not NULL); 0 at the first tet that breaks one. Each of
  * the three only gets worse as the star is read, so the answer is the one
- * star_sines' whole figures would give: most trials fail, and early (on the
+ * star_scan's whole figures would give: most trials fail, and early (on the
  * 20k-tet part-cad of scripts/corpus.py, --topology full, 6.6% of the run's
  * instructions saved; reading the active functions' tets first saved none). */
 static int star_trial(const mesh_topo *tp, const double *x, int32_t v, const double *y,
