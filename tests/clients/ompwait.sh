@@ -29,7 +29,8 @@ seen_of() {
     pid=$!
     seen=
     i=0
-    while [ $i -lt 100 ] && kill -0 $pid 2> /dev/null; do
+    # polled until the re-exec shows (at most 30 s, for a busy machine) or qdc ends
+    while [ $i -lt 1500 ] && kill -0 $pid 2> /dev/null; do
         # after the re-exec the process image is qdc again with the variable set
         seen=$(tr '\0' '\n' < /proc/$pid/environ 2> /dev/null | sed -n "s/^$var=//p")
         [ -n "$seen" ] && break
