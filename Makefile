@@ -210,7 +210,7 @@ format-check:
 # fails the run. CI runs `make fuzz FUZZ_SECONDS=20` (.ci/run).
 FUZZ_SECONDS ?= 60
 FUZZ_CC ?= $(shell command -v clang-14 2>/dev/null || echo clang)
-FUZZ_LIB := lib/core/base.c lib/core/mesh.c $(wildcard lib/io/*.c) server/parse.c server/route.c \
+FUZZ_LIB := lib/core/base.c lib/core/mesh.c lib/core/pdata.c $(wildcard lib/io/*.c) server/parse.c server/route.c \
             server/multipart.c
 FUZZ_SRC := $(if $(FUZZ),tests/fuzz/fuzz_$(FUZZ).c,$(wildcard tests/fuzz/fuzz_*.c))
 FUZZ_FLAGS := -g -O1 -fno-sanitize-recover=undefined -fopenmp $(CPPFLAGS) -Iserver -MMD -MP

@@ -140,6 +140,26 @@ int cli_options(int argc, char **argv)
     return CLI_OK;
 }
 
+/* What becomes of m's point data written in fmt, for a note: "" if it has
+ * none, else ", and point data kept (N arrays)", "... interpolated at N new
+ * vertices" (--topology full) or "; point data dropped (...)". */
+static const char *pdata_words(const mesh_t *m, meshio_format fmt, char *b, size_t n)
+{
+    const mesh_pdata *p = m->pdata;
+
+    if (!p || !p->n)
+        snprintf(b, n, "%s", "");
+    else if (!meshio_writes_pdata(fmt))
+        snprintf(b, n, "; point data dropped (%d arrays: qdc's %s writer has none)",
+                 (int)p->n, meshio_format_name(fmt) ? meshio_format_name(fmt) : "?");
+    else if (p->ninterp > 0)
+        snprintf(b, n, ", and point data interpolated at %d new vertices (%d arrays)",
+                 (int)p->ninterp, (int)p->n);
+    else
+        snprintf(b, n, ", and point data kept (%d arrays)", (int)p->n);
+    return b;
+}
+
 /* Before writing m to out in fmt: say in one note line when the input's
  * extra data (tags, names, arrays) cannot come along, or that float32
  * coordinates stay float32. */
@@ -147,6 +167,7 @@ static void source_note(const mesh_t *m, const char *out, meshio_format fmt, int
 {
     const char *why = NULL;
     int f32 = 0;
+    char pd[160];
 
     if (quiet || meshio_source_format(m) == MESHIO_AUTO)
         return;
@@ -155,8 +176,9 @@ static void source_note(const mesh_t *m, const char *out, meshio_format fmt, int
     if (!meshio_splices(m, fmt, &why) && (fmt == MESHIO_AUTO || meshio_has_writer(fmt)))
         fprintf(stderr,
                 "qdc: note: %s: written by qdc's %s writer (%s): only vertices, tets, "
-                "triangles and their region tags are kept\n",
-                out, meshio_format_name(fmt) ? meshio_format_name(fmt) : "?", why);
+                "triangles and their region tags are kept%s\n",
+                out, meshio_format_name(fmt) ? meshio_format_name(fmt) : "?", why,
+                pdata_words(m, fmt, pd, sizeof pd));
     else if (f32)
         fprintf(stderr,
                 "qdc: note: %s: coordinates written as float32, as in the input\n", out);
@@ -652,12 +674,15 @@ static int optimize_write(const optimize_args *x, mesh_t *m, int *rewrote)
     /* the input file, parked during the run, is read again for a spliced
      * write; if it changed meanwhile, qdc's own writer writes OUT */
     if (meshio_unpark_source(m, &err) != QDC_OK) {
+        char pd[160];
         if (!x->ps.quiet)
-            fprintf(stderr,
-                    "qdc: note: %s (read again to write %s in its layout): %s is "
-                    "written by qdc's own writer: only vertices, tets, triangles and "
-                    "their region tags are kept\n",
-                    err.msg, x->out, x->out);
+            fprintf(
+                stderr,
+                "qdc: note: %s (read again to write %s in its layout): %s is "
+                "written by qdc's own writer: only vertices, tets, triangles and "
+                "their region tags are kept%s\n",
+                err.msg, x->out, x->out,
+                pdata_words(m, meshio_save_format(x->out, x->fout, m), pd, sizeof pd));
         meshio_drop_source(m);
         qdc_error_clear(&err);
     }

@@ -124,6 +124,8 @@ mesh_t *mesh_dup(const mesh_t *m)
     d->tris = dup_array(m->tris, (size_t)m->ntri * 3, sizeof(int32_t), &fail);
     d->tri_ref = dup_array(m->tri_ref, (size_t)m->ntri, sizeof(int32_t), &fail);
     d->mid = dup_array(m->mid, (size_t)m->nt * 6, sizeof(int32_t), &fail);
+    if (m->pdata && !(d->pdata = mesh_pdata_dup(m->pdata, m->nv)))
+        fail = 1;
     if (fail || !d->xyz || !d->tets) {
         mesh_free(d);
         return NULL;
@@ -143,6 +145,7 @@ void mesh_free(mesh_t *m)
     qdc_free(m->tris);
     qdc_free(m->tri_ref);
     qdc_free(m->mid);
+    mesh_pdata_free(m->pdata);
     if (m->source)
         m->source->release(m->source);
     qdc_free(m);

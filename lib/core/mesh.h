@@ -41,7 +41,52 @@ typedef struct mesh {
                           * mesh_p2_edges; NULL for linear tets. The mid-edge
                           * nodes are vertices in no tet: the optimizer moves
                           * the corners only (opt/p2.c moves these after it) */
+    struct mesh_pdata *pdata; /* the file's point-data arrays (below), or NULL */
 } mesh_t;
+
+/* Point data: arrays of values per vertex that a file carried (VTK
+ * POINT_DATA, VTU <PointData>, Gmsh $NodeData), kept so that qdc's writers
+ * give them back. Each holds nv*ncomp finite doubles (vertex-major: vertex
+ * v's components at v*ncomp...), integers exactly as long as they are
+ * within 2^53. --topology flips keeps every vertex and so every value;
+ * --topology full gives kept vertices their values and a new vertex the
+ * linear interpolation of the mesh before the round at its position
+ * (integer arrays: the value of the nearest corner by weight). */
+typedef struct {
+    char *name;    /* NUL-terminated, not empty */
+    int32_t ncomp; /* components per vertex, >= 1 */
+    int integer;   /* 1: every value an integer (written as integers) */
+    char type[16]; /* the file's type name ("Int32", "float"...), or "" */
+    double *v;     /* nv*ncomp values */
+} mesh_parray;
+typedef struct mesh_pdata {
+    int32_t n;       /* arrays */
+    mesh_parray *a;  /* n arrays, in the file's order */
+    uint8_t *made;   /* nv: 1 for a vertex whose values were interpolated
+                      * (mesh_pdata_remap), or NULL when none was */
+    int32_t ninterp; /* how many: the vertices made 1 */
+} mesh_pdata;
+/* Append an array named name[0..nlen) of ncomp components to m->pdata (made
+ * if NULL): v (nv*ncomp values, from qdc_malloc*) is taken over, also on
+ * failure (freed). QDC_EINVAL (m NULL, empty name, ncomp < 1, a value NaN
+ * or Inf: err->index the value), QDC_ENOMEM. type may be NULL. */
+qdc_status mesh_pdata_add(mesh_t *m, const char *name, size_t nlen, int32_t ncomp,
+                          int integer, const char *type, double *v, qdc_error *err);
+/* A deep copy of p for nv vertices; NULL if p is NULL or out of memory. */
+mesh_pdata *mesh_pdata_dup(const mesh_pdata *p, int32_t nv);
+/* Free p and its arrays. p may be NULL. */
+void mesh_pdata_free(mesh_pdata *p);
+/* m's point data for the nv vertices at xyz (3*nv) that follow a change of
+ * vertices: vmap[v] (m->nv entries) the new index of m's vertex v, -1 if it
+ * is gone; the new vertices (those no vmap entry names) get the linear
+ * interpolation of m (its xyz, tets and values) at their position: the tet
+ * of m that contains it (barycentric weights), else the nearest by the
+ * weights, clamped to it; integer arrays the value of the corner with the
+ * largest weight. *out is a new mesh_pdata (NULL if m has none); its
+ * ninterp counts the vertices interpolated so far (m's kept ones too).
+ * Builds nothing when m->pdata is NULL. QDC_ENOMEM. */
+qdc_status mesh_pdata_remap(const mesh_t *m, int32_t nv, const double *xyz,
+                            const int32_t *vmap, mesh_pdata **out, qdc_error *err);
 
 /* The one edge order of a second-order tet's mid-edge nodes (VTK's
  * VTK_QUADRATIC_TETRA and Abaqus C3D10 order): edges 01, 12, 02, 03, 13, 23,

@@ -93,6 +93,10 @@ int meshio_has_writer(meshio_format f);
  * nodes; 0 for the writers of linear tets (DOLFIN, MSH 1...), which write such
  * a mesh only spliced over its source, and for formats without a writer. */
 int meshio_writes_p2(meshio_format f);
+/* 1 if qdc's writer of f writes point data (mesh_t.pdata: VTK POINT_DATA
+ * FIELD arrays, VTU <PointData>, Gmsh $NodeData), 0 for the writers that
+ * drop it and for formats without a writer. */
+int meshio_writes_pdata(meshio_format f);
 /* The format of a Content-Type or Accept entry: case-insensitive, parameters
  * after ';' honoured as above, others (charset, q) ignored; also accepts
  * application/x-gmsh, model/x-gmsh, application/x-vtk, application/x-vtu,

@@ -776,6 +776,64 @@ static inline void note(const meshio_options *o, const char *fmt, ...)
     o->log(o->log_ctx, 0, msg);
 }
 
+/* A point-data array a reader read: nv tuples of ncomp values v (from
+ * qdc_malloc*, taken over) appended to *pd for the mesh (mesh.h, "Point
+ * data"). An array with a NaN/Inf value is dropped with a note, not an
+ * error: such files read as they did before point data was kept. An empty
+ * name or ncomp < 1: dropped silently. QDC_ENOMEM. */
+static inline qdc_status pdata_take(mesh_pdata **pd, int64_t nv, const char *name,
+                                    size_t nlen, int64_t ncomp, int integer,
+                                    const char *type, double *v, const meshio_options *o,
+                                    const char *fmtname, qdc_error *err)
+{
+    size_t n = (size_t)nv * (size_t)(ncomp > 0 ? ncomp : 0);
+    mesh_t shell;
+    qdc_status st;
+
+    if (!nlen || ncomp < 1 || ncomp > INT32_MAX || nv < 0 || nv > INT32_MAX) {
+        qdc_free(v);
+        return QDC_OK;
+    }
+    for (size_t i = 0; i < n; i++)
+        if (!isfinite(v[i])) {
+            note(o, "%s: point data %.*s dropped: value %zu is not finite (NaN/Inf)",
+                 fmtname, (int)(nlen > 64 ? 64 : nlen), name, i);
+            qdc_free(v);
+            return QDC_OK;
+        }
+    memset(&shell, 0, sizeof shell);
+    shell.nv = (int32_t)nv;
+    shell.pdata = *pd;
+    st = mesh_pdata_add(&shell, name, nlen, (int32_t)ncomp, integer, type, v, err);
+    *pd = shell.pdata;
+    return st;
+}
+
+/* Point-data array i's name as a writer puts it in a file whose names are
+ * one word: bytes other than [A-Za-z0-9_.:+-] become '_' (at most 255). */
+static inline void pdata_word(const mesh_parray *a, char out[256])
+{
+    size_t k = 0;
+
+    for (const char *c = a->name; *c && k < 255; c++, k++) {
+        char x = *c;
+        int ok = (x >= 'a' && x <= 'z') || (x >= 'A' && x <= 'Z') ||
+                 (x >= '0' && x <= '9') || x == '_' || x == '.' || x == ':' || x == '+' ||
+                 x == '-';
+        out[k] = ok ? x : '_';
+    }
+    out[k] = 0;
+}
+
+/* 1 if every value of integer array a fits an int32. */
+static inline int pdata_int32(const mesh_parray *a, int64_t nv)
+{
+    for (size_t i = 0; i < (size_t)nv * (size_t)a->ncomp; i++)
+        if (!(a->v[i] >= INT32_MIN && a->v[i] <= INT32_MAX))
+            return 0;
+    return 1;
+}
+
 /* Element or cell types a reader skipped, counted for one note at the end. */
 enum { SKIP_TYPES = 128 };
 

@@ -51,6 +51,15 @@ static int vtype_of(const char *w, size_t n, vtype *t)
     return -1;
 }
 
+/* The VTU name of a type ("Int32"...). */
+static const char *vtk_type_name(vtype t)
+{
+    for (size_t i = 0; i < sizeof vtype_names / sizeof vtype_names[0]; i++)
+        if (vtype_names[i].t == t)
+            return vtype_names[i].name;
+    return "";
+}
+
 #if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_BIG_ENDIAN__
 enum { HOST_BIG = 1 };
 #else
@@ -333,11 +342,13 @@ typedef struct {
     double *xyz; /* 3 nv */
     iarr conn;   /* connectivity */
     int64_t nconn;
-    double *offs;  /* nc + 1 offsets into conn, or NULL for the legacy list */
-    iarr types;    /* nc cell types */
-    iarr creg;     /* nc region values, or none */
-    int creg_prio; /* 0 region, 1 gmsh:physical, 2 medit:ref, 3 MeshDomain */
-    iarr vref;     /* nv, or none */
+    double *offs;   /* nc + 1 offsets into conn, or NULL for the legacy list */
+    iarr types;     /* nc cell types */
+    iarr creg;      /* nc region values, or none */
+    int creg_prio;  /* 0 region, 1 gmsh:physical, 2 medit:ref, 3 MeshDomain */
+    iarr vref;      /* nv, or none */
+    mesh_pdata *pd; /* the other point arrays, or NULL */
+    const meshio_options *o;
 } cells;
 
 static void cells_free(cells *c)
@@ -348,6 +359,8 @@ static void cells_free(cells *c)
     iarr_free(&c->types);
     iarr_free(&c->creg);
     iarr_free(&c->vref);
+    mesh_pdata_free(c->pd);
+    c->pd = NULL;
 }
 
 static int region_prio(const char *name, size_t n)
@@ -583,6 +596,10 @@ static qdc_status cells_mesh(cells *c, const char *fmtname, const meshio_options
         }
         c->xyz = NULL; /* moves into the mesh */
         st = parsed_mesh_move(&pm, out, err);
+        if (st == QDC_OK) {
+            (*out)->pdata = c->pd;
+            c->pd = NULL;
+        }
     }
     parsed_free(&pm);
     if (st == QDC_OK)
@@ -773,8 +790,36 @@ static double *alloc_values(int64_t n, qdc_error *err)
     return a;
 }
 
+/* 1 if a type holds integers. */
+static int vtype_int(vtype t)
+{
+    return t != T_F32 && t != T_F64;
+}
+
+/* A point array of the POINTS' count (not medit:ref): its values as doubles
+ * into c->pd (a NaN/Inf one dropped with a note). */
+static qdc_status vtk_point_array(vtk *v, const char *name, size_t nlen, int64_t ncomp,
+                                  vtype t, qdc_error *err)
+{
+    int64_t n = v->attr_n * ncomp;
+    double *d = alloc_values(n, err);
+    vsink k = {d, NULL};
+    qdc_status st;
+
+    if (!d)
+        return QDC_ENOMEM;
+    st = vtk_values(v, "attribute", n, t, 0, &k, err);
+    if (st != QDC_OK) {
+        qdc_free(d);
+        return st;
+    }
+    return pdata_take(&v->c.pd, v->c.nv, name, nlen, ncomp, vtype_int(t),
+                      vtk_type_name(t), d, v->c.o, v->binary ? "vtk" : "vtk-ascii", err);
+}
+
 /* An attribute array of v->attr_n tuples of ncomp values: kept if it is a
- * region (cells) or medit:ref (points) with one component. */
+ * region (cells), medit:ref (points) with one component, or another point
+ * array (point data, when the POINTS came first). */
 static qdc_status vtk_attr_array(vtk *v, const char *name, size_t nlen, int64_t ncomp,
                                  vtype t, qdc_error *err)
 {
@@ -791,6 +836,8 @@ static qdc_status vtk_attr_array(vtk *v, const char *name, size_t nlen, int64_t 
         return fail_txt(err, QDC_EPARSE, &v->s, v->s.p,
                         "%.*s: %lld tuples do not fit in the bytes left",
                         (int)(nlen > 32 ? 32 : nlen), name, (long long)v->attr_n);
+    if (!keep && v->attr == 2 && nlen && ncomp >= 1 && v->c.xyz && v->attr_n == v->c.nv)
+        return vtk_point_array(v, name, nlen, ncomp, t, err);
     if (keep && iarr_alloc(&dst, n, err) != QDC_OK)
         return QDC_ENOMEM;
     st = vtk_values(v, "attribute", n, t, keep, keep ? &k : NULL, err);
@@ -1058,7 +1105,7 @@ static qdc_status vtk_other_attr(vtk *v, const char *w, size_t n, qdc_error *err
     }
     st = vtk_type(v, "VECTORS", &t, err);
     return st == QDC_OK
-               ? vtk_attr_array(v, "", 0, word_is(w, n, "TENSORS") ? 9 : 3, t, err)
+               ? vtk_attr_array(v, name, nl, word_is(w, n, "TENSORS") ? 9 : 3, t, err)
                : st;
 }
 
@@ -1117,6 +1164,7 @@ static qdc_status read_vtk(const char *buf, size_t len, const meshio_options *o,
     memset(&v, 0, sizeof v);
     v.rec = rec;
     v.c.creg_prio = PRIO_NONE;
+    v.c.o = o;
     v.s = txt_init(buf, len, 0);
     v.b = (const unsigned char *)buf;
     if (len < 14 || memcmp(buf, "# vtk DataFile", 14) != 0)
@@ -1222,6 +1270,45 @@ static int tet_type(const mesh_t *m)
     return m->mid ? 24 : 10;
 }
 
+/* One point array's values: integers as int32 (or 64-bit when one is
+ * beyond), floats as doubles (%.17g in text: they read back exactly). */
+static void vw_parray(vw *o, const mesh_parray *a, int64_t nv, int i32)
+{
+    size_t n = (size_t)nv * (size_t)a->ncomp;
+
+    o->per_line = a->ncomp > 9 ? 9 : a->ncomp;
+    o->i = 0;
+    for (size_t i = 0; i < n; i++) {
+        if (a->integer)
+            vw_int(o, (int64_t)a->v[i], i32 ? 4 : 8);
+        else
+            vw_real(o, a->v[i]);
+    }
+    vw_end(o);
+}
+
+/* The point arrays as one FIELD of the POINT_DATA. */
+static void vtk_write_pdata(const mesh_t *m, vw *o)
+{
+    char name[256];
+
+    wb_str(o->w, "FIELD FieldData ");
+    wb_int(o->w, m->pdata->n);
+    wb_str(o->w, "\n");
+    for (int32_t i = 0; i < m->pdata->n; i++) {
+        const mesh_parray *a = &m->pdata->a[i];
+        int i32 = a->integer && pdata_int32(a, m->nv);
+        pdata_word(a, name);
+        wb_str(o->w, name);
+        wb_str(o->w, " ");
+        wb_int(o->w, a->ncomp);
+        wb_str(o->w, " ");
+        wb_int(o->w, m->nv);
+        wb_str(o->w, !a->integer ? " double\n" : i32 ? " int\n" : " vtktypeint64\n");
+        vw_parray(o, a, m->nv, i32);
+    }
+}
+
 static void vtk_write(const mesh_t *m, int binary, wbuf *w)
 {
     vw o = {w, binary, 1, 3, 0, 1};
@@ -1268,14 +1355,19 @@ static void vtk_write(const mesh_t *m, int binary, wbuf *w)
             vw_int(&o, cell_region(m, c), 4);
         vw_end(&o);
     }
-    if (m->vref) {
+    if (m->vref || (m->pdata && m->pdata->n)) {
         wb_str(w, "POINT_DATA ");
         wb_int(w, m->nv);
-        wb_str(w, "\nSCALARS medit:ref int 1\nLOOKUP_TABLE default\n");
+        wb_str(w, "\n");
+    }
+    if (m->vref) {
+        wb_str(w, "SCALARS medit:ref int 1\nLOOKUP_TABLE default\n");
         for (int64_t i = 0; i < m->nv; i++)
             vw_int(&o, m->vref[i], 4);
         vw_end(&o);
     }
+    if (m->pdata && m->pdata->n)
+        vtk_write_pdata(m, &o);
 }
 
 /* ------------------------------------------------------------------------ */
@@ -1989,6 +2081,26 @@ static qdc_status vtu_store(vtu *x, const xtag *t, const vdst *dst, int64_t n, v
     return dst->d == offs_end ? vtu_check_ends(x, t, k.d, n, err) : QDC_OK;
 }
 
+/* A point array other than medit:ref (n values): into c.pd as doubles (a
+ * NaN/Inf one dropped with a note). */
+static qdc_status vtu_point_array(vtu *x, const xtag *t, const char *name, size_t nlen,
+                                  int64_t ncomp, int64_t n, vtype vt, qdc_error *err)
+{
+    double *d = alloc_values(n, err);
+    vsink k = {d, NULL};
+    qdc_status st;
+
+    if (!d)
+        return QDC_ENOMEM;
+    st = vtu_array(x, t, n, vt, 0, &k, NULL, err);
+    if (st != QDC_OK) {
+        qdc_free(d);
+        return st;
+    }
+    return pdata_take(&x->c.pd, x->c.nv, name, nlen, ncomp, vtype_int(vt),
+                      vtk_type_name(vt), d, x->c.o, "vtu", err);
+}
+
 static qdc_status vtu_dataarray(vtu *x, const xtag *t, int sec, double **offs_end,
                                 qdc_error *err)
 {
@@ -2030,6 +2142,8 @@ static qdc_status vtu_dataarray(vtu *x, const xtag *t, int sec, double **offs_en
     if ((uint64_t)n > (uint64_t)(x->s.end - x->s.base) * (x->zlib ? 1032 : 1))
         return fail_txt(err, QDC_EPARSE, &x->s, t->name,
                         "VTU: %lld values cannot fit in the input", (long long)n);
+    if (!dst.d && !dst.a && sec == SEC_POINTDATA && ne > nv)
+        return vtu_point_array(x, t, nv, (size_t)(ne - nv), ncomp, n, vt, err);
     if (!dst.d && !dst.a) /* not ours: its text or base64 is passed over with the tags */
         return QDC_OK;
     return vtu_store(x, t, &dst, n, vt, prio, offs_end, err);
@@ -2291,6 +2405,7 @@ static qdc_status read_vtu(const char *buf, size_t len, const meshio_options *o,
     if (rec)
         rec->fmt = MESHIO_VTU;
     x.c.creg_prio = PRIO_NONE;
+    x.c.o = o;
     x.s = txt_init(buf, len, 0);
     x.b = (const unsigned char *)buf;
     x.zbudget = gz_budget(len, o ? o->max_bytes : 0, o ? o->max_ratio : 0);
@@ -2388,6 +2503,43 @@ static void vtu_data(const mesh_t *m, int k, vw *o)
     vw_end(o);
 }
 
+/* Point array i of m as a VTU DataArray: its name (XML's special bytes and
+ * control bytes as '_') into name, Float64, or Int32 (Int64 when a value is
+ * beyond) for an integer array. */
+static vtu_arr vtu_parr(const mesh_t *m, int32_t i, char name[256], int *i32)
+{
+    const mesh_parray *a = &m->pdata->a[i];
+    vtu_arr r;
+    size_t k = 0;
+
+    for (const char *c = a->name; *c && k < 255; c++, k++)
+        name[k] = strchr("&<>\"'", *c) || (unsigned char)*c < 32 ? '_' : *c;
+    name[k] = 0;
+    *i32 = a->integer && pdata_int32(a, m->nv);
+    r.name = name;
+    r.type = !a->integer ? "Float64" : *i32 ? "Int32" : "Int64";
+    r.ncomp = a->ncomp;
+    r.bytes = (uint64_t)m->nv * (uint64_t)a->ncomp * (*i32 ? 4u : 8u);
+    return r;
+}
+
+/* Array k of the list (vtu_data's, then m's point arrays from 6 on). */
+static vtu_arr vtu_arr_of(const mesh_t *m, const vtu_arr *fixed, int k, char name[256],
+                          int *i32)
+{
+    return k < 6 ? fixed[k] : vtu_parr(m, k - 6, name, i32);
+}
+
+static void vtu_data_of(const mesh_t *m, int k, int i32, vw *o)
+{
+    if (k < 6) {
+        o->per_line = 6;
+        vtu_data(m, k, o);
+    } else {
+        vw_parray(o, &m->pdata->a[k - 6], m->nv, i32);
+    }
+}
+
 static void vtu_write(const mesh_t *m, int appended, wbuf *w)
 {
     int64_t nc = (int64_t)m->nt + m->ntri;
@@ -2402,8 +2554,10 @@ static void vtu_write(const mesh_t *m, int appended, wbuf *w)
                                         "",           "<CellData>\n", "<PointData>\n"};
     static const char *const close[6] = {
         "</Points>\n", "", "", "</Cells>\n", "</CellData>\n", "</PointData>\n"};
-    int use[6] = {1, 1, 1, 1, has_regions(m), m->vref != NULL};
+    int npd = m->pdata ? m->pdata->n : 0, nk = 6 + npd, i32 = 1;
+    int first_pd = m->vref ? 5 : 6, last_pd = npd ? nk - 1 : 5;
     vw o = {w, appended, 0, 6, 0, 0};
+    char name[256];
 
     wb_str(w,
            "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" "
@@ -2413,27 +2567,29 @@ static void vtu_write(const mesh_t *m, int appended, wbuf *w)
     wb_str(w, "\" NumberOfCells=\"");
     wb_int(w, nc);
     wb_str(w, "\">\n");
-    for (int k = 0; k < 6; k++) {
-        if (!use[k])
+    for (int k = 0; k < nk; k++) {
+        vtu_arr a;
+        if ((k == 4 && !has_regions(m)) || (k == 5 && !m->vref))
             continue;
-        wb_str(w, open[k]);
-        xml_array_head(w, &arr[k], appended, &off);
+        a = vtu_arr_of(m, arr, k, name, &i32);
+        wb_str(w, k < 5 ? open[k] : k == first_pd ? open[5] : "");
+        xml_array_head(w, &a, appended, &off);
         if (!appended) {
-            vtu_data(m, k, &o);
+            vtu_data_of(m, k, i32, &o);
             wb_str(w, "</DataArray>\n");
         }
-        wb_str(w, close[k]);
+        wb_str(w, k < 5 ? close[k] : k == last_pd ? close[5] : "");
     }
     wb_str(w, "</Piece>\n</UnstructuredGrid>\n");
     if (appended) {
         unsigned char b[8];
         wb_str(w, "<AppendedData encoding=\"raw\">\n_");
-        for (int k = 0; k < 6; k++) {
-            if (!use[k])
+        for (int k = 0; k < nk; k++) {
+            if ((k == 4 && !has_regions(m)) || (k == 5 && !m->vref))
                 continue;
-            put_le64(b, arr[k].bytes);
+            put_le64(b, vtu_arr_of(m, arr, k, name, &i32).bytes);
             wb_put(w, b, 8);
-            vtu_data(m, k, &o);
+            vtu_data_of(m, k, i32, &o);
         }
         wb_str(w, "\n</AppendedData>\n");
     }

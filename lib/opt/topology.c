@@ -148,11 +148,21 @@ static qdc_status remap_vertices(mesh_t *m, int32_t nv, double *xyz, const int32
 {
     uint8_t *f = m->fixed ? qdc_calloc((size_t)nv + 1, 1) : NULL;
     int32_t *r = m->vref ? qdc_calloc((size_t)nv + 1, sizeof *r) : NULL;
+    mesh_pdata *pd = NULL;
+    qdc_status st = QDC_OK;
 
-    if ((m->fixed && !f) || (m->vref && !r)) {
+    if ((m->fixed && !f) || (m->vref && !r))
+        st = qdc_fail(err, QDC_ENOMEM, "out of memory");
+    else /* before m's coordinates and tets change: they interpolate */
+        st = mesh_pdata_remap(m, nv, xyz, vmap, &pd, err);
+    if (st != QDC_OK) {
         qdc_free(f);
         qdc_free(r);
-        return qdc_fail(err, QDC_ENOMEM, "out of memory");
+        return st;
+    }
+    if (m->pdata) {
+        mesh_pdata_free(m->pdata);
+        m->pdata = pd;
     }
     for (int32_t v = 0; v < m->nv; v++)
         if (vmap[v] >= 0) {
@@ -609,6 +619,7 @@ static void swap_model(mesh_t *a, mesh_t *b)
     a->region = b->region;
     a->fixed = b->fixed;
     a->vref = b->vref;
+    a->pdata = b->pdata;
     a->ntri = b->ntri;
     a->tris = b->tris;
     a->tri_ref = b->tri_ref;
@@ -619,6 +630,7 @@ static void swap_model(mesh_t *a, mesh_t *b)
     b->region = t.region;
     b->fixed = t.fixed;
     b->vref = t.vref;
+    b->pdata = t.pdata;
     b->ntri = t.ntri;
     b->tris = t.tris;
     b->tri_ref = t.tri_ref;
