@@ -66,6 +66,8 @@ typedef struct {
     vec per;        /* int64 node tags of the $Periodic pairs, both sides */
     int64_t nlinks; /* $Periodic links read */
     srcrec *rec;    /* where the coordinates are, or NULL */
+    mesh_pdata *pd; /* the $NodeData arrays, or NULL */
+    const meshio_options *o;
 } gmsh;
 
 static const char *const elem_names[2] = {"triangle", "tet"};
@@ -77,6 +79,8 @@ static void gmsh_free(gmsh *g)
     tagmap_free(&g->tm);
     vec_free(&g->per);
     vec_free(&g->mid);
+    mesh_pdata_free(g->pd);
+    g->pd = NULL;
     for (int k = 0; k < 2; k++) {
         vec_free(&g->ent[k]);
         vec_free(&g->el[k].idx);
@@ -1141,6 +1145,161 @@ static qdc_status periodic(gmsh *g, qdc_error *err)
     return st == QDC_OK ? want_end(g, "Periodic", err) : st;
 }
 
+/* A $NodeData header line's first string tag (the view's name): quoted or
+ * one word, into [*n, *ne); the rest of the line passed over. */
+static void nd_string(gmsh *g, const char **n, const char **ne)
+{
+    txt *s = &g->s;
+    const char *p;
+
+    skip_ws(s);
+    p = s->p;
+    if (p < s->end && *p == '"') {
+        *n = ++p;
+        while (p < s->end && *p != '"' && *p != '\n')
+            p++;
+        *ne = p;
+    } else {
+        *n = p;
+        *ne = p = tok_end(s, p);
+    }
+    while (p < s->end && *p != '\n')
+        p++;
+    s->p = p;
+}
+
+/* The $NodeData header: *name, the component and value counts (the 2nd and
+ * 3rd integer tags). */
+static qdc_status nd_header(gmsh *g, const char **name, size_t *nl, int64_t *ncomp,
+                            int64_t *nitems, qdc_error *err)
+{
+    int64_t c, x;
+    const char *n = "", *ne = "";
+    qdc_status st = txt_int(&g->s, "$NodeData: string tags", 0, 1 << 16, &c, err);
+
+    for (int64_t i = 0; i < c && st == QDC_OK; i++) {
+        const char *a, *ae;
+        nd_string(g, &a, &ae);
+        if (i == 0) {
+            n = a;
+            ne = ae;
+        }
+    }
+    if (st == QDC_OK)
+        st = txt_int(&g->s, "$NodeData: real tags", 0, 1 << 16, &c, err);
+    for (int64_t i = 0; i < c && st == QDC_OK; i++) {
+        double t;
+        skip_ws(&g->s);
+        const char *te = tok_end(&g->s, g->s.p);
+        if (parse_double(g->s.p, te, &t) != 0)
+            st = qdc_fail(err, QDC_EPARSE, "$NodeData: a real tag is not a number");
+        g->s.p = te;
+    }
+    if (st == QDC_OK)
+        st = txt_int(&g->s, "$NodeData: integer tags", 3, 1 << 16, &c, err);
+    for (int64_t i = 0; i < c && st == QDC_OK; i++) {
+        st = txt_int(&g->s, "$NodeData: integer tag", INT32_MIN, INT32_MAX, &x, err);
+        if (i == 1)
+            *ncomp = x;
+        if (i == 2)
+            *nitems = x;
+    }
+    *name = n;
+    *nl = (size_t)(ne - n);
+    if (st == QDC_OK && (*ncomp < 1 || *ncomp > (1 << 16) || *nitems != g->nv))
+        st = qdc_fail(err, QDC_EPARSE,
+                      "$NodeData: %lld values of %lld components for %lld nodes",
+                      (long long)*nitems, (long long)*ncomp, (long long)g->nv);
+    return st;
+}
+
+/* The values of nitems nodes (tag, ncomp values each) into v, every node
+ * once (v starts NaN: a node left out leaves one). */
+static qdc_status nd_values(gmsh *g, int64_t ncomp, int64_t nitems, double *v,
+                            qdc_error *err)
+{
+    uint64_t per = g->binary ? 4 + 8 * (uint64_t)ncomp : 2 * (1 + (uint64_t)ncomp);
+    qdc_status st = QDC_OK;
+
+    if (g->binary)
+        end_of_line(g);
+    if ((uint64_t)nitems > (uint64_t)(g->s.end - g->s.p) / per)
+        return qdc_fail(err, QDC_EPARSE, "$NodeData: %lld values do not fit",
+                        (long long)nitems);
+    for (size_t i = 0; i < (size_t)nitems * (size_t)ncomp; i++)
+        v[i] = NAN;
+    for (int64_t i = 0; i < nitems && st == QDC_OK; i++) {
+        int64_t tag, k;
+        if (g->binary)
+            tag = bin_i32(g);
+        else
+            st = txt_int(&g->s, "$NodeData: node tag", INT64_MIN / 2, INT64_MAX / 2, &tag,
+                         err);
+        k = st == QDC_OK ? tagmap_find(&g->tm, tag) : -1;
+        if (st == QDC_OK && k < 0)
+            st = qdc_fail(err, QDC_EPARSE, "$NodeData: node tag %lld is no node's",
+                          (long long)tag);
+        for (int64_t c = 0; c < ncomp && st == QDC_OK; c++) {
+            double *x = &v[(size_t)k * (size_t)ncomp + (size_t)c];
+            if (g->binary)
+                *x = bin_f64(g);
+            else
+                st = txt_real(&g->s, "$NodeData: value", x, err);
+        }
+    }
+    return st;
+}
+
+/* $NodeData (after its name): the array into g->pd, replacing one of the
+ * same name (of an earlier time step: the last is kept). A section qdc
+ * cannot take (before $Nodes, another count than the nodes', a node left
+ * out or twice, a value NaN/Inf or not a number) is passed over with a note,
+ * as qdc passed over every $NodeData before it kept them. */
+static qdc_status node_data(gmsh *g, const char *sec, size_t slen, qdc_error *err)
+{
+    txt at = g->s;
+    const char *name = "";
+    size_t nl = 0;
+    int64_t ncomp = 0, nitems = -1;
+    double *v = NULL;
+    qdc_status st = g->have_nodes ? QDC_OK : QDC_EPARSE;
+
+    if (st == QDC_OK)
+        st = nd_header(g, &name, &nl, &ncomp, &nitems, err);
+    if (st == QDC_OK &&
+        (uint64_t)nitems > (uint64_t)(g->s.end - g->s.p) /
+                               (uint64_t)(g->binary ? 4 + 8 * ncomp : 2 + 2 * ncomp))
+        st = qdc_fail(err, QDC_EPARSE, "$NodeData: %lld values do not fit",
+                      (long long)nitems);
+    if (st == QDC_OK && !(v = qdc_mallocn((size_t)nitems * (size_t)ncomp + 1, sizeof *v)))
+        return qdc_fail(err, QDC_ENOMEM, "out of memory for $NodeData");
+    if (st == QDC_OK)
+        st = nd_values(g, ncomp, nitems, v, err);
+    for (size_t i = 0; st == QDC_OK && i < (size_t)nitems * (size_t)ncomp; i++)
+        if (!isfinite(v[i]))
+            st = qdc_fail(err, QDC_EPARSE, "$NodeData: node %zu left out or NaN/Inf",
+                          i / (size_t)ncomp);
+    if (st == QDC_OK)
+        st = want_end(g, "NodeData", err);
+    if (st != QDC_OK) {
+        note(g->o, "gmsh: $NodeData %.*s passed over: %s", (int)(nl > 64 ? 64 : nl), name,
+             g->have_nodes ? err->msg : "before $Nodes");
+        qdc_free(v);
+        qdc_error_clear(err);
+        g->s = at;
+        return skip_section(g, sec, slen, err);
+    }
+    for (int32_t i = 0; g->pd && i < g->pd->n; i++)
+        if (strlen(g->pd->a[i].name) == nl && !memcmp(g->pd->a[i].name, name, nl) &&
+            g->pd->a[i].ncomp == ncomp) { /* an earlier time step */
+            qdc_free(g->pd->a[i].v);
+            g->pd->a[i].v = v;
+            return QDC_OK;
+        }
+    return pdata_take(&g->pd, g->nv, nl ? name : "data", nl ? nl : 4, ncomp, 0, "double",
+                      v, g->o, "gmsh", err);
+}
+
 static qdc_status gmsh_section(gmsh *g, const char *name, size_t nlen, qdc_error *err)
 {
     if (word_is(name, nlen, "Periodic")) {
@@ -1170,6 +1329,10 @@ static qdc_status gmsh_section(gmsh *g, const char *name, size_t nlen, qdc_error
                : g->ver == 40 ? elements40(g, err)
                : g->binary    ? elements22_bin(g, err)
                               : elements22(g, err);
+    }
+    if (word_is(name, nlen, "NodeData")) {
+        end_of_line(g);
+        return node_data(g, name, nlen, err);
     }
     return skip_section(g, name, nlen, err);
 }
@@ -1241,6 +1404,10 @@ static qdc_status gmsh_mesh(gmsh *g, const meshio_options *o, mesh_t **out,
     }
     if (st == QDC_OK && pm.nfix > 0)
         periodic_note(g, o, *out);
+    if (st == QDC_OK) {
+        (*out)->pdata = g->pd;
+        g->pd = NULL;
+    }
     qdc_free(reg[0]);
     qdc_free(reg[1]);
     qdc_free(pm.fix);
@@ -1258,6 +1425,7 @@ static qdc_status read_gmsh(const char *buf, size_t len, const meshio_options *o
 
     memset(&g, 0, sizeof g);
     g.rec = rec;
+    g.o = o;
     g.per.size = sizeof(int64_t);
     g.mid.size = sizeof(int32_t);
     for (int k = 0; k < 2; k++) {
@@ -1629,6 +1797,38 @@ static void write22(const mesh_t *m, const gtets *gt, const distinct d[2], wbuf 
     wb_str(w, "$EndElements\n");
 }
 
+/* m's point arrays, one $NodeData each (every version: one string tag, the
+ * name in quotes, '"' and control bytes as '_'; time 0; time step 0, the
+ * components, the nodes), values as doubles (%.17g in ASCII: they read back
+ * exactly), in binary an int tag and the doubles of each node. */
+static void write_node_data(const mesh_t *m, wbuf *w, int bin)
+{
+    gw g = {w, bin};
+
+    for (int32_t i = 0; m->pdata && i < m->pdata->n; i++) {
+        const mesh_parray *a = &m->pdata->a[i];
+        size_t k = 0;
+        char name[256];
+        for (const char *c = a->name; *c && k < 255; c++, k++)
+            name[k] = *c == '"' || (unsigned char)*c < 32 ? '_' : *c;
+        name[k] = 0;
+        wb_str(w, "$NodeData\n1\n\"");
+        wb_str(w, name);
+        wb_str(w, "\"\n1\n0\n3\n0\n");
+        wb_int(w, a->ncomp);
+        wb_str(w, "\n");
+        wb_int(w, m->nv);
+        wb_str(w, "\n");
+        for (int32_t v = 0; v < m->nv; v++) {
+            gw_i32(&g, (int64_t)v + 1, " ");
+            for (int32_t c = 0; c < a->ncomp; c++)
+                gw_real(&g, a->v[(size_t)v * (size_t)a->ncomp + (size_t)c],
+                        c + 1 < a->ncomp ? " " : "\n");
+        }
+        wb_str(w, bin ? "\n$EndNodeData\n" : "$EndNodeData\n");
+    }
+}
+
 static qdc_status write_gmsh(const mesh_t *m, meshio_format fmt, int part, wbuf *w,
                              qdc_error *err)
 {
@@ -1660,6 +1860,8 @@ static qdc_status write_gmsh(const mesh_t *m, meshio_format fmt, int part, wbuf 
         write40(m, &gt, d, w);
     else
         write41(m, &gt, d, w, fmt == MESHIO_GMSH41_BIN);
+    if (st == QDC_OK && m->pdata)
+        write_node_data(m, w, fmt == MESHIO_GMSH22_BIN || fmt == MESHIO_GMSH41_BIN);
     qdc_free(t10);
     qdc_free(d[0].u);
     qdc_free(d[1].u);
