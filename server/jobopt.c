@@ -166,3 +166,13 @@ int job_changes_tets(const char *json)
     json_decref(root);
     return r;
 }
+
+int job_topology_full(const char *json)
+{
+    json_t *root = json_loads(json, 0, NULL);
+    json_t *v = json_object_get(root, "topology");
+    int r = json_is_string(v) && strcmp(json_string_value(v), "full") == 0;
+
+    json_decref(root);
+    return r;
+}

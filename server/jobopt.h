@@ -29,5 +29,8 @@ void job_tetra_opts(const char *json, double *quality, double *max_volume);
  * result has other tets than its upload (result.c writes it with qdc's own
  * writer, not spliced into the upload). */
 int job_changes_tets(const char *json);
+/* 1 if the options (JSON) ask for topology=full, which may insert and
+ * contract vertices. */
+int job_topology_full(const char *json);
 
 #endif

@@ -310,6 +310,17 @@ static void result_file(req *r, const job_rec *j, meshio_format f, char *path, s
     free(b);
 }
 
+/* The end of a result's Qdc-Note on the upload's point data (VTK, VTU,
+ * Gmsh arrays): kept by topology=flips and none when f's writer writes
+ * them; with topology=full dropped (result.qmesh does not carry them). */
+static const char *pdata_note(const job_rec *j, meshio_format f)
+{
+    if (job_topology_full(j->options))
+        return "; topology=full: the upload's point data, and its boundary triangles "
+               "if the vertices changed, dropped";
+    return meshio_writes_pdata(f) ? ", and the upload's point data" : "";
+}
+
 static enum MHD_Result serve_result(struct MHD_Connection *c, req *r, const job_rec *j,
                                     meshio_format f, const char *path, const char *hex)
 {
@@ -325,17 +336,17 @@ static enum MHD_Result serve_result(struct MHD_Connection *c, req *r, const job_
         snprintf(note, sizeof note,
                  "written by qdc's %s writer, not the uploaded %s file with new "
                  "coordinates: only vertices, tets, triangles and their region tags "
-                 "are kept",
+                 "are kept%s",
                  meshio_format_name(f) ? meshio_format_name(f) : "?",
-                 meshio_format_name(sf) ? meshio_format_name(sf) : "?");
+                 meshio_format_name(sf) ? meshio_format_name(sf) : "?", pdata_note(j, f));
     /* the upload's own format, but the run changed the tets: not spliced */
     else if (r->route == R_RESULT && sf == f && sf != MESHIO_QMESH && sf != MESHIO_JSON &&
              job_changes_tets(j->options))
         snprintf(note, sizeof note,
                  "written by qdc's %s writer, not the uploaded file with new "
                  "coordinates (topology changed the tets): only vertices, tets, "
-                 "triangles and their region tags are kept",
-                 meshio_format_name(f) ? meshio_format_name(f) : "?");
+                 "triangles and their region tags are kept%s",
+                 meshio_format_name(f) ? meshio_format_name(f) : "?", pdata_note(j, f));
     const char *const h[] = {MHD_HTTP_HEADER_ETAG,
                              etag,
                              MHD_HTTP_HEADER_VARY,
@@ -394,6 +405,13 @@ static qdc_status convert_source(req *r, const job_rec *j, mesh_t **out, qdc_err
     }
     job_path(r->q, j->id, "result.qmesh", src, sizeof src);
     st = meshio_load(src, MESHIO_QMESH, &res, e);
+    if (st == QDC_OK && in && tets && in->nv != res->nv) {
+        /* topology=full inserted or contracted vertices: the result alone
+         * (result.qmesh: no point data, boundary triangles or vertex refs
+         * of the upload, whose numbering no longer holds; Qdc-Note) */
+        mesh_free(in);
+        in = NULL;
+    }
     if (st == QDC_OK && in && (in->nv != res->nv || (!tets && in->nt != res->nt)))
         st = qdc_fail(e, QDC_EINTERNAL, "the result does not match its input");
     if (st == QDC_OK && in && tets) {
