@@ -1,0 +1,62 @@
+#!/bin/sh
+# pdata.sh - qdcd and point data: a .vtu of the dev bunny (low quality, 10k
+# tets) with a linear field f, a 3-component and an integer array, run with
+# topology=flips and topology=full and fetched as VTU. flips: the same
+# vertices, every array equal value for value, the Qdc-Note says the point
+# data is kept. full inserts vertices: the result is served (from
+# result.qmesh alone) and its Qdc-Note says the point data is dropped.
+. "$(dirname "$0")/../lib.sh"
+. "$(dirname "$0")/daemon.inc"
+
+if ! "$PY" -c 'import meshio, numpy' 2> /dev/null; then
+    echo "ok - server pdata # SKIP python3 meshio/numpy missing"
+    exit 0
+fi
+BUN=$(devmesh bunny_low_10k)
+"$PY" - "$BUN" "$TMP/in.vtu" << 'PY' || { fail "server pdata: input" "meshio failed"; exit 1; }
+import sys, meshio, numpy as np
+m = meshio.read(sys.argv[1])
+p = m.points
+tets = [c.data for c in m.cells if c.type == "tetra"][0]
+meshio.Mesh(p, [("tetra", tets)], point_data={
+    "f": p[:, 0] + 2 * p[:, 1] + 3 * p[:, 2], "vec": p * 0.5 - 1.0,
+    "id": np.arange(len(p), dtype=np.int32)}).write(sys.argv[2])
+PY
+start_qdcd "$TMP/d" --workers 1 ||
+    { fail "server pdata: start qdcd" "$(tail -3 "$TMP/d.log")"; exit 1; }
+VTU=application/vnd.vtk.vtu+xml
+for mode in flips full; do
+    code=$(submit "$TMP/in.vtu" $VTU "topology=$mode" "$TMP/$mode.sub")
+    id=$(jf "$TMP/$mode.sub" .id)
+    st=$(poll_all "$id")
+    if [ "$code" != 202 ] || [ "$st" != succeeded ]; then
+        fail "server pdata: $mode" "$code $st $(head -c 300 "$TMP/$mode.sub")"
+        continue
+    fi
+    code=$(req GET "/v1/jobs/$id/result?format=vtu" "$TMP/$mode.vtu")
+    note=$(hdr "$TMP/$mode.vtu" Qdc-Note)
+    if [ "$code" != 200 ]; then
+        fail "server pdata: $mode: result as vtu" "$code $(head -c 300 "$TMP/$mode.vtu")"
+        continue
+    fi
+    why=$("$PY" - "$TMP/in.vtu" "$TMP/$mode.vtu" $mode << 'PY'
+import sys, meshio, numpy as np
+a, b = meshio.read(sys.argv[1]), meshio.read(sys.argv[2])
+if sys.argv[3] == "full":
+    print("ok %d -> %d vertices, arrays %s" % (len(a.points), len(b.points), sorted(b.point_data)))
+    sys.exit()
+bad = [k for k in ("f", "vec", "id") if k not in b.point_data or
+       not np.array_equal(np.asarray(a.point_data[k]), np.asarray(b.point_data[k]))]
+print("differ: %s" % bad if bad or len(a.points) != len(b.points)
+      else "ok %d vertices, f, vec and id equal" % len(b.points))
+PY
+)
+    verdict "server pdata: $mode: result as vtu" "$why"
+    case $mode:$note in
+    flips:*"point data"*) pass "server pdata: flips: Qdc-Note: $note" ;;
+    full:*"point data"*dropped*) pass "server pdata: full: Qdc-Note: $note" ;;
+    *) fail "server pdata: $mode: Qdc-Note" "'$note'" ;;
+    esac
+done
+stop_qdcd
+[ $NFAIL = 0 ]
