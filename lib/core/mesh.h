@@ -56,7 +56,8 @@ typedef struct {
     char *name;    /* NUL-terminated, not empty */
     int32_t ncomp; /* components per vertex, >= 1 */
     int integer;   /* 1: every value an integer (written as integers) */
-    char type[16]; /* the file's type name ("Int32", "float"...), or "" */
+    char type[16]; /* the file's value type by its VTU name ("Int32",
+                    * "Float32"...; Gmsh: "double"), or "" */
     double *v;     /* nv*ncomp values */
 } mesh_parray;
 typedef struct mesh_pdata {
