@@ -26,7 +26,9 @@
  * variant is named.
  * VTK: cells of type 10 (tets) and 5 (triangles); region from the cell
  * array "region", "gmsh:physical" or "medit:ref" (written as "region"),
- * vref from the point array "medit:ref". Reading accepts either encoding.
+ * vref from the point array "medit:ref", the other point arrays as point
+ * data (mesh.h; VTK, VTU and Gmsh $NodeData, written back by their writers:
+ * meshio_writes_pdata). Reading accepts either encoding.
  * Formats without a media type are named by ?format= in the daemon. Every
  * format has a writer of qdc's own (MED's writes the frames qdc-h5 med-new
  * makes a MED file of); a format without one would be written only as the

@@ -10,7 +10,9 @@
  * integers in range. Cells of type 10 become tets and of type 5 surface
  * triangles, others are skipped and counted for a note. The region is the cell array
  * "region", "gmsh:physical", "medit:ref" or "MeshDomain" (CGAL's subdomain index, as
- * Float64; in that order of preference), vref the point array "medit:ref". Legacy binary
+ * Float64; in that order of preference), vref the point array "medit:ref", the other
+ * point arrays point data (mesh_t.pdata, as doubles; written back as a FIELD of the
+ * POINT_DATA and as <PointData> DataArrays). Legacy binary
  * data are big-endian; XML data follow byte_order. */
 #include "io/format.h"
 #include "io/gz.h"
