@@ -959,14 +959,19 @@ static int download(remote *rm, const char *id, const char *out, const char *out
             if (m->nv == local->nv && m->nt != local->nt) {
                 /* a topology mode changed the tets: the result's tets and
                  * regions in the local mesh, written by qdc's own writer */
+                int pd = local->pdata && local->pdata->n > 0;
+                meshio_format of = meshio_save_format(out, MESHIO_AUTO, local);
                 mesh_swap_tets(local, m);
                 meshio_drop_source(local);
                 if (!rm->quiet)
                     fprintf(stderr,
                             "qdc: note: %s: written by qdc's own writer (the job "
                             "changed the tets): only vertices, tets, triangles and "
-                            "their region tags are kept\n",
-                            out);
+                            "their region tags are kept%s\n",
+                            out,
+                            !pd                       ? ""
+                            : meshio_writes_pdata(of) ? ", and point data kept"
+                                                      : "; point data dropped");
             } else if (m->nv != local->nv || m->nt != local->nt) {
                 fprintf(stderr,
                         "qdc: result: %d vertices, %d tets: not the input's %d, %d\n",

@@ -779,8 +779,9 @@ static inline void note(const meshio_options *o, const char *fmt, ...)
 /* A point-data array a reader read: nv tuples of ncomp values v (from
  * qdc_malloc*, taken over) appended to *pd for the mesh (mesh.h, "Point
  * data"). An array with a NaN/Inf value is dropped with a note, not an
- * error: such files read as they did before point data was kept. An empty
- * name or ncomp < 1: dropped silently. QDC_ENOMEM. */
+ * error: such files read as they did before point data was kept; an integer
+ * type holding 1.5 (text) makes a floating array. An empty name or ncomp < 1:
+ * dropped silently. QDC_ENOMEM. */
 static inline qdc_status pdata_take(mesh_pdata **pd, int64_t nv, const char *name,
                                     size_t nlen, int64_t ncomp, int integer,
                                     const char *type, double *v, const meshio_options *o,
@@ -794,13 +795,18 @@ static inline qdc_status pdata_take(mesh_pdata **pd, int64_t nv, const char *nam
         qdc_free(v);
         return QDC_OK;
     }
-    for (size_t i = 0; i < n; i++)
+    for (size_t i = 0; i < n; i++) {
         if (!isfinite(v[i])) {
             note(o, "%s: point data %.*s dropped: value %zu is not finite (NaN/Inf)",
                  fmtname, (int)(nlen > 64 ? 64 : nlen), name, i);
             qdc_free(v);
             return QDC_OK;
         }
+        if (integer && v[i] != floor(v[i])) /* 1.5 in the text of an int array */
+            integer = 0;
+    }
+    for (size_t i = 0; integer && i < n; i++)
+        v[i] += 0.0; /* -0 read from text: the integer 0 */
     memset(&shell, 0, sizeof shell);
     shell.nv = (int32_t)nv;
     shell.pdata = *pd;
@@ -823,15 +829,24 @@ static inline void pdata_word(const mesh_parray *a, char out[256])
         out[k] = ok ? x : '_';
     }
     out[k] = 0;
+    if (!strcmp(out, "NULL") || !strcmp(out, "METADATA") || !k) /* keywords of FIELD */
+        snprintf(out + k, 256 - k, "_");
 }
 
-/* 1 if every value of integer array a fits an int32. */
-static inline int pdata_int32(const mesh_parray *a, int64_t nv)
+/* How a writer writes array a's values: 4 (int32) or 8 (int64) bytes for an
+ * integer array whose every value fits, 0 as doubles (a float array, or
+ * integers beyond int64). */
+static inline int pdata_ikind(const mesh_parray *a, int64_t nv)
 {
-    for (size_t i = 0; i < (size_t)nv * (size_t)a->ncomp; i++)
-        if (!(a->v[i] >= INT32_MIN && a->v[i] <= INT32_MAX))
-            return 0;
-    return 1;
+    int k = a->integer ? 4 : 0;
+
+    for (size_t i = 0; k && i < (size_t)nv * (size_t)a->ncomp; i++) {
+        double x = a->v[i];
+        if (x >= INT32_MIN && x <= INT32_MAX)
+            continue;
+        k = x >= -9223372036854775808.0 && x < 9223372036854775808.0 ? 8 : 0;
+    }
+    return k;
 }
 
 /* Element or cell types a reader skipped, counted for one note at the end. */

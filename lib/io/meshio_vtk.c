@@ -1272,17 +1272,17 @@ static int tet_type(const mesh_t *m)
     return m->mid ? 24 : 10;
 }
 
-/* One point array's values: integers as int32 (or 64-bit when one is
- * beyond), floats as doubles (%.17g in text: they read back exactly). */
-static void vw_parray(vw *o, const mesh_parray *a, int64_t nv, int i32)
+/* One point array's values: integers in ik bytes (pdata_ikind: 4, 8),
+ * else doubles (%.17g in text: they read back exactly). */
+static void vw_parray(vw *o, const mesh_parray *a, int64_t nv, int ik)
 {
     size_t n = (size_t)nv * (size_t)a->ncomp;
 
     o->per_line = a->ncomp > 9 ? 9 : a->ncomp;
     o->i = 0;
     for (size_t i = 0; i < n; i++) {
-        if (a->integer)
-            vw_int(o, (int64_t)a->v[i], i32 ? 4 : 8);
+        if (ik)
+            vw_int(o, (int64_t)a->v[i], ik);
         else
             vw_real(o, a->v[i]);
     }
@@ -1299,15 +1299,15 @@ static void vtk_write_pdata(const mesh_t *m, vw *o)
     wb_str(o->w, "\n");
     for (int32_t i = 0; i < m->pdata->n; i++) {
         const mesh_parray *a = &m->pdata->a[i];
-        int i32 = a->integer && pdata_int32(a, m->nv);
+        int ik = pdata_ikind(a, m->nv);
         pdata_word(a, name);
         wb_str(o->w, name);
         wb_str(o->w, " ");
         wb_int(o->w, a->ncomp);
         wb_str(o->w, " ");
         wb_int(o->w, m->nv);
-        wb_str(o->w, !a->integer ? " double\n" : i32 ? " int\n" : " vtktypeint64\n");
-        vw_parray(o, a, m->nv, i32);
+        wb_str(o->w, !ik ? " double\n" : ik == 4 ? " int\n" : " vtktypeint64\n");
+        vw_parray(o, a, m->nv, ik);
     }
 }
 
@@ -2506,9 +2506,9 @@ static void vtu_data(const mesh_t *m, int k, vw *o)
 }
 
 /* Point array i of m as a VTU DataArray: its name (XML's special bytes and
- * control bytes as '_') into name, Float64, or Int32 (Int64 when a value is
- * beyond) for an integer array. */
-static vtu_arr vtu_parr(const mesh_t *m, int32_t i, char name[256], int *i32)
+ * control bytes as '_') into name; an integer array Int32, or Int64 when a
+ * value is beyond (*ik 4 or 8), else Float64 (*ik 0: pdata_ikind). */
+static vtu_arr vtu_parr(const mesh_t *m, int32_t i, char name[256], int *ik)
 {
     const mesh_parray *a = &m->pdata->a[i];
     vtu_arr r;
@@ -2517,28 +2517,28 @@ static vtu_arr vtu_parr(const mesh_t *m, int32_t i, char name[256], int *i32)
     for (const char *c = a->name; *c && k < 255; c++, k++)
         name[k] = strchr("&<>\"'", *c) || (unsigned char)*c < 32 ? '_' : *c;
     name[k] = 0;
-    *i32 = a->integer && pdata_int32(a, m->nv);
+    *ik = pdata_ikind(a, m->nv);
     r.name = name;
-    r.type = !a->integer ? "Float64" : *i32 ? "Int32" : "Int64";
+    r.type = !*ik ? "Float64" : *ik == 4 ? "Int32" : "Int64";
     r.ncomp = a->ncomp;
-    r.bytes = (uint64_t)m->nv * (uint64_t)a->ncomp * (*i32 ? 4u : 8u);
+    r.bytes = (uint64_t)m->nv * (uint64_t)a->ncomp * (*ik == 4 ? 4u : 8u);
     return r;
 }
 
 /* Array k of the list (vtu_data's, then m's point arrays from 6 on). */
 static vtu_arr vtu_arr_of(const mesh_t *m, const vtu_arr *fixed, int k, char name[256],
-                          int *i32)
+                          int *ik)
 {
-    return k < 6 ? fixed[k] : vtu_parr(m, k - 6, name, i32);
+    return k < 6 ? fixed[k] : vtu_parr(m, k - 6, name, ik);
 }
 
-static void vtu_data_of(const mesh_t *m, int k, int i32, vw *o)
+static void vtu_data_of(const mesh_t *m, int k, int ik, vw *o)
 {
     if (k < 6) {
         o->per_line = 6;
         vtu_data(m, k, o);
     } else {
-        vw_parray(o, &m->pdata->a[k - 6], m->nv, i32);
+        vw_parray(o, &m->pdata->a[k - 6], m->nv, ik);
     }
 }
 
@@ -2556,7 +2556,7 @@ static void vtu_write(const mesh_t *m, int appended, wbuf *w)
                                         "",           "<CellData>\n", "<PointData>\n"};
     static const char *const close[6] = {
         "</Points>\n", "", "", "</Cells>\n", "</CellData>\n", "</PointData>\n"};
-    int npd = m->pdata ? m->pdata->n : 0, nk = 6 + npd, i32 = 1;
+    int npd = m->pdata ? m->pdata->n : 0, nk = 6 + npd, ik = 0;
     int first_pd = m->vref ? 5 : 6, last_pd = npd ? nk - 1 : 5;
     vw o = {w, appended, 0, 6, 0, 0};
     char name[256];
@@ -2573,11 +2573,11 @@ static void vtu_write(const mesh_t *m, int appended, wbuf *w)
         vtu_arr a;
         if ((k == 4 && !has_regions(m)) || (k == 5 && !m->vref))
             continue;
-        a = vtu_arr_of(m, arr, k, name, &i32);
+        a = vtu_arr_of(m, arr, k, name, &ik);
         wb_str(w, k < 5 ? open[k] : k == first_pd ? open[5] : "");
         xml_array_head(w, &a, appended, &off);
         if (!appended) {
-            vtu_data_of(m, k, i32, &o);
+            vtu_data_of(m, k, ik, &o);
             wb_str(w, "</DataArray>\n");
         }
         wb_str(w, k < 5 ? close[k] : k == last_pd ? close[5] : "");
@@ -2589,9 +2589,9 @@ static void vtu_write(const mesh_t *m, int appended, wbuf *w)
         for (int k = 0; k < nk; k++) {
             if ((k == 4 && !has_regions(m)) || (k == 5 && !m->vref))
                 continue;
-            put_le64(b, vtu_arr_of(m, arr, k, name, &i32).bytes);
+            put_le64(b, vtu_arr_of(m, arr, k, name, &ik).bytes);
             wb_put(w, b, 8);
-            vtu_data_of(m, k, i32, &o);
+            vtu_data_of(m, k, ik, &o);
         }
         wb_str(w, "\n</AppendedData>\n");
     }

@@ -263,6 +263,40 @@ TEST(add_refuses_nan_and_bad_shapes)
     mesh_free(m);
 }
 
+/* An int array's text may hold 1.5 (a floating array then) or -0 (the
+ * integer 0); integers beyond int64 are written as Float64. */
+TEST(integer_arrays_stay_exact)
+{
+    static const char s[] = VTK_HEAD "POINT_DATA 4\nSCALARS k int 1\n"
+                                     "LOOKUP_TABLE default\n-0 1.5 2 3\n"
+                                     "SCALARS j int 1\nLOOKUP_TABLE default\n-0 1 2 3\n";
+    mesh_t *m = NULL, *b = NULL;
+    qdc_error err;
+    const mesh_parray *a;
+    double *big = malloc(4 * sizeof *big);
+
+    ASSERT_TRUE(big);
+    ASSERT_OK(meshio_read(s, sizeof s - 1, MESHIO_AUTO, &m, &err));
+    a = arr(m, "k");
+    ASSERT_TRUE(a && !a->integer && a->v[1] == 1.5 && signbit(a->v[0]));
+    a = arr(m, "j");
+    ASSERT_TRUE(a && a->integer && a->v[0] == 0 && !signbit(a->v[0]));
+    big[0] = 1e19;
+    big[1] = -1e300;
+    big[2] = 1;
+    big[3] = -9223372036854775808.0;
+    ASSERT_OK(mesh_pdata_add(m, "big", 3, 1, 1, NULL, big, &err));
+    for (int k = 0; k < 4; k++) {
+        ASSERT_OK(roundtrip(m, pd_formats[k], &b));
+        a = arr(b, "big");
+        ASSERT_TRUE(a && !a->integer && a->v[0] == 1e19 && a->v[1] == -1e300 &&
+                    a->v[3] == -9223372036854775808.0);
+        ASSERT_TRUE(arr(b, "k") && arr(b, "k")->v[1] == 1.5);
+        mesh_free(b);
+    }
+    mesh_free(m);
+}
+
 static double lin(const double *p)
 {
     return p[0] + 2 * p[1] + 3 * p[2];
@@ -346,4 +380,5 @@ TEST(remap_without_pdata)
 TEST_MAIN("pdata", T(vtk_ascii_arrays), T(vtk_medit_ref_stays_vref),
           T(vtk_bad_sizes_and_nan), T(vtu_point_data), T(gmsh_node_data),
           T(roundtrip_bit_for_bit), T(add_refuses_nan_and_bad_shapes),
-          T(remap_interpolates_linear_fields), T(remap_without_pdata))
+          T(integer_arrays_stay_exact), T(remap_interpolates_linear_fields),
+          T(remap_without_pdata))
