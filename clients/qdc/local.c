@@ -153,8 +153,8 @@ static const char *pdata_words(const mesh_t *m, meshio_format fmt, char *b, size
         snprintf(b, n, "; point data dropped (%d arrays: qdc's %s writer has none)",
                  (int)p->n, meshio_format_name(fmt) ? meshio_format_name(fmt) : "?");
     else if (p->ninterp > 0)
-        snprintf(b, n, ", and point data interpolated at %d new vertices (%d arrays)",
-                 (int)p->ninterp, (int)p->n);
+        snprintf(b, n, ", and point data interpolated at %d new vert%s (%d arrays)",
+                 (int)p->ninterp, p->ninterp == 1 ? "ex" : "ices", (int)p->n);
     else
         snprintf(b, n, ", and point data kept (%d arrays)", (int)p->n);
     return b;
