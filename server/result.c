@@ -311,14 +311,15 @@ static void result_file(req *r, const job_rec *j, meshio_format f, char *path, s
 }
 
 /* The end of a result's Qdc-Note on the upload's point data (VTK, VTU,
- * Gmsh arrays): kept by topology=flips and none when f's writer writes
- * them; with topology=full dropped (result.qmesh does not carry them). */
-static const char *pdata_note(const job_rec *j, meshio_format f)
+ * Gmsh arrays): nothing when the writers keep it (topology none and flips
+ * keep the vertices); with topology=full it is dropped (result.qmesh does
+ * not carry it). */
+static const char *pdata_note(const job_rec *j)
 {
-    if (job_topology_full(j->options))
-        return "; topology=full: the upload's point data, and its boundary triangles "
-               "if the vertices changed, dropped";
-    return meshio_writes_pdata(f) ? ", and the upload's point data" : "";
+    return job_topology_full(j->options)
+               ? "; topology=full: the upload's point data, and its boundary triangles "
+                 "if the vertices changed, dropped"
+               : "";
 }
 
 static enum MHD_Result serve_result(struct MHD_Connection *c, req *r, const job_rec *j,
@@ -338,7 +339,7 @@ static enum MHD_Result serve_result(struct MHD_Connection *c, req *r, const job_
                  "coordinates: only vertices, tets, triangles and their region tags "
                  "are kept%s",
                  meshio_format_name(f) ? meshio_format_name(f) : "?",
-                 meshio_format_name(sf) ? meshio_format_name(sf) : "?", pdata_note(j, f));
+                 meshio_format_name(sf) ? meshio_format_name(sf) : "?", pdata_note(j));
     /* the upload's own format, but the run changed the tets: not spliced */
     else if (r->route == R_RESULT && sf == f && sf != MESHIO_QMESH && sf != MESHIO_JSON &&
              job_changes_tets(j->options))
@@ -346,7 +347,7 @@ static enum MHD_Result serve_result(struct MHD_Connection *c, req *r, const job_
                  "written by qdc's %s writer, not the uploaded file with new "
                  "coordinates (topology changed the tets): only vertices, tets, "
                  "triangles and their region tags are kept%s",
-                 meshio_format_name(f) ? meshio_format_name(f) : "?", pdata_note(j, f));
+                 meshio_format_name(f) ? meshio_format_name(f) : "?", pdata_note(j));
     const char *const h[] = {MHD_HTTP_HEADER_ETAG,
                              etag,
                              MHD_HTTP_HEADER_VARY,
