@@ -1,6 +1,7 @@
 #!/bin/sh
 # pdata.sh - point data (VTK POINT_DATA, VTU <PointData>, Gmsh $NodeData)
-# through --topology flips and full and qdc convert: a .vtu and a .vtk of
+# through --topology flips and full and qdc convert: a .vtu, a .vtk and a
+# binary MSH 2.2 of
 # the dev bunny (low quality, 10k tets: full inserts vertices on it) with a
 # linear field f = x + 2y + 3z, a 3-component field and an integer array
 # (each vertex's input index). flips keeps every vertex in its order: every
@@ -18,7 +19,7 @@ if ! "$PY" -c 'import meshio, numpy' 2> /dev/null; then
     exit 0
 fi
 BUN=$(devmesh bunny_low_10k)
-"$PY" - "$BUN" "$TMP" << 'PY' || { fail "pdata: inputs" "meshio could not write them"; exit 1; }
+"$PY" - "$BUN" "$TMP" << 'PY' 2> "$TMP/mk.err" || { fail "pdata: inputs" "$(tail -1 "$TMP/mk.err")"; exit 1; }
 import sys, meshio, numpy as np
 m = meshio.read(sys.argv[1])
 p = m.points
@@ -28,6 +29,7 @@ pd = {"f": p[:, 0] + 2 * p[:, 1] + 3 * p[:, 2], "vec": p * 0.5 - 1.0,
 out = meshio.Mesh(p, [("tetra", tets)], point_data=pd)
 out.write(sys.argv[2] + "/in.vtu")
 out.write(sys.argv[2] + "/in.vtk")
+out.write(sys.argv[2] + "/in.msh", file_format="gmsh22", binary=True)
 PY
 
 # cmp IN OUT MODE: "ok ..." or why not
@@ -61,7 +63,7 @@ else:
 PY
 }
 
-for in in in.vtu in.vtk; do
+for in in in.vtu in.vtk in.msh; do
     ext=${in#in.}
     for mode in flips full; do
         out=$TMP/$mode.$ext
@@ -69,7 +71,7 @@ for in in in.vtu in.vtk; do
             fail "pdata: $in --topology $mode" "$(tail -2 "$TMP/$mode.log")"
             continue
         fi
-        verdict "pdata: $in --topology $mode" "$(cmp_pd "$TMP/$in" "$out" $mode)"
+        verdict "pdata: $in --topology $mode" "$(cmp_pd "$TMP/$in" "$out" $mode 2> /dev/null | tail -1)"
         case $mode:$(grep 'note:.*point data' "$TMP/$mode.log") in
         flips:*"point data kept (3 arrays)"*) pass "pdata: $in flips: the note says point data kept" ;;
         full:*"point data interpolated at "[1-9]*) pass "pdata: $in full: the note says where it was interpolated" ;;
