@@ -317,8 +317,7 @@ static void result_file(req *r, const job_rec *j, meshio_format f, char *path, s
 static const char *pdata_note(const job_rec *j)
 {
     return job_topology_full(j->options)
-               ? "; topology=full: the upload's point data, and its boundary triangles "
-                 "if the vertices changed, dropped"
+               ? "; topology=full: the upload's point data dropped"
                : "";
 }
 
@@ -375,6 +374,55 @@ static int from_upload(const req *r, const job_rec *j)
     return r->route == R_RESULT && !job_is_surface(j->format);
 }
 
+static int any_nonzero(const int32_t *a, int32_t n)
+{
+    for (int32_t i = 0; a && i < n; i++)
+        if (a[i])
+            return 1;
+    return 0;
+}
+
+/* res (the result of a job whose topology mode changed the tets) given the
+ * boundary triangles, their refs and the vertex refs of result.mesh, the
+ * worker's Medit result, written from the same mesh: result.qmesh keeps
+ * neither, and the upload's no longer hold when topology=full changed the
+ * vertices or a bound let the flips change the boundary. QDC_EINTERNAL when
+ * the two do not match. */
+static qdc_status run_surface(req *r, const job_rec *j, mesh_t *res, qdc_error *e)
+{
+    char path[4300];
+    mesh_t *md = NULL;
+    qdc_status st;
+
+    job_path(r->q, j->id, "result.mesh", path, sizeof path);
+    st = meshio_load(path, MESHIO_MEDIT, &md, e);
+    if (st == QDC_OK && (md->nv != res->nv || md->nt != res->nt))
+        st = qdc_fail(e, QDC_EINTERNAL, "result.mesh does not match result.qmesh");
+    if (st == QDC_OK) {
+        int32_t *tris = res->tris, *ref = res->tri_ref, n = res->ntri;
+        /* Medit always has refs: taken when some are not 0 (or res had them) */
+        int refs = ref || any_nonzero(md->tri_ref, md->ntri);
+        res->tris = md->tris;
+        res->ntri = md->ntri;
+        md->tris = tris;
+        md->ntri = n;
+        if (refs) {
+            res->tri_ref = md->tri_ref;
+            md->tri_ref = ref;
+        } else {
+            qdc_free(res->tri_ref);
+            res->tri_ref = NULL;
+        }
+        if (res->vref || any_nonzero(md->vref, md->nv)) {
+            int32_t *v = res->vref;
+            res->vref = md->vref;
+            md->vref = v;
+        }
+    }
+    mesh_free(md);
+    return st;
+}
+
 /* The mesh to write for r (a job whose topology mode changed the tets: the
  * upload read without its source, with the result's coordinates, tets and
  * regions put in). The input: its file, read with its source kept
@@ -407,9 +455,10 @@ static qdc_status convert_source(req *r, const job_rec *j, mesh_t **out, qdc_err
     job_path(r->q, j->id, "result.qmesh", src, sizeof src);
     st = meshio_load(src, MESHIO_QMESH, &res, e);
     if (st == QDC_OK && in && tets && in->nv != res->nv) {
-        /* topology=full inserted or contracted vertices: the result alone
-         * (result.qmesh: no point data, boundary triangles or vertex refs
-         * of the upload, whose numbering no longer holds; Qdc-Note) */
+        /* topology=full inserted or contracted vertices: the upload's
+         * numbering no longer holds; the result with the run's own boundary
+         * triangles and vertex refs (the upload's point data dropped:
+         * Qdc-Note) */
         mesh_free(in);
         in = NULL;
     }
@@ -427,6 +476,8 @@ static qdc_status convert_source(req *r, const job_rec *j, mesh_t **out, qdc_err
         in = NULL;
     }
     mesh_free(in);
+    if (st == QDC_OK && tets)
+        st = run_surface(r, j, res, e);
     if (st != QDC_OK) {
         mesh_free(res);
         res = NULL;
@@ -447,7 +498,9 @@ static qdc_status fetch_sources(req *r, const job_rec *j)
                      r->route == R_INPUT ? job_input_name(j->format) : "result.qmesh",
                      NULL) == QDC_EIO ||
         (from_upload(r, j) &&
-         shared_fetch(r->q, j->id, job_input_name(j->format), NULL) == QDC_EIO))
+         shared_fetch(r->q, j->id, job_input_name(j->format), NULL) == QDC_EIO) ||
+        (from_upload(r, j) && job_changes_tets(j->options) &&
+         shared_fetch(r->q, j->id, "result.mesh", NULL) == QDC_EIO))
         return QDC_EIO;
     return fetch_frames(r, j);
 }

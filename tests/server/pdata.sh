@@ -3,8 +3,9 @@
 # tets) with a linear field f, a 3-component and an integer array, run with
 # topology=flips and topology=full and fetched as VTU. flips: the same
 # vertices, every array equal value for value, the Qdc-Note (qdc's own
-# writer: the tets changed) drops nothing of them. full inserts vertices: the result is served (from
-# result.qmesh alone) and its Qdc-Note says the point data is dropped.
+# writer: the tets changed) drops nothing of them. full inserts vertices: the
+# result is served (result.qmesh with result.mesh's surface) and its Qdc-Note
+# says the point data is dropped.
 . "$(dirname "$0")/../lib.sh"
 . "$(dirname "$0")/daemon.inc"
 
@@ -59,5 +60,52 @@ PY
     *) fail "server pdata: $mode: Qdc-Note" "'$note'" ;;
     esac
 done
+# topology=full on a Medit upload with boundary triangles and refs: the vertices
+# change, so its VTU is written from the run's own surface (result.mesh), not
+# the upload's numbering: the same triangles as the Medit result, each a face
+# of exactly one tet, the input's refs as a multiset.
+code=$(submit "$BUN" model/x-medit "topology=full" "$TMP/mf.sub")
+id=$(jf "$TMP/mf.sub" .id)
+st=$(poll_all "$id")
+if [ "$code" != 202 ] || [ "$st" != succeeded ]; then
+    fail "server pdata: medit full" "$code $st $(head -c 300 "$TMP/mf.sub")"
+else
+    c1=$(req GET "/v1/jobs/$id/result?format=vtu" "$TMP/mf.vtu")
+    c2=$(req GET "/v1/jobs/$id/result?format=medit" "$TMP/mf.mesh")
+    why=$("$PY" - "$BUN" "$TMP/mf.mesh" "$TMP/mf.vtu" "$c1" "$c2" << 'PY'
+import sys, collections, meshio, numpy as np
+if sys.argv[4] != "200" or sys.argv[5] != "200":
+    print("HTTP %s %s" % (sys.argv[4], sys.argv[5])); sys.exit()
+def tri_refs(m):
+    tris, refs = [], []
+    for k, c in enumerate(m.cells):
+        if c.type == "triangle":
+            tris.append(c.data)
+            r = [v[k] for n, v in m.cell_data.items() if n in ("medit:ref", "gmsh:physical", "CellEntityIds", "region")]
+            refs.append(np.asarray(r[0]) if r else np.zeros(len(c.data), int))
+    return np.vstack(tris), np.concatenate(refs)
+a, md, vt = meshio.read(sys.argv[1]), meshio.read(sys.argv[2]), meshio.read(sys.argv[3])
+ta, ra = tri_refs(a)
+tm, rm = tri_refs(md)
+tv, rv = tri_refs(vt)
+tets = [c.data for c in vt.cells if c.type == "tetra"][0]
+faces = collections.Counter()
+for t in tets:
+    for f in ((0, 1, 2), (0, 1, 3), (0, 2, 3), (1, 2, 3)):
+        faces[tuple(sorted(t[list(f)]))] += 1
+once = sum(faces[tuple(sorted(t))] == 1 for t in tv)
+key = lambda T: sorted(tuple(sorted(x)) for x in T.tolist())
+bad = []
+if len(vt.points) == len(a.points): bad.append("no vertex inserted or contracted")
+if key(tv) != key(tm): bad.append("vtu and medit triangles differ")
+if once != len(tv): bad.append("%d of %d triangles not boundary faces" % (len(tv) - once, len(tv)))
+if sorted(rv.tolist()) != sorted(ra.tolist()): bad.append("refs differ from the input's: %s, input %s" % (collections.Counter(rv.tolist()).most_common(3), collections.Counter(ra.tolist()).most_common(3)))
+print("differ: %s" % bad if bad else
+      "ok %d -> %d vertices, %d triangles with the input's refs, each a boundary face"
+      % (len(a.points), len(vt.points), len(tv)))
+PY
+)
+    verdict "server pdata: medit full: result as vtu" "$why"
+fi
 stop_qdcd
 [ $NFAIL = 0 ]
