@@ -140,23 +140,33 @@ int cli_options(int argc, char **argv)
     return CLI_OK;
 }
 
-/* What becomes of m's point data written in fmt, for a note: "" if it has
- * none, else ", and point data kept (N arrays)", "... interpolated at N new
- * vertices" (--topology full) or "; point data dropped (...)". */
-static const char *pdata_words(const mesh_t *m, meshio_format fmt, char *b, size_t n)
+/* What qdc's writer of fmt keeps of m, for a note: vertices, tets, triangles
+ * and their region tags, and the point data when the writer has it (kept,
+ * or interpolated at N new vertices by --topology full), else the point data
+ * said to be dropped. */
+static const char *kept_words(const mesh_t *m, meshio_format fmt, char *b, size_t n)
 {
     const mesh_pdata *p = m->pdata;
+    int k = p ? (int)p->n : 0;
+    const char *s = k == 1 ? "" : "s";
 
-    if (!p || !p->n)
-        snprintf(b, n, "%s", "");
+    if (!k)
+        snprintf(b, n, "only vertices, tets, triangles and their region tags are kept");
     else if (!meshio_writes_pdata(fmt))
-        snprintf(b, n, "; point data dropped (%d arrays: qdc's %s writer has none)",
-                 (int)p->n, meshio_format_name(fmt) ? meshio_format_name(fmt) : "?");
+        snprintf(b, n,
+                 "only vertices, tets, triangles and their region tags are kept; point "
+                 "data dropped (%d array%s: qdc's %s writer has none)",
+                 k, s, meshio_format_name(fmt) ? meshio_format_name(fmt) : "?");
     else if (p->ninterp > 0)
-        snprintf(b, n, ", and point data interpolated at %d new vert%s (%d arrays)",
-                 (int)p->ninterp, p->ninterp == 1 ? "ex" : "ices", (int)p->n);
+        snprintf(b, n,
+                 "only vertices, tets, triangles, their region tags and the point data "
+                 "are kept (%d array%s, interpolated at %d new vert%s)",
+                 k, s, (int)p->ninterp, p->ninterp == 1 ? "ex" : "ices");
     else
-        snprintf(b, n, ", and point data kept (%d arrays)", (int)p->n);
+        snprintf(b, n,
+                 "only vertices, tets, triangles, their region tags and the point data "
+                 "are kept (%d array%s)",
+                 k, s);
     return b;
 }
 
@@ -167,18 +177,16 @@ static void source_note(const mesh_t *m, const char *out, meshio_format fmt, int
 {
     const char *why = NULL;
     int f32 = 0;
-    char pd[160];
+    char kept[240];
 
     if (quiet || meshio_source_format(m) == MESHIO_AUTO)
         return;
     fmt = meshio_save_format(out, fmt, m);
     meshio_source_bytes(m, &f32);
     if (!meshio_splices(m, fmt, &why) && (fmt == MESHIO_AUTO || meshio_has_writer(fmt)))
-        fprintf(stderr,
-                "qdc: note: %s: written by qdc's %s writer (%s): only vertices, tets, "
-                "triangles and their region tags are kept%s\n",
-                out, meshio_format_name(fmt) ? meshio_format_name(fmt) : "?", why,
-                pdata_words(m, fmt, pd, sizeof pd));
+        fprintf(stderr, "qdc: note: %s: written by qdc's %s writer (%s): %s\n", out,
+                meshio_format_name(fmt) ? meshio_format_name(fmt) : "?", why,
+                kept_words(m, fmt, kept, sizeof kept));
     else if (f32)
         fprintf(stderr,
                 "qdc: note: %s: coordinates written as float32, as in the input\n", out);
@@ -674,15 +682,14 @@ static int optimize_write(const optimize_args *x, mesh_t *m, int *rewrote)
     /* the input file, parked during the run, is read again for a spliced
      * write; if it changed meanwhile, qdc's own writer writes OUT */
     if (meshio_unpark_source(m, &err) != QDC_OK) {
-        char pd[160];
+        char kept[240];
         if (!x->ps.quiet)
             fprintf(
                 stderr,
                 "qdc: note: %s (read again to write %s in its layout): %s is "
-                "written by qdc's own writer: only vertices, tets, triangles and "
-                "their region tags are kept%s\n",
+                "written by qdc's own writer: %s\n",
                 err.msg, x->out, x->out,
-                pdata_words(m, meshio_save_format(x->out, x->fout, m), pd, sizeof pd));
+                kept_words(m, meshio_save_format(x->out, x->fout, m), kept, sizeof kept));
         meshio_drop_source(m);
         qdc_error_clear(&err);
     }

@@ -966,12 +966,12 @@ static int download(remote *rm, const char *id, const char *out, const char *out
                 if (!rm->quiet)
                     fprintf(stderr,
                             "qdc: note: %s: written by qdc's own writer (the job "
-                            "changed the tets): only vertices, tets, triangles and "
-                            "their region tags are kept%s\n",
+                            "changed the tets): only vertices, tets, triangles%s\n",
                             out,
-                            !pd                       ? ""
-                            : meshio_writes_pdata(of) ? ", and point data kept"
-                                                      : "; point data dropped");
+                            !pd ? " and their region tags are kept"
+                            : meshio_writes_pdata(of)
+                                ? ", their region tags and the point data are kept"
+                                : " and their region tags are kept; point data dropped");
             } else if (m->nv != local->nv || m->nt != local->nt) {
                 fprintf(stderr,
                         "qdc: result: %d vertices, %d tets: not the input's %d, %d\n",

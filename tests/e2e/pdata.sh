@@ -73,8 +73,8 @@ for in in in.vtu in.vtk in.msh; do
         fi
         verdict "pdata: $in --topology $mode" "$(cmp_pd "$TMP/$in" "$out" $mode 2> /dev/null | tail -1)"
         case $mode:$(grep 'note:.*point data' "$TMP/$mode.log") in
-        flips:*"point data kept (3 arrays)"*) pass "pdata: $in flips: the note says point data kept" ;;
-        full:*"point data interpolated at "[1-9]*) pass "pdata: $in full: the note says where it was interpolated" ;;
+        flips:*"the point data are kept (3 arrays)"*) pass "pdata: $in flips: the note says point data kept" ;;
+        full:*"point data are kept (3 arrays, interpolated at "[1-9]*) pass "pdata: $in full: the note says where it was interpolated" ;;
         *) fail "pdata: $in $mode: note" "$(grep note: "$TMP/$mode.log")" ;;
         esac
     done
