@@ -57,7 +57,11 @@ qdc_status mesh_pdata_add(mesh_t *m, const char *name, size_t nlen, int32_t ncom
         qdc_free(v);
         return qdc_fail(err, QDC_ENOMEM, "out of memory for point data");
     }
-    memcpy(a->name, name, nlen);
+    /* a control byte (a NUL inside the file's name too) as '_': names are
+     * written back as text, and "medit:ref\0..." must not come back as
+     * the vertex refs' "medit:ref" */
+    for (size_t i = 0; i < nlen; i++)
+        a->name[i] = (unsigned char)name[i] < 0x20 || name[i] == 0x7f ? '_' : name[i];
     a->name[nlen] = 0;
     a->ncomp = ncomp;
     a->integer = integer != 0;

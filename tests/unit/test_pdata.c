@@ -263,6 +263,36 @@ TEST(add_refuses_nan_and_bad_shapes)
     mesh_free(m);
 }
 
+/* Control bytes of a name (a NUL inside the file's name too, as the VTK
+ * fuzzer found: "medit:ref\0..." came back as the vertex refs) become '_',
+ * and the name survives a VTK round trip as an array, not as the refs. */
+TEST(name_control_bytes)
+{
+    static const char name[] = "medit:ref\0\t\x7f";
+    mesh_t *m = mesh_new(4, 1, 0), *b = NULL;
+    double *v = calloc(4, sizeof *v);
+    sink s = {0};
+    qdc_error err;
+    static const double xyz[12] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1};
+
+    ASSERT_TRUE(m && v);
+    memcpy(m->xyz, xyz, sizeof xyz);
+    for (int i = 0; i < 4; i++)
+        m->tets[i] = i;
+    for (int i = 0; i < 4; i++)
+        v[i] = i + 0.5;
+    ASSERT_OK(mesh_pdata_add(m, name, sizeof name - 1, 1, 0, NULL, v, &err));
+    ASSERT_TRUE(!strcmp(m->pdata->a[0].name, "medit:ref___"));
+    ASSERT_OK(meshio_write(m, MESHIO_VTK_ASCII, sink_write, &s, &err));
+    ASSERT_OK(meshio_read(s.b, s.n, MESHIO_VTK_ASCII, &b, &err));
+    ASSERT_TRUE(arr(b, "medit:ref___") != NULL);
+    ASSERT_TRUE(b->vref == NULL || (b->vref[1] == 0 && b->vref[3] == 0));
+    ASSERT_TRUE(arr(b, "medit:ref___")->v[3] == 3.5);
+    free(s.b);
+    mesh_free(b);
+    mesh_free(m);
+}
+
 /* An int array's text may hold 1.5 (a floating array then) or -0 (the
  * integer 0); integers beyond int64 are written as Float64. */
 TEST(integer_arrays_stay_exact)
@@ -380,5 +410,5 @@ TEST(remap_without_pdata)
 TEST_MAIN("pdata", T(vtk_ascii_arrays), T(vtk_medit_ref_stays_vref),
           T(vtk_bad_sizes_and_nan), T(vtu_point_data), T(gmsh_node_data),
           T(roundtrip_bit_for_bit), T(add_refuses_nan_and_bad_shapes),
-          T(integer_arrays_stay_exact), T(remap_interpolates_linear_fields),
-          T(remap_without_pdata))
+          T(name_control_bytes), T(integer_arrays_stay_exact),
+          T(remap_interpolates_linear_fields), T(remap_without_pdata))
