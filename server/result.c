@@ -310,15 +310,19 @@ static void result_file(req *r, const job_rec *j, meshio_format f, char *path, s
     free(b);
 }
 
-/* The end of a result's Qdc-Note on the upload's point data (VTK, VTU,
- * Gmsh arrays): nothing when the writers keep it (topology none and flips
- * keep the vertices); with topology=full it is dropped (result.qmesh does
- * not carry it). */
-static const char *pdata_note(const job_rec *j)
+/* What a result written by qdc's writer of f keeps, for its Qdc-Note:
+ * vertices, tets, triangles and their region tags, and the upload's point
+ * data (VTK, VTU, Gmsh arrays) when f's writer has it, except after
+ * topology=full (result.qmesh does not carry it). */
+static const char *kept_note(const job_rec *j, meshio_format f)
 {
+    if (!meshio_writes_pdata(f))
+        return "only vertices, tets, triangles and their region tags are kept";
     return job_topology_full(j->options)
-               ? "; topology=full: the upload's point data dropped"
-               : "";
+               ? "only vertices, tets, triangles and their region tags are kept; "
+                 "topology=full: the upload's point data dropped"
+               : "only vertices, tets, triangles, their region tags and the point "
+                 "data are kept";
 }
 
 static enum MHD_Result serve_result(struct MHD_Connection *c, req *r, const job_rec *j,
@@ -335,18 +339,16 @@ static enum MHD_Result serve_result(struct MHD_Connection *c, req *r, const job_
     else if (r->route == R_RESULT && sf != MESHIO_AUTO && sf != f)
         snprintf(note, sizeof note,
                  "written by qdc's %s writer, not the uploaded %s file with new "
-                 "coordinates: only vertices, tets, triangles and their region tags "
-                 "are kept%s",
+                 "coordinates: %s",
                  meshio_format_name(f) ? meshio_format_name(f) : "?",
-                 meshio_format_name(sf) ? meshio_format_name(sf) : "?", pdata_note(j));
+                 meshio_format_name(sf) ? meshio_format_name(sf) : "?", kept_note(j, f));
     /* the upload's own format, but the run changed the tets: not spliced */
     else if (r->route == R_RESULT && sf == f && sf != MESHIO_QMESH && sf != MESHIO_JSON &&
              job_changes_tets(j->options))
         snprintf(note, sizeof note,
                  "written by qdc's %s writer, not the uploaded file with new "
-                 "coordinates (topology changed the tets): only vertices, tets, "
-                 "triangles and their region tags are kept%s",
-                 meshio_format_name(f) ? meshio_format_name(f) : "?", pdata_note(j));
+                 "coordinates (topology changed the tets): %s",
+                 meshio_format_name(f) ? meshio_format_name(f) : "?", kept_note(j, f));
     const char *const h[] = {MHD_HTTP_HEADER_ETAG,
                              etag,
                              MHD_HTTP_HEADER_VARY,

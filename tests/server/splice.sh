@@ -113,7 +113,7 @@ if grep -q '^gmsh41 ' "$TMP/ids" 2> /dev/null; then
     # the conversion says what it could not keep; the spliced result says nothing
     same=$(hdr "$TMP/gmsh41.d2" Qdc-Note)
     case $note in
-    *"vtu writer"*"only vertices, tets, triangles and their region tags are kept")
+    *"vtu writer"*"only vertices, tets, triangles, their region tags and the point data are kept")
         if [ -z "$same" ]; then
             pass "splice: gmsh41 -> vtu carries Qdc-Note: $note; the spliced gmsh41 result none"
         else
