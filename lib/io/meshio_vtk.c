@@ -24,6 +24,20 @@ typedef enum { T_I8, T_U8, T_I16, T_U16, T_I32, T_U32, T_I64, T_U64, T_F32, T_F6
 
 static const int vsize[] = {1, 1, 2, 2, 4, 4, 8, 8, 4, 8};
 
+/* A text value of a float32 array (VTK `float`, VTU Float32) as the float32
+ * it stands for, as a binary one is, so that a file reads the same whatever
+ * the digits its writer gave (qdc writes 9: splice.c); 1 if a finite value
+ * is out of float32's range. */
+static int text_f32(double *x)
+{
+    float f = (float)*x;
+
+    if (isfinite(*x) && !isfinite(f))
+        return 1;
+    *x = (double)f;
+    return 0;
+}
+
 static const struct {
     const char *name;
     vtype t;
@@ -730,13 +744,21 @@ static qdc_status vtk_values(vtk *v, const char *what, int64_t n, vtype t, int f
         if (v->voff && i % 3 == 0)
             v->voff[i / 3] = (uint64_t)(s->p - s->base);
         if (finite) {
+            const char *at = s->p;
             st = tok_real(s, s->p, te, what, &x, err);
             if (st != QDC_OK)
                 return st;
+            if (t == T_F32 && text_f32(&x))
+                return fail_txt(err, QDC_EPARSE, s, at, "%s: %s is out of float's range",
+                                what, quote_tok(q, s, at, te));
         } else {
             if (s->p == te || parse_double(s->p, te, &x) != 0)
                 return fail_txt(err, QDC_EPARSE, s, s->p, "%s: expected a number, got %s",
                                 what, quote_tok(q, s, s->p, te));
+            if (t == T_F32 && text_f32(&x))
+                return fail_txt(err, QDC_EPARSE, s, s->p,
+                                "%s: %s is out of float's range", what,
+                                quote_tok(q, s, s->p, te));
             s->p = te;
         }
         if (out && sink_put(out, i, x) != 0)
@@ -1848,8 +1870,8 @@ static qdc_status vtu_bytes(vtu *x, const xtag *t, int appended, size_t want, sr
 
 /* The n values of an ascii DataArray into out (NULL: skip); finite: NaN
  * and infinities are errors. rec (Points only): where each vertex starts. */
-static qdc_status vtu_ascii(vtu *x, const xtag *t, int64_t n, int finite, vsink *out,
-                            srcrec *rec, qdc_error *err)
+static qdc_status vtu_ascii(vtu *x, const xtag *t, int64_t n, int finite, int f32,
+                            vsink *out, srcrec *rec, qdc_error *err)
 {
     txt *s = &x->s;
     qdc_status st;
@@ -1866,7 +1888,7 @@ static qdc_status vtu_ascii(vtu *x, const xtag *t, int64_t n, int finite, vsink 
     }
     for (int64_t i = 0; i < n; i++) {
         double y;
-        const char *te, *lim = data_end(x, s->p);
+        const char *te, *at, *lim = data_end(x, s->p);
         char q[32];
         int64_t u;
         if (out && out->a && txt_uint_fast(s, 0, INT32_MAX, &u)) {
@@ -1878,6 +1900,7 @@ static qdc_status vtu_ascii(vtu *x, const xtag *t, int64_t n, int finite, vsink 
             rec->off[i / 3] = (uint64_t)(s->p - s->base);
         for (te = s->p; te < lim && !is_space((unsigned char)*te) && *te != '<'; te++)
             ;
+        at = s->p;
         if (finite)
             st = tok_real(s, s->p, te, "DataArray", &y, err);
         else
@@ -1888,6 +1911,10 @@ static qdc_status vtu_ascii(vtu *x, const xtag *t, int64_t n, int finite, vsink 
                                 quote_tok(q, s, s->p, te));
         if (st != QDC_OK)
             return st;
+        if (f32 && text_f32(&y))
+            return fail_txt(err, QDC_EPARSE, s, at,
+                            "DataArray: %s is out of Float32's range",
+                            quote_tok(q, s, at, te));
         s->p = te;
         if (out && sink_put(out, i, y) != 0)
             return qdc_fail(err, QDC_ENOMEM, "out of memory for a VTU array");
@@ -1918,7 +1945,7 @@ static qdc_status vtu_array(vtu *x, const xtag *t, int64_t n, vtype vt, int fini
         rec->nv = n / 3;
     }
     if ((size_t)(fe - fv) == 5 && memcmp(fv, "ascii", 5) == 0)
-        return vtu_ascii(x, t, n, finite, out, rec, err);
+        return vtu_ascii(x, t, n, finite, vt == T_F32, out, rec, err);
     if ((size_t)(fe - fv) == 6 && memcmp(fv, "binary", 6) == 0)
         appended = 0;
     else if ((size_t)(fe - fv) == 8 && memcmp(fv, "appended", 8) == 0)

@@ -1245,10 +1245,33 @@ TEST(vtk_ascii_float32_points)
         ASSERT_TRUE(strstr(s.b, want[k]) != NULL);
         ASSERT_TRUE(strstr(s.b, "\n1 0 0\n0 1 0\n0 0 1\n") != NULL);
         ASSERT_OK(meshio_read(s.b, s.n - 1, MESHIO_AUTO, &b, &err));
-        ASSERT_TRUE(k ? b->xyz[0] == 0.1 : (float)b->xyz[0] == 0.1f);
+        /* a float field's text is read as the float32 it stands for */
+        ASSERT_TRUE(k ? b->xyz[0] == 0.1 : b->xyz[0] == (double)0.1f);
         mesh_free(b);
         mesh_free(m);
         free(s.b);
+    }
+    /* "0.1" and a 17-digit "0.49999999999999998" in a float field: the
+     * floats; a finite value out of float's range: an error */
+    {
+        const char *pts[2] = {"0.1 0 0\n0.49999999999999998 0 0\n0 1 0\n0 0 1\n",
+                              "0 0 0\n1e39 0 0\n0 1 0\n0 0 1\n"};
+        for (int k = 0; k < 2; k++) {
+            mesh_t *m = NULL;
+            int n = snprintf(vtk, sizeof vtk,
+                             "# vtk DataFile Version 2.0\nx\nASCII\nDATASET "
+                             "UNSTRUCTURED_GRID\nPOINTS 4 float\n%sCELLS 1 5\n4 0 1 2 "
+                             "3\nCELL_TYPES 1\n10\n",
+                             pts[k]);
+            qdc_status st = meshio_read(vtk, (size_t)n, MESHIO_AUTO, &m, &err);
+            if (k == 0) {
+                ASSERT_OK(st);
+                ASSERT_TRUE(m->xyz[0] == (double)0.1f && m->xyz[3] == 0.5);
+            } else {
+                ASSERT_TRUE(st == QDC_EPARSE && strstr(err.msg, "1e39") != NULL);
+            }
+            mesh_free(m);
+        }
     }
 }
 TEST_MAIN("formats", T(roundtrip_all_tags), T(roundtrip_no_tags), T(roundtrip_empty),
