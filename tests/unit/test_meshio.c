@@ -535,8 +535,16 @@ TEST(allocation_failures)
 #ifdef QDC_FAULT_INJECTION
     mesh_t *m = make_mesh(50, 60, 10), *b;
     qdc_error err;
+    double *pv = malloc(3 * 50 * sizeof *pv), *pi = malloc(50 * sizeof *pi);
 
-    ASSERT_TRUE(m);
+    ASSERT_TRUE(m && pv && pi);
+    /* point data too: its readers and writers (VTK, VTU, Gmsh) under failures */
+    for (int i = 0; i < 150; i++)
+        pv[i] = i * 0.25 - 3;
+    for (int i = 0; i < 50; i++)
+        pi[i] = i;
+    ASSERT_OK(mesh_pdata_add(m, "vec", 3, 3, 0, NULL, pv, &err));
+    ASSERT_OK(mesh_pdata_add(m, "id", 2, 1, 1, NULL, pi, &err));
     for (int f = MESHIO_MEDIT; f < MESHIO_FORMAT_COUNT; f++) {
         sink s = {0};
         qdc_status st;
