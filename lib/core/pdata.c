@@ -72,6 +72,21 @@ qdc_status mesh_pdata_add(mesh_t *m, const char *name, size_t nlen, int32_t ncom
     return QDC_OK;
 }
 
+/* d: an array like s (name, components, kind) with nval values of 0; -1 out
+ * of memory (what was allocated is d's, for mesh_pdata_free). */
+static int parray_like(mesh_parray *d, const mesh_parray *s, size_t nval)
+{
+    size_t len = strlen(s->name);
+
+    *d = *s;
+    d->name = qdc_malloc(len + 1);
+    d->v = qdc_calloc(nval + 1, sizeof *d->v);
+    if (!d->name || !d->v)
+        return -1;
+    memcpy(d->name, s->name, len + 1);
+    return 0;
+}
+
 mesh_pdata *mesh_pdata_dup(const mesh_pdata *p, int32_t nv)
 {
     mesh_pdata *d;
@@ -88,17 +103,11 @@ mesh_pdata *mesh_pdata_dup(const mesh_pdata *p, int32_t nv)
         memcpy(d->made, p->made, (size_t)nv);
     }
     for (int32_t i = 0; i < p->n; i++) {
-        const mesh_parray *s = &p->a[i];
-        size_t n = (size_t)nv * (size_t)s->ncomp, len = strlen(s->name);
-        mesh_parray *a = &d->a[i];
-        *a = *s;
-        a->name = qdc_malloc(len + 1);
-        a->v = qdc_mallocn(n + 1, sizeof *a->v);
+        size_t n = (size_t)nv * (size_t)p->a[i].ncomp;
         d->n = i + 1;
-        if (!a->name || !a->v)
+        if (parray_like(&d->a[i], &p->a[i], n))
             goto fail;
-        memcpy(a->name, s->name, len + 1);
-        memcpy(a->v, s->v, n * sizeof *a->v);
+        memcpy(d->a[i].v, p->a[i].v, n * sizeof *d->a[i].v);
     }
     return d;
 fail:
@@ -294,16 +303,12 @@ static mesh_pdata *carry_kept(const mesh_t *m, int32_t nv, const int32_t *vmap,
     }
     for (int32_t i = 0; i < p->n; i++) {
         const mesh_parray *a = &p->a[i];
-        size_t len = strlen(a->name), nc = (size_t)a->ncomp;
-        q->a[i] = *a;
-        q->a[i].name = qdc_malloc(len + 1);
-        q->a[i].v = qdc_calloc((size_t)nv * nc + 1, sizeof(double));
+        size_t nc = (size_t)a->ncomp;
         q->n = i + 1;
-        if (!q->a[i].name || !q->a[i].v) {
+        if (parray_like(&q->a[i], a, (size_t)nv * nc)) {
             mesh_pdata_free(q);
             return NULL;
         }
-        memcpy(q->a[i].name, a->name, len + 1);
         for (int32_t v = 0; v < m->nv; v++)
             if (vmap[v] >= 0)
                 memcpy(q->a[i].v + (size_t)vmap[v] * nc, a->v + (size_t)v * nc,

@@ -42,6 +42,7 @@ typedef struct {
     int splices;           /* written back as its source with new coordinates */
     int p2;                /* write writes second-order tets (mesh_t.mid) with their
                               ten nodes; 0: such a mesh is written only spliced */
+    int pdata;             /* write writes point data (mesh_t.pdata) */
 } meshio_fmt;
 
 #define MESHIO_FORMAT(id, desc) extern const meshio_fmt desc;

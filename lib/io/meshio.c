@@ -238,20 +238,7 @@ int meshio_writes_p2(meshio_format f)
 
 int meshio_writes_pdata(meshio_format f)
 {
-    switch (f) {
-    case MESHIO_VTK:
-    case MESHIO_VTK_ASCII:
-    case MESHIO_VTU:
-    case MESHIO_VTU_ASCII:
-    case MESHIO_GMSH41:
-    case MESHIO_GMSH41_BIN:
-    case MESHIO_GMSH22:
-    case MESHIO_GMSH22_BIN:
-    case MESHIO_GMSH40:
-        return 1;
-    default:
-        return 0;
-    }
+    return meshio_has_writer(f) && table[f]->pdata;
 }
 
 /* Does the parameter list [p, e) (";a=b; c=d") hold want ("a=b")? Spaces

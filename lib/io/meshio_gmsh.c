@@ -1897,12 +1897,12 @@ static meshio_format sniff_gmsh(const char *buf, size_t len, size_t i)
 }
 
 /* What every Gmsh variant shares: one reader and writer for all versions and
- * encodings, spliced writes, ten-node tets. The variants differ in their
- * names and media types; .msh names the family (MSH 4.1 ASCII), whose
- * sniffer tells the others apart. */
+ * encodings, spliced writes, ten-node tets, point data ($NodeData). The variants differ
+ * in their names and media types; .msh names the family (MSH 4.1 ASCII), whose sniffer
+ * tells the others apart. */
 #define GMSH_VARIANT                                                                     \
     .ext = "msh", .input = "input.msh", .read = read_gmsh, .write = write_gmsh,          \
-    .splices = 1, .p2 = 1
+    .splices = 1, .p2 = 1, .pdata = 1
 #define GMSH_OTHER(var, name_, aliases_, about_, media_, media_alt_)                     \
     const meshio_fmt var = {.name = name_,                                               \
                             .aliases = aliases_,                                         \

@@ -789,30 +789,31 @@ static inline qdc_status pdata_take(mesh_pdata **pd, int64_t nv, const char *nam
 {
     size_t n = (size_t)nv * (size_t)(ncomp > 0 ? ncomp : 0);
     mesh_t shell;
+    qdc_error e;
     qdc_status st;
 
     if (!nlen || ncomp < 1 || ncomp > INT32_MAX || nv < 0 || nv > INT32_MAX) {
         qdc_free(v);
         return QDC_OK;
     }
-    for (size_t i = 0; i < n; i++) {
-        if (!isfinite(v[i])) {
-            note(o, "%s: point data %.*s dropped: value %zu is not finite (NaN/Inf)",
-                 fmtname, (int)(nlen > 64 ? 64 : nlen), name, i);
-            qdc_free(v);
-            return QDC_OK;
-        }
-        if (integer && v[i] != floor(v[i])) /* 1.5 in the text of an int array */
-            integer = 0;
-    }
+    /* 1.5 in the text of an int array: a floating one (NaN too: refused below) */
+    for (size_t i = 0; integer && i < n; i++)
+        integer = v[i] == floor(v[i]);
     for (size_t i = 0; integer && i < n; i++)
         v[i] += 0.0; /* -0 read from text: the integer 0 */
     memset(&shell, 0, sizeof shell);
     shell.nv = (int32_t)nv;
     shell.pdata = *pd;
-    st = mesh_pdata_add(&shell, name, nlen, (int32_t)ncomp, integer, type, v, err);
+    qdc_error_clear(&e);
+    st = mesh_pdata_add(&shell, name, nlen, (int32_t)ncomp, integer, type, v, &e);
     *pd = shell.pdata;
-    return st;
+    if (st == QDC_EINVAL) { /* a value NaN or Inf (v freed): e.msg says which */
+        const char *why = strstr(e.msg, ": value ");
+        note(o, "%s: point data %.*s dropped%s", fmtname, (int)(nlen > 64 ? 64 : nlen),
+             name, why ? why : "");
+        return QDC_OK;
+    }
+    return st == QDC_OK ? QDC_OK : qdc_fail(err, st, "%s", e.msg);
 }
 
 /* Point-data array i's name as a writer puts it in a file whose names are

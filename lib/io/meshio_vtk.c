@@ -2697,11 +2697,12 @@ static meshio_format sniff_vtu(const char *buf, size_t len, size_t i)
 }
 
 /* What the variants of each VTK family share: its reader and writer (one
- * for both encodings), spliced writes, ten-node tets (VTK_QUADRATIC_TETRA).
+ * for both encodings), spliced writes, ten-node tets (VTK_QUADRATIC_TETRA),
+ * point data.
  * The binary variant of each sniffs and names the family. */
 #define VTK_VARIANT(ext_, read_, write_)                                                 \
     .ext = ext_, .input = "input." ext_, .read = read_, .write = write_, .splices = 1,   \
-    .p2 = 1
+    .p2 = 1, .pdata = 1
 
 const meshio_fmt fmt_vtk = {
     .name = "vtk",
