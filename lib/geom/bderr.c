@@ -212,6 +212,18 @@ out:
     qdc_free(cnt);
 }
 
+/* Distance d of a sample (a vertex one if vert) into the running max, the
+ * vertices' max and the sums. */
+static void add_distance(double d, int vert, double *mx, double *vmx, double *sm,
+                         double *sm2)
+{
+    *mx = d > *mx ? d : *mx;
+    if (vert)
+        *vmx = d > *vmx ? d : *vmx;
+    *sm += d;
+    *sm2 += d * d;
+}
+
 /* Distances from every sample of s to the surface in b. The search for each
  * starts from the triangle of b with the sample's triangle's index: the same
  * answer (bderr_bvh_closest_near), found sooner when the two surfaces share
@@ -233,20 +245,37 @@ static qdc_status directed(const surface *s, const bderr_bvh *b, dstats *out,
 #pragma omp parallel for schedule(dynamic, 4)
 #endif
     for (int64_t c = 0; c < nchunk; c++) {
-        double mx = 0, vmx = 0, sm = 0, sm2 = 0, p[3];
+        double mx = 0, vmx = 0, sm = 0, sm2 = 0, p[3], gp[3 * BDERR_GROUP_MAX],
+               gd[BDERR_GROUP_MAX];
+        int32_t gn[BDERR_GROUP_MAX];
         int64_t end = (c + 1) * CHUNK < n ? (c + 1) * CHUNK : n;
-        for (int64_t i = c * CHUNK; i < end; i++) {
+        for (int64_t i = c * CHUNK; i < end;) {
             int64_t k = ord ? ord[i] : i;
+            int32_t g = 0, leaf;
             double d;
-            if (ord)
-                d = bderr_bvh_closest_near(b, pts + 3 * k, tri[k], NULL, NULL);
-            else
+            if (!ord) {
                 d = bderr_bvh_closest_near(b, p, surface_point(s, k, p), NULL, NULL);
-            mx = d > mx ? d : mx;
-            if (k < s->nverts)
-                vmx = d > vmx ? d : vmx;
-            sm += d;
-            sm2 += d * d;
+                add_distance(d, k < s->nverts, &mx, &vmx, &sm, &sm2);
+                i++;
+                continue;
+            }
+            /* the samples of one leaf of b (consecutive in the order) at once */
+            leaf = bderr_bvh_leaf_of(b, tri[k]);
+            while (i + g < end && g < BDERR_GROUP_MAX && leaf >= 0 &&
+                   bderr_bvh_leaf_of(b, tri[ord[i + g]]) == leaf) {
+                memcpy(gp + 3 * g, pts + 3 * (size_t)ord[i + g], 3 * sizeof(double));
+                gn[g] = tri[ord[i + g]];
+                g++;
+            }
+            if (g > 0 && bderr_bvh_closest_group(b, g, gp, gn, gd)) {
+                for (int32_t j = 0; j < g; j++)
+                    add_distance(gd[j], ord[i + j] < s->nverts, &mx, &vmx, &sm, &sm2);
+                i += g;
+                continue;
+            }
+            d = bderr_bvh_closest_near(b, pts + 3 * k, tri[k], NULL, NULL);
+            add_distance(d, k < s->nverts, &mx, &vmx, &sm, &sm2);
+            i++;
         }
         part[4 * c] = mx;
         part[4 * c + 1] = sm;

@@ -490,18 +490,24 @@ static double leaf_closest(const bderr_bvh *b, int32_t i, const double p[3], dou
                                b->xyz + 3 * (size_t)t[2], q);
 }
 
-/* Squared distance from p to the box of nd (0 inside). */
-static double box_dist2(const bvh_node *nd, const double p[3])
+/* Squared distance between the box of nd and box (lo, hi) (0 if they meet). */
+static double box_box_dist2(const bvh_node *nd, const double lo[3], const double hi[3])
 {
     double s = 0;
 
     for (int d = 0; d < 3; d++) {
-        double e = p[d] < nd->lo[d]   ? nd->lo[d] - p[d]
-                   : p[d] > nd->hi[d] ? p[d] - nd->hi[d]
-                                      : 0;
+        double e = hi[d] < nd->lo[d]   ? nd->lo[d] - hi[d]
+                   : lo[d] > nd->hi[d] ? lo[d] - nd->hi[d]
+                                       : 0;
         s += e * e;
     }
     return s;
+}
+
+/* Squared distance from p to the box of nd (0 inside). */
+static double box_dist2(const bvh_node *nd, const double p[3])
+{
+    return box_box_dist2(nd, p, p);
 }
 
 double bderr_bvh_closest(const bderr_bvh *b, const double p[3], double cp[3],
@@ -620,4 +626,110 @@ double bderr_bvh_closest_near(const bderr_bvh *b, const double p[3], int32_t nea
     if (tri)
         *tri = b->id[bt];
     return sqrt(best);
+}
+
+int32_t bderr_bvh_leaf_of(const bderr_bvh *b, int32_t tri)
+{
+    return b && tri >= 0 && tri < b->ntri ? b->leaf[b->at[tri]] : -1;
+}
+
+/* The largest of best[0..n). */
+static double group_bound(const double *best, int32_t n)
+{
+    double r = 0;
+
+    for (int32_t i = 0; i < n; i++)
+        r = best[i] > r ? best[i] : r;
+    return r;
+}
+
+/* The triangles of the subtree of node root, for every point of the group
+ * (box lo, hi; best[i] squared, lowered where a triangle is nearer): a
+ * subtree whose box is no nearer to the group's box than the group's largest
+ * best is skipped whole, a leaf for a point when its box is no nearer than
+ * that point's best. */
+static void group_descend(const bderr_bvh *b, int32_t root, int32_t n, const double *p,
+                          const double lo[3], const double hi[3], double *best,
+                          double *bound)
+{
+    int32_t stack[BVH_STACK];
+    int sp = 0;
+
+    stack[sp++] = root;
+    while (sp > 0) {
+        const bvh_node *nd = &b->nodes[stack[--sp]];
+        if (box_box_dist2(nd, lo, hi) >= *bound)
+            continue;
+        if (nd->n > 0) {
+            int changed = 0;
+            for (int32_t k = 0; k < n; k++) {
+                const double *pk = p + 3 * (size_t)k;
+                double q[3];
+                if (box_dist2(nd, pk) >= best[k])
+                    continue;
+                for (int32_t i = nd->a; i < nd->a + nd->n; i++) {
+                    double d = leaf_closest(b, i, pk, q);
+                    if (d < best[k]) {
+                        best[k] = d;
+                        changed = 1;
+                    }
+                }
+            }
+            if (changed)
+                *bound = group_bound(best, n);
+            continue;
+        }
+        /* the farther child first on the stack: the nearer is taken first */
+        {
+            int32_t l = (int32_t)(nd - b->nodes) + 1, r = nd->a;
+            if (box_box_dist2(&b->nodes[l], lo, hi) >
+                box_box_dist2(&b->nodes[r], lo, hi)) {
+                int32_t t = l;
+                l = r;
+                r = t;
+            }
+            stack[sp++] = r;
+            stack[sp++] = l;
+        }
+    }
+}
+
+int bderr_bvh_closest_group(const bderr_bvh *b, int32_t n, const double *p,
+                            const int32_t *near, double *d)
+{
+    double lo[3] = {INFINITY, INFINITY, INFINITY},
+           hi[3] = {-INFINITY, -INFINITY, -INFINITY}, bound, q[3];
+    int32_t node, leaf = n > 0 ? bderr_bvh_leaf_of(b, near[0]) : -1;
+    const bvh_node *lf;
+
+    for (int32_t k = 0; k < n; k++) {
+        const double *pk = p + 3 * (size_t)k;
+        if (n > BDERR_GROUP_MAX || leaf < 0 || bderr_bvh_leaf_of(b, near[k]) != leaf)
+            return 0;
+        for (int c = 0; c < 3; c++) {
+            if (!isfinite(pk[c]))
+                return 0;
+            lo[c] = pk[c] < lo[c] ? pk[c] : lo[c];
+            hi[c] = pk[c] > hi[c] ? pk[c] : hi[c];
+        }
+    }
+    if (n == 0)
+        return 1;
+    lf = &b->nodes[leaf];
+    for (int32_t k = 0; k < n; k++) {
+        d[k] = INFINITY;
+        for (int32_t i = lf->a; i < lf->a + lf->n; i++) {
+            double e = leaf_closest(b, i, p + 3 * (size_t)k, q);
+            d[k] = e < d[k] ? e : d[k];
+        }
+    }
+    bound = group_bound(d, n);
+    node = leaf;
+    for (int32_t up = b->up[node]; up >= 0; node = up, up = b->up[up]) {
+        int32_t sib = node == up + 1 ? b->nodes[up].a : up + 1;
+        group_descend(b, sib, n, p, lo, hi, d, &bound);
+    }
+    for (int32_t k = 0; k < n; k++)
+        d[k] = sqrt(d[k]);
+    return 1;
 }

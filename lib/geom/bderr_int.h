@@ -43,6 +43,19 @@ double bderr_bvh_closest(const bderr_bvh *b, const double p[3], double cp[3],
 double bderr_bvh_closest_near(const bderr_bvh *b, const double p[3], int32_t near,
                               double cp[3], int32_t *tri);
 
+/* Closest distances from n points at once (p: 3 doubles each) whose starting
+ * triangles near[] (the caller's indices) all lie in one leaf of b, as
+ * bderr_bvh_leaf_of tells: d[k] is bderr_bvh_closest_near's answer for point
+ * k, the same bits, with the tree walked once for the group (the points of one
+ * surface against its optimized copy lie within a few triangles of their own:
+ * the boxes beside the leaf's path are tested once for all). 1 if done; 0 (d
+ * not set) if n > BDERR_GROUP_MAX, the triangles are not in one leaf or a
+ * point is not finite. */
+#define BDERR_GROUP_MAX 64
+int bderr_bvh_closest_group(const bderr_bvh *b, int32_t n, const double *p,
+                            const int32_t *near, double *d);
+/* The leaf of b holding the caller's triangle tri, -1 if out of range. */
+int32_t bderr_bvh_leaf_of(const bderr_bvh *b, int32_t tri);
 /* The number of triangles of b (0 if b is NULL). */
 int32_t bderr_bvh_size(const bderr_bvh *b);
 /* The position of the caller's triangle tri among b's leaves: triangles close

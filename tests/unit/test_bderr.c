@@ -6,6 +6,7 @@
 #include "testlib.h"
 
 #include <stdint.h>
+#include <string.h>
 #include <unistd.h>
 #ifdef _OPENMP
 #include <omp.h>
@@ -118,6 +119,20 @@ TEST(point_triangle_vs_sampling)
     }
 }
 
+/* nt small random triangles in the unit cube, each with its own 3 vertices
+ * (x: 9 doubles a triangle, t: 3 indices). */
+static void random_triangles(double *x, int32_t *t, int nt)
+{
+    for (int i = 0; i < nt; i++) {
+        double o[3] = {urand(), urand(), urand()};
+        for (int v = 0; v < 3; v++) {
+            for (int d = 0; d < 3; d++)
+                x[9 * i + 3 * v + d] = o[d] + 0.1 * urand();
+            t[3 * i + v] = 3 * i + v;
+        }
+    }
+}
+
 TEST(bvh_matches_brute_force)
 {
     enum { NT = 700, NQ = 2000 };
@@ -127,14 +142,7 @@ TEST(bvh_matches_brute_force)
     qdc_error err;
 
     ASSERT_TRUE(x && t);
-    for (int i = 0; i < NT; i++) { /* small random triangles in the unit cube */
-        double o[3] = {urand(), urand(), urand()};
-        for (int v = 0; v < 3; v++) {
-            for (int d = 0; d < 3; d++)
-                x[9 * i + 3 * v + d] = o[d] + 0.1 * urand();
-            t[3 * i + v] = 3 * i + v;
-        }
-    }
+    random_triangles(x, t, NT);
     ASSERT_OK(bderr_bvh_build(x, 3 * NT, t, NT, &b, &err));
     for (int q = 0; q < NQ; q++) {
         double p[3] = {2 * urand() - 0.5, 2 * urand() - 0.5, 2 * urand() - 0.5}, cp[3];
@@ -161,6 +169,96 @@ TEST(bvh_matches_brute_force)
     bderr_bvh_free(b);
     free(x);
     free(t);
+}
+
+/* Points grouped by the leaf of their starting triangle get, at once, the
+ * brute-force distances (the same bits); groups the call cannot take are
+ * refused without touching d. */
+TEST(bvh_group_matches_brute_force)
+{
+    enum { NT = 600, NQ = 3000 };
+    double *x = malloc(9 * NT * sizeof(double)), *p = malloc(3 * NQ * sizeof(double));
+    int32_t *t = malloc(3 * NT * sizeof(int32_t)), *near = malloc(NQ * sizeof(int32_t));
+    int32_t *ord = malloc(NQ * sizeof(int32_t));
+    bderr_bvh *b = NULL;
+    qdc_error err;
+    int groups = 0, multi = 0;
+
+    ASSERT_TRUE(x && p && t && near && ord);
+    random_triangles(x, t, NT);
+    ASSERT_OK(bderr_bvh_build(x, 3 * NT, t, NT, &b, &err));
+    /* each point near a random triangle (on it, then pushed off by up to 0.05) */
+    for (int q = 0; q < NQ; q++) {
+        int32_t i = (int32_t)(urand() * NT) % NT;
+        double u = urand(), v = urand() * (1 - u);
+        near[q] = i;
+        for (int d = 0; d < 3; d++)
+            p[3 * q + d] = x[9 * i + d] + u * (x[9 * i + 3 + d] - x[9 * i + d]) +
+                           v * (x[9 * i + 6 + d] - x[9 * i + d]) + 0.05 * (urand() - 0.5);
+    }
+    /* in order of the leaf (an insertion sort by leaf) */
+    for (int q = 0; q < NQ; q++) {
+        int j = q;
+        ord[q] = q;
+        while (j > 0 && bderr_bvh_leaf_of(b, near[ord[j - 1]]) >
+                            bderr_bvh_leaf_of(b, near[ord[j]])) {
+            int32_t k = ord[j];
+            ord[j] = ord[j - 1];
+            ord[--j] = k;
+        }
+    }
+    for (int q = 0; q < NQ;) {
+        double gp[3 * BDERR_GROUP_MAX], gd[BDERR_GROUP_MAX];
+        int32_t gn[BDERR_GROUP_MAX], g = 0, leaf = bderr_bvh_leaf_of(b, near[ord[q]]);
+        ASSERT_TRUE(leaf >= 0);
+        while (q + g < NQ && g < BDERR_GROUP_MAX &&
+               bderr_bvh_leaf_of(b, near[ord[q + g]]) == leaf) {
+            memcpy(gp + 3 * g, p + 3 * ord[q + g], 3 * sizeof(double));
+            gn[g] = near[ord[q + g]];
+            g++;
+        }
+        ASSERT_EQ_INT(bderr_bvh_closest_group(b, g, gp, gn, gd), 1);
+        for (int32_t k = 0; k < g; k++) {
+            double best = INFINITY;
+            for (int i = 0; i < NT; i++)
+                best =
+                    fmin(best, bderr_point_triangle(gp + 3 * k, x + 9 * i, x + 9 * i + 3,
+                                                    x + 9 * i + 6, NULL));
+            ASSERT_NEAR(gd[k], best, 0);
+            ASSERT_NEAR(gd[k], bderr_bvh_closest_near(b, gp + 3 * k, gn[k], NULL, NULL),
+                        0);
+        }
+        groups++;
+        multi += g > 1;
+        q += g;
+    }
+    ASSERT_TRUE(groups > 1 && multi > 1);
+    {
+        double gd[2] = {-1, -1}, gp[6] = {0, 0, 0, 0.5, 0.5, 0.5};
+        int32_t gn[2] = {0, 0}, other = -1;
+        for (int32_t i = 1; i < NT && other < 0; i++)
+            if (bderr_bvh_leaf_of(b, i) != bderr_bvh_leaf_of(b, 0))
+                other = i;
+        ASSERT_TRUE(other > 0);
+        gn[1] = other; /* two leaves */
+        ASSERT_EQ_INT(bderr_bvh_closest_group(b, 2, gp, gn, gd), 0);
+        gn[1] = 0;
+        gp[4] = NAN; /* a point not finite */
+        ASSERT_EQ_INT(bderr_bvh_closest_group(b, 2, gp, gn, gd), 0);
+        ASSERT_NEAR(gd[0], -1, 0);
+        gn[0] = NT; /* out of range */
+        ASSERT_EQ_INT(bderr_bvh_closest_group(b, 1, gp, gn, gd), 0);
+        ASSERT_EQ_INT(bderr_bvh_closest_group(b, BDERR_GROUP_MAX + 1, gp, gn, gd), 0);
+        ASSERT_EQ_INT(bderr_bvh_closest_group(b, 0, gp, gn, gd), 1);
+        ASSERT_EQ_INT(bderr_bvh_leaf_of(b, -1), -1);
+        ASSERT_EQ_INT(bderr_bvh_leaf_of(NULL, 0), -1);
+    }
+    bderr_bvh_free(b);
+    free(x);
+    free(p);
+    free(t);
+    free(near);
+    free(ord);
 }
 
 TEST(bvh_refit_matches_brute_force)
@@ -578,8 +676,8 @@ TEST(allocation_failures)
 
 TEST_MAIN("bderr", T(point_triangle_regions), T(point_triangle_degenerate),
           T(point_triangle_vs_sampling), T(bvh_matches_brute_force),
-          T(bvh_refit_matches_brute_force), T(bvh_edge_cases),
-          T(hausdorff_translated_cube), T(parallel_planes_mean_rms),
+          T(bvh_group_matches_brute_force), T(bvh_refit_matches_brute_force),
+          T(bvh_edge_cases), T(hausdorff_translated_cube), T(parallel_planes_mean_rms),
           T(many_samples_in_drawing_order), T(deterministic_and_thread_independent),
           T(shared_triangles_same_as_copies), T(surfaces_bad_input),
           T(meshes_boundary_faces), T(meshes_big_grid_speed), T(dev_meshes),
