@@ -223,6 +223,18 @@ static qdc_status save_outputs(qdcd *q, job_rec *j, const mesh_t *out, const mes
                              j->lease_owner)) != QDC_OK)
             return qdc_fail(err, st, "cannot store %s in the database", outs[i].name);
     }
+    /* topology=full changed the vertices of a mesh with point data: the
+     * arrays as the run interpolated them, for the conversions (result.qmesh
+     * holds none) */
+    if (out->pdata && out->nv != ref->nv) {
+        job_path(q, j->id, JOB_RESULT_PDATA, path, sizeof path);
+        st = meshio_save(path, MESHIO_VTU, out, err);
+        if (st != QDC_OK)
+            return st;
+        if (shared_on(q) &&
+            (st = shared_put(q, j->id, JOB_RESULT_PDATA, "", j->lease_owner)) != QDC_OK)
+            return qdc_fail(err, st, "cannot store %s in the database", JOB_RESULT_PDATA);
+    }
     /* a MED or XDMF+HDF5 job's results are written from qdc-h5's frames of
      * the upload: into the store with them, for the other nodes */
     if (shared_on(q) &&
@@ -520,7 +532,11 @@ static int read_intake(run_state *s, meshio_format fin)
     qdc_error e;
     mesh_t *m = NULL;
 
-    if (fin == MESHIO_QMESH || fin == MESHIO_MEDIT)
+    /* topology=full of a format with point data: the upload itself, whose
+     * arrays the run interpolates at the vertices it inserts (the intake's
+     * QMESH has none) */
+    if (fin == MESHIO_QMESH || fin == MESHIO_MEDIT ||
+        (meshio_writes_pdata(fin) && job_topology_full(s->j->options)))
         return -1;
     job_path(s->q, s->j->id, JOB_INTAKE_QMESH, path, sizeof path);
     buf = file_read_all(path, &len);

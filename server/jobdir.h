@@ -17,6 +17,11 @@ void job_path(const qdcd *q, const char *id, const char *name, char *out, size_t
  * (job_intake_keeps); a job without it is parsed from its input. Removed
  * when the job ends. */
 #define JOB_INTAKE_QMESH "intake.qmesh"
+/* A topology=full result's point data (the upload's arrays, interpolated by
+ * the run at the vertices it inserted), as a VTU of the result: written by
+ * the worker when the vertices changed and the upload had arrays, read by the
+ * conversions, which take the rest from result.qmesh and result.mesh. */
+#define JOB_RESULT_PDATA "result-pdata.vtu"
 /* Input file name of a job for its format name ("input.qmesh", "input.stl"...). */
 const char *job_input_name(const char *format);
 /* Is format (a job's) a surface format, tetrahedralized by the worker? */

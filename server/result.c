@@ -312,15 +312,16 @@ static void result_file(req *r, const job_rec *j, meshio_format f, char *path, s
 
 /* What a result written by qdc's writer of f keeps, for its Qdc-Note:
  * vertices, tets, triangles and their region tags, and the upload's point
- * data (VTK, VTU, Gmsh arrays) when f's writer has it, except after
- * topology=full (result.qmesh does not carry it). */
+ * data (VTK, VTU, Gmsh arrays) when f's writer has it (after topology=full,
+ * interpolated at the vertices the run inserted). */
 static const char *kept_note(const job_rec *j, meshio_format f)
 {
     if (!meshio_writes_pdata(f))
         return "only vertices, tets, triangles and their region tags are kept";
     return job_topology_full(j->options)
-               ? "only vertices, tets, triangles and their region tags are kept; "
-                 "topology=full: the upload's point data dropped"
+               ? "only vertices, tets, triangles, their region tags and the point "
+                 "data are kept (topology=full: interpolated linearly at the "
+                 "vertices the run inserted)"
                : "only vertices, tets, triangles, their region tags and the point "
                  "data are kept";
 }
@@ -425,6 +426,31 @@ static qdc_status run_surface(req *r, const job_rec *j, mesh_t *res, qdc_error *
     return st;
 }
 
+/* res (a topology=full result whose vertices changed) given the point data
+ * of JOB_RESULT_PDATA, which the worker wrote when the upload had arrays (none
+ * when it did not: res stays without). QDC_EINTERNAL when it does not match. */
+static qdc_status run_pdata(req *r, const job_rec *j, mesh_t *res, qdc_error *e)
+{
+    char path[4300];
+    mesh_t *pd = NULL;
+    qdc_status st;
+
+    job_path(r->q, j->id, JOB_RESULT_PDATA, path, sizeof path);
+    if (access(path, R_OK) != 0)
+        return QDC_OK;
+    st = meshio_load(path, MESHIO_VTU, &pd, e);
+    if (st == QDC_OK && pd->nv != res->nv)
+        st = qdc_fail(e, QDC_EINTERNAL, "%s does not match result.qmesh",
+                      JOB_RESULT_PDATA);
+    if (st == QDC_OK) {
+        mesh_pdata_free(res->pdata);
+        res->pdata = pd->pdata;
+        pd->pdata = NULL;
+    }
+    mesh_free(pd);
+    return st;
+}
+
 /* The mesh to write for r (a job whose topology mode changed the tets: the
  * upload read without its source, with the result's coordinates, tets and
  * regions put in). The input: its file, read with its source kept
@@ -459,10 +485,11 @@ static qdc_status convert_source(req *r, const job_rec *j, mesh_t **out, qdc_err
     if (st == QDC_OK && in && tets && in->nv != res->nv) {
         /* topology=full inserted or contracted vertices: the upload's
          * numbering no longer holds; the result with the run's own boundary
-         * triangles and vertex refs (the upload's point data dropped:
-         * Qdc-Note) */
+         * triangles and vertex refs, and the point data as the run
+         * interpolated them */
         mesh_free(in);
         in = NULL;
+        st = run_pdata(r, j, res, e);
     }
     if (st == QDC_OK && in && (in->nv != res->nv || (!tets && in->nt != res->nt)))
         st = qdc_fail(e, QDC_EINTERNAL, "the result does not match its input");
@@ -502,7 +529,10 @@ static qdc_status fetch_sources(req *r, const job_rec *j)
         (from_upload(r, j) &&
          shared_fetch(r->q, j->id, job_input_name(j->format), NULL) == QDC_EIO) ||
         (from_upload(r, j) && job_changes_tets(j->options) &&
-         shared_fetch(r->q, j->id, "result.mesh", NULL) == QDC_EIO))
+         shared_fetch(r->q, j->id, "result.mesh", NULL) == QDC_EIO) ||
+        (from_upload(r, j) && job_topology_full(j->options) &&
+         meshio_writes_pdata(upload_mesh_format(j)) &&
+         shared_fetch(r->q, j->id, JOB_RESULT_PDATA, NULL) == QDC_EIO))
         return QDC_EIO;
     return fetch_frames(r, j);
 }
