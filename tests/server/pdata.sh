@@ -8,7 +8,8 @@
 # has the vertices and the arrays, value for value, of `qdc optimize IN OUT
 # --topology full` on the same file (the run is deterministic), the input's
 # values at the vertices it kept, and its Qdc-Note says they were
-# interpolated.
+# interpolated. The same for a full job of a binary MSH 2.2 upload, whose
+# result in Gmsh has the CLI's arrays.
 . "$(dirname "$0")/../lib.sh"
 . "$(dirname "$0")/daemon.inc"
 
@@ -81,6 +82,32 @@ PY
     *) fail "server pdata: $mode: Qdc-Note" "'$note'" ;;
     esac
 done
+# topology=full on a Gmsh upload (binary MSH 2.2 with $NodeData): its result in
+# its own format has the arrays of `qdc optimize IN OUT --topology full`
+"$PY" - "$TMP/in.vtu" "$TMP/in.msh" 2> /dev/null << 'PY' || fail "server pdata: gmsh input" "meshio failed"
+import sys, meshio
+meshio.read(sys.argv[1]).write(sys.argv[2], file_format="gmsh22", binary=True)
+PY
+"$BIN/qdc" optimize "$TMP/in.msh" "$TMP/cli-full.msh" --topology full -q ||
+    fail "server pdata: qdc optimize in.msh --topology full" "exit $?"
+code=$(submit "$TMP/in.msh" model/vnd.gmsh "topology=full" "$TMP/g.sub")
+id=$(jf "$TMP/g.sub" .id)
+st=$(poll_all "$id")
+c1=$(req GET "/v1/jobs/$id/result?format=gmsh" "$TMP/g.msh")
+why=$("$PY" - "$TMP/in.msh" "$TMP/g.msh" "$TMP/cli-full.msh" "$code $st $c1" 2> /dev/null << 'PY' | tail -1
+import sys, meshio, numpy as np
+if sys.argv[4] != "202 succeeded 200":
+    print("HTTP/state %s" % sys.argv[4]); sys.exit()
+a, b, c = (meshio.read(x) for x in sys.argv[1:4])
+bad = [k for k in ("f", "vec", "id") if k not in b.point_data or k not in c.point_data
+       or not np.array_equal(np.asarray(b.point_data[k]), np.asarray(c.point_data[k]))]
+if len(b.points) == len(a.points): bad.append("no vertex inserted or contracted")
+if not np.array_equal(b.points, c.points): bad.append("vertices differ from the CLI's")
+print("differ: %s" % bad if bad else "ok %d -> %d vertices, f, vec and id equal to the CLI's"
+      % (len(a.points), len(b.points)))
+PY
+)
+verdict "server pdata: gmsh full: result as gmsh" "$why"
 # topology=full on a Medit upload with boundary triangles and refs: the vertices
 # change, so its VTU is written from the run's own surface (result.mesh), not
 # the upload's numbering: the same triangles as the Medit result, each a face
