@@ -532,11 +532,9 @@ static int read_intake(run_state *s, meshio_format fin)
     qdc_error e;
     mesh_t *m = NULL;
 
-    /* topology=full of a format with point data: the upload itself, whose
-     * arrays the run interpolates at the vertices it inserts (the intake's
-     * QMESH has none) */
+    /* (a job accepted by a qdcd that wrote the QMESH for such an upload too) */
     if (fin == MESHIO_QMESH || fin == MESHIO_MEDIT ||
-        (meshio_writes_pdata(fin) && job_topology_full(s->j->options)))
+        job_parses_upload(fin, s->j->options))
         return -1;
     job_path(s->q, s->j->id, JOB_INTAKE_QMESH, path, sizeof path);
     buf = file_read_all(path, &len);

@@ -2,6 +2,7 @@
  * names of the files in them, and the scan every sweep of them uses. */
 #define _GNU_SOURCE
 #include "jobdir.h"
+#include "jobopt.h"
 
 #include <dirent.h>
 #include <stdio.h>
@@ -38,6 +39,11 @@ int job_intake_keeps(const mesh_t *m, meshio_format fmt)
 {
     return fmt != MESHIO_QMESH && fmt != MESHIO_MEDIT && !m->vref && m->ntri == 0 &&
            !m->source;
+}
+
+int job_parses_upload(meshio_format fmt, const char *options)
+{
+    return meshio_writes_pdata(fmt) && job_topology_full(options);
 }
 
 int jobdir_each(qdcd *q, jobdir_fn fn, void *ctx)

@@ -33,6 +33,12 @@ int job_is_surface(const char *format);
  * (a Medit upload's is spliced from its source); such uploads are parsed
  * again by the worker. An upload already in the binary format is its own. */
 int job_intake_keeps(const mesh_t *m, meshio_format fmt);
+/* Whether the worker parses a job's upload itself whatever JOB_INTAKE_QMESH
+ * holds: topology=full (options: the job's JSON) of a format with point data
+ * (VTK, VTU, Gmsh), whose arrays the run interpolates at the vertices it
+ * inserts; the binary mesh has none. The intake writes no JOB_INTAKE_QMESH
+ * for it. */
+int job_parses_upload(meshio_format fmt, const char *options);
 /* Call fn on each job directory DATA/jobs/ID (ID: JOB_ID_LEN lower-case hex
  * digits; anything else there is skipped) with its id and path; returns the
  * sum of what fn returned. */

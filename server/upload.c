@@ -643,7 +643,7 @@ static void keep_mesh(req *r, const mesh_t *m)
 
     double t0 = mono_now();
 
-    if (!job_intake_keeps(m, u->fmt))
+    if (!job_intake_keeps(m, u->fmt) || job_parses_upload(u->fmt, u->options))
         return;
     snprintf(u->mtmp, sizeof u->mtmp, "%s.qmesh", u->tmp);
     qdc_error_clear(&e);

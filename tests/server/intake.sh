@@ -9,7 +9,9 @@
 #  - a Medit upload gets none (its result.mesh is spliced from the file);
 #  - the same uploads with intake.qmesh deleted, or overwritten with garbage,
 #    while queued behind a long job: the worker parses the input and the three
-#    results (binary, JSON, Medit) are byte for byte those of the first jobs.
+#    results (binary, JSON, Medit) are byte for byte those of the first jobs;
+#  - a VTU upload with topology=full gets none (the worker parses it: the run
+#    interpolates its point data, which the binary mesh would not hold).
 . "$(dirname "$0")/../lib.sh"
 . "$(dirname "$0")/daemon.inc"
 
@@ -52,6 +54,19 @@ done
 D=$TMP/d
 start_qdcd "$D" --workers 1 --verbose || { fail "intake: qdcd starts" "$(tail -3 "$D.log")"; exit 1; }
 
+# hold_worker: a long job (cancelled later) that holds the one worker; its id
+# in HOLD once it runs (polled, at most 10 s)
+hold_worker() {
+    submit "$TMP/b.qmesh" application/vnd.qdc.mesh \
+        "max_iter=10000&mode=literal&finish=off&tol_move=0&time_limit=60" "$TMP/hold" > /dev/null
+    HOLD=$(jf "$TMP/hold" .id)
+    i=0
+    while [ $i -lt 200 ] && [ "$(curl -s "$URL/v1/jobs/$HOLD" | jq -r .state)" != running ]; do
+        sleep 0.05
+        i=$((i + 1))
+    done
+}
+
 # 1. the worker reads the intake's mesh
 for c in $CASES; do
     n=${c%%:*}
@@ -87,14 +102,7 @@ else
 fi
 
 # 3. without it: a long job holds the one worker while the same uploads wait
-code=$(submit "$TMP/b.qmesh" application/vnd.qdc.mesh \
-    "max_iter=10000&mode=literal&finish=off&tol_move=0&time_limit=60" "$TMP/hold")
-HOLD=$(jf "$TMP/hold" .id)
-i=0
-while [ $i -lt 200 ] && [ "$(curl -s "$URL/v1/jobs/$HOLD" | jq -r .state)" != running ]; do
-    sleep 0.05
-    i=$((i + 1))
-done
+hold_worker
 for c in $CASES; do
     n=${c%%:*}
     f=$(echo "$c" | cut -d: -f2)
@@ -139,6 +147,23 @@ for c in $CASES; do
         fail "intake: $n: fallback result identical" "state $st, same $same; log: $(grep "job $b" "$D.log" | tail -3)"
     fi
 done
+
+# 4. topology=full of a VTU upload: no intake.qmesh (the binary mesh has no
+# point data, which the run interpolates); the worker parses input.vtu
+hold_worker
+code=$(submit "$TMP/b.vtu" application/vnd.vtk.vtu+xml "topology=full" "$TMP/full.job")
+id=$(jf "$TMP/full.job" .id)
+st=$(curl -s "$URL/v1/jobs/$id" | jq -r .state)
+files=$(ls "$D/jobs/$id" | tr '\n' ' ')
+req POST "/v1/jobs/$HOLD:cancel" "$TMP/cancel2" > /dev/null
+st2=$(wait_done "$id")
+if [ "$code" = 202 ] && [ "$st" = queued ] && [ ! -e "$D/jobs/$id/intake.qmesh" ] &&
+    case $files in *intake.qmesh*) false ;; *) true ;; esac &&
+    [ "$st2" = succeeded ] && grep -q "job $id: input parsed from input.vtu" "$D.log"; then
+    pass "intake: vtu topology=full: queued without intake.qmesh, the worker parsed input.vtu"
+else
+    fail "intake: vtu topology=full: parsed by the worker" "submit $code, $st then $st2, files $files; log: $(grep "job $id" "$D.log" | tail -2)"
+fi
 
 stop_qdcd || fail "intake: qdcd stops" "exit status $?"
 exit $((NFAIL > 0))
