@@ -570,34 +570,6 @@ static void descend(const bderr_bvh *b, int32_t root, const double p[3], double 
     }
 }
 
-/* The distance only (squared), from leaf position pos up: the rest of pos's
- * leaf, then at each ancestor the subtree beside the path, unless its box is
- * no nearer than the best so far. Every triangle is in one of those, so the
- * answer is descend's from the root; when p lies on or near the triangle at
- * pos (a surface against its own optimized copy) almost every sibling is
- * skipped at its box, where the search from the root walks down the boxes
- * that hold p (issue #32: the report's boundary distances were a fifth of
- * a 100k-tet run's instructions). */
-static double closest_up(const bderr_bvh *b, const double p[3], int32_t pos)
-{
-    double q[3], best = leaf_closest(b, pos, p, q);
-    int32_t node = b->leaf[pos], bt = -1;
-    const bvh_node *lf = &b->nodes[node];
-
-    if (best != best)
-        return NAN;
-    for (int32_t i = lf->a; i < lf->a + lf->n; i++)
-        if (i != pos) {
-            double d = leaf_closest(b, i, p, q);
-            best = d < best ? d : best;
-        }
-    for (int32_t up = b->up[node]; up >= 0; node = up, up = b->up[up]) {
-        int32_t sib = node == up + 1 ? b->nodes[up].a : up + 1;
-        descend(b, sib, p, &best, &bt, q);
-    }
-    return best;
-}
-
 double bderr_bvh_closest_near(const bderr_bvh *b, const double p[3], int32_t near,
                               double cp[3], int32_t *tri)
 {
@@ -608,8 +580,9 @@ double bderr_bvh_closest_near(const bderr_bvh *b, const double p[3], int32_t nea
         *tri = -1;
     if (!b || b->ntri == 0)
         return INFINITY;
-    if (near >= 0 && near < b->ntri && !cp && !tri)
-        return sqrt(closest_up(b, p, b->at[near]));
+    if (near >= 0 && near < b->ntri && !cp && !tri &&
+        bderr_bvh_closest_group(b, 1, p, &near, &best))
+        return best; /* the distance only: from near's leaf up */
     if (near >= 0 && near < b->ntri) {
         /* a bound to start from: the search then skips every box farther
          * than this triangle (a sliding vertex stays near its own faces) */
@@ -694,6 +667,14 @@ static void group_descend(const bderr_bvh *b, int32_t root, int32_t n, const dou
     }
 }
 
+/* From the leaf of the points' triangles up: that leaf's triangles, then at
+ * each ancestor the subtree beside the path, unless its box is no nearer
+ * than the group's largest best so far. Every triangle is in one of those,
+ * so the answers are descend's from the root; when the points lie on or near
+ * their triangles (a surface against its own optimized copy) almost every
+ * sibling is skipped at its box, where the search from the root walks down
+ * the boxes that hold each point (issue #32: the report's boundary distances
+ * were a fifth of a 100k-tet run's instructions). */
 int bderr_bvh_closest_group(const bderr_bvh *b, int32_t n, const double *p,
                             const int32_t *near, double *d)
 {

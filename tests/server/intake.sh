@@ -55,16 +55,12 @@ D=$TMP/d
 start_qdcd "$D" --workers 1 --verbose || { fail "intake: qdcd starts" "$(tail -3 "$D.log")"; exit 1; }
 
 # hold_worker: a long job (cancelled later) that holds the one worker; its id
-# in HOLD once it runs (polled, at most 10 s)
+# in HOLD once it runs (wait_running)
 hold_worker() {
     submit "$TMP/b.qmesh" application/vnd.qdc.mesh \
         "max_iter=10000&mode=literal&finish=off&tol_move=0&time_limit=60" "$TMP/hold" > /dev/null
     HOLD=$(jf "$TMP/hold" .id)
-    i=0
-    while [ $i -lt 200 ] && [ "$(curl -s "$URL/v1/jobs/$HOLD" | jq -r .state)" != running ]; do
-        sleep 0.05
-        i=$((i + 1))
-    done
+    wait_running "$HOLD"
 }
 
 # 1. the worker reads the intake's mesh
