@@ -28,7 +28,7 @@ CC ?= cc
 CXX ?= c++
 OPTFLAGS ?= -O2 -g
 WARN := -Wall -Wextra -Wpedantic -Werror -Wshadow -Wstrict-prototypes
-CPPFLAGS += -D_POSIX_C_SOURCE=200809L -Ilib -I/usr/include/suitesparse -I/usr/include/postgresql
+CPPFLAGS += -D_POSIX_C_SOURCE=200809L -Ilib -Icommon -I/usr/include/suitesparse -I/usr/include/postgresql
 # -fno-math-errno: sqrt and the like as single instructions, without the
 # errno branch (the same results; lib/ sets no errno of its own)
 CFLAGS += -std=c11 $(OPTFLAGS) $(WARN) $(SANFLAGS) -fopenmp -fno-math-errno
@@ -43,14 +43,14 @@ ifneq ($(LIB_CXX),)
 LIB_LIBS += -ltet -lstdc++
 endif
 
-SRV_C := $(wildcard server/*.c)
+SRV_C := $(wildcard server/*.c) common/procenv.c
 # The web console (web/) is compiled into qdcd: scripts/embed.sh turns its files
 # into byte arrays (plain files, no build step of their own).
 WEB_FILES := $(sort $(wildcard web/*.html web/*.js web/*.css web/*.svg))
 SRV_OBJ := $(SRV_C:%.c=$(B)/%.o) $(if $(SRV_C),$(B)/gen/web_assets.o)
 SRV_LIBS := -lmicrohttpd -ljansson -lsqlite3 -lpq -lpthread
 
-CLI_C := $(wildcard clients/qdc/*.c)
+CLI_C := $(wildcard clients/qdc/*.c) common/procenv.c
 CLI_OBJ := $(CLI_C:%.c=$(B)/%.o)
 CLI_LIBS := -lcurl
 
@@ -194,6 +194,7 @@ clean:
 	rm -rf build
 
 FORMAT_SRC = $(wildcard lib/*.h lib/*/*.c lib/*/*.h lib/*/*.cpp server/*.c server/*.h clients/qdc/*.c \
+              common/*.c common/*.h \
               clients/qdc/*.h tests/unit/*.c tests/unit/*.h tests/fuzz/*.c tests/fuzz/*.h \
               examples/*.c)
 format:

@@ -5,6 +5,7 @@
 #include "api.h"
 #include "http.h"
 #include "job.h"
+#include "procenv.h"
 #include "route.h"
 #include "server.h"
 #include "sha256.h"
@@ -14,7 +15,6 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <getopt.h>
-#include <malloc.h>
 #include <pthread.h>
 #include <signal.h>
 #include <stddef.h>
@@ -758,22 +758,16 @@ static void teardown(qdcd *q)
  * main thread, where it waits blocked for sigtimedwait. */
 static pthread_t main_thread;
 /* A job's arrays, allocated and freed at each pass of the optimizer, are kept
- * in the process instead of handed back to the kernel at each free and taken
- * again as fresh pages (as the qdc CLI does: 7% of a --topology full run's CPU
- * on 100k tets went to those page faults). Blocks up to 64 MiB come from the
- * heap, whose free top is kept up to 256 MiB; a worker gives the rest back
- * after each job (malloc_trim in job.c), so an idle daemon holds little.
- * Unless the operator tuned malloc (GLIBC_TUNABLES, MALLOC_*_). */
-static void keep_heap(void)
-{
-    const char *t = getenv("GLIBC_TUNABLES");
-
-    if ((t && strstr(t, "glibc.malloc.")) || getenv("MALLOC_MMAP_THRESHOLD_") ||
-        getenv("MALLOC_TRIM_THRESHOLD_"))
-        return;
-    mallopt(M_MMAP_THRESHOLD, 64 << 20);
-    mallopt(M_TRIM_THRESHOLD, 256 << 20);
-}
+ * in the process instead of handed back to the kernel at each free and faulted
+ * in again as zeroed pages, and its memory is in transparent huge pages where
+ * the kernel allows them (the qdc CLI's reasons and figures: clients/qdc/main.c).
+ * Blocks up to 64 MiB come from the heap, whose free top is kept up to 256
+ * MiB; a worker gives the rest back after each job (malloc_trim in job.c), so
+ * an idle daemon holds little. Unless the operator tuned malloc. glibc reads
+ * these before main: 1 when it set them (main starts again). */
+#define QDCD_MALLOC_TUNABLES                                                             \
+    "glibc.malloc.hugetlb=1:glibc.malloc.mmap_threshold=67108864:"                       \
+    "glibc.malloc.trim_threshold=268435456"
 
 static void forward_stop(int sig)
 {
@@ -793,25 +787,17 @@ int main(int argc, char **argv)
      * measured 0.8 CPU s sleeping against 2.4-3.1 spinning on 2 busy cores).
      * libgomp reads the policy before main: set it and start again, once,
      * unless the operator chose one. */
-    if (!getenv("OMP_WAIT_POLICY") && setenv("OMP_WAIT_POLICY", "PASSIVE", 1) == 0)
-        reexec = 1;
+    reexec |= procenv_default("OMP_WAIT_POLICY", "PASSIVE");
     /* OpenBLAS (CHOLMOD's BLAS) starts its thread pool before main, with no
      * signal blocked: a SIGTERM the kernel handed to one of those threads
      * while the main loop was busy killed the daemon without its drain (exit
      * 143, seen once in tests/server/longpoll.sh on a loaded machine). One
      * BLAS thread per job starts none, and the jobs run side by side anyway;
      * the qdc CLI runs one too, so that both give the same bytes. */
-    if (!getenv("OPENBLAS_NUM_THREADS") && setenv("OPENBLAS_NUM_THREADS", "1", 1) == 0)
-        reexec = 1;
-    if (reexec) {
-        char self[4096]; /* its own path, so that ps and /proc/PID/comm say qdcd */
-        ssize_t n = readlink("/proc/self/exe", self, sizeof self - 1);
-        if (n > 0) {
-            self[n] = 0;
-            execv(self, argv);
-        }
-    }
-    keep_heap();
+    reexec |= procenv_default("OPENBLAS_NUM_THREADS", "1");
+    reexec |= procenv_tune_malloc(QDCD_MALLOC_TUNABLES);
+    if (reexec)
+        procenv_restart(argv);
     /* and where the operator set more BLAS threads (or another library
      * started threads early), the signal is forwarded to the main thread */
     main_thread = pthread_self();

@@ -2,8 +2,8 @@
  * (remote subcommands: see remote.c when present). */
 #define _POSIX_C_SOURCE 200809L
 #include "cli.h"
+#include "procenv.h"
 
-#include <malloc.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -72,17 +72,29 @@ static long thread_count(char **argv)
     return n > 0 && n <= 1024 ? n : 0;
 }
 
+/* glibc's malloc hands every freed block of 128 KiB or more back to the kernel
+ * (each its own mmap), and the top of the heap above 128 KiB, so the
+ * optimizer's arrays, allocated and freed at each pass and round, came back
+ * as zeroed 4 KiB pages, a fault each. Unless the user tuned malloc, qdc runs
+ * with blocks up to 1 GiB taken from the heap, the heap never trimmed (the
+ * process ends with the run) and its memory in transparent huge pages where
+ * the kernel allows them (madvise): --topology full on 100k tets (one
+ * thread) took 31,500 faults and 0.26-0.30 s of system time, 15,400 and
+ * 0.13-0.19 s with the heap kept; on the 1M-tet ball with --report, 70,800
+ * faults and 8.7-9.3 CPU s, 2,000 and 8.3-8.6 with huge pages too. Like the
+ * variables above, glibc reads these before main: 1 when it set them. */
+#define QDC_MALLOC_TUNABLES                                                              \
+    "glibc.malloc.hugetlb=1:glibc.malloc.mmap_threshold=1073741824:"                     \
+    "glibc.malloc.trim_threshold=1073741824"
+
 static void wait_passive(char **argv)
 {
-    char self[4096]; /* its own path, so that ps and /proc/PID/comm say qdc */
-    ssize_t n;
     long nth;
     int reexec = 0;
 
-    if (!getenv("OMP_WAIT_POLICY") && setenv("OMP_WAIT_POLICY", "PASSIVE", 1) == 0)
-        reexec = 1;
-    if (!getenv("OPENBLAS_NUM_THREADS") && setenv("OPENBLAS_NUM_THREADS", "1", 1) == 0)
-        reexec = 1;
+    reexec |= procenv_default("OMP_WAIT_POLICY", "PASSIVE");
+    reexec |= procenv_default("OPENBLAS_NUM_THREADS", "1");
+    reexec |= procenv_tune_malloc(QDC_MALLOC_TUNABLES);
     /* CHOLMOD's supernodal factorization opens OpenMP teams of its own size
      * (4 threads in Debian 12's, whatever qdc's count), so a run on 2 cores
      * or with --threads 1 woke and put to sleep threads it had not asked
@@ -94,41 +106,15 @@ static void wait_passive(char **argv)
     if (nth > 0) {
         char v[24];
         snprintf(v, sizeof v, "%ld", nth);
-        if (setenv("OMP_THREAD_LIMIT", v, 1) == 0)
-            reexec = 1;
+        reexec |= procenv_default("OMP_THREAD_LIMIT", v);
     }
-    if (!reexec)
-        return;
-    n = readlink("/proc/self/exe", self, sizeof self - 1);
-    if (n > 0) {
-        self[n] = 0;
-        execv(self, argv);
-    }
-}
-
-/* glibc's malloc gives the kernel back every block of 128 KiB or more when it
- * is freed (each its own mmap) and the top of the heap above 128 KiB, so the
- * optimizer's arrays, allocated and freed again at each pass and round, came
- * back as fresh zeroed pages, a page fault each: --topology full on 100k tets
- * (one thread) took 31,500 minor faults and 0.26-0.30 s of system time. Kept
- * in the process (blocks up to 1 GiB from the heap, never trimmed: the CLI
- * exits when the run ends), 15,400 and 0.15 s, and 0.1-0.2 s less user time.
- * Tunable by the user as any glibc program (GLIBC_TUNABLES, MALLOC_*_). */
-static void keep_heap(void)
-{
-    const char *t = getenv("GLIBC_TUNABLES");
-
-    if ((t && strstr(t, "glibc.malloc.")) || getenv("MALLOC_MMAP_THRESHOLD_") ||
-        getenv("MALLOC_TRIM_THRESHOLD_"))
-        return;
-    mallopt(M_MMAP_THRESHOLD, 1 << 30);
-    mallopt(M_TRIM_THRESHOLD, 1 << 30);
+    if (reexec)
+        procenv_restart(argv);
 }
 
 int main(int argc, char **argv)
 {
     wait_passive(argv);
-    keep_heap();
     if (argc < 2) {
         usage(stderr);
         return CLI_EUSAGE;

@@ -7,7 +7,7 @@ if ! command -v clang-format > /dev/null 2>&1; then
     exit 0
 fi
 bad=
-for f in $(git ls-files 'lib/*.c' 'lib/*.h' 'lib/*.cpp' 'server/*.c' 'server/*.h' 'clients/qdc/*.c' \
+for f in $(git ls-files 'lib/*.c' 'lib/*.h' 'lib/*.cpp' 'server/*.c' 'server/*.h' 'clients/qdc/*.c' 'common/*.c' 'common/*.h' \
     'clients/qdc/*.h' 'tests/unit/*.c' 'tests/unit/*.h' 'tests/fuzz/*.c' 'tests/fuzz/*.h' \
     'examples/*.c' 2> /dev/null); do
     clang-format --dry-run -Werror "$f" > /dev/null 2>&1 || bad="$bad $f"

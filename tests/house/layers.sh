@@ -49,7 +49,7 @@ done
 [ $fail = 0 ] && echo "ok - layers: lib/ files include only their own and lower layers"
 
 fail=0
-for f in server/*.c server/*.h clients/qdc/*.c clients/qdc/*.h; do
+for f in server/*.c server/*.h clients/qdc/*.c clients/qdc/*.h common/*.c common/*.h; do
     [ -f "$f" ] || continue
     for inc in $(sed -n 's/^[[:space:]]*#[[:space:]]*include[[:space:]]*"\([^"]*\)".*/\1/p' "$f"); do
         case $inc in
