@@ -213,6 +213,7 @@ static qdc_status build_incidence(int32_t nv, int32_t nt, const int32_t *tets,
 typedef struct {
     int32_t b, c; /* the two larger vertices of the face */
     int32_t id;   /* 4*t + f */
+    int32_t o;    /* the tet's vertex opposite the face (tets[id]) */
 } face_rec;
 
 static int face_less(const face_rec *p, const face_rec *q)
@@ -228,8 +229,7 @@ static int face_less(const face_rec *p, const face_rec *q)
  * equal faces in nbr. 0, or at the first bad face: 1 for a duplicate tet
  * (pair = the two tets), 2 for a face of 3+ tets (pair = its position in the
  * bucket and the count). */
-static int match_bucket(face_rec *b, int n, const int32_t *tets, int32_t *nbr,
-                        int pair[2])
+static int match_bucket(face_rec *b, int n, int32_t *nbr, int pair[2])
 {
     for (int i = 1; i < n; i++) {
         face_rec key = b[i];
@@ -254,7 +254,7 @@ static int match_bucket(face_rec *b, int n, const int32_t *tets, int32_t *nbr,
          * neighbour too, three in all): said as the duplicate it is */
         for (int k = i; k < j; k++)
             for (int l = k + 1; l < j; l++)
-                if (tets[b[k].id] == tets[b[l].id]) {
+                if (b[k].o == b[l].o) {
                     if (pair) {
                         pair[0] = b[k].id >> 2;
                         pair[1] = b[l].id >> 2;
@@ -317,6 +317,7 @@ static qdc_status match_faces(int32_t nv, int32_t nt, const int32_t *tets, int32
                         r->b = x + y + z - lo - hi;
                         r->c = hi;
                         r->id = 4 * t + f;
+                        r->o = tt[f];
                     }
                 }
             }
@@ -332,15 +333,15 @@ static qdc_status match_faces(int32_t nv, int32_t nt, const int32_t *tets, int32
         int32_t first_bad = nv;
 #pragma omp parallel for schedule(dynamic, 4096) reduction(min : first_bad)
         for (int32_t v = 0; v < nv; v++)
-            if (match_bucket(rec + start[v], (int)(start[v + 1] - start[v]), tets, nbr,
-                             NULL) != 0 &&
+            if (match_bucket(rec + start[v], (int)(start[v + 1] - start[v]), nbr, NULL) !=
+                    0 &&
                 v < first_bad)
                 first_bad = v;
         if (first_bad < nv) {
             int pair[2];
-            int kind = match_bucket(rec + start[first_bad],
-                                    (int)(start[first_bad + 1] - start[first_bad]), tets,
-                                    nbr, pair);
+            int kind =
+                match_bucket(rec + start[first_bad],
+                             (int)(start[first_bad + 1] - start[first_bad]), nbr, pair);
             if (kind == 1) {
                 int32_t t1 = pair[0], t2 = pair[1];
                 st = qdc_fail(
@@ -1000,15 +1001,20 @@ static int ring_of(const mesh_topo *tp, int32_t v, int32_t *mark, int32_t *buf)
 
 /* CSR 1-ring (diagonal included), columns ascending: each vertex's incident
  * tets' vertices, deduplicated with a marker array, insertion-sorted. The
- * vertices are independent: each thread has its own marker array and buffer
- * (serial, the random reads of the tets took 0.6 s of setup at 4M tets). */
+ * vertices are independent: each thread takes a range of them in order, with
+ * its own marker array and buffer (serial, the random reads of the tets took
+ * 0.6 s of setup at 4M tets), and packs its rings into a block of its own,
+ * copied into place once the counts are known (the rings found once: a count
+ * pass and a fill pass walked the tets twice). */
 static qdc_status build_adjacency(mesh_topo *tp)
 {
     int32_t nv = tp->nv, maxdeg = 0;
     /* at most 8 marker arrays (nv each) however many threads the caller allows */
-    int nth = qdc_threads_upto(8);
+    int nth = qdc_threads_upto(8), team = 1, failed = 0;
     int32_t *cnt = qdc_calloc((size_t)nv + 1, sizeof(int32_t)), *mark, *buf;
+    int32_t *part[8] = {NULL};
     size_t bufn;
+    qdc_status st = QDC_OK;
 
     if (!cnt)
         return QDC_ENOMEM;
@@ -1024,48 +1030,63 @@ static qdc_status build_adjacency(mesh_topo *tp)
         qdc_free(buf);
         return QDC_ENOMEM;
     }
-    for (int pass = 0; pass < 2; pass++) {
-        for (size_t i = 0; i < (size_t)nth * ((size_t)nv + 1); i++)
-            mark[i] = -1;
-#pragma omp parallel num_threads(nth)
-        {
-            int me = omp_get_thread_num();
-            int32_t *mk = mark + (size_t)me * ((size_t)nv + 1),
-                    *bf = buf + (size_t)me * bufn;
-#pragma omp for schedule(static)
-            for (int32_t v = 0; v < nv; v++) {
-                int n = ring_of(tp, v, mk, bf);
-                if (pass == 0) {
-                    cnt[v + 1] = n;
-                    continue;
+    for (size_t i = 0; i < (size_t)nth * ((size_t)nv + 1); i++)
+        mark[i] = -1;
+#pragma omp parallel num_threads(nth) reduction(| : failed)
+    {
+        int me = omp_get_thread_num(), nt = omp_get_num_threads();
+        int32_t *mk = mark + (size_t)me * ((size_t)nv + 1), *bf = buf + (size_t)me * bufn;
+        int32_t lo = qdc_part(nv, me, nt), hi = qdc_part(nv, me + 1, nt);
+        /* about 15 per vertex in a tet mesh; grown when short */
+        size_t cap = (size_t)(hi - lo) * 16 + bufn, len = 0;
+        int32_t *out = qdc_mallocn(cap, sizeof(int32_t));
+
+        if (me == 0)
+            team = nt;
+        for (int32_t v = lo; v < hi && out; v++) {
+            int n = ring_of(tp, v, mk, bf);
+            for (int i = 1; i < n; i++) {
+                int32_t key = bf[i];
+                int j = i - 1;
+                while (j >= 0 && bf[j] > key) {
+                    bf[j + 1] = bf[j];
+                    j--;
                 }
-                for (int i = 1; i < n; i++) {
-                    int32_t key = bf[i];
-                    int j = i - 1;
-                    while (j >= 0 && bf[j] > key) {
-                        bf[j + 1] = bf[j];
-                        j--;
-                    }
-                    bf[j + 1] = key;
+                bf[j + 1] = key;
+            }
+            if (len + (size_t)n > cap) {
+                int32_t *o = qdc_realloc(out, 2 * (cap + (size_t)n) * sizeof(int32_t));
+                if (!o) {
+                    qdc_free(out);
+                    out = NULL;
+                    break;
                 }
-                memcpy(tp->adj_idx + tp->adj_ptr[v], bf, (size_t)n * sizeof(int32_t));
+                out = o;
+                cap = 2 * (cap + (size_t)n);
             }
+            memcpy(out + len, bf, (size_t)n * sizeof(int32_t));
+            len += (size_t)n;
+            cnt[v + 1] = n;
         }
-        if (pass == 0) {
-            for (int32_t v = 0; v < nv; v++)
-                cnt[v + 1] += cnt[v];
-            tp->adj_ptr = cnt;
-            tp->adj_idx = qdc_mallocn((size_t)cnt[nv] + 1, sizeof(int32_t));
-            if (!tp->adj_idx) {
-                qdc_free(mark);
-                qdc_free(buf);
-                return QDC_ENOMEM;
-            }
-        }
+        part[me] = out;
+        failed |= !out;
     }
     qdc_free(mark);
     qdc_free(buf);
-    return QDC_OK;
+    for (int32_t v = 0; v < nv; v++)
+        cnt[v + 1] += cnt[v];
+    tp->adj_ptr = cnt;
+    tp->adj_idx = failed ? NULL : qdc_mallocn((size_t)cnt[nv] + 1, sizeof(int32_t));
+    if (!tp->adj_idx)
+        st = QDC_ENOMEM;
+    for (int me = 0; me < team; me++) {
+        int32_t lo = qdc_part(nv, me, team), hi = qdc_part(nv, me + 1, team);
+        if (st == QDC_OK)
+            memcpy(tp->adj_idx + cnt[lo], part[me],
+                   (size_t)(cnt[hi] - cnt[lo]) * sizeof(int32_t));
+        qdc_free(part[me]);
+    }
+    return st;
 }
 
 /* A boundary triangle and its sorted vertices, for the order of mesh_faces. */
