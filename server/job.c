@@ -20,7 +20,6 @@
 
 #include <errno.h>
 #include <jansson.h>
-#include <malloc.h>
 #include <omp.h>
 #include <pthread.h>
 #include <stdio.h>
@@ -850,7 +849,6 @@ static void *worker_main(void *arg)
             fprintf(stderr, "qdcd: %s runs job %s (attempt %d)\n", w->name, j.id,
                     j.attempts);
         run_job(w, &j);
-        malloc_trim(0); /* the job's freed memory back to the kernel (main.c) */
         pthread_mutex_lock(&p->lock);
         w->job[0] = 0;
         /* There may be more queued work than notifications (restart). */

@@ -757,17 +757,14 @@ static void teardown(qdcd *q)
  * started before main() blocked the signals, see main) is passed on to the
  * main thread, where it waits blocked for sigtimedwait. */
 static pthread_t main_thread;
-/* A job's arrays, allocated and freed at each pass of the optimizer, are kept
- * in the process instead of handed back to the kernel at each free and faulted
- * in again as zeroed pages, and its memory is in transparent huge pages where
- * the kernel allows them (the qdc CLI's reasons and figures: clients/qdc/main.c).
- * Blocks up to 64 MiB come from the heap, whose free top is kept up to 256
- * MiB; a worker gives the rest back after each job (malloc_trim in job.c), so
- * an idle daemon holds little. Unless the operator tuned malloc. glibc reads
- * these before main: 1 when it set them (main starts again). */
-#define QDCD_MALLOC_TUNABLES                                                             \
-    "glibc.malloc.hugetlb=1:glibc.malloc.mmap_threshold=67108864:"                       \
-    "glibc.malloc.trim_threshold=268435456"
+/* A job's memory is in transparent huge pages where the kernel gives them on
+ * request (the qdc CLI's reasons and figures: clients/qdc/main.c), unless the
+ * operator tuned malloc. Not the CLI's thresholds, which keep freed blocks in
+ * the process: the daemon's memory must follow its limits, and an upload's
+ * buffers, grown by realloc, then stayed beside their copies (a 1 MB gzip bomb
+ * stopped at its 100 MB cap left a peak of 251 MB against 100-164 MB,
+ * tests/server/bombs.sh). glibc reads it before main: main starts again. */
+#define QDCD_MALLOC_TUNABLES "glibc.malloc.hugetlb=1"
 
 static void forward_stop(int sig)
 {
