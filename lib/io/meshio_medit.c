@@ -482,8 +482,8 @@ static qdc_status read_medit(const char *buf, size_t len, const meshio_options *
         st = medit_recheck(&ms.p2_at, "TetrahedraP2", ms.np2, 10, 1, pm->nv, ms.p2, err);
     if (st == QDC_OK && ms.np2 >= 0)
         st = medit_p2_split(&ms, &s, err);
-    if (st == QDC_OK) /* the arrays move into the mesh (meshio_meshb.c) */
-        st = pm->tets ? parsed_mesh_move(pm, out, err) : parsed_mesh(pm, out, err);
+    if (st == QDC_OK)
+        st = parsed_mesh_move(pm, out, err);
 out:
     parsed_free(pm);
     qdc_free(ms.p2);

@@ -350,7 +350,7 @@ static qdc_status read_meshb(const char *buf, size_t len, const meshio_options *
         gm.fix = NULL;
         /* the arrays move into the mesh (copied, with their first touch of
          * fresh pages, they were a third of a 1M-tet read) */
-        st = pm->tets ? parsed_mesh_move(pm, out, err) : parsed_mesh(pm, out, err);
+        st = parsed_mesh_move(pm, out, err);
     }
     qdc_free(gm.fix);
     parsed_free(pm);

@@ -590,11 +590,19 @@ static inline qdc_status parsed_mesh(const parsed *pm, mesh_t **out, qdc_error *
 /* parsed_mesh without the copies: xyz, tets, region, vref, tris and tri_ref
  * move into the mesh (pm's pointers are NULL afterwards, also on failure,
  * when they are freed). Each must come from qdc_malloc* and hold at least
- * what the mesh needs; xyz and tets must not be NULL. */
+ * what the mesh needs. Without xyz or tets (a file with no tets) there is
+ * nothing to hand over: parsed_mesh makes the mesh, and pm is freed. */
 static inline qdc_status parsed_mesh_move(parsed *pm, mesh_t **out, qdc_error *err)
 {
-    mesh_t *m = qdc_calloc(1, sizeof *m);
+    mesh_t *m;
     int64_t nt = pm->nt < 0 ? 0 : pm->nt;
+
+    if (!pm->xyz || !pm->tets) {
+        qdc_status st = parsed_mesh(pm, out, err);
+        parsed_free(pm);
+        return st;
+    }
+    m = qdc_calloc(1, sizeof *m);
 
     if (m && pm->nfix >= 0 && !(m->fixed = qdc_calloc((size_t)pm->nv, 1))) {
         qdc_free(m);
