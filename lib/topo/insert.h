@@ -16,7 +16,8 @@
 qdc_status tmesh_add_vertex(tmesh *tm, const double p[3]);
 
 /* Insert a vertex into the cavity of live tet t (above) when the cavity's
- * smallest mean ratio rises by at least margin and, with angle 1, its smallest
+ * smallest mean ratio rises by at least margin (at least doubles, when it is
+ * below margin) and, with angle 1, its smallest
  * dihedral angle does not fall (the vertex placed for the mean ratio first,
  * then the angle checked: a star that lifts the mean ratio with a thinner
  * angle is refused): *done 1 with the new tets'
@@ -25,6 +26,12 @@ qdc_status tmesh_add_vertex(tmesh *tm, const double p[3]);
  * and tm exactly as it was. QDC_ENOMEM. */
 qdc_status insert_in_tet(tmesh *tm, int32_t t, double margin, int angle, int *done,
                          int32_t *new_ids, int *nnew);
+
+/* The largest mean ratio of a tet on the face (a, b, c), whatever its fourth
+ * corner (1 for an equilateral face, 0 for a degenerate one); reached with
+ * the fourth corner over the centroid at a height of sqrt(2/9) times the root
+ * of the sum of the face's squared edges. */
+double insert_face_cap(const double *a, const double *b, const double *c);
 
 /* Undo an insertion not yet committed: the journal rolled back and the vertex
  * it added removed. */

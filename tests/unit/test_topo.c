@@ -738,6 +738,104 @@ TEST(insertion_keeps_the_smallest_angle)
     tmesh_free(tm);
 }
 
+/* A sliver on the surface, held by it: the ring of 4 tets around the z axis
+ * (apexes at z = -1 and 1, ring points at distance 1 and angles 0, 178, 240,
+ * 300 degrees) is all boundary, and its first tet (a, b, p0, p1) spans 179.5
+ * degrees around ab: its four corners and two of its faces on the surface,
+ * mean ratio 0.032. Every tet of the star of its first cavity (the tet
+ * and the two across its faces on the axis) that the cavity can cross stands
+ * on an inner face; its worst stands on the surface. The cavity grows past
+ * that tet to the whole ring, and the star of 8 tets over the 8 boundary
+ * triangles is made with the margin and the angle check: its smallest mean
+ * ratio above 0.2, its smallest dihedral angle above 20 degrees, the volume and
+ * the boundary faces kept. */
+TEST(insertion_grows_past_the_surface)
+{
+    const double deg[4] = {0, 179.5, 240, 300};
+    double x[3 * 6] = {0, 0, -1, 0, 0, 1}, v0, q0, qn = 2;
+    int32_t tv[16], ids[32], nf0, nf1, *f0, *f1;
+    tmesh *tm = NULL;
+    int done = 0, nn = 0;
+
+    for (int k = 0; k < 4; k++) {
+        x[3 * (2 + k)] = cos(deg[k] * PI / 180);
+        x[3 * (2 + k) + 1] = sin(deg[k] * PI / 180);
+        x[3 * (2 + k) + 2] = 0;
+        tv[4 * k] = 0;
+        tv[4 * k + 1] = 1;
+        tv[4 * k + 2] = 2 + k;
+        tv[4 * k + 3] = 2 + (k + 1) % 4;
+    }
+    ASSERT_OK(tmesh_new(6, x, 4, tv, NULL, NULL, &tm, NULL));
+    q0 = min_q(tm);
+    ASSERT_TRUE(q0 > 0.03 && q0 < 0.035 && tm->q[0] == q0);
+    ASSERT_TRUE(min_dihedral_from(tm, 0) < 2.0);
+    v0 = total_vol6(tm);
+    f0 = cons_faces(tm, &nf0);
+    ASSERT_TRUE(f0);
+    ASSERT_EQ_INT(nf0, 8);
+    ASSERT_OK(insert_in_tet(tm, 0, 0.05, 1, &done, ids, &nn));
+    ASSERT_EQ_INT(done, 1);
+    ASSERT_EQ_INT(nn, 8);
+    ASSERT_EQ_INT(tm->nlive, 8);
+    ASSERT_EQ_INT(tm->nv, 7);
+    ASSERT_TRUE(consistent(tm));
+    ASSERT_NEAR(total_vol6(tm), v0, 1e-12 * v0);
+    for (int j = 0; j < nn; j++) {
+        ASSERT_TRUE(tmesh_local(tm, ids[j], 6) >= 0);
+        qn = fmin(qn, tm->q[ids[j]]);
+    }
+    ASSERT_TRUE(qn > 0.2);
+    ASSERT_TRUE(min_dihedral_from(tm, 0) > 20.0);
+    f1 = cons_faces(tm, &nf1);
+    ASSERT_TRUE(f1);
+    ASSERT_EQ_INT(nf1, nf0);
+    ASSERT_TRUE(!memcmp(f0, f1, 20 * (size_t)nf0));
+    tmesh_commit(tm);
+    free(f0);
+    free(f1);
+    tmesh_free(tm);
+}
+
+/* The cap of a face: 1 for an equilateral triangle (the regular tet on it),
+ * 0 for a degenerate one; on a scalene triangle reached by the apex over the
+ * centroid at height sqrt(2L/9), and above the mean ratio of every tet on the
+ * face with the apex anywhere (a grid of 9261 places). */
+TEST(insertion_face_cap)
+{
+    const double eq[9] = {0, 0, 0, 2, 0, 0, 1, sqrt(3.0), 0};
+    const double line[9] = {0, 0, 0, 1, 1, 1, 3, 3, 3};
+    const double f[9] = {0, 0, 0, 3, 0, 0, 0.4, 0.7, 0};
+    double l = 9 + 0.4 * 0.4 + 0.7 * 0.7 + 2.6 * 2.6 + 0.7 * 0.7, cap,
+           h = sqrt(2 * l / 9);
+    double apex[3] = {3.4 / 3, 0.7 / 3, h}, q, top = 0;
+    int32_t v[4] = {0, 1, 2, 3};
+    tmesh *tm = NULL;
+    double x[12];
+    int32_t tv[4] = {0, 1, 2, 3};
+
+    ASSERT_NEAR(insert_face_cap(eq, eq + 3, eq + 6), 1.0, 1e-12);
+    ASSERT_TRUE(insert_face_cap(line, line + 3, line + 6) == 0.0);
+    cap = insert_face_cap(f, f + 3, f + 6);
+    ASSERT_TRUE(cap > 0.2 && cap < 0.9);
+    memcpy(x, f, sizeof f);
+    memcpy(x + 9, apex, sizeof apex);
+    ASSERT_OK(tmesh_new(4, x, 1, tv, NULL, NULL, &tm, NULL));
+    ASSERT_NEAR(tm->q[0], cap, 1e-12);
+    for (int i = 0; i <= 20; i++)
+        for (int j = 0; j <= 20; j++)
+            for (int k = 0; k <= 20; k++) {
+                tm->xyz[9] = -1 + 0.25 * i;
+                tm->xyz[10] = -2 + 0.2 * j;
+                tm->xyz[11] = 0.02 + 0.2 * k;
+                q = tmesh_quality(tm, v, -INFINITY);
+                ASSERT_TRUE(q <= cap * (1 + 1e-12));
+                top = fmax(top, q);
+            }
+    ASSERT_TRUE(top > 0.95 * cap);
+    tmesh_free(tm);
+}
+
 /* The driver with insertion on a perturbed two-region grid: vertices added,
  * the smallest mean ratio above the flips' alone, the constrained faces and
  * region volumes kept, adjacency consistent, none inverted. */
@@ -1786,6 +1884,7 @@ TEST_MAIN("topo", T(kept_inner_face_blocks_removal), T(driver_keeps_an_inner_sur
           T(peeling_a_flat_boundary_tet), T(driver_writes_the_new_boundary_triangles),
           T(driver_spends_one_bound), T(insertion_in_a_bad_tet),
           T(insertion_refused_leaves_the_mesh), T(insertion_keeps_the_smallest_angle),
+          T(insertion_grows_past_the_surface), T(insertion_face_cap),
           T(driver_with_insertion), T(orient3d_exact_near_coplanar),
           T(edge_removal_3_2_keeps_volume), T(edge_removal_rings_3_to_8), T(flip_2_3),
           T(multiface_removal_restores_the_ring), T(tmesh_refuses_a_face_of_three_tets),
