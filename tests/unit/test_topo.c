@@ -1163,6 +1163,66 @@ TEST(opt_run_flips_keeps_the_model)
     mesh_free(m);
 }
 
+/* The mean ratio of the tet (p, q, r, s): 12 (3 |V|)^(2/3) / (sum of its six
+ * squared edges). */
+static double mean_ratio_of(const double *p, const double *q, const double *r,
+                            const double *s)
+{
+    const double *v[4] = {p, q, r, s};
+    double u[3], w[3], z[3], vol, l2 = 0;
+
+    for (int d = 0; d < 3; d++) {
+        u[d] = q[d] - p[d];
+        w[d] = r[d] - p[d];
+        z[d] = s[d] - p[d];
+    }
+    vol = (u[0] * (w[1] * z[2] - w[2] * z[1]) - u[1] * (w[0] * z[2] - w[2] * z[0]) +
+           u[2] * (w[0] * z[1] - w[1] * z[0])) /
+          6;
+    for (int i = 0; i < 4; i++)
+        for (int k = i + 1; k < 4; k++)
+            for (int d = 0; d < 3; d++)
+                l2 += (v[i][d] - v[k][d]) * (v[i][d] - v[k][d]);
+    return 12 * pow(3 * fabs(vol), 2.0 / 3) / l2;
+}
+
+/* With --boundary fixed no floor keeps a flat tet of four boundary corners
+ * (TOPO_FLOOR4_FIXED): the three tets around the edge cd, every vertex on the
+ * surface, a (-1,0,0) b (1,0,0) c (0,-1,0) d (0,1,0.003) and x near the plane
+ * (abcd flat, mean ratio 0.016). Removing cd leaves abxc and abxd, mean ratio
+ * 0.048 (under Stellar's floor of 0.1, three times the flat tet's) and a
+ * larger smallest angle: taken, nothing moved. */
+TEST(opt_run_fixed_flips_take_a_flat_tet)
+{
+    const double x0[15] = {-1, 0, 0, 1,     0,      0,      0,   -1,
+                           0,  0, 1, 0.003, -0.441, -0.008, 0.01};
+    const int32_t tv[12] = {0, 1, 2, 3, 2, 3, 1, 4, 2, 3, 4, 0};
+    mesh_t *m = mesh_new(5, 3, 0);
+    opt_options o;
+    opt_result r;
+    double q;
+
+    ASSERT_TRUE(m);
+    memcpy(m->xyz, x0, sizeof x0);
+    memcpy(m->tets, tv, sizeof tv);
+    q = fmin(mean_ratio_of(x0, x0 + 3, x0 + 12, x0 + 6),
+             mean_ratio_of(x0, x0 + 3, x0 + 12, x0 + 9));
+    ASSERT_TRUE(q > 0.04 && q < 0.1);
+    opt_defaults(&o);
+    o.threads = 1;
+    o.topology = OPT_TOPOLOGY_FLIPS;
+    o.boundary = OPT_BOUNDARY_FIXED;
+    ASSERT_OK(opt_run(m, &o, &r, NULL));
+    ASSERT_NEAR(r.before.q_min, mean_ratio_of(x0, x0 + 3, x0 + 6, x0 + 9), 1e-9);
+    ASSERT_TRUE(r.before.q_min < 0.02);
+    ASSERT_EQ_INT(r.tets_in, 3);
+    ASSERT_EQ_INT(m->nt, 2);
+    ASSERT_EQ_INT(r.topo_edge_removals, 1);
+    ASSERT_NEAR(r.after.q_min, q, 1e-9);
+    ASSERT_TRUE(!memcmp(m->xyz, x0, sizeof x0));
+    mesh_free(m);
+}
+
 /* What the rounds of --topology flips rely on to orient the tets once per
  * round (lib/opt/topology.c, orient_memo_get): a flip mesh_orient found stays
  * its answer after the vertices move, as long as every tet is positive
@@ -1885,8 +1945,9 @@ TEST_MAIN("topo", T(kept_inner_face_blocks_removal), T(driver_keeps_an_inner_sur
           T(driver_spends_one_bound), T(insertion_in_a_bad_tet),
           T(insertion_refused_leaves_the_mesh), T(insertion_keeps_the_smallest_angle),
           T(insertion_grows_past_the_surface), T(insertion_face_cap),
-          T(driver_with_insertion), T(orient3d_exact_near_coplanar),
-          T(edge_removal_3_2_keeps_volume), T(edge_removal_rings_3_to_8), T(flip_2_3),
+          T(opt_run_fixed_flips_take_a_flat_tet), T(driver_with_insertion),
+          T(orient3d_exact_near_coplanar), T(edge_removal_3_2_keeps_volume),
+          T(edge_removal_rings_3_to_8), T(flip_2_3),
           T(multiface_removal_restores_the_ring), T(tmesh_refuses_a_face_of_three_tets),
           T(export_keeps_the_callers_vertex_order), T(mixed_tag_shell_blocks_removal),
           T(non_convex_ring_refused), T(four_boundary_corner_floor),
