@@ -7,8 +7,9 @@
  * the INPUT surface: every such triangle lies within the largest spent of its
  * corners. A vertex on no triangle a boundary operation made (op 0) has spent
  * = its distance from its input position (a triangle of the input moved by
- * its corners: each point moves by at most their largest move); 0 for one
- * that slides on a planar patch or a straight line (the shape is kept).
+ * its corners: each point moves by at most their largest move); one that
+ * slides on a planar patch or a straight line (the shape is kept) or is a
+ * corner keeps what it spent before (0 if it never moved otherwise).
  * Indices are those of the mesh the record was made for; not thread-safe
  * (one run owns it). */
 #ifndef QDC_SPEND_H
