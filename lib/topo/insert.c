@@ -4,6 +4,7 @@
 
 #include "core/tet.h"
 #include "geom/metric_int.h"
+#include "geom/vec3.h"
 
 #include <math.h>
 #include <string.h>
@@ -194,20 +195,14 @@ static double place(tmesh *tm, int32_t t, const int32_t *old, int nold,
  * 8 (A^2 / (6 (4L/3)^2))^(1/3). */
 double insert_face_cap(const double *a, const double *b, const double *c)
 {
-    double u[3], w[3], n[3], a2, l;
+    double u[3], w[3], e[3], n[3], a2, l;
 
-    for (int d = 0; d < 3; d++) {
-        u[d] = b[d] - a[d];
-        w[d] = c[d] - a[d];
-    }
-    n[0] = u[1] * w[2] - u[2] * w[1];
-    n[1] = u[2] * w[0] - u[0] * w[2];
-    n[2] = u[0] * w[1] - u[1] * w[0];
-    a2 = 0.25 * (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-    l = 0.0;
-    for (int d = 0; d < 3; d++)
-        l += u[d] * u[d] + w[d] * w[d] + (c[d] - b[d]) * (c[d] - b[d]);
-    l *= 4.0 / 3.0;
+    vec3_sub(b, a, u);
+    vec3_sub(c, a, w);
+    vec3_sub(c, b, e);
+    vec3_cross(u, w, n);
+    a2 = 0.25 * vec3_dot(n, n);
+    l = 4.0 / 3.0 * (vec3_dot(u, u) + vec3_dot(w, w) + vec3_dot(e, e));
     return l > 0.0 ? 8.0 * cbrt(a2 / (6.0 * l * l)) : 0.0;
 }
 

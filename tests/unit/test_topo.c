@@ -66,9 +66,11 @@ TEST(orient3d_exact_near_coplanar)
     ASSERT_TRUE(naive_wrong > trials / 10);
 }
 
-/* a, b on the z axis; n ring points around it in z = 0 (counterclockwise from +z);
- * the n tets (a, b, p_k, p_k+1) of one tag. */
-static tmesh *ring_mesh(int n, double za, double zb, const int32_t *tags)
+/* a, b on the z axis; n ring points around it in z = 0 at the angles deg
+ * (degrees, counterclockwise from +z; NULL: evenly spaced); the n tets (a, b,
+ * p_k, p_k+1) of one tag. */
+static tmesh *ring_mesh_at(int n, const double *deg, double za, double zb,
+                           const int32_t *tags)
 {
     double x[3 * 12];
     int32_t tv[4 * 10];
@@ -81,8 +83,9 @@ static tmesh *ring_mesh(int n, double za, double zb, const int32_t *tags)
     x[4] = 0;
     x[5] = zb;
     for (int k = 0; k < n; k++) {
-        x[3 * (2 + k)] = cos(2 * PI * k / n);
-        x[3 * (2 + k) + 1] = sin(2 * PI * k / n);
+        double r = deg ? deg[k] * PI / 180 : 2 * PI * k / n;
+        x[3 * (2 + k)] = cos(r);
+        x[3 * (2 + k) + 1] = sin(r);
         x[3 * (2 + k) + 2] = 0;
         tv[4 * k] = 0;
         tv[4 * k + 1] = 1;
@@ -92,6 +95,11 @@ static tmesh *ring_mesh(int n, double za, double zb, const int32_t *tags)
     if (tmesh_new(n + 2, x, n, tv, tags, NULL, &tm, NULL) != QDC_OK)
         return NULL;
     return tm;
+}
+
+static tmesh *ring_mesh(int n, double za, double zb, const int32_t *tags)
+{
+    return ring_mesh_at(n, NULL, za, zb, tags);
 }
 
 static double total_vol6(const tmesh *tm)
@@ -752,21 +760,12 @@ TEST(insertion_keeps_the_smallest_angle)
 TEST(insertion_grows_past_the_surface)
 {
     const double deg[4] = {0, 179.5, 240, 300};
-    double x[3 * 6] = {0, 0, -1, 0, 0, 1}, v0, q0, qn = 2;
-    int32_t tv[16], ids[32], nf0, nf1, *f0, *f1;
-    tmesh *tm = NULL;
+    double v0, q0, qn = 2;
+    int32_t ids[32], nf0, nf1, *f0, *f1;
+    tmesh *tm = ring_mesh_at(4, deg, -1, 1, NULL);
     int done = 0, nn = 0;
 
-    for (int k = 0; k < 4; k++) {
-        x[3 * (2 + k)] = cos(deg[k] * PI / 180);
-        x[3 * (2 + k) + 1] = sin(deg[k] * PI / 180);
-        x[3 * (2 + k) + 2] = 0;
-        tv[4 * k] = 0;
-        tv[4 * k + 1] = 1;
-        tv[4 * k + 2] = 2 + k;
-        tv[4 * k + 3] = 2 + (k + 1) % 4;
-    }
-    ASSERT_OK(tmesh_new(6, x, 4, tv, NULL, NULL, &tm, NULL));
+    ASSERT_TRUE(tm);
     q0 = min_q(tm);
     ASSERT_TRUE(q0 > 0.03 && q0 < 0.035 && tm->q[0] == q0);
     ASSERT_TRUE(min_dihedral_from(tm, 0) < 2.0);
@@ -1168,22 +1167,10 @@ TEST(opt_run_flips_keeps_the_model)
 static double mean_ratio_of(const double *p, const double *q, const double *r,
                             const double *s)
 {
-    const double *v[4] = {p, q, r, s};
-    double u[3], w[3], z[3], vol, l2 = 0;
+    metric_parts pt;
 
-    for (int d = 0; d < 3; d++) {
-        u[d] = q[d] - p[d];
-        w[d] = r[d] - p[d];
-        z[d] = s[d] - p[d];
-    }
-    vol = (u[0] * (w[1] * z[2] - w[2] * z[1]) - u[1] * (w[0] * z[2] - w[2] * z[0]) +
-           u[2] * (w[0] * z[1] - w[1] * z[0])) /
-          6;
-    for (int i = 0; i < 4; i++)
-        for (int k = i + 1; k < 4; k++)
-            for (int d = 0; d < 3; d++)
-                l2 += (v[i][d] - v[k][d]) * (v[i][d] - v[k][d]);
-    return 12 * pow(3 * fabs(vol), 2.0 / 3) / l2;
+    metric_parts_for(OPT_METRIC_MIMR, p, q, r, s, &pt);
+    return fabs(metric_mean_ratio(&pt));
 }
 
 /* With --boundary fixed no floor keeps a flat tet of four boundary corners
