@@ -194,32 +194,56 @@ double metric_qt_grad(opt_metric m, const double *p12, int a, double delta, doub
     return q;
 }
 
+void metric_face_set(const double *f0, const double *f1, const double *f2,
+                     metric_face *mf)
+{
+    double e1[3], e2[3];
+
+    mf->f[0] = f0;
+    mf->f[1] = f1;
+    mf->f[2] = f2;
+    vec3_sub(f1, f0, e1);
+    vec3_sub(f2, f0, e2);
+    vec3_cross(e1, e2, mf->dV);
+    for (int k = 0; k < 3; k++)
+        mf->dV[k] *= -1.0 / 6.0;
+    mf->ee[0] = vec3_dot(e1, e1);
+    mf->ee[1] = vec3_dot(e2, e2);
+    for (int k = 0; k < 3; k++)
+        mf->ee[2 + k] = (e2[k] - e1[k]) * (e2[k] - e1[k]);
+}
+
 double metric_qt_hess_face(opt_metric m, const double *pa, const double *f0,
                            const double *f1, const double *f2, double delta, double g[3],
                            double H[6], double vl[2])
 {
+    metric_face mf;
+
+    metric_face_set(f0, f1, f2, &mf);
+    return metric_qt_hess_at(m, pa, &mf, delta, g, H, vl);
+}
+
+double metric_qt_hess_at(opt_metric m, const double *pa, const metric_face *mf,
+                         double delta, double g[3], double H[6], double vl[2])
+{
     /* q = c A^al h(s)^-be with A = l2sum, s = cv V; ln q is a sum of simple
      * terms: grad q = q u, u = al dA/A - be h' cv dV/h, and
      * hess q = q (u u^T + al (6 I/A - dA dA^T/A^2) - be cv^2 (h''/h - h'^2/h^2) dV dV^T)
-     * (d2A/dp_a2 = 6 I; V is linear in p_a: V = dV . (p_a - f0)) */
-    double e1[3], e2[3], d0[3], d1[3], d2[3], dV[3], dA[3], u[3], A, V, sarg, h, hp, hpp,
-        q;
+     * (d2A/dp_a2 = 6 I; V is linear in p_a: V = dV . (p_a - f0)). A's terms
+     * are added in the order of the sum over the edges d0, d1, d2, e1, e2,
+     * e2 - e1, as before the face's part was set apart (the same bits). */
+    const double *dV = mf->dV;
+    double d0[3], d1[3], d2[3], dA[3], u[3], A, V, sarg, h, hp, hpp, q;
     double al, be, cv, iA, ih, cvv;
 
-    vec3_sub(f1, f0, e1);
-    vec3_sub(f2, f0, e2);
-    vec3_sub(pa, f0, d0);
-    vec3_sub(pa, f1, d1);
-    vec3_sub(pa, f2, d2);
-    vec3_cross(e1, e2, dV);
-    for (int k = 0; k < 3; k++) {
-        dV[k] *= -1.0 / 6.0;
+    vec3_sub(pa, mf->f[0], d0);
+    vec3_sub(pa, mf->f[1], d1);
+    vec3_sub(pa, mf->f[2], d2);
+    for (int k = 0; k < 3; k++)
         dA[k] = 2.0 * (d0[k] + d1[k] + d2[k]);
-    }
     V = vec3_dot(dV, d0);
-    A = vec3_dot(d0, d0) + vec3_dot(d1, d1) + vec3_dot(d2, d2) + vec3_dot(e1, e1) +
-        vec3_dot(e2, e2) + (e2[0] - e1[0]) * (e2[0] - e1[0]) +
-        (e2[1] - e1[1]) * (e2[1] - e1[1]) + (e2[2] - e1[2]) * (e2[2] - e1[2]);
+    A = vec3_dot(d0, d0) + vec3_dot(d1, d1) + vec3_dot(d2, d2) + mf->ee[0] + mf->ee[1] +
+        mf->ee[2] + mf->ee[3] + mf->ee[4];
     vl[0] = V;
     vl[1] = A;
     if (m == OPT_METRIC_MIVL) {

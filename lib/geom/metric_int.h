@@ -56,6 +56,21 @@ double metric_qt_hess_face(opt_metric m, const double *pa, const double *f0,
                            const double *f1, const double *f2, double delta, double g[3],
                            double H[6], double vl[2]);
 
+/* What metric_qt_hess_face finds of the face alone, for a vertex that is
+ * tried at several points against the same faces (the finishing pass: its
+ * trial steps). */
+typedef struct {
+    const double *f[3]; /* the face's corners, as given */
+    double dV[3]; /* -(e1 x e2) / 6, e1 = f1 - f0, e2 = f2 - f0: V = dV . (pa - f0) */
+    double ee[5]; /* e1.e1, e2.e2, (e2 - e1)_k^2 (k = 0, 1, 2) */
+} metric_face;
+
+void metric_face_set(const double *f0, const double *f1, const double *f2,
+                     metric_face *mf);
+/* metric_qt_hess_face against a face set by metric_face_set: the same bits. */
+double metric_qt_hess_at(opt_metric m, const double *pa, const metric_face *mf,
+                         double delta, double g[3], double H[6], double vl[2]);
+
 /* Smallest and largest of the 6 dihedral angles (degrees), as metric_dihedrals
  * but with 2 acos instead of 6. */
 void metric_dihedral_range(const double *p0, const double *p1, const double *p2,

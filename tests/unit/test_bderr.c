@@ -171,6 +171,71 @@ TEST(bvh_matches_brute_force)
     free(t);
 }
 
+/* Queries a hair off a fine surface away from the origin (coordinates near
+ * 1e3, edges of 1e-3, distances down to 1e-12), the search started from
+ * another triangle than the query's own: the triangles skipped by their
+ * balls are never the nearest, so the distances are the brute-force ones,
+ * bit for bit, from the tree, from a start triangle and in groups. */
+TEST(bvh_ball_skips_never_change_the_answer)
+{
+    enum { N = 24, NT = 2 * N * N, NQ = 3000 };
+    double *x = malloc(9 * NT * sizeof(double)), *p = malloc(3 * NQ * sizeof(double));
+    int32_t *t = malloc(3 * NT * sizeof(int32_t)), *near = malloc(NQ * sizeof(int32_t));
+    double o[3] = {1e3, -2e3, 3e2}, h = 1e-3, *d = malloc(NQ * sizeof(double));
+    bderr_bvh *b = NULL;
+    qdc_error err;
+
+    ASSERT_TRUE(x && p && t && near && d);
+    /* a wavy grid of triangles, each with its own three corners */
+    for (int i = 0, k = 0; i < N; i++)
+        for (int j = 0; j < N; j++)
+            for (int s = 0; s < 2; s++, k++) {
+                int c[3][2] = {{i, j}, {i + 1, j + s}, {i + s, j + 1}};
+                for (int v = 0; v < 3; v++) {
+                    double *q = x + 9 * k + 3 * v;
+                    q[0] = o[0] + h * c[v][0];
+                    q[1] = o[1] + h * c[v][1];
+                    q[2] = o[2] + 0.3 * h * sin(c[v][0] * 0.7) * cos(c[v][1] * 0.5);
+                    t[3 * k + v] = 3 * k + v;
+                }
+            }
+    ASSERT_OK(bderr_bvh_build(x, 3 * NT, t, NT, &b, &err));
+    for (int q = 0; q < NQ; q++) {
+        int k = (int)(urand() * NT);
+        double u = urand(), v = urand() * (1 - u), off = pow(10.0, -12 + 9 * urand());
+        double best = INFINITY;
+        if (k >= NT)
+            k = NT - 1;
+        if (q % 2) /* by a corner, where triangles tie within the offset */
+            u = (q / 2) % 3 == 1, v = (q / 2) % 3 == 2;
+        for (int c = 0; c < 3; c++)
+            p[3 * q + c] = x[9 * k + c] + u * (x[9 * k + 3 + c] - x[9 * k + c]) +
+                           v * (x[9 * k + 6 + c] - x[9 * k + c]) +
+                           (q % 2    ? off * (urand() - 0.5)
+                            : c == 2 ? off
+                                     : 0);
+        near[q] = (k + 2 * N + 5) % NT; /* a few rows away */
+        for (int i = 0; i < NT; i++)
+            best = fmin(best, bderr_point_triangle(p + 3 * q, x + 9 * i, x + 9 * i + 3,
+                                                   x + 9 * i + 6, NULL));
+        ASSERT_NEAR(bderr_bvh_closest(b, p + 3 * q, NULL, NULL), best, 0);
+        ASSERT_NEAR(bderr_bvh_closest_near(b, p + 3 * q, near[q], NULL, NULL), best, 0);
+        d[q] = best;
+    }
+    /* one point at a time as a group of one, against its brute-force answer */
+    for (int q = 0; q < NQ; q++) {
+        double got;
+        ASSERT_TRUE(bderr_bvh_closest_group(b, 1, p + 3 * q, near + q, &got));
+        ASSERT_NEAR(got, d[q], 0);
+    }
+    bderr_bvh_free(b);
+    free(x);
+    free(p);
+    free(t);
+    free(near);
+    free(d);
+}
+
 /* Points grouped by the leaf of their starting triangle get, at once, the
  * brute-force distances (the same bits); groups the call cannot take are
  * refused without touching d. */
@@ -676,8 +741,9 @@ TEST(allocation_failures)
 
 TEST_MAIN("bderr", T(point_triangle_regions), T(point_triangle_degenerate),
           T(point_triangle_vs_sampling), T(bvh_matches_brute_force),
-          T(bvh_group_matches_brute_force), T(bvh_refit_matches_brute_force),
-          T(bvh_edge_cases), T(hausdorff_translated_cube), T(parallel_planes_mean_rms),
+          T(bvh_ball_skips_never_change_the_answer), T(bvh_group_matches_brute_force),
+          T(bvh_refit_matches_brute_force), T(bvh_edge_cases),
+          T(hausdorff_translated_cube), T(parallel_planes_mean_rms),
           T(many_samples_in_drawing_order), T(deterministic_and_thread_independent),
           T(shared_triangles_same_as_copies), T(surfaces_bad_input),
           T(meshes_boundary_faces), T(meshes_big_grid_speed), T(dev_meshes),

@@ -174,6 +174,51 @@ TEST(hessian_matches_finite_differences_of_the_gradient)
     }
 }
 
+/* A face set once (metric_face_set) and its apex moved: the same bits as
+ * metric_qt_hess_face, value, gradient, Hessian and the volume and edge
+ * sum; 1 and a zero gradient at the apex of the regular tet on the face. */
+TEST(face_set_once_gives_the_same_bits)
+{
+    const double s3 = sqrt(3.0);
+    double f[3][3] = {{0, 0, 0}, {1, 0, 0}, {0.5, s3 / 2, 0}};
+    double apex[3] = {0.5, s3 / 6, -sqrt(2.0 / 3.0)}; /* tet_face_of: apex below */
+    metric_face mf;
+    double g[3], H[6], vl[2];
+
+    metric_face_set(f[0], f[1], f[2], &mf);
+    for (int mm = 0; mm < 2; mm++) {
+        ASSERT_NEAR(metric_qt_hess_at((opt_metric)mm, apex, &mf, 0.0, g, H, vl), 1.0,
+                    1e-14);
+        for (int k = 0; k < 3; k++)
+            ASSERT_NEAR(g[k], 0.0, 1e-14);
+        ASSERT_NEAR(vl[0], sqrt(2.0) / 12, 1e-15); /* the unit regular tet */
+        ASSERT_NEAR(vl[1], 6.0, 1e-14);
+    }
+    for (int trial = 0; trial < 200; trial++) {
+        double p[3], g1[3], H1[6], vl1[2], g2[3], H2[6], vl2[2], q1, q2;
+        for (int k = 0; k < 3; k++)
+            p[k] = apex[k] + 0.4 * sin(7.1 * trial + 2.3 * k);
+        f[2][0] = 0.5 + 0.1 * cos(3.3 * trial);
+        metric_face_set(f[0], f[1], f[2], &mf);
+        for (int mm = 0; mm < 2; mm++)
+            for (int dl = 0; dl < 2; dl++) {
+                double delta = dl ? 0.05 : 0.0;
+                int grad = trial % 3 != 0;
+                q1 = metric_qt_hess_face((opt_metric)mm, p, f[0], f[1], f[2], delta,
+                                         grad ? g1 : NULL, H1, vl1);
+                q2 = metric_qt_hess_at((opt_metric)mm, p, &mf, delta, grad ? g2 : NULL,
+                                       H2, vl2);
+                ASSERT_TRUE(memcmp(&q1, &q2, sizeof q1) == 0);
+                ASSERT_TRUE(memcmp(vl1, vl2, sizeof vl1) == 0);
+                if (grad && isfinite(q1)) {
+                    ASSERT_TRUE(memcmp(g1, g2, sizeof g1) == 0);
+                    ASSERT_TRUE(memcmp(H1, H2, sizeof H1) == 0);
+                }
+            }
+    }
+    ASSERT_TRUE(isnan(metric_qt_hess_at(OPT_METRIC_MICN, apex, &mf, 0.0, g, H, vl)));
+}
+
 /* a regular tet split at its centroid: 4 congruent tets around vertex 4 */
 static mesh_t *star_mesh(void)
 {
@@ -752,6 +797,7 @@ TEST(triangle_edges_pair_up_in_order)
 TEST_MAIN("core", T(triangle_edges_pair_up_in_order),
           T(flat_tets_are_degenerate_at_every_scale),
           T(hessian_matches_finite_differences_of_the_gradient),
+          T(face_set_once_gives_the_same_bits),
           T(dihedral_sines_are_the_sines_of_the_angles),
           T(cubed_mean_ratio_orders_like_the_mean_ratio), T(regular_tet_metrics_are_one),
           T(scaled_regular_tet_is_still_one), T(mivl_is_mimr_to_three_halves),
