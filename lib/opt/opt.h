@@ -111,6 +111,9 @@ typedef struct {
     opt_topology topology; /* default NONE */
     int stall_early;       /* the stall test from the 2nd iteration on, not the 3rd (a
                             * --topology round's held smoothing, topology.c); default 0 */
+    int free_fins;         /* under a bound, the corners of tets with three boundary faces
+                            * move free within it (the smoothing of --topology, opt.c
+                            * free_fins); default 0 */
     double time_limit;     /* seconds, 0 = none: then OPT_STOPPED with the best mesh */
     int threads;           /* OpenMP threads for this run; 0 = all cores. A server running
                             * several jobs at once should give each 1 (no oversubscription) */

@@ -864,17 +864,17 @@ static qdc_status topology_run(mesh_t *m, const opt_options *opts, opt_result *r
 {
     opt_options o = *opts;
     opt_result first, last;
-    double t0 = qdc_now();
+    double t0 = qdc_now(), hausd = 0.0;
     int record = 0, stopped = 0;
     round_progress rp = {opts->progress, opts->progress_ctx, 0, 0.0};
     topo_surface sf = {0};
-    double hausd = 0.0;
     uint8_t *act;
     orient_memo om = {NULL, -1, 0};
     spend sp;
     qdc_status st;
 
     o.topology = OPT_TOPOLOGY_NONE;
+    o.free_fins = 1;
     act = qdc_malloc((size_t)m->nv + 1);
     if (!act)
         return qdc_fail(err, QDC_ENOMEM, "out of memory");
