@@ -1210,6 +1210,89 @@ TEST(opt_run_fixed_flips_take_a_flat_tet)
     mesh_free(m);
 }
 
+/* A unit cube of 2x2x2 cells, each cut into five tets (corners cut off, the
+ * cut corners alternating so that the faces match), positively ordered. */
+static mesh_t *five_tet_cube(void)
+{
+    mesh_t *m = mesh_new(27, 40, 0);
+    int32_t nt = 0;
+
+    if (!m)
+        return NULL;
+    for (int v = 0; v < 27; v++) {
+        m->xyz[3 * v] = 0.5 * (v % 3);
+        m->xyz[3 * v + 1] = 0.5 * (v / 3 % 3);
+        m->xyz[3 * v + 2] = 0.5 * (v / 9);
+    }
+    for (int k = 0; k < 2; k++)
+        for (int j = 0; j < 2; j++)
+            for (int i = 0; i < 2; i++) {
+                /* the cell's corner b (bits x, y, z) and the cut ones */
+                int32_t c[8];
+                static const int cut[2][5][4] = {{{0, 1, 2, 4},
+                                                  {3, 1, 2, 7},
+                                                  {5, 1, 4, 7},
+                                                  {6, 2, 4, 7},
+                                                  {1, 2, 4, 7}},
+                                                 {{1, 0, 3, 5},
+                                                  {2, 0, 3, 6},
+                                                  {4, 0, 5, 6},
+                                                  {7, 3, 5, 6},
+                                                  {0, 3, 5, 6}}};
+                int par = (i + j + k) % 2;
+                for (int b = 0; b < 8; b++)
+                    c[b] = (i + (b & 1)) + 3 * (j + (b >> 1 & 1)) + 9 * (k + (b >> 2));
+                for (int t = 0; t < 5; t++, nt++) {
+                    int32_t *tt = m->tets + 4 * nt;
+                    for (int a = 0; a < 4; a++)
+                        tt[a] = c[cut[par][t][a]];
+                    if (mean_ratio_of(m->xyz + 3 * tt[0], m->xyz + 3 * tt[1],
+                                      m->xyz + 3 * tt[2], m->xyz + 3 * tt[3]) < 0) {
+                        int32_t w = tt[0];
+                        tt[0] = tt[1];
+                        tt[1] = w;
+                    }
+                }
+            }
+    return m;
+}
+
+/* The corner tet of a box is a tet with three boundary faces, a good one:
+ * its corners on the box's edges stay on them (lib/opt/opt.c free_fins frees
+ * only a bad fin's). The box bent (z + 0.3 x (1 - x)), so that its edges along
+ * x are not straight (the corners of a straight one slide on it anyway), the
+ * centre moved off so that the smoothing has work: the midpoints of those
+ * edges keep their y (0 or 1, the plane of the edge's faces' other side). */
+TEST(flips_keep_a_good_corner_tets_edges)
+{
+    mesh_t *m = five_tet_cube();
+    opt_options o;
+    opt_result r;
+    int on_edges = 0;
+
+    ASSERT_TRUE(m);
+    for (int v = 0; v < 27; v++)
+        m->xyz[3 * v + 2] += 0.3 * m->xyz[3 * v] * (1 - m->xyz[3 * v]);
+    m->xyz[3 * 13] += 0.12; /* the centre */
+    m->xyz[3 * 13 + 1] -= 0.07;
+    m->xyz[3 * 13 + 2] += 0.05;
+    opt_defaults(&o);
+    o.threads = 1;
+    o.topology = OPT_TOPOLOGY_FLIPS;
+    ASSERT_OK(opt_run(m, &o, &r, NULL));
+    ASSERT_EQ_INT(r.after.n_inverted, 0);
+    /* the midpoints of the 4 edges along x: y as given (0 or 1) */
+    for (int v = 1; v < 27; v += 3) {
+        int gy = v / 3 % 3, gz = v / 9;
+        if (gy == 1 || gz == 1)
+            continue;
+        ASSERT_TRUE(m->xyz[3 * v + 1] == 0.5 * gy);
+        on_edges++;
+    }
+    ASSERT_EQ_INT(on_edges, 4);
+    mesh_free(m);
+}
+
 /* What the rounds of --topology flips rely on to orient the tets once per
  * round (lib/opt/topology.c, orient_memo_get): a flip mesh_orient found stays
  * its answer after the vertices move, as long as every tet is positive
@@ -1932,9 +2015,9 @@ TEST_MAIN("topo", T(kept_inner_face_blocks_removal), T(driver_keeps_an_inner_sur
           T(driver_spends_one_bound), T(insertion_in_a_bad_tet),
           T(insertion_refused_leaves_the_mesh), T(insertion_keeps_the_smallest_angle),
           T(insertion_grows_past_the_surface), T(insertion_face_cap),
-          T(opt_run_fixed_flips_take_a_flat_tet), T(driver_with_insertion),
-          T(orient3d_exact_near_coplanar), T(edge_removal_3_2_keeps_volume),
-          T(edge_removal_rings_3_to_8), T(flip_2_3),
+          T(opt_run_fixed_flips_take_a_flat_tet), T(flips_keep_a_good_corner_tets_edges),
+          T(driver_with_insertion), T(orient3d_exact_near_coplanar),
+          T(edge_removal_3_2_keeps_volume), T(edge_removal_rings_3_to_8), T(flip_2_3),
           T(multiface_removal_restores_the_ring), T(tmesh_refuses_a_face_of_three_tets),
           T(export_keeps_the_callers_vertex_order), T(mixed_tag_shell_blocks_removal),
           T(non_convex_ring_refused), T(four_boundary_corner_floor),
