@@ -539,18 +539,19 @@ static double leaf_closest(const bderr_bvh *b, int32_t i, const double p[3], dou
                                b->xyz + 3 * (size_t)t[2], q);
 }
 
-/* 1 if the triangle at leaf position i is no nearer to p than sb (> 0, not
- * squared) by its ball: then its distance cannot beat a best of sb^2, and
- * closest_on_triangle (some 60 flops and 6 branches) is skipped. Most
- * triangles of a leaf near a sample are; the slack keeps the test on the
- * safe side of rounding, so the answers are those without it. */
+/* 1 if the triangle at leaf position i is no nearer to p than sb (not
+ * squared; never while sb is infinite) by its ball: then its distance cannot
+ * beat a best of sb^2, and closest_on_triangle (some 60 flops and 6
+ * branches) is skipped. Most triangles of a leaf near a sample are; the
+ * slack keeps the test on the safe side of rounding, so the answers are
+ * those without it. */
 static int ball_far(const bderr_bvh *b, int32_t i, const double p[3], double sb)
 {
     const float *o = b->ball + 4 * (size_t)i;
     double e[3] = {p[0] - o[0], p[1] - o[1], p[2] - o[2]}, lim = o[3] + sb;
 
     lim += 1e-9 * lim + b->slack;
-    return vec3_dot(e, e) > lim * lim;
+    return sb < INFINITY && vec3_dot(e, e) > lim * lim;
 }
 
 /* Squared distance between the box of nd and box (lo, hi) (0 if they meet). */
@@ -603,7 +604,7 @@ static void descend(const bderr_bvh *b, int32_t root, const double p[3], double 
             double sb = sqrt(*best);
             for (int32_t i = nd->a; i < nd->a + nd->n; i++) {
                 double d;
-                if (sb < INFINITY && ball_far(b, i, p, sb))
+                if (ball_far(b, i, p, sb))
                     continue;
                 d = leaf_closest(b, i, p, q);
                 if (d < *best) {
@@ -712,7 +713,7 @@ static void group_descend(const bderr_bvh *b, int32_t root, int32_t n, const dou
                 sb = sqrt(best[k]);
                 for (int32_t i = nd->a; i < nd->a + nd->n; i++) {
                     double d;
-                    if (sb < INFINITY && ball_far(b, i, pk, sb))
+                    if (ball_far(b, i, pk, sb))
                         continue;
                     d = leaf_closest(b, i, pk, q);
                     if (d < best[k]) {

@@ -112,19 +112,25 @@ typedef struct {
     metric_face f[STAR_FACES];
 } star_faces;
 
+/* The face opposite the star's vertex in incidence k (vt_idx), set. */
+static void star_face(const mesh_topo *tp, const double *x, int32_t k, metric_face *mf)
+{
+    int32_t a = tp->vt_idx[k] & 3;
+    const int32_t *tt = tp->tets + 4 * (size_t)(tp->vt_idx[k] >> 2);
+
+    metric_face_set(x + 3 * (size_t)tt[tet_face_of[a][0]],
+                    x + 3 * (size_t)tt[tet_face_of[a][1]],
+                    x + 3 * (size_t)tt[tet_face_of[a][2]], mf);
+}
+
 static void star_faces_set(const mesh_topo *tp, const double *x, int32_t v,
                            star_faces *sf)
 {
     int32_t k0 = tp->vt_ptr[v], n = tp->vt_ptr[v + 1] - k0;
 
     sf->n = n <= STAR_FACES ? n : -1;
-    for (int32_t k = 0; k < sf->n; k++) {
-        int32_t t = tp->vt_idx[k0 + k] >> 2, a = tp->vt_idx[k0 + k] & 3;
-        const int32_t *tt = tp->tets + 4 * (size_t)t;
-        metric_face_set(x + 3 * (size_t)tt[tet_face_of[a][0]],
-                        x + 3 * (size_t)tt[tet_face_of[a][1]],
-                        x + 3 * (size_t)tt[tet_face_of[a][2]], &sf->f[k]);
-    }
+    for (int32_t k = 0; k < sf->n; k++)
+        star_face(tp, x, k0 + k, &sf->f[k]);
 }
 
 /* Local objective of vertex v placed at y with its gradient and Hessian
@@ -151,16 +157,14 @@ static double star_hess(const mesh_topo *tp, const double *x, int32_t v, const d
         g[0] = g[1] = g[2] = 0.0;
     }
     for (int32_t k = k0; k < tp->vt_ptr[v + 1]; k++) {
-        int32_t t = tp->vt_idx[k] >> 2, a = tp->vt_idx[k] & 3;
-        const int32_t *tt = tp->tets + 4 * (size_t)t;
         double gt[3], Ht[6], q, vl[2];
+        metric_face own;
+        const metric_face *mf = &own;
         if (sf && sf->n >= 0)
-            q = metric_qt_hess_at(m, y, &sf->f[k - k0], delta, g ? gt : NULL, Ht, vl);
+            mf = &sf->f[k - k0];
         else
-            q = metric_qt_hess_face(m, y, x + 3 * (size_t)tt[tet_face_of[a][0]],
-                                    x + 3 * (size_t)tt[tet_face_of[a][1]],
-                                    x + 3 * (size_t)tt[tet_face_of[a][2]], delta,
-                                    g ? gt : NULL, Ht, vl);
+            star_face(tp, x, k, &own);
+        q = metric_qt_hess_at(m, y, mf, delta, g ? gt : NULL, Ht, vl);
         si->bad += geom_tet_bad_vl(6.0 * vl[0], vl[1]);
         if (so) {
             double e =

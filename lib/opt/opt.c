@@ -52,6 +52,16 @@ static int options_valid(const opt_options *o)
  * bone-lowq's smallest angle from 0.14 to 0.53 degrees, but by freeing the
  * vertices of its feature lines, thousands of them: not done.) */
 #define FIN_QMAX 0.1
+
+/* Boundary vertex v of the run freed from its surface (slide_release) and
+ * from its least-squares row: a rerun's loose vertex, a bad fin's corner. */
+static void set_loose(ctx_t *c, int32_t v, int unbounded)
+{
+    slide_release(c->sl, v, unbounded);
+    c->locked[v] = 0;
+    c->bw2[v] = 1.0;
+}
+
 static int is_fin(const ctx_t *c, const mesh_topo *tp, const uint8_t *bf, int32_t t)
 {
     const int32_t *tt = tp->tets + 4 * (size_t)t;
@@ -88,9 +98,7 @@ static int32_t free_fins(ctx_t *c, const mesh_topo *tp, const uint8_t *pins)
                 (pins && pins[v]) || slide_flat(c->sl, v) ||
                 (kind != SLIDE_SURFACE && kind != SLIDE_LINE))
                 continue;
-            slide_release(c->sl, v, 0);
-            c->locked[v] = 0;
-            c->bw2[v] = 1.0;
+            set_loose(c, v, 0);
             freed[v] = 1;
             n++;
         }
@@ -124,9 +132,7 @@ static qdc_status run_setup(ctx_t *c, mesh_t *m, const opt_options *o,
     bound = c->hbound;
     for (int32_t v = 0; loose && c->sl && v < c->nv; v++)
         if (loose[v] && !(tp->vflag[v] & MESH_V_FIXED)) {
-            slide_release(c->sl, v, loose[v] == SLIDE_LOOSE_UNBOUNDED);
-            c->locked[v] = 0;
-            c->bw2[v] = 1.0;
+            set_loose(c, v, loose[v] == SLIDE_LOOSE_UNBOUNDED);
             nloose++;
         }
     /* the default's freed vertices (tets left inverted where sliding within
