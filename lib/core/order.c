@@ -231,7 +231,7 @@ mesh_t *mesh_order_take(mesh_t *m, mesh_order *o)
  * places filled. */
 static void permute_to(char *a, size_t sz, int32_t n, const int32_t *to, uint8_t *done)
 {
-    char carry[16], tmp[16];
+    char carry[32], tmp[32];
 
     memset(done, 0, (size_t)n);
     for (int32_t i = 0; i < n; i++) {
@@ -298,4 +298,65 @@ void mesh_order_free(mesh_order *o)
     qdc_free(o->done);
     o->vnew = o->told = o->vold = NULL;
     o->done = NULL;
+}
+
+/* The n doubles of a at stride nc (a[i * nc]) moved so that the one at i goes
+ * to to[i], in place (done: n bytes of scratch). */
+static void permute_strided(double *a, size_t nc, int32_t n, const int32_t *to,
+                            uint8_t *done)
+{
+    memset(done, 0, (size_t)n);
+    for (int32_t i = 0; i < n; i++) {
+        double carry, tmp;
+        int32_t j = i;
+        if (done[i])
+            continue;
+        carry = a[(size_t)i * nc];
+        do {
+            j = to[j];
+            tmp = a[(size_t)j * nc];
+            a[(size_t)j * nc] = carry;
+            carry = tmp;
+            done[j] = 1;
+        } while (j != i);
+    }
+}
+
+/* The n records of w int32 at a moved by to (NULL: kept in place), in place,
+ * then each value v in [0, nv) replaced by vto[v] (vto NULL: kept). */
+static void renumber_ints(int32_t *a, int w, int32_t n, const int32_t *to, int32_t nv,
+                          const int32_t *vto, uint8_t *done)
+{
+    if (!a)
+        return;
+    if (to)
+        permute_to((char *)a, 4 * (size_t)w, n, to, done);
+    if (!vto)
+        return;
+#pragma omp parallel for schedule(static)
+    for (int64_t k = 0; k < (int64_t)w * n; k++)
+        if (a[k] >= 0 && a[k] < nv)
+            a[k] = vto[a[k]];
+}
+
+void mesh_renumber(mesh_t *m, const int32_t *vto, const int32_t *tto, uint8_t *done)
+{
+    int32_t nv = m->nv;
+
+    if (m->xyz)
+        for (size_t c = 0; c < 3; c++)
+            permute_strided(m->xyz + c, 3, nv, vto, done);
+    if (m->fixed)
+        permute_to((char *)m->fixed, 1, nv, vto, done);
+    renumber_ints(m->vref, 1, nv, vto, 0, NULL, done);
+    for (int32_t i = 0; m->pdata && i < m->pdata->n; i++)
+        for (size_t c = 0; c < (size_t)m->pdata->a[i].ncomp; c++)
+            permute_strided(m->pdata->a[i].v + c, (size_t)m->pdata->a[i].ncomp, nv, vto,
+                            done);
+    if (m->pdata && m->pdata->made)
+        permute_to((char *)m->pdata->made, 1, nv, vto, done);
+    renumber_ints(m->tets, 4, m->nt, tto, nv, vto, done);
+    renumber_ints(m->region, 1, m->nt, tto, 0, NULL, done);
+    renumber_ints(m->mid, 6, m->nt, tto, nv, vto, done);
+    renumber_ints(m->tris, 3, m->ntri, NULL, nv, vto, done);
 }

@@ -39,4 +39,12 @@ void mesh_order_give_back(mesh_order *o, mesh_t *pm, mesh_t *m);
 void mesh_order_restore_xyz(const mesh_order *o, const mesh_t *pm, mesh_t *m);
 void mesh_order_free(mesh_order *o);
 
+/* m renumbered in place, allocating nothing: its vertex v moves to vto[v] (a
+ * permutation of 0..nv-1) in its coordinates, fixed flags, refs and point data
+ * and in the vertex numbers of its tets, triangles and mid-edge nodes; its tet
+ * t to tto[t] (a permutation of 0..nt-1; NULL: the order kept), with its
+ * region and mid-edge nodes. The triangles keep their order and refs, a
+ * vertex number out of range its value. done: scratch of max(nv, nt) bytes. */
+void mesh_renumber(mesh_t *m, const int32_t *vto, const int32_t *tto, uint8_t *done);
+
 #endif

@@ -1,5 +1,6 @@
 /* run.h - one optimization run (opt.c), for the rerun policy (rerun.c); the
- * run with its reruns (rerun.c), for opt_run (topology.c). */
+ * run with its reruns (rerun.c) and the rounds of --topology (topology.c),
+ * for opt_run (entry.c). */
 #ifndef QDC_RUN_H
 #define QDC_RUN_H
 
@@ -35,5 +36,11 @@ qdc_status opt_run_smooth_round(mesh_t *m, const opt_options *opts, opt_result *
  * on failure. */
 qdc_status opt_run_smooth_faces(mesh_t *m, const opt_options *opts, opt_result *res,
                                 mesh_faces **faces, qdc_error *err);
+
+/* --topology flips or full on m as numbered (topology.c): the first
+ * smoothing, the rounds of flips, each followed by smoothing, and full's
+ * round (opt_run gives it m numbered along a space-filling curve). */
+qdc_status opt_topology_rounds(mesh_t *m, const opt_options *opts, opt_result *res,
+                               qdc_error *err);
 
 #endif

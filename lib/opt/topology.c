@@ -1,5 +1,5 @@
-/* topology.c - opt_run (opt/opt.h): the run with its reruns (rerun.c) for
- * --topology none; for flips, that smoother alternated with the flips of
+/* topology.c - the rounds of --topology (run.h, opt_topology_rounds; opt_run
+ * of entry.c calls them): for flips, the smoother (rerun.c) alternated with the flips of
  * lib/topo (edge removal, 2-3 flips, multi-face removal), after Stellar's
  * schedule (Klingner and Shewchuk 2007): smooth; then flips, worst tets first;
  * then smooth again where the flips opened room, a few rounds while the
@@ -11,16 +11,14 @@
  * new tets are written in the vertex order convention of the tets they replace. m's
  * coordinates, tets, regions and tet count are replaced by the result; res->tets_in/out
  * and the topo_* counts filled, res->before the input's record, res->after the result's.
- * The top of the run: it calls only the files below it. */
-#include "opt/opt.h"
+ */
+#include "opt/run.h"
 
 #include "core/base_int.h"
 #include "core/mesh.h"
 #include "core/tet.h"
 #include "geom/metric_int.h"
 #include "opt/opt_int.h"
-#include "opt/p2.h"
-#include "opt/run.h"
 #include "opt/spend.h"
 #include "topo/topo.h"
 
@@ -859,7 +857,7 @@ static qdc_status round_smooth(mesh_t *m, opt_options *o, spend *sp, const uint8
     return st;
 }
 
-static qdc_status topology_run(mesh_t *m, const opt_options *opts, opt_result *res,
+qdc_status opt_topology_rounds(mesh_t *m, const opt_options *opts, opt_result *res,
                                qdc_error *err)
 {
     opt_options o = *opts;
@@ -940,59 +938,4 @@ static qdc_status topology_run(mesh_t *m, const opt_options *opts, opt_result *r
     if (res)
         *res = last;
     return st;
-}
-
-/* Second-order tets: the run on the corners (the mid-edge nodes are in no
- * tet: held), then the mid-edge nodes moved with their edges (p2.c). */
-static qdc_status p2_run(mesh_t *m, const opt_options *opts, opt_result *res,
-                         qdc_error *err)
-{
-    opt_result own;
-    double *x0;
-    qdc_status st;
-
-    if (opts && opts->topology != OPT_TOPOLOGY_NONE)
-        return qdc_fail(err, QDC_EINVAL,
-                        "second-order (10-node) tets: --topology %s would change the "
-                        "edges their mid-edge nodes are on; use --topology none",
-                        opt_topology_name(opts->topology));
-    if (!res)
-        res = &own;
-    x0 = qdc_mallocn((size_t)m->nv * 3 + 1, sizeof(double));
-    if (!x0)
-        return qdc_fail(err, QDC_ENOMEM, "out of memory for the input's coordinates");
-    memcpy(x0, m->xyz, (size_t)m->nv * 3 * sizeof(double));
-    st = opt_run_smooth(m, opts, res, err);
-    if (st == QDC_OK && res->outcome != OPT_FAILED) {
-        st = p2_finish(m, x0, res, err);
-        if (st != QDC_OK) /* m unchanged on failure */
-            memcpy(m->xyz, x0, (size_t)m->nv * 3 * sizeof(double));
-    }
-    qdc_free(x0);
-    return st;
-}
-
-qdc_status opt_run(mesh_t *m, const opt_options *opts, opt_result *res, qdc_error *err)
-{
-    if (m && m->mid && m->nv > 0 && m->nt > 0 && m->xyz && m->tets) {
-        qdc_status st = mesh_validate(m, NULL, err);
-        return st != QDC_OK ? st : p2_run(m, opts, res, err);
-    }
-    if (opts && opts->topology != OPT_TOPOLOGY_NONE && m && m->nv > 0 && m->nt > 0 &&
-        m->xyz && m->tets)
-        return topology_run(m, opts, res, err);
-    return opt_run_smooth(m, opts, res, err);
-}
-
-qdc_status opt_run_faces(mesh_t *m, const opt_options *opts, opt_result *res,
-                         mesh_faces **faces, qdc_error *err)
-{
-    if (!faces)
-        return opt_run(m, opts, res, err);
-    *faces = NULL;
-    /* second-order tets and a run that changes the tets: the report finds
-     * the faces itself */
-    if ((opts && opts->topology != OPT_TOPOLOGY_NONE) || (m && m->mid))
-        return opt_run(m, opts, res, err);
-    return opt_run_smooth_faces(m, opts, res, faces, err);
 }

@@ -1357,6 +1357,87 @@ TEST(opt_run_flips_leaves_inverted_input_alone)
     mesh_free(m);
 }
 
+/* --topology runs on the mesh numbered along a space-filling curve
+ * (lib/opt/toporder.c) and gives the vertices back in the caller's order: a
+ * grid (numbered by rows, which the curve reorders) keeps each vertex's
+ * number with flips, its ref and point value with it; with full the input's
+ * kept vertices come first, in their order, the new ones after with ref 0. */
+TEST(topology_keeps_the_vertex_numbers)
+{
+    const int n = 6;
+
+    for (int mode = 0; mode < 2; mode++) {
+        mesh_t *m = tm_grid(n, MESH_WITH_REGION | MESH_WITH_FIXED | MESH_WITH_VREF), *m0;
+        double *id;
+        opt_options o;
+        opt_result r;
+        int32_t last = -1, kept = 0;
+
+        ASSERT_TRUE(m);
+        tm_perturb(m, n, 0.3, 7);
+        id = qdc_mallocn((size_t)m->nv, sizeof *id);
+        ASSERT_TRUE(id);
+        for (int32_t v = 0; v < m->nv; v++) {
+            m->vref[v] = 100 + v;
+            id[v] = v;
+            m->fixed[v] = v % 5 == 0;
+        }
+        ASSERT_OK(mesh_pdata_add(m, "id", 2, 1, 1, NULL, id, NULL));
+        m0 = mesh_dup(m);
+        ASSERT_TRUE(m0);
+        opt_defaults(&o);
+        o.topology = mode ? OPT_TOPOLOGY_FULL : OPT_TOPOLOGY_FLIPS;
+        ASSERT_OK(opt_run(m, &o, &r, NULL));
+        ASSERT_TRUE(r.topo_edge_removals + r.topo_flips23 + r.topo_multiface > 0);
+        if (!mode)
+            ASSERT_EQ_INT(m->nv, m0->nv);
+        for (int32_t v = 0; v < m->nv; v++) {
+            int32_t u = m->vref[v] - 100;
+            if (m->vref[v] == 0) { /* full's new vertices come last */
+                ASSERT_TRUE(mode == 1 && v >= kept);
+                ASSERT_TRUE(m->pdata->made[v] == 1);
+                continue;
+            }
+            ASSERT_TRUE(u > last && u < m0->nv); /* the input's, in its order */
+            ASSERT_TRUE(v == kept);
+            ASSERT_TRUE(m->pdata->a[0].v[v] == u);
+            ASSERT_EQ_INT(m->fixed[v], m0->fixed[u]);
+            if (m0->fixed[u]) /* where it was, bit for bit */
+                ASSERT_TRUE(!memcmp(m->xyz + 3 * v, m0->xyz + 3 * (size_t)u, 24));
+            last = u;
+            kept++;
+        }
+        if (!mode)
+            ASSERT_EQ_INT(kept, m0->nv);
+        mesh_free(m0);
+        mesh_free(m);
+    }
+}
+
+/* A run that changes no tet gives them back in their order too, so that a
+ * file can be written back as it was read: a cube cut into five tets per cell,
+ * none under the flips' goal. */
+TEST(topology_without_a_flip_keeps_the_tets_in_order)
+{
+    mesh_t *m = five_tet_cube(), *m0;
+    opt_options o;
+    opt_result r;
+
+    ASSERT_TRUE(m);
+    m->xyz[3 * 13] += 0.02; /* the centre, off */
+    m0 = mesh_dup(m);
+    ASSERT_TRUE(m0);
+    opt_defaults(&o);
+    o.topology = OPT_TOPOLOGY_FLIPS;
+    ASSERT_OK(opt_run(m, &o, &r, NULL));
+    ASSERT_EQ_INT(r.topo_edge_removals + r.topo_flips23 + r.topo_multiface, 0);
+    ASSERT_EQ_INT(m->nt, m0->nt);
+    ASSERT_TRUE(!memcmp(m->tets, m0->tets, 16 * (size_t)m->nt));
+    ASSERT_TRUE(fabs(m->xyz[3 * 13] - 0.5) < 0.01); /* the centre moved back */
+    mesh_free(m0);
+    mesh_free(m);
+}
+
 /* Every allocation of a flips run failed in turn: either the run fails with the
  * mesh as it was, or it returns a valid mesh (a later round's failure returns
  * the mesh of the round before, as a stopped run). */
@@ -2028,4 +2109,6 @@ TEST_MAIN("topo", T(kept_inner_face_blocks_removal), T(driver_keeps_an_inner_sur
           T(driver_keeps_the_smallest_angle), T(opt_run_flips_keeps_the_model),
           T(orientation_found_again_while_positive),
           T(opt_run_flips_leaves_inverted_input_alone),
+          T(topology_keeps_the_vertex_numbers),
+          T(topology_without_a_flip_keeps_the_tets_in_order),
           T(flips_allocation_failures_are_clean))
