@@ -226,10 +226,11 @@ mesh_t *mesh_order_take(mesh_t *m, mesh_order *o)
     return p;
 }
 
-/* Records of size sz in a, moved so that the one at i goes to to[i] (a
- * permutation), in place: each cycle followed once, done[] marking the
- * places filled. */
-static void permute_to(char *a, size_t sz, int32_t n, const int32_t *to, uint8_t *done)
+/* Records of size sz (at most 32 bytes) every step bytes from a, moved so
+ * that the one at i goes to to[i] (a permutation), in place: each cycle
+ * followed once, done[] marking the places filled. */
+static void permute_step(char *a, size_t sz, size_t step, int32_t n, const int32_t *to,
+                         uint8_t *done)
 {
     char carry[32], tmp[32];
 
@@ -238,15 +239,21 @@ static void permute_to(char *a, size_t sz, int32_t n, const int32_t *to, uint8_t
         int32_t j = i;
         if (done[i])
             continue;
-        memcpy(carry, a + (size_t)i * sz, sz);
+        memcpy(carry, a + (size_t)i * step, sz);
         do {
             j = to[j];
-            memcpy(tmp, a + (size_t)j * sz, sz);
-            memcpy(a + (size_t)j * sz, carry, sz);
+            memcpy(tmp, a + (size_t)j * step, sz);
+            memcpy(a + (size_t)j * step, carry, sz);
             memcpy(carry, tmp, sz);
             done[j] = 1;
         } while (j != i);
     }
+}
+
+/* permute_step of records side by side. */
+static void permute_to(char *a, size_t sz, int32_t n, const int32_t *to, uint8_t *done)
+{
+    permute_step(a, sz, sz, n, to, done);
 }
 
 /* Records of w int32 each in a (n of them), moved so that the one at i goes
@@ -300,28 +307,6 @@ void mesh_order_free(mesh_order *o)
     o->done = NULL;
 }
 
-/* The n doubles of a at stride nc (a[i * nc]) moved so that the one at i goes
- * to to[i], in place (done: n bytes of scratch). */
-static void permute_strided(double *a, size_t nc, int32_t n, const int32_t *to,
-                            uint8_t *done)
-{
-    memset(done, 0, (size_t)n);
-    for (int32_t i = 0; i < n; i++) {
-        double carry, tmp;
-        int32_t j = i;
-        if (done[i])
-            continue;
-        carry = a[(size_t)i * nc];
-        do {
-            j = to[j];
-            tmp = a[(size_t)j * nc];
-            a[(size_t)j * nc] = carry;
-            carry = tmp;
-            done[j] = 1;
-        } while (j != i);
-    }
-}
-
 /* The n records of w int32 at a moved by to (NULL: kept in place), in place,
  * then each value v in [0, nv) replaced by vto[v] (vto NULL: kept). */
 static void renumber_ints(int32_t *a, int w, int32_t n, const int32_t *to, int32_t nv,
@@ -344,15 +329,14 @@ void mesh_renumber(mesh_t *m, const int32_t *vto, const int32_t *tto, uint8_t *d
     int32_t nv = m->nv;
 
     if (m->xyz)
-        for (size_t c = 0; c < 3; c++)
-            permute_strided(m->xyz + c, 3, nv, vto, done);
+        permute_to((char *)m->xyz, 3 * sizeof(double), nv, vto, done);
     if (m->fixed)
         permute_to((char *)m->fixed, 1, nv, vto, done);
     renumber_ints(m->vref, 1, nv, vto, 0, NULL, done);
-    for (int32_t i = 0; m->pdata && i < m->pdata->n; i++)
+    for (int32_t i = 0; m->pdata && i < m->pdata->n; i++) /* a component at a time */
         for (size_t c = 0; c < (size_t)m->pdata->a[i].ncomp; c++)
-            permute_strided(m->pdata->a[i].v + c, (size_t)m->pdata->a[i].ncomp, nv, vto,
-                            done);
+            permute_step((char *)(m->pdata->a[i].v + c), sizeof(double),
+                         (size_t)m->pdata->a[i].ncomp * sizeof(double), nv, vto, done);
     if (m->pdata && m->pdata->made)
         permute_to((char *)m->pdata->made, 1, nv, vto, done);
     renumber_ints(m->tets, 4, m->nt, tto, nv, vto, done);
