@@ -227,8 +227,9 @@ static const opt_desc table[] = {
     {"topology", OPT_T_WORD, OFF(topology), 0, 0, 0, WORDS(topology_names),
      "none: connectivity kept; flips: the smoother alternated with edge removal, 2-3 "
      "flips and multi-face removal (vertices, boundary triangles and region tags kept); "
-     "full: flips, then interior edge contraction and vertex insertion when better "
-     "(vertices added and removed inside, boundary triangles and region tags kept)",
+     "full: flips, then interior edge contraction and vertex insertion when better, "
+     "then contraction of clustered interior vertices (vertices added and removed "
+     "inside, boundary triangles and region tags kept)",
      OPT_G_EVERYDAY, topology_say},
     {"time_limit", OPT_T_REAL, OFF(time_limit), 0, 1e9, 0, NULL, 0,
      "seconds of optimizing, then the best mesh so far: no iteration or sweep is "

@@ -108,8 +108,22 @@ enum { TOPO_ROUNDS = 3 };
  * from 0.8207 / 20.73 to 0.8278 / 21.35 in 11.1 CPU s against 6.8). */
 #define TOPO_LSPLIT 1.6
 
-/* What flip_round does besides flips (its insert argument). */
-enum { ROUND_INSERT = 1, ROUND_SPLIT = 2 };
+/* What flip_round does besides flips (its insert argument): insertion and
+ * contraction (each raising its tets' smallest), edge splits before the
+ * flips, or contraction by gain (full's last round). */
+enum { ROUND_INSERT = 1, ROUND_SPLIT = 2, ROUND_COARSEN = 4 };
+
+/* The contractions of full's last round (ROUND_COARSEN: contract.h's qfloor,
+ * topo.h's cfloor): the interior edges of the tets below TOPO_CQUEUE, an edge
+ * going when the sum of (1 - mean ratio) over its vertex's tets falls and
+ * every new tet stays above TOPO_CFLOOR, the mesh's worst tet and its smallest
+ * dihedral angle. On random interior points 13-24% of the vertices go, the
+ * mean ratio rises by about 0.02; a round that contracts fewer than TOPO_CMIN
+ * of the vertices (Gmsh's, TetGen's meshes) is dropped before its smoothing.
+ * Figures and what was tried: docs/method.md section 10. */
+#define TOPO_CQUEUE 0.8
+#define TOPO_CFLOOR 0.5
+#define TOPO_CMIN 0.01
 
 /* The first round's operations besides flips for the run of opts. */
 static int first_ops(const opt_options *opts)
@@ -257,6 +271,27 @@ static qdc_status mark_active(int32_t nv, const int32_t *old, int32_t nold,
     return QDC_OK;
 }
 
+/* mark_active of m's tets against the nt new tets of nv vertices; with vmap
+ * (contractions) m's tets renumbered by it first (a vertex gone: nv, in no
+ * new tet). act has nv + 1 entries. QDC_ENOMEM. */
+static qdc_status mark_active_mapped(const mesh_t *m, const int32_t *vmap, int32_t nv,
+                                     const int32_t *tets, int32_t nt, uint8_t *act,
+                                     qdc_error *err)
+{
+    int32_t *old = vmap ? qdc_mallocn(4 * (size_t)m->nt, sizeof *old) : NULL;
+    qdc_status st;
+
+    if (!vmap)
+        return mark_active(m->nv, m->tets, m->nt, tets, nt, act, err);
+    if (!old)
+        return qdc_fail(err, QDC_ENOMEM, "out of memory");
+    for (int64_t k = 0; k < 4 * (int64_t)m->nt; k++)
+        old[k] = vmap[m->tets[k]] >= 0 ? vmap[m->tets[k]] : nv;
+    st = mark_active(nv + 1, old, m->nt, tets, nt, act, err);
+    qdc_free(old);
+    return st;
+}
+
 /* mesh_orient's flip of m's tets, kept from one call to the next while m's
  * tets stay those it was found for (nt < 0: none kept). */
 typedef struct {
@@ -353,6 +388,11 @@ static void round_params(const opt_options *o, int insert, double hausd, topo_pa
     p->split = (insert & ROUND_SPLIT) != 0;
     p->lsplit = TOPO_LSPLIT;
     p->qinsert = TOPO_QINSERT;
+    if (insert & ROUND_COARSEN) {
+        p->contract = 1;
+        p->qcontract = TOPO_CQUEUE;
+        p->cfloor = TOPO_CFLOOR;
+    }
     p->akeep = TOPO_AKEEP;
     if (o->boundary == OPT_BOUNDARY_FIXED)
         p->floor4 = TOPO_FLOOR4_FIXED;
@@ -410,8 +450,9 @@ static qdc_status flip_round(mesh_t *m, const opt_options *o, int insert, double
         if (st != QDC_OK)
             goto out;
     }
-    if (act && ts->insertions + ts->contractions == 0) {
-        st = mark_active(m->nv, m->tets, m->nt, tets, nt, act, err);
+    if (act && ts->insertions == 0) {
+        st =
+            mark_active_mapped(m, ts->contractions ? vmap : NULL, nv, tets, nt, act, err);
         if (st != QDC_OK)
             goto out;
     }
@@ -656,148 +697,6 @@ static int not_below(double a, double b)
     return a >= b - 1e-9 * fabs(b);
 }
 
-/* --topology full, after the rounds of flips: one more round with edge
- * contraction and vertex insertion too, then smoothing, kept only when its
- * smallest and mean quality are both at least those before it (else m as it
- * was): so full is never below flips on the run's own figures (its smallest
- * dihedral angle included; the smallest ones up to not_below's roundings). Measured on
- * the 100k-tet bone-lowq of scripts/corpus.py, insertion and contraction inside every
- * round ended at 0.7238 mean ratio against 0.7289 for flips. */
-static qdc_status full_round(mesh_t *m, opt_options *o, double hausd, spend *sp,
-                             orient_memo *om, topo_surface *sf, opt_result *first,
-                             opt_result *last, int *record, qdc_error *err)
-{
-    mesh_t *keep;
-    opt_result r, acc = *first;
-    opt_progress pr;
-    topo_params p;
-    topo_stats ts;
-    spend was;
-    qdc_status st;
-
-    /* No tet below the mean ratio insertion or contraction start at: the
-     * round's flips keep it so (each raises its cavity's smallest), so it
-     * would insert and contract nothing and be dropped, after a round of
-     * flips and the copies (on the 100k-tet part-cad and two-region of
-     * scripts/corpus.py --seed 1, about a tenth of full's CPU). */
-    round_params(o, 1, hausd, &p);
-    st = hausd > 0 ? QDC_OK : flip_record(m, om, 0, 0.0, &pr, err);
-    if (st != QDC_OK)
-        return st;
-    if (hausd <= 0 && pr.n_inverted == 0 && pr.q_min >= fmax(p.qinsert, p.qcontract))
-        return QDC_OK;
-    keep = mesh_dup(m);
-    if (!keep)
-        return qdc_fail(err, QDC_ENOMEM, "out of memory");
-    st = spend_copy(&was, sp, err);
-    if (st != QDC_OK) {
-        mesh_free(keep);
-        return st;
-    }
-    st = flip_round(m, o, ROUND_INSERT, hausd, sp, NULL, om, &ts, sf, err);
-    if (st == QDC_OK && ts.insertions + ts.contractions > 0) {
-        count_round(&acc, &ts, sf);
-        o->progress = NULL; /* a trial: its records would not be the result's */
-        st = spend_begin(sp, m, o, err);
-        if (st == QDC_OK) {
-            st = opt_run_smooth_round(m, o, &r, err);
-            spend_end(sp, m);
-        }
-        if (st == QDC_OK && r.outcome != OPT_STOPPED &&
-            not_below(r.after.q_min, last->after.q_min) &&
-            r.after.q_mean >= last->after.q_mean &&
-            not_below(r.after.dih_min, last->after.dih_min)) {
-            add_run(&acc, &r);
-            *first = acc;
-            *last = r;
-            *record += r.last_record;
-            mesh_free(keep);
-            spend_free(&was);
-            return QDC_OK;
-        }
-    }
-    /* not better, or the trial failed: m as it was, valid */
-    swap_model(m, keep);
-    om->nt = -1;
-    mesh_free(keep);
-    spend_free(sp);
-    *sp = was;
-    qdc_error_clear(err);
-    return QDC_OK;
-}
-
-/* A round's start, after its flips: their record (number `record`) sent,
- * and o's time limit and progress set for the round's smoothing. Returns 1
- * when the run stops here: *st says why if it failed, else last's outcome
- * (cancelled, out of time). */
-static int round_begin(const mesh_t *m, const opt_options *opts, opt_options *o,
-                       orient_memo *om, const topo_stats *ts, int record, double t0,
-                       round_progress *rp, opt_result *last, qdc_status *st,
-                       qdc_error *err)
-{
-    opt_progress pr;
-
-    *st = flip_record(m, om, record, t0, &pr, err);
-    if (*st != QDC_OK)
-        return 1;
-    pr.operations =
-        ts->edge_removals + ts->flips23 + ts->multiface + ts->bflips + ts->peels;
-    if (opts->progress && opts->progress(opts->progress_ctx, &pr)) {
-        last->outcome = OPT_STOPPED;
-        last->stop = OPT_STOP_CANCELLED;
-        return 1;
-    }
-    if (opts->time_limit > 0) {
-        double left = opts->time_limit - (qdc_now() - t0);
-        if (left <= 0) {
-            last->outcome = OPT_STOPPED;
-            last->stop = OPT_STOP_TIME_LIMIT;
-            return 1;
-        }
-        o->time_limit = left;
-    }
-    if (opts->progress) {
-        rp->offset = record;
-        rp->t_offset = qdc_now() - t0;
-        o->progress = round_report;
-        o->progress_ctx = rp;
-    }
-    return 0;
-}
-
-/* The first smoothing, whose bound is the run's: under a bound the user gave
- * it spends only a share of it; every round after spends what it has left
- * (spend.h). *hausd: the bound the boundary operations may use (0: none). */
-static qdc_status first_round(mesh_t *m, const opt_options *opts, opt_options *o,
-                              spend *sp, opt_result *first, double *hausd, qdc_error *err)
-{
-    /* the boundary changes only under a bound the user asked for (not the
-     * default's) and when it may move at all (issue #31: triangle for
-     * triangle otherwise) */
-    int given =
-        opts->boundary != OPT_BOUNDARY_FIXED &&
-        (opts->hausd > 0 || (opts->hausd_rel > 0 && opts->hausd_rel != OPT_HAUSD_AUTO));
-    qdc_status st;
-
-    if (given) {
-        o->hausd *= TOPO_FIRST_SHARE;
-        o->hausd_rel *= TOPO_FIRST_SHARE;
-    }
-    st = opt_run_smooth(m, o, first, err);
-    if (given)
-        first->hausd_bound /= TOPO_FIRST_SHARE; /* the run's bound */
-    if (st != QDC_OK)
-        return st;
-    if (opts->boundary != OPT_BOUNDARY_FIXED && first->outcome != OPT_FAILED) {
-        st = spend_set_bound(sp, m, first->hausd_bound, err);
-        if (st != QDC_OK)
-            return st;
-    }
-    if (given)
-        *hausd = first->hausd_bound;
-    return QDC_OK;
-}
-
 /* --topology flips: a round's smoothing with the vertices away from the flips
  * held runs this many global iterations at most. After the second the global
  * phase ended there (it stops at its third when that gains little) or its
@@ -857,13 +756,169 @@ static qdc_status round_smooth(mesh_t *m, opt_options *o, spend *sp, const uint8
     return st;
 }
 
+/* --topology full, after the rounds of flips: one more round with edge
+ * contraction and vertex insertion too (ops ROUND_INSERT), then one with
+ * contraction by gain (ROUND_COARSEN), each followed by smoothing and kept
+ * only when its smallest and mean quality are both at least those before it
+ * (else m as it was): so full is never below flips on the run's own figures
+ * (its smallest dihedral angle included; the smallest ones up to not_below's
+ * roundings). Measured on the 100k-tet bone-lowq of scripts/corpus.py,
+ * insertion and contraction inside every round ended at 0.7238 mean ratio
+ * against 0.7289 for flips; contraction by gain in the insertion round took
+ * bone-scan's mean ratio from 0.7501 to 0.7484 (each round on its own keeps
+ * what each gains). */
+static qdc_status full_round(mesh_t *m, opt_options *o, int ops, double hausd, spend *sp,
+                             orient_memo *om, topo_surface *sf, opt_result *first,
+                             opt_result *last, int *record, qdc_error *err)
+{
+    mesh_t *keep;
+    opt_result r, acc = *first;
+    opt_progress pr;
+    topo_params p;
+    topo_stats ts;
+    spend was;
+    int32_t nv = m->nv;
+    int64_t least;
+    uint8_t *act = NULL; /* ROUND_COARSEN: the vertices its smoothing moves */
+    qdc_status st;
+
+    /* No tet below the mean ratio insertion or contraction start at: the
+     * round's flips keep it so (each raises its cavity's smallest), so it
+     * would insert and contract nothing and be dropped, after a round of
+     * flips and the copies (on the 100k-tet part-cad and two-region of
+     * scripts/corpus.py --seed 1, about a tenth of full's CPU). */
+    round_params(o, ops, hausd, &p);
+    st = hausd > 0 ? QDC_OK : flip_record(m, om, 0, 0.0, &pr, err);
+    if (st != QDC_OK)
+        return st;
+    if (hausd <= 0 && pr.n_inverted == 0 && pr.q_min >= fmax(p.qinsert, p.qcontract))
+        return QDC_OK;
+    keep = mesh_dup(m);
+    if (!keep)
+        return qdc_fail(err, QDC_ENOMEM, "out of memory");
+    st = spend_copy(&was, sp, err);
+    if (st != QDC_OK) {
+        mesh_free(keep);
+        return st;
+    }
+    if (ops & ROUND_COARSEN) {
+        act = qdc_malloc((size_t)nv + 1);
+        if (!act)
+            st = qdc_fail(err, QDC_ENOMEM, "out of memory");
+    }
+    if (st == QDC_OK)
+        st = flip_round(m, o, ops, hausd, sp, act, om, &ts, sf, err);
+    least = act ? (int64_t)ceil(TOPO_CMIN * nv) : 1;
+    if (st == QDC_OK && ts.insertions + ts.contractions >= least) {
+        count_round(&acc, &ts, sf);
+        o->progress = NULL; /* a trial: its records would not be the result's */
+        st = round_smooth(m, o, sp, act, act != NULL, &r, err);
+        if (st == QDC_OK && r.outcome != OPT_STOPPED &&
+            not_below(r.after.q_min, last->after.q_min) &&
+            r.after.q_mean >= last->after.q_mean &&
+            not_below(r.after.dih_min, last->after.dih_min)) {
+            add_run(&acc, &r);
+            *first = acc;
+            *last = r;
+            *record += r.last_record;
+            mesh_free(keep);
+            spend_free(&was);
+            qdc_free(act);
+            return QDC_OK;
+        }
+    }
+    /* not better, too little, or the trial failed: m as it was, valid */
+    qdc_free(act);
+    swap_model(m, keep);
+    om->nt = -1;
+    mesh_free(keep);
+    spend_free(sp);
+    *sp = was;
+    qdc_error_clear(err);
+    return QDC_OK;
+}
+
+/* A round's start, after its flips: their record (number `record`) sent,
+ * and o's time limit and progress set for the round's smoothing. Returns 1
+ * when the run stops here: *st says why if it failed, else last's outcome
+ * (cancelled, out of time). */
+static int round_begin(const mesh_t *m, const opt_options *opts, opt_options *o,
+                       orient_memo *om, const topo_stats *ts, int record, double t0,
+                       round_progress *rp, opt_result *last, qdc_status *st,
+                       qdc_error *err)
+{
+    opt_progress pr;
+
+    *st = flip_record(m, om, record, t0, &pr, err);
+    if (*st != QDC_OK)
+        return 1;
+    pr.operations =
+        ts->edge_removals + ts->flips23 + ts->multiface + ts->bflips + ts->peels;
+    if (opts->progress && opts->progress(opts->progress_ctx, &pr)) {
+        last->outcome = OPT_STOPPED;
+        last->stop = OPT_STOP_CANCELLED;
+        return 1;
+    }
+    if (opts->time_limit > 0) {
+        double left = opts->time_limit - (qdc_now() - t0);
+        if (left <= 0) {
+            last->outcome = OPT_STOPPED;
+            last->stop = OPT_STOP_TIME_LIMIT;
+            return 1;
+        }
+        o->time_limit = left;
+    }
+    if (opts->progress) {
+        rp->offset = record;
+        rp->t_offset = qdc_now() - t0;
+        o->progress = round_report;
+        o->progress_ctx = rp;
+    }
+    return 0;
+}
+
+/* The first smoothing, whose bound is the run's: under a bound the user gave
+ * it spends only a share of it; every round after spends what it has left
+ * (spend.h). *hausd: the bound the boundary operations may use (0: none). */
+static qdc_status first_round(mesh_t *m, const opt_options *opts, opt_options *o,
+                              spend *sp, opt_result *first, double *hausd, int *moved,
+                              qdc_error *err)
+{
+    /* the boundary changes only under a bound the user asked for (not the
+     * default's) and when it may move at all (issue #31: triangle for
+     * triangle otherwise) */
+    int given =
+        opts->boundary != OPT_BOUNDARY_FIXED &&
+        (opts->hausd > 0 || (opts->hausd_rel > 0 && opts->hausd_rel != OPT_HAUSD_AUTO));
+    qdc_status st;
+
+    if (given) {
+        o->hausd *= TOPO_FIRST_SHARE;
+        o->hausd_rel *= TOPO_FIRST_SHARE;
+    }
+    st = opt_run_smooth(m, o, first, err);
+    if (given)
+        first->hausd_bound /= TOPO_FIRST_SHARE; /* the run's bound */
+    if (st != QDC_OK)
+        return st; /* m unchanged */
+    *moved = 1;
+    if (opts->boundary != OPT_BOUNDARY_FIXED && first->outcome != OPT_FAILED) {
+        st = spend_set_bound(sp, m, first->hausd_bound, err);
+        if (st != QDC_OK)
+            return st;
+    }
+    if (given)
+        *hausd = first->hausd_bound;
+    return QDC_OK;
+}
+
 qdc_status opt_topology_rounds(mesh_t *m, const opt_options *opts, opt_result *res,
                                qdc_error *err)
 {
     opt_options o = *opts;
     opt_result first, last;
     double t0 = qdc_now(), hausd = 0.0;
-    int record = 0, stopped = 0;
+    int record = 0, stopped = 0, moved = 0;
     round_progress rp = {opts->progress, opts->progress_ctx, 0, 0.0};
     topo_surface sf = {0};
     uint8_t *act;
@@ -873,28 +928,27 @@ qdc_status opt_topology_rounds(mesh_t *m, const opt_options *opts, opt_result *r
 
     o.topology = OPT_TOPOLOGY_NONE;
     o.free_fins = 1;
-    act = qdc_malloc((size_t)m->nv + 1);
-    if (!act)
-        return qdc_fail(err, QDC_ENOMEM, "out of memory");
     st = spend_new(m, opts, &sp, err);
-    if (st != QDC_OK) {
-        qdc_free(act);
+    if (st != QDC_OK)
         return st;
-    }
-    st = first_round(m, opts, &o, &sp, &first, &hausd, err);
-    if (st != QDC_OK) {
+    st = first_round(m, opts, &o, &sp, &first, &hausd, &moved, err);
+    if (st != QDC_OK && !moved) {
         if (res)
             *res = first;
         spend_free(&sp);
-        qdc_free(act);
         return st;
     }
+    act = qdc_malloc((size_t)m->nv + 1);
+    if (st == QDC_OK && !act)
+        st = qdc_fail(err, QDC_ENOMEM, "out of memory");
     last = first;
     first.tets_in = m->nt;
     first.verts_in = m->nv;
     record = first.last_record;
-    /* (a stopped run: cancelled, out of time or the solver in trouble) */
-    for (int round = 0; round < TOPO_ROUNDS && !stopped && last.outcome != OPT_STOPPED;
+    /* (stopped: cancelled, out of time or the solver in trouble; st not
+     * QDC_OK: the smoothing moved m, what came after failed: a stopped run) */
+    for (int round = 0;
+         round < TOPO_ROUNDS && st == QDC_OK && !stopped && last.outcome != OPT_STOPPED;
          round++) {
         topo_stats ts;
         opt_result r;
@@ -911,8 +965,7 @@ qdc_status opt_topology_rounds(mesh_t *m, const opt_options *opts, opt_result *r
                           opts->topology == OPT_TOPOLOGY_FLIPS, &r, err);
         if (st != QDC_OK)
             break; /* m is the flipped mesh, valid */
-        /* the round's records were numbered on from the topology record
-         * (its input's record is that one): its best in the whole run's numbers */
+        /* its records numbered on from the topology record (its input's) */
         r.best_iteration += record;
         record += r.last_record;
         add_run(&first, &r);
@@ -920,9 +973,11 @@ qdc_status opt_topology_rounds(mesh_t *m, const opt_options *opts, opt_result *r
                   r.after.q_mean < last.after.q_mean + TOPO_GAIN;
         last = r;
     }
-    if (st == QDC_OK && opts->topology == OPT_TOPOLOGY_FULL &&
-        last.outcome != OPT_STOPPED)
-        st = full_round(m, &o, hausd, &sp, &om, &sf, &first, &last, &record, err);
+    for (int k = 0; k < 2 && st == QDC_OK && opts->topology == OPT_TOPOLOGY_FULL &&
+                    last.outcome != OPT_STOPPED;
+         k++)
+        st = full_round(m, &o, k ? ROUND_COARSEN : ROUND_INSERT, hausd, &sp, &om, &sf,
+                        &first, &last, &record, err);
     if (st != QDC_OK) {
         /* m is the valid mesh of the round before (flip_round replaces the
          * tets only when it succeeds, a failed smoothing leaves m as it was):

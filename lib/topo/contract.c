@@ -20,13 +20,13 @@ static int has(const int32_t *a, int n, int32_t v)
 }
 
 /* Contract u onto w, t0 a tet of the edge: 1 with *c filled when legal and
- * improving. */
+ * improving (qfloor: contract_eval's). */
 static int one_way(const tmesh *tm, int32_t t0, int32_t u, int32_t w, double floor4,
-                   double margin, contract_cand *c)
+                   double margin, double qfloor, contract_cand *c)
 {
     int32_t su[CONTRACT_MAX], sw[STAR_W], ring[2 * CONTRACT_MAX], vw[4 * STAR_W];
     int nu = tmesh_star(tm, t0, u, su, CONTRACT_MAX), nw, nr = 0, nvw = 0;
-    double sold = 0.0, snew = 0.0;
+    double sold = 0.0, snew = 0.0, need;
 
     if (nu < 0)
         return 0;
@@ -58,6 +58,7 @@ static int one_way(const tmesh *tm, int32_t t0, int32_t u, int32_t w, double flo
             if (x != u && x != w && has(vw, nvw, x) && !has(ring, nr, x))
                 return 0;
         }
+    need = qfloor > 0.0 ? qfloor : c->qmin_old + margin;
     c->nold = 0;
     c->nnew = 0;
     c->qmin_new = INFINITY;
@@ -85,8 +86,10 @@ static int one_way(const tmesh *tm, int32_t t0, int32_t u, int32_t w, double flo
         nt = c->newt[c->nnew++];
         memcpy(nt, tt, 4 * sizeof *tt);
         nt[tmesh_local(tm, su[k], u)] = w;
-        q = tmesh_quality(tm, nt, floor4);
-        if (q < -1.0 || !(q > c->qmin_old + margin))
+        /* (below the bound by more than roundings: refused before the exact
+         * predicate) */
+        q = tmesh_quality_above(tm, nt, floor4, need);
+        if (q < -1.0 || !(q > need))
             return 0;
         c->qmin_new = fmin(c->qmin_new, q);
         snew += q;
@@ -96,6 +99,8 @@ static int one_way(const tmesh *tm, int32_t t0, int32_t u, int32_t w, double flo
     c->gone = u;
     c->keep = w;
     c->gain = (double)(c->nold - c->nnew) + snew - sold;
+    if (qfloor > 0.0 && !(c->gain > 0.0))
+        return 0;
     c->bnd = 0;
     c->dev = 0.0;
     return 1;
@@ -113,7 +118,7 @@ static int better(const contract_cand *x, const contract_cand *c)
 }
 
 int contract_eval(const tmesh *tm, int32_t t, int e, double floor4, double margin,
-                  contract_cand *c)
+                  double qfloor, contract_cand *c)
 {
     const int32_t *tt = tm->tv + 4 * (size_t)t;
     int32_t a = tt[tmesh_edge[e][0]], b = tt[tmesh_edge[e][1]];
@@ -124,7 +129,7 @@ int contract_eval(const tmesh *tm, int32_t t, int e, double floor4, double margi
         return 0;
     for (int dir = 0; dir < 2; dir++) {
         int32_t u = dir ? b : a, w = dir ? a : b;
-        if (!one_way(tm, t, u, w, floor4, margin, &x))
+        if (!one_way(tm, t, u, w, floor4, margin, qfloor, &x))
             continue;
         if (!have || better(&x, c)) {
             *c = x;
@@ -253,7 +258,7 @@ int contract_bedge_eval(const tmesh *tm, int32_t t, int e, double floor4, double
     for (int dir = 0; dir < 2; dir++) {
         int32_t u = dir ? b : a, w = dir ? a : b;
         double dev;
-        if (!one_way(tm, t, u, w, floor4, margin, &x))
+        if (!one_way(tm, t, u, w, floor4, margin, 0.0, &x))
             continue;
         dev = surface_move(tm, u, w, &x, bd);
         if (dev < 0.0)

@@ -30,9 +30,13 @@ typedef struct {
 
 /* The better direction (larger new minimum, then gain, then the smaller
  * vertex going) of contracting edge e (tmesh_edge) of live tet t: 1 with *c
- * filled, 0 when neither is legal (above) or improves. */
+ * filled, 0 when neither is legal (above) or improves. qfloor > 0: improving
+ * by the gain instead (Netgen's combine): the sum of (1 - q) over u's tets
+ * falls and every new tet's mean ratio is above qfloor, not above the
+ * smallest of u's (a vertex among clustered ones goes, though the tets around
+ * it were all better than the new ones will be). */
 int contract_eval(const tmesh *tm, int32_t t, int e, double floor4, double margin,
-                  contract_cand *c);
+                  double qfloor, contract_cand *c);
 
 /* As contract_eval for a boundary edge uw (under a bound, a surface attached:
  * mmg's collapse of a short boundary edge, which removes the needle and cap

@@ -31,6 +31,7 @@ void topo_params_default(topo_params *p)
     p->iangle = 1;
     p->contract = 0;
     p->qcontract = 0.3;
+    p->cfloor = 0.0;
     p->bound.hausd = 0.0;
     p->bound.cos_feature = 0.8660254037844387; /* 30 degrees */
     p->recheck = 0;
@@ -207,7 +208,8 @@ typedef struct {
     int32_t nv, cap;
     /* An edge's removal reads only the tets of its ring, which all hold both
      * its vertices, and is the same whichever of them asks: the edges found
-     * not removable, by key (a < b: (a << 32 | b) + 1; 0 empty) and epoch,
+     * not removable (and, with cfloor, not contractible: contract_pass), by
+     * key (a < b: (a << 32 | b) + 1, the top bit the kind; 0 empty) and epoch,
      * in an open-addressed table of emask + 1 slots (full: not recorded).
      * On the 100k bone-lowq this halved the edge removals evaluated. */
     uint64_t *ekey;
@@ -227,7 +229,8 @@ static void memo_free(memo *mo)
     memset(mo, 0, sizeof *mo);
 }
 
-static qdc_status memo_init(memo *mo, const tmesh *tm)
+/* A memo for tm; its edge table sized for `kinds` kinds of record. */
+static qdc_status memo_init(memo *mo, const tmesh *tm, int kinds)
 {
     size_t n = 1024;
 
@@ -236,7 +239,7 @@ static qdc_status memo_init(memo *mo, const tmesh *tm)
     mo->nv = tm->nv;
     mo->cap = tm->cap;
     mo->ebits = 10;
-    while (n < 4 * (size_t)tm->nlive) { /* about 1.2 edges a tet: a quarter full */
+    while (n < 4 * (size_t)kinds * (size_t)tm->nlive) { /* 1.2 edges a tet: a quarter */
         n *= 2;
         mo->ebits++;
     }
@@ -248,11 +251,20 @@ static qdc_status memo_init(memo *mo, const tmesh *tm)
     return mo->vchg && mo->fail && mo->ekey && mo->efail ? QDC_OK : QDC_ENOMEM;
 }
 
-/* The slot of edge ab (a < b) in the table, or of the first empty slot on its
- * probe; -1 when neither within EDGE_PROBES. */
-static int64_t edge_slot(const memo *mo, int32_t a, int32_t b)
+/* What an edge's record in the table says: not removable (edge removal), or
+ * not contractible by gain (contract_pass with cfloor). */
+enum { EDGE_REMOVAL = 0, EDGE_CONTRACT = 1 };
+
+/* The key of edge ab (a < b) for a record of kind. */
+static uint64_t edge_key(int32_t a, int32_t b, int kind)
 {
-    uint64_t key = ((uint64_t)(uint32_t)a << 32 | (uint32_t)b) + 1;
+    return (((uint64_t)(uint32_t)a << 32 | (uint32_t)b) + 1) | (uint64_t)kind << 63;
+}
+
+/* The slot of key in the table, or of the first empty slot on its probe; -1
+ * when neither within EDGE_PROBES. */
+static int64_t edge_slot(const memo *mo, uint64_t key)
+{
     uint64_t h = (key * 0x9E3779B97F4A7C15ull) >> (64 - mo->ebits);
 
     for (int k = 0; k < EDGE_PROBES; k++, h = (h + 1) & mo->emask)
@@ -261,27 +273,30 @@ static int64_t edge_slot(const memo *mo, int32_t a, int32_t b)
     return -1;
 }
 
-/* 1 when edge ab (a < b) was found not removable and its ring is unchanged. */
-static int edge_failed(const memo *mo, int32_t a, int32_t b)
+/* 1 when edge ab (a < b) was found failing as kind and the stars of its ends
+ * are unchanged (an edge's ring for a removal: it is in both stars). */
+static int edge_failed(const memo *mo, int32_t a, int32_t b, int kind)
 {
+    uint64_t key = edge_key(a, b, kind);
     int64_t h;
 
     if (a >= mo->nv || b >= mo->nv)
         return 0;
-    h = edge_slot(mo, a, b);
-    return h >= 0 && mo->ekey[h] != 0 && mo->vchg[a] <= mo->efail[h] &&
+    h = edge_slot(mo, key);
+    return h >= 0 && mo->ekey[h] == key && mo->vchg[a] <= mo->efail[h] &&
            mo->vchg[b] <= mo->efail[h];
 }
 
-static void edge_fail(memo *mo, int32_t a, int32_t b)
+static void edge_fail(memo *mo, int32_t a, int32_t b, int kind)
 {
+    uint64_t key = edge_key(a, b, kind);
     int64_t h;
 
     if (a >= mo->nv || b >= mo->nv)
         return;
-    h = edge_slot(mo, a, b);
+    h = edge_slot(mo, key);
     if (h >= 0) {
-        mo->ekey[h] = ((uint64_t)(uint32_t)a << 32 | (uint32_t)b) + 1;
+        mo->ekey[h] = key;
         mo->efail[h] = mo->epoch;
     }
 }
@@ -293,7 +308,7 @@ static void memo_fail_edges(memo *mo, const tmesh *tm, int32_t t, unsigned mask)
         if (mask & 1u << e) {
             int32_t a = tm->tv[4 * (size_t)t + tmesh_edge[e][0]],
                     b = tm->tv[4 * (size_t)t + tmesh_edge[e][1]];
-            edge_fail(mo, a < b ? a : b, a < b ? b : a);
+            edge_fail(mo, a < b ? a : b, a < b ? b : a, EDGE_REMOVAL);
         }
 }
 
@@ -405,7 +420,7 @@ static int best_flip(const tmesh *tm, int32_t t, const topo_params *p, const mem
         int32_t a = tm->tv[4 * (size_t)t + tmesh_edge[e][0]],
                 b = tm->tv[4 * (size_t)t + tmesh_edge[e][1]], lo = a < b ? a : b,
                 hi = a < b ? b : a;
-        if (mo && edge_failed(mo, lo, hi))
+        if (mo && edge_failed(mo, lo, hi, EDGE_REMOVAL))
             continue;
         if (!flip_edge_eval(tm, t, e, p->maxring, p->floor4, p->margin, &c)) {
             *efail |= 1u << e;
@@ -491,16 +506,69 @@ static qdc_status insert_pass(tmesh *tm, const topo_params *p, heap *h, memo *mo
     return s;
 }
 
+/* The smallest mean ratio (*q) and dihedral angle (*a, degrees) of tm's live
+ * tets that are not inverted (+inf and 180: none). */
+static void live_worst(const tmesh *tm, double *q, double *a)
+{
+    *q = INFINITY;
+    *a = 180.0;
+    for (int32_t t = 0; t < tm->hi; t++)
+        if (tm->tv[4 * (size_t)t] >= 0 && tm->q[t] >= -1.0) {
+            *q = fmin(*q, tm->q[t]);
+            *a =
+                fmin(*a, min_angle(tm, (const int32_t(*)[4])(tm->tv + 4 * (size_t)t), 1));
+        }
+}
+
+/* The best contraction of an interior edge of t into *best (*have), by
+ * contract_eval with qfloor; with qfloor > 0 the edges found failing are
+ * recorded in mo (may be NULL) and skipped while their stars stay. */
+static void contract_inner(const tmesh *tm, const topo_params *p, memo *mo, int32_t t,
+                           double qfloor, double afloor, contract_cand *best, int *have)
+{
+    contract_cand c;
+
+    for (int k = 0; k < 6; k++) {
+        int32_t a = tm->tv[4 * (size_t)t + tmesh_edge[k][0]],
+                b = tm->tv[4 * (size_t)t + tmesh_edge[k][1]];
+        int32_t lo = a < b ? a : b, hi = a < b ? b : a;
+        int memo_it = mo && qfloor > 0.0;
+        if (memo_it && edge_failed(mo, lo, hi, EDGE_CONTRACT))
+            continue;
+        if (!contract_eval(tm, t, k, p->floor4, p->margin, qfloor, &c) ||
+            (qfloor > 0.0 &&
+             min_angle(tm, (const int32_t(*)[4])c.newt, c.nnew) < afloor)) {
+            if (memo_it)
+                edge_fail(mo, lo, hi, EDGE_CONTRACT);
+            continue;
+        }
+        if (!*have || c.qmin_new > best->qmin_new ||
+            (c.qmin_new == best->qmin_new && c.gain > best->gain)) {
+            *best = c;
+            *have = 1;
+        }
+    }
+}
+
 /* Edge contraction in the live tets below qcontract, worst first (queued
  * once): each tet's best contraction of its edges (of its boundary edges too
- * under a bound). Adds to *ops and st; mo (NULL: none) is told each as a
- * flip's change, the vertices of the tets removed stamped too (no vertex
- * moves: the one that goes is in no tet after). */
+ * under a bound). With cfloor > 0 by gain (contract.h's qfloor: the larger of
+ * cfloor and the smallest mean ratio of the live tets when the pass starts, so
+ * that no contraction makes a tet worse than the mesh's worst). Adds to *ops
+ * and st; mo (NULL: none) is told each as a flip's change, the vertices of
+ * the tets removed stamped too (no vertex moves: the one that goes is in no
+ * tet after). */
 static qdc_status contract_pass(tmesh *tm, const topo_params *p, heap *h, memo *mo,
                                 topo_stats *st, int64_t *ops, int64_t max_ops,
                                 const atomic_int *cancel)
 {
     qdc_status s = QDC_OK;
+    double qfloor = 0.0, afloor = 0.0;
+
+    if (p->cfloor > 0.0) {
+        live_worst(tm, &qfloor, &afloor);
+        qfloor = fmax(p->cfloor, qfloor);
+    }
 
     s = queue_below(tm, h, p->qcontract);
     while (s == QDC_OK && heap_size(h) > 0 && *ops < max_ops) {
@@ -513,10 +581,9 @@ static qdc_status contract_pass(tmesh *tm, const topo_params *p, heap *h, memo *
             return QDC_ECANCEL;
         if (tm->tv[4 * (size_t)e.t] < 0 || tm->stamp[e.t] != e.stamp)
             continue;
-        for (int k = 0; k < 12; k++)
-            if ((k < 6 ? contract_eval(tm, e.t, k, p->floor4, p->margin, &c)
-                       : contract_bedge_eval(tm, e.t, k - 6, p->floor4, p->margin,
-                                             &p->bound, &c)) &&
+        contract_inner(tm, p, mo, e.t, qfloor, afloor, &best, &have);
+        for (int k = 0; k < 6; k++)
+            if (contract_bedge_eval(tm, e.t, k, p->floor4, p->margin, &p->bound, &c) &&
                 (!have || c.qmin_new > best.qmin_new ||
                  (c.qmin_new == best.qmin_new && c.gain > best.gain))) {
                 best = c;
@@ -779,7 +846,7 @@ qdc_status topo_improve(tmesh *tm, const topo_params *p, topo_stats *st,
         ops += ns;
     }
     if (use && s == QDC_OK)
-        s = memo_init(&mo, tm);
+        s = memo_init(&mo, tm, p->contract && p->cfloor > 0.0 ? 2 : 1);
     for (int r = 0; r < p->rounds && s == QDC_OK; r++) {
         int64_t before = ops;
         s = flip_pass(tm, p, &h, use, st, &ops, max_ops, cancel);

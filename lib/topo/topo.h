@@ -37,6 +37,9 @@ typedef struct {
     int contract;   /* 1: after the flips of a round, interior edge contraction
                      * (contract.h) in the tets still below qcontract */
     double qcontract;
+    double cfloor;       /* > 0: contraction by gain (contract.h's qfloor, at least
+                          * this and the live tets' smallest mean ratio); 0: each
+                          * contraction must raise its tets' smallest */
     flip_bound bound;    /* hausd > 0 and a surface attached: boundary flips and
                           * peeling (flip.h) too; hausd 0 (default): none */
     double akeep;        /* > 0: a flip must also leave its new tets' smallest
@@ -87,7 +90,7 @@ typedef struct {
 } topo_surface;
 
 /* maxring 10, qgoal 0.6, margin 1e-3, floor4 0.1, rounds 3, max_ops 0, insert 0,
- * qinsert 0.15, imargin 0.05, iangle 1, contract 0, qcontract 0.3, split 0,
+ * qinsert 0.15, imargin 0.05, iangle 1, contract 0, qcontract 0.3, cfloor 0, split 0,
  * lsplit 1.6, qsplit 0.5, no bound, recheck 0. */
 void topo_params_default(topo_params *p);
 

@@ -1010,45 +1010,70 @@ TEST(driver_skips_only_what_cannot_change)
     mesh_free(m);
 }
 
+static double mean_ratio_of(const double *p, const double *q, const double *r,
+                            const double *s);
+
+/* The smallest mean ratio of the nt tets tv (4 each) over the coordinates x. */
+static double worst_of(const double *x, const int32_t *tv, int32_t nt)
+{
+    double q = INFINITY;
+
+    for (int32_t t = 0; t < nt; t++) {
+        const int32_t *v = tv + 4 * (size_t)t;
+        q = fmin(q, mean_ratio_of(x + 3 * (size_t)v[0], x + 3 * (size_t)v[1],
+                                  x + 3 * (size_t)v[2], x + 3 * (size_t)v[3]));
+    }
+    return q;
+}
+
 /* The same with insertion and contraction between the flip passes (the
  * skips carried across them): the same vertices and tets as evaluating every
- * queued tet again, in fewer visits. */
+ * queued tet again, in fewer visits.
+ * With contraction by gain (cfloor) instead of insertion: the same, some
+ * vertices gone, and the mesh's worst tet not worse than the input's. */
 TEST(driver_skips_across_insertions_and_contractions)
 {
     const int n = 7;
     mesh_t *m = tm_grid(n, MESH_WITH_REGION);
-    int32_t nt[2], nv[2], *tv[2] = {NULL, NULL}, *rg[2] = {NULL, NULL};
-    int32_t *vmap[2] = {NULL, NULL};
-    double *xo[2] = {NULL, NULL};
     topo_params p;
-    topo_stats st[2];
 
     ASSERT_TRUE(m);
     tm_perturb(m, n, 0.35, 7);
-    topo_params_default(&p);
-    p.qgoal = 0.9;
-    p.insert = 1;
-    p.contract = 1;
-    p.qinsert = 0.6;
-    p.qcontract = 0.7;
-    p.imargin = 1e-3;
-    for (int r = 0; r < 2; r++) {
-        p.recheck = r;
-        ASSERT_OK(topo_full_arrays(m->nv, m->xyz, m->nt, m->tets, m->region, NULL, &p,
-                                   NULL, &nv[r], &xo[r], &nt[r], &tv[r], &rg[r], &vmap[r],
-                                   NULL, &st[r], NULL));
-    }
-    ASSERT_TRUE(st[0].insertions > 0 && st[0].contractions > 0);
-    ASSERT_EQ_INT(st[0].insertions, st[1].insertions);
-    ASSERT_EQ_INT(st[0].contractions, st[1].contractions);
-    ASSERT_EQ_INT(nv[0], nv[1]);
-    ASSERT_TRUE(!memcmp(xo[0], xo[1], 24 * (size_t)nv[0]));
-    same_as_recheck(st, nt, tv, rg);
-    for (int r = 0; r < 2; r++) {
-        qdc_free(tv[r]);
-        qdc_free(rg[r]);
-        qdc_free(xo[r]);
-        qdc_free(vmap[r]);
+    for (int gain = 0; gain < 2; gain++) {
+        int32_t nt[2], nv[2], *tv[2] = {NULL, NULL}, *rg[2] = {NULL, NULL};
+        int32_t *vmap[2] = {NULL, NULL};
+        double *xo[2] = {NULL, NULL};
+        topo_stats st[2];
+        topo_params_default(&p);
+        p.qgoal = gain ? 0.8 : 0.9;
+        p.insert = !gain;
+        p.contract = 1;
+        p.qinsert = 0.6;
+        p.qcontract = gain ? 0.8 : 0.7;
+        p.cfloor = gain ? 0.5 : 0.0;
+        p.imargin = 1e-3;
+        for (int r = 0; r < 2; r++) {
+            p.recheck = r;
+            ASSERT_OK(topo_full_arrays(m->nv, m->xyz, m->nt, m->tets, m->region, NULL, &p,
+                                       NULL, &nv[r], &xo[r], &nt[r], &tv[r], &rg[r],
+                                       &vmap[r], NULL, &st[r], NULL));
+        }
+        ASSERT_TRUE((gain || st[0].insertions > 0) && st[0].contractions > 0);
+        ASSERT_EQ_INT(st[0].insertions, st[1].insertions);
+        ASSERT_EQ_INT(st[0].contractions, st[1].contractions);
+        ASSERT_EQ_INT(nv[0], m->nv + (int32_t)(st[0].insertions - st[0].contractions));
+        ASSERT_EQ_INT(nv[0], nv[1]);
+        ASSERT_TRUE(!memcmp(xo[0], xo[1], 24 * (size_t)nv[0]));
+        same_as_recheck(st, nt, tv, rg);
+        if (gain)
+            ASSERT_TRUE(worst_of(xo[0], tv[0], nt[0]) >=
+                        worst_of(m->xyz, m->tets, m->nt));
+        for (int r = 0; r < 2; r++) {
+            qdc_free(tv[r]);
+            qdc_free(rg[r]);
+            qdc_free(xo[r]);
+            qdc_free(vmap[r]);
+        }
     }
     mesh_free(m);
 }
@@ -1438,6 +1463,45 @@ TEST(topology_without_a_flip_keeps_the_tets_in_order)
     mesh_free(m);
 }
 
+#ifdef QDC_FAULT_INJECTION
+/* opt_run on a copy of m0 under o: without a failure (that copy into *clean,
+ * its allocations counted in *total), then with the allocations failing from
+ * the k-th on, for k = 1, 1 + stride, ... up to *total: either QDC_ENOMEM with
+ * the mesh as it came in (counted in *failed), or a valid mesh (none
+ * inverted). */
+static void fault_sweep(const mesh_t *m0, const opt_options *o, long stride,
+                        mesh_t **clean, long *total, long *failed)
+{
+    *clean = mesh_dup(m0);
+    ASSERT_TRUE(*clean);
+    qdc_fault_set(0);
+    ASSERT_OK(opt_run(*clean, o, NULL, NULL));
+    *total = qdc_fault_count();
+    for (long k = 1; k <= *total; k += stride) {
+        mesh_topo *tp = NULL;
+        mesh_t *m = mesh_dup(m0);
+        qdc_status st;
+        ASSERT_TRUE(m);
+        qdc_fault_set(k);
+        st = opt_run(m, o, NULL, NULL);
+        qdc_fault_set(0);
+        if (st != QDC_OK) {
+            ASSERT_EQ_INT(st, QDC_ENOMEM);
+            ASSERT_EQ_INT(m->nt, m0->nt);
+            ASSERT_EQ_INT(m->nv, m0->nv);
+            ASSERT_TRUE(!memcmp(m->tets, m0->tets, 16 * (size_t)m->nt));
+            ASSERT_TRUE(!memcmp(m->xyz, m0->xyz, 24 * (size_t)m->nv));
+            (*failed)++;
+        } else {
+            ASSERT_OK(mesh_topo_build(m, &tp, NULL));
+            ASSERT_EQ_INT(mesh_count_inverted(tp, m->xyz), 0);
+            mesh_topo_free(tp);
+        }
+        mesh_free(m);
+    }
+}
+#endif
+
 /* Every allocation of a flips run failed in turn: either the run fails with the
  * mesh as it was, or it returns a valid mesh (a later round's failure returns
  * the mesh of the round before, as a stopped run). */
@@ -1447,7 +1511,7 @@ TEST(flips_allocation_failures_are_clean)
     const int n = 3;
     mesh_t *m0 = tm_grid(n, MESH_WITH_REGION | MESH_WITH_FIXED), *m;
     opt_options o;
-    long total, failed = 0;
+    long total = 0, failed = 0;
 
     ASSERT_TRUE(m0);
     tm_perturb(m0, n, 0.25, 5);
@@ -1455,37 +1519,45 @@ TEST(flips_allocation_failures_are_clean)
     opt_defaults(&o);
     o.topology = OPT_TOPOLOGY_FLIPS;
     o.threads = 1;
-    m = mesh_dup(m0);
-    ASSERT_TRUE(m);
-    qdc_fault_set(0);
-    ASSERT_OK(opt_run(m, &o, NULL, NULL));
-    total = qdc_fault_count();
-    ASSERT_TRUE(m->nt != m0->nt || memcmp(m->tets, m0->tets, 16 * (size_t)m->nt));
+    fault_sweep(m0, &o, 1, &m, &total, &failed);
+    ASSERT_TRUE(m && (m->nt != m0->nt || memcmp(m->tets, m0->tets, 16 * (size_t)m->nt)));
     mesh_free(m);
-    for (long k = 1; k <= total; k++) {
-        mesh_topo *tp = NULL;
-        qdc_status st;
-        m = mesh_dup(m0);
-        ASSERT_TRUE(m);
-        qdc_fault_set(k);
-        st = opt_run(m, &o, NULL, NULL);
-        qdc_fault_set(0);
-        if (st != QDC_OK) {
-            ASSERT_EQ_INT(st, QDC_ENOMEM);
-            ASSERT_EQ_INT(m->nt, m0->nt);
-            ASSERT_TRUE(!memcmp(m->tets, m0->tets, 16 * (size_t)m->nt));
-            ASSERT_TRUE(!memcmp(m->xyz, m0->xyz, 24 * (size_t)m->nv));
-            failed++;
-        } else {
-            ASSERT_OK(mesh_topo_build(m, &tp, NULL));
-            ASSERT_EQ_INT(mesh_count_inverted(tp, m->xyz), 0);
-            mesh_topo_free(tp);
-        }
-        mesh_free(m);
-    }
     ASSERT_TRUE(failed > 10);
     printf("  # %ld allocation failure points, %ld failed the run, each clean\n", total,
            failed);
+    mesh_free(m0);
+#else
+    SKIP("built without QDC_FAULT_INJECTION (make fault runs it)");
+#endif
+}
+
+/* --topology full on a perturbed 6x6x6 grid, whose last round contracts
+ * vertices by gain (vertices renumbered, the smoothing held to the vertices
+ * near the contractions): an allocation failure at every fourth point in turn
+ * either fails the run with QDC_ENOMEM and the mesh as it came in, or the run
+ * ends valid (a round that failed is dropped); no leak (ASan in make fault).
+ * A failure after the first smoothing used to return QDC_ENOMEM with the
+ * vertices moved. */
+TEST(full_allocation_failures_are_clean)
+{
+#ifdef QDC_FAULT_INJECTION
+    const int n = 6;
+    mesh_t *m0 = tm_grid(n, MESH_WITH_REGION), *m;
+    opt_options o;
+    long total = 0, failed = 0;
+
+    ASSERT_TRUE(m0);
+    tm_perturb(m0, n, 0.4, 6);
+    opt_defaults(&o);
+    o.topology = OPT_TOPOLOGY_FULL;
+    o.threads = 1;
+    fault_sweep(m0, &o, 4, &m, &total, &failed); /* every fourth: a run is slow */
+    ASSERT_TRUE(m && m->nv < m0->nv);            /* vertices went */
+    mesh_free(m);
+    ASSERT_TRUE(failed > 10);
+    printf("  # %ld allocation failure points, every fourth tried, %ld failed the run, "
+           "each clean\n",
+           total, failed);
     mesh_free(m0);
 #else
     SKIP("built without QDC_FAULT_INJECTION (make fault runs it)");
@@ -1784,7 +1856,7 @@ TEST(contraction_keeps_the_volume_exactly)
         for (int e = 0; e < 6 && !found; e++) {
             int32_t a = tm->tv[4 * t + tmesh_edge[e][0]],
                     b = tm->tv[4 * t + tmesh_edge[e][1]];
-            int ok = contract_eval(tm, t, e, 0.0, -INFINITY, &c);
+            int ok = contract_eval(tm, t, e, 0.0, -INFINITY, 0.0, &c);
             if (tm->vcons[a] || tm->vcons[b])
                 refused &= !ok;
             else if (ok && (c.gone == centre || c.keep == centre))
@@ -1803,6 +1875,47 @@ TEST(contraction_keeps_the_volume_exactly)
     for (int32_t t = 0; t < tm->hi; t++)
         if (tm->tv[4 * t] >= 0)
             ASSERT_TRUE(tmesh_local(tm, t, c.gone) < 0);
+    tmesh_free(tm);
+    mesh_free(m);
+}
+
+/* Contraction by gain (qfloor 0.5) on a 6x6x6 Kuhn grid with its interior
+ * vertices perturbed: each candidate removes tets, every new tet's mean ratio
+ * is above the floor, its gain is the sum of (1 - q) over the old tets less
+ * that over the new (recomputed here); some of them the contraction that must
+ * raise the smallest quality refuses (the two criteria differ). */
+TEST(contraction_by_gain_keeps_new_tets_above_the_floor)
+{
+    const int n = 6;
+    mesh_t *m = tm_grid(n, 0);
+    tmesh *tm = NULL;
+    int found = 0, gain_only = 0;
+
+    ASSERT_TRUE(m);
+    tm_perturb(m, n, 0.35, 7);
+    ASSERT_OK(tmesh_new(m->nv, m->xyz, m->nt, m->tets, NULL, NULL, &tm, NULL));
+    for (int32_t t = 0; t < tm->hi; t++)
+        for (int e = 0; e < 6; e++) {
+            contract_cand c, d;
+            double g = 0.0;
+            if (!contract_eval(tm, t, e, 0.0, 1e-3, 0.5, &c))
+                continue;
+            found++;
+            ASSERT_TRUE(c.nnew < c.nold);
+            ASSERT_TRUE(c.qmin_new > 0.5);
+            for (int k = 0; k < c.nold; k++)
+                g += 1.0 - tm->q[c.old[k]];
+            for (int k = 0; k < c.nnew; k++) {
+                double q = tmesh_quality(tm, c.newt[k], 0.0);
+                ASSERT_TRUE(q > 0.5);
+                g -= 1.0 - q;
+            }
+            ASSERT_TRUE(c.gain > 0.0);
+            ASSERT_NEAR(c.gain, g, 1e-12);
+            gain_only += !contract_eval(tm, t, e, 0.0, 1e-3, 0.0, &d);
+        }
+    ASSERT_TRUE(found > 0);
+    ASSERT_TRUE(gain_only > 0);
     tmesh_free(tm);
     mesh_free(m);
 }
@@ -2111,4 +2224,6 @@ TEST_MAIN("topo", T(kept_inner_face_blocks_removal), T(driver_keeps_an_inner_sur
           T(opt_run_flips_leaves_inverted_input_alone),
           T(topology_keeps_the_vertex_numbers),
           T(topology_without_a_flip_keeps_the_tets_in_order),
-          T(flips_allocation_failures_are_clean))
+          T(flips_allocation_failures_are_clean),
+          T(contraction_by_gain_keeps_new_tets_above_the_floor),
+          T(full_allocation_failures_are_clean))
