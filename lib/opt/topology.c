@@ -808,7 +808,7 @@ static qdc_status full_round(mesh_t *m, opt_options *o, int ops, double hausd, s
     }
     if (st == QDC_OK)
         st = flip_round(m, o, ops, hausd, sp, act, om, &ts, sf, err);
-    least = act ? (int64_t)ceil(TOPO_CMIN * nv) : 1;
+    least = ops & ROUND_COARSEN ? (int64_t)ceil(TOPO_CMIN * nv) : 1;
     if (st == QDC_OK && ts.insertions + ts.contractions >= least) {
         count_round(&acc, &ts, sf);
         o->progress = NULL; /* a trial: its records would not be the result's */

@@ -520,6 +520,17 @@ static void live_worst(const tmesh *tm, double *q, double *a)
         }
 }
 
+/* c into *best (*have) when it is the first or better: the larger new
+ * minimum, then the larger gain. */
+static void keep_better(const contract_cand *c, contract_cand *best, int *have)
+{
+    if (!*have || c->qmin_new > best->qmin_new ||
+        (c->qmin_new == best->qmin_new && c->gain > best->gain)) {
+        *best = *c;
+        *have = 1;
+    }
+}
+
 /* The best contraction of an interior edge of t into *best (*have), by
  * contract_eval with qfloor; with qfloor > 0 the edges found failing are
  * recorded in mo (may be NULL) and skipped while their stars stay. */
@@ -527,12 +538,12 @@ static void contract_inner(const tmesh *tm, const topo_params *p, memo *mo, int3
                            double qfloor, double afloor, contract_cand *best, int *have)
 {
     contract_cand c;
+    int memo_it = mo && qfloor > 0.0;
 
     for (int k = 0; k < 6; k++) {
         int32_t a = tm->tv[4 * (size_t)t + tmesh_edge[k][0]],
                 b = tm->tv[4 * (size_t)t + tmesh_edge[k][1]];
         int32_t lo = a < b ? a : b, hi = a < b ? b : a;
-        int memo_it = mo && qfloor > 0.0;
         if (memo_it && edge_failed(mo, lo, hi, EDGE_CONTRACT))
             continue;
         if (!contract_eval(tm, t, k, p->floor4, p->margin, qfloor, &c) ||
@@ -542,11 +553,7 @@ static void contract_inner(const tmesh *tm, const topo_params *p, memo *mo, int3
                 edge_fail(mo, lo, hi, EDGE_CONTRACT);
             continue;
         }
-        if (!*have || c.qmin_new > best->qmin_new ||
-            (c.qmin_new == best->qmin_new && c.gain > best->gain)) {
-            *best = c;
-            *have = 1;
-        }
+        keep_better(&c, best, have);
     }
 }
 
@@ -583,12 +590,8 @@ static qdc_status contract_pass(tmesh *tm, const topo_params *p, heap *h, memo *
             continue;
         contract_inner(tm, p, mo, e.t, qfloor, afloor, &best, &have);
         for (int k = 0; k < 6; k++)
-            if (contract_bedge_eval(tm, e.t, k, p->floor4, p->margin, &p->bound, &c) &&
-                (!have || c.qmin_new > best.qmin_new ||
-                 (c.qmin_new == best.qmin_new && c.gain > best.gain))) {
-                best = c;
-                have = 1;
-            }
+            if (contract_bedge_eval(tm, e.t, k, p->floor4, p->margin, &p->bound, &c))
+                keep_better(&c, &best, &have);
         if (!have)
             continue;
         memo_collect(tm, best.old, best.nold, vs);
