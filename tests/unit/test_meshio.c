@@ -315,23 +315,34 @@ TEST(tetgen_read)
     ASSERT_EQ_INT(meshio_read(node, strlen(node), MESHIO_TETGEN, &m, &err), QDC_EINVAL);
 }
 
+/* Counts far beyond the bytes fail before anything of their size is allocated
+ * or walked: the three reads take well under 0.1 s (milliseconds when idle;
+ * the least of three tries, so that a busy machine's pause in one does not
+ * count). */
 TEST(huge_counts_fail_fast)
 {
     const char medit[] = "Vertices 1000000000\n";
-    unsigned char q[32] = "QDCMESH";
     mesh_t *m;
     qdc_error err;
-    double t0 = now();
+    double best = 1e9;
 
-    ASSERT_EQ_INT(read_str(medit, MESHIO_MEDIT, &m, &err), QDC_EPARSE);
-    ASSERT_TRUE(strstr(err.msg, "truncated"));
-    q[8] = 1;
-    q[19] = 0x40; /* nv = 2^30 */
-    ASSERT_EQ_INT(meshio_read((const char *)q, 32, MESHIO_QMESH, &m, &err), QDC_EPARSE);
-    ASSERT_TRUE(strstr(err.msg, "size mismatch"));
-    q[23] = 0xff; /* nv near 2^64 */
-    ASSERT_EQ_INT(meshio_read((const char *)q, 32, MESHIO_AUTO, &m, &err), QDC_EPARSE);
-    ASSERT_TRUE(now() - t0 < 0.1);
+    for (int rep = 0; rep < 3 && best >= 0.1; rep++) {
+        unsigned char q[32] = "QDCMESH";
+        double t0 = now();
+
+        ASSERT_EQ_INT(read_str(medit, MESHIO_MEDIT, &m, &err), QDC_EPARSE);
+        ASSERT_TRUE(strstr(err.msg, "truncated"));
+        q[8] = 1;
+        q[19] = 0x40; /* nv = 2^30 */
+        ASSERT_EQ_INT(meshio_read((const char *)q, 32, MESHIO_QMESH, &m, &err),
+                      QDC_EPARSE);
+        ASSERT_TRUE(strstr(err.msg, "size mismatch"));
+        q[23] = 0xff; /* nv near 2^64 */
+        ASSERT_EQ_INT(meshio_read((const char *)q, 32, MESHIO_AUTO, &m, &err),
+                      QDC_EPARSE);
+        best = fmin(best, now() - t0);
+    }
+    ASSERT_TRUE(best < 0.1);
 }
 
 TEST(formats_and_sniffing)
