@@ -19,31 +19,95 @@ static int has(const int32_t *a, int n, int32_t v)
     return 0;
 }
 
-/* Contract u onto w, t0 a tet of the edge: 1 with *c filled when legal and
- * improving (qfloor: contract_eval's). */
-static int one_way(const tmesh *tm, int32_t t0, int32_t u, int32_t w, double floor4,
-                   double margin, double qfloor, contract_cand *c)
+/* The stars of an edge's two ends (tmesh_star from a tet of the edge; n -1
+ * when over STAR_W tets), found once for both directions of a contraction. */
+typedef struct {
+    int32_t s[2][STAR_W];
+    int n[2];
+} edge_stars;
+
+static void find_stars(const tmesh *tm, int32_t t0, int32_t a, int32_t b, edge_stars *st)
 {
-    int32_t su[CONTRACT_MAX], sw[STAR_W], ring[2 * CONTRACT_MAX], vw[4 * STAR_W];
-    int nu = tmesh_star(tm, t0, u, su, CONTRACT_MAX), nw, nr = 0, nvw = 0;
+    st->n[0] = tmesh_star(tm, t0, a, st->s[0], STAR_W);
+    st->n[1] = tmesh_star(tm, t0, b, st->s[1], STAR_W);
+}
+
+/* Contract u onto w, t0 a tet of the edge, su (nu tets) and sw (nw) their
+ * stars: 1 with *c filled when legal and improving (qfloor: contract_eval's). */
+static int one_way(const tmesh *tm, int32_t t0, int32_t u, int32_t w, const int32_t *su,
+                   int nu, const int32_t *sw, int nw, double floor4, double margin,
+                   double qfloor, contract_cand *c)
+{
+    int32_t ring[2 * CONTRACT_MAX], vw[4 * STAR_W];
+    int nr = 0, nvw = 0, nnew;
     double sold = 0.0, snew = 0.0, need;
 
-    if (nu < 0)
-        return 0;
-    nw = tmesh_star(tm, t0, w, sw, STAR_W);
-    if (nw < 0)
+    if (nu < 0 || nu > CONTRACT_MAX || nw < 0)
         return 0;
     c->qmin_old = INFINITY;
+    nnew = nu;
     for (int k = 0; k < nu; k++) {
         const int32_t *tt = tm->tv + 4 * (size_t)su[k];
         if (tm->q[su[k]] < -1.0 || tm->tag[su[k]] != tm->tag[t0])
             return 0;
         c->qmin_old = fmin(c->qmin_old, tm->q[su[k]]);
         sold += tm->q[su[k]];
-        if (tmesh_local(tm, su[k], w) >= 0)
+        if (tmesh_local(tm, su[k], w) >= 0) {
+            nnew--;
             for (int s = 0; s < 4; s++)
                 if (tt[s] != u && tt[s] != w && !has(ring, nr, tt[s]))
                     ring[nr++] = tt[s];
+        }
+    }
+    /* the new tets first (the cheaper refusals), then the link condition */
+    need = qfloor > 0.0 ? qfloor : c->qmin_old + margin;
+    c->nold = 0;
+    c->nnew = 0;
+    c->qmin_new = INFINITY;
+    for (int k = 0; k < nu; k++) {
+        const int32_t *tt = tm->tv + 4 * (size_t)su[k];
+        int32_t *nt;
+        double q;
+        c->old[c->nold++] = su[k];
+        if (tmesh_local(tm, su[k], w) >= 0)
+            continue; /* a tet of the edge: gone */
+        /* by gain: out once the gain cannot be positive with every tet
+         * left at mean ratio 1 (the same candidates, fewer evaluated) */
+        if (qfloor > 0.0 && !((double)(nu - nnew) - sold + snew + (nnew - c->nnew) > 0.0))
+            return 0;
+        nt = c->newt[c->nnew++];
+        memcpy(nt, tt, 4 * sizeof *tt);
+        nt[tmesh_local(tm, su[k], u)] = w;
+        /* (below the bound by more than roundings: refused before the exact
+         * predicate) */
+        q = tmesh_quality_above(tm, nt, floor4, need);
+        if (q < -1.0 || !(q > need))
+            return 0;
+        c->qmin_new = fmin(c->qmin_new, q);
+        snew += q;
+    }
+    if (c->nnew == 0)
+        return 0;
+    if (qfloor > 0.0 && !((double)(c->nold - c->nnew) + snew - sold > 0.0))
+        return 0;
+    /* link condition, edges: two ring vertices of a tet that stays must be a
+     * ring edge (then that tet meets a tet of the edge across their face) */
+    for (int k = 0; k < nu; k++) {
+        const int32_t *tt = tm->tv + 4 * (size_t)su[k];
+        if (tmesh_local(tm, su[k], w) >= 0)
+            continue;
+        for (int s = 0; s < 4; s++)
+            for (int r = s + 1; r < 4; r++) {
+                int ok = 0;
+                if (!has(ring, nr, tt[s]) || !has(ring, nr, tt[r]))
+                    continue;
+                for (int j = 0; j < nu && !ok; j++)
+                    ok = tmesh_local(tm, su[j], w) >= 0 &&
+                         tmesh_local(tm, su[j], tt[s]) >= 0 &&
+                         tmesh_local(tm, su[j], tt[r]) >= 0;
+                if (!ok)
+                    return 0;
+            }
     }
     for (int k = 0; k < nw; k++)
         for (int s = 0; s < 4; s++) {
@@ -58,49 +122,9 @@ static int one_way(const tmesh *tm, int32_t t0, int32_t u, int32_t w, double flo
             if (x != u && x != w && has(vw, nvw, x) && !has(ring, nr, x))
                 return 0;
         }
-    need = qfloor > 0.0 ? qfloor : c->qmin_old + margin;
-    c->nold = 0;
-    c->nnew = 0;
-    c->qmin_new = INFINITY;
-    for (int k = 0; k < nu; k++) {
-        const int32_t *tt = tm->tv + 4 * (size_t)su[k];
-        int32_t *nt;
-        double q;
-        c->old[c->nold++] = su[k];
-        if (tmesh_local(tm, su[k], w) >= 0)
-            continue; /* a tet of the edge: gone */
-        /* link condition, edges: two ring vertices of this tet must be a ring
-         * edge (then this tet meets a tet of the edge across their face) */
-        for (int s = 0; s < 4; s++)
-            for (int r = s + 1; r < 4; r++) {
-                int ok = 0;
-                if (!has(ring, nr, tt[s]) || !has(ring, nr, tt[r]))
-                    continue;
-                for (int j = 0; j < nu && !ok; j++)
-                    ok = tmesh_local(tm, su[j], w) >= 0 &&
-                         tmesh_local(tm, su[j], tt[s]) >= 0 &&
-                         tmesh_local(tm, su[j], tt[r]) >= 0;
-                if (!ok)
-                    return 0;
-            }
-        nt = c->newt[c->nnew++];
-        memcpy(nt, tt, 4 * sizeof *tt);
-        nt[tmesh_local(tm, su[k], u)] = w;
-        /* (below the bound by more than roundings: refused before the exact
-         * predicate) */
-        q = tmesh_quality_above(tm, nt, floor4, need);
-        if (q < -1.0 || !(q > need))
-            return 0;
-        c->qmin_new = fmin(c->qmin_new, q);
-        snew += q;
-    }
-    if (c->nnew == 0)
-        return 0;
     c->gone = u;
     c->keep = w;
     c->gain = (double)(c->nold - c->nnew) + snew - sold;
-    if (qfloor > 0.0 && !(c->gain > 0.0))
-        return 0;
     c->bnd = 0;
     c->dev = 0.0;
     return 1;
@@ -123,13 +147,16 @@ int contract_eval(const tmesh *tm, int32_t t, int e, double floor4, double margi
     const int32_t *tt = tm->tv + 4 * (size_t)t;
     int32_t a = tt[tmesh_edge[e][0]], b = tt[tmesh_edge[e][1]];
     contract_cand x;
+    edge_stars st;
     int have = 0;
 
     if (tm->vcons[a] || tm->vcons[b] || tm->q[t] < -1.0)
         return 0;
+    find_stars(tm, t, a, b, &st);
     for (int dir = 0; dir < 2; dir++) {
         int32_t u = dir ? b : a, w = dir ? a : b;
-        if (!one_way(tm, t, u, w, floor4, margin, qfloor, &x))
+        if (!one_way(tm, t, u, w, st.s[dir], st.n[dir], st.s[!dir], st.n[!dir], floor4,
+                     margin, qfloor, &x))
             continue;
         if (!have || better(&x, c)) {
             *c = x;
@@ -250,15 +277,18 @@ int contract_bedge_eval(const tmesh *tm, int32_t t, int e, double floor4, double
     const int32_t *tt = tm->tv + 4 * (size_t)t;
     int32_t a = tt[tmesh_edge[e][0]], b = tt[tmesh_edge[e][1]];
     contract_cand x;
+    edge_stars st;
     int have = 0;
 
     if (!tm->fref || !(bd->hausd > 0) || !(tm->econs[t] >> e & 1) || !tm->vcons[a] ||
         !tm->vcons[b] || tm->q[t] < -1.0)
         return 0;
+    find_stars(tm, t, a, b, &st);
     for (int dir = 0; dir < 2; dir++) {
         int32_t u = dir ? b : a, w = dir ? a : b;
         double dev;
-        if (!one_way(tm, t, u, w, floor4, margin, 0.0, &x))
+        if (!one_way(tm, t, u, w, st.s[dir], st.n[dir], st.s[!dir], st.n[!dir], floor4,
+                     margin, 0.0, &x))
             continue;
         dev = surface_move(tm, u, w, &x, bd);
         if (dev < 0.0)
