@@ -1,17 +1,16 @@
-/* topology.c - the rounds of --topology (run.h, opt_topology_rounds; opt_run
- * of entry.c calls them): for flips, the smoother (rerun.c) alternated with the flips of
- * lib/topo (edge removal, 2-3 flips, multi-face removal), after Stellar's
- * schedule (Klingner and Shewchuk 2007): smooth; then flips, worst tets first;
- * then smooth again where the flips opened room, a few rounds while the
- * quality rises; for full, one more round with edge contraction and vertex
- * insertion, kept when better (and with --boundary fixed, the first round
- * starts with splits of the long interior edges). With flips the vertex set never changes
- * (point data stays valid); boundary triangles and region tags come back as sets exactly
- * as they went in, unless the user gave --hausd (boundary flips and peeling within it);
- * new tets are written in the vertex order convention of the tets they replace. m's
- * coordinates, tets, regions and tet count are replaced by the result; res->tets_in/out
- * and the topo_* counts filled, res->before the input's record, res->after the result's.
- */
+/* topology.c - the rounds of --topology (run.h, opt_topology_rounds; opt_run of entry.c
+ * calls them): for flips, the smoother (rerun.c) alternated with the flips of lib/topo
+ * (edge removal, 2-3 flips, multi-face removal), after Stellar's schedule (Klingner and
+ * Shewchuk 2007): smooth; then flips, worst tets first; then smooth again where the flips
+ * opened room, a few rounds while the quality rises; for full, a round with edge
+ * contraction and vertex insertion, then one with contraction by gain, each kept when
+ * better (and with --boundary fixed, the first round starts with splits of the long
+ * interior edges). With flips the vertex set never changes (point data stays valid);
+ * boundary triangles and region tags come back as sets exactly as they went in, unless
+ * the user gave --hausd (boundary flips and peeling within it); new tets are written in
+ * the vertex order convention of the tets they replace. m's coordinates, tets, regions
+ * and tet count are replaced by the result; res->tets_in/out and the topo_* counts
+ * filled, res->before the input's record, res->after the result's. */
 #include "opt/run.h"
 
 #include "core/base_int.h"
@@ -113,15 +112,14 @@ enum { TOPO_ROUNDS = 3 };
  * flips, or contraction by gain (full's last round). */
 enum { ROUND_INSERT = 1, ROUND_SPLIT = 2, ROUND_COARSEN = 4 };
 
-/* The contractions of full's last round (ROUND_COARSEN: contract.h's qfloor,
- * topo.h's cfloor): the interior edges of the tets below TOPO_CQUEUE, an edge
- * going when the sum of (1 - mean ratio) over its vertex's tets falls and
- * every new tet stays above TOPO_CFLOOR, the mesh's worst tet and its smallest
- * dihedral angle. On random interior points 13-24% of the vertices go, the
- * mean ratio rises by about 0.02; a round that contracts fewer than TOPO_CMIN
- * of the vertices (Gmsh's, TetGen's meshes) is dropped before its smoothing.
- * Figures and what was tried: docs/method.md section 10. */
-#define TOPO_CQUEUE 0.8
+/* The contractions of full's last round (ROUND_COARSEN: contract.h's qfloor, topo.h's
+ * cfloor): the interior edges of the tets below TOPO_CQUEUE, an edge going when the sum
+ * of (1 - mean ratio) over its vertex's tets falls and every new tet stays above
+ * TOPO_CFLOOR, the mesh's worst tet and its smallest dihedral angle; a round contracting
+ * fewer than TOPO_CMIN of the vertices (Gmsh's, TetGen's meshes) is dropped before its
+ * smoothing. Figures (17-32% of random interior points go) and what was tried:
+ * docs/method.md 10. */
+#define TOPO_CQUEUE 0.85
 #define TOPO_CFLOOR 0.5
 #define TOPO_CMIN 0.01
 
@@ -697,6 +695,14 @@ static int not_below(double a, double b)
     return a >= b - 1e-9 * fabs(b);
 }
 
+/* full_round's test of a round's smallest dihedral angle a against b before it:
+ * at most 5% lower (the worst tet's mean ratio stays strict). A round that raises
+ * the mean ratio by 0.02 moves it a few tenths of a degree either way. */
+static int dih_kept(double a, double b)
+{
+    return a >= 0.95 * b;
+}
+
 /* --topology flips: a round's smoothing with the vertices away from the flips
  * held runs this many global iterations at most. After the second the global
  * phase ended there (it stops at its third when that gains little) or its
@@ -760,13 +766,11 @@ static qdc_status round_smooth(mesh_t *m, opt_options *o, spend *sp, const uint8
  * contraction and vertex insertion too (ops ROUND_INSERT), then one with
  * contraction by gain (ROUND_COARSEN), each followed by smoothing and kept
  * only when its smallest and mean quality are both at least those before it
- * (else m as it was): so full is never below flips on the run's own figures
- * (its smallest dihedral angle included; the smallest ones up to not_below's
- * roundings). Measured on the 100k-tet bone-lowq of scripts/corpus.py,
- * insertion and contraction inside every round ended at 0.7238 mean ratio
- * against 0.7289 for flips; contraction by gain in the insertion round took
- * bone-scan's mean ratio from 0.7501 to 0.7484 (each round on its own keeps
- * what each gains). */
+ * (the smallest up to not_below's roundings), its smallest dihedral angle as
+ * dih_kept says (else m as it was). On the 100k-tet bone-lowq of scripts/corpus.py,
+ * insertion and contraction inside every round ended at 0.7238 mean ratio against
+ * 0.7289 for flips; contraction by gain in the insertion round took bone-scan's
+ * from 0.7501 to 0.7484 (each round on its own keeps what each gains). */
 static qdc_status full_round(mesh_t *m, opt_options *o, int ops, double hausd, spend *sp,
                              orient_memo *om, topo_surface *sf, opt_result *first,
                              opt_result *last, int *record, qdc_error *err)
@@ -816,7 +820,7 @@ static qdc_status full_round(mesh_t *m, opt_options *o, int ops, double hausd, s
         if (st == QDC_OK && r.outcome != OPT_STOPPED &&
             not_below(r.after.q_min, last->after.q_min) &&
             r.after.q_mean >= last->after.q_mean &&
-            not_below(r.after.dih_min, last->after.dih_min)) {
+            dih_kept(r.after.dih_min, last->after.dih_min)) {
             add_run(&acc, &r);
             *first = acc;
             *last = r;
