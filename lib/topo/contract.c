@@ -32,14 +32,60 @@ static void find_stars(const tmesh *tm, int32_t t0, int32_t a, int32_t b, edge_s
     st->n[1] = tmesh_star(tm, t0, b, st->s[1], STAR_W);
 }
 
+/* The link condition of contracting u onto w (su, nu: u's star, on[k] set for
+ * its tets of the edge; sw, nw: w's star; ring, nr: the vertices around the
+ * edge): 1 when it holds. */
+static int link_ok(const tmesh *tm, int32_t u, int32_t w, const int32_t *su, int nu,
+                   const uint8_t *on, const int32_t *sw, int nw, const int32_t *ring,
+                   int nr)
+{
+    int32_t vw[4 * STAR_W];
+    int nvw = 0;
+
+    /* edges: two ring vertices of a tet that stays must be a ring edge (then
+     * that tet meets a tet of the edge across their face) */
+    for (int k = 0; k < nu; k++) {
+        const int32_t *tt = tm->tv + 4 * (size_t)su[k];
+        if (on[k])
+            continue;
+        for (int s = 0; s < 4; s++)
+            for (int r = s + 1; r < 4; r++) {
+                int ok = 0;
+                if (!has(ring, nr, tt[s]) || !has(ring, nr, tt[r]))
+                    continue;
+                for (int j = 0; j < nu && !ok; j++)
+                    ok = on[j] && tmesh_local(tm, su[j], tt[s]) >= 0 &&
+                         tmesh_local(tm, su[j], tt[r]) >= 0;
+                if (!ok)
+                    return 0;
+            }
+    }
+    /* vertices: next to u and to w only through the ring */
+    for (int k = 0; k < nw; k++)
+        for (int s = 0; s < 4; s++) {
+            int32_t x = tm->tv[4 * (size_t)sw[k] + s];
+            if (x != u && x != w && !has(vw, nvw, x))
+                vw[nvw++] = x;
+        }
+    for (int k = 0; k < nu; k++)
+        for (int s = 0; s < 4; s++) {
+            int32_t x = tm->tv[4 * (size_t)su[k] + s];
+            if (x != u && x != w && has(vw, nvw, x) && !has(ring, nr, x))
+                return 0;
+        }
+    return 1;
+}
+
 /* Contract u onto w, t0 a tet of the edge, su (nu tets) and sw (nw) their
- * stars: 1 with *c filled when legal and improving (qfloor: contract_eval's). */
+ * stars: 1 with *c filled when legal and improving (qfloor: contract_eval's).
+ * The new tets first (the cheaper refusals), then the link condition. */
 static int one_way(const tmesh *tm, int32_t t0, int32_t u, int32_t w, const int32_t *su,
                    int nu, const int32_t *sw, int nw, double floor4, double margin,
                    double qfloor, contract_cand *c)
 {
-    int32_t ring[2 * CONTRACT_MAX], vw[4 * STAR_W];
-    int nr = 0, nvw = 0, nnew;
+    int32_t ring[2 * CONTRACT_MAX];
+    uint8_t on[CONTRACT_MAX]; /* su[k] is a tet of the edge: gone */
+    int nr = 0, nnew;
     double sold = 0.0, snew = 0.0, need;
 
     if (nu < 0 || nu > CONTRACT_MAX || nw < 0)
@@ -52,14 +98,14 @@ static int one_way(const tmesh *tm, int32_t t0, int32_t u, int32_t w, const int3
             return 0;
         c->qmin_old = fmin(c->qmin_old, tm->q[su[k]]);
         sold += tm->q[su[k]];
-        if (tmesh_local(tm, su[k], w) >= 0) {
+        on[k] = tmesh_local(tm, su[k], w) >= 0;
+        if (on[k]) {
             nnew--;
             for (int s = 0; s < 4; s++)
                 if (tt[s] != u && tt[s] != w && !has(ring, nr, tt[s]))
                     ring[nr++] = tt[s];
         }
     }
-    /* the new tets first (the cheaper refusals), then the link condition */
     need = qfloor > 0.0 ? qfloor : c->qmin_old + margin;
     c->nold = 0;
     c->nnew = 0;
@@ -69,8 +115,8 @@ static int one_way(const tmesh *tm, int32_t t0, int32_t u, int32_t w, const int3
         int32_t *nt;
         double q;
         c->old[c->nold++] = su[k];
-        if (tmesh_local(tm, su[k], w) >= 0)
-            continue; /* a tet of the edge: gone */
+        if (on[k])
+            continue;
         /* by gain: out once the gain cannot be positive with every tet
          * left at mean ratio 1 (the same candidates, fewer evaluated) */
         if (qfloor > 0.0 && !((double)(nu - nnew) - sold + snew + (nnew - c->nnew) > 0.0))
@@ -86,45 +132,12 @@ static int one_way(const tmesh *tm, int32_t t0, int32_t u, int32_t w, const int3
         c->qmin_new = fmin(c->qmin_new, q);
         snew += q;
     }
-    if (c->nnew == 0)
+    c->gain = (double)(c->nold - c->nnew) + snew - sold;
+    if (c->nnew == 0 || (qfloor > 0.0 && !(c->gain > 0.0)) ||
+        !link_ok(tm, u, w, su, nu, on, sw, nw, ring, nr))
         return 0;
-    if (qfloor > 0.0 && !((double)(c->nold - c->nnew) + snew - sold > 0.0))
-        return 0;
-    /* link condition, edges: two ring vertices of a tet that stays must be a
-     * ring edge (then that tet meets a tet of the edge across their face) */
-    for (int k = 0; k < nu; k++) {
-        const int32_t *tt = tm->tv + 4 * (size_t)su[k];
-        if (tmesh_local(tm, su[k], w) >= 0)
-            continue;
-        for (int s = 0; s < 4; s++)
-            for (int r = s + 1; r < 4; r++) {
-                int ok = 0;
-                if (!has(ring, nr, tt[s]) || !has(ring, nr, tt[r]))
-                    continue;
-                for (int j = 0; j < nu && !ok; j++)
-                    ok = tmesh_local(tm, su[j], w) >= 0 &&
-                         tmesh_local(tm, su[j], tt[s]) >= 0 &&
-                         tmesh_local(tm, su[j], tt[r]) >= 0;
-                if (!ok)
-                    return 0;
-            }
-    }
-    for (int k = 0; k < nw; k++)
-        for (int s = 0; s < 4; s++) {
-            int32_t x = tm->tv[4 * (size_t)sw[k] + s];
-            if (x != u && x != w && !has(vw, nvw, x))
-                vw[nvw++] = x;
-        }
-    /* link condition, vertices: next to u and to w only through the ring */
-    for (int k = 0; k < nu; k++)
-        for (int s = 0; s < 4; s++) {
-            int32_t x = tm->tv[4 * (size_t)su[k] + s];
-            if (x != u && x != w && has(vw, nvw, x) && !has(ring, nr, x))
-                return 0;
-        }
     c->gone = u;
     c->keep = w;
-    c->gain = (double)(c->nold - c->nnew) + snew - sold;
     c->bnd = 0;
     c->dev = 0.0;
     return 1;

@@ -340,8 +340,9 @@ fi
 # clustered vertices go, the mean ratio rises above flips' by 0.01 or more
 # (0.873 -> 0.893 when it was added, 0.897 with the queue at 0.85), the
 # smallest dihedral is within the give of full's two rounds (each keeps it
-# within 5% of the round before: 29.977 -> 29.970), the model is kept (boundary triangles and regions, the kept vertices in their
-# order) and no tet is inverted
+# within 5% of the round before: 29.977 -> 29.970), the model is kept
+# (boundary triangles and regions, the kept vertices in their order) and no
+# tet is inverted
 in=$TMP/cube_lowq.mesh
 if ! gzip -dc "$ROOT/tests/data/dev/cube_h0.1_lowq.mesh.gz" > "$in"; then
     fail "topology full: contraction by gain" "tests/data/dev/cube_h0.1_lowq.mesh.gz missing"
