@@ -4,8 +4,8 @@
  * Shewchuk 2007): smooth; then flips, worst tets first; then smooth again where the flips
  * opened room, a few rounds while the quality rises; for full, a round with edge
  * contraction and vertex insertion, then one with contraction by gain, each kept when
- * better (and with --boundary fixed, the first round starts with splits of the long
- * interior edges). With flips the vertex set never changes (point data stays valid);
+ * better (the first round splits the long interior edges, with --boundary fixed or
+ * where many). With flips the vertex set never changes (point data stays valid);
  * boundary triangles and region tags come back as sets exactly as they went in, unless
  * the user gave --hausd (boundary flips and peeling within it); new tets are written in
  * the vertex order convention of the tets they replace. m's coordinates, tets, regions
@@ -86,26 +86,26 @@ enum { TOPO_ROUNDS = 3 };
  * its first run whole: its reruns widen it where tets stay inverted.) */
 #define TOPO_FIRST_SHARE 0.25
 
-/* --topology full --boundary fixed: the first round of flips starts with
- * interior edge splits (split.h), the unconstrained edges longer than this
- * times the mean size of their ends split at their midpoints, so that the
- * smoothing and the flips of every round place and connect the new vertices.
- * With the boundary fixed (as mmg3d -nosurf keeps it) a scanned shape's fine
- * surface stays against a coarse interior: the tets at the boundary are long
- * (issue #31: on the 100k-tet ball-scan of scripts/corpus.py --seed 1, mean
- * ratio of the tets with 3 boundary corners 0.720 against mmg3d -optim
- * -nosurf's 0.756, which splits such edges, and 26% of the tets against 17%).
- * --topology full --boundary fixed, mean ratio / smallest dihedral / CPU s,
- * one run each at load 5-7: without splits ball-scan 0.8099 / 14.63 / 7.8,
- * ball-lowq 0.7843 / 0.83 / 14.2; splits in full's round only (1.3) 0.8158 /
- * 20.75 / 8.9 and 0.7904 / 0.85 / 14.3; in the first round at 1.3 0.8284 /
- * 23.07 / 21.3 and 0.8061 / 0.86 / 23.1 (twice the tets: the CPU of mmg
- * twice over); 1.45 0.8277 / 19.07 / 13.5 and 0.7999 / 0.82 / 17.4; 1.6
- * 0.8207 / 21.97 / 9.4 and 0.7940 / 0.87 / 12.3 (mmg3d -optim -nosurf
- * 0.816 / 11.37 / 8.7 and 0.793 / 0.34 / 13.4). Not under the default
- * boundary, whose full already beats mmg's (there the splits took ball-scan
- * from 0.8207 / 20.73 to 0.8278 / 21.35 in 11.1 CPU s against 6.8). */
+/* --topology full: the first round of flips starts with interior edge splits
+ * (split.h), the unconstrained edges longer than this times the mean size of
+ * their ends split at their midpoints; the smoothing and flips of every round
+ * place and connect the new vertices. With the boundary fixed (as mmg3d -nosurf
+ * keeps it) a scanned shape's fine surface stays against a coarse interior
+ * (the 100k-tet ball-scan of scripts/corpus.py --seed 1: the tets with 3
+ * boundary corners at mean ratio 0.720 against mmg3d -optim -nosurf's 0.756,
+ * which splits such edges). --boundary fixed, mean ratio / smallest dihedral /
+ * CPU s at load 5-7: without splits ball-scan 0.8099 / 14.63 / 7.8, ball-lowq
+ * 0.7843 / 0.83 / 14.2; splits in full's round only (1.3) 0.8158 / 20.75 / 8.9
+ * and 0.7904 / 0.85 / 14.3; in the first round at 1.3 0.8284 / 23.07 / 21.3
+ * and 0.8061 / 0.86 / 23.1; 1.45 0.8277 / 19.07 / 13.5 and 0.7999 / 0.82 /
+ * 17.4; 1.6 0.8207 / 21.97 / 9.4 and 0.7940 / 0.87 / 12.3 (mmg 0.816 / 11.37 /
+ * 8.7 and 0.793 / 0.34 / 13.4). Under the default boundary only when at least
+ * TOPO_SSHARE of the edges are that long as the round starts (an interior far
+ * coarser than its surface): the dev bunny low 10k (3.7%) 0.7974 / 17.18 ->
+ * 0.8277 / 21.30 (mmg 0.8154 / 12.80). Split anyway, the 100k ball-scan (1.0%)
+ * gained 0.008 in 8% more CPU, bone-lowq (2.2%) lost 0.003 in 29% more. */
 #define TOPO_LSPLIT 1.6
+#define TOPO_SSHARE 0.03
 
 /* What flip_round does besides flips (its insert argument): insertion and
  * contraction (each raising its tets' smallest), edge splits before the
@@ -126,9 +126,7 @@ enum { ROUND_INSERT = 1, ROUND_SPLIT = 2, ROUND_COARSEN = 4 };
 /* The first round's operations besides flips for the run of opts. */
 static int first_ops(const opt_options *opts)
 {
-    return opts->topology == OPT_TOPOLOGY_FULL && opts->boundary == OPT_BOUNDARY_FIXED
-               ? ROUND_SPLIT
-               : 0;
+    return opts->topology == OPT_TOPOLOGY_FULL ? ROUND_SPLIT : 0;
 }
 
 /* *act grown to nv + 1 entries (a round added vertices). QDC_ENOMEM. */
@@ -385,6 +383,7 @@ static void round_params(const opt_options *o, int insert, double hausd, topo_pa
     p->contract = p->insert;
     p->split = (insert & ROUND_SPLIT) != 0;
     p->lsplit = TOPO_LSPLIT;
+    p->sshare = o->boundary == OPT_BOUNDARY_FIXED ? 0.0 : TOPO_SSHARE;
     p->qinsert = TOPO_QINSERT;
     if (insert & ROUND_COARSEN) {
         p->contract = 1;

@@ -189,8 +189,20 @@ static qdc_status candidates(const tmesh *tm, const double *h, double lratio, ca
     return QDC_OK;
 }
 
-qdc_status split_long_edges(tmesh *tm, double lratio, double qfrac, int64_t *nsplit,
-                            const atomic_int *cancel)
+/* The mesh's edges by Euler's formula (V - E + F - T = 1, each inner face
+ * shared by two tets): nv + nt + (boundary faces) / 2 - 1. */
+static double edges_euler(const tmesh *tm)
+{
+    int64_t nb = 0;
+
+    for (int32_t t = 0; t < tm->hi; t++)
+        for (int i = 0; i < 4 && tm->tv[4 * (size_t)t] >= 0; i++)
+            nb += tm->adj[4 * (size_t)t + i] < 0;
+    return (double)tm->nv + (double)tm->nlive + 0.5 * (double)nb - 1.0;
+}
+
+qdc_status split_long_edges(tmesh *tm, double lratio, double qfrac, double share,
+                            int64_t *nsplit, const atomic_int *cancel)
 {
     double *h = qdc_mallocn((size_t)tm->nv + 1, sizeof *h);
     qdc_status st;
@@ -205,7 +217,8 @@ qdc_status split_long_edges(tmesh *tm, double lratio, double qfrac, int64_t *nsp
         int64_t before = *nsplit;
         double *g;
         st = candidates(tm, h, lratio, &c, &n);
-        if (st != QDC_OK || n == 0) {
+        if (st != QDC_OK || n == 0 ||
+            (sweep == 0 && (double)n < share * edges_euler(tm))) {
             qdc_free(c);
             break;
         }

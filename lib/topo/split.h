@@ -34,10 +34,13 @@ void split_undo(tmesh *tm);
  * its constrained edges for a vertex on a constrained face: the surface's
  * size); the unconstrained edges longer than lratio times the mean size of
  * their ends are split (split_edge with qfrac), the relatively longest first
- * (ties by vertex ids), each edge of the mesh as the pass began at most once.
+ * (ties by vertex ids), each edge of the mesh as the pass began at most once;
+ * none when they are fewer than share times the mesh's edges (share 0: no
+ * such condition; the edges counted by Euler's formula for a solid with one
+ * closed boundary, nv + nt + (boundary faces) / 2 - 1).
  * *nsplit receives the count. cancel (may be NULL) is polled between splits:
  * QDC_ECANCEL, the mesh valid. QDC_ENOMEM. */
-qdc_status split_long_edges(tmesh *tm, double lratio, double qfrac, int64_t *nsplit,
-                            const atomic_int *cancel);
+qdc_status split_long_edges(tmesh *tm, double lratio, double qfrac, double share,
+                            int64_t *nsplit, const atomic_int *cancel);
 
 #endif

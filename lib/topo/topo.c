@@ -27,6 +27,7 @@ void topo_params_default(topo_params *p)
     p->split = 0;
     p->lsplit = 1.6;
     p->qsplit = 0.5;
+    p->sshare = 0.0;
     p->imargin = 0.05;
     p->iangle = 1;
     p->contract = 0;
@@ -843,7 +844,7 @@ qdc_status topo_improve(tmesh *tm, const topo_params *p, topo_stats *st,
     st->nv_in = tm->nv;
     if (p->split) {
         int64_t ns = 0;
-        s = split_long_edges(tm, p->lsplit, p->qsplit, &ns, cancel);
+        s = split_long_edges(tm, p->lsplit, p->qsplit, p->sshare, &ns, cancel);
         st->splits = ns;
         st->insertions += ns;
         ops += ns;

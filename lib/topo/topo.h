@@ -29,9 +29,10 @@ typedef struct {
                       * in the tets still below qinsert, worst first */
     double qinsert;  /* tets below this mean ratio get an insertion tried */
     int split;       /* 1: before the flips, interior edge splits (split.h's
-                      * split_long_edges with lsplit and qsplit) */
+                      * split_long_edges with lsplit, qsplit and sshare) */
     double lsplit;
     double qsplit;
+    double sshare;
     double imargin; /* an insertion must raise the cavity's minimum by this */
     int iangle;     /* 1: and must not lower its smallest dihedral angle */
     int contract;   /* 1: after the flips of a round, interior edge contraction

@@ -2091,21 +2091,44 @@ TEST(split_pass_splits_only_the_long_edges)
     int64_t n = -1;
 
     ASSERT_TRUE(tall && flat);
-    ASSERT_OK(split_long_edges(tall, 1.6, 0.5, &n, NULL));
+    ASSERT_OK(split_long_edges(tall, 1.6, 0.5, 0.0, &n, NULL));
     ASSERT_EQ_INT(n, 1);
     ASSERT_EQ_INT(tall->nlive, 8);
     ASSERT_TRUE(consistent(tall));
     ASSERT_NEAR(total_vol6(tall), 24.0, 1e-12);
-    ASSERT_OK(split_long_edges(tall, 1.6, 0.5, &n, NULL));
+    ASSERT_OK(split_long_edges(tall, 1.6, 0.5, 0.0, &n, NULL));
     ASSERT_EQ_INT(n, 0); /* the halves are not long */
-    ASSERT_OK(split_long_edges(flat, 1.6, 0.5, &n, NULL));
+    ASSERT_OK(split_long_edges(flat, 1.6, 0.5, 0.0, &n, NULL));
     ASSERT_EQ_INT(n, 0);
     ASSERT_EQ_INT(flat->nlive, 4);
-    ASSERT_OK(split_long_edges(flat, 1.3, 0.5, &n, NULL));
+    ASSERT_OK(split_long_edges(flat, 1.3, 0.5, 0.0, &n, NULL));
     ASSERT_EQ_INT(n, 1); /* 1.41 > 1.3 */
     ASSERT_TRUE(consistent(flat));
     tmesh_free(tall);
     tmesh_free(flat);
+}
+
+/* With a share, the pass splits only when the long edges are at least that
+ * share of the mesh's edges: the tall octahedron has 13 (4 on the square, 8
+ * to the apexes, the axis; Euler's count 6 + 4 + 8 / 2 - 1), one long (the
+ * axis, 1/13 = 0.077): none at 0.08, the axis at 0.07. */
+TEST(split_pass_waits_for_a_share_of_long_edges)
+{
+    tmesh *tm = ring_mesh(4, -3, 3, NULL);
+    int64_t n = -1;
+    snap s;
+
+    ASSERT_TRUE(tm);
+    ASSERT_TRUE(snap_take(tm, &s));
+    ASSERT_OK(split_long_edges(tm, 1.6, 0.5, 0.08, &n, NULL));
+    ASSERT_EQ_INT(n, 0);
+    ASSERT_TRUE(snap_same(tm, &s));
+    ASSERT_OK(split_long_edges(tm, 1.6, 0.5, 0.07, &n, NULL));
+    ASSERT_EQ_INT(n, 1);
+    ASSERT_EQ_INT(tm->nlive, 8);
+    ASSERT_TRUE(consistent(tm));
+    snap_free(&s);
+    tmesh_free(tm);
 }
 
 /* A face inside one region that the caller keeps (tmesh_keep_tris) is
@@ -2203,6 +2226,7 @@ TEST(driver_keeps_an_inner_surface)
 TEST_MAIN("topo", T(kept_inner_face_blocks_removal), T(driver_keeps_an_inner_surface),
           T(edge_split_at_the_midpoint), T(edge_split_refused_leaves_the_mesh),
           T(split_pass_splits_only_the_long_edges),
+          T(split_pass_waits_for_a_share_of_long_edges),
           T(contraction_keeps_the_volume_exactly),
           T(boundary_contraction_keeps_a_flat_face), T(boundary_flip_2_2_coplanar),
           T(peeling_a_flat_boundary_tet), T(driver_writes_the_new_boundary_triangles),
