@@ -697,14 +697,14 @@ static int not_below(double a, double b)
 /* full_round's test of a round's record a against b before it: the worst tet
  * not lower (not_below); the smallest dihedral at most 5% lower (a round that
  * raises the mean ratio by 0.02 moves it a few tenths of a degree); the mean
- * ratio not lower, or by at most 0.005 when the worst tet's at least doubled
- * (20k-tet bone-scan of scripts/corpus.py --seed 3, --boundary fixed: an insertion
- * round, worst 0.0013 -> 0.106, angle 0.015 -> 3.41 degrees, mean -0.0038). */
+ * ratio not lower, or by at most 0.01 when the worst tet's at least doubled
+ * (20k-tet bone-scans of scripts/corpus.py, --boundary fixed: insertion rounds
+ * took the smallest angle from 0.015 and 0.056 to 3.41 and 2.31 degrees). */
 static int round_kept(const opt_progress *a, const opt_progress *b)
 {
     return not_below(a->q_min, b->q_min) && a->dih_min >= 0.95 * b->dih_min &&
            (a->q_mean >= b->q_mean ||
-            (a->q_min >= 2.0 * b->q_min && a->q_mean >= b->q_mean - 5e-3));
+            (a->q_min >= 2.0 * b->q_min && a->q_mean >= b->q_mean - 1e-2));
 }
 
 /* --topology flips: a round's smoothing with the vertices away from the flips
