@@ -218,7 +218,7 @@ qdc_status split_long_edges(tmesh *tm, double lratio, double qfrac, double share
         double *g;
         st = candidates(tm, h, lratio, &c, &n);
         if (st != QDC_OK || n == 0 ||
-            (sweep == 0 && (double)n < share * edges_euler(tm))) {
+            (sweep == 0 && share > 0.0 && (double)n < share * edges_euler(tm))) {
             qdc_free(c);
             break;
         }
